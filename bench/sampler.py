@@ -1,0 +1,81 @@
+"""Host-side sampler: reads channels through the SPI protocol the way the vendor host library does.
+
+Each slot of the sequence is one sample: the sampling command (chip select, 2 bytes), chip select
+released, a wait of at least 50 µs, then a read clocking out the response word while sending
+zeros.  Slots are paced at ``slot_rate_Hz`` (4.4 kHz: the default 44-slot frame gives PAC at
+2.2 kS/s and every other channel at 100 S/s).  Words are decoded and parity-checked here, as a
+host would: a bad word is kept, flagged in ``status``, never silently turned into a value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from emulator import channels as ch
+from emulator.spi import protocol as proto
+from emulator.spi.peripheral import BITS_PER_TRANSFER, TransferBatch
+
+STATUS_OK, STATUS_PARITY, STATUS_ERROR_WORD = 0, 1, 2
+STATUS_NAMES = {STATUS_OK: "ok", STATUS_PARITY: "parity error", STATUS_ERROR_WORD: "error word"}
+
+
+@dataclass
+class Samples:
+    """Decoded samples of consecutive slots: instant sampled (s), channel index, code, word, status."""
+
+    times: np.ndarray
+    channels: np.ndarray
+    codes: np.ndarray
+    words: np.ndarray
+    status: np.ndarray
+
+
+def parse_sequence(sequence) -> np.ndarray:
+    """Channel indices from ``"default"`` or a list of names/indices."""
+    if isinstance(sequence, str):
+        if sequence != "default":
+            raise ValueError(f"sequence {sequence!r}: use \"default\" or a list of channel names")
+        sequence = ch.DEFAULT_FRAME_NAMES
+    if len(sequence) == 0:
+        raise ValueError("sequence is empty")
+    return np.array([c if isinstance(c, int) else ch.channel_index(c) for c in sequence], dtype=np.int64)
+
+
+class Sampler:
+    """Reads a repeating channel sequence through any peripheral with an ``exchange(TransferBatch)`` method."""
+
+    def __init__(self, peripheral, sequence="default", slot_rate_Hz: float = ch.DEFAULT_SLOT_RATE_HZ,
+                 clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ, sample_delay_s: float = proto.SAMPLE_DELAY_S):
+        self.peripheral = peripheral
+        self.sequence = parse_sequence(sequence)
+        self.slot_rate_Hz = float(slot_rate_Hz)
+        self.clock_hz = float(clock_hz)
+        self.sample_delay_s = float(sample_delay_s)
+        word_s = BITS_PER_TRANSFER / self.clock_hz
+        if 2 * word_s + self.sample_delay_s > 1.0 / self.slot_rate_Hz:
+            raise ValueError(
+                f"a slot of {1e6 / self.slot_rate_Hz:.1f} µs cannot hold command + {self.sample_delay_s * 1e6:.0f} µs "
+                f"+ read at {self.clock_hz / 1e6:.2f} MHz; lower slot_rate_Hz or raise the clock")
+        self.command_words = (proto.sample_command(self.sequence).astype(np.uint16) << 8)
+        self.next_slot = 0
+
+    def read(self, n_slots: int) -> Samples:
+        """Sample the next ``n_slots`` slots."""
+        k = self.next_slot + np.arange(n_slots)
+        self.next_slot += n_slots
+        seq_pos = k % len(self.sequence)
+        t_cmd = k / self.slot_rate_Hz
+        word_s = BITS_PER_TRANSFER / self.clock_hz
+        t_read = t_cmd + word_s + self.sample_delay_s
+        start = np.empty(2 * n_slots)
+        start[0::2], start[1::2] = t_cmd, t_read
+        mosi = np.zeros(2 * n_slots, dtype=np.uint16)
+        mosi[0::2] = self.command_words[seq_pos]
+        miso = self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz))
+        words = miso[1::2]
+        value, parity_ok = proto.decode_response(words)
+        status = np.where(parity_ok, STATUS_OK, STATUS_PARITY).astype(np.uint8)
+        status[(words >> 8) == 0xA5] = STATUS_ERROR_WORD
+        return Samples(t_cmd + word_s, self.sequence[seq_pos], value.astype(np.uint16), words, status)

@@ -1,0 +1,46 @@
+"""Fidelity profiles: what accuracy costs in time.
+
+A profile sets the simulation grid (the 4.4 kHz slot rate times an oversampling factor), how
+each analog stage is discretized, and which second-order effects run.  ``scripts/benchmark``
+measures every profile's error against ``reference`` and its cost per simulated second.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from emulator.channels import DEFAULT_SLOT_RATE_HZ
+
+
+@dataclass(frozen=True)
+class Fidelity:
+    name: str
+    oversampling: int  # grid rate = 4.4 kHz x oversampling
+    discretization: str  # see emulator.filters.DISCRETIZATIONS
+    duct_resonance: bool  # 18.7 kHz closed-tube resonance of the fluid duct
+    stage2_noise: bool  # second-stage amplifier noise
+    description: str
+
+    @property
+    def grid_Hz(self) -> float:
+        return DEFAULT_SLOT_RATE_HZ * self.oversampling
+
+
+PROFILES: dict[str, Fidelity] = {
+    p.name: p
+    for p in (
+        Fidelity("fast", 1, "bilinear", False, False,
+                 "4.4 kHz grid, plain bilinear (the 1040 Hz corner is warped), first-order effects only"),
+        Fidelity("default", 2, "prewarped", False, False,
+                 "8.8 kHz grid, every corner prewarped, first-order effects only"),
+        Fidelity("reference", 16, "prewarped", True, True,
+                 "70.4 kHz grid, prewarped, plus duct resonance and second-stage noise"),
+    )
+}
+
+
+def profile(name: str) -> Fidelity:
+    try:
+        return PROFILES[name]
+    except KeyError:
+        raise ValueError(f"unknown fidelity profile {name!r}; choose one of: {', '.join(PROFILES)}") from None

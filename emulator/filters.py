@@ -1,0 +1,94 @@
+"""Analog prototypes discretized stage by stage and run as second-order sections.
+
+Every filter in the emulator is designed as analog zeros/poles/gain (rad/s),
+discretized by one of the methods below, and run with ``scipy.signal.sosfilt``
+carrying its state ``zi`` between blocks, so output never depends on block size.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+DISCRETIZATIONS = ("bilinear", "prewarped", "matched")
+
+
+def _prewarp(roots: np.ndarray, fs: float) -> np.ndarray:
+    """Move each analog root so that its natural frequency survives the bilinear map exactly."""
+    roots = np.asarray(roots, complex)
+    mag = np.abs(roots)
+    out = roots.copy()
+    nz = mag > 0
+    if np.any(mag[nz] >= np.pi * fs):
+        raise ValueError(f"a corner lies above Nyquist ({fs / 2:.0f} Hz); raise the oversampling")
+    out[nz] = roots[nz] / mag[nz] * (2.0 * fs * np.tan(mag[nz] / (2.0 * fs)))
+    return out
+
+
+def discretize(z, p, k, fs: float, method: str, gain_at_hz: float = 0.0) -> np.ndarray:
+    """Discrete SOS for the analog filter (z, p, k) in rad/s at sample rate ``fs`` (Hz).
+
+    ``bilinear``: plain Tustin transform (corners near Nyquist are warped down).
+    ``prewarped``: every pole and zero is prewarped before Tustin, so each corner lands where it should.
+    ``matched``: matched-z (s = r -> z = exp(r/fs)); zeros at infinity go to z = -1.
+    The gain is then matched to the analog response at ``gain_at_hz``.
+    """
+    z = np.atleast_1d(np.asarray(z, complex))
+    p = np.atleast_1d(np.asarray(p, complex))
+    if method == "bilinear":
+        zd, pd, kd = signal.bilinear_zpk(z, p, k, fs)
+    elif method == "prewarped":
+        zd, pd, kd = signal.bilinear_zpk(_prewarp(z, fs), _prewarp(p, fs), k, fs)
+    elif method == "matched":
+        zd = np.concatenate([np.exp(z / fs), -np.ones(len(p) - len(z))])
+        pd = np.exp(p / fs)
+        kd = 1.0
+    else:
+        raise ValueError(f"unknown discretization {method!r}; choose one of {DISCRETIZATIONS}")
+    w_analog = 2 * np.pi * gain_at_hz
+    _, h_analog = signal.freqs_zpk(z, p, k, worN=[w_analog])
+    _, h_digital = signal.freqz_zpk(zd, pd, kd, worN=[gain_at_hz], fs=fs)
+    kd = kd * np.abs(h_analog[0]) / np.abs(h_digital[0])
+    return signal.zpk2sos(zd, pd, kd)
+
+
+class SosFilter:
+    """A second-order-section filter that carries its state between blocks."""
+
+    def __init__(self, sos: np.ndarray):
+        self.sos = np.asarray(sos, float)
+        self.zi = np.zeros((self.sos.shape[0], 2))
+
+    def settle(self, x0: float) -> None:
+        """Set the state to the steady state for a constant input ``x0`` (no start-up transient)."""
+        self.zi = signal.sosfilt_zi(self.sos) * x0
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        y, self.zi = signal.sosfilt(self.sos, x, zi=self.zi)
+        return y
+
+
+def lowpass_butter2(f_hz: float):
+    """Analog 2nd-order Butterworth low-pass, unit DC gain: (z, p, k) in rad/s."""
+    return signal.butter(2, 2 * np.pi * f_hz, analog=True, output="zpk")
+
+
+def highpass_1st(f_hz: float):
+    """Analog 1st-order high-pass, unit high-frequency gain."""
+    return np.array([0.0]), np.array([-2 * np.pi * f_hz]), 1.0
+
+
+def resonance(f_hz: float, decay_s: float, zero_hz: float | None = None):
+    """Analog 2nd-order resonance with natural frequency ``f_hz`` and envelope decay ``decay_s``.
+
+    Unit DC gain; with ``zero_hz`` a real zero (1 + s/ω_z) is added.
+    """
+    w0 = 2 * np.pi * f_hz
+    sigma = 1.0 / decay_s  # envelope e^(-t/decay) => Re(p) = -1/decay
+    wd = np.sqrt(max(w0**2 - sigma**2, 1e-12))
+    p = np.array([-sigma + 1j * wd, -sigma - 1j * wd])
+    k = w0**2
+    if zero_hz is None:
+        return np.array([]), p, k
+    wz = 2 * np.pi * zero_hz
+    return np.array([-wz]), p, k / wz

@@ -1,0 +1,214 @@
+"""The sensor: builds the effect graph a scene needs and answers "ADC code of channel c at instant t".
+
+The grid physics advances in blocks (state carried between them) only as far as the latest
+instant asked for; a short history is kept so instants can be interpolated between grid
+samples.  Memory therefore stays bounded however long the run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from emulator import channels as ch
+from emulator.adc import Adc
+from emulator.conversions import ADC_LSB_V
+from emulator.effects import Block, Effect, build_graph
+from emulator.extrinsic import MainsHum
+from emulator.fidelity import Fidelity, profile
+from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
+from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
+from emulator.params import SensorParams
+from emulator.stimuli import ContactForce, ForceStimulus, SkinDisplacement, Vibration
+from emulator.transducer import Bridge, johnson_noise
+
+#: Which grid signal each modelled channel converts.
+CHANNEL_NODE = {ch.PAC: "pac_V", ch.PDC: "pdc_V"}
+
+
+@dataclass(frozen=True)
+class NoiseSources:
+    """Switches for every noise source (all on = the real sensor at rest)."""
+
+    johnson: bool = True
+    amplifier: bool = True
+    mains_hum: bool = True
+    adc: bool = True
+    quantization: bool = True
+    spi_coupling: bool = True
+
+    @classmethod
+    def none(cls) -> "NoiseSources":
+        return cls(False, False, False, False, False, False)
+
+
+class Sensor:
+    """One emulated BioTac.
+
+    Parameters
+    ----------
+    params : SensorParams
+    stimuli : force stimuli (taps, presses, sphere drops) and :class:`Vibration` stimuli
+    channels_read : channel names or indices the host will sample; decides which effects are built
+    fidelity : profile name or :class:`Fidelity`
+    seed : scene seed; every random effect draws from a stream keyed by (seed, effect name)
+    noise : which noise sources are on
+    block_s : physics block length in s (results do not depend on it)
+    """
+
+    def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
+                 fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
+                 block_s: float = 0.5):
+        self.params = params or SensorParams()
+        self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
+        self.seed = int(seed)
+        self.noise = noise
+        self.fs = self.fidelity.grid_Hz
+        self.block_n = max(1, int(round(block_s * self.fs)))
+        self.channels_read = sorted({c if isinstance(c, (int, np.integer)) else ch.channel_index(c)
+                                     for c in channels_read})
+        unknown = [c for c in self.channels_read if c not in ch.SAMPLED_CHANNELS]
+        if unknown:
+            raise ValueError(f"channel index {unknown[0]} is not a sampled channel of this sensor")
+        self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
+        self.graph = build_graph(self._candidate_effects(list(stimuli)), set(self.nodes))
+        self.resting = self.graph.settle()
+        self.adc = Adc(self.params, self.seed, noise=noise.adc, quantize=noise.quantization,
+                       spi_coupling=noise.spi_coupling)
+        # per channel index: which grid node it converts (-1 = not read, len(nodes) = fixed resting level)
+        self._node_of_channel = np.full(64, -1, dtype=np.int64)
+        self._fixed_V = np.zeros(64)
+        for c in self.channels_read:
+            if c in CHANNEL_NODE:
+                self._node_of_channel[c] = self.nodes.index(CHANNEL_NODE[c])
+            else:
+                self._node_of_channel[c] = len(self.nodes)
+                self._fixed_V[c] = self._placeholder_code(c) * ADC_LSB_V
+        self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self.nodes}
+        self._buf_n0 = 0  # grid index of the first retained sample
+        self._computed = 0  # next grid index to compute
+
+    # --- construction --------------------------------------------------------------
+    def _candidate_effects(self, stimuli) -> list[Effect]:
+        p, fs, disc, f = self.params, self.fs, self.fidelity.discretization, self.fidelity
+        forces = [s for s in stimuli if isinstance(s, ForceStimulus)]
+        vibrations = [s for s in stimuli if isinstance(s, Vibration)]
+        other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration))]
+        if other:
+            raise TypeError(f"not a stimulus: {other[0]!r}")
+        for v in vibrations:
+            top = max(v.f_start_Hz, v.f_stop_Hz or 0.0)
+            if top >= 0.45 * fs:
+                raise ValueError(f"vibration at {top:.0f} Hz needs a finer grid than {fs:.0f} Hz "
+                                 f"(fidelity '{f.name}'); use a higher fidelity profile")
+        effects: list[Effect] = []
+        if forces:
+            effects.append(ContactForce(forces))
+        if vibrations:
+            effects.append(SkinDisplacement(vibrations))
+        effects += [RestingPressure(p), ForceCoupling(p, fs, disc), VibrationCoupling(p, fs, disc),
+                    Bridge(p, fs, disc, duct_resonance=f.duct_resonance)]
+        if self.noise.johnson:
+            effects.append(johnson_noise(p, fs, self.seed))
+        if self.noise.amplifier:
+            effects.append(amplifier_noise(p, fs, self.seed))
+        if self.noise.mains_hum:
+            effects.append(MainsHum(p, self.seed))
+        effects.append(Stage1(p, fs, disc))
+        own_noise = f.stage2_noise and self.noise.amplifier
+        if own_noise:
+            effects.append(stage2_noise(p, fs, self.seed))
+        effects.append(Stage2(p, fs, disc, own_noise=own_noise))
+        return effects
+
+    def _placeholder_code(self, channel: int) -> int:
+        """Resting level of channels the thermal/electrode model does not drive yet."""
+        if channel == ch.TDC:
+            return self.params.resting_tdc_code
+        if channel == ch.TAC:
+            return self.params.resting_tac_code
+        return self.params.resting_electrode_code
+
+    # --- time advance ---------------------------------------------------------------
+    def _advance_through(self, n_last: int) -> None:
+        while self._computed <= n_last:
+            block = Block(self._computed, self.block_n, self.fs)
+            signals = self.graph.run(block)
+            for node in self.nodes:
+                self._chunks[node].append(signals[node])
+            self._computed += block.n
+
+    def _history(self, node: str) -> np.ndarray:
+        chunks = self._chunks[node]
+        if len(chunks) > 1:
+            chunks[:] = [np.concatenate(chunks)]
+        return chunks[0] if chunks else np.empty(0)
+
+    def _trim(self, keep_from: int) -> None:
+        drop = keep_from - self._buf_n0
+        if drop <= 0:
+            return
+        for node in self.nodes:
+            h = self._history(node)
+            self._chunks[node] = [h[drop:]]
+        self._buf_n0 = keep_from
+
+    @property
+    def simulated_s(self) -> float:
+        return self._computed / self.fs
+
+    # --- sampling -------------------------------------------------------------------
+    def analog(self, channels, times) -> np.ndarray:
+        """Analog value (V) at the ADC input for each (channel index, instant in s); no ADC effects."""
+        channels = np.asarray(channels, dtype=np.int64)
+        times = np.asarray(times, dtype=float)
+        out = np.empty(times.shape)
+        if times.size == 0:
+            return out
+        if not np.isfinite(times.sum()) or times.min() < 0:
+            raise ValueError("sample instants must be finite and ≥ 0 s")
+        if channels.min() < 0 or channels.max() > 63:
+            raise ValueError("channel indices must be 0..63")
+        x = times * self.fs
+        i = np.floor(x).astype(np.int64)
+        if i.min() < self._buf_n0:
+            raise ValueError(f"instant {times.min():.6f} s is older than the retained history "
+                             f"(from {self._buf_n0 / self.fs:.6f} s): ask for instants in time order")
+        self._advance_through(int(i.max()) + 1)
+        frac = x - i
+        k = i - self._buf_n0
+        node_of = self._node_of_channel[channels]
+        if np.any(node_of < 0):
+            bad = int(channels[np.flatnonzero(node_of < 0)[0]])
+            raise ValueError(f"channel {ch.CHANNEL_NAME.get(bad, bad)} was not declared in channels_read")
+        for node_id, node in enumerate(self.nodes):
+            sel = node_of == node_id
+            if sel.all():
+                h = self._history(node)
+                out = h[k] * (1.0 - frac) + h[k + 1] * frac
+            elif sel.any():
+                h = self._history(node)
+                ks, fs = k[sel], frac[sel]
+                out[sel] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
+        fixed = node_of == len(self.nodes)
+        if fixed.any():
+            out[fixed] = self._fixed_V[channels[fixed]]
+        self._trim(int(i.max()))
+        return out
+
+    def sample(self, channels, times, bus_active=None) -> np.ndarray:
+        """12-bit codes for each (channel index, instant in s), converted in the given order."""
+        v = self.analog(channels, times)
+        return self.adc.convert(v, bus_active, where="the ADC input")
+
+    # --- reporting ------------------------------------------------------------------
+    def effects_report(self) -> list[dict]:
+        """The effects that ran, what they consumed and produced, and what they cost."""
+        sim_s = max(self.simulated_s, 1e-12)
+        rows = []
+        for cost in self.graph.costs.values():
+            d = asdict(cost)
+            d["seconds_per_simulated_s"] = cost.seconds / sim_s
+            rows.append(d)
+        return rows

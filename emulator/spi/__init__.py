@@ -1,0 +1,1 @@
+"""The sensor's SPI protocol (SENSOR.md §6): word encoding and the software peripheral."""

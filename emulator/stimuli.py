@@ -1,0 +1,208 @@
+"""What happens to the finger: contact forces (taps, presses, sphere impacts) and imposed skin vibration.
+
+Force stimuli are described by their cumulative impulse C(t) = ∫F dt, and reach
+the grid as the exact mean force over each sample interval, (C(t_n) − C(t_n − Δt))/Δt.
+A 0.4 ms sphere impact therefore carries the same impulse at 4.4 kHz as at 70 kHz.
+Displacement stimuli are smooth and are sampled at the grid instants.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+
+from emulator.effects import Block, Effect
+
+GRAVITY_M_PER_S2 = 9.80665
+
+#: The spheres of D Table 5-2: name -> (mass kg, published impact energy J from 7 cm).
+SPHERES: dict[str, tuple[float, float]] = {
+    "0.25 mm solder ball": (0.072e-6, 0.049e-6),
+    "0.45 mm solder ball": (0.422e-6, 0.289e-6),
+    "1 mm aluminum bearing": (1.461e-6, 1.002e-6),
+    "1 mm steel bearing": (4.089e-6, 2.805e-6),
+    "3/64 in steel bearing": (6.902e-6, 4.734e-6),
+    "5/64 in aluminum bearing": (11.415e-6, 7.830e-6),
+}
+DROP_HEIGHT_M = 0.07
+
+
+class ForceStimulus(ABC):
+    """A contact force on the skin over a finite time span [start_s, end_s]."""
+
+    @abstractmethod
+    def cumulative(self, t: np.ndarray) -> np.ndarray:
+        """∫ F dt from −∞ to t, in N·s (closed form)."""
+
+    def force(self, t: np.ndarray) -> np.ndarray:
+        """Instantaneous force in N (for plots and checks)."""
+        h = 1e-7
+        return (self.cumulative(t + h) - self.cumulative(t - h)) / (2 * h)
+
+
+@dataclass
+class Tap(ForceStimulus):
+    """A finger tap: raised-cosine force pulse of ``peak_N`` lasting ``duration_s`` from ``time_s``."""
+
+    time_s: float
+    peak_N: float
+    duration_s: float = 0.03
+
+    @property
+    def start_s(self):
+        return self.time_s
+
+    @property
+    def end_s(self):
+        return self.time_s + self.duration_s
+
+    def cumulative(self, t):
+        T = self.duration_s
+        x = np.clip(np.asarray(t, float) - self.time_s, 0.0, T)
+        return 0.5 * self.peak_N * (x - T / (2 * np.pi) * np.sin(2 * np.pi * x / T))
+
+
+@dataclass
+class SphereDrop(ForceStimulus):
+    """A sphere of ``mass_kg`` dropped from ``height_m`` landing at ``time_s``: a half-sine impulse."""
+
+    time_s: float
+    mass_kg: float
+    height_m: float = DROP_HEIGHT_M
+    restitution: float = 0.3
+    contact_s: float = 0.4e-3
+
+    @property
+    def impact_speed_m_per_s(self) -> float:
+        return float(np.sqrt(2 * GRAVITY_M_PER_S2 * self.height_m))
+
+    @property
+    def energy_J(self) -> float:
+        return self.mass_kg * GRAVITY_M_PER_S2 * self.height_m
+
+    @property
+    def impulse_Ns(self) -> float:
+        """Momentum transferred: m·v·(1 + e)."""
+        return self.mass_kg * self.impact_speed_m_per_s * (1.0 + self.restitution)
+
+    @property
+    def start_s(self):
+        return self.time_s
+
+    @property
+    def end_s(self):
+        return self.time_s + self.contact_s
+
+    def cumulative(self, t):
+        x = np.clip(np.asarray(t, float) - self.time_s, 0.0, self.contact_s)
+        return 0.5 * self.impulse_Ns * (1.0 - np.cos(np.pi * x / self.contact_s))
+
+
+@dataclass
+class Press(ForceStimulus):
+    """Press and hold: ramp to ``force_N`` over ``ramp_s``, hold ``hold_s``, ramp back down."""
+
+    start: float
+    force_N: float
+    ramp_s: float = 0.5
+    hold_s: float = 1.0
+
+    @property
+    def start_s(self):
+        return self.start
+
+    @property
+    def end_s(self):
+        return self.start + 2 * self.ramp_s + self.hold_s
+
+    def cumulative(self, t):
+        F, r, h = self.force_N, self.ramp_s, self.hold_s
+        x = np.clip(np.asarray(t, float) - self.start, 0.0, 2 * r + h)
+        up = F * np.minimum(x, r) ** 2 / (2 * r)
+        hold = F * np.clip(x - r, 0.0, h)
+        d = np.clip(x - r - h, 0.0, r)
+        down = F * (d - d**2 / (2 * r))
+        return up + hold + down
+
+
+@dataclass
+class Vibration:
+    """Sinusoidal skin displacement from a stiff actuator, optionally swept logarithmically.
+
+    ``amplitude_m`` peak; frequency goes from ``f_start_Hz`` to ``f_stop_Hz`` over ``duration_s``;
+    ``fade_s`` raised-cosine fades at both ends avoid clicks.
+    """
+
+    start_s: float
+    duration_s: float
+    amplitude_m: float
+    f_start_Hz: float
+    f_stop_Hz: float | None = None
+    fade_s: float = 0.01
+
+    @property
+    def end_s(self):
+        return self.start_s + self.duration_s
+
+    def frequency_at(self, t):
+        f1 = self.f_stop_Hz or self.f_start_Hz
+        x = np.clip((np.asarray(t, float) - self.start_s) / self.duration_s, 0, 1)
+        return self.f_start_Hz * (f1 / self.f_start_Hz) ** x
+
+    def displacement(self, t: np.ndarray) -> np.ndarray:
+        t = np.asarray(t, float)
+        tau = t - self.start_s
+        f0, f1, T = self.f_start_Hz, (self.f_stop_Hz or self.f_start_Hz), self.duration_s
+        if f1 == f0:
+            phase = 2 * np.pi * f0 * tau
+        else:
+            k = np.log(f1 / f0) / T
+            phase = 2 * np.pi * f0 * np.expm1(k * tau) / k
+        inside = (tau >= 0) & (tau <= T)
+        fade = np.ones_like(tau)
+        if self.fade_s > 0:
+            fade = np.clip(np.minimum(tau, T - tau) / self.fade_s, 0, 1)
+            fade = 0.5 - 0.5 * np.cos(np.pi * fade)
+        return np.where(inside, self.amplitude_m * fade * np.sin(phase), 0.0)
+
+
+def _overlapping(items, t_lo: float, t_hi: float):
+    return [s for s in items if s.end_s >= t_lo and s.start_s <= t_hi]
+
+
+class ContactForce(Effect):
+    """Contact force on the skin from taps, presses and sphere impacts (mean over each sample)."""
+
+    name = "contact_force"
+    produces = ("contact_force_N",)
+
+    def __init__(self, stimuli: list[ForceStimulus]):
+        self.stimuli = sorted(stimuli, key=lambda s: s.start_s)
+
+    def process(self, block: Block, inputs):
+        t_hi = block.times
+        dt = 1.0 / block.fs
+        t_lo = t_hi - dt
+        out = np.zeros(block.n)
+        for s in _overlapping(self.stimuli, t_lo[0], t_hi[-1]):
+            out += (s.cumulative(t_hi) - s.cumulative(t_lo)) / dt
+        return {"contact_force_N": out}
+
+
+class SkinDisplacement(Effect):
+    """Skin displacement imposed by a vibration actuator, in m."""
+
+    name = "skin_displacement"
+    produces = ("skin_displacement_m",)
+
+    def __init__(self, stimuli: list[Vibration]):
+        self.stimuli = stimuli
+
+    def process(self, block: Block, inputs):
+        t = block.times
+        out = np.zeros(block.n)
+        for s in _overlapping(self.stimuli, t[0], t[-1]):
+            out += s.displacement(t)
+        return {"skin_displacement_m": out}

@@ -1,0 +1,78 @@
+"""The piezoresistive pressure transducer: a Wheatstone bridge with two fixed and two active arms.
+
+Output (differential, V) = excitation · (offset(T) + sensitivity · (1 + span drift·ΔT) · pressure),
+i.e. 2.18 mV/kPa at 10 V.  Its 5 kΩ output resistance makes Johnson noise √(4kTR) at the bridge
+temperature.  In the reference profile the 2 cm fluid duct between skin and transducer adds its
+closed-tube resonance (18.7 kHz, negligible below 1 kHz).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from emulator import filters
+from emulator.effects import Block, Effect, effect_rng
+from emulator.params import SensorParams
+
+
+class Bridge(Effect):
+    """Piezoresistive bridge: fluid pressure (Pa) -> differential voltage at the stage-1 input."""
+
+    name = "bridge"
+    consumes = ("fluid_pressure_Pa",)
+    produces = ("stage1_input_V",)
+
+    def __init__(self, params: SensorParams, fs: float, discretization: str, duct_resonance: bool):
+        self.span = params.bridge_span_V_per_Pa
+        self.offset = params.bridge_offset_V
+        self.duct = None
+        if duct_resonance:
+            w0 = 2 * np.pi * params.duct_resonance_Hz
+            if params.duct_resonance_Hz >= 0.45 * fs:
+                raise ValueError(
+                    f"duct resonance {params.duct_resonance_Hz:.0f} Hz needs a grid above "
+                    f"{params.duct_resonance_Hz / 0.45:.0f} Hz (have {fs:.0f} Hz)"
+                )
+            q = params.duct_quality_factor
+            poles = np.roots([1.0, w0 / q, w0**2])
+            self.duct = filters.SosFilter(filters.discretize([], poles, w0**2, fs, discretization))
+
+    def settle(self, inputs):
+        p = inputs["fluid_pressure_Pa"]
+        if self.duct is not None:
+            self.duct.settle(p)
+        return {"stage1_input_V": self.offset + self.span * p}
+
+    def process(self, block: Block, inputs):
+        p = inputs["fluid_pressure_Pa"]
+        v = self.duct(p) if self.duct is not None else p.copy()
+        v *= self.span
+        v += self.offset
+        return {"stage1_input_V": v}
+
+
+class WhiteNoise(Effect):
+    """White Gaussian noise of a given one-sided density (V/√Hz) added to a signal on the grid."""
+
+    def __init__(self, name: str, signal_name: str, density: float, fs: float, seed: int, doc: str):
+        self.name = name
+        self.produces = (signal_name,)
+        self.density = density
+        self.sigma = density * np.sqrt(fs / 2.0)  # per-sample RMS of white noise band-limited to fs/2
+        self.rng = effect_rng(seed, name)
+        self._doc = doc
+
+    def describe(self) -> str:
+        return self._doc
+
+    def process(self, block: Block, inputs):
+        # float32 draws are twice as fast; the noise itself needs no more than 24 bits of precision
+        return {self.produces[0]: self.sigma * self.rng.standard_normal(block.n, dtype=np.float32)}
+
+
+def johnson_noise(params: SensorParams, fs: float, seed: int) -> WhiteNoise:
+    """Thermal noise √(4kTR) of the bridge's output resistance at the bridge temperature."""
+    return WhiteNoise(
+        "bridge_johnson_noise", "stage1_input_V", params.johnson_noise_V_per_rtHz, fs, seed,
+        "Johnson noise of the 5 kΩ bridge at its temperature",
+    )
