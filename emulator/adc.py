@@ -21,19 +21,14 @@ class NumericalError(FloatingPointError):
 class Adc:
     """12-bit ADC with input noise, SPI-coupling disturbance, quantization and clipping."""
 
-    def __init__(self, params: SensorParams, seed: int, noise: bool = True, quantize: bool = True,
-                 spi_coupling: bool = True):
+    def __init__(self, params: SensorParams, seed: int, noise: bool = True, spi_coupling: bool = True):
         self.noise_V = params.adc_noise_rms_bits * ADC_LSB_V if noise else 0.0
         self.coupling_V = params.spi_coupling_rms_V if spi_coupling else 0.0
-        self.quantize = quantize
         self.noise_rng = effect_rng(seed, "adc_noise")
         self.coupling_rng = effect_rng(seed, "spi_coupling")
 
     def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input"):
-        """Codes (uint16) for analog values in V; ``bus_active`` marks conversions that overlapped SPI clocking.
-
-        With ``quantize`` off, returns the noisy value in LSB as float (for analysis of the analog chain).
-        """
+        """Codes (uint16) for analog values in V; ``bus_active`` marks conversions that overlapped SPI clocking."""
         v = np.asarray(volts, float)
         if not np.all(np.isfinite(v)):
             bad = int(np.flatnonzero(~np.isfinite(v))[0])
@@ -43,7 +38,4 @@ class Adc:
         if self.coupling_V and bus_active is not None and np.any(bus_active):
             v = v.copy()
             v[bus_active] += self.coupling_V * self.coupling_rng.standard_normal(int(np.count_nonzero(bus_active)))
-        lsb = v / ADC_LSB_V
-        if not self.quantize:
-            return lsb
-        return np.clip(np.floor(lsb + 0.5), 0, ADC_CODES - 1).astype(np.uint16)
+        return np.clip(np.floor(v / ADC_LSB_V + 0.5), 0, ADC_CODES - 1).astype(np.uint16)

@@ -12,6 +12,8 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+from emulator.conversions import ADC_LSB_V
+
 BOLTZMANN_J_PER_K = 1.380649e-23
 ZERO_CELSIUS_K = 273.15
 
@@ -30,12 +32,12 @@ class SensorParams:
         12e3, "Pa/mL", 0.0, 1e5, "model", "resting fluid pressure rise per mL of inflation (repeatable, D ch. 4)")
     resting_pressure_exponent: float = _p(
         1.5, "1", 1.0, 3.0, "model", "resting pressure grows as volume^exponent (skin stiffens as it stretches)")
-    force_to_pressure_Pa_per_N: float = _p(
-        36.5 / 0.0115, "Pa/N", 100.0, 1e5, "D", "contact force -> DC pressure slope below the knee: 36.5 Pa per 11.5 mN")
+    force_per_pdc_bit_N: float = _p(
+        0.0115, "N", 1e-4, 1.0, "D", "contact force per PDC bit below the knee (11.5 mN/bit, R² = 0.995)")
     force_knee_N: float = _p(2.0, "N", 0.1, 20.0, "D", "force where the skin meets the core and the slope falls")
     force_slope_above_knee: float = _p(
         0.25, "1", 0.0, 1.0, "model", "pressure slope above the knee as a fraction of the slope below")
-    force_knee_width_N: float = _p(0.15, "N", 0.01, 2.0, "model", "smoothness of the transition at the knee")
+    force_knee_width_N: float = _p(0.08, "N", 0.01, 2.0, "model", "smoothness of the transition at the knee")
     resonance_Hz: float = _p(330.0, "Hz", 200.0, 350.0, "D", "skin/fluid resonance at nominal inflation")
     resonance_Hz_per_mL: float = _p(
         150.0, "Hz/mL", 0.0, 1000.0, "model", "resonance shift with inflation volume away from 0.5 mL")
@@ -128,6 +130,16 @@ class SensorParams:
     def johnson_noise_V_per_rtHz(self) -> float:
         """√(4kTR) of the bridge output resistance at the bridge temperature."""
         return math.sqrt(4.0 * BOLTZMANN_J_PER_K * self.bridge_temperature_K * self.bridge_resistance_ohm)
+
+    @property
+    def force_to_pressure_Pa_per_N(self) -> float:
+        """Mechanical slope force -> fluid pressure, fixed by the published force per PDC bit.
+
+        Uses the bridge span at its reference temperature: the mechanics does not drift with the bridge.
+        """
+        nominal_pdc_V_per_Pa = self.bridge_excitation_V * self.bridge_sensitivity_V_per_V_Pa * self.stage1_gain
+        pdc_Pa_per_bit = ADC_LSB_V / nominal_pdc_V_per_Pa
+        return pdc_Pa_per_bit / self.force_per_pdc_bit_N
 
     @property
     def pac_V_per_Pa(self) -> float:

@@ -35,12 +35,12 @@ class NoiseSources:
     amplifier: bool = True
     mains_hum: bool = True
     adc: bool = True
-    quantization: bool = True
     spi_coupling: bool = True
 
     @classmethod
     def none(cls) -> "NoiseSources":
-        return cls(False, False, False, False, False, False)
+        """Every noise source off (quantization remains: it is what an ADC does)."""
+        return cls(False, False, False, False, False)
 
 
 class Sensor:
@@ -74,8 +74,7 @@ class Sensor:
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
         self.graph = build_graph(self._candidate_effects(list(stimuli)), set(self.nodes))
         self.resting = self.graph.settle()
-        self.adc = Adc(self.params, self.seed, noise=noise.adc, quantize=noise.quantization,
-                       spi_coupling=noise.spi_coupling)
+        self.adc = Adc(self.params, self.seed, noise=noise.adc, spi_coupling=noise.spi_coupling)
         # per channel index: which grid node it converts (-1 = not read, len(nodes) = fixed resting level)
         self._node_of_channel = np.full(64, -1, dtype=np.int64)
         self._fixed_V = np.zeros(64)

@@ -1,0 +1,168 @@
+"""Measurements on recorded channels, as the dissertation made them (D ch. 5–6).
+
+All functions take plain arrays: codes or values, sample instants in s, rates in Hz.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize, signal
+
+
+# --- impact detection (D ch. 5) -----------------------------------------------------------
+@dataclass
+class DetectionRule:
+    """More than ``min_points`` samples beyond ``n_sigma`` standard deviations within ``window_s``."""
+
+    n_sigma: float = 4.0
+    min_points: int = 3
+    window_s: float = 0.1
+
+
+def exceedances(x: np.ndarray, baseline: float, sigma: float, rule: DetectionRule = DetectionRule()) -> np.ndarray:
+    """Boolean mask of samples beyond ``n_sigma``·``sigma`` from ``baseline``."""
+    return np.abs(np.asarray(x, float) - baseline) > rule.n_sigma * sigma
+
+
+def detected_in_window(x, times, t_start: float, baseline: float, sigma: float,
+                       rule: DetectionRule = DetectionRule()) -> bool:
+    """True if the window [t_start, t_start + window) holds more than ``min_points`` exceedances."""
+    sel = (times >= t_start) & (times < t_start + rule.window_s)
+    return int(np.count_nonzero(exceedances(x[sel], baseline, sigma, rule))) > rule.min_points
+
+
+class StreamingDetector:
+    """Counts detection events in a stream processed block by block (sliding window, carried state).
+
+    An event is declared when a sliding window of ``window_s`` holds more than ``min_points``
+    exceedances; a new event needs the window to have dropped back to ``min_points`` or fewer first.
+    """
+
+    def __init__(self, baseline: float, sigma: float, rate_Hz: float, rule: DetectionRule = DetectionRule()):
+        self.baseline, self.sigma, self.rule = baseline, sigma, rule
+        self.window_n = max(1, int(round(rule.window_s * rate_Hz)))
+        self._tail = np.zeros(0, dtype=np.int64)  # exceedance flags of the last window_n - 1 samples
+        self._armed = True
+        self.events = 0
+        self.samples = 0
+
+    def update(self, x: np.ndarray) -> int:
+        """Process the next samples; returns the number of new events."""
+        flags = np.concatenate([self._tail, exceedances(x, self.baseline, self.sigma, self.rule).astype(np.int64)])
+        c = np.concatenate([[0], np.cumsum(flags)])
+        n_prev = self._tail.size
+        # window ending at each new sample i (index in flags): flags[i-window_n+1 .. i]
+        idx = np.arange(n_prev, flags.size)
+        lo = np.maximum(idx - self.window_n + 1, 0)
+        counts = c[idx + 1] - c[lo]
+        above = counts > self.rule.min_points
+        was_above = np.concatenate([[not self._armed], above[:-1]])
+        new = int(np.count_nonzero(above & ~was_above))  # rising edges: the window just filled up
+        if above.size:
+            self._armed = not bool(above[-1])
+        self._tail = flags[-(self.window_n - 1):] if self.window_n > 1 else flags[:0]
+        self.events += new
+        self.samples += len(x)
+        return new
+
+
+# --- fitting -------------------------------------------------------------------------------
+@dataclass
+class RingFit:
+    amplitude: float
+    decay_s: float
+    frequency_Hz: float
+    phase: float
+
+
+def fit_decaying_sinusoid(t: np.ndarray, x: np.ndarray) -> RingFit:
+    """Least-squares fit of A·exp(−t/τ)·sin(2πft + φ) to a ringing response starting at t = 0."""
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    spec = np.abs(np.fft.rfft(x * np.hanning(x.size), n=8 * x.size))
+    f_guess = np.fft.rfftfreq(8 * x.size, np.median(np.diff(t)))[np.argmax(spec[1:]) + 1]
+
+    def model(t, a, tau, f, ph):
+        return a * np.exp(-t / tau) * np.sin(2 * np.pi * f * t + ph)
+
+    best = None
+    for ph in np.linspace(0, 2 * np.pi, 8, endpoint=False):
+        try:
+            p, _ = optimize.curve_fit(model, t, x, p0=[np.abs(x).max(), 0.02, f_guess, ph], maxfev=4000)
+        except RuntimeError:
+            continue
+        r = float(np.sum((model(t, *p) - x) ** 2))
+        if best is None or r < best[0]:
+            best = (r, p)
+    if best is None:
+        raise ValueError("no decaying sinusoid fits this signal")
+    a, tau, f, ph = best[1]
+    return RingFit(abs(a), abs(tau), abs(f), ph)
+
+
+@dataclass
+class LineFit:
+    slope: float
+    intercept: float
+    r_squared: float
+
+
+def fit_line(x, y) -> LineFit:
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    slope, intercept = np.polyfit(x, y, 1)
+    resid = y - (slope * x + intercept)
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(np.sum(resid**2)) / ss_tot if ss_tot > 0 else 0.0
+    return LineFit(float(slope), float(intercept), r2)
+
+
+def fit_proportional(x, y) -> LineFit:
+    """Fit y = slope·x through the origin; R² against the mean as usual."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    slope = float(np.dot(x, y) / np.dot(x, x))
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - float(np.sum((y - slope * x) ** 2)) / ss_tot if ss_tot > 0 else 0.0
+    return LineFit(slope, 0.0, r2)
+
+
+# --- spectra (D ch. 5) ----------------------------------------------------------------------
+def spectrum_1s(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """Power per bin (units² per bin) of the first second of ``x``: Hann window, 1 Hz bins, Parseval-true."""
+    n = int(round(fs))
+    if len(x) < n:
+        raise ValueError(f"need at least 1 s of samples ({n}), got {len(x)}")
+    f, pxx = signal.periodogram(np.asarray(x[:n], float), fs=fs, window="hann", scaling="density", detrend="constant")
+    return f, pxx * (f[1] - f[0])
+
+
+def band_power_2hz(x: np.ndarray, fs: float, f_center: float) -> float:
+    """Power in the 2 Hz band centred on ``f_center`` (bins within ±1 Hz) of a 1 s spectrum."""
+    f, p = spectrum_1s(x, fs)
+    return float(p[np.abs(f - f_center) <= 1.0 + 1e-9].sum())
+
+
+def largest_2hz_band(x: np.ndarray, fs: float, f_min: float = 2.0) -> tuple[float, float]:
+    """(frequency, power) of the 2 Hz band with most power in a 1 s spectrum, above ``f_min``."""
+    f, p = spectrum_1s(x, fs)
+    band = np.convolve(p, np.ones(3), mode="same")  # bins k-1, k, k+1 at 1 Hz spacing
+    band[f < f_min] = 0.0
+    band[-1] = 0.0
+    k = int(np.argmax(band))
+    return float(f[k]), float(band[k])
+
+
+def peak_2hz_band_power(x: np.ndarray, fs: float, f_min: float = 2.0) -> tuple[float, float]:
+    """(frequency, power) of the 2 Hz band around the spectral peak, as D ch. 5 measured P_1µm."""
+    return largest_2hz_band(x, fs, f_min)
+
+
+def minimum_detectable_amplitude(drive_m: float, p_drive_bits2: float, noise_band_bits2: float = 0.2) -> float:
+    """D eq. 5.3: d_min = drive · √(2·background / P_drive); background 0.2 bits² gives the 0.4 of the source."""
+    return drive_m * float(np.sqrt(2.0 * noise_band_bits2 / p_drive_bits2))
+
+
+# --- spectral error (fidelity benchmark) -------------------------------------------------
+def welch_db(x: np.ndarray, fs: float, nperseg: int = 1024) -> tuple[np.ndarray, np.ndarray]:
+    f, p = signal.welch(np.asarray(x, float), fs=fs, nperseg=min(nperseg, len(x)))
+    return f, 10 * np.log10(np.maximum(p, 1e-30))

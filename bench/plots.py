@@ -1,0 +1,62 @@
+"""Plots people would rather look at than read: channel traces and the PAC spectrogram."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy import signal  # noqa: E402
+
+from emulator.stimuli import Press, SphereDrop, Tap, Vibration  # noqa: E402
+
+
+def _mark_stimuli(ax, stimuli, t_max):
+    for s in stimuli:
+        if s.start_s > t_max:
+            continue
+        color = {SphereDrop: "tab:red", Tap: "tab:orange", Press: "tab:green", Vibration: "tab:purple"}[type(s)]
+        if isinstance(s, (Press, Vibration)):
+            ax.axvspan(s.start_s, min(s.end_s, t_max), color=color, alpha=0.08, lw=0)
+        else:
+            ax.axvline(s.start_s, color=color, alpha=0.35, lw=0.8)
+
+
+def scene_plots(rec, phys: dict, out_dir: Path) -> list[str]:
+    written = []
+    panels = [(k, lbl) for k, lbl in (("PAC_Pa", "PAC vibration (Pa)"), ("PDC_kPa", "PDC pressure change (kPa)"))
+              if k in phys]
+    if panels:
+        fig, axes = plt.subplots(len(panels), 1, figsize=(11, 3.2 * len(panels)), sharex=True, squeeze=False)
+        for ax, (key, label) in zip(axes[:, 0], panels):
+            ch = key.split("_")[0]
+            t = rec.channels[ch].times
+            ax.plot(t, phys[key], lw=0.5, color="black")
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+            _mark_stimuli(ax, rec.scene.stimuli, rec.simulated_s)
+        axes[-1, 0].set_xlabel("time (s)")
+        axes[0, 0].set_title(f"{rec.scene.name}: channel traces (markers: stimuli)")
+        fig.tight_layout()
+        fig.savefig(out_dir / "traces.png", dpi=110)
+        plt.close(fig)
+        written.append("traces.png")
+    if "PAC_Pa" in phys and phys["PAC_Pa"].size > 256:
+        t = rec.channels["PAC"].times
+        fs = 1.0 / np.median(np.diff(t))
+        nper = max(32, int(round(0.08 * fs)))  # 80 ms window, as D ch. 3
+        f, tt, sxx = signal.spectrogram(phys["PAC_Pa"], fs=fs, nperseg=nper, noverlap=nper // 2, scaling="density")
+        fig, ax = plt.subplots(figsize=(11, 4))
+        mesh = ax.pcolormesh(tt + t[0], f, 10 * np.log10(np.maximum(sxx, 1e-12)), shading="auto", cmap="magma")
+        fig.colorbar(mesh, ax=ax, label="PAC PSD (dB re 1 Pa²/Hz)")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("frequency (Hz)")
+        ax.set_title(f"{rec.scene.name}: PAC spectrogram (80 ms windows)")
+        fig.tight_layout()
+        fig.savefig(out_dir / "spectrogram.png", dpi=110)
+        plt.close(fig)
+        written.append("spectrogram.png")
+    return written

@@ -1,0 +1,269 @@
+"""Scene files: what happens to the finger, what the host reads, which noise, which fidelity, which seed.
+
+A scene is a TOML file validated completely before anything runs; every problem is reported
+with the file, the field (``stimulus[2].frequency_Hz``), the value and what is allowed.
+See ``fixtures/scenes/`` for examples and ``biotac-bench run --help`` for the format.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from emulator.channels import CHANNEL_INDEX
+from emulator.fidelity import PROFILES
+from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
+from emulator.sensor import NoiseSources
+from emulator.spi import protocol as proto
+from emulator.stimuli import DROP_HEIGHT_M, SPHERES, Press, SphereDrop, Tap, Vibration
+
+MAX_DURATION_S = 36000.0
+
+
+class SceneError(ValueError):
+    """A scene file is invalid; ``problems`` lists every problem found."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source, self.problems = source, problems
+        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
+
+
+@dataclass
+class Scene:
+    name: str
+    duration_s: float
+    seed: int = 0
+    fidelity: str = "default"
+    description: str = ""
+    params: SensorParams = field(default_factory=SensorParams)
+    sequence: list[str] | str = "default"
+    slot_rate_Hz: float = 4400.0
+    spi_clock_Hz: float = proto.HOST_DEFAULT_CLOCK_HZ
+    noise: NoiseSources = field(default_factory=NoiseSources)
+    stimuli: list = field(default_factory=list)
+    impact_detection: bool = False
+    source: str = "<scene>"
+    text: str = ""
+
+    @property
+    def channels(self) -> list[str]:
+        from emulator.channels import DEFAULT_FRAME_NAMES
+
+        seq = DEFAULT_FRAME_NAMES if self.sequence == "default" else self.sequence
+        return sorted(set(seq), key=lambda n: CHANNEL_INDEX[n])
+
+
+class _Checker:
+    """Collects problems while reading a table of values."""
+
+    def __init__(self):
+        self.problems: list[str] = []
+
+    def number(self, table: dict, key: str, where: str, lo: float, hi: float, unit: str,
+               default=None, required=False, integer=False):
+        if key not in table:
+            if required:
+                self.problems.append(f"{where}.{key} is missing ({unit}, {lo} to {hi})")
+            return default
+        v = table[key]
+        kind = "a whole number" if integer else "a number"
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
+            self.problems.append(f"{where}.{key} = {v!r}: must be {kind} in {unit} ({lo} to {hi})")
+            return default
+        if not math.isfinite(v) or not lo <= v <= hi:
+            self.problems.append(f"{where}.{key} = {v!r}: allowed range is {lo} to {hi} {unit}")
+            return default
+        return v
+
+    def times(self, table: dict, key: str, where: str, duration: float | None, required=True):
+        if key not in table:
+            if required:
+                self.problems.append(f"{where}.{key} is missing (an instant in s, or a list of instants)")
+            return []
+        v = table[key]
+        values = v if isinstance(v, list) else [v]
+        out = []
+        for i, t in enumerate(values):
+            name = f"{where}.{key}[{i}]" if isinstance(v, list) else f"{where}.{key}"
+            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or t < 0:
+                self.problems.append(f"{name} = {t!r}: must be an instant ≥ 0 s")
+            elif duration is not None and t >= duration:
+                self.problems.append(f"{name} = {t!r} s: after the end of the scene (duration_s = {duration})")
+            else:
+                out.append(float(t))
+        return out
+
+    def choice(self, table, key, where, choices, default=None, required=False):
+        if key not in table:
+            if required:
+                self.problems.append(f"{where}.{key} is missing; one of: {', '.join(map(str, choices))}")
+            return default
+        v = table[key]
+        if v not in choices:
+            self.problems.append(f"{where}.{key} = {v!r}: must be one of: {', '.join(map(str, choices))}")
+            return default
+        return v
+
+    def boolean(self, table, key, where, default):
+        v = table.get(key, default)
+        if not isinstance(v, bool):
+            self.problems.append(f"{where}.{key} = {v!r}: must be true or false")
+            return default
+        return v
+
+    def known_keys(self, table: dict, where: str, known):
+        for k in table:
+            if k not in known:
+                self.problems.append(f"{where}: unknown field {k!r}; known fields: {', '.join(sorted(known))}")
+
+
+STIMULUS_KINDS = ("tap", "press", "sphere_drop", "vibration")
+_STIMULUS_FIELDS = {
+    "tap": {"kind", "at_s", "peak_N", "duration_s"},
+    "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
+    "sphere_drop": {"kind", "at_s", "sphere", "mass_mg", "height_m"},
+    "vibration": {"kind", "start_s", "duration_s", "amplitude_um", "frequency_Hz", "f_start_Hz", "f_stop_Hz", "fade_s"},
+}
+
+
+def _stimuli(c: _Checker, items, duration, params: SensorParams):
+    out = []
+    if not isinstance(items, list):
+        c.problems.append("stimulus must be an array of tables ([[stimulus]])")
+        return out
+    for i, st in enumerate(items):
+        w = f"stimulus[{i}]"
+        if not isinstance(st, dict):
+            c.problems.append(f"{w} must be a table")
+            continue
+        kind = c.choice(st, "kind", w, STIMULUS_KINDS, required=True)
+        if kind is None:
+            continue
+        c.known_keys(st, w, _STIMULUS_FIELDS[kind])
+        if kind == "tap":
+            peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
+            dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
+            for t in c.times(st, "at_s", w, duration):
+                if peak is not None and dur is not None:
+                    out.append(Tap(t, peak, dur))
+        elif kind == "press":
+            start = c.times(st, "start_s", w, duration)
+            force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
+            ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
+            hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
+            if start and None not in (force, ramp, hold):
+                out.append(Press(start[0], force, ramp, hold))
+        elif kind == "sphere_drop":
+            height = c.number(st, "height_m", w, 1e-3, 10.0, "m", default=DROP_HEIGHT_M)
+            if "sphere" in st and "mass_mg" in st:
+                c.problems.append(f"{w}: give either sphere or mass_mg, not both")
+            if "mass_mg" in st:
+                mass_mg = c.number(st, "mass_mg", w, 1e-4, 1e4, "mg")
+                mass = None if mass_mg is None else mass_mg * 1e-6
+            else:
+                name = c.choice(st, "sphere", w, tuple(SPHERES), required=True)
+                mass = None if name is None else SPHERES[name][0]
+            for t in c.times(st, "at_s", w, duration):
+                if mass is not None and height is not None:
+                    out.append(SphereDrop(t, mass, height, params.impact_restitution, params.impact_contact_s))
+        elif kind == "vibration":
+            start = c.times(st, "start_s", w, duration)
+            dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
+            amp = c.number(st, "amplitude_um", w, 0.0, 1000.0, "µm", required=True)
+            fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+            if "frequency_Hz" in st:
+                f0 = c.number(st, "frequency_Hz", w, 1.0, 3000.0, "Hz")
+                f1 = None
+                if "f_start_Hz" in st or "f_stop_Hz" in st:
+                    c.problems.append(f"{w}: give frequency_Hz for a tone or f_start_Hz and f_stop_Hz for a sweep")
+            else:
+                f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
+                f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
+            if start and None not in (dur, amp, fade, f0):
+                out.append(Vibration(start[0], dur, amp * 1e-6, f0, f1, fade))
+    return out
+
+
+def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
+    """Validate a scene given as a dict (the parsed TOML); raise :class:`SceneError` listing every problem."""
+    c = _Checker()
+    c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis"})
+    meta = data.get("scene", {})
+    if "scene" not in data:
+        c.problems.append("[scene] table is missing (needs at least name and duration_s)")
+    c.known_keys(meta, "scene", {"name", "description", "duration_s", "seed", "fidelity"})
+    name = meta.get("name")
+    if not isinstance(name, str) or not name:
+        c.problems.append(f"scene.name = {name!r}: must be a non-empty string")
+    duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s", required=True)
+    seed = c.number(meta, "seed", "scene", 0, 2**63 - 1, "", default=0, integer=True)
+    fidelity = c.choice(meta, "fidelity", "scene", tuple(PROFILES), default="default")
+
+    sensor = data.get("sensor", {})
+    c.known_keys(sensor, "sensor", PARAMETER_FIELDS)
+    changes = {}
+    for k, v in sensor.items():
+        if k in PARAMETER_FIELDS:
+            try:
+                check_parameter(k, v, where=f"sensor.{k}")
+                changes[k] = v
+            except ValueError as e:
+                c.problems.append(str(e))
+    params = SensorParams().replace(**changes)
+
+    host = data.get("host", {})
+    c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz"})
+    sequence = host.get("sequence", "default")
+    if sequence != "default":
+        if not isinstance(sequence, list) or not sequence:
+            c.problems.append(f"host.sequence = {sequence!r}: \"default\" or a non-empty list of channel names")
+            sequence = "default"
+        else:
+            for i, n in enumerate(sequence):
+                if not isinstance(n, str) or n.upper() not in CHANNEL_INDEX or n.upper() == "HAL":
+                    c.problems.append(f"host.sequence[{i}] = {n!r}: channels are PAC, PDC, TAC, TDC, E1..E19")
+            sequence = [n.upper() for n in sequence if isinstance(n, str)]
+    slot_rate = c.number(host, "slot_rate_Hz", "host", 1.0, 8000.0, "Hz", default=4400.0)
+    lo, hi = proto.SPI_CLOCK_RANGE_HZ
+    clock = c.number(host, "spi_clock_Hz", "host", lo, hi, "Hz", default=proto.HOST_DEFAULT_CLOCK_HZ)
+
+    noise_t = data.get("noise", {})
+    names = NoiseSources.__dataclass_fields__.keys()
+    c.known_keys(noise_t, "noise", names)
+    noise = NoiseSources(**{k: c.boolean(noise_t, k, "noise", True) for k in names})
+
+    stimuli = _stimuli(c, data.get("stimulus", []), duration, params)
+    analysis = data.get("analysis", {})
+    c.known_keys(analysis, "analysis", {"impact_detection"})
+    impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
+
+    if fidelity and duration:
+        from emulator.fidelity import profile
+
+        grid = profile(fidelity).grid_Hz
+        for i, s in enumerate(stimuli):
+            if isinstance(s, Vibration) and max(s.f_start_Hz, s.f_stop_Hz or 0) >= 0.45 * grid:
+                c.problems.append(f"vibration at {max(s.f_start_Hz, s.f_stop_Hz or 0):.0f} Hz needs a finer grid than "
+                                  f"fidelity '{fidelity}' ({grid:.0f} Hz); use \"reference\"")
+    if c.problems:
+        raise SceneError(source, c.problems)
+    return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
+                 description=str(meta.get("description", "")), params=params, sequence=sequence,
+                 slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), noise=noise, stimuli=stimuli,
+                 impact_detection=impact_detection, source=source, text=text)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as e:
+        raise SceneError(str(path), [f"cannot read the file: {e.strerror}"]) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(str(path), [f"TOML syntax error: {e}"]) from None
+    return parse_scene(data, source=str(path), text=text)
