@@ -17,7 +17,7 @@ from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
-from emulator.stimuli import DROP_HEIGHT_M, SPHERES, Press, SphereDrop, Tap, Vibration
+from emulator.stimuli import DROP_HEIGHT_M, SPHERES, Press, PressureCalibrator, SphereDrop, Tap, Vibration
 
 MAX_DURATION_S = 36000.0
 
@@ -119,12 +119,13 @@ class _Checker:
                 self.problems.append(f"{where}: unknown field {k!r}; known fields: {', '.join(sorted(known))}")
 
 
-STIMULUS_KINDS = ("tap", "press", "sphere_drop", "vibration")
+STIMULUS_KINDS = ("tap", "press", "sphere_drop", "vibration", "pressure")
 _STIMULUS_FIELDS = {
     "tap": {"kind", "at_s", "peak_N", "duration_s"},
     "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
     "sphere_drop": {"kind", "at_s", "sphere", "mass_mg", "height_m"},
     "vibration": {"kind", "start_s", "duration_s", "amplitude_um", "frequency_Hz", "f_start_Hz", "f_stop_Hz", "fade_s"},
+    "pressure": {"kind", "start_s", "duration_s", "offset_kPa", "amplitude_Pa", "frequency_Hz", "fade_s"},
 }
 
 
@@ -183,6 +184,15 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
                 f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
             if start and None not in (dur, amp, fade, f0):
                 out.append(Vibration(start[0], dur, amp * 1e-6, f0, f1, fade))
+        elif kind == "pressure":
+            start = c.times(st, "start_s", w, duration)
+            dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
+            offset = c.number(st, "offset_kPa", w, -100.0, 200.0, "kPa", default=0.0)
+            amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
+            freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
+            fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+            if start and None not in (dur, offset, amp, freq, fade):
+                out.append(PressureCalibrator(start[0], dur, offset * 1e3, amp, freq, fade))
     return out
 
 

@@ -20,7 +20,8 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.stimuli import ContactForce, ForceStimulus, SkinDisplacement, Vibration
+from emulator.stimuli import (CalibrationPressure, ContactForce, ForceStimulus, PressureCalibrator,
+                              SkinDisplacement, Vibration)
 from emulator.transducer import Bridge, johnson_noise
 
 #: Which grid signal each modelled channel converts.
@@ -49,7 +50,7 @@ class Sensor:
     Parameters
     ----------
     params : SensorParams
-    stimuli : force stimuli (taps, presses, sphere drops) and :class:`Vibration` stimuli
+    stimuli : force stimuli (taps, presses, sphere drops), :class:`Vibration` and :class:`PressureCalibrator`
     channels_read : channel names or indices the host will sample; decides which effects are built
     fidelity : profile name or :class:`Fidelity`
     seed : scene seed; every random effect draws from a stream keyed by (seed, effect name)
@@ -93,7 +94,8 @@ class Sensor:
         p, fs, disc, f = self.params, self.fs, self.fidelity.discretization, self.fidelity
         forces = [s for s in stimuli if isinstance(s, ForceStimulus)]
         vibrations = [s for s in stimuli if isinstance(s, Vibration)]
-        other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration))]
+        calibrations = [s for s in stimuli if isinstance(s, PressureCalibrator)]
+        other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator))]
         if other:
             raise TypeError(f"not a stimulus: {other[0]!r}")
         for v in vibrations:
@@ -106,6 +108,8 @@ class Sensor:
             effects.append(ContactForce(forces))
         if vibrations:
             effects.append(SkinDisplacement(vibrations))
+        if calibrations:
+            effects.append(CalibrationPressure(calibrations))
         effects += [RestingPressure(p), ForceCoupling(p, fs, disc), VibrationCoupling(p, fs, disc),
                     Bridge(p, fs, disc, duct_resonance=f.duct_resonance)]
         if self.noise.johnson:

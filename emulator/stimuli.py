@@ -206,3 +206,51 @@ class SkinDisplacement(Effect):
         for s in _overlapping(self.stimuli, t[0], t[-1]):
             out += s.displacement(t)
         return {"skin_displacement_m": out}
+
+
+@dataclass
+class PressureCalibrator:
+    """A calibrated pressure applied straight to the liquid (bypassing the skin), as a lab calibrator would.
+
+    ``offset_Pa`` plus an optional sinusoid of ``amplitude_Pa`` at ``frequency_Hz`` during
+    [start_s, start_s + duration_s], with raised-cosine fades of ``fade_s``.
+    """
+
+    start_s: float
+    duration_s: float
+    offset_Pa: float = 0.0
+    amplitude_Pa: float = 0.0
+    frequency_Hz: float = 0.0
+    fade_s: float = 0.01
+
+    @property
+    def end_s(self):
+        return self.start_s + self.duration_s
+
+    def pressure(self, t: np.ndarray) -> np.ndarray:
+        tau = np.asarray(t, float) - self.start_s
+        T = self.duration_s
+        inside = (tau >= 0) & (tau <= T)
+        fade = np.ones_like(tau)
+        if self.fade_s > 0:
+            fade = np.clip(np.minimum(tau, T - tau) / self.fade_s, 0, 1)
+            fade = 0.5 - 0.5 * np.cos(np.pi * fade)
+        wave = self.offset_Pa + self.amplitude_Pa * np.sin(2 * np.pi * self.frequency_Hz * tau)
+        return np.where(inside, fade * wave, 0.0)
+
+
+class CalibrationPressure(Effect):
+    """Pressure applied directly to the liquid by a calibrator, in Pa."""
+
+    name = "calibration_pressure"
+    produces = ("fluid_pressure_Pa",)
+
+    def __init__(self, stimuli: list[PressureCalibrator]):
+        self.stimuli = stimuli
+
+    def process(self, block: Block, inputs):
+        t = block.times
+        out = np.zeros(block.n)
+        for s in _overlapping(self.stimuli, t[0], t[-1]):
+            out += s.pressure(t)
+        return {"fluid_pressure_Pa": out}

@@ -80,7 +80,8 @@ class SoftwarePeripheral:
             bad = int(np.flatnonzero((clock < lo) | (clock > hi))[0])
             raise ValueError(f"transfer #{bad}: SCK {clock[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
         end = start + BITS_PER_TRANSFER / clock
-        if start[0] < self._last_end - 1e-12 or (start.size > 1 and (start[1:] - end[:-1]).min() < -1e-12):
+        eps = proto.TIME_TOLERANCE_S
+        if start[0] < self._last_end - eps or (start.size > 1 and (start[1:] - end[:-1]).min() < -eps):
             raise ValueError("transfers must be in time order and must not overlap")
         b0 = mosi >> 8
         cmd = np.flatnonzero(b0 != 0)
@@ -109,7 +110,7 @@ class SoftwarePeripheral:
                 ready_at = np.full(reads.shape, self._prepared_at)
             has = from_batch | self._has_prepared
             word[~has] = proto.ERROR_WORDS["nothing_to_resend"]
-            too_soon = has & (start[reads] - ready_at < proto.SAMPLE_DELAY_S - 1e-12)
+            too_soon = has & (start[reads] - ready_at < proto.SAMPLE_DELAY_S - proto.TIME_TOLERANCE_S)
             word[too_soon] = proto.ERROR_WORDS["insufficient_delay"]
             miso[reads] = word
 

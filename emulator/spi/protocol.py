@@ -12,6 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 SAMPLE_DELAY_S = 50e-6  # minimum time from sampling command to reading the result
+#: Timing comparisons allow 1 ns: far below any SPI timing, far above float64 rounding of times
+#: (3.6 ps at 2^14 s, 0.1 ns after a year), so long runs never flip a comparison.
+TIME_TOLERANCE_S = 1e-9
 SPI_CLOCK_RANGE_HZ = (500e3, 10e6)
 HOST_DEFAULT_CLOCK_HZ = 4.4e6
 
