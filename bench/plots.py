@@ -60,3 +60,27 @@ def scene_plots(rec, phys: dict, out_dir: Path) -> list[str]:
         plt.close(fig)
         written.append("spectrogram.png")
     return written
+
+
+def sensitivity_plot(claims, out_dir: Path) -> Path:
+    """d_min versus frequency for the sensor, with the human threshold curve (D Fig. 5-4)."""
+    from bench.psychophysics import human_threshold_m
+
+    d = next(c.details["d_min_m"] for c in claims if "d_min_m" in c.details)
+    f = np.array(sorted(d))
+    dm = np.array([d[x] for x in f])
+    ff = np.geomspace(10, 900, 200)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.loglog(ff, human_threshold_m(ff) * 1e6, color="tab:green", label="human threshold (after Verrillo 1963)")
+    ax.loglog(f, dm * 1e6, "o-", color="tab:red", label="emulated BioTac d_min (D eq. 5.3)")
+    ax.set_xlabel("vibration frequency (Hz)")
+    ax.set_ylabel("minimum detectable amplitude (µm)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
+    ax.set_title("Frequency sensitivity (D Fig. 5-4)")
+    fig.tight_layout()
+    path = out_dir / "frequency_sensitivity.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,178 @@
+"""What accuracy costs in time: fidelity profiles measured against the reference profile.
+
+For every profile and shipped scene:
+  * PAC RMS error (bits): the noise-free analog PAC at the scene's PAC sampling instants, against
+    the reference profile's, over the whole scene;
+  * spectral error (dB): mean |ΔPSD| over 20–1000 Hz of the PAC codes (all noise on, through SPI)
+    against the reference profile; the row "reference (other seed)" shows the statistical floor of
+    this estimate (two noise realisations of the same model);
+  * cost: wall time per simulated second of the full run through SPI.
+Then throughput of the full 44-slot frame, the demand-driven saving of reading only PAC, and the
+peak memory of streaming one simulated hour (in a subprocess, so the number is the stream's own).
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bench import analysis
+from bench.runner import build_sensor, run_scene
+from bench.sampler import Sampler
+from bench.scene import load_scene
+from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator.conversions import ADC_LSB_V
+from emulator.fidelity import PROFILES
+from emulator.sensor import NoiseSources, Sensor
+from emulator.spi.peripheral import SoftwarePeripheral
+
+SCENES_DIR = Path(__file__).resolve().parent.parent / "fixtures" / "scenes"
+
+
+def _pac_instants(scene) -> np.ndarray:
+    sampler = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
+    k = np.arange(int(round(scene.duration_s * scene.slot_rate_Hz)))
+    word_s = 16 / scene.spi_clock_Hz
+    pos = k % len(sampler.sequence)
+    return (k / scene.slot_rate_Hz + word_s)[sampler.sequence[pos] == 0]
+
+
+def _deterministic_pac_bits(scene, fidelity: str, times: np.ndarray) -> np.ndarray:
+    scene.fidelity, scene.noise = fidelity, NoiseSources.none()
+    sensor = build_sensor(scene)
+    parts = np.array_split(times, max(1, int(scene.duration_s)))
+    return np.concatenate([sensor.analog(np.zeros(p.size, int), p) for p in parts]) / ADC_LSB_V
+
+
+def _noisy_run(scene, fidelity: str, seed: int):
+    scene.fidelity, scene.noise, scene.seed = fidelity, NoiseSources(), seed
+    rec = run_scene(scene, progress=False)
+    return rec.channels["PAC"].codes.astype(float), rec.wall_s / rec.simulated_s
+
+
+def _spectral_error_dB(x: np.ndarray, ref: np.ndarray, fs: float) -> float:
+    f, a = analysis.welch_db(x - x.mean(), fs)
+    _, b = analysis.welch_db(ref - ref.mean(), fs)
+    band = (f >= 20) & (f <= 1000)
+    return float(np.mean(np.abs(a[band] - b[band])))
+
+
+def fidelity_table(progress=print) -> list[dict]:
+    rows = []
+    for path in sorted(SCENES_DIR.glob("*.toml")):
+        base = load_scene(path)
+        if "PAC" not in base.channels:
+            continue
+        times = _pac_instants(base)
+        pac_rate = times.size / base.duration_s
+        ref_det = _deterministic_pac_bits(load_scene(path), "reference", times)
+        ref_noisy, ref_cost = _noisy_run(load_scene(path), "reference", base.seed)
+        for name in PROFILES:
+            progress(f"… {base.name} / {name}")
+            if name == "reference":
+                det_err, spec, cost = 0.0, 0.0, ref_cost
+            else:
+                det = _deterministic_pac_bits(load_scene(path), name, times)
+                det_err = float(np.sqrt(np.mean((det - ref_det) ** 2)))
+                noisy, cost = _noisy_run(load_scene(path), name, base.seed)
+                spec = _spectral_error_dB(noisy, ref_noisy, pac_rate)
+            rows.append({"scene": base.name, "profile": name, "pac_rms_error_bits": det_err,
+                         "spectral_error_dB": spec, "wall_ms_per_sim_s": 1e3 * cost,
+                         "realtime_factor": 1.0 / cost})
+        other, _ = _noisy_run(load_scene(path), "reference", base.seed + 1)
+        rows.append({"scene": base.name, "profile": "reference (other seed)", "pac_rms_error_bits": None,
+                     "spectral_error_dB": _spectral_error_dB(other, ref_noisy, pac_rate),
+                     "wall_ms_per_sim_s": None, "realtime_factor": None})
+    return rows
+
+
+def stream_realtime_factor(fidelity: str, channels, sequence, slot_rate_Hz: float, seconds: float,
+                           stimuli=()) -> dict:
+    """Wall-clock throughput of streaming ``seconds`` of samples through SPI, in 1 s host batches."""
+    sensor = Sensor(None, list(stimuli), channels, fidelity, seed=1)
+    sampler = Sampler(SoftwarePeripheral(sensor), sequence, slot_rate_Hz)
+    per_batch = int(slot_rate_Hz)
+    t0 = time.perf_counter()
+    for _ in range(int(seconds)):
+        sampler.read(per_batch)
+    wall = time.perf_counter() - t0
+    return {"fidelity": fidelity, "sequence": "default 44-slot frame" if sequence == "default" else sequence,
+            "simulated_s": seconds, "wall_s": wall, "realtime_factor": seconds / wall,
+            "effects": [e["name"] for e in sensor.effects_report()]}
+
+
+def stream_hour_child(seconds: float) -> None:
+    """Entry point of the memory subprocess: stream, keep running statistics only, print JSON."""
+    sensor = Sensor(None, [], DEFAULT_FRAME_NAMES, "default", seed=1)
+    sampler = Sampler(SoftwarePeripheral(sensor), "default", 4400.0)
+    n = 0
+    total = 0.0
+    t0 = time.perf_counter()
+    for _ in range(int(seconds)):
+        s = sampler.read(4400)
+        pac = s.codes[s.channels == 0]
+        n += pac.size
+        total += float(pac.sum())
+    wall = time.perf_counter() - t0
+    peak_MB = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({"simulated_s": seconds, "wall_s": wall, "realtime_factor": seconds / wall,
+                      "peak_rss_MB": peak_MB, "pac_mean": total / n}))
+
+
+def stream_hour(seconds: float = 3600.0) -> dict:
+    code = f"from bench.benchmark import stream_hour_child; stream_hour_child({seconds!r})"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).resolve().parent.parent)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _fmt(v, spec):
+    width = int("".join(ch for ch in spec.split(".")[0] if ch.isdigit()) or 0)
+    return f"{'—':>{width}s}" if v is None else format(v, spec)
+
+
+def main(args) -> int:
+    say = (lambda m: print(m, file=sys.stderr)) if not args.json else (lambda m: None)
+    result = {"fidelity": fidelity_table(say)}
+    sec = args.seconds
+    say("… throughput")
+    result["throughput"] = [stream_realtime_factor(p, DEFAULT_FRAME_NAMES, "default", 4400.0, sec)
+                            for p in ("fast", "default", "reference")]
+    drops = load_scene(SCENES_DIR / "sphere_drops.toml").stimuli
+    full = stream_realtime_factor("default", DEFAULT_FRAME_NAMES, "default", 4400.0, 30.0, drops)
+    pac_only = stream_realtime_factor("default", ["PAC"], ["PAC"], 2200.0, 30.0, drops)
+    pdc_only = stream_realtime_factor("default", ["PDC"], ["PDC"], 100.0, 30.0, drops)
+    result["demand"] = {"full_frame": full, "pac_only": pac_only, "pdc_only": pdc_only,
+                        "pac_only_speedup": pac_only["realtime_factor"] / full["realtime_factor"]}
+    say("… memory (streaming)")
+    result["memory"] = stream_hour(3600.0 if args.hour else 600.0)
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    print("Fidelity profiles: error against the reference profile, and cost")
+    print(f"{'scene':16s} {'profile':24s} {'PAC RMS err (bits)':>19s} {'spectral err (dB)':>18s} "
+          f"{'ms / sim s':>11s} {'× real time':>12s}")
+    for r in result["fidelity"]:
+        print(f"{r['scene']:16s} {r['profile']:24s} {_fmt(r['pac_rms_error_bits'], '19.4f')} "
+              f"{_fmt(r['spectral_error_dB'], '18.3f')} {_fmt(r['wall_ms_per_sim_s'], '11.2f')} "
+              f"{_fmt(r['realtime_factor'], '12.0f')}")
+    print("\nFull 44-slot frame at rest, through SPI:")
+    for r in result["throughput"]:
+        print(f"  {r['fidelity']:10s} {r['realtime_factor']:8.0f}× real time "
+              f"({3600 / r['realtime_factor']:.1f} s per simulated hour)")
+    d = result["demand"]
+    print("\nDemand-driven (sphere-drop stimuli, default profile):")
+    for key in ("full_frame", "pac_only", "pdc_only"):
+        r = d[key]
+        print(f"  {key:10s} {r['realtime_factor']:8.0f}× real time, effects: {', '.join(r['effects'])}")
+    print(f"  reading only PAC is {d['pac_only_speedup']:.2f}× faster than the full frame")
+    m = result["memory"]
+    print(f"\nStreaming {m['simulated_s']:.0f} simulated s of the full frame: {m['realtime_factor']:.0f}× real time, "
+          f"peak RSS {m['peak_rss_MB']:.0f} MB")
+    return 0

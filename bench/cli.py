@@ -1,0 +1,225 @@
+"""biotac-bench: run scenes against the emulated BioTac, check the published figures, measure costs."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+SCENES_DIR = REPO / "fixtures" / "scenes"
+
+MAIN_HELP = """\
+An emulated BioTac fingertip (fluid pressure path at sample level: PDC and PAC) behind its SPI protocol,
+driven by scene files.
+
+typical session:
+  biotac-bench scenes                                  # what ships
+  biotac-bench run fixtures/scenes/sphere_drops.toml   # run one: codes.npz, record.json, report.md, plots
+  biotac-bench claims                                  # check every published figure (PASS/FAIL table)
+  biotac-bench noise-budget                            # where the 1.4 bits of PAC noise come from
+  biotac-bench benchmark                               # what each fidelity profile costs and how wrong it is
+
+Every subcommand has its own --help.
+"""
+
+RUN_HELP = """\
+Runs a scene file through sensor -> SPI peripheral -> host sampler and writes, into --out:
+  codes.npz     raw 12-bit codes per channel (<CH>_t, <CH>_code, <CH>_status) and physical units
+                (PAC_Pa, PDC_kPa, PDC_force_N) using the published conversions
+  samples.csv   the same in long format (with --csv)
+  record.json   everything about the run: scene, parameters, effects that ran and their cost, results
+  report.md     a short human-readable report
+  traces.png, spectrogram.png
+
+scene file (TOML):
+  [scene]    name, duration_s, seed (0), fidelity ("fast" | "default" | "reference"), description
+  [sensor]   any sensor parameter by name, e.g. inflation_volume_mL = 0.6  (see `biotac-bench params`)
+  [host]     sequence = "default" (44-slot frame) or ["PAC", "PDC"]; slot_rate_Hz (4400); spi_clock_Hz (4.4e6)
+  [noise]    johnson, amplifier, mains_hum, adc, spi_coupling = true | false
+  [analysis] impact_detection = true   (applies D ch. 5's rule to every sphere drop)
+  [[stimulus]] one table per stimulus, by kind:
+     tap          at_s (s or list), peak_N, duration_s (0.03)
+     press        start_s, force_N, ramp_s (0.5), hold_s (1.0)
+     sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07)
+     vibration    start_s, duration_s, amplitude_um, frequency_Hz  | f_start_Hz + f_stop_Hz (log sweep), fade_s
+     pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz  (calibrator on the liquid)
+
+The file is validated before anything runs; every problem is listed with its field, value and allowed range.
+A run that fails part-way still writes what it recorded (record.json says "failed" and why); exit status 1.
+"""
+
+
+def _cmd_run(a) -> int:
+    from bench.report import write_outputs
+    from bench.runner import run_scene
+    from bench.scene import load_scene
+
+    scene = load_scene(a.scene)
+    if a.fidelity:
+        scene.fidelity = a.fidelity
+    if a.seed is not None:
+        scene.seed = a.seed
+    out = Path(a.out) if a.out else Path("out") / scene.name
+    rec = run_scene(scene, progress=not a.quiet)
+    record = write_outputs(rec, out, csv=a.csv, plots=not a.no_plots)
+    if not a.quiet:
+        print((out / "report.md").read_text())
+    print(f"wrote {out}/ ({', '.join(record['outputs'])})")
+    if rec.error:
+        print(f"error: the run stopped at {rec.simulated_s:.3f} s: {rec.error}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _cmd_validate(a) -> int:
+    from bench.scene import SceneError, load_scene
+
+    bad = 0
+    for f in a.scenes:
+        try:
+            sc = load_scene(f)
+            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {len(sc.stimuli)} stimuli, fidelity {sc.fidelity})")
+        except SceneError as e:
+            print(e, file=sys.stderr)
+            bad += 1
+    return 1 if bad else 0
+
+
+def _cmd_scenes(a) -> int:
+    from bench.scene import load_scene
+
+    for f in sorted(SCENES_DIR.glob("*.toml")):
+        sc = load_scene(f)
+        print(f"{f.relative_to(REPO)}\n    {sc.description or sc.name} ({sc.duration_s:g} s)")
+    return 0
+
+
+def _cmd_profiles(a) -> int:
+    from emulator.fidelity import PROFILES
+
+    for p in PROFILES.values():
+        print(f"{p.name:10s} {p.description}")
+    return 0
+
+
+def _cmd_params(a) -> int:
+    from emulator.params import PARAMETER_FIELDS, SensorParams
+
+    d = SensorParams()
+    for name, f in PARAMETER_FIELDS.items():
+        m = f.metadata
+        print(f"{name:38s} {getattr(d, name)!r:>24} {m['unit']:10s} [{m['range'][0]}, {m['range'][1]}] "
+              f"({m['source']}) {m['doc']}")
+    return 0
+
+
+def _cmd_noise_budget(a) -> int:
+    from emulator.noise_budget import budget, format_budget
+
+    lines = budget()
+    if a.json:
+        print(json.dumps([vars(x) for x in lines], indent=2))
+    else:
+        print(format_budget(lines))
+    return 0
+
+
+def _cmd_claims(a) -> int:
+    from bench.claims import CLAIM_GROUPS, Bench, format_table, run_claims
+
+    groups = a.only or list(CLAIM_GROUPS)
+    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick)
+    claims = run_claims(bench, groups, progress=None if a.json else lambda g: print(f"… {g}", file=sys.stderr))
+    if a.json:
+        print(json.dumps([c.as_dict() for c in claims], indent=2, default=float))
+    else:
+        print(format_table(claims))
+    if a.plots:
+        from bench.plots import sensitivity_plot
+
+        out = sensitivity_plot(claims, Path(a.plots))
+        print(f"wrote {out}", file=sys.stderr)
+    return 0 if all(c.passed for c in claims) else 1
+
+
+def _cmd_benchmark(a) -> int:
+    from bench.benchmark import main as bench_main
+
+    return bench_main(a)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    fmt = argparse.RawDescriptionHelpFormatter
+    p = argparse.ArgumentParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=fmt)
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    r = sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
+                       description=RUN_HELP, formatter_class=fmt)
+    r.add_argument("scene", help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
+    r.add_argument("--out", help="output folder (default: out/<scene name>)")
+    r.add_argument("--csv", action="store_true", help="also write samples.csv")
+    r.add_argument("--fidelity", choices=["fast", "default", "reference"], help="override the scene's profile")
+    r.add_argument("--seed", type=int, help="override the scene's seed")
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
+    r.set_defaults(func=_cmd_run)
+
+    v = sub.add_parser("validate", help="check scene files without running them")
+    v.add_argument("scenes", nargs="+")
+    v.set_defaults(func=_cmd_validate)
+
+    sub.add_parser("scenes", help="list the shipped scenes").set_defaults(func=_cmd_scenes)
+    sub.add_parser("profiles", help="list the fidelity profiles").set_defaults(func=_cmd_profiles)
+    sub.add_parser("params", help="list every sensor parameter with unit, range and source").set_defaults(
+        func=_cmd_params)
+
+    nb = sub.add_parser("noise-budget", help="the PAC noise budget, source by source")
+    nb.add_argument("--json", action="store_true")
+    nb.set_defaults(func=_cmd_noise_budget)
+
+    c = sub.add_parser("claims", help="measure every published figure on the emulator; exit 1 if any fails",
+                       description="Runs each claim (SENSOR.md figure) on the emulator's output and prints "
+                                   "claim, expected, measured, accepted range and PASS/FAIL.", formatter_class=fmt)
+    c.add_argument("--json", action="store_true", help="print the results as JSON")
+    c.add_argument("--only", action="append", choices=["noise", "scales", "force", "impact", "detection",
+                                                       "false-detection", "vibration"], help="run one group")
+    c.add_argument("--fidelity", default="default", choices=["fast", "default", "reference"])
+    c.add_argument("--seed", type=int, default=2012)
+    c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
+    c.add_argument("--plots", metavar="DIR", help="write the frequency-sensitivity plot into DIR")
+    c.set_defaults(func=_cmd_claims)
+
+    b = sub.add_parser("benchmark", help="error vs the reference profile and cost per simulated second",
+                       description="For every fidelity profile and shipped scene: PAC RMS error (bits) and "
+                                   "spectral error (dB) against the reference profile, and wall time per "
+                                   "simulated second; then throughput, memory and demand-driven savings.",
+                       formatter_class=fmt)
+    b.add_argument("--json", action="store_true", help="print the results as JSON")
+    b.add_argument("--seconds", type=float, default=60.0, help="simulated seconds for the throughput runs")
+    b.add_argument("--hour", action="store_true", help="stream a full simulated hour for the memory check")
+    b.set_defaults(func=_cmd_benchmark)
+    return p
+
+
+def main(argv=None) -> int:
+    from bench.scene import SceneError
+    from emulator.adc import NumericalError
+
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except SceneError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except (ValueError, NumericalError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
