@@ -56,11 +56,12 @@ class Sensor:
     seed : scene seed; every random effect draws from a stream keyed by (seed, effect name)
     noise : which noise sources are on
     block_s : physics block length in s (results do not depend on it)
+    start_s : the instant (s) at which the sensor starts, settled at rest; earlier instants do not exist
     """
 
     def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
                  fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
-                 block_s: float = 0.5):
+                 block_s: float = 0.5, start_s: float = 0.0):
         self.params = params or SensorParams()
         self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
         self.seed = int(seed)
@@ -86,8 +87,10 @@ class Sensor:
                 self._node_of_channel[c] = len(self.nodes)
                 self._fixed_V[c] = self._placeholder_code(c) * ADC_LSB_V
         self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self.nodes}
-        self._buf_n0 = 0  # grid index of the first retained sample
-        self._computed = 0  # next grid index to compute
+        if not (np.isfinite(start_s) and start_s >= 0):
+            raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
+        self._buf_n0 = int(np.ceil(start_s * self.fs))  # grid index of the first retained sample
+        self._computed = self._buf_n0  # next grid index to compute
 
     # --- construction --------------------------------------------------------------
     def _candidate_effects(self, stimuli) -> list[Effect]:
@@ -134,13 +137,20 @@ class Sensor:
         return self.params.resting_electrode_code
 
     # --- time advance ---------------------------------------------------------------
-    def _advance_through(self, n_last: int) -> None:
+    def _advance_through(self, n_last: int, keep_from: int) -> None:
+        """Compute the grid through index ``n_last``, retaining nothing before ``keep_from``."""
         while self._computed <= n_last:
             block = Block(self._computed, self.block_n, self.fs)
             signals = self.graph.run(block)
+            self._computed += block.n
+            if self._computed <= keep_from:  # a whole block nobody will ask for: do not keep it
+                self._buf_n0 = self._computed
+                for node in self.nodes:
+                    self._chunks[node] = []
+                continue
             for node in self.nodes:
                 self._chunks[node].append(signals[node])
-            self._computed += block.n
+        self._trim(keep_from)
 
     def _history(self, node: str) -> np.ndarray:
         chunks = self._chunks[node]
@@ -178,7 +188,7 @@ class Sensor:
         if i.min() < self._buf_n0:
             raise ValueError(f"instant {times.min():.6f} s is older than the retained history "
                              f"(from {self._buf_n0 / self.fs:.6f} s): ask for instants in time order")
-        self._advance_through(int(i.max()) + 1)
+        self._advance_through(int(i.max()) + 1, keep_from=int(i.min()))
         frac = x - i
         k = i - self._buf_n0
         node_of = self._node_of_channel[channels]

@@ -3,6 +3,8 @@
 A *transfer* is one chip-select window carrying a 2-byte word, with its start time (s) and SCK
 rate (Hz).  The peripheral answers the sampling command and the result read:
 
+* a sampling command for a channel the emulated sensor was not built to provide (see
+  ``Sensor(channels_read=...)``) answers ``EX`` and is counted in ``unprovided_requests``;
 * a transfer whose first byte is 0x00 (host clocking out with 0x0000 or 0x0001) is a *read*: it
   returns the word prepared by the latest command, or ``E.`` if it starts less than 50 µs after
   that command ended, or ``E_`` if no command came before it;
@@ -61,6 +63,15 @@ class SoftwarePeripheral:
 
     def __init__(self, sensor):
         self.sensor = sensor
+        # The emulated sensor computes only the channels it was built for; a sampling command for any
+        # other channel answers EX (and is counted) rather than stopping the exchange.
+        provided = np.zeros(256, dtype=bool)
+        provided[:] = np.isin(_CHANNEL_OF_BYTE, list(sensor.channels_read))
+        self._samples = _SAMPLES_CHANNEL & provided
+        self._prepared_by_byte = _PREPARED_BY_FIRST_BYTE.copy()
+        self._prepared_by_byte[_SAMPLES_CHANNEL & ~provided] = proto.ERROR_WORDS["channel_not_recognized"]
+        self._not_provided = _SAMPLES_CHANNEL & ~provided
+        self.unprovided_requests = 0
         self._prepared = proto.ERROR_WORDS["nothing_to_resend"]
         self._prepared_at = -np.inf
         self._has_prepared = False
@@ -77,8 +88,9 @@ class SoftwarePeripheral:
             return np.zeros(0, np.uint16)
         lo, hi = proto.SPI_CLOCK_RANGE_HZ
         if clock.min() < lo or clock.max() > hi:
-            bad = int(np.flatnonzero((clock < lo) | (clock > hi))[0])
-            raise ValueError(f"transfer #{bad}: SCK {clock[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
+            c = np.broadcast_to(clock, start.shape)
+            bad = int(np.flatnonzero((c < lo) | (c > hi))[0])
+            raise ValueError(f"transfer #{bad}: SCK {c[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
         end = start + BITS_PER_TRANSFER / clock
         eps = proto.TIME_TOLERANCE_S
         if start[0] < self._last_end - eps or (start.size > 1 and (start[1:] - end[:-1]).min() < -eps):
@@ -89,8 +101,9 @@ class SoftwarePeripheral:
 
         # the word each command prepares: an error word from the table, or a sampled code
         first = b0[cmd]
-        prepared = _PREPARED_BY_FIRST_BYTE[first]
-        sampling = _SAMPLES_CHANNEL[first]
+        prepared = self._prepared_by_byte[first]
+        sampling = self._samples[first]
+        self.unprovided_requests += int(np.count_nonzero(self._not_provided[first]))
         cmd_end = end[cmd]
         if sampling.any():
             codes = self.sensor.sample(_CHANNEL_OF_BYTE[first[sampling]], cmd_end[sampling])

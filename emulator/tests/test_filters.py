@@ -1,0 +1,62 @@
+"""Discretization stage by stage, second-order sections, carried state."""
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from emulator import filters
+
+pytestmark = pytest.mark.unit
+
+
+def _gain_db(sos, f, fs):
+    _, h = signal.sosfreqz(sos, worN=[f], fs=fs)
+    return 20 * np.log10(abs(h[0]))
+
+
+def test_prewarping_puts_the_1040Hz_corner_where_it_belongs_near_nyquist():
+    fs = 2200.0  # the corner sits at 95 % of Nyquist
+    z, p, k = filters.lowpass_butter2(1040.0)
+    pre = filters.discretize(z, p, k, fs, "prewarped")
+    plain = filters.discretize(z, p, k, fs, "bilinear")
+    assert _gain_db(pre, 1040.0, fs) == pytest.approx(-3.01, abs=0.05)
+    assert _gain_db(plain, 1040.0, fs) < -6.0  # plain bilinear warps the corner far down
+
+
+def test_dc_gain_matches_the_analog_prototype_for_every_method():
+    z, p, k = filters.resonance(330.0, 0.02)
+    for method in filters.DISCRETIZATIONS:
+        sos = filters.discretize(z, p, k, 8800.0, method)
+        assert _gain_db(sos, 0.0, 8800.0) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_resonance_rings_at_its_frequency_with_its_decay():
+    z, p, k = filters.resonance(330.0, 0.02)
+    assert np.allclose(-1 / p.real, 0.02)
+    assert np.allclose(np.abs(p), 2 * np.pi * 330.0)
+
+
+def test_unknown_method_and_corner_above_nyquist_are_refused():
+    z, p, k = filters.lowpass_butter2(1040.0)
+    with pytest.raises(ValueError, match="unknown discretization"):
+        filters.discretize(z, p, k, 8800.0, "euler")
+    with pytest.raises(ValueError, match="above Nyquist"):
+        filters.discretize(z, p, k, 1500.0, "prewarped")
+
+
+def test_sos_filter_output_is_independent_of_block_size():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(5000)
+    sos = filters.discretize(*filters.lowpass_butter2(1040.0), 8800.0, "prewarped")
+    whole = filters.SosFilter(sos)(x)
+    f = filters.SosFilter(sos)
+    pieces = np.concatenate([f(x[i:i + n]) for i, n in zip(np.cumsum([0, 1, 7, 100, 999]), [1, 7, 100, 999, 3893])])
+    assert np.array_equal(whole, pieces)
+
+
+def test_settle_starts_at_steady_state_without_a_transient():
+    sos = filters.discretize(*filters.highpass_1st(10.0), 8800.0, "prewarped", gain_at_hz=1000.0)
+    f = filters.SosFilter(sos)
+    f.settle(0.7)
+    y = f(np.full(1000, 0.7))
+    assert np.max(np.abs(y)) < 1e-12

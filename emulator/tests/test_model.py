@@ -1,0 +1,154 @@
+"""The physics stages and the effect graph: demand-driven construction, independent random streams."""
+
+import numpy as np
+import pytest
+
+from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator.conversions import ADC_LSB_V
+from emulator.mechanics import static_pressure_from_force
+from emulator.params import SensorParams
+from emulator.sensor import NoiseSources, Sensor
+from emulator.stimuli import Press, PressureCalibrator, SphereDrop, Tap, Vibration
+
+pytestmark = pytest.mark.unit
+
+
+def effects(sensor):
+    return [e["name"] for e in sensor.effects_report()]
+
+
+def test_only_the_effects_the_scene_needs_are_built():
+    rest_pdc = Sensor(channels_read=["PDC"])
+    assert "stage2" not in effects(rest_pdc)  # nobody reads PAC
+    assert "force_coupling" not in effects(rest_pdc)  # no force stimulus
+    assert "vibration_coupling" not in effects(rest_pdc)
+    taps = Sensor(stimuli=[Tap(0.1, 1.0)], channels_read=["PAC"])
+    assert {"contact_force", "force_coupling", "stage2"} <= set(effects(taps))
+    assert "skin_displacement" not in effects(taps)
+    electrodes_only = Sensor(channels_read=["E1", "TDC"])
+    assert effects(electrodes_only) == []  # placeholders need no grid physics
+    quiet = Sensor(channels_read=["PAC"], noise=NoiseSources.none())
+    assert not {"bridge_johnson_noise", "amplifier_noise", "mains_hum"} & set(effects(quiet))
+
+
+def test_reference_profile_adds_second_order_effects():
+    ref = Sensor(channels_read=["PAC"], fidelity="reference")
+    assert "stage2_noise" in effects(ref)
+    assert ref.graph.effects[[e.name for e in ref.graph.effects].index("bridge")].duct is not None
+
+
+def test_leaving_out_the_hum_leaves_every_other_sample_unchanged():
+    """Random streams are keyed by effect name: removing one effect changes only its own contribution."""
+    t = np.arange(4400) / 4400.0
+    with_hum = Sensor(channels_read=["PAC"], seed=5, noise=NoiseSources(adc=False)).analog(np.zeros(4400, int), t)
+    without = Sensor(channels_read=["PAC"], seed=5, noise=NoiseSources(adc=False, mains_hum=False)).analog(
+        np.zeros(4400, int), t)
+    diff = (with_hum - without) / ADC_LSB_V
+    spec = np.abs(np.fft.rfft(diff)) / (diff.size / 2)
+    freqs = np.fft.rfftfreq(diff.size, 1 / 4400)
+    k = int(np.argmax(spec))
+    assert freqs[k] == pytest.approx(60.0, abs=1.0)
+    # all the difference is the hum: no broadband residue from shifted noise draws
+    residue = diff - spec[k] * np.cos(2 * np.pi * freqs[k] * t + np.angle(np.fft.rfft(diff)[k]))
+    assert np.std(residue) < 0.05 * np.std(diff)
+
+
+def test_adc_noise_stream_is_independent_of_the_grid_noise():
+    t = np.arange(2200) / 2200.0
+    a = Sensor(channels_read=["PAC"], seed=9, noise=NoiseSources(johnson=False, amplifier=False, mains_hum=False))
+    b = Sensor(channels_read=["PAC"], seed=9, noise=NoiseSources(mains_hum=False, johnson=False,
+                                                                 amplifier=False, spi_coupling=False))
+    assert np.array_equal(a.sample(np.zeros(2200, int), t), b.sample(np.zeros(2200, int), t))
+
+
+def test_force_curve_is_linear_below_the_knee_and_flattens_above():
+    p = SensorParams()
+    f = np.linspace(0, 1.5, 50)  # well below the 2 N knee (the knee is smooth over ~0.1 N)
+    slope = np.gradient(static_pressure_from_force(f, p), f)
+    assert np.allclose(slope, p.force_to_pressure_Pa_per_N, rtol=0.02)
+    above = np.gradient(static_pressure_from_force(np.linspace(2.5, 5, 20), p), np.linspace(2.5, 5, 20))
+    assert np.all(above < 0.3 * p.force_to_pressure_Pa_per_N)
+    assert static_pressure_from_force(-1.0, p) == 0.0
+
+
+def test_inflation_raises_resting_pressure_and_moves_the_resonance_within_200_to_350_Hz():
+    vols = [0.2, 0.4, 0.6, 0.8, 1.0]
+    pressures = [SensorParams(inflation_volume_mL=v).resting_pressure_Pa for v in vols]
+    assert np.all(np.diff(pressures) > 0)
+    freqs = [SensorParams(inflation_volume_mL=v).resonance_at_inflation_Hz for v in vols]
+    assert np.all(np.diff(freqs) >= 0) and min(freqs) >= 200 and max(freqs) <= 350
+
+
+def test_hotter_bridge_drifts_offset_and_span():
+    cold, hot = SensorParams(bridge_temperature_C=25.0), SensorParams(bridge_temperature_C=45.0)
+    assert hot.bridge_span_V_per_Pa < cold.bridge_span_V_per_Pa
+    assert hot.bridge_offset_V != cold.bridge_offset_V
+    t = np.arange(100) / 100.0
+    hot_pdc = Sensor(hot, channels_read=["PDC"], noise=NoiseSources.none()).analog(np.ones(100, int), t)
+    cold_pdc = Sensor(cold, channels_read=["PDC"], noise=NoiseSources.none()).analog(np.ones(100, int), t)
+    assert not np.allclose(hot_pdc, cold_pdc)
+
+
+def test_johnson_noise_follows_sqrt_4kTR():
+    p = SensorParams()
+    assert p.johnson_noise_V_per_rtHz * np.sqrt(1040) == pytest.approx(0.29e-6, rel=0.05)
+
+
+def test_sphere_impulse_and_energy_follow_the_drop_height():
+    s = SphereDrop(0.0, 0.422e-6, 0.07, restitution=0.0)
+    assert s.energy_J == pytest.approx(0.289e-6, rel=0.01)  # D Table 5-2
+    assert s.impulse_Ns == pytest.approx(0.422e-6 * np.sqrt(2 * 9.80665 * 0.07))
+
+
+def test_force_pulses_deliver_the_same_impulse_on_any_grid():
+    drop = SphereDrop(0.01, 1e-6)
+    for fs in (4400.0, 8800.0, 70400.0):
+        dt = 1 / fs
+        t = np.arange(int(0.02 * fs)) * dt + dt
+        mean_force = (drop.cumulative(t) - drop.cumulative(t - dt)) / dt
+        assert mean_force.sum() * dt == pytest.approx(drop.impulse_Ns, rel=1e-9)
+
+
+def test_press_and_tap_cumulatives_integrate_their_force():
+    for s in (Press(0.1, 2.0, 0.3, 0.5), Tap(0.1, 1.5, 0.04)):
+        t = np.linspace(0, 2, 200001)
+        f = s.force(t)
+        assert np.trapezoid(f, t) == pytest.approx(float(s.cumulative(np.array([2.0]))[0]), rel=1e-4)
+
+
+def test_vibration_sweep_covers_its_frequency_range():
+    v = Vibration(0.0, 1.0, 1e-6, 10.0, 900.0)
+    assert v.frequency_at(0.0) == pytest.approx(10.0)
+    assert v.frequency_at(1.0) == pytest.approx(900.0)
+    assert np.max(np.abs(v.displacement(np.linspace(0, 1, 10000)))) <= 1e-6 + 1e-15
+
+
+def test_calibrator_pressure_reaches_pdc_at_the_published_scale():
+    cal = PressureCalibrator(0.1, 1.0, offset_Pa=10e3, fade_s=0.0)
+    s = Sensor(stimuli=[cal], channels_read=["PDC"], noise=NoiseSources.none())
+    t = np.array([0.05, 0.8])
+    v = s.analog(np.ones(2, int), t)
+    assert (v[1] - v[0]) / ADC_LSB_V * 0.0365 == pytest.approx(10.0, rel=0.02)
+
+
+def test_unknown_channel_and_undeclared_channel_are_refused():
+    with pytest.raises(ValueError, match="unknown channel"):
+        Sensor(channels_read=["PXX"])
+    s = Sensor(channels_read=["PAC"])
+    with pytest.raises(ValueError, match="not declared"):
+        s.analog([1], [0.0])
+
+
+def test_instants_older_than_the_history_are_refused_clearly():
+    s = Sensor(channels_read=["PAC"], block_s=0.01)
+    s.analog([0], [5.0])
+    with pytest.raises(ValueError, match="older than the retained history"):
+        s.analog([0], [1.0])
+
+
+def test_full_frame_channels_all_convert():
+    s = Sensor(channels_read=DEFAULT_FRAME_NAMES, seed=2)
+    from emulator.channels import channel_index
+    chans = [channel_index(n) for n in DEFAULT_FRAME_NAMES]
+    codes = s.sample(chans, np.arange(44) / 4400.0)
+    assert codes.dtype == np.uint16 and np.all(codes <= 4095)
