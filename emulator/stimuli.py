@@ -1,8 +1,9 @@
 """What happens to the finger: contact forces (taps, presses, sphere impacts) and imposed skin vibration.
 
 Force stimuli are described by their cumulative impulse C(t) = ∫F dt, and reach
-the grid as the exact mean force over each sample interval, (C(t_n) − C(t_n − Δt))/Δt.
-A 0.4 ms sphere impact therefore carries the same impulse at 4.4 kHz as at 70 kHz.
+the grid as the exact mean force over the interval centred on each grid instant,
+(C(t_n + Δt/2) − C(t_n − Δt/2))/Δt.  A 0.4 ms sphere impact therefore carries the same impulse
+at 4.4 kHz as at 70 kHz, and no grid delays it (a one-sided interval would delay it by Δt/2).
 Displacement stimuli are smooth and are sampled at the grid instants.
 """
 
@@ -182,8 +183,8 @@ class ContactForce(Effect):
         self.stimuli = sorted(stimuli, key=lambda s: s.start_s)
 
     def process(self, block: Block, inputs):
-        t_hi = block.times
         dt = 1.0 / block.fs
+        t_hi = block.times + 0.5 * dt
         t_lo = t_hi - dt
         out = np.zeros(block.n)
         for s in _overlapping(self.stimuli, t_lo[0], t_hi[-1]):
