@@ -13,15 +13,21 @@ from scipy import signal
 DISCRETIZATIONS = ("bilinear", "prewarped", "matched")
 
 
+#: Roots above this fraction of the sample rate cannot be prewarped (tan diverges at Nyquist).
+PREWARP_LIMIT = 0.49
+
+
 def _prewarp(roots: np.ndarray, fs: float) -> np.ndarray:
-    """Move each analog root so that its natural frequency survives the bilinear map exactly."""
+    """Move each analog root so that its natural frequency survives the bilinear map exactly.
+
+    Roots at or above ``PREWARP_LIMIT``·fs have no in-band image; they are left for the plain
+    bilinear map, which still places them stably (their effect is confined to the top of the band).
+    """
     roots = np.asarray(roots, complex)
     mag = np.abs(roots)
     out = roots.copy()
-    nz = mag > 0
-    if np.any(mag[nz] >= np.pi * fs):
-        raise ValueError(f"a corner lies above Nyquist ({fs / 2:.0f} Hz); raise the oversampling")
-    out[nz] = roots[nz] / mag[nz] * (2.0 * fs * np.tan(mag[nz] / (2.0 * fs)))
+    ok = (mag > 0) & (mag < 2 * np.pi * PREWARP_LIMIT * fs)
+    out[ok] = roots[ok] / mag[ok] * (2.0 * fs * np.tan(mag[ok] / (2.0 * fs)))
     return out
 
 

@@ -36,12 +36,18 @@ def test_resonance_rings_at_its_frequency_with_its_decay():
     assert np.allclose(np.abs(p), 2 * np.pi * 330.0)
 
 
-def test_unknown_method_and_corner_above_nyquist_are_refused():
+def test_unknown_method_is_refused():
     z, p, k = filters.lowpass_butter2(1040.0)
     with pytest.raises(ValueError, match="unknown discretization"):
         filters.discretize(z, p, k, 8800.0, "euler")
-    with pytest.raises(ValueError, match="above Nyquist"):
-        filters.discretize(z, p, k, 1500.0, "prewarped")
+
+
+def test_corners_above_nyquist_fall_back_to_the_plain_bilinear_map_and_stay_stable():
+    z, p, k = filters.lowpass_butter2(1040.0)
+    pre = filters.discretize(z, p, k, 1500.0, "prewarped")
+    plain = filters.discretize(z, p, k, 1500.0, "bilinear")
+    assert np.allclose(pre, plain)
+    assert np.all(np.abs(np.concatenate([np.roots(s[3:]) for s in pre])) < 1)
 
 
 def test_sos_filter_output_is_independent_of_block_size():
