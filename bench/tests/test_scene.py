@@ -1,0 +1,94 @@
+"""Scene files: validation messages name the field, the value and what is allowed."""
+
+import pytest
+
+from bench.scene import SceneError, load_scene, parse_scene
+from emulator.stimuli import Press, SphereDrop, Vibration
+
+pytestmark = pytest.mark.unit
+
+MINIMAL = {"scene": {"name": "t", "duration_s": 1.0}}
+
+
+def problems(data):
+    with pytest.raises(SceneError) as e:
+        parse_scene(data, source="s.toml")
+    return e.value.problems
+
+
+def test_a_minimal_scene_is_valid_with_documented_defaults():
+    sc = parse_scene(MINIMAL)
+    assert sc.fidelity == "default" and sc.seed == 0 and sc.sequence == "default" and sc.slot_rate_Hz == 4400.0
+
+
+def test_out_of_range_value_names_field_value_and_range():
+    (msg,) = problems({"scene": {"name": "t", "duration_s": -2}})
+    assert "scene.duration_s = -2" in msg and "allowed range" in msg
+
+
+def test_missing_required_fields_are_named():
+    msgs = problems({"scene": {"name": "t"}, "stimulus": [{"kind": "tap", "at_s": 0.1}]})
+    assert any("scene.duration_s is missing" in m for m in msgs)
+    assert any("stimulus[0].peak_N is missing" in m for m in msgs)
+
+
+def test_every_problem_is_reported_at_once():
+    msgs = problems({"scene": {"name": "", "duration_s": 1.0, "fidelity": "ultra"},
+                     "host": {"sequence": ["PAC", "QQQ"], "spi_clock_Hz": 20e6},
+                     "sensor": {"stage1_gain": 0.0, "no_such": 1}})
+    text = "\n".join(msgs)
+    for needle in ("scene.name", "scene.fidelity = 'ultra'", "host.sequence[1] = 'QQQ'", "host.spi_clock_Hz",
+                   "sensor.stage1_gain = 0.0", "unknown field 'no_such'"):
+        assert needle in text
+
+
+def test_stimulus_after_the_end_and_unknown_sphere_are_refused():
+    msgs = problems({**MINIMAL, "stimulus": [{"kind": "sphere_drop", "sphere": "marble", "at_s": [0.5, 3.0]}]})
+    text = "\n".join(msgs)
+    assert "stimulus[0].sphere = 'marble'" in text and "0.45 mm solder ball" in text
+    assert "stimulus[0].at_s[1] = 3.0 s: after the end of the scene" in text
+
+
+def test_vibration_too_fast_for_the_fidelity_grid_is_refused_with_advice():
+    msgs = problems({"scene": {"name": "t", "duration_s": 1.0, "fidelity": "fast"},
+                     "stimulus": [{"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1,
+                                   "frequency_Hz": 2500.0}]})
+    assert any("finer grid" in m and "reference" in m for m in msgs)
+
+
+def test_bad_types_are_reported_not_crashed_on():
+    msgs = problems({"scene": {"name": "t", "duration_s": "long", "seed": 1.5},
+                     "stimulus": {"kind": "tap"}})
+    text = "\n".join(msgs)
+    assert "scene.duration_s = 'long'" in text and "scene.seed = 1.5" in text and "array of tables" in text
+
+
+def test_toml_syntax_errors_and_missing_files_name_the_file(tmp_path):
+    f = tmp_path / "broken.toml"
+    f.write_text("[scene\nname = 1")
+    with pytest.raises(SceneError, match="(?s)broken.toml.*TOML syntax error"):
+        load_scene(f)
+    with pytest.raises(SceneError, match="cannot read the file"):
+        load_scene(tmp_path / "absent.toml")
+
+
+def test_each_stimulus_kind_builds_its_object():
+    sc = parse_scene({**MINIMAL, "stimulus": [
+        {"kind": "sphere_drop", "sphere": "1 mm steel bearing", "at_s": [0.1, 0.2]},
+        {"kind": "sphere_drop", "mass_mg": 2.0, "height_m": 0.2, "at_s": 0.3},
+        {"kind": "press", "start_s": 0.1, "force_N": 1.0},
+        {"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1, "f_start_Hz": 10,
+         "f_stop_Hz": 900},
+        {"kind": "pressure", "start_s": 0.0, "duration_s": 0.5, "offset_kPa": 5.0},
+    ]})
+    kinds = [type(s) for s in sc.stimuli]
+    assert kinds.count(SphereDrop) == 3 and Press in kinds and Vibration in kinds
+    assert sc.stimuli[2].mass_kg == pytest.approx(2e-6)
+
+
+def test_shipped_scenes_are_all_valid():
+    from pathlib import Path
+    scenes = sorted((Path(__file__).resolve().parents[2] / "fixtures" / "scenes").glob("*.toml"))
+    assert len(scenes) >= 4
+    for f in scenes:
+        load_scene(f)
