@@ -31,6 +31,12 @@ def static_pressure_from_force(force_N, p: SensorParams):
     return k * (F - (1 - r) * w * (softplus - softplus0))
 
 
+def skin_resonance(params: SensorParams, fs: float, discretization: str, zero_hz: float | None = None):
+    """The skin/fluid resonance at the present inflation (unit DC gain), optionally with a real zero."""
+    z, p, k = filters.resonance(params.resonance_at_inflation_Hz, params.resonance_decay_s, zero_hz=zero_hz)
+    return filters.SosFilter(filters.discretize(z, p, k, fs, discretization))
+
+
 class RestingPressure(Effect):
     """Resting fluid pressure set by the inflation volume."""
 
@@ -57,8 +63,7 @@ class ForceCoupling(Effect):
 
     def __init__(self, params: SensorParams, fs: float, discretization: str):
         self.params = params
-        z, p, k = filters.resonance(params.resonance_at_inflation_Hz, params.resonance_decay_s)
-        self.filter = filters.SosFilter(filters.discretize(z, p, k, fs, discretization))
+        self.filter = skin_resonance(params, fs, discretization)
 
     def process(self, block: Block, inputs):
         static = static_pressure_from_force(inputs["contact_force_N"], self.params)
@@ -74,11 +79,8 @@ class VibrationCoupling(Effect):
     passive = True
 
     def __init__(self, params: SensorParams, fs: float, discretization: str):
-        z, p, k = filters.resonance(
-            params.resonance_at_inflation_Hz, params.resonance_decay_s, zero_hz=params.displacement_zero_Hz
-        )
         self.gain = params.displacement_to_pressure_Pa_per_m
-        self.filter = filters.SosFilter(filters.discretize(z, p, k, fs, discretization))
+        self.filter = skin_resonance(params, fs, discretization, zero_hz=params.displacement_zero_Hz)
 
     def process(self, block: Block, inputs):
         return {"fluid_pressure_Pa": self.gain * self.filter(inputs["skin_displacement_m"])}

@@ -20,8 +20,8 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.stimuli import (CalibrationPressure, ContactForce, ForceStimulus, PressureCalibrator,
-                              SkinDisplacement, Vibration)
+from emulator.stimuli import (ContactForce, ForceStimulus, PressureCalibrator, Vibration, calibration_pressure,
+                              skin_displacement)
 from emulator.transducer import Bridge, johnson_noise
 
 #: Which grid signal each modelled channel converts.
@@ -110,9 +110,9 @@ class Sensor:
         if forces:
             effects.append(ContactForce(forces))
         if vibrations:
-            effects.append(SkinDisplacement(vibrations))
+            effects.append(skin_displacement(vibrations))
         if calibrations:
-            effects.append(CalibrationPressure(calibrations))
+            effects.append(calibration_pressure(calibrations))
         effects += [RestingPressure(p), ForceCoupling(p, fs, disc), VibrationCoupling(p, fs, disc),
                     Bridge(p, fs, disc, duct_resonance=f.duct_resonance)]
         if self.noise.johnson:

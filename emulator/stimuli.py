@@ -152,7 +152,8 @@ class Vibration:
         x = np.clip((np.asarray(t, float) - self.start_s) / self.duration_s, 0, 1)
         return self.f_start_Hz * (f1 / self.f_start_Hz) ** x
 
-    def displacement(self, t: np.ndarray) -> np.ndarray:
+    def value(self, t: np.ndarray) -> np.ndarray:
+        """Skin displacement in m at instants ``t`` (s)."""
         t = np.asarray(t, float)
         tau = t - self.start_s
         f0, f1, T = self.f_start_Hz, (self.f_stop_Hz or self.f_start_Hz), self.duration_s
@@ -161,12 +162,16 @@ class Vibration:
         else:
             k = np.log(f1 / f0) / T
             phase = 2 * np.pi * f0 * np.expm1(k * tau) / k
-        inside = (tau >= 0) & (tau <= T)
-        fade = np.ones_like(tau)
-        if self.fade_s > 0:
-            fade = np.clip(np.minimum(tau, T - tau) / self.fade_s, 0, 1)
-            fade = 0.5 - 0.5 * np.cos(np.pi * fade)
-        return np.where(inside, self.amplitude_m * fade * np.sin(phase), 0.0)
+        return self.amplitude_m * fade_window(tau, T, self.fade_s) * np.sin(phase)
+
+
+def fade_window(tau: np.ndarray, duration_s: float, fade_s: float) -> np.ndarray:
+    """Raised-cosine fade-in and fade-out of ``fade_s`` over [0, duration_s]; zero outside. ``tau`` in s."""
+    inside = (tau >= 0) & (tau <= duration_s)
+    if fade_s <= 0:
+        return inside.astype(float)
+    ramp = np.clip(np.minimum(tau, duration_s - tau) / fade_s, 0, 1)
+    return np.where(inside, 0.5 - 0.5 * np.cos(np.pi * ramp), 0.0)
 
 
 def _overlapping(items, t_lo: float, t_hi: float):
@@ -192,21 +197,31 @@ class ContactForce(Effect):
         return {"contact_force_N": out}
 
 
-class SkinDisplacement(Effect):
-    """Skin displacement imposed by a vibration actuator, in m."""
+class SampledStimuli(Effect):
+    """Smooth stimuli sampled at the grid instants and summed into one signal."""
 
-    name = "skin_displacement"
-    produces = ("skin_displacement_m",)
+    def __init__(self, name: str, signal_name: str, stimuli: list, doc: str):
+        self.name, self.produces, self.stimuli, self._doc = name, (signal_name,), stimuli, doc
 
-    def __init__(self, stimuli: list[Vibration]):
-        self.stimuli = stimuli
+    def describe(self) -> str:
+        return self._doc
 
     def process(self, block: Block, inputs):
         t = block.times
         out = np.zeros(block.n)
         for s in _overlapping(self.stimuli, t[0], t[-1]):
-            out += s.displacement(t)
-        return {"skin_displacement_m": out}
+            out += s.value(t)
+        return {self.produces[0]: out}
+
+
+def skin_displacement(stimuli: list[Vibration]) -> SampledStimuli:
+    return SampledStimuli("skin_displacement", "skin_displacement_m", stimuli,
+                          "skin displacement imposed by a vibration actuator (m)")
+
+
+def calibration_pressure(stimuli: list["PressureCalibrator"]) -> SampledStimuli:
+    return SampledStimuli("calibration_pressure", "fluid_pressure_Pa", stimuli,
+                          "pressure applied directly to the liquid by a calibrator (Pa)")
 
 
 @dataclass
@@ -228,30 +243,9 @@ class PressureCalibrator:
     def end_s(self):
         return self.start_s + self.duration_s
 
-    def pressure(self, t: np.ndarray) -> np.ndarray:
+    def value(self, t: np.ndarray) -> np.ndarray:
+        """Pressure in Pa at instants ``t`` (s)."""
         tau = np.asarray(t, float) - self.start_s
-        T = self.duration_s
-        inside = (tau >= 0) & (tau <= T)
-        fade = np.ones_like(tau)
-        if self.fade_s > 0:
-            fade = np.clip(np.minimum(tau, T - tau) / self.fade_s, 0, 1)
-            fade = 0.5 - 0.5 * np.cos(np.pi * fade)
         wave = self.offset_Pa + self.amplitude_Pa * np.sin(2 * np.pi * self.frequency_Hz * tau)
-        return np.where(inside, fade * wave, 0.0)
+        return fade_window(tau, self.duration_s, self.fade_s) * wave
 
-
-class CalibrationPressure(Effect):
-    """Pressure applied directly to the liquid by a calibrator, in Pa."""
-
-    name = "calibration_pressure"
-    produces = ("fluid_pressure_Pa",)
-
-    def __init__(self, stimuli: list[PressureCalibrator]):
-        self.stimuli = stimuli
-
-    def process(self, block: Block, inputs):
-        t = block.times
-        out = np.zeros(block.n)
-        for s in _overlapping(self.stimuli, t[0], t[-1]):
-            out += s.pressure(t)
-        return {"fluid_pressure_Pa": out}

@@ -120,7 +120,7 @@ def test_vibration_sweep_covers_its_frequency_range():
     v = Vibration(0.0, 1.0, 1e-6, 10.0, 900.0)
     assert v.frequency_at(0.0) == pytest.approx(10.0)
     assert v.frequency_at(1.0) == pytest.approx(900.0)
-    assert np.max(np.abs(v.displacement(np.linspace(0, 1, 10000)))) <= 1e-6 + 1e-15
+    assert np.max(np.abs(v.value(np.linspace(0, 1, 10000)))) <= 1e-6 + 1e-15
 
 
 def test_calibrator_pressure_reaches_pdc_at_the_published_scale():
