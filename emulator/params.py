@@ -82,6 +82,9 @@ class SensorParams:
         0.39e-6 / math.sqrt(1024.0), "V/√Hz", 0.0, 1e-6, "D", "second-stage input noise (reference profile only)")
 
     # --- ADC (SENSOR.md §2) ------------------------------------------------------------
+    adc_conversion_s: float = _p(
+        5e-6, "s", 1e-7, 1e-4, "model",
+        "ADC acquisition and conversion window after a command; SPI clocking inside it couples into the sample")
     adc_noise_rms_bits: float = _p(
         1.13, "LSB", 0.0, 20.0, "model",
         "ADC input noise; with quantization and mains hum it makes the measured 1.4 bits RMS at rest")

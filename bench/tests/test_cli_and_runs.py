@@ -100,3 +100,21 @@ def test_noise_budget_json_reproduces_table_5_1():
     assert lines["amplifier voltage noise"].rti_uV == pytest.approx(0.39, rel=0.02)
     assert lines["intrinsic total (Table 5-1)"].rti_uV == pytest.approx(0.49, rel=0.03)
     assert lines["total at the ADC output"].pac_bits == pytest.approx(1.4, abs=0.1)
+
+
+def test_claims_command_prints_json_and_exit_status_follows_the_verdicts(capsys, monkeypatch):
+    assert cli.main(["claims", "--only", "scales", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert {r["name"] for r in rows} >= {"PDC scale", "PAC scale"} and all(r["passed"] for r in rows)
+    # a sensor whose front end has the wrong gain must fail the scale claims, and the command must say so
+    from bench import claims
+    from emulator.params import SensorParams
+
+    original = claims.Bench
+
+    def miscalibrated(**kw):
+        return original(params=SensorParams(stage1_gain=11.0), **kw)
+
+    monkeypatch.setattr(claims, "Bench", miscalibrated)
+    assert cli.main(["claims", "--only", "scales"]) == 1
+    assert "FAIL" in capsys.readouterr().out

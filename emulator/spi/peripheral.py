@@ -3,6 +3,10 @@
 A *transfer* is one chip-select window carrying a 2-byte word, with its start time (s) and SCK
 rate (Hz).  The peripheral answers the sampling command and the result read:
 
+* the ADC converts during ``adc_conversion_s`` after the command; if the host starts another transfer
+  inside that window the conversion is disturbed by SPI coupling (counted in ``coupled_conversions``).
+  A command that ends a batch is converted when the next batch shows what followed it, so results
+  never depend on how traffic is split into batches;
 * a sampling command for a channel the emulated sensor was not built to provide (see
   ``Sensor(channels_read=...)``) answers ``EX`` and is counted in ``unprovided_requests``;
 * a transfer whose first byte is 0x00 (host clocking out with 0x0000 or 0x0001) is a *read*: it
@@ -72,6 +76,9 @@ class SoftwarePeripheral:
         self._prepared_by_byte[_SAMPLES_CHANNEL & ~provided] = proto.ERROR_WORDS["channel_not_recognized"]
         self._not_provided = _SAMPLES_CHANNEL & ~provided
         self.unprovided_requests = 0
+        self.conversion_s = sensor.params.adc_conversion_s
+        self.coupled_conversions = 0
+        self._deferred: tuple[int, float] | None = None  # (channel, command end) awaiting the next transfer
         self._prepared = proto.ERROR_WORDS["nothing_to_resend"]
         self._prepared_at = -np.inf
         self._has_prepared = False
@@ -98,6 +105,7 @@ class SoftwarePeripheral:
         b0 = mosi >> 8
         cmd = np.flatnonzero(b0 != 0)
         reads = np.flatnonzero(b0 == 0)
+        self._convert_deferred(next_start=float(start[0]))
 
         # the word each command prepares: an error word from the table, or a sampled code
         first = b0[cmd]
@@ -105,9 +113,16 @@ class SoftwarePeripheral:
         sampling = self._samples[first]
         self.unprovided_requests += int(np.count_nonzero(self._not_provided[first]))
         cmd_end = end[cmd]
-        if sampling.any():
-            codes = self.sensor.sample(_CHANNEL_OF_BYTE[first[sampling]], cmd_end[sampling])
-            prepared[sampling] = proto.RESPONSE_WORD[codes]
+        defer_last = cmd.size > 0 and cmd[-1] == start.size - 1 and bool(sampling[-1])
+        now = sampling.copy()
+        if defer_last:
+            now[-1] = False
+        if now.any():
+            next_start = np.append(start, np.inf)[cmd[now] + 1]
+            coupled = next_start < cmd_end[now] + self.conversion_s
+            self.coupled_conversions += int(np.count_nonzero(coupled))
+            codes = self.sensor.sample(_CHANNEL_OF_BYTE[first[now]], cmd_end[now], bus_active=coupled)
+            prepared[now] = proto.RESPONSE_WORD[codes]
 
         # each read answers the latest command before it (possibly one from an earlier batch)
         miso = np.zeros(start.shape, dtype=np.uint16)
@@ -129,5 +144,18 @@ class SoftwarePeripheral:
 
         if cmd.size:
             self._prepared, self._prepared_at, self._has_prepared = int(prepared[-1]), float(cmd_end[-1]), True
+        if defer_last:
+            self._deferred = (int(_CHANNEL_OF_BYTE[first[-1]]), float(cmd_end[-1]))
         self._last_end = float(end[-1])
         return miso
+
+    def _convert_deferred(self, next_start: float) -> None:
+        """Convert the sample of a batch's final command, now that the next transfer's start is known."""
+        if self._deferred is None:
+            return
+        channel, t_end = self._deferred
+        self._deferred = None
+        coupled = np.array([next_start < t_end + self.conversion_s])
+        self.coupled_conversions += int(coupled[0])
+        code = self.sensor.sample(np.array([channel]), np.array([t_end]), bus_active=coupled)
+        self._prepared = int(proto.RESPONSE_WORD[code[0]])

@@ -147,3 +147,39 @@ def test_after_random_garbage_a_well_formed_command_is_answered_correctly():
     miso = _exchange(per, [(t1, 0x8300), (t1 + 16 / 4.4e6 + 50e-6, 0x0000)])
     value, ok = proto.decode_response(miso[1])
     assert ok and 0 < value < 4095
+
+
+def _frame_traffic(n, gap_s):
+    """n sampling commands for PAC, each followed after ``gap_s`` by a read."""
+    word_s = 16 / 4.4e6
+    t_cmd = np.arange(n) / 4400.0
+    start = np.empty(2 * n)
+    start[0::2], start[1::2] = t_cmd, t_cmd + word_s + gap_s
+    mosi = np.zeros(2 * n, np.uint16)
+    mosi[0::2] = 0x8000
+    return start, mosi
+
+
+def test_peripheral_output_does_not_depend_on_how_traffic_is_split_into_batches():
+    start, mosi = _frame_traffic(400, 60e-6)
+    whole = SoftwarePeripheral(Sensor(channels_read=["PAC"], seed=4)).exchange(TransferBatch(start, mosi))
+    per = SoftwarePeripheral(Sensor(channels_read=["PAC"], seed=4))
+    cuts = [0, 1, 2, 3, 50, 51, 333, 800]
+    pieces = [per.exchange(TransferBatch(start[a:b], mosi[a:b])) for a, b in zip(cuts[:-1], cuts[1:])]
+    assert np.array_equal(whole, np.concatenate(pieces))
+
+
+def test_clocking_the_bus_during_a_conversion_couples_noise_into_the_sample():
+    quiet_start, quiet_mosi = _frame_traffic(2000, 60e-6)
+    quiet = SoftwarePeripheral(Sensor(channels_read=["PAC"], seed=4))
+    q = proto.decode_response(quiet.exchange(TransferBatch(quiet_start, quiet_mosi))[1::2])[0]
+    # a host that keeps clocking: the next command 1 µs after each one, reading only every other sample
+    word_s = 16 / 4.4e6
+    t = np.arange(3000) * (word_s + 1e-6)
+    busy = SoftwarePeripheral(Sensor(channels_read=["PAC"], seed=4))
+    busy.exchange(TransferBatch(t, np.full(t.size, 0x8000, np.uint16)))
+    assert quiet.coupled_conversions == 0
+    assert busy.coupled_conversions == t.size - 1
+    # the disturbed samples are much noisier than the 1.4 bits at rest
+    codes = busy.sensor.adc.convert(np.full(500, 1.65), bus_active=np.ones(500, bool)).astype(float)
+    assert codes.std() > 3 * q.astype(float).std()
