@@ -30,7 +30,7 @@ from emulator.channels import DEFAULT_FRAME_NAMES
 from emulator.conversions import ADC_LSB_V
 from emulator.fidelity import PROFILES
 from emulator.sensor import NoiseSources, Sensor
-from emulator.spi.peripheral import SoftwarePeripheral
+from emulator.spi.peripheral import TRANSFER_PERIODS, SoftwarePeripheral
 
 SCENES_DIR = Path(__file__).resolve().parent.parent / "fixtures" / "scenes"
 
@@ -38,7 +38,7 @@ SCENES_DIR = Path(__file__).resolve().parent.parent / "fixtures" / "scenes"
 def _pac_instants(scene) -> np.ndarray:
     sampler = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
     k = np.arange(int(round(scene.duration_s * scene.slot_rate_Hz)))
-    word_s = 16 / scene.spi_clock_Hz
+    word_s = TRANSFER_PERIODS / scene.spi_clock_Hz
     pos = k % len(sampler.sequence)
     return (k / scene.slot_rate_Hz + word_s)[sampler.sequence[pos] == 0]
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
-from emulator.spi.peripheral import BITS_PER_TRANSFER, TransferBatch
+from emulator.spi.peripheral import BITS_PER_TRANSFER, TRANSFER_PERIODS, TransferBatch
 
 STATUS_OK, STATUS_PARITY, STATUS_ERROR_WORD = 0, 1, 2
 STATUS_NAMES = {STATUS_OK: "ok", STATUS_PARITY: "parity error", STATUS_ERROR_WORD: "error word"}
@@ -53,7 +53,7 @@ class Sampler:
         self.slot_rate_Hz = float(slot_rate_Hz)
         self.clock_hz = float(clock_hz)
         self.sample_delay_s = float(sample_delay_s)
-        word_s = BITS_PER_TRANSFER / self.clock_hz
+        word_s = TRANSFER_PERIODS / self.clock_hz
         if 2 * word_s + self.sample_delay_s > 1.0 / self.slot_rate_Hz:
             raise ValueError(
                 f"a slot of {1e6 / self.slot_rate_Hz:.1f} µs cannot hold command + {self.sample_delay_s * 1e6:.0f} µs "
@@ -67,7 +67,7 @@ class Sampler:
         self.next_slot += n_slots
         seq_pos = k % len(self.sequence)
         t_cmd = k / self.slot_rate_Hz
-        word_s = BITS_PER_TRANSFER / self.clock_hz
+        word_s = TRANSFER_PERIODS / self.clock_hz  # chip select held for 16.5 SCK periods
         t_read = t_cmd + word_s + self.sample_delay_s
         start = np.empty(2 * n_slots)
         start[0::2], start[1::2] = t_cmd, t_read

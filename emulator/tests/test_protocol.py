@@ -54,18 +54,18 @@ def _exchange(per, schedule):
 
 def test_sample_then_read_after_50us_returns_the_code_sampled_at_the_command():
     per, sensor = _peripheral()
-    word_s = 16 / 4.4e6
+    word_s = 16.5 / 4.4e6
     miso = _exchange(per, [(1e-3, 0x8300), (1e-3 + word_s + 50e-6, 0x0000)])
     value, ok = proto.decode_response(miso[1])
     assert ok
     resting = sensor.adc.convert(sensor.analog([1], [1e-3 + word_s]))[0]
     assert value == resting
-    assert miso[0] == 0  # nothing on MISO during the command
+    assert miso[0] == proto.ERROR_WORDS["nothing_to_resend"]  # MISO during a command: nothing pending yet
 
 
 def test_host_may_clock_0x0001_while_reading():
     per, _ = _peripheral()
-    word_s = 16 / 4.4e6
+    word_s = 16.5 / 4.4e6
     a = _exchange(per, [(0.0, 0x8000), (word_s + 50e-6, 0x0001)])
     _, ok = proto.decode_response(a[1])
     assert ok
@@ -84,7 +84,7 @@ def test_bad_commands_prepare_the_published_error_words(first_byte, expected):
 
 def test_reading_sooner_than_50us_answers_insufficient_delay():
     per, _ = _peripheral()
-    word_s = 16 / 4.4e6
+    word_s = 16.5 / 4.4e6
     miso = _exchange(per, [(0.0, 0x8000), (word_s + 40e-6, 0x0000)])
     assert miso[1] == proto.ERROR_WORDS["insufficient_delay"]
 
@@ -96,7 +96,7 @@ def test_read_with_no_command_before_answers_nothing_to_resend():
 
 def test_pending_result_carries_across_batches():
     per, _ = _peripheral()
-    word_s = 16 / 4.4e6
+    word_s = 16.5 / 4.4e6
     _exchange(per, [(0.0, 0x8300)])
     miso = _exchange(per, [(word_s + 60e-6, 0x0000)])
     _, ok = proto.decode_response(miso[0])
@@ -105,7 +105,7 @@ def test_pending_result_carries_across_batches():
 
 def test_the_50us_rule_holds_after_many_hours():
     """Regression: at 2^14 s float64 time spacing exceeded the old 1 ps tolerance and exact-50 µs reads failed."""
-    word_s = 16 / 4.4e6
+    word_s = 16.5 / 4.4e6
     for t0 in (16384.0, 1e5, 3.6e6):
         per, _ = _peripheral(start_s=t0)
         k = np.arange(1000)
@@ -144,14 +144,14 @@ def test_after_random_garbage_a_well_formed_command_is_answered_correctly():
     t = np.cumsum(rng.uniform(5e-6, 80e-6, 5000))
     per.exchange(TransferBatch(t, rng.integers(0, 65536, t.size).astype(np.uint16), 4.4e6))
     t1 = t[-1] + 1e-3
-    miso = _exchange(per, [(t1, 0x8300), (t1 + 16 / 4.4e6 + 50e-6, 0x0000)])
+    miso = _exchange(per, [(t1, 0x8300), (t1 + 16.5 / 4.4e6 + 50e-6, 0x0000)])
     value, ok = proto.decode_response(miso[1])
     assert ok and 0 < value < 4095
 
 
 def _frame_traffic(n, gap_s):
     """n sampling commands for PAC, each followed after ``gap_s`` by a read."""
-    word_s = 16 / 4.4e6
+    word_s = 16.5 / 4.4e6
     t_cmd = np.arange(n) / 4400.0
     start = np.empty(2 * n)
     start[0::2], start[1::2] = t_cmd, t_cmd + word_s + gap_s
@@ -173,13 +173,12 @@ def test_clocking_the_bus_during_a_conversion_couples_noise_into_the_sample():
     quiet_start, quiet_mosi = _frame_traffic(2000, 60e-6)
     quiet = SoftwarePeripheral(Sensor(channels_read=["PAC"], seed=4))
     q = proto.decode_response(quiet.exchange(TransferBatch(quiet_start, quiet_mosi))[1::2])[0]
-    # a host that keeps clocking: the next command 1 µs after each one, reading only every other sample
-    word_s = 16 / 4.4e6
-    t = np.arange(3000) * (word_s + 1e-6)
+    # an impatient host reads 1 µs after each command: the read is refused (E.) and it disturbed the conversion
+    busy_start, busy_mosi = _frame_traffic(2000, 1e-6)
     busy = SoftwarePeripheral(Sensor(channels_read=["PAC"], seed=4))
-    busy.exchange(TransferBatch(t, np.full(t.size, 0x8000, np.uint16)))
+    miso = busy.exchange(TransferBatch(busy_start, busy_mosi))
     assert quiet.coupled_conversions == 0
-    assert busy.coupled_conversions == t.size - 1
-    # the disturbed samples are much noisier than the 1.4 bits at rest
+    assert busy.coupled_conversions == 2000
+    assert np.all(miso[1::2] == proto.ERROR_WORDS["insufficient_delay"])
     codes = busy.sensor.adc.convert(np.full(500, 1.65), bus_active=np.ones(500, bool)).astype(float)
     assert codes.std() > 3 * q.astype(float).std()

@@ -1,0 +1,118 @@
+"""Vectorized evaluation of plain sampling/read traffic for one sensor alone on its bus.
+
+The host sampler streams millions of 16-bit transfers that are only sampling commands and reads;
+this routine computes exactly what :class:`emulator.spi.model.SensorPort`'s transfer-level path
+would, with array operations, and leaves the port in the same state.  A differential test checks
+the two against each other; anything else (properties, resend, writes, faults) takes the
+transfer-level path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from emulator.channels import SAMPLED_CHANNELS
+from emulator.spi import protocol as proto
+from emulator.spi.model import (CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE, CONVERSION_TICKS,
+                                SAMPLE_DELAY_TICKS, _Prepared, ticks_array)
+
+_ERR = proto.ERROR_WORDS
+_SPECIAL = np.zeros(256, dtype=bool)
+_SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE]] = True
+
+
+def _tables():
+    byte = np.arange(256)
+    parity_ok = proto.ODD_PARITY_OK[byte]
+    channel = (byte >> 1) & 0x3F
+    recognized = parity_ok & (byte >= 0x80) & np.isin(channel, list(SAMPLED_CHANNELS))
+    word = np.full(256, _ERR["unknown_command"], dtype=np.int64)
+    word[~parity_ok] = _ERR["parity"]
+    word[parity_ok & (byte >= 0x80) & ~recognized] = _ERR["channel_not_recognized"]
+    return word, recognized, channel
+
+
+_WORD_OF_BYTE, _RECOGNIZED, _CHANNEL_OF_BYTE = _tables()
+
+
+def is_plain(port, mosi: np.ndarray) -> bool:
+    """True if the batch and the port's state are within what this routine evaluates."""
+    if port.faults.any or (port.prepared is not None and port.prepared.kind == "property"):
+        return False
+    return not _SPECIAL[mosi >> 8].any()
+
+
+def exchange_words(port, start: np.ndarray, mosi: np.ndarray, clock) -> np.ndarray:
+    n = start.size
+    end = start + 16.5 / clock
+    port.resolve_conversion(float(start[0]))
+    b0 = (mosi >> 8).astype(np.int64)
+    cmd = np.flatnonzero(b0 != 0)
+    reads = np.flatnonzero(b0 == 0)
+    first = b0[cmd]
+    cmd_end = end[cmd]
+    cmd_tick = ticks_array(cmd_end)
+    prepared = _WORD_OF_BYTE[first].copy()
+
+    # sampling commands for recognised channels: ADC busy (E-), not provided (EX), or converted
+    rs = np.flatnonzero(_RECOGNIZED[first])
+    deferred = None
+    if rs.size:
+        rticks = cmd_tick[rs]
+        prev = np.concatenate([[port.last_sampling_tick if port.last_sampling_tick is not None else -10**12],
+                               rticks[:-1]])
+        busy = rticks - prev < CONVERSION_TICKS
+        channels = _CHANNEL_OF_BYTE[first[rs]]
+        provided = np.isin(channels, list(port.provided))
+        prepared[rs[busy]] = _ERR["insufficient_sampling_delay"]
+        unprovided = ~busy & ~provided
+        prepared[rs[unprovided]] = _ERR["channel_not_recognized"]
+        port.unprovided_requests += int(np.count_nonzero(unprovided))
+        acc = rs[~busy & provided]
+        acc_ch = channels[~busy & provided]
+        if acc.size and cmd[acc[-1]] == n - 1:  # the batch's last transfer: convert when the next one is known
+            deferred = (int(acc_ch[-1]), float(cmd_end[acc[-1]]))
+            acc, acc_ch = acc[:-1], acc_ch[:-1]
+        if acc.size:
+            next_start = np.append(start, np.inf)[cmd[acc] + 1]
+            coupled = next_start < cmd_end[acc] + port.conversion_s
+            port.coupled_conversions += int(np.count_nonzero(coupled))
+            codes = port.sensor.sample(acc_ch, cmd_end[acc], bus_active=coupled)
+            words = proto.RESPONSE_WORD[codes].astype(np.int64)
+            prepared[acc] = words
+        port.last_sampling_tick = int(rticks[-1])
+
+    # what each transfer shifts out, and which read consumes each prepared word
+    before = port.prepared
+    idx = np.arange(n)
+    c = np.searchsorted(cmd, idx) - 1  # latest command before each transfer; -1: from before the batch
+    cc = np.maximum(c, 0)
+    has = np.where(c >= 0, True, before is not None)
+    ready = np.where(c >= 0, cmd_tick[cc] if cmd.size else 0, before.ready_tick if before else 0)
+    word = np.where(c >= 0, prepared[cc] if cmd.size else 0, before.word if before else 0)
+    consumed_init = before.consumed if before is not None else True
+    delay_ok = has & (ticks_array(start) - ready >= SAMPLE_DELAY_TICKS)
+    can_consume = delay_ok[reads] & ~((c[reads] == -1) & consumed_init)
+    first_consume = np.full(cmd.size + 1, n)
+    if can_consume.any():
+        groups, at = np.unique(c[reads][can_consume], return_index=True)
+        first_consume[groups + 1] = reads[can_consume][at]
+    consumed_before = (first_consume[c + 1] < idx) | ((c == -1) & consumed_init)
+    out = np.where(~has | consumed_before, _ERR["nothing_to_resend"],
+                   np.where(~delay_ok, _ERR["insufficient_delay"], word))
+    consuming = first_consume[first_consume < n]
+    if consuming.size:
+        port.last_sent = int(out[consuming.max()])
+
+    # the port's state after the batch
+    if cmd.size:
+        last = cmd.size - 1
+        done = bool(first_consume[last + 1] < n)
+        if deferred is not None:
+            port.prepared = _Prepared("pending", int(cmd_tick[last]))
+            port._deferred = deferred
+        else:
+            port.prepared = _Prepared("word", int(cmd_tick[last]), word=int(prepared[last]), consumed=done)
+    elif before is not None and first_consume[0] < n:
+        before.consumed = True
+    return out.astype(np.uint16)

@@ -1,0 +1,401 @@
+"""The sensor's SPI peripheral as a state machine, and the bus several sensors share (SENSOR.md §6).
+
+This is the reference every implementation must match bit for bit (the RTL twin is checked against
+it by golden vectors and a differential test).  Semantics, precisely:
+
+Transfers and chip select
+    A transfer clocks ``nbits`` bits (mode 0, MSB first) at ``clock_hz``: chip select falls at
+    ``start_s``, the k-th rising SCK edge comes at start + (k + ½)·T, chip select rises at
+    start + (nbits + ½)·T.  ``keep_cs`` leaves chip select asserted so the next transfer continues
+    the same window (how hosts stream property bytes).  The host's 3-bit select code picks a sensor
+    (1, 2, 4, 5, 6 for sensors 1–5), all of them (7) or none (0).
+
+Time
+    The sensor measures delays with a 1 MHz timer: ``ticks(t) = ⌊t·10⁶⌋``.  The result of a command is
+    ready 50 ticks after its chip select rose (100 with the ``slow_response`` fault); a sampling command
+    for a recognised channel less than 5 ticks after the previous one answers ``E-`` (the ADC is busy).
+
+What MISO carries
+    At chip-select fall the sensor chooses what it will shift out: the prepared result if it is ready
+    and not yet consumed; ``E.`` if it is not ready yet; ``E_`` if there is none.  A word is 16 bits
+    followed by zeros; a property is its bytes (strings end with NUL) followed by 0xFF.  This holds for
+    every transfer — during a command the host simply ignores MISO.
+
+What MOSI does (decided when chip select rises)
+    * first byte 0x00 (the host clocking 0x0000 or 0x0001): a read; if it received the prepared word
+      (≥ 16 bits) the word is consumed and kept for resend; a property stream ends with its window;
+    * fewer than 16 bits otherwise: ignored (counted in ``incomplete``);
+    * first byte 0x20 or 0x50 (library and manual spellings): resend the last word read, else ``E_``;
+    * even parity of the first byte: ``EE``;
+    * ``1SSSSSSP``: sample channel S at the instant chip select rose -> the code's response word;
+      a channel the sensor does not have (or was not built to provide) answers ``EX``;
+    * 0x61 + property id: stream that property (``EX`` for an unknown id);
+    * 0x40 + ``NNNNVVVP``: write V to parameter N: even parity of the second byte ``EE``; N ≥ 4 is
+      read-only ``ER``; V = 7 is reserved ``EW``; otherwise acknowledged with the word carrying N·8 + V;
+    * anything else: ``E?``.
+
+The conversion of a sampling command happens just after its chip select rises; it is disturbed by
+SPI coupling if the bus clocks again within ``adc_conversion_s``.  It is therefore resolved when the
+next transfer on the bus starts (or at :meth:`Bus.flush`), so results never depend on batching.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from emulator.channels import DEFAULT_FRAME_NAMES, SAMPLED_CHANNELS, channel_index
+from emulator.spi import protocol as proto
+
+TIMER_HZ = 1e6
+SAMPLE_DELAY_TICKS = 50
+SLOW_DELAY_TICKS = 100
+CONVERSION_TICKS = 5
+#: MISO changes this long after SCK falls; above 1/(2·45 ns) ≈ 11.1 MHz the host samples the previous bit.
+MISO_VALID_DELAY_S = 45e-9
+
+SELECT_CODE = {1: 0b001, 2: 0b010, 3: 0b100, 4: 0b101, 5: 0b110}
+SELECT_ALL, SELECT_NONE = 0b111, 0b000
+
+CMD_READ_PROPERTY, CMD_WRITE, CMD_RESEND, CMD_RESEND_MANUAL = 0x61, 0x40, 0x20, 0x50
+WRITABLE_PARAMETERS = 4  # N = 0..3 are writable user registers (model choice)
+RESERVED_VALUE = 7
+
+PROP_FLEX, PROP_FIRMWARE, PROP_SERIAL, PROP_CPU, PROP_FS, PROP_PATTERN = 0x10, 0x13, 0x15, 0x61, 0x70, 0x73
+
+
+def ticks(t: float) -> int:
+    """The sensor timer's count at instant ``t`` (s): ⌊t·10⁶⌋, with 1 ns of slack for float rounding."""
+    return int(math.floor(t * TIMER_HZ + 1e-3))
+
+
+def ticks_array(t: np.ndarray) -> np.ndarray:
+    return np.floor(np.asarray(t, float) * TIMER_HZ + 1e-3).astype(np.int64)
+
+
+def default_properties(index: int = 1) -> dict[int, tuple[bytes, bool]]:
+    """Property id -> (bytes, is_string) for sensor ``index`` (1–5). Strings are sent with a NUL."""
+    pattern = bytes(int(proto.sample_command(channel_index(n))) for n in DEFAULT_FRAME_NAMES)
+    return {
+        PROP_FLEX: (b"20", True),
+        PROP_FIRMWARE: (b"0206", True),
+        PROP_SERIAL: (f"BT0101EMU00000{index:02d}".encode(), True),
+        PROP_CPU: ((40000).to_bytes(2, "big"), False),  # kHz: 40 MIPS dsPIC33
+        PROP_FS: ((4400).to_bytes(2, "big"), False),
+        PROP_PATTERN: (pattern, True),
+    }
+
+
+@dataclass
+class Faults:
+    """Faults of one sensor's SPI side; each is documented in docs/faults.md with what a host sees."""
+
+    miso_flip_bit: int | None = None  # invert this bit position (from chip-select fall) of every transfer
+    mosi_flip_bit: int | None = None  # the sensor receives this bit position inverted
+    miso_stuck: int | None = None  # MISO stuck at 0 or 1
+    bad_parity: bool = False  # data words leave with the first byte's parity bit inverted
+    slow_response: bool = False  # results take 100 µs instead of 50 µs
+
+    @property
+    def any(self) -> bool:
+        return any(v not in (None, False) for v in vars(self).values())
+
+
+@dataclass
+class Transfer:
+    """One stretch of clocking with chip select asserted: ``nbits`` bits of ``mosi`` (MSB first)."""
+
+    start_s: float
+    cs: int = SELECT_CODE[1]
+    mosi: int = 0
+    nbits: int = 16
+    clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ
+    keep_cs: bool = False
+
+    @property
+    def period_s(self) -> float:
+        return 1.0 / self.clock_hz
+
+    @property
+    def end_s(self) -> float:
+        return self.start_s + (self.nbits + 0.5) * self.period_s
+
+
+@dataclass
+class _Prepared:
+    kind: str  # "word" or "property"
+    ready_tick: int
+    word: int = 0
+    data: bytes = b""
+    is_string: bool = False
+    consumed: bool = False
+
+
+class SensorPort:
+    """One sensor's SPI peripheral. ``sensor`` serves ADC codes: ``sample(channels, times, bus_active)``."""
+
+    def __init__(self, sensor, index: int = 1, faults: Faults | None = None, properties=None):
+        self.sensor = sensor
+        self.index = index
+        self.faults = faults or Faults()
+        self.properties = properties or default_properties(index)
+        self.provided = frozenset(int(c) for c in sensor.channels_read) & SAMPLED_CHANNELS
+        self.conversion_s = sensor.params.adc_conversion_s
+        self.registers = [0] * WRITABLE_PARAMETERS
+        self.reset()
+        # counters a report can show
+        self.incomplete = 0
+        self.unprovided_requests = 0
+        self.coupled_conversions = 0
+
+    def reset(self) -> None:
+        """Power-on state: nothing prepared, nothing to resend (the ``reset`` fault calls this mid-stream)."""
+        self.prepared: _Prepared | None = None
+        self.last_sent: int | None = None
+        self.last_sampling_tick: int | None = None
+        self._deferred: tuple[int, float] | None = None  # (channel, instant) awaiting the next bus activity
+        self._window_open = False
+        self._out = b""
+        self._out_fill = 0
+        self._bitpos = 0
+        self._rx = 0
+        self._delivered_full_word = False
+
+    # --- conversions ----------------------------------------------------------------
+    def resolve_conversion(self, next_activity_s: float) -> None:
+        """Convert a pending sample now that the next SPI activity on the bus is known."""
+        if self._deferred is None:
+            return
+        channel, t = self._deferred
+        self._deferred = None
+        coupled = next_activity_s < t + self.conversion_s
+        self.coupled_conversions += int(coupled)
+        code = int(self.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))[0])
+        if self.prepared is not None and self.prepared.kind == "pending":
+            self.prepared.kind = "word"
+            self.prepared.word = self._data_word(code)
+
+    def _data_word(self, value: int) -> int:
+        word = int(proto.RESPONSE_WORD[value])
+        return word ^ 0x0100 if self.faults.bad_parity else word
+
+    # --- chip select and clocking -------------------------------------------------------
+    def cs_fall(self, t: float) -> None:
+        """Chip select asserted at ``t``: choose what MISO will carry."""
+        self._window_open = True
+        self._bitpos = 0
+        self._rx = 0
+        self._delivered_full_word = False
+        p = self.prepared
+        delay = SLOW_DELAY_TICKS if self.faults.slow_response else SAMPLE_DELAY_TICKS
+        self._serving = False
+        if p is None or p.consumed:
+            self._out, self._out_fill = proto.ERROR_WORDS["nothing_to_resend"].to_bytes(2, "big"), 0x00
+        elif ticks(t) - p.ready_tick < delay:
+            self._out, self._out_fill = proto.ERROR_WORDS["insufficient_delay"].to_bytes(2, "big"), 0x00
+        elif p.kind == "property":
+            self._out = p.data + (b"\x00" if p.is_string else b"")
+            self._out_fill = 0xFF
+            self._serving = True
+        else:
+            self._out, self._out_fill = p.word.to_bytes(2, "big"), 0x00
+            self._serving = True
+
+    def clock(self, mosi: int, nbits: int) -> int:
+        """Shift ``nbits`` bits: returns the MISO bits this sensor drives (MSB first)."""
+        miso = 0
+        f = self.faults
+        for k in range(nbits):
+            pos = self._bitpos + k
+            byte_i, bit_i = divmod(pos, 8)
+            byte = self._out[byte_i] if byte_i < len(self._out) else self._out_fill
+            bit = (byte >> (7 - bit_i)) & 1
+            if f.miso_flip_bit is not None and pos == f.miso_flip_bit:
+                bit ^= 1
+            if f.miso_stuck is not None:
+                bit = f.miso_stuck
+            miso = (miso << 1) | bit
+            rx_bit = (mosi >> (nbits - 1 - k)) & 1
+            if f.mosi_flip_bit is not None and pos == f.mosi_flip_bit:
+                rx_bit ^= 1
+            if pos < 16:
+                self._rx = (self._rx << 1) | rx_bit
+        self._bitpos += nbits
+        return miso
+
+    def cs_rise(self, t: float) -> None:
+        """Chip select released at ``t``: act on what was received."""
+        self._window_open = False
+        n = self._bitpos
+        if n < 8:
+            if n:
+                self.incomplete += 1
+            return
+        b0 = (self._rx >> (min(n, 16) - 8)) & 0xFF
+        if b0 == 0x00:  # a read
+            p = self.prepared
+            if self._serving and p is not None:
+                if p.kind == "property":
+                    p.consumed = True
+                elif n >= 16:
+                    p.consumed = True
+                    self.last_sent = p.word
+            return
+        if n < 16:
+            self.incomplete += 1
+            return
+        b1 = self._rx & 0xFF
+        self._command(b0, b1, t)
+
+    def _prepare_word(self, word: int, t: float) -> None:
+        self.prepared = _Prepared("word", ticks(t), word=word)
+
+    def _command(self, b0: int, b1: int, t: float) -> None:
+        err = proto.ERROR_WORDS
+        if b0 in (CMD_RESEND, CMD_RESEND_MANUAL):
+            self._prepare_word(self.last_sent if self.last_sent is not None else err["nothing_to_resend"], t)
+        elif not proto.ODD_PARITY_OK[b0]:
+            self._prepare_word(err["parity"], t)
+        elif b0 & 0x80:
+            channel = (b0 >> 1) & 0x3F
+            if channel not in SAMPLED_CHANNELS:
+                self._prepare_word(err["channel_not_recognized"], t)
+                return
+            now = ticks(t)
+            busy = self.last_sampling_tick is not None and now - self.last_sampling_tick < CONVERSION_TICKS
+            self.last_sampling_tick = now
+            if busy:
+                self._prepare_word(err["insufficient_sampling_delay"], t)
+            elif channel not in self.provided:
+                self.unprovided_requests += 1
+                self._prepare_word(err["channel_not_recognized"], t)
+            else:
+                self.prepared = _Prepared("pending", now)
+                self._deferred = (channel, t)
+        elif b0 == CMD_READ_PROPERTY:
+            if b1 in self.properties:
+                data, is_string = self.properties[b1]
+                self.prepared = _Prepared("property", ticks(t), data=data, is_string=is_string)
+            else:
+                self._prepare_word(err["channel_not_recognized"], t)
+        elif b0 == CMD_WRITE:
+            n, v = b1 >> 4, (b1 >> 1) & 0x7
+            if not proto.ODD_PARITY_OK[b1]:
+                self._prepare_word(err["parity"], t)
+            elif n >= WRITABLE_PARAMETERS:
+                self._prepare_word(err["read_only"], t)
+            elif v == RESERVED_VALUE:
+                self._prepare_word(err["write_error"], t)
+            else:
+                self.registers[n] = v
+                self._prepare_word(self._data_word(n * 8 + v), t)
+        else:
+            self._prepare_word(err["unknown_command"], t)
+
+    # --- a sensor alone on its bus (the host sampler's path) ------------------------------
+    def exchange(self, batch) -> np.ndarray:
+        """MISO words for a batch of 16-bit transfers to this sensor alone (``TransferBatch``).
+
+        Runs of plain sampling commands and reads go through a vectorized routine; anything else
+        (properties, resend, writes, faults, a property in progress) through the transfer-level path.
+        """
+        from emulator.spi.fastpath import exchange_words, is_plain
+
+        start = np.asarray(batch.start_s, float)
+        mosi = np.asarray(batch.mosi, dtype=np.uint16)
+        clock = np.asarray(batch.clock_hz, float)
+        _check_batch(start, mosi, clock, getattr(self, "_last_end", -np.inf))
+        if start.size == 0:
+            return np.zeros(0, np.uint16)
+        if is_plain(self, mosi):
+            miso = exchange_words(self, start, mosi, clock)
+        else:
+            clocks = np.broadcast_to(clock, start.shape)
+            bus = Bus({self.index: self})
+            miso = np.array([bus.transfer(Transfer(float(s), SELECT_CODE.get(self.index, 1), int(m), 16, float(c)))
+                             for s, m, c in zip(start, mosi, clocks)], dtype=np.uint16)
+        self._last_end = float(start[-1] + 16.5 / np.broadcast_to(clock, start.shape)[-1])
+        return miso
+
+
+def _check_batch(start, mosi, clock, last_end) -> None:
+    if start.shape != mosi.shape:
+        raise ValueError("start_s and mosi must have the same length")
+    if start.size == 0:
+        return
+    lo, hi = proto.SPI_CLOCK_RANGE_HZ
+    if clock.min() < lo or clock.max() > hi:
+        c = np.broadcast_to(clock, start.shape)
+        bad = int(np.flatnonzero((c < lo) | (c > hi))[0])
+        raise ValueError(f"transfer #{bad}: SCK {c[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
+    end = start + 16.5 / clock
+    eps = proto.TIME_TOLERANCE_S
+    if start[0] < last_end - eps or (start.size > 1 and (start[1:] - end[:-1]).min() < -eps):
+        raise ValueError("transfers must be in time order and must not overlap")
+
+
+@dataclass
+class Bus:
+    """Up to five sensors sharing SCK, MOSI and MISO, selected by a 3-bit code.
+
+    ``ports`` maps sensor number (1–5) to its :class:`SensorPort`; a number with no port is an absent
+    sensor.  MISO is the OR of the sensors driving it; with nobody driving it idles at 0
+    (``pull_up=False``) or 1, so an absent sensor reads back 0x00 or 0xFF bytes.
+    """
+
+    ports: dict[int, SensorPort]
+    pull_up: bool = False
+    out_of_spec_transfers: int = 0
+    _selected: set = field(default_factory=set)
+    _last_end: float = -math.inf
+    _open: bool = False
+
+    def selected_by(self, code: int) -> set[int]:
+        if code == SELECT_ALL:
+            return set(self.ports)
+        return {n for n, c in SELECT_CODE.items() if c == code and n in self.ports}
+
+    def transfer(self, tr: Transfer) -> int:
+        """Clock one transfer; returns the MISO bits the host samples (``nbits`` bits, MSB first)."""
+        if tr.nbits < 0 or tr.clock_hz <= 0 or not math.isfinite(tr.start_s):
+            raise ValueError(f"impossible transfer: {tr}")
+        if tr.start_s < self._last_end - proto.TIME_TOLERANCE_S:
+            raise ValueError(f"transfer at {tr.start_s:.9f} s starts before the previous one ended")
+        lo, hi = proto.SPI_CLOCK_RANGE_HZ
+        if not lo <= tr.clock_hz <= hi:
+            self.out_of_spec_transfers += 1
+        for port in self.ports.values():
+            port.resolve_conversion(tr.start_s)
+        now = self.selected_by(tr.cs)
+        for n in self._selected - now:  # select code changed with chip select held: those sensors see CS rise
+            self.ports[n].cs_rise(tr.start_s)
+        for n in now - self._selected if self._open else now:
+            self.ports[n].cs_fall(tr.start_s)
+        bits = [self.ports[n].clock(tr.mosi, tr.nbits) for n in sorted(now)]
+        miso = 0
+        for b in bits:
+            miso |= b
+        if not now and self.pull_up:
+            miso = (1 << tr.nbits) - 1
+        if tr.nbits and tr.period_s / 2 < MISO_VALID_DELAY_S:
+            # the host samples before MISO settles: it sees each bit one clock late, the idle level first
+            idle = 1 if self.pull_up else 0
+            miso = (idle << (tr.nbits - 1)) | (miso >> 1)
+        self._last_end = tr.end_s
+        if tr.keep_cs:
+            self._selected, self._open = now, True
+        else:
+            for n in now:
+                self.ports[n].cs_rise(tr.end_s)
+            self._selected, self._open = set(), False
+        return miso
+
+    def run(self, transfers) -> list[int]:
+        return [self.transfer(t) for t in transfers]
+
+    def flush(self, t_s: float = math.inf) -> None:
+        """Resolve pending conversions (no further bus activity before ``t_s``)."""
+        for port in self.ports.values():
+            port.resolve_conversion(t_s)

@@ -1,0 +1,253 @@
+"""The reference SPI state machine: every command, multi-sensor buses, faults, and the vectorized path."""
+
+import numpy as np
+import pytest
+
+from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator.sensor import NoiseSources, Sensor
+from emulator.spi import protocol as proto
+from emulator.spi.model import (SELECT_ALL, SELECT_CODE, SELECT_NONE, Bus, Faults, SensorPort, Transfer,
+                                default_properties)
+from emulator.spi.peripheral import TransferBatch
+
+pytestmark = pytest.mark.unit
+E = proto.ERROR_WORDS
+ALL = list(DEFAULT_FRAME_NAMES)
+
+
+def port(index=1, faults=None, seed=1, noise=NoiseSources.none()):
+    return SensorPort(Sensor(channels_read=ALL, seed=seed + index, noise=noise), index, faults)
+
+
+def bus(n=1, **kw):
+    return Bus({i: port(i, **kw) for i in range(1, n + 1)})
+
+
+def cmd(t, first, second=0x00, cs=SELECT_CODE[1], **kw):
+    return Transfer(t, cs, (first << 8) | second, 16, **kw)
+
+
+def read(t, cs=SELECT_CODE[1], nbits=16, **kw):
+    return Transfer(t, cs, 0, nbits, **kw)
+
+
+def value(word):
+    v, ok = proto.decode_response(word)
+    assert ok, hex(word)
+    return int(v)
+
+
+def test_sample_then_read_returns_a_code_and_a_second_read_finds_nothing():
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    assert 0 < value(b.transfer(read(100e-6))) < 4095
+    assert b.transfer(read(200e-6)) == E["nothing_to_resend"]
+
+
+def test_a_read_too_soon_does_not_consume_the_result():
+    b = bus()
+    b.transfer(cmd(0.0, 0x80))
+    assert b.transfer(read(20e-6)) == E["insufficient_delay"]
+    assert 1900 < value(b.transfer(read(100e-6))) < 2200
+
+
+def test_resend_repeats_the_last_word_read_and_both_spellings_work():
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    first = b.transfer(read(100e-6))
+    for t, resend in ((300e-6, 0x20), (500e-6, 0x50)):
+        b.transfer(cmd(t, resend))
+        assert b.transfer(read(t + 100e-6)) == first
+    fresh = bus()
+    fresh.transfer(cmd(0.0, 0x20))
+    assert fresh.transfer(read(100e-6)) == E["nothing_to_resend"]
+
+
+def read_property(b, prop, t0=0.0, cs=SELECT_CODE[1], max_bytes=60):
+    """The vendor library's way: command, wait, then one byte per transfer with chip select held."""
+    b.transfer(Transfer(t0, cs, (0x61 << 8) | prop, 16))
+    out = bytearray()
+    t = t0 + 100e-6
+    while len(out) < max_bytes:
+        byte = b.transfer(Transfer(t, cs, 0, 8, keep_cs=True))
+        out.append(byte)
+        t += 10e-6
+        if byte in (0x00, 0xFF):
+            break
+    b.transfer(Transfer(t, SELECT_NONE, 0, 0))
+    return bytes(out)
+
+
+@pytest.mark.parametrize("prop", [0x10, 0x13, 0x15, 0x73])
+def test_string_properties_stream_byte_by_byte_until_nul(prop):
+    data, _ = default_properties(1)[prop]
+    assert read_property(bus(), prop) == data + b"\x00"
+
+
+def test_serial_number_starts_with_BT_and_cpu_speed_is_two_big_endian_bytes():
+    b = bus()
+    assert read_property(b, 0x15).startswith(b"BT")
+    b.transfer(Transfer(1e-3, SELECT_CODE[1], 0x6161, 16))
+    word = b.transfer(Transfer(1.2e-3, SELECT_CODE[1], 0, 16))
+    assert word == 40000  # kHz
+
+
+def test_unknown_property_answers_EX():
+    b = bus()
+    b.transfer(cmd(0.0, 0x61, 0x42))
+    assert b.transfer(read(100e-6)) == E["channel_not_recognized"]
+
+
+def nnnnvvvp(n, v, good_parity=True):
+    byte = int(proto.with_odd_parity((n << 3) | v))
+    return byte if good_parity else byte ^ 1
+
+
+@pytest.mark.parametrize("second,expected", [
+    (nnnnvvvp(2, 3), "ack"),
+    (nnnnvvvp(2, 3, good_parity=False), "parity"),
+    (nnnnvvvp(5, 1), "read_only"),
+    (nnnnvvvp(1, 7), "write_error"),  # V = 7 is reserved
+])
+def test_write_command(second, expected):
+    b = bus()
+    b.transfer(cmd(0.0, 0x40, second))
+    word = b.transfer(read(100e-6))
+    if expected == "ack":
+        assert value(word) == 2 * 8 + 3 and b.ports[1].registers[2] == 3
+    else:
+        assert word == E[expected]
+
+
+def test_sampling_commands_closer_than_5_us_find_the_adc_busy():
+    b = bus()
+    b.transfer(cmd(0.0, 0x80))
+    b.transfer(cmd(4e-6, 0x83))  # the first ends at 3.75 µs (tick 3); this one at 7.75 µs (tick 7): 4 ticks
+    assert b.transfer(read(100e-6)) == E["insufficient_sampling_delay"]
+
+
+def test_fewer_than_16_bits_of_a_command_are_ignored():
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    b.transfer(Transfer(20e-6, SELECT_CODE[1], 0x86, 8))  # truncated command
+    assert b.ports[1].incomplete == 1
+    assert 0 < value(b.transfer(read(100e-6))) < 4095  # the PDC sample is still there
+
+
+def test_broadcast_sampling_then_per_sensor_reads_on_a_five_sensor_bus():
+    b = bus(5)
+    t = 0.0
+    b.transfer(cmd(t, 0x83, cs=SELECT_ALL))
+    t = 60e-6
+    words = []
+    for n in range(1, 6):  # the vendor library switches select codes back to back, chip select held
+        words.append(b.transfer(Transfer(t, SELECT_CODE[n], 0, 16, keep_cs=True)))
+        t += 16.5 / 4.4e6
+    b.transfer(Transfer(t, SELECT_NONE, 0, 0))
+    assert all(proto.decode_response(w)[1] for w in words)
+    # each sensor sampled at the same instant (the broadcast's end)
+    ends = {p.sensor.simulated_s > 0 for p in b.ports.values()}
+    assert ends == {True}
+
+
+@pytest.mark.parametrize("pull_up,expected", [(False, 0x0000), (True, 0xFFFF)])
+def test_an_absent_sensor_reads_back_all_zeros_or_all_ones(pull_up, expected):
+    b = Bus({1: port(1)}, pull_up=pull_up)
+    b.transfer(cmd(0.0, 0x83, cs=SELECT_ALL))
+    assert b.transfer(read(100e-6, cs=SELECT_CODE[3])) == expected
+
+
+def test_cs_glitch_with_no_clock_edges_changes_nothing():
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    b.transfer(Transfer(30e-6, SELECT_CODE[1], 0, 0))
+    assert 0 < value(b.transfer(read(100e-6))) < 4095
+
+
+def test_clock_above_the_limit_makes_the_host_sample_each_bit_late():
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    good = b.transfer(read(100e-6))
+    b.transfer(cmd(300e-6, 0x20))  # resend the same word, now read at 20 MHz
+    late = b.transfer(read(400e-6, clock_hz=20e6))
+    assert late == good >> 1 and b.out_of_spec_transfers == 1
+    assert not proto.decode_response(late)[1] or late != good
+
+
+@pytest.mark.parametrize("faults,check", [
+    (Faults(miso_flip_bit=3), lambda good, bad: bad == good ^ (1 << 12)),
+    (Faults(miso_stuck=1), lambda good, bad: bad == 0xFFFF),
+    (Faults(miso_stuck=0), lambda good, bad: bad == 0x0000),
+    (Faults(bad_parity=True), lambda good, bad: bad == good ^ 0x0100 and not proto.decode_response(bad)[1]),
+])
+def test_miso_faults_change_what_the_host_receives(faults, check):
+    ref, bad = bus(), bus(faults=faults)
+    for b in (ref, bad):
+        b.transfer(cmd(0.0, 0x83))
+    assert check(ref.transfer(read(100e-6)), bad.transfer(read(100e-6)))
+
+
+def test_mosi_bit_flip_turns_a_command_into_a_parity_error():
+    b = bus(faults=Faults(mosi_flip_bit=4))
+    b.transfer(cmd(0.0, 0x83))
+    assert b.transfer(read(100e-6)) == E["parity"]
+
+
+def test_slow_response_refuses_reads_at_50_us_and_answers_at_100():
+    b = bus(faults=Faults(slow_response=True))
+    b.transfer(cmd(0.0, 0x83))
+    assert b.transfer(read(60e-6)) == E["insufficient_delay"]
+    assert proto.decode_response(b.transfer(read(120e-6)))[1]
+
+
+def test_reset_mid_stream_forgets_the_pending_result():
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    b.ports[1].reset()
+    assert b.transfer(read(100e-6)) == E["nothing_to_resend"]
+
+
+def _random_word_traffic(rng, n):
+    """Plain traffic: sampling commands (good and bad), odd first bytes, reads, at varied spacings and clocks."""
+    firsts = np.concatenate([proto.sample_command(np.arange(64)), rng.integers(1, 256, 40)])
+    firsts = firsts[~np.isin(firsts, [0x20, 0x40, 0x50, 0x61])]
+    words = np.where(rng.random(n) < 0.5, 0, (rng.choice(firsts, n).astype(np.uint16) << 8) | rng.integers(0, 256, n))
+    clocks = rng.choice([0.5e6, 1e6, 4.4e6, 10e6], n)
+    gaps = rng.choice([0.2e-6, 2e-6, 30e-6, 49.5e-6, 50e-6, 60e-6, 300e-6], n)
+    start = np.concatenate([[0.0], np.cumsum(16.5 / clocks + gaps)[:-1]])  # each waits for the previous one
+    return start, words.astype(np.uint16), clocks
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_vectorized_path_matches_the_transfer_level_path(seed):
+    rng = np.random.default_rng(seed)
+    start, words, clocks = _random_word_traffic(rng, 3000)
+    fast = port(seed=seed, noise=NoiseSources())
+    slow = port(seed=seed, noise=NoiseSources())
+    cuts = np.sort(rng.choice(np.arange(1, 3000), 6, replace=False))
+    a = np.concatenate([fast.exchange(TransferBatch(start[i:j], words[i:j], clocks[i:j]))
+                        for i, j in zip(np.r_[0, cuts], np.r_[cuts, 3000])])
+    b_ = Bus({1: slow})
+    b = np.array([b_.transfer(Transfer(float(s), SELECT_CODE[1], int(w), 16, float(c)))
+                  for s, w, c in zip(start, words, clocks)])
+    assert np.array_equal(a, b)
+    for attr in ("last_sent", "last_sampling_tick", "coupled_conversions", "unprovided_requests"):
+        assert getattr(fast, attr) == getattr(slow, attr), attr
+
+
+def test_garbage_never_wedges_the_bus_and_a_good_command_then_works():
+    rng = np.random.default_rng(3)
+    b = bus(3)
+    t = 0.0
+    for _ in range(3000):
+        nbits = int(rng.integers(0, 40))
+        t += float(rng.uniform(0.1e-6, 80e-6))
+        tr = Transfer(t, int(rng.integers(0, 8)), int(rng.integers(0, 2**40)) & ((1 << nbits) - 1), nbits,
+                      float(rng.choice([0.5e6, 4.4e6, 10e6, 20e6])), keep_cs=bool(rng.random() < 0.2))
+        b.transfer(tr)
+        t = tr.end_s
+    t += 1e-3
+    b.transfer(Transfer(t, SELECT_NONE, 0, 0))
+    for n in (1, 2, 3):
+        b.transfer(cmd(t + n * 1e-3, 0x83, cs=SELECT_CODE[n]))
+        assert 0 < value(b.transfer(read(t + n * 1e-3 + 100e-6, cs=SELECT_CODE[n]))) < 4095
