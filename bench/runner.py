@@ -37,7 +37,7 @@ class Recording:
         return self.simulated_s / self.wall_s if self.wall_s > 0 else float("inf")
 
 
-def build_sensor(scene: Scene, block_s: float = 0.5) -> Sensor:
+def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
     return Sensor(params=scene.params, stimuli=scene.stimuli, channels_read=scene.channels,
                   fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s)
 

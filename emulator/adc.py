@@ -30,11 +30,11 @@ class Adc:
     def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input"):
         """Codes (uint16) for analog values in V; ``bus_active`` marks conversions that overlapped SPI clocking."""
         v = np.asarray(volts, float)
-        if not np.all(np.isfinite(v)):
+        if not np.isfinite(v.sum()):  # one reduction: any NaN or ±Inf makes the sum non-finite
             bad = int(np.flatnonzero(~np.isfinite(v))[0])
             raise NumericalError(f"non-finite value {v[bad]} at {where} (conversion #{bad})")
         if self.noise_V:
-            v = v + self.noise_V * self.noise_rng.standard_normal(v.shape)
+            v = v + self.noise_V * self.noise_rng.standard_normal(v.shape, dtype=np.float32)
         if self.coupling_V and bus_active is not None and np.any(bus_active):
             v = v.copy()
             v[bus_active] += self.coupling_V * self.coupling_rng.standard_normal(int(np.count_nonzero(bus_active)))

@@ -27,7 +27,7 @@ class Stage1(Effect):
     def __init__(self, params: SensorParams, fs: float, discretization: str):
         self.gain, self.bias, self.rail = params.stage1_gain, params.stage1_bias_V, params.supply_rail_V
         z, p, k = filters.lowpass_butter2(params.stage1_lowpass_Hz)
-        self.filter = filters.SosFilter(filters.discretize(z, p, k, fs, discretization))
+        self.filter = filters.SosFilter(filters.discretize(z, p, k * self.gain, fs, discretization))  # gain folded in
 
     def settle(self, inputs):
         v = inputs["stage1_input_V"]
@@ -35,7 +35,7 @@ class Stage1(Effect):
         return {"pdc_V": float(np.clip(self.bias + self.gain * v, 0.0, self.rail))}
 
     def process(self, block: Block, inputs):
-        return {"pdc_V": _amplify(self.filter(inputs["stage1_input_V"]), self.gain, self.bias, self.rail)}
+        return {"pdc_V": _bias_and_limit(self.filter(inputs["stage1_input_V"]), self.bias, self.rail)}
 
 
 class Stage2(Effect):
@@ -48,7 +48,7 @@ class Stage2(Effect):
         self.consumes = ("pdc_V", "stage2_noise_V") if own_noise else ("pdc_V",)
         self.gain, self.bias, self.rail = params.stage2_gain, params.stage2_bias_V, params.supply_rail_V
         z, p, k = filters.highpass_1st(params.stage2_highpass_Hz)
-        self.filter = filters.SosFilter(filters.discretize(z, p, k, fs, discretization, gain_at_hz=1000.0))
+        self.filter = filters.SosFilter(filters.discretize(z, p, k * self.gain, fs, discretization, gain_at_hz=1000.0))
 
     def settle(self, inputs):
         self.filter.settle(inputs["pdc_V"])
@@ -58,12 +58,11 @@ class Stage2(Effect):
         x = inputs["pdc_V"]
         if "stage2_noise_V" in inputs:
             x = x + inputs["stage2_noise_V"]
-        return {"pac_V": _amplify(self.filter(x), self.gain, self.bias, self.rail)}
+        return {"pac_V": _bias_and_limit(self.filter(x), self.bias, self.rail)}
 
 
-def _amplify(y: np.ndarray, gain: float, bias: float, rail: float) -> np.ndarray:
-    """bias + gain·y limited to the output swing 0..rail, in place on ``y``."""
-    y *= gain
+def _bias_and_limit(y: np.ndarray, bias: float, rail: float) -> np.ndarray:
+    """bias + y limited to the output swing 0..rail, in place on ``y``."""
     y += bias
     return np.clip(y, 0.0, rail, out=y)
 

@@ -61,7 +61,7 @@ class Sensor:
 
     def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
                  fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
-                 block_s: float = 0.5, start_s: float = 0.0):
+                 block_s: float = 2.0, start_s: float = 0.0):
         self.params = params or SensorParams()
         self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
         self.seed = int(seed)

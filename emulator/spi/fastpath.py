@@ -42,13 +42,14 @@ def is_plain(port, mosi: np.ndarray) -> bool:
     return not _SPECIAL[mosi >> 8].any()
 
 
-def exchange_words(port, start: np.ndarray, mosi: np.ndarray, clock) -> np.ndarray:
+def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray) -> np.ndarray:
+    """MISO words for plain 16-bit transfers starting at ``start`` and releasing chip select at ``end`` (s)."""
     n = start.size
-    end = start + 16.5 / clock
     port.resolve_conversion(float(start[0]))
     b0 = (mosi >> 8).astype(np.int64)
-    cmd = np.flatnonzero(b0 != 0)
-    reads = np.flatnonzero(b0 == 0)
+    is_cmd = b0 != 0
+    cmd = np.flatnonzero(is_cmd)
+    reads = np.flatnonzero(~is_cmd)
     first = b0[cmd]
     cmd_end = end[cmd]
     cmd_tick = ticks_array(cmd_end)
@@ -63,7 +64,7 @@ def exchange_words(port, start: np.ndarray, mosi: np.ndarray, clock) -> np.ndarr
                                rticks[:-1]])
         busy = rticks - prev < CONVERSION_TICKS
         channels = _CHANNEL_OF_BYTE[first[rs]]
-        provided = np.isin(channels, list(port.provided))
+        provided = port.provided_lut[channels]
         prepared[rs[busy]] = _ERR["insufficient_sampling_delay"]
         unprovided = ~busy & ~provided
         prepared[rs[unprovided]] = _ERR["channel_not_recognized"]
@@ -74,7 +75,7 @@ def exchange_words(port, start: np.ndarray, mosi: np.ndarray, clock) -> np.ndarr
             deferred = (int(acc_ch[-1]), float(cmd_end[acc[-1]]))
             acc, acc_ch = acc[:-1], acc_ch[:-1]
         if acc.size:
-            next_start = np.append(start, np.inf)[cmd[acc] + 1]
+            next_start = start[cmd[acc] + 1]  # every accepted command but a deferred last one has a successor
             coupled = next_start < cmd_end[acc] + port.conversion_s
             port.coupled_conversions += int(np.count_nonzero(coupled))
             codes = port.sensor.sample(acc_ch, cmd_end[acc], bus_active=coupled)
@@ -85,21 +86,25 @@ def exchange_words(port, start: np.ndarray, mosi: np.ndarray, clock) -> np.ndarr
     # what each transfer shifts out, and which read consumes each prepared word
     before = port.prepared
     idx = np.arange(n)
-    c = np.searchsorted(cmd, idx) - 1  # latest command before each transfer; -1: from before the batch
-    cc = np.maximum(c, 0)
-    has = np.where(c >= 0, True, before is not None)
-    ready = np.where(c >= 0, cmd_tick[cc] if cmd.size else 0, before.ready_tick if before else 0)
-    word = np.where(c >= 0, prepared[cc] if cmd.size else 0, before.word if before else 0)
+    c = np.cumsum(is_cmd) - is_cmd - 1  # latest command before each transfer; -1: from before the batch
+    # per-command tables with the state from before the batch in front (index c + 1)
+    ready_of = np.concatenate([[before.ready_tick if before else 0], cmd_tick])
+    word_of = np.concatenate([[before.word if before else 0], prepared])
+    ready = ready_of[c + 1]
+    word = word_of[c + 1]
     consumed_init = before.consumed if before is not None else True
-    delay_ok = has & (ticks_array(start) - ready >= SAMPLE_DELAY_TICKS)
+    delay_ok = ticks_array(start) - ready >= SAMPLE_DELAY_TICKS
+    nothing = consumed_init & (c == -1) if before is not None else c < 0  # no result to shift out
+    delay_ok &= ~nothing
     can_consume = delay_ok[reads] & ~((c[reads] == -1) & consumed_init)
     first_consume = np.full(cmd.size + 1, n)
     if can_consume.any():
-        groups, at = np.unique(c[reads][can_consume], return_index=True)
-        first_consume[groups + 1] = reads[can_consume][at]
-    consumed_before = (first_consume[c + 1] < idx) | ((c == -1) & consumed_init)
-    out = np.where(~has | consumed_before, _ERR["nothing_to_resend"],
-                   np.where(~delay_ok, _ERR["insufficient_delay"], word))
+        g = c[reads][can_consume]  # non-decreasing along the reads: the first of each run consumes
+        head = np.concatenate([[True], g[1:] != g[:-1]])
+        first_consume[g[head] + 1] = reads[can_consume][head]
+    consumed_before = (first_consume[c + 1] < idx) | nothing
+    out = np.where(delay_ok, word, _ERR["insufficient_delay"])
+    out[consumed_before] = _ERR["nothing_to_resend"]
     consuming = first_consume[first_consume < n]
     if consuming.size:
         port.last_sent = int(out[consuming.max()])

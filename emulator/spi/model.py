@@ -142,6 +142,8 @@ class SensorPort:
         self.faults = faults or Faults()
         self.properties = properties or default_properties(index)
         self.provided = frozenset(int(c) for c in sensor.channels_read) & SAMPLED_CHANNELS
+        self.provided_lut = np.zeros(64, dtype=bool)
+        self.provided_lut[list(self.provided)] = True
         self.conversion_s = sensor.params.adc_conversion_s
         self.registers = [0] * WRITABLE_PARAMETERS
         self.reset()
@@ -306,25 +308,26 @@ class SensorPort:
         start = np.asarray(batch.start_s, float)
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.asarray(batch.clock_hz, float)
-        _check_batch(start, mosi, clock, getattr(self, "_last_end", -np.inf))
+        end = _check_batch(start, mosi, clock, getattr(self, "_last_end", -np.inf))
         if start.size == 0:
             return np.zeros(0, np.uint16)
         if is_plain(self, mosi):
-            miso = exchange_words(self, start, mosi, clock)
+            miso = exchange_words(self, start, end, mosi)
         else:
             clocks = np.broadcast_to(clock, start.shape)
             bus = Bus({self.index: self})
             miso = np.array([bus.transfer(Transfer(float(s), SELECT_CODE.get(self.index, 1), int(m), 16, float(c)))
                              for s, m, c in zip(start, mosi, clocks)], dtype=np.uint16)
-        self._last_end = float(start[-1] + 16.5 / np.broadcast_to(clock, start.shape)[-1])
+        self._last_end = float(end[-1])
         return miso
 
 
-def _check_batch(start, mosi, clock, last_end) -> None:
+def _check_batch(start, mosi, clock, last_end) -> np.ndarray:
+    """Validate a batch of 16-bit transfers; returns when each releases chip select (s)."""
     if start.shape != mosi.shape:
         raise ValueError("start_s and mosi must have the same length")
     if start.size == 0:
-        return
+        return start
     lo, hi = proto.SPI_CLOCK_RANGE_HZ
     if clock.min() < lo or clock.max() > hi:
         c = np.broadcast_to(clock, start.shape)
@@ -334,6 +337,7 @@ def _check_batch(start, mosi, clock, last_end) -> None:
     eps = proto.TIME_TOLERANCE_S
     if start[0] < last_end - eps or (start.size > 1 and (start[1:] - end[:-1]).min() < -eps):
         raise ValueError("transfers must be in time order and must not overlap")
+    return end
 
 
 @dataclass
