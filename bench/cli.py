@@ -36,7 +36,8 @@ Runs a scene file through sensor -> SPI peripheral -> host sampler and writes, i
 scene file (TOML):
   [scene]    name, duration_s, seed (0), fidelity ("fast" | "default" | "reference"), description
   [sensor]   any sensor parameter by name, e.g. inflation_volume_mL = 0.6  (see `biotac-bench params`)
-  [host]     sequence = "default" (44-slot frame) or ["PAC", "PDC"]; slot_rate_Hz (4400); spi_clock_Hz (4.4e6)
+  [host]     sequence = "default" (44-slot frame) or ["PAC", "PDC"]; slot_rate_Hz (4400); spi_clock_Hz (4.4e6);
+             spi = "software" (the Python model) | "rtl" (the Verilog twin, run by the C++ Verilator harness)
   [noise]    johnson, amplifier, mains_hum, adc, spi_coupling = true | false
   [analysis] impact_detection = true   (applies D ch. 5's rule to every sphere drop)
   [[stimulus]] one table per stimulus, by kind:
@@ -61,6 +62,8 @@ def _cmd_run(a) -> int:
         scene.fidelity = a.fidelity
     if a.seed is not None:
         scene.seed = a.seed
+    if a.spi:
+        scene.spi = a.spi
     out = Path(a.out) if a.out else Path("out") / scene.name
     rec = run_scene(scene, progress=not a.quiet)
     record = write_outputs(rec, out, csv=a.csv, plots=not a.no_plots)
@@ -162,6 +165,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--csv", action="store_true", help="also write samples.csv")
     r.add_argument("--fidelity", choices=["fast", "default", "reference"], help="override the scene's profile")
     r.add_argument("--seed", type=int, help="override the scene's seed")
+    r.add_argument("--spi", choices=["software", "rtl"],
+                   help="the sensor's SPI side: the software model (default) or the RTL via the C++ harness")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
     r.set_defaults(func=_cmd_run)

@@ -42,13 +42,22 @@ def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
                   fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s)
 
 
+def peripheral_for(scene: Scene, sensor: Sensor):
+    """The sensor's SPI side the scene asks for: the software model, or the RTL through the C++ harness."""
+    if scene.spi == "rtl":
+        from emulator.rtl.harness import HarnessPeripheral
+
+        return HarnessPeripheral(sensor)
+    return SoftwarePeripheral(sensor)
+
+
 def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0) -> Recording:
     """Run ``scene`` to its end. On an error the recording so far is returned with ``error`` set."""
     from tqdm import tqdm
 
     t0 = time.perf_counter()
     sensor = build_sensor(scene)
-    sampler = Sampler(SoftwarePeripheral(sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
+    sampler = Sampler(peripheral_for(scene, sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
     total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))
     chunk_slots = max(1, int(round(chunk_s * scene.slot_rate_Hz)))
     parts: dict[int, list] = {c: [] for c in np.unique(sampler.sequence)}

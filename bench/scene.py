@@ -41,6 +41,7 @@ class Scene:
     sequence: list[str] | str = "default"
     slot_rate_Hz: float = 4400.0
     spi_clock_Hz: float = proto.HOST_DEFAULT_CLOCK_HZ
+    spi: str = "software"  # which implementation of the sensor's SPI side: "software" or "rtl"
     noise: NoiseSources = field(default_factory=NoiseSources)
     stimuli: list = field(default_factory=list)
     impact_detection: bool = False
@@ -224,7 +225,8 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     params = SensorParams().replace(**changes)
 
     host = data.get("host", {})
-    c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz"})
+    c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz", "spi"})
+    spi = c.choice(host, "spi", "host", ("software", "rtl"), default="software")
     sequence = host.get("sequence", "default")
     if sequence != "default":
         if not isinstance(sequence, list) or not sequence:
@@ -261,7 +263,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         raise SceneError(source, c.problems)
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=str(meta.get("description", "")), params=params, sequence=sequence,
-                 slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), noise=noise, stimuli=stimuli,
+                 slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
                  impact_detection=impact_detection, source=source, text=text)
 
 

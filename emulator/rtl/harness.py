@@ -114,3 +114,49 @@ class Harness:
         res = self.run({"sensors": [1], "pull_up": False}, tr, codes)
         res.update(words=res["miso"][1::2], samples=samples, simulated_s=seconds, emulator_s=emulator_s)
         return res
+
+
+class HarnessPeripheral:
+    """The RTL, run by the C++ harness, behind the same ``exchange(TransferBatch)`` as the software model.
+
+    For each batch the emulator computes the ADC codes of the sampling commands at the instants they
+    end (the sampler's traffic converts every recognised, provided channel), the harness plays the
+    batch against the RTL serving those codes, and the MISO words come back.  The RTL is reset at the
+    start of every batch and the batch is shifted to start just after that reset, so nothing but the
+    protocol state in flight at a batch boundary is lost: the host sampler's batches end on a completed
+    read, so none is.  Any request the RTL makes that the codes do not match is an error.
+    """
+
+    def __init__(self, sensor, harness: Harness | None = None):
+        from emulator.spi.model import SensorPort
+
+        self.sensor = sensor
+        self.harness = harness or Harness()
+        self._reference = SensorPort(sensor)  # only for its provided-channel table and conversion window
+        self.channels_read = sensor.channels_read
+
+    def exchange(self, batch) -> np.ndarray:
+        from emulator.spi.fastpath import _CHANNEL_OF_BYTE, _RECOGNIZED
+
+        start = np.asarray(batch.start_s, float)
+        mosi = np.asarray(batch.mosi, dtype=np.uint16)
+        clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
+        end = start + 16.5 / clock
+        first = mosi >> 8
+        conv = np.flatnonzero(_RECOGNIZED[first] & self._reference.provided_lut[_CHANNEL_OF_BYTE[first]])
+        channels = _CHANNEL_OF_BYTE[first[conv]]
+        next_start = np.append(start, np.inf)[conv + 1]
+        coupled = next_start < end[conv] + self._reference.conversion_s
+        samples = self.sensor.sample(channels, end[conv], bus_active=coupled)
+        shift_us = int(np.floor(start[0] * 1e6)) - 1
+        t_ps = np.round((start - shift_us * 1e-6) * 1e12).astype(np.int64)
+        tr = np.zeros(start.size, TRANSFER)
+        tr["t_ps"], tr["half_ps"] = t_ps, np.round(0.5e12 / clock).astype(np.int32)
+        tr["nbits"], tr["cs"], tr["mosi"] = 16, 1, mosi
+        codes = np.zeros(conv.size, CODE)
+        codes["sensor"], codes["channel"], codes["code"] = 1, channels, samples
+        res = self.harness.run({"sensors": [1], "pull_up": False}, tr, codes)
+        if res["mismatched_requests"] or res["unrequested"]:
+            raise HarnessError(f"the RTL requested other conversions than the emulator computed "
+                               f"({res['mismatched_requests']} mismatched, {res['unrequested']} unrequested)")
+        return res["miso"].astype(np.uint16)
