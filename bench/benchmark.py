@@ -132,6 +132,48 @@ def stream_hour(seconds: float = 3600.0) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def spi_paths(rtl: bool = True, say=lambda m: None) -> dict:
+    """Throughput of each implementation of the sensor's SPI side on the default frame (1 sensor)."""
+    from emulator.spi.model import SELECT_CODE, Bus, SensorPort, Transfer
+    from emulator.spi import protocol as proto
+
+    out = {}
+    say("… SPI: software model")
+    r = stream_realtime_factor("default", DEFAULT_FRAME_NAMES, "default", 4400.0, 20.0)
+    out["software_vectorized"] = {"realtime_factor": r["realtime_factor"],
+                                  "transactions_per_s": 4400.0 * r["realtime_factor"], "includes_physics": True}
+    sensor = Sensor(None, [], DEFAULT_FRAME_NAMES, "default", seed=1)
+    bus = Bus({1: SensorPort(sensor)})
+    seq = Sampler(None).sequence
+    n = 4400
+    t0 = time.perf_counter()
+    for k in range(n):
+        t = k / 4400.0
+        bus.transfer(Transfer(t, SELECT_CODE[1], int(proto.sample_command(int(seq[k % 44]))) << 8, 16))
+        bus.transfer(Transfer(t + 16.5 / 4.4e6 + 50e-6, SELECT_CODE[1], 0, 16))
+    wall = time.perf_counter() - t0
+    out["software_transfer_level"] = {"realtime_factor": 1.0 / wall, "transactions_per_s": n / wall,
+                                      "includes_physics": True}
+    if rtl:
+        from emulator.rtl.harness import Harness
+        from emulator.rtl.runner import Rtl
+
+        say("… SPI: RTL under cocotb")
+        cocotb_rtl = Rtl()
+        cocotb_rtl.build()
+        c = cocotb_rtl.stream_frames(1.0)
+        out["rtl_cocotb"] = {"realtime_factor": c["simulated_s"] / c["wall_s"],
+                             "transactions_per_s": c["slots"] / c["wall_s"], "includes_physics": True}
+        say("… SPI: RTL through the C++ harness")
+        h = Harness()
+        h.build()
+        res = h.stream_frames(20.0)
+        out["rtl_cpp_harness"] = {"realtime_factor": res["simulated_s"] / res["wall_s"],
+                                  "transactions_per_s": 4400.0 * res["simulated_s"] / res["wall_s"],
+                                  "includes_physics": False, "evals": res["evals"]}
+    return out
+
+
 def _fmt(v, spec):
     width = int("".join(ch for ch in spec.split(".")[0] if ch.isdigit()) or 0)
     return f"{'—':>{width}s}" if v is None else format(v, spec)
@@ -152,6 +194,7 @@ def main(args) -> int:
                         "pac_only_speedup": pac_only["realtime_factor"] / full["realtime_factor"]}
     say("… memory (streaming)")
     result["memory"] = stream_hour(3600.0 if args.hour else 600.0)
+    result["spi"] = spi_paths(rtl=not args.no_rtl, say=say)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -175,4 +218,11 @@ def main(args) -> int:
     m = result["memory"]
     print(f"\nStreaming {m['simulated_s']:.0f} simulated s of the full frame: {m['realtime_factor']:.0f}× real time, "
           f"peak RSS {m['peak_rss_MB']:.0f} MB")
+    print("\nSPI implementations, default 44-slot frame at 4.4 kHz (one sample transaction = command + read):")
+    names = {"software_vectorized": "software model (vectorized path)",
+             "software_transfer_level": "software model (transfer-level path)",
+             "rtl_cocotb": "RTL under cocotb + Verilator", "rtl_cpp_harness": "RTL through the C++ harness"}
+    for key, r in result["spi"].items():
+        print(f"  {names[key]:38s} {r['transactions_per_s']:12.0f} transactions/s  {r['realtime_factor']:9.2f}× real time"
+              + ("" if r["includes_physics"] else "  (codes precomputed by the emulator)"))
     return 0

@@ -46,6 +46,12 @@ def use_verilator() -> None:
     os.environ.update(verilator_env())
 
 
+def fst_supported() -> bool:
+    """FST tracing compiles Verilator's FST writer, which needs the lz4 headers (Debian: liblz4-dev)."""
+    r = subprocess.run(["c++", "-x", "c++", "-E", "-"], input="#include <lz4.h>\n", capture_output=True, text=True)
+    return r.returncode == 0
+
+
 def generate_props(out_dir: Path) -> Path:
     """Write ``biotac_props.vh``: ``prop_known(prop)`` and ``prop_byte(sensor, prop, index)``."""
     out_dir.mkdir(parents=True, exist_ok=True)

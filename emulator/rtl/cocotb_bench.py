@@ -14,7 +14,7 @@ import os
 import time
 
 import cocotb
-from cocotb.triggers import Edge, Timer
+from cocotb.triggers import Timer
 from cocotb.utils import get_sim_time
 
 from emulator.spi.model import Transfer
@@ -41,7 +41,7 @@ class SpiMaster:
         d.req_half_ps.value = half_ps
         d.req_keep_cs.value = int(keep_cs)
         d.req_go.value = 1 - int(d.req_go.value)
-        await Edge(d.rsp_done)
+        await d.rsp_done.value_change
         return int(d.rsp_miso.value) & ((1 << nbits) - 1) if nbits else 0
 
     async def run(self, tr: Transfer) -> int:
@@ -61,7 +61,7 @@ class CodeServer:
         d = self.dut
         seen = int(d.sample_req.value)
         while True:
-            await Edge(d.sample_req)
+            await d.sample_req.value_change
             now = int(d.sample_req.value)
             changed = now ^ seen
             seen = now

@@ -30,7 +30,7 @@ class HarnessError(RuntimeError):
 
 class Harness:
     def __init__(self, build_dir: Path = DEFAULT_DIR):
-        self.build_dir = Path(build_dir)
+        self.build_dir = Path(build_dir).resolve()
         self.binary = self.build_dir / "harness"
 
     def build(self) -> Path:

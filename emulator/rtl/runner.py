@@ -16,8 +16,10 @@ class Rtl:
     """A built simulator of tb_top; ``run_vectors`` and ``stream_frames`` run cocotb tests in it."""
 
     def __init__(self, build_dir: Path = DEFAULT_BUILD_DIR, waves: bool = False):
-        self.build_dir = Path(build_dir)
+        self.build_dir = Path(build_dir).resolve()
         self.waves = waves
+        #: FST when the lz4 headers are there; otherwise cocotb's VCD (same signals, larger file)
+        self.wave_format = ("fst" if build.fst_supported() else "vcd") if waves else None
         build.use_verilator()
         from cocotb_tools.runner import get_runner
 
@@ -27,10 +29,10 @@ class Rtl:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
         args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
-                "-Wno-style"]
+                "-Wno-style"] + (["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else [])
         self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
                           build_dir=str(self.build_dir), build_args=args, waves=self.waves,
-                          timescale=("1ps", "1ps"), always=False)
+                          timescale=("1ps", "1ps"), always=False, log_file=str(self.build_dir / "build.log"))
 
     def _run(self, testcase: str, env: dict) -> dict:
         with tempfile.TemporaryDirectory() as tmp:
@@ -41,7 +43,8 @@ class Rtl:
             try:
                 self.runner.test(hdl_toplevel="tb_top", test_module="emulator.rtl.cocotb_bench",
                                  testcase=testcase, build_dir=str(self.build_dir), waves=self.waves,
-                                 test_dir=str(self.build_dir), results_xml=str(Path(tmp) / "results.xml"))
+                                 test_dir=str(self.build_dir), results_xml=str(Path(tmp) / "results.xml"),
+                                 log_file=str(self.build_dir / f"{testcase}.log"))
             finally:
                 for k, v in old.items():
                     if v is None:
@@ -49,8 +52,12 @@ class Rtl:
                     else:
                         os.environ[k] = v
             if not result.exists():
-                raise RuntimeError(f"the cocotb test {testcase!r} wrote no result (see the simulator log above)")
+                raise RuntimeError(f"the cocotb test {testcase!r} wrote no result; simulator log: "
+                                   f"{self.build_dir / (testcase + '.log')}")
             return json.loads(result.read_text())
+
+    def wave_files(self) -> list[Path]:
+        return sorted([*self.build_dir.glob("*.fst"), *self.build_dir.glob("*.vcd")])
 
     def run_vectors(self, paths) -> dict:
         """Replay vector files in one simulation; returns {path: {"miso": [...], ...}}."""

@@ -129,3 +129,15 @@ def test_a_scene_yields_identical_codes_over_software_and_rtl(tmp_path):
         other = results["rtl"].channels[name]
         assert np.array_equal(r.codes, other.codes), name
         assert np.array_equal(r.status, other.status) and not r.status.any(), name
+
+
+def test_waveforms_on_request(tmp_path):
+    from emulator.rtl.runner import Rtl
+
+    r = Rtl(tmp_path / "waves", waves=True)
+    r.build()
+    path = REPO / "fixtures" / "spi_vectors" / "fault_cs_glitch.json"
+    _compare(V.load(path), r.run_vectors([path])[str(path)], path.name)
+    files = r.wave_files()
+    assert files and files[0].stat().st_size > 1000
+    assert files[0].suffix == "." + r.wave_format
