@@ -25,10 +25,13 @@ def static_pressure_from_force(force_N, p: SensorParams):
     """
     F = np.maximum(np.asarray(force_N, float), 0.0)
     k, r, w, Fk = p.force_to_pressure_Pa_per_N, p.force_slope_above_knee, p.force_knee_width_N, p.force_knee_N
-    x = (F - Fk) / w
+    out = np.zeros_like(F)
+    touching = F > 0  # most samples of a scene carry no force: skip the transcendental functions there
+    x = (F[touching] - Fk) / w
     softplus = np.where(x > 30, x, np.log1p(np.exp(np.minimum(x, 30))))
     softplus0 = np.log1p(np.exp(-Fk / w))  # so that P(0) = 0
-    return k * (F - (1 - r) * w * (softplus - softplus0))
+    out[touching] = k * (F[touching] - (1 - r) * w * (softplus - softplus0))
+    return out if out.ndim else float(out)
 
 
 def skin_resonance(params: SensorParams, fs: float, discretization: str, zero_hz: float | None = None):

@@ -193,7 +193,11 @@ class ContactForce(Effect):
         t_lo = t_hi - dt
         out = np.zeros(block.n)
         for s in _overlapping(self.stimuli, t_lo[0], t_hi[-1]):
-            out += (s.cumulative(t_hi) - s.cumulative(t_lo)) / dt
+            # the interval mean is zero outside [start, end]: evaluate only the samples the stimulus touches
+            a = int(np.searchsorted(t_hi, s.start_s, side="left"))
+            b = int(np.searchsorted(t_lo, s.end_s, side="right"))
+            if b > a:
+                out[a:b] += (s.cumulative(t_hi[a:b]) - s.cumulative(t_lo[a:b])) / dt
         return {"contact_force_N": out}
 
 
