@@ -10,7 +10,8 @@ import pytest
 
 from emulator.rtl import build
 from emulator.spi import vectors as V
-from emulator.spi.model import Faults
+from emulator.spi import protocol as proto
+from emulator.spi.model import SELECT_CODE, Faults
 
 pytestmark = pytest.mark.rtl
 REPO = Path(__file__).resolve().parents[2]
@@ -51,6 +52,11 @@ def test_rtl_matches_the_software_model_on_thousands_of_random_transactions(rtl,
     for seed, faults in ((1, {}), (2, {2: Faults(miso_flip_bit=9), 3: Faults(slow_response=True)}),
                          (3, {1: Faults(bad_parity=True, mosi_flip_bit=2)})):
         traffic = V.random_traffic(np.random.default_rng(seed), 1500, sensors=(1, 2, 3), fast_clocks=True)
+        t = V.end_ps(traffic[-1]) + 1_000_000
+        for n in (1, 2, 3):  # after the garbage, a well-formed sample and read for every sensor
+            traffic.append(V.tr(V.on_grid(t), SELECT_CODE[n], 0x8300))
+            traffic.append(V.tr(V.on_grid(t + 150_000_000), SELECT_CODE[n], 0x0000))
+            t += 200_000_000
         vec = V.record(f"random seed {seed}", traffic, sensors=(1, 2, 3), faults=faults, seed=seed)
         path = tmp_path / f"random_{seed}.json"
         V.save(vec, path)
@@ -58,8 +64,14 @@ def test_rtl_matches_the_software_model_on_thousands_of_random_transactions(rtl,
     results = rtl.run_vectors([p for p, _ in files])
     total = 0
     for path, vec in files:
-        _compare(vec, results[str(path)], path.name)
+        res = results[str(path)]
+        _compare(vec, res, path.name)
         total += len(vec["transfers"])
+        for n, word in zip((1, 2, 3), res["miso"][-5::2]):  # the final reads; faulted sensors stay faulty
+            if str(n) in vec["faults"]:
+                continue
+            value, ok = proto.decode_response(int(word, 16))
+            assert ok and 0 < int(value) < 4095, f"{path.name}: sensor {n} did not recover after the garbage"
     assert total >= 4500
 
 
