@@ -57,7 +57,6 @@ class SensorParams:
     bridge_excitation_V: float = _p(10.0, "V", 1.0, 15.0, "D", "bridge supply")
     bridge_sensitivity_V_per_V_Pa: float = _p(0.218e-6, "V/(V·Pa)", 1e-8, 1e-5, "D", "0.218 mV/V·kPa")
     bridge_resistance_ohm: float = _p(5e3, "Ω", 100.0, 1e6, "D", "output resistance (Johnson noise source)")
-    bridge_temperature_C: float = _p(35.0, "°C", -20.0, 80.0, "D", "bridge temperature: the heated core, ~35 °C")
     bridge_reference_temperature_C: float = _p(
         35.0, "°C", -20.0, 80.0, "model", "temperature at which offset and span equal their nominal values")
     bridge_offset_V_per_V: float = _p(0.0, "V/V", -0.01, 0.01, "model", "zero-pressure offset at the reference temperature")
@@ -81,6 +80,39 @@ class SensorParams:
     stage2_voltage_noise_V_per_rtHz: float = _p(
         0.39e-6 / math.sqrt(1024.0), "V/√Hz", 0.0, 1e-6, "D", "second-stage input noise (reference profile only)")
 
+    # --- thermal network and thermistor (SENSOR.md §4) -------------------------------------
+    ambient_temperature_C: float = _p(25.0, "°C", -20.0, 60.0, "D", "room temperature")
+    heater_rise_K: float = _p(10.0, "K", 0.0, 30.0, "D", "heaters hold the core about 10 °C above ambient")
+    core_heat_capacity_J_per_K: float = _p(6.0, "J/K", 0.1, 100.0, "model", "epoxy core with electronics")
+    fluid_heat_capacity_J_per_K: float = _p(1.75, "J/K", 0.01, 20.0, "model", "0.5 mL of water/glycol")
+    skin_heat_capacity_J_per_K: float = _p(2.0, "J/K", 0.01, 20.0, "model", "silicone skin")
+    thermistor_heat_capacity_J_per_K: float = _p(0.004, "J/K", 1e-5, 1.0, "model", "thermistor bead")
+    core_fluid_conductance_W_per_K: float = _p(0.1, "W/K", 1e-3, 10.0, "model", "core surface to fluid")
+    fluid_skin_conductance_W_per_K: float = _p(0.2, "W/K", 1e-3, 10.0, "model", "fluid layer to skin")
+    thermistor_conductance_W_per_K: float = _p(
+        0.004, "W/K", 1e-4, 1.0, "model", "bead to its surroundings (dissipation constant): ~1 s time constant")
+    skin_air_conductance_W_per_K: float = _p(0.015, "W/K", 1e-4, 1.0, "model", "convection from the skin")
+    mount_conductance_W_per_K: float = _p(0.015, "W/K", 0.0, 1.0, "model", "core to the finger's mount")
+    contact_conductance_W_per_m2K: float = _p(
+        3000.0, "W/(m²·K)", 10.0, 1e6, "model", "skin-to-object contact conductance")
+    tdc_bandwidth_Hz: float = _p(22.6, "Hz", 1.0, 49.0, "D", "TDC bandwidth (Table 4-1)")
+    tac_highpass_Hz: float = _p(0.45, "Hz", 0.01, 10.0, "D", "TAC high-pass (Table 4-1; the text says 5 Hz)")
+    tdc_noise_V: float = _p(20e-6, "V", 0.0, 1e-2, "model", "RMS noise of the TDC node per 10 ms step")
+
+    # --- electrodes (SENSOR.md §5) ---------------------------------------------------------
+    electrode_load_ohm: float = _p(10e3, "Ω", 100.0, 1e6, "D", "R_load on the multiplexer output")
+    electrode_series_ohm: float = _p(1.55e3, "Ω", 0.0, 1e5, "model", "electrode interface and spreading")
+    fluid_sheet_ohm_mm: float = _p(3.85e3, "Ω·mm", 1.0, 1e6, "model", "fluid layer resistance × thickness")
+    resting_gap_mm: float = _p(1.5, "mm", 0.2, 5.0, "model", "fluid thickness over the electrodes at rest")
+    minimum_gap_mm: float = _p(0.1, "mm", 0.01, 1.0, "model", "fluid left when the skin bottoms on the core")
+    indentation_force_N: float = _p(1.5, "N", 0.05, 50.0, "model", "force for 63 % of the maximum indentation")
+    skin_spread_mm: float = _p(3.0, "mm", 0.5, 10.0, "model", "how far an indentation spreads in the skin")
+    shear_shift_mm_per_N: float = _p(1.0, "mm/N", 0.0, 10.0, "model", "pattern shift per N of tangential force")
+    electrode_bandwidth_Hz: float = _p(100.0, "Hz", 1.0, 400.0, "D", "electrode channel bandwidth")
+    mux_settling_s: float = _p(4e-6, "s", 1e-8, 1e-3, "model", "multiplexer and hold-node settling")
+    mux_acquisition_s: float = _p(20e-6, "s", 1e-7, 1e-3, "model", "firmware delay from mux switch to conversion")
+    mux_injection_V: float = _p(0.05, "V", 0.0, 1.0, "model", "charge injected into the hold node at a switch")
+
     # --- ADC (SENSOR.md §2) ------------------------------------------------------------
     adc_conversion_s: float = _p(
         5e-6, "s", 1e-7, 1e-4, "model",
@@ -97,12 +129,12 @@ class SensorParams:
     spi_coupling_rms_V: float = _p(
         4.0e-3, "V", 0.0, 0.1, "model", "ADC-input disturbance when a conversion overlaps SPI clocking")
 
-    # --- resting levels of channels modelled by the thermal/electrode issue -----------
-    resting_tdc_code: int = _p(2560, "code", 0, 4095, "model", "TDC at a settled heater (placeholder level)")
-    resting_tac_code: int = _p(2048, "code", 0, 4095, "model", "TAC with no heat flux (placeholder level)")
-    resting_electrode_code: int = _p(2900, "code", 0, 4095, "model", "E1..E19 with an undeformed skin (placeholder)")
-
     # ------------------------------------------------------------------------------
+    @property
+    def bridge_temperature_C(self) -> float:
+        """The bridge sits in the heated core: ambient + heater rise when settled."""
+        return self.ambient_temperature_C + self.heater_rise_K
+
     @property
     def bridge_temperature_K(self) -> float:
         return self.bridge_temperature_C + ZERO_CELSIUS_K
@@ -118,16 +150,24 @@ class SensorParams:
         """Resting (DC) fluid pressure from the inflation volume."""
         return self.resting_pressure_Pa_per_mL * self.inflation_volume_mL ** self.resting_pressure_exponent
 
+    def bridge_span_at(self, temperature_C):
+        """Bridge output per Pa (V/Pa) at a bridge temperature (°C, scalar or array)."""
+        dT = temperature_C - self.bridge_reference_temperature_C
+        return self.bridge_excitation_V * self.bridge_sensitivity_V_per_V_Pa * (1.0 + self.bridge_span_drift_per_K * dT)
+
+    def bridge_offset_at(self, temperature_C):
+        """Bridge zero-pressure output (V) at a bridge temperature (°C, scalar or array)."""
+        dT = temperature_C - self.bridge_reference_temperature_C
+        return self.bridge_excitation_V * (self.bridge_offset_V_per_V + self.bridge_offset_drift_V_per_V_K * dT)
+
     @property
     def bridge_span_V_per_Pa(self) -> float:
-        """Bridge output per Pa at its present temperature."""
-        dT = self.bridge_temperature_C - self.bridge_reference_temperature_C
-        return self.bridge_excitation_V * self.bridge_sensitivity_V_per_V_Pa * (1.0 + self.bridge_span_drift_per_K * dT)
+        """Bridge output per Pa at the settled core temperature."""
+        return self.bridge_span_at(self.bridge_temperature_C)
 
     @property
     def bridge_offset_V(self) -> float:
-        dT = self.bridge_temperature_C - self.bridge_reference_temperature_C
-        return self.bridge_excitation_V * (self.bridge_offset_V_per_V + self.bridge_offset_drift_V_per_V_K * dT)
+        return self.bridge_offset_at(self.bridge_temperature_C)
 
     @property
     def johnson_noise_V_per_rtHz(self) -> float:

@@ -13,19 +13,23 @@ import numpy as np
 
 from emulator import channels as ch
 from emulator.adc import Adc
-from emulator.conversions import ADC_LSB_V
 from emulator.effects import Block, Effect, build_graph
 from emulator.extrinsic import MainsHum
 from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.stimuli import (ContactForce, ForceStimulus, PressureCalibrator, Vibration, calibration_pressure,
-                              skin_displacement)
-from emulator.transducer import Bridge, johnson_noise
+from emulator.electrodes import Contact, ElectrodeModel, electrode_positions_mm, surface_point_mm
+from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, PowerOn, PressureCalibrator, Touch,
+                              Vibration, calibration_pressure, skin_displacement)
+from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
+from emulator.transducer import Bridge, CoreTemperature, johnson_noise
 
-#: Which grid signal each modelled channel converts.
+#: Which grid signal each pressure channel converts.
 CHANNEL_NODE = {ch.PAC: "pac_V", ch.PDC: "pdc_V"}
+#: Kinds of channel in Sensor.analog (grid nodes are 0..len(nodes)-1).
+KIND_TDC, KIND_TAC, KIND_ELECTRODE, KIND_NOT_READ = 100, 101, 102, -1
+FAULT_NAMES = ("electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed")
 
 
 @dataclass(frozen=True)
@@ -57,12 +61,19 @@ class Sensor:
     noise : which noise sources are on
     block_s : physics block length in s (results do not depend on it)
     start_s : the instant (s) at which the sensor starts, settled at rest; earlier instants do not exist
+    faults : sensor faults: ``electrode_open``/``electrode_short`` (lists of electrode numbers), ``mux_stuck``
+        (electrode number), ``thermistor`` ("open" or "short"), ``heater_failed`` (True)
     """
 
     def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
                  fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
-                 block_s: float = 2.0, start_s: float = 0.0):
+                 block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None):
         self.params = params or SensorParams()
+        self.faults = dict(faults or {})
+        unknown_faults = set(self.faults) - set(FAULT_NAMES)
+        if unknown_faults:
+            raise ValueError(f"unknown sensor fault(s): {', '.join(sorted(unknown_faults))}; known: {', '.join(FAULT_NAMES)}")
+        stimuli = list(stimuli)
         self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
         self.seed = int(seed)
         self.noise = noise
@@ -74,18 +85,22 @@ class Sensor:
         if unknown:
             raise ValueError(f"channel index {unknown[0]} is not a sampled channel of this sensor")
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
-        self.graph = build_graph(self._candidate_effects(list(stimuli)), set(self.nodes))
+        self.thermal, self.thermal_steady = self._thermal_model(stimuli)
+        self.electrodes = self._electrode_model(stimuli)
+        self.graph = build_graph(self._candidate_effects(stimuli), set(self.nodes))
         self.resting = self.graph.settle()
         self.adc = Adc(self.params, self.seed, noise=noise.adc, spi_coupling=noise.spi_coupling)
-        # per channel index: which grid node it converts (-1 = not read, len(nodes) = fixed resting level)
-        self._node_of_channel = np.full(64, -1, dtype=np.int64)
-        self._fixed_V = np.zeros(64)
+        # per channel index: which grid node or slow model it converts
+        self._node_of_channel = np.full(64, KIND_NOT_READ, dtype=np.int64)
         for c in self.channels_read:
             if c in CHANNEL_NODE:
                 self._node_of_channel[c] = self.nodes.index(CHANNEL_NODE[c])
+            elif c == ch.TDC:
+                self._node_of_channel[c] = KIND_TDC
+            elif c == ch.TAC:
+                self._node_of_channel[c] = KIND_TAC
             else:
-                self._node_of_channel[c] = len(self.nodes)
-                self._fixed_V[c] = self._placeholder_code(c) * ADC_LSB_V
+                self._node_of_channel[c] = KIND_ELECTRODE
         self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self.nodes}
         if not (np.isfinite(start_s) and start_s >= 0):
             raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
@@ -98,7 +113,8 @@ class Sensor:
         forces = [s for s in stimuli if isinstance(s, ForceStimulus)]
         vibrations = [s for s in stimuli if isinstance(s, Vibration)]
         calibrations = [s for s in stimuli if isinstance(s, PressureCalibrator)]
-        other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator))]
+        other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator, PowerOn,
+                                                         AmbientStep))]
         if other:
             raise TypeError(f"not a stimulus: {other[0]!r}")
         for v in vibrations:
@@ -113,8 +129,11 @@ class Sensor:
             effects.append(skin_displacement(vibrations))
         if calibrations:
             effects.append(calibration_pressure(calibrations))
+        dynamic = self.thermal is not None
+        if dynamic:
+            effects.append(CoreTemperature(self.thermal))
         effects += [RestingPressure(p), ForceCoupling(p, fs, disc), VibrationCoupling(p, fs, disc),
-                    Bridge(p, fs, disc, duct_resonance=f.duct_resonance)]
+                    Bridge(p, fs, disc, duct_resonance=f.duct_resonance, thermal=dynamic)]
         if self.noise.johnson:
             effects.append(johnson_noise(p, fs, self.seed))
         if self.noise.amplifier:
@@ -128,13 +147,45 @@ class Sensor:
         effects.append(Stage2(p, fs, disc, own_noise=own_noise))
         return effects
 
-    def _placeholder_code(self, channel: int) -> int:
-        """Resting level of channels the thermal/electrode model does not drive yet."""
-        if channel == ch.TDC:
-            return self.params.resting_tdc_code
-        if channel == ch.TAC:
-            return self.params.resting_tac_code
-        return self.params.resting_electrode_code
+    def _thermal_model(self, stimuli):
+        """The thermal network when something thermal happens; otherwise the settled steady state (shortcut)."""
+        p = self.params
+        contacts = []
+        for s in stimuli:
+            if isinstance(s, Touch) and s.material is not None:
+                temp = p.ambient_temperature_C if s.object_temperature_C is None else s.object_temperature_C
+                contacts.append(ThermalContact(s.start_s, s.end_s, material(s.material), temp,
+                                               np.pi * (s.indenter_radius_mm * 1e-3) ** 2))
+        power_on = [s.at_s for s in stimuli if isinstance(s, PowerOn)]
+        steps = tuple(sorted((s.at_s, s.temperature_C) for s in stimuli if isinstance(s, AmbientStep)))
+        events = ThermalEvents(contacts, power_on[0] if power_on else None, steps,
+                               0.0 if self.faults.get("heater_failed") else None)
+        thermal_read = any(c in (ch.TDC, ch.TAC) for c in self.channels_read)
+        pressure_read = bool(self.nodes)
+        if events.any and (thermal_read or pressure_read):
+            return ThermalModel(p, events, self.seed, self.faults), None
+        return None, steady_state(p, self.faults)
+
+    def _electrode_model(self, stimuli):
+        """The electrode model, only if the host reads an electrode."""
+        if not any(c >= ch.ELECTRODE_FIRST for c in self.channels_read):
+            return None
+        positions = electrode_positions_mm()
+        contacts = []
+        for s in stimuli:
+            if not isinstance(s, Touch):
+                continue
+            if s.electrode is not None:
+                centre = positions[ch.channel_index(s.electrode) - ch.ELECTRODE_FIRST]
+                centre = centre / np.hypot(centre[1], centre[2]) * np.array([1.0, 5.0, 5.0]) \
+                    if np.hypot(centre[1], centre[2]) > 0 else centre
+                centre[0] = positions[ch.channel_index(s.electrode) - ch.ELECTRODE_FIRST][0]
+            else:
+                centre = surface_point_mm(s.x_mm, s.angle_deg)
+            a, phi = np.arctan2(centre[1], -centre[2]), np.radians(s.shear_angle_deg)
+            direction = np.cos(phi) * np.array([1.0, 0, 0]) + np.sin(phi) * np.array([0, np.cos(a), np.sin(a)])
+            contacts.append(Contact(centre, s.indenter_radius_mm, s.force, s.tangential, tuple(direction)))
+        return ElectrodeModel(self.params, contacts, self.faults)
 
     # --- time advance ---------------------------------------------------------------
     def _advance_through(self, n_last: int, keep_from: int) -> None:
@@ -204,10 +255,17 @@ class Sensor:
                 h = self._history(node)
                 ks, fs = k[sel], frac[sel]
                 out[sel] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
-        fixed = node_of == len(self.nodes)
-        if fixed.any():
-            out[fixed] = self._fixed_V[channels[fixed]]
+        for kind, column in ((KIND_TDC, 1), (KIND_TAC, 2)):
+            sel = node_of == kind
+            if sel.any():
+                out[sel] = (self.thermal.values_at(times[sel])[:, column] if self.thermal is not None
+                            else self.thermal_steady[column])
+        sel = node_of == KIND_ELECTRODE
+        if sel.any():
+            out[sel] = self.electrodes.sample(channels[sel] - ch.ELECTRODE_FIRST + 1, times[sel])
         self._trim(int(i.max()))
+        if self.thermal is not None:
+            self.thermal.forget_before(min(times.max(), self._buf_n0 / self.fs))
         return out
 
     def sample(self, channels, times, bus_active=None) -> np.ndarray:

@@ -129,6 +129,61 @@ class Press(ForceStimulus):
 
 
 @dataclass
+class Touch(Press):
+    """A contact at a place on the skin, with an object: the force profile of :class:`Press`, plus where
+    (``x_mm`` along the finger, ``angle_deg`` around it from the ventral midline, or over ``electrode``),
+    the indenter's radius, a tangential force (N at full normal force, direction ``shear_angle_deg``
+    from +x toward +angle) and, for thermal contact, the object's ``material`` and temperature."""
+
+    x_mm: float = -5.0
+    angle_deg: float = 0.0
+    electrode: str | None = None
+    indenter_radius_mm: float = 3.0
+    tangential_N: float = 0.0
+    shear_angle_deg: float = 0.0
+    material: str | None = None
+    object_temperature_C: float | None = None
+
+    def force(self, t):
+        """Normal force in N (piecewise linear: ramp, hold, ramp down)."""
+        F, r, h = self.force_N, self.ramp_s, self.hold_s
+        x = np.asarray(t, float) - self.start
+        up = np.clip(x / r, 0, 1)
+        down = np.clip((x - r - h) / r, 0, 1)
+        return F * np.where(x < 0, 0.0, up - down)
+
+    def tangential(self, t):
+        return self.tangential_N * (self.force(t) / self.force_N if self.force_N else 0.0)
+
+
+@dataclass
+class PowerOn:
+    """The sensor is powered at ``at_s``, from ambient temperature: the heaters start warming the core."""
+
+    at_s: float = 0.0
+
+    @property
+    def start_s(self):
+        return self.at_s
+
+    end_s = start_s
+
+
+@dataclass
+class AmbientStep:
+    """The room temperature changes to ``temperature_C`` at ``at_s``."""
+
+    at_s: float
+    temperature_C: float
+
+    @property
+    def start_s(self):
+        return self.at_s
+
+    end_s = start_s
+
+
+@dataclass
 class Vibration:
     """Sinusoidal skin displacement from a stiff actuator, optionally swept logarithmically.
 

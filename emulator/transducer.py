@@ -22,9 +22,13 @@ class Bridge(Effect):
     consumes = ("fluid_pressure_Pa",)
     produces = ("stage1_input_V",)
 
-    def __init__(self, params: SensorParams, fs: float, discretization: str, duct_resonance: bool):
+    def __init__(self, params: SensorParams, fs: float, discretization: str, duct_resonance: bool,
+                 thermal: bool = False):
         self.span = params.bridge_span_V_per_Pa
         self.offset = params.bridge_offset_V
+        self.params = params
+        #: with a thermal model the bridge follows the core temperature (offset and span drift)
+        self.consumes = ("fluid_pressure_Pa", "bridge_temperature_C") if thermal else ("fluid_pressure_Pa",)
         self.duct = None
         if duct_resonance:
             w0 = 2 * np.pi * params.duct_resonance_Hz
@@ -41,14 +45,38 @@ class Bridge(Effect):
         p = inputs["fluid_pressure_Pa"]
         if self.duct is not None:
             self.duct.settle(p)
+        if "bridge_temperature_C" in inputs:
+            t = inputs["bridge_temperature_C"]
+            return {"stage1_input_V": self.params.bridge_offset_at(t) + self.params.bridge_span_at(t) * p}
         return {"stage1_input_V": self.offset + self.span * p}
 
     def process(self, block: Block, inputs):
         p = inputs["fluid_pressure_Pa"]
         v = self.duct(p) if self.duct is not None else p.copy()
+        if "bridge_temperature_C" in inputs:
+            t = inputs["bridge_temperature_C"]
+            v *= self.params.bridge_span_at(t)
+            v += self.params.bridge_offset_at(t)
+            return {"stage1_input_V": v}
         v *= self.span
         v += self.offset
         return {"stage1_input_V": v}
+
+
+class CoreTemperature(Effect):
+    """The heated core's temperature (°C) on the grid, from the thermal network (drives the bridge's drift)."""
+
+    name = "core_temperature"
+    produces = ("bridge_temperature_C",)
+
+    def __init__(self, thermal):
+        self.thermal = thermal
+
+    def settle(self, inputs):
+        return {"bridge_temperature_C": float(self.thermal.values_at(np.array([0.0]))[0, 0])}
+
+    def process(self, block: Block, inputs):
+        return {"bridge_temperature_C": self.thermal.values_at(block.times)[:, 0].copy()}
 
 
 class WhiteNoise(Effect):

@@ -80,7 +80,7 @@ def test_inflation_raises_resting_pressure_and_moves_the_resonance_within_200_to
 
 
 def test_hotter_bridge_drifts_offset_and_span():
-    cold, hot = SensorParams(bridge_temperature_C=25.0), SensorParams(bridge_temperature_C=45.0)
+    cold, hot = SensorParams(ambient_temperature_C=15.0), SensorParams(ambient_temperature_C=35.0)  # core 25 vs 45 °C
     assert hot.bridge_span_V_per_Pa < cold.bridge_span_V_per_Pa
     assert hot.bridge_offset_V != cold.bridge_offset_V
     t = np.arange(100) / 100.0

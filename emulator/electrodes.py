@@ -1,0 +1,177 @@
+"""The 19 impedance electrodes behind the multiplexer (SENSOR.md §5, D ch. 4).
+
+Contact -> skin and fluid deformation -> fluid gap over every electrode -> impedance -> voltage.
+
+* A contact at a point of the skin (``x_mm`` along the finger, ``angle_deg`` around it from the ventral
+  midline toward +y) with normal force F indents the skin by δ(d) = δ₀·exp(−d²/2w²) at distance d from
+  its centre, w² = r_indenter² + spread²; δ₀ = (g₀ − g_min)·(1 − e^(−F/F₀)) so the skin never goes
+  through the core (it bottoms at g_min).  The displaced liquid bulges the skin elsewhere uniformly
+  (incompressible, volume conserving).  Tangential force shifts the indentation toward the shear.
+* The fluid over an electrode is a thin conducting sheet: Z = Z_series + ρ_sheet / gap, so thinning the
+  fluid raises the impedance.
+* The multiplexer connects the selected electrode into a 10 kΩ load driven by the 4 kHz, 3.3 V
+  excitation; the peak detector holds V = 3.3·R_load/(Z + R_load), so impedance = (3.3/V − 1)·10 kΩ
+  (D eq. 4.1).  The electrode path has a 100 Hz bandwidth.
+* Between conversions the hold node keeps the last electrode's value; switching to another electrode
+  injects charge and the node settles with ``mux_settling_s`` during the firmware's acquisition delay,
+  so each sample keeps exp(−t_acq/τ) of the previous electrode's value: cross-talk when channels switch
+  faster than the node settles.
+
+Geometry and deformation are evaluated at 1 kHz in chunks aligned to absolute time, filtered per
+electrode, and interpolated to conversion instants.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy import signal
+
+from emulator import filters
+from emulator.channels import ELECTRODE_FIRST
+from emulator.params import SensorParams
+
+ELECTRODE_RATE_HZ = 1000.0
+CHUNK = 100
+CORE_RADIUS_MM = 5.0
+ELECTRODES_CSV = Path(__file__).resolve().parents[1] / "fixtures" / "electrodes.csv"
+
+
+def electrode_positions_mm() -> np.ndarray:
+    """(19, 3) electrode positions on the core in the sensor frame, mm (Ruppel et al. 2018, via SENSOR.md)."""
+    rows = [r for r in csv.reader(line for line in ELECTRODES_CSV.read_text().splitlines()
+                                  if line and not line.startswith("#"))]
+    body = [r for r in rows if r[0].startswith("E")]
+    return np.array([[float(v) for v in r[1:4]] for r in body])
+
+
+def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:
+    """A point of the core surface: ``x_mm`` along the finger, ``angle_deg`` from the ventral midline (−z) to +y."""
+    a = np.radians(angle_deg)
+    return np.array([x_mm, CORE_RADIUS_MM * np.sin(a), -CORE_RADIUS_MM * np.cos(a)])
+
+
+@dataclass
+class Contact:
+    """A contact on the skin: where, how hard (normal and tangential force profiles), with what.
+
+    ``normal_N(t)`` and ``tangential_N(t)`` give forces in N; the tangential force acts along
+    ``shear_direction`` (unit vector in the sensor frame, default along +x toward the tip).
+    """
+
+    center_mm: np.ndarray
+    indenter_radius_mm: float
+    normal_N: object
+    tangential_N: object = None
+    shear_direction: tuple = (1.0, 0.0, 0.0)
+
+    def state(self, t: np.ndarray):
+        f = np.maximum(np.asarray(self.normal_N(t), float), 0.0)
+        ft = np.zeros_like(f) if self.tangential_N is None else np.asarray(self.tangential_N(t), float)
+        return f, ft
+
+
+def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """(len(t), 19) fluid thickness over every electrode, mm."""
+    g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
+    gaps = np.full((t.size, positions.shape[0]), g0)
+    surface_mm2 = 2 * np.pi * CORE_RADIUS_MM * 25.0  # wetted core surface (about 25 mm long)
+    indent = np.zeros_like(gaps)
+    bulge = np.zeros(t.size)
+    for c in contacts:
+        f, ft = c.state(t)
+        if not f.any():
+            continue
+        depth = (g0 - gmin) * (1.0 - np.exp(-f / p.indentation_force_N))  # bounded: bottoms at g_min
+        w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
+        shift = np.outer(p.shear_shift_mm_per_N * ft, np.asarray(c.shear_direction, float))
+        centre = c.center_mm[None, :] + shift
+        d2 = ((positions[None, :, :] - centre[:, None, :]) ** 2).sum(axis=2)
+        indent += depth[:, None] * np.exp(-d2 / (2 * w2))
+        bulge += depth * 2 * np.pi * w2 / surface_mm2  # displaced volume spread over the surface
+    gaps = gaps - indent + bulge[:, None]
+    return np.maximum(gaps, gmin)
+
+
+def electrode_volts(p: SensorParams, gaps_mm: np.ndarray, faults: dict | None = None) -> np.ndarray:
+    """Peak voltage on the load for each gap (mm), with open/shorted electrode faults."""
+    z = p.electrode_series_ohm + p.fluid_sheet_ohm_mm / gaps_mm
+    faults = faults or {}
+    for n in faults.get("electrode_open", ()):
+        z[..., n - 1] = np.inf
+    for n in faults.get("electrode_short", ()):
+        z[..., n - 1] = 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = 3.3 * p.electrode_load_ohm / (z + p.electrode_load_ohm)
+    return np.nan_to_num(v, nan=0.0)
+
+
+class ElectrodeModel:
+    """Serves E1..E19 voltages at conversion instants, the multiplexer's memory included."""
+
+    def __init__(self, p: SensorParams, contacts: list[Contact], faults: dict | None = None,
+                 discretization: str = "prewarped"):
+        self.p, self.contacts, self.faults = p, contacts, faults or {}
+        self.positions = electrode_positions_mm()
+        self.dt = 1.0 / ELECTRODE_RATE_HZ
+        z, pz, k = np.array([]), np.array([-2 * np.pi * p.electrode_bandwidth_Hz]), 2 * np.pi * p.electrode_bandwidth_Hz
+        sos = filters.discretize(z, pz, k, ELECTRODE_RATE_HZ, discretization)
+        self.b, self.a = sos[0, :3], sos[0, 3:]
+        rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm), self.faults)[0]
+        self.zi = signal.lfilter_zi(self.b, self.a)[:, None] * rest[None, :]
+        self.k = 0
+        self._hist_t = [np.array([0.0])]
+        self._hist = [rest[None, :].copy()]
+        a = np.exp(-p.mux_acquisition_s / p.mux_settling_s)
+        self.mux_keep = a  # fraction of the previous electrode's value left in a sample
+        self.mux_injection = a * p.mux_injection_V
+        self.mux_node = float(rest[0])
+        self.stuck = self.faults.get("mux_stuck")  # electrode number the multiplexer is stuck on
+
+    def _advance_chunk(self):
+        t = (self.k + 1 + np.arange(CHUNK)) * self.dt
+        gaps = electrode_gaps_mm(self.p, self.contacts, t, self.positions) if self.contacts else \
+            np.full((CHUNK, 19), self.p.resting_gap_mm)
+        v = electrode_volts(self.p, gaps, self.faults)
+        y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
+        self.k += CHUNK
+        self._hist_t.append(t)
+        self._hist.append(y)
+
+    def targets(self, electrode: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """Settled voltage of electrode n (1..19) at each instant (no multiplexer memory)."""
+        if times.size == 0:
+            return np.zeros(0)
+        while self._hist_t[-1][-1] < times.max():
+            self._advance_chunk()
+        ht, hv = np.concatenate(self._hist_t), np.vstack(self._hist)
+        if times.min() < ht[0] - 1e-12:
+            raise ValueError(f"electrode instant {times.min():.6f} s is older than the electrode history")
+        idx = np.clip(np.searchsorted(ht, times, side="right") - 1, 0, len(ht) - 2)
+        frac = (times - ht[idx]) / self.dt
+        cols = electrode - 1
+        lo, hi = hv[idx, cols], hv[idx + 1, cols]
+        keep = max(0, int(np.searchsorted(ht, times.max(), side="right")) - 2)  # history still needed
+        self._hist_t, self._hist = [ht[keep:]], [hv[keep:]]
+        return lo + (hi - lo) * frac
+
+    def sample(self, electrode: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """Voltages the ADC sees for electrode conversions in the order given (multiplexer memory applied)."""
+        electrode = np.asarray(electrode, dtype=np.int64)
+        if times.size == 0:
+            return np.zeros(0)
+        if self.stuck is not None:
+            electrode = np.full_like(electrode, int(self.stuck))
+        target = self.targets(electrode, np.asarray(times, float))
+        # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions
+        a = self.mux_keep
+        y, _ = signal.lfilter([1.0], [1.0, -a], (1 - a) * target + self.mux_injection, zi=[a * self.mux_node])
+        self.mux_node = float(y[-1])
+        return y
+
+
+def electrode_index(channel: np.ndarray) -> np.ndarray:
+    return np.asarray(channel) - ELECTRODE_FIRST + 1

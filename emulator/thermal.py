@@ -1,0 +1,390 @@
+"""The heated core, the thermistor and thermal contact with objects (SENSOR.md §4, D ch. 4).
+
+A lumped thermal network, linear in its temperatures:
+
+    heaters (4 resistors) -> core -> fluid -> skin -> ambient air
+                              \\-> mount -> ambient     skin -> contact -> object layers -> object far field
+    thermistor bead: between the core surface and the fluid, with its own heat capacity and self-heating
+
+It settles ``heater_rise_K`` (10 K) above ambient and warms up over minutes after power-on.  An object in
+contact is a stack of layers of geometrically growing thickness (1-D conduction into a half-space), so
+metals, glass, stone, wood, plastics, foam and fabric draw heat according to their conductivity,
+density and heat capacity (their effusivity), through a contact conductance.
+
+Integration is exact for a linear system with inputs held over each step (matrix exponential), at the
+network's own rate (100 Hz), in chunks aligned to absolute time: stable at any step, independent of how
+callers slice time.  Outputs are interpolated to the instants asked for.
+
+Thermistor (NTC, 470 kΩ at 25 °C, B = 4025 K — the Beta model equivalent to D eq. 4.4) in a divider with
+30 kΩ from 10 V, buffered with a gain of 1.1 so that TDC/4095 = 100 kΩ/(R + 30 kΩ) exactly as the published
+conversion assumes, low-passed at 22.6 Hz -> TDC.  TAC = 1.65 V + 98 · HP(TDC), a first-order high-pass
+at 0.45 Hz (Table 4-1; the text's 5 Hz is not used): for changes slower than 0.35 s, TAC − 1.65 V ≈
+98·τ·dV_TDC/dt, which :func:`emulator.conversions.tac_to_celsius_per_s` inverts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import linalg
+
+from emulator import filters
+from emulator.effects import effect_rng
+from emulator.params import SensorParams
+
+THERMAL_RATE_HZ = 100.0
+CHUNK_STEPS = 100  # the network advances in 1 s chunks aligned to absolute time
+
+
+@dataclass(frozen=True)
+class Material:
+    """Thermal properties of an object: conductivity k (W/m/K), density ρ (kg/m³), specific heat c (J/kg/K)."""
+
+    name: str
+    k: float
+    rho: float
+    c: float
+
+    @property
+    def effusivity(self) -> float:
+        """√(kρc), W·s^½/(m²·K): how strongly a touched surface draws heat."""
+        return float(np.sqrt(self.k * self.rho * self.c))
+
+
+#: Typical room-temperature values as tabulated in Incropera & DeWitt, *Fundamentals of Heat and Mass
+#: Transfer* (6th ed.), Appendix A (Tables A.1 metals, A.2 nonmetallic solids, A.3 common materials).
+MATERIALS: dict[str, Material] = {m.name: m for m in (
+    Material("aluminum", 237.0, 2702.0, 903.0),
+    Material("steel", 60.5, 7854.0, 434.0),
+    Material("granite", 2.79, 2630.0, 775.0),
+    Material("glass", 1.4, 2500.0, 750.0),
+    Material("acrylic", 0.19, 1190.0, 1470.0),
+    Material("wood", 0.12, 510.0, 1380.0),
+    Material("cotton fabric", 0.06, 80.0, 1300.0),
+    Material("polystyrene foam", 0.027, 55.0, 1210.0),
+)}
+
+
+def material(name: str) -> Material:
+    try:
+        return MATERIALS[name]
+    except KeyError:
+        raise ValueError(f"unknown material {name!r}; known: {', '.join(MATERIALS)}") from None
+
+
+# --- the thermistor and its read-out ---------------------------------------------------------------
+THERMISTOR_B_K = 4025.0
+THERMISTOR_R_INF_OHM = 470e3 / np.exp(THERMISTOR_B_K / 298.15)  # 470 kΩ at 25 °C -> R∞ ≈ 0.644 Ω
+DIVIDER_OHM = 30e3
+DIVIDER_SUPPLY_V = 10.0
+TDC_BUFFER_GAIN = 1.1  # makes TDC/4095 = 100 kΩ/(R + 30 kΩ), the published conversion's divider
+TAC_GAIN = 98.0
+TAC_BIAS_V = 1.65
+
+
+def thermistor_ohm(t_celsius):
+    return THERMISTOR_R_INF_OHM * np.exp(THERMISTOR_B_K / (np.asarray(t_celsius, float) + 273.15))
+
+
+def tdc_volts(r_ohm, fault: str | None = None):
+    """Buffered divider output for thermistor resistance ``r_ohm`` (open: R = ∞; short: R = 0)."""
+    r = np.asarray(r_ohm, float)
+    if fault == "open":
+        r = np.full_like(r, np.inf)
+    elif fault == "short":
+        r = np.zeros_like(r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = TDC_BUFFER_GAIN * DIVIDER_SUPPLY_V * DIVIDER_OHM / (r + DIVIDER_OHM)
+    return np.nan_to_num(v, nan=0.0, posinf=0.0)
+
+
+# --- the network ------------------------------------------------------------------------------------
+CORE, FLUID, SKIN, BEAD = 0, 1, 2, 3
+OBJECT_LAYERS = 10
+
+
+def _object_layers(first_m: float = 50e-6, growth: float = 1.8) -> np.ndarray:
+    return first_m * growth ** np.arange(OBJECT_LAYERS)
+
+
+@dataclass
+class ThermalContact:
+    """An object touching the skin over [start_s, end_s]: material, temperature, contact area."""
+
+    start_s: float
+    end_s: float
+    material: Material
+    temperature_C: float
+    area_m2: float
+
+
+@dataclass
+class ThermalEvents:
+    """What changes the thermal network over time."""
+
+    contacts: list[ThermalContact]
+    power_on_s: float | None = None  # heater switched on at this instant, from ambient; None: settled since ever
+    ambient_steps: tuple[tuple[float, float], ...] = ()  # (instant s, new ambient °C)
+    heater_failed_s: float | None = None
+
+    @property
+    def any(self) -> bool:
+        return bool(self.contacts or self.power_on_s is not None or self.ambient_steps or
+                    self.heater_failed_s is not None)
+
+
+class ThermalNetwork:
+    """The network's matrices for a given contact (or none), and its exact discretization."""
+
+    def __init__(self, p: SensorParams):
+        self.p = p
+        self.layers = _object_layers()
+        self.n = 4 + OBJECT_LAYERS
+        self._cache: dict = {}
+
+    def heater_power_W(self) -> float:
+        """Heater power that holds the core ``heater_rise_K`` above ambient (steady state, no contact)."""
+        A, B = self.matrices(None)
+        per_watt = np.linalg.solve(A, -B[:, 0])  # steady rise of every node per watt of heater (ambient 0)
+        return self.p.heater_rise_K / per_watt[CORE]
+
+    def matrices(self, contact: tuple[Material, float] | None):
+        """(A, B) of x' = A x + B u, x = [core, fluid, skin, bead, object layers] (°C),
+        u = [heater W, ambient °C, object far field °C, bead self-heating W]."""
+        key = None if contact is None else (contact[0].name, round(contact[1], 12))
+        if key in self._cache:
+            return self._cache[key]
+        p = self.p
+        n = self.n
+        C = np.zeros(n)
+        G = np.zeros((n, n))  # conductances between nodes
+        g_amb = np.zeros(n)  # to ambient
+        g_far = np.zeros(n)  # to the object's far field
+        C[CORE], C[FLUID], C[SKIN], C[BEAD] = p.core_heat_capacity_J_per_K, p.fluid_heat_capacity_J_per_K, \
+            p.skin_heat_capacity_J_per_K, p.thermistor_heat_capacity_J_per_K
+
+        def link(i, j, g):
+            G[i, j] += g
+            G[j, i] += g
+
+        link(CORE, FLUID, p.core_fluid_conductance_W_per_K)
+        link(FLUID, SKIN, p.fluid_skin_conductance_W_per_K)
+        link(BEAD, CORE, p.thermistor_conductance_W_per_K / 2)
+        link(BEAD, FLUID, p.thermistor_conductance_W_per_K / 2)
+        g_amb[SKIN] = p.skin_air_conductance_W_per_K
+        g_amb[CORE] = p.mount_conductance_W_per_K
+        obj = 4 + np.arange(OBJECT_LAYERS)
+        if contact is None:
+            C[obj] = 1.0  # detached layers relax to the far-field input (they are reset when an object is touched)
+            g_far[obj] = 1.0
+        else:
+            mat, area = contact
+            d = self.layers
+            C[obj] = mat.rho * mat.c * area * d
+            link(SKIN, obj[0], 1.0 / (1.0 / (p.contact_conductance_W_per_m2K * area) + d[0] / (2 * mat.k * area)))
+            for i in range(OBJECT_LAYERS - 1):
+                link(obj[i], obj[i + 1], mat.k * area / ((d[i] + d[i + 1]) / 2))
+            g_far[obj[-1]] = mat.k * area / (d[-1] / 2)
+        A = (G - np.diag(G.sum(axis=1) + g_amb + g_far)) / C[:, None]
+        B = np.zeros((n, 4))
+        B[CORE, 0] = 1.0 / C[CORE]
+        B[:, 1] = g_amb / C
+        B[:, 2] = g_far / C
+        B[BEAD, 3] = 1.0 / C[BEAD]
+        self._cache[key] = (A, B)
+        return A, B
+
+    def chunk_response(self, contact, dt: float, steps: int):
+        """(Φʲ, Σ_{i<j} Φⁱ Γ) for j = 1..steps: a whole chunk with inputs held is x_j = Φʲ x₀ + S_j u."""
+        key = ("c", None if contact is None else (contact[0].name, round(contact[1], 12)), dt, steps)
+        if key not in self._cache:
+            Phi, Gam = self.discrete(contact, dt)
+            n = Phi.shape[0]
+            powers = np.empty((steps, n, n))
+            sums = np.empty((steps, n, Gam.shape[1]))
+            P, S = np.eye(n), np.zeros_like(Gam)
+            for j in range(steps):
+                S = Phi @ S + Gam
+                P = Phi @ P
+                powers[j], sums[j] = P, S
+            self._cache[key] = (powers, sums)
+        return self._cache[key]
+
+    def discrete(self, contact, dt: float):
+        """Exact zero-order-hold discretization (Φ, Γ) over ``dt`` (matrix exponential of the augmented system)."""
+        key = ("d", None if contact is None else (contact[0].name, round(contact[1], 12)), dt)
+        if key not in self._cache:
+            A, B = self.matrices(contact)
+            n, m = B.shape
+            M = np.zeros((n + m, n + m))
+            M[:n, :n], M[:n, n:] = A, B
+            E = linalg.expm(M * dt)
+            self._cache[key] = (E[:n, :n], E[:n, n:])
+        return self._cache[key]
+
+
+class ThermalModel:
+    """Advances the network and serves core temperature, TDC and TAC voltages at any instants (s)."""
+
+    def __init__(self, p: SensorParams, events: ThermalEvents, seed: int, faults: dict | None = None,
+                 tac_discretization: str = "prewarped"):
+        self.p = p
+        self.events = events
+        self.faults = faults or {}
+        self.net = ThermalNetwork(p)
+        self.dt = 1.0 / THERMAL_RATE_HZ
+        self.heater_W = self.net.heater_power_W()
+        self.rng = effect_rng(seed, "thermistor_noise")
+        self.noise_V = p.tdc_noise_V
+        # state at step k0: start settled (heater on since ever) or at ambient (power-on scene)
+        self.k = 0
+        self._touching = None
+        self.x = self._initial_state()
+        # read-out filters run at the network rate: 22.6 Hz low-pass on TDC, 0.45 Hz high-pass x 98 on TAC
+        fs = THERMAL_RATE_HZ
+        z, pz, k = np.array([]), np.array([-2 * np.pi * p.tdc_bandwidth_Hz]), 2 * np.pi * p.tdc_bandwidth_Hz
+        self.tdc_filter = filters.SosFilter(filters.discretize(z, pz, k, fs, tac_discretization))
+        zh, ph, kh = filters.highpass_1st(p.tac_highpass_Hz)
+        self.tac_filter = filters.SosFilter(filters.discretize(zh, ph, kh, fs, tac_discretization, gain_at_hz=10.0))
+        v0 = float(self._tdc_from_state(self.x[None, :])[0])
+        self.tdc_filter.settle(v0)
+        self.tac_filter.settle(v0)
+        self._hist_t = np.zeros(0)
+        self._hist = np.zeros((0, 3))  # core °C, TDC V, TAC V at step instants
+        self._pending: list = []  # chunks not yet merged into the history
+        self._append(self.k, self.x[None, :], np.array([v0]), np.array([TAC_BIAS_V]))
+
+    # --- inputs ------------------------------------------------------------------------------
+    def ambient_at(self, t: float) -> float:
+        amb = self.p.ambient_temperature_C
+        for when, value in self.events.ambient_steps:
+            if t >= when:
+                amb = value
+        return amb
+
+    def heater_at(self, t: float) -> float:
+        e = self.events
+        if self.faults.get("heater_failed") or (e.heater_failed_s is not None and t >= e.heater_failed_s):
+            return 0.0
+        if e.power_on_s is not None and t < e.power_on_s:
+            return 0.0
+        return self.heater_W
+
+    def _event_times(self, t0: float, t1: float) -> list[float]:
+        """Instants in [t0, t1] where an input may change (plus t1), to test whether a chunk is uniform."""
+        e = self.events
+        times = [t1]
+        for c in e.contacts:
+            times += [c.start_s, c.end_s]
+        times += [w for w, _ in e.ambient_steps]
+        times += [v for v in (e.power_on_s, e.heater_failed_s) if v is not None]
+        return [t for t in times if t0 <= t <= t1]
+
+    def contact_at(self, t: float):
+        for c in self.events.contacts:
+            if c.start_s <= t < c.end_s:
+                return c
+        return None
+
+    def _initial_state(self) -> np.ndarray:
+        heater = 0.0 if self.events.power_on_s is not None else self.heater_at(0.0)
+        return settled_state(self.net, heater, self.ambient_at(0.0), self._self_heating_W)
+
+    # --- outputs --------------------------------------------------------------------------------
+    def _tdc_from_state(self, xs: np.ndarray) -> np.ndarray:
+        return tdc_volts(thermistor_ohm(xs[:, BEAD]), self.faults.get("thermistor"))
+
+    def _self_heating_W(self, bead_C: float) -> float:
+        r = float(thermistor_ohm(bead_C))
+        v = DIVIDER_SUPPLY_V * r / (r + DIVIDER_OHM)
+        return v * v / r
+
+    def _append(self, k0, xs, tdc, tac):
+        t = (k0 + np.arange(len(xs))) * self.dt
+        self._pending.append((t, np.column_stack([xs[:, CORE], tdc, tac])))
+        self._last_t = t[-1]
+
+    def _history(self):
+        if self._pending:
+            self._hist_t = np.concatenate([self._hist_t, *(t for t, _ in self._pending)])
+            self._hist = np.vstack([self._hist, *(v for _, v in self._pending)])
+            self._pending = []
+        return self._hist_t, self._hist
+
+    def _advance_chunk(self) -> None:
+        """Advance one chunk of CHUNK_STEPS steps (inputs held per step; contact and events at step starts)."""
+        k0 = self.k
+        xs = np.empty((CHUNK_STEPS, self.net.n))
+        x = self.x
+        p_self = self._self_heating_W(float(x[BEAD]))  # updated once per chunk: it changes slowly
+        t0, t1 = k0 * self.dt, (k0 + CHUNK_STEPS - 1) * self.dt
+        c0 = self.contact_at(t0)
+        inputs = lambda t: (self.heater_at(t), self.ambient_at(t), self.contact_at(t))  # noqa: E731
+        steady = all(inputs(t) == inputs(t0) for t in self._event_times(t0, t1)) and \
+            (c0 is None or c0 is self._touching)
+        if steady:  # inputs held over the whole chunk: closed form, one matrix product
+            powers, sums = self.net.chunk_response(None if c0 is None else (c0.material, c0.area_m2),
+                                                   self.dt, CHUNK_STEPS)
+            u = np.array([self.heater_at(t0), self.ambient_at(t0),
+                          c0.temperature_C if c0 else self.ambient_at(t0), p_self])
+            xs = powers @ x + sums @ u
+            x = xs[-1]
+        for j in ([] if steady else range(CHUNK_STEPS)):
+            t = (k0 + j) * self.dt
+            c = self.contact_at(t)
+            if c is not None and c is not self._touching:
+                x = x.copy()
+                x[4:] = c.temperature_C  # a newly touched object arrives at its own temperature
+            self._touching = c
+            contact = None if c is None else (c.material, c.area_m2)
+            Phi, Gam = self.net.discrete(contact, self.dt)
+            u = np.array([self.heater_at(t), self.ambient_at(t), c.temperature_C if c else self.ambient_at(t), p_self])
+            x = Phi @ x + Gam @ u
+            xs[j] = x
+        self.x = x
+        self.k = k0 + CHUNK_STEPS
+        v = self._tdc_from_state(xs)
+        if self.noise_V:
+            v = v + self.noise_V * self.rng.standard_normal(v.shape)
+        tdc = self.tdc_filter(v)
+        tac = TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc)
+        self._append(k0 + 1, xs, tdc, tac)
+
+    def values_at(self, times: np.ndarray) -> np.ndarray:
+        """(core °C, TDC V, TAC V) at each instant, linearly interpolated between network steps."""
+        times = np.asarray(times, float)
+        if times.size == 0:
+            return np.zeros((0, 3))
+        while self._last_t < times.max():
+            self._advance_chunk()
+        ht, hv = self._history()
+        if times.min() < ht[0]:
+            raise ValueError(f"instant {times.min():.6f} s is older than the thermal history")
+        return np.column_stack([np.interp(times, ht, hv[:, i]) for i in range(3)])
+
+    def forget_before(self, t: float) -> None:
+        """Drop history before ``t`` (s): no instant before it will be asked for again."""
+        self._history()
+        keep_from = np.searchsorted(self._hist_t, t, side="right") - 1
+        if keep_from > 0:
+            self._hist_t, self._hist = self._hist_t[keep_from:], self._hist[keep_from:]
+
+
+def settled_state(net: ThermalNetwork, heater_W: float, ambient_C: float, self_heating) -> np.ndarray:
+    """Steady state of the network with no contact, the thermistor's self-heating included."""
+    A, B = net.matrices(None)
+    p_self = 0.0
+    for _ in range(3):  # self-heating depends (weakly) on the bead temperature it causes
+        x = np.linalg.solve(A, -B @ np.array([heater_W, ambient_C, ambient_C, p_self]))
+        p_self = self_heating(float(x[BEAD]))
+    x[4:] = ambient_C
+    return x
+
+
+def steady_state(p: SensorParams, faults: dict | None = None) -> tuple[float, float, float]:
+    """(core °C, TDC V, TAC V) of the settled sensor at rest: the shortcut when nothing thermal happens."""
+    model = ThermalModel(p, ThermalEvents([]), seed=0, faults=faults)
+    x = model.x
+    tdc = float(tdc_volts(thermistor_ohm(x[BEAD]), (faults or {}).get("thermistor")))
+    return float(x[CORE]), tdc, TAC_BIAS_V
