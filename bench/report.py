@@ -52,6 +52,11 @@ def physical_units(rec: Recording) -> dict[str, np.ndarray]:
         out["PDC_force_N"] = conv.pdc_to_force_n(rec.channels["PDC"].codes, base)
     if "TDC" in rec.channels:
         out["TDC_C"] = conv.tdc_to_celsius(rec.channels["TDC"].codes)
+        if "TAC" in rec.channels:
+            tdc = np.interp(rec.channels["TAC"].times, rec.channels["TDC"].times,
+                            rec.channels["TDC"].codes.astype(float))
+            base, _ = resting_stats(rec, "TAC")
+            out["TAC_C_per_s"] = conv.tac_to_celsius_per_s(rec.channels["TAC"].codes, tdc, base)
     for name, r in rec.channels.items():
         if name.startswith("E"):
             out[f"{name}_ohm"] = conv.impedance_ohm(r.codes)

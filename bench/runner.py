@@ -39,7 +39,7 @@ class Recording:
 
 def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
     return Sensor(params=scene.params, stimuli=scene.stimuli, channels_read=scene.channels,
-                  fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s)
+                  fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s, faults=scene.faults)
 
 
 def peripheral_for(scene: Scene, sensor: Sensor):

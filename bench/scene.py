@@ -17,7 +17,9 @@ from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
-from emulator.stimuli import DROP_HEIGHT_M, SPHERES, Press, PressureCalibrator, SphereDrop, Tap, Vibration
+from emulator.stimuli import (DROP_HEIGHT_M, SPHERES, AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop,
+                              Tap, Touch, Vibration)
+from emulator.thermal import MATERIALS
 
 MAX_DURATION_S = 36000.0
 
@@ -44,6 +46,7 @@ class Scene:
     spi: str = "software"  # which implementation of the sensor's SPI side: "software" or "rtl"
     noise: NoiseSources = field(default_factory=NoiseSources)
     stimuli: list = field(default_factory=list)
+    faults: dict = field(default_factory=dict)
     impact_detection: bool = False
     source: str = "<scene>"
     text: str = ""
@@ -120,14 +123,19 @@ class _Checker:
                 self.problems.append(f"{where}: unknown field {k!r}; known fields: {', '.join(sorted(known))}")
 
 
-STIMULUS_KINDS = ("tap", "press", "sphere_drop", "vibration", "pressure")
+STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step")
 _STIMULUS_FIELDS = {
     "tap": {"kind", "at_s", "peak_N", "duration_s"},
     "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
     "sphere_drop": {"kind", "at_s", "sphere", "mass_mg", "height_m"},
     "vibration": {"kind", "start_s", "duration_s", "amplitude_um", "frequency_Hz", "f_start_Hz", "f_stop_Hz", "fade_s"},
     "pressure": {"kind", "start_s", "duration_s", "offset_kPa", "amplitude_Pa", "frequency_Hz", "fade_s"},
+    "touch": {"kind", "start_s", "force_N", "ramp_s", "hold_s", "x_mm", "angle_deg", "electrode",
+              "indenter_radius_mm", "tangential_N", "shear_angle_deg", "material", "object_temperature_C"},
+    "power_on": {"kind", "at_s"},
+    "ambient_step": {"kind", "at_s", "temperature_C"},
 }
+ELECTRODE_NAMES = tuple(f"E{n}" for n in range(1, 20))
 
 
 def _stimuli(c: _Checker, items, duration, params: SensorParams):
@@ -194,13 +202,61 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
             fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
             if start and None not in (dur, offset, amp, freq, fade):
                 out.append(PressureCalibrator(start[0], dur, offset * 1e3, amp, freq, fade))
+        elif kind == "touch":
+            start = c.times(st, "start_s", w, duration)
+            vals = dict(
+                force_N=c.number(st, "force_N", w, 0.0, 50.0, "N", required=True),
+                ramp_s=c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5),
+                hold_s=c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0),
+                x_mm=c.number(st, "x_mm", w, -20.0, 8.0, "mm", default=-5.0),
+                angle_deg=c.number(st, "angle_deg", w, -180.0, 180.0, "°", default=0.0),
+                indenter_radius_mm=c.number(st, "indenter_radius_mm", w, 0.1, 15.0, "mm", default=3.0),
+                tangential_N=c.number(st, "tangential_N", w, -20.0, 20.0, "N", default=0.0),
+                shear_angle_deg=c.number(st, "shear_angle_deg", w, -180.0, 180.0, "°", default=0.0),
+                object_temperature_C=c.number(st, "object_temperature_C", w, -40.0, 120.0, "°C"),
+            )
+            electrode = c.choice(st, "electrode", w, ELECTRODE_NAMES)
+            mat = c.choice(st, "material", w, tuple(MATERIALS))
+            if start and None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
+                out.append(Touch(start[0], electrode=electrode, material=mat, **vals))
+        elif kind == "power_on":
+            at = c.times(st, "at_s", w, duration)
+            out += [PowerOn(a) for a in at[:1]]
+        elif kind == "ambient_step":
+            at = c.times(st, "at_s", w, duration)
+            temp = c.number(st, "temperature_C", w, -20.0, 60.0, "°C", required=True)
+            if at and temp is not None:
+                out.append(AmbientStep(at[0], temp))
+    return out
+
+
+def _faults(c: _Checker, table: dict) -> dict:
+    c.known_keys(table, "faults", {"electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed"})
+    out = {}
+    for key in ("electrode_open", "electrode_short"):
+        if key in table:
+            v = table[key]
+            if not isinstance(v, list) or not all(isinstance(n, int) and 1 <= n <= 19 for n in v):
+                c.problems.append(f"faults.{key} = {v!r}: a list of electrode numbers 1..19")
+            else:
+                out[key] = v
+    if "mux_stuck" in table:
+        n = c.number(table, "mux_stuck", "faults", 1, 19, "electrode number", integer=True)
+        if n is not None:
+            out["mux_stuck"] = n
+    if "thermistor" in table:
+        v = c.choice(table, "thermistor", "faults", ("open", "short"))
+        if v:
+            out["thermistor"] = v
+    if c.boolean(table, "heater_failed", "faults", False):
+        out["heater_failed"] = True
     return out
 
 
 def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     """Validate a scene given as a dict (the parsed TOML); raise :class:`SceneError` listing every problem."""
     c = _Checker()
-    c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis"})
+    c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis", "faults"})
     meta = data.get("scene", {})
     if "scene" not in data:
         c.problems.append("[scene] table is missing (needs at least name and duration_s)")
@@ -247,6 +303,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     noise = NoiseSources(**{k: c.boolean(noise_t, k, "noise", True) for k in names})
 
     stimuli = _stimuli(c, data.get("stimulus", []), duration, params)
+    faults = _faults(c, data.get("faults", {}))
     analysis = data.get("analysis", {})
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
@@ -264,6 +321,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=str(meta.get("description", "")), params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
+                 faults=faults,
                  impact_detection=impact_detection, source=source, text=text)
 
 

@@ -41,6 +41,28 @@ def tdc_to_celsius(code):
     return 4025.0 / np.log((155183.0 - 46555.0 * x) / x) - 273.15
 
 
+def tac_to_celsius_per_s(tac_code, tdc_code, tac_offset=2048.0, highpass_Hz=0.45, gain=98.0):
+    """Rate of temperature change (°C/s) from TAC, given the TDC code at the same moment.
+
+    D eq. 4.5 is garbled in the source; this is the emulator's relation.  TAC = 1.65 V + 98·HP(V_TDC) with
+    a first-order high-pass at 0.45 Hz (τ = 1/(2π·0.45 Hz) = 0.354 s); for changes slower than τ,
+    TAC − offset ≈ 98·τ·dV_TDC/dt, and dV_TDC/dT follows from the thermistor curve at the present TDC:
+    dT/dt = (TAC − offset) / (98·τ·dTDC/dT).
+    """
+    tau = 1.0 / (2 * np.pi * highpass_Hz)
+    tdc = np.asarray(tdc_code, float)
+    h = 0.01  # °C
+    t = tdc_to_celsius(tdc)
+    slope = (celsius_to_tdc(t + h) - celsius_to_tdc(t - h)) / (2 * h)  # codes per °C (negative: NTC)
+    return (np.asarray(tac_code, float) - tac_offset) / (gain * tau * slope)
+
+
+def celsius_to_tdc(t_celsius):
+    """Inverse of :func:`tdc_to_celsius` (as a real number of codes)."""
+    e = np.exp(4025.0 / (np.asarray(t_celsius, float) + 273.15))
+    return 4095.0 * 155183.0 / (e + 46555.0)
+
+
 def impedance_ohm(code):
     """Electrode impedance in Ω from E_n codes (D eq. 4.1): (4095/E_n − 1)·10 kΩ."""
     e = np.clip(np.asarray(code, float), 1.0, None)

@@ -121,6 +121,7 @@ class ElectrodeModel:
         sos = filters.discretize(z, pz, k, ELECTRODE_RATE_HZ, discretization)
         self.b, self.a = sos[0, :3], sos[0, 3:]
         rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm), self.faults)[0]
+        self.rest = rest
         self.zi = signal.lfilter_zi(self.b, self.a)[:, None] * rest[None, :]
         self.k = 0
         self._hist_t = [np.array([0.0])]
@@ -145,6 +146,8 @@ class ElectrodeModel:
         """Settled voltage of electrode n (1..19) at each instant (no multiplexer memory)."""
         if times.size == 0:
             return np.zeros(0)
+        if not self.contacts:  # nothing ever touches: every electrode rests (the steady-state shortcut)
+            return self.rest[electrode - 1]
         while self._hist_t[-1][-1] < times.max():
             self._advance_chunk()
         ht, hv = np.concatenate(self._hist_t), np.vstack(self._hist)

@@ -7,6 +7,7 @@ samples.  Memory therefore stays bounded however long the run.
 
 from __future__ import annotations
 
+import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -104,6 +105,7 @@ class Sensor:
         self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self.nodes}
         if not (np.isfinite(start_s) and start_s >= 0):
             raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
+        self._slow_cost = {"thermal": 0.0, "electrodes": 0.0}  # wall time of the slow models, s
         self._buf_n0 = int(np.ceil(start_s * self.fs))  # grid index of the first retained sample
         self._computed = self._buf_n0  # next grid index to compute
 
@@ -255,14 +257,18 @@ class Sensor:
                 h = self._history(node)
                 ks, fs = k[sel], frac[sel]
                 out[sel] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
+        t0 = time.perf_counter()
         for kind, column in ((KIND_TDC, 1), (KIND_TAC, 2)):
             sel = node_of == kind
             if sel.any():
                 out[sel] = (self.thermal.values_at(times[sel])[:, column] if self.thermal is not None
                             else self.thermal_steady[column])
+        t1 = time.perf_counter()
         sel = node_of == KIND_ELECTRODE
         if sel.any():
             out[sel] = self.electrodes.sample(channels[sel] - ch.ELECTRODE_FIRST + 1, times[sel])
+        self._slow_cost["thermal"] += t1 - t0
+        self._slow_cost["electrodes"] += time.perf_counter() - t1
         self._trim(int(i.max()))
         if self.thermal is not None:
             self.thermal.forget_before(min(times.max(), self._buf_n0 / self.fs))
@@ -282,4 +288,15 @@ class Sensor:
             d = asdict(cost)
             d["seconds_per_simulated_s"] = cost.seconds / sim_s
             rows.append(d)
+        slow = (("thermal_network", self.thermal is not None, "thermal network at 100 Hz -> TDC, TAC, core temperature",
+                 "thermal"),
+                ("thermal_steady_state", self.thermal is None and any(c in (ch.TDC, ch.TAC) for c in self.channels_read),
+                 "settled thermal state (shortcut: nothing thermal happens)", "thermal"),
+                ("electrodes", self.electrodes is not None, "contact geometry -> fluid gaps -> impedance -> mux",
+                 "electrodes"))
+        for name, built, what, key in slow:
+            if built:
+                rows.append({"name": name, "description": what, "consumes": (), "produces": (),
+                             "seconds": self._slow_cost[key], "samples": 0,
+                             "seconds_per_simulated_s": self._slow_cost[key] / sim_s})
         return rows
