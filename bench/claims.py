@@ -292,3 +292,110 @@ def format_table(claims: list[Claim]) -> str:
     n_fail = sum(not c.passed for c in claims)
     lines.append(f"{len(claims) - n_fail} passed, {n_fail} failed")
     return "\n".join(lines)
+
+
+# --- thermal and electrode modalities (issue 4) ---------------------------------------------------------
+THERMAL_MATERIALS = ("aluminum", "glass", "wood", "polystyrene foam")
+
+
+def thermal_claims(b: Bench) -> list[Claim]:
+    """Settled ~10 °C above ambient; TDC conversion within 0.1 °C over 0–70 °C; contact ordering by material."""
+    from emulator.stimuli import Touch
+    from emulator.thermal import BEAD, ThermalEvents, ThermalModel, tdc_volts, thermistor_ohm
+
+    p = b.params
+    rest = b.acquire([], 2.0, sequence=("TDC",), slot_rate_Hz=100.0)
+    settled = float(np.mean(conv.tdc_to_celsius(rest["TDC"][1])))
+    # conversion: the emulator's TDC code for a known thermistor temperature, converted back (D eq. 4.4)
+    worst = 0.0
+    for t_true in np.arange(0.0, 70.01, 2.5):
+        code = np.floor(float(tdc_volts(thermistor_ohm(t_true))) / conv.ADC_LSB_V + 0.5)
+        worst = max(worst, abs(float(conv.tdc_to_celsius(code)) - t_true))
+    codes = np.arange(1, 4095)
+    temps = conv.tdc_to_celsius(codes)
+    in_range = (temps >= 0) & (temps <= 70)
+    resolution = float(np.max(np.abs(np.diff(temps[in_range]))))
+    top = float(conv.tdc_to_celsius(4094))
+    # touch and hold, 10 s, on each material at room temperature
+    drops, tacs = {}, {}
+    for k, m in enumerate(THERMAL_MATERIALS):
+        touch = Touch(1.0, 1.0, 0.2, 10.0, electrode="E17", indenter_radius_mm=6.0, material=m)
+        rec = b.acquire([touch], 11.5, sequence=("TDC", "TAC"), slot_rate_Hz=200.0, seed_offset=k)
+        t, tdc = rec["TDC"]
+        _, tac = rec["TAC"]
+        temp = conv.tdc_to_celsius(tdc)
+        before = temp[t < 0.9].mean()
+        drops[m] = float(before - temp[(t > 10.9) & (t < 11.2)].mean())
+        rate = conv.tac_to_celsius_per_s(tac, tdc, np.mean(tac[t < 0.9]))
+        tacs[m] = float(-np.min(np.convolve(rate, np.ones(20) / 20, mode="valid")))
+    order_drop = all(drops[a] > drops[c] for a, c in zip(THERMAL_MATERIALS, THERMAL_MATERIALS[1:]))
+    order_tac = all(tacs[a] > tacs[c] for a, c in zip(THERMAL_MATERIALS, THERMAL_MATERIALS[1:]))
+    return [
+        Claim("settled thermistor above ambient", "about 10 °C (± 1 K)", settled - p.ambient_temperature_C,
+              9.0, 11.0, "K", "D ch. 4"),
+        Claim("TDC conversion error over 0–70 °C", "≤ 0.1 °C", worst, 0.0, 0.1, "°C", "D eq. 4.4"),
+        Claim("TDC resolution over 0–70 °C", "≤ 0.1 °C per code", resolution, 0.0, 0.1, "°C/code", "D Table 4-1"),
+        Claim("TDC range top (code 4094)", "≈ 74 °C (≥ 70 °C)", top, 70.0, 80.0, "°C", "D Table 4-1"),
+        Claim("TDC drop after 10 s: Al > glass > wood > foam", "strictly ordered", float(order_drop), 1.0, 1.0,
+              "ordered", "D ch. 4", {"drop_K": drops}),
+        Claim("TAC transient: Al > glass > wood > foam", "strictly ordered", float(order_tac), 1.0, 1.0, "ordered",
+              "D ch. 4", {"peak_cooling_C_per_s": tacs}),
+        Claim("TDC drop on aluminum after 10 s", "a clear drop (> 0.5 K)", drops["aluminum"], 0.5, 10.0, "K",
+              "model"),
+    ]
+
+
+def electrode_claims(b: Bench) -> list[Claim]:
+    """Monotonic impedance with force, the pressed electrode moves most, mirror symmetry, PDC consistency."""
+    from emulator.electrodes import electrode_positions_mm
+    from emulator.stimuli import Touch
+
+    electrodes = [f"E{n}" for n in range(1, 20)]
+
+    def pattern(touch, at_s):
+        # each electrode read twice in a row; the second reading has no memory of the previous electrode
+        twice = [e for e in electrodes for _ in range(2)]
+        rec = b.acquire([touch], at_s + 0.05, sequence=twice, slot_rate_Hz=3800.0, noise=NoiseSources.none())
+        z = []
+        for e in electrodes:
+            t, code = rec[e]
+            second = slice(1, None, 2)
+            t, code = t[second], code[second]
+            z.append(float(conv.impedance_ohm(code[t >= at_s - 0.02]).mean()))
+        return np.array(z)
+
+    rest = pattern(Touch(5.0, 1.0), 1.0)
+    # monotonic rise of the pressed electrode's impedance with force
+    forces = np.array([0.1, 0.3, 0.6, 1.0, 2.0, 3.5, 5.0])
+    z17 = [pattern(Touch(0.2, float(f), 0.3, 1.0, electrode="E17", indenter_radius_mm=2.0), 0.6)[16]
+           for f in forces]
+    monotonic = bool(np.all(np.diff(z17) > 0))
+    # pressing over each electrode moves that electrode most
+    hits = 0
+    for n in range(1, 20):
+        z = pattern(Touch(0.2, 1.0, 0.3, 1.0, electrode=f"E{n}", indenter_radius_mm=1.5), 0.6)
+        hits += int(np.argmax(z - rest) == n - 1)
+    # mirror-image contacts about y = 0 give mirror-image patterns
+    pos = electrode_positions_mm()
+    mirror_of = [int(np.argmin(np.linalg.norm(pos - pos[i] * np.array([1, -1, 1]), axis=1))) for i in range(19)]
+    za = pattern(Touch(0.2, 1.5, 0.3, 1.0, x_mm=-6.0, angle_deg=35.0), 0.6)
+    zb = pattern(Touch(0.2, 1.5, 0.3, 1.0, x_mm=-6.0, angle_deg=-35.0), 0.6)
+    asym = float(np.max(np.abs(za - zb[mirror_of]) / rest))
+    # the same contact's DC pressure: 11.5 mN per PDC bit
+    rec = b.acquire([Touch(0.5, 1.0, 0.3, 1.0, electrode="E17")], 1.5, sequence=("PDC",), slot_rate_Hz=200.0)
+    t, pdc = rec["PDC"]
+    rise = float(pdc[(t > 0.9) & (t < 1.7)].mean() - pdc[t < 0.45].mean())
+    return [
+        Claim("pressed electrode's impedance rises with force", "monotonic", float(monotonic), 1.0, 1.0,
+              "monotonic", "D ch. 4", {"force_N": forces.tolist(), "impedance_ohm": z17}),
+        Claim("pressing over an electrode moves it most", "19 of 19", float(hits), 19.0, 19.0, "electrodes",
+              "issue 4"),
+        Claim("mirror-image contacts give mirror-image patterns", "< 0.1 % apart", 100 * asym, 0.0, 0.1, "%",
+              "issue 4"),
+        Claim("a 1 N contact's PDC rise", "87 bits (11.5 mN/bit) ± 5 %", rise, 1.0 / 0.0115 * 0.95,
+              1.0 / 0.0115 * 1.05, "bits", "D ch. 4"),
+    ]
+
+
+CLAIM_GROUPS["thermal"] = thermal_claims
+CLAIM_GROUPS["electrodes"] = electrode_claims

@@ -226,7 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "claim, expected, measured, accepted range and PASS/FAIL.", formatter_class=fmt)
     c.add_argument("--json", action="store_true", help="print the results as JSON")
     c.add_argument("--only", action="append", choices=["noise", "scales", "force", "impact", "detection",
-                                                       "false-detection", "vibration"], help="run one group")
+                                                       "false-detection", "vibration", "thermal", "electrodes"],
+                   help="run one group")
     c.add_argument("--fidelity", default="default", choices=["fast", "default", "reference"])
     c.add_argument("--seed", type=int, default=2012)
     c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")

@@ -17,8 +17,8 @@ from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
-from emulator.stimuli import (DROP_HEIGHT_M, SPHERES, AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop,
-                              Tap, Touch, Vibration)
+from emulator.stimuli import (DROP_HEIGHT_M, SPHERES, AmbientStep, HeaterFailure, PowerOn, Press, PressureCalibrator,
+                              SphereDrop, Tap, Touch, Vibration)
 from emulator.thermal import MATERIALS
 
 MAX_DURATION_S = 36000.0
@@ -123,7 +123,8 @@ class _Checker:
                 self.problems.append(f"{where}: unknown field {k!r}; known fields: {', '.join(sorted(known))}")
 
 
-STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step")
+STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step",
+                  "heater_failure")
 _STIMULUS_FIELDS = {
     "tap": {"kind", "at_s", "peak_N", "duration_s"},
     "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
@@ -134,6 +135,7 @@ _STIMULUS_FIELDS = {
               "indenter_radius_mm", "tangential_N", "shear_angle_deg", "material", "object_temperature_C"},
     "power_on": {"kind", "at_s"},
     "ambient_step": {"kind", "at_s", "temperature_C"},
+    "heater_failure": {"kind", "at_s"},
 }
 ELECTRODE_NAMES = tuple(f"E{n}" for n in range(1, 20))
 
@@ -222,6 +224,8 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
         elif kind == "power_on":
             at = c.times(st, "at_s", w, duration)
             out += [PowerOn(a) for a in at[:1]]
+        elif kind == "heater_failure":
+            out += [HeaterFailure(a) for a in c.times(st, "at_s", w, duration)[:1]]
         elif kind == "ambient_step":
             at = c.times(st, "at_s", w, duration)
             temp = c.number(st, "temperature_C", w, -20.0, 60.0, "°C", required=True)

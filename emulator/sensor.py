@@ -21,8 +21,8 @@ from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
 from emulator.electrodes import Contact, ElectrodeModel, electrode_positions_mm, surface_point_mm
-from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, PowerOn, PressureCalibrator, Touch,
-                              Vibration, calibration_pressure, skin_displacement)
+from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
+                              Touch, Vibration, calibration_pressure, skin_displacement)
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
 
@@ -42,11 +42,12 @@ class NoiseSources:
     mains_hum: bool = True
     adc: bool = True
     spi_coupling: bool = True
+    thermistor: bool = True
 
     @classmethod
     def none(cls) -> "NoiseSources":
         """Every noise source off (quantization remains: it is what an ADC does)."""
-        return cls(False, False, False, False, False)
+        return cls(False, False, False, False, False, False)
 
 
 class Sensor:
@@ -116,7 +117,7 @@ class Sensor:
         vibrations = [s for s in stimuli if isinstance(s, Vibration)]
         calibrations = [s for s in stimuli if isinstance(s, PressureCalibrator)]
         other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator, PowerOn,
-                                                         AmbientStep))]
+                                                         AmbientStep, HeaterFailure))]
         if other:
             raise TypeError(f"not a stimulus: {other[0]!r}")
         for v in vibrations:
@@ -160,12 +161,12 @@ class Sensor:
                                                np.pi * (s.indenter_radius_mm * 1e-3) ** 2))
         power_on = [s.at_s for s in stimuli if isinstance(s, PowerOn)]
         steps = tuple(sorted((s.at_s, s.temperature_C) for s in stimuli if isinstance(s, AmbientStep)))
-        events = ThermalEvents(contacts, power_on[0] if power_on else None, steps,
-                               0.0 if self.faults.get("heater_failed") else None)
+        failures = [s.at_s for s in stimuli if isinstance(s, HeaterFailure)]
+        events = ThermalEvents(contacts, power_on[0] if power_on else None, steps, failures[0] if failures else None)
         thermal_read = any(c in (ch.TDC, ch.TAC) for c in self.channels_read)
         pressure_read = bool(self.nodes)
         if events.any and (thermal_read or pressure_read):
-            return ThermalModel(p, events, self.seed, self.faults), None
+            return ThermalModel(p, events, self.seed, self.faults, noise=self.noise.thermistor), None
         return None, steady_state(p, self.faults)
 
     def _electrode_model(self, stimuli):

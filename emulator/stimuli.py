@@ -170,6 +170,19 @@ class PowerOn:
 
 
 @dataclass
+class HeaterFailure:
+    """The heaters stop at ``at_s`` (a fault during a run): the core cools toward ambient over minutes."""
+
+    at_s: float
+
+    @property
+    def start_s(self):
+        return self.at_s
+
+    end_s = start_s
+
+
+@dataclass
 class AmbientStep:
     """The room temperature changes to ``temperature_C`` at ``at_s``."""
 

@@ -126,7 +126,7 @@ class ThermalEvents:
     contacts: list[ThermalContact]
     power_on_s: float | None = None  # heater switched on at this instant, from ambient; None: settled since ever
     ambient_steps: tuple[tuple[float, float], ...] = ()  # (instant s, new ambient °C)
-    heater_failed_s: float | None = None
+    heater_failed_s: float | None = None  # the heaters stop at this instant (the static fault: never ran)
 
     @property
     def any(self) -> bool:
@@ -228,7 +228,7 @@ class ThermalModel:
     """Advances the network and serves core temperature, TDC and TAC voltages at any instants (s)."""
 
     def __init__(self, p: SensorParams, events: ThermalEvents, seed: int, faults: dict | None = None,
-                 tac_discretization: str = "prewarped"):
+                 tac_discretization: str = "prewarped", noise: bool = True):
         self.p = p
         self.events = events
         self.faults = faults or {}
@@ -236,7 +236,7 @@ class ThermalModel:
         self.dt = 1.0 / THERMAL_RATE_HZ
         self.heater_W = self.net.heater_power_W()
         self.rng = effect_rng(seed, "thermistor_noise")
-        self.noise_V = p.tdc_noise_V
+        self.noise_V = p.tdc_noise_V if noise else 0.0
         # state at step k0: start settled (heater on since ever) or at ambient (power-on scene)
         self.k = 0
         self._touching = None

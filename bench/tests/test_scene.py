@@ -92,3 +92,18 @@ def test_shipped_scenes_are_all_valid():
     assert len(scenes) >= 4
     for f in scenes:
         load_scene(f)
+
+
+def test_touch_thermal_kinds_and_faults_are_validated():
+    sc = parse_scene({**MINIMAL, "stimulus": [
+        {"kind": "touch", "start_s": 0.1, "force_N": 1.0, "electrode": "E7", "material": "glass"},
+        {"kind": "power_on", "at_s": 0.0}, {"kind": "ambient_step", "at_s": 0.5, "temperature_C": 18.0}],
+        "faults": {"electrode_open": [3], "mux_stuck": 4, "thermistor": "open", "heater_failed": True}})
+    assert len(sc.stimuli) == 3 and sc.faults["mux_stuck"] == 4
+    msgs = problems({**MINIMAL, "stimulus": [{"kind": "touch", "start_s": 0.1, "force_N": 1.0, "electrode": "E42",
+                                              "material": "cheese"}],
+                     "faults": {"electrode_open": [0, 20], "thermistor": "melted", "fan": True}})
+    text = "\n".join(msgs)
+    for needle in ("stimulus[0].electrode = 'E42'", "stimulus[0].material = 'cheese'", "faults.electrode_open",
+                   "faults.thermistor = 'melted'", "unknown field 'fan'"):
+        assert needle in text

@@ -26,7 +26,7 @@ def test_only_the_effects_the_scene_needs_are_built():
     assert {"contact_force", "force_coupling", "stage2"} <= set(effects(taps))
     assert "skin_displacement" not in effects(taps)
     electrodes_only = Sensor(channels_read=["E1", "TDC"])
-    assert effects(electrodes_only) == []  # placeholders need no grid physics
+    assert effects(electrodes_only) == ["thermal_steady_state", "electrodes"]  # no grid physics at all
     quiet = Sensor(channels_read=["PAC"], noise=NoiseSources.none())
     assert not {"bridge_johnson_noise", "amplifier_noise", "mains_hum"} & set(effects(quiet))
 

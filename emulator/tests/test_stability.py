@@ -158,3 +158,37 @@ def test_discretized_filters_are_stable_for_any_corner_below_045_fs(frac, method
         sos = filters.discretize(z, p, k, fs, method, gain_at_hz=0.0 if p.size > 1 or z.size == 0 else fs / 4)
         poles = np.concatenate([np.roots(sec[3:]) for sec in sos])
         assert np.all(np.abs(poles) < 1.0)
+
+
+def test_an_hour_of_warm_up_sampled_at_4400_Hz_stays_stable():
+    from emulator.conversions import tdc_to_celsius
+    from emulator.stimuli import PowerOn
+
+    s = Sensor(stimuli=[PowerOn(0.0)], channels_read=["PAC", "TDC", "TAC"], fidelity="fast", seed=5)
+    temps, tacs = [], []
+    seq = np.tile([0, 3, 0, 2], 1100)  # PAC, TDC, PAC, TAC at 4.4 kHz
+    for second in range(3600):
+        t = second + np.arange(seq.size) / 4400.0
+        codes = s.sample(seq, t)
+        temps.append(tdc_to_celsius(codes[seq == 3]).mean())
+        tacs.append(codes[seq == 2].mean())
+    temps, tacs = np.array(temps), np.array(tacs)
+    assert np.all(np.isfinite(temps))
+    assert np.all(np.diff(temps[::60]) > -0.05)  # warming, never running away
+    assert 33.5 < temps[-1] < 35.0
+    assert abs(tacs[-1] - 2048) < 3  # TAC back at mid-scale once settled
+
+
+@pytest.mark.parametrize("block_s", [1 / 8800, 0.05, 2.0])
+def test_thermal_and_electrodes_do_not_depend_on_block_size(block_s):
+    from emulator.stimuli import Touch
+
+    stim = [Touch(0.05, 2.0, 0.05, 0.1, electrode="E9", material="glass", tangential_N=0.5)]
+    names = ["PDC", "TDC", "TAC", "E9", "E10", "PAC"]
+    chans = np.array([{"PAC": 0, "PDC": 1, "TAC": 2, "TDC": 3, "E9": 25, "E10": 26}[n] for n in names] * 150)
+    t = np.arange(chans.size) / 4400.0 + 1e-4
+
+    def codes(bs):
+        return Sensor(stimuli=stim, channels_read=names, seed=8, block_s=bs).sample(chans, t)
+
+    assert np.array_equal(codes(block_s), codes(2.0))

@@ -1,0 +1,155 @@
+"""Thermal and electrode modalities: physics, exact integration, conversions, faults, demand-driven building."""
+
+import numpy as np
+import pytest
+
+from emulator import conversions as conv
+from emulator.channels import DEFAULT_FRAME_NAMES, channel_index
+from emulator.electrodes import electrode_gaps_mm, electrode_positions_mm, Contact, surface_point_mm
+from emulator.params import SensorParams
+from emulator.sensor import NoiseSources, Sensor
+from emulator.stimuli import AmbientStep, PowerOn, Touch
+from emulator.thermal import (BEAD, CORE, MATERIALS, ThermalEvents, ThermalModel, ThermalNetwork, tdc_volts,
+                              thermistor_ohm)
+
+pytestmark = pytest.mark.unit
+QUIET = NoiseSources.none()
+E = [f"E{n}" for n in range(1, 20)]
+E_IDX = np.array([channel_index(e) for e in E])
+
+
+def tdc_celsius(sensor, times):
+    return conv.tdc_to_celsius(sensor.analog(np.full(len(times), channel_index("TDC")), times) / conv.ADC_LSB_V)
+
+
+def impedances(sensor, t):
+    return conv.impedance_ohm(sensor.analog(E_IDX, t + np.arange(19) * 1e-5) / conv.ADC_LSB_V)
+
+
+def test_thermistor_is_470k_at_25C_and_the_divider_matches_the_published_conversion():
+    assert thermistor_ohm(25.0) == pytest.approx(470e3, rel=1e-6)
+    for t in (5.0, 25.0, 35.0, 60.0):
+        x = float(tdc_volts(thermistor_ohm(t))) / 3.3
+        assert x == pytest.approx(100e3 / (float(thermistor_ohm(t)) + 30e3), rel=1e-9)
+        assert float(conv.tdc_to_celsius(x * 4095)) == pytest.approx(t, abs=1e-3)  # the formula's constants are rounded
+
+
+def test_heater_holds_the_core_10K_above_ambient_and_warms_up_over_minutes():
+    s = Sensor(stimuli=[PowerOn(0.0)], channels_read=["TDC"], noise=QUIET)
+    t = np.array([0.0, 60.0, 300.0, 1200.0, 3600.0])
+    temps = tdc_celsius(s, t)
+    assert np.all(np.diff(temps) > 0)
+    assert temps[0] == pytest.approx(25.0, abs=0.2) and temps[1] < 30.0 and temps[3] > 33.5
+    assert temps[-1] == pytest.approx(tdc_celsius(Sensor(channels_read=["TDC"], noise=QUIET), [0.0])[0], abs=0.05)
+    net = ThermalNetwork(SensorParams())
+    A, B = net.matrices(None)
+    x = np.linalg.solve(A, -B @ np.array([net.heater_power_W(), 25.0, 25.0, 0.0]))
+    assert x[CORE] == pytest.approx(35.0, abs=1e-9)
+
+
+def test_exact_discretization_is_stable_at_any_step_and_chunks_equal_stepping():
+    net = ThermalNetwork(SensorParams())
+    contact = (MATERIALS["aluminum"], 1e-4)
+    for dt in (1e-4, 0.01, 1.0, 100.0, 1e4):
+        Phi, _ = net.discrete(contact, dt)
+        assert np.max(np.abs(np.linalg.eigvals(Phi))) < 1.0
+    powers, sums = net.chunk_response(contact, 0.01, 50)
+    Phi, Gam = net.discrete(contact, 0.01)
+    x = np.linspace(20, 40, net.n)
+    u = np.array([0.3, 25.0, 20.0, 1e-4])
+    y = x.copy()
+    for j in range(50):
+        y = Phi @ y + Gam @ u
+        assert np.allclose(powers[j] @ x + sums[j] @ u, y, atol=1e-10)
+
+
+def test_an_ambient_step_moves_the_settled_temperature_and_TAC_follows_dT_dt():
+    s = Sensor(stimuli=[AmbientStep(5.0, 15.0)], channels_read=["TDC", "TAC"], noise=QUIET)
+    t = np.arange(0.0, 400.0, 0.5)
+    tdc = s.analog(np.full(t.size, channel_index("TDC")), t) / conv.ADC_LSB_V
+    s2 = Sensor(stimuli=[AmbientStep(5.0, 15.0)], channels_read=["TDC", "TAC"], noise=QUIET)
+    tac = s2.analog(np.full(t.size, channel_index("TAC")), t) / conv.ADC_LSB_V
+    temp = conv.tdc_to_celsius(tdc)
+    assert temp[-1] < temp[0] - 5.0  # heading for 15 + 10 °C
+    slope = np.gradient(temp, t)
+    rate = conv.tac_to_celsius_per_s(tac, tdc, tac_offset=2048.0)
+    sel = (t > 60) & (np.abs(slope) > 0.01)
+    assert sel.sum() > 100
+    assert np.allclose(rate[sel], slope[sel], rtol=0.1)  # the documented TAC relation holds within 10 %
+
+
+@pytest.mark.parametrize("fault,channel,check", [
+    ({"thermistor": "open"}, "TDC", lambda c: c == 0),
+    ({"thermistor": "short"}, "TDC", lambda c: c == 4095),
+    # electrodes keep 0.67 % of the previous electrode's value in the multiplexer's hold node: near the rails
+    ({"electrode_open": [7]}, "E7", lambda c: c < 40),
+    ({"electrode_short": [7]}, "E7", lambda c: c > 4055),
+])
+def test_open_and_shorted_faults_read_at_the_rails(fault, channel, check):
+    s = Sensor(channels_read=[channel], noise=QUIET, faults=fault)
+    code = int(s.sample([channel_index(channel)], [0.01])[0])
+    assert check(code), code
+
+
+def test_a_stuck_multiplexer_returns_one_electrode_on_every_channel():
+    touch = Touch(0.1, 1.5, 0.2, 1.0, electrode="E3")
+    s = Sensor(stimuli=[touch], channels_read=E, noise=QUIET, faults={"mux_stuck": 3})
+    z = impedances(s, 0.5)
+    assert np.allclose(z[1:], z[2], rtol=1e-3)  # the first sample still remembers the node's previous value
+    assert z[2] > 1.2 * impedances(Sensor(channels_read=E, noise=QUIET), 0.5)[2]
+
+
+def test_a_dead_heater_leaves_the_finger_at_ambient_and_a_failing_one_cools_it():
+    dead = Sensor(channels_read=["TDC"], noise=QUIET, faults={"heater_failed": True})
+    assert tdc_celsius(dead, [0.0, 100.0]) == pytest.approx([25.0, 25.0], abs=0.2)
+    from emulator.stimuli import HeaterFailure
+
+    failing = Sensor(stimuli=[HeaterFailure(10.0)], channels_read=["TDC"], noise=QUIET)
+    temps = tdc_celsius(failing, [0.0, 600.0, 7200.0])
+    assert temps[0] > 34.0 and temps[1] < temps[0] - 2 and temps[2] == pytest.approx(25.0, abs=0.3)
+
+
+def test_unknown_fault_is_refused_by_name():
+    with pytest.raises(ValueError, match="unknown sensor fault"):
+        Sensor(faults={"fan_failed": True})
+
+
+def test_only_the_needed_modalities_are_built():
+    plain = Sensor(channels_read=["PAC", "PDC"])
+    assert plain.electrodes is None and plain.thermal is None
+    names = [e["name"] for e in Sensor(channels_read=["TDC"]).effects_report()]
+    assert "thermal_steady_state" in names and "thermal_network" not in names
+    touched = Sensor(stimuli=[Touch(0.1, 1.0, material="glass")], channels_read=["TDC", "E1"])
+    names = [e["name"] for e in touched.effects_report()]
+    assert "thermal_network" in names and "electrodes" in names
+    # a contact with no material changes no temperature: no thermal network
+    assert Sensor(stimuli=[Touch(0.1, 1.0)], channels_read=["TDC"]).thermal is None
+
+
+def test_shear_skews_the_pattern_toward_its_direction():
+    base = impedances(Sensor(stimuli=[Touch(0.1, 1.5, 0.2, 1.0, electrode="E17")], channels_read=E, noise=QUIET),
+                      0.5)
+    sheared = impedances(Sensor(stimuli=[Touch(0.1, 1.5, 0.2, 1.0, electrode="E17", tangential_N=1.5)],
+                                channels_read=E, noise=QUIET), 0.5)
+    tipward, rootward = 9, 17  # E10 (x = 1.3 mm) lies toward the tip of E17, E18 (x = −9.8 mm) away from it
+    assert sheared[tipward] - base[tipward] > 0 > sheared[rootward] - base[rootward]
+
+
+def test_forces_that_bottom_the_skin_stay_bounded():
+    p = SensorParams()
+    pos = electrode_positions_mm()
+    c = Contact(surface_point_mm(-2.8, 0.0), 6.0, lambda t: np.full(np.shape(t), 50.0))
+    gaps = electrode_gaps_mm(p, [c], np.array([0.0, 1.0]), pos)
+    assert np.all(gaps >= p.minimum_gap_mm) and np.all(np.isfinite(gaps))
+    s = Sensor(stimuli=[Touch(0.1, 50.0, 0.2, 1.0, electrode="E17")], channels_read=E + ["PDC"], noise=QUIET)
+    codes = s.sample(E_IDX, 0.6 + np.arange(19) * 1e-4)
+    assert codes.min() > 0 and codes.max() < 4095
+
+
+def test_the_full_frame_with_both_modalities_is_deterministic():
+    stim = [Touch(0.2, 1.0, 0.1, 0.3, electrode="E5", material="aluminum")]
+    chans = np.array([channel_index(n) for n in DEFAULT_FRAME_NAMES] * 20)
+    t = np.arange(chans.size) / 4400.0
+    a = Sensor(stimuli=stim, channels_read=DEFAULT_FRAME_NAMES, seed=3).sample(chans, t)
+    b = Sensor(stimuli=stim, channels_read=DEFAULT_FRAME_NAMES, seed=3).sample(chans, t)
+    assert np.array_equal(a, b)
