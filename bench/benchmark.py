@@ -102,9 +102,17 @@ def stream_realtime_factor(fidelity: str, channels, sequence, slot_rate_Hz: floa
     for _ in range(int(seconds)):
         sampler.read(per_batch)
     wall = time.perf_counter() - t0
+    report = sensor.effects_report()
+    slow = {"thermal_network", "thermal_steady_state", "electrodes"}
+    modality_ms = {"pressure path (grid effects)": 1e3 * sum(e["seconds"] for e in report if e["name"] not in slow)}
+    for e in report:
+        if e["name"] in slow:
+            modality_ms[e["name"].replace("_", " ")] = 1e3 * e["seconds"]
+    modality_ms["SPI, ADC and host (the rest)"] = 1e3 * wall - sum(modality_ms.values())
     return {"fidelity": fidelity, "sequence": "default 44-slot frame" if sequence == "default" else sequence,
             "simulated_s": seconds, "wall_s": wall, "realtime_factor": seconds / wall,
-            "effects": [e["name"] for e in sensor.effects_report()]}
+            "effects": [e["name"] for e in report],
+            "ms_per_simulated_s": {k: v / seconds for k, v in modality_ms.items()}}
 
 
 def stream_hour_child(seconds: float) -> None:
@@ -192,6 +200,9 @@ def main(args) -> int:
     pdc_only = stream_realtime_factor("default", ["PDC"], ["PDC"], 100.0, 30.0, drops)
     result["demand"] = {"full_frame": full, "pac_only": pac_only, "pdc_only": pdc_only,
                         "pac_only_speedup": pac_only["realtime_factor"] / full["realtime_factor"]}
+    say("… modalities")
+    touches = load_scene(SCENES_DIR / "thermal_contacts.toml").stimuli
+    result["modalities"] = stream_realtime_factor("default", DEFAULT_FRAME_NAMES, "default", 4400.0, 100.0, touches)
     say("… memory (streaming)")
     result["memory"] = stream_hour(3600.0 if args.hour else 600.0)
     result["spi"] = spi_paths(rtl=not args.no_rtl, say=say)
@@ -215,6 +226,11 @@ def main(args) -> int:
         r = d[key]
         print(f"  {key:10s} {r['realtime_factor']:8.0f}× real time, effects: {', '.join(r['effects'])}")
     print(f"  reading only PAC is {d['pac_only_speedup']:.2f}× faster than the full frame")
+    m = result["modalities"]
+    print(f"\nFull frame with the thermal network and electrodes active (thermal-contacts scene, default profile): "
+          f"{m['realtime_factor']:.0f}× real time; cost per modality (ms per simulated s):")
+    for name, ms in m["ms_per_simulated_s"].items():
+        print(f"  {name:32s} {ms:7.3f}")
     m = result["memory"]
     print(f"\nStreaming {m['simulated_s']:.0f} simulated s of the full frame: {m['realtime_factor']:.0f}× real time, "
           f"peak RSS {m['peak_rss_MB']:.0f} MB")

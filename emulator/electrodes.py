@@ -17,8 +17,9 @@ Contact -> skin and fluid deformation -> fluid gap over every electrode -> imped
   so each sample keeps exp(−t_acq/τ) of the previous electrode's value: cross-talk when channels switch
   faster than the node settles.
 
-Geometry and deformation are evaluated at 1 kHz in chunks aligned to absolute time, filtered per
-electrode, and interpolated to conversion instants.
+Geometry and deformation are evaluated at the fidelity profile's electrode rate (250 Hz to 2 kHz, above
+twice the 100 Hz bandwidth) in chunks aligned to absolute time, filtered per electrode, and interpolated
+to conversion instants.
 """
 
 from __future__ import annotations
@@ -34,8 +35,7 @@ from emulator import filters
 from emulator.channels import ELECTRODE_FIRST
 from emulator.params import SensorParams
 
-ELECTRODE_RATE_HZ = 1000.0
-CHUNK = 100
+CHUNK_S = 1.0  # the model advances in 1 s chunks aligned to absolute time (per-chunk overhead dominates)
 CORE_RADIUS_MM = 5.0
 ELECTRODES_CSV = Path(__file__).resolve().parents[1] / "fixtures" / "electrodes.csv"
 
@@ -65,13 +65,14 @@ class Contact:
     center_mm: np.ndarray
     indenter_radius_mm: float
     normal_N: object
-    tangential_N: object = None
+    tangential_per_normal: float = 0.0  # tangential force as a fraction of the normal force
     shear_direction: tuple = (1.0, 0.0, 0.0)
+    start_s: float = -np.inf  # the contact exerts no force outside [start_s, end_s]
+    end_s: float = np.inf
 
     def state(self, t: np.ndarray):
         f = np.maximum(np.asarray(self.normal_N(t), float), 0.0)
-        ft = np.zeros_like(f) if self.tangential_N is None else np.asarray(self.tangential_N(t), float)
-        return f, ft
+        return f, self.tangential_per_normal * f
 
 
 def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray) -> np.ndarray:
@@ -82,14 +83,18 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
     indent = np.zeros_like(gaps)
     bulge = np.zeros(t.size)
     for c in contacts:
+        if c.end_s < t[0] or c.start_s > t[-1]:
+            continue
         f, ft = c.state(t)
         if not f.any():
             continue
         depth = (g0 - gmin) * (1.0 - np.exp(-f / p.indentation_force_N))  # bounded: bottoms at g_min
         w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
-        shift = np.outer(p.shear_shift_mm_per_N * ft, np.asarray(c.shear_direction, float))
-        centre = c.center_mm[None, :] + shift
-        d2 = ((positions[None, :, :] - centre[:, None, :]) ** 2).sum(axis=2)
+        # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
+        rel = positions - c.center_mm[None, :]
+        along = rel @ np.asarray(c.shear_direction, float)
+        s_mm = p.shear_shift_mm_per_N * ft
+        d2 = (rel * rel).sum(axis=1)[None, :] - 2 * np.outer(s_mm, along) + (s_mm * s_mm)[:, None]
         indent += depth[:, None] * np.exp(-d2 / (2 * w2))
         bulge += depth * 2 * np.pi * w2 / surface_mm2  # displaced volume spread over the surface
     gaps = gaps - indent + bulge[:, None]
@@ -113,16 +118,18 @@ class ElectrodeModel:
     """Serves E1..E19 voltages at conversion instants, the multiplexer's memory included."""
 
     def __init__(self, p: SensorParams, contacts: list[Contact], faults: dict | None = None,
-                 discretization: str = "prewarped"):
+                 discretization: str = "prewarped", rate_Hz: float = 500.0):
         self.p, self.contacts, self.faults = p, contacts, faults or {}
         self.positions = electrode_positions_mm()
-        self.dt = 1.0 / ELECTRODE_RATE_HZ
+        self.dt = 1.0 / rate_Hz
+        self.chunk = max(1, int(round(CHUNK_S * rate_Hz)))
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.electrode_bandwidth_Hz]), 2 * np.pi * p.electrode_bandwidth_Hz
-        sos = filters.discretize(z, pz, k, ELECTRODE_RATE_HZ, discretization)
+        sos = filters.discretize(z, pz, k, rate_Hz, discretization)
         self.b, self.a = sos[0, :3], sos[0, 3:]
         rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm), self.faults)[0]
         self.rest = rest
         self.zi = signal.lfilter_zi(self.b, self.a)[:, None] * rest[None, :]
+        self.zi_rest = self.zi.copy()
         self.k = 0
         self._hist_t = [np.array([0.0])]
         self._hist = [rest[None, :].copy()]
@@ -133,12 +140,14 @@ class ElectrodeModel:
         self.stuck = self.faults.get("mux_stuck")  # electrode number the multiplexer is stuck on
 
     def _advance_chunk(self):
-        t = (self.k + 1 + np.arange(CHUNK)) * self.dt
-        gaps = electrode_gaps_mm(self.p, self.contacts, t, self.positions) if self.contacts else \
-            np.full((CHUNK, 19), self.p.resting_gap_mm)
-        v = electrode_volts(self.p, gaps, self.faults)
-        y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
-        self.k += CHUNK
+        t = (self.k + 1 + np.arange(self.chunk)) * self.dt
+        active = [c for c in self.contacts if c.end_s >= t[0] and c.start_s <= t[-1]]
+        if not active and np.allclose(self.zi, self.zi_rest, rtol=0, atol=1e-12):
+            y = np.broadcast_to(self.rest, (self.chunk, 19))  # nothing touching and the filter settled: rest
+        else:
+            v = electrode_volts(self.p, electrode_gaps_mm(self.p, active, t, self.positions), self.faults)
+            y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
+        self.k += self.chunk
         self._hist_t.append(t)
         self._hist.append(y)
 

@@ -19,6 +19,7 @@ class Fidelity:
     discretization: str  # see emulator.filters.DISCRETIZATIONS
     duct_resonance: bool  # 18.7 kHz closed-tube resonance of the fluid duct
     stage2_noise: bool  # second-stage amplifier noise
+    electrode_rate_Hz: float  # rate of the electrode geometry model (the channels' bandwidth is 100 Hz)
     description: str
 
     @property
@@ -29,12 +30,13 @@ class Fidelity:
 PROFILES: dict[str, Fidelity] = {
     p.name: p
     for p in (
-        Fidelity("fast", 1, "bilinear", False, False,
-                 "4.4 kHz grid, plain bilinear (the 1040 Hz corner is warped), first-order effects only"),
-        Fidelity("default", 2, "prewarped", False, False,
-                 "8.8 kHz grid, every corner prewarped, first-order effects only"),
-        Fidelity("reference", 16, "prewarped", True, True,
-                 "70.4 kHz grid, prewarped, plus duct resonance and second-stage noise"),
+        Fidelity("fast", 1, "bilinear", False, False, 250.0,
+                 "4.4 kHz grid, plain bilinear (the 1040 Hz corner is warped), electrodes at 250 Hz, "
+                 "first-order effects only"),
+        Fidelity("default", 2, "prewarped", False, False, 500.0,
+                 "8.8 kHz grid, every corner prewarped, electrodes at 500 Hz, first-order effects only"),
+        Fidelity("reference", 16, "prewarped", True, True, 2000.0,
+                 "70.4 kHz grid, prewarped, electrodes at 2 kHz, plus duct resonance and second-stage noise"),
     )
 }
 

@@ -187,8 +187,11 @@ class Sensor:
                 centre = surface_point_mm(s.x_mm, s.angle_deg)
             a, phi = np.arctan2(centre[1], -centre[2]), np.radians(s.shear_angle_deg)
             direction = np.cos(phi) * np.array([1.0, 0, 0]) + np.sin(phi) * np.array([0, np.cos(a), np.sin(a)])
-            contacts.append(Contact(centre, s.indenter_radius_mm, s.force, s.tangential, tuple(direction)))
-        return ElectrodeModel(self.params, contacts, self.faults)
+            contacts.append(Contact(centre, s.indenter_radius_mm, s.force,
+                                    s.tangential_N / s.force_N if s.force_N else 0.0, tuple(direction),
+                                    s.start_s, s.end_s))
+        return ElectrodeModel(self.params, contacts, self.faults, self.fidelity.discretization,
+                              self.fidelity.electrode_rate_Hz)
 
     # --- time advance ---------------------------------------------------------------
     def _advance_through(self, n_last: int, keep_from: int) -> None:
