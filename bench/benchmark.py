@@ -231,6 +231,10 @@ def main(args) -> int:
           f"{m['realtime_factor']:.0f}× real time; cost per modality (ms per simulated s):")
     for name, ms in m["ms_per_simulated_s"].items():
         print(f"  {name:32s} {ms:7.3f}")
+    ms = m["ms_per_simulated_s"]
+    print(f"  saved when a scene needs neither: thermal network {ms.get('thermal network', 0):.3f} ms/s (steady-state "
+          f"shortcut instead), electrodes {ms.get('electrodes', 0):.3f} ms/s (not built when no electrode is read; "
+          f"resting values when nothing touches)")
     m = result["memory"]
     print(f"\nStreaming {m['simulated_s']:.0f} simulated s of the full frame: {m['realtime_factor']:.0f}× real time, "
           f"peak RSS {m['peak_rss_MB']:.0f} MB")

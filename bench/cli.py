@@ -11,8 +11,8 @@ REPO = Path(__file__).resolve().parent.parent
 SCENES_DIR = REPO / "fixtures" / "scenes"
 
 MAIN_HELP = """\
-An emulated BioTac fingertip (fluid pressure path at sample level: PDC and PAC) behind its SPI protocol,
-driven by scene files.
+An emulated BioTac fingertip — pressure (PDC, PAC), temperature (TDC, TAC) and 19 impedance electrodes at
+sample level — behind its SPI protocol (software model or Verilog RTL), driven by scene files.
 
 typical session:
   biotac-bench scenes                                  # what ships
@@ -46,6 +46,13 @@ scene file (TOML):
      sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07)
      vibration    start_s, duration_s, amplitude_um, frequency_Hz  | f_start_Hz + f_stop_Hz (log sweep), fade_s
      pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz  (calibrator on the liquid)
+     touch        start_s, force_N, ramp_s, hold_s; where: electrode ("E17") or x_mm + angle_deg;
+                  indenter_radius_mm (3), tangential_N, shear_angle_deg; material ("aluminum", "glass",
+                  "wood", "polystyrene foam", ...) and object_temperature_C for thermal contact
+     power_on     at_s   (heaters start from ambient)        ambient_step  at_s, temperature_C
+     heater_failure  at_s
+  [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
+             heater_failed = true
 
 The file is validated before anything runs; every problem is listed with its field, value and allowed range.
 A run that fails part-way still writes what it recorded (record.json says "failed" and why); exit status 1.

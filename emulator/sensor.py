@@ -136,7 +136,8 @@ class Sensor:
         if dynamic:
             effects.append(CoreTemperature(self.thermal))
         effects += [RestingPressure(p), ForceCoupling(p, fs, disc), VibrationCoupling(p, fs, disc),
-                    Bridge(p, fs, disc, duct_resonance=f.duct_resonance, thermal=dynamic)]
+                    Bridge(p, fs, disc, duct_resonance=f.duct_resonance, thermal=dynamic,
+                           settled_temperature_C=None if dynamic else self.thermal_steady[0])]
         if self.noise.johnson:
             effects.append(johnson_noise(p, fs, self.seed))
         if self.noise.amplifier:

@@ -23,9 +23,10 @@ class Bridge(Effect):
     produces = ("stage1_input_V",)
 
     def __init__(self, params: SensorParams, fs: float, discretization: str, duct_resonance: bool,
-                 thermal: bool = False):
-        self.span = params.bridge_span_V_per_Pa
-        self.offset = params.bridge_offset_V
+                 thermal: bool = False, settled_temperature_C: float | None = None):
+        t = params.bridge_temperature_C if settled_temperature_C is None else settled_temperature_C
+        self.span = params.bridge_span_at(t)
+        self.offset = params.bridge_offset_at(t)
         self.params = params
         #: with a thermal model the bridge follows the core temperature (offset and span drift)
         self.consumes = ("fluid_pressure_Pa", "bridge_temperature_C") if thermal else ("fluid_pressure_Pa",)

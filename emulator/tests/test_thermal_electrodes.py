@@ -153,3 +153,32 @@ def test_the_full_frame_with_both_modalities_is_deterministic():
     a = Sensor(stimuli=stim, channels_read=DEFAULT_FRAME_NAMES, seed=3).sample(chans, t)
     b = Sensor(stimuli=stim, channels_read=DEFAULT_FRAME_NAMES, seed=3).sample(chans, t)
     assert np.array_equal(a, b)
+
+
+def test_the_core_temperature_drives_the_bridge_drift_into_PDC():
+    p = SensorParams(bridge_offset_drift_V_per_V_K=-2e-5)
+    steady = Sensor(p, channels_read=["PDC"], noise=QUIET)
+    cooled = Sensor(p, stimuli=[AmbientStep(1.0, 15.0)], channels_read=["PDC"], noise=QUIET)
+    t = np.array([0.5, 900.0])
+    a, b = steady.analog([1, 1], t), cooled.analog([1, 1], t)
+    assert a[0] == pytest.approx(b[0], abs=1e-9)  # same before the step
+    drift_bits = (b[1] - b[0]) / conv.ADC_LSB_V
+    assert drift_bits > 20  # 10 K cooler core, negative offset drift -> PDC rises
+    assert a[1] == pytest.approx(a[0], abs=1e-9)
+
+
+@pytest.mark.parametrize("gap_mm", [0.12, 0.3, 0.8, 1.5, 2.5])
+def test_impedance_round_trips_through_eq_4_1(gap_mm):
+    from emulator.electrodes import electrode_volts
+
+    p = SensorParams()
+    z_true = p.electrode_series_ohm + p.fluid_sheet_ohm_mm / gap_mm
+    code = np.floor(electrode_volts(p, np.full((1, 19), gap_mm))[0, 0] / conv.ADC_LSB_V + 0.5)
+    assert float(conv.impedance_ohm(code)) == pytest.approx(z_true, rel=0.01)
+
+
+def test_electrode_noise_makes_the_published_3_2_mV_resolution():
+    s = Sensor(channels_read=["E5"], seed=4)
+    codes = s.sample(np.full(20000, channel_index("E5")), np.arange(20000) / 1000.0).astype(float)
+    rms_mV = codes.std() * conv.ADC_LSB_V * 1e3
+    assert rms_mV * np.sqrt(12) == pytest.approx(3.2, rel=0.15)  # an effective step of 3.2 mV (Table 4-1)
