@@ -42,8 +42,13 @@ def is_plain(port, mosi: np.ndarray) -> bool:
     return not _SPECIAL[mosi >> 8].any()
 
 
-def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray) -> np.ndarray:
-    """MISO words for plain 16-bit transfers starting at ``start`` and releasing chip select at ``end`` (s)."""
+def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray,
+                   next_activity: np.ndarray | None = None) -> np.ndarray:
+    """MISO words for plain 16-bit transfers starting at ``start`` and releasing chip select at ``end`` (s).
+
+    ``next_activity`` (s) is when the bus clocks next after each transfer (another sensor's transfer may come
+    first); by default the port's own next transfer, and unknown (deferred) after the last one.
+    """
     n = start.size
     port.resolve_conversion(float(start[0]))
     b0 = (mosi >> 8).astype(np.int64)
@@ -71,11 +76,12 @@ def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray) -
         port.unprovided_requests += int(np.count_nonzero(unprovided))
         acc = rs[~busy & provided]
         acc_ch = channels[~busy & provided]
-        if acc.size and cmd[acc[-1]] == n - 1:  # the batch's last transfer: convert when the next one is known
+        nxt = np.append(start[1:], np.inf) if next_activity is None else np.asarray(next_activity, float)
+        if acc.size and not np.isfinite(nxt[cmd[acc[-1]]]):  # nothing known after it: convert when something is
             deferred = (int(acc_ch[-1]), float(cmd_end[acc[-1]]))
             acc, acc_ch = acc[:-1], acc_ch[:-1]
         if acc.size:
-            next_start = start[cmd[acc] + 1]  # every accepted command but a deferred last one has a successor
+            next_start = nxt[cmd[acc]]
             coupled = next_start < cmd_end[acc] + port.conversion_s
             port.coupled_conversions += int(np.count_nonzero(coupled))
             codes = port.sensor.sample(acc_ch, cmd_end[acc], bus_active=coupled)

@@ -453,6 +453,49 @@ class Bus:
     def run(self, transfers) -> list[int]:
         return [self.transfer(t) for t in transfers]
 
+    def exchange_words(self, start, cs, mosi, clock_hz, keep_cs=None) -> np.ndarray:
+        """MISO for a batch of 16-bit transfers with select codes ``cs`` (the firmware's usual traffic).
+
+        Plain word traffic to any set of sensors is split per sensor and evaluated with each port's
+        vectorized path (a transfer with chip select held into the next one, the select code switching, is the
+        same for each sensor as two separate windows); anything else goes transfer by transfer.
+        """
+        from emulator.spi.fastpath import exchange_words, is_plain
+
+        start = np.asarray(start, float)
+        cs = np.asarray(cs, dtype=np.int64)
+        mosi = np.asarray(mosi, dtype=np.uint16)
+        clock = np.broadcast_to(np.asarray(clock_hz, float), start.shape)
+        keep = np.zeros(start.shape, bool) if keep_cs is None else np.asarray(keep_cs, bool)
+        if start.size == 0:
+            return np.zeros(0, np.uint16)
+        end = start + 16.5 / clock
+        lo, hi = proto.SPI_CLOCK_RANGE_HZ
+        selected = {n: (cs == SELECT_ALL) | (cs == SELECT_CODE[n]) for n in self.ports}
+        same_sensor_held = any(np.any(keep[:-1] & sel[:-1] & sel[1:]) for sel in selected.values())
+        plain = (not self._open and clock.min() >= lo and clock.max() <= hi and not same_sensor_held
+                 and start[0] >= self._last_end - proto.TIME_TOLERANCE_S
+                 and (start.size < 2 or (start[1:] - end[:-1]).min() >= -proto.TIME_TOLERANCE_S)
+                 and all(is_plain(p, mosi[selected[n]]) for n, p in self.ports.items()))
+        if not plain:
+            return np.array([self.transfer(Transfer(float(t), int(c), int(m), 16, float(f), bool(k)))
+                             for t, c, m, f, k in zip(start, cs, mosi, clock, keep)], dtype=np.uint16)
+        for port in self.ports.values():
+            port.resolve_conversion(float(start[0]))
+        next_bus = np.append(start[1:], np.inf)
+        miso = np.zeros(start.shape, dtype=np.uint16)
+        anyone = np.zeros(start.shape, bool)
+        for n, port in self.ports.items():
+            sel = selected[n]
+            if sel.any():
+                miso[sel] |= exchange_words(port, start[sel], end[sel], mosi[sel], next_bus[sel])
+                anyone |= sel
+        if self.pull_up:
+            miso[~anyone] = 0xFFFF
+        self._last_end = float(end[-1])
+        self._record(float(end[-1]), int(self.pull_up))  # (the line history matters only for late sampling)
+        return miso
+
     def flush(self, t_s: float = math.inf) -> None:
         """Resolve pending conversions (no further bus activity before ``t_s``)."""
         for port in self.ports.values():

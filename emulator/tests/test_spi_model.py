@@ -251,3 +251,29 @@ def test_garbage_never_wedges_the_bus_and_a_good_command_then_works():
     for n in (1, 2, 3):
         b.transfer(cmd(t + n * 1e-3, 0x83, cs=SELECT_CODE[n]))
         assert 0 < value(b.transfer(read(t + n * 1e-3 + 100e-6, cs=SELECT_CODE[n]))) < 4095
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_bus_word_path_matches_transfer_level_for_multi_sensor_frames(seed):
+    """Broadcast sampling then per-sensor reads with the select code switching, as bridge firmware does."""
+    rng = np.random.default_rng(seed)
+    present = sorted(rng.choice([1, 2, 3, 4, 5], int(rng.integers(1, 6)), replace=False).tolist())
+    start, cs, mosi, keep = [], [], [], []
+    t = 1e-3
+    for k in range(600):
+        ch = int(rng.choice([0, 1, 17, 35, 3]))
+        start.append(t), cs.append(SELECT_ALL), mosi.append(int(proto.sample_command(ch)) << 8), keep.append(False)
+        t += 16.5 / 4.4e6 + float(rng.choice([50e-6, 60e-6, 30e-6]))
+        for n in range(1, 6):
+            start.append(t), cs.append(SELECT_CODE[n]), mosi.append(0), keep.append(n < 5)
+            t += 16.5 / 4.4e6
+        t += float(rng.choice([10e-6, 100e-6]))
+    start, cs, mosi, keep = map(np.array, (start, cs, mosi, keep))
+    fast = Bus({n: port(n, noise=NoiseSources()) for n in present})
+    slow = Bus({n: port(n, noise=NoiseSources()) for n in present})
+    cut = int(rng.integers(1, start.size - 1))
+    a = np.concatenate([fast.exchange_words(start[:cut], cs[:cut], mosi[:cut], 4.4e6, keep[:cut]),
+                        fast.exchange_words(start[cut:], cs[cut:], mosi[cut:], 4.4e6, keep[cut:])])
+    b = np.array([slow.transfer(Transfer(float(s), int(c), int(m), 16, 4.4e6, bool(k)))
+                  for s, c, m, k in zip(start, cs, mosi, keep)])
+    assert np.array_equal(a, b)
