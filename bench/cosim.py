@@ -1,0 +1,202 @@
+"""Native co-simulation of bridge firmware: the firmware's HAL bound to emulated sensors in virtual time.
+
+The firmware (C) is compiled for this machine with the system C compiler into a shared library and called
+through ctypes. Its HAL calls land here: queued SPI sequences go through the software SPI bus to emulated
+sensors, delays advance virtual time, and the UART is a byte pipe — an in-memory one, or a pty that any
+program can open as a serial port (:class:`bench.serial_link.PtyLink`).  Deterministic and faster than real
+time; ``run(..., realtime=True)`` paces virtual time to the wall clock.
+"""
+
+from __future__ import annotations
+
+import ctypes as C
+import hashlib
+import subprocess
+import time
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+
+from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator.sensor import Sensor
+from emulator.spi.model import Bus, SensorPort, Transfer
+
+REPO = Path(__file__).resolve().parents[1]
+FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
+SPI_CLOCK_HZ = 4.4e6
+
+
+class FirmwareError(RuntimeError):
+    pass
+
+
+def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
+    """Compile firmware sources (C11) into a shared library; cached by the sources' hash."""
+    sources = [Path(s) for s in (sources or sorted(FIRMWARE_DIR.glob("*.c")))]
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources + sorted(FIRMWARE_DIR.glob("*.h"))))
+    out_dir = Path(out_dir or REPO / "out" / "firmware") / digest.hexdigest()[:12]
+    lib = out_dir / "libbtbridge.so"
+    if lib.exists():
+        return lib
+    out_dir.mkdir(parents=True, exist_ok=True)
+    cmd = ["cc", "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-shared", "-fPIC", f"-I{FIRMWARE_DIR}",
+           *map(str, sources), "-o", str(lib)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise FirmwareError(f"the firmware does not compile:\n{r.stderr}")
+    return lib
+
+
+class BtWord(C.Structure):
+    _fields_ = [("offset_ns", C.c_uint32), ("cs", C.c_uint8), ("keep_cs", C.c_uint8), ("mosi", C.c_uint16)]
+
+
+SEQ_FN = C.CFUNCTYPE(None, C.c_void_p, C.POINTER(BtWord), C.POINTER(C.c_uint16), C.c_size_t)
+BYTES_FN = C.CFUNCTYPE(None, C.c_void_p, C.c_uint8, C.c_uint8, C.POINTER(C.c_uint8), C.POINTER(C.c_uint8), C.c_size_t)
+DELAY_FN = C.CFUNCTYPE(None, C.c_void_p, C.c_uint32)
+MICROS_FN = C.CFUNCTYPE(C.c_uint64, C.c_void_p)
+WRITE_FN = C.CFUNCTYPE(None, C.c_void_p, C.POINTER(C.c_uint8), C.c_size_t)
+READ_FN = C.CFUNCTYPE(C.c_size_t, C.c_void_p, C.POINTER(C.c_uint8), C.c_size_t)
+
+
+class BtHal(C.Structure):
+    _fields_ = [("ctx", C.c_void_p), ("spi_sequence", SEQ_FN), ("spi_bytes", BYTES_FN), ("delay_us", DELAY_FN),
+                ("micros", MICROS_FN), ("uart_write", WRITE_FN), ("uart_read", READ_FN)]
+
+
+class VirtualBoard:
+    """The board around the firmware: SPI bus with emulated sensors, virtual time, a UART.
+
+    ``sensors`` maps sensor number (1–5) to an emulated :class:`Sensor`; ``uart_out`` receives every byte
+    the firmware sends; bytes for the firmware are queued with :meth:`send_to_firmware`.  ``events`` are
+    (virtual time s, callable(board)) applied as time passes: unplugging a sensor, corrupting the line...
+    """
+
+    def __init__(self, sensors: dict[int, Sensor], uart_out=None, pull_up: bool = False):
+        self.sensors = dict(sensors)
+        self.bus = Bus({n: SensorPort(s, n) for n, s in self.sensors.items()}, pull_up=pull_up)
+        self.t = 0.0
+        self.uart_out = uart_out or (lambda data: None)
+        self.uart_in: deque[int] = deque()
+        self.events: list[tuple[float, object]] = []
+        self.error: BaseException | None = None
+
+    # --- faults and events ---------------------------------------------------------------
+    def at(self, t_s: float, action) -> None:
+        self.events.append((t_s, action))
+        self.events.sort(key=lambda e: e[0])
+
+    def unplug(self, n: int) -> None:
+        self.bus.ports.pop(n, None)
+
+    def plug(self, n: int) -> None:
+        """Plug sensor n back in: it starts from power-on state (its physics carries on)."""
+        port = SensorPort(self.sensors[n], n)
+        self.bus.ports[n] = port
+
+    def _events_due(self) -> None:
+        while self.events and self.events[0][0] <= self.t:
+            _, action = self.events.pop(0)
+            action(self)
+
+    def send_to_firmware(self, data: bytes) -> None:
+        self.uart_in.extend(data)
+
+    # --- the HAL ------------------------------------------------------------------------
+    def _guard(fn):  # noqa: N805 - decorator inside the class body
+        def wrapped(self, *a):
+            try:
+                return fn(self, *a)
+            except BaseException as e:  # an exception must not unwind through C: keep it, stop the run
+                self.error = self.error or e
+                return 0
+        return wrapped
+
+    @_guard
+    def spi_sequence(self, ctx, words, miso, n):
+        self._events_due()
+        w = np.ctypeslib.as_array(words, shape=(n,))
+        start = self.t + w["offset_ns"] * 1e-9
+        out = self.bus.exchange_words(start, w["cs"], w["mosi"], SPI_CLOCK_HZ, w["keep_cs"].astype(bool))
+        np.ctypeslib.as_array(miso, shape=(n,))[:] = out
+        self.t = float(start[-1] + 16.5 / SPI_CLOCK_HZ)
+
+    @_guard
+    def spi_bytes(self, ctx, cs, keep_cs, tx, rx, n):
+        self._events_due()
+        mosi = int.from_bytes(bytes(tx[:n]), "big") if n else 0
+        tr = Transfer(self.t, int(cs), mosi, 8 * n, SPI_CLOCK_HZ, bool(keep_cs))
+        bits = self.bus.transfer(tr)
+        for i, byte in enumerate(bits.to_bytes(n, "big") if n else b""):
+            rx[i] = byte
+        self.t = tr.end_s + 0.5e-6
+
+    @_guard
+    def delay_us(self, ctx, us):
+        self.t += us * 1e-6
+        self._events_due()
+
+    @_guard
+    def micros(self, ctx):
+        return int(self.t * 1e6)
+
+    @_guard
+    def uart_write(self, ctx, data, n):
+        self.uart_out(bytes(data[:n]))
+
+    @_guard
+    def uart_read(self, ctx, buf, maxn):
+        k = min(maxn, len(self.uart_in))
+        for i in range(k):
+            buf[i] = self.uart_in.popleft()
+        return k
+
+    del _guard
+
+
+class CoSim:
+    """Firmware + board: ``run(seconds)`` executes the firmware's main loop in virtual time."""
+
+    def __init__(self, board: VirtualBoard, library: Path | None = None):
+        self.board = board
+        self.lib = C.CDLL(str(library or build_firmware()))
+        self.lib.bt_bridge_size.restype = C.c_size_t
+        self.state = C.create_string_buffer(self.lib.bt_bridge_size())
+        self._cb = [SEQ_FN(board.spi_sequence), BYTES_FN(board.spi_bytes), DELAY_FN(board.delay_us),
+                    MICROS_FN(board.micros), WRITE_FN(board.uart_write), READ_FN(board.uart_read)]
+        self.hal = BtHal(None, *self._cb)
+        self.lib.bt_init(self.state, C.byref(self.hal))
+        self._raise()
+
+    def _raise(self):
+        if self.board.error is not None:
+            e, self.board.error = self.board.error, None
+            raise FirmwareError(f"the bench failed inside a HAL call: {e!r}") from e
+
+    def run(self, seconds: float, realtime: bool = False, max_steps: int | None = None) -> None:
+        """Run the firmware until ``seconds`` more of virtual time have passed.
+
+        A firmware that stops advancing time (a hang in a loop that calls no HAL) cannot be interrupted from
+        here; ``max_steps`` bounds the number of main-loop passes and raises if they run out first.
+        """
+        end = self.board.t + seconds
+        wall0, virt0 = time.perf_counter(), self.board.t
+        steps = 0
+        while self.board.t < end:
+            self.lib.bt_step(self.state)
+            self._raise()
+            steps += 1
+            if max_steps is not None and steps >= max_steps:
+                raise FirmwareError(f"the firmware made {steps} passes without reaching t = {end:.3f} s "
+                                    f"(virtual time {self.board.t:.3f} s): hung or idling without delays")
+            if realtime:
+                ahead = (self.board.t - virt0) - (time.perf_counter() - wall0)
+                if ahead > 0:
+                    time.sleep(ahead)
+
+
+def default_sensors(n: int = 1, stimuli=(), seed: int = 1, **kw) -> dict[int, Sensor]:
+    """n emulated sensors reading the default frame's channels (sensor k gets seed + k)."""
+    return {k: Sensor(stimuli=stimuli if k == 1 else (), channels_read=DEFAULT_FRAME_NAMES, seed=seed + k, **kw)
+            for k in range(1, n + 1)}

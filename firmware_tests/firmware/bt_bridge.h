@@ -1,0 +1,42 @@
+/* BioTac bridge firmware: samples 1..5 sensors over SPI and streams frames over a UART.
+ *
+ * UART framing, both directions:  0xAA 0x55 | type u8 | length u16 LE | payload | CRC-16/CCITT-FALSE u16 LE
+ * (the CRC covers type, length and payload).
+ *   firmware -> host   0x10 DATA    seq u16, sensor mask u8, slots u8, then per slot: channel u8 and, per
+ *                                   present sensor in ascending order, u16 = code (12 bits) | status << 12
+ *                                   (status 0 ok, 1 parity error, 2 error word from the sensor)
+ *                      0x11 STATUS  mask u8, streaming u8, frames u32, parity errors u32, error words u32,
+ *                                   sensor losses u32, sensor finds u32, command errors u32
+ *                      0x12 ACK     command type u8, result u8 (0 ok, 1 bad length, 2 unknown, 3 bad value)
+ *   host -> firmware   0x01 START, 0x02 STOP, 0x03 PATTERN (payload: 1..64 channel indices), 0x04 STATUS
+ */
+#ifndef BT_BRIDGE_H
+#define BT_BRIDGE_H
+#include "bt_hal.h"
+
+#define BT_MAX_SENSORS 5
+#define BT_MAX_PATTERN 64
+
+typedef struct {
+    const bt_hal *hal;
+    uint8_t present;          /* bit i: sensor i + 1 answers with a serial number starting "BT" */
+    uint8_t streaming;
+    uint8_t pattern[BT_MAX_PATTERN];
+    uint8_t pattern_len;
+    uint16_t seq;
+    uint32_t frames, parity_errors, error_words, losses, finds, cmd_errors;
+    uint32_t frames_since_detect;
+    uint8_t absent_streak[BT_MAX_SENSORS];
+    /* host command parser */
+    uint8_t rx[4 + 2 + BT_MAX_PATTERN + 2];
+    size_t rx_len;
+} bt_bridge;
+
+void bt_init(bt_bridge *b, const bt_hal *hal);
+/* One pass of the main loop: serve host commands, then stream one frame (or idle for 1 ms). */
+void bt_step(bt_bridge *b);
+/* Look for sensors (serial number "BT..."); returns the mask of present sensors. */
+uint8_t bt_detect(bt_bridge *b);
+uint16_t bt_crc16(const uint8_t *data, size_t n);
+
+#endif
