@@ -1,0 +1,86 @@
+"""Fault campaign building blocks: each fault states what the firmware and the driver must do."""
+
+import numpy as np
+import pytest
+
+from bench.bridge import FirmwareBench
+from bench.driver import CMD_START, BridgeDriver, Status
+from emulator.spi.model import Faults
+
+pytestmark = pytest.mark.firmware
+
+
+def run(fb, n=200, faults=()):
+    """Start streaming, then schedule ``faults`` = [(seconds after streaming starts, action(board))]."""
+    drv = BridgeDriver(fb.port)
+    drv.start()
+    assert drv.wait_for(CMD_START) is not None
+    t0 = fb.virtual_time
+    for dt, action in faults:
+        fb.at(t0 + dt, action)
+    frames = list(drv.frames(max_frames=n, timeout_s=10))
+    drv.request_status()
+    status = drv.wait_for(Status)
+    drv.close()
+    return drv, frames, status
+
+
+def test_a_sensor_unplugged_and_replugged_is_lost_then_found_again():
+    """Firmware: marks the sensor lost within two frames, looks for it every second, finds it again.
+    Driver: sees the sensor mask change and come back; no corrupted data in between."""
+    with FirmwareBench(2) as fb:
+        drv, frames, status = run(fb, 300, [(0.5, lambda b: b.unplug(2)), (1.2, lambda b: b.plug(2))])
+    masks = [f.sensor_mask for f in frames]
+    assert masks[0] == 0b11 and 0b01 in masks and masks[-1] == 0b11
+    assert status.losses >= 1 and status.finds >= 1
+    assert drv.parser.stats.crc_errors == 0
+
+
+def test_parity_errors_are_flagged_never_passed_as_data():
+    """A sensor whose responses carry bad parity: every sample is flagged (status 1) and counted."""
+    with FirmwareBench(1) as fb:
+        fb.now(lambda b: setattr(b.bus.ports[1], "faults", Faults(bad_parity=True)))
+        drv, frames, status = run(fb, 50)
+    assert all((f.status == 1).all() for f in frames[5:])
+    assert status.parity_errors >= 44 * 40
+
+
+def test_miso_stuck_high_looks_like_an_absent_sensor_and_is_dropped():
+    with FirmwareBench(2) as fb:
+        drv, frames, status = run(fb, 150, [(0.3, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))])
+    assert frames[0].sensor_mask == 0b11 and frames[-1].sensor_mask == 0b01 and status.losses >= 1
+
+
+def test_sensor_reset_mid_stream_costs_at_most_a_few_error_words():
+    with FirmwareBench(1) as fb:
+        drv, frames, status = run(fb, 100, [(0.4, lambda b: b.bus.ports[1].reset())])
+    bad = sum(int((f.status != 0).sum()) for f in frames)
+    assert bad <= 2 and frames[-1].sensor_mask == 1 and status.losses == 0
+
+
+@pytest.mark.parametrize("corrupt,drop", [(2e-4, 0.0), (0.0, 2e-4), (1e-3, 1e-3)])
+def test_serial_corruption_and_loss_are_detected_and_the_driver_resyncs(corrupt, drop):
+    """Driver: CRC catches corruption, sequence numbers count lost frames, decoding resumes at the next sync;
+    no frame that reaches the caller is corrupted."""
+    with FirmwareBench(1, corrupt_rate=corrupt, drop_rate=drop, seed=3) as fb:
+        drv, frames, status = run(fb, 300)
+    st = drv.parser.stats
+    assert st.crc_errors + st.bad_lengths + st.malformed > 0 or st.dropped_frames > 0
+    assert st.dropped_frames >= 1
+    for f in frames:  # whatever arrived intact is clean data
+        assert (f.status == 0).all() and set(f.channels) <= set(range(36))
+    pac = np.concatenate([f.codes[f.channels == 0, 0] for f in frames]).astype(float)
+    assert abs(np.median(pac) - 2048) < 3
+
+
+def test_the_host_closing_its_port_does_not_stop_the_firmware():
+    with FirmwareBench(1) as fb:
+        drv, frames, _ = run(fb, 20)
+        t = fb.virtual_time
+        import time
+        time.sleep(0.5)
+        assert fb.virtual_time > t  # still running after the host went away
+        drv2 = BridgeDriver(fb.port)  # and a new host can attach and read on
+        more = list(drv2.frames(max_frames=10, timeout_s=5))
+        drv2.close()
+    assert len(more) == 10
