@@ -1,0 +1,151 @@
+"""Fault campaigns: every fault × scene × seed through firmware, serial link and driver, with verdicts.
+
+Each fault states what a correct firmware and driver do; a run passes when the stream stays decodable,
+nothing corrupted reaches the caller, the expected reaction is seen, and nothing hangs (every wait is
+bounded).  Results go to JUnit XML and a summary table.
+"""
+
+from __future__ import annotations
+
+import time
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bench.bridge import FirmwareBench
+from bench.driver import CMD_START, BridgeDriver, Status
+from emulator.spi.model import Faults
+from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
+
+
+@dataclass
+class FaultCase:
+    name: str
+    expected: str
+    bench_kw: dict
+    schedule: list  # (seconds after streaming starts, action(board))
+    check: object  # (frames, status, parser stats) -> problem string or None
+
+
+def _mask_returns(frames, status, stats):
+    masks = [f.sensor_mask for f in frames]
+    if not (0b01 in masks and masks[-1] == 0b11):
+        return f"sensor 2 was not lost and found again (masks seen: {sorted(set(masks))})"
+    if status.losses < 1 or status.finds < 1:
+        return "firmware counters show no loss/find"
+
+
+def _flags_parity(frames, status, stats):
+    if not any((f.status == 1).any() for f in frames) or status.parity_errors == 0:
+        return "bad parity was not flagged"
+
+
+def _drops_sensor(frames, status, stats):
+    if frames[-1].sensor_mask != 0b01:
+        return "the stuck sensor is still streamed"
+
+
+def _survives_reset(frames, status, stats):
+    if sum(int((f.status != 0).sum()) for f in frames) > 2:
+        return "more than two bad samples after a reset"
+
+
+def _resyncs(frames, status, stats):
+    if stats.dropped_frames == 0 and stats.crc_errors == 0:
+        return "corruption went unnoticed"
+
+
+def _clean(frames, status, stats):
+    if stats.crc_errors or stats.dropped_frames or any(f.status.any() for f in frames):
+        return "errors on a healthy link"
+
+
+FAULTS = {f.name: f for f in (
+    FaultCase("none", "no errors, no drops", {}, [], _clean),
+    FaultCase("unplug_replug", "sensor 2 lost within 2 frames, found again within 1 s", {"n_sensors": 2},
+              [(0.3, lambda b: b.unplug(2)), (0.8, lambda b: b.plug(2))], _mask_returns),
+    FaultCase("parity_errors", "every sample flagged, counted", {},
+              [(0.1, lambda b: setattr(b.bus.ports[1], "faults", Faults(bad_parity=True)))], _flags_parity),
+    FaultCase("miso_stuck", "stuck sensor treated as absent", {"n_sensors": 2},
+              [(0.2, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))], _drops_sensor),
+    FaultCase("brownout_reset", "at most two bad samples, sensor kept", {},
+              [(0.3, lambda b: b.bus.ports[1].reset())], _survives_reset),
+    FaultCase("serial_corruption", "CRC errors counted, resync, clean frames", {"corrupt_rate": 5e-4}, [],
+              _resyncs),
+    FaultCase("serial_loss", "dropped frames counted from sequence numbers", {"drop_rate": 5e-4}, [], _resyncs),
+)}
+
+SCENES = {
+    "rest": [],
+    "taps": [Tap(0.5, 0.5), Tap(1.0, 1.0)],
+    "sphere_drops": [SphereDrop(0.4 + 0.3 * k, SPHERES["1 mm steel bearing"][0]) for k in range(4)],
+    "press": [Touch(0.3, 1.0, 0.2, 0.6, electrode="E17")],
+}
+
+
+def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) -> dict:
+    t0 = time.perf_counter()
+    problem = None
+    try:
+        with FirmwareBench(stimuli=SCENES[scene], seed=seed, **{"n_sensors": 1, **fault.bench_kw}) as fb:
+            drv = BridgeDriver(fb.port)
+            drv.start()
+            if drv.wait_for(CMD_START, timeout_s=5) is None:
+                raise TimeoutError("no acknowledgement of START within 5 s")
+            start = fb.virtual_time
+            for dt, action in fault.schedule:
+                fb.at(start + dt, action)
+            frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
+            drv.request_status()
+            status = drv.wait_for(Status, timeout_s=5)
+            drv.close()
+        if len(frames) < frames_wanted // 2:
+            problem = f"only {len(frames)} frames arrived"
+        elif status is None:
+            problem = "no status reply"
+        else:
+            problem = fault.check(frames, status, drv.parser.stats)
+            pac = np.concatenate([f.codes[f.channels == 0, 0] for f in frames if (f.status == 0).all()]
+                                 or [np.array([2048])])
+            if problem is None and not (0 <= pac.min() and pac.max() <= 4095):
+                problem = "out-of-range data reached the caller"
+    except Exception as e:  # a crash or hang of the firmware or driver is a failure of the case
+        problem = f"{type(e).__name__}: {e}"
+    return {"fault": fault.name, "scene": scene, "seed": seed, "expected": fault.expected,
+            "passed": problem is None, "problem": problem, "seconds": time.perf_counter() - t0}
+
+
+def run_campaign(faults, scenes, seeds, progress=None) -> list[dict]:
+    results = []
+    for f in faults:
+        for s in scenes:
+            for seed in seeds:
+                if progress:
+                    progress(f"{f} × {s} × seed {seed}")
+                results.append(run_case(FAULTS[f], s, seed))
+    return results
+
+
+def write_junit(results: list[dict], path: Path) -> None:
+    suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results)),
+                       failures=str(sum(not r["passed"] for r in results)),
+                       time=f"{sum(r['seconds'] for r in results):.3f}")
+    for r in results:
+        case = ET.SubElement(suite, "testcase", classname=f"campaign.{r['fault']}",
+                             name=f"{r['scene']}[seed={r['seed']}]", time=f"{r['seconds']:.3f}")
+        if not r["passed"]:
+            ET.SubElement(case, "failure", message=r["problem"]).text = f"expected: {r['expected']}"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ET.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)
+
+
+def summary(results: list[dict]) -> str:
+    lines = [f"{'fault':18s} {'scene':13s} {'seed':>4s}  result  expected / problem"]
+    for r in results:
+        lines.append(f"{r['fault']:18s} {r['scene']:13s} {r['seed']:4d}  {'PASS' if r['passed'] else 'FAIL':6s}  "
+                     f"{r['expected'] if r['passed'] else r['problem']}")
+    n_fail = sum(not r["passed"] for r in results)
+    lines.append(f"{len(results) - n_fail} passed, {n_fail} failed")
+    return "\n".join(lines)

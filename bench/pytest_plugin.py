@@ -1,0 +1,59 @@
+"""pytest plugin: fixtures that hand your own tests an emulated BioTac.
+
+Installed with the package (entry point ``pytest11``), so in any test:
+
+    def test_my_driver_reads_rest_noise(biotac_serial_port):
+        my_driver = MyDriver(biotac_serial_port)        # a real serial device path (a pty)
+        ...
+
+    def test_my_host_code(biotac_bridge):
+        bench = biotac_bridge(n_sensors=3, stimuli=[Tap(0.5, 1.0)])   # firmware on a pty, 3 sensors
+        bench.at(bench.virtual_time + 1.0, lambda board: board.unplug(2))   # a fault, in virtual time
+        ...
+
+    def test_my_spi_code(biotac_sensor):
+        spi = biotac_sensor(stimuli=[Tap(0.1, 1.0)])   # the sensor's SPI side, in process
+        miso = spi.exchange(TransferBatch(start_s, mosi_words))   # or spi.bus for multi-sensor traffic
+
+Fixtures
+    biotac_sensor       factory -> emulator.spi.model.SensorPort over an emulated sensor (in process)
+    biotac_bridge       factory -> bench.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown)
+    biotac_serial_port  the pty path of a one-sensor bridge that is already running
+"""
+
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.fixture
+def biotac_sensor():
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.sensor import Sensor
+    from emulator.spi.model import SensorPort
+
+    def make(stimuli=(), channels=DEFAULT_FRAME_NAMES, seed: int = 0, **sensor_kw):
+        return SensorPort(Sensor(stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw))
+
+    return make
+
+
+@pytest.fixture
+def biotac_bridge():
+    from bench.bridge import FirmwareBench
+
+    benches = []
+
+    def make(n_sensors: int = 1, stimuli=(), **kw):
+        fb = FirmwareBench(n_sensors, stimuli=stimuli, **kw).start()
+        benches.append(fb)
+        return fb
+
+    yield make
+    for fb in benches:
+        fb.stop()
+
+
+@pytest.fixture
+def biotac_serial_port(biotac_bridge):
+    return biotac_bridge(1).port
