@@ -182,6 +182,38 @@ def spi_paths(rtl: bool = True, say=lambda m: None) -> dict:
     return out
 
 
+def firmware_paths(say=lambda m: None) -> dict:
+    """Bridge firmware co-simulated in virtual time, and the driver keeping up through a pty."""
+    from bench.bridge import FirmwareBench
+    from bench.cosim import CoSim, VirtualBoard, default_sensors
+    from bench.driver import CMD_START, BridgeDriver, FrameParser, encode
+
+    out = {}
+    for n in (1, 3):
+        say(f"… firmware co-simulation, {n} sensor(s)")
+        parser = FrameParser()
+        board = VirtualBoard(default_sensors(n), uart_out=lambda b: parser.feed(b))
+        sim = CoSim(board)
+        board.send_to_firmware(encode(CMD_START))
+        t0 = time.perf_counter()
+        sim.run(10.0)
+        wall = time.perf_counter() - t0
+        out[f"cosim_{n}_sensors"] = {"realtime_factor": 10.0 / wall, "frames": parser.stats.frames}
+    say("… driver at 10x real-time pacing, 3 sensors")
+    with FirmwareBench(3, realtime=True, speed=10.0) as fb:
+        drv = BridgeDriver(fb.port)
+        drv.start()
+        drv.wait_for(CMD_START)
+        t0 = time.perf_counter()
+        frames = list(drv.frames(max_frames=1000, timeout_s=10))
+        wall = time.perf_counter() - t0
+        drv.close()
+    st = drv.parser.stats
+    out["driver_3_sensors_10x"] = {"frames": len(frames), "wall_s": wall, "frames_per_s": len(frames) / wall,
+                                   "dropped": st.dropped_frames, "crc_errors": st.crc_errors}
+    return out
+
+
 def _fmt(v, spec):
     width = int("".join(ch for ch in spec.split(".")[0] if ch.isdigit()) or 0)
     return f"{'—':>{width}s}" if v is None else format(v, spec)
@@ -206,6 +238,7 @@ def main(args) -> int:
     say("… memory (streaming)")
     result["memory"] = stream_hour(3600.0 if args.hour else 600.0)
     result["spi"] = spi_paths(rtl=not args.no_rtl, say=say)
+    result["firmware"] = firmware_paths(say=say)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -245,4 +278,11 @@ def main(args) -> int:
     for key, r in result["spi"].items():
         print(f"  {names[key]:38s} {r['transactions_per_s']:12.0f} transactions/s  {r['realtime_factor']:9.2f}× real time"
               + ("" if r["includes_physics"] else "  (codes precomputed by the emulator)"))
+    fw = result["firmware"]
+    print("\nBridge firmware (C, native) with emulated sensors in virtual time, full 44-slot frame:")
+    for n in (1, 3):
+        print(f"  {n} sensor(s): {fw[f'cosim_{n}_sensors']['realtime_factor']:6.1f}× real time")
+    d = fw["driver_3_sensors_10x"]
+    print(f"  driver through a pty, 3 sensors, firmware paced at 10× real time: {d['frames']} frames in "
+          f"{d['wall_s']:.2f} s ({d['frames_per_s']:.0f} frames/s), dropped {d['dropped']}, CRC errors {d['crc_errors']}")
     return 0
