@@ -211,6 +211,17 @@ def firmware_paths(say=lambda m: None) -> dict:
     st = drv.parser.stats
     out["driver_3_sensors_10x"] = {"frames": len(frames), "wall_s": wall, "frames_per_s": len(frames) / wall,
                                    "dropped": st.dropped_frames, "crc_errors": st.crc_errors}
+    say("… Cheetah-compatible library with the example client")
+    import subprocess
+
+    from bench.cheetah_server import CheetahBench, build_client
+
+    with CheetahBench(3) as cb:
+        exe = build_client(cb.library)
+        t0 = time.perf_counter()
+        subprocess.run([str(exe), "200"], capture_output=True, env=cb.env, check=True, timeout=600)
+        wall = time.perf_counter() - t0
+        out["cheetah_3_sensors"] = {"simulated_s": cb.t, "wall_s": wall, "realtime_factor": cb.t / wall}
     return out
 
 
@@ -285,4 +296,7 @@ def main(args) -> int:
     d = fw["driver_3_sensors_10x"]
     print(f"  driver through a pty, 3 sensors, firmware paced at 10× real time: {d['frames']} frames in "
           f"{d['wall_s']:.2f} s ({d['frames_per_s']:.0f} frames/s), dropped {d['dropped']}, CRC errors {d['crc_errors']}")
+    c = fw["cheetah_3_sensors"]
+    print(f"  Cheetah-compatible library, example client streaming the default frame from 3 sensors: "
+          f"{c['realtime_factor']:.1f}× real time")
     return 0

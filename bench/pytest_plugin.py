@@ -19,6 +19,8 @@ Fixtures
     biotac_sensor       factory -> emulator.spi.model.SensorPort over an emulated sensor (in process)
     biotac_bridge       factory -> bench.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown)
     biotac_serial_port  the pty path of a one-sensor bridge that is already running
+    biotac_cheetah      factory -> bench.cheetah_server.CheetahBench: emulated sensors behind cheetah.so; run
+                        your Cheetah-based program with ``cwd``/copy at ``.lib_dir`` and ``env=bench.env``
 """
 
 from __future__ import annotations
@@ -57,3 +59,19 @@ def biotac_bridge():
 @pytest.fixture
 def biotac_serial_port(biotac_bridge):
     return biotac_bridge(1).port
+
+
+@pytest.fixture
+def biotac_cheetah():
+    from bench.cheetah_server import CheetahBench
+
+    benches = []
+
+    def make(n_sensors: int = 1, stimuli=(), **kw):
+        cb = CheetahBench(n_sensors, stimuli=stimuli, **kw).start()
+        benches.append(cb)
+        return cb
+
+    yield make
+    for cb in benches:
+        cb.stop()

@@ -63,3 +63,12 @@ def test_campaign_writes_junit_and_fails_a_case_whose_expectation_is_not_met(tmp
     suite = ET.parse(path).getroot()
     assert suite.get("tests") == "3" and suite.get("failures") == "1"
     assert "2 passed, 1 failed" in campaign.summary(results)
+
+
+def test_the_cheetah_fixture_runs_a_vendor_style_program(biotac_cheetah):
+    from bench.cheetah_server import build_client
+
+    cb = biotac_cheetah(3)
+    exe = build_client(cb.library)
+    r = subprocess.run([str(exe), "2"], capture_output=True, text=True, env=cb.env, cwd=cb.lib_dir, timeout=60)
+    assert r.returncode == 0 and r.stdout.count("BT0101EMU") == 3

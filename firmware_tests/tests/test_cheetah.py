@@ -1,0 +1,66 @@
+"""The Cheetah-compatible library: an unmodified-style client program runs against emulated sensors."""
+
+import ctypes as C
+import subprocess
+
+import pytest
+
+from bench.cheetah_server import CheetahBench, build_client, build_library
+
+pytestmark = pytest.mark.firmware
+
+API = ["find_devices", "find_devices_ext", "open", "open_ext", "close", "port", "unique_id", "status_string",
+       "version", "sleep_ms", "target_power", "host_ifce_speed", "dev_addr", "spi_bitrate", "spi_configure",
+       "spi_queue_clear", "spi_queue_oe", "spi_queue_delay_cycles", "spi_queue_delay_ns", "spi_queue_ss",
+       "spi_queue_byte", "spi_queue_array", "spi_batch_length", "spi_batch_shift", "spi_async_submit",
+       "spi_async_collect"]
+
+
+def test_the_library_exports_the_loader_interface():
+    lib = C.CDLL(str(build_library()))
+    lib.ch_c_version.restype = C.c_uint32
+    v = lib.ch_c_version()
+    assert (v & 0xFFFF) >= 0x0306 and (v >> 16) <= (v & 0xFFFF)
+    for name in API:
+        assert hasattr(lib, f"c_ch_{name}"), name
+
+
+def test_an_unmodified_client_detects_sensors_and_streams_frames():
+    with CheetahBench(2) as cb:
+        exe = build_client(cb.library)
+        r = subprocess.run([str(exe), "20"], capture_output=True, text=True, env=cb.env, timeout=120)
+        assert r.returncode == 0, r.stderr
+    serials = [line for line in r.stdout.splitlines() if line.startswith("serial")]
+    assert serials[0].endswith("BT0101EMU0000001") and serials[1].endswith("BT0101EMU0000002")
+    assert serials[2].endswith("N/A")  # sensor 3 absent: reads back an idle line
+    fields = r.stdout.splitlines()[-1].split()
+    stats = dict(zip(fields[::2], fields[1::2]))
+    assert stats["frames"] == "100" and stats["parity_errors"] == "0"
+    assert abs(float(stats["pac_mean"]) - 2048) < 1 and 1.2 < float(stats["pac_std"]) < 1.6
+
+
+def test_queued_delays_and_sleep_advance_the_emulators_time_exactly(monkeypatch):
+    with CheetahBench(1) as cb:
+        lib = C.CDLL(str(cb.library))
+        monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
+        h = lib.c_ch_open(0)
+        assert h == 1
+        t0 = cb.t
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_delay_ns(h, 123456)
+        lib.c_ch_spi_queue_delay_ns(h, 1000)
+        buf = (C.c_uint8 * 4)()
+        assert lib.c_ch_spi_batch_shift(h, 4, buf) == 0
+        assert cb.t - t0 == pytest.approx(124456e-9, abs=1e-12)
+        lib.c_ch_sleep_ms(250)
+        assert cb.t - t0 == pytest.approx(0.250124456, abs=1e-12)
+        assert lib.c_ch_spi_async_collect(h, 4, buf) == -103  # CH_SPI_ASYNC_EMPTY
+        assert lib.c_ch_spi_queue_clear(h) == 0 and lib.c_ch_spi_batch_shift(h, 4, buf) == -101  # empty queue
+        assert lib.c_ch_close(h) == 0 and lib.c_ch_close(h) == -10  # CH_INVALID_HANDLE once closed
+
+
+def test_without_the_emulator_the_client_finds_no_adapter(tmp_path):
+    exe = build_client(build_library())
+    env = {"BIOTAC_CHEETAH_SOCKET": str(tmp_path / "nothing.sock"), "PATH": "/usr/bin:/bin"}
+    r = subprocess.run([str(exe), "1"], capture_output=True, text=True, env=env, timeout=30)
+    assert r.returncode == 4 and "no Cheetah adapter found" in r.stderr
