@@ -24,8 +24,10 @@ from bench.serial_link import PtyLink
 class FirmwareBench:
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, realtime: bool = False,
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
-                 step_s: float = 0.01):
-        self.link = PtyLink()
+                 step_s: float = 0.01, baudrate: int = 3_000_000):
+        self.link = PtyLink(baudrate)
+        self.baudrate = baudrate
+        self._line_free_at = 0.0  # wall time when the paced UART has sent everything so far
         self.port = self.link.path
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
@@ -52,6 +54,11 @@ class FirmwareBench:
                     self.bytes_corrupted += 1
                 out.append(b)
             data = bytes(out)
+        if self.realtime:  # a real UART sends 10 bits per byte at the baud rate: pace the line accordingly
+            now = time.perf_counter()
+            self._line_free_at = max(self._line_free_at, now) + len(data) * 10 / (self.baudrate * self.speed)
+            if self._line_free_at > now:
+                time.sleep(self._line_free_at - now)
         self.link.write(data)
 
     def _loop(self) -> None:

@@ -72,6 +72,8 @@ FAULTS = {f.name: f for f in (
               [(0.2, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))], _drops_sensor),
     FaultCase("brownout_reset", "at most two bad samples, sensor kept", {},
               [(0.3, lambda b: b.bus.ports[1].reset())], _survives_reset),
+    FaultCase("cs_glitch", "chip select toggled with no clock edges: ignored, no errors", {},
+              [(0.1 + 0.05 * k, lambda b: b.glitch(1)) for k in range(10)], _clean),
     FaultCase("serial_corruption", "CRC errors counted, resync, clean frames", {"corrupt_rate": 5e-4}, [],
               _resyncs),
     FaultCase("serial_loss", "dropped frames counted from sequence numbers", {"drop_rate": 5e-4}, [], _resyncs),

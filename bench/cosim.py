@@ -95,6 +95,14 @@ class VirtualBoard:
         port = SensorPort(self.sensors[n], n)
         self.bus.ports[n] = port
 
+    def glitch(self, n: int) -> None:
+        """Toggle sensor n's chip select with no clock edges (a glitch on the line), now."""
+        from emulator.spi.model import SELECT_CODE
+
+        tr = Transfer(self.t, SELECT_CODE[n], 0, 0, SPI_CLOCK_HZ)
+        self.bus.transfer(tr)
+        self.t = tr.end_s
+
     def _events_due(self) -> None:
         while self.events and self.events[0][0] <= self.t:
             _, action = self.events.pop(0)

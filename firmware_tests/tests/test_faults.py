@@ -84,3 +84,18 @@ def test_the_host_closing_its_port_does_not_stop_the_firmware():
         more = list(drv2.frames(max_frames=10, timeout_s=5))
         drv2.close()
     assert len(more) == 10
+
+
+def test_real_time_mode_honours_the_baud_rate():
+    """At 57 600 baud a 100-frame/s stream of ~110-byte frames cannot keep up: bytes arrive at the line rate."""
+    import time
+
+    with FirmwareBench(1, realtime=True, baudrate=57600) as fb:
+        drv = BridgeDriver(fb.port, baudrate=57600)
+        drv.start()
+        assert drv.wait_for(CMD_START) is not None
+        t0, n0 = time.perf_counter(), fb.link.bytes_out
+        frames = list(drv.frames(max_frames=15, timeout_s=10))
+        rate = (fb.link.bytes_out - n0) / (time.perf_counter() - t0)
+        drv.close()
+    assert len(frames) == 15 and rate < 57600 / 10 * 1.15
