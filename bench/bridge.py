@@ -24,7 +24,7 @@ from bench.serial_link import PtyLink
 class FirmwareBench:
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, realtime: bool = False,
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
-                 step_s: float = 0.01, baudrate: int = 3_000_000):
+                 step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software"):
         self.link = PtyLink(baudrate)
         self.baudrate = baudrate
         self._line_free_at = 0.0  # wall time when the paced UART has sent everything so far
@@ -32,7 +32,7 @@ class FirmwareBench:
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
         self.board = VirtualBoard(sensors or default_sensors(n_sensors, stimuli, seed), uart_out=self._line,
-                                  pull_up=pull_up)
+                                  pull_up=pull_up, spi=spi)
         self.sim = CoSim(self.board)
         self.realtime, self.speed, self.step_s = realtime, speed, step_s
         self._stop = threading.Event()
@@ -108,6 +108,8 @@ class FirmwareBench:
         self._stop.set()
         self._thread.join(timeout=10)
         self.link.close()
+        if hasattr(self.board.bus, "close"):
+            self.board.bus.close()
         if self.error is not None:
             raise RuntimeError(f"the firmware bench stopped with an error: {self.error!r}") from self.error
 

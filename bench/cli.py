@@ -198,7 +198,7 @@ def _cmd_bridge(a) -> int:
     from bench.scene import load_scene
 
     stimuli = load_scene(a.scene).stimuli if a.scene else ()
-    with FirmwareBench(a.sensors, stimuli=stimuli, seed=a.seed, realtime=not a.fast, speed=a.speed) as fb:
+    with FirmwareBench(a.sensors, stimuli=stimuli, seed=a.seed, realtime=not a.fast, speed=a.speed, spi=a.spi) as fb:
         print(f"bridge firmware running with {a.sensors} emulated sensor(s); serial port: {fb.port}", flush=True)
         print("open it with any serial program (raw, no flow control); Ctrl-C to stop", flush=True)
         deadline = None if a.seconds is None else time.monotonic() + a.seconds
@@ -339,6 +339,8 @@ def build_parser() -> argparse.ArgumentParser:
     br.add_argument("--seconds", type=float, help="stop after this many wall-clock seconds")
     br.add_argument("--speed", type=float, default=1.0, help="virtual seconds per wall second when paced")
     br.add_argument("--fast", action="store_true", help="run as fast as possible instead of real time")
+    br.add_argument("--spi", choices=["software", "rtl"], default="software",
+                    help="the sensors' SPI side: the software model, or the Verilog RTL in the C++ harness")
     br.set_defaults(func=_cmd_bridge)
 
     rc = sub.add_parser("record", help="record a bridge's serial stream to NPZ (and CSV)",

@@ -73,9 +73,17 @@ class VirtualBoard:
     (virtual time s, callable(board)) applied as time passes: unplugging a sensor, corrupting the line...
     """
 
-    def __init__(self, sensors: dict[int, Sensor], uart_out=None, pull_up: bool = False):
+    def __init__(self, sensors: dict[int, Sensor], uart_out=None, pull_up: bool = False, spi: str = "software"):
         self.sensors = dict(sensors)
-        self.bus = Bus({n: SensorPort(s, n) for n, s in self.sensors.items()}, pull_up=pull_up)
+        if spi == "rtl":  # the Verilog twin in a persistent C++ Verilator harness
+            from emulator.rtl.harness import RtlBus
+
+            self.bus = RtlBus(self.sensors)
+        elif spi == "software":
+            self.bus = Bus({n: SensorPort(s, n) for n, s in self.sensors.items()}, pull_up=pull_up)
+        else:
+            raise ValueError(f"spi = {spi!r}: use 'software' or 'rtl'")
+        self.spi = spi
         self.t = 0.0
         self.uart_out = uart_out or (lambda data: None)
         self.uart_in: deque[int] = deque()
@@ -87,11 +95,17 @@ class VirtualBoard:
         self.events.append((t_s, action))
         self.events.sort(key=lambda e: e[0])
 
+    def _software_bus(self, what: str) -> None:
+        if self.spi != "software":
+            raise ValueError(f"{what} needs the software SPI bus (the RTL's set of sensors is fixed)")
+
     def unplug(self, n: int) -> None:
+        self._software_bus("unplugging a sensor")
         self.bus.ports.pop(n, None)
 
     def plug(self, n: int) -> None:
         """Plug sensor n back in: it starts from power-on state (its physics carries on)."""
+        self._software_bus("plugging a sensor")
         port = SensorPort(self.sensors[n], n)
         self.bus.ports[n] = port
 
@@ -99,6 +113,7 @@ class VirtualBoard:
         """Toggle sensor n's chip select with no clock edges (a glitch on the line), now."""
         from emulator.spi.model import SELECT_CODE
 
+        self._software_bus("a glitch")
         tr = Transfer(self.t, SELECT_CODE[n], 0, 0, SPI_CLOCK_HZ)
         self.bus.transfer(tr)
         self.t = tr.end_s

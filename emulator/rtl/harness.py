@@ -160,3 +160,92 @@ class HarnessPeripheral:
             raise HarnessError(f"the RTL requested other conversions than the emulator computed "
                                f"({res['mismatched_requests']} mismatched, {res['unrequested']} unrequested)")
         return res["miso"].astype(np.uint16)
+
+
+class RtlBus:
+    """The RTL of five sensors' SPI side, in a persistent C++ harness, with the calls of :class:`Bus`.
+
+    ``exchange_words`` and ``transfer`` play transfers against the Verilog (its state and time run on
+    from call to call); ADC codes for the sampling commands are computed by the emulated sensors at the
+    instants the commands end, as the software bus does, and handed to the RTL with the batch.  Faults and
+    hot-plugging need the software bus: the set of sensors is fixed here.
+    """
+
+    def __init__(self, sensors: dict, harness: "Harness | None" = None):
+        from emulator.spi.model import SensorPort
+
+        self.harness = harness or Harness()
+        if not self.harness.binary.exists():
+            self.harness.build()
+        self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
+        self.present = sum(1 << (n - 1) for n in sensors)
+        self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE)
+        self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False}, 0))
+        self.proc.stdin.flush()
+        self.mismatches = 0
+        self._pending_codes: list[tuple[int, int, float, float]] = []  # (sensor, channel, end, next start)
+
+    def _codes_for(self, start, end, cs, mosi, nbits):
+        """ADC codes of the sampling commands among these transfers, for every sensor they select."""
+        from emulator.spi.fastpath import _CHANNEL_OF_BYTE, _RECOGNIZED
+        from emulator.spi.model import SELECT_ALL, SELECT_CODE
+
+        out = []
+        nxt = np.append(start[1:], np.inf)
+        for i in range(start.size):
+            if nbits[i] < 16:
+                continue
+            first = int(mosi[i]) >> (int(nbits[i]) - 8) & 0xFF
+            if not _RECOGNIZED[first]:
+                continue
+            ch = int(_CHANNEL_OF_BYTE[first])
+            for n, port in self.ports.items():
+                if (cs[i] == SELECT_ALL or cs[i] == SELECT_CODE[n]) and port.provided_lut[ch]:
+                    coupled = nxt[i] < end[i] + port.conversion_s
+                    code = int(port.sensor.sample(np.array([ch]), np.array([end[i]]), np.array([coupled]))[0])
+                    out.append((n, ch, code))
+        return np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    def _play(self, start, cs, mosi, nbits, clock, keep):
+        start = np.asarray(start, float)
+        clock = np.broadcast_to(np.asarray(clock, float), start.shape)
+        nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
+        end = start + (nbits + 0.5) / clock
+        tr = np.zeros(start.size, TRANSFER)
+        tr["t_ps"] = np.round(start * 1e12).astype(np.int64)
+        tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
+        tr["nbits"], tr["cs"], tr["keep_cs"] = nbits, cs, np.asarray(keep, bool)
+        tr["mosi"] = np.asarray(mosi, dtype=np.uint64)
+        c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits)
+        codes = np.zeros(len(c), CODE)
+        if len(c):
+            codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
+        self.proc.stdin.write(struct.pack("<II", start.size, len(codes)) + tr.tobytes() + codes.tobytes())
+        self.proc.stdin.flush()
+        raw = np.frombuffer(self._read(8 * (start.size + 2)), dtype="<u8")
+        if raw[start.size]:
+            raise HarnessError(f"the RTL requested conversions the emulator did not compute ({int(raw[start.size])})")
+        return raw[:start.size]
+
+    def _read(self, n: int) -> bytes:
+        buf = b""
+        while len(buf) < n:
+            chunk = self.proc.stdout.read(n - len(buf))
+            if not chunk:
+                raise HarnessError("the RTL harness stopped")
+            buf += chunk
+        return buf
+
+    def exchange_words(self, start, cs, mosi, clock_hz, keep_cs=None) -> np.ndarray:
+        keep = np.zeros(len(start), bool) if keep_cs is None else keep_cs
+        return self._play(start, np.asarray(cs), np.asarray(mosi), 16, clock_hz, keep).astype(np.uint16)
+
+    def transfer(self, tr) -> int:
+        return int(self._play([tr.start_s], np.array([tr.cs]), np.array([tr.mosi]), tr.nbits, tr.clock_hz,
+                              [tr.keep_cs])[0])
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.stdin.close()
+            self.proc.wait(timeout=10)

@@ -8,6 +8,10 @@
 //   SCHEDULE: header (see struct Header) then Transfer records, little endian
 //   CODES:    CodeRecord per conversion, in the order the sensors request them
 //   OUT:      one uint64 MISO value per transfer, then uint64 count of mismatched ADC requests
+// usage: harness --stream
+//   stdin:  a Header (n_transfers ignored), then batches: uint32 n_transfers, uint32 n_codes, Transfer records,
+//           CodeRecord records; the RTL keeps its state and time runs on from batch to batch
+//   stdout: per batch, one uint64 MISO per transfer, then uint64 mismatched requests and unused codes so far
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -116,24 +120,15 @@ static std::vector<char> read_file(const char* path) {
     return data;
 }
 
-int main(int argc, char** argv) {
-    if (argc != 4) { std::fprintf(stderr, "usage: harness SCHEDULE CODES OUT\n"); return 2; }
-    std::vector<char> sched = read_file(argv[1]);
-    std::vector<char> codes = read_file(argv[2]);
-    if (sched.size() < sizeof(Header)) { std::fprintf(stderr, "harness: schedule too short\n"); return 2; }
-    Header h;
-    std::memcpy(&h, sched.data(), sizeof h);
-    if (std::string(h.magic, 7) != "BTSPIV1" || sched.size() != sizeof h + h.n_transfers * sizeof(Transfer)) {
-        std::fprintf(stderr, "harness: malformed schedule file\n");
-        return 2;
-    }
-    const Transfer* trs = reinterpret_cast<const Transfer*>(sched.data() + sizeof h);
-    Harness H;
-    for (size_t k = 0; k + sizeof(CodeRecord) <= codes.size(); k += sizeof(CodeRecord)) {
+static void add_codes(Harness& H, const char* data, size_t n) {
+    for (size_t k = 0; k + sizeof(CodeRecord) <= n; k += sizeof(CodeRecord)) {
         CodeRecord c;
-        std::memcpy(&c, codes.data() + k, sizeof c);
+        std::memcpy(&c, data + k, sizeof c);
         if (c.sensor >= 1 && c.sensor <= 5) H.codes[c.sensor - 1].push_back(c);
     }
+}
+
+static void setup(Harness& H, const Header& h) {
     auto& top = *H.top;
     top.clk = 1;
     top.present = h.present;
@@ -156,42 +151,96 @@ int main(int argc, char** argv) {
     H.advance_to(100000);
     top.rst_n = 0x1F;
     H.eval();
+}
 
-    std::vector<uint64_t> out(h.n_transfers);
-    for (uint64_t i = 0; i < h.n_transfers; ++i) {
-        const Transfer& t = trs[i];
-        if (t.reset_mask) {
-            H.advance_to(t.t_ps - 20);
-            top.rst_n = 0x1F & ~t.reset_mask;
-            H.eval();
-            top.rst_n = 0x1F;
-            H.eval();
-        }
-        H.advance_to(t.t_ps);
-        int64_t half = t.half_ps;
-        top.cs_code = t.cs;
-        top.mosi = t.nbits ? (t.nbits - 1 < 64 ? (t.mosi >> (t.nbits - 1)) & 1 : 0) : 0;
+static uint64_t play(Harness& H, const Transfer& t) {
+    auto& top = *H.top;
+    if (t.reset_mask) {
+        H.advance_to(t.t_ps - 20);
+        top.rst_n = 0x1F & ~t.reset_mask;
         H.eval();
-        uint64_t miso = 0;
-        for (int k = 0; k < t.nbits; ++k) {
-            H.advance_to(t.t_ps + half * (2 * k + 1));
-            top.sck = 1;
-            H.eval();
-            int bit = H.line_at(H.now - VALID_DELAY_PS);  // within spec this is the bit on the line now
-            miso = (miso << 1) | (uint64_t)bit;
-            H.advance_to(t.t_ps + half * 2 * (k + 1));
-            top.sck = 0;
-            int next = t.nbits - 2 - k;
-            top.mosi = (next >= 0 && next < 64) ? (t.mosi >> next) & 1 : 0;
-            H.eval();
-        }
-        H.advance_to(t.t_ps + half * (2 * t.nbits + 1));
-        if (!t.keep_cs) {
-            top.cs_code = 0;
-            H.eval();
-        }
-        out[i] = miso;
+        top.rst_n = 0x1F;
+        H.eval();
     }
+    H.advance_to(t.t_ps);
+    int64_t half = t.half_ps;
+    top.cs_code = t.cs;
+    top.mosi = t.nbits ? (t.nbits - 1 < 64 ? (t.mosi >> (t.nbits - 1)) & 1 : 0) : 0;
+    H.eval();
+    uint64_t miso = 0;
+    for (int k = 0; k < t.nbits; ++k) {
+        H.advance_to(t.t_ps + half * (2 * k + 1));
+        top.sck = 1;
+        H.eval();
+        int bit = H.line_at(H.now - VALID_DELAY_PS);  // within spec this is the bit on the line now
+        miso = (miso << 1) | (uint64_t)bit;
+        H.advance_to(t.t_ps + half * 2 * (k + 1));
+        top.sck = 0;
+        int next = t.nbits - 2 - k;
+        top.mosi = (next >= 0 && next < 64) ? (t.mosi >> next) & 1 : 0;
+        H.eval();
+    }
+    H.advance_to(t.t_ps + half * (2 * t.nbits + 1));
+    if (!t.keep_cs) {
+        top.cs_code = 0;
+        H.eval();
+    }
+    return miso;
+}
+
+static bool read_exact(void* buf, size_t n) { return std::fread(buf, 1, n, stdin) == n; }
+
+static int stream_mode() {
+    Header h;
+    if (!read_exact(&h, sizeof h) || std::string(h.magic, 7) != "BTSPIV1") {
+        std::fprintf(stderr, "harness: malformed stream header\n");
+        return 2;
+    }
+    Harness H;
+    setup(H, h);
+    uint32_t counts[2];
+    std::vector<Transfer> trs;
+    std::vector<char> codes;
+    std::vector<uint64_t> out;
+    while (read_exact(counts, sizeof counts)) {
+        trs.resize(counts[0]);
+        codes.resize((size_t)counts[1] * sizeof(CodeRecord));
+        if ((counts[0] && !read_exact(trs.data(), counts[0] * sizeof(Transfer))) ||
+            (counts[1] && !read_exact(codes.data(), codes.size()))) {
+            std::fprintf(stderr, "harness: truncated batch\n");
+            return 2;
+        }
+        add_codes(H, codes.data(), codes.size());
+        out.resize(counts[0] + 2);
+        for (uint32_t i = 0; i < counts[0]; ++i) out[i] = play(H, trs[i]);
+        uint64_t left = 0;
+        for (auto& q : H.codes) left += q.size();
+        out[counts[0]] = H.mismatches;
+        out[counts[0] + 1] = left;
+        std::fwrite(out.data(), sizeof(uint64_t), out.size(), stdout);
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
+int main(int argc, char** argv) {
+    if (argc == 2 && std::string(argv[1]) == "--stream") return stream_mode();
+    if (argc != 4) { std::fprintf(stderr, "usage: harness SCHEDULE CODES OUT | harness --stream\n"); return 2; }
+    std::vector<char> sched = read_file(argv[1]);
+    std::vector<char> codes = read_file(argv[2]);
+    if (sched.size() < sizeof(Header)) { std::fprintf(stderr, "harness: schedule too short\n"); return 2; }
+    Header h;
+    std::memcpy(&h, sched.data(), sizeof h);
+    if (std::string(h.magic, 7) != "BTSPIV1" || sched.size() != sizeof h + h.n_transfers * sizeof(Transfer)) {
+        std::fprintf(stderr, "harness: malformed schedule file\n");
+        return 2;
+    }
+    const Transfer* trs = reinterpret_cast<const Transfer*>(sched.data() + sizeof h);
+    Harness H;
+    add_codes(H, codes.data(), codes.size());
+    setup(H, h);
+    std::vector<uint64_t> out(h.n_transfers);
+    for (uint64_t i = 0; i < h.n_transfers; ++i) out[i] = play(H, trs[i]);
     H.advance_to(H.now + 200000000);  // 200 µs for any last request
     FILE* f = std::fopen(argv[3], "wb");
     if (!f) { std::fprintf(stderr, "harness: cannot write %s\n", argv[3]); return 2; }
