@@ -10,12 +10,10 @@ unmodified with the built ``cheetah.so`` beside it and ``BIOTAC_CHEETAH_SOCKET``
 
 from __future__ import annotations
 
-import hashlib
 import os
 import shutil
 import socket
 import struct
-import subprocess
 import tempfile
 import threading
 from pathlib import Path
@@ -23,26 +21,21 @@ from pathlib import Path
 import numpy as np
 
 from bench.cosim import default_sensors
+from bench.native import build_folder, compile_c
 from emulator.spi.model import Bus, SensorPort, Transfer
 
 REPO = Path(__file__).resolve().parents[1]
 LIBRARY_SOURCE = REPO / "emulator" / "cheetah" / "cheetah_emu.c"
+CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "biotac_client.c"
 OP_SS, OP_BYTES, OP_DELAY_NS, OP_OE = 1, 2, 3, 4
 REQ_SHIFT, REQ_SLEEP, REQ_HELLO = 1, 2, 3
 
 
 def build_library(out_dir: Path | None = None) -> Path:
-    """Compile cheetah.so into its own folder (cached by source hash); returns the library's path."""
-    digest = hashlib.sha256(LIBRARY_SOURCE.read_bytes()).hexdigest()[:12]
-    folder = Path(out_dir or REPO / "out" / "cheetah") / digest
-    lib = folder / "cheetah.so"
-    if not lib.exists():
-        folder.mkdir(parents=True, exist_ok=True)
-        r = subprocess.run(["cc", "-std=c11", "-D_DEFAULT_SOURCE", "-O2", "-Wall", "-Wextra", "-Werror", "-shared",
-                            "-fPIC", str(LIBRARY_SOURCE), "-o", str(lib)], capture_output=True, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"cheetah.so does not compile:\n{r.stderr}")
-    return lib
+    """Compile cheetah.so into its own folder (cached by the library's and client's sources); returns its path."""
+    folder = build_folder(out_dir or REPO / "out" / "cheetah", [LIBRARY_SOURCE, CLIENT_SOURCE])
+    return compile_c([LIBRARY_SOURCE], folder / "cheetah.so", flags=("-D_DEFAULT_SOURCE", "-shared", "-fPIC"),
+                     what="cheetah.so")
 
 
 class CheetahBench:
@@ -194,15 +187,8 @@ class CheetahBench:
         self.stop()
 
 
-CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "biotac_client.c"
-
-
 def build_client(library: Path) -> Path:
-    """Compile the example client beside the library (it loads cheetah.so from its own folder)."""
-    exe = library.parent / "biotac_client"
-    if not exe.exists() or exe.stat().st_mtime < CLIENT_SOURCE.stat().st_mtime:
-        r = subprocess.run(["cc", "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", str(CLIENT_SOURCE), "-ldl", "-lm",
-                            "-o", str(exe)], capture_output=True, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"the Cheetah client does not compile:\n{r.stderr}")
-    return exe
+    """Compile the example client beside ``library`` (a :func:`build_library` result): it loads cheetah.so
+    from its own folder, as programs using the vendor's loader do."""
+    return compile_c([CLIENT_SOURCE], Path(library).parent / "biotac_client", libs=("-ldl", "-lm"),
+                     what="the Cheetah example client")

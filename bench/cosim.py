@@ -10,14 +10,13 @@ time; ``run(..., realtime=True)`` paces virtual time to the wall clock.
 from __future__ import annotations
 
 import ctypes as C
-import hashlib
-import subprocess
 import time
 from collections import deque
 from pathlib import Path
 
 import numpy as np
 
+from bench.native import build_folder, compile_c
 from emulator.channels import DEFAULT_FRAME_NAMES
 from emulator.sensor import Sensor
 from emulator.spi.model import Bus, SensorPort, Transfer
@@ -28,24 +27,15 @@ SPI_CLOCK_HZ = 4.4e6
 
 
 class FirmwareError(RuntimeError):
-    pass
+    """The firmware misbehaved under co-simulation (a failing HAL call, a hang)."""
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
-    """Compile firmware sources (C11) into a shared library; cached by the sources' hash."""
+    """Compile firmware sources (C11) into a shared library; cached by the sources' and headers' contents."""
     sources = [Path(s) for s in (sources or sorted(FIRMWARE_DIR.glob("*.c")))]
-    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources + sorted(FIRMWARE_DIR.glob("*.h"))))
-    out_dir = Path(out_dir or REPO / "out" / "firmware") / digest.hexdigest()[:12]
-    lib = out_dir / "libbtbridge.so"
-    if lib.exists():
-        return lib
-    out_dir.mkdir(parents=True, exist_ok=True)
-    cmd = ["cc", "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-shared", "-fPIC", f"-I{FIRMWARE_DIR}",
-           *map(str, sources), "-o", str(lib)]
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise FirmwareError(f"the firmware does not compile:\n{r.stderr}")
-    return lib
+    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + sorted(FIRMWARE_DIR.glob("*.h")))
+    return compile_c(sources, folder / "libbtbridge.so", flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}"),
+                     what="the firmware")
 
 
 class BtWord(C.Structure):

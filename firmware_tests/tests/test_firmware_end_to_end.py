@@ -76,3 +76,17 @@ def test_host_commands_stop_and_change_the_pattern():
         assert drv.wait_for(CMD_STOP) == ("ack", CMD_STOP, 0)
         drv.close()
     assert list(later[-1].channels) == [1, 0, 3]
+
+
+def test_firmware_that_does_not_compile_reports_the_compiler_and_caches_nothing(tmp_path):
+    """Users plug in their own firmware: a compile error names the file and line and leaves no library behind."""
+    from bench.cosim import FIRMWARE_DIR, build_firmware
+    from bench.native import BuildError
+
+    broken = tmp_path / "broken.c"
+    broken.write_text('#include "bt_hal.h"\nint bt_broken(void) { return undeclared_name; }\n')
+    sources = sorted(FIRMWARE_DIR.glob("*.c")) + [broken]
+    with pytest.raises(BuildError, match=r"the firmware does not compile:(.|\n)*broken\.c:2"):
+        build_firmware(sources, out_dir=tmp_path / "out")
+    assert not list((tmp_path / "out").rglob("*.so")), "a failed build must not leave a cached library"
+    assert not list((tmp_path / "out").rglob("*.partial"))
