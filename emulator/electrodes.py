@@ -54,6 +54,12 @@ def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:
     return np.array([x_mm, CORE_RADIUS_MM * np.sin(a), -CORE_RADIUS_MM * np.cos(a)])
 
 
+def surface_point_over_mm(position_mm) -> np.ndarray:
+    """The core-surface point radially over ``position_mm`` (same x; a point off the finger's axis), mm."""
+    x, y, z = position_mm
+    return surface_point_mm(x, np.degrees(np.arctan2(y, -z)))
+
+
 @dataclass
 class Contact:
     """A contact on the skin: where, how hard (normal and tangential force profiles), with what.

@@ -20,7 +20,8 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.electrodes import Contact, ElectrodeModel, electrode_positions_mm, surface_point_mm
+from emulator.electrodes import (Contact, ElectrodeModel, electrode_positions_mm, surface_point_mm,
+                                 surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
                               Touch, Vibration, calibration_pressure, skin_displacement)
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
@@ -180,10 +181,7 @@ class Sensor:
             if not isinstance(s, Touch):
                 continue
             if s.electrode is not None:
-                centre = positions[ch.channel_index(s.electrode) - ch.ELECTRODE_FIRST]
-                centre = centre / np.hypot(centre[1], centre[2]) * np.array([1.0, 5.0, 5.0]) \
-                    if np.hypot(centre[1], centre[2]) > 0 else centre
-                centre[0] = positions[ch.channel_index(s.electrode) - ch.ELECTRODE_FIRST][0]
+                centre = surface_point_over_mm(positions[ch.channel_index(s.electrode) - ch.ELECTRODE_FIRST])
             else:
                 centre = surface_point_mm(s.x_mm, s.angle_deg)
             a, phi = np.arctan2(centre[1], -centre[2]), np.radians(s.shear_angle_deg)
