@@ -77,5 +77,5 @@ class Sampler:
         words = miso[1::2]
         value, parity_ok = proto.decode_response(words)
         status = np.where(parity_ok, STATUS_OK, STATUS_PARITY).astype(np.uint8)
-        status[(words >> 8) == 0xA5] = STATUS_ERROR_WORD
+        status[proto.is_error_word(words)] = STATUS_ERROR_WORD
         return Samples(t_cmd + word_s, self.sequence[seq_pos], value.astype(np.uint16), words, status)

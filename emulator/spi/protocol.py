@@ -29,6 +29,13 @@ ERROR_WORDS: dict[str, int] = {
     "write_error": 0xA557,  # "EW"
 }
 ERROR_NAME = {v: k for k, v in ERROR_WORDS.items()}
+#: First byte of every error word.
+ERROR_WORD_PREFIX = 0xA5
+
+
+def is_error_word(word) -> np.ndarray:
+    """True for response word(s) that are error words (first byte 0xA5), whatever their second byte."""
+    return (np.asarray(word, dtype=np.uint16) >> 8) == ERROR_WORD_PREFIX
 
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
 #: True where a byte has an odd number of ones.
