@@ -40,20 +40,25 @@ def biotac_sensor():
     return make
 
 
+def _benches(bench_class):
+    """A factory fixture's body: start ``bench_class(n_sensors, stimuli=..., **kw)`` on demand, stop each after."""
+    started = []
+
+    def make(n_sensors: int = 1, stimuli=(), **kw):
+        bench = bench_class(n_sensors, stimuli=stimuli, **kw).start()
+        started.append(bench)
+        return bench
+
+    yield make
+    for bench in started:
+        bench.stop()
+
+
 @pytest.fixture
 def biotac_bridge():
     from bench.bridge import FirmwareBench
 
-    benches = []
-
-    def make(n_sensors: int = 1, stimuli=(), **kw):
-        fb = FirmwareBench(n_sensors, stimuli=stimuli, **kw).start()
-        benches.append(fb)
-        return fb
-
-    yield make
-    for fb in benches:
-        fb.stop()
+    yield from _benches(FirmwareBench)
 
 
 @pytest.fixture
@@ -65,13 +70,4 @@ def biotac_serial_port(biotac_bridge):
 def biotac_cheetah():
     from bench.cheetah_server import CheetahBench
 
-    benches = []
-
-    def make(n_sensors: int = 1, stimuli=(), **kw):
-        cb = CheetahBench(n_sensors, stimuli=stimuli, **kw).start()
-        benches.append(cb)
-        return cb
-
-    yield make
-    for cb in benches:
-        cb.stop()
+    yield from _benches(CheetahBench)
