@@ -108,8 +108,7 @@ class FirmwareBench:
         self._stop.set()
         self._thread.join(timeout=10)
         self.link.close()
-        if hasattr(self.board.bus, "close"):
-            self.board.bus.close()
+        self.board.bus.close()
         if self.error is not None:
             raise RuntimeError(f"the firmware bench stopped with an error: {self.error!r}") from self.error
 

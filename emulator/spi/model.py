@@ -379,6 +379,9 @@ class Bus:
     _open: bool = False
     _line: list = field(default_factory=list)  # recent (time, level) changes of the MISO line
 
+    def close(self) -> None:
+        """Nothing to release (a bus backed by a simulator process, like the RTL one, stops it here)."""
+
     def _level(self, selected: set[int], pos_of=None) -> int:
         """The MISO line level while ``selected`` sensors drive their next bits (OR), or the pull level."""
         if not selected:
