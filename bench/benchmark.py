@@ -26,28 +26,25 @@ from bench import analysis
 from bench.runner import build_sensor, run_scene
 from bench.sampler import Sampler
 from bench.scene import load_scene
-from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator.channels import DEFAULT_FRAME_NAMES, PAC
 from emulator.conversions import ADC_LSB_V
 from emulator.fidelity import PROFILES
 from emulator.sensor import NoiseSources, Sensor
-from emulator.spi.peripheral import TRANSFER_PERIODS, SoftwarePeripheral
+from emulator.spi.peripheral import SoftwarePeripheral
 
 SCENES_DIR = Path(__file__).resolve().parent.parent / "fixtures" / "scenes"
 
 
 def _pac_instants(scene) -> np.ndarray:
+    """The instants (s) at which the scene's host samples PAC."""
     sampler = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
-    k = np.arange(int(round(scene.duration_s * scene.slot_rate_Hz)))
-    word_s = TRANSFER_PERIODS / scene.spi_clock_Hz
-    pos = k % len(sampler.sequence)
-    return (k / scene.slot_rate_Hz + word_s)[sampler.sequence[pos] == 0]
+    _, t_sampled, channel = sampler.slots(np.arange(int(round(scene.duration_s * scene.slot_rate_Hz))))
+    return t_sampled[channel == PAC]
 
 
 def _deterministic_pac_bits(scene, fidelity: str, times: np.ndarray) -> np.ndarray:
     scene.fidelity, scene.noise = fidelity, NoiseSources.none()
-    sensor = build_sensor(scene)
-    parts = np.array_split(times, max(1, int(scene.duration_s)))
-    return np.concatenate([sensor.analog(np.zeros(p.size, int), p) for p in parts]) / ADC_LSB_V
+    return build_sensor(scene).analog_trace("PAC", times) / ADC_LSB_V
 
 
 def _noisy_run(scene, fidelity: str, seed: int):

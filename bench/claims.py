@@ -16,6 +16,7 @@ from bench import analysis
 from bench.psychophysics import human_threshold_m
 from bench.sampler import Sampler
 from emulator import conversions as conv
+from emulator.channels import channel_index
 from emulator.mechanics import static_pressure_from_force
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
@@ -62,27 +63,20 @@ class Bench:
         """Codes per channel through sensor -> SPI -> host; returns {name: (times, codes as float)}."""
         sensor = Sensor(self.params, stimuli, sequence, self.fidelity, self.seed + seed_offset, noise)
         sampler = Sampler(SoftwarePeripheral(sensor), list(sequence), slot_rate_Hz)
-        n_total = int(round(duration_s * slot_rate_Hz))
-        chunks = []
-        for start in range(0, n_total, int(slot_rate_Hz)):
-            s = sampler.read(min(int(slot_rate_Hz), n_total - start))
-            if np.any(s.status != 0):
-                raise RuntimeError(f"the host saw {np.count_nonzero(s.status)} bad words in a clean acquisition")
-            chunks.append(s)
+        chunks = list(sampler.chunks(int(round(duration_s * slot_rate_Hz)), int(slot_rate_Hz)))
+        bad = sum(np.count_nonzero(c.status) for c in chunks)
+        if bad:
+            raise RuntimeError(f"the host saw {bad} bad words in a clean acquisition")
         times = np.concatenate([c.times for c in chunks])
         chans = np.concatenate([c.channels for c in chunks])
         codes = np.concatenate([c.codes for c in chunks]).astype(float)
-        from emulator.channels import channel_index
-
         return {n: (times[chans == channel_index(n)], codes[chans == channel_index(n)]) for n in set(sequence)}
 
     def analog_pac_bits(self, stimuli, duration_s, rate_Hz=2200.0, noise=NoiseSources.none()):
         """PAC before the ADC, in LSB, sampled at ``rate_Hz``."""
         sensor = Sensor(self.params, stimuli, ("PAC",), self.fidelity, self.seed, noise)
         t = np.arange(int(round(duration_s * rate_Hz))) / rate_Hz
-        out = np.concatenate([sensor.analog(np.zeros(k.size, int), t[k])
-                              for k in np.array_split(np.arange(t.size), max(1, int(duration_s)))])
-        return t, out / conv.ADC_LSB_V
+        return t, sensor.analog_trace("PAC", t) / conv.ADC_LSB_V
 
 
 # ---------------------------------------------------------------------------------------------

@@ -66,14 +66,12 @@ def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0) -> Reco
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]")
     done = 0
     try:
-        while done < total_slots:
-            n = min(chunk_slots, total_slots - done)
-            s = sampler.read(n)
+        for s in sampler.chunks(total_slots, chunk_slots):
             for c, lst in parts.items():
                 m = s.channels == c
                 lst.append((s.times[m], s.codes[m], s.status[m]))
-            done += n
-            bar.update(n / scene.slot_rate_Hz)
+            done += s.times.size
+            bar.update(s.times.size / scene.slot_rate_Hz)
     except Exception as e:  # keep what was recorded; the caller reports the error
         error = f"{type(e).__name__}: {e}"
     finally:

@@ -15,7 +15,7 @@ import numpy as np
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
-from emulator.spi.peripheral import BITS_PER_TRANSFER, TRANSFER_PERIODS, TransferBatch
+from emulator.spi.peripheral import TRANSFER_PERIODS, TransferBatch
 
 STATUS_OK, STATUS_PARITY, STATUS_ERROR_WORD = 0, 1, 2
 STATUS_NAMES = {STATUS_OK: "ok", STATUS_PARITY: "parity error", STATUS_ERROR_WORD: "error word"}
@@ -53,29 +53,40 @@ class Sampler:
         self.slot_rate_Hz = float(slot_rate_Hz)
         self.clock_hz = float(clock_hz)
         self.sample_delay_s = float(sample_delay_s)
-        word_s = TRANSFER_PERIODS / self.clock_hz
-        if 2 * word_s + self.sample_delay_s > 1.0 / self.slot_rate_Hz:
+        self.word_s = TRANSFER_PERIODS / self.clock_hz  # chip select held for 16.5 SCK periods
+        if 2 * self.word_s + self.sample_delay_s > 1.0 / self.slot_rate_Hz:
             raise ValueError(
                 f"a slot of {1e6 / self.slot_rate_Hz:.1f} µs cannot hold command + {self.sample_delay_s * 1e6:.0f} µs "
                 f"+ read at {self.clock_hz / 1e6:.2f} MHz; lower slot_rate_Hz or raise the clock")
         self.command_words = (proto.sample_command(self.sequence).astype(np.uint16) << 8)
         self.next_slot = 0
 
+    def slots(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For slot numbers ``k``: when the sampling command starts (s), when the channel is sampled (the
+        command's chip-select release, s), and the channel index."""
+        t_cmd = k / self.slot_rate_Hz
+        return t_cmd, t_cmd + self.word_s, self.sequence[k % len(self.sequence)]
+
     def read(self, n_slots: int) -> Samples:
         """Sample the next ``n_slots`` slots."""
         k = self.next_slot + np.arange(n_slots)
         self.next_slot += n_slots
-        seq_pos = k % len(self.sequence)
-        t_cmd = k / self.slot_rate_Hz
-        word_s = TRANSFER_PERIODS / self.clock_hz  # chip select held for 16.5 SCK periods
-        t_read = t_cmd + word_s + self.sample_delay_s
+        t_cmd, t_sampled, channels = self.slots(k)
+        t_read = t_sampled + self.sample_delay_s
         start = np.empty(2 * n_slots)
         start[0::2], start[1::2] = t_cmd, t_read
         mosi = np.zeros(2 * n_slots, dtype=np.uint16)
-        mosi[0::2] = self.command_words[seq_pos]
+        mosi[0::2] = self.command_words[k % len(self.sequence)]
         miso = self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz))
         words = miso[1::2]
         value, parity_ok = proto.decode_response(words)
         status = np.where(parity_ok, STATUS_OK, STATUS_PARITY).astype(np.uint8)
         status[proto.is_error_word(words)] = STATUS_ERROR_WORD
-        return Samples(t_cmd + word_s, self.sequence[seq_pos], value.astype(np.uint16), words, status)
+        return Samples(t_sampled, channels, value.astype(np.uint16), words, status)
+
+    def chunks(self, n_slots: int, chunk_slots: int):
+        """Read the next ``n_slots`` slots in reads of at most ``chunk_slots``, yielding each :class:`Samples`."""
+        if chunk_slots < 1:
+            raise ValueError(f"chunk_slots = {chunk_slots}: must be at least 1")
+        for done in range(0, n_slots, chunk_slots):
+            yield self.read(min(chunk_slots, n_slots - done))

@@ -277,6 +277,15 @@ class Sensor:
             self.thermal.forget_before(min(times.max(), self._buf_n0 / self.fs))
         return out
 
+    def analog_trace(self, channel, times, chunk_s: float = 1.0) -> np.ndarray:
+        """Analog value (V) of one channel at increasing ``times`` (s), asked for ``chunk_s`` of instants at a
+        time so the retained history stays short however long the trace."""
+        times = np.asarray(times, dtype=float)
+        index = channel if isinstance(channel, (int, np.integer)) else ch.channel_index(channel)
+        span = float(times[-1] - times[0]) if times.size else 0.0
+        parts = np.array_split(times, max(1, int(np.ceil(span / chunk_s))))
+        return np.concatenate([self.analog(np.full(part.size, index), part) for part in parts])
+
     def sample(self, channels, times, bus_active=None) -> np.ndarray:
         """12-bit codes for each (channel index, instant in s), converted in the given order."""
         v = self.analog(channels, times)

@@ -92,13 +92,14 @@ class Harness:
     def stream_frames(self, seconds: float, seed: int = 1) -> dict:
         """The default frame from sensor 1 for ``seconds``: codes from the emulator, words from the RTL."""
         from bench.sampler import parse_sequence
+        from emulator.channels import DEFAULT_SLOT_RATE_HZ
         from emulator.sensor import Sensor
         from emulator.spi import protocol as proto
 
         seq = parse_sequence("default")
-        n = int(round(seconds * 4400))
+        n = int(round(seconds * DEFAULT_SLOT_RATE_HZ))
         half_ps = int(round(0.5 / proto.HOST_DEFAULT_CLOCK_HZ * 1e12))
-        slot_ps = int(round(1e12 / 4400))
+        slot_ps = int(round(1e12 / DEFAULT_SLOT_RATE_HZ))
         t_cmd = 1_000_005 + np.arange(n, dtype=np.int64) * slot_ps
         channels = seq[np.arange(n) % len(seq)]
         t0 = time.perf_counter()

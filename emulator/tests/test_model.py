@@ -8,7 +8,7 @@ from emulator.conversions import ADC_LSB_V
 from emulator.mechanics import static_pressure_from_force
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
-from emulator.stimuli import Press, PressureCalibrator, SphereDrop, Tap, Vibration
+from emulator.stimuli import SPHERES, Press, PressureCalibrator, SphereDrop, Tap, Vibration
 
 pytestmark = pytest.mark.unit
 
@@ -152,3 +152,12 @@ def test_full_frame_channels_all_convert():
     chans = [channel_index(n) for n in DEFAULT_FRAME_NAMES]
     codes = s.sample(chans, np.arange(44) / 4400.0)
     assert codes.dtype == np.uint16 and np.all(codes <= 4095)
+
+
+def test_analog_trace_does_not_depend_on_how_the_instants_are_chunked():
+    t = np.arange(0, 3.0, 1 / 2200.0)
+    stimuli = [Tap(0.7, 1.0), SphereDrop(2.1, SPHERES["1 mm steel bearing"][0])]
+    whole = Sensor(stimuli=stimuli, channels_read=["PAC", "PDC"], seed=5).analog_trace("PAC", t, chunk_s=10.0)
+    pieces = Sensor(stimuli=stimuli, channels_read=["PAC", "PDC"], seed=5).analog_trace("PAC", t, chunk_s=0.137)
+    assert whole.shape == t.shape and np.all(np.isfinite(whole))
+    np.testing.assert_array_equal(whole, pieces)
