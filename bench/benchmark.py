@@ -121,7 +121,7 @@ def stream_hour_child(seconds: float) -> None:
     t0 = time.perf_counter()
     for _ in range(int(seconds)):
         s = sampler.read(4400)
-        pac = s.codes[s.channels == 0]
+        pac = s.codes[s.channels == PAC]
         n += pac.size
         total += float(pac.sum())
     wall = time.perf_counter() - t0

@@ -16,6 +16,7 @@ import numpy as np
 
 from bench.bridge import FirmwareBench
 from bench.driver import CMD_START, BridgeDriver, Status
+from emulator.channels import PAC
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
@@ -109,7 +110,7 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) 
             problem = "no status reply"
         else:
             problem = fault.check(frames, status, drv.parser.stats)
-            pac = np.concatenate([f.codes[f.channels == 0, 0] for f in frames if (f.status == 0).all()]
+            pac = np.concatenate([f.codes[f.channels == PAC, 0] for f in frames if (f.status == 0).all()]
                                  or [np.array([2048])])
             if problem is None and not (0 <= pac.min() and pac.max() <= 4095):
                 problem = "out-of-range data reached the caller"

@@ -16,7 +16,7 @@ from bench import analysis
 from bench.psychophysics import human_threshold_m
 from bench.sampler import Sampler
 from emulator import conversions as conv
-from emulator.channels import channel_index
+from emulator.channels import PAC, channel_index
 from emulator.mechanics import static_pressure_from_force
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
@@ -206,7 +206,7 @@ def false_detection_claims(b: Bench, hours: float = 10.0) -> list[Claim]:
         s = sampler.read(4400 * 10)
         if np.any(s.status != 0):
             raise RuntimeError(f"host saw {np.count_nonzero(s.status)} bad words at t ≈ {s.times[0]:.0f} s")
-        return s.codes[s.channels == 0].astype(float)
+        return s.codes[s.channels == PAC].astype(float)
 
     pac0 = pac_codes()
     det = analysis.StreamingDetector(pac0.mean(), pac0.std(), 2200.0)
