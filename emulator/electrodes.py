@@ -191,5 +191,6 @@ class ElectrodeModel:
         return y
 
 
-def electrode_index(channel: np.ndarray) -> np.ndarray:
+def electrode_number(channel) -> np.ndarray:
+    """Electrode number (1 for E1 … 19 for E19) of electrode channel index(es)."""
     return np.asarray(channel) - ELECTRODE_FIRST + 1

@@ -20,7 +20,7 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.electrodes import (Contact, ElectrodeModel, electrode_positions_mm, surface_point_mm,
+from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
                                  surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
                               Touch, Vibration, calibration_pressure, skin_displacement)
@@ -269,7 +269,7 @@ class Sensor:
         t1 = time.perf_counter()
         sel = node_of == KIND_ELECTRODE
         if sel.any():
-            out[sel] = self.electrodes.sample(channels[sel] - ch.ELECTRODE_FIRST + 1, times[sel])
+            out[sel] = self.electrodes.sample(electrode_number(channels[sel]), times[sel])
         self._slow_cost["thermal"] += t1 - t0
         self._slow_cost["electrodes"] += time.perf_counter() - t1
         self._trim(int(i.max()))
