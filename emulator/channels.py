@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 PAC, PDC, TAC, TDC, HAL = 0, 1, 2, 3, 15
 ELECTRODE_FIRST = 17  # E1; E19 = 35
 
@@ -29,3 +31,14 @@ def channel_index(name: str) -> int:
         raise ValueError(
             f"unknown channel {name!r}; known: PAC, PDC, TAC, TDC, E1..E19"
         ) from None
+
+
+def parse_sequence(sequence) -> np.ndarray:
+    """Channel indices from ``"default"`` or a list of names/indices."""
+    if isinstance(sequence, str):
+        if sequence != "default":
+            raise ValueError(f"sequence {sequence!r}: use \"default\" or a list of channel names")
+        sequence = DEFAULT_FRAME_NAMES
+    if len(sequence) == 0:
+        raise ValueError("sequence is empty")
+    return np.array([c if isinstance(c, int) else channel_index(c) for c in sequence], dtype=np.int64)

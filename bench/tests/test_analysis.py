@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from bench import analysis
-from bench.psychophysics import human_threshold_m
+from bench.verification import analysis
+from bench.verification.psychophysics import human_threshold_m
 
 pytestmark = pytest.mark.unit
 

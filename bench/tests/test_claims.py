@@ -2,7 +2,7 @@
 
 import pytest
 
-from bench.claims import CLAIM_GROUPS, Bench
+from bench.verification.claims import CLAIM_GROUPS, Bench
 
 pytestmark = pytest.mark.claims
 

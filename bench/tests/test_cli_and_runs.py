@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench import cli
-from bench.report import write_outputs
-from bench.runner import run_scene
-from bench.scene import parse_scene
+from bench.cli import main as cli
+from bench.reporting.report import write_outputs
+from bench.running.runner import run_scene
+from bench.scenes.scene import parse_scene
 
 pytestmark = pytest.mark.unit
 REPO = Path(__file__).resolve().parents[2]
@@ -107,7 +107,7 @@ def test_claims_command_prints_json_and_exit_status_follows_the_verdicts(capsys,
     rows = json.loads(capsys.readouterr().out)
     assert {r["name"] for r in rows} >= {"PDC scale", "PAC scale"} and all(r["passed"] for r in rows)
     # a sensor whose front end has the wrong gain must fail the scale claims, and the command must say so
-    from bench import claims
+    from bench.verification import claims
     from emulator.params import SensorParams
 
     original = claims.Bench

@@ -2,7 +2,8 @@
 
 import pytest
 
-from bench.scene import SceneError, load_scene, parse_scene
+from bench.errors import SceneError
+from bench.scenes.scene import load_scene, parse_scene
 from emulator.stimuli import Press, SphereDrop, Vibration
 
 pytestmark = pytest.mark.unit

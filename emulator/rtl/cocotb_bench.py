@@ -175,7 +175,7 @@ async def frame_stream(dut):
         return
     import numpy as np
 
-    from bench.sampler import parse_sequence
+    from emulator.channels import parse_sequence
     from emulator.sensor import Sensor
     from emulator.spi import protocol as proto
 

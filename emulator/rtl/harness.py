@@ -91,7 +91,7 @@ class Harness:
 
     def stream_frames(self, seconds: float, seed: int = 1) -> dict:
         """The default frame from sensor 1 for ``seconds``: codes from the emulator, words from the RTL."""
-        from bench.sampler import parse_sequence
+        from emulator.channels import parse_sequence
         from emulator.channels import DEFAULT_SLOT_RATE_HZ
         from emulator.sensor import Sensor
         from emulator.spi import protocol as proto

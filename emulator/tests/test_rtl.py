@@ -82,7 +82,7 @@ def test_writes_reach_the_rtl_registers(rtl):
 
 
 def test_a_frame_stream_gives_identical_codes_over_rtl_and_software(rtl):
-    from bench.sampler import Sampler
+    from bench.running.sampler import Sampler
     from emulator.channels import DEFAULT_FRAME_NAMES
     from emulator.sensor import Sensor
     from emulator.spi.model import SensorPort
@@ -127,8 +127,8 @@ def test_cpp_harness_reproduces_every_golden_vector(harness):
 
 
 def test_a_scene_yields_identical_codes_over_software_and_rtl(tmp_path):
-    from bench.runner import run_scene
-    from bench.scene import load_scene
+    from bench.running.runner import run_scene
+    from bench.scenes.scene import load_scene
 
     results = {}
     for spi in ("software", "rtl"):

@@ -5,7 +5,7 @@ import subprocess
 
 import pytest
 
-from bench.cheetah_server import CheetahBench, build_client, build_library
+from bench.hosts.cheetah_server import CheetahBench, build_client, build_library
 
 pytestmark = pytest.mark.firmware
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from bench.bridge import FirmwareBench
-from bench.driver import CMD_START, BridgeDriver, Status
+from bench.hosts.bridge import FirmwareBench
+from bench.hosts.driver import CMD_START, BridgeDriver, Status
 from emulator.spi.model import Faults
 
 pytestmark = pytest.mark.firmware

@@ -4,9 +4,9 @@ time, its UART is a pty, and the pyserial driver reads it. Every wait is bounded
 import numpy as np
 import pytest
 
-from bench import analysis
-from bench.bridge import FirmwareBench
-from bench.driver import CMD_PATTERN, CMD_START, CMD_STOP, BridgeDriver, Status
+from bench.verification import analysis
+from bench.hosts.bridge import FirmwareBench
+from bench.hosts.driver import CMD_PATTERN, CMD_START, CMD_STOP, BridgeDriver, Status
 from emulator.sensor import Sensor
 from emulator.channels import DEFAULT_FRAME_NAMES
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
@@ -80,8 +80,8 @@ def test_host_commands_stop_and_change_the_pattern():
 
 def test_firmware_that_does_not_compile_reports_the_compiler_and_caches_nothing(tmp_path):
     """Users plug in their own firmware: a compile error names the file and line and leaves no library behind."""
-    from bench.cosim import FIRMWARE_DIR, build_firmware
-    from bench.native import BuildError
+    from bench.hosts.cosim import FIRMWARE_DIR, build_firmware
+    from bench.errors import BuildError
 
     broken = tmp_path / "broken.c"
     broken.write_text('#include "bt_hal.h"\nint bt_broken(void) { return undeclared_name; }\n')

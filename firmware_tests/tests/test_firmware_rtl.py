@@ -4,8 +4,8 @@ software model, detection by property reads included."""
 import numpy as np
 import pytest
 
-from bench.cosim import CoSim, VirtualBoard, default_sensors
-from bench.driver import CMD_START, DataFrame, FrameParser, encode
+from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+from bench.hosts.driver import CMD_START, DataFrame, FrameParser, encode
 
 pytestmark = [pytest.mark.firmware, pytest.mark.rtl]
 

@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bench.cosim import CoSim, VirtualBoard, default_sensors
-from bench.driver import CMD_START, CMD_STATUS, DataFrame, FrameParser, Status, encode
+from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+from bench.hosts.driver import CMD_START, CMD_STATUS, DataFrame, FrameParser, Status, encode
 
 pytestmark = pytest.mark.firmware
 

@@ -7,7 +7,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from bench import campaign, cli
+from bench.campaigns import faults as campaign
+from bench.cli import main as cli
 
 pytestmark = pytest.mark.firmware
 
@@ -31,7 +32,7 @@ def test_with_the_firmware_on_a_serial_port(biotac_serial_port):
 
 
 def test_the_plugin_hands_user_tests_a_sensor_and_a_serial_port(tmp_path):
-    from bench.driver import crc16
+    from bench.hosts.driver import crc16
 
     assert crc16(bytes([0x01, 0, 0])).to_bytes(2, "little") == bytes([0xAC, 0xFB])  # the literal in USER_TESTS
     (tmp_path / "test_user.py").write_text(USER_TESTS)
@@ -66,7 +67,7 @@ def test_campaign_writes_junit_and_fails_a_case_whose_expectation_is_not_met(tmp
 
 
 def test_the_cheetah_fixture_runs_a_vendor_style_program(biotac_cheetah):
-    from bench.cheetah_server import build_client
+    from bench.hosts.cheetah_server import build_client
 
     cb = biotac_cheetah(3)
     exe = build_client(cb.library)

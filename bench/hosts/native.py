@@ -11,11 +11,9 @@ import os
 import subprocess
 from pathlib import Path
 
+from bench.errors import BuildError
+
 C_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror")
-
-
-class BuildError(RuntimeError):
-    """The system C compiler rejected a source; the message carries its diagnostics."""
 
 
 def build_folder(root: Path, inputs) -> Path:

@@ -12,9 +12,9 @@ from typing import Callable
 
 import numpy as np
 
-from bench import analysis
-from bench.psychophysics import human_threshold_m
-from bench.sampler import Sampler
+from bench.verification import analysis
+from bench.verification.psychophysics import human_threshold_m
+from bench.running.sampler import Sampler
 from emulator import conversions as conv
 from emulator.channels import PAC, channel_index
 from emulator.mechanics import static_pressure_from_force

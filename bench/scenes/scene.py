@@ -12,6 +12,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bench.errors import SceneError
 from emulator.channels import CHANNEL_INDEX
 from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
@@ -22,14 +23,6 @@ from emulator.stimuli import (DROP_HEIGHT_M, SPHERES, AmbientStep, HeaterFailure
 from emulator.thermal import MATERIALS
 
 MAX_DURATION_S = 36000.0
-
-
-class SceneError(ValueError):
-    """A scene file is invalid; ``problems`` lists every problem found."""
-
-    def __init__(self, source: str, problems: list[str]):
-        self.source, self.problems = source, problems
-        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
 
 
 @dataclass

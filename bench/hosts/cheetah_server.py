@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.cosim import default_sensors
-from bench.native import build_folder, compile_c
+from bench.hosts.cosim import default_sensors
+from bench.hosts.native import build_folder, compile_c
+from bench.paths import REPO
 from emulator.spi.model import Bus, SensorPort, Transfer
 
-REPO = Path(__file__).resolve().parents[1]
 LIBRARY_SOURCE = REPO / "emulator" / "cheetah" / "cheetah_emu.c"
 CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "biotac_client.c"
 OP_SS, OP_BYTES, OP_DELAY_NS, OP_OE = 1, 2, 3, 4

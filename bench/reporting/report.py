@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import analysis
-from bench.runner import Recording
+from bench.verification import analysis
+from bench.running.runner import Recording
 from emulator import conversions as conv
 from emulator.stimuli import SPHERES, SphereDrop
 
@@ -143,7 +143,7 @@ def write_outputs(rec: Recording, out_dir: Path, csv: bool = False, plots: bool 
         _write_csv(rec, phys, out_dir / "samples.csv")
         outputs.append("samples.csv")
     if plots and rec.simulated_s > 0:
-        from bench import plots as plotting
+        from bench.reporting import plots as plotting
 
         outputs += plotting.scene_plots(rec, phys, out_dir)
     outputs += ["record.json", "report.md"]

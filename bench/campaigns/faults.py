@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.bridge import FirmwareBench
-from bench.driver import CMD_START, BridgeDriver, Status
+from bench.hosts.bridge import FirmwareBench
+from bench.hosts.driver import CMD_START, BridgeDriver, Status
 from emulator.channels import PAC
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch

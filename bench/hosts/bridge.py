@@ -17,8 +17,8 @@ import random
 import threading
 import time
 
-from bench.cosim import CoSim, VirtualBoard, default_sensors
-from bench.serial_link import PtyLink
+from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+from bench.hosts.serial_link import PtyLink
 
 
 class FirmwareBench:

@@ -32,24 +32,13 @@ class Samples:
     status: np.ndarray
 
 
-def parse_sequence(sequence) -> np.ndarray:
-    """Channel indices from ``"default"`` or a list of names/indices."""
-    if isinstance(sequence, str):
-        if sequence != "default":
-            raise ValueError(f"sequence {sequence!r}: use \"default\" or a list of channel names")
-        sequence = ch.DEFAULT_FRAME_NAMES
-    if len(sequence) == 0:
-        raise ValueError("sequence is empty")
-    return np.array([c if isinstance(c, int) else ch.channel_index(c) for c in sequence], dtype=np.int64)
-
-
 class Sampler:
     """Reads a repeating channel sequence through any peripheral with an ``exchange(TransferBatch)`` method."""
 
     def __init__(self, peripheral, sequence="default", slot_rate_Hz: float = ch.DEFAULT_SLOT_RATE_HZ,
                  clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ, sample_delay_s: float = proto.SAMPLE_DELAY_S):
         self.peripheral = peripheral
-        self.sequence = parse_sequence(sequence)
+        self.sequence = ch.parse_sequence(sequence)
         self.slot_rate_Hz = float(slot_rate_Hz)
         self.clock_hz = float(clock_hz)
         self.sample_delay_s = float(sample_delay_s)

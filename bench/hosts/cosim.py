@@ -3,7 +3,7 @@
 The firmware (C) is compiled for this machine with the system C compiler into a shared library and called
 through ctypes. Its HAL calls land here: queued SPI sequences go through the software SPI bus to emulated
 sensors, delays advance virtual time, and the UART is a byte pipe — an in-memory one, or a pty that any
-program can open as a serial port (:class:`bench.serial_link.PtyLink`).  Deterministic and faster than real
+program can open as a serial port (:class:`bench.hosts.serial_link.PtyLink`).  Deterministic and faster than real
 time; ``run(..., realtime=True)`` paces virtual time to the wall clock.
 """
 
@@ -16,18 +16,15 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.native import build_folder, compile_c
+from bench.errors import FirmwareError
+from bench.hosts.native import build_folder, compile_c
+from bench.paths import REPO
 from emulator.channels import DEFAULT_FRAME_NAMES
 from emulator.sensor import Sensor
 from emulator.spi.model import Bus, SensorPort, Transfer
 
-REPO = Path(__file__).resolve().parents[1]
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
-
-
-class FirmwareError(RuntimeError):
-    """The firmware misbehaved under co-simulation (a failing HAL call, a hang)."""
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:

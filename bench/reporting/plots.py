@@ -112,7 +112,7 @@ def electrode_map(rec, phys: dict, out_dir: Path) -> str:
 
 def sensitivity_plot(claims, out_dir: Path) -> Path:
     """d_min versus frequency for the sensor, with the human threshold curve (D Fig. 5-4)."""
-    from bench.psychophysics import human_threshold_m
+    from bench.verification.psychophysics import human_threshold_m
 
     d = next(c.details["d_min_m"] for c in claims if "d_min_m" in c.details)
     f = np.array(sorted(d))

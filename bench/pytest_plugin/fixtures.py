@@ -17,9 +17,9 @@ Installed with the package (entry point ``pytest11``), so in any test:
 
 Fixtures
     biotac_sensor       factory -> emulator.spi.model.SensorPort over an emulated sensor (in process)
-    biotac_bridge       factory -> bench.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown)
+    biotac_bridge       factory -> bench.hosts.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown)
     biotac_serial_port  the pty path of a one-sensor bridge that is already running
-    biotac_cheetah      factory -> bench.cheetah_server.CheetahBench: emulated sensors behind cheetah.so; run
+    biotac_cheetah      factory -> bench.hosts.cheetah_server.CheetahBench: emulated sensors behind cheetah.so; run
                         your Cheetah-based program with ``cwd``/copy at ``.lib_dir`` and ``env=bench.env``
 """
 
@@ -56,7 +56,7 @@ def _benches(bench_class):
 
 @pytest.fixture
 def biotac_bridge():
-    from bench.bridge import FirmwareBench
+    from bench.hosts.bridge import FirmwareBench
 
     yield from _benches(FirmwareBench)
 
@@ -68,6 +68,6 @@ def biotac_serial_port(biotac_bridge):
 
 @pytest.fixture
 def biotac_cheetah():
-    from bench.cheetah_server import CheetahBench
+    from bench.hosts.cheetah_server import CheetahBench
 
     yield from _benches(CheetahBench)

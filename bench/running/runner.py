@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bench.sampler import Sampler
-from bench.scene import Scene
+from bench.running.sampler import Sampler
+from bench.scenes.scene import Scene
 from emulator.channels import CHANNEL_NAME
 from emulator.sensor import Sensor
 from emulator.spi.peripheral import SoftwarePeripheral

@@ -18,21 +18,20 @@ import resource
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-from bench import analysis
-from bench.runner import build_sensor, run_scene
-from bench.sampler import Sampler
-from bench.scene import load_scene
+from bench.verification import analysis
+from bench.running.runner import build_sensor, run_scene
+from bench.running.sampler import Sampler
+from bench.paths import REPO, SCENES_DIR
+from bench.scenes.scene import load_scene
 from emulator.channels import DEFAULT_FRAME_NAMES, PAC
 from emulator.conversions import ADC_LSB_V
 from emulator.fidelity import PROFILES
 from emulator.sensor import NoiseSources, Sensor
 from emulator.spi.peripheral import SoftwarePeripheral
 
-SCENES_DIR = Path(__file__).resolve().parent.parent / "fixtures" / "scenes"
 
 
 def _pac_instants(scene) -> np.ndarray:
@@ -131,9 +130,9 @@ def stream_hour_child(seconds: float) -> None:
 
 
 def stream_hour(seconds: float = 3600.0) -> dict:
-    code = f"from bench.benchmark import stream_hour_child; stream_hour_child({seconds!r})"
+    code = f"from bench.verification.benchmark import stream_hour_child; stream_hour_child({seconds!r})"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         cwd=Path(__file__).resolve().parent.parent)
+                         cwd=REPO)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -181,9 +180,9 @@ def spi_paths(rtl: bool = True, say=lambda m: None) -> dict:
 
 def firmware_paths(say=lambda m: None) -> dict:
     """Bridge firmware co-simulated in virtual time, and the driver keeping up through a pty."""
-    from bench.bridge import FirmwareBench
-    from bench.cosim import CoSim, VirtualBoard, default_sensors
-    from bench.driver import CMD_START, BridgeDriver, FrameParser, encode
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+    from bench.hosts.driver import CMD_START, BridgeDriver, FrameParser, encode
 
     out = {}
     for n in (1, 3):
@@ -211,7 +210,7 @@ def firmware_paths(say=lambda m: None) -> dict:
     say("… Cheetah-compatible library with the example client")
     import subprocess
 
-    from bench.cheetah_server import CheetahBench, build_client
+    from bench.hosts.cheetah_server import CheetahBench, build_client
 
     with CheetahBench(3) as cb:
         exe = build_client(cb.library)

@@ -1,0 +1,1 @@
+"""Campaigns of independent runs: fault × scene × seed through firmware and host driver."""

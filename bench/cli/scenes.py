@@ -1,0 +1,135 @@
+"""Scene commands: run a scene, validate scene files, list scenes, fidelity profiles and sensor parameters."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from bench.paths import REPO, SCENES_DIR
+from emulator.fidelity import PROFILES
+
+
+RUN_HELP = """\
+Runs a scene file through sensor -> SPI peripheral -> host sampler and writes, into --out:
+  codes.npz     raw 12-bit codes per channel (<CH>_t, <CH>_code, <CH>_status) and physical units
+                (PAC_Pa, PDC_kPa, PDC_force_N) using the published conversions
+  samples.csv   the same in long format (with --csv)
+  record.json   everything about the run: scene, parameters, effects that ran and their cost, results
+  report.md     a short human-readable report
+  traces.png, spectrogram.png
+
+scene file (TOML):
+  [scene]    name, duration_s, seed (0), fidelity ("fast" | "default" | "reference"), description
+  [sensor]   any sensor parameter by name, e.g. inflation_volume_mL = 0.6  (see `biotac-bench params`)
+  [host]     sequence = "default" (44-slot frame) or ["PAC", "PDC"]; slot_rate_Hz (4400); spi_clock_Hz (4.4e6);
+             spi = "software" (the Python model) | "rtl" (the Verilog twin, run by the C++ Verilator harness)
+  [noise]    johnson, amplifier, mains_hum, adc, spi_coupling = true | false
+  [analysis] impact_detection = true   (applies D ch. 5's rule to every sphere drop)
+  [[stimulus]] one table per stimulus, by kind:
+     tap          at_s (s or list), peak_N, duration_s (0.03)
+     press        start_s, force_N, ramp_s (0.5), hold_s (1.0)
+     sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07)
+     vibration    start_s, duration_s, amplitude_um, frequency_Hz  | f_start_Hz + f_stop_Hz (log sweep), fade_s
+     pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz  (calibrator on the liquid)
+     touch        start_s, force_N, ramp_s, hold_s; where: electrode ("E17") or x_mm + angle_deg;
+                  indenter_radius_mm (3), tangential_N, shear_angle_deg; material ("aluminum", "glass",
+                  "wood", "polystyrene foam", ...) and object_temperature_C for thermal contact
+     power_on     at_s   (heaters start from ambient)        ambient_step  at_s, temperature_C
+     heater_failure  at_s
+  [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
+             heater_failed = true
+
+The file is validated before anything runs; every problem is listed with its field, value and allowed range.
+A run that fails part-way still writes what it recorded (record.json says "failed" and why); exit status 1.
+"""
+
+
+def _cmd_run(a) -> int:
+    from bench.reporting.report import write_outputs
+    from bench.running.runner import run_scene
+    from bench.scenes.scene import load_scene
+
+    scene = load_scene(a.scene)
+    if a.fidelity:
+        scene.fidelity = a.fidelity
+    if a.seed is not None:
+        scene.seed = a.seed
+    if a.spi:
+        scene.spi = a.spi
+    out = Path(a.out) if a.out else Path("out") / scene.name
+    rec = run_scene(scene, progress=not a.quiet)
+    record = write_outputs(rec, out, csv=a.csv, plots=not a.no_plots)
+    if not a.quiet:
+        print((out / "report.md").read_text())
+    print(f"wrote {out}/ ({', '.join(record['outputs'])})")
+    if rec.error:
+        print(f"error: the run stopped at {rec.simulated_s:.3f} s: {rec.error}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _cmd_validate(a) -> int:
+    from bench.scenes.scene import SceneError, load_scene
+
+    bad = 0
+    for f in a.scenes:
+        try:
+            sc = load_scene(f)
+            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {len(sc.stimuli)} stimuli, fidelity {sc.fidelity})")
+        except SceneError as e:
+            print(e, file=sys.stderr)
+            bad += 1
+    return 1 if bad else 0
+
+
+def _cmd_scenes(a) -> int:
+    from bench.scenes.scene import load_scene
+
+    for f in sorted(SCENES_DIR.glob("*.toml")):
+        sc = load_scene(f)
+        print(f"{f.relative_to(REPO)}\n    {sc.description or sc.name} ({sc.duration_s:g} s)")
+    return 0
+
+
+def _cmd_profiles(a) -> int:
+    from emulator.fidelity import PROFILES
+
+    for p in PROFILES.values():
+        print(f"{p.name:10s} {p.description}")
+    return 0
+
+
+def _cmd_params(a) -> int:
+    from emulator.params import PARAMETER_FIELDS, SensorParams
+
+    d = SensorParams()
+    for name, f in PARAMETER_FIELDS.items():
+        m = f.metadata
+        print(f"{name:38s} {getattr(d, name)!r:>24} {m['unit']:10s} [{m['range'][0]}, {m['range'][1]}] "
+              f"({m['source']}) {m['doc']}")
+    return 0
+
+
+def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    r = sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
+                       description=RUN_HELP, formatter_class=fmt)
+    r.add_argument("scene", help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
+    r.add_argument("--out", help="output folder (default: out/<scene name>)")
+    r.add_argument("--csv", action="store_true", help="also write samples.csv")
+    r.add_argument("--fidelity", choices=list(PROFILES), help="override the scene's profile")
+    r.add_argument("--seed", type=int, help="override the scene's seed")
+    r.add_argument("--spi", choices=["software", "rtl"],
+                   help="the sensor's SPI side: the software model (default) or the RTL via the C++ harness")
+    r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
+    r.set_defaults(func=_cmd_run)
+
+    v = sub.add_parser("validate", help="check scene files without running them")
+    v.add_argument("scenes", nargs="+")
+    v.set_defaults(func=_cmd_validate)
+
+    sub.add_parser("scenes", help="list the shipped scenes").set_defaults(func=_cmd_scenes)
+    sub.add_parser("profiles", help="list the fidelity profiles").set_defaults(func=_cmd_profiles)
+    sub.add_parser("params", help="list every sensor parameter with unit, range and source").set_defaults(
+        func=_cmd_params)

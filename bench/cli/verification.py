@@ -1,0 +1,76 @@
+"""Verification commands: the published-figure claims, the noise budget, the benchmark."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from emulator.fidelity import PROFILES
+
+
+def _cmd_noise_budget(a) -> int:
+    from emulator.noise_budget import budget, format_budget
+
+    lines = budget()
+    if a.json:
+        print(json.dumps([vars(x) for x in lines], indent=2))
+    else:
+        print(format_budget(lines))
+    return 0
+
+
+def _cmd_claims(a) -> int:
+    from bench.verification.claims import CLAIM_GROUPS, Bench, format_table, run_claims
+
+    groups = a.only or list(CLAIM_GROUPS)
+    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick)
+    claims = run_claims(bench, groups, progress=None if a.json else lambda g: print(f"… {g}", file=sys.stderr))
+    if a.json:
+        print(json.dumps([c.as_dict() for c in claims], indent=2, default=float))
+    else:
+        print(format_table(claims))
+    if a.plots:
+        from bench.reporting.plots import sensitivity_plot
+
+        out = sensitivity_plot(claims, Path(a.plots))
+        print(f"wrote {out}", file=sys.stderr)
+    return 0 if all(c.passed for c in claims) else 1
+
+
+def _cmd_benchmark(a) -> int:
+    from bench.verification.benchmark import main as bench_main
+
+    return bench_main(a)
+
+
+def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    nb = sub.add_parser("noise-budget", help="the PAC noise budget, source by source")
+    nb.add_argument("--json", action="store_true")
+    nb.set_defaults(func=_cmd_noise_budget)
+
+    c = sub.add_parser("claims", help="measure every published figure on the emulator; exit 1 if any fails",
+                       description="Runs each claim (SENSOR.md figure) on the emulator's output and prints "
+                                   "claim, expected, measured, accepted range and PASS/FAIL.", formatter_class=fmt)
+    c.add_argument("--json", action="store_true", help="print the results as JSON")
+    c.add_argument("--only", action="append", choices=["noise", "scales", "force", "impact", "detection",
+                                                       "false-detection", "vibration", "thermal", "electrodes"],
+                   help="run one group")
+    c.add_argument("--fidelity", default="default", choices=list(PROFILES))
+    c.add_argument("--seed", type=int, default=2012)
+    c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
+    c.add_argument("--plots", metavar="DIR", help="write the frequency-sensitivity plot into DIR")
+    c.set_defaults(func=_cmd_claims)
+
+    b = sub.add_parser("benchmark", help="error vs the reference profile and cost per simulated second",
+                       description="For every fidelity profile and shipped scene: PAC RMS error (bits) and "
+                                   "spectral error (dB) against the reference profile, and wall time per "
+                                   "simulated second; then throughput, memory and demand-driven savings.",
+                       formatter_class=fmt)
+    b.add_argument("--json", action="store_true", help="print the results as JSON")
+    b.add_argument("--seconds", type=float, default=60.0, help="simulated seconds for the throughput runs")
+    b.add_argument("--hour", action="store_true", help="stream a full simulated hour for the memory check")
+    b.add_argument("--no-rtl", action="store_true", help="skip the RTL measurements (no Verilator build)")
+    b.set_defaults(func=_cmd_benchmark)
+

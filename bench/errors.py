@@ -1,0 +1,28 @@
+"""The bench's error root: every error the bench raises on purpose is a :class:`BenchError`.
+
+Each also inherits the builtin it is a kind of (``ValueError`` for bad input, ``RuntimeError`` for a part that
+failed), so callers that catch builtins keep working; the CLI turns any of them into a one-line message and exit
+status 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+
+class BenchError(Exception):
+    """Root of the bench's own errors."""
+
+
+class SceneError(BenchError, ValueError):
+    """A scene file is invalid; ``problems`` lists every problem found (field, value, what is allowed)."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source, self.problems = source, problems
+        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
+
+
+class BuildError(BenchError, RuntimeError):
+    """A native part (firmware, cheetah.so, a client) did not compile; the message carries the diagnostics."""
+
+
+class FirmwareError(BenchError, RuntimeError):
+    """The firmware misbehaved under co-simulation (a failing HAL call, a hang)."""

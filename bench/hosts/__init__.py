@@ -1,0 +1,1 @@
+"""Things under test and their transports: bridge firmware co-simulated in virtual time, the pty serial link, the pyserial host driver, the server behind the Cheetah-compatible library, and native builds."""

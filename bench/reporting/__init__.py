@@ -1,0 +1,1 @@
+"""What a run leaves behind: record.json, report.md, and plots (time traces, spectrograms, sensitivity)."""
