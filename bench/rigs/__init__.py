@@ -1,0 +1,1 @@
+"""Rigs that move the finger, seen from the bench side: the texture rig (stepper lowering the finger until PDC reaches a target, linear stage sliding the texture, motor current as traction), controlled only through codes read over SPI."""

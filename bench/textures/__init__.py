@@ -1,0 +1,1 @@
+"""Textures as data and what is measured on them: the 117-texture library (:mod:`.library`, from ``fixtures/textures/``) and the three texture properties — traction, roughness, fineness — computed from a trial's recorded codes and stage current (:mod:`.properties`), on emulated or real recordings alike."""

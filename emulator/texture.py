@@ -1,0 +1,149 @@
+"""Texture surfaces as data, and the height profile a finger sliding in a straight line sees on them.
+
+A :class:`Texture` is a random self-affine surface (RMS height, correlation length, roughness exponent) plus
+optional periodic components (gratings, weaves, meshes, hooks), friction (static, kinetic, velocity dependence),
+compliance (the surface material's Young's modulus) and a thermal material for :mod:`emulator.thermal`.
+
+The random component's one-sided spatial power spectrum is flat below ``q0 = 2π / correlation_length`` and falls
+as ``q^-(1 + 2H)`` above it (the 1-D section of an isotropic self-affine surface with Hurst exponent ``H``), up
+to the track's resolution.  A track is generated deterministically from the texture's own ``seed``: the same
+texture is the same surface in every trial; a trial only starts somewhere else on it (``start_m``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: Length of the stored surface (m): one period of the generated random component; tracks wrap around it.
+SURFACE_LENGTH_M = 1.0
+
+
+@dataclass(frozen=True)
+class PeriodicComponent:
+    """A periodic relief: ridges of ``period_m`` with fundamental amplitude ``amplitude_m`` (peak, m).
+
+    ``harmonics`` are the relative amplitudes of the 2nd, 3rd, … harmonics (a square-ish grating has 0, 1/3, …
+    on odd ones); ``orientation_deg`` is the angle between the sliding direction and the ridges' normal, so a
+    finger sliding across the ridges (0°) meets them at ``period_m`` and at 60° every 2 × ``period_m``.
+    """
+
+    period_m: float
+    amplitude_m: float
+    harmonics: tuple[float, ...] = ()
+    orientation_deg: float = 0.0
+
+    @property
+    def track_period_m(self) -> float:
+        """Period along the sliding direction (m)."""
+        c = abs(math.cos(math.radians(self.orientation_deg)))
+        return self.period_m / max(c, 1e-3)
+
+
+@dataclass(frozen=True)
+class Texture:
+    """One texture of the library (SI units). ``source`` says where its numbers come from."""
+
+    number: int
+    name: str
+    group: str
+    rms_height_m: float
+    correlation_length_m: float
+    hurst: float
+    mu_static: float
+    mu_kinetic: float
+    stribeck_velocity_m_per_s: float = 0.005
+    mu_per_velocity_s_per_m: float = 0.0
+    modulus_Pa: float = 1e9
+    material: str = "acrylic"
+    periodic: tuple[PeriodicComponent, ...] = ()
+    seed: int = 0
+    source: str = ""
+    description: str = ""
+
+    def friction_coefficient(self, v_m_per_s):
+        """Steady-sliding friction coefficient at relative speed ``v`` (m/s): Stribeck curve plus a viscous rise."""
+        v = np.abs(np.asarray(v_m_per_s, float))
+        return (self.mu_kinetic + (self.mu_static - self.mu_kinetic) * np.exp(-(v / self.stribeck_velocity_m_per_s) ** 2)
+                + self.mu_per_velocity_s_per_m * v)
+
+
+@dataclass
+class SurfaceTrack:
+    """Heights (m) of a texture along the sliding direction on a uniform grid of ``dx_m``, from ``start_m``."""
+
+    heights_m: np.ndarray
+    dx_m: float
+    start_m: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    def at(self, x_m) -> np.ndarray:
+        """Height (m) at positions ``x_m`` along the track, linearly interpolated (positions wrap)."""
+        u = (np.asarray(x_m, float) - self.start_m) / self.dx_m
+        n = self.heights_m.size
+        i = np.floor(u).astype(np.int64)
+        f = u - i
+        i %= n
+        return self.heights_m[i] * (1 - f) + self.heights_m[(i + 1) % n] * f
+
+
+def random_profile(texture: Texture, dx_m: float, length_m: float = SURFACE_LENGTH_M) -> np.ndarray:
+    """The texture's random self-affine component over ``length_m`` at spacing ``dx_m`` (m; periodic, zero
+    mean, RMS = ``rms_height_m``). Deterministic from ``texture.seed``: the same surface at any ``dx_m``
+    (components with wavelength below 2·dx are absent)."""
+    n = int(round(length_m / dx_m))
+    if texture.rms_height_m <= 0 or n < 4:
+        return np.zeros(max(n, 1))
+    # the spectrum's phases and amplitudes are drawn on a fixed frequency list, so refining dx only adds
+    # finer components and never changes the coarser ones
+    rng = np.random.default_rng(np.random.SeedSequence([texture.seed, 0x5EED]))
+    k = np.arange(1, n // 2 + 1)
+    q = 2 * np.pi * k / length_m
+    q0 = 2 * np.pi / texture.correlation_length_m
+    psd = np.where(q < q0, 1.0, (q / q0) ** -(1 + 2 * texture.hurst))
+    n_max = int(round(length_m / 0.5e-6)) // 2  # the finest resolution ever used: 0.5 µm
+    phases = _stable_draws(rng, n_max, k.size)
+    spectrum = np.zeros(n // 2 + 1, complex)
+    spectrum[1:] = np.sqrt(psd) * np.exp(2j * np.pi * phases)
+    h = np.fft.irfft(spectrum, n)
+    rms = float(np.sqrt(np.mean(h**2)))
+    # scale so that the RMS over the band resolved at the reference spacing is the texture's RMS height
+    full = float(np.sqrt(np.sum(_reference_psd(texture, length_m))))
+    resolved = float(np.sqrt(np.sum(psd)))
+    return h / rms * texture.rms_height_m * (resolved / full)
+
+
+def _reference_psd(texture: Texture, length_m: float, dx_ref_m: float = 0.5e-6) -> np.ndarray:
+    k = np.arange(1, int(round(length_m / dx_ref_m)) // 2 + 1)
+    q = 2 * np.pi * k / length_m
+    q0 = 2 * np.pi / texture.correlation_length_m
+    return np.where(q < q0, 1.0, (q / q0) ** -(1 + 2 * texture.hurst))
+
+
+def _stable_draws(rng: np.random.Generator, n_total: int, n_used: int) -> np.ndarray:
+    """The first ``n_used`` of ``n_total`` uniform draws, identical whatever ``n_used`` is."""
+    return rng.random(n_total)[:n_used]
+
+
+def periodic_profile(texture: Texture, x_m: np.ndarray) -> np.ndarray:
+    """Sum of the texture's periodic components at positions ``x_m`` (m)."""
+    x = np.asarray(x_m, float)
+    out = np.zeros_like(x)
+    for c in texture.periodic:
+        w = 2 * np.pi / c.track_period_m
+        out += c.amplitude_m * np.cos(w * x)
+        for j, rel in enumerate(c.harmonics, start=2):
+            out += rel * c.amplitude_m * np.cos(j * w * x)
+    return out
+
+
+def surface_track(texture: Texture, dx_m: float, start_m: float = 0.0, length_m: float = SURFACE_LENGTH_M) -> SurfaceTrack:
+    """The texture along a straight track starting at ``start_m`` (m) on its surface, sampled every ``dx_m``."""
+    if not (dx_m > 0 and math.isfinite(dx_m)):
+        raise ValueError(f"dx_m = {dx_m!r}: must be a positive length in m")
+    rough = random_profile(texture, dx_m, length_m)
+    x = np.arange(rough.size) * dx_m
+    heights = rough + periodic_profile(texture, x)
+    return SurfaceTrack(np.roll(heights, -int(round(start_m / dx_m)) % heights.size), dx_m, start_m=0.0)
