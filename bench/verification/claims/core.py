@@ -1,0 +1,144 @@
+"""The claims' core: a ``Claim`` (one published figure, measured, with its kind and source), the ``Bench``
+that acquires codes through the host's path, the group registry filled by ``@claim_group``, and the runner
+and table.
+
+Every claim says what kind of evidence it is (``kind``):
+
+* ``prediction``  — follows from inputs that were not set to the figure being checked;
+* ``calibrated``  — a model knob was tuned to reproduce this figure (``calibration`` names the knob and
+  the target), so passing shows the tuning still holds, not that the physics predicts it;
+* ``derived``     — arithmetic from other published inputs (or the same number as another row in other
+  units);
+* ``consistency`` — reads back a parameter set to the published value, evaluates a published formula, or
+  cannot fail for physics reasons (``note`` says which): a regression check, not proof.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from bench.running.sampler import Sampler
+from emulator import conversions as conv
+from emulator.channels import channel_index
+from emulator.params import SensorParams
+from emulator.sensor import NoiseSources, Sensor
+from emulator.spi.peripheral import SoftwarePeripheral
+
+KINDS = ("prediction", "calibrated", "derived", "consistency")
+
+
+@dataclass
+class Claim:
+    """One published figure: what was expected, what was measured, the accepted range, and what kind of
+    evidence the row is (see the module docstring)."""
+
+    name: str
+    expected: str
+    measured: float
+    low: float
+    high: float
+    unit: str
+    source: str  # where the figure is published: D section or table, or SENSOR.md §
+    details: dict = field(default_factory=dict)
+    kind: str = field(default="", kw_only=True)
+    calibration: str = field(default="", kw_only=True)  # calibrated rows: the knob and what it was tuned to
+    note: str = field(default="", kw_only=True)  # why the row has its kind (e.g. why it cannot fail)
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"claim {self.name!r}: kind = {self.kind!r}; must be one of {', '.join(KINDS)}")
+        if self.kind == "calibrated" and not self.calibration:
+            raise ValueError(f"claim {self.name!r} is calibrated: name the knob and its target in calibration=")
+        if not self.source:
+            raise ValueError(f"claim {self.name!r}: give its source (D section or table, SENSOR.md §)")
+
+    @property
+    def passed(self) -> bool:
+        return bool(np.isfinite(self.measured) and self.low <= self.measured <= self.high)
+
+    @property
+    def tolerance(self) -> str:
+        return f"[{self.low:.4g}, {self.high:.4g}]"
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d.update(passed=self.passed, tolerance=self.tolerance)
+        return d
+
+
+@dataclass
+class Bench:
+    """Shared settings of one claims run."""
+
+    fidelity: str = "default"
+    seed: int = 2012
+    params: SensorParams = field(default_factory=SensorParams)
+    quick: bool = False  # fewer drops and hours, for a fast look (the suite never uses it)
+
+    def acquire(self, stimuli, duration_s, sequence=("PAC", "PDC"), slot_rate_Hz=4400.0,
+                noise=NoiseSources(), seed_offset=0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Codes per channel through sensor -> SPI -> host; returns {name: (times, codes as float)}."""
+        sensor = Sensor(self.params, stimuli, sequence, self.fidelity, self.seed + seed_offset, noise)
+        sampler = Sampler(SoftwarePeripheral(sensor), list(sequence), slot_rate_Hz)
+        chunks = list(sampler.chunks(int(round(duration_s * slot_rate_Hz)), int(slot_rate_Hz)))
+        bad = sum(np.count_nonzero(c.status) for c in chunks)
+        if bad:
+            raise RuntimeError(f"the host saw {bad} bad words in a clean acquisition")
+        times = np.concatenate([c.times for c in chunks])
+        chans = np.concatenate([c.channels for c in chunks])
+        codes = np.concatenate([c.codes for c in chunks]).astype(float)
+        return {n: (times[chans == channel_index(n)], codes[chans == channel_index(n)]) for n in set(sequence)}
+
+    def analog_pac_bits(self, stimuli, duration_s, rate_Hz=2200.0, noise=NoiseSources.none()):
+        """PAC before the ADC, in LSB, sampled at ``rate_Hz``."""
+        sensor = Sensor(self.params, stimuli, ("PAC",), self.fidelity, self.seed, noise)
+        t = np.arange(int(round(duration_s * rate_Hz))) / rate_Hz
+        return t, sensor.analog_trace("PAC", t) / conv.ADC_LSB_V
+
+
+ClaimGroup = Callable[[Bench], list[Claim]]
+
+#: group name -> function(bench) -> claims, in registration order (the table's order)
+CLAIM_GROUPS: dict[str, ClaimGroup] = {}
+
+
+def claim_group(name: str) -> Callable[[ClaimGroup], ClaimGroup]:
+    """Register a function ``f(bench) -> list[Claim]`` as the claim group ``name``."""
+
+    def register(fn: ClaimGroup) -> ClaimGroup:
+        if name in CLAIM_GROUPS and CLAIM_GROUPS[name] is not fn:
+            raise ValueError(f"claim group {name!r} is registered twice")
+        CLAIM_GROUPS[name] = fn
+        return fn
+
+    return register
+
+
+def run_claims(bench: Bench, groups=None, progress=None) -> list[Claim]:
+    out = []
+    for name in groups or CLAIM_GROUPS:
+        if progress:
+            progress(name)
+        out += CLAIM_GROUPS[name](bench)
+    return out
+
+
+def kind_counts(claims: list[Claim]) -> dict[str, int]:
+    return {k: sum(c.kind == k for c in claims) for k in KINDS}
+
+
+def format_table(claims: list[Claim]) -> str:
+    w = max(len(c.name) for c in claims)
+    ws = max(6, max(len(c.source) for c in claims))
+    lines = [f"{'claim':{w}s}  {'kind':11s} {'source':{ws}s}  {'expected':22s} {'measured':>12s} {'unit':10s} "
+             f"{'accepted':22s} result"]
+    for c in claims:
+        lines.append(f"{c.name:{w}s}  {c.kind:11s} {c.source:{ws}s}  {c.expected:22s} {c.measured:12.4g} "
+                     f"{c.unit:10s} {c.tolerance:22s} {'PASS' if c.passed else 'FAIL'}")
+    n_fail = sum(not c.passed for c in claims)
+    lines.append(f"{len(claims) - n_fail} passed, {n_fail} failed")
+    lines.append("kinds: " + ", ".join(f"{n} {k}" for k, n in kind_counts(claims).items()))
+    return "\n".join(lines)
