@@ -22,11 +22,24 @@ def _cmd_noise_budget(a) -> int:
 
 
 def _cmd_claims(a) -> int:
-    from bench.verification.claims import CLAIM_GROUPS, Bench, format_table, run_claims
+    from bench.verification.claims import (CLAIM_GROUPS, Bench, format_spread_table, format_table, run_claims,
+                                           run_claims_over_seeds)
 
     groups = a.only or list(CLAIM_GROUPS)
+    progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
+    if a.seeds is not None:
+        if a.seeds < 1:
+            print(f"error: --seeds {a.seeds}: give at least 1", file=sys.stderr)
+            return 2
+        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick),
+                                     range(a.seed, a.seed + a.seeds), groups, progress)
+        if a.json:
+            print(json.dumps([r.as_dict() for r in rows], indent=2, default=float))
+        else:
+            print(format_spread_table(rows))
+        return 0 if all(all(r.passed) for r in rows) else 1
     bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick)
-    claims = run_claims(bench, groups, progress=None if a.json else lambda g: print(f"… {g}", file=sys.stderr))
+    claims = run_claims(bench, groups, progress=progress)
     if a.json:
         print(json.dumps([c.as_dict() for c in claims], indent=2, default=float))
     else:
@@ -52,13 +65,17 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
 
     c = sub.add_parser("claims", help="measure every published figure on the emulator; exit 1 if any fails",
                        description="Runs each claim (SENSOR.md figure) on the emulator's output and prints "
-                                   "claim, expected, measured, accepted range and PASS/FAIL.", formatter_class=fmt)
+                                   "claim, its kind (prediction, calibrated, derived, consistency), its source, "
+                                   "expected, measured, accepted range and PASS/FAIL.", formatter_class=fmt)
     c.add_argument("--json", action="store_true", help="print the results as JSON")
     from bench.verification.claims import CLAIM_GROUPS
 
     c.add_argument("--only", action="append", choices=list(CLAIM_GROUPS), help="run one group (repeatable)")
     c.add_argument("--fidelity", default="default", choices=list(PROFILES))
-    c.add_argument("--seed", type=int, default=2012)
+    c.add_argument("--seed", type=int, default=2012, help="scene seed (with --seeds: the first of N)")
+    c.add_argument("--seeds", type=int, metavar="N",
+                   help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
+                        "how many seeds pass it")
     c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
     c.add_argument("--plots", metavar="DIR", help="write the frequency-sensitivity plot into DIR")
     c.set_defaults(func=_cmd_claims)

@@ -17,7 +17,8 @@ import importlib
 import pkgutil
 
 from bench.verification.claims.core import (  # noqa: F401  (public names)
-    CLAIM_GROUPS, KINDS, Bench, Claim, claim_group, format_table, kind_counts, run_claims)
+    CLAIM_GROUPS, KINDS, Bench, Claim, Spread, claim_group, format_spread_table, format_table, kind_counts,
+    run_claims, run_claims_over_seeds)
 from bench.verification.claims.noise import noise_claims  # noqa: F401
 from bench.verification.claims.scales import scale_claims  # noqa: F401
 from bench.verification.claims.force import force_claims  # noqa: F401

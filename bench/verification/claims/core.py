@@ -142,3 +142,70 @@ def format_table(claims: list[Claim]) -> str:
     lines.append(f"{len(claims) - n_fail} passed, {n_fail} failed")
     lines.append("kinds: " + ", ".join(f"{n} {k}" for k, n in kind_counts(claims).items()))
     return "\n".join(lines)
+
+
+@dataclass
+class Spread:
+    """One claim over several seeds: its measured values per seed and how many seeds passed."""
+
+    name: str
+    kind: str
+    source: str
+    expected: str
+    unit: str
+    low: float
+    high: float
+    seeds: list[int]
+    measured: list[float]
+    passed: list[bool]
+
+    @property
+    def min(self) -> float:
+        return float(np.min(self.measured))
+
+    @property
+    def max(self) -> float:
+        return float(np.max(self.measured))
+
+    @property
+    def failed_seeds(self) -> list[int]:
+        return [s for s, ok in zip(self.seeds, self.passed) if not ok]
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d.update(min=self.min, max=self.max, failed_seeds=self.failed_seeds,
+                 tolerance=f"[{self.low:.4g}, {self.high:.4g}]")
+        return d
+
+
+def run_claims_over_seeds(make_bench: Callable[[int], Bench], seeds, groups=None, progress=None) -> list[Spread]:
+    """Run the claims once per seed (``make_bench(seed)``) and gather each claim's values across the seeds."""
+    rows: dict[str, Spread] = {}
+    seeds = list(seeds)
+    for seed in seeds:
+        claims = run_claims(make_bench(seed), groups,
+                            progress=None if progress is None else (lambda g, s=seed: progress(f"seed {s}: {g}")))
+        for c in claims:
+            r = rows.setdefault(c.name, Spread(c.name, c.kind, c.source, c.expected, c.unit, c.low, c.high,
+                                               [], [], []))
+            r.seeds.append(seed)
+            r.measured.append(float(c.measured))
+            r.passed.append(c.passed)
+    return list(rows.values())
+
+
+def format_spread_table(rows: list[Spread]) -> str:
+    w = max(len(r.name) for r in rows)
+    lines = [f"{'claim':{w}s}  {'kind':11s} {'expected':22s} {'min':>10s} {'max':>10s} {'unit':10s} "
+             f"{'accepted':22s} seeds passed"]
+    for r in rows:
+        verdict = f"{sum(r.passed)}/{len(r.passed)}"
+        if r.failed_seeds:
+            verdict += " (fails for seed " + ", ".join(map(str, r.failed_seeds)) + ")"
+        accepted = f"[{r.low:.4g}, {r.high:.4g}]"
+        lines.append(f"{r.name:{w}s}  {r.kind:11s} {r.expected:22s} {r.min:10.4g} {r.max:10.4g} {r.unit:10s} "
+                     f"{accepted:22s} {verdict}")
+    seeds = rows[0].seeds if rows else []
+    bad = sum(bool(r.failed_seeds) for r in rows)
+    lines.append(f"{len(rows) - bad} of {len(rows)} claims pass for every seed ({', '.join(map(str, seeds))})")
+    return "\n".join(lines)
