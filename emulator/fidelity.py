@@ -20,6 +20,9 @@ class Fidelity:
     duct_resonance: bool  # 18.7 kHz closed-tube resonance of the fluid duct
     stage2_noise: bool  # second-stage amplifier noise
     electrode_rate_Hz: float  # rate of the electrode geometry model (the channels' bandwidth is 100 Hz)
+    sliding_dx_m: float  # spatial resolution of texture tracks (features finer than 2·dx are absent)
+    friction_substeps: int  # friction integrated at the grid rate × substeps
+    patch_radii: int  # patch radii tabulated for the contact patch (interpolated between)
     description: str
 
     @property
@@ -30,13 +33,15 @@ class Fidelity:
 PROFILES: dict[str, Fidelity] = {
     p.name: p
     for p in (
-        Fidelity("fast", 1, "bilinear", False, False, 250.0,
+        Fidelity("fast", 1, "bilinear", False, False, 250.0, 20e-6, 1, 4,
                  "4.4 kHz grid, plain bilinear (the 1040 Hz corner is warped), electrodes at 250 Hz, "
-                 "first-order effects only"),
-        Fidelity("default", 2, "prewarped", False, False, 500.0,
-                 "8.8 kHz grid, every corner prewarped, electrodes at 500 Hz, first-order effects only"),
-        Fidelity("reference", 16, "prewarped", True, True, 2000.0,
-                 "70.4 kHz grid, prewarped, electrodes at 2 kHz, plus duct resonance and second-stage noise"),
+                 "textures at 20 µm, friction on the grid, 4 patch radii, first-order effects only"),
+        Fidelity("default", 2, "prewarped", False, False, 500.0, 10e-6, 1, 8,
+                 "8.8 kHz grid, every corner prewarped, electrodes at 500 Hz, textures at 10 µm, friction on the "
+                 "grid, 8 patch radii, first-order effects only"),
+        Fidelity("reference", 16, "prewarped", True, True, 2000.0, 2.5e-6, 4, 16,
+                 "70.4 kHz grid, prewarped, electrodes at 2 kHz, textures at 2.5 µm, friction oversampled ×4, "
+                 "16 patch radii, plus duct resonance and second-stage noise"),
     )
 }
 

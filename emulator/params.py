@@ -53,6 +53,24 @@ class SensorParams:
         18.7e3, "Hz", 5e3, 1e5, "D", "closed-tube resonance of the 2 cm fluid duct, v/(4L) (reference profile only)")
     duct_quality_factor: float = _p(5.0, "1", 0.5, 100.0, "model", "quality factor of the duct resonance")
 
+    # --- sliding contact (SENSOR.md §7; emulator/sliding.py) ---------------------------------
+    contact_stiffness_N_per_m1_5: float = _p(
+        17.2e3, "N/m^1.5", 1e2, 1e7, "model",
+        "Hertz-like fingertip contact law N = K·δ^1.5 (1 N at 1.5 mm indentation)")
+    contact_radius_at_1N_m: float = _p(
+        2.5e-3, "m", 1e-4, 2e-2, "model", "radius of the contact patch on a flat surface at 1 N (grows as N^(1/3))")
+    skin_tangential_stiffness_N_per_m: float = _p(
+        1500.0, "N/m", 10.0, 1e6, "model", "tangential stiffness of the skin over the fluid (pre-slip ramp)")
+    skin_tangential_damping_N_s_per_m: float = _p(
+        3.0, "N·s/m", 0.0, 1e4, "model", "tangential damping of the skin (2 ms with the stiffness)")
+    bristle_stiffness_per_N: float = _p(
+        1e5, "1/m", 1e2, 1e9, "model", "LuGre bristle stiffness per N of load (micro-slip ~ µ/σ0 ≈ 10 µm)")
+    bristle_damping_per_N: float = _p(
+        10.0, "s/m", 0.0, 1e5, "model", "LuGre bristle damping per N of load")
+    tangential_coupling: float = _p(
+        0.5, "1", 0.0, 2.0, "model",
+        "fluid pressure from tangential force as a fraction of the pressure from the same normal force")
+
     # --- piezoresistive bridge (SENSOR.md §3) ------------------------------------------
     bridge_excitation_V: float = _p(10.0, "V", 1.0, 15.0, "D", "bridge supply")
     bridge_sensitivity_V_per_V_Pa: float = _p(0.218e-6, "V/(V·Pa)", 1e-8, 1e-5, "D", "0.218 mV/V·kPa")

@@ -20,6 +20,7 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
+from emulator.sliding import CommandedMotion, Slide, SlidingContact
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
                                  surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
@@ -66,11 +67,13 @@ class Sensor:
     start_s : the instant (s) at which the sensor starts, settled at rest; earlier instants do not exist
     faults : sensor faults: ``electrode_open``/``electrode_short`` (lists of electrode numbers), ``mux_stuck``
         (electrode number), ``thermistor`` ("open" or "short"), ``heater_failed`` (True)
+    record_signals : grid signals besides the channels' nodes to keep for :meth:`signal` (e.g.
+        ``"tangential_force_N"`` for a rig's stage current, ``"contact_force_N"`` for the true normal load)
     """
 
     def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
                  fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
-                 block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None):
+                 block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None, record_signals=()):
         self.params = params or SensorParams()
         self.faults = dict(faults or {})
         unknown_faults = set(self.faults) - set(FAULT_NAMES)
@@ -88,9 +91,10 @@ class Sensor:
         if unknown:
             raise ValueError(f"channel index {unknown[0]} is not a sampled channel of this sensor")
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
+        self.record_signals = tuple(record_signals)
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)
         self.electrodes = self._electrode_model(stimuli)
-        self.graph = build_graph(self._candidate_effects(stimuli), set(self.nodes))
+        self.graph = build_graph(self._candidate_effects(stimuli), set(self.nodes) | set(self.record_signals))
         self.resting = self.graph.settle()
         self.adc = Adc(self.params, self.seed, noise=noise.adc, spi_coupling=noise.spi_coupling)
         # per channel index: which grid node or slow model it converts
@@ -104,7 +108,7 @@ class Sensor:
                 self._node_of_channel[c] = KIND_TAC
             else:
                 self._node_of_channel[c] = KIND_ELECTRODE
-        self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self.nodes}
+        self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self._kept}
         if not (np.isfinite(start_s) and start_s >= 0):
             raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
         self._slow_cost = {"thermal": 0.0, "electrodes": 0.0}  # wall time of the slow models, s
@@ -117,8 +121,9 @@ class Sensor:
         forces = [s for s in stimuli if isinstance(s, ForceStimulus)]
         vibrations = [s for s in stimuli if isinstance(s, Vibration)]
         calibrations = [s for s in stimuli if isinstance(s, PressureCalibrator)]
+        motions = [s for s in stimuli if isinstance(s, (Slide, CommandedMotion))]
         other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator, PowerOn,
-                                                         AmbientStep, HeaterFailure))]
+                                                         AmbientStep, HeaterFailure, Slide, CommandedMotion))]
         if other:
             raise TypeError(f"not a stimulus: {other[0]!r}")
         for v in vibrations:
@@ -133,6 +138,9 @@ class Sensor:
             effects.append(skin_displacement(vibrations))
         if calibrations:
             effects.append(calibration_pressure(calibrations))
+        if motions:  # built only for scenes that slide
+            effects.append(SlidingContact(motions, p, fs, f.sliding_dx_m, f.friction_substeps, f.patch_radii,
+                                          self.seed))
         dynamic = self.thermal is not None
         if dynamic:
             effects.append(CoreTemperature(self.thermal))
@@ -201,11 +209,11 @@ class Sensor:
             self._computed += block.n
             if self._computed <= keep_from:  # a whole block nobody will ask for: do not keep it
                 self._buf_n0 = self._computed
-                for node in self.nodes:
+                for node in self._kept:
                     self._chunks[node] = []
                 continue
-            for node in self.nodes:
-                self._chunks[node].append(signals[node])
+            for node in self._kept:
+                self._chunks[node].append(signals[node] if node in signals else np.zeros(block.n))
         self._trim(keep_from)
 
     def _history(self, node: str) -> np.ndarray:
@@ -218,10 +226,32 @@ class Sensor:
         drop = keep_from - self._buf_n0
         if drop <= 0:
             return
-        for node in self.nodes:
+        for node in self._kept:
             h = self._history(node)
             self._chunks[node] = [h[drop:]]
         self._buf_n0 = keep_from
+
+    @property
+    def _kept(self) -> tuple[str, ...]:
+        """Grid signals whose recent history is kept: the channels' nodes and ``record_signals``."""
+        return tuple(self.nodes) + tuple(s for s in self.record_signals if s not in self.nodes)
+
+    def signal(self, name: str, times) -> np.ndarray:
+        """Value of a recorded grid signal (one of ``record_signals``, SI units) at ``times`` (s, in time order),
+        linearly interpolated: the world beside the sensor, e.g. the tangential force a rig's stage feels."""
+        if name not in self.record_signals:
+            raise ValueError(f"signal {name!r} was not declared in record_signals {self.record_signals}")
+        times = np.asarray(times, dtype=float)
+        if times.size == 0:
+            return np.empty(0)
+        x = times * self.fs
+        i = np.floor(x).astype(np.int64)
+        if i.min() < self._buf_n0:
+            raise ValueError(f"instant {times.min():.6f} s is older than the retained history")
+        self._advance_through(int(i.max()) + 1, keep_from=self._buf_n0)
+        h = self._history(name)
+        k = i - self._buf_n0
+        return h[k] * (1.0 - (x - i)) + h[k + 1] * (x - i)
 
     @property
     def simulated_s(self) -> float:

@@ -1,0 +1,146 @@
+"""Skin–texture contact while sliding, sample by sample: LuGre friction against a compliant skin, plus the texture
+seen through the contact patch (compiled with numba; one call per block, state carried between calls).
+
+Per grid step of ``dt`` (s), with the stage moving the texture at ``V`` (m/s) and a nominal normal load ``N0`` (N):
+
+* the texture's height under the patch ``h`` (m) and the load-weighted slope under the skin ``s`` (1) are read
+  from precomputed spatial tables at the texture position under the finger (the relative slip ``p``), at the
+  patch radius of the present load; normal load ``N = max(0, N0 + k·h)`` with the Hertz contact stiffness
+  ``k_n = 1.5·K^(2/3)·N0^(1/3)`` in series with the texture's own stiffness;
+* LuGre friction per N of load: bristle deflection ``z`` obeys ``dz/dt = v_r − σ0|v_r| z / g(v_r)`` with the
+  Stribeck curve ``g``; over one step with ``v_r`` held it is integrated exactly (an exponential), so it is
+  stable at any step and ``|z|`` never exceeds ``max(|z|, µs/σ0)``; the friction force is
+  ``N·(σ0 z + σ1 dz/dt + µv v_r)``;
+* the skin is a massless spring–damper (``k_t``, ``c_t``) between the core and the contact, so the skin's
+  velocity ``u`` satisfies ``k_t (x + u dt) + c_t u = F_friction(u)`` with ``v_r = V − u``: an implicit step,
+  solved for ``u`` by bisection on a bracket that always holds a root (unconditionally stable);
+* the texture position advances by the slip ``v_r·dt``: while the skin sticks it hardly moves, so the texture
+  excites nothing; at slip the features start passing under the patch.
+
+The tangential force on the skin is the friction force plus ``N·s`` (ridges climbing feature slopes).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), last friction (N)
+STATE_SIZE = 4
+
+
+@njit(cache=True)
+def _stribeck(v, mu_s, mu_k, vs):
+    return mu_k + (mu_s - mu_k) * math.exp(-(v / vs) ** 2)
+
+
+@njit(cache=True)
+def _bristle_after(z, vr, dt, sigma0, mu_s, mu_k, vs):
+    """Bristle deflection after ``dt`` with the slip velocity ``vr`` held (exact solution of the linear ODE)."""
+    if vr == 0.0:
+        return z
+    g = _stribeck(vr, mu_s, mu_k, vs)
+    a = sigma0 * abs(vr) / g
+    z_ss = g / sigma0 if vr > 0 else -g / sigma0
+    if a * dt < 1e-12:
+        return z + vr * dt
+    return z_ss + (z - z_ss) * math.exp(-a * dt)
+
+
+@njit(cache=True)
+def _interp_table(table, radii, r, pos, dx):
+    """Bilinear read of ``table[radius index, position index]`` at radius ``r`` (m) and position ``pos`` (m)."""
+    n = table.shape[1]
+    u = pos / dx
+    i = int(math.floor(u))
+    f = u - i
+    i = i % n
+    j = (i + 1) % n
+    if r <= radii[0]:
+        return table[0, i] * (1 - f) + table[0, j] * f
+    if r >= radii[-1]:
+        k = radii.size - 1
+        return table[k, i] * (1 - f) + table[k, j] * f
+    k = 0
+    while radii[k + 1] < r:
+        k += 1
+    w = (r - radii[k]) / (radii[k + 1] - radii[k])
+    a = table[k, i] * (1 - f) + table[k, j] * f
+    b = table[k + 1, i] * (1 - f) + table[k + 1, j] * f
+    return a * (1 - w) + b * w
+
+
+@njit(cache=True)
+def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
+                K, radius_1N, modulus_eff, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
+                out_normal, out_tangential, out_slip_velocity, out_position):
+    """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place.
+
+    ``N0``, ``V``: nominal normal load (N) and stage velocity (m/s) per grid sample; ``heights``/``slopes``:
+    spatial tables (radius × position) of the patch-averaged height (m) and the ridge-sampled slope (1);
+    ``modulus_eff``: the texture's E/(1 − ν²) (Pa): soft textures yield in series with the skin, so their
+    features reach the fluid attenuated by k_tex/(k_n + k_tex);
+    ``state``: x, z, p, F (updated in place).
+    """
+    x, z, p = state[0], state[1], state[2]
+    h = dt / substeps
+    for n in range(N0.size):
+        n0 = N0[n]
+        v_stage = V[n]
+        f_sum = 0.0
+        vr_sum = 0.0
+        normal = 0.0
+        slope = 0.0
+        for _ in range(substeps):
+            if n0 > 0.0:
+                r = radius_1N * n0 ** (1.0 / 3.0)
+                kn = 1.5 * K ** (2.0 / 3.0) * n0 ** (1.0 / 3.0)
+                k_tex = 2.0 * r * modulus_eff  # a soft texture in series with the skin (flat-punch stiffness)
+                series = k_tex / (kn + k_tex)
+                height = _interp_table(heights, radii, r, p, dx)
+                slope = series * _interp_table(slopes, radii, r, p, dx)
+                normal = max(0.0, n0 + kn * series * height)
+            else:
+                normal = 0.0
+                slope = 0.0
+            # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0
+            zmax = max(abs(z), mu_s / sigma0)
+            fmax = normal * (sigma0 * zmax + sigma1 * 2.0 * zmax / h + mu_v * (abs(v_stage) + 1.0))
+            bound = abs(v_stage) + (k_t * abs(x) + fmax) / (c_t + k_t * h) + 1e-6
+            lo, hi = -bound, bound
+            u = 0.0
+            znew = z
+            force = 0.0
+            for _it in range(60):
+                u = 0.5 * (lo + hi)
+                vr = v_stage - u
+                znew = _bristle_after(z, vr, h, sigma0, mu_s, mu_k, vs)
+                force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * vr)
+                g = k_t * (x + u * h) + c_t * u - force
+                if g > 0.0:
+                    hi = u
+                else:
+                    lo = u
+                if hi - lo < 1e-12 * (1.0 + abs(v_stage)):
+                    break
+            vr = v_stage - u
+            x += u * h
+            z = znew
+            p += vr * h
+            f_sum += force
+            vr_sum += vr
+        out_normal[n] = normal
+        out_tangential[n] = f_sum / substeps + normal * slope
+        out_slip_velocity[n] = vr_sum / substeps
+        out_position[n] = p
+    state[0], state[1], state[2] = x, z, p
+    state[3] = out_tangential[N0.size - 1] if N0.size else state[3]
+
+
+def new_state(position_m: float = 0.0) -> np.ndarray:
+    """A contact at rest at ``position_m`` on the texture (m)."""
+    s = np.zeros(STATE_SIZE)
+    s[2] = position_m
+    return s

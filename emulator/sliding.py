@@ -1,0 +1,285 @@
+"""Sliding over a texture: the motions that press and slide, and the effect that turns them into forces.
+
+Data flow (per block, state carried): texture + skin → spatial tables along the track (patch-averaged height,
+ridge-sampled slope, one row per patch radius) → :func:`emulator.friction.slide_block` (LuGre stick-slip
+against the compliant skin, texture position advanced by the slip) → ``contact_force_N`` (normal load with
+its fluctuations, plus the tangential force's share of fluid pressure) and ``tangential_force_N`` (for the
+stage's motor current and plots).  ``contact_force_N`` then takes the existing path: force → fluid pressure →
+resonance → bridge → front end → codes.
+
+The texture under the finger is seen through the contact patch (radius ``a = a_1N·N^(1/3)``): heights are
+averaged with the Hertz line load ``∝ 1 − x²/a²`` (a spatial low-pass: coarse features pass, fine ones fade
+as force grows); fingerprint ridges sample the surface slope at the ridge pitch under the same load, each ridge
+crest seeing the surface through its contact width — a comb that folds fine texture into vibrations at
+``v/pitch`` and its harmonics.  A smooth skin sees only the patch-averaged slope.  Worn ridges interpolate
+between the two by the skin's ridge gain (:mod:`emulator.skin`).
+
+Two kinds of motion: :class:`Slide` (scripted: force ramp, hold, slide at a velocity over a distance, lift;
+force-controlled) and :class:`CommandedMotion` (a rig's stepper and stage commands added while the run goes,
+position-controlled: the normal load follows from the finger's indentation through the contact law).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from emulator import friction
+from emulator.effects import Block, Effect, effect_rng
+from emulator.params import SensorParams
+from emulator.skin import Skin
+from emulator.texture import Texture, random_profile, periodic_profile
+
+POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0.5 for rubbers changes it by 20 %)
+
+
+@dataclass
+class Slide:
+    """A scripted sliding trial, force-controlled: the normal force ramps to ``force_N`` over ``approach_s``,
+    holds ``hold_s``, the stage slides the texture at ``velocity_m_per_s`` over ``distance_m`` (accelerating
+    over ``accel_s``), then the finger lifts over ``lift_s``.  ``start_position_m`` is where on the texture the
+    finger lands."""
+
+    start_s: float
+    texture: Texture
+    force_N: float
+    velocity_m_per_s: float
+    distance_m: float
+    approach_s: float = 0.3
+    hold_s: float = 0.5
+    accel_s: float = 0.05
+    lift_s: float = 0.2
+    start_position_m: float = 0.0
+    skin: Skin | None = None
+
+    def __post_init__(self):
+        for name in ("force_N", "velocity_m_per_s", "distance_m", "approach_s", "accel_s", "lift_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"slide.{name} = {v!r}: must be a positive number")
+        if self.distance_m < self.velocity_m_per_s * self.accel_s:
+            raise ValueError(f"slide.distance_m = {self.distance_m!r}: shorter than the acceleration and braking "
+                             f"({self.velocity_m_per_s * self.accel_s:.4g} m at this velocity)")
+
+    @property
+    def slide_start_s(self) -> float:
+        return self.start_s + self.approach_s + self.hold_s
+
+    @property
+    def slide_end_s(self) -> float:
+        return self.slide_start_s + self.distance_m / self.velocity_m_per_s + self.accel_s
+
+    @property
+    def end_s(self) -> float:
+        return self.slide_end_s + self.lift_s
+
+    @property
+    def max_travel_m(self) -> float:
+        return self.distance_m
+
+    def normal_force_N(self, t: np.ndarray) -> np.ndarray:
+        """Nominal normal force (N): raised-cosine ramps up and down, held in between."""
+        t = np.asarray(t, float)
+        up = np.clip((t - self.start_s) / self.approach_s, 0, 1)
+        down = np.clip((t - self.slide_end_s) / self.lift_s, 0, 1)
+        return self.force_N * (0.5 - 0.5 * np.cos(np.pi * up)) * (0.5 + 0.5 * np.cos(np.pi * down))
+
+    def stage_velocity_m_per_s(self, t: np.ndarray) -> np.ndarray:
+        """Stage velocity (m/s): linear ramps of ``accel_s`` at both ends of the slide."""
+        t = np.asarray(t, float)
+        v, a = self.velocity_m_per_s, self.accel_s
+        rise = np.clip((t - self.slide_start_s) / a, 0, 1)
+        fall = np.clip((self.slide_end_s - t) / a, 0, 1)
+        return v * np.minimum(rise, fall)
+
+
+@dataclass
+class CommandedMotion:
+    """Motion commanded while the run goes (a rig's stepper and linear stage), position-controlled.
+
+    The finger's depth below the texture's surface (m, negative above it) and the stage velocity (m/s) are
+    piecewise linear in time between commands; a command takes effect ``latency_s`` after it is given (the
+    rig's control latency), so the emulator never needs a command it has not yet received.  The normal load is
+    the contact law of the indentation: ``N = K·δ^1.5`` for the skin in series with the texture's compliance.
+    """
+
+    texture: Texture
+    start_position_m: float = 0.0
+    max_travel_m: float = 0.2
+    latency_s: float = 0.02
+    skin: Skin | None = None
+    start_s: float = 0.0
+    end_s: float = math.inf
+    depth_m: float = -1e-3
+    _finger: list = field(default_factory=list)  # (t, depth m, depth rate m/s)
+    _stage: list = field(default_factory=list)  # (t, velocity m/s, acceleration m/s²)
+    _stage_velocity: float = 0.0
+
+    def __post_init__(self):
+        self._finger = [(self.start_s, self.depth_m, 0.0)]
+        self._stage = [(self.start_s, 0.0, 0.0)]
+
+    def move_finger(self, t_s: float, rate_m_per_s: float) -> float:
+        """From ``t_s`` + latency the finger moves down at ``rate_m_per_s`` (negative: up); returns the instant."""
+        t = t_s + self.latency_s
+        t0, d0, r0 = self._finger[-1]
+        if t < t0:
+            raise ValueError(f"finger command at {t:.6f} s is older than the last one ({t0:.6f} s)")
+        self._finger.append((t, d0 + r0 * (t - t0), float(rate_m_per_s)))
+        return t
+
+    def move_stage(self, t_s: float, velocity_m_per_s: float, accel_m_per_s2: float = 1.0) -> tuple[float, float]:
+        """From ``t_s`` + latency the stage accelerates at ``accel_m_per_s2`` to ``velocity_m_per_s``; returns
+        (start, end) of the change."""
+        t = t_s + self.latency_s
+        v0 = self.stage_velocity_m_per_s(np.array([t]))[0]
+        dv = float(velocity_m_per_s) - v0
+        dur = abs(dv) / accel_m_per_s2
+        self._stage.append((t, v0, math.copysign(accel_m_per_s2, dv) if dur > 0 else 0.0))
+        self._stage.append((t + dur, float(velocity_m_per_s), 0.0))
+        return t, t + dur
+
+    def depth_at(self, t: np.ndarray) -> np.ndarray:
+        """Finger depth below the surface (m) at instants ``t``."""
+        t = np.asarray(t, float)
+        starts = np.array([s[0] for s in self._finger])
+        k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, None)
+        seg = np.array(self._finger)[k]
+        return seg[:, 1] + seg[:, 2] * (t - seg[:, 0])
+
+    def stage_velocity_m_per_s(self, t: np.ndarray) -> np.ndarray:
+        t = np.asarray(t, float)
+        starts = np.array([s[0] for s in self._stage])
+        k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, None)
+        seg = np.array(self._stage)[k]
+        return seg[:, 1] + seg[:, 2] * (t - seg[:, 0])
+
+    def decided_until(self) -> float:
+        """Latest instant up to which the motion is fixed by commands already given."""
+        return max(self._finger[-1][0], self._stage[-1][0])
+
+
+def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) -> np.ndarray:
+    """Normal load (N) at finger depth ``depth_m`` (m): skin (N = K δ_s^1.5) in series with the texture's
+    flat-punch compliance (δ_t = N / (2 a E*)), solved on a table and interpolated."""
+    table_N, table_depth = _depth_table(params.contact_stiffness_N_per_m1_5, params.contact_radius_at_1N_m,
+                                        texture.modulus_Pa)
+    d = np.asarray(depth_m, float)
+    return np.where(d > 0, np.interp(d, table_depth, table_N), 0.0)
+
+
+@functools.lru_cache(maxsize=64)
+def _depth_table(K: float, radius_1N: float, modulus: float):
+    N = np.concatenate([[0.0], np.geomspace(1e-5, 50.0, 2000)])
+    skin = (N / K) ** (2.0 / 3.0)
+    radius = radius_1N * np.cbrt(N)
+    texture = np.divide(N, 2.0 * radius * modulus / (1 - POISSON_RATIO**2), out=np.zeros_like(N), where=radius > 0)
+    return N, skin + texture
+
+
+@functools.lru_cache(maxsize=32)
+def _random_track(texture: Texture, dx_m: float) -> np.ndarray:
+    return random_profile(texture, dx_m)
+
+
+def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, length_m: float, dx_m: float,
+                   radii_m: np.ndarray):
+    """Tables (radius × position) of the patch-averaged height (m) and the slope the skin feels (1) along the
+    track ``[start_m, start_m + length_m)``, positions relative to ``start_m``."""
+    rough = _random_track(texture, dx_m)
+    n_surface = rough.size
+    pad = int(np.ceil((radii_m.max() + skin.ridge_pitch_m) / dx_m)) + 2
+    n = int(np.ceil(length_m / dx_m)) + 2
+    idx = (int(round(start_m / dx_m)) + np.arange(-pad, n + pad)) % n_surface
+    x = (np.arange(-pad, n + pad)) * dx_m + start_m
+    h = rough[idx] + periodic_profile(texture, x)
+    # the crest of a ridge sees the surface through its contact width
+    w_crest = max(1, int(round(skin.ridge_contact_width_m / dx_m)))
+    crest = np.convolve(h, np.ones(w_crest) / w_crest, mode="same")
+    crest_slope = np.gradient(crest, dx_m)
+    heights = np.empty((radii_m.size, n))
+    slopes = np.empty((radii_m.size, n))
+    for k, a in enumerate(radii_m):
+        m = max(1, int(np.floor(a / dx_m)))
+        xs = np.arange(-m, m + 1) * dx_m
+        w = np.clip(1.0 - (xs / a) ** 2, 0.0, None)
+        w /= w.sum()
+        patch = np.convolve(h, w[::-1], mode="same")
+        heights[k] = patch[pad:pad + n]
+        smooth_slope = np.gradient(patch, dx_m)[pad:pad + n]
+        ridged = np.zeros(n)
+        j = np.arange(-int(a // skin.ridge_pitch_m), int(a // skin.ridge_pitch_m) + 1)
+        wj = np.clip(1.0 - (j * skin.ridge_pitch_m / a) ** 2, 0.0, None)
+        if wj.sum() > 0:
+            wj /= wj.sum()
+            for jj, ww in zip(j, wj):
+                shift = int(round(jj * skin.ridge_pitch_m / dx_m))
+                ridged += ww * crest_slope[pad + shift:pad + shift + n]
+        slopes[k] = smooth_slope + ridge_gain * (ridged - smooth_slope)
+    return heights, slopes
+
+
+class SlidingContact(Effect):
+    """Skin–texture sliding: stick-slip friction, patch-averaged texture, fingerprint ridges (N)."""
+
+    name = "sliding_contact"
+    produces = ("contact_force_N", "tangential_force_N")
+
+    def __init__(self, motions: list, params: SensorParams, fs: float, dx_m: float, substeps: int, n_radii: int,
+                 seed: int):
+        self.params, self.fs, self.dx_m, self.substeps = params, fs, dx_m, int(substeps)
+        self.motions = sorted(motions, key=lambda m: m.start_s)
+        rng = effect_rng(seed, self.name)
+        self._contacts = []
+        for m in self.motions:
+            skin = m.skin or Skin()
+            gain = skin.trial_gain(rng)
+            force_max = getattr(m, "force_N", 5.0)
+            radii = params.contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, max(2.5 * force_max, 0.1), n_radii))
+            length = m.max_travel_m + 4 * radii.max() + 0.01
+            heights, slopes = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m, radii)
+            self._contacts.append({"motion": m, "gain": gain, "radii": radii, "heights": heights, "slopes": slopes,
+                                   "state": friction.new_state(0.0), "skin_state": skin.state()})
+
+    def describe(self) -> str:
+        return "sliding contact: stick-slip friction, patch-averaged texture, fingerprint ridges (N)"
+
+    def ridge_gains(self) -> list[float]:
+        return [c["gain"] for c in self._contacts]
+
+    def process(self, block: Block, inputs):
+        t = block.times
+        normal_out = np.zeros(block.n)
+        tangential_out = np.zeros(block.n)
+        p, dt = self.params, 1.0 / block.fs
+        for c in self._contacts:
+            m = c["motion"]
+            if m.end_s < t[0] or m.start_s > t[-1]:
+                continue
+            a = int(np.searchsorted(t, m.start_s, side="left"))
+            b = int(np.searchsorted(t, m.end_s, side="right"))
+            tt = t[a:b]
+            if isinstance(m, Slide):
+                n0 = m.normal_force_N(tt)
+            else:
+                n0 = contact_force_from_depth(m.depth_at(tt), p, m.texture)
+            v = m.stage_velocity_m_per_s(tt)
+            tex = m.texture
+            normal = np.empty(tt.size)
+            tang = np.empty(tt.size)
+            slip = np.empty(tt.size)
+            pos = np.empty(tt.size)
+            friction.slide_block(np.ascontiguousarray(n0), np.ascontiguousarray(v), dt, self.substeps,
+                                 c["heights"], c["slopes"], c["radii"], self.dx_m, c["state"],
+                                 p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
+                                 tex.modulus_Pa / (1 - POISSON_RATIO**2),
+                                 p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
+                                 p.bristle_stiffness_per_N, p.bristle_damping_per_N,
+                                 tex.mu_static, tex.mu_kinetic, tex.stribeck_velocity_m_per_s,
+                                 tex.mu_per_velocity_s_per_m, normal, tang, slip, pos)
+            normal_out[a:b] += normal + p.tangential_coupling * np.abs(tang)
+            tangential_out[a:b] += tang
+        return {"contact_force_N": normal_out, "tangential_force_N": tangential_out}
