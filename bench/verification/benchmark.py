@@ -136,6 +136,46 @@ def stream_hour(seconds: float = 3600.0) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def run_memory(short_s: float = 60.0, long_s: float = 36000.0, say=print) -> dict:
+    """Peak RSS of ``biotac-bench run`` (full 44-slot frame at rest, samples.h5 and plots) for ``short_s`` and
+    ``long_s`` simulated seconds, each in its own child process (``os.wait4`` returns that child's own peak).
+
+    Target: the long run at the short run's peak within 20 %, both at most 300 MB.
+    """
+    import os
+    import tempfile
+    from pathlib import Path
+
+    runs = {}
+    with tempfile.TemporaryDirectory(prefix="biotac-run-memory-") as tmp:
+        for seconds in (short_s, long_s):
+            scene = Path(tmp) / f"rest_{seconds:g}s.toml"
+            scene.write_text(f'[scene]\nname = "rest-memory"\nduration_s = {float(seconds)!r}\nseed = 1\n'
+                             f'[host]\nsequence = "default"\n')
+            out, log = Path(tmp) / f"out_{seconds:g}s", Path(tmp) / f"log_{seconds:g}s.txt"
+            t0 = time.perf_counter()
+            with log.open("w") as err:
+                p = subprocess.Popen([sys.executable, "-m", "bench.cli", "run", str(scene), "--out", str(out),
+                                      "--quiet"], cwd=REPO, stdout=subprocess.DEVNULL, stderr=err)
+                _, status, usage = os.wait4(p.pid, 0)
+                p.returncode = os.waitstatus_to_exitcode(status)
+            if p.returncode != 0:
+                raise RuntimeError(f"run of {seconds:g} s failed ({p.returncode}): {log.read_text()[-2000:]}")
+            runs[seconds] = {"simulated_s": seconds, "wall_s": time.perf_counter() - t0,
+                             "peak_rss_MB": usage.ru_maxrss / 1024.0,
+                             "outputs": sorted(f.name for f in out.iterdir() if not f.name.startswith("."))}
+    short, long_ = runs[short_s], runs[long_s]
+    res = {"short": short, "long": long_, "ratio": long_["peak_rss_MB"] / short["peak_rss_MB"],
+           "target_MB": 300.0, "target_ratio": 1.2}
+    res["met"] = max(short["peak_rss_MB"], long_["peak_rss_MB"]) <= 300.0 and abs(res["ratio"] - 1.0) <= 0.2
+    if say:
+        say(f"`run` with samples.h5 and plots, full 44-slot frame at rest: {short_s:g} s peak RSS "
+            f"{short['peak_rss_MB']:.0f} MB ({short['wall_s']:.1f} s wall), {long_s:g} s peak RSS "
+            f"{long_['peak_rss_MB']:.0f} MB ({long_['wall_s']:.1f} s wall); ratio {res['ratio']:.2f} "
+            f"(target ≤ 300 MB, equal within 20 %: {'met' if res['met'] else 'NOT met'})")
+    return res
+
+
 def spi_paths(rtl: bool = True, say=lambda m: None) -> dict:
     """Throughput of each implementation of the sensor's SPI side on the default frame (1 sensor)."""
     from emulator.spi.model import SELECT_CODE, Bus, SensorPort, Transfer
@@ -278,6 +318,7 @@ def main(args) -> int:
     m = result["memory"]
     print(f"\nStreaming {m['simulated_s']:.0f} simulated s of the full frame: {m['realtime_factor']:.0f}× real time, "
           f"peak RSS {m['peak_rss_MB']:.0f} MB")
+    run_memory(say=print)
     print("\nSPI implementations, default 44-slot frame at 4.4 kHz (one sample transaction = command + read):")
     names = {"software_vectorized": "software model (vectorized path)",
              "software_transfer_level": "software model (transfer-level path)",
