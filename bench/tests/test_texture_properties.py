@@ -1,0 +1,207 @@
+"""Texture properties (traction, roughness, fineness) on synthetic trials with known answers."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import signal
+
+from bench.textures import properties as tp
+
+pytestmark = pytest.mark.unit
+
+FS = 2200.0
+CONTACT, START, END, STOP = 0.5, 1.5, 3.5, 4.0  # s
+
+
+def make_trial(slide_signal=None, bg_sigma=0.0, seed=0, current=None, **meta) -> tp.TrialRecording:
+    """A 4 s trial at 2.2 kS/s: PAC = mid-scale + background noise everywhere + ``slide_signal(t)`` while sliding."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(STOP * FS)) / FS
+    pac = 2048.0 + bg_sigma * rng.standard_normal(t.size)
+    sliding = (t >= START) & (t <= END)
+    if slide_signal is not None:
+        pac[sliding] += slide_signal(t[sliding], rng)
+    tc = np.arange(0.0, STOP, 0.1)  # current every 100 ms, as D's stage controller
+    cur = np.full(tc.size, 0.05) if current is None else current(tc)
+    pdc = np.where(t > CONTACT, 2100.0, 2000.0)[::22]
+    return tp.TrialRecording(pac_t=t, pac=pac, pdc_t=t[::22], pdc=pdc, current_t=tc, current_A=cur,
+                             contact_s=CONTACT, slide_start_s=START, slide_end_s=END, **meta)
+
+
+# ------------------------------------------------------------------------------------------------ the FIR filter
+
+
+def test_filter_is_66th_order_linear_phase():
+    h = tp.roughness_filter(FS)
+    assert h.size == 67 and tp.FIR_ORDER == 66
+    assert np.allclose(h, h[::-1])  # symmetric: linear phase, delay 33 samples
+
+
+def test_filter_passband_is_20_to_700_hz():
+    h = tp.roughness_filter(FS)
+    _, H = signal.freqz(h, worN=[10.0, 20.0, 30.0, 400.0, 690.0, 700.0, 900.0], fs=FS)
+    a10, a20, a30, a400, a690, a700, a900 = np.abs(H)
+    assert a10 < 0.5 < a30          # the low edge lies between 10 and 30 Hz
+    assert a400 == pytest.approx(1.0, abs=0.01)
+    assert a690 > 0.5 > a900 and a900 < 0.01  # the high edge between 690 and 900 Hz; stop band beyond
+    assert a20 == pytest.approx(0.5, abs=0.06) and a700 == pytest.approx(0.5, abs=0.06)  # −6 dB at the edges
+
+
+# ------------------------------------------------------------------------------------------------ fineness
+
+
+@pytest.mark.parametrize("f", [80.0, 250.0, 600.0])
+def test_tone_gives_centroid_at_its_frequency(f):
+    rec = make_trial(lambda t, rng: 40.0 * np.sin(2 * np.pi * f * t), bg_sigma=0.01)
+    sc = tp.spectral_centroid(rec)
+    assert sc == pytest.approx(f, rel=0.01)
+    assert tp.fineness(rec) == pytest.approx(math.log(f), abs=0.01)
+
+
+def test_centroid_weights_by_power_not_amplitude():
+    # 100 Hz at amplitude 30 and 500 Hz at amplitude 10: powers 900 and 100 -> (900·100 + 100·500) / 1000 = 140 Hz
+    rec = make_trial(lambda t, rng: 30 * np.sin(2 * np.pi * 100 * t) + 10 * np.sin(2 * np.pi * 500 * t))
+    assert tp.spectral_centroid(rec) == pytest.approx(140.0, rel=0.02)
+
+
+def test_centroid_ignores_the_pac_offset_and_uses_only_the_measurement_window():
+    # a loud 900 Hz tone during the hold and the first 20 % of the slide must not count
+    def sig(t, rng):
+        return np.where(t < START + 0.15 * (END - START), 200 * np.sin(2 * np.pi * 900 * t), 0) + \
+            20 * np.sin(2 * np.pi * 200 * t)
+    rec = make_trial(sig)
+    assert tp.spectral_centroid(rec) == pytest.approx(200.0, rel=0.01)
+
+
+# ------------------------------------------------------------------------------------------------ roughness
+
+
+def test_white_noise_above_background_gives_expected_roughness():
+    sigma_bg, sigma_x = 5.0, 8.0
+    rec = make_trial(lambda t, rng: sigma_x * rng.standard_normal(t.size), bg_sigma=sigma_bg, seed=3)
+    g = float(np.sum(tp.roughness_filter(FS) ** 2))  # white-noise power gain of the filter
+    p, bg = tp.band_powers(rec)
+    assert bg == pytest.approx(sigma_bg**2 * g, rel=0.1)
+    assert p == pytest.approx((sigma_bg**2 + sigma_x**2) * g, rel=0.1)
+    assert tp.roughness(rec) == pytest.approx(math.log(sigma_x**2 * g), abs=0.08)
+
+
+def test_roughness_scales_as_log_of_power():
+    a = make_trial(lambda t, rng: 4.0 * rng.standard_normal(t.size), bg_sigma=1.0, seed=1)
+    b = make_trial(lambda t, rng: 40.0 * rng.standard_normal(t.size), bg_sigma=1.0, seed=1)
+    assert tp.roughness(b) - tp.roughness(a) == pytest.approx(math.log(100.0), abs=0.1)
+
+
+def test_roughness_floor_when_sliding_is_quieter_than_background():
+    rec = make_trial(None, bg_sigma=3.0)
+    rec_loud_bg = tp.TrialRecording(
+        pac_t=rec.pac_t, pac=np.where(rec.pac_t < START, rec.pac, 2048.0), pdc_t=rec.pdc_t, pdc=rec.pdc,
+        current_t=rec.current_t, current_A=rec.current_A, contact_s=CONTACT, slide_start_s=START,
+        slide_end_s=END)
+    r = tp.roughness(rec_loud_bg)
+    assert math.isfinite(r) and r == pytest.approx(math.log(tp.POWER_FLOOR))
+    assert tp.roughness(rec_loud_bg, power_floor=1e-6) == pytest.approx(math.log(1e-6))
+
+
+# ------------------------------------------------------------------------------------------------ traction
+
+
+def test_traction_is_mean_current_over_the_measurement_window():
+    def current(tc):
+        c = np.full(tc.size, 0.05)                       # unloaded, outside the slide
+        c[(tc >= START) & (tc < START + 0.3)] = 2.0      # acceleration surge: inside the skipped lead
+        steady = (tc >= START + 0.3) & (tc <= END)
+        c[steady] = 0.6 + 0.1 * np.sin(tc[steady] * 7)   # sliding at constant velocity
+        return c
+    rec = make_trial(None, bg_sigma=1.0, current=current)
+    t0, t1 = tp.measurement_window(rec)
+    assert (t0, t1) == pytest.approx((START + 0.4, END - 0.2))
+    tc = rec.current_t
+    expected = np.mean([0.6 + 0.1 * math.sin(x * 7) for x in tc if t0 <= x <= t1])
+    assert tp.traction(rec) == pytest.approx(expected, rel=1e-12)
+    assert tp.traction(rec, lead=0.0) > expected + 0.1  # including the surge changes the answer
+
+
+def test_properties_returns_all_three():
+    rec = make_trial(lambda t, rng: 10 * np.sin(2 * np.pi * 300 * t) + rng.standard_normal(t.size), bg_sigma=1.0)
+    props = tp.properties(rec)
+    assert set(props) == {"traction", "roughness", "fineness"}
+    assert props == {"traction": tp.traction(rec), "roughness": tp.roughness(rec), "fineness": tp.fineness(rec)}
+
+
+# ------------------------------------------------------------------------------------------------ files and errors
+
+
+def test_npz_round_trip(tmp_path):
+    rec = make_trial(lambda t, rng: 5 * rng.standard_normal(t.size), bg_sigma=1.0, texture=43, force_N=0.2,
+                     velocity_m_s=0.0631, trial=4, seed=99, extra={"skin": "new"})
+    path = tp.save_npz(rec, tmp_path / "trial")
+    assert path.name == "trial.npz" and path.exists()
+    back = tp.load_npz(path)
+    for name in ("pac_t", "pac", "pdc_t", "pdc", "current_t", "current_A"):
+        assert np.array_equal(getattr(back, name), getattr(rec, name)), name
+    assert (back.contact_s, back.slide_start_s, back.slide_end_s) == (CONTACT, START, END)
+    assert back.metadata() == rec.metadata()
+    assert tp.properties(back) == tp.properties(rec)
+
+
+def _write(path, **arrays):
+    np.savez(path, **arrays)
+    return path
+
+
+def _arrays(rec):
+    return dict(PAC_t=rec.pac_t, PAC_code=rec.pac, PDC_t=rec.pdc_t, PDC_code=rec.pdc,
+                stage_current_t=rec.current_t, stage_current_A=rec.current_A, contact_s=CONTACT,
+                slide_start_s=START, slide_end_s=END)
+
+
+def test_load_names_missing_arrays(tmp_path):
+    a = _arrays(make_trial(None, bg_sigma=1.0))
+    del a["stage_current_A"], a["slide_end_s"]
+    with pytest.raises(tp.RecordingError, match="missing array.*stage_current_A, slide_end_s"):
+        tp.load_npz(_write(tmp_path / "x.npz", **a))
+
+
+def _nan_at_3(x):
+    x = x.copy()
+    x[3] = np.nan
+    return x
+
+
+@pytest.mark.parametrize("key, make_value, message", [
+    ("PAC_code", lambda a: np.zeros(10), "PAC: .* instants but 10 values"),
+    ("PDC_t", lambda a: a["PDC_t"][::-1].copy(), "PDC: instants are not strictly increasing"),
+    ("stage_current_A", lambda a: _nan_at_3(a["stage_current_A"]), "stage current: contains NaN"),
+    ("PAC_t", lambda a: np.zeros((2, 2)), "PAC: instants and values must be 1-D"),
+    ("slide_start_s", lambda a: np.float64(0.2), "contact_s <= slide_start_s < slide_end_s"),
+    ("slide_end_s", lambda a: np.array([1.0, 2.0]), "slide_end_s must be a scalar"),
+    ("meta_json", lambda a: np.array("{not json"), "meta_json is not valid JSON"),
+    ("format", lambda a: np.array("something else v9"), "format is 'something else v9'"),
+])
+def test_load_rejects_malformed_arrays(tmp_path, key, make_value, message):
+    a = _arrays(make_trial(None, bg_sigma=1.0))
+    a[key] = make_value(a)
+    with pytest.raises(tp.RecordingError, match=message):
+        tp.load_npz(_write(tmp_path / "x.npz", **a))
+
+
+def test_windows_without_data_are_errors():
+    rec = make_trial(None, bg_sigma=1.0)
+    sparse = tp.TrialRecording(pac_t=rec.pac_t, pac=rec.pac, pdc_t=rec.pdc_t, pdc=rec.pdc,
+                               current_t=np.array([0.0, 3.9]), current_A=np.array([0.1, 0.1]),
+                               contact_s=CONTACT, slide_start_s=START, slide_end_s=END)
+    with pytest.raises(tp.RecordingError, match="stage current: no samples in the measurement window"):
+        tp.traction(sparse)
+    short_hold = tp.TrialRecording(pac_t=rec.pac_t, pac=rec.pac, pdc_t=rec.pdc_t, pdc=rec.pdc,
+                                   current_t=rec.current_t, current_A=rec.current_A,
+                                   contact_s=START - 0.05, slide_start_s=START, slide_end_s=END)
+    with pytest.raises(tp.RecordingError, match="too short for a background window"):
+        tp.roughness(short_hold)
+    with pytest.raises(tp.RecordingError, match="must cover contact_s"):
+        tp.TrialRecording(pac_t=rec.pac_t, pac=rec.pac, pdc_t=rec.pdc_t, pdc=rec.pdc, current_t=rec.current_t,
+                          current_A=rec.current_A, contact_s=CONTACT, slide_start_s=START, slide_end_s=9.0)
+    flat = make_trial(None, bg_sigma=0.0)
+    with pytest.raises(tp.RecordingError, match="constant"):
+        tp.fineness(flat)

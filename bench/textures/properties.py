@@ -1,0 +1,339 @@
+"""The three texture properties of D ch. 6 — traction, roughness, fineness — from one trial's recorded data.
+
+The functions take a :class:`TrialRecording`: PAC and PDC codes with their instants, the linear stage's motor
+current, and the instants of the trial's phases. A recording can come from the emulator or from a real rig, as
+long as it is in this layout (:func:`save_npz` / :func:`load_npz` document the file format).
+
+Phases of a trial (D Fig. 6-4)::
+
+    finger lowered ──► contact_s ── hold (stepper locked) ──► slide_start_s ── sliding ──► slide_end_s
+                         └── background window ──┘                └─ measurement window ─┘
+
+* **measurement window**: the part of the slide the properties are computed over. D: it "occurs shortly after
+  the sliding [starts] and stops before the sliding is completed"; before it the motor current "is initially
+  high due to the acceleration of the linear stage". D gives no numbers; here it is
+  ``[slide_start + lead·D, slide_end − tail·D]`` with ``D`` the slide duration, ``lead = 0.2`` (past the stage's
+  acceleration at every velocity of the 1–10 cm/s grid) and ``tail = 0.1`` (clear of the deceleration).
+* **background window**: the hold between reaching the target force and the start of sliding, shortened by
+  ``guard_s = 0.05`` s at both ends so neither the end of the approach nor the onset of sliding leaks in through
+  the band-pass filter (its half-length is 33 samples = 15 ms at 2.2 kS/s).
+
+Definitions (D eqs 6.14–6.19):
+
+* **traction** (A) = mean stage motor current over the measurement window (D 6.14: traction ∝ motor current; the
+  current rises linearly with normal force while sliding at constant velocity, so the accelerating start is
+  excluded). Plain mean of the current samples inside the window.
+* **roughness** = ln(Power − background), D 6.15–6.16, with ``Power = (1/N) Σ PAC_filt(n)²`` over the
+  measurement window, ``background`` the same power over the background window, and ``PAC_filt`` PAC (codes,
+  mean removed) through a 20–700 Hz band-pass FIR of order 66 (67 taps; :func:`roughness_filter`). Units of the
+  power: bits² (PAC codes). The log is natural (MATLAB's ``log``, in which D analysed the data; another base
+  only rescales the property). A difference ≤ ``power_floor`` (default 1e-3 bits², far below the 1/12 bits²
+  of ADC quantisation, so no measurable vibration is clipped) is replaced by ``power_floor``: the result is
+  always finite.
+* **fineness** = ln(SC), D 6.18–6.19, with SC (Hz) the spectral centroid ``Σ|FFT|²·f / Σ|FFT|²`` of the
+  *unfiltered* PAC (D Fig. 6-4 C) over the measurement window. D: "a sliding window was used to collect the
+  Fourier transform at different sections of the signal, which were averaged and used for the spectral
+  centroid estimation" — so the power spectra of the windows are averaged and the centroid is taken of the
+  average (not an average of per-window centroids). D gives no window length: here 256 samples (116 ms at
+  2.2 kS/s, 8.6 Hz bins), 50 % overlap, each segment mean-removed and Hann-tapered (the PAC code carries a
+  mid-scale offset whose DC bin would otherwise dominate; the taper limits leakage). All bins 0…fs/2 count.
+
+Samples are taken as uniformly spaced; the sampling rate is 1 / median spacing of the instants.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import signal
+
+from bench.errors import BenchError
+
+#: Order of the roughness band-pass FIR (D: "66th order FIR"): 67 taps.
+FIR_ORDER = 66
+#: Band edges of the roughness filter (Hz), D: "20-700Hz digital band-pass filter".
+BAND_HZ = (20.0, 700.0)
+#: Default measurement window: fractions of the slide duration skipped at its start and end.
+MEASURE_LEAD, MEASURE_TAIL = 0.2, 0.1
+#: Default guard (s) trimmed from both ends of the hold to form the background window.
+BACKGROUND_GUARD_S = 0.05
+#: Floor (bits²) for the background-subtracted vibration power.
+POWER_FLOOR = 1e-3
+#: Spectral-centroid segments: length (samples) and overlap (fraction).
+CENTROID_WINDOW, CENTROID_OVERLAP = 256, 0.5
+#: Layout tag written into every trial file.
+NPZ_FORMAT = "biotac-bench trial recording v1"
+#: Arrays every trial file holds (see :func:`save_npz`).
+NPZ_ARRAYS = ("PAC_t", "PAC_code", "PDC_t", "PDC_code", "stage_current_t", "stage_current_A")
+NPZ_SCALARS = ("contact_s", "slide_start_s", "slide_end_s")
+
+
+class RecordingError(BenchError, ValueError):
+    """A trial recording is malformed (missing or bad array, inconsistent phases, windows without data)."""
+
+
+def _series(name: str, t: Any, x: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Validate one (instants, values) pair: 1-D, same length, non-empty, finite, instants strictly increasing."""
+    try:
+        t = np.asarray(t, dtype=np.float64)
+        x = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise RecordingError(f"{name}: not numeric ({e})") from None
+    if t.ndim != 1 or x.ndim != 1:
+        raise RecordingError(f"{name}: instants and values must be 1-D (got shapes {t.shape} and {x.shape})")
+    if t.size != x.size:
+        raise RecordingError(f"{name}: {t.size} instants but {x.size} values")
+    if t.size == 0:
+        raise RecordingError(f"{name}: empty")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
+        raise RecordingError(f"{name}: contains NaN or infinite values")
+    if t.size > 1 and not np.all(np.diff(t) > 0):
+        raise RecordingError(f"{name}: instants are not strictly increasing")
+    return t, x
+
+
+@dataclass(frozen=True)
+class TrialRecording:
+    """One exploratory trial: what the sensor and the stage recorded, and when the phases began.
+
+    ``pac_t``/``pac`` — PAC instants (s) and 12-bit codes (2.2 kS/s in the default frame);
+    ``pdc_t``/``pdc`` — PDC instants (s) and codes; ``current_t``/``current_A`` — stage motor current instants (s)
+    and current (A); ``contact_s`` — the finger reached the target force (the stepper stops); ``slide_start_s`` /
+    ``slide_end_s`` — the stage starts / stops sliding. All instants share one clock (s).
+    Metadata (free, not used by the computations): ``texture`` (id or name), ``force_N``, ``velocity_m_s``,
+    ``trial`` (repetition number), ``seed``, and ``extra`` (any JSON-serialisable dict).
+    Arrays are converted to float64 and validated on construction (:class:`RecordingError` names the problem).
+    """
+
+    pac_t: np.ndarray
+    pac: np.ndarray
+    pdc_t: np.ndarray
+    pdc: np.ndarray
+    current_t: np.ndarray
+    current_A: np.ndarray
+    contact_s: float
+    slide_start_s: float
+    slide_end_s: float
+    texture: int | str | None = None
+    force_N: float | None = None
+    velocity_m_s: float | None = None
+    trial: int | None = None
+    seed: int | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for name, (tf, xf) in {"PAC": ("pac_t", "pac"), "PDC": ("pdc_t", "pdc"),
+                               "stage current": ("current_t", "current_A")}.items():
+            t, x = _series(name, getattr(self, tf), getattr(self, xf))
+            object.__setattr__(self, tf, t)
+            object.__setattr__(self, xf, x)
+        phases = {}
+        for name in NPZ_SCALARS:
+            try:
+                v = float(getattr(self, name))
+            except (TypeError, ValueError):
+                raise RecordingError(f"{name}: not a number ({getattr(self, name)!r})") from None
+            if not math.isfinite(v):
+                raise RecordingError(f"{name}: not finite ({v})")
+            phases[name] = v
+            object.__setattr__(self, name, v)
+        if not phases["contact_s"] <= phases["slide_start_s"] < phases["slide_end_s"]:
+            raise RecordingError(
+                "phases must satisfy contact_s <= slide_start_s < slide_end_s (got "
+                + ", ".join(f"{k}={v}" for k, v in phases.items()) + ")")
+        if self.pac_t.size < 2 or not (self.pac_t[0] <= phases["contact_s"] and phases["slide_end_s"] <= self.pac_t[-1]):
+            raise RecordingError(
+                f"PAC ({self.pac_t[0]:.4g}…{self.pac_t[-1]:.4g} s) must cover contact_s…slide_end_s "
+                f"({phases['contact_s']:.4g}…{phases['slide_end_s']:.4g} s)")
+
+    @property
+    def pac_rate_hz(self) -> float:
+        """PAC sampling rate (Hz): 1 / median spacing of the instants."""
+        return 1.0 / float(np.median(np.diff(self.pac_t)))
+
+    def metadata(self) -> dict:
+        """The free metadata as a JSON-serialisable dict."""
+        return {"texture": self.texture, "force_N": self.force_N, "velocity_m_s": self.velocity_m_s,
+                "trial": self.trial, "seed": self.seed, "extra": self.extra}
+
+
+def save_npz(rec: TrialRecording, path: str | Path) -> Path:
+    """Write ``rec`` to ``path`` (compressed NPZ) and return the path.
+
+    Layout (every key always present): ``PAC_t``, ``PDC_t``, ``stage_current_t`` — instants (s, float64);
+    ``PAC_code``, ``PDC_code`` — codes (float64; integers for real 12-bit data); ``stage_current_A`` — motor current
+    (A); ``contact_s``, ``slide_start_s``, ``slide_end_s`` — 0-d float64 (s); ``meta_json`` — 0-d string, the JSON
+    of :meth:`TrialRecording.metadata`; ``format`` — 0-d string :data:`NPZ_FORMAT`. The PAC/PDC names match the
+    ``codes.npz`` a scene run writes.
+    """
+    path = Path(path)
+    np.savez_compressed(
+        path, PAC_t=rec.pac_t, PAC_code=rec.pac, PDC_t=rec.pdc_t, PDC_code=rec.pdc,
+        stage_current_t=rec.current_t, stage_current_A=rec.current_A,
+        contact_s=np.float64(rec.contact_s), slide_start_s=np.float64(rec.slide_start_s),
+        slide_end_s=np.float64(rec.slide_end_s), meta_json=np.array(json.dumps(rec.metadata())),
+        format=np.array(NPZ_FORMAT))
+    return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
+
+
+def load_npz(path: str | Path) -> TrialRecording:
+    """Read a trial written by :func:`save_npz` (or by anything producing the same layout).
+
+    ``meta_json`` and ``format`` are optional; every array and phase is required. Raises :class:`RecordingError`
+    naming each missing key, or the malformed array.
+    """
+    try:
+        data = np.load(Path(path), allow_pickle=False)
+    except (OSError, ValueError) as e:
+        raise RecordingError(f"{path}: cannot read as NPZ ({e})") from None
+    with data:
+        missing = [k for k in NPZ_ARRAYS + NPZ_SCALARS if k not in data.files]
+        if missing:
+            raise RecordingError(f"{path}: missing array(s): {', '.join(missing)}")
+        if "format" in data.files and str(data["format"]) != NPZ_FORMAT:
+            raise RecordingError(f"{path}: format is {str(data['format'])!r}, expected {NPZ_FORMAT!r}")
+        for k in NPZ_SCALARS:
+            if data[k].shape not in ((), (1,)):
+                raise RecordingError(f"{path}: {k} must be a scalar (got shape {data[k].shape})")
+        meta: dict = {}
+        if "meta_json" in data.files:
+            try:
+                meta = json.loads(str(data["meta_json"]))
+            except json.JSONDecodeError as e:
+                raise RecordingError(f"{path}: meta_json is not valid JSON ({e})") from None
+            if not isinstance(meta, dict):
+                raise RecordingError(f"{path}: meta_json must hold an object")
+        known = ("texture", "force_N", "velocity_m_s", "trial", "seed", "extra")
+        kwargs = {k: meta[k] for k in known if k in meta and meta[k] is not None}
+        try:
+            return TrialRecording(
+                pac_t=data["PAC_t"], pac=data["PAC_code"], pdc_t=data["PDC_t"], pdc=data["PDC_code"],
+                current_t=data["stage_current_t"], current_A=data["stage_current_A"],
+                contact_s=data["contact_s"].reshape(()), slide_start_s=data["slide_start_s"].reshape(()),
+                slide_end_s=data["slide_end_s"].reshape(()), **kwargs)
+        except RecordingError as e:
+            raise RecordingError(f"{path}: {e}") from None
+
+
+# ---------------------------------------------------------------------------------------------------- windows
+
+
+def measurement_window(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL) -> tuple[float, float]:
+    """(start, end) instants (s) of the measurement window: the slide minus ``lead``/``tail`` of its duration."""
+    if not (0.0 <= lead and 0.0 <= tail and lead + tail < 1.0):
+        raise ValueError(f"lead={lead}, tail={tail}: need lead, tail >= 0 and lead + tail < 1")
+    d = rec.slide_end_s - rec.slide_start_s
+    return rec.slide_start_s + lead * d, rec.slide_end_s - tail * d
+
+
+def background_window(rec: TrialRecording, guard_s: float = BACKGROUND_GUARD_S) -> tuple[float, float]:
+    """(start, end) instants (s) of the background window: the hold minus ``guard_s`` at both ends."""
+    t0, t1 = rec.contact_s + guard_s, rec.slide_start_s - guard_s
+    if not t1 > t0:
+        raise RecordingError(
+            f"the hold ({rec.contact_s:.4g}…{rec.slide_start_s:.4g} s) is too short for a background window "
+            f"with guard {guard_s} s at both ends")
+    return t0, t1
+
+
+def _in(t: np.ndarray, window: tuple[float, float]) -> np.ndarray:
+    return (t >= window[0]) & (t <= window[1])
+
+
+# ---------------------------------------------------------------------------------------------------- properties
+
+
+def roughness_filter(fs_hz: float, order: int = FIR_ORDER, band_hz: tuple[float, float] = BAND_HZ) -> np.ndarray:
+    """Taps (``order + 1``) of the roughness band-pass: a Hamming-windowed linear-phase FIR, as MATLAB's
+    ``fir1(66, [20 700]/(fs/2))``, unity gain at the band centre. With 67 taps at 2.2 kS/s the edges are soft
+    (−6 dB at 20 and 700 Hz; 0.41 at DC, which is why PAC's mean is removed before filtering; < 0.01 beyond
+    750 Hz)."""
+    if not band_hz[1] < fs_hz / 2:
+        raise RecordingError(f"PAC sampled at {fs_hz:.1f} Hz: the {band_hz[1]} Hz band edge is above Nyquist")
+    return signal.firwin(order + 1, list(band_hz), pass_zero=False, window="hamming", fs=fs_hz)
+
+
+def traction(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL) -> float:
+    """Traction (A): the mean stage motor current over the measurement window (D eq. 6.14)."""
+    w = measurement_window(rec, lead, tail)
+    sel = _in(rec.current_t, w)
+    if not sel.any():
+        raise RecordingError(f"stage current: no samples in the measurement window {w[0]:.4g}…{w[1]:.4g} s")
+    return float(rec.current_A[sel].mean())
+
+
+def band_powers(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
+                guard_s: float = BACKGROUND_GUARD_S) -> tuple[float, float]:
+    """(sliding power, background power) of band-passed PAC (bits²): mean square over each window.
+
+    PAC's mean is removed, the whole record is filtered once with :func:`roughness_filter` (zero-phase alignment:
+    centred convolution, i.e. the 33-sample delay compensated), then each window's samples are averaged.
+    """
+    fs = rec.pac_rate_hz
+    h = roughness_filter(fs)
+    y = np.convolve(rec.pac - rec.pac.mean(), h, mode="same")
+    out = []
+    for name, w in (("measurement", measurement_window(rec, lead, tail)), ("background", background_window(rec, guard_s))):
+        sel = _in(rec.pac_t, w)
+        if not sel.any():
+            raise RecordingError(f"PAC: no samples in the {name} window {w[0]:.4g}…{w[1]:.4g} s")
+        out.append(float(np.mean(y[sel] ** 2)))
+    return out[0], out[1]
+
+
+def roughness(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
+              guard_s: float = BACKGROUND_GUARD_S, power_floor: float = POWER_FLOOR) -> float:
+    """Roughness = ln(max(P_slide − P_background, power_floor)), powers in bits² (D eqs 6.15–6.16)."""
+    if not power_floor > 0:
+        raise ValueError(f"power_floor must be > 0 (got {power_floor})")
+    p, bg = band_powers(rec, lead, tail, guard_s)
+    return float(math.log(max(p - bg, power_floor)))
+
+
+def averaged_spectrum(x: np.ndarray, fs_hz: float, window: int = CENTROID_WINDOW,
+                      overlap: float = CENTROID_OVERLAP) -> tuple[np.ndarray, np.ndarray]:
+    """(frequencies (Hz), mean |FFT|² over segments) of ``x``: segments of ``window`` samples (or the whole of
+    ``x`` if shorter) stepping by ``window·(1 − overlap)``, each mean-removed and Hann-tapered."""
+    if not 0.0 <= overlap < 1.0:
+        raise ValueError(f"overlap must be in [0, 1) (got {overlap})")
+    x = np.asarray(x, dtype=np.float64)
+    n = min(int(window), x.size)
+    if n < 2:
+        raise RecordingError(f"PAC: {x.size} sample(s) in the measurement window; need at least 2")
+    step = max(1, int(round(n * (1.0 - overlap))))
+    seg = np.lib.stride_tricks.sliding_window_view(x, n)[::step]
+    seg = (seg - seg.mean(axis=1, keepdims=True)) * signal.get_window("hann", n)  # periodic Hann
+    power = (np.abs(np.fft.rfft(seg, axis=1)) ** 2).mean(axis=0)
+    return np.fft.rfftfreq(n, 1.0 / fs_hz), power
+
+
+def spectral_centroid(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
+                      window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> float:
+    """Spectral centroid (Hz) Σ|FFT|²·f / Σ|FFT|² of unfiltered PAC over the measurement window (D eq. 6.18)."""
+    w = measurement_window(rec, lead, tail)
+    f, p = averaged_spectrum(rec.pac[_in(rec.pac_t, w)], rec.pac_rate_hz, window, overlap)
+    total = p.sum()
+    if not total > 0:
+        raise RecordingError(f"PAC is constant over the measurement window {w[0]:.4g}…{w[1]:.4g} s: "
+                             "spectral centroid undefined")
+    return float((p * f).sum() / total)
+
+
+def fineness(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
+             window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> float:
+    """Fineness = ln(spectral centroid / 1 Hz) (D eq. 6.19)."""
+    return float(math.log(spectral_centroid(rec, lead, tail, window, overlap)))
+
+
+def properties(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
+               guard_s: float = BACKGROUND_GUARD_S, power_floor: float = POWER_FLOOR,
+               window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> dict[str, float]:
+    """All three properties of one trial: ``{"traction": A, "roughness": ln bits², "fineness": ln Hz}``."""
+    return {"traction": traction(rec, lead, tail),
+            "roughness": roughness(rec, lead, tail, guard_s, power_floor),
+            "fineness": fineness(rec, lead, tail, window, overlap)}
