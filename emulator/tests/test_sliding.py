@@ -1,0 +1,168 @@
+"""Sliding over textures: stick-slip physics, demand-driven construction, block-size independence, and the hard
+cases (creep, fast slides, lift-off, force steps, stiff bristles, extreme and perfectly smooth surfaces, worn
+ridges, a 10-minute slide) staying finite and stable."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from emulator.params import SensorParams
+from emulator.sensor import NoiseSources, Sensor
+from emulator.skin import Skin
+from emulator.sliding import CommandedMotion, Slide, contact_force_from_depth
+from emulator.stimuli import Tap
+from emulator.texture import PeriodicComponent, Texture
+
+SAND = Texture(901, "sand", "test", rms_height_m=60e-6, correlation_length_m=270e-6, hurst=0.8, mu_static=0.9,
+               mu_kinetic=0.6, modulus_Pa=5e9, seed=7)
+GRATING = Texture(902, "grating", "test", rms_height_m=0.5e-6, correlation_length_m=100e-6, hurst=0.8,
+                  mu_static=0.6, mu_kinetic=0.45, seed=8,
+                  periodic=(PeriodicComponent(3e-3, 250e-6, (0.0, 0.33)),))
+SMOOTH = Texture(903, "smooth", "test", rms_height_m=0.0, correlation_length_m=100e-6, hurst=0.8, mu_static=1.0,
+                 mu_kinetic=0.8, seed=9)
+
+
+def _trace(stimuli, signal=None, t_end=None, block_s=2.0, params=None, fidelity="default", noise=NoiseSources()):
+    s = Sensor(params=params, stimuli=stimuli, channels_read=["PAC", "PDC"], block_s=block_s, fidelity=fidelity,
+               noise=noise, record_signals=("tangential_force_N", "contact_force_N"), seed=3)
+    t = np.arange(0.0, t_end, 1 / 2200)
+    if signal:
+        return t, s.signal(signal, t)
+    return t, s.analog_trace("PAC", t)
+
+
+@pytest.mark.unit
+def test_nothing_of_sliding_is_built_for_a_scene_without_sliding():
+    s = Sensor(stimuli=[Tap(0.1, 1.0)], channels_read=["PAC", "PDC"])
+    assert "sliding_contact" not in [e.name for e in s.graph.effects]
+    s2 = Sensor(stimuli=[Slide(0.1, SAND, 0.5, 0.01, 0.01)], channels_read=["PAC", "PDC"])
+    assert "sliding_contact" in [e.name for e in s2.graph.effects]
+
+
+@pytest.mark.unit
+def test_stick_then_slip_tangential_force_ramps_to_static_then_settles_at_kinetic():
+    """While the skin sticks the tangential force ramps at k_t·V; it peaks near µs·N and settles on the Stribeck
+    curve at the sliding speed, µ(V)·N."""
+    p = SensorParams()
+    F, v = 1.0, 0.005
+    slide = Slide(0.1, SMOOTH, F, v, 0.01, approach_s=0.1, hold_s=0.2, accel_s=0.001)
+    t, ft = _trace([slide], "tangential_force_N", slide.end_s, noise=NoiseSources.none())
+    start = slide.slide_start_s
+    early = (t > start + 0.005) & (t < start + 0.04)
+    slope = np.polyfit(t[early], ft[early], 1)[0]
+    assert slope == pytest.approx(p.skin_tangential_stiffness_N_per_m * v, rel=0.1)
+    sliding = (t > start + 0.8) & (t < slide.slide_end_s - 0.01)
+    assert ft.max() == pytest.approx(SMOOTH.mu_static * F, rel=0.05)
+    assert np.mean(ft[sliding]) == pytest.approx(float(SMOOTH.friction_coefficient(v)) * F, rel=0.02)
+
+
+@pytest.mark.unit
+def test_results_do_not_depend_on_block_size():
+    slide = Slide(0.05, SAND, 0.5, 0.02, 0.005, approach_s=0.05, hold_s=0.05, lift_s=0.05)
+    t_end = slide.end_s + 0.02
+    ref = _trace([slide], t_end=t_end, block_s=1.0)[1]
+    for block_s in (1 / 8800, 7 / 8800, 0.0123):
+        assert np.array_equal(_trace([slide], t_end=t_end, block_s=block_s)[1], ref), block_s
+
+
+@pytest.mark.unit
+def test_worn_ridges_and_smooth_skin_give_the_same_forces():
+    """A skin worn flat (ridge height 0) is a smooth skin: the ridge term vanishes."""
+    worn = Skin(ridge_height_m=0.0)
+    a = _trace([Slide(0.05, SAND, 0.5, 0.02, 0.01, skin=worn)], "tangential_force_N", 1.3)[1]
+    b = _trace([Slide(0.05, SAND, 0.5, 0.02, 0.01, skin=Skin(fingerprints=False))], "tangential_force_N", 1.3)[1]
+    c = _trace([Slide(0.05, SAND, 0.5, 0.02, 0.01, skin=Skin())], "tangential_force_N", 1.3)[1]
+    np.testing.assert_allclose(a, b, atol=1e-12)
+    # the ridges add fast fluctuations (sample-to-sample changes), not a different mean
+    assert np.std(np.diff(c)) > 3 * np.std(np.diff(b))
+
+
+def _finite_and_bounded(values, bound):
+    assert np.all(np.isfinite(values))
+    assert np.max(np.abs(values)) < bound
+
+
+@pytest.mark.stability
+@pytest.mark.parametrize("velocity", [1e-4, 0.2])
+def test_creep_and_fast_slides_stay_finite(velocity):
+    distance = 2e-4 if velocity < 1e-3 else 0.05
+    slide = Slide(0.05, SAND, 1.0, velocity, distance, accel_s=0.001 if velocity < 1e-3 else 0.05)
+    t, ft = _trace([slide], "tangential_force_N", min(slide.end_s, 4.0))
+    _finite_and_bounded(ft, 5.0)
+    t, pac = _trace([slide], t_end=min(slide.end_s, 4.0))
+    _finite_and_bounded(pac, 10.0)
+
+
+@pytest.mark.stability
+def test_lift_off_mid_slide_and_force_steps_stay_finite():
+    """A rig lifts the finger off mid-slide and pushes it down again in a step: load 0 → friction 0, no NaN."""
+    motion = CommandedMotion(SAND, latency_s=0.0, start_s=0.0)
+    motion.move_finger(0.0, 4e-3)  # down 4 mm/s
+    motion.move_finger(0.3, 0.0)
+    motion.move_stage(0.35, 0.05, accel_m_per_s2=2.0)
+    motion.move_finger(0.6, -0.1)  # lift off fast
+    motion.move_finger(0.65, 0.0)
+    motion.move_finger(0.8, 0.2)  # force step back down
+    motion.move_finger(0.81, 0.0)
+    t, ft = _trace([motion], "tangential_force_N", 1.2)
+    _finite_and_bounded(ft, 20.0)
+    lifted = (t > 0.63) & (t < 0.79)
+    assert np.all(np.abs(ft[lifted]) < 1e-3)
+    t, pac = _trace([motion], t_end=1.2)
+    _finite_and_bounded(pac, 10.0)
+
+
+@pytest.mark.stability
+def test_stiff_bristles_extreme_roughness_and_perfectly_smooth_surfaces_stay_finite():
+    stiff = SensorParams().replace(bristle_stiffness_per_N=1e9, skin_tangential_damping_N_s_per_m=0.0)
+    rough = Texture(904, "extreme", "test", rms_height_m=500e-6, correlation_length_m=50e-6, hurst=0.2,
+                    mu_static=1.5, mu_kinetic=0.2, stribeck_velocity_m_per_s=1e-4, modulus_Pa=1e10, seed=1)
+    for params, texture in ((stiff, SAND), (None, rough), (stiff, SMOOTH), (None, SMOOTH)):
+        slide = Slide(0.05, texture, 2.0, 0.1, 0.03)
+        t, ft = _trace([slide], "tangential_force_N", slide.end_s, params=params)
+        _finite_and_bounded(ft, 50.0)
+        t, pac = _trace([slide], t_end=slide.end_s, params=params)
+        _finite_and_bounded(pac, 10.0)
+
+
+@pytest.mark.stability
+def test_ten_minute_slide_does_not_drift():
+    """10 minutes of steady sliding: the mean tangential force of the last minute equals the first's (2 %)."""
+    slide = Slide(0.0, GRATING, 1.0, 1e-3, 0.6, approach_s=0.1, hold_s=0.1)
+    s = Sensor(stimuli=[slide], channels_read=["PDC"], record_signals=("tangential_force_N",), block_s=5.0)
+    means = []
+    for m0 in np.arange(0.0, 600.0, 60.0):
+        t = np.arange(m0 + 1.0, m0 + 60.0, 0.01)
+        means.append(np.mean(s.signal("tangential_force_N", t)))
+    _finite_and_bounded(np.array(means), 5.0)
+    assert means[-1] == pytest.approx(means[1], rel=0.02)
+
+
+@pytest.mark.stability
+@settings(max_examples=12, deadline=None)
+@given(rms_um=st.floats(0.0, 300.0), corr_um=st.floats(20.0, 3000.0), hurst=st.floats(0.0, 1.0),
+       mu_k=st.floats(0.05, 1.5), extra=st.floats(0.0, 1.0), force=st.floats(0.05, 5.0),
+       velocity=st.floats(1e-3, 0.2), modulus=st.floats(1e4, 1e11))
+def test_any_texture_and_movement_gives_finite_bounded_forces(rms_um, corr_um, hurst, mu_k, extra, force, velocity,
+                                                             modulus):
+    tex = Texture(905, "any", "test", rms_height_m=rms_um * 1e-6, correlation_length_m=corr_um * 1e-6, hurst=hurst,
+                  mu_static=mu_k + extra, mu_kinetic=mu_k, modulus_Pa=modulus, seed=5)
+    slide = Slide(0.02, tex, force, velocity, max(0.005, velocity * 0.06), approach_s=0.05, hold_s=0.05)
+    t, ft = _trace([slide], "tangential_force_N", min(slide.end_s, 0.6))
+    # friction never exceeds µs·N plus the ridge term (slopes ≤ a few) and its own damping transients
+    _finite_and_bounded(ft, 10 * force * (mu_k + extra + 1.0) + 1.0)
+
+
+@pytest.mark.unit
+def test_contact_law_softer_texture_needs_more_depth_for_the_same_force():
+    p = SensorParams()
+    foam = Texture(906, "foam", "test", 100e-6, 500e-6, 0.5, 1.0, 0.8, modulus_Pa=50e3, seed=1)
+    hard = Texture(907, "hard", "test", 1e-6, 100e-6, 0.5, 0.6, 0.4, modulus_Pa=5e9, seed=1)
+    depth = 1.5e-3
+    assert contact_force_from_depth(depth, p, hard) == pytest.approx(1.0, rel=0.02)  # K·δ^1.5 = 1 N
+    assert contact_force_from_depth(depth, p, foam) < 0.8 * contact_force_from_depth(depth, p, hard)
+    assert contact_force_from_depth(-1e-3, p, hard) == 0.0
+    assert math.isfinite(float(contact_force_from_depth(1.0, p, foam)))
