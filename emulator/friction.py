@@ -27,8 +27,10 @@ import math
 import numpy as np
 from numba import njit
 
-#: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), last friction (N)
-STATE_SIZE = 4
+#: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
+#: (m) and slope (1) where the finger touched down: the skin settles onto the local geometry at touchdown, so
+#: only changes from there load it (a force-controlled press on a sloped spot is the commanded force)
+STATE_SIZE = 6  # ... and whether the finger is touching (1.0) or not (0.0)
 
 
 @njit(cache=True)
@@ -82,10 +84,11 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
     spatial tables (radius × position) of the patch-averaged height (m) and the ridge-sampled slope (1);
     ``modulus_eff``: the texture's E/(1 − ν²) (Pa): soft textures yield in series with the skin, so their
     features reach the fluid attenuated by k_tex/(k_n + k_tex);
-    ``state``: x, z, p, F (updated in place).
+    ``state``: x, z, p, touchdown height and slope, touching (updated in place).
     """
-    x, z, p = state[0], state[1], state[2]
+    x, z, p, h_ref, s_ref = state[0], state[1], state[2], state[3], state[4]
     h = dt / substeps
+    touching = 1 if state[5] > 0.5 else 0
     for n in range(N0.size):
         n0 = N0[n]
         v_stage = V[n]
@@ -100,9 +103,14 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
                 k_tex = 2.0 * r * modulus_eff  # a soft texture in series with the skin (flat-punch stiffness)
                 series = k_tex / (kn + k_tex)
                 height = _interp_table(heights, radii, r, p, dx)
-                slope = series * _interp_table(slopes, radii, r, p, dx)
-                normal = max(0.0, n0 + kn * series * height)
+                slope_here = _interp_table(slopes, radii, r, p, dx)
+                if touching == 0:  # touchdown: the skin settles onto this spot
+                    h_ref, s_ref = height, slope_here
+                    touching = 1
+                slope = series * (slope_here - s_ref)
+                normal = max(0.0, n0 + kn * series * (height - h_ref))
             else:
+                touching = 0
                 normal = 0.0
                 slope = 0.0
             # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0
@@ -135,8 +143,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
         out_tangential[n] = f_sum / substeps + normal * slope
         out_slip_velocity[n] = vr_sum / substeps
         out_position[n] = p
-    state[0], state[1], state[2] = x, z, p
-    state[3] = out_tangential[N0.size - 1] if N0.size else state[3]
+    state[0], state[1], state[2], state[3], state[4], state[5] = x, z, p, h_ref, s_ref, float(touching)
 
 
 def new_state(position_m: float = 0.0) -> np.ndarray:

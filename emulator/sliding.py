@@ -4,7 +4,7 @@ Data flow (per block, state carried): texture + skin → spatial tables along th
 ridge-sampled slope, one row per patch radius) → :func:`emulator.friction.slide_block` (LuGre stick-slip
 against the compliant skin, texture position advanced by the slip) → ``contact_force_N`` (normal load with
 its fluctuations, plus the tangential force's share of fluid pressure) and ``tangential_force_N`` (for the
-stage's motor current and plots).  ``contact_force_N`` then takes the existing path: force → fluid pressure →
+stage's motor current and plots) and ``normal_force_N`` (the true normal load, for checking force control).  ``contact_force_N`` then takes the existing path: force → fluid pressure →
 resonance → bridge → front end → codes.
 
 The texture under the finger is seen through the contact patch (radius ``a = a_1N·N^(1/3)``): heights are
@@ -226,7 +226,7 @@ class SlidingContact(Effect):
     """Skin–texture sliding: stick-slip friction, patch-averaged texture, fingerprint ridges (N)."""
 
     name = "sliding_contact"
-    produces = ("contact_force_N", "tangential_force_N")
+    produces = ("contact_force_N", "tangential_force_N", "normal_force_N")
 
     def __init__(self, motions: list, params: SensorParams, fs: float, dx_m: float, substeps: int, n_radii: int,
                  seed: int):
@@ -254,6 +254,7 @@ class SlidingContact(Effect):
         t = block.times
         normal_out = np.zeros(block.n)
         tangential_out = np.zeros(block.n)
+        load_out = np.zeros(block.n)
         p, dt = self.params, 1.0 / block.fs
         for c in self._contacts:
             m = c["motion"]
@@ -280,6 +281,9 @@ class SlidingContact(Effect):
                                  p.bristle_stiffness_per_N, p.bristle_damping_per_N,
                                  tex.mu_static, tex.mu_kinetic, tex.stribeck_velocity_m_per_s,
                                  tex.mu_per_velocity_s_per_m, normal, tang, slip, pos)
-            normal_out[a:b] += normal + p.tangential_coupling * np.abs(tang)
+            # the tangential load's share of fluid pressure, signed: its fluctuations enter linearly (no
+            # rectification); slides run along +x, so the mean friction raises the pressure
+            normal_out[a:b] += normal + p.tangential_coupling * tang
             tangential_out[a:b] += tang
-        return {"contact_force_N": normal_out, "tangential_force_N": tangential_out}
+            load_out[a:b] += normal
+        return {"contact_force_N": normal_out, "tangential_force_N": tangential_out, "normal_force_N": load_out}

@@ -1,0 +1,222 @@
+"""The texture rig of D ch. 6, as a real control loop through the emulated sensor.
+
+A stepper lowers the finger at 0.5 mm/s until the PDC change read over SPI reaches the target (force control
+through PDC: the rig converts the target force to PDC counts with the published 11.5 mN per bit, so sensor noise
+and skin and texture compliance decide the force it actually reaches); it holds ~0.5 s; a linear stage slides
+the texture at the set velocity over the set distance while the stage's motor current — rising linearly with
+the tangential load — is sampled at the frame rate; then the finger lifts.  The controller sees only codes: it
+reads the sensor through the host sampler and the SPI peripheral like any host.  Its commands reach the motors
+``latency_s`` later (20 ms), and while it lowers the finger it reads one 10 ms frame at a time; afterwards the
+motion is fixed in advance and the run is read in long chunks.
+
+:func:`movement_grid` gives the 36 movements of D eqs 6.20–6.21.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bench.running.sampler import Sampler
+from bench.textures.properties import TrialRecording
+from emulator import channels as ch
+from emulator.effects import effect_rng
+from emulator.params import SensorParams
+from emulator.sensor import NoiseSources, Sensor
+from emulator.skin import Skin
+from emulator.sliding import CommandedMotion
+from emulator.spi.peripheral import SoftwarePeripheral
+from emulator.texture import SURFACE_LENGTH_M, Texture
+
+FORCE_PER_PDC_BIT_N = 0.0115  # the rig's calibration: the published 11.5 mN per PDC bit (D ch. 4)
+
+
+@dataclass(frozen=True)
+class Movement:
+    """An exploratory movement: normal force (N) and sliding velocity (m/s)."""
+
+    force_N: float
+    velocity_m_per_s: float
+
+    @property
+    def power_W(self) -> float:
+        """Sliding power scale N·v (equal along the grid's anti-diagonals)."""
+        return self.force_N * self.velocity_m_per_s
+
+    def label(self) -> str:
+        return f"{self.force_N:.2f} N @ {self.velocity_m_per_s * 100:.2f} cm/s"
+
+
+def movement_grid() -> list[Movement]:
+    """The 36 movements of D eqs 6.20–6.21: v_i = 10^((i−1)/5) cm/s, F_j = 0.2·10^((j−1)/5) N, i, j = 1..6."""
+    return [Movement(0.2 * 10 ** ((j - 1) / 5), 0.01 * 10 ** ((i - 1) / 5)) for j in range(1, 7) for i in range(1, 7)]
+
+
+@dataclass
+class RigSettings:
+    """The rig's mechanics and timing (SI units)."""
+
+    lower_rate_m_per_s: float = 0.5e-3  # D ch. 6
+    start_gap_m: float = 0.2e-3  # finger above the texture when the trial starts
+    baseline_s: float = 0.2  # PDC and PAC at rest before lowering
+    hold_s: float = 0.5  # D ch. 6: "held for ~0.5 s"
+    distance_m: float = 0.05
+    stage_accel_m_per_s2: float = 1.0
+    lift_rate_m_per_s: float = 5e-3
+    settle_after_s: float = 0.2
+    latency_s: float = 0.02
+    pdc_average_frames: int = 3  # the controller averages the last few PDC readings
+    motor_idle_A: float = 0.15  # stage motor current with no load (model choice)
+    motor_A_per_N: float = 0.4  # current per N of tangential load (model choice: linear, D ch. 6)
+    motor_noise_A: float = 0.004  # RMS current-sense noise per reading (model choice)
+    chunk_s: float = 0.5
+
+    def __post_init__(self):
+        for name, value in vars(self).items():
+            if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"rig.{name} = {value!r}: must be a finite number ≥ 0")
+
+
+@dataclass
+class Trial:
+    """One trial's recording (for the properties), its true forces, and what the controller did."""
+
+    recording: TrialRecording
+    movement: Movement
+    true_normal_N: float  # mean true normal load during the slide (the emulator's contact force, not a code)
+    reached_pdc_change: float  # PDC change (counts) at which the stepper stopped
+    skin_before: dict
+    skin_after: dict
+    texture: int
+    trial: int
+    start_position_m: float
+    wall_s: float = 0.0
+    frames: int = 0
+    extra: dict = field(default_factory=dict)
+
+
+class TextureRig:
+    """The rig with one skin: trials run one after another on the same skin (which wears)."""
+
+    def __init__(self, skin: Skin | None = None, params: SensorParams | None = None, fidelity: str = "default",
+                 noise: NoiseSources = NoiseSources(), settings: RigSettings | None = None, wear: bool = True):
+        self.skin = skin or Skin()
+        self.params = params or SensorParams()
+        self.fidelity, self.noise = fidelity, noise
+        self.settings = settings or RigSettings()
+        self.wear = wear
+
+    def run_trial(self, texture: Texture, movement: Movement, seed: int, trial: int = 0) -> Trial:
+        """Lower, hold, slide, lift: one trial on ``texture``; ``seed`` decides the start position and every
+        noise stream, so a trial is the same whatever else ran before it (given the skin's state)."""
+        import time
+
+        wall0 = time.perf_counter()
+        s = self.settings
+        if not (movement.force_N > 0 and movement.velocity_m_per_s > 0):
+            raise ValueError(f"movement {movement}: force and velocity must be positive")
+        start_position = float(effect_rng(seed, "rig.start_position").uniform(0.0, SURFACE_LENGTH_M))
+        motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
+                                 max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
+        sensor = Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
+                        fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=0.01,
+                        record_signals=("tangential_force_N", "normal_force_N"))
+        sampler = Sampler(SoftwarePeripheral(sensor))
+        frame = len(sampler.sequence)
+        frame_s = frame / sampler.slot_rate_Hz
+        current_rng = effect_rng(seed, "rig.motor_current")
+        log = _Log()
+
+        def read(n_frames):
+            t_cur = (sampler.next_slot + np.arange(n_frames) * frame) / sampler.slot_rate_Hz
+            ft = sensor.signal("tangential_force_N", t_cur)
+            log.load(t_cur, sensor.signal("normal_force_N", t_cur))
+            log.current(t_cur, s.motor_idle_A + s.motor_A_per_N * np.abs(ft)
+                        + s.motor_noise_A * current_rng.standard_normal(t_cur.size))
+            log.samples(sampler.read(n_frames * frame))
+
+        # baseline at rest, then lower until the PDC change reaches the target
+        read(int(round(s.baseline_s / frame_s)))
+        baseline = float(np.mean(log.pdc_codes()))
+        target = movement.force_N / FORCE_PER_PDC_BIT_N
+        motion.move_finger(sampler.next_slot / sampler.slot_rate_Hz, s.lower_rate_m_per_s)
+        max_frames = int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / frame_s)
+        reached = None
+        for _ in range(max_frames):
+            read(1)
+            change = float(np.mean(log.pdc_codes()[-s.pdc_average_frames:])) - baseline
+            if change >= target:
+                reached = change
+                break
+        if reached is None:
+            raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on {texture.name}")
+        t_stop = sampler.next_slot / sampler.slot_rate_Hz
+        contact_s = motion.move_finger(t_stop, 0.0)
+        sensor.block_n = max(1, int(round(s.chunk_s * sensor.fs)))  # the motion is now planned ahead
+        # hold, then slide over the distance: the stage starts, cruises and brakes at planned instants
+        slide_start = contact_s + s.hold_s
+        v, acc = movement.velocity_m_per_s, s.stage_accel_m_per_s2
+        ramp = v / acc
+        cruise = max(0.0, s.distance_m / v - ramp)
+        motion.move_stage(slide_start - s.latency_s, v, acc)
+        brake = slide_start + ramp + cruise
+        motion.move_stage(brake - s.latency_s, 0.0, acc)
+        slide_end = brake + ramp
+        motion.move_finger(slide_end - s.latency_s, -s.lift_rate_m_per_s)
+        end = slide_end + s.settle_after_s + (s.start_gap_m + 3e-3) / s.lift_rate_m_per_s
+        while sampler.next_slot / sampler.slot_rate_Hz < end:
+            read(max(1, int(round(s.chunk_s / frame_s))))
+        true_normal = log.mean_load(slide_start + ramp, brake)
+        skin_before = self.skin.state()
+        if self.wear:
+            area = math.pi * (self.params.contact_radius_at_1N_m * movement.force_N ** (1 / 3)) ** 2
+            self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic))
+        rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
+        return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
+                     start_position, time.perf_counter() - wall0, log.n_frames(frame))
+
+
+class _Log:
+    """What the rig recorded: samples as read, motor current, and the true normal load for the report."""
+
+    def __init__(self):
+        self.t, self.ch, self.code, self.cur_t, self.cur, self.load_N = [], [], [], [], [], []
+
+    def load(self, t, newtons):
+        self.load_N.append(newtons)
+
+    def mean_load(self, t0: float, t1: float) -> float:
+        """Mean true normal load (N) over [t0, t1], from the emulator's own force (not from codes)."""
+        t, load = np.concatenate(self.cur_t), np.concatenate(self.load_N)
+        return float(np.mean(load[(t >= t0) & (t <= t1)]))
+
+    def samples(self, s):
+        self.t.append(s.times)
+        self.ch.append(s.channels)
+        self.code.append(s.codes)
+
+    def current(self, t, amps):
+        self.cur_t.append(t)
+        self.cur.append(amps)
+
+    def _cat(self):
+        if len(self.t) > 1:
+            self.t, self.ch, self.code = [np.concatenate(self.t)], [np.concatenate(self.ch)], [np.concatenate(self.code)]
+        return self.t[0], self.ch[0], self.code[0]
+
+    def pdc_codes(self) -> np.ndarray:
+        t, c, code = self._cat()
+        return code[c == ch.PDC].astype(float)
+
+    def n_frames(self, frame: int) -> int:
+        return self._cat()[0].size // frame
+
+    def recording(self, contact_s, slide_start, slide_end, texture, movement, trial, seed) -> TrialRecording:
+        t, c, code = self._cat()
+        pac, pdc = c == ch.PAC, c == ch.PDC
+        return TrialRecording(t[pac], code[pac], t[pdc], code[pdc], np.concatenate(self.cur_t),
+                              np.concatenate(self.cur), contact_s, slide_start, slide_end, texture=texture,
+                              force_N=movement.force_N, velocity_m_s=movement.velocity_m_per_s, trial=trial, seed=seed)
+
