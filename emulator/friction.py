@@ -13,7 +13,7 @@ Per grid step of ``dt`` (s), with the stage moving the texture at ``V`` (m/s) an
   ``N·(σ0 z + σ1 dz/dt + µv v_r)``;
 * the skin is a massless spring–damper (``k_t``, ``c_t``) between the core and the contact, so the skin's
   velocity ``u`` satisfies ``k_t (x + u dt) + c_t u = F_friction(u)`` with ``v_r = V − u``: an implicit step,
-  solved for ``u`` by bisection on a bracket that always holds a root (unconditionally stable);
+  solved for ``u`` by regula falsi (Illinois) on a bracket that always holds a root (unconditionally stable);
 * the texture position advances by the slip ``v_r·dt``: while the skin sticks it hardly moves, so the texture
   excites nothing; at slip the features start passing under the patch.
 
@@ -30,12 +30,15 @@ from numba import njit
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
 #: (m) and slope (1) where the finger touched down: the skin settles onto the local geometry at touchdown, so
 #: only changes from there load it (a force-controlled press on a sloped spot is the commanded force)
-STATE_SIZE = 6  # ... and whether the finger is touching (1.0) or not (0.0)
+STATE_SIZE = 7  # ... whether the finger is touching (1.0) or not (0.0), and the skin's last velocity (m/s)
 
 
 @njit(cache=True)
 def _stribeck(v, mu_s, mu_k, vs):
-    return mu_k + (mu_s - mu_k) * math.exp(-(v / vs) ** 2)
+    r = abs(v) / vs
+    if r > 30.0:  # the static part has decayed below 1e-390 of itself
+        return mu_k
+    return mu_k + (mu_s - mu_k) * math.exp(-r * r)
 
 
 @njit(cache=True)
@@ -49,6 +52,15 @@ def _bristle_after(z, vr, dt, sigma0, mu_s, mu_k, vs):
     if a * dt < 1e-12:
         return z + vr * dt
     return z_ss + (z - z_ss) * math.exp(-a * dt)
+
+
+@njit(cache=True)
+def _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v):
+    """G(u) = skin force − friction force for skin velocity ``u`` over one step (increasing through its root)."""
+    vr = v_stage - u
+    znew = _bristle_after(z, vr, h, sigma0, mu_s, mu_k, vs)
+    force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * vr)
+    return k_t * (x + u * h) + c_t * u - force
 
 
 @njit(cache=True)
@@ -89,6 +101,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
     x, z, p, h_ref, s_ref = state[0], state[1], state[2], state[3], state[4]
     h = dt / substeps
     touching = 1 if state[5] > 0.5 else 0
+    u_prev = state[6]
     for n in range(N0.size):
         n0 = N0[n]
         v_stage = V[n]
@@ -113,26 +126,51 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
                 touching = 0
                 normal = 0.0
                 slope = 0.0
-            # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0
+            # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0, bracketed around
+            # the previous velocity (widened until G changes sign; G(±bound) always brackets a root), then
+            # regula falsi with the Illinois modification (superlinear, never leaves the bracket)
             zmax = max(abs(z), mu_s / sigma0)
             fmax = normal * (sigma0 * zmax + sigma1 * 2.0 * zmax / h + mu_v * (abs(v_stage) + 1.0))
             bound = abs(v_stage) + (k_t * abs(x) + fmax) / (c_t + k_t * h) + 1e-6
-            lo, hi = -bound, bound
-            u = 0.0
-            znew = z
-            force = 0.0
-            for _it in range(60):
-                u = 0.5 * (lo + hi)
-                vr = v_stage - u
-                znew = _bristle_after(z, vr, h, sigma0, mu_s, mu_k, vs)
-                force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * vr)
-                g = k_t * (x + u * h) + c_t * u - force
-                if g > 0.0:
-                    hi = u
-                else:
-                    lo = u
-                if hi - lo < 1e-12 * (1.0 + abs(v_stage)):
+            step = 1e-4 * (1.0 + abs(v_stage))
+            u_prev = min(max(u_prev, -bound), bound)  # the bound changes with the load: start inside it
+            lo = max(-bound, u_prev - step)
+            hi = min(bound, u_prev + step)
+            g_lo = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+            g_hi = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+            while g_lo > 0.0 and lo > -bound:
+                lo = max(-bound, lo - 4.0 * (hi - lo))
+                g_lo = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+            while g_hi < 0.0 and hi < bound:
+                hi = min(bound, hi + 4.0 * (hi - lo))
+                g_hi = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+            u = 0.5 * (lo + hi)
+            side = 0
+            tol = 1e-13 * (1.0 + abs(v_stage))
+            for _it in range(100):
+                if hi - lo < tol or g_hi == g_lo:
                     break
+                u = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+                if not (lo < u < hi):
+                    u = 0.5 * (lo + hi)
+                g = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+                if g == 0.0:
+                    break
+                if g > 0.0:
+                    hi, g_hi = u, g
+                    if side == 1:
+                        g_lo *= 0.5
+                    side = 1
+                else:
+                    lo, g_lo = u, g
+                    if side == -1:
+                        g_hi *= 0.5
+                    side = -1
+                if abs(g) < 1e-12 * (1.0 + normal):
+                    break
+            u_prev = u
+            znew = _bristle_after(z, v_stage - u, h, sigma0, mu_s, mu_k, vs)
+            force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * (v_stage - u))
             vr = v_stage - u
             x += u * h
             z = znew
@@ -143,7 +181,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
         out_tangential[n] = f_sum / substeps + normal * slope
         out_slip_velocity[n] = vr_sum / substeps
         out_position[n] = p
-    state[0], state[1], state[2], state[3], state[4], state[5] = x, z, p, h_ref, s_ref, float(touching)
+    state[0], state[1], state[2], state[3], state[4], state[5], state[6] = x, z, p, h_ref, s_ref, float(touching), u_prev
 
 
 def new_state(position_m: float = 0.0) -> np.ndarray:
