@@ -17,7 +17,8 @@ Per grid step of ``dt`` (s), with the stage moving the texture at ``V`` (m/s) an
 * the texture position advances by the slip ``v_r·dt``: while the skin sticks it hardly moves, so the texture
   excites nothing; at slip the features start passing under the patch.
 
-The tangential force on the skin is the friction force plus ``N·s`` (ridges climbing feature slopes).
+The tangential force on the skin is the friction force plus ``N·s`` (ridges climbing feature slopes while the
+skin slips over them).
 """
 
 from __future__ import annotations
@@ -26,6 +27,10 @@ import math
 
 import numpy as np
 from numba import njit
+
+#: ridges catch feature slopes only while the skin slips over them: the slope force is scaled by
+#: |v_r| / (|v_r| + this) (model choice: 1 mm/s, so a finger pressed without sliding feels no slope force)
+CATCH_VELOCITY_M_PER_S = 1e-3
 
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
 #: (m) and slope (1) where the finger touched down: the skin settles onto the local geometry at touchdown, so
@@ -120,7 +125,9 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
                 if touching == 0:  # touchdown: the skin settles onto this spot
                     h_ref, s_ref = height, slope_here
                     touching = 1
-                slope = series * (slope_here - s_ref)
+                vr_last = v_stage - u_prev
+                catching = abs(vr_last) / (abs(vr_last) + CATCH_VELOCITY_M_PER_S)
+                slope = series * catching * (slope_here - s_ref)
                 normal = max(0.0, n0 + kn * series * (height - h_ref))
             else:
                 touching = 0

@@ -1,0 +1,84 @@
+"""The texture rig: force control through PDC over SPI, the movement grid, the trial's recording and its
+properties, skin wear between trials, and determinism from the trial's seed."""
+
+import numpy as np
+import pytest
+
+from bench.rigs.texture_rig import Movement, TextureRig, movement_grid
+from bench.textures.properties import properties
+from emulator.skin import Skin
+from emulator.texture import Texture
+
+pytestmark = pytest.mark.unit
+
+# test surfaces defined here so the rig is tested apart from the library: a ground glass-like flat and a
+# 60-grit-like abrasive (particle ~270 µm, RMS height 60 µm)
+GLASS = Texture(1001, "flat", "test", rms_height_m=0.01e-6, correlation_length_m=50e-6, hurst=0.8, mu_static=1.0,
+                mu_kinetic=0.8, modulus_Pa=70e9, seed=3)
+SAND = Texture(1002, "abrasive", "test", rms_height_m=60e-6, correlation_length_m=270e-6, hurst=0.8,
+               mu_static=0.9, mu_kinetic=0.7, modulus_Pa=5e9, seed=7)
+
+
+def test_movement_grid_is_d_eqs_6_20_and_6_21():
+    grid = movement_grid()
+    assert len(grid) == 36
+    forces = sorted({round(m.force_N, 6) for m in grid})
+    speeds = sorted({round(m.velocity_m_per_s, 6) for m in grid})
+    np.testing.assert_allclose(forces, 0.2 * 10 ** (np.arange(6) / 5), rtol=1e-5)
+    np.testing.assert_allclose(speeds, 0.01 * 10 ** (np.arange(6) / 5), rtol=1e-5)
+    # equal sliding power along anti-diagonals
+    powers = sorted(m.power_W for m in grid)
+    assert any(np.isclose(powers[k], powers[k + 1]) for k in range(len(powers) - 1))
+
+
+@pytest.mark.parametrize("texture", [GLASS, SAND], ids=["flat", "abrasive"])
+@pytest.mark.parametrize("force", [0.5, 1.26, 2.0])
+def test_force_control_through_pdc_reaches_the_target_within_10_percent(texture, force):
+    """True force = the emulator's own normal load while sliding (never read from codes); three trial seeds."""
+    rig = TextureRig(wear=False)
+    for seed in range(3):
+        trial = rig.run_trial(texture, Movement(force, 0.02), seed=seed)
+        assert trial.true_normal_N == pytest.approx(force, rel=0.10), (seed, trial.true_normal_N)
+
+
+@pytest.mark.xfail(strict=True, reason="known deviation (see README, texture rig): at 0.2 N the PDC target is "
+                   "17 counts; 1.4 LSB of PDC noise and the 20 ms command latency at 0.5 mm/s overshoot by up "
+                   "to ~13 % on the abrasive")
+def test_force_control_at_the_lightest_movement_within_10_percent():
+    rig = TextureRig(wear=False)
+    errors = [rig.run_trial(t, Movement(0.2, 0.02), seed=s).true_normal_N / 0.2 - 1 for t in (GLASS, SAND)
+              for s in range(3)]
+    assert max(abs(e) for e in errors) <= 0.10
+
+
+def test_trial_recording_has_phases_in_order_and_properties_are_finite():
+    trial = TextureRig(wear=False).run_trial(SAND, Movement(0.5, 0.05), seed=4)
+    rec = trial.recording
+    assert rec.pac_t[0] < rec.contact_s < rec.slide_start_s < rec.slide_end_s < rec.pac_t[-1]
+    assert rec.slide_start_s - rec.contact_s == pytest.approx(0.5)  # the hold
+    assert rec.slide_end_s - rec.slide_start_s == pytest.approx(0.05 / 0.05 + 0.05)  # distance / v + a ramp
+    props = properties(rec)
+    assert all(np.isfinite(v) for v in props.values())
+    # motor current rises with the tangential load: sliding draws more than resting
+    sliding = (rec.current_t > rec.slide_start_s + 0.2) & (rec.current_t < rec.slide_end_s - 0.05)
+    assert rec.current_A[sliding].mean() > rec.current_A[rec.current_t < rec.contact_s - 0.3].mean() + 0.1
+
+
+def test_a_trial_is_determined_by_its_seed_and_the_skin_state():
+    a = TextureRig(wear=False).run_trial(SAND, Movement(0.5, 0.025), seed=11)
+    b = TextureRig(wear=False).run_trial(SAND, Movement(0.5, 0.025), seed=11)
+    c = TextureRig(wear=False).run_trial(SAND, Movement(0.5, 0.025), seed=12)
+    assert np.array_equal(a.recording.pac, b.recording.pac)
+    assert a.start_position_m != c.start_position_m
+
+
+def test_high_power_movements_wear_the_skin_faster_and_wear_lowers_roughness():
+    low, high = Skin(), Skin()
+    rig_low, rig_high = TextureRig(skin=low), TextureRig(skin=high)
+    rig_low.run_trial(SAND, Movement(0.2, 0.01), seed=1)
+    rig_high.run_trial(SAND, Movement(2.0, 0.1), seed=1)
+    assert high.ridge_height_m < low.ridge_height_m < Skin().ridge_height_new_m
+    fresh = properties(TextureRig(skin=Skin(), wear=False).run_trial(SAND, Movement(0.5, 0.025), seed=5).recording)
+    worn = properties(TextureRig(skin=Skin(ridge_height_m=0.0), wear=False)
+                      .run_trial(SAND, Movement(0.5, 0.025), seed=5).recording)
+    assert worn["roughness"] < fresh["roughness"]
