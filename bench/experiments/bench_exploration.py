@@ -1,7 +1,7 @@
 """Throughput of virtual Bayesian exploration: exploration steps per second on D's full scale — 117 synthetic
 textures × 36 movements × 3 properties (target ≥ 10 000 steps/s).
 
-Run ``python -m bench.experiments.bench_exploration [--sims N] [--textures N] [--seed S]``. A step is one
+Run ``python -m bench.experiments.bench_exploration [--sims N] [--textures N] [--seed S] [--backend B]``. A step is one
 exploratory movement of one simulation (choice, draw, posterior update); the rate counts the steps the
 simulations made over the wall time of :func:`~bench.experiments.exploration.simulate` (the one-off confusion
 matrices, built once per candidate set, and the compiled kernel's first load are timed separately).
@@ -46,15 +46,18 @@ def main(argv=None) -> float:
     ap.add_argument("--sims", type=int, default=200, help="simulations per true texture (default 200)")
     ap.add_argument("--textures", type=int, default=16, help="true textures simulated (default 16, as D)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--backend", choices=("auto", "numba", "numpy"), default="auto",
+                    help="how the expected uncertainty is computed (default auto: numba when available)")
     args = ap.parse_args(argv)
 
     train, valid = synthetic_tables(seed=args.seed)
     model = ex.fit_model(train)
     t0 = time.perf_counter()
-    ctx = ex.prepare(model)
+    ctx = ex.prepare(model, backend=args.backend)
     prep = time.perf_counter() - t0
     t0 = time.perf_counter()
-    ex.uncertainty_rows(ctx.confusion, np.full((1, ctx.mean.shape[0]), 1.0 / ctx.mean.shape[0]))  # JIT warm-up
+    k = ctx.mean.shape[0]
+    ex.uncertainty_rows(ctx.confusion, np.full((1, k), 1.0 / k), backend=args.backend)  # JIT compile or load
     warm = time.perf_counter() - t0
     T, M, P = model.mean.shape
     print(f"{T} textures × {M} movements × {P} properties; confusion matrices and pilot: {prep * 1e3:.0f} ms; "

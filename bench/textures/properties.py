@@ -146,7 +146,8 @@ class TrialRecording:
             raise RecordingError(
                 "phases must satisfy contact_s <= slide_start_s < slide_end_s (got "
                 + ", ".join(f"{k}={v}" for k, v in phases.items()) + ")")
-        if self.pac_t.size < 2 or not (self.pac_t[0] <= phases["contact_s"] and phases["slide_end_s"] <= self.pac_t[-1]):
+        covered = self.pac_t[0] <= phases["contact_s"] and phases["slide_end_s"] <= self.pac_t[-1]
+        if self.pac_t.size < 2 or not covered:
             raise RecordingError(
                 f"PAC ({self.pac_t[0]:.4g}…{self.pac_t[-1]:.4g} s) must cover contact_s…slide_end_s "
                 f"({phases['contact_s']:.4g}…{phases['slide_end_s']:.4g} s)")
@@ -223,7 +224,8 @@ def load_npz(path: str | Path) -> TrialRecording:
 # ---------------------------------------------------------------------------------------------------- windows
 
 
-def measurement_window(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL) -> tuple[float, float]:
+def measurement_window(rec: TrialRecording, lead: float = MEASURE_LEAD,
+                       tail: float = MEASURE_TAIL) -> tuple[float, float]:
     """(start, end) instants (s) of the measurement window: the slide minus ``lead``/``tail`` of its duration."""
     if not (0.0 <= lead and 0.0 <= tail and lead + tail < 1.0):
         raise ValueError(f"lead={lead}, tail={tail}: need lead, tail >= 0 and lead + tail < 1")
@@ -278,7 +280,8 @@ def band_powers(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = M
     h = roughness_filter(fs)
     y = np.convolve(rec.pac - rec.pac.mean(), h, mode="same")
     out = []
-    for name, w in (("measurement", measurement_window(rec, lead, tail)), ("background", background_window(rec, guard_s))):
+    windows = (("measurement", measurement_window(rec, lead, tail)), ("background", background_window(rec, guard_s)))
+    for name, w in windows:
         sel = _in(rec.pac_t, w)
         if not sel.any():
             raise RecordingError(f"PAC: no samples in the {name} window {w[0]:.4g}…{w[1]:.4g} s")
