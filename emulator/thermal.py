@@ -63,6 +63,37 @@ MATERIALS: dict[str, Material] = {m.name: m for m in (
     Material("wood", 0.12, 510.0, 1380.0),
     Material("cotton fabric", 0.06, 80.0, 1300.0),
     Material("polystyrene foam", 0.027, 55.0, 1210.0),
+    # --- added for the texture library (fixtures/textures/library.toml) ---
+    # Incropera & DeWitt Appendix A: A.1 (AISI 304), A.3 (paper; hardwoods oak/maple; balsa cross grain; cork
+    # board; rubber, vulcanized soft; leather, sole).  Balsa's and leather's c are not tabulated there: balsa takes
+    # the softwood entry's c, leather the usual 1.5 kJ/kg·K of tanned hide.
+    Material("stainless steel", 14.9, 7900.0, 477.0),
+    Material("paper", 0.180, 930.0, 1340.0),
+    Material("hardwood", 0.16, 720.0, 1255.0),
+    Material("balsa", 0.055, 140.0, 1380.0),
+    Material("cork", 0.039, 120.0, 1800.0),
+    Material("rubber (soft)", 0.13, 1100.0, 2010.0),
+    Material("leather", 0.159, 998.0, 1500.0),
+    # Callister, *Materials Science and Engineering*, Table 19.1 (c, k) and Appendix B (ρ): polymers.
+    Material("PTFE", 0.25, 2200.0, 1050.0),
+    Material("nylon", 0.24, 1140.0, 1670.0),
+    Material("polyethylene", 0.48, 960.0, 1850.0),
+    Material("polypropylene", 0.12, 905.0, 1925.0),
+    Material("phenolic laminate", 0.15, 1300.0, 1650.0),
+    # Handbook/data-sheet ranges where the textbooks above have no entry (mid-range values; k in W/m·K,
+    # ρ in kg/m³, c in kJ/kg·K): flexible PVC k 0.14-0.17, ρ 1200-1350, c 1.0-1.4; filled silicone elastomer
+    # k 0.2-0.3, ρ 1100-1200, c 1.2-1.5; isomolded graphite k 80-120, ρ 1750-1850, c 0.71; fired ceramic and
+    # porcelain tile k 1.0-1.5, ρ 2000-2400, c 0.84.  Foams and fibre assemblies: Gibson & Ashby, *Cellular
+    # Solids* (flexible PU foam ~30 kg/m³, EVA foam ~150 kg/m³), Morton & Hearle, *Physical Properties of
+    # Textile Fibres* (wool c 1.36; pressed felt ~250 kg/m³), fur pelts k ~0.04 (Scholander et al. 1950).
+    Material("vinyl (PVC)", 0.16, 1300.0, 1200.0),
+    Material("silicone rubber", 0.20, 1150.0, 1300.0),
+    Material("graphite", 100.0, 1780.0, 710.0),
+    Material("ceramic tile", 1.3, 2300.0, 840.0),
+    Material("polyurethane foam", 0.035, 30.0, 1400.0),
+    Material("EVA foam", 0.05, 150.0, 2000.0),
+    Material("wool felt", 0.05, 250.0, 1360.0),
+    Material("fur", 0.04, 60.0, 1400.0),
 )}
 
 
