@@ -21,3 +21,34 @@ def test_published_figures_hold(group):
               for c in _claims(group) if not c.passed]
     assert not failed, "\n".join(failed)
     assert _claims(group), "a claim group that checks nothing"
+
+
+# The review of issue 11: which rows are read-backs, calibrations or arithmetic, and must not pose as predictions.
+EXPECTED_KINDS = {
+    "PAC noise at rest, all sources": "calibrated",  # adc_noise_rms_bits tuned to 1.4 bits
+    "largest 2 Hz band of a 1 s PAC spectrum at rest": "calibrated",  # hum amplitude tuned to 0.2 bits²
+    "intrinsic noise referred to input": "derived",  # the intrinsic noise again, in µV
+    "intrinsic noise in pressure": "derived",  # ... and in Pa
+    "PAC range (half-span)": "derived",  # 2048 × the PAC scale
+    "PDC code at full transducer range 103.4 kPa": "consistency",  # tolerance = the whole ADC range
+    "force per PDC bit, 0–2 N": "consistency",  # the slope is defined by 11.5 mN/bit
+    "slope above the knee / slope below": "consistency",
+    "impact ringing frequency": "consistency",
+    "impact ringing decay time constant": "consistency",
+    "false detections at rest": "consistency",  # P ≈ 1e-9 per window
+    "settled thermistor above ambient": "consistency",  # heater_rise_K
+    "TDC conversion error over 0–70 °C": "consistency",
+    "mirror-image contacts give mirror-image patterns": "consistency",  # symmetric table, symmetric model
+    "a 1 N contact's PDC rise": "consistency",
+}
+
+
+def test_every_claim_is_labelled_and_no_read_back_poses_as_a_prediction():
+    from bench.verification.claims import KINDS
+
+    claims = {c.name: c for group in CLAIM_GROUPS for c in _claims(group)}
+    assert all(c.kind in KINDS and c.source for c in claims.values())
+    assert all(c.calibration for c in claims.values() if c.kind == "calibrated")
+    assert all(c.note for c in claims.values() if c.kind == "consistency"), "say why a row is only a consistency check"
+    wrong = {n: (claims[n].kind, k) for n, k in EXPECTED_KINDS.items() if claims[n].kind != k}
+    assert not wrong, wrong

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator import conversions as conv
 from emulator.conversions import ADC_LSB_V
 from emulator.mechanics import static_pressure_from_force
 from emulator.params import SensorParams
@@ -86,7 +87,12 @@ def test_hotter_bridge_drifts_offset_and_span():
     t = np.arange(100) / 100.0
     hot_pdc = Sensor(hot, channels_read=["PDC"], noise=NoiseSources.none()).analog(np.ones(100, int), t)
     cold_pdc = Sensor(cold, channels_read=["PDC"], noise=NoiseSources.none()).analog(np.ones(100, int), t)
-    assert not np.allclose(hot_pdc, cold_pdc)
+    # 20 K apart: offset −1 µV/V/K and span −0.2 %/K (the drift parameters) on 10 V, times the gain of 10
+    p = SensorParams()
+    offset_V = 10.0 * -1e-6 * 20.0
+    span_V = 10.0 * 0.218e-6 * p.resting_pressure_Pa * (-2e-3 * 20.0)
+    assert np.ptp(hot_pdc) == 0 and np.ptp(cold_pdc) == 0  # settled: no drift in time
+    assert hot_pdc[0] - cold_pdc[0] == pytest.approx(10.0 * (offset_V + span_V), rel=0.01)
 
 
 def test_johnson_noise_follows_sqrt_4kTR():
@@ -147,11 +153,23 @@ def test_instants_older_than_the_history_are_refused_clearly():
 
 
 def test_full_frame_channels_all_convert():
-    s = Sensor(channels_read=DEFAULT_FRAME_NAMES, seed=2)
+    """Every channel of the default frame converts to its resting value, read back with the published
+    conversions: PAC and TAC at mid-scale, PDC at the resting pressure, TDC about 10 °C above ambient, every
+    electrode at the impedance of the resting fluid layer."""
+    p = SensorParams()
+    s = Sensor(channels_read=DEFAULT_FRAME_NAMES, seed=2, noise=NoiseSources.none())
     from emulator.channels import channel_index
     chans = [channel_index(n) for n in DEFAULT_FRAME_NAMES]
     codes = s.sample(chans, np.arange(44) / 4400.0)
-    assert codes.dtype == np.uint16 and np.all(codes <= 4095)
+    by = dict(zip(DEFAULT_FRAME_NAMES, codes.astype(float)))
+    assert codes.dtype == np.uint16
+    assert by["PAC"] == 2048 and by["TAC"] == 2048
+    pdc_offset = p.stage1_bias_V / ADC_LSB_V  # zero gauge pressure
+    assert float(conv.pdc_to_kpa(by["PDC"], pdc_offset)) == pytest.approx(p.resting_pressure_Pa / 1e3, rel=0.02)
+    assert float(conv.tdc_to_celsius(by["TDC"])) == pytest.approx(p.ambient_temperature_C + 10.0, abs=1.0)
+    z_rest = p.electrode_series_ohm + p.fluid_sheet_ohm_mm / p.resting_gap_mm
+    electrodes = [by[f"E{n}"] for n in range(1, 20)]
+    assert conv.impedance_ohm(np.array(electrodes)) == pytest.approx(np.full(19, z_rest), rel=0.01)
 
 
 def test_analog_trace_does_not_depend_on_how_the_instants_are_chunked():

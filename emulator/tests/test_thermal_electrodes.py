@@ -5,7 +5,8 @@ import pytest
 
 from emulator import conversions as conv
 from emulator.channels import DEFAULT_FRAME_NAMES, channel_index
-from emulator.electrodes import electrode_gaps_mm, electrode_positions_mm, Contact, surface_point_mm
+from emulator.electrodes import (Contact, electrode_gaps_mm, electrode_positions_mm, surface_point_mm,
+                                 surface_point_over_mm)
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.stimuli import AmbientStep, PowerOn, Touch
@@ -143,7 +144,14 @@ def test_forces_that_bottom_the_skin_stay_bounded():
     assert np.all(gaps >= p.minimum_gap_mm) and np.all(np.isfinite(gaps))
     s = Sensor(stimuli=[Touch(0.1, 50.0, 0.2, 1.0, electrode="E17")], channels_read=E + ["PDC"], noise=QUIET)
     codes = s.sample(E_IDX, 0.6 + np.arange(19) * 1e-4)
-    assert codes.min() > 0 and codes.max() < 4095
+    # the pressed electrode reads the impedance of the fluid left over it (gap from the contact geometry), far
+    # above rest, and no electrode reads a rail
+    centre = surface_point_over_mm(pos[16])
+    gap = electrode_gaps_mm(p, [Contact(centre, 3.0, lambda t: np.full(np.shape(t), 50.0))], np.array([0.6]), pos)[0]
+    z = conv.impedance_ohm(codes.astype(float))
+    assert z[16] == pytest.approx(p.electrode_series_ohm + p.fluid_sheet_ohm_mm / gap[16], rel=0.02)
+    assert z[16] > 3 * (p.electrode_series_ohm + p.fluid_sheet_ohm_mm / p.resting_gap_mm)
+    assert codes.min() > 100 and codes.max() < 4000
 
 
 def test_the_full_frame_with_both_modalities_is_deterministic():

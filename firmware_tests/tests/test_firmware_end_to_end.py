@@ -48,20 +48,33 @@ def test_three_sensors_are_detected_and_streamed_together():
 
 
 def test_the_host_detects_sphere_drops_and_sees_taps_and_presses():
-    stimuli = [SphereDrop(1.0, SPHERES["1 mm steel bearing"][0]), Tap(2.0, 0.5), Touch(2.5, 1.0, 0.2, 1.0)]
+    """The stream starts when the host's START arrives, at a virtual time that depends on how fast the host
+    thread runs (the firmware runs ~30x real time meanwhile): the stimuli come late enough (6 s) to fall inside
+    the stream, and the checks use times relative to each other."""
+    stimuli = [SphereDrop(6.0, SPHERES["1 mm steel bearing"][0]), Tap(7.0, 0.5), Touch(7.5, 1.0, 0.2, 1.0)]
     with FirmwareBench(1, stimuli=stimuli) as fb:
-        drv, frames = stream(fb, 400)
+        drv, frames = stream(fb, 1000)
         drv.close()
     seq0 = frames[0].seq
     t_pac = np.concatenate([(f.seq - seq0) * 0.01 + np.arange(22) / 2200.0 for f in frames])
     x = pac(frames)
-    # frames start after detection (~ a few ms); find the drop by the dissertation's rule
+    # find the drop by the dissertation's rule, with the noise of the stream's first half second
     rest = x[t_pac < 0.5]
     hits = analysis.StreamingDetector(rest.mean(), rest.std(), 2200.0)
     hits.update(x)
-    assert hits.events >= 2  # the drop, and the tap
+    # when each detection starts: a 100 ms window first holds more than 3 samples beyond 4 σ
+    flags = np.concatenate([[0], np.cumsum(analysis.exceedances(x, rest.mean(), rest.std()))])
+    counts = flags[220:] - flags[:-220]
+    above = counts > 3
+    onsets = t_pac[219:][np.flatnonzero(above & ~np.concatenate([[False], above[:-1]]))]
+    # the drop is detected itself (the first event), and the tap one second after it
+    assert hits.events == len(onsets) >= 2
+    assert onsets[1] - onsets[0] == pytest.approx(1.0, abs=0.03)
+    assert onsets[0] > 0.5, "the stream started after the drop: the host took too long to send START"
     pdc = np.array([f.codes[f.channels == 1, 0][0] for f in frames], float)
-    assert pdc.max() - np.median(pdc[:40]) > 60  # a 1 N press: ~87 PDC bits
+    t_pdc = np.array([(f.seq - seq0) * 0.01 for f in frames])
+    press = (t_pdc > onsets[0] + 1.75) & (t_pdc < onsets[0] + 2.45)  # the press holds 1 N from 7.7 to 8.7 s
+    assert np.median(pdc[press]) - np.median(pdc[:40]) == pytest.approx(87, abs=6)  # 11.5 mN per PDC bit
 
 
 def test_host_commands_stop_and_change_the_pattern():

@@ -1,0 +1,34 @@
+"""The mutation catalogue (bench/verification/mutants.py): it matches the tree, covers what issue 11 asks for, and
+a quick sample of it runs here, on a scratch copy, so a new blind spot fails the suite.  The whole catalogue:
+``scripts/mutants`` (or ``tox -e mutants``)."""
+
+import pytest
+
+from bench.verification import mutants as mu
+
+
+@pytest.mark.unit
+def test_the_catalogue_matches_the_tree_and_covers_every_area():
+    assert mu.check_catalogue() == []
+    assert len(mu.CATALOGUE) >= 40
+    areas = {m.area for m in mu.CATALOGUE}
+    assert {"constants", "filters", "parity", "crc", "timing", "electrodes", "mechanics", "thermal", "adc",
+            "noise"} <= areas
+    assert set(mu.FAST) <= {m.name for m in mu.CATALOGUE}
+    with pytest.raises(KeyError, match="unknown mutant"):
+        mu.by_name(["no-such-mutant"])
+
+
+@pytest.mark.mutants
+def test_a_quick_sample_of_the_catalogue_is_caught_on_a_scratch_copy():
+    """The sample (Boltzmann's constant, the second byte's parity on the host, the multiplexer's memory, the TDC
+    bandwidth) must be caught; and a mutant run against a test that cannot see it must be reported as survived,
+    so "caught" means something (the harness imports the scratch copy's modules, not the checkout's)."""
+    blind = mu.Mutant("boltzmann-vs-parity-test", "constants", "emulator/params.py",
+                      "BOLTZMANN_J_PER_K = 1.380649e-23", "BOLTZMANN_J_PER_K = 1.380649e-22",
+                      ("emulator/tests/test_protocol.py::test_every_sampling_command_has_odd_parity",),
+                      "a constant no parity test can see")
+    results = {r.name: r for r in mu.run_catalogue(mu.by_name(mu.FAST) + [blind])}
+    assert {n: results[n].status for n in mu.FAST} == {n: "caught" for n in mu.FAST}, \
+        {n: results[n].detail for n in mu.FAST}
+    assert results[blind.name].status == "survived"

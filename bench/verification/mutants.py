@@ -1,0 +1,581 @@
+"""A mutation catalogue: deliberate faults in the physics, the protocol, the firmware and the host, each of which
+some test must catch.
+
+Each :class:`Mutant` names a file, an exact snippet of it (which must occur exactly once), its replacement and
+the pytest selection that should fail once the snippet is replaced.  Mutants are applied to a *scratch copy*
+of the tree (the git-tracked and untracked-but-not-ignored files of the working tree, copied to a temporary
+folder), never to the checkout itself; the selected tests run there with ``cwd`` and ``PYTHONPATH`` set to the
+copy, so the copy's modules are the ones imported (checked before anything runs: the editable install in
+``.venv`` appends its finder to ``sys.meta_path``, after ``PYTHONPATH``), and with ``PYTHONDONTWRITEBYTECODE``
+so a mutation of the same length written within the same second never meets a stale ``.pyc``.  C sources
+are rebuilt because the bench caches native builds by the hash of their sources.
+
+A result is *caught* (the tests failed), *survived* (they passed: a blind spot — write the missing test) or
+*error* (the snippet is gone, the tests could not be collected, or they timed out).  Before the mutants, the
+union of their selections runs once unmutated (the baseline): a selection that fails without any mutation
+would make every mutant look caught.
+
+    python -m bench.verification.mutants                 # the whole catalogue: table, exit 1 unless all caught
+    python -m bench.verification.mutants --list          # names, files, what each breaks
+    python -m bench.verification.mutants --only adc-reference-3v0 --json
+    python -m bench.verification.mutants --fast          # the sample that also runs in the test suite
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@dataclass(frozen=True)
+class Mutant:
+    """One deliberate fault: replace ``original`` (exactly one occurrence in ``file``) by ``replacement``."""
+
+    name: str
+    area: str
+    file: str  # relative to the repository root
+    original: str
+    replacement: str
+    tests: tuple[str, ...]  # pytest node ids or paths, relative to the repository root
+    what: str  # the fault, in words
+
+
+@dataclass
+class Result:
+    name: str
+    area: str
+    file: str
+    status: str  # caught, survived, error
+    seconds: float
+    detail: str = ""
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+# --- test selections used below -------------------------------------------------------------------------
+_DOC = "emulator/tests/test_documented_behaviour.py"
+_PROTO = "emulator/tests/test_parity_and_timing.py"
+_MODEL = "emulator/tests/test_model.py"
+_FILTERS = "emulator/tests/test_filters.py"
+_THERMAL = "emulator/tests/test_thermal_electrodes.py"
+_FW_DOC = "firmware_tests/tests/test_firmware_documented.py"
+_CLI = "bench/tests/test_cli_and_runs.py"
+
+CATALOGUE: list[Mutant] = [
+    # --- physical constants -------------------------------------------------------------------------
+    Mutant("boltzmann-x10", "constants", "emulator/params.py",
+           "BOLTZMANN_J_PER_K = 1.380649e-23", "BOLTZMANN_J_PER_K = 1.380649e-22",
+           (f"{_MODEL}::test_johnson_noise_follows_sqrt_4kTR",), "Boltzmann's constant ten times too large"),
+    Mutant("johnson-2kTR", "noise", "emulator/params.py",
+           "math.sqrt(4.0 * BOLTZMANN_J_PER_K", "math.sqrt(2.0 * BOLTZMANN_J_PER_K",
+           (f"{_MODEL}::test_johnson_noise_follows_sqrt_4kTR", f"{_DOC}::test_each_noise_source_matches_the_budget"),
+           "Johnson noise from √(2kTR) instead of √(4kTR)"),
+    Mutant("bridge-resistance-50k", "constants", "emulator/params.py",
+           'bridge_resistance_ohm: float = _p(5e3,', 'bridge_resistance_ohm: float = _p(50e3,',
+           (f"{_MODEL}::test_johnson_noise_follows_sqrt_4kTR",), "bridge output resistance 50 kΩ instead of 5 kΩ"),
+    Mutant("bridge-sensitivity-half", "constants", "emulator/params.py",
+           "bridge_sensitivity_V_per_V_Pa: float = _p(0.218e-6,", "bridge_sensitivity_V_per_V_Pa: float = _p(0.109e-6,",
+           (f"{_MODEL}::test_calibrator_pressure_reaches_pdc_at_the_published_scale",
+            f"{_DOC}::test_pac_scale_is_0_37_Pa_per_bit"),
+           "bridge sensitivity halved (the force claim still reads 11.5 mN/bit: it is a read-back)"),
+    Mutant("bridge-excitation-5V", "constants", "emulator/params.py",
+           'bridge_excitation_V: float = _p(10.0,', 'bridge_excitation_V: float = _p(5.0,',
+           (f"{_MODEL}::test_calibrator_pressure_reaches_pdc_at_the_published_scale",),
+           "bridge excited at 5 V instead of 10 V"),
+    Mutant("stage1-gain-11", "constants", "emulator/params.py",
+           "stage1_gain: float = _p(10.0,", "stage1_gain: float = _p(11.0,",
+           (f"{_MODEL}::test_calibrator_pressure_reaches_pdc_at_the_published_scale",),
+           "first-stage gain 11 instead of 10"),
+    Mutant("stage2-gain-90", "constants", "emulator/params.py",
+           "stage2_gain: float = _p(99.1,", "stage2_gain: float = _p(90.0,",
+           (f"{_DOC}::test_pac_scale_is_0_37_Pa_per_bit",), "second-stage gain 90 instead of 99.1"),
+    Mutant("pac-bias-1v5", "constants", "emulator/params.py",
+           'stage2_bias_V: float = _p(1.65,', 'stage2_bias_V: float = _p(1.5,',
+           (f"{_MODEL}::test_full_frame_channels_all_convert",), "PAC biased at 1.5 V instead of mid-scale 1.65 V"),
+    Mutant("force-per-bit-23mN", "constants", "emulator/params.py",
+           "force_per_pdc_bit_N: float = _p(\n        0.0115,", "force_per_pdc_bit_N: float = _p(\n        0.023,",
+           (f"{_DOC}::test_a_1_N_press_raises_PDC_by_87_bits",), "23 mN per PDC bit instead of 11.5"),
+    Mutant("force-knee-4N", "constants", "emulator/params.py",
+           "force_knee_N: float = _p(2.0,", "force_knee_N: float = _p(4.0,",
+           (f"{_MODEL}::test_force_curve_is_linear_below_the_knee_and_flattens_above",), "knee at 4 N instead of 2 N"),
+    Mutant("heater-rise-5K", "thermal", "emulator/params.py",
+           "heater_rise_K: float = _p(10.0,", "heater_rise_K: float = _p(5.0,",
+           (f"{_THERMAL}::test_heater_holds_the_core_10K_above_ambient_and_warms_up_over_minutes",),
+           "heaters hold the core 5 K above ambient instead of 10 K"),
+    # --- ADC ------------------------------------------------------------------------------------------
+    Mutant("adc-11-bits", "adc", "emulator/conversions.py", "ADC_BITS = 12", "ADC_BITS = 11",
+           (f"{_DOC}::test_adc_rounds_to_the_nearest_code_and_clips_at_the_rails",), "an 11-bit ADC"),
+    Mutant("adc-reference-3v0", "adc", "emulator/conversions.py",
+           "ADC_FULL_SCALE_V = 3.3", "ADC_FULL_SCALE_V = 3.0",
+           (f"{_MODEL}::test_calibrator_pressure_reaches_pdc_at_the_published_scale",), "ADC reference 3.0 V"),
+    Mutant("adc-truncates", "adc", "emulator/adc.py",
+           "np.floor(v / ADC_LSB_V + 0.5)", "np.floor(v / ADC_LSB_V + 0.0)",
+           (f"{_DOC}::test_adc_rounds_to_the_nearest_code_and_clips_at_the_rails",),
+           "the ADC truncates instead of rounding to the nearest code"),
+    Mutant("adc-clips-at-4096", "adc", "emulator/adc.py",
+           "0, ADC_CODES - 1).astype(np.uint16)", "0, ADC_CODES).astype(np.uint16)",
+           (f"{_DOC}::test_adc_rounds_to_the_nearest_code_and_clips_at_the_rails",),
+           "the ADC clips at 4096 (wraps to 0 in 12 bits)"),
+    Mutant("adc-noise-doubled", "noise", "emulator/adc.py",
+           "params.adc_noise_rms_bits * ADC_LSB_V if noise", "2 * params.adc_noise_rms_bits * ADC_LSB_V if noise",
+           (f"{_DOC}::test_adc_input_noise_is_1_13_LSB",), "ADC input noise twice its parameter"),
+    # --- filters: orders and corners ------------------------------------------------------------------
+    Mutant("stage1-lowpass-1st-order", "filters", "emulator/filters.py",
+           'return signal.butter(2, 2 * np.pi * f_hz', 'return signal.butter(1, 2 * np.pi * f_hz',
+           (f"{_DOC}::test_pdc_front_end_is_a_2nd_order_butterworth_at_1040_Hz",),
+           "anti-alias filter of order 1 instead of 2"),
+    Mutant("stage1-corner-2000Hz", "filters", "emulator/params.py",
+           "stage1_lowpass_Hz: float = _p(1040.0,", "stage1_lowpass_Hz: float = _p(2000.0,",
+           (f"{_DOC}::test_pdc_front_end_is_a_2nd_order_butterworth_at_1040_Hz",),
+           "anti-alias corner at 2000 Hz instead of 1040 Hz"),
+    Mutant("stage2-highpass-1Hz", "filters", "emulator/params.py",
+           "stage2_highpass_Hz: float = _p(10.0,", "stage2_highpass_Hz: float = _p(1.0,",
+           (f"{_DOC}::test_pac_band_starts_with_a_1st_order_10_Hz_high_pass",), "PAC high-pass at 1 Hz instead of 10 Hz"),
+    Mutant("highpass-2nd-order", "filters", "emulator/filters.py",
+           "return np.array([0.0]), np.array([-2 * np.pi * f_hz]), 1.0",
+           "return np.array([0.0, 0.0]), np.array([-2 * np.pi * f_hz, -2 * np.pi * f_hz]), 1.0",
+           (f"{_DOC}::test_pac_band_starts_with_a_1st_order_10_Hz_high_pass",),
+           "the high-passes (PAC 10 Hz, TAC 0.45 Hz) of order 2 instead of 1"),
+    Mutant("no-prewarping", "filters", "emulator/filters.py",
+           "out[ok] = roots[ok] / mag[ok] * (2.0 * fs * np.tan(mag[ok] / (2.0 * fs)))", "out[ok] = roots[ok]",
+           (f"{_FILTERS}::test_prewarping_puts_the_1040Hz_corner_where_it_belongs_near_nyquist",),
+           "prewarping silently does nothing"),
+    Mutant("tdc-bandwidth-2Hz", "filters", "emulator/params.py",
+           "tdc_bandwidth_Hz: float = _p(22.6,", "tdc_bandwidth_Hz: float = _p(2.26,",
+           (f"{_DOC}::test_TDC_bandwidth_is_22_6_Hz",), "TDC bandwidth 2.26 Hz instead of 22.6 Hz"),
+    Mutant("tdc-bandwidth-45Hz", "filters", "emulator/params.py",
+           "tdc_bandwidth_Hz: float = _p(22.6,", "tdc_bandwidth_Hz: float = _p(45.0,",
+           (f"{_DOC}::test_TDC_bandwidth_is_22_6_Hz",), "TDC bandwidth 45 Hz instead of 22.6 Hz"),
+    Mutant("tac-highpass-5Hz", "filters", "emulator/params.py",
+           "tac_highpass_Hz: float = _p(0.45,", "tac_highpass_Hz: float = _p(5.0,",
+           (f"{_DOC}::test_TAC_is_98_times_a_0_45_Hz_high_pass_of_TDC",),
+           "TAC high-pass at the text's 5 Hz instead of Table 4-1's 0.45 Hz"),
+    Mutant("tac-gain-49", "thermal", "emulator/thermal.py", "TAC_GAIN = 98.0", "TAC_GAIN = 49.0",
+           (f"{_DOC}::test_TAC_is_98_times_a_0_45_Hz_high_pass_of_TDC",), "TAC gain 49 instead of 98"),
+    Mutant("electrode-bandwidth-5Hz", "filters", "emulator/params.py",
+           "electrode_bandwidth_Hz: float = _p(100.0,", "electrode_bandwidth_Hz: float = _p(5.0,",
+           (f"{_DOC}::test_electrode_bandwidth_is_100_Hz",), "electrode bandwidth 5 Hz instead of 100 Hz"),
+    Mutant("electrode-bandwidth-300Hz", "filters", "emulator/params.py",
+           "electrode_bandwidth_Hz: float = _p(100.0,", "electrode_bandwidth_Hz: float = _p(300.0,",
+           (f"{_DOC}::test_electrode_bandwidth_is_100_Hz",), "electrode bandwidth 300 Hz instead of 100 Hz"),
+    # --- resonance, impacts, displacement ------------------------------------------------------------
+    Mutant("resonance-250Hz", "mechanics", "emulator/params.py",
+           "resonance_Hz: float = _p(330.0,", "resonance_Hz: float = _p(250.0,",
+           (f"{_DOC}::test_an_impact_rings_at_330_Hz_with_a_20_ms_decay",), "skin/fluid resonance at 250 Hz"),
+    Mutant("resonance-decay-40ms", "mechanics", "emulator/params.py",
+           "resonance_decay_s: float = _p(0.020,", "resonance_decay_s: float = _p(0.040,",
+           (f"{_DOC}::test_an_impact_rings_at_330_Hz_with_a_20_ms_decay",), "ringing decays in 40 ms"),
+    Mutant("resonance-sigma-doubled", "mechanics", "emulator/filters.py",
+           "sigma = 1.0 / decay_s", "sigma = 2.0 / decay_s",
+           (f"{_FILTERS}::test_resonance_rings_at_its_frequency_with_its_decay",), "envelope decays twice as fast"),
+    Mutant("impulse-x2.5", "mechanics", "emulator/stimuli.py",
+           "return 0.5 * self.impulse_Ns * (1.0 - np.cos(np.pi * x / self.contact_s))",
+           "return 1.25 * self.impulse_Ns * (1.0 - np.cos(np.pi * x / self.contact_s))",
+           (f"{_MODEL}::test_force_pulses_deliver_the_same_impulse_on_any_grid",
+            f"{_DOC}::test_an_impact_rings_with_the_amplitude_its_impulse_predicts"),
+           "a sphere delivers 2.5 times its impulse"),
+    Mutant("restitution-ignored", "mechanics", "emulator/stimuli.py",
+           "self.impact_speed_m_per_s * (1.0 + self.restitution)", "self.impact_speed_m_per_s * (1.0 + 0.0)",
+           (f"{_DOC}::test_the_impact_impulse_is_m_v_1_plus_e",), "the bounce (1 + e) left out of the impulse"),
+    Mutant("scene-drops-ignore-restitution", "mechanics", "bench/scenes/scene.py",
+           "SphereDrop(t, mass, height, params.impact_restitution, params.impact_contact_s)",
+           "SphereDrop(t, mass, height, 0.3, params.impact_contact_s)",
+           (f"{_DOC}::test_the_impact_impulse_is_m_v_1_plus_e",),
+           "scenes ignore the sensor's impact_restitution parameter"),
+    Mutant("impact-contact-4ms", "mechanics", "emulator/stimuli.py",
+           "    restitution: float = 0.3\n    contact_s: float = 0.4e-3",
+           "    restitution: float = 0.3\n    contact_s: float = 4e-3",
+           (f"{_DOC}::test_an_impact_rings_with_the_amplitude_its_impulse_predicts",),
+           "sphere contact lasts 4 ms instead of 0.4 ms"),
+    Mutant("displacement-gain-x10", "mechanics", "emulator/params.py",
+           "        3.17e6, \"Pa/m\"", "        3.17e7, \"Pa/m\"",
+           (f"{_DOC}::test_skin_displacement_reaches_the_liquid_with_the_documented_gain_and_zero",),
+           "skin displacement -> pressure ten times too strong"),
+    Mutant("displacement-zero-5kHz", "mechanics", "emulator/params.py",
+           "        500.0, \"Hz\", 50.0, 1e4,", "        5000.0, \"Hz\", 50.0, 1e4,",
+           (f"{_DOC}::test_skin_displacement_reaches_the_liquid_with_the_documented_gain_and_zero",),
+           "direct liquid path's zero at 5 kHz instead of 500 Hz"),
+    # --- noise sources -------------------------------------------------------------------------------
+    Mutant("white-noise-bandwidth-fs", "noise", "emulator/transducer.py",
+           "self.sigma = density * np.sqrt(fs / 2.0)", "self.sigma = density * np.sqrt(fs)",
+           (f"{_DOC}::test_each_noise_source_matches_the_budget",),
+           "grid white noise sized for a bandwidth of fs instead of fs/2"),
+    Mutant("amplifier-noise-x2", "noise", "emulator/params.py",
+           "0.39e-6 / math.sqrt(1024.0), \"V/√Hz\", 0.0, 1e-6, \"D\", \"first-stage",
+           "0.78e-6 / math.sqrt(1024.0), \"V/√Hz\", 0.0, 1e-6, \"D\", \"first-stage",
+           (f"{_CLI}::test_noise_budget_json_reproduces_table_5_1",), "first-stage voltage noise doubled"),
+    Mutant("hum-50Hz", "noise", "emulator/params.py",
+           "mains_frequency_Hz: float = _p(60.0,", "mains_frequency_Hz: float = _p(50.0,",
+           (f"{_MODEL}::test_leaving_out_the_hum_leaves_every_other_sample_unchanged",), "50 Hz mains"),
+    Mutant("hum-x10", "noise", "emulator/params.py",
+           "        0.516e-6, \"V\"", "        5.16e-6, \"V\"",
+           (f"{_DOC}::test_the_hum_fills_the_largest_2_Hz_band_with_0_2_bits2",), "hum ten times too strong"),
+    Mutant("spi-coupling-off", "noise", "emulator/adc.py",
+           "v[bus_active] += self.coupling_V", "v[bus_active] += 0.0 * self.coupling_V",
+           ("emulator/tests/test_protocol.py::test_clocking_the_bus_during_a_conversion_couples_noise_into_the_sample",),
+           "SPI clocking during a conversion couples nothing"),
+    # --- multiplexer and electrodes ------------------------------------------------------------------
+    Mutant("mux-memory-deleted", "electrodes", "emulator/electrodes.py",
+           "a = np.exp(-p.mux_acquisition_s / p.mux_settling_s)", "a = 0.0 * np.exp(-p.mux_acquisition_s / p.mux_settling_s)",
+           (f"{_DOC}::test_the_multiplexer_keeps_0_67_percent_of_the_previous_electrode",),
+           "the multiplexer's hold node forgets the previous electrode (and injects nothing)"),
+    Mutant("mux-settling-2us", "electrodes", "emulator/params.py",
+           "mux_settling_s: float = _p(4e-6,", "mux_settling_s: float = _p(2e-6,",
+           (f"{_DOC}::test_the_multiplexer_keeps_0_67_percent_of_the_previous_electrode",),
+           "the hold node settles twice as fast"),
+    Mutant("mux-injection-off", "electrodes", "emulator/electrodes.py",
+           "self.mux_injection = a * p.mux_injection_V", "self.mux_injection = 0.0 * p.mux_injection_V",
+           (f"{_DOC}::test_charge_injection_offsets_repeated_reads_of_one_electrode",), "no charge injection"),
+    Mutant("electrode-load-20k", "electrodes", "emulator/params.py",
+           "electrode_load_ohm: float = _p(10e3,", "electrode_load_ohm: float = _p(20e3,",
+           (f"{_THERMAL}::test_impedance_round_trips_through_eq_4_1",), "20 kΩ electrode load instead of 10 kΩ"),
+    Mutant("electrode-geometry-E10-moved", "electrodes", "fixtures/electrodes.csv",
+           "E10,1.299,0.000,-4.330", "E10,2.299,0.000,-4.330",
+           (f"{_DOC}::test_electrode_positions_are_the_published_table",), "E10 moved 1 mm along the finger"),
+    Mutant("electrode-geometry-mirror-broken", "electrodes", "fixtures/electrodes.csv",
+           "E12,-2.700,3.513,-3.670", "E12,-2.700,3.513,-3.570",
+           (f"{_DOC}::test_electrode_positions_are_the_published_table",), "E12 no longer E2's mirror image"),
+    Mutant("core-radius-6mm", "electrodes", "emulator/electrodes.py", "CORE_RADIUS_MM = 5.0", "CORE_RADIUS_MM = 6.0",
+           (f"{_DOC}::test_electrode_positions_are_the_published_table",),
+           "contacts placed on a 6 mm core instead of the 5 mm the electrode table implies"),
+    # --- thermistor ----------------------------------------------------------------------------------
+    Mutant("thermistor-B-3950", "thermal", "emulator/thermal.py",
+           "THERMISTOR_B_K = 4025.0", "THERMISTOR_B_K = 3950.0",
+           (f"{_THERMAL}::test_thermistor_is_470k_at_25C_and_the_divider_matches_the_published_conversion",),
+           "thermistor B = 3950 K instead of 4025 K"),
+    Mutant("thermistor-47k", "thermal", "emulator/thermal.py",
+           "THERMISTOR_R_INF_OHM = 470e3", "THERMISTOR_R_INF_OHM = 47e3",
+           (f"{_THERMAL}::test_thermistor_is_470k_at_25C_and_the_divider_matches_the_published_conversion",),
+           "47 kΩ thermistor instead of 470 kΩ"),
+    Mutant("divider-10k", "thermal", "emulator/thermal.py", "DIVIDER_OHM = 30e3", "DIVIDER_OHM = 10e3",
+           (f"{_THERMAL}::test_thermistor_is_470k_at_25C_and_the_divider_matches_the_published_conversion",),
+           "10 kΩ divider resistor instead of 30 kΩ"),
+    Mutant("tdc-conversion-constant", "thermal", "emulator/conversions.py",
+           "(155183.0 - 46555.0 * x) / x", "(155183.0 - 46000.0 * x) / x",
+           (f"{_THERMAL}::test_thermistor_is_470k_at_25C_and_the_divider_matches_the_published_conversion",),
+           "a wrong constant in the published TDC conversion (D eq. 4.4)"),
+    # --- protocol: parity of each byte ----------------------------------------------------------------
+    Mutant("response-byte0-even-parity", "parity", "emulator/spi/protocol.py",
+           "hi = with_odd_parity(data >> 5).astype(np.uint16)", "hi = (with_odd_parity(data >> 5) ^ 1).astype(np.uint16)",
+           ("emulator/tests/test_protocol.py::test_response_words_round_trip_every_code_with_odd_parity_and_zero_bits",),
+           "response words leave with the first byte's parity even"),
+    Mutant("response-byte1-no-parity", "parity", "emulator/spi/protocol.py",
+           "lo = lo_data | (~_POPCOUNT[lo_data] & 1)", "lo = lo_data",
+           ("emulator/tests/test_protocol.py::test_response_words_round_trip_every_code_with_odd_parity_and_zero_bits",),
+           "response words leave without the second byte's parity bit"),
+    Mutant("host-ignores-byte1-parity", "parity", "emulator/spi/protocol.py",
+           "return value, ODD_PARITY_OK[b0] & ODD_PARITY_OK[b1]", "return value, ODD_PARITY_OK[b0] & True",
+           (f"{_PROTO}::test_every_single_bit_error_in_a_response_word_is_flagged",
+            f"{_PROTO}::test_the_host_sampler_flags_parity_faults_in_either_byte"),
+           "the host decoder ignores the second byte's parity"),
+    Mutant("host-ignores-byte0-parity", "parity", "emulator/spi/protocol.py",
+           "return value, ODD_PARITY_OK[b0] & ODD_PARITY_OK[b1]", "return value, True & ODD_PARITY_OK[b1]",
+           (f"{_PROTO}::test_every_single_bit_error_in_a_response_word_is_flagged",),
+           "the host decoder ignores the first byte's parity"),
+    Mutant("sampler-error-words-as-parity", "parity", "bench/running/sampler.py",
+           "status[proto.is_error_word(words)] = STATUS_ERROR_WORD", "pass",
+           (f"{_PROTO}::test_the_host_sampler_marks_error_words_as_error_words",),
+           "the host sampler reports error words as parity errors"),
+    Mutant("command-even-parity", "parity", "emulator/spi/protocol.py",
+           "return with_odd_parity(0x40 | c)", "return with_odd_parity(0x40 | c) ^ 1",
+           ("emulator/tests/test_protocol.py::test_every_sampling_command_has_odd_parity",),
+           "sampling commands sent with even parity"),
+    Mutant("sensor-accepts-even-commands", "parity", "emulator/spi/model.py",
+           "        elif not proto.ODD_PARITY_OK[b0]:\n            self._prepare_word(err[\"parity\"], t)",
+           "        elif False:\n            self._prepare_word(err[\"parity\"], t)",
+           ("emulator/tests/test_spi_model.py::test_mosi_bit_flip_turns_a_command_into_a_parity_error",),
+           "the sensor's transfer-level path accepts commands with even parity"),
+    Mutant("firmware-ignores-byte1-parity", "parity", "firmware_tests/firmware/bt_bridge.c",
+           "else if (!odd_parity(b0) || !odd_parity(b1))", "else if (!odd_parity(b0))",
+           (f"{_FW_DOC}::test_the_firmware_flags_parity_faults_in_either_byte",),
+           "the firmware ignores the second byte's parity"),
+    Mutant("firmware-ignores-byte0-parity", "parity", "firmware_tests/firmware/bt_bridge.c",
+           "else if (!odd_parity(b0) || !odd_parity(b1))", "else if (!odd_parity(b1))",
+           (f"{_FW_DOC}::test_the_firmware_flags_parity_faults_in_either_byte",),
+           "the firmware ignores the first byte's parity"),
+    Mutant("firmware-command-even-parity", "parity", "firmware_tests/firmware/bt_bridge.c",
+           "return odd_parity(b) ? b : (uint8_t)(b | 1);", "return odd_parity(b) ? (uint8_t)(b | 1) : b;",
+           (f"{_FW_DOC}::test_the_firmware_samples_with_the_vendor_timing",),
+           "the firmware sends sampling commands with even parity"),
+    # --- CRC -----------------------------------------------------------------------------------------
+    Mutant("firmware-crc-poly-8005", "crc", "firmware_tests/firmware/bt_bridge.c",
+           "crc ^= (uint16_t)data[i] << 8;\n        for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021)",
+           "crc ^= (uint16_t)data[i] << 8;\n        for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x8005)",
+           (f"{_FW_DOC}::test_the_firmware_crc_is_ccitt_false",), "the firmware's CRC-16 with polynomial 0x8005"),
+    Mutant("firmware-payload-crc-poly", "crc", "firmware_tests/firmware/bt_bridge.c",
+           "crc ^= (uint16_t)payload[i] << 8;\n        for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021)",
+           "crc ^= (uint16_t)payload[i] << 8;\n        for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1201)",
+           (f"{_FW_DOC}::test_the_firmware_samples_with_the_vendor_timing",),
+           "the CRC over a frame's payload with a wrong polynomial"),
+    Mutant("firmware-crc-init-0", "crc", "firmware_tests/firmware/bt_bridge.c",
+           "uint16_t bt_crc16(const uint8_t *data, size_t n) {\n    uint16_t crc = 0xFFFF;",
+           "uint16_t bt_crc16(const uint8_t *data, size_t n) {\n    uint16_t crc = 0x0000;",
+           (f"{_FW_DOC}::test_the_firmware_crc_is_ccitt_false",), "the firmware's CRC-16 starts from 0"),
+    Mutant("driver-crc-poly-8005", "crc", "bench/hosts/driver.py",
+           "crc = ((crc << 1) ^ 0x1021) & 0xFFFF", "crc = ((crc << 1) ^ 0x8005) & 0xFFFF",
+           (f"{_PROTO}::test_the_driver_crc_is_ccitt_false",), "the host driver's CRC-16 with polynomial 0x8005"),
+    # --- timing rules --------------------------------------------------------------------------------
+    Mutant("sensor-delay-45us", "timing", "emulator/spi/model.py",
+           "SAMPLE_DELAY_TICKS = 50", "SAMPLE_DELAY_TICKS = 45",
+           (f"{_PROTO}::test_the_50_us_rule_has_its_boundary_at_50_us",), "the sensor answers after 45 µs"),
+    Mutant("sensor-delay-55us", "timing", "emulator/spi/model.py",
+           "SAMPLE_DELAY_TICKS = 50", "SAMPLE_DELAY_TICKS = 55",
+           (f"{_PROTO}::test_the_50_us_rule_has_its_boundary_at_50_us",), "the sensor needs 55 µs"),
+    Mutant("host-delay-40us", "timing", "emulator/spi/protocol.py",
+           "SAMPLE_DELAY_S = 50e-6", "SAMPLE_DELAY_S = 40e-6",
+           (f"{_PROTO}::test_the_host_sampler_reads_every_slot_cleanly_with_the_vendor_timing",),
+           "the host sampler reads 40 µs after the command"),
+    Mutant("sampling-delay-6us", "timing", "emulator/spi/model.py",
+           "CONVERSION_TICKS = 5", "CONVERSION_TICKS = 6",
+           (f"{_PROTO}::test_the_5_us_sampling_delay_has_its_boundary_at_5_us",),
+           "the ADC stays busy 6 µs after a sampling command"),
+    Mutant("sampling-delay-3us", "timing", "emulator/spi/model.py",
+           "CONVERSION_TICKS = 5", "CONVERSION_TICKS = 3",
+           (f"{_PROTO}::test_the_5_us_sampling_delay_has_its_boundary_at_5_us",),
+           "the ADC is ready again 3 µs after a sampling command"),
+    Mutant("conversion-window-2us", "timing", "emulator/params.py",
+           "        5e-6, \"s\", 1e-7, 1e-4, \"model\",", "        2e-6, \"s\", 1e-7, 1e-4, \"model\",",
+           (f"{_PROTO}::test_clocking_within_5_us_of_a_sampling_command_disturbs_the_conversion",),
+           "SPI clocking disturbs a conversion only within 2 µs instead of 5 µs"),
+    Mutant("firmware-delay-40us", "timing", "firmware_tests/firmware/bt_bridge.c",
+           "#define SAMPLE_DELAY_NS 50000u", "#define SAMPLE_DELAY_NS 40000u",
+           (f"{_FW_DOC}::test_the_firmware_samples_with_the_vendor_timing",), "the firmware reads 40 µs after the command"),
+    Mutant("firmware-slot-4kHz", "timing", "firmware_tests/firmware/bt_bridge.c",
+           "uint32_t t = (uint32_t)((uint64_t)k * 1000000000u / 4400u);",
+           "uint32_t t = (uint32_t)((uint64_t)k * 1000000000u / 4000u);",
+           (f"{_FW_DOC}::test_the_firmware_samples_with_the_vendor_timing",), "the firmware's slots at 4 kHz"),
+    Mutant("firmware-word-gap-short", "timing", "firmware_tests/firmware/bt_bridge.c",
+           "#define WORD_NS 3750u", "#define WORD_NS 3000u",
+           (f"{_FW_DOC}::test_the_firmware_samples_with_the_vendor_timing",),
+           "the firmware starts the next word before the previous one ended"),
+]
+
+#: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
+FAST = ("boltzmann-x10", "host-ignores-byte1-parity", "mux-memory-deleted", "tdc-bandwidth-2Hz")
+
+
+def by_name(names) -> list[Mutant]:
+    known = {m.name: m for m in CATALOGUE}
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise KeyError(f"unknown mutant(s): {', '.join(unknown)}; known: {', '.join(known)}")
+    return [known[n] for n in names]
+
+
+def check_catalogue(repo: Path = REPO, mutants=None) -> list[str]:
+    """Problems with the catalogue against ``repo``: snippets not found exactly once, missing test files,
+    duplicate names."""
+    problems = []
+    mutants = CATALOGUE if mutants is None else mutants
+    names = [m.name for m in mutants]
+    problems += [f"duplicate mutant name {n!r}" for n in sorted({n for n in names if names.count(n) > 1})]
+    for m in mutants:
+        path = repo / m.file
+        if not path.exists():
+            problems.append(f"{m.name}: {m.file} does not exist")
+            continue
+        count = path.read_text(encoding="utf-8").count(m.original)
+        if count != 1:
+            problems.append(f"{m.name}: the snippet occurs {count} times in {m.file} (must be exactly once)")
+        if m.original == m.replacement:
+            problems.append(f"{m.name}: the replacement equals the original")
+        for t in m.tests:
+            if not (repo / t.split("::")[0]).exists():
+                problems.append(f"{m.name}: test file {t.split('::')[0]} does not exist")
+    return problems
+
+
+# --- scratch copies -------------------------------------------------------------------------------------
+#: Without git (an unpacked archive), everything except these folders and files is copied.
+_NOT_SOURCE = {".git", ".venv", ".tox", "out", "build", "__pycache__", ".pytest_cache", ".hypothesis"}
+
+
+def tree_files(repo: Path = REPO) -> list[str]:
+    """The working tree's files that git tracks or would track (untracked but not ignored), relative paths."""
+    try:
+        out = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"], cwd=repo,
+                             capture_output=True, check=True).stdout
+        return sorted({p for p in out.decode().split("\0") if p})
+    except (OSError, subprocess.CalledProcessError):
+        return sorted(str(p.relative_to(repo)) for p in Path(repo).rglob("*")
+                      if (p.is_file() or p.is_symlink()) and not _NOT_SOURCE & set(p.relative_to(repo).parts)
+                      and not p.name.endswith((".pyc", ".egg-info")) and ".egg-info" not in str(p))
+
+
+def make_scratch(repo: Path = REPO, dest: Path | None = None) -> Path:
+    """Copy the working tree's files (as they are on disk) into ``dest`` (a new temporary folder by default)."""
+    dest = Path(dest or tempfile.mkdtemp(prefix="biotac-mutants-"))
+    for rel in tree_files(repo):
+        src = repo / rel
+        if not src.exists() and not src.is_symlink():  # deleted in the working tree
+            continue
+        target = dest / rel
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if src.is_symlink():
+            target.symlink_to(os.readlink(src))
+        else:
+            shutil.copy2(src, target)
+    return dest
+
+
+def scratch_env(scratch: Path) -> dict:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(scratch) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    return env
+
+
+def check_imports_from(scratch: Path) -> None:
+    """Raise unless a Python started the way the tests are started imports ``emulator`` and ``bench`` from the
+    scratch copy (not from the checkout the editable install points at)."""
+    code = "import emulator, bench, bench.pytest_plugin.fixtures as f; print(emulator.__file__); print(bench.__file__); print(f.__file__)"
+    r = subprocess.run([sys.executable, "-c", code], cwd=scratch, env=scratch_env(scratch), capture_output=True,
+                       text=True)
+    paths = r.stdout.split()
+    root = str(Path(scratch).resolve())
+    if r.returncode != 0 or len(paths) != 3 or not all(str(Path(p).resolve()).startswith(root) for p in paths):
+        raise RuntimeError(f"the scratch copy's modules are not the ones imported: {r.stdout} {r.stderr}")
+
+
+def run_pytest(scratch: Path, tests, timeout_s: float) -> tuple[int | None, str, float]:
+    """(exit code or None on timeout, last lines of output, seconds) of pytest on ``tests`` in ``scratch``."""
+    cmd = [sys.executable, "-m", "pytest", "-x", "-q", "--no-header", "-p", "no:cacheprovider", *tests]
+    t0 = time.perf_counter()
+    try:
+        r = subprocess.run(cmd, cwd=scratch, env=scratch_env(scratch), capture_output=True, text=True,
+                           timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        return None, f"timed out after {timeout_s:.0f} s", time.perf_counter() - t0
+    tail = "\n".join((r.stdout + r.stderr).strip().splitlines()[-3:])
+    return r.returncode, tail, time.perf_counter() - t0
+
+
+def run_mutant(scratch: Path, m: Mutant, timeout_s: float = 900.0) -> Result:
+    path = Path(scratch) / m.file
+    text = path.read_text(encoding="utf-8")
+    if text.count(m.original) != 1:
+        return Result(m.name, m.area, m.file, "error", 0.0,
+                      f"snippet found {text.count(m.original)} times in {m.file} (must be exactly once)")
+    path.write_text(text.replace(m.original, m.replacement), encoding="utf-8")
+    try:
+        code, tail, seconds = run_pytest(scratch, m.tests, timeout_s)
+    finally:
+        path.write_text(text, encoding="utf-8")
+    if code == 1:
+        return Result(m.name, m.area, m.file, "caught", seconds, _failed_line(tail))
+    if code == 0:
+        return Result(m.name, m.area, m.file, "survived", seconds, "every selected test passed")
+    return Result(m.name, m.area, m.file, "error", seconds, tail if code is not None else tail)
+
+
+def _failed_line(tail: str) -> str:
+    lines = [ln for ln in tail.splitlines() if ln.startswith("FAILED")]
+    return (lines[0] if lines else tail.splitlines()[-1] if tail else "")[:160]
+
+
+def baseline(scratch: Path, mutants, timeout_s: float = 1800.0) -> tuple[bool, str]:
+    """Run the union of the mutants' selections unmutated: they must all pass."""
+    tests = sorted({t for m in mutants for t in m.tests})
+    code, tail, _ = run_pytest(scratch, tests, timeout_s)
+    return code == 0, tail
+
+
+def run_catalogue(mutants=None, repo: Path = REPO, timeout_s: float = 900.0, keep: bool = False,
+                  progress=None, check_baseline: bool = True) -> list[Result]:
+    mutants = list(CATALOGUE if mutants is None else mutants)
+    scratch = make_scratch(repo)
+    try:
+        check_imports_from(scratch)
+        if check_baseline:
+            if progress:
+                progress(f"baseline: {len({t for m in mutants for t in m.tests})} test selection(s), unmutated")
+            ok, tail = baseline(scratch, mutants)
+            if not ok:
+                raise RuntimeError(f"the selected tests fail without any mutation (fix them first):\n{tail}")
+        results = []
+        for i, m in enumerate(mutants, 1):
+            if progress:
+                progress(f"[{i}/{len(mutants)}] {m.name}")
+            results.append(run_mutant(scratch, m, timeout_s))
+            if progress:
+                r = results[-1]
+                progress(f"    {r.status} in {r.seconds:.1f} s")
+        return results
+    finally:
+        if keep:
+            if progress:
+                progress(f"scratch copy kept in {scratch}")
+        else:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+
+def format_results(results: list[Result]) -> str:
+    w = max([len(r.name) for r in results] + [6])
+    lines = [f"{'mutant':{w}s}  {'area':10s} {'file':38s} {'result':9s} {'time':>7s}"]
+    for r in results:
+        lines.append(f"{r.name:{w}s}  {r.area:10s} {r.file:38s} {r.status:9s} {r.seconds:6.1f}s")
+    counts = {s: sum(r.status == s for r in results) for s in ("caught", "survived", "error")}
+    lines.append(f"{len(results)} mutants: {counts['caught']} caught, {counts['survived']} survived, "
+                 f"{counts['error']} error")
+    for r in results:
+        if r.status != "caught":
+            lines.append(f"  {r.name}: {r.status}: {r.detail}")
+    return "\n".join(lines)
+
+
+def format_list(mutants) -> str:
+    w = max(len(m.name) for m in mutants)
+    lines = [f"{'mutant':{w}s}  {'area':10s} {'file':38s} what it breaks"]
+    lines += [f"{m.name:{w}s}  {m.area:10s} {m.file:38s} {m.what}" for m in mutants]
+    lines.append(f"{len(mutants)} mutants")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="scripts/mutants", description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--list", action="store_true", help="list the catalogue and exit")
+    ap.add_argument("--only", action="append", metavar="NAME", help="run this mutant (repeatable)")
+    ap.add_argument("--fast", action="store_true", help=f"run the quick sample ({', '.join(FAST)})")
+    ap.add_argument("--json", action="store_true", help="print the results as JSON")
+    ap.add_argument("--timeout", type=float, default=900.0, help="seconds per mutant (default 900)")
+    ap.add_argument("--no-baseline", action="store_true", help="skip the unmutated run of the selected tests")
+    ap.add_argument("--keep", action="store_true", help="keep the scratch copy (its path is printed)")
+    a = ap.parse_args(argv)
+    names = list(a.only or []) + (list(FAST) if a.fast else [])
+    try:
+        mutants = by_name(names) if names else list(CATALOGUE)
+    except KeyError as e:
+        print(f"error: {e.args[0]}", file=sys.stderr)
+        return 2
+    if a.list:
+        print(json.dumps([asdict(m) for m in mutants], indent=2) if a.json else format_list(mutants))
+        return 0
+    problems = check_catalogue(mutants=mutants)
+    if problems:
+        print("error: the catalogue does not match the tree:\n  " + "\n  ".join(problems), file=sys.stderr)
+        return 2
+    progress = None if a.json else (lambda s: print(s, file=sys.stderr, flush=True))
+    try:
+        results = run_catalogue(mutants, timeout_s=a.timeout, keep=a.keep, progress=progress,
+                                check_baseline=not a.no_baseline)
+    except RuntimeError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print(json.dumps([r.as_dict() for r in results], indent=2) if a.json else format_results(results))
+    return 0 if all(r.status == "caught" for r in results) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
