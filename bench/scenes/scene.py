@@ -261,6 +261,10 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     name = meta.get("name")
     if not isinstance(name, str) or not name:
         c.problems.append(f"scene.name = {name!r}: must be a non-empty string")
+    elif len(name) > 100 or name in (".", "..") or not all(ch.isascii() and (ch.isalnum() or ch in "-_.")
+                                                           for ch in name):
+        c.problems.append(f"scene.name = {name!r}: must be a name, not a path (it names the default out "
+                          f"folder): 1 to 100 letters, digits, '-', '_' or '.', and not '.' or '..'")
     duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s", required=True)
     seed = c.number(meta, "seed", "scene", 0, 2**63 - 1, "", default=0, integer=True)
     fidelity = c.choice(meta, "fidelity", "scene", tuple(PROFILES), default="default")
