@@ -20,6 +20,15 @@ class SceneError(BenchError, ValueError):
         super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
 
 
+class TextureError(BenchError, ValueError):
+    """A texture library file is invalid, or a texture asked for is not in it; ``problems`` lists every problem
+    (texture, field, value, what is allowed)."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source, self.problems = source, problems
+        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
+
+
 class BuildError(BenchError, RuntimeError):
     """A native part (firmware, cheetah.so, a client) did not compile; the message carries the diagnostics."""
 

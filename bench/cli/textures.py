@@ -1,0 +1,118 @@
+"""Texture library commands: list the 117 textures and the test surfaces (one group, or as JSON), or show one
+texture in full with where its numbers come from."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+TEXTURES_HELP = """\
+Lists the texture library (fixtures/textures/library.toml): the 117 textures of D Table 6-1 in the
+dissertation's groups, and the test surfaces (901+) that scenes use.  Columns: number, name, group, RMS height
+of the random component, periods of the periodic components along the sliding direction, static/kinetic
+friction against the silicone skin, the texture's Young's modulus, thermal material.
+
+The file is validated completely before anything is listed; every problem names the texture, the field, the
+value and what is allowed.  --json prints the textures in the file's own fields and units (it round-trips).
+
+examples:
+  biotac-bench textures                      # all of them
+  biotac-bench textures --group "coarse weaves"
+  biotac-bench textures --show 100           # or --show T100, --show burlap: every field and its source
+  biotac-bench textures --json > textures.json
+"""
+
+
+def _si(x: float, unit: str) -> str:
+    for factor, prefix in ((1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n")):
+        if abs(x) >= factor or factor == 1e-9:
+            return f"{x / factor:.3g} {prefix}{unit}"
+    return f"{x:.3g} {unit}"
+
+
+def _periods(t) -> str:
+    return ", ".join(f"{p.track_period_m * 1e3:.3g}" for p in t.periodic) or "-"
+
+
+def _pick_group(text: str) -> str:
+    from bench.textures.library import GROUP_NAMES
+
+    key = text.strip().casefold()
+    exact = [g for g in GROUP_NAMES if g.casefold() == key]
+    found = exact or [g for g in GROUP_NAMES if key and key in g.casefold()]
+    if len(found) != 1:
+        raise ValueError(f"--group {text!r}: {'ambiguous' if found else 'unknown'}; groups: {', '.join(GROUP_NAMES)}")
+    return found[0]
+
+
+def _show(t) -> str:
+    from emulator.thermal import MATERIALS
+
+    m = MATERIALS[t.material]
+    lines = [f"T{t.number} {t.name} ({t.group})"]
+    if t.description:
+        lines.append(f"  {t.description}")
+    rows = [
+        ("random relief", f"RMS {_si(t.rms_height_m, 'm')}, correlation length {_si(t.correlation_length_m, 'm')}, "
+                          f"Hurst {t.hurst:g}"),
+    ]
+    for i, p in enumerate(t.periodic):
+        harm = ", ".join(f"{h:g}" for h in p.harmonics) or "none"
+        rows.append((f"periodic[{i}]", f"period {_si(p.period_m, 'm')} at {p.orientation_deg:g}° "
+                                       f"(along the track {_si(p.track_period_m, 'm')}), amplitude "
+                                       f"{_si(p.amplitude_m, 'm')}, harmonics {harm}"))
+    rows += [
+        ("friction", f"μs {t.mu_static:g}, μk {t.mu_kinetic:g}, Stribeck {_si(t.stribeck_velocity_m_per_s, 'm/s')}, "
+                     f"+{t.mu_per_velocity_s_per_m:g} per m/s"),
+        ("modulus", _si(t.modulus_Pa, "Pa")),
+        ("material", f"{t.material} (k {m.k:g} W/m·K, ρ {m.rho:g} kg/m³, c {m.c:g} J/kg·K; effusivity "
+                     f"{m.effusivity:.0f} W·s½/m²·K)"),
+        ("seed", str(t.seed)),
+        ("source", t.source),
+    ]
+    lines += [f"  {k:<14} {v}" for k, v in rows]
+    return "\n".join(lines)
+
+
+def _table(textures) -> str:
+    head = ("No.", "name", "group", "RMS µm", "period mm", "μs/μk", "modulus", "material")
+    rows = [(f"T{t.number}", t.name, t.group, f"{t.rms_height_m * 1e6:.3g}", _periods(t),
+             f"{t.mu_static:.2f}/{t.mu_kinetic:.2f}", _si(t.modulus_Pa, "Pa"), t.material) for t in textures]
+    widths = [max(len(r[i]) for r in rows + [head]) for i in range(len(head))]
+    right = {0, 3, 5, 6}
+
+    def fmt(r):
+        return "  ".join(c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
+
+    return "\n".join([fmt(head), fmt(tuple("-" * w for w in widths))] + [fmt(r) for r in rows])
+
+
+def _cmd_textures(a) -> int:
+    from bench.textures.library import load_library, texture, texture_record
+
+    lib = load_library(a.library)
+    if a.show is not None:
+        t = texture(a.show, a.library)
+        print(json.dumps(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
+        return 0
+    items = list(lib.values())
+    if a.group:
+        group = _pick_group(a.group)
+        items = [t for t in items if t.group == group]
+    if a.json:
+        print(json.dumps([texture_record(t) for t in items], indent=2, ensure_ascii=False))
+        return 0
+    print(_table(items))
+    print(f"\n{len(items)} texture(s); `biotac-bench textures --show N` prints one with its source")
+    return 0
+
+
+def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    p = sub.add_parser("textures", help="list the 117-texture library (and test surfaces), or show one texture",
+                       description=TEXTURES_HELP, formatter_class=fmt)
+    p.add_argument("--group", help="only this group (e.g. \"glass\", \"coarse weaves\")")
+    p.add_argument("--show", metavar="N", help="one texture in full: number (10, T10) or name (\"velcro hooks\")")
+    p.add_argument("--json", action="store_true", help="JSON in the library file's fields and units")
+    p.add_argument("--library", metavar="FILE",
+                   help="another library file (default fixtures/textures/library.toml, which must be complete)")
+    p.set_defaults(func=_cmd_textures)

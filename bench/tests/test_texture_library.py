@@ -1,0 +1,315 @@
+"""The texture library: 117 textures in the dissertation's groups, the named ones at their numbers, every field
+physical, groups varied, complete validation with clear messages, lookup, the CLI listing and its JSON."""
+
+import itertools
+import json
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from bench.cli import main as cli
+from bench.errors import BenchError, TextureError
+from bench.textures import library as L
+from bench.textures.library import (LIBRARY_PATH, NUMBER_FIELDS, PERIODIC_FIELDS, load_library, parse_library,
+                                    read_library_file, texture, texture_record)
+from emulator.texture import SURFACE_LENGTH_M, Texture, surface_track
+from emulator.thermal import MATERIALS
+
+pytestmark = pytest.mark.unit
+
+# D Table 6-1's groups, written out here rather than taken from the module under test
+DISSERTATION_GROUPS = [
+    ("paper-like", 1, 9), ("art supplies and misc.", 10, 23), ("glass", 24, 28), ("foam", 29, 31),
+    ("tiles and laminates", 32, 35), ("wood", 36, 38), ("engineering materials", 39, 46), ("rubber", 47, 54),
+    ("vinyl", 55, 66), ("leathers and suedes", 67, 72), ("cottons and silks", 73, 83), ("other fabrics", 84, 99),
+    ("coarse weaves", 100, 115), ("furs", 116, 117),
+]
+NAMED_IN_D = {2: "linen paper", 3: "smooth cardstock", 10: "velcro hooks", 30: "foam", 38: "balsa wood",
+              43: "graphite", 45: "milled aluminum", 46: "polished aluminum", 47: "rubber", 54: "silicone",
+              58: "textured vinyl #2", 84: "satin", 87: "rayon", 100: "burlap"}
+
+
+@pytest.fixture(scope="module")
+def lib():
+    return load_library()
+
+
+# ------------------------------------------------------------------------------------------ contents
+def test_117_textures_in_the_dissertations_groups(lib):
+    assert [n for n in lib if n <= 117] == list(range(1, 118))
+    for group, lo, hi in DISSERTATION_GROUPS:
+        assert [n for n, t in lib.items() if t.group == group] == list(range(lo, hi + 1)), group
+    extras = {n: t for n, t in lib.items() if n > 117}
+    assert all(900 <= n <= 999 and t.group == "test surfaces" for n, t in extras.items())
+    assert all(isinstance(t, Texture) for t in lib.values())
+
+
+def test_named_textures_at_their_numbers(lib):
+    for n, name in NAMED_IN_D.items():
+        assert lib[n].name == name
+    assert L.NAMED == NAMED_IN_D
+
+
+def test_test_surfaces_for_scenes(lib):
+    sandpaper = texture("60-grit sandpaper")
+    assert sandpaper.number == 901 and 250e-6 <= sandpaper.correlation_length_m <= 270e-6  # FEPA/CAMI 60 grit
+    assert sandpaper.rms_height_m == pytest.approx(0.2 * sandpaper.correlation_length_m, rel=0.01)
+    grating = texture("3 mm grating")
+    (c,) = grating.periodic
+    assert grating.number == 902 and c.track_period_m == pytest.approx(3e-3)
+    assert c.harmonics[0::2] == (0.0, 0.0, 0.0)  # square-ish: odd harmonics only
+    assert [abs(h) for h in c.harmonics[1::2]] == pytest.approx([1 / 3, 1 / 5, 1 / 7], abs=1e-3)
+
+
+def test_every_field_within_range_and_every_material_known(lib):
+    for t in lib.values():
+        rec = texture_record(t)
+        for key, spec in NUMBER_FIELDS.items():
+            assert math.isfinite(rec[key]) and spec.lo <= rec[key] <= spec.hi, (t.number, key, rec[key])
+        assert t.mu_kinetic <= t.mu_static
+        assert t.material in MATERIALS, (t.number, t.material)
+        assert t.source.strip() and t.description.strip() and t.name == t.name.strip()
+        for p in rec["periodic"]:
+            for key, spec in PERIODIC_FIELDS.items():
+                assert spec.lo <= p[key] <= spec.hi, (t.number, key, p[key])
+            assert all(abs(h) <= 1 for h in p["harmonics"])
+        assert all(c.track_period_m < SURFACE_LENGTH_M for c in t.periodic)
+    assert len({t.seed for t in lib.values()}) == len(lib)
+    assert len({t.name.casefold() for t in lib.values()}) == len(lib)
+
+
+def _parameters(t: Texture) -> tuple:
+    return (t.rms_height_m, t.correlation_length_m, t.hurst, t.mu_static, t.mu_kinetic, t.stribeck_velocity_m_per_s,
+            t.mu_per_velocity_s_per_m, t.modulus_Pa, t.material, t.periodic)
+
+
+def test_members_of_a_group_are_similar_but_not_identical(lib):
+    for group, lo, hi in DISSERTATION_GROUPS + [("test surfaces", 900, 999)]:
+        members = [t for t in lib.values() if t.group == group]
+        for a, b in itertools.combinations(members, 2):
+            differ = sum(x != y for x, y in zip(_parameters(a), _parameters(b)))
+            assert differ >= 2, f"T{a.number} and T{b.number} differ in only {differ} parameter(s)"
+
+
+def test_weaves_follow_their_thread_counts(lib):
+    """Spot checks of the documented derivations: a weave's period is its thread spacing."""
+    assert lib[100].periodic[0].track_period_m == pytest.approx(25.4e-3 / 12, rel=0.01)  # burlap 12/inch
+    for n, count in ((105, 11), (106, 14), (107, 18)):  # aida cloths
+        assert lib[n].periodic[0].track_period_m == pytest.approx(25.4e-3 / count, rel=0.01)
+    c = lib[45].periodic[0]  # milled aluminum: cusps f²/8r for f = 0.25 mm, r = 0.8 mm
+    assert c.period_m == pytest.approx(0.25e-3) and c.amplitude_m == pytest.approx(4 / math.pi**2 * 9.77e-6, rel=0.01)
+
+
+def test_named_textures_make_finite_tracks(lib):
+    for n in list(NAMED_IN_D) + [901, 902]:
+        track = surface_track(lib[n], 50e-6, length_m=0.1)
+        assert np.all(np.isfinite(track.heights_m)) and np.std(track.heights_m) > 0
+
+
+def test_load_is_deterministic():
+    a = load_library()
+    L._load_cached.cache_clear()
+    b = load_library()
+    c = parse_library(read_library_file(LIBRARY_PATH), complete=True)
+    assert a == b == c and list(a) == sorted(a)
+    assert a is not b  # callers get their own dict
+
+
+# ------------------------------------------------------------------------------------------ validation
+GOOD = """\
+[[texture]]
+number = 5
+name = "kraft paper"
+group = "paper-like"
+rms_height_um = 6.0
+correlation_length_um = 200.0
+hurst = 0.7
+mu_static = 0.6
+mu_kinetic = 0.48
+modulus_MPa = 40.0
+material = "paper"
+seed = 5
+source = "test"
+"""
+SECOND = (GOOD.replace("number = 5", "number = 4").replace('"kraft paper"', '"newsprint"')
+          .replace("seed = 5", "seed = 4"))
+PERIODIC = "[[texture.periodic]]\nperiod_mm = 1.0\namplitude_um = 20.0\n"
+
+
+def _edit(old: str, new: str, text: str = GOOD) -> str:
+    assert old in text
+    return text.replace(old, new)
+
+
+BROKEN = {
+    "unknown field": (GOOD + 'colour = "brown"\n', ["T5 'kraft paper'", "unknown field 'colour'", "hurst"]),
+    "missing field": (_edit("rms_height_um = 6.0\n", ""), ["T5 'kraft paper'", "rms_height_um is missing",
+                                                           "0.0001 to 3000 µm"]),
+    "wrong type": (_edit("hurst = 0.7", 'hurst = "high"'), ["T5 'kraft paper'", "hurst = 'high'",
+                                                            "must be a number", "0.1 to 1"]),
+    "boolean": (_edit("hurst = 0.7", "hurst = true"), ["T5 'kraft paper'", "hurst = True", "must be a number"]),
+    "nan": (_edit("rms_height_um = 6.0", "rms_height_um = nan"), ["T5 'kraft paper'", "rms_height_um = nan",
+                                                                   "allowed range is 0.0001 to 3000 µm"]),
+    "infinite": (_edit("modulus_MPa = 40.0", "modulus_MPa = inf"), ["T5 'kraft paper'", "modulus_MPa = inf",
+                                                                     "allowed range", "MPa"]),
+    "metres in a µm field": (_edit("rms_height_um = 6.0", "rms_height_um = 6e-6"),
+                             ["T5 'kraft paper'", "rms_height_um = 6e-06", "0.0001 to 3000 µm"]),
+    "pascals in a MPa field": (_edit("modulus_MPa = 40.0", "modulus_MPa = 4e7"),
+                               ["T5 'kraft paper'", "modulus_MPa = 40000000.0", "0.0005 to 1e+06 MPa"]),
+    "kinetic above static": (_edit("mu_kinetic = 0.48", "mu_kinetic = 0.9"),
+                             ["T5 'kraft paper'", "mu_kinetic = 0.9", "mu_static = 0.6"]),
+    "friction out of range": (_edit("mu_static = 0.6", "mu_static = 12.0"),
+                              ["T5 'kraft paper'", "mu_static = 12.0", "0.02 to 3"]),
+    "optional field bad": (GOOD + "stribeck_velocity_mm_per_s = -1.0\n",
+                           ["T5 'kraft paper'", "stribeck_velocity_mm_per_s = -1.0", "0.01 to 1000 mm/s"]),
+    "unknown material": (_edit('material = "paper"', 'material = "papyrus"'),
+                         ["T5 'kraft paper'", "material = 'papyrus'", "unknown", "'paper'", "aluminum"]),
+    "wrong group": (_edit('group = "paper-like"', 'group = "glass"'),
+                    ["T5 'kraft paper'", "group = 'glass'", "'paper-like'", "1-9"]),
+    "number out of range": (_edit("number = 5", "number = 500"),
+                            ["T500 'kraft paper'", "number = 500", "1 to 117", "900 to 999"]),
+    "number not a number": (_edit("number = 5", 'number = "five"'),
+                            ["texture[0] 'kraft paper'", "number = 'five'", "whole number"]),
+    "number missing": (_edit("number = 5\n", ""), ["texture[0] 'kraft paper'", "number is missing"]),
+    "name missing": (_edit('name = "kraft paper"\n', ""), ["T5", "name is missing"]),
+    "negative seed": (_edit("seed = 5", "seed = -1"), ["T5 'kraft paper'", "seed = -1", "0 to 2**63-1"]),
+    "fractional seed": (_edit("seed = 5", "seed = 1.5"), ["T5 'kraft paper'", "seed = 1.5", "whole number"]),
+    "empty source": (_edit('source = "test"', 'source = " "'), ["T5 'kraft paper'", "source = ' '", "non-empty"]),
+    "zero period": (GOOD + _edit("period_mm = 1.0", "period_mm = 0.0", PERIODIC),
+                    ["T5 'kraft paper'", "periodic[0].period_mm = 0.0", "0.01 to 50 mm"]),
+    "missing amplitude": (GOOD + _edit("amplitude_um = 20.0\n", "", PERIODIC),
+                          ["T5 'kraft paper'", "periodic[0].amplitude_um is missing"]),
+    "harmonic too big": (GOOD + PERIODIC + "harmonics = [0.5, 2.0]\n",
+                         ["T5 'kraft paper'", "periodic[0].harmonics[1] = 2.0", "-1 to 1"]),
+    "harmonics not a list": (GOOD + PERIODIC + "harmonics = 0.3\n",
+                             ["T5 'kraft paper'", "periodic[0].harmonics = 0.3", "list"]),
+    "periodic unknown field": (GOOD + PERIODIC + "phase_deg = 10.0\n",
+                               ["T5 'kraft paper'", "periodic[0].phase_deg", "unknown field"]),
+    "ridges along the track": (GOOD + PERIODIC + "orientation_deg = 90.0\n",
+                               ["T5 'kraft paper'", "periodic[0].orientation_deg = 90.0", "-85 to 85"]),
+    "periodic not tables": (GOOD + "periodic = 3\n", ["T5 'kraft paper'", "periodic = 3", "array of tables"]),
+    "duplicate number": (GOOD + _edit("number = 4", "number = 5", SECOND),
+                         ["T5 'newsprint'", "number = 5", "already used by T5 'kraft paper'"]),
+    "duplicate name": (GOOD + _edit('"newsprint"', '"Kraft Paper"', SECOND),
+                       ["T4 'Kraft Paper'", "name = 'Kraft Paper'", "already used by T5 'kraft paper'"]),
+    "duplicate seed": (GOOD + _edit("seed = 4", "seed = 5", SECOND),
+                       ["T4 'newsprint'", "seed = 5", "already the seed of T5 'kraft paper'"]),
+    "unknown top-level key": ("version = 2\n" + GOOD, ["library", "unknown top-level key 'version'"]),
+    "no textures": ("", ["library", "no [[texture]] tables"]),
+}
+
+
+def test_a_good_snippet_parses():
+    lib = parse_library(tomllib.loads(GOOD + PERIODIC + "harmonics = [0.0, -0.333]\n" + SECOND))
+    assert list(lib) == [4, 5]
+    t = lib[5]
+    assert t.rms_height_m == 6e-6 and t.modulus_Pa == 40e6 and t.stribeck_velocity_m_per_s == 0.005
+    assert t.periodic[0].period_m == 1e-3 and t.periodic[0].amplitude_m == 20e-6
+
+
+@pytest.mark.parametrize("case", sorted(BROKEN))
+def test_broken_libraries_are_rejected_with_texture_field_and_value(case, tmp_path):
+    text, fragments = BROKEN[case]
+    f = tmp_path / "broken.toml"
+    f.write_text(text, encoding="utf-8")
+    with pytest.raises(TextureError) as e:
+        load_library(f)
+    message = str(e.value)
+    assert str(f) in message
+    problem = next((p for p in e.value.problems if all(x in p for x in fragments)), None)
+    assert problem is not None, f"no problem mentions all of {fragments}: {e.value.problems}"
+
+
+def test_every_problem_is_listed_at_once(tmp_path):
+    text = _edit("hurst = 0.7", "hurst = 7.0", _edit('material = "paper"', 'material = "papyrus"')) + "colour = 1\n"
+    with pytest.raises(TextureError) as e:
+        parse_library(tomllib.loads(text + SECOND.replace("mu_kinetic = 0.48", "mu_kinetic = 0.7")))
+    assert len(e.value.problems) == 4
+    assert isinstance(e.value, BenchError) and isinstance(e.value, ValueError)
+
+
+def test_file_level_errors_name_the_file(tmp_path):
+    bad = tmp_path / "latin1.toml"
+    bad.write_bytes(GOOD.replace("kraft paper", "papier kraft \xe9").encode("latin-1"))
+    with pytest.raises(TextureError, match=r"(?s)latin1\.toml.*not UTF-8 text: byte 0xe9"):
+        load_library(bad)
+    syntax = tmp_path / "syntax.toml"
+    syntax.write_text("[[texture]\nnumber = 5\n", encoding="utf-8")
+    with pytest.raises(TextureError, match=r"(?s)syntax\.toml.*TOML syntax error"):
+        load_library(syntax)
+    with pytest.raises(TextureError, match=r"(?s)missing\.toml.*cannot read the file"):
+        load_library(tmp_path / "missing.toml")
+
+
+def test_the_shipped_library_must_be_complete(tmp_path):
+    data = read_library_file(LIBRARY_PATH)
+    data["texture"] = [t for t in data["texture"] if t["number"] not in (7, 8, 9, 50)]
+    with pytest.raises(TextureError, match=r"T7-T9, T50 are missing"):
+        parse_library(data, complete=True)
+    assert 7 not in parse_library(data)  # a partial library is fine when completeness is not asked for
+    data = read_library_file(LIBRARY_PATH)
+    next(t for t in data["texture"] if t["number"] == 10)["name"] = "hook tape"
+    with pytest.raises(TextureError, match=r"T10 'hook tape': name = 'hook tape': D ch. 6 names texture 10 "
+                                           r"'velcro hooks'"):
+        parse_library(data, complete=True)
+
+
+# ------------------------------------------------------------------------------------------ lookup
+def test_lookup_by_number_or_name():
+    t = texture(10)
+    assert t.name == "velcro hooks"
+    assert texture("T10") == texture("10") == texture("  Velcro Hooks ") == t
+
+
+@pytest.mark.parametrize("query, fragments", [
+    ("velcro hook", ["no texture named 'velcro hook'", "T10 'velcro hooks'", "T11 'velcro loops'"]),
+    ("aluminium", ["no texture named 'aluminium'", "T45 'milled aluminum'", "T46 'polished aluminum'"]),
+    ("zzzz", ["no texture named 'zzzz'", "biotac-bench textures"]),
+    (999, ["no texture number 999", "T1-T117"]),
+    (True, ["give a number"]),
+])
+def test_lookup_errors_list_close_matches(query, fragments):
+    with pytest.raises(TextureError) as e:
+        texture(query)
+    assert all(x in str(e.value) for x in fragments), str(e.value)
+
+
+# ------------------------------------------------------------------------------------------ CLI
+def test_cli_lists_the_library(capsys):
+    assert cli.main(["textures"]) == 0
+    out = capsys.readouterr().out
+    for n, name in NAMED_IN_D.items():
+        assert f"T{n}" in out and name in out
+    assert "119 texture(s)" in out and "T902" in out
+
+
+def test_cli_json_round_trips(capsys):
+    assert cli.main(["textures", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["number"] for r in rows] == list(load_library())
+    assert parse_library({"texture": rows}, complete=True) == load_library()
+
+
+def test_cli_group_and_show(capsys):
+    assert cli.main(["textures", "--group", "glass", "--json"]) == 0
+    assert [r["number"] for r in json.loads(capsys.readouterr().out)] == [24, 25, 26, 27, 28]
+    assert cli.main(["textures", "--show", "T100"]) == 0
+    out = capsys.readouterr().out
+    assert "T100 burlap (coarse weaves)" in out and load_library()[100].source in out
+    assert cli.main(["textures", "--show", "burlap", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["source"] == load_library()[100].source
+
+
+def test_cli_errors_print_cleanly(tmp_path, capsys):
+    assert cli.main(["textures", "--group", "plastics"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --group 'plastics'") and "coarse weaves" in err and "Traceback" not in err
+    assert cli.main(["textures", "--show", "velcro hook"]) == 2
+    assert "T10 'velcro hooks'" in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text(_edit("mu_kinetic = 0.48", "mu_kinetic = 0.9"), encoding="utf-8")
+    assert cli.main(["textures", "--library", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.toml" in err and "mu_kinetic = 0.9" in err and "Traceback" not in err

@@ -1,0 +1,417 @@
+"""The texture library: ``fixtures/textures/library.toml`` read, validated completely, converted to SI.
+
+The file holds one ``[[texture]]`` table per texture (the 117 of D Table 6-1 by number, plus test surfaces
+numbered 900-999), with units in the field names (``rms_height_um``, ``modulus_MPa``, ...); :func:`load_library`
+returns ``{number: emulator.texture.Texture}`` in SI units, or raises :class:`~bench.errors.TextureError` listing
+every problem found, each naming the texture (number and name), the field, the value and what is allowed — like
+scene files (:mod:`bench.scenes.scene`).  :func:`texture` looks one texture up by number or name.
+
+Allowed values (physical ranges, wide enough for any real surface, narrow enough to catch a wrong unit):
+
+==============================  ==================  ===========================================================
+field                           range               why
+==============================  ==================  ===========================================================
+number                          1-117, 900-999      the 117 of D Table 6-1; test surfaces (group "test surfaces")
+rms_height_um                   0.0001 - 3000 µm    0.1 nm (atomically flat) to 3 mm (coarse pile, open foam)
+correlation_length_um           0.1 - 50000 µm      sub-µm grains to 50 mm features (≪ the 1 m stored surface)
+hurst                           0.1 - 1.0           roughness exponent of a self-affine surface (0 < H ≤ 1)
+mu_static, mu_kinetic           0.02 - 3.0          lubricated contacts to clean soft elastomers; μk ≤ μs
+stribeck_velocity_mm_per_s      0.01 - 1000 mm/s    optional, default 5 mm/s (the model's)
+mu_per_velocity_s_per_m         0 - 20 s/m          optional, default 0; viscous rise of μ with speed
+modulus_MPa                     0.0005 - 1e6 MPa    0.5 kPa (fur pile) to 1000 GPa (diamond)
+material                        emulator.thermal.MATERIALS
+seed                            0 - 2⁶³−1, whole    each texture its own surface: seeds are unique
+periodic[].period_mm            0.01 - 50 mm        normal to the ridges
+periodic[].amplitude_um         0.001 - 5000 µm     fundamental, peak
+periodic[].harmonics            ≤ 16 values, −1..1  relative amplitudes of the 2nd, 3rd, ... harmonics
+periodic[].orientation_deg      −85 - 85°           ridge normal vs sliding direction (omit ridges along it)
+==============================  ==================  ===========================================================
+
+``name`` (unique, case-insensitive), ``group`` (the dissertation's group for the number), ``source`` (where the
+numbers come from, non-empty) and ``description`` are text.  The shipped library must hold all of T1..T117, with
+the textures the dissertation names at their numbers (:data:`NAMED`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import functools
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from bench.errors import TextureError
+from bench.paths import FIXTURES
+from emulator.texture import PeriodicComponent, Texture
+from emulator.thermal import MATERIALS
+
+LIBRARY_PATH = FIXTURES / "textures" / "library.toml"
+
+#: The dissertation's groups (D Table 6-1) by number range, in order.
+GROUPS: tuple[tuple[str, int, int], ...] = (
+    ("paper-like", 1, 9),
+    ("art supplies and misc.", 10, 23),
+    ("glass", 24, 28),
+    ("foam", 29, 31),
+    ("tiles and laminates", 32, 35),
+    ("wood", 36, 38),
+    ("engineering materials", 39, 46),
+    ("rubber", 47, 54),
+    ("vinyl", 55, 66),
+    ("leathers and suedes", 67, 72),
+    ("cottons and silks", 73, 83),
+    ("other fabrics", 84, 99),
+    ("coarse weaves", 100, 115),
+    ("furs", 116, 117),
+)
+#: Surfaces outside the 117 that scenes use (e.g. 901 60-grit sandpaper, 902 3 mm grating).
+TEST_GROUP: tuple[str, int, int] = ("test surfaces", 900, 999)
+LIBRARY_SIZE = 117
+GROUP_NAMES = tuple(g for g, _, _ in GROUPS) + (TEST_GROUP[0],)
+
+#: The textures D ch. 6 names, at their numbers.
+NAMED: dict[int, str] = {
+    2: "linen paper", 3: "smooth cardstock", 10: "velcro hooks", 30: "foam", 38: "balsa wood", 43: "graphite",
+    45: "milled aluminum", 46: "polished aluminum", 47: "rubber", 54: "silicone", 58: "textured vinyl #2",
+    84: "satin", 87: "rayon", 100: "burlap",
+}
+
+
+@dataclass(frozen=True)
+class _Number:
+    """A numeric field: file unit, allowed range, SI = value × 10**exp, the Texture attribute, default (None:
+    required)."""
+
+    unit: str
+    lo: float
+    hi: float
+    exp: int
+    attr: str
+    default: float | None = None
+
+    def to_si(self, v: float) -> float:
+        # dividing by an exact power of ten rounds correctly (60 µm -> 6e-05 m, not 5.9999999999999995e-05)
+        return float(v) / 10 ** -self.exp if self.exp < 0 else float(v) * 10 ** self.exp
+
+    def from_si(self, x: float) -> float:
+        """Back in file units: the shortest decimal that :meth:`to_si` turns into ``x`` again."""
+        v = x * 10 ** -self.exp if self.exp < 0 else x / 10 ** self.exp
+        for digits in range(12, 18):
+            if self.to_si(shorter := float(f"{v:.{digits}g}")) == x:
+                return shorter
+        return v
+
+
+NUMBER_FIELDS: dict[str, _Number] = {
+    "rms_height_um": _Number("µm", 1e-4, 3000.0, -6, "rms_height_m"),
+    "correlation_length_um": _Number("µm", 0.1, 50000.0, -6, "correlation_length_m"),
+    "hurst": _Number("", 0.1, 1.0, 0, "hurst"),
+    "mu_static": _Number("", 0.02, 3.0, 0, "mu_static"),
+    "mu_kinetic": _Number("", 0.02, 3.0, 0, "mu_kinetic"),
+    "stribeck_velocity_mm_per_s": _Number("mm/s", 0.01, 1000.0, -3, "stribeck_velocity_m_per_s", 5.0),
+    "mu_per_velocity_s_per_m": _Number("s/m", 0.0, 20.0, 0, "mu_per_velocity_s_per_m", 0.0),
+    "modulus_MPa": _Number("MPa", 5e-4, 1e6, 6, "modulus_Pa"),
+}
+PERIODIC_FIELDS: dict[str, _Number] = {
+    "period_mm": _Number("mm", 0.01, 50.0, -3, "period_m"),
+    "amplitude_um": _Number("µm", 1e-3, 5000.0, -6, "amplitude_m"),
+    "orientation_deg": _Number("°", -85.0, 85.0, 0, "orientation_deg", 0.0),
+}
+MAX_HARMONICS = 16
+SEED_MAX = 2**63 - 1
+TEXT_FIELDS = ("name", "group", "material", "source", "description")
+KNOWN_FIELDS = frozenset({"number", "seed", "periodic", *TEXT_FIELDS, *NUMBER_FIELDS})
+MAX_NAME = 60
+
+
+def group_of(number: int) -> str | None:
+    """The group a texture number belongs to (None outside 1-117 and 900-999)."""
+    for g, lo, hi in GROUPS + (TEST_GROUP,):
+        if lo <= number <= hi:
+            return g
+    return None
+
+
+def _label(number: int, name) -> str:
+    """How problems name a texture: ``T10 'velcro hooks'``."""
+    return f"T{number} {name!r}" if isinstance(name, str) and name else f"T{number}"
+
+
+class _Checker:
+    def __init__(self):
+        self.problems: list[str] = []
+
+    def add(self, who: str, msg: str):
+        self.problems.append(f"{who}: {msg}")
+
+    def number(self, who: str, table: dict, key: str, spec: _Number, prefix: str = ""):
+        """The value in SI units, or None (problem recorded)."""
+        name = prefix + key
+        unit = f" {spec.unit}" if spec.unit else ""
+        if key not in table:
+            if spec.default is None:
+                self.add(who, f"{name} is missing (a number, {spec.lo:g} to {spec.hi:g}{unit})")
+                return None
+            return spec.to_si(spec.default)
+        v = table[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.add(who, f"{name} = {v!r}: must be a number, {spec.lo:g} to {spec.hi:g}{unit}")
+            return None
+        if not math.isfinite(v) or not spec.lo <= v <= spec.hi:
+            self.add(who, f"{name} = {v!r}: allowed range is {spec.lo:g} to {spec.hi:g}{unit}")
+            return None
+        return spec.to_si(v)
+
+    def text(self, who: str, table: dict, key: str, required=True):
+        if key not in table:
+            if required:
+                self.add(who, f"{key} is missing (text)")
+            return None
+        v = table[key]
+        if not isinstance(v, str) or (required and not v.strip()):
+            self.add(who, f"{key} = {v!r}: must be {'non-empty ' if required else ''}text")
+            return None
+        return v
+
+
+def _periodic(c: _Checker, who: str, items) -> tuple[PeriodicComponent, ...] | None:
+    if not isinstance(items, list) or not all(isinstance(p, dict) for p in items):
+        c.add(who, f"periodic = {items!r}: must be an array of tables ([[texture.periodic]])")
+        return None
+    out, ok = [], True
+    for j, p in enumerate(items):
+        where = f"periodic[{j}]."
+        for k in p:
+            if k not in PERIODIC_FIELDS and k != "harmonics":
+                c.add(who, f"{where}{k}: unknown field; known fields: "
+                           f"{', '.join(sorted([*PERIODIC_FIELDS, 'harmonics']))}")
+                ok = False
+        vals = {spec.attr: c.number(who, p, k, spec, where) for k, spec in PERIODIC_FIELDS.items()}
+        harmonics = p.get("harmonics", [])
+        if not isinstance(harmonics, list) or len(harmonics) > MAX_HARMONICS:
+            c.add(who, f"{where}harmonics = {harmonics!r}: must be a list of at most {MAX_HARMONICS} relative "
+                       "amplitudes (2nd, 3rd, ...), each -1 to 1")
+            harmonics = None
+        else:
+            for k, h in enumerate(harmonics):
+                if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) or abs(h) > 1:
+                    c.add(who, f"{where}harmonics[{k}] = {h!r}: allowed range is -1 to 1 (relative to the "
+                               "fundamental)")
+                    harmonics = None
+                    break
+        if None in vals.values() or harmonics is None:
+            ok = False
+            continue
+        out.append(PeriodicComponent(harmonics=tuple(float(h) for h in harmonics), **vals))
+    return tuple(out) if ok else None
+
+
+def parse_library(data: dict, source: str = "<library>", complete: bool = False) -> dict[int, Texture]:
+    """Validate a parsed library (the TOML as a dict); ``complete`` also demands T1..T117 with the named ones.
+
+    Returns ``{number: Texture}`` sorted by number; raises :class:`TextureError` listing every problem."""
+    c = _Checker()
+    if not isinstance(data, dict):
+        raise TextureError(source, ["the library must be a table holding [[texture]] tables"])
+    for k in data:
+        if k != "texture":
+            c.add("library", f"unknown top-level key {k!r}: the file holds [[texture]] tables only")
+    items = data.get("texture")
+    if items is None:
+        c.add("library", "no [[texture]] tables")
+        items = []
+    elif not isinstance(items, list):
+        c.add("library", f"texture = {items!r}: must be an array of tables ([[texture]])")
+        items = []
+
+    seen = _Seen()
+    out: dict[int, Texture] = {}
+    for i, t in enumerate(items):
+        tex = _texture(c, i, t, seen)
+        if tex is not None:
+            out[tex.number] = tex
+    if complete:
+        missing = [n for n in range(1, LIBRARY_SIZE + 1) if n not in seen.numbers]
+        if missing:
+            c.add("library", f"textures {_ranges(missing)} are missing: the library holds T1..T{LIBRARY_SIZE}")
+        for n, expected in NAMED.items():
+            if n in out and out[n].name != expected:
+                c.add(_label(n, out[n].name), f"name = {out[n].name!r}: D ch. 6 names texture {n} {expected!r}")
+    if c.problems:
+        raise TextureError(source, c.problems)
+    return dict(sorted(out.items()))
+
+
+@dataclass
+class _Seen:
+    """Numbers, names (case-folded) and seeds met so far, each with the label of the texture that had it first."""
+
+    numbers: dict = field(default_factory=dict)
+    names: dict = field(default_factory=dict)
+    seeds: dict = field(default_factory=dict)
+
+
+def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
+    """One ``[[texture]]`` table, or None after recording its problems."""
+    if not isinstance(t, dict):
+        c.add(f"texture[{i}]", f"{t!r}: must be a table ([[texture]])")
+        return None
+    number, name = t.get("number"), t.get("name")
+    if isinstance(number, int) and not isinstance(number, bool):
+        who = _label(number, name)
+    else:  # no usable number: say where the table is
+        who = f"texture[{i}]" + (f" {name!r}" if isinstance(name, str) and name else "")
+    n_before = len(c.problems)
+    for k in t:
+        if k not in KNOWN_FIELDS:
+            c.add(who, f"unknown field {k!r}; known fields: {', '.join(sorted(KNOWN_FIELDS))}")
+
+    # identity: number, name, group, seed
+    if "number" not in t:
+        c.add(who, f"number is missing (1 to {LIBRARY_SIZE}, or {TEST_GROUP[1]} to {TEST_GROUP[2]} for test surfaces)")
+        number = None
+    elif isinstance(number, bool) or not isinstance(number, int) or group_of(number) is None:
+        c.add(who, f"number = {number!r}: allowed 1 to {LIBRARY_SIZE} (the library) or {TEST_GROUP[1]} to "
+                   f"{TEST_GROUP[2]} (test surfaces), a whole number")
+        number = None
+    elif number in seen.numbers:
+        c.add(who, f"number = {number}: already used by {seen.numbers[number]}; numbers are unique")
+    else:
+        seen.numbers[number] = who
+    name = c.text(who, t, "name")
+    if name is not None:
+        if len(name) > MAX_NAME or name != name.strip():
+            c.add(who, f"name = {name!r}: at most {MAX_NAME} characters, no leading or trailing spaces")
+        elif name.casefold() in seen.names:
+            c.add(who, f"name = {name!r}: already used by {seen.names[name.casefold()]}; names are unique")
+        else:
+            seen.names[name.casefold()] = who
+    group = c.text(who, t, "group")
+    if group is not None and number is not None and group != group_of(number):
+        expected = group_of(number)
+        lo, hi = next((lo, hi) for g, lo, hi in GROUPS + (TEST_GROUP,) if g == expected)
+        c.add(who, f"group = {group!r}: texture {number} is in group {expected!r} (numbers {lo}-{hi}); "
+                   f"groups: {', '.join(GROUP_NAMES)}")
+    elif group is not None and group not in GROUP_NAMES:
+        c.add(who, f"group = {group!r}: must be one of: {', '.join(GROUP_NAMES)}")
+    seed = t.get("seed")
+    if "seed" not in t:
+        c.add(who, "seed is missing (a whole number, 0 to 2**63-1, unique)")
+    elif isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
+        c.add(who, f"seed = {seed!r}: must be a whole number, 0 to 2**63-1")
+    elif seed in seen.seeds:
+        c.add(who, f"seed = {seed}: already the seed of {seen.seeds[seed]}; each texture is its own surface")
+    else:
+        seen.seeds[seed] = who
+
+    # physics: numbers in SI, friction consistent, a known thermal material, periodic components
+    vals = {spec.attr: c.number(who, t, k, spec) for k, spec in NUMBER_FIELDS.items()}
+    if None not in vals.values() and vals["mu_kinetic"] > vals["mu_static"]:
+        c.add(who, f"mu_kinetic = {t['mu_kinetic']!r}: must not exceed mu_static = {t['mu_static']!r} "
+                   "(kinetic friction ≤ static)")
+    material = c.text(who, t, "material")
+    if material is not None and material not in MATERIALS:
+        near = difflib.get_close_matches(material, list(MATERIALS), n=3, cutoff=0.5)
+        hint = f" (did you mean {', '.join(map(repr, near))}?)" if near else ""
+        c.add(who, f"material = {material!r}: unknown{hint}; known materials (emulator.thermal.MATERIALS): "
+                   f"{', '.join(MATERIALS)}")
+    source = c.text(who, t, "source")
+    description = c.text(who, t, "description", required=False)
+    periodic = _periodic(c, who, t.get("periodic", []))
+    if len(c.problems) > n_before:
+        return None
+    return Texture(number=number, name=name, group=group, material=material, seed=seed, source=source,
+                   description=description or "", periodic=periodic, **vals)
+
+
+def _ranges(numbers: list[int]) -> str:
+    runs, start = [], numbers[0]
+    for a, b in zip(numbers, numbers[1:] + [None]):
+        if b != a + 1:
+            runs.append(f"T{start}" if start == a else f"T{start}-T{a}")
+            start = b
+    return ", ".join(runs)
+
+
+def read_library_file(path: str | Path) -> dict:
+    """The parsed TOML of a library file; unreadable files, non-UTF-8 bytes and TOML syntax errors raise
+    :class:`TextureError` naming the file."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise TextureError(str(path), [f"cannot read the file: {e.strerror}"]) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise TextureError(str(path), [f"not UTF-8 text: byte 0x{raw[e.start]:02x} at offset {e.start} "
+                                       f"({e.reason})"]) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise TextureError(str(path), [f"TOML syntax error: {e}"]) from None
+
+
+@functools.lru_cache(maxsize=8)
+def _load_cached(path: str, mtime_ns: int, size: int, complete: bool) -> dict[int, Texture]:
+    return parse_library(read_library_file(path), source=path, complete=complete)
+
+
+def load_library(path: str | Path | None = None, complete: bool | None = None) -> dict[int, Texture]:
+    """The textures of a library file (default: the shipped ``fixtures/textures/library.toml``), by number, in SI.
+
+    Everything is validated before anything is returned; ``complete`` (default: True for the shipped file)
+    also demands T1..T117 with the textures the dissertation names at their numbers."""
+    p = Path(path) if path is not None else LIBRARY_PATH
+    if complete is None:
+        complete = path is None
+    try:
+        st = p.stat()
+    except OSError as e:
+        raise TextureError(str(p), [f"cannot read the file: {e.strerror}"]) from None
+    return dict(_load_cached(str(p), st.st_mtime_ns, st.st_size, bool(complete)))
+
+
+_NUMBER_RE = re.compile(r"^\s*[Tt]?\s*(\d+)\s*$")
+
+
+def texture(number_or_name: int | str, path: str | Path | None = None) -> Texture:
+    """One texture by number (``10``, ``"T10"``, ``"10"``) or name (``"velcro hooks"``, case-insensitive)."""
+    lib = load_library(path)
+    source = str(path if path is not None else LIBRARY_PATH)
+    q = number_or_name
+    if isinstance(q, bool) or not isinstance(q, (int, str)):
+        raise TextureError(source, [f"texture {q!r}: give a number (10, 'T10') or a name ('velcro hooks')"])
+    m = _NUMBER_RE.match(q) if isinstance(q, str) else None
+    if isinstance(q, int) or m:
+        n = q if isinstance(q, int) else int(m.group(1))
+        if n in lib:
+            return lib[n]
+        nums = sorted(lib)
+        near = sorted(nums, key=lambda k: abs(k - n))[:3]
+        raise TextureError(source, [f"no texture number {n}; the library holds {_ranges(nums)}; closest: "
+                                    + ", ".join(f"T{k} {lib[k].name!r}" for k in sorted(near))])
+    by_name = {t.name.casefold(): t for t in lib.values()}
+    key = q.strip().casefold()
+    if key in by_name:
+        return by_name[key]
+    names = list(by_name)
+    near = difflib.get_close_matches(key, names, n=5, cutoff=0.5)
+    near += [nm for nm in names if key and key in nm and nm not in near][:5 - len(near)]
+    hint = ("close matches: " + ", ".join(f"T{by_name[nm].number} {by_name[nm].name!r}" for nm in near)
+            if near else "no close matches (`biotac-bench textures` lists them all)")
+    raise TextureError(source, [f"no texture named {q!r}; {hint}"])
+
+
+def texture_record(t: Texture) -> dict:
+    """A texture in the library file's fields and units (what ``biotac-bench textures --json`` prints):
+    ``parse_library({"texture": [texture_record(t)]})`` gives ``t`` back."""
+    rec: dict = {"number": t.number, "name": t.name, "group": t.group, "description": t.description}
+    for key, spec in NUMBER_FIELDS.items():
+        rec[key] = spec.from_si(getattr(t, spec.attr))
+    rec.update(material=t.material, seed=t.seed, source=t.source)
+    rec["periodic"] = [{key: spec.from_si(getattr(p, spec.attr)) for key, spec in PERIODIC_FIELDS.items()}
+                       | {"harmonics": list(p.harmonics)} for p in t.periodic]
+    return rec
