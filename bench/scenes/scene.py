@@ -7,6 +7,7 @@ See ``fixtures/scenes/`` for examples and ``biotac-bench run --help`` for the fo
 
 from __future__ import annotations
 
+import copy
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -20,6 +21,10 @@ from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
 from emulator.stimuli import (DROP_HEIGHT_M, SPHERES, AmbientStep, HeaterFailure, PowerOn, Press, PressureCalibrator,
                               SphereDrop, Tap, Touch, Vibration)
+from emulator.effects import effect_rng
+from emulator.skin import Skin
+from emulator.sliding import Slide
+from emulator.texture import SURFACE_LENGTH_M
 from emulator.thermal import MATERIALS
 
 MAX_DURATION_S = 36000.0
@@ -43,6 +48,9 @@ class Scene:
     impact_detection: bool = False
     source: str = "<scene>"
     text: str = ""
+    skin_before: dict = field(default_factory=dict)  # the skin's state before the first slide
+    skin_after: dict = field(default_factory=dict)  # ... and after the last (Archard wear, if on)
+    trial_skins: list = field(default_factory=list)  # the skin's state before each slide
 
     @property
     def channels(self) -> list[str]:
@@ -117,7 +125,7 @@ class _Checker:
 
 
 STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step",
-                  "heater_failure")
+                  "heater_failure", "slide", "replace_skin")
 _STIMULUS_FIELDS = {
     "tap": {"kind", "at_s", "peak_N", "duration_s"},
     "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
@@ -129,7 +137,11 @@ _STIMULUS_FIELDS = {
     "power_on": {"kind", "at_s"},
     "ambient_step": {"kind", "at_s", "temperature_C"},
     "heater_failure": {"kind", "at_s"},
+    "replace_skin": {"kind", "at_s"},
+    "slide": {"kind", "start_s", "texture", "force_N", "velocity_mm_per_s", "distance_mm", "approach_s", "hold_s",
+              "accel_s", "lift_s", "start_position_mm"},
 }
+SKIN_FIELDS = {"fingerprints", "ridge_height_um", "wear", "wear_coefficient"}
 ELECTRODE_NAMES = tuple(f"E{n}" for n in range(1, 20))
 
 
@@ -224,7 +236,132 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
             temp = c.number(st, "temperature_C", w, -20.0, 60.0, "°C", required=True)
             if at and temp is not None:
                 out.append(AmbientStep(at[0], temp))
+        elif kind == "slide":
+            out += _slides(c, st, w, duration)
+        elif kind == "replace_skin":
+            out += [SkinReplacement(t) for t in c.times(st, "at_s", w, duration)]
     return out
+
+
+def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
+    """One :class:`SlideSpec` per start instant (a list of ``start_s`` is a list of trials)."""
+    from bench.errors import TextureError
+    from bench.textures.library import texture as find_texture
+
+    starts = c.times(st, "start_s", w, duration)
+    vals = dict(
+        force_N=c.number(st, "force_N", w, 0.01, 20.0, "N", required=True),
+        velocity_mm_per_s=c.number(st, "velocity_mm_per_s", w, 0.1, 500.0, "mm/s", required=True),
+        distance_mm=c.number(st, "distance_mm", w, 0.1, 500.0, "mm", required=True),
+        approach_s=c.number(st, "approach_s", w, 0.005, 60.0, "s", default=0.3),
+        hold_s=c.number(st, "hold_s", w, 0.0, 600.0, "s", default=0.5),
+        accel_s=c.number(st, "accel_s", w, 0.001, 10.0, "s", default=0.05),
+        lift_s=c.number(st, "lift_s", w, 0.005, 60.0, "s", default=0.2),
+        start_position_mm=c.number(st, "start_position_mm", w, 0.0, 1000.0, "mm"),
+    )
+    tex = None
+    if "texture" not in st:
+        c.problems.append(f"{w}.texture is missing: a library texture by number (30, \"T30\") or name")
+    else:
+        try:
+            tex = find_texture(st["texture"])
+        except TextureError as e:
+            c.problems.append(f"{w}.texture = {st['texture']!r}: " + "; ".join(e.problems))
+    if tex is None or None in [v for k, v in vals.items() if k != "start_position_mm"]:
+        return []
+    v, d, a = vals["velocity_mm_per_s"] * 1e-3, vals["distance_mm"] * 1e-3, vals["accel_s"]
+    if d < v * a:
+        c.problems.append(f"{w}.distance_mm = {vals['distance_mm']!r}: shorter than the stage's acceleration and "
+                          f"braking at this velocity ({v * a * 1e3:.3g} mm); lower accel_s or slide farther")
+        return []
+    out = []
+    for t in starts:
+        spec = SlideSpec(t, tex, vals["force_N"], v, d, vals["approach_s"], vals["hold_s"], a, vals["lift_s"],
+                         None if vals["start_position_mm"] is None else vals["start_position_mm"] * 1e-3, where=w)
+        if duration is not None and spec.end_s > duration:
+            c.problems.append(f"{w}: the slide starting at {t} s ends at {spec.end_s:.3f} s, after the end of the "
+                              f"scene (duration_s = {duration})")
+            continue
+        out.append(spec)
+    return out
+
+
+@dataclass
+class SlideSpec:
+    """A slide as the scene file gives it (SI units); :func:`build_slides` turns the scene's slides into
+    :class:`emulator.sliding.Slide` stimuli on one skin that wears from trial to trial."""
+
+    start_s: float
+    texture: object
+    force_N: float
+    velocity_m_per_s: float
+    distance_m: float
+    approach_s: float
+    hold_s: float
+    accel_s: float
+    lift_s: float
+    start_position_m: float | None
+    where: str = ""
+
+    @property
+    def end_s(self) -> float:
+        return self.start_s + self.approach_s + self.hold_s + self.distance_m / self.velocity_m_per_s + \
+            self.accel_s + self.lift_s
+
+
+@dataclass
+class SkinReplacement:
+    """A fresh skin goes on at ``at_s`` (between slides): ridges new, history carried on."""
+
+    at_s: float
+
+    @property
+    def start_s(self) -> float:
+        return self.at_s
+
+
+def build_slides(specs: list, skin: Skin, seed: int, wear: bool, contact_radius_at_1N_m: float):
+    """Slides in time order on ``skin``: each trial starts on the skin as the earlier ones left it (Archard wear
+    after each, if ``wear``; :class:`SkinReplacement` events put on a fresh skin); a start position not given is
+    drawn from the scene seed and the trial's index. Returns (slides, skin states before each trial, the skin
+    after the last)."""
+    slides, states = [], []
+    events = sorted(specs, key=lambda x: (x.start_s, isinstance(x, SlideSpec)))
+    replacements = [e for e in events if isinstance(e, SkinReplacement)]
+    for e in replacements:
+        if any(sp.start_s < e.at_s < sp.end_s for sp in events if isinstance(sp, SlideSpec)):
+            raise ValueError(f"the skin replacement at {e.at_s} s falls during a slide")
+    k = -1
+    for sp in events:
+        if isinstance(sp, SkinReplacement):
+            skin = skin.replace()
+            continue
+        k += 1
+        position = sp.start_position_m
+        if position is None:
+            position = float(effect_rng(seed, f"slide[{k}].start_position").uniform(0.0, SURFACE_LENGTH_M))
+        states.append(skin.state())
+        slides.append(Slide(sp.start_s, sp.texture, sp.force_N, sp.velocity_m_per_s, sp.distance_m, sp.approach_s,
+                            sp.hold_s, sp.accel_s, sp.lift_s, position, skin=copy.deepcopy(skin)))
+        if wear:
+            area = math.pi * (contact_radius_at_1N_m * sp.force_N ** (1 / 3)) ** 2
+            skin.wear(sp.force_N, sp.distance_m, area, float(sp.texture.mu_kinetic))
+    return slides, states, skin
+
+
+def _skin(c: _Checker, table) -> tuple[Skin, bool]:
+    if not isinstance(table, dict):
+        c.problems.append(f"skin = {table!r}: must be a table ([skin])")
+        return Skin(), True
+    c.known_keys(table, "skin", SKIN_FIELDS)
+    fingerprints = c.boolean(table, "fingerprints", "skin", True)
+    new_um = Skin().ridge_height_new_m * 1e6
+    height = c.number(table, "ridge_height_um", "skin", 0.0, new_um, "µm", default=new_um)
+    k = c.number(table, "wear_coefficient", "skin", 0.0, 1.0, "", default=Skin().wear_coefficient)
+    wear = c.boolean(table, "wear", "skin", True)
+    given = "ridge_height_um" in table and height is not None
+    return Skin(fingerprints=fingerprints, ridge_height_m=height * 1e-6 if given else Skin().ridge_height_new_m,
+                wear_coefficient=k if k is not None else Skin().wear_coefficient), wear
 
 
 def _faults(c: _Checker, table: dict) -> dict:
@@ -253,7 +390,7 @@ def _faults(c: _Checker, table: dict) -> dict:
 def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     """Validate a scene given as a dict (the parsed TOML); raise :class:`SceneError` listing every problem."""
     c = _Checker()
-    c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis", "faults"})
+    c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis", "faults", "skin"})
     meta = data.get("scene", {})
     if "scene" not in data:
         c.problems.append("[scene] table is missing (needs at least name and duration_s)")
@@ -304,6 +441,19 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     noise = NoiseSources(**{k: c.boolean(noise_t, k, "noise", True) for k in names})
 
     stimuli = _stimuli(c, data.get("stimulus", []), duration, params)
+    skin, wear = _skin(c, data.get("skin", {}))
+    slide_specs = [s for s in stimuli if isinstance(s, (SlideSpec, SkinReplacement))]
+    stimuli = [s for s in stimuli if not isinstance(s, (SlideSpec, SkinReplacement))]
+    ordered = sorted((s for s in slide_specs if isinstance(s, SlideSpec)), key=lambda x: x.start_s)
+    for a, b in zip(ordered, ordered[1:]):
+        if b.start_s < a.end_s:
+            c.problems.append(f"{b.where}: the slide starting at {b.start_s} s overlaps the one of {a.where} "
+                              f"(from {a.start_s} s to {a.end_s:.3f} s); one finger slides on one texture at a time")
+    for r in (s for s in slide_specs if isinstance(s, SkinReplacement)):
+        for a in ordered:
+            if a.start_s < r.at_s < a.end_s:
+                c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
+                                  f"({a.start_s} s to {a.end_s:.3f} s)")
     faults = _faults(c, data.get("faults", {}))
     analysis = data.get("analysis", {})
     c.known_keys(analysis, "analysis", {"impact_detection"})
@@ -319,11 +469,15 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                                   f"fidelity '{fidelity}' ({grid:.0f} Hz); use \"reference\"")
     if c.problems:
         raise SceneError(source, c.problems)
+    skin_before = skin.state()
+    slides, trial_skins, skin = build_slides(slide_specs, skin, int(seed), wear, params.contact_radius_at_1N_m)
+    stimuli += slides
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=str(meta.get("description", "")), params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
                  faults=faults,
-                 impact_detection=impact_detection, source=source, text=text)
+                 impact_detection=impact_detection, source=source, text=text,
+                 skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins)
 
 
 def load_scene(path: str | Path) -> Scene:

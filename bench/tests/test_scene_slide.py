@@ -1,0 +1,74 @@
+"""Sliding in scene files: the `slide` and `replace_skin` kinds and the [skin] table — every start time honoured,
+one skin that wears from trial to trial, and clear errors for what cannot run."""
+
+import pytest
+
+from bench.errors import SceneError
+from bench.scenes.scene import parse_scene
+from emulator.sliding import Slide
+
+pytestmark = pytest.mark.unit
+
+
+def _scene(*stimuli, skin=None, duration=20.0):
+    data = {"scene": {"name": "s", "duration_s": duration}, "stimulus": list(stimuli)}
+    if skin is not None:
+        data["skin"] = skin
+    return parse_scene(data)
+
+
+def _slide(**kw):
+    d = {"kind": "slide", "start_s": 0.5, "texture": "3 mm grating", "force_N": 0.5, "velocity_mm_per_s": 20,
+         "distance_mm": 20}
+    d.update(kw)
+    return d
+
+
+def _problems(*stimuli, **kw):
+    with pytest.raises(SceneError) as e:
+        _scene(*stimuli, **kw)
+    return "\n".join(e.value.problems)
+
+
+def test_every_start_time_is_a_trial_on_one_skin_that_wears():
+    sc = _scene(_slide(start_s=[0.5, 3.0, 5.5], force_N=2.0, velocity_mm_per_s=100, distance_mm=50),
+                skin={"wear_coefficient": 1e-3})
+    slides = [s for s in sc.stimuli if isinstance(s, Slide)]
+    assert [s.start_s for s in slides] == [0.5, 3.0, 5.5]
+    heights = [st["ridge_height_m"] for st in sc.trial_skins]
+    assert heights[0] == sc.skin_before["ridge_height_m"] > heights[1] > heights[2] > sc.skin_after["ridge_height_m"]
+    assert [s.skin.ridge_height_m for s in slides] == heights  # each trial slides on the skin as it was then
+    assert len({s.start_position_m for s in slides}) == 3  # each lands somewhere else on the texture
+
+
+def test_a_skin_replacement_restores_the_ridges_and_wear_can_be_switched_off():
+    sc = _scene(_slide(start_s=[0.5, 3.0], force_N=2.0, velocity_mm_per_s=100, distance_mm=50),
+                {"kind": "replace_skin", "at_s": 2.9}, skin={"wear_coefficient": 1e-3})
+    assert sc.trial_skins[1]["ridge_height_m"] == sc.skin_before["ridge_height_m"]
+    assert sc.trial_skins[1]["serial"] == 2
+    still = _scene(_slide(start_s=[0.5, 3.0]), skin={"wear": False})
+    assert still.skin_after["ridge_height_m"] == still.skin_before["ridge_height_m"]
+    smooth = _scene(_slide(), skin={"fingerprints": False})
+    assert smooth.stimuli[0].skin.ridge_factor == 0.0
+
+
+@pytest.mark.parametrize("stimulus, words", [
+    (_slide(texture="no such cloth"), ["stimulus[0].texture", "no such cloth"]),
+    ({k: v for k, v in _slide().items() if k != "texture"}, ["stimulus[0].texture is missing"]),
+    (_slide(force_N=-1), ["stimulus[0].force_N", "-1"]),
+    (_slide(velocity_mm_per_s="fast"), ["stimulus[0].velocity_mm_per_s", "'fast'"]),
+    (_slide(distance_mm=0.5, velocity_mm_per_s=100), ["stimulus[0].distance_mm", "acceleration"]),
+    (_slide(start_s=19.0), ["ends at", "after the end of the scene"]),
+    (_slide(grip=True), ["unknown field 'grip'"]),
+])
+def test_bad_slides_are_named_with_field_and_value(stimulus, words):
+    text = _problems(stimulus)
+    for w in words:
+        assert w in text
+
+
+def test_overlapping_slides_and_replacements_during_a_slide_are_rejected():
+    assert "overlaps" in _problems(_slide(start_s=0.5), _slide(start_s=1.0))
+    assert "falls during the slide" in _problems(_slide(start_s=0.5), {"kind": "replace_skin", "at_s": 1.5})
+    assert "skin.ridge_height_um" in _problems(_slide(), skin={"ridge_height_um": 500})
+    assert "skin = " in _problems(_slide(), skin=[1])
