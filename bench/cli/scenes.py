@@ -12,12 +12,22 @@ from emulator.fidelity import PROFILES
 
 RUN_HELP = """\
 Runs a scene file through sensor -> SPI peripheral -> host sampler and writes, into --out:
-  codes.npz     raw 12-bit codes per channel (<CH>_t, <CH>_code, <CH>_status) and physical units
-                (PAC_Pa, PDC_kPa, PDC_force_N) using the published conversions
-  samples.csv   the same in long format (with --csv)
-  record.json   everything about the run: scene, parameters, effects that ran and their cost, results
+  samples.h5    every sample, streamed to disk as the run goes (HDF5): /<CH>/t (s), /<CH>/code (12-bit),
+                /<CH>/status (0 ok, 1 parity error, 2 error word); the scene, seed, fidelity and status as
+                attributes
+  codes.npz     export of the same (<CH>_t, <CH>_code, <CH>_status) plus physical units (PAC_Pa, PDC_kPa,
+                PDC_force_N, ...) using the published conversions; runs up to 600 simulated s (--npz: any)
+  samples.csv   the same in long format (with --csv; same length rule)
+  record.json   everything about the run: scene, parameters, effects that ran and their cost, results,
+                status ("ok", "failed" with the error, "interrupted" with the signal); written last
   report.md     a short human-readable report
-  traces.png, spectrogram.png
+  traces.png, spectrogram.png   (from min/max envelopes and an averaged spectrogram: any run length)
+
+The out folder is checked and locked before anything runs; a folder that is not empty is refused unless
+--force (which first removes an earlier run's files, and nothing else). Without --out, a fresh folder
+out/<scene name>[-2, -3, ...] is used. Every file is written under a temporary name and renamed into place.
+Ctrl-C (SIGINT) or SIGTERM stops the run at the next chunk and writes everything recorded so far with
+status "interrupted"; exit status 130 / 143.
 
 scene file (TOML):
   [scene]    name, duration_s, seed (0), fidelity ("fast" | "default" | "reference"), description
@@ -46,27 +56,36 @@ A run that fails part-way still writes what it recorded (record.json says "faile
 
 
 def _cmd_run(a) -> int:
-    from bench.reporting.report import write_outputs
-    from bench.running.runner import run_scene
+    from bench.reporting.outdir import OutFolder
+    from bench.reporting.session import run_to_folder
     from bench.scenes.scene import load_scene
 
-    scene = load_scene(a.scene)
-    if a.fidelity:
-        scene.fidelity = a.fidelity
-    if a.seed is not None:
-        scene.seed = a.seed
-    if a.spi:
-        scene.spi = a.spi
-    out = Path(a.out) if a.out else Path("out") / scene.name
-    rec = run_scene(scene, progress=not a.quiet)
-    record = write_outputs(rec, out, csv=a.csv, plots=not a.no_plots)
+    folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None  # checked before anything runs
+    try:
+        scene = load_scene(a.scene)
+        if a.fidelity:
+            scene.fidelity = a.fidelity
+        if a.seed is not None:
+            scene.seed = a.seed
+        if a.spi:
+            scene.spi = a.spi
+        res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
+                            plots=not a.no_plots, progress=not a.quiet, compression=a.compression)
+    finally:
+        if folder is not None:
+            folder.close()
+    out, record = res.folder, res.record
     if not a.quiet:
         print((out / "report.md").read_text())
     print(f"wrote {out}/ ({', '.join(record['outputs'])})")
-    if rec.error:
-        print(f"error: the run stopped at {rec.simulated_s:.3f} s: {rec.error}", file=sys.stderr)
-        return 1
-    return 0
+    for name, why in record.get("skipped_outputs", {}).items():
+        print(f"note: {name} {why}", file=sys.stderr)
+    if record["status"] == "interrupted":
+        print(f"interrupted by {record.get('interrupted_by')} at {record['simulated_s']:.3f} s of "
+              f"{scene.duration_s:g} s: wrote what was recorded", file=sys.stderr)
+    elif record["status"] != "ok":
+        print(f"error: the run stopped at {record['simulated_s']:.3f} s: {record['error']}", file=sys.stderr)
+    return res.exit_code
 
 
 def _cmd_validate(a) -> int:
@@ -115,8 +134,14 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     r = sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
                        description=RUN_HELP, formatter_class=fmt)
     r.add_argument("scene", help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
-    r.add_argument("--out", help="output folder (default: out/<scene name>)")
+    r.add_argument("--out", help="output folder (default: a fresh out/<scene name>[-n])")
     r.add_argument("--csv", action="store_true", help="also write samples.csv")
+    r.add_argument("--force", action="store_true",
+                   help="run into a folder that is not empty: an earlier run's files are removed first")
+    r.add_argument("--npz", action="store_true",
+                   help="export codes.npz (and samples.csv with --csv) even for runs longer than 600 simulated s")
+    r.add_argument("--compression", choices=["gzip", "lzf", "none"], default="gzip",
+                   help="samples.h5 compression (default gzip: level 1 with shuffle, readable everywhere)")
     r.add_argument("--fidelity", choices=list(PROFILES), help="override the scene's profile")
     r.add_argument("--seed", type=int, help="override the scene's seed")
     r.add_argument("--spi", choices=["software", "rtl"],

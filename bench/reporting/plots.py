@@ -1,4 +1,8 @@
-"""Plots people would rather look at than read: channel traces and the PAC spectrogram."""
+"""Plots people would rather look at than read: channel traces and the PAC spectrogram.
+
+Scene plots are drawn from the run's streaming summary (min/max envelopes of at most one bin per pixel column,
+a spectrogram of bounded size), so drawing them costs the same memory after ten hours as after a minute.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +13,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from scipy import signal  # noqa: E402
 
 from emulator.stimuli import AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration  # noqa: E402,E501
 
@@ -20,94 +23,146 @@ def _mark_stimuli(ax, stimuli, t_max):
             continue
         color = {SphereDrop: "tab:red", Tap: "tab:orange", Press: "tab:green", Touch: "tab:green",
                  Vibration: "tab:purple", PressureCalibrator: "tab:brown", PowerOn: "tab:gray",
-                 AmbientStep: "tab:cyan"}[type(s)]
+                 AmbientStep: "tab:cyan"}.get(type(s), "tab:gray")
         if isinstance(s, (Press, Vibration, PressureCalibrator)):
             ax.axvspan(s.start_s, min(s.end_s, t_max), color=color, alpha=0.08, lw=0)
         else:
             ax.axvline(s.start_s, color=color, alpha=0.35, lw=0.8)
 
 
-def scene_plots(rec, phys: dict, out_dir: Path) -> list[str]:
-    written = []
-    panels = [(k, lbl) for k, lbl in (("PAC_Pa", "PAC vibration (Pa)"), ("PDC_kPa", "PDC pressure change (kPa)"),
-                                      ("TDC_C", "TDC temperature (°C)"), ("TAC_C_per_s", "TAC (°C/s)"),
-                                      ("E_kohm", "electrode impedance (kΩ)"))
-              if k in phys or (k == "E_kohm" and "E1_ohm" in phys)]
-    if panels:
+def _envelope_panel(summary, key: str, base: dict):
+    """(centre instants, low, high) of one trace panel in physical units, from the streamed min/max envelope
+    (one bin per pixel column at most: the zig-zag low → high → low draws what the full trace would)."""
+    from emulator import conversions as conv
+
+    ch = key.split("_")[0]
+    c, lo, hi, mean = summary.channels[ch].envelope()
+    if ch == "PAC":
+        f = lambda x: conv.pac_to_pa(x, base["PAC"])  # noqa: E731
+    elif ch == "PDC":
+        f = lambda x: conv.pdc_to_kpa(x, base["PDC"])  # noqa: E731
+    elif ch == "TDC":
+        f = conv.tdc_to_celsius
+    elif ch == "TAC":
+        tc, _, _, tmean = summary.channels["TDC"].envelope()
+        tdc = np.interp(c, tc, tmean) if tc.size else np.full(c.size, np.nan)
+        f = lambda x: conv.tac_to_celsius_per_s(x, tdc, base["TAC"])  # noqa: E731
+    else:
+        f = lambda x: conv.impedance_ohm(x) / 1e3  # noqa: E731
+    a, b = f(lo), f(hi)
+    return c, np.minimum(a, b), np.maximum(a, b)
+
+
+def _zigzag(ax, c, lo, hi, **kw):
+    ax.plot(np.repeat(c, 2), np.column_stack([lo, hi]).ravel(), **kw)
+
+
+def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
+    """The plots of a run, drawn from its streaming summary (memory independent of the run's length): a list
+    of (file name, draw(path)) — each draw writes one PNG to ``path``."""
+    summary = rec.summary
+    names = summary.channels
+    plots = []
+    panels = [(k, lbl) for k, lbl, need in (("PAC_Pa", "PAC vibration (Pa)", ("PAC",)),
+                                            ("PDC_kPa", "PDC pressure change (kPa)", ("PDC",)),
+                                            ("TDC_C", "TDC temperature (°C)", ("TDC",)),
+                                            ("TAC_C_per_s", "TAC (°C/s)", ("TAC", "TDC")),
+                                            ("E_kohm", "electrode impedance (kΩ)", ("E1",)))
+              if all(n in names for n in need)]
+
+    def traces(path: Path):
         fig, axes = plt.subplots(len(panels), 1, figsize=(11, 3.2 * len(panels)), sharex=True, squeeze=False)
-        for ax, (key, label) in zip(axes[:, 0], panels):
-            if key == "E_kohm":
-                for n in range(1, 20):
-                    if f"E{n}_ohm" in phys:
-                        ax.plot(rec.channels[f"E{n}"].times, phys[f"E{n}_ohm"] / 1e3, lw=0.7, label=f"E{n}")
-                ax.legend(ncol=10, fontsize=6, loc="upper right")
-            else:
-                ch = key.split("_")[0]
-                ax.plot(rec.channels[ch].times, phys[key], lw=0.5, color="black")
-            ax.set_ylabel(label)
-            ax.grid(alpha=0.3)
-            _mark_stimuli(ax, rec.scene.stimuli, rec.simulated_s)
-        axes[-1, 0].set_xlabel("time (s)")
-        axes[0, 0].set_title(f"{rec.scene.name}: channel traces (markers: stimuli)")
-        fig.tight_layout()
-        fig.savefig(out_dir / "traces.png", dpi=110)
-        plt.close(fig)
-        written.append("traces.png")
-    if "PAC_Pa" in phys and phys["PAC_Pa"].size > 256:
-        t = rec.channels["PAC"].times
-        fs = 1.0 / np.median(np.diff(t))
-        nper = max(32, int(round(0.08 * fs)))  # 80 ms window, as D ch. 3
-        f, tt, sxx = signal.spectrogram(phys["PAC_Pa"], fs=fs, nperseg=nper, noverlap=nper // 2, scaling="density")
-        fig, ax = plt.subplots(figsize=(11, 4))
-        mesh = ax.pcolormesh(tt + t[0], f, 10 * np.log10(np.maximum(sxx, 1e-12)), shading="auto", cmap="magma")
-        fig.colorbar(mesh, ax=ax, label="PAC PSD (dB re 1 Pa²/Hz)")
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("frequency (Hz)")
-        ax.set_title(f"{rec.scene.name}: PAC spectrogram (80 ms windows)")
-        fig.tight_layout()
-        fig.savefig(out_dir / "spectrogram.png", dpi=110)
-        plt.close(fig)
-        written.append("spectrogram.png")
-    if "E1_ohm" in phys and any(isinstance(s, Touch) for s in rec.scene.stimuli):
-        written.append(electrode_map(rec, phys, out_dir))
-    return written
+        try:
+            for ax, (key, label) in zip(axes[:, 0], panels):
+                if key == "E_kohm":
+                    for n in range(1, 20):
+                        if f"E{n}" in names:
+                            _zigzag(ax, *_envelope_panel(summary, f"E{n}_ohm", base), lw=0.7, label=f"E{n}")
+                    ax.legend(ncol=10, fontsize=6, loc="upper right")
+                else:
+                    _zigzag(ax, *_envelope_panel(summary, key, base), lw=0.5, color="black")
+                ax.set_ylabel(label)
+                ax.grid(alpha=0.3)
+                _mark_stimuli(ax, rec.scene.stimuli, rec.simulated_s)
+            axes[-1, 0].set_xlabel("time (s)")
+            axes[0, 0].set_title(f"{rec.scene.name}: channel traces (markers: stimuli)")
+            fig.tight_layout()
+            fig.savefig(path, dpi=110, format="png")
+        finally:
+            plt.close(fig)
+
+    if panels:
+        plots.append(("traces.png", traces))
+    spec = summary.spectrogram
+    if spec is not None and spec.samples > 256 and spec.result() is not None:
+        def spectrogram(path: Path):
+            from emulator.conversions import PAC_PA_PER_BIT
+
+            f, tt, sxx = spec.result()
+            fig, ax = plt.subplots(figsize=(11, 4))
+            try:
+                psd = sxx * PAC_PA_PER_BIT ** 2  # codes²/Hz → Pa²/Hz (the offset does not enter: windows are detrended)
+                mesh = ax.pcolormesh(tt, f, 10 * np.log10(np.maximum(psd, 1e-12)), shading="auto", cmap="magma")
+                fig.colorbar(mesh, ax=ax, label="PAC PSD (dB re 1 Pa²/Hz)")
+                ax.set_xlabel("time (s)")
+                ax.set_ylabel("frequency (Hz)")
+                avg = f", each column the mean of {spec.group}" if spec.group > 1 else ""
+                ax.set_title(f"{rec.scene.name}: PAC spectrogram (80 ms windows{avg})")
+                fig.tight_layout()
+                fig.savefig(path, dpi=110, format="png")
+            finally:
+                plt.close(fig)
+
+        plots.append(("spectrogram.png", spectrogram))
+    if "E1" in names and any(isinstance(s, Touch) for s in rec.scene.stimuli):
+        plots.append(("electrode_map.png", lambda path: electrode_map(rec, path)))
+    return plots
 
 
-def electrode_map(rec, phys: dict, out_dir: Path) -> str:
+def electrode_map(rec, path: Path) -> None:
     """The finger's core unwrapped (along the finger × around it) with each electrode coloured by its largest
     impedance change over the scene, and the touches marked."""
+    from bench.running.aggregate import hist_median_pair
+    from emulator.conversions import impedance_ohm
     from emulator.electrodes import CORE_RADIUS_MM, electrode_positions_mm
 
     pos = electrode_positions_mm()
     arc = CORE_RADIUS_MM * np.arctan2(pos[:, 1], -pos[:, 2])  # mm around the finger from the ventral midline
     change = []
     for n in range(1, 20):
-        z = phys[f"E{n}_ohm"]
-        rest = np.median(z[: max(5, len(z) // 20)])
-        change.append(100 * np.max(np.abs(z - rest)) / rest)
+        cs = rec.summary.channels.get(f"E{n}")
+        if cs is None or cs.good == 0:
+            change.append(0.0)
+            continue
+        a, b = hist_median_pair(cs.early_hist if cs.early_hist.any() else cs.hist)
+        rest = float((impedance_ohm(a) + impedance_ohm(b)) / 2)  # the median of the resting impedances
+        nz = np.flatnonzero(cs.hist)
+        extreme = np.abs(impedance_ohm(np.array([nz[0], nz[-1]])) - rest)
+        change.append(100 * float(extreme.max()) / rest)
     fig, ax = plt.subplots(figsize=(8, 4.2))
-    ax.add_patch(plt.Rectangle((-16, -np.pi * CORE_RADIUS_MM / 1.6), 21, 2 * np.pi * CORE_RADIUS_MM / 1.6,
-                               fill=False, ls="--", color="gray"))
-    sc = ax.scatter(pos[:, 0], arc, c=change, s=260, cmap="viridis", edgecolors="black")
-    for n, (x, a) in enumerate(zip(pos[:, 0], arc), start=1):
-        ax.annotate(f"E{n}", (x, a), ha="center", va="center", fontsize=7, color="white")
-    for s in rec.scene.stimuli:
-        if isinstance(s, Touch):
-            if s.electrode:
-                k = int(s.electrode[1:]) - 1
-                x, a = pos[k, 0], arc[k]
-            else:
-                x, a = s.x_mm, CORE_RADIUS_MM * np.radians(s.angle_deg)
-            ax.plot(x, a, "x", color="red", ms=10, mew=2)
-    fig.colorbar(sc, ax=ax, label="largest impedance change (%)")
-    ax.set_xlabel("along the finger, x (mm; tip at right)")
-    ax.set_ylabel("around the finger from the ventral midline (mm)")
-    ax.set_title(f"{rec.scene.name}: electrode map (red ×: touches)")
-    ax.set_aspect("equal")
-    fig.tight_layout()
-    fig.savefig(out_dir / "electrode_map.png", dpi=110)
-    plt.close(fig)
-    return "electrode_map.png"
+    try:
+        ax.add_patch(plt.Rectangle((-16, -np.pi * CORE_RADIUS_MM / 1.6), 21, 2 * np.pi * CORE_RADIUS_MM / 1.6,
+                                   fill=False, ls="--", color="gray"))
+        sc = ax.scatter(pos[:, 0], arc, c=change, s=260, cmap="viridis", edgecolors="black")
+        for n, (x, a) in enumerate(zip(pos[:, 0], arc), start=1):
+            ax.annotate(f"E{n}", (x, a), ha="center", va="center", fontsize=7, color="white")
+        for s in rec.scene.stimuli:
+            if isinstance(s, Touch):
+                if s.electrode:
+                    k = int(s.electrode[1:]) - 1
+                    x, a = pos[k, 0], arc[k]
+                else:
+                    x, a = s.x_mm, CORE_RADIUS_MM * np.radians(s.angle_deg)
+                ax.plot(x, a, "x", color="red", ms=10, mew=2)
+        fig.colorbar(sc, ax=ax, label="largest impedance change (%)")
+        ax.set_xlabel("along the finger, x (mm; tip at right)")
+        ax.set_ylabel("around the finger from the ventral midline (mm)")
+        ax.set_title(f"{rec.scene.name}: electrode map (red ×: touches)")
+        ax.set_aspect("equal")
+        fig.tight_layout()
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)
 
 
 def sensitivity_plot(claims, out_dir: Path) -> Path:

@@ -1,25 +1,39 @@
-"""Outputs of a run: raw codes (NPZ, CSV on request), physical units, a JSON record, plots, a short report."""
+"""Outputs of a run: samples.h5 (every sample), exports (codes.npz, samples.csv), plots, a JSON record, a report.
+
+:func:`write_outputs` writes them into a locked out folder (:mod:`bench.reporting.outdir`), each file under a
+temporary name renamed into place, in this order: exports, plots, then ``samples.h5`` (its ``status`` attribute
+set to the record's), ``report.md``, and ``record.json`` last — so a ``record.json`` present means every file it
+lists is complete and belongs to the same run.  Figures in the record come from the run's streaming summary
+(:class:`bench.running.aggregate.RunSummary`), never from all samples in memory.
+"""
 
 from __future__ import annotations
 
 import json
-import math
+import os
 from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from bench.verification import analysis
+from bench.reporting import exports, store
+from bench.reporting.outdir import OutFolder
+from bench.running.aggregate import IMPACT_WINDOW_S, RunSummary
 from bench.running.runner import Recording
-from emulator import conversions as conv
+from bench.verification import analysis
 from emulator.stimuli import SPHERES, SphereDrop
 
 SPHERE_NAME = {m: n for n, (m, _) in SPHERES.items()}
 
 
-def _first_stimulus_s(rec: Recording) -> float:
-    starts = [s.start_s for s in rec.scene.stimuli]
-    return min(starts) if starts else rec.simulated_s
+def _summary(rec: Recording) -> RunSummary:
+    """The recording's streaming summary (built from in-memory channels for a hand-made recording)."""
+    if rec.summary is None:
+        s = RunSummary(rec.scene, list(rec.channels))
+        s.add_parts({n: (r.times, r.codes, r.status) for n, r in rec.channels.items()})
+        s.finish()
+        rec.summary = s
+    return rec.summary
 
 
 def resting_stats(rec: Recording, channel: str) -> tuple[float, float]:
@@ -27,56 +41,37 @@ def resting_stats(rec: Recording, channel: str) -> tuple[float, float]:
 
     Falls back to the median and a MAD-based σ of the whole trace when there is no quiet lead-in.
     """
-    r = rec.channels[channel]
-    x = r.codes.astype(float)[r.status == 0]
-    t = r.times[r.status == 0]
-    if x.size == 0:
-        return math.nan, math.nan
-    quiet_end = min(_first_stimulus_s(rec) - 0.02, 1.0)
-    sel = t < quiet_end
-    if quiet_end >= 0.05 and np.count_nonzero(sel) >= 5:
-        return float(np.mean(x[sel])), float(np.std(x[sel]))
-    med = float(np.median(x))
-    return med, float(1.4826 * np.median(np.abs(x - med)))
+    return _summary(rec).resting_stats(channel, rec.simulated_s)
+
+
+def baselines(rec: Recording) -> dict[str, float]:
+    """Resting offsets used by the physical conversions (PAC, PDC, TAC)."""
+    names = rec.channel_names or list(rec.channels)
+    return {n: resting_stats(rec, n)[0] for n in ("PAC", "PDC", "TAC") if n in names}
 
 
 def physical_units(rec: Recording) -> dict[str, np.ndarray]:
-    """Published conversions, with offsets taken from the resting lead-in as a host would."""
-    out = {}
-    if "PAC" in rec.channels:
-        base, _ = resting_stats(rec, "PAC")
-        out["PAC_Pa"] = conv.pac_to_pa(rec.channels["PAC"].codes, base)
-    if "PDC" in rec.channels:
-        base, _ = resting_stats(rec, "PDC")
-        out["PDC_kPa"] = conv.pdc_to_kpa(rec.channels["PDC"].codes, base)
-        out["PDC_force_N"] = conv.pdc_to_force_n(rec.channels["PDC"].codes, base)
-    if "TDC" in rec.channels:
-        out["TDC_C"] = conv.tdc_to_celsius(rec.channels["TDC"].codes)
-        if "TAC" in rec.channels:
-            tdc = np.interp(rec.channels["TAC"].times, rec.channels["TDC"].times,
-                            rec.channels["TDC"].codes.astype(float))
-            base, _ = resting_stats(rec, "TAC")
-            out["TAC_C_per_s"] = conv.tac_to_celsius_per_s(rec.channels["TAC"].codes, tdc, base)
-    for name, r in rec.channels.items():
-        if name.startswith("E"):
-            out[f"{name}_ohm"] = conv.impedance_ohm(r.codes)
-    return out
+    """Published conversions of the in-memory channels, with offsets taken from the resting lead-in."""
+    return exports.physical_units(rec.channels, baselines(rec))
 
 
 def impact_results(rec: Recording) -> dict:
     """The dissertation's impact detection applied to every sphere drop of the scene."""
-    if "PAC" not in rec.channels:
+    names = rec.channel_names or list(rec.channels)
+    if "PAC" not in names:
         return {"error": "impact detection needs PAC in the host sequence"}
-    pac = rec.channels["PAC"]
+    summary = _summary(rec)
     base, sigma = resting_stats(rec, "PAC")
-    x = pac.codes.astype(float)
     rule = analysis.DetectionRule()
+    assert rule.window_s <= IMPACT_WINDOW_S, "the summary keeps shorter windows than the rule reads"
     per_sphere: dict[str, dict] = {}
-    for s in rec.scene.stimuli:
-        if not isinstance(s, SphereDrop) or s.time_s + rule.window_s > rec.simulated_s:
+    drops = [s for s in rec.scene.stimuli if isinstance(s, SphereDrop)]
+    for i, s in enumerate(drops):
+        if s.time_s + rule.window_s > rec.simulated_s:
             continue
         name = SPHERE_NAME.get(s.mass_kg, f"{s.mass_kg * 1e6:.3f} mg sphere")
-        hit = analysis.detected_in_window(x, pac.times, s.time_s, base, sigma, rule)
+        t, x = summary.impact_window(i)
+        hit = analysis.detected_in_window(x, t, s.time_s, base, sigma, rule)
         d = per_sphere.setdefault(name, {"mass_mg": s.mass_kg * 1e6, "energy_uJ": s.energy_J * 1e6,
                                          "drops": 0, "detected": 0})
         d["drops"] += 1
@@ -92,20 +87,13 @@ def _stimulus_record(s) -> dict:
     return d
 
 
-def build_record(rec: Recording, outputs: list[str]) -> dict:
+def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None,
+                 interrupted_by: str | None = None) -> dict:
     sc = rec.scene
-    stats = {}
-    for name, r in rec.channels.items():
-        ok = r.status == 0
-        x = r.codes[ok].astype(float)
-        stats[name] = {
-            "samples": int(r.codes.size), "bad_samples": int(np.count_nonzero(~ok)),
-            "rate_Hz": float(r.codes.size / rec.simulated_s) if rec.simulated_s else 0.0,
-            "mean_code": float(x.mean()) if x.size else None, "std_code": float(x.std()) if x.size else None,
-            "min_code": int(x.min()) if x.size else None, "max_code": int(x.max()) if x.size else None,
-        }
+    summary = _summary(rec)
+    stats = {name: cs.stats(rec.simulated_s) for name, cs in summary.channels.items()}
     record = {
-        "status": "failed" if rec.error else "ok",
+        "status": rec.status,
         "error": rec.error,
         "scene": {"name": sc.name, "source": sc.source, "description": sc.description, "seed": sc.seed,
                   "fidelity": sc.fidelity, "duration_s": sc.duration_s},
@@ -120,7 +108,11 @@ def build_record(rec: Recording, outputs: list[str]) -> dict:
         "channels": stats,
         "outputs": outputs,
     }
-    if "PAC" in rec.channels:
+    if interrupted_by:
+        record["interrupted_by"] = interrupted_by
+    if skipped:
+        record["skipped_outputs"] = skipped
+    if "PAC" in summary.channels:
         base, sigma = resting_stats(rec, "PAC")
         record["pac_resting"] = {"baseline_code": base, "sigma_bits": sigma}
     if sc.impact_detection:
@@ -128,29 +120,112 @@ def build_record(rec: Recording, outputs: list[str]) -> dict:
     return record
 
 
-def write_outputs(rec: Recording, out_dir: Path, csv: bool = False, plots: bool = True) -> dict:
-    """Write everything about ``rec`` into ``out_dir``; returns the JSON record."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    outputs = []
-    arrays = {}
-    for name, r in rec.channels.items():
-        arrays[f"{name}_t"], arrays[f"{name}_code"], arrays[f"{name}_status"] = r.times, r.codes, r.status
-    phys = physical_units(rec)
-    arrays.update(phys)
-    np.savez_compressed(out_dir / "codes.npz", scene_toml=np.array(rec.scene.text), **arrays)
-    outputs.append("codes.npz")
-    if csv:
-        _write_csv(rec, phys, out_dir / "samples.csv")
-        outputs.append("samples.csv")
-    if plots and rec.simulated_s > 0:
-        from bench.reporting import plots as plotting
+class _NoGuard:
+    """Stands in for a signal guard when outputs are written from Python: never asks to stop."""
 
-        outputs += plotting.scene_plots(rec, phys, out_dir)
-    outputs += ["record.json", "report.md"]
-    record = build_record(rec, outputs)
-    (out_dir / "record.json").write_text(json.dumps(record, indent=2, default=_json_default))
-    (out_dir / "report.md").write_text(markdown_report(record))
-    return record
+    signum = None
+    signal_name = None
+
+    def checkpoint(self):
+        pass
+
+
+def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True, *, npz: bool | None = None,
+                  samples_tmp: Path | None = None, force: bool = False, guard=None,
+                  compression: str = "gzip") -> dict:
+    """Write everything about ``rec`` into ``out_dir`` (a path, checked and locked here, or an open
+    :class:`~bench.reporting.outdir.OutFolder`); returns the JSON record.
+
+    ``samples_tmp``: the run's closed ``samples.h5`` under its temporary name (from a streaming run); without it,
+    ``samples.h5`` is written from the recording's in-memory channels.  ``npz``: export codes.npz (and samples.csv
+    when ``csv``) whatever the run's length (``True``), never (``False``), or for runs up to
+    :data:`~bench.reporting.exports.EXPORT_MAX_S` (``None``).  ``guard``: a signal guard whose ``checkpoint()``
+    raises to stop exports and plots early; the record is still written, with status ``"interrupted"``.
+    """
+    from bench.running.signals import StopRequested
+
+    guard = guard or _NoGuard()
+    own = not isinstance(out_dir, OutFolder)
+    folder = OutFolder.open(out_dir, force=force) if own else out_dir
+    outputs: list[str] = []
+    skipped: dict[str, str] = {}
+    problems: list[str] = []
+    stopped = False
+
+    def step(name: str, fn):
+        nonlocal stopped
+        if stopped:
+            skipped[name] = "not written: the run was interrupted while writing its outputs"
+            return
+        try:
+            guard.checkpoint()
+            with folder.atomic(name) as tmp:
+                fn(tmp)
+            outputs.append(name)
+        except StopRequested:
+            stopped = True
+            skipped[name] = "not written: the run was interrupted while writing its outputs"
+        except Exception as e:
+            problems.append(f"writing {name}: {type(e).__name__}: {e}")
+
+    try:
+        h5 = samples_tmp
+        if h5 is None and rec.channels:
+            h5 = folder.temp_path("samples.h5")
+            try:
+                store.write_recording(h5, rec, compression)
+            except Exception as e:
+                problems.append(f"writing samples.h5: {type(e).__name__}: {e}")
+                os.unlink(h5)
+                h5 = None
+        base = baselines(rec)
+        export = npz if npz is not None else rec.simulated_s <= exports.EXPORT_MAX_S
+        wanted = ["codes.npz"] + (["samples.csv"] if csv else [])
+        if h5 is None:
+            for name in wanted:
+                skipped[name] = "not written: there is no samples.h5 to export from"
+        elif not export:
+            why = ("not written: exports are off (--npz not given)" if npz is False else
+                   f"not written: the run is longer than {exports.EXPORT_MAX_S:g} simulated s; samples.h5 holds "
+                   f"every sample, or run again with --npz to force the export")
+            for name in wanted:
+                skipped[name] = why
+        else:
+            step("codes.npz", lambda tmp: exports.export_npz(h5, tmp, base, guard.checkpoint))
+            if csv:
+                step("samples.csv", lambda tmp: exports.export_csv(h5, tmp, base, guard.checkpoint))
+        if plots and rec.simulated_s > 0:
+            from bench.reporting import plots as plotting
+
+            for name, draw in plotting.scene_plots(rec, base):
+                step(name, draw)
+
+        # commit: final status into samples.h5, then report.md, then record.json (no checkpoints from here on)
+        if guard.signum is not None and rec.status == "ok":
+            rec.status = "interrupted"
+        if problems:
+            if rec.status != "failed":
+                rec.status = "failed"
+            rec.error = "; ".join(([rec.error] if rec.error else []) + problems)
+        interrupted_by = guard.signal_name if rec.status == "interrupted" else None
+        if h5 is not None:
+            try:
+                store.set_status(h5, rec.status, rec.simulated_s, rec.error,
+                                 interrupted_by=interrupted_by or "")
+                folder.commit(h5, "samples.h5")
+                outputs.insert(0, "samples.h5")
+            except Exception as e:
+                rec.status = "failed"
+                rec.error = "; ".join(([rec.error] if rec.error else []) + [f"writing samples.h5: {e}"])
+        planned = outputs + ["report.md", "record.json"]
+        record = build_record(rec, planned, skipped, interrupted_by)
+        folder.write_text("report.md", markdown_report(record))
+        folder.write_text("record.json", json.dumps(record, indent=2, default=_json_default))
+        return record
+    finally:
+        folder.remove_temps()
+        if own:
+            folder.close()
 
 
 def _json_default(o):
@@ -163,29 +238,14 @@ def _json_default(o):
     return str(o)
 
 
-def _write_csv(rec: Recording, phys: dict, path: Path) -> None:
-    unit_of = {"PAC": ("PAC_Pa", "Pa"), "PDC": ("PDC_kPa", "kPa"), "TDC": ("TDC_C", "degC")}
-    rows = []
-    for name, r in rec.channels.items():
-        key, unit = unit_of.get(name, (f"{name}_ohm", "ohm"))
-        value = phys.get(key, np.full(r.codes.size, np.nan))
-        rows.append(np.rec.fromarrays([r.times, np.full(r.codes.size, name), r.codes, r.status, value,
-                                       np.full(r.codes.size, unit)]))
-    allrows = np.concatenate(rows) if rows else []
-    order = np.argsort(allrows["f0"], kind="stable") if len(allrows) else []
-    with path.open("w") as f:
-        f.write("time_s,channel,code,status,value,unit\n")
-        for row in (allrows[i] for i in order):
-            f.write(f"{row[0]:.7f},{row[1]},{row[2]},{row[3]},{row[4]:.6g},{row[5]}\n")
-
-
 def markdown_report(record: dict) -> str:
     sc = record["scene"]
     lines = [f"# Scene report: {sc['name']}", ""]
     if sc["description"]:
         lines += [sc["description"], ""]
-    lines += [f"- status: **{record['status']}**" + (f" — {record['error']}" if record["error"] else ""),
-              f"- simulated {record['simulated_s']:.2f} s in {record['wall_s']:.2f} s wall "
+    status = record["status"] + (f" by {record['interrupted_by']}" if record.get("interrupted_by") else "")
+    lines += [f"- status: **{status}**" + (f" — {record['error']}" if record["error"] else ""),
+              f"- simulated {record['simulated_s']:.2f} s of {sc['duration_s']:g} s in {record['wall_s']:.2f} s wall "
               f"({record['realtime_factor']:.0f}× real time), fidelity `{sc['fidelity']}`, seed {sc['seed']}", ""]
     if "pac_resting" in record:
         lines += [f"PAC at rest: baseline {record['pac_resting']['baseline_code']:.1f}, "
@@ -209,5 +269,8 @@ def markdown_report(record: dict) -> str:
     for e in record["effects"]:
         lines.append(f"| {e['name']} | {e['description']} | {1e3 * e['seconds_per_simulated_s']:.3f} |")
     lines += ["", "Outputs: " + ", ".join(f"`{o}`" for o in record["outputs"]), ""]
+    for name, why in record.get("skipped_outputs", {}).items():
+        lines.append(f"- `{name}` {why}")
+    if record.get("skipped_outputs"):
+        lines.append("")
     return "\n".join(lines)
-

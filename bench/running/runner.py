@@ -1,17 +1,30 @@
-"""Run a scene: sensor -> SPI peripheral -> host sampler, streamed in chunks of simulated time."""
+"""Run a scene: sensor -> SPI peripheral -> host sampler, streamed in chunks of simulated time.
+
+Each chunk's samples go, per channel, to a :class:`~bench.running.aggregate.RunSummary` (statistics and plot
+data of bounded size), to any ``sinks`` (e.g. the HDF5 store that writes ``samples.h5`` as the run goes), and —
+when ``keep_samples`` is true, the default for runs up to :data:`KEEP_SAMPLES_MAX_S` — to memory, so that
+``Recording.channels["PAC"].codes`` works as it always did.  A run keeps going until its end, an error (kept in
+``Recording.error``, status ``"failed"``), or ``should_stop()`` turning true at a chunk boundary (status
+``"interrupted"``); whatever was recorded up to then is in the recording.
+"""
 
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from bench.running.aggregate import RunSummary
 from bench.running.sampler import Sampler
 from bench.scenes.scene import Scene
 from emulator.channels import CHANNEL_NAME
 from emulator.sensor import Sensor
 from emulator.spi.peripheral import SoftwarePeripheral
+
+#: ``run_scene`` keeps every sample in memory by default only up to this simulated duration (s).
+KEEP_SAMPLES_MAX_S = 600.0
 
 
 @dataclass
@@ -25,12 +38,25 @@ class ChannelRecord:
 
 @dataclass
 class Recording:
+    """What a run produced.  ``channels`` maps channel names to :class:`ChannelRecord`: in memory, or read back
+    on demand from ``samples.h5`` (see ``bench.reporting.store``), or empty when the samples were neither kept
+    nor stored; ``summary`` always holds the statistics and plot data."""
+
     scene: Scene
-    channels: dict[str, ChannelRecord]
+    channels: Mapping[str, ChannelRecord]
     simulated_s: float
     wall_s: float
     effects: list[dict] = field(default_factory=list)
     error: str | None = None
+    status: str = ""  # "ok" | "failed" | "interrupted"; derived from ``error`` when left empty
+    summary: RunSummary | None = None
+    channel_names: list[str] = field(default_factory=list)
+
+    def __post_init__(self):
+        if not self.status:
+            self.status = "failed" if self.error else "ok"
+        if not self.channel_names:
+            self.channel_names = list(self.channels)
 
     @property
     def realtime_factor(self) -> float:
@@ -51,37 +77,103 @@ def peripheral_for(scene: Scene, sensor: Sensor):
     return SoftwarePeripheral(sensor)
 
 
-def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0) -> Recording:
-    """Run ``scene`` to its end. On an error the recording so far is returned with ``error`` set."""
+def read_channel_names(scene: Scene) -> list[str]:
+    """The channels the scene's host reads, in channel-index order (the keys of ``Recording.channels``)."""
+    seq = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz).sequence
+    return [CHANNEL_NAME[int(c)] for c in np.unique(seq)]
+
+
+@dataclass
+class Chunk:
+    """One chunk of samples sorted by channel (time order kept within each channel), and ``parts``: channel
+    name → (instants, codes, status) as views into those arrays."""
+
+    times: np.ndarray
+    channels: np.ndarray
+    codes: np.ndarray
+    status: np.ndarray
+    parts: dict
+
+
+def split_by_channel(times, channels, codes, status) -> Chunk:
+    """Interleaved samples of consecutive slots → a :class:`Chunk` sorted by channel."""
+    order = np.argsort(channels, kind="stable")
+    t, ch, code, st = times[order], channels[order], codes[order], status[order]
+    cut = np.concatenate([[0], np.flatnonzero(np.diff(ch)) + 1, [ch.size]])
+    parts = {CHANNEL_NAME[int(ch[a])]: (t[a:b], code[a:b], st[a:b]) for a, b in zip(cut[:-1], cut[1:]) if b > a}
+    return Chunk(t, ch, code, st, parts)
+
+
+def make_chunk(parts: dict) -> Chunk:
+    """A :class:`Chunk` from channel name → (instants, codes, status) given in channel-index order or not."""
+    from emulator.channels import CHANNEL_INDEX
+
+    names = sorted((n for n in parts if len(parts[n][0])), key=lambda n: CHANNEL_INDEX[n])
+    if not names:
+        z = np.zeros(0)
+        return Chunk(z, z.astype(np.int64), z.astype(np.uint16), z.astype(np.uint8), {})
+    t, code, st = (np.concatenate([np.asarray(parts[n][i]) for n in names]) for i in range(3))
+    ch = np.concatenate([np.full(len(parts[n][0]), CHANNEL_INDEX[n]) for n in names])
+    return split_by_channel(t, ch, code, st)
+
+
+def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
+              sinks=(), should_stop=None) -> Recording:
+    """Run ``scene`` to its end, an error, or ``should_stop()`` (checked at every chunk boundary).
+
+    ``keep_samples``: hold every sample in ``Recording.channels`` (default: only for scenes up to
+    :data:`KEEP_SAMPLES_MAX_S`; longer ones keep the summary only).  ``sinks``: objects with ``add(parts)``
+    receiving each chunk as channel name → (instants, codes, status).  An exception in the sampler or a sink
+    ends the run: the recording so far is returned with ``error`` set and status ``"failed"``.
+    """
     from tqdm import tqdm
 
+    if keep_samples is None:
+        keep_samples = scene.duration_s <= KEEP_SAMPLES_MAX_S
     t0 = time.perf_counter()
-    sensor = build_sensor(scene)
-    sampler = Sampler(peripheral_for(scene, sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
-    total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))
-    chunk_slots = max(1, int(round(chunk_s * scene.slot_rate_Hz)))
-    parts: dict[int, list] = {c: [] for c in np.unique(sampler.sequence)}
-    error = None
+    names = read_channel_names(scene)
+    summary = RunSummary(scene, names)
+    parts: dict[str, list] = {n: [] for n in names}
+    error, status = None, "ok"
+    done = 0
+    sensor = None
     bar = tqdm(total=round(scene.duration_s, 3), unit="sim s", disable=not progress, desc=scene.name,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]")
-    done = 0
     try:
+        sensor = build_sensor(scene)
+        sampler = Sampler(peripheral_for(scene, sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
+        total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))
+        chunk_slots = max(1, int(round(chunk_s * scene.slot_rate_Hz)))
         for s in sampler.chunks(total_slots, chunk_slots):
-            for c, lst in parts.items():
-                m = s.channels == c
-                lst.append((s.times[m], s.codes[m], s.status[m]))
+            chunk = split_by_channel(s.times, s.channels, s.codes, s.status)
+            summary.add(chunk)
+            for sink in sinks:
+                sink.add(chunk.parts)
+            if keep_samples:
+                for name, p in chunk.parts.items():
+                    parts[name].append(p)
             done += s.times.size
             bar.update(s.times.size / scene.slot_rate_Hz)
+            if should_stop is not None and should_stop() and done < total_slots:
+                status = "interrupted"
+                break
     except Exception as e:  # keep what was recorded; the caller reports the error
-        error = f"{type(e).__name__}: {e}"
+        error, status = f"{type(e).__name__}: {e}", "failed"
     finally:
         bar.close()
-    channels = {}
-    for c, lst in parts.items():
-        if lst:
-            t, code, st = (np.concatenate(x) for x in zip(*lst))
-        else:
-            t, code, st = np.zeros(0), np.zeros(0, np.uint16), np.zeros(0, np.uint8)
-        channels[CHANNEL_NAME[int(c)]] = ChannelRecord(t, code, st)
-    return Recording(scene, channels, done / scene.slot_rate_Hz, time.perf_counter() - t0,
-                     sensor.effects_report(), error)
+    try:
+        summary.finish()
+    except Exception as e:  # a summary that cannot finish must not hide the run
+        if error is None:
+            error, status = f"{type(e).__name__}: {e}", "failed"
+    channels: dict[str, ChannelRecord] = {}
+    if keep_samples:
+        for name, lst in parts.items():
+            if lst:
+                t, code, st = (np.concatenate(x) for x in zip(*lst))
+            else:
+                t, code, st = np.zeros(0), np.zeros(0, np.uint16), np.zeros(0, np.uint8)
+            channels[name] = ChannelRecord(t, code, st)
+    effects = sensor.effects_report() if sensor is not None else []
+    return Recording(scene, channels, done / scene.slot_rate_Hz, time.perf_counter() - t0, effects, error, status,
+                     summary, names)

@@ -1,0 +1,234 @@
+"""The out folder of a run: checked before anything runs, locked while the run writes, written atomically.
+
+* :meth:`OutFolder.open` checks the path (no NUL byte, not a file, creatable, writable), takes an exclusive
+  ``fcntl.flock`` on :data:`LOCK_NAME` inside it (a second run into the same folder is refused at once), and
+  refuses a folder that already holds anything unless ``force``; with ``force`` it removes an earlier run's
+  files first — ``record.json`` before everything else — and refuses to touch anything that is not a run's own
+  file (:data:`RUN_FILES`, leftover temporary files).
+* Every file is written under a temporary name in the folder itself (``.<name>.<random>.part``, created with
+  ``O_EXCL``, so a symlink planted there is never followed) and renamed into place with ``os.replace``, which
+  replaces a symlink rather than writing through it.  A reader sees a file complete or not at all.
+
+The lock file stays in the folder after the run (removing it would let two runs lock two different files of
+the same name); it holds the pid of the run that last locked it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import os
+import tempfile
+from pathlib import Path
+
+from bench.errors import BenchError
+
+LOCK_NAME = ".biotac-bench.lock"
+#: Files a run writes; ``--force`` removes only these (and leftover temporary files).
+RUN_FILES = ("record.json", "samples.h5", "codes.npz", "samples.csv", "report.md", "traces.png",
+             "spectrogram.png", "electrode_map.png")
+TEMP_SUFFIX = ".part"
+
+
+class OutDirError(BenchError, ValueError):
+    """The out folder cannot be used (the message names the flag and the path)."""
+
+
+_UMASK: list[int] = []
+
+
+def _umask() -> int:
+    if not _UMASK:
+        m = os.umask(0o022)
+        os.umask(m)
+        _UMASK.append(m)
+    return _UMASK[0]
+
+
+def _is_temp(name: str) -> bool:
+    return name.startswith(".") and name.endswith(TEMP_SUFFIX) and any(
+        name.startswith(f".{f}.") for f in RUN_FILES)
+
+
+class OutFolder:
+    """A checked, locked out folder; use :meth:`open`, then :meth:`atomic` / :meth:`write_text`, then
+    :meth:`close` (or use it as a context manager)."""
+
+    def __init__(self, path: Path, lock_fd: int, flag: str = "--out"):
+        self.path, self._lock_fd, self.flag = path, lock_fd, flag
+
+    # ---- opening
+    @classmethod
+    def open(cls, path, force: bool = False, flag: str = "--out") -> "OutFolder":
+        raw = os.fspath(path)
+        where = f"{flag} {raw!r}"
+        if "\x00" in raw:
+            raise OutDirError(f"{where}: the path contains a NUL byte")
+        if not raw.strip():
+            raise OutDirError(f"{where}: the path is empty")
+        p = Path(raw)
+        try:
+            if p.is_symlink() and not p.exists():
+                raise OutDirError(f"{where}: is a broken symbolic link")
+            if p.exists() and not p.is_dir():
+                raise OutDirError(f"{where}: is a file, not a folder")
+            p.mkdir(parents=True, exist_ok=True)
+        except FileExistsError:
+            raise OutDirError(f"{where}: is a file, not a folder") from None
+        except NotADirectoryError:
+            raise OutDirError(f"{where}: cannot create the folder: a part of the path is a file") from None
+        except OSError as e:
+            raise OutDirError(f"{where}: cannot create the folder: {e.strerror or e}") from None
+        lock_path = p / LOCK_NAME
+        try:
+            fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+        except OSError as e:
+            if e.errno == errno.ELOOP:
+                raise OutDirError(f"{where}: {LOCK_NAME} in it is a symbolic link; remove it") from None
+            raise OutDirError(f"{where}: the folder is not writable ({e.strerror or e})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            try:
+                holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+            except OSError:
+                holder = ""
+            os.close(fd)
+            who = f"another run (pid {holder})" if holder.isdigit() else "another run"
+            raise OutDirError(f"{where}: {who} is writing into this folder; wait for it to end or choose "
+                              f"another {flag}") from None
+        except OSError as e:
+            os.close(fd)
+            raise OutDirError(f"{where}: cannot lock the folder ({e.strerror or e})") from None
+        folder = cls(p, fd, flag)
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            folder._probe_writable()
+            folder._prepare(force)
+        except BaseException:
+            folder.close()
+            raise
+        return folder
+
+    def _where(self) -> str:
+        return f"{self.flag} {os.fspath(self.path)!r}"
+
+    def _probe_writable(self) -> None:
+        try:
+            fd, name = tempfile.mkstemp(dir=self.path, prefix=".record.json.", suffix=TEMP_SUFFIX)
+        except OSError as e:
+            raise OutDirError(f"{self._where()}: the folder is not writable ({e.strerror or e})") from None
+        os.close(fd)
+        os.unlink(name)
+
+    def _prepare(self, force: bool) -> None:
+        entries = sorted(e.name for e in os.scandir(self.path) if e.name != LOCK_NAME)
+        if not entries:
+            return
+        listed = ", ".join(entries[:6]) + (f", … ({len(entries)} entries)" if len(entries) > 6 else "")
+        if not force:
+            raise OutDirError(f"{self._where()}: the folder is not empty ({listed}); pass --force to replace an "
+                              f"earlier run's files, or choose a fresh folder")
+        foreign = []
+        for name in entries:
+            full = self.path / name
+            if not (name in RUN_FILES or _is_temp(name)) or (full.is_dir() and not full.is_symlink()):
+                foreign.append(name)
+        if foreign:
+            raise OutDirError(f"{self._where()}: --force only replaces a run's own files, and the folder also "
+                              f"holds: {', '.join(foreign[:6])}" + (" …" if len(foreign) > 6 else ""))
+        for name in sorted(entries, key=lambda n: n != "record.json"):  # the record first: never a stale "ok"
+            try:
+                os.unlink(self.path / name)
+            except FileNotFoundError:
+                pass
+            except OSError as e:
+                raise OutDirError(f"{self._where()}: cannot remove {name} of an earlier run "
+                                  f"({e.strerror or e})") from None
+
+    # ---- writing
+    def temp_path(self, name: str) -> Path:
+        """A fresh, empty temporary file in the folder for ``name`` (created with O_EXCL)."""
+        fd, tmp = tempfile.mkstemp(dir=self.path, prefix=f".{name}.", suffix=TEMP_SUFFIX)
+        try:
+            os.fchmod(fd, 0o666 & ~_umask())  # as an ordinary open() would create it (mkstemp makes 0600)
+        finally:
+            os.close(fd)
+        return Path(tmp)
+
+    def commit(self, tmp: Path, name: str) -> Path:
+        """Move a finished temporary file into place as ``name`` (atomic; replaces a symlink, never follows it)."""
+        fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        final = self.path / name
+        os.replace(tmp, final)
+        self._sync_dir()
+        return final
+
+    def _sync_dir(self) -> None:
+        with contextlib.suppress(OSError):
+            fd = os.open(self.path, os.O_RDONLY | os.O_DIRECTORY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+
+    @contextlib.contextmanager
+    def atomic(self, name: str):
+        """``with folder.atomic("x.png") as tmp: write tmp`` → renamed to ``x.png`` on success, removed on error."""
+        tmp = self.temp_path(name)
+        try:
+            yield tmp
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+            raise
+        self.commit(tmp, name)
+
+    def write_text(self, name: str, text: str) -> Path:
+        with self.atomic(name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        return self.path / name
+
+    def remove_temps(self) -> None:
+        """Remove temporary files this run left behind (after an error)."""
+        for e in os.scandir(self.path):
+            if _is_temp(e.name):
+                with contextlib.suppress(OSError):
+                    os.unlink(e.path)
+
+    # ---- closing
+    def close(self) -> None:
+        if self._lock_fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(self._lock_fd)  # releases the flock
+            self._lock_fd = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def fresh_folder(base: Path, force: bool = False, flag: str = "--out") -> OutFolder:
+    """The default out folder: ``base`` if it is absent or empty, else ``base-2``, ``base-3``, … — the first
+    that is free and not locked by another run."""
+    last = None
+    for n in range(1, 1000):
+        p = base if n == 1 else base.with_name(f"{base.name}-{n}")
+        if not force and p.is_dir() and any(e.name != LOCK_NAME for e in os.scandir(p)):
+            continue
+        try:
+            return OutFolder.open(p, force=force, flag=flag)
+        except OutDirError as e:
+            last = e
+            if "is writing into this folder" in str(e) or "not empty" in str(e):
+                continue
+            raise
+    raise last or OutDirError(f"{flag}: no free folder next to {os.fspath(base)!r}")

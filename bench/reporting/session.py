@@ -1,0 +1,79 @@
+"""One run into one out folder, as ``biotac-bench run`` does it: nothing lost, nothing mixed, nothing wedged.
+
+1. The out folder is checked, created and locked before anything runs (:mod:`bench.reporting.outdir`).
+2. The scene streams into ``samples.h5`` under a temporary name while SIGINT/SIGTERM only ask to stop
+   (:mod:`bench.running.signals`); memory holds the streaming summary, not the samples.
+3. Exports, plots, then ``samples.h5``, ``report.md`` and ``record.json`` are renamed into place
+   (:func:`bench.reporting.report.write_outputs`); the record's status is ``ok``, ``failed`` (with the error) or
+   ``interrupted`` (with the signal).
+
+Exit status: 0 ok, 1 failed, 128 + signal number when a signal stopped the run (130 SIGINT, 143 SIGTERM).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from bench.reporting.outdir import OutFolder, fresh_folder
+from bench.reporting.report import write_outputs
+from bench.reporting.store import SampleStore
+from bench.running.runner import Recording, read_channel_names, run_scene
+from bench.running.signals import StopSignals
+
+
+@dataclass
+class RunResult:
+    record: dict
+    exit_code: int
+    folder: Path
+    recording: Recording
+
+
+def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, npz: bool | None = None,
+                  plots: bool = True, progress: bool = True, compression: str = "gzip",
+                  chunk_s: float = 4.0, out_root: Path = Path("out")) -> RunResult:
+    """Run ``scene`` into ``out`` (a path: checked, locked, refused when not empty unless ``force``; or an open
+    :class:`OutFolder`), or, without ``out``, into a fresh folder ``out_root/<scene name>[-n]``."""
+    if isinstance(out, OutFolder):
+        folder = out
+    elif out is not None:
+        folder = OutFolder.open(out, force=force)
+    else:
+        folder = fresh_folder(Path(out_root) / scene.name, force=force)
+    try:
+        with StopSignals() as guard:
+            names = read_channel_names(scene)
+            h5 = folder.temp_path("samples.h5")
+            store = SampleStore(h5, scene, names, compression)
+            try:
+                rec = run_scene(scene, progress=progress, chunk_s=chunk_s, keep_samples=False, sinks=[store],
+                                should_stop=guard.should_stop)
+            except BaseException:
+                store.abort()
+                raise
+            try:
+                store.close("running", rec.simulated_s, rec.error)
+            except Exception as e:
+                rec.status = "failed"
+                rec.error = "; ".join(([rec.error] if rec.error else []) + [f"writing samples.h5: {e}"])
+                with contextlib.suppress(OSError):
+                    os.unlink(h5)
+                h5 = None
+            if guard.signum is not None and rec.status == "ok":
+                rec.status = "interrupted"
+            record = write_outputs(rec, folder, csv=csv, plots=plots, npz=npz, samples_tmp=h5, guard=guard)
+            if guard.exit_code is not None:
+                code = guard.exit_code
+            else:
+                code = 0 if record["status"] == "ok" else 1
+        if h5 is not None and "samples.h5" in record["outputs"]:
+            from bench.reporting.store import StoredChannels
+
+            rec.channels = StoredChannels(folder.path / "samples.h5")
+        return RunResult(record, code, folder.path, rec)
+    finally:
+        folder.remove_temps()
+        folder.close()
