@@ -1,9 +1,10 @@
 """The skin as an object with a history: fingerprint ridges that wear with frictional work (D ch. 4 and 6).
 
 Ridges (pitch and width 0.4 mm, height 0.2 mm when new, D ch. 4) lose height by an Archard-type law: the worn
-volume is ``k · N · d / H`` (wear coefficient ``k``, normal force ``N``, sliding distance ``d``, hardness ``H``),
-spread over the ridge crests in contact, so movements of high force × high speed (more distance per trial at
-the same duration, more force) wear fastest.  Worn ridges catch texture features less (the ridge term of the
+volume is ``k · (1 + v/v_h) · N · d / H`` (wear coefficient ``k``, normal force ``N``, sliding distance ``d``,
+hardness ``H``), spread over the ridge crests in contact.  The factor ``1 + v/v_h`` stands for the faster
+abrasion of elastomers at higher sliding speed (frictional heating at the asperities; ``v_h`` = 2.5 cm/s is a
+model choice), so over the rig's fixed 5 cm the movements of high force × high speed wear fastest, as D saw.  Worn ridges catch texture features less (the ridge term of the
 sliding model scales with ``ridge_height / ridge_height_new``) and less regularly: each trial's ridge gain
 varies by a relative spread that grows with the worn fraction (``irregularity``, a model choice standing for
 the uneven wear D saw as degraded repeatability).  A skin persists across the trials of a session until it is
@@ -28,10 +29,11 @@ class Skin:
     ridge_height_new_m: float = 0.2e-3
     ridge_height_m: float = 0.2e-3
     ridge_contact_width_m: float = 0.1e-3  # crest width that touches a surface (model choice)
-    wear_coefficient: float = 5e-5  # Archard k (1), calibrated: a skin lasts ~600 trials of 1 N × 5 cm, as D replaced
+    wear_coefficient: float = 2.5e-5  # Archard k (1), calibrated: a skin lasts ~600 trials of 1 N × 5 cm at 2.5 cm/s, as D replaced
     # the skin twice over 117 textures × 15 trials
     hardness_Pa: float = 1.5e6  # silicone skin, ~45 Shore A (model choice)
     irregularity: float = 0.5  # relative spread of the ridge gain of a fully worn skin (model choice)
+    heating_velocity_m_per_s: float = 0.025  # v_h: abrasion doubles at this sliding speed (model choice)
     serial: int = 1
     trials: int = 0
     sliding_distance_m: float = 0.0
@@ -56,18 +58,21 @@ class Skin:
         spread = self.irregularity * self.worn_fraction
         return max(0.0, self.ridge_factor * (1.0 + spread * rng.standard_normal()))
 
-    def wear(self, normal_N: float, distance_m: float, contact_area_m2: float, mu: float = 0.0) -> float:
-        """Wear the ridges after sliding ``distance_m`` at ``normal_N`` over ``contact_area_m2``; returns the
-        height lost (m).  The worn volume k·N·d/H is spread over the crest area in contact."""
-        if normal_N < 0 or distance_m < 0 or contact_area_m2 <= 0:
-            raise ValueError("wear needs normal_N ≥ 0, distance_m ≥ 0 and a positive contact area")
+    def wear(self, normal_N: float, distance_m: float, contact_area_m2: float, mu: float = 0.0,
+             velocity_m_per_s: float = 0.0) -> float:
+        """Wear the ridges after sliding ``distance_m`` at ``normal_N`` and ``velocity_m_per_s`` over
+        ``contact_area_m2``; returns the height lost (m).  The worn volume k·(1 + v/v_h)·N·d/H is spread over the
+        crest area in contact."""
+        if normal_N < 0 or distance_m < 0 or contact_area_m2 <= 0 or velocity_m_per_s < 0:
+            raise ValueError("wear needs normal_N, distance_m, velocity_m_per_s ≥ 0 and a positive contact area")
         self.trials += 1
         self.sliding_distance_m += distance_m
         self.frictional_work_J += mu * normal_N * distance_m
         lost = 0.0
         if self.fingerprints and self.ridge_height_m > 0:
             crest_area = contact_area_m2 * self.ridge_contact_width_m / self.ridge_pitch_m
-            lost = min(self.ridge_height_m, self.wear_coefficient * normal_N * distance_m / self.hardness_Pa / crest_area)
+            k = self.wear_coefficient * (1.0 + velocity_m_per_s / self.heating_velocity_m_per_s)
+            lost = min(self.ridge_height_m, k * normal_N * distance_m / self.hardness_Pa / crest_area)
             self.ridge_height_m -= lost
         self._history.append((self.serial, self.trials, self.ridge_height_m))
         return lost
@@ -76,7 +81,7 @@ class Skin:
         """A fresh skin of the same kind (ridges new); the history carries on under the next serial."""
         fresh = Skin(self.fingerprints, self.ridge_pitch_m, self.ridge_width_m, self.ridge_height_new_m,
                      self.ridge_height_new_m, self.ridge_contact_width_m, self.wear_coefficient, self.hardness_Pa,
-                     self.irregularity, serial=self.serial + 1)
+                     self.irregularity, self.heating_velocity_m_per_s, serial=self.serial + 1)
         fresh._history = list(self._history)
         return fresh
 

@@ -172,7 +172,7 @@ class TextureRig:
         skin_before = self.skin.state()
         if self.wear:
             area = math.pi * (self.params.contact_radius_at_1N_m * movement.force_N ** (1 / 3)) ** 2
-            self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic))
+            self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic), movement.velocity_m_per_s)
         rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
                      start_position, time.perf_counter() - wall0, log.n_frames(frame))

@@ -345,7 +345,7 @@ def build_slides(specs: list, skin: Skin, seed: int, wear: bool, contact_radius_
                             sp.hold_s, sp.accel_s, sp.lift_s, position, skin=copy.deepcopy(skin)))
         if wear:
             area = math.pi * (contact_radius_at_1N_m * sp.force_N ** (1 / 3)) ** 2
-            skin.wear(sp.force_N, sp.distance_m, area, float(sp.texture.mu_kinetic))
+            skin.wear(sp.force_N, sp.distance_m, area, float(sp.texture.mu_kinetic), sp.velocity_m_per_s)
     return slides, states, skin
 
 

@@ -116,12 +116,12 @@ def rig_claims(b: Bench) -> list[Claim]:
         skin = Skin()
         area = np.pi * (b.params.contact_radius_at_1N_m * mv.force_N ** (1 / 3)) ** 2
         for _ in range(50):
-            skin.wear(mv.force_N, 0.05 * mv.velocity_m_per_s / 0.01, area, 0.6)
+            skin.wear(mv.force_N, 0.05, area, 0.6, mv.velocity_m_per_s)
         lost[label] = skin.ridge_height_new_m - skin.ridge_height_m
     out.append(Claim("ridge wear, high vs low power movement (50 trials each)", "high wears faster",
                      lost["high"] / max(lost["low"], 1e-30), 1.0, np.inf, "ratio", "D ch. 6",
                      {"lost_m": lost}, kind="consistency",
-                     note="Archard's law: worn volume ∝ N·d; the slide lasts the same time, so d ∝ v"))
+                     note="the wear law: worn volume ∝ (1 + v/v_h)·N·d over the rig's fixed 5 cm"))
     # after wear, roughness for a fixed texture and movement drops; a fresh skin restores it
     mv = Movement(0.5, 0.025)
     fresh = [roughness(TextureRig(skin=Skin(), wear=False).run_trial(sand, mv, seed=100 + k).recording)

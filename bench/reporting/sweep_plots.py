@@ -1,0 +1,50 @@
+"""Plots of a texture sweep: each property against force and velocity, one panel per property, a line per
+texture and velocity (the 6 × 6 movement grid of D eqs 6.20–6.21)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+PROPERTIES = (("traction", "traction (A)"), ("roughness", "roughness (ln bits²)"), ("fineness", "fineness (ln Hz)"))
+
+
+def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], path: Path) -> Path:
+    """Mean ± SD of each property over repetitions, against force (one line per velocity) and against velocity
+    (one line per force), for each texture; written to ``path`` (PNG)."""
+    textures = sorted(set(cols["texture"].tolist()))
+    fig, axes = plt.subplots(len(PROPERTIES), 2, figsize=(11, 3.2 * len(PROPERTIES)), squeeze=False)
+    cmap = plt.get_cmap("tab10")
+    for r, (key, label) in enumerate(PROPERTIES):
+        for c, (x_key, line_key, x_label) in enumerate((("force_N", "velocity_m_per_s", "normal force (N)"),
+                                                        ("velocity_m_per_s", "force_N", "velocity (m/s)"))):
+            ax = axes[r][c]
+            for k, tex in enumerate(textures):
+                sel_t = cols["texture"] == tex
+                lines = sorted(set(cols[line_key][sel_t].round(6).tolist()))
+                for j, lv in enumerate(lines):
+                    sel = sel_t & np.isclose(cols[line_key], lv)
+                    xs = sorted(set(cols[x_key][sel].round(6).tolist()))
+                    mean = [cols[key][sel & np.isclose(cols[x_key], x)].mean() for x in xs]
+                    sd = [cols[key][sel & np.isclose(cols[x_key], x)].std() for x in xs]
+                    ax.errorbar(xs, mean, yerr=sd, color=cmap(k % 10), alpha=0.35 + 0.65 * (j + 1) / len(lines),
+                                lw=1, capsize=2, label=names.get(tex, str(tex)) if j == len(lines) - 1 else None)
+            ax.set_xscale("log")
+            ax.set_xlabel(x_label)
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+    axes[0][0].legend(fontsize=7, ncol=2)
+    axes[0][0].set_title("against force (shade: velocity)")
+    axes[0][1].set_title("against velocity (shade: force)")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.png")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(path)
+    return path

@@ -1,0 +1,68 @@
+"""The campaign engine on Dask: results in task order and identical for 1 and 2 workers, a worker killed
+mid-task loses nothing, an existing scheduler by address, clear errors."""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bench.campaigns.engine import CampaignError, ClusterSpec, run_tasks
+from bench.experiments.trials import TrialTask, run_trial_task, trial_seed
+
+pytestmark = pytest.mark.unit
+
+
+def seeded_value(task):
+    """A task whose result depends only on its own seed."""
+    seed, n = task
+    return float(np.random.default_rng(seed).standard_normal(n).sum())
+
+
+def die_once(task):
+    """Kills its worker process the first time it runs (a marker file remembers), then answers."""
+    marker, value = task
+    if not Path(marker).exists():
+        Path(marker).write_text("died")
+        os._exit(1)
+    return value * 2
+
+
+def test_results_are_identical_for_one_and_two_workers_and_in_task_order():
+    tasks = [(trial_seed(7, "x", k), 1000) for k in range(12)]
+    one = run_tasks(seeded_value, tasks, ClusterSpec(workers=1), progress=False)
+    two = run_tasks(seeded_value, tasks, ClusterSpec(workers=2), progress=False)
+    assert one == two == [seeded_value(t) for t in tasks]
+
+
+def test_a_rig_trial_is_the_same_on_any_worker():
+    task = TrialTask(902, 0.5, 0.05, 0, trial_seed(1, "t", 902, 0, 0))
+    here = run_trial_task(task)
+    there = run_tasks(run_trial_task, [task, task], ClusterSpec(workers=2), progress=False)
+    for row in there:
+        for key in ("traction", "roughness", "fineness", "true_normal_N"):
+            assert row[key] == here[key]
+
+
+def test_a_worker_killed_mid_task_loses_nothing(tmp_path):
+    tasks = [(str(tmp_path / "died-once"), k) for k in range(4)]
+    assert run_tasks(die_once, tasks, ClusterSpec(workers=2), progress=False) == [0, 2, 4, 6]
+    assert (tmp_path / "died-once").read_text() == "died"  # the kill did happen
+
+
+def test_an_existing_scheduler_by_address_and_by_environment(monkeypatch):
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        tasks = [(k, 10) for k in range(3)]
+        assert run_tasks(seeded_value, tasks, ClusterSpec(scheduler=cluster.scheduler_address), progress=False) \
+            == [seeded_value(t) for t in tasks]
+        monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", cluster.scheduler_address)
+        assert ClusterSpec.from_env().scheduler == cluster.scheduler_address
+
+
+def test_clear_errors_for_no_scheduler_and_a_failing_task():
+    with pytest.raises(CampaignError, match="no Dask scheduler answers at tcp://127.0.0.1:9"):
+        run_tasks(seeded_value, [(1, 1)], ClusterSpec(scheduler="tcp://127.0.0.1:9"), progress=False)
+    with pytest.raises(CampaignError, match="task 1"):
+        run_tasks(seeded_value, [(1, 1), ("not a seed", 1)], ClusterSpec(workers=1), progress=False, retries=0)
