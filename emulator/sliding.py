@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.signal import fftconvolve
 
 from emulator import friction
 from emulator.effects import Block, Effect, effect_rng
@@ -207,7 +208,7 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
         xs = np.arange(-m, m + 1) * dx_m
         w = np.clip(1.0 - (xs / a) ** 2, 0.0, None)
         w /= w.sum()
-        patch = np.convolve(h, w[::-1], mode="same")
+        patch = fftconvolve(h, w[::-1], mode="same")
         heights[k] = patch[pad:pad + n]
         smooth_slope = np.gradient(patch, dx_m)[pad:pad + n]
         ridged = np.zeros(n)

@@ -6,14 +6,18 @@ and skin and texture compliance decide the force it actually reaches); it holds 
 the texture at the set velocity over the set distance while the stage's motor current — rising linearly with
 the tangential load — is sampled at the frame rate; then the finger lifts.  The controller sees only codes: it
 reads the sensor through the host sampler and the SPI peripheral like any host.  Its commands reach the motors
-``latency_s`` later (20 ms), and while it lowers the finger it reads one 10 ms frame at a time; afterwards the
-motion is fixed in advance and the run is read in long chunks.
+``latency_s`` later (20 ms).  It decides after every 10 ms frame while lowering; to avoid paying a Python round
+trip per frame, the emulator reads a window of frames as if the finger kept lowering (which it does until the
+controller stops it), finds the frame where the controller stops, goes back to a snapshot taken before the
+window and reads exactly up to that frame in blocks shorter than the latency — the same samples, since results
+do not depend on block size (tested).  Afterwards the motion is fixed in advance and read in long chunks.
 
 :func:`movement_grid` gives the 36 movements of D eqs 6.20–6.21.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field
 
@@ -72,6 +76,7 @@ class RigSettings:
     motor_A_per_N: float = 0.4  # current per N of tangential load (model choice: linear, D ch. 6)
     motor_noise_A: float = 0.004  # RMS current-sense noise per reading (model choice)
     chunk_s: float = 0.5
+    speculation_s: float = 1.0  # while lowering, frames are read this far ahead and replayed up to the stop
 
     def __post_init__(self):
         for name, value in vars(self).items():
@@ -120,41 +125,40 @@ class TextureRig:
         start_position = float(effect_rng(seed, "rig.start_position").uniform(0.0, SURFACE_LENGTH_M))
         motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
                                  max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
-        sensor = Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
-                        fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=0.01,
-                        record_signals=("tangential_force_N", "normal_force_N"))
-        sampler = Sampler(SoftwarePeripheral(sensor))
-        frame = len(sampler.sequence)
-        frame_s = frame / sampler.slot_rate_Hz
-        current_rng = effect_rng(seed, "rig.motor_current")
-        log = _Log()
-
-        def read(n_frames):
-            t_cur = (sampler.next_slot + np.arange(n_frames) * frame) / sampler.slot_rate_Hz
-            ft = sensor.signal("tangential_force_N", t_cur)
-            log.load(t_cur, sensor.signal("normal_force_N", t_cur))
-            log.current(t_cur, s.motor_idle_A + s.motor_A_per_N * np.abs(ft)
-                        + s.motor_noise_A * current_rng.standard_normal(t_cur.size))
-            log.samples(sampler.read(n_frames * frame))
-
+        run = _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
+                          fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.latency_s / 2,
+                          record_signals=("tangential_force_N", "normal_force_N")),
+                   motion, effect_rng(seed, "rig.motor_current"), s)
+        frame_s = run.frame / run.sampler.slot_rate_Hz
         # baseline at rest, then lower until the PDC change reaches the target
-        read(int(round(s.baseline_s / frame_s)))
-        baseline = float(np.mean(log.pdc_codes()))
+        run.read(int(round(s.baseline_s / frame_s)))
+        baseline = float(np.mean(run.log.pdc_codes()))
         target = movement.force_N / FORCE_PER_PDC_BIT_N
-        motion.move_finger(sampler.next_slot / sampler.slot_rate_Hz, s.lower_rate_m_per_s)
-        max_frames = int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / frame_s)
-        reached = None
-        for _ in range(max_frames):
-            read(1)
-            change = float(np.mean(log.pdc_codes()[-s.pdc_average_frames:])) - baseline
-            if change >= target:
-                reached = change
+        run.motion.move_finger(run.now, s.lower_rate_m_per_s)
+        reached, k = None, None
+        window = max(1, int(round(s.speculation_s / frame_s)))
+        for _ in range(int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / s.speculation_s) + 1):
+            # read a window as if the finger keeps lowering (it does, until the controller stops it); if the
+            # controller would stop inside it, go back to before the window and read exactly up to that frame
+            snapshot = copy.deepcopy(run)
+            run.sensor.block_n = max(1, int(round(s.chunk_s * run.sensor.fs)))
+            before = run.log.pdc_codes().size
+            run.read(window)
+            pdc = run.log.pdc_codes()
+            means = np.convolve(pdc, np.ones(s.pdc_average_frames) / s.pdc_average_frames, "full")[:pdc.size]
+            over = np.flatnonzero(means[before:] - baseline >= target)
+            if over.size:
+                k = int(over[0]) + 1
+                reached = float(means[before + k - 1] - baseline)
+                run = snapshot
+                run.read(k)  # short blocks: nothing is computed beyond the stop command's effect
                 break
         if reached is None:
             raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on {texture.name}")
+        motion, sampler, log = run.motion, run.sampler, run.log
         t_stop = sampler.next_slot / sampler.slot_rate_Hz
         contact_s = motion.move_finger(t_stop, 0.0)
-        sensor.block_n = max(1, int(round(s.chunk_s * sensor.fs)))  # the motion is now planned ahead
+        run.sensor.block_n = max(1, int(round(s.chunk_s * run.sensor.fs)))  # the motion is now planned ahead
         # hold, then slide over the distance: the stage starts, cruises and brakes at planned instants
         slide_start = contact_s + s.hold_s
         v, acc = movement.velocity_m_per_s, s.stage_accel_m_per_s2
@@ -166,8 +170,8 @@ class TextureRig:
         slide_end = brake + ramp
         motion.move_finger(slide_end - s.latency_s, -s.lift_rate_m_per_s)
         end = slide_end + s.settle_after_s + (s.start_gap_m + 3e-3) / s.lift_rate_m_per_s
-        while sampler.next_slot / sampler.slot_rate_Hz < end:
-            read(max(1, int(round(s.chunk_s / frame_s))))
+        while run.now < end:
+            run.read(max(1, int(round(s.chunk_s / frame_s))))
         true_normal = log.mean_load(slide_start + ramp, brake)
         skin_before = self.skin.state()
         if self.wear:
@@ -175,7 +179,33 @@ class TextureRig:
             self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic), movement.velocity_m_per_s)
         rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
-                     start_position, time.perf_counter() - wall0, log.n_frames(frame))
+                     start_position, time.perf_counter() - wall0, log.n_frames(run.frame))
+
+
+class _Run:
+    """Everything a trial's run holds — sensor, SPI side, host sampler, motion, current noise, log — as one
+    object, so the controller can snapshot it (``copy.deepcopy``) and go back."""
+
+    def __init__(self, sensor: Sensor, motion: CommandedMotion, current_rng, settings: RigSettings):
+        self.sensor, self.motion, self.current_rng, self.settings = sensor, motion, current_rng, settings
+        self.sampler = Sampler(SoftwarePeripheral(sensor))
+        self.frame = len(self.sampler.sequence)
+        self.log = _Log()
+
+    @property
+    def now(self) -> float:
+        """The next slot's instant (s)."""
+        return self.sampler.next_slot / self.sampler.slot_rate_Hz
+
+    def read(self, n_frames: int) -> None:
+        """Read ``n_frames`` frames through SPI, with the stage current and the true load once per frame."""
+        s = self.settings
+        t_cur = (self.sampler.next_slot + np.arange(n_frames) * self.frame) / self.sampler.slot_rate_Hz
+        ft = self.sensor.signal("tangential_force_N", t_cur)
+        self.log.load(t_cur, self.sensor.signal("normal_force_N", t_cur))
+        self.log.current(t_cur, s.motor_idle_A + s.motor_A_per_N * np.abs(ft)
+                         + s.motor_noise_A * self.current_rng.standard_normal(t_cur.size))
+        self.log.samples(self.sampler.read(n_frames * self.frame))
 
 
 class _Log:
