@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from bench.paths import REPO, SCENES_DIR
 from emulator.fidelity import PROFILES
@@ -60,15 +59,15 @@ def _cmd_run(a) -> int:
     from bench.reporting.session import run_to_folder
     from bench.scenes.scene import load_scene
 
-    folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None  # checked before anything runs
+    scene = load_scene(a.scene)  # validated completely, then the out folder checked: both before anything runs
+    if a.fidelity:
+        scene.fidelity = a.fidelity
+    if a.seed is not None:
+        scene.seed = a.seed
+    if a.spi:
+        scene.spi = a.spi
+    folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
     try:
-        scene = load_scene(a.scene)
-        if a.fidelity:
-            scene.fidelity = a.fidelity
-        if a.seed is not None:
-            scene.seed = a.seed
-        if a.spi:
-            scene.spi = a.spi
         res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
                             plots=not a.no_plots, progress=not a.quiet, compression=a.compression)
     finally:
