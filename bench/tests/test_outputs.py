@@ -385,6 +385,7 @@ def test_sigint_and_sigterm_mid_run_keep_a_consistent_record(tmp_path):
 def test_two_concurrent_runs_into_one_folder_never_mix(tmp_path):
     rounds = 10 if STRESS else 2
     scene = _scene_file(tmp_path, 20.0, "conc")
+    refusals = {"locked": 0, "not empty": 0}
     for i in range(rounds):
         out = tmp_path / f"o{i}"
         a = _bench("run", scene, "--out", out, "--quiet", "--seed", "1")
@@ -394,7 +395,9 @@ def test_two_concurrent_runs_into_one_folder_never_mix(tmp_path):
         assert codes == [0, 2], (ea, eb)
         loser = ea if a.returncode else eb
         assert ("is writing into this folder" in loser or "not empty" in loser) and "Traceback" not in loser
+        refusals["locked" if "is writing into this folder" in loser else "not empty"] += 1
         assert len(loser.strip().splitlines()) == 1
         record = check_consistent(out, "ok")
         winner_seed = 1 if a.returncode == 0 else 2
         assert record["scene"]["seed"] == winner_seed and store.read_attrs(out / "samples.h5")["seed"] == winner_seed
+    print(f"{rounds} concurrent pairs: one ran, the other was refused ({refusals})")
