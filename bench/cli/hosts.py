@@ -1,95 +1,381 @@
-"""Host-stack commands: the bridge firmware on a pty, recording a bridge's serial stream."""
+"""Host-stack commands: the bridge firmware on a pty, recording a bridge's serial stream.
+
+Also the argument checks every host-stack command shares (:func:`number`, :func:`whole`, :func:`one_line_errors`):
+a bad value is refused by argparse with one line naming the flag and exit status 2, before anything runs.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import signal
+import sys
+from contextlib import contextmanager
 from pathlib import Path
+
+# --- argument checks (shared by the host-stack command groups) -------------------------------------------------
+
+
+def number(lo: float | None = None, hi: float | None = None, lo_open: bool = False, what: str = "a number"):
+    """argparse type: a finite float within [lo, hi] (``lo_open``: strictly above lo)."""
+
+    def parse(text: str) -> float:
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{text}: must be a finite number")
+        if lo is not None and (v <= lo if lo_open else v < lo):
+            raise argparse.ArgumentTypeError(f"{text}: must be {'>' if lo_open else '≥'} {lo:g}" +
+                                             (f" and ≤ {hi:g}" if hi is not None else ""))
+        if hi is not None and v > hi:
+            raise argparse.ArgumentTypeError(f"{text}: must be ≤ {hi:g}")
+        return v
+
+    parse.__name__ = what
+    return parse
+
+
+def whole(lo: int | None = None, hi: int | None = None):
+    """argparse type: an integer within [lo, hi]."""
+
+    def parse(text: str) -> int:
+        try:
+            v = int(text, 10)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if (lo is not None and v < lo) or (hi is not None and v > hi):
+            rng = (f"{lo} to {hi}" if hi is not None else f"≥ {lo}") if lo is not None else f"≤ {hi}"
+            raise argparse.ArgumentTypeError(f"{text}: must be {rng}")
+        return v
+
+    parse.__name__ = "a whole number"
+    return parse
+
+
+def existing_file(text: str) -> str:
+    """argparse type: a readable regular file."""
+    if "\0" in text:
+        raise argparse.ArgumentTypeError("the path contains a NUL byte")
+    p = Path(text)
+    if not p.exists():
+        raise argparse.ArgumentTypeError(f"{text}: no such file")
+    if not p.is_file():
+        raise argparse.ArgumentTypeError(f"{text}: not a regular file")
+    if not os.access(p, os.R_OK):
+        raise argparse.ArgumentTypeError(f"{text}: not readable")
+    return text
+
+
+def output_file(text: str) -> str:
+    """argparse type: a path a file can be written to (its folder exists or can be made, and is writable)."""
+    if not text or "\0" in text:
+        raise argparse.ArgumentTypeError("an empty path or one with a NUL byte")
+    p = Path(text)
+    if p.is_dir():
+        raise argparse.ArgumentTypeError(f"{text}: is a folder, not a file")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise argparse.ArgumentTypeError(f"{text}: not writable")
+    parent = p.parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise argparse.ArgumentTypeError(f"{text}: {parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"{text}: cannot write in {parent}")
+    return text
+
+
+def one_line_errors(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Usage errors of this subcommand as one line (``biotac-bench CMD: error: argument --flag: ...``), status 2."""
+
+    def error(message: str):
+        parser.exit(2, f"{parser.prog}: error: {message} (see {parser.prog} --help)\n")
+
+    parser.error = error
+    return parser
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that the same clean-up runs."""
+
+
+@contextmanager
+def sigterm_raises():
+    """Within the block SIGTERM raises :class:`Terminated` (Ctrl-C raises KeyboardInterrupt as always)."""
+
+    def handler(signum, frame):
+        raise Terminated()
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+@contextmanager
+def signals_deferred():
+    """Within the block SIGINT and SIGTERM are noted, not raised (a second Ctrl-C cannot cut a file short)."""
+    seen = []
+
+    def note(signum, frame):
+        seen.append(signum)
+
+    try:
+        old = {s: signal.signal(s, note) for s in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:
+        yield seen
+        return
+    try:
+        yield seen
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+# --- bridge ------------------------------------------------------------------------------------------------------
 
 
 def _cmd_bridge(a) -> int:
     import time
 
     from bench.hosts.bridge import FirmwareBench
-    from bench.scenes.scene import load_scene
+    from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
 
-    stimuli = load_scene(a.scene).stimuli if a.scene else ()
-    with FirmwareBench(a.sensors, stimuli=stimuli, seed=a.seed, realtime=not a.fast, speed=a.speed, spi=a.spi) as fb:
-        print(f"bridge firmware running with {a.sensors} emulated sensor(s); serial port: {fb.port}", flush=True)
-        print("open it with any serial program (raw, no flow control); Ctrl-C to stop", flush=True)
-        deadline = None if a.seconds is None else time.monotonic() + a.seconds
+    kw = {}
+    what = f"{a.sensors} emulated sensor(s) at rest"
+    seed = 1 if a.seed is None else a.seed
+    spi = a.spi or "software"
+    if a.scene:
+        from bench.scenes.scene import load_scene
+
+        scene = load_scene(a.scene)
+        kw["pattern"] = firmware_pattern(scene)
+        kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
+        spi = a.spi or scene.spi
+        seed = scene.seed if a.seed is None else a.seed
+        faults = ", ".join(f"{k}={v}" for k, v in scene.faults.items()) or "none"
+        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' (parameters, faults: {faults}, "
+                f"noise, fidelity {scene.fidelity}, seed {seed}; sensor 1 feels its {len(scene.stimuli)} stimuli)")
+    with sigterm_raises():
         try:
-            while deadline is None or time.monotonic() < deadline:
+            fb = FirmwareBench(a.sensors, seed=seed, realtime=not a.fast, speed=a.speed, spi=spi,
+                               baudrate=a.baud, rx_buffer=a.rx_buffer, **kw).start()
+        except KeyboardInterrupt:
+            return 130
+        try:
+            print(f"bridge firmware running with {what}", flush=True)
+            print(f"serial port: {fb.port}", flush=True)
+            print(f"UART {a.baud} baud, host receive buffer {a.rx_buffer} bytes"
+                  + (" (a host that stops reading loses what does not fit, as on a real UART)" if not a.fast else
+                     " (unpaced: the firmware waits for a reading host)"), flush=True)
+            print("open it with any serial program (raw, no flow control); Ctrl-C or SIGTERM to stop", flush=True)
+            deadline = None if a.seconds is None else time.monotonic() + a.seconds
+            while (deadline is None or time.monotonic() < deadline) and fb._thread.is_alive():
                 time.sleep(0.2)
         except KeyboardInterrupt:
             pass
-        print(f"stopped at virtual time {fb.virtual_time:.2f} s")
+        finally:
+            with signals_deferred():
+                try:
+                    fb.stop()
+                except RuntimeError as e:
+                    print(f"error: {e}", file=sys.stderr)
+                    return 1
+        print(f"stopped at virtual time {fb.virtual_time:.2f} s; bytes lost to overruns: {fb.link.bytes_overrun}")
     return 0
+
+
+# --- record ------------------------------------------------------------------------------------------------------
+
+END_STATUS = {"complete": 0, "stream stopped": 1, "disconnected": 1, "port error": 1, "interrupted": 130,
+              "terminated": 143}
+
+
+def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
+    """Write the frames (atomically: temporary name, then rename); returns the files written."""
+    import numpy as np
+
+    n = len(frames)
+    shapes = {(tuple(f.channels), f.sensor_mask) for f in frames}
+    if len({(len(c), m) for c, m in shapes}) == 1:
+        layout = "compact"  # codes[frame, slot, k]: the k-th present sensor
+        codes = np.stack([f.codes for f in frames])
+        status = np.stack([f.status for f in frames])
+        channels = np.stack([f.channels for f in frames])
+    else:  # the pattern or the set of sensors changed: index by sensor number, pad with status 255
+        layout = "by_sensor"  # codes[frame, slot, sensor - 1]
+        slots = max(len(f.channels) for f in frames)
+        codes = np.zeros((n, slots, 5), np.uint16)
+        status = np.full((n, slots, 5), 255, np.uint8)
+        channels = np.full((n, slots), 255, np.int64)
+        for i, f in enumerate(frames):
+            k = len(f.channels)
+            channels[i, :k] = f.channels
+            for j, s in enumerate(f.sensors):
+                codes[i, :k, s - 1] = f.codes[:, j]
+                status[i, :k, s - 1] = f.status[:, j]
+    arrays = dict(seq=np.array([f.seq for f in frames]), mask=np.array([f.sensor_mask for f in frames]),
+                  channels=channels, codes=codes, status=status, layout=np.array(layout),
+                  **{k: np.array(v) for k, v in meta.items()})
+    written = []
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.partial")
+    try:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+        os.replace(tmp, out)
+    finally:
+        tmp.unlink(missing_ok=True)
+    written.append(out)
+    if csv:
+        path = out.with_suffix(".csv")
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.partial")
+        try:
+            with open(tmp, "w") as fh:
+                fh.write("seq,slot,channel,sensor,code,status\n")
+                for f in frames:
+                    for k, ch in enumerate(f.channels):
+                        for j, s in enumerate(f.sensors):
+                            fh.write(f"{f.seq},{k},{ch},{s},{f.codes[k, j]},{f.status[k, j]}\n")
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
+        written.append(path)
+    return written
+
+
+def _open_driver(port: str, baud: int):
+    from bench.hosts.driver import BridgeDriver
+
+    try:
+        return BridgeDriver(port, baudrate=baud)
+    except (OSError, ValueError) as e:
+        msg = getattr(e, "strerror", None) or str(e)
+        raise OSError(f"argument port: cannot open {port}: {msg}") from None
 
 
 def _cmd_record(a) -> int:
-    import numpy as np
     from tqdm import tqdm
 
-    from bench.hosts.driver import CMD_START, BridgeDriver
+    from bench.hosts.driver import CMD_START, SLOT_RATE_HZ
 
-    drv = BridgeDriver(a.port, baudrate=a.baud)
-    drv.start()
-    if drv.wait_for(CMD_START, timeout_s=5) is None:
-        raise OSError(f"{a.port}: no answer to START within 5 s (is the bridge running?)")
-    frames = []
-    n = int(a.seconds * 100)
-    with tqdm(total=n, unit="frame", disable=a.quiet) as bar:
-        for f in drv.frames(max_frames=n, timeout_s=5):
-            frames.append(f)
-            bar.update(1)
-    drv.stop()
-    drv.close()
-    if not frames:
-        raise OSError(f"{a.port}: no frames arrived")
-    seq = np.array([f.seq for f in frames])
     out = Path(a.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(out, seq=seq, mask=np.array([f.sensor_mask for f in frames]),
-                        channels=np.stack([f.channels for f in frames]), codes=np.stack([f.codes for f in frames]),
-                        status=np.stack([f.status for f in frames]))
-    if a.csv:
-        with open(out.with_suffix(".csv"), "w") as fh:
-            fh.write("seq,slot,channel,sensor,code,status\n")
-            for f in frames:
-                for k, ch in enumerate(f.channels):
-                    for j, n_s in enumerate(f.sensors):
-                        fh.write(f"{f.seq},{k},{ch},{n_s},{f.codes[k, j]},{f.status[k, j]}\n")
-    st = drv.parser.stats
-    print(f"wrote {out}: {len(frames)} frames; CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, "
-          f"bytes skipped {st.bytes_skipped}")
-    return 0
+    frames, end, detail = [], "complete", ""
+    recorded_s = 0.0
+    drv = None
+    with sigterm_raises():
+        try:
+            drv = _open_driver(a.port, a.baud)
+            drv.start()
+            if drv.wait_for(CMD_START, timeout_s=5) is None:
+                drv.close()
+                if drv.disconnected:
+                    raise OSError(f"{a.port}: the port closed before the bridge answered START")
+                raise OSError(f"{a.port}: no answer to START within 5 s (is the bridge running?)")
+            if not a.quiet:
+                print(f"recording {a.seconds:g} s from {a.port}", file=sys.stderr, flush=True)
+            with tqdm(total=round(a.seconds, 3), unit="s", disable=a.quiet,
+                      bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s") as bar:
+                for f in drv.frames(timeout_s=a.idle_timeout):
+                    frames.append(f)
+                    dt = len(f.channels) / SLOT_RATE_HZ
+                    recorded_s += dt
+                    bar.update(dt)
+                    if recorded_s >= a.seconds - 1e-9:
+                        break
+                else:
+                    end = "disconnected" if drv.disconnected else "stream stopped"
+                    detail = ("the bridge went away (its port closed)" if drv.disconnected else
+                              f"no data for {a.idle_timeout:g} s")
+        except Terminated:
+            end, detail = "terminated", "terminated by SIGTERM"
+        except KeyboardInterrupt:
+            end, detail = "interrupted", "interrupted by Ctrl-C (SIGINT)"
+        except OSError as e:
+            if not frames:
+                raise
+            end, detail = "port error", f"port error: {e}"
+    with signals_deferred():
+        if drv is not None:
+            try:
+                if not drv.disconnected:
+                    drv.stop()
+                drv.close()
+            except Exception:  # noqa: BLE001 - the port may be gone; what was received is saved regardless
+                pass
+        status = END_STATUS[end]
+        if not frames:
+            print(f"error: {detail or 'no frames arrived'}; nothing received, no file written", file=sys.stderr)
+            return status or 1
+        st = drv.parser.stats
+        meta = {"end": end, "requested_s": a.seconds, "recorded_s": recorded_s, "dropped_frames": st.dropped_frames,
+                "crc_errors": st.crc_errors}
+        written = _save_recording(out, frames, meta, a.csv)
+    summary = (f"wrote {', '.join(map(str, written))}: {len(frames)} frames ({recorded_s:.2f} s of {a.seconds:g} s "
+               f"asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes skipped "
+               f"{st.bytes_skipped}")
+    print(summary)
+    if end != "complete":
+        print(f"warning: partial recording: {detail} after {recorded_s:.2f} s of the {a.seconds:g} s asked "
+              f"(exit status {status})", file=sys.stderr)
+    return status
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    br = sub.add_parser("bridge", help="run the bridge firmware against emulated sensors on a serial port (pty)",
-                        description="Compiles and runs the reference bridge firmware (firmware_tests/firmware) "
-                                    "against emulated sensors in virtual time and exposes its UART as a pty that "
-                                    "any program can open as a serial port. Real-time paced unless --fast.",
-                        formatter_class=fmt)
-    br.add_argument("--sensors", type=int, default=1, choices=range(1, 6))
-    br.add_argument("--scene", help="scene file whose stimuli the first sensor feels")
-    br.add_argument("--seed", type=int, default=1)
-    br.add_argument("--seconds", type=float, help="stop after this many wall-clock seconds")
-    br.add_argument("--speed", type=float, default=1.0, help="virtual seconds per wall second when paced")
+    br = one_line_errors(sub.add_parser(
+        "bridge", help="run the bridge firmware against emulated sensors on a serial port (pty)",
+        description="Compiles and runs the reference bridge firmware (firmware_tests/firmware) against emulated "
+                    "sensors in virtual time and exposes its UART as a pty that any program can open as a serial "
+                    "port. Real-time paced unless --fast. With --scene every sensor is built from the scene "
+                    "(parameters, faults, noise, fidelity, seed; sensor 1 feels its stimuli) and its "
+                    "host.sequence becomes the firmware's sampling pattern.\n\n"
+                    "The host's receive buffer holds --rx-buffer bytes: paced, a host that stops reading loses "
+                    "what does not fit (an overrun, as on a real UART without flow control) and the firmware "
+                    "streams on; with --fast the firmware waits for a reading host instead. Stops on Ctrl-C or "
+                    "SIGTERM.", formatter_class=fmt))
+    br.add_argument("--sensors", type=whole(1, 5), default=1, help="emulated sensors, 1 to 5 (default 1)")
+    br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it, sensor 1 feels its stimuli")
+    br.add_argument("--seed", type=whole(0), help="seed (default: the scene's, else 1); sensor k uses seed + k - 1")
+    br.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")
+    br.add_argument("--speed", type=number(0, lo_open=True), default=1.0,
+                    help="virtual seconds per wall second when paced (> 0; default 1)")
     br.add_argument("--fast", action="store_true", help="run as fast as possible instead of real time")
-    br.add_argument("--spi", choices=["software", "rtl"], default="software",
-                    help="the sensors' SPI side: the software model, or the Verilog RTL in the C++ harness")
+    br.add_argument("--baud", type=whole(50, 12_000_000), default=3_000_000,
+                    help="the UART's baud rate (paces the line; default 3000000)")
+    br.add_argument("--rx-buffer", type=whole(1024, 1 << 24), default=4096, metavar="BYTES",
+                    help="the host's receive buffer in bytes (default 4096)")
+    br.add_argument("--spi", choices=["software", "rtl"], default=None,
+                    help="the sensors' SPI side: the software model, or the Verilog RTL in the C++ harness "
+                         "(default: the scene's host.spi, else software)")
     br.set_defaults(func=_cmd_bridge)
 
-    rc = sub.add_parser("record", help="record a bridge's serial stream to NPZ (and CSV)",
-                        description="Reads the bridge firmware's frames from a serial port (a device, a pty, or a "
-                                    "pyserial URL such as socket://host:port) and writes codes, status and "
-                                    "sequence numbers to NPZ; reports CRC errors and dropped frames.",
-                        formatter_class=fmt)
+    rc = one_line_errors(sub.add_parser(
+        "record", help="record a bridge's serial stream to NPZ (and CSV)",
+        description="Reads the bridge firmware's frames from a serial port (a device, a pty, or a pyserial URL "
+                    "such as socket://host:port) and writes codes, status and sequence numbers to NPZ; reports "
+                    "CRC errors and dropped frames.\n\n"
+                    "Whatever ends the recording, what was received is written (to a temporary name, then "
+                    "renamed), with 'end', 'requested_s' and 'recorded_s' in the file. Exit status: 0 complete; "
+                    "1 the stream stopped, the bridge went away or the port failed before --seconds (a warning "
+                    "says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments or nothing received.\n\n"
+                    "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
+                    "the set of sensors changes during the recording, codes[frame, slot, sensor - 1] with status "
+                    "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt))
     rc.add_argument("port")
-    rc.add_argument("--seconds", type=float, default=1.0)
-    rc.add_argument("--out", default="out/recording.npz")
+    rc.add_argument("--seconds", type=number(0, 86_400 * 7, lo_open=True), default=1.0,
+                    help="seconds of stream to record (> 0; default 1)")
+    rc.add_argument("--out", type=output_file, default="out/recording.npz")
     rc.add_argument("--csv", action="store_true")
-    rc.add_argument("--baud", type=int, default=3_000_000)
+    rc.add_argument("--baud", type=whole(50, 12_000_000), default=3_000_000)
+    rc.add_argument("--idle-timeout", type=number(0, 3600, lo_open=True), default=5.0, metavar="S",
+                    help="the stream has stopped when nothing arrives for this long (default 5 s)")
     rc.add_argument("--quiet", action="store_true")
     rc.set_defaults(func=_cmd_record)

@@ -8,32 +8,52 @@
 A background thread runs the firmware in virtual time in 10 ms steps, moving bytes between the pty and the
 firmware's UART.  Faults are scheduled in virtual time (:meth:`at`) or applied at once (:meth:`now`); the
 line itself can corrupt or drop bytes (``corrupt_rate``, ``drop_rate``).
+
+The host's side of the link is a finite receive buffer (:class:`bench.hosts.serial_link.PtyLink`, 4096 bytes by
+default, ``rx_buffer=``).  Paced to the wall clock (``realtime=True``, what ``biotac-bench bridge`` does), it
+behaves like a UART without flow control: bytes arrive at the baud rate, and a host that does not read in time
+loses what does not fit (an overrun) while the firmware streams on; ``overrun_frames()`` lists the frames that
+lost bytes.  Unpaced (``realtime=False``, the default for tests), virtual time has no relation to the host's
+clock, so the firmware waits for a host that is reading (back-pressure: nothing is lost however slow the host);
+a host that has not read for :data:`HOST_GONE_S` is taken as gone, and bytes overrun as in real time.
 """
 
 from __future__ import annotations
 
+import math
 import queue
 import random
 import threading
 import time
 
 from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
-from bench.hosts.serial_link import PtyLink
+from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
+
+#: Unpaced, a host whose receive buffer has stayed full this long (wall s) is taken as gone (bytes overrun).
+HOST_GONE_S = 0.2
 
 
 class FirmwareBench:
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, realtime: bool = False,
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
-                 step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software"):
-        self.link = PtyLink(baudrate)
+                 step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software",
+                 rx_buffer: int = RX_BUFFER_BYTES, keep_arrivals: bool = False, pattern=None):
+        if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
+            raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
+        if not (isinstance(baudrate, int) and baudrate > 0):
+            raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
+        self.link = PtyLink(baudrate, rx_buffer=rx_buffer, keep_arrivals=keep_arrivals)
         self.baudrate = baudrate
         self._line_free_at = 0.0  # wall time when the paced UART has sent everything so far
+        self._host_gone = False  # unpaced: the buffer stayed full for HOST_GONE_S (no more waiting until it drains)
         self.port = self.link.path
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
         self.board = VirtualBoard(sensors or default_sensors(n_sensors, stimuli, seed), uart_out=self._line,
                                   pull_up=pull_up, spi=spi)
         self.sim = CoSim(self.board)
+        if pattern is not None:
+            self.sim.set_pattern(pattern)
         self.realtime, self.speed, self.step_s = realtime, speed, step_s
         self._stop = threading.Event()
         self._requests: queue.Queue = queue.Queue()  # (virtual time or None, action): applied by the bench thread
@@ -58,8 +78,23 @@ class FirmwareBench:
             now = time.perf_counter()
             self._line_free_at = max(self._line_free_at, now) + len(data) * 10 / (self.baudrate * self.speed)
             if self._line_free_at > now:
-                time.sleep(self._line_free_at - now)
-        self.link.write(data)
+                self._sleep(self._line_free_at - now)
+        elif self.link.room() < len(data):  # unpaced: wait for a host that reads, not for one that is gone
+            if not self._host_gone:
+                self._host_gone = not self.link.wait_for_room(len(data), HOST_GONE_S, self._stop)
+        else:
+            self._host_gone = False
+        self.link.deliver(data)
+
+    def _sleep(self, seconds: float) -> None:
+        """Sleep, moving buffered bytes on to the pty as the host reads them."""
+        end = time.perf_counter() + seconds
+        while True:
+            self.link.pump()
+            left = end - time.perf_counter()
+            if left <= 0:
+                return
+            time.sleep(min(left, 0.001))
 
     def _loop(self) -> None:
         wall0, virt0 = time.perf_counter(), self.board.t
@@ -70,10 +105,11 @@ class FirmwareBench:
                 if data:
                     self.board.send_to_firmware(data)
                 self.sim.run(self.step_s)
+                self.link.pump()
                 if self.realtime:
                     ahead = (self.board.t - virt0) / self.speed - (time.perf_counter() - wall0)
                     if ahead > 0:
-                        time.sleep(ahead)
+                        self._sleep(ahead)
         except BaseException as e:  # reported by stop()
             self.error = e
 
@@ -100,13 +136,40 @@ class FirmwareBench:
     def virtual_time(self) -> float:
         return self.board.t
 
+    def overrun_frames(self) -> list[int]:
+        """Sequence numbers of the data frames that lost bytes to receive-buffer overruns (needs
+        ``keep_arrivals=True``): exactly the frames a host reading this port can never get."""
+        if self.link.arrivals is None:
+            raise ValueError("overrun_frames() needs FirmwareBench(..., keep_arrivals=True)")
+        data, lost, pos, k = bytes(self.link.arrivals), [], 0, 0
+        ranges = self.link.overruns
+        while pos + 7 <= len(data):
+            if data[pos:pos + 2] != b"\xaa\x55":  # only with line faults: find the next frame
+                nxt = data.find(b"\xaa\x55", pos + 1)
+                if nxt < 0:
+                    break
+                pos = nxt
+                continue
+            length = data[pos + 3] | data[pos + 4] << 8
+            end = pos + 7 + length
+            while k < len(ranges) and sum(ranges[k]) <= pos:
+                k += 1
+            if data[pos + 2] == 0x10 and k < len(ranges) and ranges[k][0] < end and length >= 2:
+                lost.append(data[pos + 5] | data[pos + 6] << 8)
+            pos = end
+        return lost
+
     def start(self) -> "FirmwareBench":
         self._thread.start()
         return self
 
     def stop(self) -> None:
+        """Stop the firmware and close the port (a host still reading it sees the port go away); idempotent."""
+        if self.link.closed:
+            return
         self._stop.set()
-        self._thread.join(timeout=10)
+        if self._thread.is_alive():
+            self._thread.join(timeout=10)
         self.link.close()
         self.board.bus.close()
         if self.error is not None:

@@ -179,6 +179,18 @@ class CoSim:
         self.lib.bt_init(self.state, C.byref(self.hal))
         self._raise()
 
+    def set_pattern(self, channels) -> None:
+        """Set the firmware's sampling pattern directly (as its PATTERN command would, without a reply on the
+        UART): 1–64 channel indices (or names), each PAC, PDC, TAC, TDC or E1..E19."""
+        from emulator.channels import channel_index
+
+        idx = [c if isinstance(c, int) else channel_index(c) for c in channels]
+        data = bytes(i & 0xFF for i in idx)
+        result = self.lib.bt_set_pattern(self.state, data, C.c_size_t(len(data))) & 0xFF
+        if result or any(not 0 <= i <= 255 for i in idx):
+            raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
+                             + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E19"))
+
     def _raise(self):
         if self.board.error is not None:
             e, self.board.error = self.board.error, None

@@ -2,13 +2,19 @@
 
 :class:`FrameParser` turns bytes into frames: it hunts for the 0xAA 0x55 sync, checks the length and the
 CRC-16, and after corruption resynchronises on the next sync, counting what it skipped.  Sequence numbers
-reveal dropped frames.  :class:`BridgeDriver` runs the parser on a pyserial port (a device path, or URLs
-such as ``loop://`` and ``socket://host:port``), sends commands, and offers an iterator and a callback API.
+reveal dropped frames (:class:`SequenceTracker`: robust to reordering, duplicates, the 16-bit counter's
+wrap-around and gaps longer than it).  :class:`BridgeDriver` runs the parser on a pyserial port (a device path,
+or URLs such as ``loop://`` and ``socket://host:port``), sends commands and matches each reply to the command
+that asked for it, and offers an iterator and a callback API.
 """
 
 from __future__ import annotations
 
+import binascii
+import math
 import struct
+import time
+from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,16 +26,31 @@ T_DATA, T_STATUS, T_ACK = 0x10, 0x11, 0x12
 CMD_START, CMD_STOP, CMD_PATTERN, CMD_STATUS = 0x01, 0x02, 0x03, 0x04
 MAX_PAYLOAD = 4 + 64 * (1 + 2 * 5)
 ACK_RESULTS = {0: "ok", 1: "bad length", 2: "unknown command", 3: "bad value"}
+SLOT_RATE_HZ = 4400.0  # the firmware's sampling slots: a frame of n slots lasts n / 4400 s
+#: A command whose reply has not come within this many seconds is taken as lost (its reply, if it ever comes,
+#: is then matched to a later command of the same type, or counted as unsolicited).
+REPLY_HORIZON_S = 5.0
 
 
-def crc16(data: bytes) -> int:
-    """CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF)."""
+def _crc16_bitwise(data: bytes) -> int:
+    """CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection, no final XOR), bit by bit: the reference."""
     crc = 0xFFFF
     for byte in data:
         crc ^= byte << 8
         for _ in range(8):
             crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
     return crc
+
+
+def _crc16_table(data: bytes) -> int:
+    return binascii.crc_hqx(data, 0xFFFF)
+
+
+#: CRC-16/CCITT-FALSE of ``data``.  The standard library's ``binascii.crc_hqx`` is the same CRC (polynomial
+#: 0x1021, MSB first, no final XOR: CRC-16/XMODEM's algorithm) and, started from 0xFFFF, gives CCITT-FALSE —
+#: table-driven C, ~1000x the bitwise loop.  It is used only if it agrees with the bitwise reference on the
+#: standard check input "123456789" (0x29B1), so the reference stays the definition.
+crc16 = _crc16_table if _crc16_table(b"123456789") == _crc16_bitwise(b"123456789") else _crc16_bitwise
 
 
 def encode(frame_type: int, payload: bytes = b"") -> bytes:
@@ -70,10 +91,94 @@ class ParserStats:
     crc_errors: int = 0
     bad_lengths: int = 0
     bytes_skipped: int = 0
-    dropped_frames: int = 0
+    dropped_frames: int = 0  # frames missing from the sequence (a late frame that fills a gap is taken back out)
     resyncs: int = 0
-    last_seq: int | None = None
+    last_seq: int | None = None  # the newest sequence number seen (16 bits, as sent)
     malformed: int = 0
+    reordered: int = 0  # frames that arrived after a later one (they are delivered, and filled their gap)
+    duplicates: int = 0  # frames whose sequence number was already seen, or older than anything missing: not delivered
+
+
+class SequenceTracker:
+    """Counts the frames missing from the firmware's 16-bit sequence numbers.
+
+    Sequence numbers are unwrapped into a running count.  A frame ahead of the newest one adds the frames in
+    between to the missing ones; a frame behind it either fills a gap counted earlier (a reordered frame: it is
+    taken back out of the missing count) or repeats one already seen (a duplicate).  A 16-bit counter cannot
+    tell a gap of ``d`` frames from ``d + 65536·k``, nor a far jump ahead from a frame from the past: the
+    arrival time decides, from the stream's measured frame rate (or the nominal one, 4400 slots/s divided by
+    the frame's slots, before there is a measurement).
+    """
+
+    KEEP = 1 << 15  # missing frames are remembered (to recognise late arrivals) this far behind the newest
+
+    def __init__(self, stats: ParserStats):
+        self.stats = stats
+        self.top: int | None = None  # unwrapped newest sequence number
+        self.top_t = 0.0
+        self._first: tuple[int, float] | None = None
+        self._gaps: deque[list[int]] = deque()  # [first, end) of missing unwrapped numbers, ascending
+        self._nominal_rate = 100.0
+
+    def rate(self) -> float:
+        """Frames per second of arrival time: measured over the stream (≥ 0.5 s of it), else nominal."""
+        if self._first is not None and self.top is not None:
+            n, t = self.top - self._first[0], self.top_t - self._first[1]
+            if t >= 0.5 and n >= 10:
+                return n / t
+        return self._nominal_rate
+
+    def _take_from_gap(self, u: int) -> bool:
+        for i, (a, b) in enumerate(self._gaps):
+            if a <= u < b:
+                if a == u and b == u + 1:
+                    del self._gaps[i]
+                elif a == u:
+                    self._gaps[i][0] = u + 1
+                elif b == u + 1:
+                    self._gaps[i][1] = u
+                else:
+                    self._gaps[i][1] = u
+                    self._gaps.insert(i + 1, [u + 1, b])
+                return True
+        return False
+
+    def _forget_old(self) -> None:
+        floor = self.top - self.KEEP
+        while self._gaps and self._gaps[0][1] <= floor:
+            self._gaps.popleft()
+        if self._gaps and self._gaps[0][0] < floor:
+            self._gaps[0][0] = floor
+
+    def accept(self, seq: int, now: float, slots: int = 44) -> bool:
+        """Count frame ``seq`` arriving at ``now`` (s); False for a duplicate that should not be delivered."""
+        if slots > 0:
+            self._nominal_rate = SLOT_RATE_HZ / slots
+        st = self.stats
+        if self.top is None:
+            self.top, self.top_t, self._first = seq, now, (seq, now)
+            st.last_seq = seq
+            return True
+        d = (seq - self.top) & 0xFFFF  # ahead by d, or behind by 65536 - d
+        behind = self.top + d - 0x10000
+        if d >= 0x8000 and self._take_from_gap(behind):  # a late frame: up to 32 768 behind
+            st.dropped_frames -= 1
+            st.reordered += 1
+            return True
+        expected = max(0.0, now - self.top_t) * self.rate()  # frames the elapsed time says went by
+        if (d == 0 or d >= 0x8000) and expected < 0x8000:  # behind the newest, and not one that was missing
+            st.duplicates += 1
+            return False
+        wraps = max(0, math.floor((expected - d) / 0x10000 + 0.5))
+        ahead = d + wraps * 0x10000 or 0x10000
+        if ahead > 1:
+            self._gaps.append([self.top + 1, self.top + ahead])
+            st.dropped_frames += ahead - 1
+        self.top += ahead
+        self.top_t = now
+        st.last_seq = seq
+        self._forget_old()
+        return True
 
 
 @dataclass
@@ -83,7 +188,12 @@ class FrameParser:
     stats: ParserStats = field(default_factory=ParserStats)
     _buf: bytearray = field(default_factory=bytearray)
 
-    def feed(self, data: bytes) -> list:
+    def __post_init__(self):
+        self.sequence = SequenceTracker(self.stats)
+
+    def feed(self, data: bytes, now: float | None = None) -> list:
+        """Parse ``data`` (arriving at ``now``, monotonic seconds; default: the clock now)."""
+        now = time.monotonic() if now is None else now
         self._buf += data
         out = []
         buf = self._buf
@@ -111,7 +221,7 @@ class FrameParser:
                 continue
             payload = body[3:]
             del buf[:5 + length + 2]
-            frame = self._decode(ftype, payload)
+            frame = self._decode(ftype, payload, now)
             if frame is not None:
                 out.append(frame)
         return out
@@ -119,12 +229,11 @@ class FrameParser:
     def _skip(self, n: int) -> None:
         if n <= 0:
             return
-        if self.stats.bytes_skipped == 0 or n:
-            self.stats.resyncs += 1
+        self.stats.resyncs += 1
         self.stats.bytes_skipped += n
         del self._buf[:n]
 
-    def _decode(self, ftype: int, p: bytes):
+    def _decode(self, ftype: int, p: bytes, now: float):
         try:
             if ftype == T_DATA:
                 seq, mask, slots = struct.unpack_from("<HBB", p)
@@ -133,7 +242,8 @@ class FrameParser:
                     raise ValueError("data frame length does not match its header")
                 rec = np.frombuffer(p[4:], dtype=np.uint8).reshape(slots, 1 + 2 * ns)
                 words = rec[:, 1:].copy().view("<u2").reshape(slots, ns)
-                self._count_seq(seq)
+                if not self.sequence.accept(seq, now, slots):
+                    return None
                 self.stats.frames += 1
                 return DataFrame(seq, mask, rec[:, 0].astype(int), (words & 0x0FFF).astype(np.uint16),
                                  (words >> 12).astype(np.uint8))
@@ -148,14 +258,6 @@ class FrameParser:
             return None
         self.stats.malformed += 1
         return None
-
-    def _count_seq(self, seq: int) -> None:
-        last = self.stats.last_seq
-        if last is not None:
-            gap = (seq - last - 1) & 0xFFFF
-            if gap < 0x8000:
-                self.stats.dropped_frames += gap
-        self.stats.last_seq = seq
 
 
 def to_physical(frame: DataFrame, pac_offset: float = 2048.0, pdc_offset: float | None = None) -> dict:
@@ -180,7 +282,14 @@ def to_physical(frame: DataFrame, pac_offset: float = 2048.0, pdc_offset: float 
 
 
 class BridgeDriver:
-    """The firmware's serial stream through pyserial: commands, frames as an iterator or by callback."""
+    """The firmware's serial stream through pyserial: commands, frames as an iterator or by callback.
+
+    Replies are matched to the command that asked for them: the firmware answers each command in order
+    (an ACK carrying the command's type, or a STATUS for a STATUS request), so a reply goes to the oldest
+    command of its type still waiting (commands unanswered for :data:`REPLY_HORIZON_S` are taken as lost),
+    and :meth:`wait_for` returns the reply to the *latest* command of that type — never a stale reply to an
+    earlier one.  Replies nobody asked for are counted in ``unsolicited_replies`` and dropped.
+    """
 
     def __init__(self, port, baudrate: int = 3_000_000, timeout: float = 0.05):
         import serial
@@ -192,36 +301,60 @@ class BridgeDriver:
             self.serial = port
         self.parser = FrameParser()
         self.callbacks = []
-        self.replies: list = []  # statuses and acks, for wait_for
         self.disconnected = False
+        self.unsolicited_replies = 0
+        self._sent = 0  # commands sent so far (each gets the next number)
+        self._waiting: dict[int, deque] = {}  # command type -> deque of (number, time sent), oldest first
+        self._latest: dict[int, int] = {}  # command type -> number of the latest command of that type
+        self._answers: dict[int, object] = {}  # command number -> its reply
 
     def close(self) -> None:
         self.serial.close()
 
-    def send(self, frame_type: int, payload: bytes = b"") -> None:
+    def send(self, frame_type: int, payload: bytes = b"") -> int:
+        """Send a command frame; returns its number (for :meth:`reply_to`)."""
         self.serial.write(encode(frame_type, payload))
         self.serial.flush()
+        self._sent += 1
+        self._waiting.setdefault(frame_type, deque()).append((self._sent, time.monotonic()))
+        self._latest[frame_type] = self._sent
+        return self._sent
 
-    def start(self):
-        self.send(CMD_START)
+    def start(self) -> int:
+        return self.send(CMD_START)
 
-    def stop(self):
-        self.send(CMD_STOP)
+    def stop(self) -> int:
+        return self.send(CMD_STOP)
 
-    def set_pattern(self, channels) -> None:
-        self.send(CMD_PATTERN, bytes(int(c) for c in channels))
+    def set_pattern(self, channels) -> int:
+        return self.send(CMD_PATTERN, bytes(int(c) for c in channels))
 
-    def request_status(self):
-        self.send(CMD_STATUS)
+    def request_status(self) -> int:
+        return self.send(CMD_STATUS)
 
     def on_frame(self, callback) -> None:
         self.callbacks.append(callback)
+
+    def _file_reply(self, item) -> None:
+        ctype = CMD_STATUS if isinstance(item, Status) else item[1]
+        waiting = self._waiting.get(ctype)
+        now = time.monotonic()
+        while waiting and now - waiting[0][1] > REPLY_HORIZON_S:  # lost: never answered
+            waiting.popleft()
+        if not waiting:
+            self.unsolicited_replies += 1
+            return
+        number, _ = waiting.popleft()
+        self._answers[number] = item
+        if len(self._answers) > 256:  # replies nobody collected: keep the newest
+            for k in sorted(self._answers)[:-256]:
+                del self._answers[k]
 
     def poll(self) -> list:
         """Read what has arrived; returns the decoded items (frames, statuses, acks)."""
         try:
             data = self.serial.read(max(1, self.serial.in_waiting or 1))
-        except OSError:  # EIO: the other side of the pty went away
+        except OSError:  # EIO: the other side of the pty went away (pyserial's SerialException is an OSError)
             self.disconnected = True
             return []
         items = self.parser.feed(data) if data else []
@@ -230,27 +363,31 @@ class BridgeDriver:
                 for cb in self.callbacks:
                     cb(item)
             else:
-                self.replies.append(item)
+                self._file_reply(item)
         return items
 
-    def wait_for(self, want, timeout_s: float = 2.0):
-        """The next status (``want=Status``) or ack of command type ``want`` (an int), or None on timeout."""
-        import time
+    def reply_to(self, number: int):
+        """The reply to command ``number`` if it has come (and was not taken yet), else None."""
+        return self._answers.pop(number, None)
 
+    def wait_for(self, want, timeout_s: float = 2.0):
+        """The reply to the latest command of type ``want`` (an int: its ACK ``("ack", type, result)``; or
+        ``Status`` after :meth:`request_status`), or None on timeout or if no such command was sent."""
+        ctype = CMD_STATUS if want is Status else int(want)
+        number = self._latest.get(ctype)
+        if number is None:
+            return None
         deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline and not self.disconnected:
-            for item in list(self.replies):
-                if (want is Status and isinstance(item, Status)) or (
-                        isinstance(item, tuple) and item[0] == "ack" and item[1] == want):
-                    self.replies.remove(item)
-                    return item
+        while True:
+            reply = self._answers.pop(number, None)
+            if reply is not None:
+                return reply
+            if time.monotonic() >= deadline or self.disconnected:
+                return None
             self.poll()
-        return None
 
     def frames(self, max_frames: int | None = None, timeout_s: float = 5.0):
         """Yield data frames; stops after ``max_frames`` or when nothing arrives for ``timeout_s``."""
-        import time
-
         got = 0
         idle_since = time.monotonic()
         while max_frames is None or got < max_frames:

@@ -116,18 +116,20 @@ void bt_init(bt_bridge *b, const bt_hal *hal) {
     b->finds = 0; /* sensors present at start-up are not "found again" */
 }
 
+uint8_t bt_set_pattern(bt_bridge *b, const uint8_t *p, size_t len) {
+    if (len < 1 || len > BT_MAX_PATTERN) return 1;
+    for (size_t i = 0; i < len; ++i)
+        if (!(p[i] <= 3 || (p[i] >= 17 && p[i] <= 35))) return 3;
+    memcpy(b->pattern, p, len);
+    b->pattern_len = (uint8_t)len;
+    return 0;
+}
+
 static void handle_command(bt_bridge *b, uint8_t type, const uint8_t *p, uint16_t len) {
     switch (type) {
     case 0x01: b->streaming = 1; ack(b, type, 0); break;
     case 0x02: b->streaming = 0; ack(b, type, 0); break;
-    case 0x03:
-        if (len < 1 || len > BT_MAX_PATTERN) { ack(b, type, 1); break; }
-        for (uint16_t i = 0; i < len; ++i)
-            if (!(p[i] <= 3 || (p[i] >= 17 && p[i] <= 35))) { ack(b, type, 3); return; }
-        memcpy(b->pattern, p, len);
-        b->pattern_len = (uint8_t)len;
-        ack(b, type, 0);
-        break;
+    case 0x03: ack(b, type, bt_set_pattern(b, p, len)); break;
     case 0x04: send_status(b); break;
     default: ack(b, type, 2); break;
     }

@@ -38,5 +38,8 @@ void bt_step(bt_bridge *b);
 /* Look for sensors (serial number "BT..."); returns the mask of present sensors. */
 uint8_t bt_detect(bt_bridge *b);
 uint16_t bt_crc16(const uint8_t *data, size_t n);
+/* Set the sampling pattern (what the PATTERN command does): 1..64 channel indices, each 0..3 or 17..35.
+ * Returns the ACK result: 0 ok, 1 bad length, 3 bad value (the pattern is then unchanged). */
+uint8_t bt_set_pattern(bt_bridge *b, const uint8_t *p, size_t len);
 
 #endif

@@ -1,0 +1,66 @@
+"""Emulated sensors for the host stacks (bridge firmware, Cheetah adapter) built from a whole scene.
+
+A scene describes one sensor and what happens to it: its parameters, faults, noise switches, fidelity profile,
+seed and stimuli.  Behind the bridge or the Cheetah adapter every sensor is built exactly as a scene run builds
+its sensor (:func:`bench.running.runner.build_sensor`), reading every channel a host may ask for (the default
+44-slot frame covers them all):
+
+* sensor 1 is the scene's sensor: its stimuli, its seed;
+* sensors 2..N share its parameters, faults, noise and fidelity, feel no stimuli, and draw from seeds
+  ``seed + 1 .. seed + N - 1`` (independent noise);
+* the scene's ``[host]`` section describes the host.  The bridge firmware is the host of the SPI bus: a
+  ``sequence`` becomes its sampling pattern; it samples at 4400 slots/s with a 4.4 MHz clock, so other slot
+  rates or clocks are refused (they could not be honoured); ``spi`` picks the SPI implementation.  Behind the
+  Cheetah adapter the host is the user's program, which decides those itself.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from bench.errors import SceneError
+from emulator.channels import CHANNEL_INDEX, SAMPLED_CHANNELS
+from emulator.sensor import Sensor
+from emulator.spi import protocol as proto
+
+FIRMWARE_SLOT_RATE_HZ = 4400.0
+FIRMWARE_MAX_PATTERN = 64
+
+
+def sensors_from_scene(scene, n_sensors: int, seed: int | None = None) -> dict[int, Sensor]:
+    """Sensors 1..``n_sensors`` for ``scene`` (see the module docstring); ``seed`` overrides the scene's."""
+    from bench.running.runner import build_sensor
+
+    base = scene.seed if seed is None else int(seed)
+    out = {}
+    for k in range(1, n_sensors + 1):
+        one = dataclasses.replace(scene, sequence="default", seed=base + k - 1,
+                                  stimuli=list(scene.stimuli) if k == 1 else [])
+        out[k] = build_sensor(one)
+    return out
+
+
+def firmware_pattern(scene) -> list[int] | None:
+    """The bridge firmware's sampling pattern for the scene's ``host.sequence`` (None: the default frame).
+    Refuses, naming the field, what the firmware cannot do: other slot rates or SPI clocks, long patterns."""
+    problems = []
+    if abs(scene.slot_rate_Hz - FIRMWARE_SLOT_RATE_HZ) > 1e-9:
+        problems.append(f"host.slot_rate_Hz = {scene.slot_rate_Hz:g}: the bridge firmware samples at "
+                        f"{FIRMWARE_SLOT_RATE_HZ:g} slots/s (run the scene with 'biotac-bench run' instead)")
+    if abs(scene.spi_clock_Hz - proto.HOST_DEFAULT_CLOCK_HZ) > 1e-6:
+        problems.append(f"host.spi_clock_Hz = {scene.spi_clock_Hz:g}: the bridge firmware clocks SPI at "
+                        f"{proto.HOST_DEFAULT_CLOCK_HZ:g} Hz")
+    pattern = None
+    if scene.sequence != "default":
+        names = list(scene.sequence)
+        pattern = [CHANNEL_INDEX[n] for n in names if n in CHANNEL_INDEX]
+        bad = [n for n in names if CHANNEL_INDEX.get(n) not in SAMPLED_CHANNELS]
+        if bad:
+            problems.append(f"host.sequence: {', '.join(map(str, bad))}: the firmware samples PAC, PDC, TAC, TDC, "
+                            "E1..E19")
+        if not 1 <= len(names) <= FIRMWARE_MAX_PATTERN:
+            problems.append(f"host.sequence has {len(names)} slots: the bridge firmware's pattern holds 1 to "
+                            f"{FIRMWARE_MAX_PATTERN}")
+    if problems:
+        raise SceneError(scene.source, problems)
+    return pattern

@@ -1,0 +1,148 @@
+"""The host driver's bookkeeping (issue 12, item 4): dropped frames counted from sequence numbers that arrive out of
+order, repeat, wrap around 16 bits or jump by more than 65 536; replies matched to the command that asked; the
+CRC through the standard library's table-driven crc_hqx (the same polynomial as the firmware's CRC-16)."""
+
+import struct
+import time
+
+import pytest
+
+from bench.hosts import driver as D
+from bench.hosts.driver import CMD_PATTERN, CMD_START, CMD_STATUS, BridgeDriver, DataFrame, FrameParser, Status
+
+pytestmark = pytest.mark.unit
+
+
+def data_frame(seq: int, slots: int = 44) -> bytes:
+    payload = struct.pack("<HBB", seq & 0xFFFF, 0b1, slots) + bytes([0, 0x00, 0x08]) * slots
+    return D.encode(D.T_DATA, payload)
+
+
+def feed(parser, seqs, t0=0.0, rate=100.0):
+    """Frames ``seqs`` arriving one by one at ``rate`` per second from ``t0``; returns the delivered sequence numbers."""
+    got = []
+    for k, s in enumerate(seqs):
+        got += [f.seq for f in parser.feed(data_frame(s), now=t0 + k / rate) if isinstance(f, DataFrame)]
+    return got
+
+
+def test_a_reordered_frame_fills_its_gap_and_is_not_a_drop():
+    p = FrameParser()
+    assert feed(p, [1, 2, 3, 5, 4, 6]) == [1, 2, 3, 5, 4, 6]
+    assert p.stats.dropped_frames == 0 and p.stats.reordered == 1 and p.stats.duplicates == 0
+
+
+def test_one_stale_frame_does_not_count_as_fifty_two_drops():
+    """Issue 12: one frame from the past (seq 48 after 100) made the next frame count 52 drops."""
+    p = FrameParser()
+    assert feed(p, list(range(101)) + [48, 101]) == list(range(101)) + [101]
+    assert p.stats.dropped_frames == 0 and p.stats.duplicates == 1 and p.stats.last_seq == 101
+
+
+def test_a_repeated_frame_is_delivered_once():
+    p = FrameParser()
+    assert feed(p, [7, 8, 8, 9]) == [7, 8, 9]
+    assert p.stats.dropped_frames == 0 and p.stats.duplicates == 1
+
+
+def test_wrap_around_is_not_a_gap_and_a_gap_across_it_counts_exactly():
+    p = FrameParser()
+    feed(p, [65533, 65534, 65535, 0, 1, 2])
+    assert p.stats.dropped_frames == 0
+    q = FrameParser()
+    feed(q, [65534, 3])  # 65535, 0, 1, 2 missing
+    assert q.stats.dropped_frames == 4
+
+
+@pytest.mark.parametrize("gap", [40_000, 65_535, 65_536, 70_000, 200_000])
+def test_gaps_longer_than_half_the_counter_are_counted_from_the_arrival_time(gap):
+    """Issue 12: a 40 000-frame gap counted 0.  At 100 frames/s the arrival time tells how many went by."""
+    p = FrameParser()
+    feed(p, range(200))  # 2 s at 100 frames/s: the rate is measured
+    later = 199 + gap + 1
+    p.feed(data_frame(later), now=1.99 + (gap + 1) / 100.0)
+    assert p.stats.dropped_frames == gap
+    p.feed(data_frame(later + 1), now=1.99 + (gap + 2) / 100.0)
+    assert p.stats.dropped_frames == gap and p.stats.duplicates == 0
+
+
+def test_a_late_frame_after_a_long_gap_is_still_recognised():
+    p = FrameParser()
+    feed(p, list(range(10)) + [15, 16, 12])
+    assert p.stats.dropped_frames == 4 and p.stats.reordered == 1
+
+
+def test_the_crc_is_the_standard_librarys_and_keeps_up_with_pathological_input():
+    """crc_hqx from 0xFFFF is CRC-16/CCITT-FALSE (same polynomial 0x1021 as the firmware's C): the driver uses it.
+    Pathological input — a sync with the longest legal length every 5 bytes, so every byte starts a CRC over
+    ~700 bytes — parses at well over 100 kB/s (the bitwise loop managed ~7 kB/s)."""
+    assert D.crc16 is D._crc16_table
+    assert D.crc16(b"123456789") == D._crc16_bitwise(b"123456789") == 0x29B1
+    evil = (b"\xaa\x55\x10" + struct.pack("<H", D.MAX_PAYLOAD)) * 40_000  # 200 kB
+    p = FrameParser()
+    t0 = time.perf_counter()
+    p.feed(evil)
+    p.feed(b"\x00" * (D.MAX_PAYLOAD + 7))
+    rate = len(evil) / (time.perf_counter() - t0)
+    assert p.stats.crc_errors >= 39_000
+    assert rate > 100e3, f"{rate / 1e3:.0f} kB/s"
+
+
+class FakeFirmware:
+    """A serial port whose far end answers each command in order (ack or status), when told to."""
+
+    def __init__(self):
+        self.rx = bytearray()
+        self.commands = []
+        self.in_waiting = 0
+
+    def write(self, data):
+        self.commands += [x for x in FrameParser().feed(bytes(data))] or [("cmd", data[2], data[5:-2])]
+
+    def flush(self):
+        pass
+
+    def answer(self, ctype, result=0):
+        if ctype == CMD_STATUS:
+            self.rx += D.encode(D.T_STATUS, struct.pack("<BB6I", 1, 1, 5, 0, 0, 0, 0, result))
+        else:
+            self.rx += D.encode(D.T_ACK, bytes([ctype, result]))
+        self.in_waiting = len(self.rx)
+
+    def read(self, n):
+        out, self.rx[:] = bytes(self.rx[:n]), self.rx[n:]
+        self.in_waiting = len(self.rx)
+        return out
+
+    def close(self):
+        pass
+
+
+def test_a_stale_acknowledgement_is_not_returned_to_a_later_wait():
+    """Two PATTERN commands: the first (refused, 3) is answered late; waiting after the second returns the second's
+    answer, not the first's."""
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    drv.set_pattern([99])
+    drv.set_pattern([1, 0])
+    port.answer(CMD_PATTERN, 3)
+    assert drv.wait_for(CMD_PATTERN, timeout_s=0.2) is None  # only the first command's answer has come
+    port.answer(CMD_PATTERN, 0)
+    assert drv.wait_for(CMD_PATTERN, timeout_s=0.5) == ("ack", CMD_PATTERN, 0)
+    assert drv.wait_for(CMD_PATTERN, timeout_s=0.1) is None  # taken: never returned twice
+
+
+def test_replies_nobody_asked_for_are_counted_and_dropped():
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    port.answer(CMD_START)  # e.g. left over from a previous program on the same port
+    drv.poll()
+    assert drv.unsolicited_replies == 1
+    assert drv.wait_for(CMD_START, timeout_s=0.1) is None  # nothing was sent
+    n = drv.start()
+    port.answer(CMD_START)
+    assert drv.wait_for(CMD_START, timeout_s=0.5) == ("ack", CMD_START, 0) and drv.reply_to(n) is None
+    drv.request_status()
+    port.answer(CMD_STATUS, 7)
+    st = drv.wait_for(Status, timeout_s=0.5)
+    assert isinstance(st, Status) and st.command_errors == 7

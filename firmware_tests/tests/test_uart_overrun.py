@@ -1,0 +1,93 @@
+"""The pty UART has a finite receive buffer and overruns like a real one (issue 12, item 4).
+
+Figure: one sensor streams 143-byte frames (5 header + 4 + 44 × 3 + 2 CRC) at 100 frames/s = 14.3 kB/s over a
+3 Mbaud link (300 kB/s: the line never limits).  The host's receive buffer holds 4096 bytes.  A host that stops
+reading for 6 s therefore keeps the first 4096 bytes sent after its last read — 28 whole frames — and loses
+every other frame of the ~600 sent meanwhile: ~572 frames, exactly those whose bytes did not fit, and the
+driver's dropped-frame count is exactly that number."""
+
+import time
+
+import pytest
+
+from bench.hosts.bridge import FirmwareBench
+from bench.hosts.driver import CMD_START, BridgeDriver
+from bench.hosts.serial_link import RX_BUFFER_BYTES
+
+pytestmark = pytest.mark.firmware
+FRAME_BYTES = 5 + 4 + 44 * 3 + 2
+
+
+def counting_driver(port):
+    drv = BridgeDriver(port)
+    read = drv.serial.read
+    drv.bytes_read = 0
+
+    def counted(n):
+        data = read(n)
+        drv.bytes_read += len(data)
+        return data
+
+    drv.serial.read = counted
+    return drv
+
+
+def test_a_host_that_stops_reading_for_6_s_loses_what_a_real_uart_would_and_the_driver_counts_it():
+    with FirmwareBench(1, realtime=True, keep_arrivals=True) as fb:
+        drv = counting_driver(fb.port)
+        drv.start()
+        assert drv.wait_for(CMD_START, timeout_s=5) == ("ack", CMD_START, 0)
+        before = list(drv.frames(max_frames=100, timeout_s=10))
+        stalled_at = drv.bytes_read  # the host stops reading here ...
+        in_at_stall = fb.link.bytes_in
+        time.sleep(6.0)
+        in_at_resume = fb.link.bytes_in  # ... and reads again from here
+        after = list(drv.frames(max_frames=150, timeout_s=10))
+        drv.close()
+    lost = fb.overrun_frames()
+    # the buffer: exactly 4096 bytes after the host's last read were kept; everything after them was lost until
+    # the host read again
+    assert len(fb.link.overruns) == 1
+    first_lost, n_lost = fb.link.overruns[0]
+    assert first_lost == stalled_at + RX_BUFFER_BYTES
+    assert abs((first_lost + n_lost) - in_at_resume) <= FRAME_BYTES
+    # the driver reports exactly the frames that lost bytes, and got every other one
+    st = drv.parser.stats
+    assert st.dropped_frames == len(lost) and st.reordered == 0 and st.duplicates == 0
+    seqs = [f.seq for f in before + after]
+    assert not set(seqs) & set(lost)
+    assert sorted(set(range(seqs[0], seqs[-1] + 1)) - set(seqs)) == sorted(lost)
+    # the figure: ~600 frames sent in 6 s, 28 whole frames fit in 4096 bytes
+    sent_in_stall = (in_at_resume - in_at_stall) / FRAME_BYTES
+    assert 570 <= sent_in_stall <= 630
+    assert sent_in_stall - RX_BUFFER_BYTES // FRAME_BYTES - 2 <= len(lost) <= sent_in_stall - RX_BUFFER_BYTES // FRAME_BYTES + 2
+
+
+def test_unpaced_the_firmware_waits_for_a_slow_host_and_loses_nothing():
+    """Unpaced (the tests' default) virtual time waits while the buffer is full and the host still reads."""
+    with FirmwareBench(1) as fb:
+        drv = BridgeDriver(fb.port)
+        drv.start()
+        assert drv.wait_for(CMD_START) is not None
+        frames = []
+        for _ in range(20):
+            frames += list(drv.frames(max_frames=10, timeout_s=5))
+            time.sleep(0.05)  # a slow host: 20 × 50 ms pauses, each shorter than HOST_GONE_S
+        overrun = fb.link.bytes_overrun
+        drv.close()
+    assert len(frames) == 200 and drv.parser.stats.dropped_frames == 0 and overrun == 0
+
+
+def test_unpaced_a_host_gone_for_longer_than_host_gone_s_loses_bytes_and_the_firmware_runs_on():
+    with FirmwareBench(1, keep_arrivals=True) as fb:
+        drv = BridgeDriver(fb.port)
+        drv.start()
+        assert drv.wait_for(CMD_START) is not None
+        list(drv.frames(max_frames=10, timeout_s=5))
+        t = fb.virtual_time
+        time.sleep(1.0)
+        assert fb.virtual_time > t + 1.0  # not stalled
+        more = list(drv.frames(max_frames=50, timeout_s=5))
+        drv.close()
+    assert fb.link.bytes_overrun > 0 and len(more) == 50
+    assert drv.parser.stats.dropped_frames == len([s for s in fb.overrun_frames() if s <= more[-1].seq])
