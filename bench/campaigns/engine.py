@@ -10,6 +10,7 @@ reschedules the task (``retries`` covers tasks that raise).  A progress bar runs
 
 from __future__ import annotations
 
+import logging
 import os
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -52,7 +53,7 @@ def connect(spec: ClusterSpec):
         except (OSError, TimeoutError) as e:
             raise CampaignError(f"no Dask scheduler answers at {spec.scheduler}: {e}") from None
     cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=40)
+                           silence_logs=logging.CRITICAL)
     client = Client(cluster)
     client._owned_cluster = cluster  # closed with the client
     return client

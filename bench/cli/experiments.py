@@ -1,4 +1,5 @@
-"""Experiment commands: the texture sweep (the rig over textures × movements × repetitions, on Dask)."""
+"""Experiment commands: the texture sweep (the rig over textures × movements × repetitions) and the Bayesian
+exploration experiment of D ch. 6, both on Dask."""
 
 from __future__ import annotations
 
@@ -105,3 +106,82 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=_cmd_texture_sweep)
+    add_explore_command(sub, fmt)
+
+
+EXPLORE_HELP = """\
+Runs the dissertation's texture experiment (D ch. 6) end to end on the bench from an experiment file:
+pilot (dissimilar textures × 36 movements) → the movement of least uncertainty per property → training (every
+texture × those movements, one skin that wears and is replaced) → validation trials for pairs of similar
+textures → virtual exploration (Monte Carlo: pairs, and 117-way identification) for each strategy.
+
+Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
+stage's trials are cached in out/cache by content hash, so changing the classifier settings re-runs no sliding.
+
+Writes into --out: report.md (beside D's numbers), summary.json, accuracy.csv, accuracy_per_texture.csv,
+confusion.csv, pilot_uncertainty.csv, trials.csv/json, properties_at_optimal_movements.png,
+probability_evolution.png.  --ablation NAME runs a variant (smooth-skin, unreplaced-wear, fewer-trials,
+double-noise; or all) into --out/<name>/ and adds a comparison table to --out/ablations.md.
+
+  biotac-bench explore fixtures/experiments/fishel2012.toml
+  biotac-bench explore fixtures/experiments/quick.toml --ablation smooth-skin
+"""
+
+
+def _cmd_explore(a) -> int:
+    from dataclasses import replace
+
+    from bench.campaigns.engine import ClusterSpec
+    from bench.experiments.experiment import ABLATIONS, load_experiment, run_experiment, summary
+    from bench.reporting.experiment_report import write_outputs
+
+    spec = load_experiment(a.experiment)
+    if a.workers is not None and a.workers < 1:
+        raise ValueError(f"--workers = {a.workers}: must be at least 1")
+    names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
+    out = Path(a.out or f"out/explore/{spec.name}")
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out = {out}: is a file, not a folder")
+    cluster = ClusterSpec.from_env(a.scheduler, a.workers)
+    cache = None if a.no_cache else Path(a.cache)
+    variants = [("baseline", spec)] + [(n, replace(spec, **ABLATIONS[n][1])) for n in names]
+    rows = []
+    for label, sp in variants:
+        t0 = time.perf_counter()
+        print(f"== {label}: {cluster.describe()}", file=sys.stderr)
+        result = run_experiment(sp, cache_dir=cache, cluster=cluster, progress=not a.quiet,
+                                log=lambda m: print(m, file=sys.stderr))
+        folder = out if label == "baseline" else out / label
+        files = write_outputs(result, folder)
+        s = summary(result)
+        rows.append((label, s, time.perf_counter() - t0))
+        print(f"wrote {folder}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
+    if names:
+        lines = ["# Ablations", "", "| variant | pairs (bayesian) | 117-way (bayesian) | median movements |",
+                 "|---|---|---|---|"]
+        for label, s, _ in rows:
+            what = "as specified" if label == "baseline" else ABLATIONS[label][0]
+            lines.append(f"| {label} ({what}) | {100 * s['pairs/bayesian']['accuracy']:.1f} % | "
+                         f"{100 * s['identification/bayesian']['accuracy']:.1f} % | "
+                         f"{s['identification/bayesian']['median_moves']:g} |")
+        (out / "ablations.md").write_text("\n".join(lines) + "\n")
+        print("\n".join(lines))
+    else:
+        print((out / "report.md").read_text())
+    return 0
+
+
+def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    from bench.experiments.experiment import ABLATIONS
+
+    e = sub.add_parser("explore", help="the texture experiment of D ch. 6: pilot, training, validation, "
+                                       "Bayesian exploration (Dask)", description=EXPLORE_HELP, formatter_class=fmt)
+    e.add_argument("experiment", help="experiment file (TOML), e.g. fixtures/experiments/fishel2012.toml")
+    e.add_argument("--out", help="output folder (default out/explore/<name>)")
+    e.add_argument("--ablation", choices=list(ABLATIONS) + ["all"], help="also run a variant and compare")
+    e.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
+    e.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    e.add_argument("--cache", default="out/cache", help="where stage results are cached (out/cache)")
+    e.add_argument("--no-cache", action="store_true", help="run every trial again")
+    e.add_argument("--quiet", action="store_true", help="no progress bars")
+    e.set_defaults(func=_cmd_explore)

@@ -49,7 +49,7 @@ def _cmd_claims(a) -> int:
 
         out = sensitivity_plot(claims, Path(a.plots))
         print(f"wrote {out}", file=sys.stderr)
-    return 0 if all(c.passed for c in claims) else 1
+    return 0 if all(c.ok for c in claims) else 1
 
 
 def _cmd_benchmark(a) -> int:

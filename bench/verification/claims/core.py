@@ -46,6 +46,9 @@ class Claim:
     kind: str = field(default="", kw_only=True)
     calibration: str = field(default="", kw_only=True)  # calibrated rows: the knob and what it was tuned to
     note: str = field(default="", kw_only=True)  # why the row has its kind (e.g. why it cannot fail)
+    #: a published figure the model does not reproduce, and why: the row is reported (DEVIATES), not hidden,
+    #: and the suite insists it still fails — a deviation that starts passing must be looked at again
+    deviation: str = field(default="", kw_only=True)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -60,12 +63,23 @@ class Claim:
         return bool(np.isfinite(self.measured) and self.low <= self.measured <= self.high)
 
     @property
+    def ok(self) -> bool:
+        """Passes, or fails exactly as its documented deviation says."""
+        return self.passed != bool(self.deviation)
+
+    @property
+    def result(self) -> str:
+        if self.deviation:
+            return "DEVIATES" if not self.passed else "PASS (deviation documented: recheck)"
+        return "PASS" if self.passed else "FAIL"
+
+    @property
     def tolerance(self) -> str:
         return f"[{self.low:.4g}, {self.high:.4g}]"
 
     def as_dict(self) -> dict:
         d = asdict(self)
-        d.update(passed=self.passed, tolerance=self.tolerance)
+        d.update(passed=self.passed, ok=self.ok, result=self.result, tolerance=self.tolerance)
         return d
 
 
@@ -137,9 +151,14 @@ def format_table(claims: list[Claim]) -> str:
              f"{'accepted':22s} result"]
     for c in claims:
         lines.append(f"{c.name:{w}s}  {c.kind:11s} {c.source:{ws}s}  {c.expected:22s} {c.measured:12.4g} "
-                     f"{c.unit:10s} {c.tolerance:22s} {'PASS' if c.passed else 'FAIL'}")
-    n_fail = sum(not c.passed for c in claims)
-    lines.append(f"{len(claims) - n_fail} passed, {n_fail} failed")
+                     f"{c.unit:10s} {c.tolerance:22s} {c.result}")
+    n_dev = sum(bool(c.deviation) and not c.passed for c in claims)
+    n_fail = sum(not c.ok for c in claims)
+    lines.append(f"{len(claims) - n_fail - n_dev} passed, {n_fail} failed, {n_dev} known deviations from the "
+                 f"dissertation")
+    for c in claims:
+        if c.deviation and not c.passed:
+            lines.append(f"  deviation: {c.name}: {c.deviation}")
     lines.append("kinds: " + ", ".join(f"{n} {k}" for k, n in kind_counts(claims).items()))
     return "\n".join(lines)
 

@@ -1,0 +1,421 @@
+"""The dissertation's texture experiment (D ch. 6) end to end on the bench, from a declarative experiment file.
+
+Stages, each a set of independent rig trials (:mod:`bench.experiments.trials`) run on the campaign engine and
+cached by content hash (the stage's tasks, the texture library, the model's source files), so changing the
+classifier or the strategies re-runs no sliding:
+
+1. **pilot** — dissimilar textures × the 36 movements × repetitions on fresh skins; expected uncertainty U per
+   property and movement with equal priors; the movement of least U per property, high-power movements
+   excluded (their wear is shown, from the skin-wear law);
+2. **training** — every texture × the three chosen movements × repetitions, in one session on one skin that
+   wears and is replaced once wear is detectable (as D did);
+3. **validation** — a separate set of trials (other seeds, so other start positions) for pairs of similar
+   textures: by default, the disjoint within-group pairs the training model confuses most (D chose pairs its
+   subjects found similar; this is the sensor's own notion of similar, stated in the report);
+4. **virtual exploration** — Monte Carlo as D: pairs (1000 simulations each, threshold 99.9 %) and 117-way
+   identification of the validation textures (threshold 99 %), for each strategy (bayesian, cycle, random).
+
+:func:`run_experiment` returns an :class:`ExperimentResult`; :func:`write_outputs` writes tables, plots and a
+Markdown report side by side with D's numbers.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from bench.errors import BenchError
+from bench.experiments import exploration as ex
+from bench.experiments.trials import TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement
+from bench.paths import FIXTURES, OUT, REPO
+from bench.rigs.texture_rig import movement_grid
+
+EXPERIMENTS_DIR = FIXTURES / "experiments"
+#: D's published figures, for the report (Tables 6-4, 6-5; ch. 6 text)
+D_FIGURES = {"pairs accuracy %": 99.6, "pairs median moves": 3, "117-way accuracy %": 95.4,
+             "117-way median moves": 5, "human pairs accuracy %": 81.3,
+             "best movements": {"traction": "1.26 N @ 1 cm/s", "roughness": "0.2 N @ 6.31 cm/s",
+                                "fineness": "0.5 N @ 2.5 cm/s"}}
+STRATEGY_NAMES = ("bayesian", "cycle", "random")
+
+
+class ExperimentError(BenchError, ValueError):
+    """An experiment file is invalid; ``problems`` lists every problem (field, value, what is allowed)."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source, self.problems = source, problems
+        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
+
+
+@dataclass
+class ExperimentSpec:
+    """An experiment (see ``fixtures/experiments/fishel2012.toml`` for every field and its meaning)."""
+
+    name: str = "experiment"
+    seed: int = 2012
+    fidelity: str = "default"
+    pilot_textures: list[int] = field(default_factory=lambda: [10, 30, 43, 46, 47, 84, 87, 100, 38, 58])
+    pilot_trials: int = 6
+    pilot_movements: list[int] | None = None  # grid ids; None = all 36
+    exclude_high_power: bool = True
+    training_textures: list[int] | None = None  # None = the whole library's 117
+    training_trials: int = 5
+    wear: bool = True
+    replace_skin: bool = True
+    pairs: list[tuple[int, int]] | None = None  # None = chosen from the training model
+    n_pairs: int = 8
+    validation_trials: int = 5
+    strategies: tuple[str, ...] = STRATEGY_NAMES
+    pair_threshold: float = 0.999
+    identification_threshold: float = 0.99
+    max_moves: int = 10
+    pair_simulations: int = 1000
+    identification_simulations: int = 8000  # over the validation textures, as D
+    identify_all_textures: bool = False  # beyond D: 117-way for every texture (validation trials for all)
+    fingerprints: bool = True
+    noise_scale: float = 1.0
+    source: str = "<experiment>"
+
+    def key(self) -> str:
+        return hashlib.sha256(repr(self).encode()).hexdigest()[:12]
+
+
+ABLATIONS = {
+    "smooth-skin": ("a skin without fingerprints", {"fingerprints": False}),
+    "unreplaced-wear": ("skin wear on, never replaced", {"replace_skin": False}),
+    "fewer-trials": ("2 training trials instead of 5", {"training_trials": 2}),
+    "double-noise": ("every sensor noise source doubled", {"noise_scale": 2.0}),
+}
+
+
+def load_experiment(path: str | Path) -> ExperimentSpec:
+    """Read and validate an experiment file (TOML); every problem is reported at once."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise ExperimentError(str(path), [f"cannot read the file: {e.strerror}"]) from None
+    except UnicodeDecodeError as e:
+        raise ExperimentError(str(path), [f"not UTF-8 text: {e.reason} at byte {e.start}"]) from None
+    except tomllib.TOMLDecodeError as e:
+        raise ExperimentError(str(path), [f"TOML syntax error: {e}"]) from None
+    return parse_experiment(data, str(path))
+
+
+def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
+    from bench.textures.library import load_library
+    from emulator.fidelity import PROFILES
+
+    problems: list[str] = []
+    known = {"experiment": {"name", "seed", "fidelity"},
+             "pilot": {"textures", "trials", "movements", "exclude_high_power"},
+             "training": {"textures", "trials", "wear", "replace_skin"},
+             "validation": {"pairs", "n_pairs", "trials"},
+             "exploration": {"strategies", "pair_threshold", "identification_threshold", "max_moves",
+                             "pair_simulations", "identification_simulations", "identify_all_textures"},
+             "skin": {"fingerprints"}, "sensor": {"noise_scale"}}
+    if not isinstance(data, dict):
+        raise ExperimentError(source, ["the file must hold tables"])
+    for k, v in data.items():
+        if k not in known:
+            problems.append(f"unknown table [{k}]; known: {', '.join(known)}")
+        elif not isinstance(v, dict):
+            problems.append(f"[{k}] must be a table")
+        else:
+            problems += [f"{k}: unknown field {f!r}; known: {', '.join(sorted(known[k]))}" for f in v if f not in known[k]]
+    if problems:
+        raise ExperimentError(source, problems)
+    lib = load_library()
+    spec = ExperimentSpec(source=source)
+    t = {k: data.get(k, {}) for k in known}
+
+    def get(table, key, kind, lo=None, hi=None, default=None):
+        if key not in t[table]:
+            return default
+        v = t[table][key]
+        ok = isinstance(v, kind) and not isinstance(v, bool) if kind is not bool else isinstance(v, bool)
+        if ok and lo is not None and not (lo <= v <= hi):
+            ok = False
+        if not ok:
+            rng = f" ({lo} to {hi})" if lo is not None else ""
+            problems.append(f"{table}.{key} = {v!r}: must be {kind.__name__ if isinstance(kind, type) else kind}{rng}")
+            return default
+        return v
+
+    def textures(table, key, default):
+        if key not in t[table]:
+            return default
+        v = t[table][key]
+        if v == "all":
+            return None
+        if not isinstance(v, list) or not v or not all(isinstance(n, int) and not isinstance(n, bool) for n in v):
+            problems.append(f"{table}.{key} = {v!r}: a list of texture numbers, or \"all\"")
+            return default
+        missing = [n for n in v if n not in lib]
+        if missing:
+            problems.append(f"{table}.{key}: no texture {missing} in the library (biotac-bench textures)")
+        if len(set(v)) != len(v):
+            problems.append(f"{table}.{key}: a texture is listed twice")
+        return v
+
+    spec.name = get("experiment", "name", str, default=spec.name)
+    spec.seed = get("experiment", "seed", int, 0, 2**63 - 1, spec.seed)
+    fid = get("experiment", "fidelity", str, default=spec.fidelity)
+    if fid not in PROFILES:
+        problems.append(f"experiment.fidelity = {fid!r}: one of {', '.join(PROFILES)}")
+    spec.fidelity = fid
+    spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or spec.pilot_textures
+    spec.pilot_trials = get("pilot", "trials", int, 2, 100, spec.pilot_trials)
+    mv = t["pilot"].get("movements")
+    if mv is not None and mv != "all":
+        if not isinstance(mv, list) or not all(isinstance(m, int) and 0 <= m < 36 for m in mv) or len(mv) < 3:
+            problems.append(f"pilot.movements = {mv!r}: \"all\" or a list of at least 3 grid ids 0..35")
+        else:
+            spec.pilot_movements = mv
+    spec.exclude_high_power = get("pilot", "exclude_high_power", bool, default=spec.exclude_high_power)
+    spec.training_textures = textures("training", "textures", None)
+    spec.training_trials = get("training", "trials", int, 2, 100, spec.training_trials)
+    spec.wear = get("training", "wear", bool, default=spec.wear)
+    spec.replace_skin = get("training", "replace_skin", bool, default=spec.replace_skin)
+    pairs = t["validation"].get("pairs")
+    if pairs is not None:
+        if not isinstance(pairs, list) or not all(isinstance(p, list) and len(p) == 2 and all(isinstance(n, int)
+                                                                                             for n in p) for p in pairs):
+            problems.append(f"validation.pairs = {pairs!r}: a list of [a, b] texture-number pairs")
+        else:
+            spec.pairs = [tuple(p) for p in pairs]
+            bad = [n for p in pairs for n in p if n not in lib]
+            if bad:
+                problems.append(f"validation.pairs: no texture {bad} in the library")
+    spec.n_pairs = get("validation", "n_pairs", int, 1, 58, spec.n_pairs)
+    spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
+    strategies = t["exploration"].get("strategies", list(spec.strategies))
+    if not isinstance(strategies, list) or not strategies or any(s not in ex.STRATEGIES for s in strategies):
+        problems.append(f"exploration.strategies = {strategies!r}: a list of {', '.join(ex.STRATEGIES)}")
+    else:
+        spec.strategies = tuple(strategies)
+    spec.pair_threshold = get("exploration", "pair_threshold", float, 0.5, 0.999999, spec.pair_threshold)
+    spec.identification_threshold = get("exploration", "identification_threshold", float, 0.01, 0.999999,
+                                        spec.identification_threshold)
+    spec.max_moves = get("exploration", "max_moves", int, 1, 100, spec.max_moves)
+    spec.pair_simulations = get("exploration", "pair_simulations", int, 1, 10**6, spec.pair_simulations)
+    spec.identification_simulations = get("exploration", "identification_simulations", int, 1, 10**7,
+                                          spec.identification_simulations)
+    spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
+    spec.fingerprints = get("skin", "fingerprints", bool, default=True)
+    spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
+    if problems:
+        raise ExperimentError(source, problems)
+    return spec
+
+
+# ----------------------------------------------------------------------------------------------- stages
+
+
+def _code_digest() -> str:
+    """A digest of everything a trial's outcome depends on besides its task: the model's and rig's sources and
+    the texture library."""
+    h = hashlib.sha256()
+    files = sorted((REPO / "emulator").glob("*.py")) + sorted((REPO / "emulator" / "spi").glob("*.py")) + [
+        REPO / "bench" / "rigs" / "texture_rig.py", REPO / "bench" / "textures" / "properties.py",
+        REPO / "bench" / "experiments" / "trials.py", REPO / "bench" / "running" / "sampler.py",
+        FIXTURES / "textures" / "library.toml"]
+    for f in files:
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=None, progress: bool = True,
+              client=None) -> list[dict]:
+    """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code."""
+    key = hashlib.sha256((repr(tasks) + _code_digest()).encode()).hexdigest()[:16]
+    path = None if cache_dir is None else cache_dir / f"{name}-{key}.json"
+    if path is not None and path.exists():
+        return json.loads(path.read_text())
+    rows = sweep(tasks, spec=spec, client=client, progress=progress) if tasks else []
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(rows))
+        tmp.replace(path)
+    return rows
+
+
+def table_from_rows(rows: list[dict], movement_ids: dict | None = None) -> ex.TrialTable:
+    """A long-format :class:`~bench.experiments.exploration.TrialTable` from trial rows."""
+    n = len(rows)
+    texture = np.repeat([r["texture"] for r in rows], 3)
+    movement = np.repeat([r["movement_id"] for r in rows], 3)
+    trial = np.repeat([r["trial"] for r in rows], 3)
+    prop = np.tile(np.arange(3), n)
+    value = np.array([[r["traction"], r["roughness"], r["fineness"]] for r in rows]).ravel()
+    return ex.TrialTable(texture, movement, prop, trial, value)
+
+
+@dataclass
+class ExperimentResult:
+    spec: ExperimentSpec
+    pilot_rows: list[dict]
+    pilot_uncertainty: np.ndarray  # (36, 3), NaN where excluded or not run
+    best_movements: np.ndarray  # grid id per property
+    wear: list[dict]
+    training_rows: list[dict]
+    skin_history: list[dict]
+    pairs: list[tuple[int, int]]
+    validation_rows: list[dict]
+    pair_results: dict  # strategy -> list of ExplorationResult (one per true texture of each pair)
+    identification_results: dict  # strategy -> list of ExplorationResult
+    wall_s: dict = field(default_factory=dict)
+
+
+def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int) -> list[tuple[int, int]]:
+    """The ``n_pairs`` disjoint within-group pairs with the highest mean confusion at the best movements."""
+    from bench.textures.library import load_library
+
+    lib = load_library()
+    conf = model.confusion()  # (K, K, M, P)
+    mi = model.movement_index(best)
+    c = np.mean([conf[:, :, mi[p], p] for p in range(3)], axis=0)
+    ids = model.textures
+    cands = []
+    for i in range(len(ids)):
+        for j in range(i + 1, len(ids)):
+            if lib[int(ids[i])].group == lib[int(ids[j])].group:
+                cands.append((c[i, j], int(ids[i]), int(ids[j])))
+    used, pairs = set(), []
+    for _, a, b in sorted(cands, reverse=True):
+        if a not in used and b not in used:
+            pairs.append((a, b))
+            used |= {a, b}
+        if len(pairs) == n_pairs:
+            break
+    return pairs
+
+
+def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache", cluster=None,
+                   progress: bool = True, log=print) -> ExperimentResult:
+    """Pilot → training → validation → virtual exploration (see the module docstring)."""
+    import time
+
+    from bench.campaigns.engine import ClusterSpec, close, connect
+    from bench.textures.library import load_library
+
+    wall = {}
+    lib = load_library()
+    grid = movement_grid()
+    client = connect(cluster or ClusterSpec.from_env())
+    try:
+        # 1. pilot
+        t0 = time.perf_counter()
+        ids = spec.pilot_movements if spec.pilot_movements is not None else list(range(len(grid)))
+        tasks = sweep_tasks(spec.pilot_textures, [grid[i] for i in ids], spec.pilot_trials, spec.seed,
+                            spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale)
+        tasks = [replace(t, movement_id=ids[t.movement_id]) for t in tasks]
+        log(f"pilot: {len(tasks)} trials")
+        pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress)
+        model = ex.fit_model(table_from_rows(pilot_rows))
+        high = ex.movement_grid()["high_power"]
+        exclude = [m for m in ids if high[m]] if spec.exclude_high_power else []
+        u = ex.pilot_uncertainty(model, exclude_movements=exclude)
+        best = ex.least_uncertain_movements(model, exclude_movements=exclude)
+        u_full = np.full((len(grid), 3), np.nan)
+        u_full[model.movements] = u
+        wall["pilot"] = time.perf_counter() - t0
+        # 2. training: one session on one skin, in texture order, replaced when wear is detectable
+        t0 = time.perf_counter()
+        textures = spec.training_textures or sorted(n for n in lib if n <= 117)
+        tasks = []
+        for tex in textures:
+            for p, m in enumerate(best):
+                for k in range(spec.training_trials):
+                    tasks.append(TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
+                                           trial_seed(spec.seed, "training", tex, int(m), k), int(m), spec.fidelity,
+                                           spec.fingerprints, stage="training", noise_scale=spec.noise_scale))
+        # the same movement may be best for two properties: run it once
+        tasks = list({(t.texture, t.movement_id, t.trial): t for t in tasks}.values())
+        tasks, history = schedule_skin(tasks, wear=spec.wear, replace_at=0.5 if spec.replace_skin else None)
+        log(f"training: {len(tasks)} trials on {history[-1]['skin'] if history else 1} skin(s)")
+        training_rows = run_stage("training", tasks, cache_dir, client=client, progress=progress)
+        train = ex.fit_model(table_from_rows(training_rows))
+        wall["training"] = time.perf_counter() - t0
+        # 3. validation
+        t0 = time.perf_counter()
+        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs)
+        val_textures = sorted({n for p in pairs for n in p} | (set(textures) if spec.identify_all_textures else set()))
+        tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
+                           trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,
+                           spec.fingerprints, stage="validation", noise_scale=spec.noise_scale)
+                 for tex in val_textures for m in sorted(set(best.tolist())) for k in range(spec.validation_trials)]
+        log(f"validation: {len(tasks)} trials for {len(val_textures)} textures")
+        validation_rows = run_stage("validation", tasks, cache_dir, client=client, progress=progress)
+        val_table = table_from_rows(validation_rows)
+        wall["validation"] = time.perf_counter() - t0
+    finally:
+        close(client)
+    # 4. virtual exploration
+    t0 = time.perf_counter()
+    pair_results, ident_results = {}, {}
+    all_ctx = ex.prepare(train, best_movements=best)
+    per_texture = max(1, spec.identification_simulations // max(1, len({n for p in pairs for n in p})))
+    for s in spec.strategies:
+        pair_results[s] = []
+        for a, b in pairs:
+            ctx = ex.prepare(train, candidates=[a, b], best_movements=best)
+            for true in (a, b):
+                pair_results[s].append(ex.simulate(train, val_table, true, strategy=s,
+                                                   threshold=spec.pair_threshold, max_moves=spec.max_moves,
+                                                   n_sims=spec.pair_simulations // 2, seed=spec.seed, context=ctx))
+        ident_results[s] = [ex.simulate(train, val_table, true, strategy=s, threshold=spec.identification_threshold,
+                                        max_moves=spec.max_moves, n_sims=per_texture, seed=spec.seed + 1,
+                                        context=all_ctx)
+                            for true in val_textures]
+    wall["exploration"] = time.perf_counter() - t0
+    return ExperimentResult(spec, pilot_rows, u_full, best, wear_per_movement(), training_rows, history, pairs,
+                            validation_rows, pair_results, ident_results, wall)
+
+
+def summary(result: ExperimentResult) -> dict:
+    """Accuracy and movements to converge per strategy, for pairs and 117-way identification."""
+    out = {}
+    for task, res in (("pairs", result.pair_results), ("identification", result.identification_results)):
+        for s, rs in res.items():
+            per_texture = {int(r.true_texture): float(np.mean(r.correct)) for r in rs}
+            med = {int(r.true_texture): float(ex.median_moves(r)) for r in rs}
+            out[f"{task}/{s}"] = {"accuracy": ex.accuracy(rs), "median_moves": ex.median_moves(rs),
+                                  "per_texture_accuracy": per_texture, "per_texture_median_moves": med,
+                                  "simulations": int(sum(len(r) for r in rs))}
+    return out
+
+
+def beats_baselines(result: ExperimentResult) -> int:
+    """Validation textures on which Bayesian exploration is at least as accurate as cycling and as random choice,
+    and converges in no more movements (medians)."""
+    s = summary(result)
+    bay = s["identification/bayesian"]
+    count = 0
+    for tex, acc in bay["per_texture_accuracy"].items():
+        ok = True
+        for other in ("cycle", "random"):
+            key = f"identification/{other}"
+            if key not in s:
+                continue
+            if acc < s[key]["per_texture_accuracy"][tex] or \
+                    bay["per_texture_median_moves"][tex] > s[key]["per_texture_median_moves"][tex]:
+                ok = False
+        count += ok
+    return count
+
+
+def movement_label(m: int) -> str:
+    g = movement_grid()[int(m)]
+    return f"{g.force_N:.2f} N @ {g.velocity_m_per_s * 100:.2f} cm/s"
+
+
+def _finite(x: float) -> str:
+    return "∞" if not math.isfinite(x) else f"{x:g}"

@@ -1,0 +1,159 @@
+"""What the texture experiment leaves behind: trial tables, accuracy and movement tables, the confusion matrix,
+plots like D Figs 6-5 and 6-10, and a Markdown report beside D's numbers.  Every file is written to a temporary
+name and renamed into place."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from bench.experiments import exploration as ex  # noqa: E402
+from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines, movement_label,  # noqa: E402
+                                          summary)
+
+
+def _atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def _csv(path: Path, rows: list[dict]) -> None:
+    if not rows:
+        return
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    tmp.replace(path)
+
+
+def _savefig(fig, path: Path) -> None:
+    tmp = path.with_name(path.name + ".tmp.png")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(path)
+
+
+def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
+    """Write every output of an experiment into ``out``; returns the file names."""
+    from bench.textures.library import load_library
+
+    out.mkdir(parents=True, exist_ok=True)
+    lib = load_library()
+    names = []
+    rows = result.pilot_rows + result.training_rows + result.validation_rows
+    _csv(out / "trials.csv", rows)
+    _atomic(out / "trials.json", json.dumps(rows))
+    names += ["trials.csv", "trials.json"]
+    u = [{"movement_id": m, "movement": movement_label(m), "U_traction": result.pilot_uncertainty[m, 0],
+          "U_roughness": result.pilot_uncertainty[m, 1], "U_fineness": result.pilot_uncertainty[m, 2],
+          "ridge_lost_um_per_100_trials": result.wear[m]["ridge_lost_m"] * 1e6}
+         for m in range(result.pilot_uncertainty.shape[0])]
+    _csv(out / "pilot_uncertainty.csv", u)
+    names.append("pilot_uncertainty.csv")
+    s = summary(result)
+    acc_rows = [{"task": k.split("/")[0], "strategy": k.split("/")[1], "accuracy_%": 100 * v["accuracy"],
+                 "median_moves": v["median_moves"], "simulations": v["simulations"]} for k, v in s.items()]
+    _csv(out / "accuracy.csv", acc_rows)
+    per_tex = [{"texture": t, "name": lib[t].name, **{f"{k}_accuracy": v["per_texture_accuracy"][t] for k, v in s.items()
+                                                       if t in v["per_texture_accuracy"]}}
+               for t in sorted({t for v in s.values() for t in v["per_texture_accuracy"]})]
+    _csv(out / "accuracy_per_texture.csv", per_tex)
+    names += ["accuracy.csv", "accuracy_per_texture.csv"]
+    if "bayesian" in result.identification_results:
+        labels = np.array(sorted({int(r.true_texture) for r in result.identification_results["bayesian"]}
+                                 | {int(d) for r in result.identification_results["bayesian"] for d in r.decided}))
+        lab, cm = ex.confusion_matrix(result.identification_results["bayesian"], labels=labels)
+        _csv(out / "confusion.csv", [{"true": int(t), **{str(int(d)): int(cm[i, j]) for j, d in enumerate(lab)}}
+                                     for i, t in enumerate(lab)])
+        names.append("confusion.csv")
+    record = {"spec": {k: v for k, v in vars(result.spec).items()}, "best_movements":
+              {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
+              "pairs": result.pairs, "summary": s, "bayesian_beats_baselines_on": beats_baselines(result),
+              "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
+              "wall_s": result.wall_s, "dissertation": D_FIGURES}
+    _atomic(out / "summary.json", json.dumps(record, indent=2, default=str))
+    names.append("summary.json")
+    names += _plots(result, out, lib)
+    _atomic(out / "report.md", markdown(result, record, lib))
+    names.append("report.md")
+    return names
+
+
+def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
+    names = []
+    # properties per texture at the optimal movements (like D Fig. 6-5)
+    rows = result.training_rows
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for p, (prop, m) in enumerate(zip(ex.PROPERTIES, result.best_movements)):
+        sel = [r for r in rows if r["movement_id"] == int(m)]
+        tex = sorted({r["texture"] for r in sel})
+        vals = [[r[prop] for r in sel if r["texture"] == t] for t in tex]
+        axes[p].errorbar(tex, [np.mean(v) for v in vals], yerr=[np.std(v) for v in vals], fmt=".", ms=3, lw=0.7)
+        axes[p].set_xlabel("texture number")
+        axes[p].set_ylabel(prop)
+        axes[p].set_title(f"{prop} at {movement_label(m)}")
+        axes[p].grid(alpha=0.3)
+    fig.tight_layout()
+    _savefig(fig, out / "properties_at_optimal_movements.png")
+    names.append("properties_at_optimal_movements.png")
+    # probability evolution of a few simulations (like D Fig. 6-10)
+    if "bayesian" in result.identification_results:
+        rs = result.identification_results["bayesian"][:4]
+        fig, axes = plt.subplots(1, len(rs), figsize=(4 * len(rs), 3.6), squeeze=False)
+        for ax, r in zip(axes[0], rs):
+            h = r.posterior[0]
+            steps = int(r.n_moves[0]) + 1
+            top = np.argsort(-np.nanmax(h[:steps], axis=0))[:5]
+            for k in top:
+                ax.plot(range(steps), h[:steps, k], marker=".", label=f"T{int(r.candidates[k])}")
+            ax.set_title(f"true T{int(r.true_texture)} ({lib[int(r.true_texture)].name})", fontsize=9)
+            ax.set_xlabel("movement")
+            ax.set_ylabel("P(texture)")
+            ax.set_ylim(0, 1.02)
+            ax.legend(fontsize=7)
+            ax.grid(alpha=0.3)
+        fig.tight_layout()
+        _savefig(fig, out / "probability_evolution.png")
+        names.append("probability_evolution.png")
+    return names
+
+
+def markdown(result: ExperimentResult, record: dict, lib) -> str:
+    s = record["summary"]
+    d = D_FIGURES
+    lines = [f"# Texture experiment: {result.spec.name}", "",
+             "Bayesian exploration (D ch. 6) run end to end on the emulated BioTac: every value below comes from "
+             "sliding trials of the texture rig read over SPI. Nothing was tuned toward these numbers.", "",
+             "## Optimal movements (pilot)", "", "| property | emulator | dissertation |", "|---|---|---|"]
+    for p in ex.PROPERTIES:
+        lines.append(f"| {p} | {record['best_movements'][p]} | {d['best movements'][p]} |")
+    lines += ["", "## Accuracy and movements to converge", "",
+              "| task | strategy | accuracy | median movements | dissertation |", "|---|---|---|---|---|"]
+    for k, v in s.items():
+        task, strat = k.split("/")
+        ref = ""
+        if strat == "bayesian":
+            ref = (f"{d['pairs accuracy %']} %, median {d['pairs median moves']} (humans {d['human pairs accuracy %']} %)"
+                   if task == "pairs" else f"{d['117-way accuracy %']} %, median {d['117-way median moves']}")
+        lines.append(f"| {task} | {strat} | {100 * v['accuracy']:.1f} % | {v['median_moves']:g} | {ref} |")
+    n_val = len({t for p in result.pairs for t in p})
+    lines += ["", f"In identification, Bayesian exploration is at least as accurate as cycling and random choice and "
+                  f"converges in no "
+                  f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} validation textures.", "",
+              "## Pairs of similar textures", "",
+              "Chosen as the disjoint pairs within a texture group that the training model confuses most at the "
+              "three optimal movements (the sensor's own notion of similar; D's pairs were chosen by people):", ""]
+    lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}" for a, b in result.pairs]
+    lines += ["", f"Skin replacements during training: {record['skin_replacements']}.",
+              "Wall time per stage (s): " + ", ".join(f"{k} {v:.1f}" for k, v in result.wall_s.items()), ""]
+    return "\n".join(lines)

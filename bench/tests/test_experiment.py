@@ -1,0 +1,73 @@
+"""The texture experiment end to end (reduced, same code path as fishel2012.toml): stages, caching by content
+hash, outputs, and the experiment file's validation."""
+
+import json
+
+import pytest
+
+from bench.campaigns.engine import ClusterSpec
+from bench.cli import main as cli
+from bench.experiments import experiment as E
+from bench.paths import FIXTURES
+
+pytestmark = pytest.mark.unit
+QUICK = FIXTURES / "experiments" / "quick.toml"
+
+
+def test_shipped_experiment_files_validate():
+    full = E.load_experiment(FIXTURES / "experiments" / "fishel2012.toml")
+    assert full.pilot_trials == 6 and full.training_trials == 5 and full.pair_simulations == 1000
+    assert full.identification_simulations == 8000 and full.training_textures is None  # all 117
+    assert len(full.pilot_textures) == 10
+
+
+@pytest.mark.parametrize("data, words", [
+    ({"pilot": {"textures": [999]}}, ["pilot.textures", "999"]),
+    ({"pilot": {"trials": 1}}, ["pilot.trials = 1"]),
+    ({"exploration": {"strategies": ["psychic"]}}, ["exploration.strategies"]),
+    ({"exploration": {"pair_threshold": 1.5}}, ["exploration.pair_threshold = 1.5"]),
+    ({"trainig": {}}, ["unknown table [trainig]"]),
+    ({"training": {"trails": 5}}, ["training: unknown field 'trails'"]),
+    ({"validation": {"pairs": [[2, 3, 4]]}}, ["validation.pairs"]),
+    ({"pilot": {"movements": [0, 99, 1]}}, ["pilot.movements"]),
+])
+def test_bad_experiment_files_name_field_and_value(data, words):
+    with pytest.raises(E.ExperimentError) as e:
+        E.parse_experiment(data, "x.toml")
+    for w in words:
+        assert w in str(e.value)
+
+
+def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkeypatch):
+    spec = E.load_experiment(QUICK)
+    result = E.run_experiment(spec, cache_dir=tmp_path / "cache", cluster=ClusterSpec(workers=2), progress=False,
+                              log=lambda m: None)
+    assert len(result.pilot_rows) == 4 * 6 * 2
+    assert len(result.pairs) == 2 and all(a != b for a, b in result.pairs)
+    s = E.summary(result)
+    for key in ("pairs/bayesian", "pairs/cycle", "pairs/random", "identification/bayesian"):
+        assert 0.0 <= s[key]["accuracy"] <= 1.0 and s[key]["simulations"] > 0
+    # a second run with other exploration settings reads every stage from the cache: no trial runs
+    import bench.experiments.experiment as module
+
+    monkeypatch.setattr(module, "sweep", lambda *a, **k: pytest.fail("a cached stage ran trials again"))
+    again = E.run_experiment(E.ExperimentSpec(**{**vars(spec), "max_moves": 5}), cache_dir=tmp_path / "cache",
+                             cluster=ClusterSpec(workers=1), progress=False, log=lambda m: None)
+    assert again.training_rows == result.training_rows
+    from bench.reporting.experiment_report import write_outputs
+
+    files = write_outputs(result, tmp_path / "out")
+    for name in ("report.md", "summary.json", "accuracy.csv", "confusion.csv", "trials.csv",
+                 "probability_evolution.png", "properties_at_optimal_movements.png"):
+        assert name in files and (tmp_path / "out" / name).stat().st_size > 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert set(summary["best_movements"]) == {"traction", "roughness", "fineness"}
+    assert "99.6" in (tmp_path / "out" / "report.md").read_text()  # D's number stands beside ours
+
+
+def test_explore_command_reports_bad_input_without_traceback(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[pilot]\ntextures = [999]\n")
+    assert cli.main(["explore", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "pilot.textures" in err and "Traceback" not in err
