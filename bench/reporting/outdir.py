@@ -107,6 +107,9 @@ class OutFolder:
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
             folder._probe_writable()
             folder._prepare(force)
+        except OSError as e:
+            folder.close()
+            raise OutDirError(f"{where}: {e.strerror or e}") from None
         except BaseException:
             folder.close()
             raise

@@ -9,6 +9,7 @@ lists is complete and belongs to the same run.  Figures in the record come from 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from dataclasses import asdict
@@ -208,24 +209,53 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
                 rec.status = "failed"
             rec.error = "; ".join(([rec.error] if rec.error else []) + problems)
         interrupted_by = guard.signal_name if rec.status == "interrupted" else None
+        planned = (["samples.h5"] if h5 is not None else []) + outputs + ["report.md", "record.json"]
+        record = _safe_record(rec, planned, skipped, interrupted_by)
+        text = markdown_report(record)
         if h5 is not None:
             try:
-                store.set_status(h5, rec.status, rec.simulated_s, rec.error,
+                store.set_status(h5, record["status"], rec.simulated_s, record["error"],
                                  interrupted_by=interrupted_by or "")
                 folder.commit(h5, "samples.h5")
-                outputs.insert(0, "samples.h5")
             except Exception as e:
-                rec.status = "failed"
-                rec.error = "; ".join(([rec.error] if rec.error else []) + [f"writing samples.h5: {e}"])
-        planned = outputs + ["report.md", "record.json"]
-        record = build_record(rec, planned, skipped, interrupted_by)
-        folder.write_text("report.md", markdown_report(record))
+                _fail(record, f"writing samples.h5: {type(e).__name__}: {e}", "samples.h5")
+                text = markdown_report(record)
+        try:
+            folder.write_text("report.md", text)
+        except Exception as e:
+            _fail(record, f"writing report.md: {type(e).__name__}: {e}", "report.md")
+            if "samples.h5" in record["outputs"]:  # keep samples.h5's status equal to the record's
+                with contextlib.suppress(Exception):
+                    store.set_status(folder.path / "samples.h5", record["status"], rec.simulated_s,
+                                     record["error"])
         folder.write_text("record.json", json.dumps(record, indent=2, default=_json_default))
         return record
     finally:
         folder.remove_temps()
         if own:
             folder.close()
+
+
+def _fail(record: dict, problem: str, missing: str | None = None) -> None:
+    record["status"] = "failed"
+    record["error"] = "; ".join(([record["error"]] if record.get("error") else []) + [problem])
+    if missing in record["outputs"]:
+        record["outputs"].remove(missing)
+
+
+def _safe_record(rec: Recording, outputs: list[str], skipped: dict, interrupted_by: str | None) -> dict:
+    """:func:`build_record`, or — if building it fails — a minimal record saying so (a record is always written)."""
+    try:
+        return build_record(rec, outputs, skipped, interrupted_by)
+    except Exception as e:
+        sc = rec.scene
+        record = {"status": rec.status, "error": rec.error,
+                  "scene": {"name": sc.name, "source": sc.source, "description": sc.description, "seed": sc.seed,
+                            "fidelity": sc.fidelity, "duration_s": sc.duration_s},
+                  "simulated_s": rec.simulated_s, "wall_s": rec.wall_s, "realtime_factor": rec.realtime_factor,
+                  "effects": [], "channels": {}, "outputs": outputs, "skipped_outputs": skipped}
+        _fail(record, f"building the record: {type(e).__name__}: {e}")
+        return record
 
 
 def _json_default(o):

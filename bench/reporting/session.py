@@ -7,7 +7,8 @@
    (:func:`bench.reporting.report.write_outputs`); the record's status is ``ok``, ``failed`` (with the error) or
    ``interrupted`` (with the signal).
 
-Exit status: 0 ok, 1 failed, 128 + signal number when a signal stopped the run (130 SIGINT, 143 SIGTERM).
+Exit status follows the record: 0 ok, 1 failed, 128 + the signal's number when interrupted (130 SIGINT, 143
+SIGTERM).
 """
 
 from __future__ import annotations
@@ -65,10 +66,7 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
             if guard.signum is not None and rec.status == "ok":
                 rec.status = "interrupted"
             record = write_outputs(rec, folder, csv=csv, plots=plots, npz=npz, samples_tmp=h5, guard=guard)
-            if guard.exit_code is not None:
-                code = guard.exit_code
-            else:
-                code = 0 if record["status"] == "ok" else 1
+            code = {"ok": 0, "interrupted": guard.exit_code or 130}.get(record["status"], 1)
         if h5 is not None and "samples.h5" in record["outputs"]:
             from bench.reporting.store import StoredChannels
 

@@ -322,6 +322,21 @@ def test_an_error_while_writing_writes_the_record_as_failed(tmp_path, monkeypatc
 
 
 @pytest.mark.unit
+def test_a_record_that_cannot_be_built_is_still_written(tmp_path, monkeypatch):
+    from bench.reporting import report
+
+    def broken(*a, **kw):
+        raise KeyError("impact_detection")
+
+    monkeypatch.setattr(report, "build_record", broken)
+    out = tmp_path / "o"
+    assert cli.main(["run", str(_scene_file(tmp_path, 0.5)), "--out", str(out), "--quiet", "--no-plots"]) == 1
+    record = json.loads((out / "record.json").read_text())
+    assert record["status"] == "failed" and "building the record: KeyError" in record["error"]
+    assert store.read_attrs(out / "samples.h5")["status"] == "failed"
+
+
+@pytest.mark.unit
 def test_signals_while_writing_stop_the_exports_and_still_write_the_record(tmp_path, monkeypatch):
     """Two SIGINTs arrive while codes.npz is being written: no half-written file, record says interrupted."""
     from bench.reporting import exports
