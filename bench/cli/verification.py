@@ -89,5 +89,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     b.add_argument("--seconds", type=float, default=60.0, help="simulated seconds for the throughput runs")
     b.add_argument("--hour", action="store_true", help="stream a full simulated hour for the memory check")
     b.add_argument("--no-rtl", action="store_true", help="skip the RTL measurements (no Verilator build)")
+    b.add_argument("--textures", action="store_true",
+                   help="only the sliding, texture-rig, Dask-scaling and exploration benchmarks")
     b.set_defaults(func=_cmd_benchmark)
 

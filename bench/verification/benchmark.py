@@ -268,6 +268,11 @@ def _fmt(v, spec):
 
 def main(args) -> int:
     say = (lambda m: print(m, file=sys.stderr)) if not args.json else (lambda m: None)
+    if getattr(args, "textures", False):
+        from bench.verification.benchmark_textures import report
+
+        print(report(say))
+        return 0
     result = {"fidelity": fidelity_table(say)}
     sec = args.seconds
     say("… throughput")

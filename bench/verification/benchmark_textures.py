@@ -1,0 +1,120 @@
+"""Benchmarks of sliding, the texture rig and the experiment's campaigns: what each fidelity profile costs and how
+wrong it is while sliding, rig trials per second, Dask scaling (1 vs 2 workers, overhead per task, an estimate
+for a larger cluster), and exploration steps per second.  Printed by ``biotac-bench benchmark --textures``."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from bench.experiments.trials import TrialTask, run_trial_task, trial_seed
+from emulator.sensor import NoiseSources, Sensor
+from emulator.sliding import Slide
+
+PAC_RATE_HZ = 2200.0
+
+
+def _slide_pac_bits(texture, fidelity: str) -> tuple[np.ndarray, float]:
+    """Noise-free analog PAC (LSB) of a scripted 5 cm slide at 0.5 N, 2.5 cm/s, and its wall time (s)."""
+    from emulator import conversions as conv
+
+    slide = Slide(0.2, texture, 0.5, 0.025, 0.05, start_position_m=0.3)
+    t = np.arange(0.0, slide.end_s + 0.2, 1 / PAC_RATE_HZ)
+    t0 = time.perf_counter()
+    sensor = Sensor(stimuli=[slide], channels_read=["PAC"], fidelity=fidelity, noise=NoiseSources.none())
+    x = sensor.analog_trace("PAC", t) / conv.ADC_LSB_V
+    return x, time.perf_counter() - t0
+
+
+def sliding_fidelity(textures=(901, 902, 30), say=lambda m: None) -> list[dict]:
+    """Per texture and profile: PAC RMS error (LSB) and spectral error (dB, 20–700 Hz) of a noise-free slide
+    against the reference profile, and the rig trial's cost (lower, hold, slide 5 cm, full frame, noise on)."""
+    from bench.textures.library import texture
+
+    rows = []
+    for number in textures:
+        tex = texture(number)
+        ref, _ = _slide_pac_bits(tex, "reference")
+        f = np.fft.rfftfreq(ref.size, 1 / PAC_RATE_HZ)
+        band = (f >= 20) & (f <= 700)
+        ref_spec = np.abs(np.fft.rfft(ref * np.hanning(ref.size)))[band] ** 2
+        for profile in ("fast", "default", "reference"):
+            say(f"… sliding on {tex.name}, {profile}")
+            x, _ = _slide_pac_bits(tex, profile)
+            spec = np.abs(np.fft.rfft(x * np.hanning(x.size)))[band] ** 2
+            spectral = float(np.sqrt(np.mean((10 * np.log10((spec + 1e-12) / (ref_spec + 1e-12))) ** 2)))
+            task = TrialTask(number, 0.5, 0.025, 0, trial_seed(1, "bench", number), fidelity=profile)
+            run_trial_task(task)  # warm the caches (surface tracks, compiled kernels)
+            t0 = time.perf_counter()
+            row = run_trial_task(task)
+            wall = time.perf_counter() - t0
+            rows.append({"texture": tex.name, "profile": profile, "pac_rms_error_bits": float(np.sqrt(np.mean((x - ref) ** 2))),
+                         "spectral_error_dB": spectral, "trial_simulated_s": row["simulated_s"], "trial_wall_s": wall,
+                         "realtime_factor": row["simulated_s"] / wall})
+    return rows
+
+
+def dask_scaling(n_trials: int = 48, say=lambda m: None) -> dict:
+    """The same rig trials on a LocalCluster of 1 and of 2 workers: wall time, speed-up, overhead per task."""
+    from bench.campaigns.engine import ClusterSpec, close, connect, run_tasks
+
+    moves = [(0.2, 0.01), (0.5, 0.025), (1.26, 0.0631), (2.0, 0.1)]
+    tasks = [TrialTask(t, f, v, k, trial_seed(3, "scaling", t, f, v, k))
+             for k, (t, (f, v)) in enumerate((t, m) for t in (2, 30, 43, 100, 901, 902) for m in moves)][:n_trials]
+    out = {"trials": len(tasks)}
+    for workers in (1, 2):
+        say(f"… Dask, {workers} worker(s)")
+        client = connect(ClusterSpec(workers=workers))
+        try:
+            run_tasks(run_trial_task, tasks[:workers * 2], client=client, progress=False)  # warm every worker
+            t0 = time.perf_counter()
+            rows = run_tasks(run_trial_task, tasks, client=client, progress=False)
+            wall = time.perf_counter() - t0
+        finally:
+            close(client)
+        busy = sum(r["wall_s"] for r in rows)
+        out[f"workers_{workers}"] = {"wall_s": wall, "task_s": busy,
+                                     "overhead_per_task_s": max(0.0, (wall * workers - busy) / len(rows))}
+    w1, w2 = out["workers_1"], out["workers_2"]
+    out["speedup"] = w1["wall_s"] / w2["wall_s"]
+    mean_task = w1["task_s"] / len(tasks)
+    # estimate (stated as such): 64 workers, same per-task cost and overhead, perfectly divisible work
+    out["estimate_64_workers_trials_per_s"] = 64 / (mean_task + w2["overhead_per_task_s"])
+    out["mean_task_s"] = mean_task
+    return out
+
+
+def exploration_speed() -> float:
+    """Bayesian exploration steps per second over 117 synthetic textures (bench.experiments.bench_exploration
+    prints its per-strategy lines to stdout)."""
+    import contextlib
+    import io
+
+    from bench.experiments import bench_exploration
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        return float(bench_exploration.main([]))
+
+
+def report(say=lambda m: None) -> str:
+    lines = ["Sliding: a 5 cm slide at 0.5 N, 2.5 cm/s — error against the reference profile (noise-free PAC) and "
+             "the cost of a rig trial (lower, hold, slide, lift; full 44-slot frame, noise on):",
+             f"  {'texture':20s} {'profile':10s} {'PAC RMS err (bits)':>19s} {'spectral err (dB)':>18s} "
+             f"{'trial sim s':>12s} {'trial wall s':>13s} {'× real time':>12s}"]
+    for r in sliding_fidelity(say=say):
+        lines.append(f"  {r['texture']:20s} {r['profile']:10s} {r['pac_rms_error_bits']:19.3f} "
+                     f"{r['spectral_error_dB']:18.3f} {r['trial_simulated_s']:12.2f} {r['trial_wall_s']:13.3f} "
+                     f"{r['realtime_factor']:12.0f}")
+    d = dask_scaling(say=say)
+    lines += [f"\nCampaign engine (Dask LocalCluster), {d['trials']} rig trials:",
+              f"  1 worker: {d['workers_1']['wall_s']:.2f} s; 2 workers: {d['workers_2']['wall_s']:.2f} s; "
+              f"speed-up {d['speedup']:.2f}×",
+              f"  overhead per task: {d['workers_2']['overhead_per_task_s'] * 1e3:.1f} ms (2 workers), "
+              f"{d['workers_1']['overhead_per_task_s'] * 1e3:.1f} ms (1 worker); mean trial {d['mean_task_s']:.3f} s",
+              f"  estimate (not measured): 64 workers ≈ {d['estimate_64_workers_trials_per_s']:.0f} trials/s, so the "
+              f"experiment's ~4000 trials in ≈ {4000 / d['estimate_64_workers_trials_per_s']:.0f} s"]
+    say("… exploration steps")
+    lines.append(f"\nBayesian exploration over 117 textures × 36 movements × 3 properties: "
+                 f"{exploration_speed():,.0f} steps/s")
+    return "\n".join(lines)
