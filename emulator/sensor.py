@@ -169,6 +169,10 @@ class Sensor:
                 temp = p.ambient_temperature_C if s.object_temperature_C is None else s.object_temperature_C
                 contacts.append(ThermalContact(s.start_s, s.end_s, material(s.material), temp,
                                                np.pi * (s.indenter_radius_mm * 1e-3) ** 2))
+            elif isinstance(s, Slide):  # the texture at room temperature, over the patch at the slide's force
+                contacts.append(ThermalContact(s.start_s, s.end_s, material(s.texture.material),
+                                               p.ambient_temperature_C,
+                                               np.pi * (p.contact_radius_at_1N_m * s.force_N ** (1 / 3)) ** 2))
         power_on = [s.at_s for s in stimuli if isinstance(s, PowerOn)]
         steps = tuple(sorted((s.at_s, s.temperature_C) for s in stimuli if isinstance(s, AmbientStep)))
         failures = [s.at_s for s in stimuli if isinstance(s, HeaterFailure)]
@@ -186,6 +190,10 @@ class Sensor:
         positions = electrode_positions_mm()
         contacts = []
         for s in stimuli:
+            if isinstance(s, Slide):  # the ventral pad on the texture, sheared along +x by kinetic friction
+                contacts.append(Contact(surface_point_mm(-5.0, 0.0), self.params.contact_radius_at_1N_m * 1e3,
+                                        s.normal_force_N, s.texture.mu_kinetic, (1.0, 0.0, 0.0), s.start_s, s.end_s))
+                continue
             if not isinstance(s, Touch):
                 continue
             if s.electrode is not None:
