@@ -258,7 +258,8 @@ def _open_driver(port: str, baud: int):
     try:
         return BridgeDriver(port, baudrate=baud)
     except (OSError, ValueError) as e:
-        msg = getattr(e, "strerror", None) or str(e)
+        code = getattr(e, "errno", None)
+        msg = os.strerror(code) if isinstance(code, int) else str(e)
         raise OSError(f"argument port: cannot open {port}: {msg}") from None
 
 

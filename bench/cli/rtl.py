@@ -6,7 +6,56 @@ import argparse
 import sys
 from pathlib import Path
 
+from bench.cli.hosts import number, one_line_errors
 from bench.paths import REPO
+
+_TRANSFER_KEYS = {"t_ps": int, "cs": int, "nbits": int, "mosi": str, "half_ps": int, "keep_cs": bool, "miso": str}
+
+
+def vector_file_problem(path: str) -> str | None:
+    """Why ``path`` is not a protocol vector file (fixtures/spi_vectors/*.json), or None if it is one."""
+    import json
+
+    try:
+        vec = json.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return "no such file"
+    except IsADirectoryError:
+        return "a folder, not a file"
+    except OSError as e:
+        return f"cannot read it ({e.strerror})"
+    except UnicodeDecodeError:
+        return "not a vector file (not UTF-8 text)"
+    except json.JSONDecodeError as e:
+        return f"not a vector file (JSON syntax error at line {e.lineno}, column {e.colno})"
+    except RecursionError:
+        return "not a vector file (nested too deeply)"
+    if not isinstance(vec, dict):
+        return "not a vector file (the top level must be an object)"
+    missing = [k for k in ("sensors", "pull_up", "faults", "transfers", "conversions") if k not in vec]
+    if missing:
+        return f"not a vector file (missing {', '.join(missing)})"
+    sensors = vec["sensors"]
+    if not (isinstance(sensors, list) and sensors and all(isinstance(s, int) and 1 <= s <= 5 for s in sensors)):
+        return "not a vector file (sensors must be a list of sensor numbers 1..5)"
+    if not isinstance(vec["pull_up"], bool) or not isinstance(vec["faults"], dict):
+        return "not a vector file (pull_up must be true/false, faults an object)"
+    if not isinstance(vec["transfers"], list) or not isinstance(vec["conversions"], list):
+        return "not a vector file (transfers and conversions must be lists)"
+    for k, d in enumerate(vec["transfers"]):
+        if not isinstance(d, dict):
+            return f"not a vector file (transfers[{k}] is not an object)"
+        for key, kind in _TRANSFER_KEYS.items():
+            v = d.get(key)
+            if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
+                return f"not a vector file (transfers[{k}].{key} = {v!r})"
+        try:
+            int(d["mosi"], 16), int(d["miso"], 16)
+        except ValueError:
+            return f"not a vector file (transfers[{k}]: mosi/miso must be hex)"
+        if d["half_ps"] <= 0 or d["nbits"] < 0 or not 0 <= d["cs"] <= 7 or d["t_ps"] < 0:
+            return f"not a vector file (transfers[{k}] out of range)"
+    return None
 
 
 def _cmd_rtl(a) -> int:
@@ -21,7 +70,14 @@ def _cmd_rtl(a) -> int:
         from emulator.spi import vectors as V
 
         if not a.files:
-            raise ValueError("give one or more vector files, e.g. fixtures/spi_vectors/properties.json")
+            print("biotac-bench rtl: error: argument files: give one or more vector files, e.g. "
+                  "fixtures/spi_vectors/properties.json", file=sys.stderr)
+            return 2
+        for f in a.files:
+            problem = vector_file_problem(f)
+            if problem:
+                print(f"biotac-bench rtl: error: argument files: {f}: {problem}", file=sys.stderr)
+                return 2
         rtl = Rtl(REPO / "out" / ("rtl_build_waves" if a.waves else "rtl_build"), waves=a.waves)
         if a.waves and rtl.wave_format != "fst":
             print("note: FST needs the lz4 headers (Debian: apt-get install liblz4-dev); writing VCD instead",
@@ -47,13 +103,15 @@ def _cmd_rtl(a) -> int:
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    rt = sub.add_parser("rtl", help="the Verilog twin: lint, replay vector files (FST waves on request), stream",
-                        description="lint: verilator --lint-only -Wall on the RTL. vectors FILE...: replay protocol "
-                                    "vector files (fixtures/spi_vectors/*.json) on the RTL under cocotb and compare "
-                                    "with the reference; --waves writes an FST waveform. stream: play the default "
-                                    "frame through the C++ harness.", formatter_class=fmt)
+    rt = one_line_errors(sub.add_parser(
+        "rtl", help="the Verilog twin: lint, replay vector files (FST waves on request), stream",
+        description="lint: verilator --lint-only -Wall on the RTL. vectors FILE...: replay protocol vector files "
+                    "(fixtures/spi_vectors/*.json) on the RTL under cocotb and compare with the reference; --waves "
+                    "writes an FST waveform. stream: play the default frame through the C++ harness.",
+        formatter_class=fmt))
     rt.add_argument("action", choices=["lint", "vectors", "stream"])
     rt.add_argument("files", nargs="*", help="vector files (for 'vectors')")
     rt.add_argument("--waves", action="store_true", help="dump an FST waveform of the simulation")
-    rt.add_argument("--seconds", type=float, default=1.0, help="simulated seconds (for 'stream')")
+    rt.add_argument("--seconds", type=number(0, 3600, lo_open=True), default=1.0,
+                    help="simulated seconds (for 'stream'; > 0)")
     rt.set_defaults(func=_cmd_rtl)

@@ -1,11 +1,45 @@
-"""The emulator behind the Cheetah-compatible library (emulator/cheetah/cheetah_emu.c).
+"""The emulated Cheetah adapter behind the Cheetah-compatible library (emulator/cheetah/cheetah_emu.c).
 
-``CheetahBench`` builds ``cheetah.so`` (cached), serves a Unix socket, and clocks every queue a client
-shifts through the emulated sensors' SPI bus in virtual time: slave-select changes open and close chip-select
-windows (a change from one select code to another with nothing in between is the vendor library's way of
-reading sensors back to back), bytes are clocked at the configured bit rate, queued delays and
-``ch_sleep_ms`` advance time exactly.  A program built against Total Phase's public header and loader runs
-unmodified with the built ``cheetah.so`` beside it and ``BIOTAC_CHEETAH_SOCKET`` pointing at the bench.
+``CheetahBench`` builds ``cheetah.so`` (cached), serves a Unix socket in a private folder, and clocks every queue
+a client shifts through the emulated sensors' SPI bus in virtual time.  A program built against Total Phase's
+public header and loader runs unmodified with the built ``cheetah.so`` beside it and ``BIOTAC_CHEETAH_SOCKET``
+pointing at the bench (``bench.env``; ``biotac-bench cheetah serve`` prints the line to export).
+
+How it behaves like the device
+    *One client per adapter.*  The first program that opens it owns it until it closes (or dies); meanwhile
+    ``ch_find_devices`` reports the port ORed with ``CH_PORT_NOT_FREE`` and ``ch_open`` fails with
+    ``CH_UNABLE_TO_OPEN`` — as a second open of a real adapter does.
+
+    *Private socket.*  The socket lives in a fresh folder of mode 0700: under ``$XDG_RUNTIME_DIR`` when that is
+    a private folder of this user, else a ``mkdtemp`` folder; the library refuses sockets in folders that are
+    not private or served by another user, and there is no default path.
+
+    *Timing.*  Bytes are clocked at the configured bit rate; queued delays and ``ch_sleep_ms`` advance time
+    exactly.  The adapter's own overheads (model choices, taken from the delay formula of SynTouch's published
+    Cheetah host code, which budgets them): every queued slave-select command occupies one byte slot,
+    :data:`SELECT_CYCLES` = 8 SCK periods, before the lines change; every run of bytes under one select costs
+    :data:`TRANSFER_OVERHEAD_S` = 750 ns beyond its bits (set-up before the first clock and hold after the
+    last).  With the vendor's per-sample queue (6 select commands, 4 runs of 2 bytes, 3 delays) a sample costs
+    its delays + 112 SCK periods + 3 µs — what the formula assumes, so it yields the 4400 Hz it asks for.
+
+    *The host and the adapter run in parallel.*  The adapter's time (the bus) and the host's time advance
+    separately: a batch starts when it is submitted (or shifted) and the bus is free; ``ch_sleep_ms`` advances
+    the host's time only; collecting a batch (or a synchronous shift) makes the host wait for its end.
+    :attr:`t` is the host's time.
+
+    *SPI settings.*  The sensors are mode 0 (sample MOSI on the rising edge, shift MISO on the falling edge,
+    first bit at chip-select fall), MSB first, active-low selects.  The adapter clocks as configured and the
+    bus shows what that does: LSB first reverses every byte each way; phase 1 with idle-low clock (mode 1)
+    changes MOSI on the rising edge the sensor samples on, so the sensor reads each bit one late (MOSI shifted
+    by one bit); mode 3 (idle-high, sample on the trailing rising edge) samples MISO after the sensor's first
+    falling-edge shift (MISO shifted by one bit); mode 2 samples MISO on the edge the sensor shifts it, and
+    gets the old bit (the sensor's output changes ~45 ns after the edge), so it happens to read correctly, as
+    on a real bus; an active-high select line (``ss_polarity`` bit set) is asserted when the host thinks it
+    idle, so the sensors see the complement of every select code (``code ^ ss_polarity``).
+
+    *Clean teardown.*  Whatever clients send, the bench keeps serving the others; a malformed request ends
+    that client's connection and is recorded in :attr:`client_errors`; :meth:`stop` closes every connection,
+    joins every thread and removes the folder, and never raises.
 """
 
 from __future__ import annotations
@@ -13,9 +47,11 @@ from __future__ import annotations
 import os
 import shutil
 import socket
+import stat
 import struct
 import tempfile
 import threading
+from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -27,45 +63,112 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 
 LIBRARY_SOURCE = REPO / "emulator" / "cheetah" / "cheetah_emu.c"
 CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "biotac_client.c"
+VENDOR_RATE_CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "vendor_rate_client.c"
 OP_SS, OP_BYTES, OP_DELAY_NS, OP_OE = 1, 2, 3, 4
-REQ_SHIFT, REQ_SLEEP, REQ_HELLO = 1, 2, 3
+REQ_SHIFT, REQ_SLEEP, REQ_HELLO, REQ_QUERY, REQ_SUBMIT, REQ_COLLECT = 1, 2, 3, 4, 5, 6
+MAX_REQUEST_BYTES = 64 << 20
+UNIQUE_ID = 1365000042
+
+#: Every queued slave-select command occupies one byte slot of the adapter's shift engine (SCK periods).
+SELECT_CYCLES = 8
+#: Every run of bytes shifted under one select costs this much beyond its bits (s): set-up and hold.
+TRANSFER_OVERHEAD_S = 750e-9
+#: A batch's slave-select polarity bits: 1 = that line is active high (the sensors' selects are active low).
+MODE_CPOL, MODE_CPHA, MODE_LSB = 1, 2, 4
+
+
+class ProtocolError(Exception):
+    """A client sent something the library never sends: its connection is closed."""
 
 
 def build_library(out_dir: Path | None = None) -> Path:
-    """Compile cheetah.so into its own folder (cached by the library's and client's sources); returns its path."""
-    folder = build_folder(out_dir or REPO / "out" / "cheetah", [LIBRARY_SOURCE, CLIENT_SOURCE])
+    """Compile cheetah.so into its own folder (cached by the library's and clients' sources); returns its path."""
+    folder = build_folder(out_dir or REPO / "out" / "cheetah",
+                          [LIBRARY_SOURCE, CLIENT_SOURCE, VENDOR_RATE_CLIENT_SOURCE])
     return compile_c([LIBRARY_SOURCE], folder / "cheetah.so", flags=("-D_DEFAULT_SOURCE", "-shared", "-fPIC"),
                      what="cheetah.so")
 
 
-class CheetahBench:
-    """Emulated sensors behind the Cheetah-compatible library: ``with CheetahBench(3) as cb: ...``."""
+def private_folder() -> str:
+    """A fresh folder only this user can enter (0700): under $XDG_RUNTIME_DIR if that is private, else mkdtemp."""
+    runtime = os.environ.get("XDG_RUNTIME_DIR")
+    if runtime:
+        try:
+            st = os.stat(runtime)
+            if stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid() and not st.st_mode & 0o077 \
+                    and len(runtime) + len("/biotac-cheetah-XXXXXXXX/cheetah.sock") < 108:
+                return tempfile.mkdtemp(prefix="biotac-cheetah-", dir=runtime)
+        except OSError:
+            pass
+    return tempfile.mkdtemp(prefix="biotac-cheetah-")
 
-    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None):
+
+def _reverse_bits(b: int) -> int:
+    return int(f"{b:08b}"[::-1], 2)
+
+
+_REVERSED = bytes(_reverse_bits(b) for b in range(256))
+
+
+class _Client:
+    def __init__(self, conn: socket.socket):
+        self.conn = conn
+        self.owner = False
+        self.results: deque[tuple[bytes, float]] = deque()  # submitted batches: (MISO, end time)
+        self.thread: threading.Thread | None = None
+
+
+class CheetahBench:
+    """Emulated sensors behind the Cheetah-compatible library: ``with CheetahBench(3) as cb: ...``.
+
+    ``trace=True`` keeps every transfer clocked on the bus in :attr:`trace` as (start s, select code the sensors
+    see, bits, MOSI the sensors received).
+    """
+
+    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False):
         self.library = build_library()
         self.lib_dir = self.library.parent
-        self._tmp = tempfile.mkdtemp(prefix="biotac-cheetah-")
+        self._tmp = private_folder()
         self.socket_path = os.path.join(self._tmp, "cheetah.sock")
         self.bus = Bus({n: SensorPort(s, n) for n, s in (sensors or default_sensors(n_sensors, stimuli, seed)).items()})
-        self.t = 0.0
-        self.ss = 0
-        self.window_open = False
+        self.t_host = 0.0  # the host program's time (s)
+        self.t_bus = 0.0  # when the adapter's bus is free
         self.batches = 0
+        self.trace: list | None = [] if trace else None
+        self.client_errors: list[str] = []
+        # the adapter's state on the bus, carried from batch to batch
+        self._host_ss = 0  # the select code the host asked for last
+        self._bus_open = False  # a chip-select window is open on the bus (with code _bus_code)
+        self._bus_code = 0
+        self._mosi_last = 0  # the last bit the adapter drove on MOSI (it holds the line)
+        self._lock = threading.Lock()
+        self._owner: _Client | None = None
+        self._clients: list[_Client] = []
         self._server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         self._server.bind(self.socket_path)
-        self._server.listen(4)
+        os.chmod(self.socket_path, 0o600)
+        self._server.listen(8)
+        self._server.settimeout(0.2)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._serve, name="cheetah-server", daemon=True)
-        self.error: BaseException | None = None
+        self._stopped = False
+
+    @property
+    def t(self) -> float:
+        """The host's time (s): what queued delays, shifts, collects and ``ch_sleep_ms`` have advanced."""
+        return self.t_host
 
     @property
     def env(self) -> dict:
         """Environment for a client process: where the library finds this bench."""
         return {**os.environ, "BIOTAC_CHEETAH_SOCKET": self.socket_path}
 
+    @property
+    def in_use(self) -> bool:
+        return self._owner is not None
+
     # --- serving ------------------------------------------------------------------------
     def _serve(self):
-        self._server.settimeout(0.2)
         while not self._stop.is_set():
             try:
                 conn, _ = self._server.accept()
@@ -73,98 +176,214 @@ class CheetahBench:
                 continue
             except OSError:
                 return
-            threading.Thread(target=self._client, args=(conn,), daemon=True).start()
+            client = _Client(conn)
+            client.thread = threading.Thread(target=self._client, args=(client,), name="cheetah-client", daemon=True)
+            with self._lock:
+                self._clients.append(client)
+            client.thread.start()
 
-    def _client(self, conn):
-        with conn:
-            try:
-                while True:
-                    head = self._recv(conn, 5)
-                    if head is None:
-                        return
-                    kind, length = head[0], struct.unpack("<I", head[1:])[0]
-                    payload = self._recv(conn, length) if length else b""
-                    if kind == REQ_SHIFT:
-                        reply = self.execute(payload)
-                    elif kind == REQ_SLEEP:
-                        self.t += struct.unpack("<I", payload)[0] * 1e-3
-                        reply = b""
-                    else:
-                        reply = b""
+    def _client(self, c: _Client):
+        conn = c.conn
+        try:
+            while not self._stop.is_set():
+                head = self._recv(conn, 5)
+                if head is None:
+                    return
+                kind, length = head[0], struct.unpack("<I", head[1:])[0]
+                if length > MAX_REQUEST_BYTES:
+                    raise ProtocolError(f"request of {length} bytes")
+                payload = self._recv(conn, length) if length else b""
+                if payload is None:
+                    return
+                reply = self._handle(c, kind, payload)
+                if reply is not None:
                     conn.sendall(struct.pack("<I", len(reply)) + reply)
-            except Exception as e:  # reported by stop(); the client sees a communication error
-                self.error = e
+                if kind == REQ_HELLO and not c.owner:
+                    return  # refused: another program has the adapter
+        except (ProtocolError, ValueError, struct.error, IndexError) as e:
+            self.client_errors.append(f"{type(e).__name__}: {e}")
+        except OSError:
+            pass  # the client went away mid-request
+        except Exception as e:  # noqa: BLE001 - whatever a client caused ends its connection, not the bench
+            self.client_errors.append(f"{type(e).__name__}: {e}")
+        finally:
+            with self._lock:
+                if self._owner is c:
+                    self._owner = None
+                if c in self._clients:
+                    self._clients.remove(c)
+            try:
+                conn.close()
+            except OSError:
+                pass
+
+    def _handle(self, c: _Client, kind: int, payload: bytes) -> bytes | None:
+        with self._lock:
+            if kind == REQ_QUERY:
+                return bytes([self._owner is not None]) + struct.pack("<I", UNIQUE_ID)
+            if kind == REQ_HELLO:
+                if self._owner is None:
+                    self._owner, c.owner = c, True
+                    return b"\x00"
+                return b"\x01"
+            if not c.owner:
+                raise ProtocolError(f"request {kind} before opening the adapter")
+            if kind == REQ_SLEEP:
+                if len(payload) != 4:
+                    raise ProtocolError("sleep needs 4 bytes")
+                self.t_host += struct.unpack("<I", payload)[0] * 1e-3
+                return b""
+            if kind == REQ_SHIFT:
+                miso, end = self.execute(payload, max(self.t_host, self.t_bus))
+                self.t_bus = self.t_host = end
+                return miso
+            if kind == REQ_SUBMIT:  # starts now (when the bus is free); the host does not wait
+                miso, end = self.execute(payload, max(self.t_host, self.t_bus))
+                self.t_bus = end
+                c.results.append((miso, end))
+                return None
+            if kind == REQ_COLLECT:
+                if not c.results:
+                    raise ProtocolError("collect with nothing submitted")
+                miso, end = c.results.popleft()
+                self.t_host = max(self.t_host, end)
+                return miso
+            raise ProtocolError(f"unknown request type {kind}")
 
     @staticmethod
     def _recv(conn, n):
-        buf = b""
+        buf = bytearray()
         while len(buf) < n:
             chunk = conn.recv(n - len(buf))
             if not chunk:
                 return None
             buf += chunk
-        return buf
+        return bytes(buf)
 
     # --- the queue -> SPI transfers ------------------------------------------------------------
-    def execute(self, payload: bytes) -> bytes:
-        rate_khz = struct.unpack_from("<I", payload)[0]
+    def execute(self, payload: bytes, start: float) -> tuple[bytes, float]:
+        """Clock one batch from ``start`` (s); returns (the MISO bytes the host receives, when the batch ends)."""
+        if len(payload) < 6:
+            raise ProtocolError("batch header truncated")
+        rate_khz, mode, ss_pol = struct.unpack_from("<IBB", payload)
+        if not 1 <= rate_khz <= 1_000_000 or mode > 7:
+            raise ProtocolError(f"bit rate {rate_khz} kHz, mode {mode}")
+        ss_pol &= 7
         clock = rate_khz * 1e3
-        transfers: list[Transfer] = []
-        pending: list | None = None  # [start, cs, bytearray]
-        t = self.t
+        T = 1.0 / clock
+        plan: list[Transfer] = []
+        t = start
+        pending: list | None = None  # [start, code, bytearray]
+        sel: tuple[float, int] | None = None  # a select change the bus has not seen yet
+        bus_open, bus_code = self._bus_open, self._bus_code
+        cur = (self._host_ss ^ ss_pol) & 7  # the code the sensors see
+        if cur != (bus_code if bus_open else 0):
+            sel = (t, cur)
+
+        def emit_select(when: float, code: int):
+            nonlocal bus_open, bus_code
+            plan.append(Transfer(when, code, 0, 0, clock, code != 0))
+            bus_open, bus_code = code != 0, code
 
         def flush(keep: bool):
-            nonlocal pending, t
-            if pending is not None:
-                data = bytes(pending[2])
-                tr = Transfer(pending[0], pending[1], int.from_bytes(data, "big"), 8 * len(data), clock, keep)
-                transfers.append(tr)
-                t = tr.end_s
-                self.window_open = keep and pending[1] != 0
-                pending = None
+            nonlocal pending, t, bus_open, bus_code
+            p0, code, data = pending
+            tr = Transfer(p0, code, int.from_bytes(bytes(data), "big"), 8 * len(data), clock, keep and code != 0)
+            plan.append(tr)
+            bus_open, bus_code = tr.keep_cs, code
+            t = p0 + 8 * len(data) * T + max(0.5 * T, TRANSFER_OVERHEAD_S)
+            pending = None
 
-        i = 4
-        while i < len(payload):
+        i, n = 6, len(payload)
+        while i < n:
+            if i + 5 > n:
+                raise ProtocolError("queue record truncated")
             kind, value = payload[i], struct.unpack_from("<I", payload, i + 1)[0]
             i += 5
             if kind == OP_SS:
-                if value != self.ss:
-                    if pending is not None:
-                        flush(keep=value != 0)
-                    elif value == 0 and self.window_open:  # release a window held open from before
-                        transfers.append(Transfer(t, 0, 0, 0, clock))
-                        t = transfers[-1].end_s
-                        self.window_open = False
-                    self.ss = value
+                if value > 7:
+                    raise ProtocolError(f"select code {value}")
+                new = (value ^ ss_pol) & 7
+                if pending is not None:
+                    flush(keep=new != 0)
+                t += SELECT_CYCLES * T  # the select command's byte slot; the lines change at its end
+                self._host_ss, cur = value, new
+                sel = (t, cur) if cur != (bus_code if bus_open else 0) else None
             elif kind == OP_BYTES:
+                if value == 0 or i + value > n:
+                    raise ProtocolError("byte record truncated")
                 data = payload[i:i + value]
                 i += value
                 if pending is None:
-                    pending = [t, self.ss, bytearray()]
+                    sel = None  # the transfer itself changes the select at its start
+                    pending = [t, cur, bytearray()]
                 pending[2] += data
             elif kind == OP_DELAY_NS:
-                flush(keep=self.ss != 0)
+                if pending is not None:
+                    flush(keep=cur != 0)
+                if sel is not None:
+                    emit_select(*sel)
+                    sel = None
                 t += value * 1e-9
-        flush(keep=self.ss != 0)
-        self.t = max(t, self.t)
+            elif kind == OP_OE:
+                pass  # output enable: the lines stay driven (the sensors see no difference)
+            else:
+                raise ProtocolError(f"queue record kind {kind}")
+        if pending is not None:
+            flush(keep=cur != 0)
+        if sel is not None:
+            emit_select(*sel)
+        self._bus_open, self._bus_code = bus_open, bus_code
         self.batches += 1
-        return self._clock(transfers)
+        return self._clock(plan, mode), t
 
-    def _clock(self, transfers: list[Transfer]) -> bytes:
-        if not transfers:
+    def _clock(self, plan: list[Transfer], mode: int) -> bytes:
+        if not plan:
             return b""
-        if all(tr.nbits == 16 for tr in transfers):  # word traffic: the vectorized path
-            miso = self.bus.exchange_words(np.array([tr.start_s for tr in transfers]),
-                                           np.array([tr.cs for tr in transfers]),
-                                           np.array([tr.mosi for tr in transfers], dtype=np.uint16),
-                                           np.array([tr.clock_hz for tr in transfers]),
-                                           np.array([tr.keep_cs for tr in transfers]))
+        if mode == 0 and all(tr.nbits == 16 for tr in plan):  # word traffic: the vectorized path
+            if self.trace is not None:
+                self.trace.extend((tr.start_s, tr.cs, tr.nbits, tr.mosi) for tr in plan)
+            miso = self.bus.exchange_words(np.array([tr.start_s for tr in plan]),
+                                           np.array([tr.cs for tr in plan]),
+                                           np.array([tr.mosi for tr in plan], dtype=np.uint16),
+                                           np.array([tr.clock_hz for tr in plan]),
+                                           np.array([tr.keep_cs for tr in plan]))
+            self._mosi_last = int(plan[-1].mosi) & 1
             return miso.astype(">u2").tobytes()
         out = bytearray()
-        for tr in transfers:
-            bits = self.bus.transfer(tr)
-            if tr.nbits:
-                out += bits.to_bytes(tr.nbits // 8, "big")
+        for tr in plan:
+            if not tr.nbits:
+                if self.trace is not None:
+                    self.trace.append((tr.start_s, tr.cs, 0, 0))
+                self.bus.transfer(tr)
+                continue
+            n = tr.nbits // 8
+            mosi = tr.mosi
+            if mode & MODE_LSB:  # the adapter shifts each byte LSB first: the sensors assemble it reversed
+                mosi = int.from_bytes(bytes(mosi.to_bytes(n, "big")).translate(_REVERSED), "big")
+            host_last = mosi & 1
+            if mode & (MODE_CPOL | MODE_CPHA) == MODE_CPHA:  # mode 1: the sensor samples each bit one late
+                mosi = (self._mosi_last << (tr.nbits - 1)) | (mosi >> 1)
+            self._mosi_last = host_last
+            wire = Transfer(tr.start_s, tr.cs, mosi, tr.nbits, tr.clock_hz, True if mode & 3 == 3 else tr.keep_cs)
+            if self.trace is not None:
+                self.trace.append((wire.start_s, wire.cs, wire.nbits, wire.mosi))
+            bits = self.bus.transfer(wire)
+            if mode & (MODE_CPOL | MODE_CPHA) == MODE_CPOL | MODE_CPHA:
+                # mode 3: the first falling edge (the leading one) shifts MISO before the first sample
+                selected = self.bus.selected_by(tr.cs)
+                nxt = 0
+                for k in selected:
+                    nxt |= self.bus.ports[k].miso_bit(self.bus.ports[k].position)
+                if not selected:
+                    nxt = int(self.bus.pull_up)
+                bits = ((bits << 1) | nxt) & ((1 << tr.nbits) - 1)
+                if not tr.keep_cs:
+                    self.bus.transfer(Transfer(wire.end_s, 0, 0, 0, tr.clock_hz))
+            data = bits.to_bytes(n, "big")
+            if mode & MODE_LSB:
+                data = data.translate(_REVERSED)
+            out += data
         return bytes(out)
 
     # --- lifetime -------------------------------------------------------------------------
@@ -173,12 +392,28 @@ class CheetahBench:
         return self
 
     def stop(self) -> None:
+        """Close every connection, join every thread, remove the socket's folder; never raises."""
+        if self._stopped:
+            return
+        self._stopped = True
         self._stop.set()
-        self._server.close()
-        self._thread.join(timeout=5)
+        try:
+            self._server.close()
+        except OSError:
+            pass
+        if self._thread.is_alive():
+            self._thread.join(timeout=5)
+        with self._lock:
+            clients = list(self._clients)
+        for c in clients:
+            try:
+                c.conn.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+        for c in clients:
+            if c.thread is not None and c.thread is not threading.current_thread():
+                c.thread.join(timeout=5)
         shutil.rmtree(self._tmp, ignore_errors=True)
-        if self.error is not None:
-            raise RuntimeError(f"the Cheetah bench failed: {self.error!r}") from self.error
 
     def __enter__(self):
         return self.start()
@@ -192,3 +427,9 @@ def build_client(library: Path) -> Path:
     from its own folder, as programs using the vendor's loader do."""
     return compile_c([CLIENT_SOURCE], Path(library).parent / "biotac_client", libs=("-ldl", "-lm"),
                      what="the Cheetah example client")
+
+
+def build_vendor_rate_client(library: Path) -> Path:
+    """Compile the client that paces its samples with SynTouch's published delay formula (beside ``library``)."""
+    return compile_c([VENDOR_RATE_CLIENT_SOURCE], Path(library).parent / "vendor_rate_client", libs=("-ldl",),
+                     what="the vendor-formula Cheetah client")

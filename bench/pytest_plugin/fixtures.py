@@ -17,10 +17,17 @@ Installed with the package (entry point ``pytest11``), so in any test:
 
 Fixtures
     biotac_sensor       factory -> emulator.spi.model.SensorPort over an emulated sensor (in process)
-    biotac_bridge       factory -> bench.hosts.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown)
+    biotac_bridge       factory -> bench.hosts.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown).
+                        Unpaced by default: the firmware waits for your program to read, nothing is lost.  With
+                        ``realtime=True`` the pty is a UART without flow control: a program that stops reading
+                        overruns the 4096-byte receive buffer and loses frames (``keep_arrivals=True`` and
+                        ``bench.overrun_frames()`` tell which), as a real one would
     biotac_serial_port  the pty path of a one-sensor bridge that is already running
     biotac_cheetah      factory -> bench.hosts.cheetah_server.CheetahBench: emulated sensors behind cheetah.so; run
-                        your Cheetah-based program with ``cwd``/copy at ``.lib_dir`` and ``env=bench.env``
+                        your Cheetah-based program with ``cwd``/copy at ``.lib_dir`` and ``env=bench.env``.  One
+                        program at a time may open the adapter; teardown is clean whatever the program did
+                        (malformed requests are listed in ``bench.client_errors``); ``trace=True`` keeps every
+                        transfer with its time
 """
 
 from __future__ import annotations

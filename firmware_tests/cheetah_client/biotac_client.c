@@ -47,6 +47,7 @@ static struct {
     int (*batch_shift)(int, int, u08 *);
     int (*async_submit)(int);
     int (*async_collect)(int, int, u08 *);
+    const char *(*status_string)(int);
 } ch;
 
 static void *load(const char *argv0) {
@@ -81,6 +82,7 @@ int main(int argc, char **argv) {
     BIND(queue_byte, "spi_queue_byte"); BIND(queue_delay_ns, "spi_queue_delay_ns");
     BIND(batch_length, "spi_batch_length"); BIND(batch_shift, "spi_batch_shift");
     BIND(async_submit, "spi_async_submit"); BIND(async_collect, "spi_async_collect");
+    BIND(status_string, "status_string");
 
     u16 ports[4];
     if (ch.find_devices(4, ports) < 1) { fprintf(stderr, "no Cheetah adapter found\n"); return 4; }
@@ -118,7 +120,10 @@ int main(int argc, char **argv) {
             ch.queue_delay_ns(h, 50000);
             for (int s = 0; s < SENSORS; ++s) { ch.queue_ss(h, SELECT[s]); ch.queue_byte(h, 2, 0x00); }
             ch.queue_ss(h, 0);
-            ch.queue_delay_ns(h, 227273 - 50000 - (2 + 2 * SENSORS) * 8 * 1000000 / 4400 - 10000);
+            /* pad the sample to 1/4400 s: besides the delays, the adapter spends the bits, one byte slot (8 SCK
+               periods) per select command (6 per sample) and ~750 ns per run of bytes (4 per sample), the budget
+               SynTouch's host code uses for the Cheetah */
+            ch.queue_delay_ns(h, 227273 - 50000 - ((2 + 2 * SENSORS) * 8 + 6 * 8) * 1000000 / 4400 - 4 * 750);
         }
     int len = ch.batch_length(h);
     u08 *data = malloc((size_t)len);
@@ -128,7 +133,10 @@ int main(int argc, char **argv) {
     for (int b = 0; b < batches; ++b) {
         int got = ch.async_collect(h, len, data);
         ch.async_submit(h);
-        if (got != len) { fprintf(stderr, "short batch: %d of %d bytes\n", got, len); return 5; }
+        if (got != len) {
+            fprintf(stderr, "batch failed: %d (%s)\n", got, got < 0 ? ch.status_string(got) : "short batch");
+            return 5;
+        }
         int per_slot = 2 + 2 * SENSORS;
         for (int i = 0; i < FRAMES_PER_BATCH * FRAME; ++i)
             for (int s = 0; s < SENSORS; ++s) {

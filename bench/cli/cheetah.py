@@ -1,0 +1,76 @@
+"""The emulated Cheetah adapter: ``biotac-bench cheetah serve [SCENE] --sensors N``."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+
+from bench.cli.hosts import existing_file, number, one_line_errors, sigterm_raises, signals_deferred, whole
+
+
+def _cmd_serve(a) -> int:
+    import time
+
+    from bench.hosts.cheetah_server import CheetahBench
+
+    kw = {}
+    what = f"{a.sensors} emulated sensor(s) at rest"
+    if a.scene:
+        from bench.errors import SceneError
+        from bench.hosts.scene_sensors import sensors_from_scene
+        from bench.scenes.scene import load_scene
+
+        scene = load_scene(a.scene)
+        if scene.spi != "software":
+            raise SceneError(scene.source, [f"host.spi = {scene.spi!r}: the Cheetah adapter serves the software "
+                                            "SPI model only"])
+        kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
+        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' (sensor 1 feels its "
+                f"{len(scene.stimuli)} stimuli)")
+        if scene.sequence != "default" or scene.slot_rate_Hz != 4400.0:
+            print("note: the scene's [host] section is not used: your program is the host and chooses what to "
+                  "sample and when", file=sys.stderr)
+    else:
+        kw["seed"] = 1 if a.seed is None else a.seed
+    with sigterm_raises():
+        cb = CheetahBench(a.sensors, **kw).start()
+        try:
+            print(f"export BIOTAC_CHEETAH_SOCKET={shlex.quote(cb.socket_path)}", flush=True)
+            print(f"emulated Cheetah adapter (port 0) with {what}\n"
+                  f"run your Cheetah program with that variable set and this cheetah.so beside it (or in its working "
+                  f"folder): {cb.library}\nCtrl-C or SIGTERM to stop", file=sys.stderr, flush=True)
+            deadline = None if a.seconds is None else time.monotonic() + a.seconds
+            while deadline is None or time.monotonic() < deadline:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            with signals_deferred():
+                cb.stop()
+    print(f"stopped: {cb.batches} batches served, {cb.t:.3f} s of the host's virtual time"
+          + (f"; {len(cb.client_errors)} client connection(s) ended for malformed requests" if cb.client_errors
+             else ""), file=sys.stderr)
+    return 0
+
+
+def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    ch = sub.add_parser("cheetah", help="the emulated Cheetah SPI adapter for unmodified Cheetah-based programs",
+                        description="Emulated BioTac sensors behind a Cheetah-compatible adapter: programs written "
+                                    "against Total Phase's Cheetah API load the bench's cheetah.so and talk to "
+                                    "the emulated sensors over SPI, in virtual time.", formatter_class=fmt)
+    chsub = ch.add_subparsers(dest="cheetah_command", metavar="ACTION", required=True)
+    sv = one_line_errors(chsub.add_parser(
+        "serve", help="serve an emulated adapter until stopped",
+        description="Serves one emulated Cheetah adapter (port 0) with --sensors emulated sensors on a Unix socket in "
+                    "a private folder, and prints the line to export:\n\n"
+                    "  export BIOTAC_CHEETAH_SOCKET=...\n\n"
+                    "then serves until Ctrl-C or SIGTERM (or --seconds), and stops cleanly whatever clients did. "
+                    "With SCENE every sensor is built from the scene (parameters, faults, noise, fidelity, seed; "
+                    "sensor 1 feels its stimuli, in the adapter's virtual time). One program at a time may open "
+                    "the adapter, as with the real device.", formatter_class=fmt))
+    sv.add_argument("scene", nargs="?", type=existing_file, help="scene file the sensors are built from")
+    sv.add_argument("--sensors", type=whole(1, 5), default=3, help="emulated sensors, 1 to 5 (default 3)")
+    sv.add_argument("--seed", type=whole(0), help="seed (default: the scene's, else 1); sensor k uses seed + k - 1")
+    sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")
+    sv.set_defaults(func=_cmd_serve)

@@ -1,0 +1,336 @@
+"""The emulated Cheetah adapter behaves like the device (issue 12, item 5): one client at a time, an error code
+(never SIGPIPE) when the server dies, a private socket, clean teardown whatever clients did, a command that
+serves it, adapter overheads that make SynTouch's own delay formula sample at 4400 Hz, wrong SPI settings that
+garble the bus, asynchronous batches that start when submitted."""
+
+import ctypes as C
+import os
+import signal
+import socket
+import stat
+import struct
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bench.hosts import cheetah_server as cs
+from bench.hosts.cheetah_server import CheetahBench, build_client, build_library, build_vendor_rate_client
+
+pytestmark = pytest.mark.firmware
+REPO = Path(__file__).resolve().parents[2]
+CH_COMMUNICATION_ERROR, CH_UNABLE_TO_OPEN, CH_SPI_ASYNC_PENDING = -7, -8, -104
+
+
+@pytest.fixture
+def lib(monkeypatch):
+    """cheetah.so loaded in this process; closes whatever handle a test leaves open."""
+    lib = C.CDLL(str(build_library()))
+    yield lib, monkeypatch
+    lib.c_ch_close(1)
+
+
+def open_adapter(lib, monkeypatch, cb):
+    monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
+    h = lib.c_ch_open(0)
+    assert h == 1
+    lib.c_ch_spi_bitrate(h, 4400)
+    return h
+
+
+def read_serial(lib, h, sensor_select=1) -> bytes:
+    """The serial-number property, as the vendor library reads it (command, 50 µs, bytes with select held)."""
+    buf = (C.c_uint8 * 32)()
+    lib.c_ch_spi_queue_clear(h)
+    lib.c_ch_spi_queue_ss(h, sensor_select)
+    lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x61, 0x15))
+    lib.c_ch_spi_queue_ss(h, 0)
+    lib.c_ch_spi_queue_delay_ns(h, 60000)
+    lib.c_ch_spi_queue_ss(h, sensor_select)
+    lib.c_ch_spi_queue_byte(h, 18, 0x00)
+    lib.c_ch_spi_queue_ss(h, 0)
+    n = lib.c_ch_spi_batch_shift(h, 32, buf)
+    assert n == 20
+    return bytes(buf[2:20])
+
+
+def sample_words(lib, h, commands=(0x80, 0x83, 0x86)) -> list[int]:
+    """Each command to sensor 1, 50 µs, then its response word."""
+    out = []
+    for cmd in commands:
+        buf = (C.c_uint8 * 4)()
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_ss(h, 1)
+        lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(cmd, 0))
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, 60000)
+        lib.c_ch_spi_queue_ss(h, 1)
+        lib.c_ch_spi_queue_byte(h, 2, 0)
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, 20000)
+        assert lib.c_ch_spi_batch_shift(h, 4, buf) == 4
+        out.append(buf[2] << 8 | buf[3])
+    return out
+
+
+def odd(b):
+    return bin(b).count("1") % 2 == 1
+
+
+# --- one client per adapter ------------------------------------------------------------------------------------
+
+
+def test_a_second_program_cannot_open_an_adapter_in_use_and_can_once_it_is_closed(lib):
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        assert lib.c_ch_open(0) == CH_UNABLE_TO_OPEN  # a second open in the same program
+        exe = build_client(cb.library)
+        r = subprocess.run([str(exe), "1"], capture_output=True, text=True, env=cb.env, timeout=60)
+        assert r.returncode == 4 and "cannot open the adapter (-8)" in r.stderr  # another program: refused
+        ports = (C.c_uint16 * 1)()
+        assert lib.c_ch_find_devices(1, ports) == 1 and ports[0] == 0x8000  # CH_PORT_NOT_FREE | port 0
+        assert read_serial(lib, h).startswith(b"BT0101EMU0000001")  # the owner is not disturbed
+        assert lib.c_ch_close(h) == 0
+        r = subprocess.run([str(exe), "2"], capture_output=True, text=True, env=cb.env, timeout=60)
+        assert r.returncode == 0, r.stderr
+        assert cb.client_errors == []
+
+
+# --- a dead server: an error code, never a signal ------------------------------------------------------------
+
+
+def serve(*args):
+    p = subprocess.Popen([sys.executable, "-m", "bench.cli", "cheetah", "serve", *map(str, args)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO)
+    line = p.stdout.readline()
+    assert line.startswith("export BIOTAC_CHEETAH_SOCKET="), (line, p.stderr.read() if p.poll() is not None else "")
+    path = line.split("=", 1)[1].strip().strip("'")
+    return p, path
+
+
+def test_a_server_killed_mid_stream_gives_the_client_an_error_code_not_sigpipe():
+    p, path = serve("--sensors", "3")
+    try:
+        exe = build_client(build_library())
+        client = subprocess.Popen([str(exe), "100000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                  env={**os.environ, "BIOTAC_CHEETAH_SOCKET": path})
+        time.sleep(2.0)  # streaming asynchronous batches by now
+        assert client.poll() is None
+        p.kill()  # SIGKILL: no goodbye
+        out, err = client.communicate(timeout=60)
+    finally:
+        p.kill()
+        p.wait()
+    assert client.returncode == 5, (client.returncode, err)  # its own error exit; -13 would be SIGPIPE
+    assert "batch failed: -7 (communication error" in err
+
+
+def test_every_call_after_the_server_went_away_returns_communication_error(lib):
+    lib, mp = lib
+    cb = CheetahBench(1).start()
+    h = open_adapter(lib, mp, cb)
+    cb.stop()
+    buf = (C.c_uint8 * 4)()
+    lib.c_ch_spi_queue_clear(h)
+    lib.c_ch_spi_queue_byte(h, 2, 0x80)
+    assert lib.c_ch_spi_async_submit(h) in (0, CH_COMMUNICATION_ERROR)  # the write may still be buffered
+    assert lib.c_ch_spi_batch_shift(h, 4, buf) in (CH_COMMUNICATION_ERROR, CH_SPI_ASYNC_PENDING)
+    lib.c_ch_spi_async_collect(h, 4, buf)
+    assert lib.c_ch_spi_batch_shift(h, 4, buf) == CH_COMMUNICATION_ERROR
+    assert lib.c_ch_close(h) == 0
+
+
+# --- the socket: private, never shared ------------------------------------------------------------------------
+
+
+def test_the_socket_lives_in_a_private_folder_and_the_library_has_no_shared_default(tmp_path, monkeypatch):
+    runtime = tmp_path / "run"
+    runtime.mkdir(mode=0o700)
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    with CheetahBench(1) as cb:
+        folder = Path(cb.socket_path).parent
+        assert folder.parent == runtime and stat.S_IMODE(folder.stat().st_mode) == 0o700
+        assert stat.S_IMODE(Path(cb.socket_path).stat().st_mode) == 0o600
+    assert not folder.exists()
+    runtime.chmod(0o755)  # not private: not used
+    with CheetahBench(1) as cb:
+        assert not Path(cb.socket_path).is_relative_to(runtime)
+        assert stat.S_IMODE(Path(cb.socket_path).parent.stat().st_mode) == 0o700
+    src = (REPO / "emulator" / "cheetah" / "cheetah_emu.c").read_text()
+    assert "/tmp/" not in src  # no fixed fallback path
+
+
+def test_the_library_refuses_a_socket_in_a_folder_others_can_enter(tmp_path):
+    shared = tmp_path / "shared"
+    shared.mkdir(mode=0o755)
+    shared.chmod(0o755)
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    server.bind(str(shared / "cheetah.sock"))
+    server.listen(1)
+    try:
+        exe = build_client(build_library())
+        env = {"BIOTAC_CHEETAH_SOCKET": str(shared / "cheetah.sock"), "PATH": "/usr/bin:/bin"}
+        r = subprocess.run([str(exe), "1"], capture_output=True, text=True, env=env, timeout=30)
+    finally:
+        server.close()
+    assert r.returncode == 4 and "no Cheetah adapter found" in r.stderr
+    assert "must be yours and private" in r.stderr
+
+
+# --- clean teardown whatever clients did ----------------------------------------------------------------------
+
+
+def test_teardown_is_clean_after_garbage_half_requests_and_open_clients(lib):
+    lib, mp = lib
+    cb = CheetahBench(2).start()
+    rng = np.random.default_rng(5)
+    socks = []
+    for k in range(12):  # garbage of every kind
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        s.connect(cb.socket_path)
+        if k % 4 == 0:
+            s.sendall(rng.integers(0, 256, 200, dtype=np.uint8).tobytes())
+        elif k % 4 == 1:
+            s.sendall(bytes([cs.REQ_SHIFT]) + struct.pack("<I", 0xFFFFFFF0))  # absurd length
+        elif k % 4 == 2:
+            s.sendall(bytes([cs.REQ_HELLO, 0, 0, 0, 0]) + bytes([cs.REQ_SHIFT]) + struct.pack("<I", 9) + b"\x01\x02")
+        else:
+            s.sendall(bytes([cs.REQ_SHIFT]) + struct.pack("<I", 11) + struct.pack("<IBB", 4400, 0, 0) + b"\x09\x00\x00\x00\x00")
+        socks.append(s)
+    time.sleep(0.3)
+    h = open_adapter(lib, mp, cb) if not cb.in_use else None  # a half request may still hold the adapter
+    threads_before = threading.active_count()
+    cb.stop()  # never raises
+    assert cb.client_errors  # the garbage was noticed
+    assert not Path(cb.socket_path).parent.exists()
+    time.sleep(0.2)
+    assert threading.active_count() <= threads_before
+    assert not any(t.name.startswith("cheetah") for t in threading.enumerate())
+    for s in socks:
+        s.close()
+    if h:
+        lib.c_ch_close(h)
+
+
+# --- biotac-bench cheetah serve ----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_cheetah_serve_prints_the_line_to_export_serves_and_stops_cleanly(sig, tmp_path):
+    scene = tmp_path / "quiet.toml"
+    scene.write_text('[scene]\nname = "quiet"\nduration_s = 10\nseed = 4\n[noise]\njohnson = false\n'
+                     'amplifier = false\nmains_hum = false\nadc = false\nspi_coupling = false\n')
+    p, path = serve(scene, "--sensors", "2")
+    try:
+        assert stat.S_IMODE(Path(path).parent.stat().st_mode) == 0o700
+        exe = build_client(build_library())
+        r = subprocess.run([str(exe), "5"], capture_output=True, text=True, timeout=120,
+                           env={**os.environ, "BIOTAC_CHEETAH_SOCKET": path})
+        assert r.returncode == 0, r.stderr
+        stats = dict(zip(r.stdout.split()[-10::2], r.stdout.split()[-9::2]))
+        assert float(stats["pac_std"]) < 0.3  # the scene's noise switches reached the sensors
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=30)
+    finally:
+        p.kill()
+    assert p.returncode == 0 and "stopped:" in err and "Traceback" not in err
+    assert not Path(path).parent.exists()
+
+
+# --- timing: the vendor's own formula yields its rate ----------------------------------------------------------
+
+
+def vendor_rate(monkeypatch=None, batches=6) -> tuple[float, str]:
+    with CheetahBench(3, trace=True) as cb:
+        exe = build_vendor_rate_client(cb.library)
+        r = subprocess.run([str(exe), str(batches)], capture_output=True, text=True, env=cb.env, timeout=300)
+        assert r.returncode == 0, r.stderr
+        starts = np.array([t for t, code, nbits, mosi in cb.trace if code == 7 and nbits == 16])
+    assert len(starts) == batches * 5 * 44
+    return 1.0 / np.diff(starts).mean(), r.stdout
+
+
+def test_synTouchs_delay_formula_samples_at_4400_hz():
+    """The vendor's padding (227 273 − 112 SCK periods − 63 µs = 138 818 ns at 4.4 MHz) plus what the adapter spends
+    (its bits, 8 SCK periods per select command, 750 ns per run of bytes) is 1/4400 s."""
+    rate, out = vendor_rate()
+    assert "additional_ns 138818 frames_per_batch 5" in out
+    assert rate == pytest.approx(4400, rel=0.01)
+    assert rate == pytest.approx(4400, abs=0.5)  # in fact exact
+    assert "parity_errors 0" in out
+
+
+def test_without_the_adapter_overheads_the_formula_would_run_fast(monkeypatch):
+    """The issue's figure: an adapter that charged nothing for selects and transfers gave 4677 Hz."""
+    monkeypatch.setattr(cs, "SELECT_CYCLES", 0)
+    monkeypatch.setattr(cs, "TRANSFER_OVERHEAD_S", 0.0)
+    rate, _ = vendor_rate(batches=2)
+    assert rate == pytest.approx(4677, rel=0.002)
+
+
+# --- wrong SPI settings garble the bus --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("polarity,phase,bitorder,ss_pol,garbled", [
+    (0, 0, 0, 0, False),  # mode 0, MSB first, active low: the sensors' own settings
+    (1, 0, 0, 0, False),  # mode 2: every sample races the sensor's shift, and the old bit wins (as on a real bus)
+    (0, 1, 0, 0, True),  # mode 1: the sensor reads MOSI one bit late
+    (1, 1, 0, 0, True),  # mode 3: the host reads MISO one bit early
+    (0, 0, 1, 0, True),  # LSB first
+    (0, 0, 0, 1, True),  # SS0 active high
+])
+def test_spi_settings_the_sensors_do_not_use_garble_the_traffic(lib, polarity, phase, bitorder, ss_pol, garbled):
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        assert lib.c_ch_spi_configure(h, polarity, phase, bitorder, ss_pol) == 0
+        serial = read_serial(lib, h)
+        words = sample_words(lib, h)
+        lib.c_ch_close(h)
+    good = serial.startswith(b"BT0101EMU0000001") and all(
+        (w >> 8) != 0xA5 and odd(w >> 8) and odd(w & 0xFF) for w in words)
+    assert good == (not garbled), (serial, [hex(w) for w in words])
+    if not garbled:
+        assert abs(((words[0] >> 9) * 32 + ((words[0] & 0xFF) >> 3)) - 2048) < 20  # PAC at rest
+
+
+def test_an_invalid_configuration_is_refused(lib):
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        assert lib.c_ch_spi_configure(h, 2, 0, 0, 0) == -11  # CH_CONFIG_ERROR
+
+
+# --- asynchronous batches start at submit ------------------------------------------------------------------------
+
+
+def test_an_async_batch_starts_when_submitted_not_when_collected(lib):
+    lib, mp = lib
+    with CheetahBench(1, trace=True) as cb:
+        h = open_adapter(lib, mp, cb)
+        t0 = cb.t
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_ss(h, 1)
+        lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x80, 0))
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, 1_000_000)  # the batch lasts ~1 ms
+        assert lib.c_ch_spi_async_submit(h) == 0
+        lib.c_ch_sleep_ms(100)  # the host does something else meanwhile
+        buf = (C.c_uint8 * 4)()
+        assert lib.c_ch_spi_batch_shift(h, 4, buf) == CH_SPI_ASYNC_PENDING  # as on the device: collect first
+        assert lib.c_ch_spi_async_collect(h, 4, buf) == 2
+        started = [t for t, code, nbits, mosi in cb.trace if nbits == 16][0]
+        assert started - t0 < 1e-5  # it ran during the sleep, not after it
+        assert cb.t == pytest.approx(t0 + 0.1, abs=1e-9)  # the batch ended long before the host collected it
+        # a batch longer than the sleep: collecting waits for its end
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_delay_ns(h, 300_000_000)
+        lib.c_ch_spi_async_submit(h)
+        lib.c_ch_sleep_ms(100)
+        lib.c_ch_spi_async_collect(h, 0, buf)
+        assert cb.t == pytest.approx(t0 + 0.1 + 0.3, abs=1e-5)
