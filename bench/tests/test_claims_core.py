@@ -80,3 +80,19 @@ def test_a_multi_seed_run_reports_the_spread_and_the_seeds_that_fail():
     table = format_spread_table(rows)
     assert "3/5 (fails for seed 2015, 2016)" in table and "0 of 1 claims pass for every seed" in table
     assert r.as_dict()["failed_seeds"] == [2015, 2016]
+
+
+def test_a_documented_deviation_is_reported_across_seeds_not_hidden():
+    @claim_group("test-deviating")
+    def deviating(bench):
+        return [Claim("not reproduced", "> 2013.5", float(bench.seed), 2013.5, 1e9, "seed", "test",
+                      kind="prediction", deviation="the model lacks it")]
+
+    try:
+        rows = run_claims_over_seeds(lambda s: Bench(seed=s), range(2012, 2015), ["test-deviating"])
+    finally:
+        del CLAIM_GROUPS["test-deviating"]
+    (r,) = rows
+    assert r.passed == [False, False, True] and r.failed_seeds == [2014]  # it passed for 2014: recheck it
+    assert "(documented deviation) passes for seed 2014: recheck it" in format_spread_table(rows)
+

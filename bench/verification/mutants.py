@@ -476,7 +476,7 @@ def run_mutant(scratch: Path, m: Mutant, timeout_s: float = 900.0) -> Result:
         return Result(m.name, m.area, m.file, "caught", seconds, _failed_line(tail))
     if code == 0:
         return Result(m.name, m.area, m.file, "survived", seconds, "every selected test passed")
-    return Result(m.name, m.area, m.file, "error", seconds, tail if code is not None else tail)
+    return Result(m.name, m.area, m.file, "error", seconds, tail)  # not collected, usage error, or timed out
 
 
 def _failed_line(tail: str) -> str:
