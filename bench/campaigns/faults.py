@@ -121,6 +121,12 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) 
 
 
 def run_campaign(faults, scenes, seeds, progress=None) -> list[dict]:
+    faults, scenes, seeds = list(faults), list(scenes), list(seeds)
+    if not (faults and scenes and seeds):
+        raise ValueError("a campaign needs at least one fault, one scene and one seed (it would pass vacuously)")
+    unknown = [f for f in faults if f not in FAULTS] + [s for s in scenes if s not in SCENES]
+    if unknown:
+        raise ValueError(f"unknown fault or scene: {', '.join(map(str, unknown))}")
     results = []
     for f in faults:
         for s in scenes:

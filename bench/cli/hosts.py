@@ -285,12 +285,15 @@ def _cmd_record(a) -> int:
                 print(f"recording {a.seconds:g} s from {a.port}", file=sys.stderr, flush=True)
             with tqdm(total=round(a.seconds, 3), unit="s", disable=a.quiet,
                       bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s") as bar:
+                dropped0 = drv.parser.stats.dropped_frames
                 for f in drv.frames(timeout_s=a.idle_timeout):
                     frames.append(f)
                     dt = len(f.channels) / SLOT_RATE_HZ
                     recorded_s += dt
-                    bar.update(dt)
-                    if recorded_s >= a.seconds - 1e-9:
+                    # the stream's span: what arrived plus what was lost on the way (frames of the same length)
+                    span = recorded_s + (drv.parser.stats.dropped_frames - dropped0) * dt
+                    bar.update(min(span, a.seconds) - bar.n)
+                    if span >= a.seconds - 1e-9:
                         break
                 else:
                     end = "disconnected" if drv.disconnected else "stream stopped"

@@ -287,3 +287,13 @@ def test_bad_arguments_are_refused_in_one_line_naming_the_flag(args, flag, capsy
 def test_the_entry_point_refuses_them_the_same_way(args):
     r = run_cli(*args, timeout=60)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+
+
+def test_a_campaign_with_nothing_to_run_is_refused_not_passed():
+    from bench.campaigns import faults as campaign
+
+    for faults, scenes, seeds in (([], ["rest"], [0]), (["none"], [], [0]), (["none"], ["rest"], range(-1))):
+        with pytest.raises(ValueError, match="vacuously"):
+            campaign.run_campaign(faults, scenes, seeds)
+    with pytest.raises(ValueError, match="unknown fault or scene: meteor"):
+        campaign.run_campaign(["meteor"], ["rest"], [0])
