@@ -93,14 +93,14 @@ def _interp_table(table, radii, r, pos, dx):
 
 @njit(cache=True)
 def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
-                K, radius_1N, modulus_eff, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
+                K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
                 out_normal, out_tangential, out_slip_velocity, out_position):
     """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place.
 
     ``N0``, ``V``: nominal normal load (N) and stage velocity (m/s) per grid sample; ``heights``/``slopes``:
     spatial tables (radius × position) of the patch-averaged height (m) and the ridge-sampled slope (1);
-    ``modulus_eff``: the texture's E/(1 − ν²) (Pa): soft textures yield in series with the skin, so their
-    features reach the fluid attenuated by k_tex/(k_n + k_tex);
+    ``modulus_eff``: the texture's E/(1 − ν²) (Pa) and ``layer_m`` its layer thickness (m): soft textures yield
+    in series with the skin, so their features reach the fluid attenuated by k_tex/(k_n + k_tex);
     ``state``: x, z, p, touchdown height and slope, touching (updated in place).
     """
     x, z, p, h_ref, s_ref = state[0], state[1], state[2], state[3], state[4]
@@ -118,7 +118,10 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
             if n0 > 0.0:
                 r = radius_1N * n0 ** (1.0 / 3.0)
                 kn = 1.5 * K ** (2.0 / 3.0) * n0 ** (1.0 / 3.0)
-                k_tex = 2.0 * r * modulus_eff  # a soft texture in series with the skin (flat-punch stiffness)
+                # a soft texture layer in series with the skin: flat-punch stiffness, stiffening as the layer
+                # densifies toward its thickness (the derivative of δ_t = T(1 − exp(−N/(kT))))
+                k_flat = 2.0 * r * modulus_eff
+                k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
                 series = k_tex / (kn + k_tex)
                 height = _interp_table(heights, radii, r, p, dx)
                 slope_here = _interp_table(slopes, radii, r, p, dx)

@@ -35,6 +35,9 @@ from emulator.skin import Skin
 from emulator.texture import Texture, random_profile, periodic_profile
 
 POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0.5 for rubbers changes it by 20 %)
+#: textures are layers on the rig's rigid backing: a soft one compresses at most this much (it densifies as it
+#: approaches its thickness), so a finger always reaches a force (model choice: the library has no thickness)
+TEXTURE_LAYER_M = 3e-3
 
 
 @dataclass
@@ -164,8 +167,9 @@ class CommandedMotion:
 
 
 def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) -> np.ndarray:
-    """Normal load (N) at finger depth ``depth_m`` (m): skin (N = K δ_s^1.5) in series with the texture's
-    flat-punch compliance (δ_t = N / (2 a E*)), solved on a table and interpolated."""
+    """Normal load (N) at finger depth ``depth_m`` (m): skin (N = K δ_s^1.5) in series with the texture layer,
+    δ_t = T·(1 − exp(−N / (k T))) with the flat-punch stiffness k = 2 a E* and the layer thickness T (soft at
+    first, densifying toward T), solved on a table and interpolated."""
     table_N, table_depth = _depth_table(params.contact_stiffness_N_per_m1_5, params.contact_radius_at_1N_m,
                                         texture.modulus_Pa)
     d = np.asarray(depth_m, float)
@@ -177,7 +181,8 @@ def _depth_table(K: float, radius_1N: float, modulus: float):
     N = np.concatenate([[0.0], np.geomspace(1e-5, 50.0, 2000)])
     skin = (N / K) ** (2.0 / 3.0)
     radius = radius_1N * np.cbrt(N)
-    texture = np.divide(N, 2.0 * radius * modulus / (1 - POISSON_RATIO**2), out=np.zeros_like(N), where=radius > 0)
+    k = 2.0 * radius * modulus / (1 - POISSON_RATIO**2)
+    texture = TEXTURE_LAYER_M * -np.expm1(-np.divide(N, k * TEXTURE_LAYER_M, out=np.zeros_like(N), where=k > 0))
     return N, skin + texture
 
 
@@ -277,7 +282,7 @@ class SlidingContact(Effect):
             friction.slide_block(np.ascontiguousarray(n0), np.ascontiguousarray(v), dt, self.substeps,
                                  c["heights"], c["slopes"], c["radii"], self.dx_m, c["state"],
                                  p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
-                                 tex.modulus_Pa / (1 - POISSON_RATIO**2),
+                                 tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
                                  p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
                                  p.bristle_stiffness_per_N, p.bristle_damping_per_N,
                                  tex.mu_static, tex.mu_kinetic, tex.stribeck_velocity_m_per_s,
