@@ -100,16 +100,24 @@ def sliding_claims(b: Bench) -> list[Claim]:
 @claim_group("rig")
 def rig_claims(b: Bench) -> list[Claim]:
     """Force control through PDC, and skin wear."""
-    sand = texture(901)
     rig = TextureRig(fidelity=b.fidelity, params=b.params, wear=False)
-    errors = []
-    for i, force in enumerate((0.2, 0.5, 1.26, 2.0)):
-        trial = rig.run_trial(sand, Movement(force, 0.02), seed=b.seed + i)
-        errors.append((trial.true_normal_N / force - 1) * 100)
-    worst = float(np.max(np.abs(errors)))
-    out = [Claim("force control through PDC: true normal force vs target", "within ± 10 %", worst, 0.0, 10.0,
-                 "% (worst)", "D ch. 6", {"errors_%": errors}, kind="prediction",
-                 note="true force = the emulator's normal load while sliding, never read from codes")]
+    errors = {}
+    for number in (901, 24):  # the abrasive and a glass
+        for force in (0.2, 0.5, 1.26, 2.0):
+            for k in range(3):
+                trial = rig.run_trial(texture(number), Movement(force, 0.02), seed=b.seed + 10 * k)
+                errors[(number, force, k)] = (trial.true_normal_N / force - 1) * 100
+    above = max(abs(e) for (n, f, k), e in errors.items() if f >= 0.5)
+    light = max(abs(e) for (n, f, k), e in errors.items() if f < 0.5)
+    detail = {f"T{n} {f} N seed+{10 * k}": round(e, 2) for (n, f, k), e in errors.items()}
+    out = [Claim("force control through PDC at 0.5–2 N: true force vs target", "within ± 10 %", above, 0.0, 10.0,
+                 "% (worst)", "D ch. 6", detail, kind="prediction",
+                 note="true force = the emulator's normal load while sliding, never read from codes; "
+                      "2 textures × 3 seeds"),
+           Claim("force control through PDC at 0.2 N: true force vs target", "within ± 10 %", light, 0.0, 10.0,
+                 "% (worst)", "D ch. 6", detail, kind="prediction",
+                 deviation="17 PDC counts of target against 1.4 LSB of noise and 10 µm of latency travel "
+                           "(20 ms at 0.5 mm/s): the rig overshoots by up to ~13 % at the lightest movement")]
     # wear: ridge height falls faster for high force × high speed than for low (same number of trials)
     lost = {}
     for label, mv in (("low", Movement(0.2, 0.01)), ("high", Movement(2.0, 0.1))):
@@ -123,7 +131,7 @@ def rig_claims(b: Bench) -> list[Claim]:
                      {"lost_m": lost}, kind="consistency",
                      note="the wear law: worn volume ∝ (1 + v/v_h)·N·d over the rig's fixed 5 cm"))
     # after wear, roughness for a fixed texture and movement drops; a fresh skin restores it
-    mv = Movement(0.5, 0.025)
+    mv, sand = Movement(0.5, 0.025), texture(901)
     fresh = [roughness(TextureRig(skin=Skin(), wear=False).run_trial(sand, mv, seed=100 + k).recording)
              for k in range(3)]
     worn_skin = Skin(ridge_height_m=0.3 * Skin().ridge_height_new_m)
