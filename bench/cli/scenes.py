@@ -46,6 +46,11 @@ scene file (TOML):
                   "wood", "polystyrene foam", ...) and object_temperature_C for thermal contact
      power_on     at_s   (heaters start from ambient)        ambient_step  at_s, temperature_C
      heater_failure  at_s
+     slide        start_s (s or list: one trial each), texture (library number, "T30" or name; biotac-bench
+                  textures), force_N, velocity_mm_per_s, distance_mm; approach_s (0.3), hold_s (0.5),
+                  accel_s (0.05), lift_s (0.2), start_position_mm (default: drawn from the seed)
+     replace_skin at_s   (a fresh skin between slides)
+  [skin]     fingerprints = true | false, ridge_height_um (200 = new), wear = true, wear_coefficient (2.5e-5)
   [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
              heater_failed = true
 

@@ -72,3 +72,13 @@ def test_overlapping_slides_and_replacements_during_a_slide_are_rejected():
     assert "falls during the slide" in _problems(_slide(start_s=0.5), {"kind": "replace_skin", "at_s": 1.5})
     assert "skin.ridge_height_um" in _problems(_slide(), skin={"ridge_height_um": 500})
     assert "skin = " in _problems(_slide(), skin=[1])
+
+
+def test_run_help_teaches_sliding(capsys):
+    from bench.cli import main as cli
+
+    with pytest.raises(SystemExit):
+        cli.main(["run", "--help"])
+    out = capsys.readouterr().out
+    for word in ("slide", "velocity_mm_per_s", "replace_skin", "[skin]", "biotac-bench\n                  textures"):
+        assert word in out
