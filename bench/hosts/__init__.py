@@ -1,1 +1,1 @@
-"""Things under test and their transports: bridge firmware co-simulated in virtual time, the pty serial link, the pyserial host driver, the server behind the Cheetah-compatible library, and native builds."""
+"""Things under test and their transports: bridge firmware co-simulated in virtual time, the pty serial link with its finite receive buffer, the pyserial host driver, the emulated Cheetah adapter behind the Cheetah-compatible library, sensors built from a scene for them, and native builds."""
