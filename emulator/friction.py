@@ -92,7 +92,7 @@ def _interp_table(table, radii, r, pos, dx):
 
 
 @njit(cache=True)
-def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
+def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdown_reference,
                 K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
                 out_normal, out_tangential, out_slip_velocity, out_position):
     """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place.
@@ -101,7 +101,10 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
     spatial tables (radius × position) of the patch-averaged height (m) and the ridge-sampled slope (1);
     ``modulus_eff``: the texture's E/(1 − ν²) (Pa) and ``layer_m`` its layer thickness (m): soft textures yield
     in series with the skin, so their features reach the fluid attenuated by k_tex/(k_n + k_tex);
-    ``state``: x, z, p, touchdown height and slope, touching (updated in place).
+    ``state``: x, z, p, touchdown height and slope, touching (updated in place); ``touchdown_reference``: a
+    position-held finger (a rig) takes the touchdown spot as its reference, so its load changes with the height
+    from there; a force-controlled finger (scripted slides) holds the commanded force on average, so heights are
+    taken from the track's mean (zero).
     """
     x, z, p, h_ref, s_ref = state[0], state[1], state[2], state[3], state[4]
     h = dt / substeps
@@ -125,7 +128,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state,
                 series = k_tex / (kn + k_tex)
                 height = _interp_table(heights, radii, r, p, dx)
                 slope_here = _interp_table(slopes, radii, r, p, dx)
-                if touching == 0:  # touchdown: the skin settles onto this spot
+                if touching == 0 and touchdown_reference:  # touchdown: the skin settles onto this spot
                     h_ref, s_ref = height, slope_here
                     touching = 1
                 vr_last = v_stage - u_prev

@@ -234,9 +234,13 @@ class SlidingContact(Effect):
     name = "sliding_contact"
     produces = ("contact_force_N", "tangential_force_N", "normal_force_N")
 
+    #: rate (Hz) of the force log kept for each contact (for a stage's motor current and force plots)
+    LOG_RATE_HZ = 100.0
+
     def __init__(self, motions: list, params: SensorParams, fs: float, dx_m: float, substeps: int, n_radii: int,
                  seed: int):
         self.params, self.fs, self.dx_m, self.substeps = params, fs, dx_m, int(substeps)
+        self.log_every = max(1, int(round(fs / self.LOG_RATE_HZ)))
         self.motions = sorted(motions, key=lambda m: m.start_s)
         rng = effect_rng(seed, self.name)
         self._contacts = []
@@ -248,13 +252,20 @@ class SlidingContact(Effect):
             length = m.max_travel_m + 4 * radii.max() + 0.01
             heights, slopes = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m, radii)
             self._contacts.append({"motion": m, "gain": gain, "radii": radii, "heights": heights, "slopes": slopes,
-                                   "state": friction.new_state(0.0), "skin_state": skin.state()})
+                                   "state": friction.new_state(0.0), "skin_state": skin.state(), "log": []})
 
     def describe(self) -> str:
         return "sliding contact: stick-slip friction, patch-averaged texture, fingerprint ridges (N)"
 
     def ridge_gains(self) -> list[float]:
         return [c["gain"] for c in self._contacts]
+
+    def force_log(self, k: int) -> dict[str, np.ndarray]:
+        """Contact ``k``'s forces at :data:`LOG_RATE_HZ` so far: instants (s), normal and tangential force (N),
+        slip velocity (m/s)."""
+        log = self._contacts[k]["log"]
+        a = np.concatenate(log, axis=1) if log else np.zeros((4, 0))
+        return {"t": a[0], "normal_N": a[1], "tangential_N": a[2], "slip_m_per_s": a[3]}
 
     def process(self, block: Block, inputs):
         t = block.times
@@ -281,6 +292,7 @@ class SlidingContact(Effect):
             pos = np.empty(tt.size)
             friction.slide_block(np.ascontiguousarray(n0), np.ascontiguousarray(v), dt, self.substeps,
                                  c["heights"], c["slopes"], c["radii"], self.dx_m, c["state"],
+                                 not isinstance(m, Slide),
                                  p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
                                  tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
                                  p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
@@ -292,4 +304,9 @@ class SlidingContact(Effect):
             normal_out[a:b] += normal + p.tangential_coupling * tang
             tangential_out[a:b] += tang
             load_out[a:b] += normal
+            # the force log: grid samples whose index is a multiple of log_every (independent of block size)
+            n_idx = block.n0 + a + np.arange(tt.size)
+            keep = n_idx % self.log_every == 0
+            if keep.any():
+                c["log"].append(np.stack([tt[keep], normal[keep], tang[keep], slip[keep]]))
         return {"contact_force_N": normal_out, "tangential_force_N": tangential_out, "normal_force_N": load_out}

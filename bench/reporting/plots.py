@@ -116,7 +116,54 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
         plots.append(("spectrogram.png", spectrogram))
     if "E1" in names and any(isinstance(s, Touch) for s in rec.scene.stimuli):
         plots.append(("electrode_map.png", lambda path: electrode_map(rec, path)))
+    if getattr(rec, "forces", None) and len(rec.forces.get("t", ())):
+        plots.append(("forces.png", lambda path: sliding_forces(rec, path)))
+    if getattr(rec, "slides", None):
+        plots.append(("properties.png", lambda path: sliding_properties(rec, path)))
     return plots
+
+
+def sliding_forces(rec, path: Path) -> None:
+    """Normal and tangential force on the skin and the slip velocity, at 100 Hz, over every slide."""
+    f = rec.forces
+    fig, axes = plt.subplots(2, 1, figsize=(11, 5.5), sharex=True)
+    try:
+        axes[0].plot(f["t"], f["normal_N"], ".", ms=1.5, label="normal")
+        axes[0].plot(f["t"], f["tangential_N"], ".", ms=1.5, label="tangential")
+        axes[0].set_ylabel("force on the skin (N)")
+        axes[0].legend(loc="upper right", fontsize=8)
+        axes[1].plot(f["t"], 100 * f["slip_m_per_s"], ".", ms=1.5, color="tab:gray")
+        axes[1].set_ylabel("slip velocity (cm/s)")
+        axes[1].set_xlabel("time (s)")
+        for ax in axes:
+            ax.grid(alpha=0.3)
+        axes[0].set_title(f"{rec.scene.name}: contact forces and slip (100 Hz)")
+        fig.tight_layout()
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)
+
+
+def sliding_properties(rec, path: Path) -> None:
+    """Traction, roughness and fineness of each sliding trial, in trial order, with the skin's ridge height."""
+    rows = rec.slides
+    k = [r["trial"] for r in rows]
+    fig, axes = plt.subplots(4, 1, figsize=(9, 8), sharex=True)
+    try:
+        for ax, key, label in zip(axes, ("traction", "roughness", "fineness"),
+                                  ("traction (A)", "roughness (ln bits²)", "fineness (ln Hz)")):
+            ax.plot(k, [r[key] for r in rows], "o-", ms=4)
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+        axes[3].plot(k, [1e6 * (r["ridge_height_m"] or 0.0) for r in rows], "s-", ms=3, color="tab:brown")
+        axes[3].set_ylabel("ridge height (µm)")
+        axes[3].set_xlabel("sliding trial")
+        axes[3].grid(alpha=0.3)
+        axes[0].set_title(f"{rec.scene.name}: texture properties per trial")
+        fig.tight_layout()
+        fig.savefig(path, dpi=110, format="png")
+    finally:
+        plt.close(fig)
 
 
 def electrode_map(rec, path: Path) -> None:

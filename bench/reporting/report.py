@@ -83,8 +83,16 @@ def impact_results(rec: Recording) -> dict:
 
 
 def _stimulus_record(s) -> dict:
+    from emulator.skin import Skin
+    from emulator.texture import Texture
+
     d = {"kind": type(s).__name__}
-    d.update({k: v for k, v in vars(s).items()})
+    for k, v in vars(s).items():
+        if isinstance(v, Texture):
+            v = {"number": v.number, "name": v.name}
+        elif isinstance(v, Skin):
+            v = v.state()
+        d[k] = v
     return d
 
 
@@ -118,6 +126,9 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
         record["pac_resting"] = {"baseline_code": base, "sigma_bits": sigma}
     if sc.impact_detection:
         record["impact_detection"] = impact_results(rec)
+    if getattr(rec, "slides", None) or getattr(sc, "skin_before", None):
+        record["sliding"] = {"skin_before": sc.skin_before, "skin_after": sc.skin_after,
+                             "trials": getattr(rec, "slides", [])}
     return record
 
 
@@ -287,6 +298,20 @@ def markdown_report(record: dict) -> str:
             lines.append(f"| {name} | {d['energy_uJ']:.3f} | {d['drops']} | {d['detected']} | "
                          f"{100 * d['detection_rate']:.0f} % |")
         lines.append("")
+    sliding = record.get("sliding")
+    if sliding and sliding["trials"]:
+        lines += ["## Sliding trials (traction, roughness, fineness as D ch. 6 defines them)", "",
+                  "| trial | texture | force (N) | velocity (cm/s) | ridge height (µm) | true normal force (N) | "
+                  "traction (A) | roughness | fineness |", "|---|---|---|---|---|---|---|---|---|"]
+        for r in sliding["trials"]:
+            lines.append(f"| {r['trial']} | T{r['texture']} {r['texture_name']} | {r['force_N']:g} | "
+                         f"{100 * r['velocity_m_per_s']:g} | {1e6 * (r['ridge_height_m'] or 0):.1f} | "
+                         f"{r['true_normal_N']:.3f} | {r['traction']:.3f} | {r['roughness']:.2f} | "
+                         f"{r['fineness']:.2f} |")
+        b, a = sliding["skin_before"], sliding["skin_after"]
+        lines += ["", f"Skin before: serial {b['serial']}, ridge height {1e6 * b['ridge_height_m']:.1f} µm; after: "
+                      f"serial {a['serial']}, ridge height {1e6 * a['ridge_height_m']:.1f} µm "
+                      f"({a['trials']} trials on it, {a['sliding_distance_m']:.2f} m slid).", ""]
     lines += ["## Channels", "", "| channel | samples | rate (Hz) | mean | std | min | max | bad |",
               "|---|---|---|---|---|---|---|---|"]
     for name, s in record["channels"].items():

@@ -78,6 +78,12 @@ class RigSettings:
     chunk_s: float = 0.5
     speculation_s: float = 1.0  # while lowering, frames are read this far ahead and replayed up to the stop
 
+    def stage_current_A(self, tangential_N, rng: np.random.Generator) -> np.ndarray:
+        """The stage motor's current (A) for a tangential load (N): idle current, linear in the load, plus
+        current-sense noise (D ch. 6: the current rises linearly with the load)."""
+        ft = np.asarray(tangential_N, float)
+        return self.motor_idle_A + self.motor_A_per_N * np.abs(ft) + self.motor_noise_A * rng.standard_normal(ft.size)
+
     def __post_init__(self):
         for name, value in vars(self).items():
             if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
@@ -203,8 +209,7 @@ class _Run:
         t_cur = (self.sampler.next_slot + np.arange(n_frames) * self.frame) / self.sampler.slot_rate_Hz
         ft = self.sensor.signal("tangential_force_N", t_cur)
         self.log.load(t_cur, self.sensor.signal("normal_force_N", t_cur))
-        self.log.current(t_cur, s.motor_idle_A + s.motor_A_per_N * np.abs(ft)
-                         + s.motor_noise_A * self.current_rng.standard_normal(t_cur.size))
+        self.log.current(t_cur, s.stage_current_A(ft, self.current_rng))
         self.log.samples(self.sampler.read(n_frames * self.frame))
 
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from bench.running.aggregate import RunSummary
 from bench.running.sampler import Sampler
+from bench.running.slides import SlideRecorder
 from bench.scenes.scene import Scene
 from emulator.channels import CHANNEL_NAME
 from emulator.sensor import Sensor
@@ -51,6 +52,8 @@ class Recording:
     status: str = ""  # "ok" | "failed" | "interrupted"; derived from ``error`` when left empty
     summary: RunSummary | None = None
     channel_names: list[str] = field(default_factory=list)
+    slides: list[dict] = field(default_factory=list)  # one row per sliding trial: texture, movement, properties
+    forces: dict = field(default_factory=dict)  # the sliding contact's force log at 100 Hz (s, N, N, m/s)
 
     def __post_init__(self):
         if not self.status:
@@ -133,6 +136,7 @@ def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep
     t0 = time.perf_counter()
     names = read_channel_names(scene)
     summary = RunSummary(scene, names)
+    slide_recorder = SlideRecorder(scene)
     parts: dict[str, list] = {n: [] for n in names}
     error, status = None, "ok"
     done = 0
@@ -147,6 +151,8 @@ def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep
         for s in sampler.chunks(total_slots, chunk_slots):
             chunk = split_by_channel(s.times, s.channels, s.codes, s.status)
             summary.add(chunk)
+            if slide_recorder:
+                slide_recorder.add(chunk.parts)
             for sink in sinks:
                 sink.add(chunk.parts)
             if keep_samples:
@@ -175,5 +181,12 @@ def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep
                 t, code, st = np.zeros(0), np.zeros(0, np.uint16), np.zeros(0, np.uint8)
             channels[name] = ChannelRecord(t, code, st)
     effects = sensor.effects_report() if sensor is not None else []
+    slides, forces = [], {}
+    if slide_recorder:
+        try:
+            slides, forces = slide_recorder.finish(sensor), slide_recorder.force_traces(sensor)
+        except Exception as e:  # properties that cannot be computed must not hide the run
+            if error is None:
+                error, status = f"{type(e).__name__}: {e}", "failed"
     return Recording(scene, channels, done / scene.slot_rate_Hz, time.perf_counter() - t0, effects, error, status,
-                     summary, names)
+                     summary, names, slides, forces)

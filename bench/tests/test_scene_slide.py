@@ -82,3 +82,24 @@ def test_run_help_teaches_sliding(capsys):
     out = capsys.readouterr().out
     for word in ("slide", "velocity_mm_per_s", "replace_skin", "[skin]", "biotac-bench\n                  textures"):
         assert word in out
+
+
+def test_a_sliding_scene_run_reports_properties_per_trial_and_the_skin(tmp_path):
+    import json
+
+    from bench.cli import main as cli
+    from bench.paths import SCENES_DIR
+
+    assert cli.main(["run", str(SCENES_DIR / "grating.toml"), "--out", str(tmp_path), "--quiet", "--no-plots"]) == 0
+    record = json.loads((tmp_path / "record.json").read_text())
+    trials = record["sliding"]["trials"]
+    assert [t["force_N"] for t in trials] == [0.5, 1.5, 0.5]
+    for t in trials:
+        for key in ("traction", "roughness", "fineness"):
+            assert isinstance(t[key], float)
+        assert t["true_normal_N"] == pytest.approx(t["force_N"], rel=0.02)  # force-controlled slides
+    # more force, more traction (the stage current follows the tangential load)
+    assert trials[1]["traction"] > trials[0]["traction"]
+    assert record["sliding"]["skin_after"]["ridge_height_m"] < record["sliding"]["skin_before"]["ridge_height_m"]
+    assert record["stimuli"][0]["texture"] == {"number": 902, "name": "3 mm grating"}
+    assert "Sliding trials" in (tmp_path / "report.md").read_text()
