@@ -9,9 +9,10 @@ classifier or the strategies re-runs no sliding:
    excluded (their wear is shown, from the skin-wear law);
 2. **training** — every texture × the three chosen movements × repetitions, in one session on one skin that
    wears and is replaced once wear is detectable (as D did);
-3. **validation** — a separate set of trials (other seeds, so other start positions) for pairs of similar
-   textures: by default, the disjoint within-group pairs the training model confuses most (D chose pairs its
-   subjects found similar; this is the sensor's own notion of similar, stated in the report);
+3. **validation** — a separate set of trials (other seeds, so other start positions), on the same skin as the
+   session goes on, for pairs of similar textures: by default disjoint pairs drawn at random (from the seed)
+   within the library's groups — textures of one kind, as D's pairs were; ``pair_choice = "most-confused"`` takes
+   the within-group pairs the training model confuses most instead (a harder test);
 4. **virtual exploration** — Monte Carlo as D: pairs (1000 simulations each, threshold 99.9 %) and 117-way
    identification of the validation textures (threshold 99 %), for each strategy (bayesian, cycle, random).
 
@@ -70,6 +71,7 @@ class ExperimentSpec:
     replace_skin: bool = True
     pairs: list[tuple[int, int]] | None = None  # None = chosen from the training model
     n_pairs: int = 8
+    pair_choice: str = "random-within-group"  # or "most-confused"
     validation_trials: int = 5
     strategies: tuple[str, ...] = STRATEGY_NAMES
     pair_threshold: float = 0.999
@@ -116,7 +118,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     known = {"experiment": {"name", "seed", "fidelity"},
              "pilot": {"textures", "trials", "movements", "exclude_high_power"},
              "training": {"textures", "trials", "wear", "replace_skin"},
-             "validation": {"pairs", "n_pairs", "trials"},
+             "validation": {"pairs", "n_pairs", "trials", "pair_choice"},
              "exploration": {"strategies", "pair_threshold", "identification_threshold", "max_moves",
                              "pair_simulations", "identification_simulations", "identify_all_textures"},
              "skin": {"fingerprints"}, "sensor": {"noise_scale"}}
@@ -194,6 +196,11 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             if bad:
                 problems.append(f"validation.pairs: no texture {bad} in the library")
     spec.n_pairs = get("validation", "n_pairs", int, 1, 58, spec.n_pairs)
+    choice = t["validation"].get("pair_choice", spec.pair_choice)
+    if choice not in ("random-within-group", "most-confused"):
+        problems.append(f"validation.pair_choice = {choice!r}: \"random-within-group\" or \"most-confused\"")
+    else:
+        spec.pair_choice = choice
     spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
     strategies = t["exploration"].get("strategies", list(spec.strategies))
     if not isinstance(strategies, list) or not strategies or any(s not in ex.STRATEGIES for s in strategies):
@@ -274,14 +281,17 @@ class ExperimentResult:
     wall_s: dict = field(default_factory=dict)
 
 
-def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int) -> list[tuple[int, int]]:
-    """The ``n_pairs`` disjoint within-group pairs with the highest mean confusion at the best movements."""
+def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: str, seed: int) -> list[tuple[int, int]]:
+    """``n_pairs`` disjoint pairs of textures of one library group: drawn at random (``random-within-group``),
+    or those with the highest mean confusion at the best movements (``most-confused``)."""
     from bench.textures.library import load_library
 
     lib = load_library()
     conf = model.confusion()  # (K, K, M, P)
     mi = model.movement_index(best)
     c = np.mean([conf[:, :, mi[p], p] for p in range(3)], axis=0)
+    if choice == "random-within-group":
+        c = np.random.default_rng(np.random.SeedSequence([seed, 0x9A125])).random(c.shape)
     ids = model.textures
     cands = []
     for i in range(len(ids)):
@@ -339,19 +349,22 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                                            spec.fingerprints, stage="training", noise_scale=spec.noise_scale))
         # the same movement may be best for two properties: run it once
         tasks = list({(t.texture, t.movement_id, t.trial): t for t in tasks}.values())
-        tasks, history = schedule_skin(tasks, wear=spec.wear, replace_at=0.5 if spec.replace_skin else None)
+        replace_at = 0.5 if spec.replace_skin else None
+        tasks, history = schedule_skin(tasks, wear=spec.wear, replace_at=replace_at)
         log(f"training: {len(tasks)} trials on {history[-1]['skin'] if history else 1} skin(s)")
         training_rows = run_stage("training", tasks, cache_dir, client=client, progress=progress)
         train = ex.fit_model(table_from_rows(training_rows))
         wall["training"] = time.perf_counter() - t0
-        # 3. validation
+        # 3. validation: the session goes on with the same skin
         t0 = time.perf_counter()
-        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs)
+        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs, spec.pair_choice, spec.seed)
         val_textures = sorted({n for p in pairs for n in p} | (set(textures) if spec.identify_all_textures else set()))
-        tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
-                           trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,
-                           spec.fingerprints, stage="validation", noise_scale=spec.noise_scale)
-                 for tex in val_textures for m in sorted(set(best.tolist())) for k in range(spec.validation_trials)]
+        val_tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
+                               trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,
+                               spec.fingerprints, stage="validation", noise_scale=spec.noise_scale)
+                     for tex in val_textures for m in sorted(set(best.tolist())) for k in range(spec.validation_trials)]
+        session, history = schedule_skin(tasks + val_tasks, wear=spec.wear, replace_at=replace_at)
+        tasks = session[len(tasks):]
         log(f"validation: {len(tasks)} trials for {len(val_textures)} textures")
         validation_rows = run_stage("validation", tasks, cache_dir, client=client, progress=progress)
         val_table = table_from_rows(validation_rows)

@@ -151,8 +151,11 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                   f"converges in no "
                   f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} validation textures.", "",
               "## Pairs of similar textures", "",
-              "Chosen as the disjoint pairs within a texture group that the training model confuses most at the "
-              "three optimal movements (the sensor's own notion of similar; D's pairs were chosen by people):", ""]
+              ("Disjoint pairs drawn at random (from the experiment's seed) within the library's texture groups: "
+               "textures of one kind, as D's were (D's pairs were chosen by people):"
+               if result.spec.pair_choice == "random-within-group" else
+               "The disjoint pairs within a texture group that the training model confuses most at the three "
+               "optimal movements (a harder test than D's, whose pairs were chosen by people):"), ""]
     lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}" for a, b in result.pairs]
     lines += ["", f"Skin replacements during training: {record['skin_replacements']}.",
               "Wall time per stage (s): " + ", ".join(f"{k} {v:.1f}" for k, v in result.wall_s.items()), ""]
