@@ -71,6 +71,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "the adapter, as with the real device.", formatter_class=fmt))
     sv.add_argument("scene", nargs="?", type=existing_file, help="scene file the sensors are built from")
     sv.add_argument("--sensors", type=whole(1, 5), default=3, help="emulated sensors, 1 to 5 (default 3)")
-    sv.add_argument("--seed", type=whole(0), help="seed (default: the scene's, else 1); sensor k uses seed + k - 1")
+    sv.add_argument("--seed", type=whole(0),
+                    help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
+                         "seed + k without")
     sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")
     sv.set_defaults(func=_cmd_serve)

@@ -347,7 +347,9 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "SIGTERM.", formatter_class=fmt))
     br.add_argument("--sensors", type=whole(1, 5), default=1, help="emulated sensors, 1 to 5 (default 1)")
     br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it, sensor 1 feels its stimuli")
-    br.add_argument("--seed", type=whole(0), help="seed (default: the scene's, else 1); sensor k uses seed + k - 1")
+    br.add_argument("--seed", type=whole(0),
+                    help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
+                         "seed + k without")
     br.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")
     br.add_argument("--speed", type=number(0, lo_open=True), default=1.0,
                     help="virtual seconds per wall second when paced (> 0; default 1)")
