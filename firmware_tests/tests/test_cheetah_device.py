@@ -200,7 +200,8 @@ def test_teardown_is_clean_after_garbage_half_requests_and_open_clients(lib):
         elif k % 4 == 2:
             s.sendall(bytes([cs.REQ_HELLO, 0, 0, 0, 0]) + bytes([cs.REQ_SHIFT]) + struct.pack("<I", 9) + b"\x01\x02")
         else:
-            s.sendall(bytes([cs.REQ_SHIFT]) + struct.pack("<I", 11) + struct.pack("<IBB", 4400, 0, 0) + b"\x09\x00\x00\x00\x00")
+            batch = struct.pack("<IBB", 4400, 0, 0) + b"\x09\x00\x00\x00\x00"  # an unknown queue record
+            s.sendall(bytes([cs.REQ_SHIFT]) + struct.pack("<I", len(batch)) + batch)
         socks.append(s)
     time.sleep(0.3)
     h = open_adapter(lib, mp, cb) if not cb.in_use else None  # a half request may still hold the adapter
@@ -256,7 +257,8 @@ def vendor_rate(monkeypatch=None, batches=6) -> tuple[float, str]:
 
 
 def test_synTouchs_delay_formula_samples_at_4400_hz():
-    """The vendor's padding (227 273 − 112 SCK periods − 63 µs = 138 818 ns at 4.4 MHz) plus what the adapter spends
+    """The vendor's padding (227 273 − 112 SCK periods − 63 µs = 138 818 ns at 4.4 MHz) plus what the adapter
+    spends
     (its bits, 8 SCK periods per select command, 750 ns per run of bytes) is 1/4400 s."""
     rate, out = vendor_rate()
     assert "additional_ns 138818 frames_per_batch 5" in out

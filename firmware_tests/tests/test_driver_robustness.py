@@ -19,7 +19,8 @@ def data_frame(seq: int, slots: int = 44) -> bytes:
 
 
 def feed(parser, seqs, t0=0.0, rate=100.0):
-    """Frames ``seqs`` arriving one by one at ``rate`` per second from ``t0``; returns the delivered sequence numbers."""
+    """Frames ``seqs`` arriving one by one at ``rate`` per second from ``t0``; returns the sequence numbers
+    delivered."""
     got = []
     for k, s in enumerate(seqs):
         got += [f.seq for f in parser.feed(data_frame(s), now=t0 + k / rate) if isinstance(f, DataFrame)]
