@@ -25,6 +25,7 @@ import numpy as np
 
 from bench.running.sampler import Sampler
 from bench.textures.properties import TrialRecording
+from bench.textures.stage import StageMotor
 from emulator import channels as ch
 from emulator.effects import effect_rng
 from emulator.params import SensorParams
@@ -72,17 +73,9 @@ class RigSettings:
     settle_after_s: float = 0.2
     latency_s: float = 0.02
     pdc_average_frames: int = 3  # the controller averages the last few PDC readings
-    motor_idle_A: float = 0.15  # stage motor current with no load (model choice)
-    motor_A_per_N: float = 0.4  # current per N of tangential load (model choice: linear, D ch. 6)
-    motor_noise_A: float = 0.004  # RMS current-sense noise per reading (model choice)
+    motor: StageMotor = field(default_factory=StageMotor)  # the stage's motor current (traction)
     chunk_s: float = 0.5
     speculation_s: float = 1.0  # while lowering, frames are read this far ahead and replayed up to the stop
-
-    def stage_current_A(self, tangential_N, rng: np.random.Generator) -> np.ndarray:
-        """The stage motor's current (A) for a tangential load (N): idle current, linear in the load, plus
-        current-sense noise (D ch. 6: the current rises linearly with the load)."""
-        ft = np.asarray(tangential_N, float)
-        return self.motor_idle_A + self.motor_A_per_N * np.abs(ft) + self.motor_noise_A * rng.standard_normal(ft.size)
 
     def __post_init__(self):
         for name, value in vars(self).items():
@@ -209,7 +202,7 @@ class _Run:
         t_cur = (self.sampler.next_slot + np.arange(n_frames) * self.frame) / self.sampler.slot_rate_Hz
         ft = self.sensor.signal("tangential_force_N", t_cur)
         self.log.load(t_cur, self.sensor.signal("normal_force_N", t_cur))
-        self.log.current(t_cur, s.stage_current_A(ft, self.current_rng))
+        self.log.current(t_cur, s.motor.current_A(ft, self.current_rng))
         self.log.samples(self.sampler.read(n_frames * self.frame))
 
 

@@ -1,5 +1,5 @@
 """Sliding trials inside a scene run: each slide's PAC and PDC codes as the host read them, its stage current
-(from the contact's tangential force through the rig's motor model), and its texture properties.
+(from the contact's tangential force through the stage's motor model, :mod:`bench.textures.stage`), and its texture properties.
 
 The runner hands every chunk to :meth:`SlideRecorder.add`; only samples inside a slide's window are kept, so
 memory grows with the slides' total duration, not the scene's.  :meth:`SlideRecorder.finish` returns one row per
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bench.rigs.texture_rig import RigSettings
+from bench.textures.stage import StageMotor
 from bench.textures.properties import TrialRecording, properties
 from emulator.effects import effect_rng
 from emulator.sliding import Slide
@@ -19,10 +19,10 @@ LEAD_S = 0.1  # samples kept before each slide's contact (s)
 
 
 class SlideRecorder:
-    def __init__(self, scene, settings: RigSettings | None = None):
+    def __init__(self, scene, motor: StageMotor | None = None):
         self.scene = scene
         self.slides = sorted((s for s in scene.stimuli if isinstance(s, Slide)), key=lambda s: s.start_s)
-        self.settings = settings or RigSettings()
+        self.motor = motor or StageMotor()
         self._parts = [{"PAC": [], "PDC": []} for _ in self.slides]
 
     def __bool__(self) -> bool:
@@ -50,8 +50,7 @@ class SlideRecorder:
             if effect is None or got["PAC"] is None or got["PDC"] is None or got["PAC"][0][-1] < s.slide_end_s:
                 continue  # the run ended (or was interrupted) before this slide did
             log = effect.force_log(k)
-            current = self.settings.stage_current_A(log["tangential_N"], effect_rng(self.scene.seed,
-                                                                                     f"slide[{k}].motor_current"))
+            current = self.motor.current_A(log["tangential_N"], effect_rng(self.scene.seed, f"slide[{k}].motor_current"))
             rec = TrialRecording(got["PAC"][0], got["PAC"][1], got["PDC"][0], got["PDC"][1], log["t"], current,
                                  s.start_s + s.approach_s, s.slide_start_s, s.slide_end_s, texture=s.texture.number,
                                  force_N=s.force_N, velocity_m_s=s.velocity_m_per_s, trial=k, seed=self.scene.seed)

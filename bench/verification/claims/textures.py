@@ -232,6 +232,35 @@ def texture_property_claims(b: Bench) -> list[Claim]:
               deviation="the model's vibration grows with force everywhere (texture forces scale with the load); "
                         "it has no load-dependent damping of the skin, which D's observation implies"),
     ]
+    # across the whole library at one movement: roughness and traction correlate negatively (D ch. 6)
+    from bench.textures.library import load_library
+
+    library = [n for n in load_library() if n <= 117]
+    lib_rows = _trials(b, library, [main], 1, "claims-library")
+    r = float(np.corrcoef([x["traction"] for x in lib_rows], [x["roughness"] for x in lib_rows])[0, 1])
+    out.append(Claim("roughness and traction across the 117 textures (0.5 N @ 2.5 cm/s)", "negative correlation", r,
+                     -1.0, 0.0, "Pearson r", "D ch. 6 (Table 6-3)", kind="derived",
+                     note="partly built in: the library's friction falls with roughness for solids (its sources say "
+                          "so), so this is not an independent prediction"))
+    # smooth surfaces give no harmonics; a grating does: the largest rise of the sliding PAC spectrum over the
+    # resting one (Welch, 256-sample segments), 20–700 Hz
+    from scipy.signal import welch
+
+    lines = {}
+    for number in (46, 24, 902):
+        s_ = Slide(2.0, texture(number), 0.5, 0.05, 0.1, approach_s=0.1, hold_s=0.3)
+        t, pac = _pac(b, s_, s_.slide_end_s)
+        x = pac[(t >= s_.slide_start_s + 0.1) & (t < s_.slide_end_s - 0.05)]
+        rest = pac[t < 1.9]
+        f, p_slide = welch(x - x.mean(), fs=PAC_RATE_HZ, nperseg=256)
+        _, p_rest = welch(rest - rest.mean(), fs=PAC_RATE_HZ, nperseg=256)
+        band = (f >= 20) & (f <= 700)
+        lines[number] = float(10 * np.log10(np.max(p_slide[band] / p_rest[band])))
+    out += [Claim("smooth surfaces (polished aluminum, glass): no spectral lines while sliding",
+                  "< 10 dB over rest at every frequency", max(lines[46], lines[24]), -np.inf, 10.0, "dB", "D ch. 6",
+                  {"max_rise_dB": lines}, kind="prediction"),
+            Claim("3 mm grating: spectral lines (harmonics) while sliding", "≥ 20 dB over rest", lines[902],
+                  20.0, np.inf, "dB", "D ch. 3", kind="prediction")]
     # wear: after wear, roughness drops and its trial-to-trial spread grows; a fresh skin restores it
     sand = 901
     fresh = [r["roughness"] for r in _trials(b, [sand], [main], 6, "claims-wear")]
