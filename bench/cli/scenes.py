@@ -64,13 +64,10 @@ def _cmd_run(a) -> int:
     from bench.reporting.session import run_to_folder
     from bench.scenes.scene import load_scene
 
-    scene = load_scene(a.scene)  # validated completely, then the out folder checked: both before anything runs
-    if a.fidelity:
-        scene.fidelity = a.fidelity
-    if a.seed is not None:
-        scene.seed = a.seed
-    if a.spi:
-        scene.spi = a.spi
+    # the command line's values replace the file's before validation: the scene that runs is the one validated
+    overrides = {k: v for k, v in (("scene.fidelity", a.fidelity), ("scene.seed", a.seed), ("host.spi", a.spi))
+                 if v is not None}
+    scene = load_scene(a.scene, overrides)  # validated completely, then the out folder checked: both before running
     folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
     try:
         res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
@@ -134,11 +131,27 @@ def _cmd_params(a) -> int:
     return 0
 
 
+def _path(what: str):
+    """argparse type: a non-empty path without a NUL byte (what the path names is checked by the command)."""
+
+    def parse(text: str) -> str:
+        if not text:
+            raise argparse.ArgumentTypeError(f"an empty path: give {what}")
+        if "\0" in text:
+            raise argparse.ArgumentTypeError(f"{text!r}: the path contains a NUL byte")
+        return text
+
+    parse.__name__ = what
+    return parse
+
+
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    r = sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
-                       description=RUN_HELP, formatter_class=fmt)
-    r.add_argument("scene", help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
-    r.add_argument("--out", help="output folder (default: a fresh out/<scene name>[-n])")
+    from bench.cli.hosts import one_line_errors, whole
+
+    r = one_line_errors(sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
+                                       description=RUN_HELP, formatter_class=fmt))
+    r.add_argument("scene", type=_path("a scene file"), help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
+    r.add_argument("--out", type=_path("an out folder"), help="output folder (default: a fresh out/<scene name>[-n])")
     r.add_argument("--csv", action="store_true", help="also write samples.csv")
     r.add_argument("--force", action="store_true",
                    help="run into a folder that is not empty: an earlier run's files are removed first")
@@ -147,18 +160,21 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     r.add_argument("--compression", choices=["gzip", "lzf", "none"], default="gzip",
                    help="samples.h5 compression (default gzip: level 1 with shuffle, readable everywhere)")
     r.add_argument("--fidelity", choices=list(PROFILES), help="override the scene's profile")
-    r.add_argument("--seed", type=int, help="override the scene's seed")
+    r.add_argument("--seed", type=whole(0, 2**63 - 1), help="override the scene's seed (0 to 2^63 - 1)")
     r.add_argument("--spi", choices=["software", "rtl"],
                    help="the sensor's SPI side: the software model (default) or the RTL via the C++ harness")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
     r.set_defaults(func=_cmd_run)
 
-    v = sub.add_parser("validate", help="check scene files without running them")
-    v.add_argument("scenes", nargs="+")
+    v = one_line_errors(sub.add_parser(
+        "validate", help="check scene files without running them",
+        description="Validates each scene file completely (nothing runs) and prints 'ok' or every problem with its "
+                    "field and value. Exit status 0 if every file is valid, 1 if any is not, 2 for bad arguments."))
+    v.add_argument("scenes", nargs="+", type=_path("a scene file"))
     v.set_defaults(func=_cmd_validate)
 
-    sub.add_parser("scenes", help="list the shipped scenes").set_defaults(func=_cmd_scenes)
-    sub.add_parser("profiles", help="list the fidelity profiles").set_defaults(func=_cmd_profiles)
-    sub.add_parser("params", help="list every sensor parameter with unit, range and source").set_defaults(
-        func=_cmd_params)
+    one_line_errors(sub.add_parser("scenes", help="list the shipped scenes")).set_defaults(func=_cmd_scenes)
+    one_line_errors(sub.add_parser("profiles", help="list the fidelity profiles")).set_defaults(func=_cmd_profiles)
+    one_line_errors(sub.add_parser("params", help="list every sensor parameter with unit, range and source")
+                    ).set_defaults(func=_cmd_params)

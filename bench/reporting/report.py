@@ -104,9 +104,14 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
     record = {
         "status": rec.status,
         "error": rec.error,
+        # the whole scene: its fields as run (command-line overrides applied and named), and the file's own text
         "scene": {"name": sc.name, "source": sc.source, "description": sc.description, "seed": sc.seed,
-                  "fidelity": sc.fidelity, "duration_s": sc.duration_s},
-        "host": {"sequence": sc.sequence, "slot_rate_Hz": sc.slot_rate_Hz, "spi_clock_Hz": sc.spi_clock_Hz},
+                  "fidelity": sc.fidelity, "duration_s": sc.duration_s,
+                  "overrides": dict(getattr(sc, "overrides", {}) or {}), "text": sc.text},
+        "host": {"sequence": sc.sequence, "slot_rate_Hz": sc.slot_rate_Hz, "spi_clock_Hz": sc.spi_clock_Hz,
+                 "spi": sc.spi},
+        "faults": dict(sc.faults),
+        "analysis": {"impact_detection": sc.impact_detection},
         "noise": asdict(sc.noise),
         "sensor_parameters": asdict(sc.params),
         "stimuli": [_stimulus_record(s) for s in sc.stimuli],

@@ -28,6 +28,33 @@ from emulator.texture import SURFACE_LENGTH_M
 from emulator.thermal import MATERIALS
 
 MAX_DURATION_S = 36000.0
+MAX_SCENE_BYTES = 1_000_000  # a scene file larger than 1 MB is refused before it is parsed
+MAX_NESTING = 16  # arrays and tables nested deeper than this are refused (a scene needs 4 levels)
+MAX_INSTANTS = 10_000  # instants of all stimuli together (each one is a stimulus the sensor computes)
+TABLES = ("scene", "sensor", "host", "noise", "analysis", "faults", "skin")
+
+
+def _r(v, limit: int = 80) -> str:
+    """``repr(v)`` for messages, shortened when long (a hostile file can hold a 1 MB string)."""
+    try:
+        text = repr(v)
+    except (RecursionError, ValueError):
+        text = f"<{type(v).__name__}>"
+    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+
+
+def _cut(text: str, limit: int = 300) -> str:
+    """A message from elsewhere, shortened when long."""
+    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+
+
+def _real(v) -> bool:
+    """A number TOML can give (int or float, not bool) that is finite and fits a float."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    if isinstance(v, int):
+        return abs(v) < 2 ** 1000
+    return math.isfinite(v)
 
 
 @dataclass
@@ -51,6 +78,7 @@ class Scene:
     skin_before: dict = field(default_factory=dict)  # the skin's state before the first slide
     skin_after: dict = field(default_factory=dict)  # ... and after the last (Archard wear, if on)
     trial_skins: list = field(default_factory=list)  # the skin's state before each slide
+    overrides: dict = field(default_factory=dict)  # values given on the command line, e.g. {"scene.seed": 5}
 
     @property
     def channels(self) -> list[str]:
@@ -75,10 +103,10 @@ class _Checker:
         v = table[key]
         kind = "a whole number" if integer else "a number"
         if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
-            self.problems.append(f"{where}.{key} = {v!r}: must be {kind} in {unit} ({lo} to {hi})")
+            self.problems.append(f"{where}.{key} = {_r(v)}: must be {kind} in {unit} ({lo} to {hi})")
             return default
-        if not math.isfinite(v) or not lo <= v <= hi:
-            self.problems.append(f"{where}.{key} = {v!r}: allowed range is {lo} to {hi} {unit}")
+        if not _real(v) or not lo <= v <= hi:
+            self.problems.append(f"{where}.{key} = {_r(v)}: allowed range is {lo} to {hi} {unit}")
             return default
         return v
 
@@ -89,13 +117,15 @@ class _Checker:
             return []
         v = table[key]
         values = v if isinstance(v, list) else [v]
+        if not values:
+            self.problems.append(f"{where}.{key} = []: give at least one instant (s)")
         out = []
         for i, t in enumerate(values):
             name = f"{where}.{key}[{i}]" if isinstance(v, list) else f"{where}.{key}"
-            if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t) or t < 0:
-                self.problems.append(f"{name} = {t!r}: must be an instant ≥ 0 s")
+            if not _real(t) or t < 0:
+                self.problems.append(f"{name} = {_r(t)}: must be an instant ≥ 0 s")
             elif duration is not None and t >= duration:
-                self.problems.append(f"{name} = {t!r} s: after the end of the scene (duration_s = {duration})")
+                self.problems.append(f"{name} = {_r(t)} s: after the end of the scene (duration_s = {duration})")
             else:
                 out.append(float(t))
         return out
@@ -106,22 +136,34 @@ class _Checker:
                 self.problems.append(f"{where}.{key} is missing; one of: {', '.join(map(str, choices))}")
             return default
         v = table[key]
-        if v not in choices:
-            self.problems.append(f"{where}.{key} = {v!r}: must be one of: {', '.join(map(str, choices))}")
+        if not isinstance(v, (str, int, float)) or isinstance(v, bool) or v not in choices:
+            self.problems.append(f"{where}.{key} = {_r(v)}: must be one of: {', '.join(map(str, choices))}")
             return default
         return v
 
     def boolean(self, table, key, where, default):
         v = table.get(key, default)
         if not isinstance(v, bool):
-            self.problems.append(f"{where}.{key} = {v!r}: must be true or false")
+            self.problems.append(f"{where}.{key} = {_r(v)}: must be true or false")
             return default
         return v
 
     def known_keys(self, table: dict, where: str, known):
         for k in table:
             if k not in known:
-                self.problems.append(f"{where}: unknown field {k!r}; known fields: {', '.join(sorted(known))}")
+                self.problems.append(f"{where}: unknown field {_r(k)}; known fields: {', '.join(sorted(known))}")
+
+    def table(self, data: dict, key: str, what: str) -> dict:
+        """``data[key]`` if it is a table (missing: an empty one); otherwise a problem naming key and value."""
+        v = data.get(key, {})
+        if isinstance(v, dict):
+            return v
+        if isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            self.problems.append(f"{key} = {_r(v)}: must be one table ([{key}]), not an array of tables "
+                                 f"([[{key}]]); {what}")
+        else:
+            self.problems.append(f"{key} = {_r(v)}: must be a table ([{key}]); {what}")
+        return {}
 
 
 STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step",
@@ -146,14 +188,17 @@ ELECTRODE_NAMES = tuple(f"E{n}" for n in range(1, 20))
 
 
 def _stimuli(c: _Checker, items, duration, params: SensorParams):
+    first_once: dict[str, str] = {}  # power_on, heater_failure: which stimulus gave the one allowed
     out = []
     if not isinstance(items, list):
-        c.problems.append("stimulus must be an array of tables ([[stimulus]])")
+        c.problems.append(f"stimulus = {_r(items)}: stimulus must be an array of tables ([[stimulus]]), one per "
+                          f"stimulus, each with a kind")
         return out
     for i, st in enumerate(items):
         w = f"stimulus[{i}]"
         if not isinstance(st, dict):
-            c.problems.append(f"{w} must be a table")
+            c.problems.append(f"{w} = {_r(st)}: must be a table ([[stimulus]] with a kind: "
+                              f"{', '.join(STIMULUS_KINDS)})")
             continue
         kind = c.choice(st, "kind", w, STIMULUS_KINDS, required=True)
         if kind is None:
@@ -170,8 +215,8 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
             force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
             ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
             hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
-            if start and None not in (force, ramp, hold):
-                out.append(Press(start[0], force, ramp, hold))
+            if None not in (force, ramp, hold):
+                out += [Press(t, force, ramp, hold) for t in start]
         elif kind == "sphere_drop":
             height = c.number(st, "height_m", w, 1e-3, 10.0, "m", default=DROP_HEIGHT_M)
             if "sphere" in st and "mass_mg" in st:
@@ -198,8 +243,8 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
             else:
                 f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
                 f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
-            if start and None not in (dur, amp, fade, f0):
-                out.append(Vibration(start[0], dur, amp * 1e-6, f0, f1, fade))
+            if None not in (dur, amp, fade, f0) and (f1 is not None or "frequency_Hz" in st):
+                out += [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start]
         elif kind == "pressure":
             start = c.times(st, "start_s", w, duration)
             dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
@@ -207,8 +252,8 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
             amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
             freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
             fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
-            if start and None not in (dur, offset, amp, freq, fade):
-                out.append(PressureCalibrator(start[0], dur, offset * 1e3, amp, freq, fade))
+            if None not in (dur, offset, amp, freq, fade):
+                out += [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) for t in start]
         elif kind == "touch":
             start = c.times(st, "start_s", w, duration)
             vals = dict(
@@ -224,18 +269,32 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
             )
             electrode = c.choice(st, "electrode", w, ELECTRODE_NAMES)
             mat = c.choice(st, "material", w, tuple(MATERIALS))
-            if start and None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
-                out.append(Touch(start[0], electrode=electrode, material=mat, **vals))
-        elif kind == "power_on":
+            where = [k for k in ("x_mm", "angle_deg") if k in st]
+            if "electrode" in st and where:
+                c.problems.append(f"{w}: give the place either as electrode ({_r(st['electrode'])}) or as x_mm + "
+                                  f"angle_deg ({', '.join(f'{k} = {_r(st[k])}' for k in where)}), not both")
+            if "object_temperature_C" in st and "material" not in st:
+                c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
+                                  f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
+            if None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
+                out += [Touch(t, electrode=electrode, material=mat, **vals) for t in start]
+        elif kind in ("power_on", "heater_failure"):
             at = c.times(st, "at_s", w, duration)
-            out += [PowerOn(a) for a in at[:1]]
-        elif kind == "heater_failure":
-            out += [HeaterFailure(a) for a in c.times(st, "at_s", w, duration)[:1]]
+            what = ("the sensor is powered on once (heaters start from ambient)" if kind == "power_on" else
+                    "the heaters fail once (they stay off)")
+            if len(at) > 1:
+                c.problems.append(f"{w}.at_s = {_r(st['at_s'])}: {kind} happens at most once per scene: {what}")
+            elif at:
+                if first_once.get(kind):
+                    c.problems.append(f"{w}: a second {kind} (the first is {first_once[kind]}): {what}")
+                else:
+                    first_once[kind] = w
+                    out.append((PowerOn if kind == "power_on" else HeaterFailure)(at[0]))
         elif kind == "ambient_step":
             at = c.times(st, "at_s", w, duration)
             temp = c.number(st, "temperature_C", w, -20.0, 60.0, "°C", required=True)
-            if at and temp is not None:
-                out.append(AmbientStep(at[0], temp))
+            if temp is not None:
+                out += [AmbientStep(t, temp) for t in at]
         elif kind == "slide":
             out += _slides(c, st, w, duration)
         elif kind == "replace_skin":
@@ -266,7 +325,7 @@ def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
         try:
             tex = find_texture(st["texture"])
         except TextureError as e:
-            c.problems.append(f"{w}.texture = {st['texture']!r}: " + "; ".join(e.problems))
+            c.problems.append(f"{w}.texture = {_r(st['texture'])}: " + "; ".join(_cut(p) for p in e.problems))
     if tex is None or None in [v for k, v in vals.items() if k != "start_position_mm"]:
         return []
     v, d, a = vals["velocity_mm_per_s"] * 1e-3, vals["distance_mm"] * 1e-3, vals["accel_s"]
@@ -351,7 +410,7 @@ def build_slides(specs: list, skin: Skin, seed: int, wear: bool, contact_radius_
 
 def _skin(c: _Checker, table) -> tuple[Skin, bool]:
     if not isinstance(table, dict):
-        c.problems.append(f"skin = {table!r}: must be a table ([skin])")
+        c.problems.append(f"skin = {_r(table)}: must be a table ([skin])")
         return Skin(), True
     c.known_keys(table, "skin", SKIN_FIELDS)
     fingerprints = c.boolean(table, "fingerprints", "skin", True)
@@ -370,10 +429,20 @@ def _faults(c: _Checker, table: dict) -> dict:
     for key in ("electrode_open", "electrode_short"):
         if key in table:
             v = table[key]
-            if not isinstance(v, list) or not all(isinstance(n, int) and 1 <= n <= 19 for n in v):
-                c.problems.append(f"faults.{key} = {v!r}: a list of electrode numbers 1..19")
+            if not isinstance(v, list) or not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 19
+                                                  for n in v):
+                c.problems.append(f"faults.{key} = {_r(v)}: a list of electrode numbers 1..19")
+            elif len(set(v)) < len(v):
+                twice = sorted({n for n in v if v.count(n) > 1})
+                c.problems.append(f"faults.{key} = {_r(v)}: electrode {', '.join(map(str, twice))} listed more "
+                                  f"than once")
             else:
                 out[key] = v
+    both = sorted(set(out.get("electrode_open", ())) & set(out.get("electrode_short", ())))
+    if both:
+        c.problems.append(f"faults: electrode {', '.join(map(str, both))} is both open (faults.electrode_open = "
+                          f"{_r(out['electrode_open'])}) and shorted (faults.electrode_short = "
+                          f"{_r(out['electrode_short'])}); an electrode is one or the other")
     if "mux_stuck" in table:
         n = c.number(table, "mux_stuck", "faults", 1, 19, "electrode number", integer=True)
         if n is not None:
@@ -387,60 +456,180 @@ def _faults(c: _Checker, table: dict) -> dict:
     return out
 
 
+def _check_host(c: _Checker, sequence, slot_rate: float, clock: float, duration: float) -> None:
+    """What the sampler would refuse, and sequences the scene is too short to read even once, as problems."""
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.spi.peripheral import TRANSFER_PERIODS
+
+    word_s = TRANSFER_PERIODS / clock  # the same rule as bench.running.sampler.Sampler
+    if 2 * word_s + proto.SAMPLE_DELAY_S > 1.0 / slot_rate:
+        c.problems.append(f"host.slot_rate_Hz = {slot_rate:g}: a slot of {1e6 / slot_rate:.1f} µs cannot hold the "
+                          f"command, {proto.SAMPLE_DELAY_S * 1e6:.0f} µs and the read at host.spi_clock_Hz = "
+                          f"{clock:g}; lower slot_rate_Hz or raise the clock")
+    seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
+    slots = int(round(duration * slot_rate))  # what the runner reads
+    first = {}
+    for i, n in enumerate(seq):
+        first.setdefault(n, i)
+    unread = [n for n, i in first.items() if i >= slots]
+    if unread:
+        c.problems.append(f"scene.duration_s = {duration:g}: at host.slot_rate_Hz = {slot_rate:g} the scene reads "
+                          f"{slots} slot(s), so {', '.join(unread[:5])}{', ...' if len(unread) > 5 else ''} of the "
+                          f"host sequence ({len(seq)} slots) would never be read; make the scene at least "
+                          f"{max(first.values()) + 1} slots ({(max(first.values()) + 1) / slot_rate:.3g} s) long")
+
+
+def _slot_gaps(seq: list, channel: str) -> list[int]:
+    """Gaps (in slots) between consecutive reads of ``channel`` in the repeating sequence."""
+    at = [i for i, n in enumerate(seq) if n == channel]
+    return [b - a for a, b in zip(at, at[1:] + [at[0] + len(seq)])] if at else []
+
+
+def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
+    """Every sliding trial's texture properties (traction, roughness, fineness: bench.textures.properties) must be
+    computable from what the host reads; otherwise the scene is refused here, not after it ran."""
+    import statistics
+
+    from bench.running.slides import LEAD_S
+    from bench.textures.properties import (BACKGROUND_GUARD_S, BAND_HZ, MEASURE_LEAD, MEASURE_TAIL)
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.sliding import SlidingContact
+
+    if not specs:
+        return
+    seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
+    missing = [n for n in ("PAC", "PDC") if n not in seq]
+    if missing:
+        c.problems.append(f"host.sequence = {_r(sequence)}: a sliding scene reports each trial's texture properties "
+                          f"from PAC and PDC; add {' and '.join(missing)} to the host sequence")
+        return
+    pac_Hz = slot_rate / statistics.median(_slot_gaps(seq, "PAC"))
+    if not BAND_HZ[1] < pac_Hz / 2:
+        c.problems.append(f"host.slot_rate_Hz = {slot_rate:g}: PAC is read at {pac_Hz:.4g} Hz, and the roughness of "
+                          f"a sliding trial needs its {BAND_HZ[1]:g} Hz band below Nyquist: more than "
+                          f"{2 * BAND_HZ[1]:g} Hz of PAC")
+    pdc_gap_s = max(_slot_gaps(seq, "PDC")) / slot_rate
+    measured = 1.0 - MEASURE_LEAD - MEASURE_TAIL
+    need_s = 2.0 / SlidingContact.LOG_RATE_HZ  # the stage current comes from the contact's 100 Hz force log
+    seen = set()
+    for sp in (x for x in specs if isinstance(x, SlideSpec)):
+        if sp.where in seen:  # the trials of one [[stimulus]] have one shape: its problems are reported once
+            continue
+        seen.add(sp.where)
+        slide_s = sp.distance_m / sp.velocity_m_per_s + sp.accel_s
+        if slide_s * measured < need_s:
+            c.problems.append(f"{sp.where}: the slide lasts {slide_s * 1e3:.3g} ms; its texture properties are "
+                              f"measured over the middle {measured:.0%} of it and need at least {need_s * 1e3:g} ms "
+                              f"there (at least {need_s / measured * 1e3:.3g} ms of sliding): slide farther or slower")
+        if sp.hold_s <= 2 * BACKGROUND_GUARD_S:
+            c.problems.append(f"{sp.where}.hold_s = {sp.hold_s:g}: a sliding trial's roughness subtracts the "
+                              f"vibration of the hold before the slide, less {BACKGROUND_GUARD_S:g} s at both ends; "
+                              f"hold longer than {2 * BACKGROUND_GUARD_S:g} s")
+        if pdc_gap_s > LEAD_S + sp.end_s - sp.start_s:
+            c.problems.append(f"{sp.where}: PDC is read every {pdc_gap_s:.3g} s, so a trial of "
+                              f"{sp.end_s - sp.start_s:.3g} s may hold no PDC sample; read PDC more often")
+
+
+def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: float, stimuli) -> None:
+    """``impact_detection`` needs PAC at a rate the rule can use and sphere drops it can judge."""
+    from bench.verification.analysis import DetectionRule
+    from emulator.channels import DEFAULT_FRAME_NAMES
+
+    rule = DetectionRule()
+    seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
+    if "PAC" not in seq:
+        c.problems.append(f"analysis.impact_detection = true: the rule reads PAC, and host.sequence = {_r(sequence)} "
+                          f"does not read it; add \"PAC\" or switch impact detection off")
+        return
+    pac_Hz = slot_rate * seq.count("PAC") / len(seq)
+    need_Hz = (rule.min_points + 1) / rule.window_s
+    if pac_Hz < need_Hz:
+        c.problems.append(f"analysis.impact_detection = true: PAC is read at {pac_Hz:.3g} Hz (host.slot_rate_Hz = "
+                          f"{slot_rate:g}, {seq.count('PAC')} of {len(seq)} slots); the rule needs more than "
+                          f"{rule.min_points} samples within {rule.window_s * 1e3:.0f} ms, so at least {need_Hz:g} Hz")
+    drops = [s for s in stimuli if isinstance(s, SphereDrop)]
+    if not drops:
+        c.problems.append("analysis.impact_detection = true: the scene has no sphere_drop to judge")
+    for s in drops:
+        if s.time_s + rule.window_s > duration:
+            c.problems.append(f"analysis.impact_detection = true: the sphere drop at {s.time_s} s is judged over "
+                              f"{rule.window_s * 1e3:.0f} ms after it, past the end of the scene (duration_s = "
+                              f"{duration:g}); drop it earlier or lengthen the scene")
+
+
 def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     """Validate a scene given as a dict (the parsed TOML); raise :class:`SceneError` listing every problem."""
     c = _Checker()
+    if not isinstance(data, dict):
+        raise SceneError(source, [f"the scene is {_r(data)}: it must be a table of tables ([scene], [host], "
+                                  f"[[stimulus]], ...)"])
     c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis", "faults", "skin"})
-    meta = data.get("scene", {})
+    meta = c.table(data, "scene", "it needs at least name and duration_s")
     if "scene" not in data:
         c.problems.append("[scene] table is missing (needs at least name and duration_s)")
     c.known_keys(meta, "scene", {"name", "description", "duration_s", "seed", "fidelity"})
     name = meta.get("name")
-    if not isinstance(name, str) or not name:
-        c.problems.append(f"scene.name = {name!r}: must be a non-empty string")
+    if "scene" in data and not isinstance(data["scene"], dict):
+        pass  # the table's shape is the problem; its fields are not looked for
+    elif not isinstance(name, str) or not name:
+        c.problems.append(f"scene.name = {_r(name)}: must be a non-empty string")
     elif len(name) > 100 or name in (".", "..") or not all(ch.isascii() and (ch.isalnum() or ch in "-_.")
                                                            for ch in name):
-        c.problems.append(f"scene.name = {name!r}: must be a name, not a path (it names the default out "
+        c.problems.append(f"scene.name = {_r(name)}: must be a name, not a path (it names the default out "
                           f"folder): 1 to 100 letters, digits, '-', '_' or '.', and not '.' or '..'")
-    duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s", required=True)
+    duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s",
+                        required=isinstance(data.get("scene", {}), dict))
     seed = c.number(meta, "seed", "scene", 0, 2**63 - 1, "", default=0, integer=True)
     fidelity = c.choice(meta, "fidelity", "scene", tuple(PROFILES), default="default")
+    description = meta.get("description", "")
+    if not isinstance(description, str):
+        c.problems.append(f"scene.description = {_r(description)}: must be a string")
+        description = ""
 
-    sensor = data.get("sensor", {})
+    sensor = c.table(data, "sensor", "sensor parameters by name (biotac-bench params)")
     c.known_keys(sensor, "sensor", PARAMETER_FIELDS)
     changes = {}
     for k, v in sensor.items():
         if k in PARAMETER_FIELDS:
+            if isinstance(v, int) and not _real(v):
+                unit, (lo, hi) = PARAMETER_FIELDS[k].metadata["unit"], PARAMETER_FIELDS[k].metadata["range"]
+                c.problems.append(f"sensor.{k} = {_r(v)}: allowed range is {lo} to {hi} {unit}")
+                continue
             try:
                 check_parameter(k, v, where=f"sensor.{k}")
                 changes[k] = v
-            except ValueError as e:
-                c.problems.append(str(e))
+            except (ValueError, TypeError, OverflowError) as e:
+                c.problems.append(_cut(str(e)))
     params = SensorParams().replace(**changes)
 
-    host = data.get("host", {})
+    host = c.table(data, "host", "sequence, slot_rate_Hz, spi_clock_Hz, spi")
     c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz", "spi"})
     spi = c.choice(host, "spi", "host", ("software", "rtl"), default="software")
     sequence = host.get("sequence", "default")
+    host_problems = len(c.problems)
     if sequence != "default":
         if not isinstance(sequence, list) or not sequence:
-            c.problems.append(f"host.sequence = {sequence!r}: \"default\" or a non-empty list of channel names")
+            c.problems.append(f"host.sequence = {_r(sequence)}: \"default\" or a non-empty list of channel names")
             sequence = "default"
         else:
             for i, n in enumerate(sequence):
                 if not isinstance(n, str) or n.upper() not in CHANNEL_INDEX or n.upper() == "HAL":
-                    c.problems.append(f"host.sequence[{i}] = {n!r}: channels are PAC, PDC, TAC, TDC, E1..E19")
-            sequence = [n.upper() for n in sequence if isinstance(n, str)]
+                    c.problems.append(f"host.sequence[{i}] = {_r(n)}: channels are PAC, PDC, TAC, TDC, E1..E19")
+            sequence = [n.upper() for n in sequence if isinstance(n, str) and n.upper() in CHANNEL_INDEX]
     slot_rate = c.number(host, "slot_rate_Hz", "host", 1.0, 8000.0, "Hz", default=4400.0)
     lo, hi = proto.SPI_CLOCK_RANGE_HZ
     clock = c.number(host, "spi_clock_Hz", "host", lo, hi, "Hz", default=proto.HOST_DEFAULT_CLOCK_HZ)
+    host_ok = len(c.problems) == host_problems and isinstance(data.get("host", {}), dict)
 
-    noise_t = data.get("noise", {})
+    noise_t = c.table(data, "noise", "noise sources by name, each true or false")
     names = NoiseSources.__dataclass_fields__.keys()
     c.known_keys(noise_t, "noise", names)
     noise = NoiseSources(**{k: c.boolean(noise_t, k, "noise", True) for k in names})
 
     stimuli = _stimuli(c, data.get("stimulus", []), duration, params)
+    if len(stimuli) > MAX_INSTANTS:
+        c.problems.append(f"stimulus: {len(stimuli)} stimuli (every instant of every [[stimulus]] counts): at most "
+                          f"{MAX_INSTANTS} per scene")
     skin, wear = _skin(c, data.get("skin", {}))
     slide_specs = [s for s in stimuli if isinstance(s, (SlideSpec, SkinReplacement))]
     stimuli = [s for s in stimuli if not isinstance(s, (SlideSpec, SkinReplacement))]
@@ -454,10 +643,28 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             if a.start_s < r.at_s < a.end_s:
                 c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
                                   f"({a.start_s} s to {a.end_s:.3f} s)")
-    faults = _faults(c, data.get("faults", {}))
-    analysis = data.get("analysis", {})
+    faults = _faults(c, c.table(data, "faults", "electrode_open, electrode_short, mux_stuck, thermistor, "
+                                               "heater_failed"))
+    analysis = c.table(data, "analysis", "impact_detection = true | false")
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
+    if faults.get("heater_failed"):
+        for s in stimuli:
+            if isinstance(s, HeaterFailure):
+                c.problems.append(f"heater_failure at {s.at_s} s: faults.heater_failed = true says the heaters never "
+                                  f"ran, so they cannot fail during the run; give one or the other")
+    steps: dict[float, float] = {}
+    for s in stimuli:
+        if isinstance(s, AmbientStep):
+            if steps.get(s.at_s, s.temperature_C) != s.temperature_C:
+                c.problems.append(f"ambient_step at {s.at_s} s: two room temperatures at one instant "
+                                  f"({steps[s.at_s]} and {s.temperature_C} °C)")
+            steps[s.at_s] = s.temperature_C
+    if host_ok and duration is not None:
+        _check_host(c, sequence, float(slot_rate), float(clock), float(duration))
+        _check_slides(c, slide_specs, sequence, float(slot_rate))
+        if impact_detection:
+            _check_impact_detection(c, sequence, float(slot_rate), float(duration), stimuli)
 
     if fidelity and duration:
         from emulator.fidelity import profile
@@ -467,28 +674,122 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             if isinstance(s, Vibration) and max(s.f_start_Hz, s.f_stop_Hz or 0) >= 0.45 * grid:
                 c.problems.append(f"vibration at {max(s.f_start_Hz, s.f_stop_Hz or 0):.0f} Hz needs a finer grid than "
                                   f"fidelity '{fidelity}' ({grid:.0f} Hz); use \"reference\"")
+            elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
+                c.problems.append(f"pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity '{fidelity}' "
+                                  f"({grid:.0f} Hz); use \"default\" or \"reference\"")
     if c.problems:
         raise SceneError(source, c.problems)
     skin_before = skin.state()
     slides, trial_skins, skin = build_slides(slide_specs, skin, int(seed), wear, params.contact_radius_at_1N_m)
     stimuli += slides
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
-                 description=str(meta.get("description", "")), params=params, sequence=sequence,
+                 description=description, params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
                  faults=faults,
                  impact_detection=impact_detection, source=source, text=text,
                  skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file."""
+def _position(data: bytes, offset: int) -> str:
+    line = data.count(b"\n", 0, offset) + 1
+    column = offset - data.rfind(b"\n", 0, offset)
+    return f"line {line}, column {column}"
+
+
+def _too_deep(data, limit: int = MAX_NESTING) -> str | None:
+    """The first field nested more than ``limit`` arrays/tables deep, or None (an iterative walk: no recursion)."""
+    stack = [(data, "", 0)]
+    while stack:
+        v, where, depth = stack.pop()
+        if depth > limit:
+            return where or "the file"
+        if isinstance(v, dict):
+            stack += [(x, f"{where}.{k}" if where else str(k), depth + 1) for k, x in v.items()]
+        elif isinstance(v, list):
+            stack += [(x, f"{where}[{i}]", depth + 1) for i, x in enumerate(v)]
+    return None
+
+
+def read_scene_text(path: str | Path) -> str:
+    """The text of a scene file, or :class:`SceneError` naming the file and what is wrong with it: unreadable, not
+    a regular file (a folder, device or pipe), larger than :data:`MAX_SCENE_BYTES`, empty, not UTF-8 (a leading
+    byte-order mark is allowed and dropped), a NUL byte."""
+    import os
+    import stat
+
+    where = str(path)
+    if "\0" in where:
+        raise SceneError(_r(where)[1:-1], ["the path contains a NUL byte"])
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        st = os.stat(path)
+        if stat.S_ISDIR(st.st_mode):
+            raise SceneError(where, ["cannot read the file: Is a directory (give a scene file, e.g. "
+                                     "fixtures/scenes/taps.toml)"])
+        if not stat.S_ISREG(st.st_mode):  # a device or a pipe could block or never end
+            raise SceneError(where, ["cannot read the file: not a regular file (a device, pipe or socket); save the "
+                                     "scene to a file"])
+        if st.st_size > MAX_SCENE_BYTES:
+            raise SceneError(where, [f"the file is {st.st_size} bytes: a scene file may hold at most "
+                                     f"{MAX_SCENE_BYTES} bytes (1 MB)"])
+        with open(path, "rb") as f:
+            data = f.read(MAX_SCENE_BYTES + 1)
     except OSError as e:
-        raise SceneError(str(path), [f"cannot read the file: {e.strerror}"]) from None
+        raise SceneError(where, [f"cannot read the file: {e.strerror or e}"]) from None
+    if len(data) > MAX_SCENE_BYTES:
+        raise SceneError(where, [f"the file holds more than {MAX_SCENE_BYTES} bytes: a scene file may hold at most "
+                                 f"{MAX_SCENE_BYTES} bytes (1 MB)"])
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError(where, ["the file is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)"])
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]  # a byte-order mark some editors write: not part of the text
+    if not data.strip():
+        raise SceneError(where, ["the file is empty: a scene needs at least a [scene] table with name and "
+                                 "duration_s"])
+    nul = data.find(b"\0")
+    if nul >= 0:
+        raise SceneError(where, [f"the file holds a NUL byte at {_position(data, nul)}: not a text file"])
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise SceneError(where, [f"not UTF-8 text: byte 0x{data[e.start]:02x} at {_position(data, e.start)} "
+                                 f"cannot be decoded (TOML files are UTF-8; save the file as UTF-8)"]) from None
+
+
+def parse_scene_text(text: str, source: str = "<scene>", overrides: dict | None = None) -> Scene:
+    """Parse and validate a scene file's text; :class:`SceneError` names ``source`` for any problem.
+
+    ``overrides``: values that replace the file's before validation, by ``"table.field"`` (e.g. ``{"scene.seed":
+    5, "scene.fidelity": "fast", "host.spi": "rtl"}``: ``run``'s command-line options), so that the scene that
+    runs is the scene that was validated; the scene keeps them in ``Scene.overrides``."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        raise SceneError(str(path), [f"TOML syntax error: {e}"]) from None
-    return parse_scene(data, source=str(path), text=text)
+        raise SceneError(source, [f"TOML syntax error: {e}"]) from None
+    except RecursionError:
+        raise SceneError(source, [f"arrays or inline tables nested too deeply to read (a scene needs 4 levels; "
+                                  f"at most {MAX_NESTING} are allowed)"]) from None
+    except ValueError as e:  # e.g. an integer of more than 4300 digits
+        raise SceneError(source, [f"TOML value error: {_cut(str(e))}"]) from None
+    deep = _too_deep(data)
+    if deep is not None:
+        raise SceneError(source, [f"{_cut(deep, 120)}: nested more than {MAX_NESTING} arrays or tables deep "
+                                  f"(a scene needs 4)"])
+    overrides = dict(overrides or {})
+    for key, value in overrides.items():
+        table, _, name = key.partition(".")
+        if table not in TABLES or not name:
+            raise ValueError(f"override {key!r}: give table.field, e.g. scene.seed")
+        if table == "scene" and table not in data:
+            continue  # the missing [scene] table is reported as such
+        if isinstance(data.setdefault(table, {}), dict):  # a table of the wrong shape is reported as such
+            data[table][name] = value
+    scene = parse_scene(data, source=source, text=text)
+    scene.overrides = overrides
+    return scene
+
+
+def load_scene(path: str | Path, overrides: dict | None = None) -> Scene:
+    """Read and validate a scene file (see :func:`read_scene_text` for what makes a file unreadable;
+    ``overrides`` as for :func:`parse_scene_text`)."""
+    return parse_scene_text(read_scene_text(path), source=str(path), overrides=overrides)
