@@ -14,14 +14,15 @@ from emulator.stimuli import SPHERES, SphereDrop
 def impact_ring_claims(b: Bench) -> list[Claim]:
     """Decaying sinusoid of ~330 Hz and ~20 ms; amplitude linear in the impulse below clipping."""
     mass = SPHERES["5/64 in aluminum bearing"][0]
-    rec = b.acquire([SphereDrop(0.5, mass)], 1.0, sequence=("PAC",), slot_rate_Hz=4400.0)
+    impact = {"restitution": b.params.impact_restitution, "contact_s": b.params.impact_contact_s}  # as scenes do
+    rec = b.acquire([SphereDrop(0.5, mass, **impact)], 1.0, sequence=("PAC",), slot_rate_Hz=4400.0)
     t, pac = rec["PAC"]
     sel = (t > 0.5 + 1e-3) & (t < 0.62)
     ring = analysis.fit_decaying_sinusoid(t[sel] - 0.5, pac[sel] - np.mean(pac[t < 0.45]))
     # linearity: peak amplitude vs impulse for all six spheres (noise-free analog PAC)
     impulses, peaks = [], []
     for name, (m, _) in SPHERES.items():
-        drop = SphereDrop(0.2, m)
+        drop = SphereDrop(0.2, m, **impact)
         tt, x = b.analog_pac_bits([drop], 0.5, rate_Hz=22000.0)
         x = x - x[tt < 0.19].mean()
         impulses.append(drop.impulse_Ns)
