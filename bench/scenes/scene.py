@@ -739,6 +739,8 @@ def read_scene_text(path: str | Path) -> str:
     if len(data) > MAX_SCENE_BYTES:
         raise SceneError(where, [f"the file holds more than {MAX_SCENE_BYTES} bytes: a scene file may hold at most "
                                  f"{MAX_SCENE_BYTES} bytes (1 MB)"])
+    if data.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+        raise SceneError(where, ["the file is UTF-32 text: save it as UTF-8 (TOML files are UTF-8)"])
     if data.startswith((b"\xff\xfe", b"\xfe\xff")):
         raise SceneError(where, ["the file is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)"])
     if data.startswith(b"\xef\xbb\xbf"):
