@@ -32,6 +32,10 @@ MAX_SCENE_BYTES = 1_000_000  # a scene file larger than 1 MB is refused before i
 MAX_NESTING = 16  # arrays and tables nested deeper than this are refused (a scene needs 4 levels)
 MAX_INSTANTS = 10_000  # instants of all stimuli together (each one is a stimulus the sensor computes)
 TABLES = ("scene", "sensor", "host", "noise", "analysis", "faults", "skin")
+#: D ch. 5's impact detection rule as ``bench.verification.analysis.DetectionRule`` applies it (more than
+#: ``min_points`` PAC samples beyond 4σ within ``window_s`` of a drop); kept here because verification builds on
+#: scenes, not the other way round — bench/tests/test_hostile_input.py holds the two equal.
+IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S = 3, 0.1
 
 
 def _r(v, limit: int = 80) -> str:
@@ -490,7 +494,6 @@ def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
     computable from what the host reads; otherwise the scene is refused here, not after it ran."""
     import statistics
 
-    from bench.running.slides import LEAD_S
     from bench.textures.properties import (BACKGROUND_GUARD_S, BAND_HZ, MEASURE_LEAD, MEASURE_TAIL)
     from emulator.channels import DEFAULT_FRAME_NAMES
     from emulator.sliding import SlidingContact
@@ -525,35 +528,34 @@ def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
             c.problems.append(f"{sp.where}.hold_s = {sp.hold_s:g}: a sliding trial's roughness subtracts the "
                               f"vibration of the hold before the slide, less {BACKGROUND_GUARD_S:g} s at both ends; "
                               f"hold longer than {2 * BACKGROUND_GUARD_S:g} s")
-        if pdc_gap_s > LEAD_S + sp.end_s - sp.start_s:
+        if pdc_gap_s > sp.end_s - sp.start_s:
             c.problems.append(f"{sp.where}: PDC is read every {pdc_gap_s:.3g} s, so a trial of "
                               f"{sp.end_s - sp.start_s:.3g} s may hold no PDC sample; read PDC more often")
 
 
 def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: float, stimuli) -> None:
     """``impact_detection`` needs PAC at a rate the rule can use and sphere drops it can judge."""
-    from bench.verification.analysis import DetectionRule
     from emulator.channels import DEFAULT_FRAME_NAMES
 
-    rule = DetectionRule()
+    min_points, window_s = IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S
     seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
     if "PAC" not in seq:
         c.problems.append(f"analysis.impact_detection = true: the rule reads PAC, and host.sequence = {_r(sequence)} "
                           f"does not read it; add \"PAC\" or switch impact detection off")
         return
     pac_Hz = slot_rate * seq.count("PAC") / len(seq)
-    need_Hz = (rule.min_points + 1) / rule.window_s
+    need_Hz = (min_points + 1) / window_s
     if pac_Hz < need_Hz:
         c.problems.append(f"analysis.impact_detection = true: PAC is read at {pac_Hz:.3g} Hz (host.slot_rate_Hz = "
                           f"{slot_rate:g}, {seq.count('PAC')} of {len(seq)} slots); the rule needs more than "
-                          f"{rule.min_points} samples within {rule.window_s * 1e3:.0f} ms, so at least {need_Hz:g} Hz")
+                          f"{min_points} samples within {window_s * 1e3:.0f} ms, so at least {need_Hz:g} Hz")
     drops = [s for s in stimuli if isinstance(s, SphereDrop)]
     if not drops:
         c.problems.append("analysis.impact_detection = true: the scene has no sphere_drop to judge")
     for s in drops:
-        if s.time_s + rule.window_s > duration:
+        if s.time_s + window_s > duration:
             c.problems.append(f"analysis.impact_detection = true: the sphere drop at {s.time_s} s is judged over "
-                              f"{rule.window_s * 1e3:.0f} ms after it, past the end of the scene (duration_s = "
+                              f"{window_s * 1e3:.0f} ms after it, past the end of the scene (duration_s = "
                               f"{duration:g}); drop it earlier or lengthen the scene")
 
 

@@ -97,6 +97,14 @@ def test_the_corpus_is_large_and_every_file_is_described():
     assert sum(1 for c in INVOCATIONS if c.get("subprocess") and not c.get("known_open")) >= 5
 
 
+def test_the_validator_knows_the_impact_rule_the_analysis_applies():
+    from bench.scenes import scene
+    from bench.verification.analysis import DetectionRule
+
+    rule = DetectionRule()
+    assert (scene.IMPACT_RULE_MIN_POINTS, scene.IMPACT_RULE_WINDOW_S) == (rule.min_points, rule.window_s)
+
+
 # --- scene files ------------------------------------------------------------------------------------------------
 
 
