@@ -54,8 +54,12 @@ scene file (TOML):
   [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
              heater_failed = true
 
-The file is validated before anything runs; every problem is listed with its field, value and allowed range.
-A run that fails part-way still writes what it recorded (record.json says "failed" and why); exit status 1.
+Every at_s / start_s may be a list: one stimulus per instant (power_on and heater_failure happen once).
+The file (UTF-8, at most 1 MB) is validated before anything runs, with --seed/--fidelity/--spi applied; every
+problem is listed with its field, value and allowed range, and so is a scene whose analysis could not run
+(impact_detection without PAC, slides without PAC and PDC, a sequence the scene is too short to read); exit
+status 2. A run that fails part-way still writes what it recorded (record.json says "failed" and why); exit
+status 1.
 """
 
 
