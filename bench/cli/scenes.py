@@ -155,7 +155,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     r = one_line_errors(sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
                                        description=RUN_HELP, formatter_class=fmt))
     r.add_argument("scene", type=_path("a scene file"), help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
-    r.add_argument("--out", type=_path("an out folder"), help="output folder (default: a fresh out/<scene name>[-n])")
+    r.add_argument("--out", help="output folder (default: a fresh out/<scene name>[-n])")  # checked by OutFolder
     r.add_argument("--csv", action="store_true", help="also write samples.csv")
     r.add_argument("--force", action="store_true",
                    help="run into a folder that is not empty: an earlier run's files are removed first")
