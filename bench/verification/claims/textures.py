@@ -104,7 +104,7 @@ def rig_claims(b: Bench) -> list[Claim]:
     errors = {}
     for number in (901, 24):  # the abrasive and a glass
         for force in (0.2, 0.5, 1.26, 2.0):
-            for k in range(3):
+            for k in range(6):
                 trial = rig.run_trial(texture(number), Movement(force, 0.02), seed=b.seed + 10 * k)
                 errors[(number, force, k)] = (trial.true_normal_N / force - 1) * 100
     above = max(abs(e) for (n, f, k), e in errors.items() if f >= 0.5)
@@ -113,7 +113,7 @@ def rig_claims(b: Bench) -> list[Claim]:
     out = [Claim("force control through PDC at 0.5–2 N: true force vs target", "within ± 10 %", above, 0.0, 10.0,
                  "% (worst)", "D ch. 6", detail, kind="prediction",
                  note="true force = the emulator's normal load while sliding, never read from codes; "
-                      "2 textures × 3 seeds"),
+                      "2 textures × 6 seeds"),
            Claim("force control through PDC at 0.2 N: true force vs target", "within ± 10 %", light, 0.0, 10.0,
                  "% (worst)", "D ch. 6", detail, kind="prediction",
                  deviation="17 PDC counts of target against 1.4 LSB of noise and 10 µm of latency travel "
@@ -166,7 +166,7 @@ def texture_property_claims(b: Bench) -> list[Claim]:
     named = {43: "graphite", 46: "polished aluminum", 47: "rubber", 30: "foam", 84: "satin", 87: "rayon",
              100: "burlap", 10: "velcro hooks"}
     main = Movement(0.5, 0.025)
-    rows = _trials(b, list(named), [main], 3, "claims-pilot")
+    rows = _trials(b, list(named), [main], 6, "claims-pilot")  # D's pilot: 6 trials per texture and movement
     by = {p: {t: _mean(rows, p, texture=t) for t in named} for p in ("traction", "roughness", "fineness")}
     rank = {p: sorted(named, key=lambda t: by[p][t]) for p in by}  # ascending
 
@@ -201,7 +201,7 @@ def texture_property_claims(b: Bench) -> list[Claim]:
     ]
     # centroid against velocity at 0.2 N: rises for coarse rough textures, falls for graphite
     vel = [Movement(0.2, 0.01), Movement(0.2, 0.0631)]
-    rows_v = _trials(b, [10, 30, 87, 100, 43], vel, 2, "claims-velocity")
+    rows_v = _trials(b, [10, 30, 87, 100, 43], vel, 4, "claims-velocity")
     rises = [_mean(rows_v, "fineness", texture=t, velocity_m_per_s=0.0631)
              - _mean(rows_v, "fineness", texture=t, velocity_m_per_s=0.01) for t in (10, 30, 87, 100)]
     graphite = (_mean(rows_v, "fineness", texture=43, velocity_m_per_s=0.0631)
@@ -216,7 +216,7 @@ def texture_property_claims(b: Bench) -> list[Claim]:
     ]
     # across textures: faster sliding raises vibration amplitude; more force damps it (D ch. 6)
     trend = _trials(b, [2, 30, 43, 84, 100], [Movement(0.5, 0.01), Movement(0.5, 0.063), Movement(1.26, 0.025),
-                                             Movement(0.2, 0.025)], 2, "claims-trends")
+                                             Movement(0.2, 0.025)], 4, "claims-trends")
     faster = [_mean(trend, "roughness", texture=t, velocity_m_per_s=0.063)
               - _mean(trend, "roughness", texture=t, velocity_m_per_s=0.01, force_N=0.5) for t in (2, 30, 43, 84, 100)]
     heavier = [_mean(trend, "roughness", texture=t, force_N=1.26)
