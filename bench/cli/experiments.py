@@ -40,6 +40,8 @@ def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
 
 
 def _cmd_texture_sweep(a) -> int:
+    from dataclasses import replace
+
     from bench.campaigns.engine import ClusterSpec
     from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
     from bench.reporting.sweep_plots import properties_vs_movement
@@ -61,7 +63,7 @@ def _cmd_texture_sweep(a) -> int:
         raise ValueError(f"--out = {a.out}: is a file, not a folder")
     tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin)
     # keep the grid's own movement ids in the table
-    tasks = [t.__class__(**{**t.__dict__, "movement_id": ids[t.movement_id]}) for t in tasks]
+    tasks = [replace(t, movement_id=ids[t.movement_id]) for t in tasks]
     spec = ClusterSpec.from_env(a.scheduler, a.workers)
     print(f"{len(tasks)} trials ({len(textures)} textures × {len(movements)} movements × {a.trials}) on "
           f"{spec.describe()}", file=sys.stderr)
