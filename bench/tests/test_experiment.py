@@ -71,3 +71,29 @@ def test_explore_command_reports_bad_input_without_traceback(tmp_path, capsys):
     assert cli.main(["explore", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "pilot.textures" in err and "Traceback" not in err
+
+
+def test_texture_sweep_writes_its_table_and_plot(tmp_path, capsys):
+    import csv
+
+    out = tmp_path / "sweep"
+    assert cli.main(["texture-sweep", "--textures", "902,T30", "--movements", "0,35", "--trials", "1",
+                     "--workers", "1", "--out", str(out), "--quiet"]) == 0
+    rows = list(csv.DictReader(open(out / "trials.csv")))
+    assert {(r["texture"], r["movement_id"]) for r in rows} == {("902", "0"), ("902", "35"), ("30", "0"), ("30", "35")}
+    assert (out / "properties.png").stat().st_size > 0 and (out / "wear.csv").exists()
+    wear = list(csv.DictReader(open(out / "wear.csv")))
+    assert float(wear[1]["ridge_lost_m"]) > float(wear[0]["ridge_lost_m"])  # 2 N @ 10 cm/s wears more
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["texture-sweep", "--textures", "902", "--trials", "0"], "--trials"),
+    (["texture-sweep", "--textures", "902", "--movements", "0,99"], "--movements"),
+    (["texture-sweep", "--textures", "no such thing"], "no such thing"),
+    (["texture-sweep", "--textures", "902", "--workers", "0"], "--workers"),
+    (["explore", "fixtures/experiments/quick.toml", "--workers", "0"], "--workers"),
+])
+def test_sweep_and_explore_name_the_bad_flag(argv, flag, capsys):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert flag in err and "Traceback" not in err
