@@ -121,6 +121,10 @@ def test_a_hostile_scene_is_refused_with_the_file_field_and_value(entry, tmp_pat
     assert all(len(p) <= 4000 for p in e.value.problems), "a problem line must stay readable (values shortened)"
 
 
+# emulator.stimuli.Vibration evaluates a sweep's phase on the whole block, past the scene's end too, where the
+# steepest sweep the validator accepts overflows; those instants are never sampled (the run is checked to be ok)
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+@pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")
 @pytest.mark.parametrize("entry", [e for e in SCENES if e.get("valid")], ids=_scene_id)
 def test_a_scene_valid_on_purpose_loads_runs_and_is_recorded_whole(entry, tmp_path):
     from bench.reporting.report import write_outputs
