@@ -509,6 +509,7 @@ def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
     from emulator.channels import DEFAULT_FRAME_NAMES
     from emulator.sliding import SlidingContact
 
+    specs = [x for x in specs if isinstance(x, SlideSpec)]  # a skin replacement alone reads nothing
     if not specs:
         return
     seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
@@ -526,7 +527,7 @@ def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
     measured = 1.0 - MEASURE_LEAD - MEASURE_TAIL
     need_s = 2.0 / SlidingContact.LOG_RATE_HZ  # the stage current comes from the contact's 100 Hz force log
     seen = set()
-    for sp in (x for x in specs if isinstance(x, SlideSpec)):
+    for sp in specs:
         if sp.where in seen:  # the trials of one [[stimulus]] have one shape: its problems are reported once
             continue
         seen.add(sp.where)
