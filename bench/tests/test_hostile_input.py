@@ -196,3 +196,19 @@ def test_no_traceback_escapes_a_real_process(case, tmp_path):
                          env=env, timeout=60)
     _check_output(case, out.returncode, out.stderr)
     assert not (tmp_path / "out").exists(), "a refused command must not write anything"
+
+
+def test_command_line_overrides_are_validated_run_and_recorded(tmp_path, capsys):
+    scene = SCENE_FILES / "valid-faults-combined.toml"
+    out = tmp_path / "o"
+    with time_limit(CASE_LIMIT_S, "run with overrides"):
+        status = cli.main(["run", str(scene), "--seed", "7", "--fidelity", "fast", "--out", str(out), "--quiet",
+                           "--no-plots"])
+    assert status == 0, capsys.readouterr().err
+    record = json.loads((out / "record.json").read_text())
+    assert record["scene"]["seed"] == 7 and record["scene"]["fidelity"] == "fast"
+    assert record["scene"]["overrides"] == {"scene.fidelity": "fast", "scene.seed": 7}
+    assert record["scene"]["text"] == scene.read_text(encoding="utf-8")
+    assert record["faults"] == {"electrode_open": [3], "electrode_short": [4], "mux_stuck": 5, "thermistor": "short",
+                                "heater_failed": True}
+    assert record["host"]["spi"] == "software"
