@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.hosts import one_line_errors, output_file, whole
+from bench.cli.args import one_line_errors, output_file, whole
 
 
 def _names(kind: str):

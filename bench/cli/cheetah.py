@@ -6,7 +6,7 @@ import argparse
 import shlex
 import sys
 
-from bench.cli.hosts import existing_file, number, one_line_errors, sigterm_raises, signals_deferred, whole
+from bench.cli.args import existing_file, number, one_line_errors, sigterm_raises, signals_deferred, whole
 
 
 def _cmd_serve(a) -> int:

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from bench.cli.args import whole
 from emulator.fidelity import PROFILES
 
 SWEEP_HELP = """\
@@ -48,6 +49,8 @@ def _cmd_texture_sweep(a) -> int:
     from bench.rigs.texture_rig import movement_grid
     from bench.textures.library import load_library, texture
 
+    from bench.reporting.outdir import writable_folder
+
     if a.trials < 1:
         raise ValueError(f"--trials = {a.trials}: must be at least 1")
     if a.workers is not None and a.workers < 1:
@@ -58,9 +61,7 @@ def _cmd_texture_sweep(a) -> int:
         raise ValueError("--textures: give at least one texture (numbers or names, comma-separated)")
     ids = list(range(len(grid))) if a.movements == "all" else _int_list("--movements", a.movements, 0, len(grid) - 1)
     movements = [grid[i] for i in ids]
-    out = Path(a.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out = {a.out}: is a file, not a folder")
+    out = writable_folder(a.out, "--out")  # checked before anything runs
     tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin)
     # keep the grid's own movement ids in the table
     tasks = [replace(t, movement_id=ids[t.movement_id]) for t in tasks]
@@ -70,7 +71,6 @@ def _cmd_texture_sweep(a) -> int:
     t0 = time.perf_counter()
     rows = sweep(tasks, spec=spec, progress=not a.quiet)
     wall = time.perf_counter() - t0
-    out.mkdir(parents=True, exist_ok=True)
     _write_csv(out / "trials.csv", rows)
     tmp = out / "trials.json.tmp"
     tmp.write_text(json.dumps({"wall_s": wall, "workers": spec.describe(), "rows": rows}, indent=1))
@@ -100,7 +100,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--movements", default="all", help="'all' (the 36 of D eqs 6.20–6.21) or grid ids 0..35 "
                                                       "(id = 6 × force step + velocity step)")
     s.add_argument("--trials", type=int, default=6, help="repetitions per texture and movement (6)")
-    s.add_argument("--seed", type=int, default=0, help="the sweep's seed; each trial's seed derives from it")
+    s.add_argument("--seed", type=whole(0), default=0, help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
     s.add_argument("--out", default="out/texture-sweep", help="output folder (out/texture-sweep)")
@@ -141,11 +141,11 @@ def _cmd_explore(a) -> int:
     if a.workers is not None and a.workers < 1:
         raise ValueError(f"--workers = {a.workers}: must be at least 1")
     names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
-    out = Path(a.out or f"out/explore/{spec.name}")
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out = {out}: is a file, not a folder")
+    from bench.reporting.outdir import writable_folder
+
+    out = writable_folder(a.out or f"out/explore/{spec.name}", "--out")  # both checked before anything runs
     cluster = ClusterSpec.from_env(a.scheduler, a.workers)
-    cache = None if a.no_cache else Path(a.cache)
+    cache = None if a.no_cache else writable_folder(a.cache, "--cache")
     variants = [("baseline", spec)] + [(n, replace(spec, **ABLATIONS[n][1])) for n in names]
     rows = []
     for label, sp in variants:

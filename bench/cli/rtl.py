@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.hosts import number, one_line_errors
+from bench.cli.args import number, one_line_errors
 from bench.paths import REPO
 
 _TRANSFER_KEYS = {"t_ps": int, "cs": int, "nbits": int, "mosi": str, "half_ps": int, "keep_cs": bool, "miso": str}

@@ -150,7 +150,7 @@ def _path(what: str):
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    from bench.cli.hosts import one_line_errors, whole
+    from bench.cli.args import one_line_errors, whole
 
     r = one_line_errors(sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
                                        description=RUN_HELP, formatter_class=fmt))

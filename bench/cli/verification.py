@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from bench.cli.args import number, whole
 from emulator.fidelity import PROFILES
 
 
@@ -72,7 +73,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
 
     c.add_argument("--only", action="append", choices=list(CLAIM_GROUPS), help="run one group (repeatable)")
     c.add_argument("--fidelity", default="default", choices=list(PROFILES))
-    c.add_argument("--seed", type=int, default=2012, help="scene seed (with --seeds: the first of N)")
+    c.add_argument("--seed", type=whole(0), default=2012, help="scene seed (with --seeds: the first of N)")
     c.add_argument("--seeds", type=int, metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")
@@ -86,7 +87,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                    "simulated second; then throughput, memory and demand-driven savings.",
                        formatter_class=fmt)
     b.add_argument("--json", action="store_true", help="print the results as JSON")
-    b.add_argument("--seconds", type=float, default=60.0, help="simulated seconds for the throughput runs")
+    b.add_argument("--seconds", type=number(0.0, 36000.0, lo_open=True), default=60.0,
+                   help="simulated seconds for the throughput runs")
     b.add_argument("--hour", action="store_true", help="stream a full simulated hour for the memory check")
     b.add_argument("--no-rtl", action="store_true", help="skip the RTL measurements (no Verilator build)")
     b.add_argument("--textures", action="store_true",

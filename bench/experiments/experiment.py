@@ -25,12 +25,12 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from bench import tomlfile
 from bench.errors import BenchError
 from bench.experiments import exploration as ex
 from bench.experiments.trials import TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement
@@ -98,16 +98,10 @@ ABLATIONS = {
 
 def load_experiment(path: str | Path) -> ExperimentSpec:
     """Read and validate an experiment file (TOML); every problem is reported at once."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as e:
-        raise ExperimentError(str(path), [f"cannot read the file: {e.strerror}"]) from None
-    except UnicodeDecodeError as e:
-        raise ExperimentError(str(path), [f"not UTF-8 text: {e.reason} at byte {e.start}"]) from None
-    except tomllib.TOMLDecodeError as e:
-        raise ExperimentError(str(path), [f"TOML syntax error: {e}"]) from None
-    return parse_experiment(data, str(path))
+    text = tomlfile.read_text(path, ExperimentError, 1_000_000,
+                              "an experiment needs at least an [experiment] table with its name")
+    return parse_experiment(tomlfile.parse(text, str(path), ExperimentError, 8, "an experiment needs 3 levels"),
+                            str(path))
 
 
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
@@ -217,6 +211,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
     spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
+    if "name" not in t["experiment"]:
+        problems.append("[experiment] table with a name is missing (e.g. name = \"my-variant\")")
     if problems:
         raise ExperimentError(source, problems)
     return spec

@@ -235,3 +235,30 @@ def fresh_folder(base: Path, force: bool = False, flag: str = "--out") -> OutFol
                 continue
             raise
     raise last or OutDirError(f"{flag}: no free folder next to {os.fspath(base)!r}")
+
+
+def writable_folder(path, flag: str = "--out") -> Path:
+    """Check a plain output folder before a long job (a sweep, an experiment) runs: not a file, no NUL byte,
+    creatable and writable — :class:`OutDirError` naming ``flag`` otherwise. Creates it; no lock, nothing removed
+    (the job writes each file under a temporary name and renames it into place)."""
+    raw = os.fspath(path)
+    where = f"{flag} {raw!r}"
+    if "\x00" in raw:
+        raise OutDirError(f"{where}: the path contains a NUL byte")
+    if not raw.strip():
+        raise OutDirError(f"{where}: the path is empty")
+    p = Path(raw)
+    try:
+        if p.exists() and not p.is_dir():
+            raise OutDirError(f"{where}: is a file, not a folder")
+        p.mkdir(parents=True, exist_ok=True)
+        fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)
+        os.close(fd)
+        os.unlink(name)
+    except FileExistsError:
+        raise OutDirError(f"{where}: is a file, not a folder") from None
+    except NotADirectoryError:
+        raise OutDirError(f"{where}: cannot create the folder: a part of the path is a file") from None
+    except OSError as e:
+        raise OutDirError(f"{where}: the folder cannot be created or written ({e.strerror or e})") from None
+    return p

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import copy
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bench import tomlfile
 from bench.errors import SceneError
 from emulator.channels import CHANNEL_INDEX
 from emulator.fidelity import PROFILES
@@ -704,72 +704,13 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                  skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins)
 
 
-def _position(data: bytes, offset: int) -> str:
-    line = data.count(b"\n", 0, offset) + 1
-    column = offset - data.rfind(b"\n", 0, offset)
-    return f"line {line}, column {column}"
-
-
-def _too_deep(data, limit: int = MAX_NESTING) -> str | None:
-    """The first field nested more than ``limit`` arrays/tables deep, or None (an iterative walk: no recursion)."""
-    stack = [(data, "", 0)]
-    while stack:
-        v, where, depth = stack.pop()
-        if depth > limit:
-            return where or "the file"
-        if isinstance(v, dict):
-            stack += [(x, f"{where}.{k}" if where else str(k), depth + 1) for k, x in v.items()]
-        elif isinstance(v, list):
-            stack += [(x, f"{where}[{i}]", depth + 1) for i, x in enumerate(v)]
-    return None
-
-
 def read_scene_text(path: str | Path) -> str:
-    """The text of a scene file, or :class:`SceneError` naming the file and what is wrong with it: unreadable, not
-    a regular file (a folder, device or pipe), larger than :data:`MAX_SCENE_BYTES`, empty, not UTF-8 (a leading
-    byte-order mark is allowed and dropped), a NUL byte."""
-    import os
-    import stat
-
-    where = str(path)
-    if "\0" in where:
-        raise SceneError(_r(where)[1:-1], ["the path contains a NUL byte"])
-    path = Path(path)
-    try:
-        st = os.stat(path)
-        if stat.S_ISDIR(st.st_mode):
-            raise SceneError(where, ["cannot read the file: Is a directory (give a scene file, e.g. "
-                                     "fixtures/scenes/taps.toml)"])
-        if not stat.S_ISREG(st.st_mode):  # a device or a pipe could block or never end
-            raise SceneError(where, ["cannot read the file: not a regular file (a device, pipe or socket); save the "
-                                     "scene to a file"])
-        if st.st_size > MAX_SCENE_BYTES:
-            raise SceneError(where, [f"the file is {st.st_size} bytes: a scene file may hold at most "
-                                     f"{MAX_SCENE_BYTES} bytes (1 MB)"])
-        with open(path, "rb") as f:
-            data = f.read(MAX_SCENE_BYTES + 1)
-    except OSError as e:
-        raise SceneError(where, [f"cannot read the file: {e.strerror or e}"]) from None
-    if len(data) > MAX_SCENE_BYTES:
-        raise SceneError(where, [f"the file holds more than {MAX_SCENE_BYTES} bytes: a scene file may hold at most "
-                                 f"{MAX_SCENE_BYTES} bytes (1 MB)"])
-    if data.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
-        raise SceneError(where, ["the file is UTF-32 text: save it as UTF-8 (TOML files are UTF-8)"])
-    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise SceneError(where, ["the file is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)"])
-    if data.startswith(b"\xef\xbb\xbf"):
-        data = data[3:]  # a byte-order mark some editors write: not part of the text
-    if not data.strip():
-        raise SceneError(where, ["the file is empty: a scene needs at least a [scene] table with name and "
-                                 "duration_s"])
-    nul = data.find(b"\0")
-    if nul >= 0:
-        raise SceneError(where, [f"the file holds a NUL byte at {_position(data, nul)}: not a text file"])
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        raise SceneError(where, [f"not UTF-8 text: byte 0x{data[e.start]:02x} at {_position(data, e.start)} "
-                                 f"cannot be decoded (TOML files are UTF-8; save the file as UTF-8)"]) from None
+    """The text of a scene file, or :class:`SceneError` naming the file and what is wrong with it (see
+    :func:`bench.tomlfile.read_text`: unreadable, not a regular file, larger than :data:`MAX_SCENE_BYTES`, empty,
+    not UTF-8, a NUL byte)."""
+    return tomlfile.read_text(path, SceneError, MAX_SCENE_BYTES,
+                              "a scene needs at least a [scene] table with name and duration_s",
+                              "give a scene file, e.g. fixtures/scenes/taps.toml")
 
 
 def parse_scene_text(text: str, source: str = "<scene>", overrides: dict | None = None) -> Scene:
@@ -778,19 +719,7 @@ def parse_scene_text(text: str, source: str = "<scene>", overrides: dict | None 
     ``overrides``: values that replace the file's before validation, by ``"table.field"`` (e.g. ``{"scene.seed":
     5, "scene.fidelity": "fast", "host.spi": "rtl"}``: ``run``'s command-line options), so that the scene that
     runs is the scene that was validated; the scene keeps them in ``Scene.overrides``."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SceneError(source, [f"TOML syntax error: {e}"]) from None
-    except RecursionError:
-        raise SceneError(source, [f"arrays or inline tables nested too deeply to read (a scene needs 4 levels; "
-                                  f"at most {MAX_NESTING} are allowed)"]) from None
-    except ValueError as e:  # e.g. an integer of more than 4300 digits
-        raise SceneError(source, [f"TOML value error: {_cut(str(e))}"]) from None
-    deep = _too_deep(data)
-    if deep is not None:
-        raise SceneError(source, [f"{_cut(deep, 120)}: nested more than {MAX_NESTING} arrays or tables deep "
-                                  f"(a scene needs 4)"])
+    data = tomlfile.parse(text, source, SceneError, MAX_NESTING, "a scene needs 4 levels")
     overrides = dict(overrides or {})
     for key, value in overrides.items():
         table, _, name = key.partition(".")

@@ -23,6 +23,7 @@ def test_shipped_experiment_files_validate():
 
 @pytest.mark.parametrize("data, words", [
     ({"pilot": {"textures": [999]}}, ["pilot.textures", "999"]),
+    ({"pilot": {"trials": 6}}, ["[experiment] table with a name is missing"]),
     ({"pilot": {"trials": 1}}, ["pilot.trials = 1"]),
     ({"exploration": {"strategies": ["psychic"]}}, ["exploration.strategies"]),
     ({"exploration": {"pair_threshold": 1.5}}, ["exploration.pair_threshold = 1.5"]),

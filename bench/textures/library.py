@@ -38,14 +38,16 @@ import difflib
 import functools
 import math
 import re
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bench import tomlfile
 from bench.errors import TextureError
 from bench.paths import FIXTURES
 from emulator.texture import PeriodicComponent, Texture
 from emulator.thermal import MATERIALS
+
+MAX_LIBRARY_BYTES = 4_000_000  # a texture library file larger than 4 MB is refused before it is parsed
 
 LIBRARY_PATH = FIXTURES / "textures" / "library.toml"
 
@@ -336,22 +338,10 @@ def _ranges(numbers: list[int]) -> str:
 
 
 def read_library_file(path: str | Path) -> dict:
-    """The parsed TOML of a library file; unreadable files, non-UTF-8 bytes and TOML syntax errors raise
-    :class:`TextureError` naming the file."""
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise TextureError(str(path), [f"cannot read the file: {e.strerror}"]) from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as e:
-        raise TextureError(str(path), [f"not UTF-8 text: byte 0x{raw[e.start]:02x} at offset {e.start} "
-                                       f"({e.reason})"]) from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise TextureError(str(path), [f"TOML syntax error: {e}"]) from None
+    """The parsed TOML of a library file; an unreadable or oversized file, a device or pipe, non-UTF-8 bytes, TOML
+    syntax errors and absurd nesting raise :class:`TextureError` naming the file (:mod:`bench.tomlfile`)."""
+    text = tomlfile.read_text(path, TextureError, MAX_LIBRARY_BYTES, "no [[texture]] tables: the library is empty")
+    return tomlfile.parse(text, str(path), TextureError, 8, "a library needs 4 levels")
 
 
 @functools.lru_cache(maxsize=8)

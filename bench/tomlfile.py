@@ -1,0 +1,93 @@
+"""Reading the bench's TOML files (scenes, the texture library, experiment files) safely: a regular file of bounded
+size (a device or a pipe could block or never end), UTF-8 text without NUL bytes, TOML nested no deeper than a
+limit (checked without recursion).  Every problem becomes the caller's error class, naming the file."""
+
+from __future__ import annotations
+
+import os
+import stat
+import tomllib
+from pathlib import Path
+
+
+def _position(data: bytes, offset: int) -> str:
+    line = data.count(b"\n", 0, offset) + 1
+    column = offset - data.rfind(b"\n", 0, offset)
+    return f"line {line}, column {column}"
+
+
+def too_deep(data, limit: int) -> str | None:
+    """The first field nested more than ``limit`` arrays/tables deep, or None (an iterative walk: no recursion)."""
+    stack = [(data, "", 0)]
+    while stack:
+        v, where, depth = stack.pop()
+        if depth > limit:
+            return where or "the file"
+        if isinstance(v, dict):
+            stack += [(x, f"{where}.{k}" if where else str(k), depth + 1) for k, x in v.items()]
+        elif isinstance(v, list):
+            stack += [(x, f"{where}[{i}]", depth + 1) for i, x in enumerate(v)]
+    return None
+
+
+def read_text(path: str | Path, error, max_bytes: int, empty_hint: str, folder_hint: str = "") -> str:
+    """The text of a TOML file, or ``error(source, [problem])`` naming the file and what is wrong with it:
+    unreadable, not a regular file, larger than ``max_bytes``, empty (``empty_hint`` says what it needs), not
+    UTF-8 (a leading byte-order mark is allowed and dropped), a NUL byte."""
+    where = str(path)
+    if "\0" in where:
+        raise error(repr(where)[1:-1], ["the path contains a NUL byte"])
+    size_text = f"{max_bytes} bytes ({max_bytes / 1e6:g} MB)"
+    try:
+        st = os.stat(path)
+        if stat.S_ISDIR(st.st_mode):
+            raise error(where, ["cannot read the file: Is a directory" + (f" ({folder_hint})" if folder_hint else "")])
+        if not stat.S_ISREG(st.st_mode):
+            raise error(where, ["cannot read the file: not a regular file (a device, pipe or socket); save it "
+                                "to a file"])
+        if st.st_size > max_bytes:
+            raise error(where, [f"the file is {st.st_size} bytes: it may hold at most {size_text}"])
+        with open(path, "rb") as f:
+            data = f.read(max_bytes + 1)
+    except OSError as e:
+        raise error(where, [f"cannot read the file: {e.strerror or e}"]) from None
+    if len(data) > max_bytes:
+        raise error(where, [f"the file holds more than {max_bytes} bytes: it may hold at most {size_text}"])
+    if data.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+        raise error(where, ["the file is UTF-32 text: save it as UTF-8 (TOML files are UTF-8)"])
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise error(where, ["the file is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)"])
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]  # a byte-order mark some editors write: not part of the text
+    if not data.strip():
+        raise error(where, [f"the file is empty: {empty_hint}"])
+    nul = data.find(b"\0")
+    if nul >= 0:
+        raise error(where, [f"the file holds a NUL byte at {_position(data, nul)}: not a text file"])
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise error(where, [f"not UTF-8 text: byte 0x{data[e.start]:02x} at {_position(data, e.start)} "
+                            f"cannot be decoded (TOML files are UTF-8; save the file as UTF-8)"]) from None
+
+
+def parse(text: str, source: str, error, max_nesting: int, needed: str) -> dict:
+    """The TOML of ``text``, or ``error(source, [problem])``: syntax errors, values TOML cannot hold, nesting
+    deeper than ``max_nesting`` (``needed`` says how deep the file's format goes)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise error(source, [f"TOML syntax error: {e}"]) from None
+    except RecursionError:
+        raise error(source, [f"arrays or inline tables nested too deeply to read ({needed}; at most {max_nesting} "
+                             f"are allowed)"]) from None
+    except ValueError as e:  # e.g. an integer of more than 4300 digits
+        raise error(source, [f"TOML value error: {_cut(str(e))}"]) from None
+    deep = too_deep(data, max_nesting)
+    if deep is not None:
+        raise error(source, [f"{_cut(deep, 120)}: nested more than {max_nesting} arrays or tables deep ({needed})"])
+    return data
+
+
+def _cut(text: str, limit: int = 300) -> str:
+    return text if len(text) <= limit else text[:limit] + f"… ({len(text)} characters)"
