@@ -26,7 +26,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import fftconvolve
+from scipy.signal import fftconvolve, lfilter
 
 from emulator import friction
 from emulator.effects import Block, Effect, effect_rng
@@ -232,7 +232,11 @@ class SlidingContact(Effect):
     """Skin–texture sliding: stick-slip friction, patch-averaged texture, fingerprint ridges (N)."""
 
     name = "sliding_contact"
-    produces = ("contact_force_N", "tangential_force_N", "normal_force_N")
+    produces = ("contact_force_N", "tangential_force_N", "normal_force_N", "stage_force_N")
+    #: the linear stage drags the texture through its own mechanics: the load its motor feels (and its current
+    #: measures) is the tangential force low-passed at this corner (model choice: a stage and motor of tens of
+    #: hertz; fast texture fluctuations do not reach the motor current)
+    STAGE_CORNER_HZ = 20.0
 
     #: rate (Hz) of the force log kept for each contact (for a stage's motor current and force plots)
     LOG_RATE_HZ = 100.0
@@ -241,6 +245,8 @@ class SlidingContact(Effect):
                  seed: int):
         self.params, self.fs, self.dx_m, self.substeps = params, fs, dx_m, int(substeps)
         self.log_every = max(1, int(round(fs / self.LOG_RATE_HZ)))
+        a = np.exp(-2 * np.pi * self.STAGE_CORNER_HZ / fs)  # first-order low-pass, exact pole
+        self._stage_ba = (np.array([1.0 - a]), np.array([1.0, -a]))
         self.motions = sorted(motions, key=lambda m: m.start_s)
         rng = effect_rng(seed, self.name)
         self._contacts = []
@@ -252,7 +258,8 @@ class SlidingContact(Effect):
             length = m.max_travel_m + 4 * radii.max() + 0.01
             heights, slopes = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m, radii)
             self._contacts.append({"motion": m, "gain": gain, "radii": radii, "heights": heights, "slopes": slopes,
-                                   "state": friction.new_state(0.0), "skin_state": skin.state(), "log": []})
+                                   "state": friction.new_state(0.0), "skin_state": skin.state(), "log": [],
+                                   "stage_zi": np.zeros(1)})
 
     def describe(self) -> str:
         return "sliding contact: stick-slip friction, patch-averaged texture, fingerprint ridges (N)"
@@ -262,16 +269,17 @@ class SlidingContact(Effect):
 
     def force_log(self, k: int) -> dict[str, np.ndarray]:
         """Contact ``k``'s forces at :data:`LOG_RATE_HZ` so far: instants (s), normal and tangential force (N),
-        slip velocity (m/s)."""
+        slip velocity (m/s), and the stage's load (N: the tangential force through the stage's mechanics)."""
         log = self._contacts[k]["log"]
-        a = np.concatenate(log, axis=1) if log else np.zeros((4, 0))
-        return {"t": a[0], "normal_N": a[1], "tangential_N": a[2], "slip_m_per_s": a[3]}
+        a = np.concatenate(log, axis=1) if log else np.zeros((5, 0))
+        return {"t": a[0], "normal_N": a[1], "tangential_N": a[2], "slip_m_per_s": a[3], "stage_N": a[4]}
 
     def process(self, block: Block, inputs):
         t = block.times
         normal_out = np.zeros(block.n)
         tangential_out = np.zeros(block.n)
         load_out = np.zeros(block.n)
+        stage_out = np.zeros(block.n)
         p, dt = self.params, 1.0 / block.fs
         for c in self._contacts:
             m = c["motion"]
@@ -304,9 +312,12 @@ class SlidingContact(Effect):
             normal_out[a:b] += normal + p.tangential_coupling * tang
             tangential_out[a:b] += tang
             load_out[a:b] += normal
+            stage, c["stage_zi"] = lfilter(*self._stage_ba, tang, zi=c["stage_zi"])
+            stage_out[a:b] += stage
             # the force log: grid samples whose index is a multiple of log_every (independent of block size)
             n_idx = block.n0 + a + np.arange(tt.size)
             keep = n_idx % self.log_every == 0
             if keep.any():
-                c["log"].append(np.stack([tt[keep], normal[keep], tang[keep], slip[keep]]))
-        return {"contact_force_N": normal_out, "tangential_force_N": tangential_out, "normal_force_N": load_out}
+                c["log"].append(np.stack([tt[keep], normal[keep], tang[keep], slip[keep], stage[keep]]))
+        return {"contact_force_N": normal_out, "tangential_force_N": tangential_out, "normal_force_N": load_out,
+                "stage_force_N": stage_out}

@@ -126,7 +126,7 @@ class TextureRig:
                                  max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
         run = _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
                           fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.latency_s / 2,
-                          record_signals=("tangential_force_N", "normal_force_N")),
+                          record_signals=("stage_force_N", "normal_force_N")),
                    motion, effect_rng(seed, "rig.motor_current"), s)
         frame_s = run.frame / run.sampler.slot_rate_Hz
         # baseline at rest, then lower until the PDC change reaches the target
@@ -200,7 +200,7 @@ class _Run:
         """Read ``n_frames`` frames through SPI, with the stage current and the true load once per frame."""
         s = self.settings
         t_cur = (self.sampler.next_slot + np.arange(n_frames) * self.frame) / self.sampler.slot_rate_Hz
-        ft = self.sensor.signal("tangential_force_N", t_cur)
+        ft = self.sensor.signal("stage_force_N", t_cur)
         self.log.load(t_cur, self.sensor.signal("normal_force_N", t_cur))
         self.log.current(t_cur, s.motor.current_A(ft, self.current_rng))
         self.log.samples(self.sampler.read(n_frames * self.frame))

@@ -50,7 +50,7 @@ class SlideRecorder:
             if effect is None or got["PAC"] is None or got["PDC"] is None or got["PAC"][0][-1] < s.slide_end_s:
                 continue  # the run ended (or was interrupted) before this slide did
             log = effect.force_log(k)
-            current = self.motor.current_A(log["tangential_N"], effect_rng(self.scene.seed, f"slide[{k}].motor_current"))
+            current = self.motor.current_A(log["stage_N"], effect_rng(self.scene.seed, f"slide[{k}].motor_current"))
             rec = TrialRecording(got["PAC"][0], got["PAC"][1], got["PDC"][0], got["PDC"][1], log["t"], current,
                                  s.start_s + s.approach_s, s.slide_start_s, s.slide_end_s, texture=s.texture.number,
                                  force_N=s.force_N, velocity_m_s=s.velocity_m_per_s, trial=k, seed=self.scene.seed)

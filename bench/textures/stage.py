@@ -10,8 +10,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class StageMotor:
-    """Current (A) = idle + slope × |tangential load| + current-sense noise; all three are model choices (D gives
-    only "linear")."""
+    """Current (A) = idle + slope × |the stage's load| + current-sense noise, the load being the tangential force
+    through the stage's mechanics (``stage_force_N``, low-passed at 20 Hz); all are model choices (D: "linear")."""
 
     idle_A: float = 0.15
     A_per_N: float = 0.4
