@@ -229,7 +229,9 @@ class Vibration:
             phase = 2 * np.pi * f0 * tau
         else:
             k = np.log(f1 / f0) / T
-            phase = 2 * np.pi * f0 * np.expm1(k * tau) / k
+            # the sweep exists only within [0, T] (the fade window is zero outside): evaluate its phase there only,
+            # so a steep sweep never overflows far from it
+            phase = 2 * np.pi * f0 * np.expm1(k * np.clip(tau, 0.0, T)) / k
         return self.amplitude_m * fade_window(tau, T, self.fade_s) * np.sin(phase)
 
 

@@ -249,17 +249,6 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
                 f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
             if None not in (dur, amp, fade, f0) and (f1 is not None or "frequency_Hz" in st):
                 out += [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start]
-                if f1 is not None and f1 != f0 and duration is not None and start:
-                    # emulator.stimuli.Vibration evaluates the sweep's phase, exp(k·τ), at every instant of the
-                    # scene (τ from the sweep's start), not only within the sweep: a steep sweep overflows to NaN
-                    # far from it. Refuse what would overflow (e^700; 0.1 s of margin past the end).
-                    octaves = math.log(f1 / f0)
-                    span = (duration - min(start) + 0.1) if octaves > 0 else max(start)  # τ reaching the furthest
-                    if abs(octaves) / dur * span > 700:
-                        c.problems.append(f"{w}: a sweep from {f0:g} to {f1:g} Hz in duration_s = {dur:g} s is too "
-                                          f"steep for the emulator to compute over a {duration:g} s scene (its "
-                                          f"phase overflows); sweep more slowly: duration_s of at least "
-                                          f"{abs(octaves) * span / 700:.3g} s")
         elif kind == "pressure":
             start = c.times(st, "start_s", w, duration)
             dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
