@@ -33,8 +33,8 @@ from numba import njit
 CATCH_VELOCITY_M_PER_S = 1e-3
 
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
-#: (m) and slope (1) where the finger touched down: the skin settles onto the local geometry at touchdown, so
-#: only changes from there load it (a force-controlled press on a sloped spot is the commanded force)
+#: (m) and slope (1) where the finger touched down (a position-held finger's load changes with the height from
+#: there; the slope is kept for the record but not subtracted: see the slope force below)
 STATE_SIZE = 7  # ... whether the finger is touching (1.0) or not (0.0), and the skin's last velocity (m/s)
 
 
@@ -133,7 +133,9 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
                     touching = 1
                 vr_last = v_stage - u_prev
                 catching = abs(vr_last) / (abs(vr_last) + CATCH_VELOCITY_M_PER_S)
-                slope = series * catching * (slope_here - s_ref)
+                # (no reference for the slope: ridges catch only while slipping, so a pressed finger feels no slope
+                # force anyway, and while sliding up- and down-slopes average out)
+                slope = series * catching * slope_here
                 normal = max(0.0, n0 + kn * series * (height - h_ref))
             else:
                 touching = 0
