@@ -55,13 +55,14 @@ def sliding_fidelity(textures=(901, 902, 30), say=lambda m: None) -> list[dict]:
     return rows
 
 
-def dask_scaling(n_trials: int = 48, say=lambda m: None) -> dict:
-    """The same rig trials on a LocalCluster of 1 and of 2 workers: wall time, speed-up, overhead per task."""
+def dask_scaling(repetitions: int = 4, say=lambda m: None) -> dict:
+    """The same rig trials (6 textures × 4 movements × ``repetitions``) on a LocalCluster of 1 and of 2 workers:
+    wall time, speed-up, overhead per task."""
     from bench.campaigns.engine import ClusterSpec, close, connect, run_tasks
 
     moves = [(0.2, 0.01), (0.5, 0.025), (1.26, 0.0631), (2.0, 0.1)]
     tasks = [TrialTask(t, f, v, k, trial_seed(3, "scaling", t, f, v, k))
-             for k, (t, (f, v)) in enumerate((t, m) for t in (2, 30, 43, 100, 901, 902) for m in moves)][:n_trials]
+             for t in (2, 30, 43, 100, 901, 902) for f, v in moves for k in range(repetitions)]
     out = {"trials": len(tasks)}
     for workers in (1, 2):
         say(f"… Dask, {workers} worker(s)")
