@@ -71,6 +71,8 @@ _FILTERS = "emulator/tests/test_filters.py"
 _THERMAL = "emulator/tests/test_thermal_electrodes.py"
 _FW_DOC = "firmware_tests/tests/test_firmware_documented.py"
 _CLI = "bench/tests/test_cli_and_runs.py"
+_SLIDE = "emulator/tests/test_sliding.py"
+_RIG = "bench/tests/test_texture_rig.py"
 
 CATALOGUE: list[Mutant] = [
     # --- physical constants -------------------------------------------------------------------------
@@ -359,6 +361,25 @@ CATALOGUE: list[Mutant] = [
            "#define WORD_NS 3750u", "#define WORD_NS 3000u",
            (f"{_FW_DOC}::test_the_firmware_samples_with_the_vendor_timing",),
            "the firmware starts the next word before the previous one ended"),
+    # --- sliding: friction, skin, wear ----------------------------------------------------------------
+    Mutant("skin-tangential-stiffness-x2", "sliding", "emulator/params.py",
+           'skin_tangential_stiffness_N_per_m: float = _p(\n        1500.0,',
+           'skin_tangential_stiffness_N_per_m: float = _p(\n        3000.0,',
+           (f"{_SLIDE}::test_stick_then_slip_tangential_force_ramps_to_static_then_settles_at_kinetic",),
+           "the skin twice as stiff tangentially (the stick-phase ramp doubles)"),
+    Mutant("stribeck-inverted", "sliding", "emulator/friction.py",
+           "return mu_k + (mu_s - mu_k) * math.exp(-r * r)", "return mu_s - (mu_s - mu_k) * math.exp(-r * r)",
+           (f"{_SLIDE}::test_stick_then_slip_tangential_force_ramps_to_static_then_settles_at_kinetic",),
+           "the Stribeck curve upside down (friction rises from kinetic to static with speed)"),
+    Mutant("wear-speed-factor-dropped", "sliding", "emulator/skin.py",
+           "k = self.wear_coefficient * (1.0 + velocity_m_per_s / self.heating_velocity_m_per_s)",
+           "k = self.wear_coefficient",
+           (f"{_SLIDE}::test_wear_grows_with_sliding_speed_at_the_same_force_and_distance",),
+           "wear independent of sliding speed"),
+    Mutant("ridges-catch-when-stuck", "sliding", "emulator/friction.py",
+           "catching = abs(vr_last) / (abs(vr_last) + CATCH_VELOCITY_M_PER_S)", "catching = 1.0",
+           (f"{_RIG}::test_force_control_through_pdc_reaches_the_target_within_10_percent",),
+           "ridges load feature slopes even when the skin does not slip (a pressed finger feels slope forces)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -169,3 +169,15 @@ def test_contact_law_softer_texture_needs_more_depth_for_the_same_force():
     assert contact_force_from_depth(depth, p, foam) < 0.8 * contact_force_from_depth(depth, p, hard)
     assert contact_force_from_depth(-1e-3, p, hard) == 0.0
     assert math.isfinite(float(contact_force_from_depth(1.0, p, foam)))
+
+
+@pytest.mark.unit
+def test_wear_grows_with_sliding_speed_at_the_same_force_and_distance():
+    """The wear law's speed factor 1 + v/v_h: a fast slide over the same 5 cm wears more than a slow one."""
+    area = np.pi * (2.5e-3) ** 2
+    slow, fast = Skin(), Skin()
+    slow.wear(1.0, 0.05, area, velocity_m_per_s=0.01)
+    fast.wear(1.0, 0.05, area, velocity_m_per_s=0.1)
+    lost_slow = slow.ridge_height_new_m - slow.ridge_height_m
+    lost_fast = fast.ridge_height_new_m - fast.ridge_height_m
+    assert lost_fast / lost_slow == pytest.approx((1 + 0.1 / 0.025) / (1 + 0.01 / 0.025), rel=1e-9)
