@@ -4,11 +4,9 @@ exploration experiment of D ch. 6, both on Dask."""
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import sys
 import time
-from pathlib import Path
 
 from bench.cli.args import whole
 from emulator.fidelity import PROFILES
@@ -45,6 +43,7 @@ def _cmd_texture_sweep(a) -> int:
 
     from bench.campaigns.engine import ClusterSpec
     from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
+    from bench.reporting.experiment_report import write_rows_csv
     from bench.reporting.sweep_plots import properties_vs_movement
     from bench.rigs.texture_rig import movement_grid
     from bench.textures.library import load_library, texture
@@ -71,26 +70,17 @@ def _cmd_texture_sweep(a) -> int:
     t0 = time.perf_counter()
     rows = sweep(tasks, spec=spec, progress=not a.quiet)
     wall = time.perf_counter() - t0
-    _write_csv(out / "trials.csv", rows)
+    write_rows_csv(out / "trials.csv", rows)
     tmp = out / "trials.json.tmp"
     tmp.write_text(json.dumps({"wall_s": wall, "workers": spec.describe(), "rows": rows}, indent=1))
     tmp.replace(out / "trials.json")
-    _write_csv(out / "wear.csv", wear_per_movement(movements))
+    write_rows_csv(out / "wear.csv", wear_per_movement(movements))
     lib = load_library()
     properties_vs_movement(rows_to_arrays(rows), {n: lib[n].name for n in textures}, out / "properties.png")
     sim = sum(r["simulated_s"] for r in rows)
     print(f"wrote {out}/ (trials.csv, trials.json, wear.csv, properties.png): {len(rows)} trials, "
           f"{sim:.0f} simulated s in {wall:.1f} s wall ({sim / wall:.0f}× real time)")
     return 0
-
-
-def _write_csv(path: Path, rows: list[dict]) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    tmp.replace(path)
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:

@@ -25,7 +25,8 @@ def _atomic(path: Path, text: str) -> None:
     tmp.replace(path)
 
 
-def _csv(path: Path, rows: list[dict]) -> None:
+def write_rows_csv(path: Path, rows: list[dict]) -> None:
+    """A table of row dicts (same keys) as CSV, written under a temporary name and renamed into place."""
     if not rows:
         return
     tmp = path.with_name(path.name + ".tmp")
@@ -51,29 +52,29 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     lib = load_library()
     names = []
     rows = result.pilot_rows + result.training_rows + result.validation_rows
-    _csv(out / "trials.csv", rows)
+    write_rows_csv(out / "trials.csv", rows)
     _atomic(out / "trials.json", json.dumps(rows))
     names += ["trials.csv", "trials.json"]
     u = [{"movement_id": m, "movement": movement_label(m), "U_traction": result.pilot_uncertainty[m, 0],
           "U_roughness": result.pilot_uncertainty[m, 1], "U_fineness": result.pilot_uncertainty[m, 2],
           "ridge_lost_um_per_100_trials": result.wear[m]["ridge_lost_m"] * 1e6}
          for m in range(result.pilot_uncertainty.shape[0])]
-    _csv(out / "pilot_uncertainty.csv", u)
+    write_rows_csv(out / "pilot_uncertainty.csv", u)
     names.append("pilot_uncertainty.csv")
     s = summary(result)
     acc_rows = [{"task": k.split("/")[0], "strategy": k.split("/")[1], "accuracy_%": 100 * v["accuracy"],
                  "median_moves": v["median_moves"], "simulations": v["simulations"]} for k, v in s.items()]
-    _csv(out / "accuracy.csv", acc_rows)
+    write_rows_csv(out / "accuracy.csv", acc_rows)
     per_tex = [{"texture": t, "name": lib[t].name, **{f"{k}_accuracy": v["per_texture_accuracy"][t] for k, v in s.items()
                                                        if t in v["per_texture_accuracy"]}}
                for t in sorted({t for v in s.values() for t in v["per_texture_accuracy"]})]
-    _csv(out / "accuracy_per_texture.csv", per_tex)
+    write_rows_csv(out / "accuracy_per_texture.csv", per_tex)
     names += ["accuracy.csv", "accuracy_per_texture.csv"]
     if "bayesian" in result.identification_results:
         labels = np.array(sorted({int(r.true_texture) for r in result.identification_results["bayesian"]}
                                  | {int(d) for r in result.identification_results["bayesian"] for d in r.decided}))
         lab, cm = ex.confusion_matrix(result.identification_results["bayesian"], labels=labels)
-        _csv(out / "confusion.csv", [{"true": int(t), **{str(int(d)): int(cm[i, j]) for j, d in enumerate(lab)}}
+        write_rows_csv(out / "confusion.csv", [{"true": int(t), **{str(int(d)): int(cm[i, j]) for j, d in enumerate(lab)}}
                                      for i, t in enumerate(lab)])
         names.append("confusion.csv")
     record = {"spec": {k: v for k, v in vars(result.spec).items()}, "best_movements":

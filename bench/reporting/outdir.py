@@ -61,25 +61,8 @@ class OutFolder:
     # ---- opening
     @classmethod
     def open(cls, path, force: bool = False, flag: str = "--out") -> "OutFolder":
-        raw = os.fspath(path)
-        where = f"{flag} {raw!r}"
-        if "\x00" in raw:
-            raise OutDirError(f"{where}: the path contains a NUL byte")
-        if not raw.strip():
-            raise OutDirError(f"{where}: the path is empty")
-        p = Path(raw)
-        try:
-            if p.is_symlink() and not p.exists():
-                raise OutDirError(f"{where}: is a broken symbolic link")
-            if p.exists() and not p.is_dir():
-                raise OutDirError(f"{where}: is a file, not a folder")
-            p.mkdir(parents=True, exist_ok=True)
-        except FileExistsError:
-            raise OutDirError(f"{where}: is a file, not a folder") from None
-        except NotADirectoryError:
-            raise OutDirError(f"{where}: cannot create the folder: a part of the path is a file") from None
-        except OSError as e:
-            raise OutDirError(f"{where}: cannot create the folder: {e.strerror or e}") from None
+        p = _make_folder(path, flag)
+        where = f"{flag} {os.fspath(path)!r}"
         lock_path = p / LOCK_NAME
         try:
             fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
@@ -237,10 +220,9 @@ def fresh_folder(base: Path, force: bool = False, flag: str = "--out") -> OutFol
     raise last or OutDirError(f"{flag}: no free folder next to {os.fspath(base)!r}")
 
 
-def writable_folder(path, flag: str = "--out") -> Path:
-    """Check a plain output folder before a long job (a sweep, an experiment) runs: not a file, no NUL byte,
-    creatable and writable — :class:`OutDirError` naming ``flag`` otherwise. Creates it; no lock, nothing removed
-    (the job writes each file under a temporary name and renames it into place)."""
+def _make_folder(path, flag: str) -> Path:
+    """Create the folder ``path`` (named by ``flag`` in errors) after checking it: no NUL byte, not empty, not a
+    broken symbolic link, not a file, creatable."""
     raw = os.fspath(path)
     where = f"{flag} {raw!r}"
     if "\x00" in raw:
@@ -249,16 +231,29 @@ def writable_folder(path, flag: str = "--out") -> Path:
         raise OutDirError(f"{where}: the path is empty")
     p = Path(raw)
     try:
+        if p.is_symlink() and not p.exists():
+            raise OutDirError(f"{where}: is a broken symbolic link")
         if p.exists() and not p.is_dir():
             raise OutDirError(f"{where}: is a file, not a folder")
         p.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)
-        os.close(fd)
-        os.unlink(name)
     except FileExistsError:
         raise OutDirError(f"{where}: is a file, not a folder") from None
     except NotADirectoryError:
         raise OutDirError(f"{where}: cannot create the folder: a part of the path is a file") from None
     except OSError as e:
-        raise OutDirError(f"{where}: the folder cannot be created or written ({e.strerror or e})") from None
+        raise OutDirError(f"{where}: cannot create the folder: {e.strerror or e}") from None
+    return p
+
+
+def writable_folder(path, flag: str = "--out") -> Path:
+    """Check a plain output folder before a long job (a sweep, an experiment) runs: :func:`_make_folder`'s checks
+    and a write probe — :class:`OutDirError` naming ``flag`` otherwise. No lock, nothing removed (the job writes
+    each file under a temporary name and renames it into place)."""
+    p = _make_folder(path, flag)
+    try:
+        fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)
+        os.close(fd)
+        os.unlink(name)
+    except OSError as e:
+        raise OutDirError(f"{flag} {os.fspath(path)!r}: the folder is not writable ({e.strerror or e})") from None
     return p
