@@ -96,7 +96,7 @@ def private_folder() -> str:
         try:
             st = os.stat(runtime)
             if stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid() and not st.st_mode & 0o077 \
-                    and len(runtime) + len("/biotac-cheetah-XXXXXXXX/cheetah.sock") < 108:
+                    and len(runtime) + len("/biotac-cheetah-") + 8 + len("/cheetah.sock") < 108:  # sun_path room
                 return tempfile.mkdtemp(prefix="biotac-cheetah-", dir=runtime)
         except OSError:
             pass
