@@ -26,12 +26,14 @@ def _atomic(path: Path, text: str) -> None:
 
 
 def write_rows_csv(path: Path, rows: list[dict]) -> None:
-    """A table of row dicts (same keys) as CSV, written under a temporary name and renamed into place."""
+    """A table of row dicts as CSV (columns: every key, in first-seen order; a row without one leaves it empty),
+    written under a temporary name and renamed into place."""
     if not rows:
         return
+    columns = list(dict.fromkeys(k for r in rows for k in r))
     tmp = path.with_name(path.name + ".tmp")
     with open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w = csv.DictWriter(fh, fieldnames=columns, restval="")
         w.writeheader()
         w.writerows(rows)
     tmp.replace(path)

@@ -98,3 +98,14 @@ def test_sweep_and_explore_name_the_bad_flag(argv, flag, capsys):
     assert cli.main(argv) == 2
     err = capsys.readouterr().err
     assert flag in err and "Traceback" not in err
+
+
+def test_row_tables_with_different_columns_are_written_whole(tmp_path):
+    import csv
+
+    from bench.reporting.experiment_report import write_rows_csv
+
+    write_rows_csv(tmp_path / "t.csv", [{"texture": 1, "pairs": 0.5}, {"texture": 2, "identification": 0.9}])
+    rows = list(csv.DictReader(open(tmp_path / "t.csv")))
+    assert rows == [{"texture": "1", "pairs": "0.5", "identification": ""},
+                    {"texture": "2", "pairs": "", "identification": "0.9"}]
