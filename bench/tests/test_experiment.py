@@ -19,6 +19,9 @@ def test_shipped_experiment_files_validate():
     assert full.pilot_trials == 6 and full.training_trials == 5 and full.pair_simulations == 1000
     assert full.identification_simulations == 8000 and full.training_textures is None  # all 117
     assert len(full.pilot_textures) == 10
+    every = E.load_experiment(FIXTURES / "experiments" / "fishel2012_all.toml")
+    assert every.identify_all_textures and vars(every) | {"identify_all_textures": False, "name": full.name,
+                                                          "source": full.source} == vars(full)
 
 
 @pytest.mark.parametrize("data, words", [
