@@ -27,8 +27,10 @@ class Adc:
         self.noise_rng = effect_rng(seed, "adc_noise")
         self.coupling_rng = effect_rng(seed, "spi_coupling")
 
-    def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input"):
-        """Codes (uint16) for analog values in V; ``bus_active`` marks conversions that overlapped SPI clocking."""
+    def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input",
+                channels: np.ndarray | None = None):
+        """Codes (uint16) for analog values in V; ``bus_active`` marks conversions that overlapped SPI clocking;
+        ``channels`` (SPI channel index per conversion) lets each channel's path carry its own noise."""
         v = np.asarray(volts, float)
         if not np.isfinite(v.sum()):  # one reduction: any NaN or ±Inf makes the sum non-finite
             bad = int(np.flatnonzero(~np.isfinite(v))[0])

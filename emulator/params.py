@@ -147,6 +147,18 @@ class SensorParams:
     spi_coupling_rms_V: float = _p(
         4.0e-3, "V", 0.0, 0.1, "model", "ADC-input disturbance when a conversion overlaps SPI clocking")
 
+    # --- sensor units (issue 10.1; emulator/units.py draws these per unit) -------------------
+    electrode_gap_spread_mm: float = _p(
+        0.0, "mm", 0.0, 1.0, "model", "spread of each electrode's resting fluid gap around resting_gap_mm (0: alike)")
+    electrode_gap_seed: float = _p(
+        0, "1", 0, 2**31 - 1, "model", "whole number seeding the per-electrode resting gaps (a unit's own draw)")
+
+    # --- per-channel noise (issue 10.2; emulator/adc.py, emulator/extrinsic.py) -----------------
+
+    # --- skin viscoelasticity, contact mechanics and impacts (issues 10.4, 10.5, 11.2) -----------
+
+    # --- local electrodes (issue 10.3; emulator/electrodes.py) ---------------------------------
+
     # ------------------------------------------------------------------------------
     @property
     def bridge_temperature_C(self) -> float:

@@ -327,7 +327,7 @@ class Sensor:
     def sample(self, channels, times, bus_active=None) -> np.ndarray:
         """12-bit codes for each (channel index, instant in s), converted in the given order."""
         v = self.analog(channels, times)
-        return self.adc.convert(v, bus_active, where="the ADC input")
+        return self.adc.convert(v, bus_active, where="the ADC input", channels=channels)
 
     # --- reporting ------------------------------------------------------------------
     def effects_report(self) -> list[dict]:
