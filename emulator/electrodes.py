@@ -1,4 +1,4 @@
-"""The 19 impedance electrodes behind the multiplexer (SENSOR.md §5, D ch. 4).
+"""The impedance electrodes (19 on the BioTac, 24 on the SP) behind the multiplexer (SENSOR.md §5, D ch. 4).
 
 Contact -> skin and fluid deformation -> fluid gap over every electrode -> impedance -> voltage.
 
@@ -82,7 +82,7 @@ class Contact:
 
 
 def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray) -> np.ndarray:
-    """(len(t), 19) fluid thickness over every electrode, mm."""
+    """(len(t), N) fluid thickness over every electrode (``positions`` (N, 3), mm), mm."""
     g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
     gaps = np.full((t.size, positions.shape[0]), g0)
     surface_mm2 = 2 * np.pi * CORE_RADIUS_MM * 25.0  # wetted core surface (about 25 mm long)
@@ -112,27 +112,53 @@ def electrode_volts(p: SensorParams, gaps_mm: np.ndarray, faults: dict | None = 
     z = p.electrode_series_ohm + p.fluid_sheet_ohm_mm / gaps_mm
     faults = faults or {}
     for n in faults.get("electrode_open", ()):
-        z[..., n - 1] = np.inf
+        z[..., int(n) - 1] = np.inf
     for n in faults.get("electrode_short", ()):
-        z[..., n - 1] = 0.0
+        z[..., int(n) - 1] = 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         v = 3.3 * p.electrode_load_ohm / (z + p.electrode_load_ohm)
     return np.nan_to_num(v, nan=0.0)
 
 
+def _whole_in(e, n: int) -> bool:
+    return (not isinstance(e, bool) and isinstance(e, (int, float, np.integer, np.floating))
+            and float(e).is_integer() and 1 <= e <= n)
+
+
+def _check_faults(faults: dict, n: int) -> None:
+    """Refuse electrode fault numbers outside 1..n, naming the fault and the value."""
+    for key in ("electrode_open", "electrode_short"):
+        for e in faults.get(key, ()):
+            if not _whole_in(e, n):
+                raise ValueError(f"faults.{key}: electrode {e!r} is not a whole number in 1..{n}")
+    stuck = faults.get("mux_stuck")
+    if stuck is not None and not _whole_in(stuck, n):
+        raise ValueError(f"faults.mux_stuck: electrode {stuck!r} is not a whole number in 1..{n}")
+
+
 class ElectrodeModel:
-    """Serves E1..E19 voltages at conversion instants, the multiplexer's memory included."""
+    """Serves E1..EN voltages at conversion instants, the multiplexer's memory included.
+
+    ``positions`` : (N, 3) electrode positions on the core, mm (default: the 19 of fixtures/electrodes.csv;
+    the BioTac SP passes its 24).  Fault dicts number electrodes 1..N.
+    """
 
     def __init__(self, p: SensorParams, contacts: list[Contact], faults: dict | None = None,
-                 discretization: str = "prewarped", rate_Hz: float = 500.0):
+                 discretization: str = "prewarped", rate_Hz: float = 500.0, *, positions=None):
         self.p, self.contacts, self.faults = p, contacts, faults or {}
-        self.positions = electrode_positions_mm()
+        self.positions = electrode_positions_mm() if positions is None else np.asarray(positions, float)
+        if self.positions.ndim != 2 or self.positions.shape[1] != 3 or self.positions.shape[0] < 1:
+            raise ValueError(f"electrode positions: shape {self.positions.shape}, expected (N, 3) in mm with N >= 1")
+        if not np.all(np.isfinite(self.positions)):
+            raise ValueError("electrode positions: every coordinate must be a finite number of mm")
+        self.n = n = self.positions.shape[0]
+        _check_faults(self.faults, n)
         self.dt = 1.0 / rate_Hz
         self.chunk = max(1, int(round(CHUNK_S * rate_Hz)))
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.electrode_bandwidth_Hz]), 2 * np.pi * p.electrode_bandwidth_Hz
         sos = filters.discretize(z, pz, k, rate_Hz, discretization)
         self.b, self.a = sos[0, :3], sos[0, 3:]
-        rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm), self.faults)[0]
+        rest = electrode_volts(p, np.full((1, n), p.resting_gap_mm), self.faults)[0]
         self.rest = rest
         self.zi = signal.lfilter_zi(self.b, self.a)[:, None] * rest[None, :]
         self.zi_rest = self.zi.copy()
@@ -149,7 +175,7 @@ class ElectrodeModel:
         t = (self.k + 1 + np.arange(self.chunk)) * self.dt
         active = [c for c in self.contacts if c.end_s >= t[0] and c.start_s <= t[-1]]
         if not active and np.allclose(self.zi, self.zi_rest, rtol=0, atol=1e-12):
-            y = np.broadcast_to(self.rest, (self.chunk, 19))  # nothing touching and the filter settled: rest
+            y = np.broadcast_to(self.rest, (self.chunk, self.n))  # nothing touching and the filter settled: rest
         else:
             v = electrode_volts(self.p, electrode_gaps_mm(self.p, active, t, self.positions), self.faults)
             y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
@@ -158,7 +184,7 @@ class ElectrodeModel:
         self._hist.append(y)
 
     def targets(self, electrode: np.ndarray, times: np.ndarray) -> np.ndarray:
-        """Settled voltage of electrode n (1..19) at each instant (no multiplexer memory)."""
+        """Settled voltage of electrode n (1..N) at each instant (no multiplexer memory)."""
         if times.size == 0:
             return np.zeros(0)
         if not self.contacts:  # nothing ever touches: every electrode rests (the steady-state shortcut)
@@ -183,6 +209,8 @@ class ElectrodeModel:
             return np.zeros(0)
         if self.stuck is not None:
             electrode = np.full_like(electrode, int(self.stuck))
+        if electrode.min() < 1 or electrode.max() > self.n:
+            raise ValueError(f"electrode numbers {electrode.min()}..{electrode.max()}: this sensor has E1..E{self.n}")
         target = self.targets(electrode, np.asarray(times, float))
         # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions
         a = self.mux_keep

@@ -1,0 +1,45 @@
+"""Electrode model: any number of electrodes, per-electrode resting gaps, locality of a contact's pattern."""
+
+import numpy as np
+import pytest
+
+from emulator.electrodes import Contact, ElectrodeModel, electrode_positions_mm, surface_point_over_mm
+from emulator.params import SensorParams
+
+pytestmark = pytest.mark.unit
+
+
+def _sp_like_positions(n=24):
+    """A made-up (n, 3) table: electrodes spread over the ventral half of the core, mm."""
+    x = np.linspace(-14.0, 4.0, n)
+    a = np.radians(np.linspace(-80.0, 80.0, n)[np.random.default_rng(0).permutation(n)])
+    return np.column_stack([x, 5.0 * np.sin(a), -5.0 * np.cos(a)])
+
+
+def test_the_model_serves_as_many_electrodes_as_its_positions_table_has():
+    p = SensorParams()
+    pos = _sp_like_positions(24)
+    press = Contact(surface_point_over_mm(pos[20]), 2.0, lambda t: np.full(np.shape(t), 1.0), start_s=0.1)
+    m = ElectrodeModel(p, [press], positions=pos)
+    v = m.targets(np.arange(1, 25), np.full(24, 0.8))
+    assert v.shape == (24,) and np.all(np.isfinite(v))
+    assert int(np.argmin(v)) == 20  # the pressed electrode's fluid thins most: lowest voltage
+    assert ElectrodeModel(p, [], positions=pos).targets(np.array([24]), np.array([0.5])).shape == (1,)
+    # default: the 19 of fixtures/electrodes.csv
+    assert ElectrodeModel(p, []).positions.shape == (19, 3)
+    assert np.array_equal(ElectrodeModel(p, []).positions, electrode_positions_mm())
+
+
+def test_faults_index_electrodes_1_to_N_and_bad_numbers_are_refused_by_name():
+    p = SensorParams()
+    pos = _sp_like_positions(24)
+    m = ElectrodeModel(p, [], faults={"electrode_open": [24], "mux_stuck": 22}, positions=pos)
+    assert m.rest[23] == 0.0
+    with pytest.raises(ValueError, match=r"faults.electrode_short: electrode 20 .* 1..19"):
+        ElectrodeModel(p, [], faults={"electrode_short": [20]})
+    with pytest.raises(ValueError, match=r"faults.mux_stuck: electrode 25 .* 1..24"):
+        ElectrodeModel(p, [], faults={"mux_stuck": 25}, positions=pos)
+    with pytest.raises(ValueError, match=r"shape \(19, 2\)"):
+        ElectrodeModel(p, [], positions=np.zeros((19, 2)))
+    with pytest.raises(ValueError, match="E1..E19"):
+        ElectrodeModel(p, []).sample(np.array([20]), np.array([0.1]))
