@@ -69,11 +69,15 @@ class Sensor:
         (electrode number), ``thermistor`` ("open" or "short"), ``heater_failed`` (True)
     record_signals : grid signals besides the channels' nodes to keep for :meth:`signal` (e.g.
         ``"tangential_force_N"`` for a rig's stage current, ``"contact_force_N"`` for the true normal load)
+    variant : ``"biotac"`` (19 electrodes, the dissertation's sensor) or ``"biotac-sp"`` (24 electrodes,
+        E20..E24 at channel indices 36..40); see :mod:`emulator.channels`
     """
 
     def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
                  fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
-                 block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None, record_signals=()):
+                 block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None, record_signals=(),
+                 variant: str = ch.DEFAULT_VARIANT):
+        self.variant = ch.variant(variant)  # ValueError naming the allowed variants
         self.params = params or SensorParams()
         self.faults = dict(faults or {})
         unknown_faults = set(self.faults) - set(FAULT_NAMES)
@@ -85,11 +89,13 @@ class Sensor:
         self.noise = noise
         self.fs = self.fidelity.grid_Hz
         self.block_n = max(1, int(round(block_s * self.fs)))
-        self.channels_read = sorted({c if isinstance(c, (int, np.integer)) else ch.channel_index(c)
+        self.channels_read = sorted({int(c) if isinstance(c, (int, np.integer)) else ch.channel_index(c)
                                      for c in channels_read})
-        unknown = [c for c in self.channels_read if c not in ch.SAMPLED_CHANNELS]
+        unknown = [c for c in self.channels_read if c not in self.variant.sampled_channels]
         if unknown:
-            raise ValueError(f"channel index {unknown[0]} is not a sampled channel of this sensor")
+            raise ValueError(f"channel {ch.variant('biotac-sp').channel_name.get(unknown[0], unknown[0])} "
+                             f"(index {unknown[0]}) is not a sampled channel of a {self.variant.name!r} sensor "
+                             f"(E1..E{self.variant.n_electrodes}, PAC, PDC, TAC, TDC)")
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
         self.record_signals = tuple(record_signals)
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)
