@@ -152,6 +152,12 @@ class SensorParams:
         0.0, "mm", 0.0, 1.0, "model", "spread of each electrode's resting fluid gap around resting_gap_mm (0: alike)")
     electrode_gap_seed: float = _p(
         0, "1", 0, 2**31 - 1, "model", "whole number seeding the per-electrode resting gaps (a unit's own draw)")
+    thermistor_r25_ohm: float = _p(
+        470e3, "Ω", 1e3, 1e7, "D",
+        "thermistor resistance at 25 °C (Vishay NTCS0805E3474FXT, D ch. 4: 470 kΩ ±1 %); a unit's own value")
+    thermistor_beta_K: float = _p(
+        4025.0, "K", 2000.0, 6000.0, "model",
+        "thermistor Beta (equivalent of D eq. 4.4; the part's B25/85 tolerance is ±3 %); a unit's own value")
 
     # --- per-channel noise (issue 10.2; emulator/adc.py, emulator/extrinsic.py) -----------------
 
