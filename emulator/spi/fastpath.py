@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from emulator.channels import SAMPLED_CHANNELS
+from emulator import channels as ch
 from emulator.spi import protocol as proto
 from emulator.spi.model import (CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE, CONVERSION_TICKS,
                                 SAMPLE_DELAY_TICKS, _Prepared, ticks_array)
@@ -21,18 +21,21 @@ _SPECIAL = np.zeros(256, dtype=bool)
 _SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE]] = True
 
 
-def _tables():
+def _tables(sampled):
+    """Per first byte: the error word a non-sampling byte prepares, whether it samples a channel of ``sampled``,
+    and its channel index."""
     byte = np.arange(256)
     parity_ok = proto.ODD_PARITY_OK[byte]
     channel = (byte >> 1) & 0x3F
-    recognized = parity_ok & (byte >= 0x80) & np.isin(channel, list(SAMPLED_CHANNELS))
+    recognized = parity_ok & (byte >= 0x80) & np.isin(channel, list(sampled))
     word = np.full(256, _ERR["unknown_command"], dtype=np.int64)
     word[~parity_ok] = _ERR["parity"]
     word[parity_ok & (byte >= 0x80) & ~recognized] = _ERR["channel_not_recognized"]
     return word, recognized, channel
 
 
-_WORD_OF_BYTE, _RECOGNIZED, _CHANNEL_OF_BYTE = _tables()
+#: The tables of each variant (the SP recognises E20..E24; the 19-electrode sensor answers them EX).
+_TABLES = {name: _tables(ch.variant(name).sampled_channels) for name in ch.VARIANTS}
 
 
 def is_plain(port, mosi: np.ndarray) -> bool:
@@ -58,17 +61,18 @@ def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray,
     first = b0[cmd]
     cmd_end = end[cmd]
     cmd_tick = ticks_array(cmd_end)
-    prepared = _WORD_OF_BYTE[first].copy()
+    word_of_byte, recognized_of_byte, channel_of_byte = _TABLES[port.variant.name]
+    prepared = word_of_byte[first].copy()
 
     # sampling commands for recognised channels: ADC busy (E-), not provided (EX), or converted
-    rs = np.flatnonzero(_RECOGNIZED[first])
+    rs = np.flatnonzero(recognized_of_byte[first])
     deferred = None
     if rs.size:
         rticks = cmd_tick[rs]
         prev = np.concatenate([[port.last_sampling_tick if port.last_sampling_tick is not None else -10**12],
                                rticks[:-1]])
         busy = rticks - prev < CONVERSION_TICKS
-        channels = _CHANNEL_OF_BYTE[first[rs]]
+        channels = channel_of_byte[first[rs]]
         provided = port.provided_lut[channels]
         prepared[rs[busy]] = _ERR["insufficient_sampling_delay"]
         unprovided = ~busy & ~provided

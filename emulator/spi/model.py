@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from emulator import channels as ch
 from emulator.channels import DEFAULT_FRAME_NAMES, SAMPLED_CHANNELS, channel_index
 from emulator.spi import protocol as proto
 
@@ -84,13 +85,43 @@ def ticks_array(t: np.ndarray) -> np.ndarray:
     return np.floor(np.asarray(t, float) * TIMER_HZ + 1e-3).astype(np.int64)
 
 
-def default_properties(index: int = 1) -> dict[int, tuple[bytes, bool]]:
-    """Property id -> (bytes, is_string) for sensor ``index`` (1–5). Strings are sent with a NUL."""
-    pattern = bytes(int(proto.sample_command(channel_index(n))) for n in DEFAULT_FRAME_NAMES)
+#: Serial-number prefix of each variant: the host library decides a sensor is present by "BT"; the SP's serials
+#: start "BTSP" (Shadow Robot, sr-ros-interface issue #377: "Serial number starts with BTSP instead of BT2P").
+SERIAL_PREFIX = {"biotac": "BT0101", "biotac-sp": "BTSP01"}
+#: (flex version, firmware version) strings of each variant (model choice: the SP's are not published).
+VERSIONS = {"biotac": (b"20", b"0206"), "biotac-sp": (b"SP", b"0300")}
+SERIAL_LENGTH = 16
+
+
+def default_serial(index: int = 1, variant: str = ch.DEFAULT_VARIANT) -> str:
+    """The 16-character serial number of sensor ``index`` of a variant (``BT0101EMU000001`` …, ``BTSP01EMU00000``…)."""
+    return f"{SERIAL_PREFIX[ch.variant(variant).name]}EMU00000{index:02d}"
+
+
+def check_serial(serial: str) -> bytes:
+    """The serial as ASCII bytes, refusing what a host could not read back: must start "BT", 2..16 printable
+    characters, no NUL (the string ends at NUL)."""
+    if not isinstance(serial, str) or not serial.startswith("BT") or not 2 <= len(serial) <= SERIAL_LENGTH \
+            or not all(0x20 < ord(c) < 0x7F for c in serial):
+        raise ValueError(f"serial {serial!r}: must be 2..{SERIAL_LENGTH} printable ASCII characters (no spaces) "
+                         f"starting with \"BT\" (the host library's presence check)")
+    return serial.encode("ascii")
+
+
+def default_properties(index: int = 1, variant: str = ch.DEFAULT_VARIANT,
+                       serial: str | None = None) -> dict[int, tuple[bytes, bool]]:
+    """Property id -> (bytes, is_string) for sensor ``index`` (1–5) of a variant. Strings are sent with a NUL.
+
+    ``serial`` overrides the serial number (each manufacturing unit its own); it must start with "BT".
+    The sampling-pattern property holds the variant's default frame (44 commands, 54 on the SP).
+    """
+    v = ch.variant(variant)
+    pattern = bytes(int(proto.sample_command(v.channel_index[n])) for n in v.frame_names)
+    flex, firmware = VERSIONS[v.name]
     return {
-        PROP_FLEX: (b"20", True),
-        PROP_FIRMWARE: (b"0206", True),
-        PROP_SERIAL: (f"BT0101EMU00000{index:02d}".encode(), True),
+        PROP_FLEX: (flex, True),
+        PROP_FIRMWARE: (firmware, True),
+        PROP_SERIAL: (check_serial(default_serial(index, v.name) if serial is None else serial), True),
         PROP_CPU: ((40000).to_bytes(2, "big"), False),  # kHz: 40 MIPS dsPIC33
         PROP_FS: ((4400).to_bytes(2, "big"), False),
         PROP_PATTERN: (pattern, True),
@@ -149,8 +180,10 @@ class SensorPort:
         self.sensor = sensor
         self.index = index
         self.faults = faults or Faults()
-        self.properties = properties or default_properties(index)
-        self.provided = frozenset(int(c) for c in sensor.channels_read) & SAMPLED_CHANNELS
+        self.variant = ch.variant(getattr(sensor, "variant", ch.DEFAULT_VARIANT))
+        self.recognized = self.variant.sampled_channels  # channels this variant has (others answer EX)
+        self.properties = properties or default_properties(index, self.variant.name)
+        self.provided = frozenset(int(c) for c in sensor.channels_read) & self.recognized
         self.provided_lut = np.zeros(64, dtype=bool)
         self.provided_lut[list(self.provided)] = True
         self.conversion_s = sensor.params.adc_conversion_s
@@ -284,7 +317,7 @@ class SensorPort:
             self._prepare_word(err["parity"], t)
         elif b0 & 0x80:
             channel = (b0 >> 1) & 0x3F
-            if channel not in SAMPLED_CHANNELS:
+            if channel not in self.recognized:
                 self._prepare_word(err["channel_not_recognized"], t)
                 return
             now = ticks(t)
