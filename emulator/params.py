@@ -136,14 +136,16 @@ class SensorParams:
         5e-6, "s", 1e-7, 1e-4, "model",
         "ADC acquisition and conversion window after a command; SPI clocking inside it couples into the sample")
     adc_noise_rms_bits: float = _p(
-        1.13, "LSB", 0.0, 20.0, "model",
-        "ADC input noise; with quantization and mains hum it makes the measured 1.4 bits RMS at rest")
+        0.45, "LSB", 0.0, 20.0, "model",
+        "ADC input (transition) noise per conversion, common to every channel: the 12-bit SAR's ENOB (11.1 typ., "
+        "dsPIC33FJ datasheet) less quantization and the reference share; see the per-channel noise section")
 
     # --- extrinsic noise (SENSOR.md §3) ------------------------------------------------
     mains_frequency_Hz: float = _p(60.0, "Hz", 40.0, 70.0, "D", "mains frequency (60 Hz in the source lab)")
     mains_amplitude_V: float = _p(
         0.516e-6, "V", 0.0, 1e-3, "model",
-        "hum amplitude at the first-stage input; gives the 0.2 bits² largest 2 Hz band of PAC at rest")
+        "hum amplitude of the fundamental at the first-stage input; gives the 0.2 bits² largest 2 Hz band of PAC "
+        "at rest (harmonics: mains_harmonic2_ratio, mains_harmonic3_ratio)")
     spi_coupling_rms_V: float = _p(
         4.0e-3, "V", 0.0, 0.1, "model", "ADC-input disturbance when a conversion overlaps SPI clocking")
 
@@ -160,10 +162,32 @@ class SensorParams:
         "thermistor Beta (equivalent of D eq. 4.4; the part's B25/85 tolerance is ±3 %); a unit's own value")
 
     # --- per-channel noise (issue 10.2; emulator/adc.py, emulator/extrinsic.py) -----------------
+    adc_reference_noise_ppm: float = _p(
+        20.0, "ppm", 0.0, 1e4, "model",
+        "RMS noise of the ADC reference (VREFH = AVDD, 3.3 V) per conversion, relative: a code k moves by k·ppm·1e-6 "
+        "(≈ 66 µV RMS, the order of a 3.3 V LDO's output noise over the conversion bandwidth)")
+    pac_path_noise_rms_bits: float = _p(
+        1.04, "LSB", 0.0, 20.0, "model",
+        "extra noise of the PAC path only (second gain stage and ADC driver, sampled per conversion); CALIBRATED: "
+        "the one knob sized so PAC at rest reads D's measured 1.4 bits RMS")
+    mains_harmonic2_ratio: float = _p(
+        0.04, "1", 0.0, 1.0, "model",
+        "2nd mains harmonic (120 Hz at 60 Hz mains) amplitude / fundamental at the stage-1 input: capacitive "
+        "pickup grows as n·V_n; IEC 61000-2-2 compatibility level V_2 = 2 % gives 2 × 2 %")
+    mains_harmonic3_ratio: float = _p(
+        0.15, "1", 0.0, 1.0, "model",
+        "3rd mains harmonic (180 Hz at 60 Hz mains) amplitude / fundamental at the stage-1 input: capacitive "
+        "pickup grows as n·V_n; IEC 61000-2-2 compatibility level V_3 = 5 % gives 3 × 5 %")
 
     # --- skin viscoelasticity, contact mechanics and impacts (issues 10.4, 10.5, 11.2) -----------
 
     # --- local electrodes (issue 10.3; emulator/electrodes.py) ---------------------------------
+    bulge_width_ratio: float = _p(
+        1.0, "1", 0.3, 5.0, "model",
+        "width of the rim bulge (the displaced liquid's ring, peak at √2·ratio·w) over the indentation width w")
+    free_skin_half_angle_deg: float = _p(
+        120.0, "deg", 60.0, 180.0, "model",
+        "skin free to bulge within this angle of the ventral midline; beyond it the skin is tethered at the nail")
 
     # ------------------------------------------------------------------------------
     @property
