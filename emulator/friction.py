@@ -69,26 +69,30 @@ def _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k,
 
 
 @njit(cache=True)
-def _interp_table(table, radii, r, pos, dx):
-    """Bilinear read of ``table[radius index, position index]`` at radius ``r`` (m) and position ``pos`` (m)."""
-    n = table.shape[1]
+def _interp_tables(heights, slopes, radii, r, pos, dx):
+    """Bilinear reads of ``heights`` and ``slopes`` (radius index × position index) at radius ``r`` (m) and
+    position ``pos`` (m); the track repeats beyond its ends."""
+    n = heights.shape[1]
     u = pos / dx
     i = int(math.floor(u))
     f = u - i
     i = i % n
     j = (i + 1) % n
     if r <= radii[0]:
-        return table[0, i] * (1 - f) + table[0, j] * f
-    if r >= radii[-1]:
-        k = radii.size - 1
-        return table[k, i] * (1 - f) + table[k, j] * f
-    k = 0
-    while radii[k + 1] < r:
-        k += 1
-    w = (r - radii[k]) / (radii[k + 1] - radii[k])
-    a = table[k, i] * (1 - f) + table[k, j] * f
-    b = table[k + 1, i] * (1 - f) + table[k + 1, j] * f
-    return a * (1 - w) + b * w
+        k, w = 0, 0.0
+    elif r >= radii[-1]:
+        k, w = radii.size - 1, 0.0
+    else:
+        k = 0
+        while radii[k + 1] < r:
+            k += 1
+        w = (r - radii[k]) / (radii[k + 1] - radii[k])
+    h = heights[k, i] * (1 - f) + heights[k, j] * f
+    s = slopes[k, i] * (1 - f) + slopes[k, j] * f
+    if w > 0.0:
+        h = h * (1 - w) + (heights[k + 1, i] * (1 - f) + heights[k + 1, j] * f) * w
+        s = s * (1 - w) + (slopes[k + 1, i] * (1 - f) + slopes[k + 1, j] * f) * w
+    return h, s
 
 
 @njit(cache=True)
@@ -110,6 +114,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
     h = dt / substeps
     touching = 1 if state[5] > 0.5 else 0
     u_prev = state[6]
+    kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
     for n in range(N0.size):
         n0 = N0[n]
         v_stage = V[n]
@@ -117,17 +122,19 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
         vr_sum = 0.0
         normal = 0.0
         slope = 0.0
+        r, kn, series = 0.0, 0.0, 0.0
+        if n0 > 0.0:  # what depends on the load alone: the patch radius and the stiffnesses
+            cbrt_n = n0 ** (1.0 / 3.0)
+            r = radius_1N * cbrt_n
+            kn = kn_per_cbrt_n * cbrt_n
+            # a soft texture layer in series with the skin: flat-punch stiffness, stiffening as the layer
+            # densifies toward its thickness (the derivative of δ_t = T(1 − exp(−N/(kT))))
+            k_flat = 2.0 * r * modulus_eff
+            k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
+            series = k_tex / (kn + k_tex)
         for _ in range(substeps):
             if n0 > 0.0:
-                r = radius_1N * n0 ** (1.0 / 3.0)
-                kn = 1.5 * K ** (2.0 / 3.0) * n0 ** (1.0 / 3.0)
-                # a soft texture layer in series with the skin: flat-punch stiffness, stiffening as the layer
-                # densifies toward its thickness (the derivative of δ_t = T(1 − exp(−N/(kT))))
-                k_flat = 2.0 * r * modulus_eff
-                k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
-                series = k_tex / (kn + k_tex)
-                height = _interp_table(heights, radii, r, p, dx)
-                slope_here = _interp_table(slopes, radii, r, p, dx)
+                height, slope_here = _interp_tables(heights, slopes, radii, r, p, dx)
                 if touching == 0 and touchdown_reference:  # touchdown: the skin settles onto this spot
                     h_ref, s_ref = height, slope_here
                     touching = 1
@@ -141,6 +148,14 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
                 touching = 0
                 normal = 0.0
                 slope = 0.0
+            if normal == 0.0:  # no load, no friction: the skin relaxes on its own, G(u) is linear
+                u = -k_t * x / (k_t * h + c_t)
+                u_prev = u
+                z = _bristle_after(z, v_stage - u, h, sigma0, mu_s, mu_k, vs)
+                x += u * h
+                p += (v_stage - u) * h
+                vr_sum += v_stage - u
+                continue
             # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0, bracketed around
             # the previous velocity (widened until G changes sign; G(±bound) always brackets a root), then
             # regula falsi with the Illinois modification (superlinear, never leaves the bracket)

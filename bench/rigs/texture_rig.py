@@ -139,7 +139,7 @@ class TextureRig:
         for _ in range(int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / s.speculation_s) + 1):
             # read a window as if the finger keeps lowering (it does, until the controller stops it); if the
             # controller would stop inside it, go back to before the window and read exactly up to that frame
-            snapshot = copy.deepcopy(run)
+            snapshot = run.snapshot()
             run.sensor.block_n = max(1, int(round(s.chunk_s * run.sensor.fs)))
             before = run.log.pdc_codes().size
             run.read(window)
@@ -190,6 +190,19 @@ class _Run:
         self.sampler = Sampler(SoftwarePeripheral(sensor))
         self.frame = len(self.sampler.sequence)
         self.log = _Log()
+
+    def snapshot(self) -> "_Run":
+        """A copy to go back to: everything that changes while the run goes is copied; what stays fixed for
+        the whole trial (parameters, texture, skin, the texture's spatial tables, filter coefficients) is
+        shared, which makes the copy several times cheaper."""
+        shared = [self.sensor.params, self.sensor.fidelity, self.motion.texture, self.motion.skin, self.settings]
+        for effect in self.sensor.graph.effects:
+            for contact in getattr(effect, "_contacts", ()):
+                shared += [contact["heights"], contact["slopes"], contact["radii"]]
+            sos = getattr(getattr(effect, "filter", None), "sos", None)
+            if sos is not None:
+                shared.append(sos)
+        return copy.deepcopy(self, memo={id(o): o for o in shared if o is not None})
 
     @property
     def now(self) -> float:

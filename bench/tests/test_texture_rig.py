@@ -42,12 +42,12 @@ def test_force_control_through_pdc_reaches_the_target_within_10_percent(texture,
 
 
 @pytest.mark.xfail(strict=True, reason="known deviation (see README, texture rig): at 0.2 N the PDC target is "
-                   "17 counts; 1.4 LSB of PDC noise and the 20 ms command latency at 0.5 mm/s overshoot by up "
-                   "to ~13 % on the abrasive")
+                   "17 counts; PDC noise (0.45 LSB) and the 20 ms command latency at 0.5 mm/s overshoot by up to "
+                   "~11 % on the abrasive over six seeds")
 def test_force_control_at_the_lightest_movement_within_10_percent():
     rig = TextureRig(wear=False)
     errors = [rig.run_trial(t, Movement(0.2, 0.02), seed=s).true_normal_N / 0.2 - 1 for t in (GLASS, SAND)
-              for s in range(3)]
+              for s in range(6)]
     assert max(abs(e) for e in errors) <= 0.10
 
 
