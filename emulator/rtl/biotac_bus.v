@@ -1,9 +1,12 @@
 // Five BioTac SPI peripherals sharing SCK, MOSI and MISO; the host's 3-bit select code picks one
 // (1, 2, 4, 5, 6 -> sensors 1..5), all (7) or none (0). MISO is the OR of the selected sensors'
-// outputs; with none selected it idles at pull_up, so an absent sensor reads 0x00 or 0xFF.
+// outputs; with none selected it idles at pull_up, so an absent sensor reads 0x00 or 0xFF.  The SP parameter
+// makes chosen sensors BioTac SPs (E20..E24 answer data instead of "EX"; their own property ROM).
 `default_nettype none
 
-module biotac_bus (
+module biotac_bus #(
+    parameter [4:0] SP = 5'b00000  // bit i set: sensor i + 1 is a BioTac SP (24 electrodes), else a BioTac (19)
+) (
     input  wire        clk,
     input  wire [4:0]  rst_n,
     input  wire [4:0]  present,         // sensors plugged in
@@ -33,7 +36,7 @@ module biotac_bus (
     generate
         for (i = 0; i < 5; i = i + 1) begin : sensor
             assign selected[i] = present[i] && (cs_code == ADDRESS[3*i +: 3] || cs_code == 3'b111);
-            biotac_spi #(.SENSOR(i + 1)) spi (
+            biotac_spi #(.SENSOR(i + 1), .VARIANT(SP[i] ? 1 : 0)) spi (
                 .clk(clk), .rst_n(rst_n[i]), .sck(sck), .cs_n(!selected[i]), .mosi(mosi), .miso(miso_each[i]),
                 .sample_req(sample_req[i]), .sample_channel(sample_channel[6*i +: 6]),
                 .sample_code(sample_code[12*i +: 12]), .sample_ack(sample_ack[i]),

@@ -11,7 +11,8 @@
 `default_nettype none
 
 module biotac_spi #(
-    parameter integer SENSOR = 1  // sensor number 1..5 (its serial number in the property ROM)
+    parameter integer SENSOR = 1,  // sensor number 1..5 (its serial number in the property ROM)
+    parameter integer VARIANT = 0  // 0: BioTac, E1..E19 (channels 17..35); 1: BioTac SP, E1..E24 (17..40)
 ) (
     input  wire        clk,          // 1 MHz timer clock
     input  wire        rst_n,        // asynchronous reset (the "reset mid-stream" fault)
@@ -40,6 +41,8 @@ module biotac_spi #(
     localparam [1:0] K_WORD = 2'd0, K_PENDING = 2'd1, K_PROPERTY = 2'd2;
 
     localparam [2:0] SENSOR_ID = SENSOR[2:0];
+    localparam [0:0] VARIANT_ID = VARIANT[0:0];
+    localparam [5:0] LAST_ELECTRODE = (VARIANT == 1) ? 6'd40 : 6'd35;  // E24 or E19
 
     // ---------------------------------------------------------------- timer (1 µs ticks; delays are differences)
     reg [31:0] timer;
@@ -60,7 +63,7 @@ module biotac_spi #(
     endfunction
 
     function automatic is_sampled(input [5:0] ch);
-        is_sampled = (ch <= 6'd3) || (ch >= 6'd17 && ch <= 6'd35);
+        is_sampled = (ch <= 6'd3) || (ch >= 6'd17 && ch <= LAST_ELECTRODE);
     endfunction
 
     // ---------------------------------------------------------------- receive (SCK rising edges)
@@ -127,7 +130,7 @@ module biotac_spi #(
     wire [8:0] byte_index = tx_count[11:3];
     reg  [7:0] out_byte;
     always @(*) begin
-        if (out_kind == K_PROPERTY) out_byte = prop_byte(SENSOR_ID, out_prop, byte_index);
+        if (out_kind == K_PROPERTY) out_byte = prop_byte(VARIANT_ID, SENSOR_ID, out_prop, byte_index);
         else if (byte_index == 9'd0) out_byte = out_word[15:8];
         else if (byte_index == 9'd1) out_byte = out_word[7:0];
         else out_byte = 8'h00;

@@ -4,7 +4,7 @@
 the simulator clocks SCK itself.  ``CodeServer`` answers the peripherals' ADC requests.
 
 Tests read their inputs from environment variables set by the runner and write JSON results:
-``vectors`` replays a vector file; ``frame_stream`` streams the default 44-slot frame.
+``vectors`` replays a vector file; ``frame_stream`` streams the default frame (44 slots; 54 on a BioTac SP).
 """
 
 from __future__ import annotations
@@ -179,8 +179,9 @@ async def frame_stream(dut):
     from emulator.sensor import Sensor
     from emulator.spi import protocol as proto
 
-    seq = parse_sequence("default")
-    sensor = Sensor(channels_read=list(seq), seed=int(os.environ.get("BIOTAC_SEED", "1")))
+    variant = os.environ.get("BIOTAC_VARIANT", "biotac")  # sensor 1's variant (the build's SP parameter)
+    seq = parse_sequence("default", variant)
+    sensor = Sensor(channels_read=list(seq), seed=int(os.environ.get("BIOTAC_SEED", "1")), variant=variant)
     await reset(dut)
     # coupling is decided by the next bus activity, which this schedule knows: reads start 50 µs later
     CodeServer(dut, lambda s, ch, t: int(sensor.sample(np.array([ch]), np.array([t]),

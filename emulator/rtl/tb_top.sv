@@ -4,7 +4,9 @@
 `timescale 1ps/1ps
 `default_nettype none
 
-module tb_top;
+module tb_top #(
+    parameter [4:0] SP = 5'b00000  // which sensors are BioTac SPs (see biotac_bus)
+);
     // 1 MHz sensor timer: rising edges at 1, 2, 3 ... µs
     reg clk = 1'b1;
     always #500000 clk = ~clk;
@@ -56,7 +58,7 @@ module tb_top;
             if ($time >= VALID_DELAY_PS && t_hist[j] <= $time - VALID_DELAY_PS) miso_at_host = v_hist[j];
     endfunction
 
-    biotac_bus bus (
+    biotac_bus #(.SP(SP)) bus (
         .clk(clk), .rst_n(rst_n), .present(present), .pull_up(pull_up), .sck(sck), .mosi(mosi),
         .cs_code(cs_code), .miso(miso_at_bus), .sample_req(sample_req), .sample_channel(sample_channel),
         .sample_code(sample_code), .sample_ack(sample_ack),

@@ -36,6 +36,8 @@ def _tables(sampled):
 
 #: The tables of each variant (the SP recognises E20..E24; the 19-electrode sensor answers them EX).
 _TABLES = {name: _tables(ch.variant(name).sampled_channels) for name in ch.VARIANTS}
+#: The default variant's tables under their former names.
+_WORD_OF_BYTE, _RECOGNIZED, _CHANNEL_OF_BYTE = _TABLES[ch.DEFAULT_VARIANT]
 
 
 def is_plain(port, mosi: np.ndarray) -> bool:
