@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy import signal
+from scipy import signal, special
 
 from emulator import filters
 from emulator.channels import ELECTRODE_FIRST
@@ -81,29 +82,108 @@ class Contact:
         return f, self.tangential_per_normal * f
 
 
-def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray) -> np.ndarray:
-    """(len(t), N) fluid thickness over every electrode (``positions`` (N, 3), mm), mm."""
+SKIN_BASE_X_MM = -20.0  # the skin is clamped to the core this far behind the tip's centre (wetted length ~25 mm)
+GAP_TRUNCATION = 2.0  # resting-gap offsets are drawn from a normal truncated at ±2 spreads (see resting_gaps_mm)
+
+
+def resting_gaps_mm(p: SensorParams, n: int) -> np.ndarray:
+    """(n,) resting fluid gap over each electrode, mm.
+
+    gap_i = resting_gap_mm + electrode_gap_spread_mm · z_i, z_i a standard normal truncated to ±2 (a skin or core
+    moulded further off is rejected: its skin would rest on an electrode), drawn from ``electrode_gap_seed`` in
+    electrode order (the first 19 of a 24-electrode draw are the 19-electrode draw), and clipped physically to at
+    least twice ``minimum_gap_mm`` (a resting skin stays clear of where it bottoms).  Spread 0: all nominal.
+    """
+    seed = p.electrode_gap_seed
+    if isinstance(seed, bool) or not float(seed).is_integer() or not 0 <= seed <= 2**31 - 1:
+        raise ValueError(f"sensor.electrode_gap_seed = {seed!r}: must be a whole number (0 to {2**31 - 1})")
+    g = np.full(n, float(p.resting_gap_mm))
+    if p.electrode_gap_spread_mm == 0.0:
+        return g
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x6A9]))  # the gap stream of this seed
+    lo, hi = special.ndtr(-GAP_TRUNCATION), special.ndtr(GAP_TRUNCATION)
+    z = special.ndtri(lo + (hi - lo) * rng.random(n))  # inverse CDF: a truncated normal, one draw per electrode
+    return np.maximum(g + p.electrode_gap_spread_mm * z, 2.0 * p.minimum_gap_mm)
+
+
+@lru_cache(maxsize=8)
+def free_skin_grid(half_angle_deg: float, step_mm: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """Points (M, 3) and areas (M,) of the free (untethered) skin, mm and mm².
+
+    The wetted skin covers the cylinder x ∈ [SKIN_BASE_X_MM, 0] and the hemispherical tip x > 0 (radius
+    CORE_RADIUS_MM); it is tethered at the nail on the dorsal side, so only points within ``half_angle_deg`` of
+    the ventral midline (angle from −z toward ±y) are free to move.
+    """
+    r, half = CORE_RADIUS_MM, np.radians(half_angle_deg)
+    nth = max(4, int(np.ceil(2 * half * r / step_mm)))
+    th = -half + (np.arange(nth) + 0.5) * (2 * half / nth)
+    nx = int(np.ceil(-SKIN_BASE_X_MM / step_mm))
+    x = SKIN_BASE_X_MM + (np.arange(nx) + 0.5) * (-SKIN_BASE_X_MM / nx)
+    X, T = np.meshgrid(x, th, indexing="ij")
+    cyl = np.column_stack([X.ravel(), r * np.sin(T.ravel()), -r * np.cos(T.ravel())])
+    cyl_a = np.full(cyl.shape[0], (-SKIN_BASE_X_MM / nx) * r * (2 * half / nth))
+    nphi = max(2, int(np.ceil(0.5 * np.pi * r / step_mm)))
+    phi = (np.arange(nphi) + 0.5) * (0.5 * np.pi / nphi)  # polar angle from the +x axis
+    P, T = np.meshgrid(phi, th, indexing="ij")
+    tip = np.column_stack([r * np.cos(P.ravel()), r * np.sin(P.ravel()) * np.sin(T.ravel()),
+                           -r * np.sin(P.ravel()) * np.cos(T.ravel())])
+    tip_a = r * r * np.sin(P.ravel()) * (0.5 * np.pi / nphi) * (2 * half / nth)
+    return np.vstack([cyl, tip]), np.concatenate([cyl_a, tip_a])
+
+
+def indentation_profile(d2_mm2, w_mm: float, ratio: float, kappa: float = 1.0):
+    """Gap change per mm of indentation depth at squared distance ``d2_mm2`` (mm²) from a contact's centre, 1.
+
+    −exp(−d²/2w²) (the indentation, width w) + κ·(d²/2s²)·exp(−d²/2s²) (the rim bulge, a ring of width
+    s = ratio·w peaking at d = √2·s); κ makes the two volumes equal on the free skin (κ = 1 on a plane).
+    """
+    u = d2_mm2 / (2.0 * w_mm * w_mm)
+    us = u / (ratio * ratio)
+    return -np.exp(-u) + kappa * us * np.exp(-us)
+
+
+def bulge_balance(p: SensorParams, center_mm, w_mm: float) -> float:
+    """κ: the rim bulge's amplitude that puts back on the free skin the volume the indentation displaced, 1."""
+    pts, area = free_skin_grid(float(p.free_skin_half_angle_deg))
+    d2 = ((pts - np.asarray(center_mm, float)[None, :]) ** 2).sum(axis=1)
+    u = d2 / (2.0 * w_mm * w_mm)
+    us = u / p.bulge_width_ratio**2
+    v_in, v_ring = (area * np.exp(-u)).sum(), (area * us * np.exp(-us)).sum()
+    return float(v_in / v_ring) if v_ring > 0 else 0.0
+
+
+def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray,
+                      rest_mm: np.ndarray | None = None) -> np.ndarray:
+    """(len(t), N) fluid thickness over every electrode (``positions`` (N, 3), mm), mm.
+
+    ``rest_mm`` : (N,) resting gaps (default :func:`resting_gaps_mm`).  Each contact thins the fluid over
+    electrode i by (g_i − g_min)·a(F)·exp(−d²/2w²), a(F) = 1 − exp(−F/F₀), so the skin bottoms at g_min under a
+    hard press whatever the electrode's resting gap, and raises it by the rim bulge κ·δ₀·(d²/2s²)·exp(−d²/2s²)
+    with δ₀ = (g₀ − g_min)·a(F) at the nominal resting gap g₀: the displaced liquid, put back near the rim.
+    """
     g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
-    gaps = np.full((t.size, positions.shape[0]), g0)
-    surface_mm2 = 2 * np.pi * CORE_RADIUS_MM * 25.0  # wetted core surface (about 25 mm long)
-    indent = np.zeros_like(gaps)
-    bulge = np.zeros(t.size)
+    rest = resting_gaps_mm(p, positions.shape[0]) if rest_mm is None else np.asarray(rest_mm, float)
+    frac = np.zeros((t.size, positions.shape[0]))
+    bulge = np.zeros_like(frac)
     for c in contacts:
         if c.end_s < t[0] or c.start_s > t[-1]:
             continue
         f, ft = c.state(t)
         if not f.any():
             continue
-        depth = (g0 - gmin) * (1.0 - np.exp(-f / p.indentation_force_N))  # bounded: bottoms at g_min
+        a = 1.0 - np.exp(-f / p.indentation_force_N)  # bounded: bottoms at g_min
         w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
+        kappa = bulge_balance(p, c.center_mm, np.sqrt(w2))
         # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
         rel = positions - c.center_mm[None, :]
         along = rel @ np.asarray(c.shear_direction, float)
         s_mm = p.shear_shift_mm_per_N * ft
         d2 = (rel * rel).sum(axis=1)[None, :] - 2 * np.outer(s_mm, along) + (s_mm * s_mm)[:, None]
-        indent += depth[:, None] * np.exp(-d2 / (2 * w2))
-        bulge += depth * 2 * np.pi * w2 / surface_mm2  # displaced volume spread over the surface
-    gaps = gaps - indent + bulge[:, None]
+        u = d2 / (2 * w2)
+        us = u / p.bulge_width_ratio**2
+        frac += a[:, None] * np.exp(-u)
+        bulge += ((g0 - gmin) * kappa * a)[:, None] * (us * np.exp(-us))
+    gaps = rest[None, :] - (rest[None, :] - gmin) * frac + bulge
     return np.maximum(gaps, gmin)
 
 
@@ -158,7 +238,8 @@ class ElectrodeModel:
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.electrode_bandwidth_Hz]), 2 * np.pi * p.electrode_bandwidth_Hz
         sos = filters.discretize(z, pz, k, rate_Hz, discretization)
         self.b, self.a = sos[0, :3], sos[0, 3:]
-        rest = electrode_volts(p, np.full((1, n), p.resting_gap_mm), self.faults)[0]
+        self.rest_gaps_mm = resting_gaps_mm(p, n)
+        rest = electrode_volts(p, self.rest_gaps_mm[None, :], self.faults)[0]
         self.rest = rest
         self.zi = signal.lfilter_zi(self.b, self.a)[:, None] * rest[None, :]
         self.zi_rest = self.zi.copy()
@@ -177,7 +258,8 @@ class ElectrodeModel:
         if not active and np.allclose(self.zi, self.zi_rest, rtol=0, atol=1e-12):
             y = np.broadcast_to(self.rest, (self.chunk, self.n))  # nothing touching and the filter settled: rest
         else:
-            v = electrode_volts(self.p, electrode_gaps_mm(self.p, active, t, self.positions), self.faults)
+            gaps = electrode_gaps_mm(self.p, active, t, self.positions, self.rest_gaps_mm)
+            v = electrode_volts(self.p, gaps, self.faults)
             y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
         self.k += self.chunk
         self._hist_t.append(t)

@@ -43,3 +43,41 @@ def test_faults_index_electrodes_1_to_N_and_bad_numbers_are_refused_by_name():
         ElectrodeModel(p, [], positions=np.zeros((19, 2)))
     with pytest.raises(ValueError, match="E1..E19"):
         ElectrodeModel(p, []).sample(np.array([20]), np.array([0.1]))
+
+
+# --- per-electrode resting gaps (issue 10.1/10.3) ---------------------------------------------------------------
+def test_resting_gaps_are_nominal_without_spread_and_drawn_per_electrode_with_it():
+    from emulator.electrodes import resting_gaps_mm
+
+    p = SensorParams()
+    assert np.array_equal(resting_gaps_mm(p, 19), np.full(19, p.resting_gap_mm))
+    q = p.replace(electrode_gap_spread_mm=0.6, electrode_gap_seed=12345)
+    g = resting_gaps_mm(q, 19)
+    assert np.array_equal(g, resting_gaps_mm(q, 19))  # deterministic from the seed
+    assert np.array_equal(g, resting_gaps_mm(q, 24)[:19])  # electrode order: a 24-electrode draw extends it
+    assert not np.allclose(g, resting_gaps_mm(q.replace(electrode_gap_seed=12346), 19))
+    assert np.all(np.abs(g - p.resting_gap_mm) <= 2 * 0.6 + 1e-12) and g.min() >= 2 * p.minimum_gap_mm
+    assert 0.3 < g.std() < 0.9
+    with pytest.raises(ValueError, match=r"electrode_gap_seed = 1.5: must be a whole number"):
+        resting_gaps_mm(q.replace(electrode_gap_seed=1.5), 19)
+
+
+def test_a_units_resting_codes_differ_by_electrode_and_every_rest_uses_them():
+    from emulator import conversions as conv
+    from emulator.channels import channel_index
+    from emulator.electrodes import electrode_volts, resting_gaps_mm
+    from emulator.sensor import NoiseSources, Sensor
+    from emulator.stimuli import Touch
+
+    names = [f"E{n}" for n in range(1, 20)]
+    idx = np.array([channel_index(e) for e in names])
+    q = SensorParams().replace(electrode_gap_spread_mm=0.6, electrode_gap_seed=7)
+    expected = electrode_volts(q, resting_gaps_mm(q, 19)[None, :])[0] / conv.ADC_LSB_V
+    assert expected.max() - expected.min() > 300  # a unit's electrodes rest hundreds of codes apart
+    untouched = Sensor(q, channels_read=names, noise=NoiseSources.none())
+    # a touch that has ended long ago: the filtered path settles back to each electrode's own rest
+    touched = Sensor(q, stimuli=[Touch(0.1, 1.0, 0.1, 0.3, electrode="E5")], channels_read=names,
+                     noise=NoiseSources.none())
+    for s, t0 in ((untouched, 0.2), (touched, 2.5)):
+        codes = np.array([s.sample(np.array([i, i]), t0 + np.array([0.0, 1e-4]))[-1] for i in idx], float)
+        assert np.allclose(codes, expected, atol=2.0)
