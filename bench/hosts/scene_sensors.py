@@ -5,9 +5,12 @@ seed and stimuli.  Behind the bridge or the Cheetah adapter every sensor is buil
 its sensor (:func:`bench.running.runner.build_sensor`), reading every channel a host may ask for (the default
 44-slot frame covers them all):
 
-* sensor 1 is the scene's sensor: its stimuli, its seed;
-* sensors 2..N share its parameters, faults, noise and fidelity, feel no stimuli, and draw from seeds
-  ``seed + 1 .. seed + N - 1`` (independent noise);
+* sensor k (1..N) is the scene's sensor k: its unit, parameters and variant (``[sensor]`` for sensor 1,
+  ``[[sensors]]`` with ``index = k`` for the others), the stimuli addressed to it (``sensor = k`` on a
+  ``[[stimulus]]``; default 1), and seed ``seed + k - 1`` (independent noise);
+* sensors the scene does not describe share sensor 1's unit, parameters and variant and feel nothing;
+* every sensor shares the scene's faults, noise switches and fidelity;
+* each sensor carries its unit's serial number as ``sensor.serial`` (what the host reads as its serial property);
 * the scene's ``[host]`` section describes the host.  The bridge firmware is the host of the SPI bus: a
   ``sequence`` becomes its sampling pattern; it samples at 4400 slots/s with a 4.4 MHz clock, so other slot
   rates or clocks are refused (they could not be honoured); ``spi`` picks the SPI implementation.  Behind the
@@ -28,14 +31,18 @@ FIRMWARE_MAX_PATTERN = 64
 
 
 def sensors_from_scene(scene, n_sensors: int, seed: int | None = None) -> dict[int, Sensor]:
-    """Sensors 1..``n_sensors`` for ``scene`` (see the module docstring); ``seed`` overrides the scene's."""
+    """Sensors 1..``n_sensors`` for ``scene`` (see the module docstring); ``seed`` overrides the scene's.
+    Refuses (:class:`SceneError`) fewer sensors than the scene describes: their stimuli would be lost."""
     from bench.running.runner import build_sensor
 
-    base = scene.seed if seed is None else int(seed)
+    if n_sensors < scene.n_sensors:
+        raise SceneError(scene.source, [f"the scene describes {scene.n_sensors} sensors ([[sensors]] or a stimulus's "
+                                        f"sensor = {scene.n_sensors}); serve at least {scene.n_sensors} "
+                                        f"(--sensors {scene.n_sensors}), not {n_sensors}"])
+    base = scene if seed is None else dataclasses.replace(scene, seed=int(seed))
     out = {}
     for k in range(1, n_sensors + 1):
-        one = dataclasses.replace(scene, sequence="default", seed=base + k - 1,
-                                  stimuli=list(scene.stimuli) if k == 1 else [])
+        one = dataclasses.replace(base.for_sensor(k), sequence="default")
         out[k] = build_sensor(one)
     return out
 

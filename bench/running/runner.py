@@ -6,6 +6,11 @@ when ``keep_samples`` is true, the default for runs up to :data:`KEEP_SAMPLES_MA
 ``Recording.channels["PAC"].codes`` works as it always did.  A run keeps going until its end, an error (kept in
 ``Recording.error``, status ``"failed"``), or ``should_stop()`` turning true at a chunk boundary (status
 ``"interrupted"``); whatever was recorded up to then is in the recording.
+
+A scene with several sensors (``[[sensors]]``, or a stimulus's ``sensor = k``) runs each sensor through its own
+SPI peripheral and host sampler (the scene's host sequence, independent noise: seed + k - 1): the recording is
+sensor 1's, as for a one-sensor scene, and ``Recording.sensors`` maps 2..N to each other sensor's own
+:class:`Recording` (its scene is ``scene.for_sensor(k)``).  ``sinks`` receive sensor 1's samples only.
 """
 
 from __future__ import annotations
@@ -54,6 +59,7 @@ class Recording:
     channel_names: list[str] = field(default_factory=list)
     slides: list[dict] = field(default_factory=list)  # one row per sliding trial: texture, movement, properties
     forces: dict = field(default_factory=dict)  # the sliding contact's force log at 100 Hz (s, N, N, m/s)
+    sensors: dict = field(default_factory=dict)  # sensors 2..N of a several-sensor scene: number -> Recording
 
     def __post_init__(self):
         if not self.status:
@@ -67,8 +73,12 @@ class Recording:
 
 
 def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
-    return Sensor(params=scene.params, stimuli=scene.stimuli, channels_read=scene.channels,
-                  fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s, faults=scene.faults)
+    """Sensor 1 of ``scene`` (``scene.for_sensor(k)`` for another), carrying its unit's serial as ``.serial``."""
+    sensor = Sensor(params=scene.params, stimuli=scene.stimuli, channels_read=scene.channels,
+                    fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s, faults=scene.faults,
+                    variant=scene.variant)
+    sensor.serial = scene.serial
+    return sensor
 
 
 def peripheral_for(scene: Scene, sensor: Sensor):
@@ -122,6 +132,21 @@ def make_chunk(parts: dict) -> Chunk:
 
 def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
               sinks=(), should_stop=None) -> Recording:
+    """Run every sensor of ``scene``: sensor 1 as :func:`run_one_sensor` (with ``sinks``), then sensors 2..N, each
+    into ``Recording.sensors[k]`` (samples kept in memory for scenes up to :data:`KEEP_SAMPLES_MAX_S`)."""
+    rec = run_one_sensor(scene, progress, chunk_s, keep_samples=keep_samples, sinks=sinks, should_stop=should_stop)
+    for k in range(2, scene.n_sensors + 1):
+        if rec.status != "ok":
+            break
+        rec.sensors[k] = run_one_sensor(scene.for_sensor(k), progress, chunk_s, should_stop=should_stop)
+        if rec.sensors[k].status != "ok" and rec.error is None:
+            rec.status = rec.sensors[k].status
+            rec.error = None if rec.sensors[k].error is None else f"sensor {k}: {rec.sensors[k].error}"
+    return rec
+
+
+def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
+                   sinks=(), should_stop=None) -> Recording:
     """Run ``scene`` to its end, an error, or ``should_stop()`` (checked at every chunk boundary).
 
     ``keep_samples``: hold every sample in ``Recording.channels`` (default: only for scenes up to

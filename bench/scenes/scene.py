@@ -32,6 +32,10 @@ MAX_SCENE_BYTES = 1_000_000  # a scene file larger than 1 MB is refused before i
 MAX_NESTING = 16  # arrays and tables nested deeper than this are refused (a scene needs 4 levels)
 MAX_INSTANTS = 10_000  # instants of all stimuli together (each one is a stimulus the sensor computes)
 TABLES = ("scene", "sensor", "host", "noise", "analysis", "faults", "skin")
+#: sensors a scene can describe: the bridge firmware and the Cheetah adapter serve at most 5
+MAX_SENSORS = 5
+#: keys of [sensor] and of each [[sensors]] table besides the parameters (``biotac-bench params``)
+SENSOR_KEYS = ("unit", "variant")
 #: D ch. 5's impact detection rule as ``bench.verification.analysis.DetectionRule`` applies it (more than
 #: ``min_points`` PAC samples beyond 4σ within ``window_s`` of a drop); kept here because verification builds on
 #: scenes, not the other way round — bench/tests/test_hostile_input.py holds the two equal.
@@ -83,6 +87,47 @@ class Scene:
     skin_after: dict = field(default_factory=dict)  # ... and after the last (Archard wear, if on)
     trial_skins: list = field(default_factory=list)  # the skin's state before each slide
     overrides: dict = field(default_factory=dict)  # values given on the command line, e.g. {"scene.seed": 5}
+    unit: str = "nominal"  # sensor 1's unit: "nominal" or its seed (emulator.units)
+    serial: str = ""  # sensor 1's serial number
+    variant: str = "biotac"  # sensor 1's variant (emulator.channels.VARIANTS)
+    #: sensors 2..N (declared in [[sensors]] or addressed by a stimulus), by number; sensor 1 is the scene itself
+    sensors: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not self.serial:
+            from emulator.units import serial_for
+
+            self.serial = serial_for(None if self.unit == "nominal" else int(self.unit))
+
+    @property
+    def n_sensors(self) -> int:
+        """How many sensors the scene describes (1 + the highest of sensors 2..N)."""
+        return max([1, *self.sensors])
+
+    def sensor_spec(self, k: int) -> "SensorSpec":
+        """Sensor ``k`` (1..N) of the scene; sensors the scene does not describe share sensor 1's unit,
+        parameters and variant and feel nothing."""
+        if k == 1:
+            return SensorSpec(1, self.unit, self.serial, self.params, self.variant, list(self.stimuli),
+                              self.skin_before, self.skin_after, list(self.trial_skins))
+        if k in self.sensors:
+            return self.sensors[k]
+        return SensorSpec(k, self.unit, self.serial, self.params, self.variant, [], {}, {}, [])
+
+    def for_sensor(self, k: int) -> "Scene":
+        """A one-sensor scene of sensor ``k``: its unit, parameters, variant, stimuli and skin; the scene's host,
+        noise, faults, fidelity; seed ``seed + k - 1`` (independent noise per sensor)."""
+        import dataclasses
+
+        if k == 1 and not self.sensors:
+            return self
+        sp = self.sensor_spec(k)
+        return dataclasses.replace(self, name=self.name if k == 1 else f"{self.name}-sensor{k}",
+                                   seed=self.seed + k - 1, params=sp.params, stimuli=list(sp.stimuli),
+                                   unit=sp.unit, serial=sp.serial, variant=sp.variant, sensors={},
+                                   skin_before=sp.skin_before, skin_after=sp.skin_after,
+                                   trial_skins=list(sp.trial_skins),
+                                   impact_detection=self.impact_detection and k == 1)
 
     @property
     def channels(self) -> list[str]:
@@ -90,6 +135,21 @@ class Scene:
 
         seq = DEFAULT_FRAME_NAMES if self.sequence == "default" else self.sequence
         return sorted(set(seq), key=lambda n: CHANNEL_INDEX[n])
+
+
+@dataclass
+class SensorSpec:
+    """One sensor of a scene: number, unit ("nominal" or its seed), serial, parameters, variant, stimuli, skin."""
+
+    index: int
+    unit: str
+    serial: str
+    params: SensorParams
+    variant: str
+    stimuli: list
+    skin_before: dict = field(default_factory=dict)
+    skin_after: dict = field(default_factory=dict)
+    trial_skins: list = field(default_factory=list)
 
 
 class _Checker:
@@ -187,12 +247,18 @@ _STIMULUS_FIELDS = {
     "slide": {"kind", "start_s", "texture", "force_N", "velocity_mm_per_s", "distance_mm", "approach_s", "hold_s",
               "accel_s", "lift_s", "start_position_mm"},
 }
+for _fields in _STIMULUS_FIELDS.values():
+    _fields.add("sensor")  # which sensor feels it (1..MAX_SENSORS; default 1)
 SKIN_FIELDS = {"fingerprints", "ridge_height_um", "wear", "wear_coefficient"}
 ELECTRODE_NAMES = tuple(f"E{n}" for n in range(1, 20))
+SP_ELECTRODE_NAMES = tuple(f"E{n}" for n in range(20, 25))  # the BioTac SP's five more
 
 
-def _stimuli(c: _Checker, items, duration, params: SensorParams):
-    first_once: dict[str, str] = {}  # power_on, heater_failure: which stimulus gave the one allowed
+def _stimuli(c: _Checker, items, duration, params: SensorParams, targets: list | None = None,
+             params_of=None, variant_of=None):
+    """The stimuli of ``items``; ``targets`` (if given) receives the sensor number of each stimulus returned.
+    ``params_of(k)``/``variant_of(k)``: sensor k's parameters and variant (default: ``params``, "biotac")."""
+    first_once: dict = {}  # (kind, sensor) of power_on, heater_failure: which stimulus gave the one allowed
     out = []
     if not isinstance(items, list):
         c.problems.append(f"stimulus = {_r(items)}: stimulus must be an array of tables ([[stimulus]]), one per "
@@ -208,102 +274,120 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams):
         if kind is None:
             continue
         c.known_keys(st, w, _STIMULUS_FIELDS[kind])
-        if kind == "tap":
-            peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
-            dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
-            for t in c.times(st, "at_s", w, duration):
-                if peak is not None and dur is not None:
-                    out.append(Tap(t, peak, dur))
-        elif kind == "press":
-            start = c.times(st, "start_s", w, duration)
-            force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
-            ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
-            hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
-            if None not in (force, ramp, hold):
-                out += [Press(t, force, ramp, hold) for t in start]
-        elif kind == "sphere_drop":
-            height = c.number(st, "height_m", w, 1e-3, 10.0, "m", default=DROP_HEIGHT_M)
-            if "sphere" in st and "mass_mg" in st:
-                c.problems.append(f"{w}: give either sphere or mass_mg, not both")
-            if "mass_mg" in st:
-                mass_mg = c.number(st, "mass_mg", w, 1e-4, 1e4, "mg")
-                mass = None if mass_mg is None else mass_mg * 1e-6
-            else:
-                name = c.choice(st, "sphere", w, tuple(SPHERES), required=True)
-                mass = None if name is None else SPHERES[name][0]
-            for t in c.times(st, "at_s", w, duration):
-                if mass is not None and height is not None:
-                    out.append(SphereDrop(t, mass, height, params.impact_restitution, params.impact_contact_s))
-        elif kind == "vibration":
-            start = c.times(st, "start_s", w, duration)
-            dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
-            amp = c.number(st, "amplitude_um", w, 0.0, 1000.0, "µm", required=True)
-            fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
-            if "frequency_Hz" in st:
-                f0 = c.number(st, "frequency_Hz", w, 1.0, 3000.0, "Hz")
-                f1 = None
-                if "f_start_Hz" in st or "f_stop_Hz" in st:
-                    c.problems.append(f"{w}: give frequency_Hz for a tone or f_start_Hz and f_stop_Hz for a sweep")
-            else:
-                f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
-                f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
-            if None not in (dur, amp, fade, f0) and (f1 is not None or "frequency_Hz" in st):
-                out += [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start]
-        elif kind == "pressure":
-            start = c.times(st, "start_s", w, duration)
-            dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
-            offset = c.number(st, "offset_kPa", w, -100.0, 200.0, "kPa", default=0.0)
-            amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
-            freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
-            fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
-            if None not in (dur, offset, amp, freq, fade):
-                out += [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) for t in start]
-        elif kind == "touch":
-            start = c.times(st, "start_s", w, duration)
-            vals = dict(
-                force_N=c.number(st, "force_N", w, 0.0, 50.0, "N", required=True),
-                ramp_s=c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5),
-                hold_s=c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0),
-                x_mm=c.number(st, "x_mm", w, -20.0, 8.0, "mm", default=-5.0),
-                angle_deg=c.number(st, "angle_deg", w, -180.0, 180.0, "°", default=0.0),
-                indenter_radius_mm=c.number(st, "indenter_radius_mm", w, 0.1, 15.0, "mm", default=3.0),
-                tangential_N=c.number(st, "tangential_N", w, -20.0, 20.0, "N", default=0.0),
-                shear_angle_deg=c.number(st, "shear_angle_deg", w, -180.0, 180.0, "°", default=0.0),
-                object_temperature_C=c.number(st, "object_temperature_C", w, -40.0, 120.0, "°C"),
-            )
-            electrode = c.choice(st, "electrode", w, ELECTRODE_NAMES)
-            mat = c.choice(st, "material", w, tuple(MATERIALS))
-            where = [k for k in ("x_mm", "angle_deg") if k in st]
-            if "electrode" in st and where:
-                c.problems.append(f"{w}: give the place either as electrode ({_r(st['electrode'])}) or as x_mm + "
-                                  f"angle_deg ({', '.join(f'{k} = {_r(st[k])}' for k in where)}), not both")
-            if "object_temperature_C" in st and "material" not in st:
-                c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
-                                  f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
-            if None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
-                out += [Touch(t, electrode=electrode, material=mat, **vals) for t in start]
-        elif kind in ("power_on", "heater_failure"):
-            at = c.times(st, "at_s", w, duration)
-            what = ("the sensor is powered on once (heaters start from ambient)" if kind == "power_on" else
-                    "the heaters fail once (they stay off)")
-            if len(at) > 1:
-                c.problems.append(f"{w}.at_s = {_r(st['at_s'])}: {kind} happens at most once per scene: {what}")
-            elif at:
-                if first_once.get(kind):
-                    c.problems.append(f"{w}: a second {kind} (the first is {first_once[kind]}): {what}")
-                else:
-                    first_once[kind] = w
-                    out.append((PowerOn if kind == "power_on" else HeaterFailure)(at[0]))
-        elif kind == "ambient_step":
-            at = c.times(st, "at_s", w, duration)
-            temp = c.number(st, "temperature_C", w, -20.0, 60.0, "°C", required=True)
-            if temp is not None:
-                out += [AmbientStep(t, temp) for t in at]
-        elif kind == "slide":
-            out += _slides(c, st, w, duration)
-        elif kind == "replace_skin":
-            out += [SkinReplacement(t) for t in c.times(st, "at_s", w, duration)]
+        k = c.number(st, "sensor", w, 1, MAX_SENSORS, "(a sensor number)", default=1, integer=True) or 1
+        before = len(out)
+        _one_stimulus(c, st, w, kind, k, duration, params_of(k) if params_of else params,
+                      variant_of(k) if variant_of else "biotac", first_once, out)
+        if targets is not None:
+            targets.extend([k] * (len(out) - before))
     return out
+
+
+def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, params: SensorParams,
+                  variant: str, first_once: dict, out: list) -> None:
+    """Append the stimuli of one [[stimulus]] table (for sensor ``k``) to ``out``."""
+    if kind == "tap":
+        peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
+        dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
+        for t in c.times(st, "at_s", w, duration):
+            if peak is not None and dur is not None:
+                out.append(Tap(t, peak, dur))
+    elif kind == "press":
+        start = c.times(st, "start_s", w, duration)
+        force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
+        ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
+        hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
+        if None not in (force, ramp, hold):
+            out += [Press(t, force, ramp, hold) for t in start]
+    elif kind == "sphere_drop":
+        height = c.number(st, "height_m", w, 1e-3, 10.0, "m", default=DROP_HEIGHT_M)
+        if "sphere" in st and "mass_mg" in st:
+            c.problems.append(f"{w}: give either sphere or mass_mg, not both")
+        if "mass_mg" in st:
+            mass_mg = c.number(st, "mass_mg", w, 1e-4, 1e4, "mg")
+            mass = None if mass_mg is None else mass_mg * 1e-6
+        else:
+            name = c.choice(st, "sphere", w, tuple(SPHERES), required=True)
+            mass = None if name is None else SPHERES[name][0]
+        for t in c.times(st, "at_s", w, duration):
+            if mass is not None and height is not None:
+                out.append(SphereDrop(t, mass, height, params.impact_restitution, params.impact_contact_s))
+    elif kind == "vibration":
+        start = c.times(st, "start_s", w, duration)
+        dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
+        amp = c.number(st, "amplitude_um", w, 0.0, 1000.0, "µm", required=True)
+        fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+        if "frequency_Hz" in st:
+            f0 = c.number(st, "frequency_Hz", w, 1.0, 3000.0, "Hz")
+            f1 = None
+            if "f_start_Hz" in st or "f_stop_Hz" in st:
+                c.problems.append(f"{w}: give frequency_Hz for a tone or f_start_Hz and f_stop_Hz for a sweep")
+        else:
+            f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
+            f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
+        if None not in (dur, amp, fade, f0) and (f1 is not None or "frequency_Hz" in st):
+            out += [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start]
+    elif kind == "pressure":
+        start = c.times(st, "start_s", w, duration)
+        dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
+        offset = c.number(st, "offset_kPa", w, -100.0, 200.0, "kPa", default=0.0)
+        amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
+        freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
+        fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+        if None not in (dur, offset, amp, freq, fade):
+            out += [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) for t in start]
+    elif kind == "touch":
+        start = c.times(st, "start_s", w, duration)
+        vals = dict(
+            force_N=c.number(st, "force_N", w, 0.0, 50.0, "N", required=True),
+            ramp_s=c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5),
+            hold_s=c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0),
+            x_mm=c.number(st, "x_mm", w, -20.0, 8.0, "mm", default=-5.0),
+            angle_deg=c.number(st, "angle_deg", w, -180.0, 180.0, "°", default=0.0),
+            indenter_radius_mm=c.number(st, "indenter_radius_mm", w, 0.1, 15.0, "mm", default=3.0),
+            tangential_N=c.number(st, "tangential_N", w, -20.0, 20.0, "N", default=0.0),
+            shear_angle_deg=c.number(st, "shear_angle_deg", w, -180.0, 180.0, "°", default=0.0),
+            object_temperature_C=c.number(st, "object_temperature_C", w, -40.0, 120.0, "°C"),
+        )
+        names = ELECTRODE_NAMES + (SP_ELECTRODE_NAMES if variant == "biotac-sp" else ())
+        if st.get("electrode") in SP_ELECTRODE_NAMES and variant != "biotac-sp":
+            c.problems.append(f"{w}.electrode = {_r(st['electrode'])}: sensor {k} is a {variant!r}, which has "
+                              f"E1..E19; E20..E24 are on a \"biotac-sp\" ([sensor] or [[sensors]] variant)")
+        electrode = c.choice(st, "electrode", w, names) if st.get("electrode") not in SP_ELECTRODE_NAMES \
+            or variant == "biotac-sp" else None
+        mat = c.choice(st, "material", w, tuple(MATERIALS))
+        where = [k for k in ("x_mm", "angle_deg") if k in st]
+        if "electrode" in st and where:
+            c.problems.append(f"{w}: give the place either as electrode ({_r(st['electrode'])}) or as x_mm + "
+                              f"angle_deg ({', '.join(f'{k} = {_r(st[k])}' for k in where)}), not both")
+        if "object_temperature_C" in st and "material" not in st:
+            c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
+                              f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
+        if None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
+            out += [Touch(t, electrode=electrode, material=mat, **vals) for t in start]
+    elif kind in ("power_on", "heater_failure"):
+        at = c.times(st, "at_s", w, duration)
+        what = ("the sensor is powered on once (heaters start from ambient)" if kind == "power_on" else
+                "the heaters fail once (they stay off)")
+        if len(at) > 1:
+            c.problems.append(f"{w}.at_s = {_r(st['at_s'])}: {kind} happens at most once per "
+                              f"{'scene' if k == 1 else 'sensor'}: {what}")
+        elif at:
+            if first_once.get((kind, k)):
+                c.problems.append(f"{w}: a second {kind} (the first is {first_once[kind, k]})"
+                                  f"{f' on sensor {k}' if k != 1 else ''}: {what}")
+            else:
+                first_once[kind, k] = w
+                out.append((PowerOn if kind == "power_on" else HeaterFailure)(at[0]))
+    elif kind == "ambient_step":
+        at = c.times(st, "at_s", w, duration)
+        temp = c.number(st, "temperature_C", w, -20.0, 60.0, "°C", required=True)
+        if temp is not None:
+            out += [AmbientStep(t, temp) for t in at]
+    elif kind == "slide":
+        out += _slides(c, st, w, duration)
+    elif kind == "replace_skin":
+        out += [SkinReplacement(t) for t in c.times(st, "at_s", w, duration)]
 
 
 def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
@@ -560,13 +644,91 @@ def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: f
                               f"{duration:g}); drop it earlier or lengthen the scene")
 
 
+def _unit_value(c: _Checker, table: dict, where: str):
+    """``table["unit"]``: a unit seed (whole number), "nominal", or a serial number ("BT..."); None if invalid."""
+    from emulator.units import MAX_UNIT_SEED, NOMINAL, SERIAL_PREFIX, check_serial
+
+    v = table.get("unit", NOMINAL)
+    if isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= MAX_UNIT_SEED:
+        return v
+    if isinstance(v, str) and v == NOMINAL:
+        return v
+    if isinstance(v, str) and v.startswith(SERIAL_PREFIX):
+        try:
+            check_serial(v)
+            return v
+        except ValueError as e:
+            c.problems.append(f"{where}.unit = {_r(v)}: {_cut(str(e))}")
+            return None
+    c.problems.append(f"{where}.unit = {_r(v)}: a unit seed 0 to {MAX_UNIT_SEED} (e.g. unit = 17), \"{NOMINAL}\", "
+                      f"or a serial number starting with \"{SERIAL_PREFIX}\" (biotac-bench units)")
+    return None
+
+
+def _sensor_table(c: _Checker, table: dict, where: str, extra=()):
+    """(unit name, variant, parameters, serial) of a [sensor] or [[sensors]] table: the unit's parameters with
+    the table's parameter overrides on top."""
+    from emulator.channels import VARIANTS
+    from emulator.units import unit as make_unit
+
+    c.known_keys(table, where, set(PARAMETER_FIELDS) | set(SENSOR_KEYS) | set(extra))
+    which = _unit_value(c, table, where)
+    variant = c.choice(table, "variant", where, VARIANTS, default="biotac") or "biotac"
+    changes = {}
+    for k, v in table.items():
+        if k in PARAMETER_FIELDS:
+            if isinstance(v, int) and not _real(v):
+                unit_, (lo, hi) = PARAMETER_FIELDS[k].metadata["unit"], PARAMETER_FIELDS[k].metadata["range"]
+                c.problems.append(f"{where}.{k} = {_r(v)}: allowed range is {lo} to {hi} {unit_}")
+                continue
+            try:
+                check_parameter(k, v, where=f"{where}.{k}")
+                changes[k] = v
+            except (ValueError, TypeError, OverflowError) as e:
+                c.problems.append(_cut(str(e)))
+    u = make_unit(which if which is not None else None)
+    params = u.params.replace(**changes)
+    return u.name, variant, params, u.serial
+
+
+def _sensors_tables(c: _Checker, items) -> dict:
+    """Sensors 2..N from ``[[sensors]]``: number -> (unit name, variant, parameters, serial)."""
+    out: dict = {}
+    if isinstance(items, dict):
+        c.problems.append(f"sensors = {_r(items)}: must be an array of tables ([[sensors]]), one per sensor 2.."
+                          f"{MAX_SENSORS}, each with its index (sensor 1 is [sensor])")
+        return out
+    if not isinstance(items, list) or not all(isinstance(t, dict) for t in items):
+        c.problems.append(f"sensors = {_r(items)}: must be an array of tables ([[sensors]] with index = 2.."
+                          f"{MAX_SENSORS}, unit, variant, parameters)")
+        return out
+    seen: dict[int, str] = {}
+    for i, t in enumerate(items):
+        w = f"sensors[{i}]"
+        if "index" in t and t["index"] == 1 and not isinstance(t["index"], bool):
+            c.problems.append(f"{w}.index = 1: sensor 1 is described by the [sensor] table; [[sensors]] describes "
+                              f"sensors 2..{MAX_SENSORS}")
+            continue
+        k = c.number(t, "index", w, 2, MAX_SENSORS, "(a sensor number)", required=True, integer=True)
+        spec = _sensor_table(c, t, w, extra=("index",))
+        if k is None:
+            continue
+        if k in seen:
+            c.problems.append(f"{w}.index = {k}: sensor {k} is already described by {seen[k]}")
+            continue
+        seen[k] = w
+        out[k] = spec
+    return out
+
+
 def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     """Validate a scene given as a dict (the parsed TOML); raise :class:`SceneError` listing every problem."""
     c = _Checker()
     if not isinstance(data, dict):
         raise SceneError(source, [f"the scene is {_r(data)}: it must be a table of tables ([scene], [host], "
                                   f"[[stimulus]], ...)"])
-    c.known_keys(data, "scene file", {"scene", "sensor", "host", "noise", "stimulus", "analysis", "faults", "skin"})
+    c.known_keys(data, "scene file", {"scene", "sensor", "sensors", "host", "noise", "stimulus", "analysis", "faults",
+                                      "skin"})
     meta = c.table(data, "scene", "it needs at least name and duration_s")
     if "scene" not in data:
         c.problems.append("[scene] table is missing (needs at least name and duration_s)")
@@ -589,21 +751,10 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         c.problems.append(f"scene.description = {_r(description)}: must be a string")
         description = ""
 
-    sensor = c.table(data, "sensor", "sensor parameters by name (biotac-bench params)")
-    c.known_keys(sensor, "sensor", PARAMETER_FIELDS)
-    changes = {}
-    for k, v in sensor.items():
-        if k in PARAMETER_FIELDS:
-            if isinstance(v, int) and not _real(v):
-                unit, (lo, hi) = PARAMETER_FIELDS[k].metadata["unit"], PARAMETER_FIELDS[k].metadata["range"]
-                c.problems.append(f"sensor.{k} = {_r(v)}: allowed range is {lo} to {hi} {unit}")
-                continue
-            try:
-                check_parameter(k, v, where=f"sensor.{k}")
-                changes[k] = v
-            except (ValueError, TypeError, OverflowError) as e:
-                c.problems.append(_cut(str(e)))
-    params = SensorParams().replace(**changes)
+    sensor = c.table(data, "sensor", "sensor 1: unit, variant and parameters by name (biotac-bench params, "
+                                     "biotac-bench units)")
+    unit, variant, params, serial = _sensor_table(c, sensor, "sensor")
+    others = _sensors_tables(c, data.get("sensors", []))
 
     host = c.table(data, "host", "sequence, slot_rate_Hz, spi_clock_Hz, spi")
     c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz", "spi"})
@@ -629,43 +780,58 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     c.known_keys(noise_t, "noise", names)
     noise = NoiseSources(**{k: c.boolean(noise_t, k, "noise", True) for k in names})
 
-    stimuli = _stimuli(c, data.get("stimulus", []), duration, params)
+    targets: list[int] = []
+    stimuli = _stimuli(c, data.get("stimulus", []), duration, params, targets,
+                       params_of=lambda k: others[k][2] if k in others else params,
+                       variant_of=lambda k: others[k][1] if k in others else variant)
     if len(stimuli) > MAX_INSTANTS:
         c.problems.append(f"stimulus: {len(stimuli)} stimuli (every instant of every [[stimulus]] counts): at most "
                           f"{MAX_INSTANTS} per scene")
     skin, wear = _skin(c, data.get("skin", {}))
-    slide_specs = [s for s in stimuli if isinstance(s, (SlideSpec, SkinReplacement))]
-    stimuli = [s for s in stimuli if not isinstance(s, (SlideSpec, SkinReplacement))]
-    ordered = sorted((s for s in slide_specs if isinstance(s, SlideSpec)), key=lambda x: x.start_s)
-    for a, b in zip(ordered, ordered[1:]):
-        if b.start_s < a.end_s:
-            c.problems.append(f"{b.where}: the slide starting at {b.start_s} s overlaps the one of {a.where} "
-                              f"(from {a.start_s} s to {a.end_s:.3f} s); one finger slides on one texture at a time")
-    for r in (s for s in slide_specs if isinstance(s, SkinReplacement)):
-        for a in ordered:
-            if a.start_s < r.at_s < a.end_s:
-                c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
-                                  f"({a.start_s} s to {a.end_s:.3f} s)")
+    # every sensor's stimuli (1: the scene's own); sensors addressed but not declared share sensor 1's unit
+    per_sensor: dict[int, list] = {1: []}
+    for s, k in zip(stimuli, targets):
+        per_sensor.setdefault(k, []).append(s)
+    slide_specs_of = {k: [s for s in lst if isinstance(s, (SlideSpec, SkinReplacement))]
+                      for k, lst in per_sensor.items()}
+    per_sensor = {k: [s for s in lst if not isinstance(s, (SlideSpec, SkinReplacement))]
+                  for k, lst in per_sensor.items()}
+    slide_specs = slide_specs_of[1]
+    stimuli = per_sensor[1]
+    for k, specs in slide_specs_of.items():
+        ordered = sorted((s for s in specs if isinstance(s, SlideSpec)), key=lambda x: x.start_s)
+        for a, b in zip(ordered, ordered[1:]):
+            if b.start_s < a.end_s:
+                c.problems.append(f"{b.where}: the slide starting at {b.start_s} s overlaps the one of {a.where} "
+                                  f"(from {a.start_s} s to {a.end_s:.3f} s); one finger slides on one texture at a "
+                                  f"time" + (f" (both on sensor {k})" if k != 1 else ""))
+        for r in (s for s in specs if isinstance(s, SkinReplacement)):
+            for a in ordered:
+                if a.start_s < r.at_s < a.end_s:
+                    c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
+                                      f"({a.start_s} s to {a.end_s:.3f} s)")
     faults = _faults(c, c.table(data, "faults", "electrode_open, electrode_short, mux_stuck, thermistor, "
                                                "heater_failed"))
     analysis = c.table(data, "analysis", "impact_detection = true | false")
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
     if faults.get("heater_failed"):
-        for s in stimuli:
+        for s in (x for lst in per_sensor.values() for x in lst):
             if isinstance(s, HeaterFailure):
                 c.problems.append(f"heater_failure at {s.at_s} s: faults.heater_failed = true says the heaters never "
                                   f"ran, so they cannot fail during the run; give one or the other")
-    steps: dict[float, float] = {}
-    for s in stimuli:
-        if isinstance(s, AmbientStep):
-            if steps.get(s.at_s, s.temperature_C) != s.temperature_C:
-                c.problems.append(f"ambient_step at {s.at_s} s: two room temperatures at one instant "
-                                  f"({steps[s.at_s]} and {s.temperature_C} °C)")
-            steps[s.at_s] = s.temperature_C
+    for k, lst in per_sensor.items():
+        steps: dict[float, float] = {}
+        for s in lst:
+            if isinstance(s, AmbientStep):
+                if steps.get(s.at_s, s.temperature_C) != s.temperature_C:
+                    c.problems.append(f"ambient_step at {s.at_s} s: two room temperatures at one instant "
+                                      f"({steps[s.at_s]} and {s.temperature_C} °C)"
+                                      + (f" for sensor {k}" if k != 1 else ""))
+                steps[s.at_s] = s.temperature_C
     if host_ok and duration is not None:
         _check_host(c, sequence, float(slot_rate), float(clock), float(duration))
-        _check_slides(c, slide_specs, sequence, float(slot_rate))
+        _check_slides(c, [x for specs in slide_specs_of.values() for x in specs], sequence, float(slot_rate))
         if impact_detection:
             _check_impact_detection(c, sequence, float(slot_rate), float(duration), stimuli)
 
@@ -673,7 +839,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         from emulator.fidelity import profile
 
         grid = profile(fidelity).grid_Hz
-        for i, s in enumerate(stimuli):
+        for i, s in enumerate(x for lst in per_sensor.values() for x in lst):
             if isinstance(s, Vibration) and max(s.f_start_Hz, s.f_stop_Hz or 0) >= 0.45 * grid:
                 c.problems.append(f"vibration at {max(s.f_start_Hz, s.f_stop_Hz or 0):.0f} Hz needs a finer grid than "
                                   f"fidelity '{fidelity}' ({grid:.0f} Hz); use \"reference\"")
@@ -682,15 +848,27 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                                   f"({grid:.0f} Hz); use \"default\" or \"reference\"")
     if c.problems:
         raise SceneError(source, c.problems)
+    fresh_skin = copy.deepcopy(skin)
     skin_before = skin.state()
     slides, trial_skins, skin = build_slides(slide_specs, skin, int(seed), wear, params.contact_radius_at_1N_m)
     stimuli += slides
+    sensors = {}
+    for k in sorted(set(others) | set(per_sensor)):
+        if k == 1:
+            continue
+        u, var, p_k, ser = others.get(k, (unit, variant, params, serial))
+        own = copy.deepcopy(fresh_skin)  # each finger its own skin, as the [skin] table describes it
+        before = own.state()
+        slides_k, skins_k, own = build_slides(slide_specs_of.get(k, []), own, int(seed) + k - 1, wear,
+                                              p_k.contact_radius_at_1N_m)
+        sensors[k] = SensorSpec(k, u, ser, p_k, var, per_sensor.get(k, []) + slides_k, before, own.state(), skins_k)
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=description, params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
                  faults=faults,
                  impact_detection=impact_detection, source=source, text=text,
-                 skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins)
+                 skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins,
+                 unit=unit, serial=serial, variant=variant, sensors=sensors)
 
 
 def read_scene_text(path: str | Path) -> str:
