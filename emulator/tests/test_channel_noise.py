@@ -1,0 +1,136 @@
+"""Per-channel noise (issue 10.2): ADC input noise common to every channel, reference noise proportional to the
+code, the PAC path's own extra noise, mains hum with harmonics carried exactly across blocks."""
+
+import numpy as np
+import pytest
+
+from emulator import channels as ch
+from emulator.adc import Adc
+from emulator.conversions import ADC_LSB_V as LSB
+from emulator.effects import Block
+from emulator.extrinsic import MainsHum, hum_components
+from emulator.noise_budget import budget, channel_totals
+from emulator.params import SensorParams
+from emulator.sensor import NoiseSources, Sensor
+
+QUIET = ["PDC", "TDC", "TAC"] + [f"E{n}" for n in range(1, 20)]
+
+
+def test_adc_input_noise_is_its_parameter_on_every_channel():
+    """A constant input on a quiet channel reads with √(σ_adc² + (ppm·code)² + 1/12) LSB RMS."""
+    p = SensorParams()
+    adc = Adc(p, seed=5, noise=True, spi_coupling=False)
+    n = 200000
+    codes = adc.convert(np.full(n, 1000.3 * LSB), channels=np.full(n, ch.PDC)).astype(float)
+    ref = p.adc_reference_noise_ppm * 1e-6 * 1000.3
+    assert codes.std() == pytest.approx(np.sqrt(p.adc_noise_rms_bits**2 + ref**2 + 1 / 12), rel=0.02)
+    assert codes.mean() == pytest.approx(1000.3, abs=0.01)
+
+
+def test_reference_noise_grows_with_the_code():
+    """Reference noise only (input noise 0): σ = ppm · code, so a code near full scale is noisier than one low."""
+    p = SensorParams().replace(adc_noise_rms_bits=0.0, pac_path_noise_rms_bits=0.0, adc_reference_noise_ppm=1000.0)
+    adc = Adc(p, seed=1, noise=True, spi_coupling=False)
+    n = 100000
+    lo = adc.convert(np.full(n, 500.0 * LSB)).astype(float)
+    hi = adc.convert(np.full(n, 4000.0 * LSB)).astype(float)
+    assert np.sqrt(hi.var() - 1 / 12) == pytest.approx(4.0, rel=0.05)  # 1000 ppm × 4000
+    assert lo.std() < 0.7 and hi.std() > 3.5
+
+
+def test_pac_path_noise_lands_on_pac_conversions_only_and_leaves_the_others_unchanged():
+    p = SensorParams()
+    n = 100000
+    chans = np.where(np.arange(n) % 2 == 0, ch.PAC, ch.PDC)
+    v = np.full(n, 2000.4 * LSB)
+    a = Adc(p, seed=3, spi_coupling=False).convert(v, channels=chans).astype(float)
+    b = Adc(p.replace(pac_path_noise_rms_bits=0.0), seed=3, spi_coupling=False).convert(v, channels=chans)
+    assert np.array_equal(a[1::2], b[1::2].astype(float))  # PDC conversions identical with or without it
+    expected = np.sqrt(p.adc_noise_rms_bits**2 + p.pac_path_noise_rms_bits**2 + 1 / 12)
+    assert a[0::2].std() == pytest.approx(expected, rel=0.02)
+
+
+def test_adc_rejects_mismatched_channels():
+    with pytest.raises(ValueError, match="channels"):
+        Adc(SensorParams(), seed=0).convert(np.zeros(4), channels=np.zeros(3, int))
+
+
+def test_quiet_channels_read_half_an_lsb_and_pac_1_4_bits_at_rest():
+    """Through the sensor's own sampling at the default frame's instants."""
+    names = list(ch.DEFAULT_FRAME_NAMES)
+    s = Sensor(channels_read=set(names), seed=11)
+    idx = np.array([ch.channel_index(x) for x in names])
+    frames = 2000
+    t = (np.arange(frames * idx.size) / ch.DEFAULT_SLOT_RATE_HZ) + 0.1
+    codes = s.sample(np.tile(idx, frames), t).astype(float)
+    chans = np.tile(idx, frames)
+    for name in QUIET:
+        sd = codes[chans == ch.channel_index(name)].std()
+        assert 0.3 <= sd <= 0.7, (name, sd)
+    assert codes[chans == ch.PAC].std() == pytest.approx(1.4, abs=0.1)
+
+
+def test_budget_covers_every_channel_and_agrees_with_the_measurement():
+    totals = channel_totals(budget())
+    assert set(totals) == {"PAC", *QUIET}
+    assert totals["PAC"] == pytest.approx(1.4, abs=0.05)
+    for name in QUIET:
+        if name != "TAC":  # TAC carries the thermistor noise only while the thermal network runs
+            assert 0.45 <= totals[name] <= 0.6, name
+
+
+def _hum(params, seed, block_n, total_n, fs=8800.0):
+    h = MainsHum(params, seed)
+    out = [h.process(Block(n0, min(block_n, total_n - n0), fs), {})["stage1_input_V"]
+           for n0 in range(0, total_n, block_n)]
+    return np.concatenate(out)
+
+
+@pytest.mark.parametrize("mains", [50.0, 60.0])
+def test_hum_has_its_fundamental_and_2nd_and_3rd_harmonics_at_their_amplitudes(mains):
+    p = SensorParams().replace(mains_frequency_Hz=mains)
+    fs, n = 8800.0, 8800
+    x = _hum(p, 4, 1000, n, fs)
+    spec = np.abs(np.fft.rfft(x)) * 2 / n
+    f = np.fft.rfftfreq(n, 1 / fs)
+    for k, fk, a in hum_components(p):
+        assert spec[np.argmin(np.abs(f - fk))] == pytest.approx(a, rel=1e-6), k
+    others = np.ones_like(spec, bool)
+    for _, fk, _ in hum_components(p):
+        others[np.argmin(np.abs(f - fk))] = False
+    assert spec[others].max() < 1e-6 * p.mains_amplitude_V
+
+
+def test_hum_phase_is_carried_exactly_across_blocks_and_far_into_a_run():
+    p = SensorParams()
+    a = _hum(p, 9, 8800, 3 * 8800)
+    b = _hum(p, 9, 1237, 3 * 8800)
+    assert np.max(np.abs(a - b)) < 1e-18
+    # ten hours in, a block still continues the same three sinusoids
+    fs, n0 = 8800.0, int(10 * 3600 * 8800)
+    h = MainsHum(p, 9)
+    late = h.process(Block(n0, 64, fs), {})["stage1_input_V"]
+    t = (n0 + np.arange(64)) / fs
+    phases = np.random.default_rng(np.random.SeedSequence([9, int.from_bytes(
+        __import__("hashlib").sha256(b"mains_hum").digest()[:8], "little")])).uniform(0, 2 * np.pi, 3)
+    exact = sum(a * np.sin(2 * np.pi * ((fk * (n0 + np.arange(64))) % fs) / fs + ph)
+                for (_, fk, a), ph in zip(hum_components(p), phases))
+    assert np.max(np.abs(late - exact)) < 1e-6 * p.mains_amplitude_V
+    assert t[0] > 3.5e4
+
+
+def test_hum_off_removes_fundamental_and_harmonics_only():
+    """Random streams are keyed by effect name: leaving the hum out changes PAC only by the three hum lines."""
+    t = np.arange(4400) / 4400.0
+    with_hum = Sensor(channels_read=["PAC"], seed=5, noise=NoiseSources(adc=False)).analog(np.zeros(4400, int), t)
+    without = Sensor(channels_read=["PAC"], seed=5, noise=NoiseSources(adc=False, mains_hum=False)).analog(
+        np.zeros(4400, int), t)
+    diff = (with_hum - without) / LSB
+    spec = np.fft.rfft(diff)
+    f = np.fft.rfftfreq(diff.size, 1 / 4400)
+    keep = np.zeros_like(spec)
+    for _, fk, _ in hum_components(SensorParams()):
+        k = np.argmin(np.abs(f - fk))
+        keep[k] = spec[k]
+    residue = diff - np.fft.irfft(keep, diff.size)
+    assert np.std(residue) < 0.05 * np.std(diff)  # the old fundamental-only check would leave 15 % (3rd harmonic)
