@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from bench.cli import campaigns, cheetah, experiments, hosts, rtl, scenes, textures, verification
+from bench.cli import campaigns, cheetah, experiments, hosts, rtl, scenes, textures, units, verification
 
 MAIN_HELP = """\
 An emulated BioTac fingertip — pressure (PDC, PAC), temperature (TDC, TAC) and 19 impedance electrodes at
@@ -26,7 +26,7 @@ Every subcommand has its own --help.
 """
 
 #: The command groups, in the order ``--help`` lists them.
-COMMAND_GROUPS = (scenes, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
+COMMAND_GROUPS = (scenes, units, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -26,20 +26,23 @@ def _cmd_claims(a) -> int:
     from bench.verification.claims import (CLAIM_GROUPS, Bench, format_spread_table, format_table, run_claims,
                                            run_claims_over_seeds)
 
+    from emulator.units import unit
+
     groups = a.only or list(CLAIM_GROUPS)
+    params = unit(a.unit).params
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
         if a.seeds < 1:
             print(f"error: --seeds {a.seeds}: give at least 1", file=sys.stderr)
             return 2
-        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick),
+        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, params=params),
                                      range(a.seed, a.seed + a.seeds), groups, progress)
         if a.json:
             print(json.dumps([r.as_dict() for r in rows], indent=2, default=float))
         else:
             print(format_spread_table(rows))
         return 0 if not any(r.failed_seeds for r in rows) else 1
-    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick)
+    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, params=params)
     claims = run_claims(bench, groups, progress=progress)
     if a.json:
         print(json.dumps([c.as_dict() for c in claims], indent=2, default=float))
@@ -51,6 +54,18 @@ def _cmd_claims(a) -> int:
         out = sensitivity_plot(claims, Path(a.plots))
         print(f"wrote {out}", file=sys.stderr)
     return 0 if all(c.ok for c in claims) else 1
+
+
+def _unit(text: str):
+    """argparse type: a unit seed, "nominal" or a serial number (emulator.units.unit)."""
+    from emulator.units import unit
+
+    which = int(text) if text.isdigit() else text
+    try:
+        unit(which)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return which
 
 
 def _cmd_benchmark(a) -> int:
@@ -77,6 +92,9 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.add_argument("--seeds", type=int, metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")
+    c.add_argument("--unit", type=_unit, default=None,
+                   help="run the claims on this sensor unit: a unit seed, \"nominal\" (default) or a serial "
+                        "number \"BT...\" (biotac-bench units)")
     c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
     c.add_argument("--plots", metavar="DIR", help="write the frequency-sensitivity plot into DIR")
     c.set_defaults(func=_cmd_claims)

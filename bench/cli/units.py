@@ -1,0 +1,93 @@
+"""Sensor-unit commands: ``biotac-bench units`` prints a unit's parameters (drawn by emulator/units.py)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from bench.cli.args import one_line_errors, whole
+
+UNITS_HELP = """\
+A sensor unit is one real device: its parameters drawn deterministically from documented manufacturing spreads
+(inflation, bridge offset and span, amplifier offsets, electrode gaps, thermistor tolerance, resonance; the basis
+of each spread is in emulator/units.py) by a unit seed, or from its serial number.  The nominal unit is the
+model's nominal sensor exactly.
+
+  biotac-bench units --seed 17              # unit 17's parameters and the figures they imply
+  biotac-bench units --seed 17 --compare    # beside the nominal unit, with the difference
+  biotac-bench units --serial BTU0000000000017 --json
+  biotac-bench claims --unit 17             # the published-figure claims for unit 17
+
+In a scene: [sensor] unit = 17 (or "nominal", or a serial "BT..."); other fingers in [[sensors]] tables with
+index = 2..5, unit, variant.
+"""
+
+
+def _serial(text: str) -> str:
+    from emulator.units import check_serial
+
+    try:
+        check_serial(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return text
+
+
+def _rows(u) -> dict:
+    from emulator.units import DRAWN_FIELDS, derived
+
+    out = {name: getattr(u.params, name) for name in DRAWN_FIELDS}
+    out.update(derived(u.params))
+    return out
+
+
+def _units_cmd(a) -> int:
+    from emulator.params import PARAMETER_FIELDS
+    from emulator.units import unit
+
+    u = unit(a.serial if a.serial is not None else a.seed)
+    nominal = unit(None)
+    rows, ref = _rows(u), _rows(nominal)
+    if a.json:
+        doc = {"serial": u.serial, "unit": u.name, "parameters": rows}
+        if a.compare:
+            doc["nominal"] = ref
+        print(json.dumps(doc, indent=2, default=float))
+        return 0
+    print(f"unit {u.name}  serial {u.serial}")
+    head = f"{'parameter':34s} {'value':>14s}"
+    if a.compare:
+        head += f" {'nominal':>14s} {'difference':>12s}"
+    print(head + "  unit")
+    for name, v in rows.items():
+        what = PARAMETER_FIELDS[name].metadata["unit"] if name in PARAMETER_FIELDS else _DERIVED_UNITS[name]
+        line = f"{name:34s} {_fmt(v)}"
+        if a.compare:
+            d = v - ref[name]
+            rel = f"{100 * d / ref[name]:+.2f} %" if ref[name] and name != "electrode_gap_seed" else f"{d:+.4g}"
+            line += f" {_fmt(ref[name])} {rel:>12s}"
+        print(f"{line}  {what}")
+    return 0
+
+
+def _fmt(v) -> str:
+    return f"{v:14d}" if isinstance(v, int) else f"{v:14.6g}"
+
+
+_DERIVED_UNITS = {"resting_pressure_Pa": "Pa", "resting_PDC_V": "V", "resting_PDC_code": "code",
+                  "resonance_at_inflation_Hz": "Hz", "PDC_Pa_per_bit": "Pa/bit"}
+
+
+def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    from emulator.units import MAX_UNIT_SEED
+
+    u = one_line_errors(sub.add_parser("units", help="a sensor unit's parameters (manufacturing spreads)",
+                                       description=UNITS_HELP, formatter_class=fmt))
+    which = u.add_mutually_exclusive_group()
+    which.add_argument("--seed", type=whole(0, MAX_UNIT_SEED), help=f"unit seed (0 to {MAX_UNIT_SEED}); default: "
+                                                                    "the nominal unit")
+    which.add_argument("--serial", type=_serial, help="serial number (\"BT...\"): BTU + 13 digits is that seed; "
+                                                      "any other serial seeds the draw from its text")
+    u.add_argument("--compare", action="store_true", help="show the nominal unit and the difference beside it")
+    u.add_argument("--json", action="store_true", help="print JSON")
+    u.set_defaults(func=_units_cmd)
