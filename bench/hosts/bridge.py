@@ -37,7 +37,8 @@ class FirmwareBench:
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, realtime: bool = False,
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
                  step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software",
-                 rx_buffer: int = RX_BUFFER_BYTES, keep_arrivals: bool = False, pattern=None):
+                 rx_buffer: int = RX_BUFFER_BYTES, keep_arrivals: bool = False, pattern=None,
+                 variant: str = "biotac"):
         if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
         if not (isinstance(baudrate, int) and baudrate > 0):
@@ -49,7 +50,7 @@ class FirmwareBench:
         self.port = self.link.path
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
-        self.board = VirtualBoard(sensors or default_sensors(n_sensors, stimuli, seed), uart_out=self._line,
+        self.board = VirtualBoard(sensors or default_sensors(n_sensors, stimuli, seed, variant), uart_out=self._line,
                                   pull_up=pull_up, spi=spi)
         self.sim = CoSim(self.board)
         if pattern is not None:

@@ -19,7 +19,7 @@ import numpy as np
 from bench.errors import FirmwareError
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
-from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator import channels as ch
 from emulator.sensor import Sensor
 from emulator.spi.model import Bus, SensorPort, Transfer
 
@@ -181,15 +181,14 @@ class CoSim:
 
     def set_pattern(self, channels) -> None:
         """Set the firmware's sampling pattern directly (as its PATTERN command would, without a reply on the
-        UART): 1–64 channel indices (or names), each PAC, PDC, TAC, TDC or E1..E19."""
-        from emulator.channels import channel_index
-
-        idx = [c if isinstance(c, int) else channel_index(c) for c in channels]
+        UART): 1–64 channel indices (or names), each PAC, PDC, TAC, TDC or E1..E24 (E20..E24 exist on a BioTac
+        SP only; a 19-electrode sensor answers them with error words)."""
+        idx = [c if isinstance(c, int) else ch.channel_index(c) for c in channels]
         data = bytes(i & 0xFF for i in idx)
         result = self.lib.bt_set_pattern(self.state, data, C.c_size_t(len(data))) & 0xFF
         if result or any(not 0 <= i <= 255 for i in idx):
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
-                             + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E19"))
+                             + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E24"))
 
     def _raise(self):
         if self.board.error is not None:
@@ -218,7 +217,9 @@ class CoSim:
                     time.sleep(ahead)
 
 
-def default_sensors(n: int = 1, stimuli=(), seed: int = 1, **kw) -> dict[int, Sensor]:
-    """n emulated sensors reading the default frame's channels (sensor k gets seed + k)."""
-    return {k: Sensor(stimuli=stimuli if k == 1 else (), channels_read=DEFAULT_FRAME_NAMES, seed=seed + k, **kw)
+def default_sensors(n: int = 1, stimuli=(), seed: int = 1, variant: str = ch.DEFAULT_VARIANT,
+                    **kw) -> dict[int, Sensor]:
+    """n emulated sensors of ``variant`` reading its default frame's channels (sensor k gets seed + k)."""
+    frame = ch.variant(variant).frame_names
+    return {k: Sensor(stimuli=stimuli if k == 1 else (), channels_read=frame, seed=seed + k, variant=variant, **kw)
             for k in range(1, n + 1)}

@@ -72,6 +72,38 @@ class DataFrame:
     def sensors(self) -> list[int]:
         return [n for n in range(1, 6) if self.sensor_mask >> (n - 1) & 1]
 
+    @property
+    def ok(self) -> np.ndarray:
+        """``ok[slot, sensor]``: the slot carries a code (status 0); an error word or a parity error never does."""
+        return self.status == 0
+
+    def samples(self, sensor: int) -> dict[str, np.ndarray]:
+        """Sensor ``sensor``'s codes by channel name (PAC, E20 …), only the slots with status 0."""
+        k = self.sensors.index(sensor)
+        out = {}
+        for name in dict.fromkeys(channel_name(c) for c in self.channels):
+            sel = (np.array([channel_name(c) for c in self.channels]) == name) & self.ok[:, k]
+            out[name] = self.codes[sel, k]
+        return out
+
+    def errors(self, sensor: int) -> list[tuple[int, str, str]]:
+        """Sensor ``sensor``'s failed slots: (slot, channel name, "error word" or "parity error") — e.g. E20..E24
+        asked of a 19-electrode BioTac, which answers each with its "channel not recognized" error word."""
+        k = self.sensors.index(sensor)
+        return [(int(i), channel_name(self.channels[i]), STATUS_NAMES[int(self.status[i, k])])
+                for i in np.flatnonzero(self.status[:, k] != 0)]
+
+
+#: The firmware's per-sample status codes.
+STATUS_NAMES = {0: "ok", 1: "parity error", 2: "error word"}
+
+
+def channel_name(index: int) -> str:
+    """Name of a channel index of either variant (E1..E24 = 17..40), else ``"ch<index>"``."""
+    from emulator.channels import variant
+
+    return variant("biotac-sp").channel_name.get(int(index), f"ch{int(index)}")
+
 
 @dataclass
 class Status:
@@ -83,6 +115,11 @@ class Status:
     losses: int
     finds: int
     command_errors: int
+    sp_mask: int = 0  # bit n-1: sensor n is a BioTac SP (serial "BTSP…"); firmwares before the SP omit it
+
+    @property
+    def sp_sensors(self) -> list[int]:
+        return [n for n in range(1, 6) if self.sp_mask >> (n - 1) & 1]
 
 
 @dataclass
@@ -248,8 +285,10 @@ class FrameParser:
                 return DataFrame(seq, mask, rec[:, 0].astype(int), (words & 0x0FFF).astype(np.uint16),
                                  (words >> 12).astype(np.uint8))
             if ftype == T_STATUS:
-                mask, streaming, *counters = struct.unpack("<BB6I", p)
-                return Status(mask, bool(streaming), *counters)
+                mask, streaming, *counters = struct.unpack("<BB6I", p[:26])
+                if len(p) not in (26, 27):
+                    raise ValueError("status frame length")
+                return Status(mask, bool(streaming), *counters, sp_mask=p[26] if len(p) == 27 else 0)
             if ftype == T_ACK:
                 cmd, result = struct.unpack("<BB", p)
                 return ("ack", cmd, result)

@@ -6,6 +6,11 @@
 static const uint8_t SELECT[BT_MAX_SENSORS] = {1, 2, 4, 5, 6};
 static const uint8_t DEFAULT_FRAME[44] = {17, 0, 18, 0, 19, 0, 20, 0, 21, 0, 22, 0, 23, 0, 24, 0, 25, 0, 26, 0, 27, 0,
                                           28, 0, 29, 0, 30, 0, 31, 0, 32, 0, 33, 0, 34, 0, 35, 0, 1, 0, 2, 0, 3, 0};
+/* The BioTac SP's frame: E1..E24 (channels 17..40) each followed by PAC, then PDC, TAC, TDC: 54 slots. */
+static const uint8_t SP_FRAME[54] = {17, 0, 18, 0, 19, 0, 20, 0, 21, 0, 22, 0, 23, 0, 24, 0, 25, 0, 26, 0, 27, 0,
+                                     28, 0, 29, 0, 30, 0, 31, 0, 32, 0, 33, 0, 34, 0, 35, 0, 36, 0, 37, 0, 38, 0,
+                                     39, 0, 40, 0, 1, 0, 2, 0, 3, 0};
+#define LAST_ELECTRODE 40u        /* E24 of the SP; a 19-electrode sensor answers 36..40 with "EX" */
 #define SLOT_NS 227273u           /* 4.4 kHz */
 #define SAMPLE_DELAY_NS 50000u
 #define WORD_NS 3750u             /* 16.5 SCK periods at 4.4 MHz */
@@ -53,7 +58,7 @@ static void put32(uint8_t *p, uint32_t v) {
 }
 
 static void send_status(bt_bridge *b) {
-    uint8_t p[2 + 6 * 4];
+    uint8_t p[2 + 6 * 4 + 1];
     p[0] = b->present;
     p[1] = b->streaming;
     put32(p + 2, b->frames);
@@ -62,6 +67,7 @@ static void send_status(bt_bridge *b) {
     put32(p + 14, b->losses);
     put32(p + 18, b->finds);
     put32(p + 22, b->cmd_errors);
+    p[26] = b->sp;
     send(b, 0x11, p, sizeof p);
 }
 
@@ -71,7 +77,8 @@ static void ack(bt_bridge *b, uint8_t cmd, uint8_t result) {
     send(b, 0x12, p, 2);
 }
 
-/* Serial number property: read command, wait, then bytes with chip select held until NUL or 0xFF. */
+/* Serial number property: read command, wait, then bytes with chip select held until NUL or 0xFF.
+ * Returns 0 (no sensor), 1 (a BioTac: "BT...") or 2 (a BioTac SP: "BTSP..."). */
 static int has_bt_serial(bt_bridge *b, int sensor) {
     const bt_hal *h = b->hal;
     uint8_t tx[2] = {0x61, 0x15}, rx[2];
@@ -87,13 +94,30 @@ static int has_bt_serial(bt_bridge *b, int sensor) {
     }
     h->spi_bytes(h->ctx, 0, 0, &zero, &byte, 0); /* release chip select */
     h->delay_us(h->ctx, 10);
-    return n >= 2 && serial[0] == 'B' && serial[1] == 'T';
+    if (n < 2 || serial[0] != 'B' || serial[1] != 'T') return 0;
+    return (n >= 4 && serial[2] == 'S' && serial[3] == 'P') ? 2 : 1;
+}
+
+/* The default pattern for the sensors present: the SP's 54 slots when every one is an SP, else the 44 slots
+ * every variant answers. A pattern the host set stays. */
+static void choose_default_pattern(bt_bridge *b) {
+    if (!b->pattern_default) return;
+    if (b->present && (b->present & (uint8_t)~b->sp) == 0) {
+        memcpy(b->pattern, SP_FRAME, sizeof SP_FRAME);
+        b->pattern_len = sizeof SP_FRAME;
+    } else {
+        memcpy(b->pattern, DEFAULT_FRAME, sizeof DEFAULT_FRAME);
+        b->pattern_len = sizeof DEFAULT_FRAME;
+    }
 }
 
 uint8_t bt_detect(bt_bridge *b) {
-    uint8_t mask = 0;
-    for (int s = 0; s < BT_MAX_SENSORS; ++s)
-        if (has_bt_serial(b, s)) mask |= (uint8_t)(1u << s);
+    uint8_t mask = 0, sp = 0;
+    for (int s = 0; s < BT_MAX_SENSORS; ++s) {
+        int kind = has_bt_serial(b, s);
+        if (kind) mask |= (uint8_t)(1u << s);
+        if (kind == 2) sp |= (uint8_t)(1u << s);
+    }
     for (int s = 0; s < BT_MAX_SENSORS; ++s) {
         uint8_t bit = (uint8_t)(1u << s);
         if ((mask & bit) && !(b->present & bit)) b->finds++;
@@ -101,7 +125,9 @@ uint8_t bt_detect(bt_bridge *b) {
         b->absent_streak[s] = 0;
     }
     b->present = mask;
+    b->sp = sp;
     b->frames_since_detect = 0;
+    choose_default_pattern(b);
     return mask;
 }
 
@@ -110,6 +136,7 @@ void bt_init(bt_bridge *b, const bt_hal *hal) {
     b->hal = hal;
     memcpy(b->pattern, DEFAULT_FRAME, sizeof DEFAULT_FRAME);
     b->pattern_len = sizeof DEFAULT_FRAME;
+    b->pattern_default = 1;
     hal->delay_us(hal->ctx, 1000); /* sensors power up */
     b->finds = 0;
     bt_detect(b);
@@ -119,9 +146,10 @@ void bt_init(bt_bridge *b, const bt_hal *hal) {
 uint8_t bt_set_pattern(bt_bridge *b, const uint8_t *p, size_t len) {
     if (len < 1 || len > BT_MAX_PATTERN) return 1;
     for (size_t i = 0; i < len; ++i)
-        if (!(p[i] <= 3 || (p[i] >= 17 && p[i] <= 35))) return 3;
+        if (!(p[i] <= 3 || (p[i] >= 17 && p[i] <= LAST_ELECTRODE))) return 3;
     memcpy(b->pattern, p, len);
     b->pattern_len = (uint8_t)len;
+    b->pattern_default = 0;
     return 0;
 }
 

@@ -6,9 +6,15 @@
  *                                   present sensor in ascending order, u16 = code (12 bits) | status << 12
  *                                   (status 0 ok, 1 parity error, 2 error word from the sensor)
  *                      0x11 STATUS  mask u8, streaming u8, frames u32, parity errors u32, error words u32,
- *                                   sensor losses u32, sensor finds u32, command errors u32
+ *                                   sensor losses u32, sensor finds u32, command errors u32, SP mask u8
+ *                                   (bit i: sensor i + 1's serial starts "BTSP", a 24-electrode BioTac SP)
  *                      0x12 ACK     command type u8, result u8 (0 ok, 1 bad length, 2 unknown, 3 bad value)
  *   host -> firmware   0x01 START, 0x02 STOP, 0x03 PATTERN (payload: 1..64 channel indices), 0x04 STATUS
+ *
+ * Default pattern: the 54-slot SP frame (E1,PAC,...,E24,PAC,PDC,PAC,TAC,PAC,TDC,PAC) when every sensor present
+ * is a BioTac SP, else the 44-slot frame (E1..E19) every variant answers; re-chosen at each detection until
+ * the host sets a pattern.  A channel a sensor does not have (E20..E24 on a 19-electrode BioTac) comes back
+ * as its "EX" error word: status 2, never a code.
  */
 #ifndef BT_BRIDGE_H
 #define BT_BRIDGE_H
@@ -20,6 +26,8 @@
 typedef struct {
     const bt_hal *hal;
     uint8_t present;          /* bit i: sensor i + 1 answers with a serial number starting "BT" */
+    uint8_t sp;               /* bit i: ... starting "BTSP" (a BioTac SP, E1..E24) */
+    uint8_t pattern_default;  /* the pattern is the default one (follows the sensors' variants) */
     uint8_t streaming;
     uint8_t pattern[BT_MAX_PATTERN];
     uint8_t pattern_len;
@@ -38,7 +46,7 @@ void bt_step(bt_bridge *b);
 /* Look for sensors (serial number "BT..."); returns the mask of present sensors. */
 uint8_t bt_detect(bt_bridge *b);
 uint16_t bt_crc16(const uint8_t *data, size_t n);
-/* Set the sampling pattern (what the PATTERN command does): 1..64 channel indices, each 0..3 or 17..35.
+/* Set the sampling pattern (what the PATTERN command does): 1..64 channel indices, each 0..3 or 17..40.
  * Returns the ACK result: 0 ok, 1 bad length, 3 bad value (the pattern is then unchanged). */
 uint8_t bt_set_pattern(bt_bridge *b, const uint8_t *p, size_t len);
 
