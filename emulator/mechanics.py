@@ -1,30 +1,142 @@
 """Fluid and skin: contact force and skin displacement -> fluid pressure at the transducer (SENSOR.md §1).
 
-* Inflation sets the resting pressure (:class:`RestingPressure`).
-* Contact force maps to DC pressure linearly (36.5 Pa per 11.5 mN) until the skin meets the core near
-  2 N, where the slope falls (:func:`static_pressure_from_force`).  The skin/fluid system rings at
-  ~330 Hz with a ~20 ms envelope, the resonance moving with inflation (:class:`ForceCoupling`).
+* Inflation sets the resting pressure (:class:`RestingPressure`) and, through the slope of that pressure–volume
+  curve, the stiffness of the fluid seen through the skin.
+* Contact mechanics (:func:`skin_fluid`): a contact indents the loaded skin area A by δ; the incompressible
+  fluid must bulge the skin elsewhere by A·δ, so its pressure rises by dP/dV·A·δ and it carries the force
+  k_f·δ with k_f = A²·dP/dV.  The skin shell carries the rest directly to the core and nail (stiffness k_s).
+  The fluid pressure per N of contact is therefore φ/A with φ = k_f/(k_f + k_s): mN per PDC bit *follows*
+  from geometry, inflation and the bridge + gain + ADC chain.  k_s is the one calibrated knob (11.5 mN/bit).
+  The slope falls where the skin meets the core near 2 N (:func:`static_pressure_from_force`).
+* Viscoelastic skin: the silicone's modulus relaxes (standard linear solid, ``skin_relaxation_time_s``,
+  ``skin_relaxed_modulus_fraction``), so under a held force load moves from the skin to the fluid: PDC creeps
+  up, and loading/unloading trace a loop (emulator/viscoelastic.py, exact update, state carried).
+* Resonance: the skin membrane and the fluid layer under it (mass m) ring on the same stiffness
+  k = k_f + k_s,0 (the unrelaxed skin at these frequencies): f = √(k/m)/2π.  The skin's areal mass is fixed by
+  ``resonance_Hz`` at the nominal 0.5 mL (calibrated); how f moves with inflation is predicted (k_f ∝ dP/dV,
+  fluid layer ∝ volume).  Damping: viscous shear in the fluid layer plus the skin's loss factor, the latter
+  fixed by ``resonance_decay_s`` at 0.5 mL (calibrated); the decay's change with inflation is predicted.
 * Skin displacement imposed by an actuator reaches the liquid through the same resonance plus a
   direct path through the incompressible liquid (a real zero, :class:`VibrationCoupling`).
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
 from emulator import filters
 from emulator.effects import Block, Effect
 from emulator.params import SensorParams
+from emulator.viscoelastic import Creep, sls_retardation
+
+#: inflation at which ``resonance_Hz`` and ``resonance_decay_s`` are published (D ch. 4: ~0.5 cc)
+NOMINAL_INFLATION_ML = 0.5
+#: share of the fluid layer's mass that moves with the skin: linear velocity profile across the layer (the
+#: fluid at the core wall is at rest), kinetic energy ∫(z/h)² = 1/3
+FLUID_LAYER_MASS_SHARE = 1.0 / 3.0
 
 
-def static_pressure_from_force(force_N, p: SensorParams):
-    """DC pressure rise in Pa for a quasi-static contact force in N.
+@dataclass(frozen=True)
+class SkinFluid:
+    """Mechanical figures of the skin over the fluid at one inflation (SI units)."""
+
+    fluid_stiffness_N_per_m: float  # k_f = A²·dP/dV
+    skin_stiffness_relaxed_N_per_m: float  # k_s∞
+    skin_stiffness_instant_N_per_m: float  # k_s0 = k_s∞ / (E∞/E0)
+    pressure_per_N_relaxed: float  # Pa/N, quasi-static (held force)
+    pressure_per_N_instant: float  # Pa/N, just after a step (and at the resonance)
+    creep_time_s: float  # retardation time of the pressure under a held force
+    creep_ratio: float  # instantaneous / relaxed pressure
+    layer_thickness_m: float  # fluid layer under the skin
+    moving_mass_kg: float  # skin + the fluid moving with it
+    skin_mass_kg: float
+    resonance_Hz: float  # natural frequency √(k/m)/2π
+    decay_s: float  # envelope time constant of the ringing
+    fluid_damping_N_s_per_m: float
+    skin_loss_factor: float
+    implied_skin_thickness_m: float  # skin mass / (density × loaded area): a plausibility check, not an input
+
+
+def _stiffness(p: SensorParams, volume_mL: float):
+    """(k_f, dP/dV in Pa/m³) at an inflation volume in mL: slope of P = a·V^n times the loaded area squared."""
+    dp_dv = p.resting_pressure_Pa_per_mL * p.resting_pressure_exponent * volume_mL ** (p.resting_pressure_exponent - 1)
+    dp_dv *= 1e6  # per mL -> per m³
+    return p.skin_load_area_m2**2 * dp_dv, dp_dv
+
+
+def _fluid_mass_and_damping(p: SensorParams, volume_mL: float):
+    """(moving fluid mass kg, viscous damping N·s/m, layer thickness m) of the layer under the loaded skin."""
+    h = volume_mL * 1e-6 / p.fluid_wetted_area_m2
+    mass = FLUID_LAYER_MASS_SHARE * p.fluid_density_kg_per_m3 * p.skin_load_area_m2 * h
+    damping = p.fluid_viscosity_Pa_s * p.skin_load_area_m2 / h  # shear across the layer (Couette)
+    return mass, damping, h
+
+
+def skin_fluid(p: SensorParams) -> SkinFluid:
+    """Contact mechanics, creep and resonance of the skin over the fluid at ``p.inflation_volume_mL``."""
+    A = p.skin_load_area_m2
+    rE = p.skin_relaxed_modulus_fraction
+    ks_inf = p.skin_direct_stiffness_N_per_m
+    ks_0 = ks_inf / rE
+
+    def dynamics_at(volume_mL):
+        kf, _ = _stiffness(p, volume_mL)
+        m_f, c_f, h = _fluid_mass_and_damping(p, volume_mL)
+        return kf + ks_0, m_f, c_f, h
+
+    # anchor the skin's mass and loss factor at the nominal inflation (the published 330 Hz and 20 ms)
+    k_n, mf_n, cf_n, _ = dynamics_at(NOMINAL_INFLATION_ML)
+    w_n = 2 * math.pi * p.resonance_Hz
+    m_total_n = k_n / w_n**2
+    skin_mass = max(m_total_n - mf_n, 0.0)
+    sigma_fluid_n = cf_n / (2 * (skin_mass + mf_n))
+    # hysteretic skin loss: decay rate η·ω/2 (ζ = η/2); whatever the fluid does not supply
+    eta = max(2.0 * (1.0 / p.resonance_decay_s - sigma_fluid_n) / w_n, 0.0)
+
+    kf, _ = _stiffness(p, p.inflation_volume_mL)
+    k, m_f, c_f, h = dynamics_at(p.inflation_volume_mL)
+    m = skin_mass + m_f
+    w = math.sqrt(k / m)
+    decay = 1.0 / (c_f / (2 * m) + eta * w / 2)
+    tau, ratio = sls_retardation(p.skin_relaxation_time_s, rE, kf / ks_inf if ks_inf > 0 else math.inf) \
+        if ks_inf > 0 else (p.skin_relaxation_time_s, 1.0)
+    phi_relaxed = kf / (kf + ks_inf)
+    out = SkinFluid(
+        fluid_stiffness_N_per_m=kf, skin_stiffness_relaxed_N_per_m=ks_inf, skin_stiffness_instant_N_per_m=ks_0,
+        pressure_per_N_relaxed=phi_relaxed / A, pressure_per_N_instant=phi_relaxed * ratio / A,
+        creep_time_s=tau, creep_ratio=ratio, layer_thickness_m=h, moving_mass_kg=m, skin_mass_kg=skin_mass,
+        resonance_Hz=w / (2 * math.pi), decay_s=decay, fluid_damping_N_s_per_m=c_f, skin_loss_factor=eta,
+        implied_skin_thickness_m=skin_mass / (p.skin_density_kg_per_m3 * A))
+    return out
+
+
+def hertz_contact(mass_kg: float, radius_m: float, speed_m_per_s: float, modulus_Pa: float):
+    """Elastic Hertz impact of a rigid sphere on a half-space of plane-strain modulus E* (Pa).
+
+    Returns (contact duration s, peak force N, peak indentation m):
+    δ_max = (15·m·v²/(16·E*·√R))^(2/5), F_max = (4/3)·E*·√R·δ_max^(3/2), t_c ≈ 2.94·δ_max/v
+    (= 2.87·(m²/(R·E*²·v))^(1/5)).
+    """
+    if min(mass_kg, radius_m, speed_m_per_s, modulus_Pa) <= 0:
+        raise ValueError(f"hertz_contact: mass {mass_kg!r} kg, radius {radius_m!r} m, speed {speed_m_per_s!r} m/s "
+                         f"and modulus {modulus_Pa!r} Pa must all be > 0")
+    d_max = (15.0 * mass_kg * speed_m_per_s**2 / (16.0 * modulus_Pa * math.sqrt(radius_m))) ** 0.4
+    f_max = 4.0 / 3.0 * modulus_Pa * math.sqrt(radius_m) * d_max**1.5
+    return 2.9432 * d_max / speed_m_per_s, f_max, d_max
+
+
+def static_pressure_from_force(force_N, p: SensorParams, slope_Pa_per_N: float | None = None):
+    """DC pressure rise in Pa for a quasi-static contact force in N (default slope: the relaxed one).
 
     Slope ``k`` below the knee, ``k·r`` above it, joined by a softplus of width ``w``:
     P = k·(F − (1 − r)·w·softplus((F − F_knee)/w)).  Negative forces (pulling) give no pressure change.
     """
     F = np.maximum(np.asarray(force_N, float), 0.0)
-    k, r, w, Fk = p.force_to_pressure_Pa_per_N, p.force_slope_above_knee, p.force_knee_width_N, p.force_knee_N
+    k = p.force_to_pressure_Pa_per_N if slope_Pa_per_N is None else slope_Pa_per_N
+    r, w, Fk = p.force_slope_above_knee, p.force_knee_width_N, p.force_knee_N
     out = np.zeros_like(F)
     touching = F > 0  # most samples of a scene carry no force: skip the transcendental functions there
     x = (F[touching] - Fk) / w
@@ -36,7 +148,8 @@ def static_pressure_from_force(force_N, p: SensorParams):
 
 def skin_resonance(params: SensorParams, fs: float, discretization: str, zero_hz: float | None = None):
     """The skin/fluid resonance at the present inflation (unit DC gain), optionally with a real zero."""
-    z, p, k = filters.resonance(params.resonance_at_inflation_Hz, params.resonance_decay_s, zero_hz=zero_hz)
+    sf = skin_fluid(params)
+    z, p, k = filters.resonance(sf.resonance_Hz, sf.decay_s, zero_hz=zero_hz)
     return filters.SosFilter(filters.discretize(z, p, k, fs, discretization))
 
 
@@ -57,7 +170,7 @@ class RestingPressure(Effect):
 
 
 class ForceCoupling(Effect):
-    """Contact force -> fluid pressure: static force curve, then the skin/fluid resonance."""
+    """Contact force -> fluid pressure: skin creep, static force curve, then the skin/fluid resonance."""
 
     name = "force_coupling"
     consumes = ("contact_force_N",)
@@ -66,10 +179,15 @@ class ForceCoupling(Effect):
 
     def __init__(self, params: SensorParams, fs: float, discretization: str):
         self.params = params
+        sf = skin_fluid(params)
+        self.slope = sf.pressure_per_N_relaxed
+        # the creep response r·F + (1 − r)·L[F] tends to F under a held force: the relaxed slope then applies
+        self.creep = Creep.standard_linear_solid(sf.creep_time_s, sf.creep_ratio)
         self.filter = skin_resonance(params, fs, discretization)
 
     def process(self, block: Block, inputs):
-        static = static_pressure_from_force(inputs["contact_force_N"], self.params)
+        crept = self.creep.step(np.maximum(inputs["contact_force_N"], 0.0), block.fs)
+        static = static_pressure_from_force(crept, self.params, self.slope)
         return {"fluid_pressure_Pa": self.filter(static)}
 
 

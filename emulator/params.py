@@ -12,8 +12,6 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from emulator.conversions import ADC_LSB_V
-
 BOLTZMANN_J_PER_K = 1.380649e-23
 ZERO_CELSIUS_K = 273.15
 
@@ -180,11 +178,36 @@ class SensorParams:
         "pickup grows as n·V_n; IEC 61000-2-2 compatibility level V_3 = 5 % gives 3 × 5 %")
 
     # --- skin viscoelasticity, contact mechanics and impacts (issues 10.4, 10.5, 11.2) -----------
+    skin_load_area_m2: float = _p(
+        2.5e-4, "m²", 2e-5, 1.5e-3, "model",
+        "effective area of the skin membrane over the fluid that a contact loads (ventral pad ~14 × 18 mm)")
+    skin_direct_stiffness_N_per_m: float = _p(
+        160.0, "N/m", 0.0, 1e5, "model",
+        "relaxed stiffness of the skin shell carrying load to the core/nail directly (not through the fluid); "
+        "calibrated: sets 11.5 mN/PDC bit at the published bridge, gain and ADC")
+    skin_relaxation_time_s: float = _p(
+        1.0, "s", 1e-3, 100.0, "model", "stress-relaxation time of the silicone skin (standard linear solid)")
+    skin_relaxed_modulus_fraction: float = _p(
+        0.6, "1", 0.3, 1.0, "model",
+        "relaxed/instantaneous modulus E∞/E0 of the filled silicone skin (sets creep and hysteresis of PDC); "
+        "calibrated: R² of a 0–2 N press-and-release near D's 0.995")
+    skin_youngs_modulus_Pa: float = _p(
+        0.97e6, "Pa", 1e4, 1e8, "model",
+        "skin Young's modulus: Silastic S (D ch. 4), ~26 Shore A, through Gent's hardness relation")
+    skin_poisson_ratio: float = _p(0.5, "1", 0.0, 0.5, "model", "skin Poisson ratio (incompressible elastomer)")
+    skin_density_kg_per_m3: float = _p(1120.0, "kg/m³", 500.0, 3000.0, "model", "silicone skin density")
+    fluid_density_kg_per_m3: float = _p(
+        1150.0, "kg/m³", 500.0, 3000.0, "model", "BioTac fluid: 82 % polyethylene glycol, 18 % water, 1 M NaBr (D ch. 4)")
+    fluid_viscosity_Pa_s: float = _p(
+        0.035, "Pa·s", 1e-4, 10.0, "model", "viscosity of the glycol solution at the ~35 °C core temperature")
+    fluid_wetted_area_m2: float = _p(
+        1.0e-3, "m²", 1e-4, 5e-3, "model",
+        "core area under the skin; the fluid layer is inflation volume / this area (0.5 mm at 0.5 mL)")
 
     # --- local electrodes (issue 10.3; emulator/electrodes.py) ---------------------------------
     bulge_width_ratio: float = _p(
-        1.0, "1", 0.3, 5.0, "model",
-        "width of the rim bulge (the displaced liquid's ring, peak at √2·ratio·w) over the indentation width w")
+        0.7071, "1", 0.3, 5.0, "model",
+        "rim-bulge ring width s over the indentation width w; the ring peaks at √2·s = w, just outside the contact")
     free_skin_half_angle_deg: float = _p(
         120.0, "deg", 60.0, 180.0, "model",
         "skin free to bulge within this angle of the ventral midline; beyond it the skin is tethered at the nail")
@@ -201,9 +224,11 @@ class SensorParams:
 
     @property
     def resonance_at_inflation_Hz(self) -> float:
-        """Resonance moved by inflation and kept within the published 200–350 Hz."""
-        f = self.resonance_Hz + self.resonance_Hz_per_mL * (self.inflation_volume_mL - 0.5)
-        return min(max(f, 200.0), 350.0)
+        """Skin/fluid resonance at the present inflation: √(k/m)/2π from the fluid and skin stiffness and the
+        moving mass (emulator/mechanics.py); ``resonance_Hz`` anchors it at the nominal 0.5 mL."""
+        from emulator.mechanics import skin_fluid
+
+        return skin_fluid(self).resonance_Hz
 
     @property
     def resting_pressure_Pa(self) -> float:
@@ -236,13 +261,12 @@ class SensorParams:
 
     @property
     def force_to_pressure_Pa_per_N(self) -> float:
-        """Mechanical slope force -> fluid pressure, fixed by the published force per PDC bit.
+        """Quasi-static (relaxed) fluid pressure per N of contact force, from contact mechanics: the fraction
+        of the load the fluid carries over the loaded skin area (emulator/mechanics.py).  The bridge, gain and
+        ADC do not enter: mN per PDC bit follows from this slope and that chain."""
+        from emulator.mechanics import skin_fluid
 
-        Uses the bridge span at its reference temperature: the mechanics does not drift with the bridge.
-        """
-        nominal_pdc_V_per_Pa = self.bridge_excitation_V * self.bridge_sensitivity_V_per_V_Pa * self.stage1_gain
-        pdc_Pa_per_bit = ADC_LSB_V / nominal_pdc_V_per_Pa
-        return pdc_Pa_per_bit / self.force_per_pdc_bit_N
+        return skin_fluid(self).pressure_per_N_relaxed
 
     @property
     def pac_V_per_Pa(self) -> float:
