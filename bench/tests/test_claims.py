@@ -44,7 +44,8 @@ EXPECTED_KINDS = {
     "false detections at rest": "consistency",  # P ≈ 1e-9 per window
     "settled thermistor above ambient": "consistency",  # heater_rise_K
     "TDC conversion error over 0–70 °C": "consistency",
-    "mirror-image contacts give mirror-image patterns": "consistency",  # symmetric table, symmetric model
+    "a 1 N contact's change stays in the nearest 4 electrodes": "calibrated",  # bulge_width_ratio
+    "a contact's electrode pattern locates it": "prediction",
     "a 1 N contact's PDC rise": "consistency",
 }
 
