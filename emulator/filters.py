@@ -7,6 +7,8 @@ carrying its state ``zi`` between blocks, so output never depends on block size.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy import signal
 
@@ -32,6 +34,21 @@ def _prewarp(roots: np.ndarray, fs: float) -> np.ndarray:
 
 
 def discretize(z, p, k, fs: float, method: str, gain_at_hz: float = 0.0) -> np.ndarray:
+    """Discrete SOS for the analog filter (z, p, k) in rad/s at sample rate ``fs`` (Hz), read-only: designs are
+    remembered, so sensors built one after another (a rig's trials) design each filter once."""
+    key = (tuple(np.atleast_1d(np.asarray(z, complex)).tolist()), tuple(np.atleast_1d(np.asarray(p, complex)).tolist()),
+           float(k), float(fs), method, float(gain_at_hz))
+    return _discretize_cached(*key)
+
+
+@functools.lru_cache(maxsize=256)
+def _discretize_cached(z: tuple, p: tuple, k: float, fs: float, method: str, gain_at_hz: float) -> np.ndarray:
+    sos = _design(np.array(z, complex), np.array(p, complex), k, fs, method, gain_at_hz)
+    sos.setflags(write=False)
+    return sos
+
+
+def _design(z, p, k, fs: float, method: str, gain_at_hz: float) -> np.ndarray:
     """Discrete SOS for the analog filter (z, p, k) in rad/s at sample rate ``fs`` (Hz).
 
     ``bilinear``: plain Tustin transform (corners near Nyquist are warped down).

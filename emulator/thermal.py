@@ -24,6 +24,7 @@ at 0.45 Hz (Table 4-1; the text's 5 Hz is not used): for changes slower than 0.3
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -415,6 +416,17 @@ def settled_state(net: ThermalNetwork, heater_W: float, ambient_C: float, self_h
 
 def steady_state(p: SensorParams, faults: dict | None = None) -> tuple[float, float, float]:
     """(core °C, TDC V, TAC V) of the settled sensor at rest: the shortcut when nothing thermal happens."""
+    faults = faults or {}
+    return _steady_state(p, faults.get("thermistor"), bool(faults.get("heater_failed")))
+
+
+@functools.lru_cache(maxsize=64)
+def _steady_state(p: SensorParams, thermistor_fault, heater_failed: bool) -> tuple[float, float, float]:
+    """:func:`steady_state` for the only faults it depends on (remembered: sensors built one after another share
+    it)."""
+    faults = {"thermistor": thermistor_fault} if thermistor_fault else {}
+    if heater_failed:
+        faults["heater_failed"] = True
     model = ThermalModel(p, ThermalEvents([]), seed=0, faults=faults)
     x = model.x
     tdc = float(tdc_volts(thermistor_ohm(x[BEAD]), (faults or {}).get("thermistor")))
