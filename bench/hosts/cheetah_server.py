@@ -136,12 +136,14 @@ class CheetahBench:
     see, bits, MOSI the sensors received).
     """
 
-    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False):
+    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False,
+                 variant: str = "biotac"):
         self.library = build_library()
         self.lib_dir = self.library.parent
         self._tmp = private_folder()
         self.socket_path = os.path.join(self._tmp, "cheetah.sock")
-        self.bus = Bus({n: SensorPort(s, n) for n, s in (sensors or default_sensors(n_sensors, stimuli, seed)).items()})
+        sensors = sensors or default_sensors(n_sensors, stimuli, seed, variant)  # variant: "biotac" or "biotac-sp"
+        self.bus = Bus({n: SensorPort(s, n) for n, s in sensors.items()})
         self.t_host = 0.0  # the host program's time (s)
         self.t_bus = 0.0  # when the adapter's bus is free
         self.batches = 0

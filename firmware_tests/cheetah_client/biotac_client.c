@@ -2,7 +2,11 @@
  * Like a program built with the vendor's loader, it loads "cheetah.so" at run time from its own folder
  * (then the working folder), checks ch_c_version, and calls the c_ch_* functions.
  *
- * usage: biotac_client [batches]   -> prints "serial <n> <serial>" per sensor and a summary line
+ * usage: biotac_client [batches] [44|sp] [dump file]
+ *   -> prints "serial <n> <serial>" per sensor and a summary line.  "sp" samples the BioTac SP's 54-slot frame
+ *   (E1..E24: E20..E24 are commands 0xC8, 0xCB, 0xCD, 0xCE, 0xD0), as the vendor's SP headers do whatever sensor
+ *   is attached; a 19-electrode sensor answers E20..E24 with error words (first byte 0xA5), which are counted as
+ *   error_words, never as samples.  A dump file receives the first batch's words: "slot sensor command word" (hex).
  */
 #define _DEFAULT_SOURCE
 #include <dlfcn.h>
@@ -21,14 +25,17 @@ typedef uint32_t u32;
 #define CLIENT_API 0x0350u
 #define MIN_LIBRARY 0x0306u
 #define SENSORS 3
-#define FRAME 44
 #define FRAMES_PER_BATCH 5
 
 static const u08 SELECT[SENSORS] = {0x01, 0x02, 0x04};
-static const u08 FRAME_CMDS[FRAME] = {0xA2, 0x80, 0xA4, 0x80, 0xA7, 0x80, 0xA8, 0x80, 0xAB, 0x80, 0xAD, 0x80, 0xAE, 0x80,
+static const u08 FRAME_CMDS[44] = {0xA2, 0x80, 0xA4, 0x80, 0xA7, 0x80, 0xA8, 0x80, 0xAB, 0x80, 0xAD, 0x80, 0xAE, 0x80,
+                                   0xB0, 0x80, 0xB3, 0x80, 0xB5, 0x80, 0xB6, 0x80, 0xB9, 0x80, 0xBA, 0x80, 0xBC, 0x80,
+                                   0xBF, 0x80, 0xC1, 0x80, 0xC2, 0x80, 0xC4, 0x80, 0xC7, 0x80, 0x83, 0x80, 0x85, 0x80,
+                                   0x86, 0x80};
+static const u08 SP_FRAME_CMDS[54] = {0xA2, 0x80, 0xA4, 0x80, 0xA7, 0x80, 0xA8, 0x80, 0xAB, 0x80, 0xAD, 0x80, 0xAE, 0x80,
                                       0xB0, 0x80, 0xB3, 0x80, 0xB5, 0x80, 0xB6, 0x80, 0xB9, 0x80, 0xBA, 0x80, 0xBC, 0x80,
-                                      0xBF, 0x80, 0xC1, 0x80, 0xC2, 0x80, 0xC4, 0x80, 0xC7, 0x80, 0x83, 0x80, 0x85, 0x80,
-                                      0x86, 0x80};
+                                      0xBF, 0x80, 0xC1, 0x80, 0xC2, 0x80, 0xC4, 0x80, 0xC7, 0x80, 0xC8, 0x80, 0xCB, 0x80,
+                                      0xCD, 0x80, 0xCE, 0x80, 0xD0, 0x80, 0x83, 0x80, 0x85, 0x80, 0x86, 0x80};
 
 static struct {
     int (*find_devices)(int, u16 *);
@@ -70,6 +77,12 @@ static int odd(u08 b) { int n = 0; while (b) { n += b & 1; b >>= 1; } return n &
 
 int main(int argc, char **argv) {
     int batches = argc > 1 ? atoi(argv[1]) : 20;
+    int sp = argc > 2 && strcmp(argv[2], "sp") == 0;
+    if (argc > 2 && !sp && strcmp(argv[2], "44") != 0) { fprintf(stderr, "frame: 44 or sp, not %s\n", argv[2]); return 1; }
+    const u08 *FRAME_CMDS_USED = sp ? SP_FRAME_CMDS : FRAME_CMDS;
+    const int FRAME = sp ? 54 : 44;
+    FILE *dump = argc > 3 ? fopen(argv[3], "w") : NULL;
+    if (argc > 3 && !dump) { fprintf(stderr, "cannot write %s\n", argv[3]); return 1; }
     void *lib = load(argv[0]);
     if (!lib) { fprintf(stderr, "cannot load cheetah.so: %s\n", dlerror()); return 2; }
     u32 (*version)(void) = (u32(*)(void))dlsym(lib, "ch_c_version");
@@ -116,7 +129,7 @@ int main(int argc, char **argv) {
     ch.queue_clear(h);
     for (int f = 0; f < FRAMES_PER_BATCH; ++f)
         for (int k = 0; k < FRAME; ++k) {
-            ch.queue_ss(h, 0x07); ch.queue_byte(h, 1, FRAME_CMDS[k]); ch.queue_byte(h, 1, 0x00); ch.queue_ss(h, 0);
+            ch.queue_ss(h, 0x07); ch.queue_byte(h, 1, FRAME_CMDS_USED[k]); ch.queue_byte(h, 1, 0x00); ch.queue_ss(h, 0);
             ch.queue_delay_ns(h, 50000);
             for (int s = 0; s < SENSORS; ++s) { ch.queue_ss(h, SELECT[s]); ch.queue_byte(h, 2, 0x00); }
             ch.queue_ss(h, 0);
@@ -128,7 +141,7 @@ int main(int argc, char **argv) {
     int len = ch.batch_length(h);
     u08 *data = malloc((size_t)len);
     for (int i = 0; i < 4; ++i) ch.async_submit(h);
-    long samples = 0, parity_errors = 0, pac_n = 0;
+    long samples = 0, parity_errors = 0, error_words = 0, pac_n = 0;
     double pac_sum = 0, pac_sq = 0;
     for (int b = 0; b < batches; ++b) {
         int got = ch.async_collect(h, len, data);
@@ -142,15 +155,18 @@ int main(int argc, char **argv) {
             for (int s = 0; s < SENSORS; ++s) {
                 if (!present[s]) continue;
                 u08 b0 = data[i * per_slot + 2 + 2 * s], b1 = data[i * per_slot + 3 + 2 * s];
+                if (dump && b == 0) fprintf(dump, "%d %d %02x %02x%02x\n", i, s + 1, FRAME_CMDS_USED[i % FRAME], b0, b1);
+                if (b0 == 0xA5) { error_words++; continue; } /* the sensor's error word: not a sample */
                 samples++;
                 if (!odd(b0) || !odd(b1)) { parity_errors++; continue; }
                 int value = (b0 >> 1) * 32 + (b1 >> 3);
-                if (s == 0 && FRAME_CMDS[i % FRAME] == 0x80) { pac_sum += value; pac_sq += (double)value * value; pac_n++; }
+                if (s == 0 && FRAME_CMDS_USED[i % FRAME] == 0x80) { pac_sum += value; pac_sq += (double)value * value; pac_n++; }
             }
     }
     double mean = pac_n ? pac_sum / pac_n : 0, sd = pac_n ? sqrt(pac_sq / pac_n - mean * mean) : 0;
-    printf("frames %d samples %ld parity_errors %ld pac_mean %.2f pac_std %.3f\n", batches * FRAMES_PER_BATCH, samples,
-           parity_errors, mean, sd);
+    printf("frames %d samples %ld parity_errors %ld pac_mean %.2f pac_std %.3f error_words %ld\n",
+           batches * FRAMES_PER_BATCH, samples, parity_errors, mean, sd, error_words);
+    if (dump) fclose(dump);
     free(data);
     ch.close(h);
     return 0;

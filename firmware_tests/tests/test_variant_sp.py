@@ -11,6 +11,7 @@ import pytest
 from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
 from bench.hosts.driver import CMD_START, CMD_STATUS, DataFrame, FrameParser, Status, encode
 from emulator import channels as ch
+from emulator.spi import protocol as proto
 
 pytestmark = pytest.mark.firmware
 SP = ch.variant("biotac-sp")
@@ -82,3 +83,70 @@ def test_sp_frames_are_identical_over_the_software_model_and_the_rtl():
     for x, y in zip(a, b):
         assert x.seq == y.seq and np.array_equal(x.codes, y.codes) and np.array_equal(x.status, y.status)
     assert a[0].codes.shape == (54, 1)
+
+
+# --- the same codes through every path -------------------------------------------------------------------------------
+ELECTRODE_SLOTS = [i for i, n in enumerate(SP.frame_names) if n.startswith("E")]
+
+
+def pressed_sp():
+    """An SP pressed (2 N) over E22 from t = 0, noise off: from 0.2 s on, every electrode's code is constant and
+    they differ from each other (E22 ≈ 2077, its neighbours 2624..2861, the far ones ≈ 2900), so any path that
+    loses, swaps or mislabels an electrode slot shows."""
+    from emulator.sensor import NoiseSources, Sensor
+    from emulator.stimuli import Touch
+
+    return Sensor(stimuli=[Touch(0.0, 2.0, ramp_s=0.01, hold_s=1000.0, electrode="E22")], channels_read=SP.frame_names,
+                  variant="biotac-sp", seed=3, noise=NoiseSources.none())
+
+
+def reference_electrode_codes():
+    """The software model asked directly for the 54-slot frame (second frame: the multiplexer has seen E24)."""
+    idx = ch.parse_sequence("default", "biotac-sp")
+    codes = pressed_sp().sample(np.tile(idx, 2), 0.3 + np.arange(108) / 4400.0)[54:]
+    return codes[ELECTRODE_SLOTS]
+
+
+def test_the_54_slot_frame_gives_identical_electrode_codes_through_the_firmware_and_driver():
+    ref = reference_electrode_codes()
+    assert len(set(ref.tolist())) >= 15 and ref.min() < 2200  # distinct codes; E22 pressed
+    frames, _ = run_firmware({1: pressed_sp()}, seconds=0.5)
+    for f in frames[-10:]:
+        assert np.array_equal(f.codes[ELECTRODE_SLOTS, 0], ref)
+
+
+@pytest.mark.rtl
+def test_the_54_slot_frame_gives_identical_electrode_codes_through_firmware_and_rtl():
+    frames, _ = run_firmware({1: pressed_sp()}, seconds=0.4, spi="rtl")
+    assert np.array_equal(frames[-1].codes[ELECTRODE_SLOTS, 0], reference_electrode_codes())
+
+
+def test_a_vendor_style_cheetah_client_gets_sp_data_and_clear_errors_from_a_19_electrode_sensor(tmp_path):
+    """The Cheetah client sampling the SP frame (E20..E24 = 0xC8..0xD0) from an SP (sensor 1) and a BioTac
+    (sensor 2): the SP's electrode codes equal the software model's; the BioTac's E20..E24 are 0xA558 words
+    (parity flag set), counted as error words, never as samples."""
+    import subprocess
+
+    from emulator.sensor import NoiseSources, Sensor
+    from bench.hosts.cheetah_server import CheetahBench, build_client
+
+    biotac = Sensor(channels_read=ch.DEFAULT_FRAME_NAMES, seed=4, noise=NoiseSources.none())
+    dump = tmp_path / "words.txt"
+    with CheetahBench(sensors={1: pressed_sp(), 2: biotac}) as cb:
+        exe = build_client(cb.library)
+        r = subprocess.run([str(exe), "1", "sp", str(dump)], capture_output=True, text=True, env=cb.env, timeout=120)
+        assert r.returncode == 0, r.stderr
+    serials = [line.split()[-1] for line in r.stdout.splitlines() if line.startswith("serial")]
+    assert serials[0].startswith("BTSP") and serials[1].startswith("BT0101")
+    fields = r.stdout.splitlines()[-1].split()
+    stats = dict(zip(fields[::2], fields[1::2]))
+    assert stats["frames"] == "5" and stats["parity_errors"] == "0" and stats["error_words"] == str(5 * 5)
+    rows = [line.split() for line in dump.read_text().splitlines()]
+    words = {(int(s), int(i)): (int(c, 16), int(w, 16)) for i, s, c, w in rows}
+    sp_words = np.array([words[1, 54 + k][1] for k in ELECTRODE_SLOTS], np.uint16)  # the second frame
+    value, ok = proto.decode_response(sp_words)
+    assert ok.all() and np.array_equal(value, reference_electrode_codes())
+    vendor = [words[2, 54 + k] for k in range(54) if SP.frame_names[k] in {"E20", "E21", "E22", "E23", "E24"}]
+    assert [c for c, _ in vendor] == [0xC8, 0xCB, 0xCD, 0xCE, 0xD0]
+    assert all(w == proto.ERROR_WORDS["channel_not_recognized"] for _, w in vendor)
+    assert not proto.decode_response(np.array([w for _, w in vendor], np.uint16))[1].any()
