@@ -2,8 +2,10 @@
 
 Force stimuli are described by their cumulative impulse C(t) = ∫F dt, and reach
 the grid as the exact mean force over the interval centred on each grid instant,
-(C(t_n + Δt/2) − C(t_n − Δt/2))/Δt.  A 0.4 ms sphere impact therefore carries the same impulse
+(C(t_n + Δt/2) − C(t_n − Δt/2))/Δt.  A sub-millisecond sphere impact therefore carries the same impulse
 at 4.4 kHz as at 70 kHz, and no grid delays it (a one-sided interval would delay it by Δt/2).
+Sphere impacts are Hertz contacts: the duration and pulse shape follow from the sphere's mass and radius,
+the skin's modulus and the approach speed; the impulse is the momentum change m·v·(1 + e).
 Displacement stimuli are smooth and are sampled at the grid instants.
 """
 
@@ -15,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from emulator.effects import Block, Effect
+from emulator.mechanics import hertz_contact
+from emulator.params import SensorParams
 
 GRAVITY_M_PER_S2 = 9.80665
 
@@ -28,6 +32,42 @@ SPHERES: dict[str, tuple[float, float]] = {
     "5/64 in aluminum bearing": (11.415e-6, 7.830e-6),
 }
 DROP_HEIGHT_M = 0.07
+
+#: densities of the spheres' materials (kg/m³): eutectic tin-lead solder, aluminium, bearing steel
+MATERIAL_DENSITY_KG_PER_M3 = {"solder": 8400.0, "aluminum": 2700.0, "steel": 7850.0}
+
+
+def sphere_density_kg_per_m3(name: str) -> float:
+    """Density of a sphere of :data:`SPHERES` from the material its name gives."""
+    for material, rho in MATERIAL_DENSITY_KG_PER_M3.items():
+        if material in name.lower():
+            return rho
+    raise ValueError(f"sphere {name!r}: name none of the materials {', '.join(MATERIAL_DENSITY_KG_PER_M3)}")
+
+
+def sphere_radius_m(mass_kg: float, density_kg_per_m3: float) -> float:
+    """Radius of a solid sphere of this mass and density (m)."""
+    return float((3.0 * mass_kg / (4.0 * np.pi * density_kg_per_m3)) ** (1.0 / 3.0))
+
+
+#: name -> radius (m) from the published mass and the material's density (the names' diameters within 3 %)
+SPHERE_RADII_M: dict[str, float] = {n: sphere_radius_m(m, sphere_density_kg_per_m3(n)) for n, (m, _) in SPHERES.items()}
+
+_DEFAULTS = SensorParams()
+#: plane-strain modulus E/(1 − ν²) of the skin a sphere lands on (Pa), for drops built without a sensor
+SKIN_CONTACT_MODULUS_PA = _DEFAULTS.skin_youngs_modulus_Pa / (1.0 - _DEFAULTS.skin_poisson_ratio**2)
+
+
+def _hertz_pulse_table(n: int = 4096):
+    """Cumulative of sin^(3/2)(πx) over x in [0, 1], normalized to end at 1 (the Hertz force pulse shape)."""
+    fine = 16
+    x = np.linspace(0.0, 1.0, n * fine + 1)
+    f = np.sin(np.pi * x) ** 1.5
+    c = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(x))])
+    return x[::fine], c[::fine] / c[-1], float(c[-1])
+
+
+_HERTZ_X, _HERTZ_C, HERTZ_SHAPE_INTEGRAL = _hertz_pulse_table()
 
 
 class ForceStimulus(ABC):
@@ -67,13 +107,36 @@ class Tap(ForceStimulus):
 
 @dataclass
 class SphereDrop(ForceStimulus):
-    """A sphere of ``mass_kg`` dropped from ``height_m`` landing at ``time_s``: a half-sine impulse."""
+    """A sphere of ``mass_kg`` dropped from ``height_m`` landing at ``time_s``: a Hertz impact.
+
+    The force pulse is F(t) ∝ sin^(3/2)(π·t/t_c) (Hertz: F ∝ δ^(3/2), δ ≈ δ_max·sin(π·t/t_c)) with the elastic
+    Hertz duration t_c = 2.94·δ_max/v of a sphere of radius ``radius_m`` (default: from the mass and
+    ``density_kg_per_m3``) on a skin of plane-strain modulus ``contact_modulus_Pa``; its area is the momentum
+    change m·v·(1 + e).  Faster impacts are shorter (t_c ∝ v^(−1/5)), so the force spectrum depends on the
+    speed.  ``contact_s`` (s), if given, replaces the Hertz pulse by a half-sine of that duration (legacy).
+    """
 
     time_s: float
     mass_kg: float
     height_m: float = DROP_HEIGHT_M
     restitution: float = 0.3
-    contact_s: float = 0.4e-3
+    contact_s: float | None = None
+    radius_m: float | None = None
+    density_kg_per_m3: float = MATERIAL_DENSITY_KG_PER_M3["steel"]
+    contact_modulus_Pa: float = SKIN_CONTACT_MODULUS_PA
+
+    def __post_init__(self):
+        checks = {"mass_kg": self.mass_kg, "height_m": self.height_m, "density_kg_per_m3": self.density_kg_per_m3,
+                  "contact_modulus_Pa": self.contact_modulus_Pa}
+        if self.radius_m is not None:
+            checks["radius_m"] = self.radius_m
+        if self.contact_s is not None:
+            checks["contact_s"] = self.contact_s
+        for name, value in checks.items():
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"SphereDrop.{name} = {value!r}: must be a finite number > 0")
+        if not 0.0 <= self.restitution <= 1.0:
+            raise ValueError(f"SphereDrop.restitution = {self.restitution!r}: allowed range is 0 to 1")
 
     @property
     def impact_speed_m_per_s(self) -> float:
@@ -84,9 +147,32 @@ class SphereDrop(ForceStimulus):
         return self.mass_kg * GRAVITY_M_PER_S2 * self.height_m
 
     @property
+    def momentum_Ns(self) -> float:
+        """Momentum at impact m·v."""
+        return self.mass_kg * self.impact_speed_m_per_s
+
+    @property
     def impulse_Ns(self) -> float:
         """Momentum transferred: m·v·(1 + e)."""
-        return self.mass_kg * self.impact_speed_m_per_s * (1.0 + self.restitution)
+        return self.momentum_Ns * (1.0 + self.restitution)
+
+    @property
+    def sphere_radius_m(self) -> float:
+        return self.radius_m if self.radius_m is not None else sphere_radius_m(self.mass_kg, self.density_kg_per_m3)
+
+    @property
+    def contact_duration_s(self) -> float:
+        """Hertz contact duration (or the given ``contact_s``)."""
+        if self.contact_s is not None:
+            return self.contact_s
+        return hertz_contact(self.mass_kg, self.sphere_radius_m, self.impact_speed_m_per_s, self.contact_modulus_Pa)[0]
+
+    @property
+    def peak_force_N(self) -> float:
+        """Largest force of the pulse (N)."""
+        if self.contact_s is not None:
+            return np.pi / 2 * self.impulse_Ns / self.contact_s
+        return self.impulse_Ns / (self.contact_duration_s * HERTZ_SHAPE_INTEGRAL)
 
     @property
     def start_s(self):
@@ -94,11 +180,14 @@ class SphereDrop(ForceStimulus):
 
     @property
     def end_s(self):
-        return self.time_s + self.contact_s
+        return self.time_s + self.contact_duration_s
 
     def cumulative(self, t):
-        x = np.clip(np.asarray(t, float) - self.time_s, 0.0, self.contact_s)
-        return 0.5 * self.impulse_Ns * (1.0 - np.cos(np.pi * x / self.contact_s))
+        tc = self.contact_duration_s
+        x = np.clip((np.asarray(t, float) - self.time_s) / tc, 0.0, 1.0)
+        if self.contact_s is not None:
+            return 0.5 * self.impulse_Ns * (1.0 - np.cos(np.pi * x))
+        return self.impulse_Ns * np.interp(x, _HERTZ_X, _HERTZ_C)
 
 
 @dataclass

@@ -37,10 +37,18 @@ EXPECTED_KINDS = {
     "intrinsic noise in pressure": "derived",  # ... and in Pa
     "PAC range (half-span)": "derived",  # 2048 × the PAC scale
     "PDC code at full transducer range 103.4 kPa": "consistency",  # tolerance = the whole ADC range
-    "force per PDC bit, 0–2 N": "consistency",  # the slope is defined by 11.5 mN/bit
+    "force per PDC bit, 0–2 N": "calibrated",  # skin_direct_stiffness_N_per_m; the bridge/gain/ADC still enter
+    "linearity of force -> PDC, 0–2 N": "calibrated",  # skin_relaxed_modulus_fraction (R² near 0.995)
+    "PDC creep under a held 1 N, 0.2 → 10 s": "consistency",  # bounds on a model choice; D has no figure
+    "PDC hysteresis loop, 0–2 N at 0.5 N/s": "consistency",
     "slope above the knee / slope below": "consistency",
-    "impact ringing frequency": "consistency",
-    "impact ringing decay time constant": "consistency",
+    "impact ringing frequency": "calibrated",  # resonance_Hz anchors the skin's moving mass at 0.5 mL
+    "impact ringing decay time constant": "calibrated",  # resonance_decay_s anchors the skin's loss factor
+    "impact ringing over 0.3–0.7 mL: lowest": "prediction",
+    "impact ringing over 0.3–0.7 mL: highest": "prediction",
+    "ringing frequency change 0.4 → 0.6 mL": "prediction",
+    "impact ring amplitude / momentum change m·v·(1+e)": "consistency",  # the model's own impulse formula
+    "detection threshold spread: energy / momentum": "prediction",  # a documented deviation from D
     "false detections at rest": "consistency",  # P ≈ 1e-9 per window
     "settled thermistor above ambient": "consistency",  # heater_rise_K
     "TDC conversion error over 0–70 °C": "consistency",
