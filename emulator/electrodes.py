@@ -34,7 +34,9 @@ from scipy import signal, special
 
 from emulator import filters
 from emulator.channels import ELECTRODE_FIRST
+from emulator.mechanics import skin_fluid
 from emulator.params import SensorParams
+from emulator.viscoelastic import Creep
 
 CHUNK_S = 1.0  # the model advances in 1 s chunks aligned to absolute time (per-chunk overhead dominates)
 CORE_RADIUS_MM = 5.0
@@ -152,26 +154,34 @@ def bulge_balance(p: SensorParams, center_mm, w_mm: float) -> float:
     return float(v_in / v_ring) if v_ring > 0 else 0.0
 
 
+def indentation_fraction(p: SensorParams, force_N) -> np.ndarray:
+    """a(F) = 1 − exp(−F/F₀): the static share of the available gap a normal force F (N) squeezes out, 1."""
+    return 1.0 - np.exp(-np.asarray(force_N, float) / p.indentation_force_N)
+
+
 def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray,
-                      rest_mm: np.ndarray | None = None) -> np.ndarray:
+                      rest_mm: np.ndarray | None = None, fractions: list | None = None) -> np.ndarray:
     """(len(t), N) fluid thickness over every electrode (``positions`` (N, 3), mm), mm.
 
     ``rest_mm`` : (N,) resting gaps (default :func:`resting_gaps_mm`).  Each contact thins the fluid over
     electrode i by (g_i − g_min)·a(F)·exp(−d²/2w²), a(F) = 1 − exp(−F/F₀), so the skin bottoms at g_min under a
     hard press whatever the electrode's resting gap, and raises it by the rim bulge κ·δ₀·(d²/2s²)·exp(−d²/2s²)
     with δ₀ = (g₀ − g_min)·a(F) at the nominal resting gap g₀: the displaced liquid, put back near the rim.
+    ``fractions`` : per contact, a(t) to use instead of the static a(F(t)) (the creeping skin), or None.
     """
     g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
     rest = resting_gaps_mm(p, positions.shape[0]) if rest_mm is None else np.asarray(rest_mm, float)
     frac = np.zeros((t.size, positions.shape[0]))
     bulge = np.zeros_like(frac)
-    for c in contacts:
-        if c.end_s < t[0] or c.start_s > t[-1]:
+    for i, c in enumerate(contacts):
+        a = None if fractions is None else fractions[i]
+        if a is None:
+            if c.end_s < t[0] or c.start_s > t[-1]:
+                continue
+            a = indentation_fraction(p, c.state(t)[0])  # bounded: bottoms at g_min
+        if not a.any():
             continue
-        f, ft = c.state(t)
-        if not f.any():
-            continue
-        a = 1.0 - np.exp(-f / p.indentation_force_N)  # bounded: bottoms at g_min
+        ft = c.state(t)[1]
         w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
         kappa = bulge_balance(p, c.center_mm, np.sqrt(w2))
         # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
@@ -251,14 +261,33 @@ class ElectrodeModel:
         self.mux_injection = a * p.mux_injection_V
         self.mux_node = float(rest[0])
         self.stuck = self.faults.get("mux_stuck")  # electrode number the multiplexer is stuck on
+        # the skin creeps under a held force (standard linear solid with the fluid in parallel, as for PDC): each
+        # contact's force goes through its own creep filter (state carried across chunks) before the depth law,
+        # so the compliance creeps while the bottoming on the core stays a hard, instantaneous limit
+        sf = skin_fluid(p)
+        self.creep_time_s, self.creep_ratio = sf.creep_time_s, sf.creep_ratio
+        self.creeps = [Creep.standard_linear_solid(sf.creep_time_s, sf.creep_ratio) for _ in contacts]
+        for c, cr in zip(contacts, self.creeps):
+            cr.settle(float(c.state(np.array([0.0]))[0][0]))  # a contact loaded at t = 0 has been forever
+        self.rate_Hz = rate_Hz
 
     def _advance_chunk(self):
         t = (self.k + 1 + np.arange(self.chunk)) * self.dt
-        active = [c for c in self.contacts if c.end_s >= t[0] and c.start_s <= t[-1]]
+        fractions = []
+        for c, cr in zip(self.contacts, self.creeps):
+            touching = c.end_s >= t[0] and c.start_s <= t[-1]
+            if not touching and cr.last == 0.0 and np.all(np.abs(cr.state) < 1e-9):  # N: no trace left
+                cr.state[:] = 0.0  # released and recovered: nothing left to creep back
+                fractions.append(None)
+                continue
+            f = c.state(t)[0] if touching else np.zeros(t.size)
+            fractions.append(indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0)))
+        active = [i for i, a in enumerate(fractions) if a is not None]
         if not active and np.allclose(self.zi, self.zi_rest, rtol=0, atol=1e-12):
             y = np.broadcast_to(self.rest, (self.chunk, self.n))  # nothing touching and the filter settled: rest
         else:
-            gaps = electrode_gaps_mm(self.p, active, t, self.positions, self.rest_gaps_mm)
+            gaps = electrode_gaps_mm(self.p, [self.contacts[i] for i in active], t, self.positions,
+                                     self.rest_gaps_mm, [fractions[i] for i in active])
             v = electrode_volts(self.p, gaps, self.faults)
             y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
         self.k += self.chunk

@@ -81,3 +81,50 @@ def test_a_units_resting_codes_differ_by_electrode_and_every_rest_uses_them():
     for s, t0 in ((untouched, 0.2), (touched, 2.5)):
         codes = np.array([s.sample(np.array([i, i]), t0 + np.array([0.0, 1e-4]))[-1] for i in idx], float)
         assert np.allclose(codes, expected, atol=2.0)
+
+
+# --- viscoelastic creep of the indentation (emulator/viscoelastic.py) -------------------------------------------
+def test_a_held_force_makes_the_electrode_code_creep_and_a_release_recovers():
+    from emulator import conversions as conv
+    from emulator.channels import channel_index
+    from emulator.electrodes import indentation_fraction, resting_gaps_mm
+    from emulator.mechanics import skin_fluid
+    from emulator.sensor import NoiseSources, Sensor
+    from emulator.stimuli import Touch
+
+    p = SensorParams()
+    sf = skin_fluid(p)
+    assert 0.5 < sf.creep_ratio < 1.0 and sf.creep_time_s > 0.1
+    touch = Touch(0.5, 1.0, 0.01, 6.0, electrode="E17")  # 1 N on within 10 ms, held 6 s, off within 10 ms
+    s = Sensor(stimuli=[touch], channels_read=["E17"], noise=NoiseSources.none())
+    t = np.array([0.4, 0.7, 1.5, 3.0, 6.4, 6.8, 8.0, 12.0])
+    codes = s.sample(np.full(t.size, channel_index("E17")), t).astype(float)
+    z = conv.impedance_ohm(codes)
+    assert z[1] < z[2] < z[3] < z[4]  # held: the skin creeps toward the core, the impedance keeps rising
+    # the pressed electrode's gap follows a(F·c(t)), c = r + (1 − r)(1 − e^(−t/τ)) (standard linear solid)
+    gmin, g0 = p.minimum_gap_mm, resting_gaps_mm(p, 19)[16]
+
+    def z_at(held_s):
+        c = sf.creep_ratio + (1 - sf.creep_ratio) * (1 - np.exp(-held_s / sf.creep_time_s))
+        gap = g0 - (g0 - gmin) * indentation_fraction(p, 1.0 * c)
+        return p.electrode_series_ohm + p.fluid_sheet_ohm_mm / gap
+
+    assert z[4] / z[1] == pytest.approx(z_at(5.9) / z_at(0.2), rel=0.01)
+    assert z[4] / z[1] > 1.03  # a visible creep: several % in impedance, tens of codes
+    assert codes[1] - codes[4] > 10
+    # released: the skin recovers over the same time, back to rest
+    assert z[5] > z[6] > z[7] and z[7] == pytest.approx(z[0], rel=2e-3)
+
+
+def test_the_crept_pattern_does_not_depend_on_how_the_host_reads_it():
+    from emulator.channels import channel_index
+    from emulator.sensor import NoiseSources, Sensor
+    from emulator.stimuli import Touch
+
+    stim = [Touch(0.3, 1.2, 0.2, 2.5, electrode="E10")]
+    t = np.sort(np.random.default_rng(3).uniform(0.0, 5.0, 400))
+    idx = np.full(t.size, channel_index("E10"))
+    whole = Sensor(stimuli=stim, channels_read=["E10"], noise=NoiseSources.none()).sample(idx, t)
+    s = Sensor(stimuli=stim, channels_read=["E10"], noise=NoiseSources.none())
+    parts = np.concatenate([s.sample(idx[i:i + 37], t[i:i + 37]) for i in range(0, t.size, 37)])
+    np.testing.assert_array_equal(whole, parts)

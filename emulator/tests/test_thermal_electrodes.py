@@ -132,8 +132,18 @@ def test_shear_skews_the_pattern_toward_its_direction():
                       0.5)
     sheared = impedances(Sensor(stimuli=[Touch(0.1, 1.5, 0.2, 1.0, electrode="E17", tangential_N=1.5)],
                                 channels_read=E, noise=QUIET), 0.5)
-    tipward, rootward = 9, 17  # E10 (x = 1.3 mm) lies toward the tip of E17, E18 (x = −9.8 mm) away from it
-    assert sheared[tipward] - base[tipward] > 0 > sheared[rootward] - base[rootward]
+    rest = impedances(Sensor(channels_read=E, noise=QUIET), 0.5)
+    tipward = 9  # E10 (x = 1.3 mm) lies toward the tip of E17 (x = −2.8 mm)
+    assert sheared[tipward] - base[tipward] > 0
+    # the dimple (impedances above rest) moves toward the tip: its impedance-weighted centre along x moves +x
+    # (electrodes on the rim bulge behind it move the other way: the bulge leaves them, so no rootward sign test)
+    x = electrode_positions_mm()[:, 0]
+
+    def centre_x(z):
+        rise = np.maximum(z - rest, 0.0)
+        return float((rise * x).sum() / rise.sum())
+
+    assert centre_x(sheared) - centre_x(base) > 0.5
 
 
 def test_forces_that_bottom_the_skin_stay_bounded():
