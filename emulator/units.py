@@ -27,8 +27,9 @@ Spreads and their basis (σ of a normal draw clipped at ±3σ unless said otherw
   stage-2 (PAC mid-scale) bias σ 10 mV (1.65 V from a 1 % divider: ±16 mV worst case).
 * electrode geometry — ``electrode_gap_spread_mm`` = :data:`ELECTRODE_GAP_SPREAD_MM` and a per-unit
   ``electrode_gap_seed``: each electrode's resting fluid gap differs (skin thickness and core moulding, D ch. 4
-  reports uneven skin thickness in moulded skins); 0.5 mm is sized so a unit's resting electrode codes span
-  roughly 1900–3200 (provisional until the electrode model's helper reports its figure).
+  reports uneven skin thickness in moulded skins); 0.7 mm is sized on the electrode model (emulator/electrodes.py,
+  gaps truncated at ±2σ): over 20 units the resting codes' 2nd–98th percentiles are 1900–3150 (0.5 mm gives
+  2410–3100, 0.6 mm 2200–3130), each unit spanning ~1000 codes.
 * thermistor — R25 uniform within ±1 % and Beta uniform within ±3 %: the tolerance letters of the part D names
   (Vishay NTCS0805E3474FXT: F = ±1 % on R25, X = ±3 % on B25/85).  A band, not a σ: parts are sorted into it.
   (Honoured once :mod:`emulator.thermal` reads ``thermistor_r25_ohm`` / ``thermistor_beta_K``.)
@@ -57,8 +58,8 @@ _SEED_SERIAL = re.compile(r"^BTU(\d{13})$")
 MAX_UNIT_SEED = 2**31 - 1
 MAX_SERIAL_LENGTH = 32
 
-#: spread of each electrode's resting gap (mm) of a drawn unit — provisional, see the module docstring
-ELECTRODE_GAP_SPREAD_MM = 0.5
+#: spread of each electrode's resting gap (mm) of a drawn unit, sized on the electrode model (module docstring)
+ELECTRODE_GAP_SPREAD_MM = 0.7
 INFLATION_SPREAD_ML = 0.03
 BRIDGE_OFFSET_SPREAD_V_PER_V = 1.0e-3
 SPAN_SPREAD = 0.0025
