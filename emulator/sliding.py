@@ -121,14 +121,23 @@ class CommandedMotion:
     _finger: list = field(default_factory=list)  # (t, depth m, depth rate m/s)
     _stage: list = field(default_factory=list)  # (t, velocity m/s, acceleration m/s²)
     _stage_velocity: float = 0.0
+    _computed_until_s: float = -math.inf  # latest instant the sensor has already evaluated the motion at
 
     def __post_init__(self):
         self._finger = [(self.start_s, self.depth_m, 0.0)]
         self._stage = [(self.start_s, 0.0, 0.0)]
 
+    def _check_not_past(self, t: float, what: str) -> None:
+        """A command must not change the motion at instants the sensor has already computed."""
+        if t < self._computed_until_s:
+            raise ValueError(f"{what} command takes effect at {t:.6f} s, but the sensor has already computed the "
+                             f"motion through {self._computed_until_s:.6f} s: give commands at least the latency "
+                             "ahead of what has been read")
+
     def move_finger(self, t_s: float, rate_m_per_s: float) -> float:
         """From ``t_s`` + latency the finger moves down at ``rate_m_per_s`` (negative: up); returns the instant."""
         t = t_s + self.latency_s
+        self._check_not_past(t, "finger")
         t0, d0, r0 = self._finger[-1]
         if t < t0:
             raise ValueError(f"finger command at {t:.6f} s is older than the last one ({t0:.6f} s)")
@@ -139,7 +148,8 @@ class CommandedMotion:
         """From ``t_s`` + latency the stage accelerates at ``accel_m_per_s2`` to ``velocity_m_per_s``; returns
         (start, end) of the change."""
         t = t_s + self.latency_s
-        v0 = self.stage_velocity_m_per_s(np.array([t]))[0]
+        self._check_not_past(t, "stage")
+        v0 = self._piecewise(self._stage, np.array([t]))[0]
         dv = float(velocity_m_per_s) - v0
         dur = abs(dv) / accel_m_per_s2
         self._stage.append((t, v0, math.copysign(accel_m_per_s2, dv) if dur > 0 else 0.0))
@@ -147,18 +157,22 @@ class CommandedMotion:
         return t, t + dur
 
     def depth_at(self, t: np.ndarray) -> np.ndarray:
-        """Finger depth below the surface (m) at instants ``t``."""
-        t = np.asarray(t, float)
-        starts = np.array([s[0] for s in self._finger])
-        k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, None)
-        seg = np.array(self._finger)[k]
-        return seg[:, 1] + seg[:, 2] * (t - seg[:, 0])
+        """Finger depth below the surface (m) at instants ``t`` (s), as the sensor computes them."""
+        return self._piecewise(self._finger, t, computing=True)
 
     def stage_velocity_m_per_s(self, t: np.ndarray) -> np.ndarray:
+        """Stage velocity (m/s) at instants ``t`` (s), as the sensor computes them."""
+        return self._piecewise(self._stage, t, computing=True)
+
+    def _piecewise(self, segments: list, t, computing: bool = False) -> np.ndarray:
+        """Value of piecewise-linear ``segments`` (start s, value, slope) at ``t``; ``computing`` marks instants the
+        sensor has now evaluated (later commands must not reach back before them)."""
         t = np.asarray(t, float)
-        starts = np.array([s[0] for s in self._stage])
-        k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, None)
-        seg = np.array(self._stage)[k]
+        if computing and t.size:
+            self._computed_until_s = max(self._computed_until_s, float(t.max()))
+        seg = np.array(segments)
+        k = np.clip(np.searchsorted(seg[:, 0], t, side="right") - 1, 0, None)
+        seg = seg[k]
         return seg[:, 1] + seg[:, 2] * (t - seg[:, 0])
 
     def decided_until(self) -> float:

@@ -150,7 +150,7 @@ class TextureRig:
                 k = int(over[0]) + 1
                 reached = float(means[before + k - 1] - baseline)
                 run = snapshot
-                run.read(k)  # short blocks: nothing is computed beyond the stop command's effect
+                run.read_exactly(k)  # nothing is computed beyond the stop command's effect
                 break
         if reached is None:
             raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on {texture.name}")
@@ -208,6 +208,21 @@ class _Run:
     def now(self) -> float:
         """The next slot's instant (s)."""
         return self.sampler.next_slot / self.sampler.slot_rate_Hz
+
+    def read_exactly(self, n_frames: int) -> None:
+        """:meth:`read`, computing the sensor's grid in one block through the last instant these frames need
+        and not beyond, so a command given right after still lies in the future of everything computed."""
+        last_slot = self.sampler.next_slot + n_frames * self.frame - 1
+        _, t_last, _ = self.sampler.slots(np.array([last_slot]))
+        fs = self.sensor.fs
+        needed = int(np.floor(t_last[0] * fs)) + 2  # grid samples through the last one interpolation reads
+        computed = int(round(self.sensor.simulated_s * fs))
+        block_n = self.sensor.block_n
+        self.sensor.block_n = max(1, needed - computed)
+        try:
+            self.read(n_frames)
+        finally:
+            self.sensor.block_n = block_n
 
     def read(self, n_frames: int) -> None:
         """Read ``n_frames`` frames through SPI, with the stage current and the true load once per frame."""

@@ -115,6 +115,18 @@ def test_lift_off_mid_slide_and_force_steps_stay_finite():
     _finite_and_bounded(pac, 10.0)
 
 
+@pytest.mark.unit
+def test_a_command_reaching_back_into_computed_instants_is_refused():
+    """A rig's command takes effect after its latency; if the sensor already computed past that instant the
+    command would silently rewrite the past, so it is refused, naming both instants."""
+    motion = CommandedMotion(SAND, latency_s=0.02, start_s=0.0)
+    sensor = Sensor(stimuli=[motion], channels_read=["PDC"], block_s=0.1, record_signals=("normal_force_N",))
+    sensor.signal("normal_force_N", [0.05])  # computes the grid through the first 0.1 s block
+    motion.move_finger(0.09, 1e-3)  # takes effect at 0.11 s: after the block, accepted
+    with pytest.raises(ValueError, match="already computed the motion through"):
+        motion.move_stage(0.05, 0.01)  # would take effect at 0.07 s, inside the computed block
+
+
 @pytest.mark.stability
 def test_stiff_bristles_extreme_roughness_and_perfectly_smooth_surfaces_stay_finite():
     stiff = SensorParams().replace(bristle_stiffness_per_N=1e9, skin_tangential_damping_N_s_per_m=0.0)
