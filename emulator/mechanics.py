@@ -30,7 +30,7 @@ import numpy as np
 from emulator import filters
 from emulator.effects import Block, Effect
 from emulator.params import SensorParams
-from emulator.viscoelastic import Creep, sls_retardation
+from emulator.viscoelastic import Creep
 
 #: inflation at which ``resonance_Hz`` and ``resonance_decay_s`` are published (D ch. 4: ~0.5 cc)
 NOMINAL_INFLATION_ML = 0.5
@@ -101,9 +101,14 @@ def skin_fluid(p: SensorParams) -> SkinFluid:
     m = skin_mass + m_f
     w = math.sqrt(k / m)
     decay = 1.0 / (c_f / (2 * m) + eta * w / 2)
-    tau, ratio = sls_retardation(p.skin_relaxation_time_s, rE, kf / ks_inf if ks_inf > 0 else math.inf) \
-        if ks_inf > 0 else (p.skin_relaxation_time_s, 1.0)
-    phi_relaxed = kf / (kf + ks_inf)
+    # creep of the pair (skin SLS ∥ elastic fluid path) under a held force: sls_retardation with the stiffnesses
+    # written out, so that a vanishing skin stiffness (no creep) needs no division by it
+    k_relaxed, k_instant = kf + ks_inf, kf + ks_0
+    if k_relaxed > 0.0:
+        tau, ratio = p.skin_relaxation_time_s * k_instant / k_relaxed, k_relaxed / k_instant
+        phi_relaxed = kf / k_relaxed
+    else:  # neither path stiff: the fluid takes the load as it comes
+        tau, ratio, phi_relaxed = p.skin_relaxation_time_s, 1.0, 1.0
     out = SkinFluid(
         fluid_stiffness_N_per_m=kf, skin_stiffness_relaxed_N_per_m=ks_inf, skin_stiffness_instant_N_per_m=ks_0,
         pressure_per_N_relaxed=phi_relaxed / A, pressure_per_N_instant=phi_relaxed * ratio / A,
