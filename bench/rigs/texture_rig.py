@@ -125,12 +125,12 @@ class TextureRig:
         motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
                                  max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
         run = _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
-                          fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.latency_s / 2,
+                          fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
                           record_signals=("stage_force_N", "normal_force_N")),
                    motion, effect_rng(seed, "rig.motor_current"), s)
         frame_s = run.frame / run.sampler.slot_rate_Hz
         # baseline at rest, then lower until the PDC change reaches the target
-        run.read(int(round(s.baseline_s / frame_s)))
+        run.read_exactly(int(round(s.baseline_s / frame_s)))  # the lowering command follows
         baseline = float(np.mean(run.log.pdc_codes()))
         target = movement.force_N / FORCE_PER_PDC_BIT_N
         run.motion.move_finger(run.now, s.lower_rate_m_per_s)
@@ -140,7 +140,6 @@ class TextureRig:
             # read a window as if the finger keeps lowering (it does, until the controller stops it); if the
             # controller would stop inside it, go back to before the window and read exactly up to that frame
             snapshot = run.snapshot()
-            run.sensor.block_n = max(1, int(round(s.chunk_s * run.sensor.fs)))
             before = run.log.pdc_codes().size
             run.read(window)
             pdc = run.log.pdc_codes()
@@ -157,7 +156,6 @@ class TextureRig:
         motion, sampler, log = run.motion, run.sampler, run.log
         t_stop = sampler.next_slot / sampler.slot_rate_Hz
         contact_s = motion.move_finger(t_stop, 0.0)
-        run.sensor.block_n = max(1, int(round(s.chunk_s * run.sensor.fs)))  # the motion is now planned ahead
         # hold, then slide over the distance: the stage starts, cruises and brakes at planned instants
         slide_start = contact_s + s.hold_s
         v, acc = movement.velocity_m_per_s, s.stage_accel_m_per_s2
