@@ -1,0 +1,141 @@
+"""Several fingers in one scene (issue 10.7): stimuli reach the sensor they name, each sensor is its own unit, and
+every host path — ``run``, the bridge firmware read by the driver's parser, the Cheetah adapter — sees each
+finger's own signals: a finger's PDC rises at its own touch and only then, whatever the other fingers do."""
+
+from __future__ import annotations
+
+import ctypes as C
+
+import numpy as np
+import pytest
+
+from bench.paths import FIXTURES
+from bench.scenes.scene import load_scene, parse_scene_text
+from emulator.channels import channel_index
+from emulator.spi import protocol as proto
+from emulator.units import serial_for, unit
+
+GRASP = FIXTURES / "scenes" / "grasp_three_fingers.toml"
+#: when each finger meets the object (s): the touches' and the slide's starts in grasp_three_fingers.toml
+ONSET_S = {1: 0.5, 2: 0.9, 3: 1.2}
+SETTLED_S = 0.3  # after its onset a finger's force has ramped up (touch ramp 0.25 s, slide approach 0.1 s)
+QUIET_CODES = 6.0  # largest departure from rest before a finger's own touch (PDC noise is ~1 code)
+RISE_CODES = 40.0  # smallest rise once pressed (0.8 N at 11.5 mN/bit is ~70 codes)
+
+
+def check_own_touch_only(times: dict, pdc: dict) -> dict:
+    """Per sensor: PDC at rest until its own onset (while the others press), risen after; returns the rises."""
+    rises = {}
+    for k, onset in ONSET_S.items():
+        t, code = np.asarray(times[k]), np.asarray(pdc[k], float)
+        rest = code[(t > 0.05) & (t < 0.45)].mean()
+        before = code[(t > 0.05) & (t < onset - 0.02)]
+        assert np.abs(before - rest).max() < QUIET_CODES, (k, np.abs(before - rest).max())
+        pressed = code[(t > onset + SETTLED_S) & (t < onset + SETTLED_S + 0.2)]
+        rises[k] = pressed.mean() - rest
+        assert rises[k] > RISE_CODES, (k, rises[k])
+    return rises
+
+
+def test_the_grasp_scene_gives_each_finger_its_unit_and_its_stimuli():
+    sc = load_scene(GRASP)
+    assert sc.n_sensors == 3 and sc.serial == serial_for(17) and sc.params == unit(17).params
+    assert sc.sensors[2].params == unit(18).params and sc.sensors[3].unit == "nominal"
+    assert [len(sc.sensor_spec(k).stimuli) for k in (1, 2, 3)] == [1, 1, 1]
+    assert sc.for_sensor(3).stimuli[0].start_s == ONSET_S[3] and sc.for_sensor(3).seed == sc.seed + 2
+
+
+def test_stimuli_of_sensor_2_do_not_reach_sensor_1():
+    sc = parse_scene_text('[scene]\nname = "s"\nduration_s = 1.0\n[[stimulus]]\nkind = "tap"\nat_s = 0.5\n'
+                          'peak_N = 1.0\nsensor = 2\n')
+    assert sc.stimuli == [] and len(sc.sensors[2].stimuli) == 1 and sc.n_sensors == 2
+    assert sc.sensors[2].params == sc.params  # not declared: sensor 1's twin
+
+
+def test_run_records_every_finger_and_each_rises_at_its_own_touch():
+    from bench.running.runner import run_scene
+
+    rec = run_scene(load_scene(GRASP), progress=False)
+    assert rec.status == "ok", rec.error
+    recs = {1: rec, **rec.sensors}
+    assert sorted(recs) == [1, 2, 3] and recs[3].scene.name == "grasp_three_fingers-sensor3"
+    times = {k: r.channels["PDC"].times for k, r in recs.items()}
+    rises = check_own_touch_only(times, {k: r.channels["PDC"].codes for k, r in recs.items()})
+    assert rises[1] > rises[2] > rises[3]  # 2.0 N, 1.2 N, 0.8 N
+    assert len(recs[3].slides) == 1 and not recs[1].slides  # the slip is the middle finger's
+    rest = [r.channels["PDC"].codes[:20].mean() for r in recs.values()]
+    assert np.ptp(rest) > 10  # three units: three resting levels
+
+
+@pytest.mark.firmware
+def test_the_bridge_firmware_and_driver_see_each_fingers_own_touch():
+    from bench.hosts.cosim import CoSim, VirtualBoard
+    from bench.hosts.driver import CMD_START, DataFrame, FrameParser, encode
+    from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
+
+    sc = load_scene(GRASP)
+    sc.sequence = ["PDC", "TDC"]  # two slots: PDC at 2.2 kHz for all three sensors
+    parser, items = FrameParser(), []
+    board = VirtualBoard(sensors_from_scene(sc, 3), uart_out=lambda b: items.extend(parser.feed(b)))
+    sim = CoSim(board)
+    sim.set_pattern(firmware_pattern(sc))
+    board.send_to_firmware(encode(CMD_START))
+    sim.run(1.8)
+    frames = [i for i in items if isinstance(i, DataFrame)]
+    assert frames and frames[-1].sensors == [1, 2, 3]
+    slot_s = 1.0 / 4400.0
+    t0 = board.t - len(frames) * 2 * slot_s  # frames are back to back from the start command on
+    times, pdc = {}, {}
+    for k in (1, 2, 3):
+        codes = [f.samples(k)["PDC"] for f in frames]
+        times[k] = t0 + np.arange(len(frames)) * 2 * slot_s
+        pdc[k] = np.array([c[0] if c.size else np.nan for c in codes])
+    check_own_touch_only(times, pdc)
+
+
+def _pdc_through_cheetah(lib, h, n_samples: int, period_s: float) -> np.ndarray:
+    """PDC of sensors 1..3 through the Cheetah API the way the vendor's host code reads: command to all,
+    50 µs, each sensor read in turn; one sample every ``period_s``; returns codes[sample, sensor]."""
+    select = (0x01, 0x02, 0x04)
+    cmd = int(proto.sample_command(channel_index("PDC")))
+    per = 2 + 2 * len(select)
+    lib.c_ch_spi_queue_clear(h)
+    for _ in range(n_samples):
+        lib.c_ch_spi_queue_ss(h, 0x07)
+        lib.c_ch_spi_queue_byte(h, 1, cmd)
+        lib.c_ch_spi_queue_byte(h, 1, 0x00)
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, 50000)
+        for s in select:
+            lib.c_ch_spi_queue_ss(h, s)
+            lib.c_ch_spi_queue_byte(h, 2, 0x00)
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, int(period_s * 1e9) - 60000)
+    buf = (C.c_uint8 * (per * n_samples))()
+    assert lib.c_ch_spi_batch_shift(h, per * n_samples, buf) == per * n_samples
+    data = np.frombuffer(bytes(buf), np.uint8).reshape(n_samples, per)
+    words = (data[:, 2::2].astype(np.uint16) << 8) | data[:, 3::2]
+    value, ok = proto.decode_response(words)
+    assert ok.all()
+    return value
+
+
+@pytest.mark.firmware
+def test_the_cheetah_adapter_serves_each_fingers_own_touch(monkeypatch):
+    from bench.hosts.cheetah_server import CheetahBench
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    sc = load_scene(GRASP)
+    with CheetahBench(3, sensors=sensors_from_scene(sc, 3)) as cb:
+        lib = C.CDLL(str(cb.library))
+        monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
+        h = lib.c_ch_open(0)
+        assert h > 0
+        lib.c_ch_spi_bitrate(h, 4400)
+        t_start = cb.t
+        period = 0.005
+        parts = [_pdc_through_cheetah(lib, h, 60, period) for _ in range(6)]  # 1.8 s in batches of 0.3 s
+        lib.c_ch_close(h)
+    codes = np.concatenate(parts)
+    t = t_start + np.arange(len(codes)) * period
+    check_own_touch_only({k: t for k in (1, 2, 3)}, {k: codes[:, k - 1] for k in (1, 2, 3)})
