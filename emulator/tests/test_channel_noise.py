@@ -130,6 +130,7 @@ def test_hum_off_removes_fundamental_and_harmonics_only():
     diff = (with_hum - without) / LSB
     spec = np.fft.rfft(diff)
     f = np.fft.rfftfreq(diff.size, 1 / 4400)
+    assert f[np.argmax(np.abs(spec))] == pytest.approx(60.0, abs=1.0)  # D's lab: 60 Hz mains by default
     keep = np.zeros_like(spec)
     for _, fk, _ in hum_components(SensorParams()):
         k = np.argmin(np.abs(f - fk))
