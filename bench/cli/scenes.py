@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from bench.paths import REPO, SCENES_DIR
 from emulator.fidelity import PROFILES
@@ -30,7 +31,11 @@ status "interrupted"; exit status 130 / 143.
 
 scene file (TOML):
   [scene]    name, duration_s, seed (0), fidelity ("fast" | "default" | "reference"), description
-  [sensor]   any sensor parameter by name, e.g. inflation_volume_mL = 0.6  (see `biotac-bench params`)
+  [sensor]   sensor 1: unit = 17 | "nominal" | "BT..." (a sensor unit: `biotac-bench units`), variant = "biotac" |
+             "biotac-sp", and any sensor parameter by name on top of the unit, e.g. inflation_volume_mL = 0.6
+             (see `biotac-bench params`)
+  [[sensors]] one table per further finger: index = 2..5, unit, variant, parameters (sensors not described are
+             sensor 1's twin, at rest)
   [host]     sequence = "default" (44-slot frame) or ["PAC", "PDC"]; slot_rate_Hz (4400); spi_clock_Hz (4.4e6);
              spi = "software" (the Python model) | "rtl" (the Verilog twin, run by the C++ Verilator harness)
   [noise]    johnson, amplifier, mains_hum, adc, spi_coupling = true | false
@@ -54,7 +59,12 @@ scene file (TOML):
   [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
              heater_failed = true
 
-Every at_s / start_s may be a list: one stimulus per instant (power_on and heater_failure happen once).
+Every at_s / start_s may be a list: one stimulus per instant (power_on and heater_failure happen once per sensor).
+Every [[stimulus]] may name its sensor: sensor = 2 (default 1); it reaches that sensor only.
+
+Several sensors: each runs through its own SPI side and host sampler (the scene's [host], seed + k - 1); --out
+holds sensor 1's files as for one sensor, and sensor<k>/ the same files for sensor k (its own report, traces,
+samples; the sliding trials of a finger that slides).
 The file (UTF-8, at most 1 MB) is validated before anything runs, with --seed/--fidelity/--spi applied; every
 problem is listed with its field, value and allowed range, and so is a scene whose analysis could not run
 (impact_detection without PAC, slides without PAC and PDC, a sequence the scene is too short to read); exit
@@ -72,6 +82,8 @@ def _cmd_run(a) -> int:
     overrides = {k: v for k, v in (("scene.fidelity", a.fidelity), ("scene.seed", a.seed), ("host.spi", a.spi))
                  if v is not None}
     scene = load_scene(a.scene, overrides)  # validated completely, then the out folder checked: both before running
+    if a.out is not None and a.force:
+        _clear_sensor_folders(Path(a.out))
     folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
     try:
         res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
@@ -82,7 +94,13 @@ def _cmd_run(a) -> int:
     out, record = res.folder, res.record
     if not a.quiet:
         print((out / "report.md").read_text())
-    print(f"wrote {out}/ ({', '.join(record['outputs'])})")
+    print(f"wrote {out}/ ({', '.join(record['outputs'])})" + (" for sensor 1" if scene.n_sensors > 1 else ""))
+    for k, sub in sorted(res.recording.sensors.items()):
+        from bench.reporting.report import write_outputs
+
+        sub_record = write_outputs(sub, out / f"sensor{k}", csv=a.csv, plots=not a.no_plots, force=a.force)
+        print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} (unit "
+              f"{sub.scene.unit}, serial {sub.scene.serial}, {len(sub.scene.stimuli)} stimuli)")
     for name, why in record.get("skipped_outputs", {}).items():
         print(f"note: {name} {why}", file=sys.stderr)
     if record["status"] == "interrupted":
@@ -93,6 +111,22 @@ def _cmd_run(a) -> int:
     return res.exit_code
 
 
+def _clear_sensor_folders(out: Path) -> None:
+    """--force: an earlier several-sensor run's sensor<k>/ folders, emptied of run files (nothing else) and removed,
+    so that the out folder holds only a run's own files again."""
+    from bench.reporting.outdir import OutFolder
+
+    if not out.is_dir():
+        return
+    for sub in sorted(out.glob("sensor[0-9]")):
+        if sub.is_dir() and not sub.is_symlink():
+            OutFolder.open(sub, force=True).close()
+            try:
+                sub.rmdir()
+            except OSError:
+                pass  # something else is in it: the out folder's own check names it
+
+
 def _cmd_validate(a) -> int:
     from bench.scenes.scene import SceneError, load_scene
 
@@ -100,7 +134,9 @@ def _cmd_validate(a) -> int:
     for f in a.scenes:
         try:
             sc = load_scene(f)
-            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {len(sc.stimuli)} stimuli, fidelity {sc.fidelity})")
+            more = (f", {sc.n_sensors} sensors ({sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))}"
+                    f" stimuli in all)" if sc.n_sensors > 1 else "")
+            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {len(sc.stimuli)} stimuli, fidelity {sc.fidelity}{more})")
         except SceneError as e:
             print(e, file=sys.stderr)
             bad += 1

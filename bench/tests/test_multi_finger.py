@@ -139,3 +139,22 @@ def test_the_cheetah_adapter_serves_each_fingers_own_touch(monkeypatch):
     codes = np.concatenate(parts)
     t = t_start + np.arange(len(codes)) * period
     check_own_touch_only({k: t for k in (1, 2, 3)}, {k: codes[:, k - 1] for k in (1, 2, 3)})
+
+
+def test_the_run_command_writes_each_fingers_own_report(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    from bench.paths import REPO
+
+    out = tmp_path / "grasp"
+    r = subprocess.run([sys.executable, "-m", "bench.cli", "run", str(GRASP), "--out", str(out), "--quiet",
+                        "--no-plots"], capture_output=True, text=True, cwd=REPO, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "for sensor 2 (unit 18, serial BTU0000000000018" in r.stdout
+    for k, folder in ((1, out), (2, out / "sensor2"), (3, out / "sensor3")):
+        record = json.loads((folder / "record.json").read_text())
+        assert record["status"] == "ok" and (folder / "report.md").is_file() and (folder / "codes.npz").is_file()
+        pdc = np.load(folder / "codes.npz")["PDC_code"]
+        assert pdc.max() - pdc[:20].mean() > RISE_CODES, k  # each folder holds its own finger's touch
