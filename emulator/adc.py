@@ -7,8 +7,8 @@ Each conversion takes the analog value at the commanded instant and adds the noi
 * the PAC path's own extra noise, on PAC conversions only (``pac_path_noise_rms_bits``: the second gain stage
   and the ADC driver of the AC node; the grid noise before it — bridge, amplifier, hum — is in the analog value).
 
-The three are independent Gaussians, so one standard-normal draw per conversion scaled by the conversion's own
-σ = √(σ_adc² + (ppm·v)² + σ_PAC²) carries them all: switching one source off leaves every other conversion's code
+The three are independent Gaussians, so one standard-normal draw per conversion scaled by the conversion's
+own σ = √(σ_adc² + (ppm·v)² + σ_PAC²) carries them all: switching one source off leaves every other conversion's code
 unchanged.  Then SPI coupling if the bus was clocking during the conversion, rounding to the nearest code and
 clipping to 0..4095.  A non-finite input is a modelling error and is reported, never coded.
 """
