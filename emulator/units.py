@@ -56,7 +56,7 @@ SERIAL_PREFIX = "BT"  # the host recognises a BioTac by this prefix
 NOMINAL_SERIAL = "BTNOMINAL0000000"
 _SEED_SERIAL = re.compile(r"^BTU(\d{13})$")
 MAX_UNIT_SEED = 2**31 - 1
-MAX_SERIAL_LENGTH = 32
+MAX_SERIAL_LENGTH = 16  # what the sensor's serial property holds (emulator/spi/model.py)
 
 #: spread of each electrode's resting gap (mm) of a drawn unit, sized on the electrode model (module docstring)
 ELECTRODE_GAP_SPREAD_MM = 0.7
@@ -137,7 +137,7 @@ def seed_of_serial(serial: str) -> int | None:
 
 
 def check_serial(serial) -> None:
-    """ValueError unless ``serial`` is a serial number: "BT" then 1 to 30 letters, digits, '-' or '_'."""
+    """ValueError unless ``serial`` is a serial number: "BT" then 1 to 14 letters, digits, '-' or '_'."""
     if (not isinstance(serial, str) or not serial.startswith(SERIAL_PREFIX) or not 3 <= len(serial) <= MAX_SERIAL_LENGTH
             or not all(c.isascii() and (c.isalnum() or c in "-_") for c in serial)):
         shown = repr(serial) if len(repr(serial)) <= 60 else repr(serial)[:50] + "…"

@@ -28,6 +28,12 @@ Fixtures
                         program at a time may open the adapter; teardown is clean whatever the program did
                         (malformed requests are listed in ``bench.client_errors``); ``trace=True`` keeps every
                         transfer with its time
+
+Sensor units: every factory takes a unit (``emulator.units``: a unit seed, "nominal" or a serial "BT..."):
+``biotac_sensor(unit=17)``, ``biotac_bridge(3, units=[17, 18, "nominal"])`` (sensor k is ``units[k - 1]``; the
+sensors read the default frame, sensor 1 feels ``stimuli``, sensor k draws its noise from ``seed + k``).  Each
+sensor then carries the unit's parameters and its serial number (``sensor.serial``; ``biotac_sensor`` also
+answers it as its serial property).
 """
 
 from __future__ import annotations
@@ -41,17 +47,46 @@ def biotac_sensor():
     from emulator.sensor import Sensor
     from emulator.spi.model import SensorPort
 
-    def make(stimuli=(), channels=DEFAULT_FRAME_NAMES, seed: int = 0, **sensor_kw):
-        return SensorPort(Sensor(stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw))
+    def make(stimuli=(), channels=DEFAULT_FRAME_NAMES, seed: int = 0, unit=None, **sensor_kw):
+        if unit is None:
+            return SensorPort(Sensor(stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw))
+        from emulator.spi.model import default_properties
+        from emulator.units import unit as make_unit
+
+        u = make_unit(unit)
+        sensor = Sensor(params=u.params, stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw)
+        sensor.serial = u.serial
+        return SensorPort(sensor, properties=default_properties(1, sensor.variant.name, serial=u.serial))
 
     return make
+
+
+def unit_sensors(n_sensors: int, units, stimuli=(), seed: int = 1) -> dict:
+    """Sensors 1..n of the given units (a list of n unit seeds / "nominal" / serials), reading the default frame;
+    sensor 1 feels ``stimuli``; sensor k draws its noise from ``seed + k`` (as the benches' own sensors)."""
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.sensor import Sensor
+    from emulator.units import unit
+
+    units = list(units)
+    if len(units) != n_sensors:
+        raise ValueError(f"units = {units!r}: give one unit per sensor ({n_sensors})")
+    out = {}
+    for k, which in enumerate(units, start=1):
+        u = unit(which)
+        out[k] = Sensor(params=u.params, stimuli=list(stimuli) if k == 1 else [], channels_read=DEFAULT_FRAME_NAMES,
+                        seed=seed + k)
+        out[k].serial = u.serial
+    return out
 
 
 def _benches(bench_class):
     """A factory fixture's body: start ``bench_class(n_sensors, stimuli=..., **kw)`` on demand, stop each after."""
     started = []
 
-    def make(n_sensors: int = 1, stimuli=(), **kw):
+    def make(n_sensors: int = 1, stimuli=(), units=None, **kw):
+        if units is not None:
+            kw["sensors"] = unit_sensors(n_sensors, units, stimuli, kw.pop("seed", 1))
         bench = bench_class(n_sensors, stimuli=stimuli, **kw).start()
         started.append(bench)
         return bench

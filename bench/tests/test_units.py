@@ -177,3 +177,15 @@ def test_claims_unit_runs_the_claims_on_that_unit():
     assert rows["PDC scale"]["measured"] != nominal["PDC scale"]["measured"]  # the unit's own bridge span
     r = run_cli("claims", "--unit", "nope", "--only", "scales")
     assert r.returncode == 2 and "--unit" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.firmware  # builds the Cheetah library
+def test_the_pytest_fixtures_take_a_unit(biotac_sensor, biotac_cheetah):
+    from emulator.spi.model import PROP_SERIAL
+
+    port = biotac_sensor(unit=17)
+    assert port.sensor.params == unit(17).params and port.properties[PROP_SERIAL][0] == serial_for(17).encode()
+    assert biotac_sensor().sensor.params == SensorParams()
+    cb = biotac_cheetah(2, units=[4, "nominal"])
+    assert cb.bus.ports[1].sensor.params == unit(4).params and cb.bus.ports[2].sensor.params == SensorParams()
+    assert [cb.bus.ports[k].sensor.serial for k in (1, 2)] == [serial_for(4), NOMINAL_SERIAL]
