@@ -52,7 +52,8 @@ class Harness:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
         cmd = ["verilator", "--cc", "--exe", "--build", "-O3", "-j", "2", *build.CXX20, f"-I{gen}",
-               "--top-module", "biotac_bus", f"-GSP=5'd{self.sp}", "-Mdir", str(self.build_dir / "obj"), "-o", str(self.binary),
+               "--top-module", "biotac_bus", f"-GSP=5'd{self.sp}", "-Mdir", str(self.build_dir / "obj"),
+               "-o", str(self.binary),
                "-Wno-fatal", "-Wno-lint", "-Wno-style", str(HARNESS_CPP), *map(str, build.SOURCES)]
         r = subprocess.run(cmd, capture_output=True, text=True, env=build.verilator_env())
         if r.returncode != 0:

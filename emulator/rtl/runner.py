@@ -18,10 +18,12 @@ class Rtl:
     ``sp``: bit n-1 set where sensor n is a BioTac SP (tb_top's ``SP`` parameter; one build per mask).
     """
 
-    def __init__(self, build_dir: Path = DEFAULT_BUILD_DIR, waves: bool = False, sp: int = 0):
+    def __init__(self, build_dir: Path | None = None, waves: bool = False, sp: int = 0):
         if not (isinstance(sp, int) and 0 <= sp <= 31):
             raise ValueError(f"sp = {sp!r}: a 5-bit mask of BioTac SP sensors (0..31)")
         self.sp = sp
+        if build_dir is None:  # one build per mask: the parameter does not make the runner rebuild
+            build_dir = DEFAULT_BUILD_DIR if sp == 0 else DEFAULT_BUILD_DIR.with_name(f"rtl_build_sp{sp}")
         self.build_dir = Path(build_dir).resolve()
         self.waves = waves
         #: FST when the lz4 headers are there; otherwise cocotb's VCD (same signals, larger file)
@@ -35,7 +37,8 @@ class Rtl:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
         args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
-                "-Wno-style", f"-GSP=5'd{self.sp}"] + (["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else [])
+                "-Wno-style", f"-GSP=5'd{self.sp}"]
+        args += ["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else []
         self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
                           build_dir=str(self.build_dir), build_args=args, waves=self.waves,
                           timescale=("1ps", "1ps"), always=False, log_file=str(self.build_dir / "build.log"))

@@ -94,7 +94,7 @@ SERIAL_LENGTH = 16
 
 
 def default_serial(index: int = 1, variant: str = ch.DEFAULT_VARIANT) -> str:
-    """The 16-character serial number of sensor ``index`` of a variant (``BT0101EMU000001`` …, ``BTSP01EMU00000``…)."""
+    """The 16-character serial number of sensor ``index`` of a variant (``BT0101EMU0000001``, ``BTSP01EMU0000001``)."""
     return f"{SERIAL_PREFIX[ch.variant(variant).name]}EMU00000{index:02d}"
 
 
