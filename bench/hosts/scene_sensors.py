@@ -10,7 +10,8 @@ its sensor (:func:`bench.running.runner.build_sensor`), reading every channel a 
   ``[[stimulus]]``; default 1), and seed ``seed + k - 1`` (independent noise);
 * sensors the scene does not describe share sensor 1's unit, parameters and variant and feel nothing;
 * every sensor shares the scene's faults, noise switches and fidelity;
-* each sensor carries its unit's serial number as ``sensor.serial`` (what the host reads as its serial property);
+* each sensor carries its unit's serial number as ``sensor.serial`` (what the host should read as its serial
+  property; None for the nominal unit, whose ports keep their default serial, one per sensor number);
 * the scene's ``[host]`` section describes the host.  The bridge firmware is the host of the SPI bus: a
   ``sequence`` becomes its sampling pattern; it samples at 4400 slots/s with a 4.4 MHz clock, so other slot
   rates or clocks are refused (they could not be honoured); ``spi`` picks the SPI implementation.  Behind the

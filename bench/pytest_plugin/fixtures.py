@@ -32,8 +32,8 @@ Fixtures
 Sensor units: every factory takes a unit (``emulator.units``: a unit seed, "nominal" or a serial "BT..."):
 ``biotac_sensor(unit=17)``, ``biotac_bridge(3, units=[17, 18, "nominal"])`` (sensor k is ``units[k - 1]``; the
 sensors read the default frame, sensor 1 feels ``stimuli``, sensor k draws its noise from ``seed + k``).  Each
-sensor then carries the unit's parameters and its serial number (``sensor.serial``; ``biotac_sensor`` also
-answers it as its serial property).
+sensor then carries the unit's parameters and its serial number (``sensor.serial``, None for the nominal unit;
+``biotac_sensor`` also answers it as its serial property).
 """
 
 from __future__ import annotations
@@ -55,8 +55,8 @@ def biotac_sensor():
 
         u = make_unit(unit)
         sensor = Sensor(params=u.params, stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw)
-        sensor.serial = u.serial
-        return SensorPort(sensor, properties=default_properties(1, sensor.variant.name, serial=u.serial))
+        sensor.serial = None if u.seed is None else u.serial
+        return SensorPort(sensor, properties=default_properties(1, sensor.variant.name, serial=sensor.serial))
 
     return make
 
@@ -76,7 +76,7 @@ def unit_sensors(n_sensors: int, units, stimuli=(), seed: int = 1) -> dict:
         u = unit(which)
         out[k] = Sensor(params=u.params, stimuli=list(stimuli) if k == 1 else [], channels_read=DEFAULT_FRAME_NAMES,
                         seed=seed + k)
-        out[k].serial = u.serial
+        out[k].serial = None if u.seed is None else u.serial  # nominal: the port's own default serial
     return out
 
 

@@ -73,11 +73,12 @@ class Recording:
 
 
 def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
-    """Sensor 1 of ``scene`` (``scene.for_sensor(k)`` for another), carrying its unit's serial as ``.serial``."""
+    """Sensor 1 of ``scene`` (``scene.for_sensor(k)`` for another), carrying its unit's serial as ``.serial``
+    (None for the nominal unit: the host then sees the port's own default serial, different per sensor)."""
     sensor = Sensor(params=scene.params, stimuli=scene.stimuli, channels_read=scene.channels,
                     fidelity=scene.fidelity, seed=scene.seed, noise=scene.noise, block_s=block_s, faults=scene.faults,
                     variant=scene.variant)
-    sensor.serial = scene.serial
+    sensor.serial = None if scene.unit == "nominal" or not scene.serial else scene.serial
     return sensor
 
 

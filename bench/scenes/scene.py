@@ -88,13 +88,13 @@ class Scene:
     trial_skins: list = field(default_factory=list)  # the skin's state before each slide
     overrides: dict = field(default_factory=dict)  # values given on the command line, e.g. {"scene.seed": 5}
     unit: str = "nominal"  # sensor 1's unit: "nominal" or its seed (emulator.units)
-    serial: str = ""  # sensor 1's serial number
+    serial: str | None = None  # sensor 1's serial number (None: the unit's; "": none of its own, a twin)
     variant: str = "biotac"  # sensor 1's variant (emulator.channels.VARIANTS)
     #: sensors 2..N (declared in [[sensors]] or addressed by a stimulus), by number; sensor 1 is the scene itself
     sensors: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        if not self.serial:
+        if self.serial is None:
             from emulator.units import serial_for
 
             self.serial = serial_for(None if self.unit == "nominal" else int(self.unit))
@@ -106,13 +106,13 @@ class Scene:
 
     def sensor_spec(self, k: int) -> "SensorSpec":
         """Sensor ``k`` (1..N) of the scene; sensors the scene does not describe share sensor 1's unit,
-        parameters and variant and feel nothing."""
+        parameters and variant and feel nothing (with no serial of their own: the host sees the port's default)."""
         if k == 1:
             return SensorSpec(1, self.unit, self.serial, self.params, self.variant, list(self.stimuli),
                               self.skin_before, self.skin_after, list(self.trial_skins))
         if k in self.sensors:
             return self.sensors[k]
-        return SensorSpec(k, self.unit, self.serial, self.params, self.variant, [], {}, {}, [])
+        return SensorSpec(k, self.unit, "", self.params, self.variant, [], {}, {}, [])
 
     def for_sensor(self, k: int) -> "Scene":
         """A one-sensor scene of sensor ``k``: its unit, parameters, variant, stimuli and skin; the scene's host,
@@ -856,7 +856,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     for k in sorted(set(others) | set(per_sensor)):
         if k == 1:
             continue
-        u, var, p_k, ser = others.get(k, (unit, variant, params, serial))
+        u, var, p_k, ser = others.get(k, (unit, variant, params, ""))  # not declared: sensor 1's twin
         own = copy.deepcopy(fresh_skin)  # each finger its own skin, as the [skin] table describes it
         before = own.state()
         slides_k, skins_k, own = build_slides(slide_specs_of.get(k, []), own, int(seed) + k - 1, wear,

@@ -49,7 +49,7 @@ def test_stimuli_of_sensor_2_do_not_reach_sensor_1():
     sc = parse_scene_text('[scene]\nname = "s"\nduration_s = 1.0\n[[stimulus]]\nkind = "tap"\nat_s = 0.5\n'
                           'peak_N = 1.0\nsensor = 2\n')
     assert sc.stimuli == [] and len(sc.sensors[2].stimuli) == 1 and sc.n_sensors == 2
-    assert sc.sensors[2].params == sc.params  # not declared: sensor 1's twin
+    assert sc.sensors[2].params == sc.params and sc.sensors[2].serial == ""  # not declared: sensor 1's twin
 
 
 def test_run_records_every_finger_and_each_rises_at_its_own_touch():
