@@ -160,14 +160,16 @@ def indentation_fraction(p: SensorParams, force_N) -> np.ndarray:
 
 
 def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray,
-                      rest_mm: np.ndarray | None = None, fractions: list | None = None) -> np.ndarray:
+                      rest_mm: np.ndarray | None = None, fractions: list | None = None,
+                      kappas: list | None = None) -> np.ndarray:
     """(len(t), N) fluid thickness over every electrode (``positions`` (N, 3), mm), mm.
 
     ``rest_mm`` : (N,) resting gaps (default :func:`resting_gaps_mm`).  Each contact thins the fluid over
     electrode i by (g_i − g_min)·a(F)·exp(−d²/2w²), a(F) = 1 − exp(−F/F₀), so the skin bottoms at g_min under a
     hard press whatever the electrode's resting gap, and raises it by the rim bulge κ·δ₀·(d²/2s²)·exp(−d²/2s²)
     with δ₀ = (g₀ − g_min)·a(F) at the nominal resting gap g₀: the displaced liquid, put back near the rim.
-    ``fractions`` : per contact, a(t) to use instead of the static a(F(t)) (the creeping skin), or None.
+    ``fractions`` : per contact, a(t) to use instead of the static a(F(t)) (the creeping skin), or None;
+    ``kappas`` : per contact, its :func:`bulge_balance` if already known.
     """
     g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
     rest = resting_gaps_mm(p, positions.shape[0]) if rest_mm is None else np.asarray(rest_mm, float)
@@ -183,7 +185,7 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
             continue
         ft = c.state(t)[1]
         w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
-        kappa = bulge_balance(p, c.center_mm, np.sqrt(w2))
+        kappa = bulge_balance(p, c.center_mm, np.sqrt(w2)) if kappas is None else kappas[i]
         # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
         rel = positions - c.center_mm[None, :]
         along = rel @ np.asarray(c.shear_direction, float)
@@ -270,6 +272,8 @@ class ElectrodeModel:
         for c, cr in zip(contacts, self.creeps):
             cr.settle(float(c.state(np.array([0.0]))[0][0]))  # a contact loaded at t = 0 has been forever
         self.rate_Hz = rate_Hz
+        self.kappas = [bulge_balance(p, c.center_mm, float(np.hypot(c.indenter_radius_mm, p.skin_spread_mm)))
+                       for c in contacts]
 
     def _advance_chunk(self):
         t = (self.k + 1 + np.arange(self.chunk)) * self.dt
@@ -287,7 +291,8 @@ class ElectrodeModel:
             y = np.broadcast_to(self.rest, (self.chunk, self.n))  # nothing touching and the filter settled: rest
         else:
             gaps = electrode_gaps_mm(self.p, [self.contacts[i] for i in active], t, self.positions,
-                                     self.rest_gaps_mm, [fractions[i] for i in active])
+                                     self.rest_gaps_mm, [fractions[i] for i in active],
+                                     [self.kappas[i] for i in active])
             v = electrode_volts(self.p, gaps, self.faults)
             y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
         self.k += self.chunk
