@@ -26,8 +26,9 @@ def _cmd_serve(a) -> int:
             raise SceneError(scene.source, [f"host.spi = {scene.spi!r}: the Cheetah adapter serves the software "
                                             "SPI model only"])
         kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
-        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' (sensor 1 feels its "
-                f"{len(scene.stimuli)} stimuli)")
+        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' ("
+                + "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
+                            for k in range(1, scene.n_sensors + 1)) + ")")
         if scene.sequence != "default" or scene.slot_rate_Hz != 4400.0:
             print("note: the scene's [host] section is not used: your program is the host and chooses what to "
                   "sample and when", file=sys.stderr)

@@ -34,8 +34,10 @@ def _cmd_bridge(a) -> int:
         spi = a.spi or scene.spi
         seed = scene.seed if a.seed is None else a.seed
         faults = ", ".join(f"{k}={v}" for k, v in scene.faults.items()) or "none"
-        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' (parameters, faults: {faults}, "
-                f"noise, fidelity {scene.fidelity}, seed {seed}; sensor 1 feels its {len(scene.stimuli)} stimuli)")
+        feels = "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
+                          for k in range(1, scene.n_sensors + 1))
+        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' (units, parameters, faults: {faults}, "
+                f"noise, fidelity {scene.fidelity}, seed {seed}; {feels})")
     with sigterm_raises():
         try:
             fb = FirmwareBench(a.sensors, seed=seed, realtime=not a.fast, speed=a.speed, spi=spi,
@@ -218,7 +220,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "streams on; with --fast the firmware waits for a reading host instead. Stops on Ctrl-C or "
                     "SIGTERM.", formatter_class=fmt))
     br.add_argument("--sensors", type=whole(1, 5), default=1, help="emulated sensors, 1 to 5 (default 1)")
-    br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it, sensor 1 feels its stimuli")
+    br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it (units, variants, each its own "
+                                                           "stimuli; --sensors at least the scene's count)")
     br.add_argument("--seed", type=whole(0),
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")

@@ -131,10 +131,13 @@ class Scene:
 
     @property
     def channels(self) -> list[str]:
-        from emulator.channels import DEFAULT_FRAME_NAMES
+        """The channels sensor 1 answers: its variant's default frame (a BioTac SP's has E20..E24), or the host
+        sequence's channels."""
+        from emulator.channels import variant
 
-        seq = DEFAULT_FRAME_NAMES if self.sequence == "default" else self.sequence
-        return sorted(set(seq), key=lambda n: CHANNEL_INDEX[n])
+        v = variant(self.variant)
+        seq = v.frame_names if self.sequence == "default" else self.sequence
+        return sorted(set(seq), key=lambda n: v.channel_index[n])
 
 
 @dataclass

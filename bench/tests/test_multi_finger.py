@@ -158,3 +158,20 @@ def test_the_run_command_writes_each_fingers_own_report(tmp_path):
         assert record["status"] == "ok" and (folder / "report.md").is_file() and (folder / "codes.npz").is_file()
         pdc = np.load(folder / "codes.npz")["PDC_code"]
         assert pdc.max() - pdc[:20].mean() > RISE_CODES, k  # each folder holds its own finger's touch
+
+
+def test_a_finger_can_be_a_biotac_sp_and_its_own_e22_feels_its_touch():
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    sc = parse_scene_text('[scene]\nname = "sp"\nduration_s = 1.0\n[[sensors]]\nindex = 2\nvariant = "biotac-sp"\n'
+                          'unit = 5\n[[stimulus]]\nkind = "touch"\nsensor = 2\nelectrode = "E22"\nstart_s = 0.2\n'
+                          'force_N = 1.0\n[noise]\nadc = false\nspi_coupling = false\n')
+    sensors = sensors_from_scene(sc, 2)
+    assert [s.variant.name for s in sensors.values()] == ["biotac", "biotac-sp"]
+    assert sensors[2].params == unit(5).params and "E22" in sc.for_sensor(2).channels
+    e22 = sensors[2].variant.channel_index["E22"]
+    rest, pressed = sensors[2].sample(np.array([e22, e22]), np.array([0.1, 0.9]))
+    assert abs(int(pressed) - int(rest)) > 50  # the SP finger's own fifth-row electrode moves
+    e17 = channel_index("E17")
+    a, b = sensors[1].sample(np.array([e17, e17]), np.array([0.1, 0.9]))
+    assert abs(int(a) - int(b)) <= 3  # sensor 1 feels nothing
