@@ -2,11 +2,33 @@
 
 Contact -> skin and fluid deformation -> fluid gap over every electrode -> impedance -> voltage.
 
+* Resting gaps: electrode i rests under a gap g_i = g₀ + ``electrode_gap_spread_mm``·z_i, z_i a standard
+  normal truncated to ±2 and drawn from ``electrode_gap_seed`` (:func:`resting_gaps_mm`; spread 0: all g₀).
+  A spread of 0.6 mm makes a unit's resting codes span about 2200–3100 (lowest/highest code of the median
+  unit; 10–90 % of units: lowest 1840–2530, highest 3070–3150): a low gap moves the code far more than a
+  high one (the code saturates toward 3545 as the gap grows).
 * A contact at a point of the skin (``x_mm`` along the finger, ``angle_deg`` around it from the ventral
-  midline toward +y) with normal force F indents the skin by δ(d) = δ₀·exp(−d²/2w²) at distance d from
-  its centre, w² = r_indenter² + spread²; δ₀ = (g₀ − g_min)·(1 − e^(−F/F₀)) so the skin never goes
-  through the core (it bottoms at g_min).  The displaced liquid bulges the skin elsewhere uniformly
-  (incompressible, volume conserving).  Tangential force shifts the indentation toward the shear.
+  midline toward +y) with normal force F squeezes out the share a·exp(−d²/2w²) of the fluid over an electrode
+  at distance d from its centre, w² = r_indenter² + spread², a = 1 − e^(−F/F₀): the gap goes from g_i toward
+  g_min and the skin bottoms there, never through the core.  The force passes through the skin's creep (the
+  standard linear solid of emulator/mechanics.py and emulator/viscoelastic.py, state carried across chunks)
+  before the depth law, so a held force creeps the pattern (~10 % more force-equivalent over ~1.1 s) and a
+  release recovers over the same time.  Tangential force shifts the whole pattern toward the shear.
+* Where the displaced liquid goes: the fluid is incompressible and the skin is tethered at the nail (only
+  skin within ``free_skin_half_angle_deg`` of the ventral midline, and ahead of the base clamp, may move), so
+  the volume reappears as a ring bulge around the contact rim, κ·δ₀·(d²/2s²)·exp(−d²/2s²) with
+  s = ``bulge_width_ratio``·w (default 1/√2: ring peak at w) and δ₀ = (g₀ − g_min)·a; κ (≈2, more near the
+  nail or the base) makes the net volume over the free skin zero (:func:`bulge_balance`).
+  Locality (the gap change per mm of central depth, κ = 2): −1 at the centre, −0.55 at 0.5 w, 0 at 0.85 w
+  (the dimple ends), +0.2 at 1.24 w (the rim bulge), 0 again at 2.07 w, then a faint −0.01…−0.02 tail that
+  is gone (< 0.003) beyond 3.5 w.  For a 1 N fingertip contact (3 mm indenter, w = 4.2 mm): −380 codes on
+  the pressed electrode, −170 at 2 mm, +35 to +40 codes at 5–6 mm, under 6 codes beyond 8 mm; the
+  pressed electrode and its 3 nearest neighbours carry 77 % (median; 65 % at least) of Σ|Δcode| over the
+  19 electrodes, where the former uniform bulge moved every electrode by 20–30 codes (62 %).
+  Sources: D ch. 4 says only that the skin and fluid deform over electrodes distributed on the core;
+  SynTouch and Lin et al. 2013 describe a distributed pattern from which the point of contact is estimated;
+  no published figure gives the fall-off, so the profile's shape is a model choice (claims: locality is
+  calibrated on ``bulge_width_ratio``, localisation within 2 mm is a prediction).
 * The fluid over an electrode is a thin conducting sheet: Z = Z_series + ρ_sheet / gap, so thinning the
   fluid raises the impedance.
 * The multiplexer connects the selected electrode into a 10 kΩ load driven by the 4 kHz, 3.3 V

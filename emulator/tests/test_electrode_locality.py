@@ -128,3 +128,60 @@ def test_the_crept_pattern_does_not_depend_on_how_the_host_reads_it():
     s = Sensor(stimuli=stim, channels_read=["E10"], noise=NoiseSources.none())
     parts = np.concatenate([s.sample(idx[i:i + 37], t[i:i + 37]) for i in range(0, t.size, 37)])
     np.testing.assert_array_equal(whole, parts)
+
+
+# --- locality: where a contact's change goes ---------------------------------------------------------------------
+def _press_changes(p, radius_mm=3.0, force_N=1.0):
+    """|Δcode| of every electrode (rows: a press over E1..E19 in turn) and the electrode distances, mm."""
+    from emulator.conversions import ADC_LSB_V
+    from emulator.electrodes import electrode_gaps_mm, electrode_volts, resting_gaps_mm
+
+    pos = electrode_positions_mm()
+    rest = electrode_volts(p, resting_gaps_mm(p, 19)[None, :])[0] / ADC_LSB_V
+    rows = []
+    for i in range(19):
+        c = Contact(surface_point_over_mm(pos[i]), radius_mm, lambda t: np.full(np.shape(t), force_N))
+        rows.append(np.abs(electrode_volts(p, electrode_gaps_mm(p, [c], np.array([0.5]), pos))[0] / ADC_LSB_V - rest))
+    return np.array(rows), np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=2)
+
+
+def test_a_1N_press_changes_mostly_the_nearest_electrodes_and_little_beyond_10_mm():
+    d, dist = _press_changes(SensorParams())
+    order = np.argsort(dist, axis=1)
+    share4 = np.array([d[i, order[i, :4]].sum() / d[i].sum() for i in range(19)])
+    assert np.median(share4) > 0.7 and share4.min() > 0.6
+    assert np.all(np.argmax(d, axis=1) == np.arange(19))  # the pressed electrode moves most
+    assert d[i := 16, 16] > 300  # ~380 codes under a 1 N, 3 mm contact
+    assert d[dist > 10.0].max() < 10.0  # a uniform bulge would move every far electrode by ~20-30 codes
+    # a spread pattern (wider indenter) reaches further but still stays local
+    wide, _ = _press_changes(SensorParams(), radius_mm=5.0)
+    assert wide[dist > 10.0].max() > d[dist > 10.0].max() and wide[dist > 14.0].max() < 10.0
+
+
+def test_the_profile_falls_off_as_documented():
+    from emulator.electrodes import indentation_profile
+
+    w = np.hypot(3.0, 3.0)
+    prof = lambda d: float(indentation_profile(d * d, w, 1 / np.sqrt(2), 2.0))  # noqa: E731 (plane: κ = 2)
+    assert prof(0.0) == -1.0
+    assert abs(prof(0.845 * w)) < 0.01  # the dimple ends at 0.85 w
+    assert 0.18 < max(prof(x * w) for x in np.linspace(1.0, 1.5, 11)) < 0.21  # the rim bulge: +0.2 at 1.24 w
+    assert abs(prof(2.07 * w)) < 0.01 and all(abs(prof(x * w)) < 0.03 for x in (2.5, 3.0, 4.0))
+
+
+@pytest.mark.parametrize("x_mm,angle_deg", [(-5.0, 0.0), (-5.0, 100.0), (4.0, 0.0), (-17.0, 40.0)])
+def test_the_displaced_liquid_is_put_back_on_the_free_skin(x_mm, angle_deg):
+    from emulator.electrodes import bulge_balance, free_skin_grid, indentation_profile, surface_point_mm
+
+    p = SensorParams()
+    w = np.hypot(3.0, p.skin_spread_mm)
+    c = surface_point_mm(x_mm, angle_deg)
+    kappa = bulge_balance(p, c, w)
+    pts, area = free_skin_grid(p.free_skin_half_angle_deg)
+    d2 = ((pts - c) ** 2).sum(axis=1)
+    net = (area * indentation_profile(d2, w, p.bulge_width_ratio, kappa)).sum()
+    assert abs(net) < 1e-9 * (area * np.exp(-d2 / (2 * w * w))).sum()  # volume conserved on the free skin
+    assert 1.5 < kappa < 3.0  # 2 on a plane; more where the nail or the base takes part of the ring away
+    # the skin under the nail cannot take the liquid: the free rim takes more of it near the tether
+    if angle_deg == 100.0:
+        assert kappa > bulge_balance(p, surface_point_mm(x_mm, 0.0), w)
