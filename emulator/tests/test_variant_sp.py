@@ -113,6 +113,11 @@ def test_a_19_electrode_sensor_answers_e20_to_e24_with_clear_error_words():
     assert (words == proto.ERROR_WORDS["channel_not_recognized"]).all(), [hex(w) for w in words]
     assert not proto.decode_response(words)[1].any()  # the parity flag is set: a host cannot take it for data
     assert port.unprovided_requests == 0  # not a channel of this variant at all (not merely unprovided)
+    # the transfer-level path (properties, faults, several sensors) says the same
+    slow = SensorPort(Sensor(channels_read=ch.DEFAULT_FRAME_NAMES, seed=4))
+    bus = Bus({1: slow})
+    got = [bus.transfer(Transfer(float(t), SELECT_CODE[1], int(m))) for t, m in zip(start, mosi)][1::2]
+    assert got == [proto.ERROR_WORDS["channel_not_recognized"]] * 5 and slow.unprovided_requests == 0
 
 
 @pytest.mark.parametrize("variant", ["biotac", "biotac-sp"])
