@@ -29,20 +29,20 @@ def _cmd_claims(a) -> int:
     from emulator.units import unit
 
     groups = a.only or list(CLAIM_GROUPS)
-    params = unit(a.unit).params
+    unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
         if a.seeds < 1:
             print(f"error: --seeds {a.seeds}: give at least 1", file=sys.stderr)
             return 2
-        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, params=params),
+        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, **unit_kw),
                                      range(a.seed, a.seed + a.seeds), groups, progress)
         if a.json:
             print(json.dumps([r.as_dict() for r in rows], indent=2, default=float))
         else:
             print(format_spread_table(rows))
         return 0 if not any(r.failed_seeds for r in rows) else 1
-    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, params=params)
+    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, **unit_kw)
     claims = run_claims(bench, groups, progress=progress)
     if a.json:
         print(json.dumps([c.as_dict() for c in claims], indent=2, default=float))
