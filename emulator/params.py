@@ -197,7 +197,8 @@ class SensorParams:
     skin_poisson_ratio: float = _p(0.5, "1", 0.0, 0.5, "model", "skin Poisson ratio (incompressible elastomer)")
     skin_density_kg_per_m3: float = _p(1120.0, "kg/m³", 500.0, 3000.0, "model", "silicone skin density")
     fluid_density_kg_per_m3: float = _p(
-        1150.0, "kg/m³", 500.0, 3000.0, "model", "BioTac fluid: 82 % polyethylene glycol, 18 % water, 1 M NaBr (D ch. 4)")
+        1150.0, "kg/m³", 500.0, 3000.0, "model",
+        "BioTac fluid: 82 % polyethylene glycol, 18 % water, 1 M NaBr (D ch. 4)")
     fluid_viscosity_Pa_s: float = _p(
         0.035, "Pa·s", 1e-4, 10.0, "model", "viscosity of the glycol solution at the ~35 °C core temperature")
     fluid_wetted_area_m2: float = _p(

@@ -190,6 +190,16 @@ class SphereDrop(ForceStimulus):
         return self.impulse_Ns * np.interp(x, _HERTZ_X, _HERTZ_C)
 
 
+def sphere_drop_on(params: SensorParams, time_s: float, mass_kg: float, height_m: float = DROP_HEIGHT_M,
+                   sphere: str | None = None, radius_m: float | None = None) -> SphereDrop:
+    """A Hertz drop on a sensor: restitution and skin modulus from ``params``; the radius from ``radius_m``, else
+    from the sphere's name in :data:`SPHERES` (its material's density), else from the mass as steel."""
+    if radius_m is None and sphere is not None:
+        radius_m = SPHERE_RADII_M[sphere]
+    return SphereDrop(time_s, mass_kg, height_m, params.impact_restitution, radius_m=radius_m,
+                      contact_modulus_Pa=params.skin_youngs_modulus_Pa / (1.0 - params.skin_poisson_ratio**2))
+
+
 @dataclass
 class Press(ForceStimulus):
     """Press and hold: ramp to ``force_N`` over ``ramp_s``, hold ``hold_s``, ramp back down."""

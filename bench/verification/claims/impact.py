@@ -10,7 +10,7 @@ from bench.verification import analysis
 from bench.verification.claims.core import Bench, Claim, claim_group
 from emulator import conversions as conv
 from emulator.mechanics import skin_fluid
-from emulator.stimuli import GRAVITY_M_PER_S2, SPHERE_RADII_M, SPHERES, SphereDrop
+from emulator.stimuli import DROP_HEIGHT_M, GRAVITY_M_PER_S2, SPHERES, SphereDrop, sphere_drop_on
 
 INFLATIONS_ML = (0.3, 0.4, 0.5, 0.6, 0.7)
 
@@ -18,9 +18,7 @@ INFLATIONS_ML = (0.3, 0.4, 0.5, 0.6, 0.7)
 def drop(b: Bench, t: float, name: str, height_m: float | None = None, params=None) -> SphereDrop:
     """A Hertz drop of a sphere of D Table 5-2 on the bench's skin (restitution from the sensor, as scenes do)."""
     p = params or b.params
-    extra = {} if height_m is None else {"height_m": height_m}
-    return SphereDrop(t, SPHERES[name][0], restitution=p.impact_restitution, radius_m=SPHERE_RADII_M[name],
-                      contact_modulus_Pa=p.skin_youngs_modulus_Pa / (1 - p.skin_poisson_ratio**2), **extra)
+    return sphere_drop_on(p, t, SPHERES[name][0], DROP_HEIGHT_M if height_m is None else height_m, sphere=name)
 
 
 def ring(b: Bench, name: str = "5/64 in aluminum bearing"):
