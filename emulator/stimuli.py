@@ -154,7 +154,7 @@ class SphereDrop(ForceStimulus):
     @property
     def impulse_Ns(self) -> float:
         """Momentum transferred: m·v·(1 + e)."""
-        return self.momentum_Ns * (1.0 + self.restitution)
+        return self.mass_kg * self.impact_speed_m_per_s * (1.0 + self.restitution)
 
     @property
     def sphere_radius_m(self) -> float:
