@@ -55,22 +55,31 @@ import numpy as np
 from scipy import signal, special
 
 from emulator import filters
-from emulator.channels import ELECTRODE_FIRST
+from emulator.channels import DEFAULT_VARIANT, ELECTRODE_FIRST
+from emulator.channels import variant as variant_of
 from emulator.mechanics import skin_fluid
 from emulator.params import SensorParams
 from emulator.viscoelastic import Creep
 
 CHUNK_S = 1.0  # the model advances in 1 s chunks aligned to absolute time (per-chunk overhead dominates)
 CORE_RADIUS_MM = 5.0
-ELECTRODES_CSV = Path(__file__).resolve().parents[1] / "fixtures" / "electrodes.csv"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+#: each variant's electrode table: the BioTac's 19 (Ruppel et al. 2018, via SENSOR.md) and the BioTac SP's 24
+#: (derived from its documented layout grid; see that file's header)
+ELECTRODE_TABLES = {"biotac": FIXTURES / "electrodes.csv", "biotac-sp": FIXTURES / "electrodes_sp.csv"}
+ELECTRODES_CSV = ELECTRODE_TABLES["biotac"]
 
 
-def electrode_positions_mm() -> np.ndarray:
-    """(19, 3) electrode positions on the core in the sensor frame, mm (Ruppel et al. 2018, via SENSOR.md)."""
-    rows = [r for r in csv.reader(line for line in ELECTRODES_CSV.read_text().splitlines()
+def electrode_positions_mm(variant: str = DEFAULT_VARIANT) -> np.ndarray:
+    """(N, 3) electrode positions on the core in the sensor frame (mm) of a sensor variant."""
+    v = variant_of(variant)  # ValueError naming the known variants
+    path = ELECTRODE_TABLES[v.name]
+    rows = [r for r in csv.reader(line for line in path.read_text().splitlines()
                                   if line and not line.startswith("#"))]
-    body = [r for r in rows if r[0].startswith("E")]
-    return np.array([[float(v) for v in r[1:4]] for r in body])
+    table = np.array([[float(x) for x in r[1:4]] for r in rows if r[0].startswith("E")])
+    if table.shape != (v.n_electrodes, 3):
+        raise ValueError(f"{path}: {table.shape[0]} electrode rows, a {v.name!r} sensor has {v.n_electrodes}")
+    return table
 
 
 def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:

@@ -7,11 +7,8 @@ samples.  Memory therefore stays bounded however long the run.
 
 from __future__ import annotations
 
-import csv
 import time
 from dataclasses import asdict, dataclass
-
-from pathlib import Path
 
 import numpy as np
 
@@ -35,22 +32,7 @@ from emulator.transducer import Bridge, CoreTemperature, johnson_noise
 CHANNEL_NODE = {ch.PAC: "pac_V", ch.PDC: "pdc_V"}
 #: Kinds of channel in Sensor.analog (grid nodes are 0..len(nodes)-1).
 KIND_TDC, KIND_TAC, KIND_ELECTRODE, KIND_NOT_READ = 100, 101, 102, -1
-#: Electrode positions of the BioTac SP (derived from its documented layout; see the file's header).
-ELECTRODES_SP_CSV = Path(__file__).resolve().parents[1] / "fixtures" / "electrodes_sp.csv"
 FAULT_NAMES = ("electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed")
-
-
-def variant_electrode_positions_mm(variant: str = ch.DEFAULT_VARIANT) -> np.ndarray:
-    """(N, 3) electrode positions (mm, sensor frame) of a variant: the 19 of fixtures/electrodes.csv or the SP's 24."""
-    v = ch.variant(variant)
-    if v.name == "biotac":
-        return electrode_positions_mm()
-    rows = list(csv.reader(line for line in ELECTRODES_SP_CSV.read_text().splitlines()
-                           if line and not line.startswith("#")))
-    table = np.array([[float(x) for x in r[1:4]] for r in rows if r[0].startswith("E")])
-    if table.shape != (v.n_electrodes, 3):
-        raise ValueError(f"{ELECTRODES_SP_CSV}: {table.shape[0]} electrode rows, expected {v.n_electrodes}")
-    return table
 
 
 @dataclass(frozen=True)
@@ -211,7 +193,7 @@ class Sensor:
         """The electrode model, only if the host reads an electrode."""
         if not any(c >= ch.ELECTRODE_FIRST for c in self.channels_read):
             return None
-        positions = variant_electrode_positions_mm(self.variant.name)
+        positions = electrode_positions_mm(self.variant.name)
         contacts = []
         for s in stimuli:
             if isinstance(s, Slide):  # the ventral pad on the texture, sheared along +x by kinetic friction
@@ -233,9 +215,6 @@ class Sensor:
             contacts.append(Contact(centre, s.indenter_radius_mm, s.force,
                                     s.tangential_N / s.force_N if s.force_N else 0.0, tuple(direction),
                                     s.start_s, s.end_s))
-        if self.variant.name == ch.DEFAULT_VARIANT:  # the default path exactly as before
-            return ElectrodeModel(self.params, contacts, self.faults, self.fidelity.discretization,
-                                  self.fidelity.electrode_rate_Hz)
         return ElectrodeModel(self.params, contacts, self.faults, self.fidelity.discretization,
                               self.fidelity.electrode_rate_Hz, positions=positions)
 

@@ -198,8 +198,9 @@ def test_impedance_round_trips_through_eq_4_1(gap_mm):
     assert float(conv.impedance_ohm(code)) == pytest.approx(z_true, rel=0.01)
 
 
-def test_electrode_noise_makes_the_published_3_2_mV_resolution():
+def test_an_electrode_at_rest_carries_about_half_an_lsb_of_noise():
+    """Issue 10: quiet channels sit near half an LSB RMS at rest (the ADC's own noise; PAC's extra noise belongs to
+    PAC's path). Table 4-1's 3.2 mV electrode resolution equals 3.3 V / 1024, not a noise figure."""
     s = Sensor(channels_read=["E5"], seed=4)
     codes = s.sample(np.full(20000, channel_index("E5")), np.arange(20000) / 1000.0).astype(float)
-    rms_mV = codes.std() * conv.ADC_LSB_V * 1e3
-    assert rms_mV * np.sqrt(12) == pytest.approx(3.2, rel=0.15)  # an effective step of 3.2 mV (Table 4-1)
+    assert 0.3 <= codes.std() <= 0.7

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from emulator import channels as ch
-from emulator.sensor import Sensor, variant_electrode_positions_mm
+from emulator.electrodes import electrode_positions_mm
+from emulator.sensor import Sensor
 from emulator.spi import protocol as proto
 from emulator.spi.model import (PROP_PATTERN, PROP_SERIAL, SELECT_CODE, Bus, SensorPort, Transfer,
                                 default_properties)
@@ -68,7 +69,7 @@ def test_unknown_variant_names_the_allowed_ones():
 
 
 def test_sp_electrode_table_is_24_distinct_points_on_the_core():
-    p = variant_electrode_positions_mm("biotac-sp")
+    p = electrode_positions_mm("biotac-sp")
     assert p.shape == (24, 3) and np.isfinite(p).all()
     d = np.linalg.norm(p[:, None] - p[None], axis=-1) + np.eye(24) * 99
     assert d.min() > 1.0  # mm: no two electrodes on top of each other
