@@ -183,10 +183,15 @@ def test_pac_scale_is_0_37_Pa_per_bit():
 
 
 def test_a_1_N_press_raises_PDC_by_87_bits():
-    """11.5 mN per PDC bit below the knee (D ch. 4): a 1 N press raises PDC by 1/0.0115 = 87 bits."""
-    s = Sensor(stimuli=[Press(0.1, 1.0, 0.2, 1.0)], channels_read=["PDC"], noise=QUIET)
-    v = s.analog([1, 1], [0.05, 0.8])
-    assert (v[1] - v[0]) / LSB == pytest.approx(1 / 0.0115, rel=0.02)
+    """11.5 mN per PDC bit below the knee (D ch. 4), on a press loading at D's ~0.5 N/s: 1 N raises PDC by
+    1/0.0115 = 87 bits (± 5 %, the claim's tolerance). Held, the skin keeps creeping: the relaxed rise is larger
+    by no more than the creep the force claims bound (15 %)."""
+    s = Sensor(stimuli=[Press(0.1, 2.0, ramp_s=4.0, hold_s=0.2)], channels_read=["PDC"], noise=QUIET)
+    v = s.analog([1, 1], [0.05, 2.1])  # 1 N on the loading ramp
+    assert (v[1] - v[0]) / LSB == pytest.approx(1 / 0.0115, rel=0.05)
+    held = Sensor(stimuli=[Press(0.1, 1.0, 0.2, 8.0)], channels_read=["PDC"], noise=QUIET)
+    w = held.analog([1, 1], [0.05, 8.0])
+    assert 1.0 < (w[1] - w[0]) / (v[1] - v[0]) < 1.15
 
 
 # --- impacts (SENSOR.md §1 and §7) --------------------------------------------------------------------------------
@@ -235,24 +240,27 @@ def test_an_impact_rings_at_330_Hz_with_a_20_ms_decay():
 
 
 def test_an_impact_rings_with_the_amplitude_its_impulse_predicts():
-    """The ring's amplitude follows from the impulse J = m·v·(1 + e) alone: a 0.4 ms half-sine of impulse J into
-    the force -> pressure slope k (36.5 Pa per 11.5 mN) and the unit-DC-gain resonance (impulse response
-    ω0²/ωd·e^(−t/τ)·sin ωd t), times the pulse's spectral weight at ωd, then the bridge and both gains
-    (2.16 mV/Pa on PAC) and the front end's filters at 330 Hz."""
+    """The ring's amplitude follows from the impulse J = m·v·(1 + e): the Hertz force pulse f(t) (area J) into the
+    skin's instantaneous force -> pressure slope (creep has no time to act) and the unit-DC-gain resonance (impulse
+    response ω0²/ωd·e^(−σt)·sin ωd t), so the amplitude is ω0²/ωd·|∫ f(τ)·e^((σ − iωd)τ) dτ|, then the bridge,
+    both gains and the front end's filters at the ring frequency."""
+    from emulator.mechanics import skin_fluid
+
     p = SensorParams()
     m = SPHERES["1 mm steel bearing"][0]
     drop = SphereDrop(0.1, m)
     ring = _ring(m)
-    w0 = 2 * np.pi * 330.0
-    sigma = 1 / 0.020
+    fluid = skin_fluid(p)
+    w0, sigma = 2 * np.pi * fluid.resonance_Hz, 1 / fluid.decay_s
     wd = np.sqrt(w0**2 - sigma**2)
-    T = 0.4e-3
-    pulse = abs(np.cos(wd * T / 2) / (1 - (wd * T / np.pi) ** 2))  # half-sine spectrum at ωd, relative to J
+    tau = np.linspace(0.0, drop.contact_duration_s, 20001)
+    force = np.gradient(drop.cumulative(0.1 + tau), tau)
+    weighted = abs(np.trapezoid(force * np.exp((sigma - 1j * wd) * tau), tau))
     f = wd / (2 * np.pi)
     front_end = 1 / np.sqrt(1 + (f / 1040.0) ** 4) / np.sqrt(1 + (10.0 / f) ** 2)
-    k = (LSB / (10.0 * 0.218e-6 * 10.0)) / 0.0115  # Pa per N from the published figures
-    predicted = drop.impulse_Ns * k * w0**2 / wd * pulse * np.exp(sigma * T / 2) * p.pac_V_per_Pa * front_end
+    predicted = fluid.pressure_per_N_instant * w0**2 / wd * weighted * p.pac_V_per_Pa * front_end
     assert drop.impulse_Ns == pytest.approx(m * np.sqrt(2 * 9.80665 * 0.07) * 1.3, rel=1e-9)
+    assert np.trapezoid(force, tau) == pytest.approx(drop.impulse_Ns, rel=1e-3)
     assert abs(ring.amplitude) == pytest.approx(predicted, rel=0.05)
 
 
