@@ -99,7 +99,9 @@ class Contact:
     """A contact on the skin: where, how hard (normal and tangential force profiles), with what.
 
     ``normal_N(t)`` and ``tangential_N(t)`` give forces in N; the tangential force acts along
-    ``shear_direction`` (unit vector in the sensor frame, default along +x toward the tip).
+    ``shear_direction`` (unit vector in the sensor frame, default along +x toward the tip).  ``planned``: the force
+    profile is known in advance (a scripted stimulus); a contact driven by commands given while the run goes (a rig)
+    is not, and the model then computes no instant beyond those asked for.
     """
 
     center_mm: np.ndarray
@@ -109,6 +111,7 @@ class Contact:
     shear_direction: tuple = (1.0, 0.0, 0.0)
     start_s: float = -np.inf  # the contact exerts no force outside [start_s, end_s]
     end_s: float = np.inf
+    planned: bool = True
 
     def state(self, t: np.ndarray):
         f = np.maximum(np.asarray(self.normal_N(t), float), 0.0)
@@ -303,11 +306,14 @@ class ElectrodeModel:
         for c, cr in zip(contacts, self.creeps):
             cr.settle(float(c.state(np.array([0.0]))[0][0]))  # a contact loaded at t = 0 has been forever
         self.rate_Hz = rate_Hz
+        self.lazy = not all(c.planned for c in contacts)  # compute no further than asked: commands are still coming
         self.kappas = [bulge_balance(p, c.center_mm, float(np.hypot(c.indenter_radius_mm, p.skin_spread_mm)))
                        for c in contacts]
 
-    def _advance_chunk(self):
-        t = (self.k + 1 + np.arange(self.chunk)) * self.dt
+    def _advance_chunk(self, n: int | None = None):
+        """Advance ``n`` samples (default: a whole chunk); results do not depend on how the time is cut."""
+        n = self.chunk if n is None else n
+        t = (self.k + 1 + np.arange(n)) * self.dt
         fractions = []
         for c, cr in zip(self.contacts, self.creeps):
             touching = c.end_s >= t[0] and c.start_s <= t[-1]
@@ -319,14 +325,14 @@ class ElectrodeModel:
             fractions.append(indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0)))
         active = [i for i, a in enumerate(fractions) if a is not None]
         if not active and np.allclose(self.zi, self.zi_rest, rtol=0, atol=1e-12):
-            y = np.broadcast_to(self.rest, (self.chunk, self.n))  # nothing touching and the filter settled: rest
+            y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
         else:
             gaps = electrode_gaps_mm(self.p, [self.contacts[i] for i in active], t, self.positions,
                                      self.rest_gaps_mm, [fractions[i] for i in active],
                                      [self.kappas[i] for i in active])
             v = electrode_volts(self.p, gaps, self.faults)
             y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
-        self.k += self.chunk
+        self.k += n
         self._hist_t.append(t)
         self._hist.append(y)
 
@@ -337,7 +343,10 @@ class ElectrodeModel:
         if not self.contacts:  # nothing ever touches: every electrode rests (the steady-state shortcut)
             return self.rest[electrode - 1]
         while self._hist_t[-1][-1] < times.max():
-            self._advance_chunk()
+            if self.lazy:  # through the first sample at or after the latest instant asked for, not beyond
+                self._advance_chunk(max(1, int(np.ceil(times.max() / self.dt - 1e-9)) - self.k))
+            else:
+                self._advance_chunk()
         ht, hv = np.concatenate(self._hist_t), np.vstack(self._hist)
         if times.min() < ht[0] - 1e-12:
             raise ValueError(f"electrode instant {times.min():.6f} s is older than the electrode history")

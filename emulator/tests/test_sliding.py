@@ -9,6 +9,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
+from emulator.channels import ELECTRODE_FIRST
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.skin import Skin
@@ -125,6 +126,25 @@ def test_a_command_reaching_back_into_computed_instants_is_refused():
     motion.move_finger(0.09, 1e-3)  # takes effect at 0.11 s: after the block, accepted
     with pytest.raises(ValueError, match="already computed the motion through"):
         motion.move_stage(0.05, 0.01)  # would take effect at 0.07 s, inside the computed block
+
+
+@pytest.mark.unit
+def test_a_rigs_finger_presses_the_electrodes_under_the_pad_as_the_commands_come():
+    """The electrodes feel a commanded finger's load, computed no further ahead than the host has read: a command
+    given right after a read (its latency ahead) is accepted."""
+    from emulator.electrodes import electrode_positions_mm, surface_point_mm
+
+    nearest = int(np.argmin(np.linalg.norm(electrode_positions_mm() - surface_point_mm(-5.0, 0.0), axis=1))) + 1
+    motion = CommandedMotion(SAND, latency_s=0.02, start_s=0.0, depth_m=-2e-4)
+    sensor = Sensor(stimuli=[motion], channels_read=[f"E{nearest}"], noise=NoiseSources.none())
+    index = ELECTRODE_FIRST + nearest - 1
+    rest = float(sensor.sample([index], [0.1])[0])
+    motion.move_finger(0.1, 1e-3)  # lower at 1 mm/s: ~1.2 mm into the skin by 1.5 s
+    pressed = float(sensor.sample([index], [1.5])[0])
+    motion.move_finger(1.5, 0.0)  # a command right after the read: nothing beyond 1.5 s was computed
+    assert rest - pressed > 20  # thinner fluid over the pad's electrode: higher impedance, lower code
+    held = float(sensor.sample([index], [2.0])[0])
+    assert abs(held - pressed) < abs(pressed - rest)
 
 
 @pytest.mark.stability
