@@ -15,9 +15,10 @@ Integration is exact for a linear system with inputs held over each step (matrix
 network's own rate (100 Hz), in chunks aligned to absolute time: stable at any step, independent of how
 callers slice time.  Outputs are interpolated to the instants asked for.
 
-Thermistor (NTC, 470 kΩ at 25 °C, B = 4025 K — the Beta model equivalent to D eq. 4.4) in a divider with
-30 kΩ from 10 V, buffered with a gain of 1.1 so that TDC/4095 = 100 kΩ/(R + 30 kΩ) exactly as the published
-conversion assumes, low-passed at 22.6 Hz -> TDC.  TAC = 1.65 V + 98 · HP(TDC), a first-order high-pass
+Thermistor (NTC, the unit's own R25 and Beta: nominally 470 kΩ at 25 °C, B = 4025 K — the Beta model equivalent
+to D eq. 4.4) in a divider with 30 kΩ from 10 V, buffered with a gain of 1.1 so that TDC/4095 = 100 kΩ/(R + 30 kΩ)
+exactly as the published conversion assumes (whose constants are the nominal part's: a unit with another R25 or
+Beta reads slightly off through it, as a real unit does), low-passed at 22.6 Hz -> TDC.  TAC = 1.65 V + 98 · HP(TDC), a first-order high-pass
 at 0.45 Hz (Table 4-1; the text's 5 Hz is not used): for changes slower than 0.35 s, TAC − 1.65 V ≈
 98·τ·dV_TDC/dt, which :func:`emulator.conversions.tac_to_celsius_per_s` inverts.
 """
@@ -33,6 +34,8 @@ from scipy import linalg
 from emulator import filters
 from emulator.effects import effect_rng
 from emulator.params import SensorParams
+
+_NOMINAL = SensorParams()
 
 THERMAL_RATE_HZ = 100.0
 CHUNK_STEPS = 100  # the network advances in 1 s chunks aligned to absolute time
@@ -106,8 +109,11 @@ def material(name: str) -> Material:
 
 
 # --- the thermistor and its read-out ---------------------------------------------------------------
-THERMISTOR_B_K = 4025.0
-THERMISTOR_R_INF_OHM = 470e3 / np.exp(THERMISTOR_B_K / 298.15)  # 470 kΩ at 25 °C -> R∞ ≈ 0.644 Ω
+# The thermistor is the unit's own part: R25 = ``p.thermistor_r25_ohm``, Beta = ``p.thermistor_beta_K`` (nominal
+# 470 kΩ and 4025 K; emulator/units.py draws a unit's within the part's tolerance).  The published conversion
+# (emulator/conversions.tdc_to_celsius, D eq. 4.4) keeps the nominal part's constants, so a unit whose thermistor
+# differs reads a slightly wrong temperature through it, as a real unit does.
+T25_K = 298.15
 DIVIDER_OHM = 30e3
 DIVIDER_SUPPLY_V = 10.0
 TDC_BUFFER_GAIN = 1.1  # makes TDC/4095 = 100 kΩ/(R + 30 kΩ), the published conversion's divider
@@ -115,8 +121,12 @@ TAC_GAIN = 98.0
 TAC_BIAS_V = 1.65
 
 
-def thermistor_ohm(t_celsius):
-    return THERMISTOR_R_INF_OHM * np.exp(THERMISTOR_B_K / (np.asarray(t_celsius, float) + 273.15))
+def thermistor_ohm(t_celsius, p: SensorParams | None = None):
+    """Resistance (Ω) of the thermistor of unit ``p`` (None: the nominal unit) at ``t_celsius`` (Beta model:
+    R = R∞·exp(B/T), R∞ = R25/exp(B/298.15 K))."""
+    p = _NOMINAL if p is None else p
+    r_inf = p.thermistor_r25_ohm / np.exp(p.thermistor_beta_K / T25_K)  # 470 kΩ, 4025 K -> R∞ ≈ 0.644 Ω
+    return r_inf * np.exp(p.thermistor_beta_K / (np.asarray(t_celsius, float) + 273.15))
 
 
 def tdc_volts(r_ohm, fault: str | None = None):
@@ -325,10 +335,10 @@ class ThermalModel:
 
     # --- outputs --------------------------------------------------------------------------------
     def _tdc_from_state(self, xs: np.ndarray) -> np.ndarray:
-        return tdc_volts(thermistor_ohm(xs[:, BEAD]), self.faults.get("thermistor"))
+        return tdc_volts(thermistor_ohm(xs[:, BEAD], self.p), self.faults.get("thermistor"))
 
     def _self_heating_W(self, bead_C: float) -> float:
-        r = float(thermistor_ohm(bead_C))
+        r = float(thermistor_ohm(bead_C, self.p))
         v = DIVIDER_SUPPLY_V * r / (r + DIVIDER_OHM)
         return v * v / r
 
@@ -429,5 +439,5 @@ def _steady_state(p: SensorParams, thermistor_fault, heater_failed: bool) -> tup
         faults["heater_failed"] = True
     model = ThermalModel(p, ThermalEvents([]), seed=0, faults=faults)
     x = model.x
-    tdc = float(tdc_volts(thermistor_ohm(x[BEAD]), (faults or {}).get("thermistor")))
+    tdc = float(tdc_volts(thermistor_ohm(x[BEAD], p), (faults or {}).get("thermistor")))
     return float(x[CORE]), tdc, TAC_BIAS_V
