@@ -108,6 +108,17 @@ def check_serial(serial: str) -> bytes:
     return serial.encode("ascii")
 
 
+def variant_serial(serial: str, variant: str = ch.DEFAULT_VARIANT) -> str:
+    """The serial a sensor of ``variant`` reports for a unit's serial number: unchanged, except that a BioTac SP's
+    must start "BTSP" (the host tells the variants apart by it: firmware ``has_bt_serial``), so an SP unit whose
+    serial does not is reported as "BTSP" + the last 12 characters after its "BT" (``BTU0000000000005`` ->
+    ``BTSP000000000005``)."""
+    sp_prefix = SERIAL_PREFIX["biotac-sp"][:4]
+    if ch.variant(variant).name != "biotac-sp" or serial.startswith(sp_prefix):
+        return serial
+    return sp_prefix + serial[2:][-(SERIAL_LENGTH - len(sp_prefix)):]
+
+
 def default_properties(index: int = 1, variant: str = ch.DEFAULT_VARIANT,
                        serial: str | None = None) -> dict[int, tuple[bytes, bool]]:
     """Property id -> (bytes, is_string) for sensor ``index`` (1–5) of a variant. Strings are sent with a NUL.
@@ -174,7 +185,9 @@ class _Prepared:
 
 
 class SensorPort:
-    """One sensor's SPI peripheral. ``sensor`` serves ADC codes: ``sample(channels, times, bus_active)``."""
+    """One sensor's SPI peripheral. ``sensor`` serves ADC codes: ``sample(channels, times, bus_active)``.
+    Without ``properties`` the port serves its variant's defaults with the sensor's own serial number
+    (``sensor.serial``, set on scene-built sensors; :func:`variant_serial`), or sensor ``index``'s default one."""
 
     def __init__(self, sensor, index: int = 1, faults: Faults | None = None, properties=None):
         self.sensor = sensor
@@ -182,7 +195,9 @@ class SensorPort:
         self.faults = faults or Faults()
         self.variant = ch.variant(getattr(sensor, "variant", ch.DEFAULT_VARIANT))
         self.recognized = self.variant.sampled_channels  # channels this variant has (others answer EX)
-        self.properties = properties or default_properties(index, self.variant.name)
+        serial = getattr(sensor, "serial", None)  # a unit's own serial (scene-built sensors); None: the default
+        self.properties = properties or default_properties(
+            index, self.variant.name, serial=None if serial is None else variant_serial(serial, self.variant.name))
         self.provided = frozenset(int(c) for c in sensor.channels_read) & self.recognized
         self.provided_lut = np.zeros(64, dtype=bool)
         self.provided_lut[list(self.provided)] = True
