@@ -4,9 +4,9 @@ Contact -> skin and fluid deformation -> fluid gap over every electrode -> imped
 
 * Resting gaps: electrode i rests under a gap g_i = g₀ + ``electrode_gap_spread_mm``·z_i, z_i a standard
   normal truncated to ±2 and drawn from ``electrode_gap_seed`` (:func:`resting_gaps_mm`; spread 0: all g₀).
-  A spread of 0.6 mm makes a unit's resting codes span about 2200–3100 (lowest/highest code of the median
-  unit; 10–90 % of units: lowest 1840–2530, highest 3070–3150): a low gap moves the code far more than a
-  high one (the code saturates toward 3545 as the gap grows).
+  The units' 0.7 mm spread (:mod:`emulator.units`) puts resting codes over about 1900–3150 (2nd–98th
+  percentiles over 20 units, each unit spanning ~1000 codes): a low gap moves the code far more than a high one
+  (the code saturates toward 3545 as the gap grows).
 * A contact at a point of the skin (``x_mm`` along the finger, ``angle_deg`` around it from the ventral
   midline toward +y) with normal force F squeezes out the share a·exp(−d²/2w²) of the fluid over an electrode
   at distance d from its centre, w² = r_indenter² + spread², a = 1 − e^(−F/F₀): the gap goes from g_i toward

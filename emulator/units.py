@@ -10,7 +10,8 @@ Spreads and their basis (σ of a normal draw clipped at ±3σ unless said otherw
 * inflation volume — σ 0.03 mL around 0.5 mL.  D ch. 4 (assembly, Fig. 4-6): each skin is filled by hand with
   "approximately 0.5 cc" and corrected until the inflated height is 15.1 mm; D ch. 3 found the pressure/volume
   curve repeatable over five fillings (Fig. 3-4).  A few drops (30 µL) of filling is what the height check leaves.
-  Moves the resting pressure (∝ V^1.5: ±9 %/σ ≈ ±10 PDC codes) and the resonance (``resonance_Hz_per_mL``).
+  Moves the resting pressure (∝ V^1.5: ±9 %/σ ≈ ±10 PDC codes), and through the fluid's stiffness and layer
+  mass the force slope and the resonance (:func:`emulator.mechanics.skin_fluid`).
 * bridge null offset — σ 1 mV/V (±10 mV at 10 V excitation, ±124 PDC codes after the gain of 10).  An
   uncompensated MEMS piezoresistive bridge (D: Honeywell 24PC15SMT) is sold with its null offset as a band of
   a few mV/V; the 24PC sheet itself was not in reach of the search tool, so the band is the generic one of
@@ -20,7 +21,7 @@ Spreads and their basis (σ of a normal draw clipped at ±3σ unless said otherw
   scale (36.96 Pa/bit from the published bridge, gain and LSB) already sits 1.3 % above D's 36.5, leaving 0.7 %.
   Deliberately narrow: see :data:`SPAN_SPREAD` (a choice forced by the claims, not a datum): a real population
   would scatter its scales by several %, which the bench's ±2 % tolerance on D Table 4-1 does not allow for.
-  The mechanics is unaffected (``force_to_pressure_Pa_per_N`` uses the span), so 11.5 mN/PDC bit holds.
+  The span enters the force → PDC chain, so a unit's mN per PDC bit moves with it (±0.7 % at most).
 * bridge offset and span drift — σ 20 % of their nominal values (uncompensated: drift is a property of the
   doping, which varies lot to lot).
 * amplifier offsets — stage-1 bias σ 10 mV (op-amp input offset ~1 mV × gain 10, bias divider of 1 % resistors),
@@ -32,9 +33,9 @@ Spreads and their basis (σ of a normal draw clipped at ±3σ unless said otherw
   2410–3100, 0.6 mm 2200–3130), each unit spanning ~1000 codes.
 * thermistor — R25 uniform within ±1 % and Beta uniform within ±3 %: the tolerance letters of the part D names
   (Vishay NTCS0805E3474FXT: F = ±1 % on R25, X = ±3 % on B25/85).  A band, not a σ: parts are sorted into it.
-  (Honoured once :mod:`emulator.thermal` reads ``thermistor_r25_ohm`` / ``thermistor_beta_K``.)
-* resonance — σ 5 Hz around 330 Hz at nominal inflation, clipped to the published 200–350 Hz: the skin's
-  thickness and tension vary from moulding to moulding; the inflation adds its own shift.
+* resonance — σ 5 Hz around 330 Hz at nominal inflation (``resonance_Hz`` anchors the skin's mass), clipped to
+  the published 200–350 Hz: the skin's thickness and tension vary from moulding to moulding; the inflation adds
+  its own shift.
 
 Gains (stage 1: 10, stage 2: 99.1), the ADC and the noise parameters stay nominal: they are fixed by resistors of
 0.1–1 % and the published noise figures are checked to ±10 %.

@@ -9,8 +9,9 @@ reads the sensor through the host sampler and the SPI peripheral like any host. 
 ``latency_s`` later (20 ms).  It decides after every 10 ms frame while lowering; to avoid paying a Python round
 trip per frame, the emulator reads a window of frames as if the finger kept lowering (which it does until the
 controller stops it), finds the frame where the controller stops, goes back to a snapshot taken before the
-window and reads exactly up to that frame in blocks shorter than the latency — the same samples, since results
-do not depend on block size (tested).  Afterwards the motion is fixed in advance and read in long chunks.
+window and reads up to that frame in one block that ends exactly there, so the stop command (20 ms later) lies
+after everything computed — the same samples, since results do not depend on block size (tested); the motion
+refuses a command that would reach into computed instants.  Afterwards the motion is fixed in advance and read in long chunks.
 
 :func:`movement_grid` gives the 36 movements of D eqs 6.20–6.21.
 """
