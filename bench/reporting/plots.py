@@ -75,7 +75,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
         try:
             for ax, (key, label) in zip(axes[:, 0], panels):
                 if key == "E_kohm":
-                    for n in range(1, 20):
+                    for n in range(1, 25):  # E20..E24: a BioTac SP's
                         if f"E{n}" in names:
                             _zigzag(ax, *_envelope_panel(summary, f"E{n}_ohm", base), lw=0.7, label=f"E{n}")
                     ax.legend(ncol=10, fontsize=6, loc="upper right")
@@ -173,10 +173,10 @@ def electrode_map(rec, path: Path) -> None:
     from emulator.conversions import impedance_ohm
     from emulator.electrodes import CORE_RADIUS_MM, electrode_positions_mm
 
-    pos = electrode_positions_mm()
+    pos = electrode_positions_mm(rec.scene.variant)  # the sensor's own variant's table (24 on an SP)
     arc = CORE_RADIUS_MM * np.arctan2(pos[:, 1], -pos[:, 2])  # mm around the finger from the ventral midline
     change = []
-    for n in range(1, 20):
+    for n in range(1, len(pos) + 1):
         cs = rec.summary.channels.get(f"E{n}")
         if cs is None or cs.good == 0:
             change.append(0.0)

@@ -64,9 +64,10 @@ class SampleStore:
         kw = {} if compression == "none" else {"compression": compression, "shuffle": True}
         if compression == "gzip":
             kw["compression_opts"] = 1
-        from emulator.channels import parse_sequence, CHANNEL_INDEX
+        from emulator.channels import ALL_CHANNEL_INDEX as CHANNEL_INDEX
+        from emulator.channels import parse_sequence
 
-        seq_idx = parse_sequence(scene.sequence)
+        seq_idx = parse_sequence(scene.sequence, scene.variant)  # "default": the sensor's variant's frame
         self._ds = {}
         for name in self.names:
             g = self.f.create_group(name)
@@ -152,7 +153,7 @@ def read_attrs(path: Path) -> dict:
 
 
 def channel_names(path: Path) -> list[str]:
-    from emulator.channels import CHANNEL_INDEX
+    from emulator.channels import ALL_CHANNEL_INDEX as CHANNEL_INDEX
 
     with _h5py().File(path, "r") as f:
         return sorted(f.keys(), key=lambda n: CHANNEL_INDEX.get(n, 999))

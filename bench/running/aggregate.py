@@ -236,7 +236,7 @@ class RunSummary:
 
     def __init__(self, scene, channel_names, bins: int = ENVELOPE_BINS,
                  spectrogram_columns: int = SPECTROGRAM_COLUMNS, impact_window_s: float = IMPACT_WINDOW_S):
-        from emulator.channels import CHANNEL_INDEX
+        from emulator.channels import ALL_CHANNEL_INDEX as CHANNEL_INDEX  # E1..E24: an SP's E20..E24 too
         from emulator.stimuli import SphereDrop
 
         self.duration_s = float(scene.duration_s)

@@ -25,9 +25,12 @@ from bench.running.aggregate import RunSummary
 from bench.running.sampler import Sampler
 from bench.running.slides import SlideRecorder
 from bench.scenes.scene import Scene
-from emulator.channels import CHANNEL_NAME
+from emulator.channels import ALL_CHANNEL_INDEX
 from emulator.sensor import Sensor
 from emulator.spi.peripheral import SoftwarePeripheral
+
+#: Every channel any variant has (E1..E24), by index: a BioTac SP's E20..E24 are named too.
+CHANNEL_NAME: dict[int, str] = {i: n for n, i in ALL_CHANNEL_INDEX.items()}
 
 #: ``run_scene`` keeps every sample in memory by default only up to this simulated duration (s).
 KEEP_SAMPLES_MAX_S = 600.0
@@ -93,7 +96,7 @@ def peripheral_for(scene: Scene, sensor: Sensor):
 
 def read_channel_names(scene: Scene) -> list[str]:
     """The channels the scene's host reads, in channel-index order (the keys of ``Recording.channels``)."""
-    seq = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz).sequence
+    seq = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz, variant=scene.variant).sequence
     return [CHANNEL_NAME[int(c)] for c in np.unique(seq)]
 
 
@@ -120,7 +123,7 @@ def split_by_channel(times, channels, codes, status) -> Chunk:
 
 def make_chunk(parts: dict) -> Chunk:
     """A :class:`Chunk` from channel name → (instants, codes, status) given in channel-index order or not."""
-    from emulator.channels import CHANNEL_INDEX
+    CHANNEL_INDEX = ALL_CHANNEL_INDEX  # noqa: N806
 
     names = sorted((n for n in parts if len(parts[n][0])), key=lambda n: CHANNEL_INDEX[n])
     if not names:
@@ -171,7 +174,8 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]")
     try:
         sensor = build_sensor(scene)
-        sampler = Sampler(peripheral_for(scene, sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
+        sampler = Sampler(peripheral_for(scene, sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz,
+                          variant=scene.variant)
         total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))
         chunk_slots = max(1, int(round(chunk_s * scene.slot_rate_Hz)))
         for s in sampler.chunks(total_slots, chunk_slots):

@@ -32,13 +32,27 @@ class Samples:
     status: np.ndarray
 
 
+def variant_of(peripheral) -> str:
+    """The variant of the sensor behind ``peripheral`` (a :class:`~emulator.spi.model.SensorPort` has ``variant``,
+    the RTL harness peripheral a ``sensor``); the default variant when it cannot tell (None, a recorder)."""
+    for obj in (peripheral, getattr(peripheral, "sensor", None)):
+        v = getattr(obj, "variant", None)
+        if v is not None:
+            return ch.variant(v).name
+    return ch.DEFAULT_VARIANT
+
+
 class Sampler:
     """Reads a repeating channel sequence through any peripheral with an ``exchange(TransferBatch)`` method."""
 
     def __init__(self, peripheral, sequence="default", slot_rate_Hz: float = ch.DEFAULT_SLOT_RATE_HZ,
-                 clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ, sample_delay_s: float = proto.SAMPLE_DELAY_S):
+                 clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ, sample_delay_s: float = proto.SAMPLE_DELAY_S,
+                 variant: str | None = None):
+        """``sequence = "default"`` is the variant's frame (54 slots on a BioTac SP): ``variant`` names it, or else
+        the peripheral's sensor's variant is used (the default variant without a peripheral)."""
         self.peripheral = peripheral
-        self.sequence = ch.parse_sequence(sequence)
+        self.variant = ch.variant(variant if variant is not None else variant_of(peripheral))
+        self.sequence = ch.parse_sequence(sequence, self.variant.name)
         self.slot_rate_Hz = float(slot_rate_Hz)
         self.clock_hz = float(clock_hz)
         self.sample_delay_s = float(sample_delay_s)

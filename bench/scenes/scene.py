@@ -14,7 +14,7 @@ from pathlib import Path
 
 from bench import tomlfile
 from bench.errors import SceneError
-from emulator.channels import CHANNEL_INDEX
+from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
 from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
@@ -547,9 +547,17 @@ def _faults(c: _Checker, table: dict) -> dict:
     return out
 
 
-def _check_host(c: _Checker, sequence, slot_rate: float, clock: float, duration: float) -> None:
-    """What the sampler would refuse, and sequences the scene is too short to read even once, as problems."""
-    from emulator.channels import DEFAULT_FRAME_NAMES
+def _frame(variant: str) -> tuple[str, ...]:
+    """The default frame of a sensor variant (what ``host.sequence = "default"`` reads from it)."""
+    from emulator.channels import variant as variant_of
+
+    return variant_of(variant).frame_names
+
+
+def _check_host(c: _Checker, sequence, slot_rate: float, clock: float, duration: float,
+                variant: str = "biotac") -> None:
+    """What the sampler would refuse, and sequences the scene is too short to read even once, as problems
+    (``variant``: whose default frame "default" reads — the longest of the scene's sensors')."""
     from emulator.spi.peripheral import TRANSFER_PERIODS
 
     word_s = TRANSFER_PERIODS / clock  # the same rule as bench.running.sampler.Sampler
@@ -557,7 +565,7 @@ def _check_host(c: _Checker, sequence, slot_rate: float, clock: float, duration:
         c.problems.append(f"host.slot_rate_Hz = {slot_rate:g}: a slot of {1e6 / slot_rate:.1f} µs cannot hold the "
                           f"command, {proto.SAMPLE_DELAY_S * 1e6:.0f} µs and the read at host.spi_clock_Hz = "
                           f"{clock:g}; lower slot_rate_Hz or raise the clock")
-    seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
+    seq = list(_frame(variant) if sequence == "default" else sequence)
     slots = int(round(duration * slot_rate))  # what the runner reads
     first = {}
     for i, n in enumerate(seq):
@@ -576,19 +584,19 @@ def _slot_gaps(seq: list, channel: str) -> list[int]:
     return [b - a for a, b in zip(at, at[1:] + [at[0] + len(seq)])] if at else []
 
 
-def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
+def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float, variant: str = "biotac") -> None:
     """Every sliding trial's texture properties (traction, roughness, fineness: bench.textures.properties) must be
-    computable from what the host reads; otherwise the scene is refused here, not after it ran."""
+    computable from what the host reads from the sliding sensor (of ``variant``); otherwise the scene is refused
+    here, not after it ran."""
     import statistics
 
     from bench.textures.properties import (BACKGROUND_GUARD_S, BAND_HZ, MEASURE_LEAD, MEASURE_TAIL)
-    from emulator.channels import DEFAULT_FRAME_NAMES
     from emulator.sliding import SlidingContact
 
     specs = [x for x in specs if isinstance(x, SlideSpec)]  # a skin replacement alone reads nothing
     if not specs:
         return
-    seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
+    seq = list(_frame(variant) if sequence == "default" else sequence)
     missing = [n for n in ("PAC", "PDC") if n not in seq]
     if missing:
         c.problems.append(f"host.sequence = {_r(sequence)}: a sliding scene reports each trial's texture properties "
@@ -621,12 +629,12 @@ def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float) -> None:
                               f"{sp.end_s - sp.start_s:.3g} s may hold no PDC sample; read PDC more often")
 
 
-def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: float, stimuli) -> None:
-    """``impact_detection`` needs PAC at a rate the rule can use and sphere drops it can judge."""
-    from emulator.channels import DEFAULT_FRAME_NAMES
-
+def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: float, stimuli,
+                            variant: str = "biotac") -> None:
+    """``impact_detection`` needs PAC at a rate the rule can use and sphere drops it can judge (sensor 1's, of
+    ``variant``)."""
     min_points, window_s = IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S
-    seq = list(DEFAULT_FRAME_NAMES if sequence == "default" else sequence)
+    seq = list(_frame(variant) if sequence == "default" else sequence)
     if "PAC" not in seq:
         c.problems.append(f"analysis.impact_detection = true: the rule reads PAC, and host.sequence = {_r(sequence)} "
                           f"does not read it; add \"PAC\" or switch impact detection off")
@@ -769,10 +777,14 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             c.problems.append(f"host.sequence = {_r(sequence)}: \"default\" or a non-empty list of channel names")
             sequence = "default"
         else:
+            # E20..E24 when a sensor is a BioTac SP (a 19-electrode sensor answers them with error words)
+            sp = "biotac-sp" in {variant, *(o[1] for o in others.values())}
+            known = ALL_CHANNEL_INDEX if sp else CHANNEL_INDEX
             for i, n in enumerate(sequence):
-                if not isinstance(n, str) or n.upper() not in CHANNEL_INDEX or n.upper() == "HAL":
-                    c.problems.append(f"host.sequence[{i}] = {_r(n)}: channels are PAC, PDC, TAC, TDC, E1..E19")
-            sequence = [n.upper() for n in sequence if isinstance(n, str) and n.upper() in CHANNEL_INDEX]
+                if not isinstance(n, str) or n.upper() not in known or n.upper() == "HAL":
+                    c.problems.append(f"host.sequence[{i}] = {_r(n)}: channels are PAC, PDC, TAC, TDC, "
+                                      + ("E1..E24" if sp else "E1..E19 (E20..E24 with a \"biotac-sp\" sensor)"))
+            sequence = [n.upper() for n in sequence if isinstance(n, str) and n.upper() in known]
     slot_rate = c.number(host, "slot_rate_Hz", "host", 1.0, 8000.0, "Hz", default=4400.0)
     lo, hi = proto.SPI_CLOCK_RANGE_HZ
     clock = c.number(host, "spi_clock_Hz", "host", lo, hi, "Hz", default=proto.HOST_DEFAULT_CLOCK_HZ)
@@ -833,10 +845,13 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                                       + (f" for sensor {k}" if k != 1 else ""))
                 steps[s.at_s] = s.temperature_C
     if host_ok and duration is not None:
-        _check_host(c, sequence, float(slot_rate), float(clock), float(duration))
-        _check_slides(c, [x for specs in slide_specs_of.values() for x in specs], sequence, float(slot_rate))
+        variant_of = {k: others[k][1] if k in others else variant for k in (1, *others, *slide_specs_of)}
+        longest = max(set(variant_of.values()), key=lambda v: len(_frame(v)))
+        _check_host(c, sequence, float(slot_rate), float(clock), float(duration), longest)
+        for k, specs in slide_specs_of.items():
+            _check_slides(c, specs, sequence, float(slot_rate), variant_of[k])
         if impact_detection:
-            _check_impact_detection(c, sequence, float(slot_rate), float(duration), stimuli)
+            _check_impact_detection(c, sequence, float(slot_rate), float(duration), stimuli, variant)
 
     if fidelity and duration:
         from emulator.fidelity import profile

@@ -79,3 +79,64 @@ def test_the_bridge_firmware_recognises_an_sp_unit_by_its_serial():
         board.bus.close()
     status = [s for s in FrameParser().feed(bytes(out), now=0.0) if isinstance(s, Status)][-1]
     assert status.sp_mask == 0b1000  # only sensor 4, the SP unit
+
+
+# --- a BioTac SP's default frame through run -----------------------------------------------------------------------
+SP_RUN = ('[scene]\nname = "sp"\nduration_s = 0.3\n[sensor]\nvariant = "biotac-sp"\nunit = 5\n'
+          '[[sensors]]\nindex = 2\nvariant = "biotac-sp"\n'
+          '[[stimulus]]\nkind = "touch"\nelectrode = "E22"\nstart_s = 0.1\nforce_N = 1.0\nramp_s = 0.05\n'
+          '[noise]\nadc = false\nspi_coupling = false\n')
+
+
+def test_run_of_an_sp_records_e20_to_e24_from_its_54_slot_frame():
+    from bench.running.runner import read_channel_names, run_scene
+    from emulator.channels import variant
+
+    sc = parse_scene_text(SP_RUN)
+    assert [f"E{k}" for k in range(20, 25)] == [n for n in read_channel_names(sc) if n in
+                                                 {"E20", "E21", "E22", "E23", "E24"}]
+    rec = run_scene(sc, progress=False)
+    assert rec.status == "ok", rec.error
+    frames = round(0.3 * 4400) // 54
+    for k, r in ((1, rec), (2, rec.sensors[2])):
+        assert set(r.channels) == set(variant("biotac-sp").frame_names), k
+        for n in ("E1", "E20", "E24", "PDC"):
+            assert len(r.channels[n].codes) in (frames, frames + 1), (k, n)  # once per 54 slots
+            assert (r.channels[n].status == 0).all() and (r.channels[n].codes > 100).all()
+    e22 = rec.channels["E22"]
+    assert abs(float(e22.codes[e22.times > 0.2].mean()) - float(e22.codes[e22.times < 0.09].mean())) > 50
+
+
+def test_a_scene_checks_an_sp_frame_and_accepts_its_electrodes_in_the_host_sequence():
+    from bench.errors import SceneError
+
+    head = '[scene]\nname = "s"\nduration_s = {d}\n[sensor]\nvariant = "{v}"\n'
+    fifty_slots = 50 / 4400  # the 44-slot frame is read whole, the SP's 54 slots are not
+    parse_scene_text(head.format(d=fifty_slots, v="biotac"))
+    with pytest.raises(SceneError, match="TAC, TDC of the host sequence .54 slots."):
+        parse_scene_text(head.format(d=fifty_slots, v="biotac-sp"))
+    sc = parse_scene_text(head.format(d=0.1, v="biotac-sp") + '[host]\nsequence = ["E22", "PAC"]\n')
+    assert sc.sequence == ["E22", "PAC"]
+    with pytest.raises(SceneError, match=r"host.sequence\[0\] = 'E22'.*biotac-sp"):
+        parse_scene_text(head.format(d=0.1, v="biotac") + '[host]\nsequence = ["E22", "PAC"]\n')
+
+
+def test_the_run_command_stores_and_plots_an_sps_e20_to_e24(tmp_path):
+    import subprocess
+    import sys
+
+    import h5py
+
+    from bench.paths import REPO
+
+    scene = tmp_path / "sp.toml"
+    scene.write_text(SP_RUN)
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "bench.cli", "run", str(scene), "--out", str(out), "--quiet"],
+                       capture_output=True, text=True, cwd=REPO, timeout=300)
+    assert r.returncode == 0, r.stderr
+    for folder in (out, out / "sensor2"):
+        with h5py.File(folder / "samples.h5", "r") as f:
+            assert {f"E{k}" for k in range(20, 25)} <= set(f)
+            assert f["E22"].attrs["rate_Hz"] == pytest.approx(4400 / 54)
+    assert (out / "electrode_map.png").is_file()  # drawn on the SP's 24-electrode table
