@@ -26,8 +26,10 @@ from bench.errors import BenchError
 
 LOCK_NAME = ".biotac-bench.lock"
 #: Files a run writes; ``--force`` removes only these (and leftover temporary files).
+#: Every file a run writes (bench.reporting.report.write_outputs: the store, its exports, the report, the record and
+#: each plot of bench.reporting.plots.scene_plots, a sliding run's forces.png and properties.png included).
 RUN_FILES = ("record.json", "samples.h5", "codes.npz", "samples.csv", "report.md", "traces.png",
-             "spectrogram.png", "electrode_map.png")
+             "spectrogram.png", "electrode_map.png", "forces.png", "properties.png")
 TEMP_SUFFIX = ".part"
 
 

@@ -140,3 +140,28 @@ def test_the_run_command_stores_and_plots_an_sps_e20_to_e24(tmp_path):
             assert {f"E{k}" for k in range(20, 25)} <= set(f)
             assert f["E22"].attrs["rate_Hz"] == pytest.approx(4400 / 54)
     assert (out / "electrode_map.png").is_file()  # drawn on the SP's 24-electrode table
+
+
+# --- --force over a sliding run's folder ---------------------------------------------------------------------------
+def test_a_sliding_run_can_be_redone_into_its_folder_with_force(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    from bench.paths import FIXTURES, REPO
+    from bench.reporting.outdir import RUN_FILES
+
+    out = tmp_path / "foam"
+
+    def run(*extra):
+        return subprocess.run([sys.executable, "-m", "bench.cli", "run", str(FIXTURES / "scenes" / "foam.toml"),
+                               "--out", str(out), "--quiet", *extra], capture_output=True, text=True, cwd=REPO,
+                              timeout=300)
+
+    r = run()
+    assert r.returncode == 0, r.stderr
+    written = {p.name for p in out.iterdir() if not p.name.startswith(".")}
+    assert {"forces.png", "properties.png"} <= written and written <= set(RUN_FILES)
+    r = run("--force")
+    assert r.returncode == 0, r.stderr
+    assert json.loads((out / "record.json").read_text())["status"] == "ok"
