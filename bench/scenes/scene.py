@@ -19,8 +19,9 @@ from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
-from emulator.stimuli import (DROP_HEIGHT_M, SPHERES, AmbientStep, HeaterFailure, PowerOn, Press, PressureCalibrator,
-                              SphereDrop, Tap, Touch, Vibration)
+from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERES, AmbientStep, HeaterFailure, PowerOn,
+                              Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, sphere_drop_on,
+                              sphere_radius_m)
 from emulator.effects import effect_rng
 from emulator.skin import Skin
 from emulator.sliding import Slide
@@ -28,6 +29,10 @@ from emulator.texture import SURFACE_LENGTH_M
 from emulator.thermal import MATERIALS
 
 MAX_DURATION_S = 36000.0
+#: a mass_mg sphere drop's diameter_mm (mm) and the density it implies with the mass (kg/m³: from light plastics to
+#: the densest metals), so that a mistyped unit is refused rather than dropped
+SPHERE_DIAMETER_MM = (0.01, 50.0)
+SPHERE_DENSITY_KG_PER_M3 = (500.0, 23000.0)
 MAX_SCENE_BYTES = 1_000_000  # a scene file larger than 1 MB is refused before it is parsed
 MAX_NESTING = 16  # arrays and tables nested deeper than this are refused (a scene needs 4 levels)
 MAX_INSTANTS = 10_000  # instants of all stimuli together (each one is a stimulus the sensor computes)
@@ -238,7 +243,7 @@ STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure
 _STIMULUS_FIELDS = {
     "tap": {"kind", "at_s", "peak_N", "duration_s"},
     "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
-    "sphere_drop": {"kind", "at_s", "sphere", "mass_mg", "height_m"},
+    "sphere_drop": {"kind", "at_s", "sphere", "mass_mg", "height_m", "diameter_mm", "material"},
     "vibration": {"kind", "start_s", "duration_s", "amplitude_um", "frequency_Hz", "f_start_Hz", "f_stop_Hz", "fade_s"},
     "pressure": {"kind", "start_s", "duration_s", "offset_kPa", "amplitude_Pa", "frequency_Hz", "fade_s"},
     "touch": {"kind", "start_s", "force_N", "ramp_s", "hold_s", "x_mm", "angle_deg", "electrode",
@@ -303,18 +308,47 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         if None not in (force, ramp, hold):
             out += [Press(t, force, ramp, hold) for t in start]
     elif kind == "sphere_drop":
+        # a Hertz impact on this sensor's skin (emulator.stimuli.sphere_drop_on): a named sphere gives its mass and
+        # radius; a mass_mg drop its radius from diameter_mm, or from its material's density (default steel)
         height = c.number(st, "height_m", w, 1e-3, 10.0, "m", default=DROP_HEIGHT_M)
         if "sphere" in st and "mass_mg" in st:
             c.problems.append(f"{w}: give either sphere or mass_mg, not both")
+        name, radius, ok = None, None, True
         if "mass_mg" in st:
             mass_mg = c.number(st, "mass_mg", w, 1e-4, 1e4, "mg")
             mass = None if mass_mg is None else mass_mg * 1e-6
+            if "diameter_mm" in st and "material" in st:
+                c.problems.append(f"{w}: give diameter_mm or material for a mass_mg drop, not both (the material's "
+                                  f"density and the mass give the diameter)")
+                ok = False
+            elif "diameter_mm" in st:
+                d_mm = c.number(st, "diameter_mm", w, SPHERE_DIAMETER_MM[0], SPHERE_DIAMETER_MM[1], "mm")
+                ok = d_mm is not None
+                if ok and mass is not None:
+                    radius = d_mm * 0.5e-3
+                    rho = mass / (4.0 / 3.0 * math.pi * radius**3)
+                    lo, hi = SPHERE_DENSITY_KG_PER_M3
+                    if not lo <= rho <= hi:
+                        c.problems.append(f"{w}: mass_mg = {_r(mass_mg)} and diameter_mm = {_r(d_mm)} make a sphere "
+                                          f"of density {rho:.4g} kg/m³; allowed range is {lo:g} to {hi:g} kg/m³ "
+                                          f"(steel 7850)")
+                        ok = False
+            elif "material" in st:
+                material = c.choice(st, "material", w, tuple(MATERIAL_DENSITY_KG_PER_M3))
+                ok = material is not None
+                if ok and mass is not None:
+                    radius = sphere_radius_m(mass, MATERIAL_DENSITY_KG_PER_M3[material])
         else:
+            for key in ("diameter_mm", "material"):
+                if key in st:
+                    c.problems.append(f"{w}.{key}: only with mass_mg (a named sphere has its own "
+                                      f"{'diameter' if key == 'diameter_mm' else 'material'})")
+                    ok = False
             name = c.choice(st, "sphere", w, tuple(SPHERES), required=True)
             mass = None if name is None else SPHERES[name][0]
         for t in c.times(st, "at_s", w, duration):
-            if mass is not None and height is not None:
-                out.append(SphereDrop(t, mass, height, params.impact_restitution, params.impact_contact_s))
+            if mass is not None and height is not None and ok:
+                out.append(sphere_drop_on(params, t, mass, height, sphere=name, radius_m=radius))
     elif kind == "vibration":
         start = c.times(st, "start_s", w, duration)
         dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)

@@ -165,3 +165,37 @@ def test_a_sliding_run_can_be_redone_into_its_folder_with_force(tmp_path):
     r = run("--force")
     assert r.returncode == 0, r.stderr
     assert json.loads((out / "record.json").read_text())["status"] == "ok"
+
+
+# --- scene sphere drops: Hertz impacts on the unit's own skin ------------------------------------------------------
+def test_scene_sphere_drops_are_hertz_impacts_on_the_sensors_own_skin():
+    from emulator.stimuli import MATERIAL_DENSITY_KG_PER_M3, SPHERE_RADII_M, SPHERES, hertz_contact, sphere_drop_on
+
+    text = ('[scene]\nname = "d"\nduration_s = 1.0\n[sensor]\nskin_youngs_modulus_Pa = {E}\n'
+            '[[stimulus]]\nkind = "sphere_drop"\nat_s = 0.2\nsphere = "1 mm steel bearing"\n'
+            '[[stimulus]]\nkind = "sphere_drop"\nat_s = 0.4\nmass_mg = 4.089\ndiameter_mm = 2.0\n'
+            '[[stimulus]]\nkind = "sphere_drop"\nat_s = 0.6\nmass_mg = 1.461\nmaterial = "aluminum"\n')
+    base = parse_scene_text(text.replace("skin_youngs_modulus_Pa = {E}\n", ""))
+    E = base.params.skin_youngs_modulus_Pa
+    stiff = parse_scene_text(text.format(E=4 * E))
+    for sc in (base, stiff):
+        steel, wide, alu = sc.stimuli
+        p = sc.params
+        assert steel == sphere_drop_on(p, 0.2, SPHERES["1 mm steel bearing"][0], 0.07, sphere="1 mm steel bearing")
+        assert steel.contact_s is None and steel.sphere_radius_m == SPHERE_RADII_M["1 mm steel bearing"]
+        assert wide.sphere_radius_m == pytest.approx(1e-3) and wide.contact_s is None
+        r_alu = (3 * 1.461e-6 / (4 * np.pi * MATERIAL_DENSITY_KG_PER_M3["aluminum"])) ** (1 / 3)
+        assert alu.sphere_radius_m == pytest.approx(r_alu, rel=1e-12)
+        modulus = p.skin_youngs_modulus_Pa / (1 - p.skin_poisson_ratio**2)
+        for s in (steel, wide, alu):
+            assert s.restitution == p.impact_restitution and s.contact_modulus_Pa == pytest.approx(modulus)
+            assert s.contact_duration_s == hertz_contact(s.mass_kg, s.sphere_radius_m, s.impact_speed_m_per_s,
+                                                         modulus)[0]
+    # Hertz: t_c ∝ (m²/(R·E*²·v))^(1/5) -- a 4x stiffer skin shortens every impact by 4^(-2/5), a wider sphere of
+    # the same mass shortens it by (R'/R)^(-1/5)
+    assert stiff.stimuli[0].contact_duration_s == pytest.approx(base.stimuli[0].contact_duration_s * 4 ** -0.4,
+                                                                rel=1e-9)
+    steel, wide = base.stimuli[:2]
+    assert wide.contact_duration_s == pytest.approx(
+        steel.contact_duration_s * (wide.sphere_radius_m / steel.sphere_radius_m) ** -0.2, rel=1e-9)
+    assert base.stimuli[0].contact_duration_s != pytest.approx(base.params.impact_contact_s, rel=0.05)
