@@ -149,10 +149,10 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
             ref = (f"{d['pairs accuracy %']} %, median {d['pairs median moves']} (humans {d['human pairs accuracy %']} %)"
                    if task == "pairs" else f"{d['117-way accuracy %']} %, median {d['117-way median moves']}")
         lines.append(f"| {task} | {strat} | {100 * v['accuracy']:.1f} % | {v['median_moves']:g} | {ref} |")
-    n_val = len({t for p in result.pairs for t in p})
+    n_val = len({int(r.true_texture) for r in result.identification_results.get("bayesian", ())})  # identified
     lines += ["", f"In identification, Bayesian exploration is at least as accurate as cycling and random choice and "
                   f"converges in no "
-                  f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} validation textures.", "",
+                  f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} identified textures.", "",
               "## Pairs of similar textures", "",
               ("Disjoint pairs drawn at random (from the experiment's seed) within the library's texture groups: "
                "textures of one kind, as D's were (D's pairs were chosen by people):"

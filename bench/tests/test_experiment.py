@@ -66,7 +66,17 @@ def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkey
         assert name in files and (tmp_path / "out" / name).stat().st_size > 0
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(summary["best_movements"]) == {"traction", "roughness", "fineness"}
-    assert "99.6" in (tmp_path / "out" / "report.md").read_text()  # D's number stands beside ours
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "99.6" in report  # D's number stands beside ours
+    identified = len({int(r.true_texture) for r in result.identification_results["bayesian"]})
+    assert f"of {identified} identified textures" in report
+    # beyond D: every training texture identified; the report counts them all, not just the pairs' textures
+    monkeypatch.undo()  # this one needs validation trials for every texture
+    every = E.run_experiment(E.ExperimentSpec(**{**vars(spec), "identify_all_textures": True}),
+                             cache_dir=tmp_path / "cache", cluster=ClusterSpec(workers=1), progress=False,
+                             log=lambda m: None)
+    write_outputs(every, tmp_path / "every")
+    assert f"of {len(spec.training_textures)} identified textures" in (tmp_path / "every" / "report.md").read_text()
 
 
 def test_explore_command_reports_bad_input_without_traceback(tmp_path, capsys):
