@@ -52,8 +52,10 @@ def connect(spec: ClusterSpec):
             return Client(spec.scheduler, timeout="5s")
         except (OSError, TimeoutError) as e:
             raise CampaignError(f"no Dask scheduler answers at {spec.scheduler}: {e}") from None
+    # no dashboard; the scheduler's small HTTP server takes any free port (not 8787, which another campaign or
+    # notebook on this machine may hold: that only made distributed warn)
     cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           silence_logs=logging.CRITICAL)
+                           scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL)
     client = Client(cluster)
     client._owned_cluster = cluster  # closed with the client
     return client

@@ -66,3 +66,26 @@ def test_clear_errors_for_no_scheduler_and_a_failing_task():
         run_tasks(seeded_value, [(1, 1)], ClusterSpec(scheduler="tcp://127.0.0.1:9"), progress=False)
     with pytest.raises(CampaignError, match="task 1"):
         run_tasks(seeded_value, [(1, 1), ("not a seed", 1)], ClusterSpec(workers=1), progress=False, retries=0)
+
+
+def test_a_local_cluster_does_not_fight_over_the_dashboard_port():
+    """Two campaigns on one machine (or a notebook holding 8787): the scheduler's HTTP server takes a free port
+    quietly instead of warning that 8787 is in use."""
+    import socket
+    import warnings
+
+    from bench.campaigns.engine import close, connect
+
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", 8787))
+        holder.listen()
+    except OSError:
+        pass  # already held by something else: the situation this test is about
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            close(connect(ClusterSpec(workers=1)))
+    finally:
+        holder.close()
+    assert not [w for w in caught if "8787" in str(w.message)]
