@@ -13,6 +13,7 @@ import pytest
 
 from bench.paths import REPO
 from bench.scenes.scene import SceneError, parse_scene_text
+from emulator import conversions as conv
 from emulator.channels import channel_index
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
@@ -22,12 +23,38 @@ from emulator.units import (DRAWN_FIELDS, ELECTRODE_GAP_SPREAD_MM, NOMINAL_SERIA
 ELECTRODES = [f"E{n}" for n in range(1, 20)]
 RANDOM_UNITS = [3, 17, 101, 4242, 65537, 123456, 777, 2012, 31337, 2**31 - 1]
 FAST_GROUPS = ("noise", "scales", "force", "thermal", "electrodes")
-#: claims that compare raw electrode code changes across electrodes: a unit's electrodes rest at different gaps, so
-#: the same indentation moves a thin-gap electrode more. They hold for the nominal unit (asserted below); for a unit
-#: they need each electrode's change normalised by its own rest (bench/verification/claims/electrodes.py, not this
-#: helper's file): until then they are reported, not asserted, for units.
+#: claims that compare electrodes: they compare each electrode's change in fluid conductance (how far the skin moved
+#: over it, whatever gap it rests at: bench/verification/claims/electrodes.py), so they hold for every unit
 GAP_SENSITIVE = {"pressing over an electrode moves it most", "a 1 N contact's change stays in the nearest 4 electrodes",
                  "a contact's electrode pattern locates it"}
+
+
+#: a unit's own thermistor (R25 ±1 %, Beta ±3 %) read through the published conversion (the nominal part's constants)
+#: reads off by what its R25 and Beta predict: for a unit this claim is checked against that prediction instead
+UNIT_THERMISTOR = "TDC conversion error over 0–70 °C"
+TDC_CONVERSION_BAR_C = 0.1  # the claim's own bar: rounding of the published constants, ADC and dither
+
+
+def read_through_published_conversion_C(bead_C: float, p: SensorParams) -> float:
+    """The temperature the published conversion (R25 = 470 kΩ, B = 4025 K) reads for unit ``p``'s thermistor at
+    ``bead_C``: ln(R/470 kΩ) = 4025·(1/T' − 1/298.15) with R = R25'·exp(B'·(1/T − 1/298.15))."""
+    t = bead_C + 273.15
+    ln_r = np.log(p.thermistor_r25_ohm / 470e3) + p.thermistor_beta_K * (1.0 / t - 1.0 / 298.15)
+    return 1.0 / (1.0 / 298.15 + ln_r / 4025.0) - 273.15
+
+
+def skin_movement_depends_on_the_rest() -> bool:
+    """True while the electrode model thins each electrode's fluid by a share of its own resting gap (then the skin
+    moves farther over a thick-gap electrode for the same contact, and no reading of the codes can compare electrodes
+    independently of their rests); False once the skin's movement is the contact's alone."""
+    from emulator.electrodes import Contact, electrode_gaps_mm
+
+    p = SensorParams()
+    positions = np.array([[0.0, 0.0, -5.0], [0.0, 0.0, -5.0]])
+    contact = Contact(np.array([0.0, 0.0, -5.0]), 3.0, lambda t: np.full(np.shape(t), 0.5))
+    gaps = electrode_gaps_mm(p, [contact], np.array([0.0]), positions, rest_mm=np.array([1.0, 2.0]))[0]
+    moved = gaps - np.array([1.0, 2.0])
+    return not np.isclose(moved[0], moved[1], rtol=1e-9, atol=1e-12)
 
 
 def resting_electrode_codes(p: SensorParams) -> np.ndarray:
@@ -84,10 +111,20 @@ def test_the_fast_claims_hold_for_the_unit(which):
     claims = run_claims(Bench(params=unit(which).params), FAST_GROUPS)
     names = {c.name for c in claims}
     assert len(claims) > 20
-    exempt = set() if which is None else GAP_SENSITIVE
-    bad = [(c.name, c.measured, c.tolerance) for c in claims if not c.ok and c.name not in exempt]
-    assert not bad, f"unit {which}: {bad}"
     assert GAP_SENSITIVE <= names, GAP_SENSITIVE - names  # a renamed claim must be looked at again here
+    bad = [(c.name, c.measured, c.tolerance) for c in claims
+           if not c.ok and (which is None or c.name != UNIT_THERMISTOR)]
+    if which is not None:  # the unit's thermistor: the published conversion misreads it by what R25/Beta predict
+        tdc = next(c for c in claims if c.name == UNIT_THERMISTOR)
+        p = unit(which).params
+        off = [abs(float(conv.tdc_to_celsius(code)) - read_through_published_conversion_C(bead, p))
+               for bead, code in tdc.details["bead_C_and_mean_code"]]
+        assert max(off) <= TDC_CONVERSION_BAR_C, (which, off)
+    if bad and which is not None and skin_movement_depends_on_the_rest() and {n for n, _, _ in bad} <= GAP_SENSITIVE:
+        pytest.xfail(f"unit {which}: the electrode model thins each electrode's fluid by a share of its own resting "
+                     f"gap (emulator/electrodes.electrode_gaps_mm), so the skin moves farther over a thick-gap "
+                     f"electrode for the same contact: {bad}")
+    assert not bad, f"unit {which}: {bad}"
 
 
 # --- scenes and the command line ---------------------------------------------------------------------------------
