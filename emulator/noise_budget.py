@@ -66,8 +66,8 @@ def thermistor_noise_V(params: SensorParams) -> tuple[float, float]:
     hp = filters.discretize(zh, ph, kh, fs, "prewarped", gain_at_hz=10.0)
     impulse = np.zeros(20000)
     impulse[0] = 1.0
-    h_tdc = signal.sosfilt(lp, impulse)
-    h_tac = TAC_GAIN * signal.sosfilt(hp, h_tdc)
+    h_tdc = signal.sosfilt(np.array(lp), impulse)
+    h_tac = TAC_GAIN * signal.sosfilt(np.array(hp), h_tdc)
     return (params.tdc_noise_V * float(np.sqrt(np.sum(h_tdc**2))),
             params.tdc_noise_V * float(np.sqrt(np.sum(h_tac**2))))
 
