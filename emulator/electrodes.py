@@ -8,9 +8,9 @@ Contact -> skin and fluid deformation -> fluid gap over every electrode -> imped
   percentiles over 20 units, each unit spanning ~1000 codes): a low gap moves the code far more than a high one
   (the code saturates toward 3545 as the gap grows).
 * A contact at a point of the skin (``x_mm`` along the finger, ``angle_deg`` around it from the ventral
-  midline toward +y) with normal force F squeezes out the share a·exp(−d²/2w²) of the fluid over an electrode
-  at distance d from its centre, w² = r_indenter² + spread², a = 1 − e^(−F/F₀): the gap goes from g_i toward
-  g_min and the skin bottoms there, never through the core.  The force passes through the skin's creep (the
+  midline toward +y) with normal force F moves the skin toward the core by δ₀·exp(−d²/2w²) at distance d from
+  its centre, δ₀ = (g₀ − g_min)·a, w² = r_indenter² + spread², a = 1 − e^(−F/F₀): the same displacement over any
+  resting gap g_i, stopped on the core at g_min (a thin-gap electrode bottoms under a lighter press).  The force passes through the skin's creep (the
   standard linear solid of emulator/mechanics.py and emulator/viscoelastic.py, state carried across chunks)
   before the depth law, so a held force creeps the pattern (~10 % more force-equivalent over ~1.1 s) and a
   release recovers over the same time.  Tangential force shifts the whole pattern toward the shear.
@@ -198,10 +198,11 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
                       kappas: list | None = None) -> np.ndarray:
     """(len(t), N) fluid thickness over every electrode (``positions`` (N, 3), mm), mm.
 
-    ``rest_mm`` : (N,) resting gaps (default :func:`resting_gaps_mm`).  Each contact thins the fluid over
-    electrode i by (g_i − g_min)·a(F)·exp(−d²/2w²), a(F) = 1 − exp(−F/F₀), so the skin bottoms at g_min under a
-    hard press whatever the electrode's resting gap, and raises it by the rim bulge κ·δ₀·(d²/2s²)·exp(−d²/2s²)
-    with δ₀ = (g₀ − g_min)·a(F) at the nominal resting gap g₀: the displaced liquid, put back near the rim.
+    ``rest_mm`` : (N,) resting gaps (default :func:`resting_gaps_mm`).  Each contact moves the skin toward the
+    core by δ₀·exp(−d²/2w²) over electrode i, δ₀ = (g₀ − g_min)·a(F), a(F) = 1 − exp(−F/F₀), g₀ the nominal resting
+    gap — a displacement, the same whatever the fluid under it — and raises it by the rim bulge
+    κ·δ₀·(d²/2s²)·exp(−d²/2s²): the displaced liquid, put back near the rim.  Where the fluid is thinner than the
+    dent the skin stops on the core (g_min): a thin-gap electrode bottoms under a lighter press.
     ``fractions`` : per contact, a(t) to use instead of the static a(F(t)) (the creeping skin), or None;
     ``kappas`` : per contact, its :func:`bulge_balance` if already known.
     """
@@ -229,8 +230,8 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
         us = u / p.bulge_width_ratio**2
         frac += a[:, None] * np.exp(-u)
         bulge += ((g0 - gmin) * kappa * a)[:, None] * (us * np.exp(-us))
-    gaps = rest[None, :] - (rest[None, :] - gmin) * frac + bulge
-    return np.maximum(gaps, gmin)
+    gaps = rest[None, :] - (g0 - gmin) * frac + bulge  # the skin moves by the same depth over any gap
+    return np.maximum(gaps, gmin)  # ... and stops on the core
 
 
 def electrode_volts(p: SensorParams, gaps_mm: np.ndarray, faults: dict | None = None) -> np.ndarray:
