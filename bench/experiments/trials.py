@@ -61,6 +61,8 @@ def _params(noise_scale: float) -> SensorParams:
         return SensorParams()
     p = SensorParams()
     return p.replace(adc_noise_rms_bits=p.adc_noise_rms_bits * noise_scale,
+                     adc_reference_noise_ppm=p.adc_reference_noise_ppm * noise_scale,
+                     pac_path_noise_rms_bits=p.pac_path_noise_rms_bits * noise_scale,
                      amp_voltage_noise_V_per_rtHz=p.amp_voltage_noise_V_per_rtHz * noise_scale,
                      amp_current_noise_A_per_rtHz=p.amp_current_noise_A_per_rtHz * noise_scale,
                      mains_amplitude_V=p.mains_amplitude_V * noise_scale,

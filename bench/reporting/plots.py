@@ -222,7 +222,7 @@ def sensitivity_plot(claims, out_dir: Path) -> Path:
     ff = np.geomspace(10, 900, 200)
     out_dir.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.loglog(ff, human_threshold_m(ff) * 1e6, color="tab:green", label="human threshold (after Verrillo 1963)")
+    ax.loglog(ff, human_threshold_m(ff) * 1e6, color="tab:green", label="human threshold (Bolanowski et al. 1988, thenar)")
     ax.loglog(f, dm * 1e6, "o-", color="tab:red", label="emulated BioTac d_min (D eq. 5.3)")
     ax.set_xlabel("vibration frequency (Hz)")
     ax.set_ylabel("minimum detectable amplitude (µm)")

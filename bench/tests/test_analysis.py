@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from bench.verification import analysis
-from bench.verification.psychophysics import human_threshold_m
 
 pytestmark = pytest.mark.unit
 
@@ -55,14 +54,6 @@ def test_spectrum_is_parseval_true_for_white_noise():
 def test_minimum_detectable_amplitude_is_eq_5_3():
     assert analysis.minimum_detectable_amplitude(1e-6, 0.4) == pytest.approx(1e-6)
     assert analysis.minimum_detectable_amplitude(1e-6, 40.0) == pytest.approx(1e-7)
-
-
-def test_human_threshold_curve_is_u_shaped_with_its_minimum_near_250_Hz():
-    f = np.array([10, 40, 100, 250, 600, 900])
-    d = human_threshold_m(f)
-    assert np.argmin(d) == 3 and d[3] == pytest.approx(0.1e-6)
-    assert d[0] == d[1]  # flat below 40 Hz (Verrillo 1963)
-    assert 20 * np.log10(d[1] / d[3]) == pytest.approx(12 * np.log2(250 / 40))
 
 
 def test_line_fits_report_r_squared():

@@ -122,3 +122,16 @@ def test_row_tables_with_different_columns_are_written_whole(tmp_path):
     rows = list(csv.DictReader(open(tmp_path / "t.csv")))
     assert rows == [{"texture": "1", "pairs": "0.5", "identification": ""},
                     {"texture": "2", "pairs": "", "identification": "0.9"}]
+
+
+def test_the_double_noise_ablation_doubles_every_noise_source():
+    """The 'double-noise' ablation scales every noise source of the sensor: the ADC's own and its reference, the
+    PAC path's, the amplifier's, the hum and the bridge's Johnson noise (×2 in amplitude: R ×4)."""
+    from bench.experiments.trials import _params
+    from emulator.params import SensorParams
+
+    p, q = SensorParams(), _params(2.0)
+    for name in ("adc_noise_rms_bits", "adc_reference_noise_ppm", "pac_path_noise_rms_bits",
+                 "amp_voltage_noise_V_per_rtHz", "amp_current_noise_A_per_rtHz", "mains_amplitude_V"):
+        assert getattr(q, name) == pytest.approx(2 * getattr(p, name)), name
+    assert q.bridge_resistance_ohm == pytest.approx(4 * p.bridge_resistance_ohm)

@@ -38,22 +38,6 @@ def test_reference_profile_adds_second_order_effects():
     assert ref.graph.effects[[e.name for e in ref.graph.effects].index("bridge")].duct is not None
 
 
-def test_leaving_out_the_hum_leaves_every_other_sample_unchanged():
-    """Random streams are keyed by effect name: removing one effect changes only its own contribution."""
-    t = np.arange(4400) / 4400.0
-    with_hum = Sensor(channels_read=["PAC"], seed=5, noise=NoiseSources(adc=False)).analog(np.zeros(4400, int), t)
-    without = Sensor(channels_read=["PAC"], seed=5, noise=NoiseSources(adc=False, mains_hum=False)).analog(
-        np.zeros(4400, int), t)
-    diff = (with_hum - without) / ADC_LSB_V
-    spec = np.abs(np.fft.rfft(diff)) / (diff.size / 2)
-    freqs = np.fft.rfftfreq(diff.size, 1 / 4400)
-    k = int(np.argmax(spec))
-    assert freqs[k] == pytest.approx(60.0, abs=1.0)
-    # all the difference is the hum: no broadband residue from shifted noise draws
-    residue = diff - spec[k] * np.cos(2 * np.pi * freqs[k] * t + np.angle(np.fft.rfft(diff)[k]))
-    assert np.std(residue) < 0.05 * np.std(diff)
-
-
 def test_adc_noise_stream_is_independent_of_the_grid_noise():
     t = np.arange(2200) / 2200.0
     a = Sensor(channels_read=["PAC"], seed=9, noise=NoiseSources(johnson=False, amplifier=False, mains_hum=False))
