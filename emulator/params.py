@@ -113,7 +113,10 @@ class SensorParams:
         3000.0, "W/(m²·K)", 10.0, 1e6, "model", "skin-to-object contact conductance")
     tdc_bandwidth_Hz: float = _p(22.6, "Hz", 1.0, 49.0, "D", "TDC bandwidth (Table 4-1)")
     tac_highpass_Hz: float = _p(0.45, "Hz", 0.01, 10.0, "D", "TAC high-pass (Table 4-1; the text says 5 Hz)")
-    tdc_noise_V: float = _p(20e-6, "V", 0.0, 1e-2, "model", "RMS noise of the TDC node per 10 ms step")
+    tdc_noise_V: float = _p(
+        0.3e-6, "V", 0.0, 1e-2, "model",
+        "RMS noise of the thermistor divider node per 10 ms step: its Johnson noise (30 kΩ ∥ 303 kΩ at 35 °C over "
+        "the steps' 50 Hz: 0.15 µV) and the buffer's (~20 nV/√Hz, 1/f corner 10 Hz: 0.21 µV), rounded up")
 
     # --- electrodes (SENSOR.md §5) ---------------------------------------------------------
     electrode_load_ohm: float = _p(10e3, "Ω", 100.0, 1e6, "D", "R_load on the multiplexer output")

@@ -89,10 +89,10 @@ def noise_claims(b: Bench) -> list[Claim]:
               "LSB", "issue 10.2", {"per_channel_LSB": {n: quiet[n] for n in ELECTRODES}, "worst": worst_e},
               kind="prediction", note=_QUIET),
         Claim("TAC noise at rest, thermal network running", "0.3–0.7 LSB RMS", tac_net, 0.3, 0.7, "LSB",
-              "issue 10.2", {"TDC_LSB": float(np.std(net["TDC"][1]))}, kind="prediction", note=_QUIET,
-              deviation="the thermistor-node noise tdc_noise_V = 20 µV per 10 ms step (emulator/thermal.py, a "
-                        "model choice outside the per-channel noise) reaches TAC through its ×98 gain: ≈ 1.6 LSB. "
-                        "The divider's own Johnson noise is ~0.1 µV, so the parameter looks too high"),
+              "issue 10.2", {"TDC_LSB": float(np.std(net["TDC"][1]))}, kind="prediction",
+              note=_QUIET + "; the thermistor node's own noise (tdc_noise_V = 0.3 µV per 10 ms step, from the "
+                   "divider's Johnson noise and the buffer's: it was an unexplained 20 µV, 1.6 LSB on TAC, "
+                   "before) reaches TAC through its ×98 gain; any value below ~5 µV passes"),
         Claim("mains harmonics (2nd, 3rd) visible in PAC at rest", "each line ≥ 3 dB above the local floor",
               min(excess.values()), 3.0, np.inf, "dB (weaker line)", "issue 10.2", {"excess_dB": excess},
               kind="consistency",

@@ -190,8 +190,8 @@ def texture_property_claims(b: Bench) -> list[Claim]:
                         "probably comes from filaments snagging on the ridges, which the model does not have"),
         Claim("polished aluminum has the lowest roughness", "lowest", position("roughness", 46), 0, 0, "rank",
               "D ch. 6", kind="prediction",
-              deviation="rubber comes lowest, aluminum second: both slide at the noise floor here, so their order "
-                        "is set by noise, not by the surfaces"),
+              note="aluminum and rubber both slide near the noise floor; with the quiet channels' own noise "
+                   "(issue 10) aluminum comes lowest, before it rubber did"),
         Claim("graphite and satin: the highest spectral centroid", "the top two",
               min(position("fineness", 43), position("fineness", 84)), len(named) - 2, len(named) - 1, "rank",
               "D ch. 6", {"fineness": by["fineness"]}, kind="prediction",
