@@ -9,6 +9,7 @@ the schedule.  The sensors' variants are a Verilog parameter (``SP``), so a harn
 
 from __future__ import annotations
 
+import hashlib
 import struct
 import subprocess
 import tempfile
@@ -48,6 +49,22 @@ class Harness:
         self.build_dir = Path(build_dir).resolve()
         self.binary = self.build_dir / "harness"
 
+    def _sources_digest(self) -> str:
+        """Hash of everything the binary is built from: the harness, the RTL, the property generator, the mask."""
+        h = hashlib.sha256(f"sp={self.sp}".encode())
+        for path in (HARNESS_CPP, *build.SOURCES, Path(build.__file__)):
+            h.update(path.read_bytes())
+        return h.hexdigest()
+
+    def ensure_built(self) -> Path:
+        """The binary, rebuilt when any of its sources changed since it was built (never a stale RTL)."""
+        stamp = self.build_dir / "sources.sha256"
+        digest = self._sources_digest()
+        if not (self.binary.exists() and stamp.exists() and stamp.read_text() == digest):
+            self.build()
+            stamp.write_text(digest)
+        return self.binary
+
     def build(self) -> Path:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
@@ -78,8 +95,7 @@ class Harness:
                            *bits("miso_flip_bit"), *bits("mosi_flip_bit"), n)
 
     def run(self, vec: dict, transfers: np.ndarray, codes: np.ndarray) -> dict:
-        if not self.binary.exists():
-            self.build()
+        self.ensure_built()
         with tempfile.TemporaryDirectory() as tmp:
             sched, code_file, out = Path(tmp) / "schedule.bin", Path(tmp) / "codes.bin", Path(tmp) / "miso.bin"
             sched.write_bytes(self._header(vec, len(transfers)) + transfers.tobytes())
@@ -201,8 +217,7 @@ class RtlBus:
         self.harness = harness or Harness(sp=mask)
         if self.harness.sp != mask:
             raise ValueError(f"the harness was built for SP mask {self.harness.sp}, the sensors need {mask}")
-        if not self.harness.binary.exists():
-            self.harness.build()
+        self.harness.ensure_built()
         self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
         self.present = sum(1 << (n - 1) for n in sensors)
         self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,

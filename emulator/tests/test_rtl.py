@@ -153,3 +153,20 @@ def test_waveforms_on_request(tmp_path):
     files = r.wave_files()
     assert files and files[0].stat().st_size > 1000
     assert files[0].suffix == "." + r.wave_format
+
+
+@pytest.mark.rtl
+def test_a_harness_is_rebuilt_when_its_rtl_changes(tmp_path, monkeypatch):
+    """A harness binary is reused only while its sources are unchanged: an edited RTL never runs stale."""
+    from emulator.rtl import build, harness as H
+
+    h = H.Harness(tmp_path / "h")
+    h.ensure_built()
+    built = h.binary.stat().st_mtime_ns
+    h.ensure_built()  # unchanged sources: reused
+    assert h.binary.stat().st_mtime_ns == built
+    edited = tmp_path / "biotac_spi.v"
+    edited.write_text(build.SOURCES[0].read_text() + "\n// edited\n")
+    monkeypatch.setattr(build, "SOURCES", [edited, *build.SOURCES[1:]])
+    h.ensure_built()
+    assert h.binary.stat().st_mtime_ns != built

@@ -169,8 +169,7 @@ def sp_harness():
     from emulator.rtl.harness import Harness
 
     h = Harness(sp=0b00010)
-    if not h.binary.exists():
-        h.build()
+    h.ensure_built()
     return h
 
 
