@@ -136,6 +136,21 @@ def stream_hour(seconds: float = 3600.0) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+#: runs ``biotac-bench <args>`` and writes the process's peak resident memory (kB, VmHWM) to the file in argv[1]
+_RUN_AND_REPORT_HWM = """
+import atexit, runpy, sys
+report = sys.argv[1]
+def _hwm():
+    with open('/proc/self/status') as f:
+        kb = next(line.split()[1] for line in f if line.startswith('VmHWM:'))
+    with open(report, 'w') as out:
+        out.write(kb)
+atexit.register(_hwm)
+sys.argv = ['biotac-bench'] + sys.argv[2:]
+runpy.run_module('bench.cli', run_name='__main__', alter_sys=True)
+"""
+
+
 def run_memory(short_s: float = 60.0, long_s: float = 36000.0, say=print) -> dict:
     """Peak RSS of ``biotac-bench run`` (full 44-slot frame at rest, samples.h5 and plots) for ``short_s`` and
     ``long_s`` simulated seconds, each in its own child process (``os.wait4`` returns that child's own peak).
@@ -154,15 +169,17 @@ def run_memory(short_s: float = 60.0, long_s: float = 36000.0, say=print) -> dic
                              f'[host]\nsequence = "default"\n')
             out, log = Path(tmp) / f"out_{seconds:g}s", Path(tmp) / f"log_{seconds:g}s.txt"
             t0 = time.perf_counter()
+            hwm = Path(tmp) / f"hwm_{seconds:g}s.txt"
             with log.open("w") as err:
-                p = subprocess.Popen([sys.executable, "-m", "bench.cli", "run", str(scene), "--out", str(out),
-                                      "--quiet"], cwd=REPO, stdout=subprocess.DEVNULL, stderr=err)
-                _, status, usage = os.wait4(p.pid, 0)
-                p.returncode = os.waitstatus_to_exitcode(status)
+                # the child reports its own high-water mark (VmHWM of its image after exec): the rusage of a
+                # child forked from this (large) benchmark process counts the parent's pages it started with
+                p = subprocess.Popen([sys.executable, "-c", _RUN_AND_REPORT_HWM, str(hwm), "run", str(scene),
+                                      "--out", str(out), "--quiet"], cwd=REPO, stdout=subprocess.DEVNULL, stderr=err)
+                p.wait()
             if p.returncode != 0:
                 raise RuntimeError(f"run of {seconds:g} s failed ({p.returncode}): {log.read_text()[-2000:]}")
             runs[seconds] = {"simulated_s": seconds, "wall_s": time.perf_counter() - t0,
-                             "peak_rss_MB": usage.ru_maxrss / 1024.0,
+                             "peak_rss_MB": float(hwm.read_text()) / 1024.0,
                              "outputs": sorted(f.name for f in out.iterdir() if not f.name.startswith("."))}
     short, long_ = runs[short_s], runs[long_s]
     res = {"short": short, "long": long_, "ratio": long_["peak_rss_MB"] / short["peak_rss_MB"],
