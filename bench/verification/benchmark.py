@@ -157,7 +157,6 @@ def run_memory(short_s: float = 60.0, long_s: float = 36000.0, say=print) -> dic
 
     Target: the long run at the short run's peak within 20 %, both at most 300 MB.
     """
-    import os
     import tempfile
     from pathlib import Path
 
