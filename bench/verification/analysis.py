@@ -5,6 +5,8 @@ All functions take plain arrays: codes or values, sample instants in s, rates in
 
 from __future__ import annotations
 
+import warnings
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,7 +91,9 @@ def fit_decaying_sinusoid(t: np.ndarray, x: np.ndarray) -> RingFit:
     best = None
     for ph in np.linspace(0, 2 * np.pi, 8, endpoint=False):
         try:
-            p, _ = optimize.curve_fit(model, t, x, p0=[np.abs(x).max(), 0.02, f_guess, ph], maxfev=4000)
+            with warnings.catch_warnings():  # some starting phases leave the covariance undefined: only p is used
+                warnings.simplefilter("ignore", optimize.OptimizeWarning)
+                p, _ = optimize.curve_fit(model, t, x, p0=[np.abs(x).max(), 0.02, f_guess, ph], maxfev=4000)
         except RuntimeError:
             continue
         r = float(np.sum((model(t, *p) - x) ** 2))
