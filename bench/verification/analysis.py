@@ -6,7 +6,6 @@ All functions take plain arrays: codes or values, sample instants in s, rates in
 from __future__ import annotations
 
 import warnings
-
 from dataclasses import dataclass
 
 import numpy as np
