@@ -30,15 +30,11 @@ class SensorParams:
         12e3, "Pa/mL", 0.0, 1e5, "model", "resting fluid pressure rise per mL of inflation (repeatable, D ch. 4)")
     resting_pressure_exponent: float = _p(
         1.5, "1", 1.0, 3.0, "model", "resting pressure grows as volume^exponent (skin stiffens as it stretches)")
-    force_per_pdc_bit_N: float = _p(
-        0.0115, "N", 1e-4, 1.0, "D", "contact force per PDC bit below the knee (11.5 mN/bit, R² = 0.995)")
     force_knee_N: float = _p(2.0, "N", 0.1, 20.0, "D", "force where the skin meets the core and the slope falls")
     force_slope_above_knee: float = _p(
         0.25, "1", 0.0, 1.0, "model", "pressure slope above the knee as a fraction of the slope below")
     force_knee_width_N: float = _p(0.08, "N", 0.01, 2.0, "model", "smoothness of the transition at the knee")
     resonance_Hz: float = _p(330.0, "Hz", 200.0, 350.0, "D", "skin/fluid resonance at nominal inflation")
-    resonance_Hz_per_mL: float = _p(
-        150.0, "Hz/mL", 0.0, 1000.0, "model", "resonance shift with inflation volume away from 0.5 mL")
     resonance_decay_s: float = _p(0.020, "s", 0.002, 0.2, "D", "decay time constant of impact ringing")
     displacement_to_pressure_Pa_per_m: float = _p(
         3.17e6, "Pa/m", 1e4, 1e9, "model",
@@ -46,7 +42,6 @@ class SensorParams:
     displacement_zero_Hz: float = _p(
         500.0, "Hz", 50.0, 1e4, "model", "zero of the displacement path (direct transmission through the liquid)")
     impact_restitution: float = _p(0.3, "1", 0.0, 1.0, "model", "coefficient of restitution of a sphere on the skin")
-    impact_contact_s: float = _p(0.4e-3, "s", 1e-5, 5e-3, "model", "contact duration of a sphere impact (half-sine)")
     duct_resonance_Hz: float = _p(
         18.7e3, "Hz", 5e3, 1e5, "D", "closed-tube resonance of the 2 cm fluid duct, v/(4L) (reference profile only)")
     duct_quality_factor: float = _p(5.0, "1", 0.5, 100.0, "model", "quality factor of the duct resonance")

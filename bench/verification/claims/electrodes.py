@@ -152,5 +152,5 @@ def electrode_claims(b: Bench) -> list[Claim]:
                    "tuned to it (the bar is ours, not a published figure)"),
         Claim("a 1 N contact's PDC rise", "87 bits (11.5 mN/bit) ± 5 %", rise, 1.0 / 0.0115 * 0.95,
               1.0 / 0.0115 * 1.05, "bits", "D ch. 4; §1", kind="consistency",
-              note="reads back force_per_pdc_bit_N through a touch"),
+              note="the force claims' 11.5 mN per PDC bit again, through a touch over an electrode"),
     ]
