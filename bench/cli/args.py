@@ -85,6 +85,31 @@ def output_file(text: str) -> str:
     return text
 
 
+def _checked(check, text: str) -> None:
+    """Run an emulator check on a command-line value; its ValueError becomes argparse's error."""
+    try:
+        check(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def unit_serial(text: str) -> str:
+    """A sensor unit's serial number ("BT...", emulator.units.check_serial)."""
+    from emulator.units import check_serial
+
+    _checked(check_serial, text)
+    return text
+
+
+def unit_choice(text: str):
+    """A sensor unit: a unit seed (whole number), "nominal" or a serial number (emulator.units.unit)."""
+    from emulator.units import unit
+
+    which = int(text) if text.isdigit() else text
+    _checked(lambda _: unit(which), text)
+    return which
+
+
 def one_line_errors(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Usage errors of this subcommand as one line (``biotac-bench CMD: error: argument --flag: ...``), status 2."""
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from bench.cli.args import one_line_errors, whole
+from bench.cli.args import one_line_errors, unit_serial, whole
 
 UNITS_HELP = """\
 A sensor unit is one real device: its parameters drawn deterministically from documented manufacturing spreads
@@ -21,16 +21,6 @@ model's nominal sensor exactly.
 In a scene: [sensor] unit = 17 (or "nominal", or a serial "BT..."); other fingers in [[sensors]] tables with
 index = 2..5, unit, variant.
 """
-
-
-def _serial(text: str) -> str:
-    from emulator.units import check_serial
-
-    try:
-        check_serial(text)
-    except ValueError as e:
-        raise argparse.ArgumentTypeError(str(e)) from None
-    return text
 
 
 def _rows(u) -> dict:
@@ -86,7 +76,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     which = u.add_mutually_exclusive_group()
     which.add_argument("--seed", type=whole(0, MAX_UNIT_SEED), help=f"unit seed (0 to {MAX_UNIT_SEED}); default: "
                                                                     "the nominal unit")
-    which.add_argument("--serial", type=_serial, help="serial number (\"BT...\"): BTU + 13 digits is that seed; "
+    which.add_argument("--serial", type=unit_serial, help="serial number (\"BT...\"): BTU + 13 digits is that seed; "
                                                       "any other serial seeds the draw from its text")
     u.add_argument("--compare", action="store_true", help="show the nominal unit and the difference beside it")
     u.add_argument("--json", action="store_true", help="print JSON")

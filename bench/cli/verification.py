@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from bench.cli.args import number, whole
+from bench.cli.args import number, unit_choice, whole
 from emulator.fidelity import PROFILES
 
 
@@ -56,18 +56,6 @@ def _cmd_claims(a) -> int:
     return 0 if all(c.ok for c in claims) else 1
 
 
-def _unit(text: str):
-    """argparse type: a unit seed, "nominal" or a serial number (emulator.units.unit)."""
-    from emulator.units import unit
-
-    which = int(text) if text.isdigit() else text
-    try:
-        unit(which)
-    except ValueError as e:
-        raise argparse.ArgumentTypeError(str(e)) from None
-    return which
-
-
 def _cmd_benchmark(a) -> int:
     from bench.verification.benchmark import main as bench_main
 
@@ -92,7 +80,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.add_argument("--seeds", type=int, metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")
-    c.add_argument("--unit", type=_unit, default=None,
+    c.add_argument("--unit", type=unit_choice, default=None,
                    help="run the claims on this sensor unit: a unit seed, \"nominal\" (default) or a serial "
                         "number \"BT...\" (biotac-bench units)")
     c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
