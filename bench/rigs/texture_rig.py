@@ -73,7 +73,9 @@ class RigSettings:
     lift_rate_m_per_s: float = 5e-3
     settle_after_s: float = 0.2
     latency_s: float = 0.02
-    pdc_average_frames: int = 3  # the controller averages the last few PDC readings
+    # D ch. 6: the stepper stops "when this value [the DC pressure] reached the target change" — each frame's
+    # reading itself; averaging n frames (a choice D does not describe) adds (n − 1)/2 frames of lag
+    pdc_average_frames: int = 1
     motor: StageMotor = field(default_factory=StageMotor)  # the stage's motor current (traction)
     chunk_s: float = 0.5
     speculation_s: float = 1.0  # while lowering, frames are read this far ahead and replayed up to the stop

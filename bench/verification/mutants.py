@@ -384,6 +384,10 @@ CATALOGUE: list[Mutant] = [
            "catching = abs(vr_last) / (abs(vr_last) + CATCH_VELOCITY_M_PER_S)", "catching = 1.0",
            (f"{_RIG}::test_force_control_through_pdc_reaches_the_target_within_10_percent",),
            "ridges load feature slopes even when the skin does not slip (a pressed finger feels slope forces)"),
+    Mutant("rig-stops-on-averaged-pdc", "sliding", "bench/rigs/texture_rig.py",
+           "pdc_average_frames: int = 1", "pdc_average_frames: int = 3",
+           (f"{_RIG}::test_force_control_at_the_lightest_movement",),
+           "the stepper stops on a 3-frame PDC average (a frame more lag) instead of each reading, as D describes"),
 ]
 
 # --- issue 10: skin mechanics, local electrodes, units, the BioTac SP, several fingers -------------------------------

@@ -116,7 +116,8 @@ def rig_claims(b: Bench) -> list[Claim]:
                  kind="prediction",
                  note=f"true force = the emulator's normal load while sliding, never read from codes; 4 targets "
                       f"(0.2–2 N) × 2 textures × 6 seeds; single trials reach {worst_trial:.1f} % at 0.2 N, where "
-                      f"the target is 17 PDC counts against 1.4 LSB of noise and 20 ms of latency at 0.5 mm/s")]
+                      f"the target is 17 PDC counts against ~0.5 LSB of PDC noise and 20 ms of latency at 0.5 mm/s; the "
+                      f"stepper stops at the first frame whose PDC change reaches the target (D ch. 6)")]
     # wear: ridge height falls faster for high force × high speed than for low (same number of trials)
     lost = {}
     for label, mv in (("low", Movement(0.2, 0.01)), ("high", Movement(2.0, 0.1))):
