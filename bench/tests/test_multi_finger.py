@@ -11,6 +11,7 @@ import pytest
 
 from bench.paths import FIXTURES
 from bench.scenes.scene import load_scene, parse_scene_text
+from bench.tests.host_benches import cheetah_adapter, run_firmware
 from emulator.channels import channel_index
 from emulator.spi import protocol as proto
 from emulator.units import serial_for, unit
@@ -69,22 +70,15 @@ def test_run_records_every_finger_and_each_rises_at_its_own_touch():
 
 @pytest.mark.firmware
 def test_the_bridge_firmware_and_driver_see_each_fingers_own_touch():
-    from bench.hosts.cosim import CoSim, VirtualBoard
-    from bench.hosts.driver import CMD_START, DataFrame, FrameParser, encode
     from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
 
     sc = load_scene(GRASP)
     sc.sequence = ["PDC", "TDC"]  # two slots: PDC at 2.2 kHz for all three sensors
-    parser, items = FrameParser(), []
-    board = VirtualBoard(sensors_from_scene(sc, 3), uart_out=lambda b: items.extend(parser.feed(b)))
-    sim = CoSim(board)
-    sim.set_pattern(firmware_pattern(sc))
-    board.send_to_firmware(encode(CMD_START))
-    sim.run(1.8)
-    frames = [i for i in items if isinstance(i, DataFrame)]
+    run = run_firmware(sensors_from_scene(sc, 3), 1.8, pattern=firmware_pattern(sc), status=False)
+    frames = run.frames
     assert frames and frames[-1].sensors == [1, 2, 3]
     slot_s = 1.0 / 4400.0
-    t0 = board.t - len(frames) * 2 * slot_s  # frames are back to back from the start command on
+    t0 = run.t_end - len(frames) * 2 * slot_s  # frames are back to back from the start command on
     times, pdc = {}, {}
     for k in (1, 2, 3):
         codes = [f.samples(k)["PDC"] for f in frames]
@@ -122,20 +116,13 @@ def _pdc_through_cheetah(lib, h, n_samples: int, period_s: float) -> np.ndarray:
 
 @pytest.mark.firmware
 def test_the_cheetah_adapter_serves_each_fingers_own_touch(monkeypatch):
-    from bench.hosts.cheetah_server import CheetahBench
     from bench.hosts.scene_sensors import sensors_from_scene
 
     sc = load_scene(GRASP)
-    with CheetahBench(3, sensors=sensors_from_scene(sc, 3)) as cb:
-        lib = C.CDLL(str(cb.library))
-        monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
-        h = lib.c_ch_open(0)
-        assert h > 0
-        lib.c_ch_spi_bitrate(h, 4400)
+    with cheetah_adapter(monkeypatch, 3, sensors=sensors_from_scene(sc, 3)) as (cb, lib, h):
         t_start = cb.t
         period = 0.005
         parts = [_pdc_through_cheetah(lib, h, 60, period) for _ in range(6)]  # 1.8 s in batches of 0.3 s
-        lib.c_ch_close(h)
     codes = np.concatenate(parts)
     t = t_start + np.arange(len(codes)) * period
     check_own_touch_only({k: t for k in (1, 2, 3)}, {k: codes[:, k - 1] for k in (1, 2, 3)})

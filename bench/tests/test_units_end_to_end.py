@@ -4,12 +4,11 @@ unit's skin, and a sliding run can be redone into its folder with --force."""
 
 from __future__ import annotations
 
-import ctypes as C
-
 import numpy as np
 import pytest
 
 from bench.scenes.scene import parse_scene_text
+from bench.tests.host_benches import cheetah_adapter, read_serial, run_firmware
 from emulator.spi.model import PROP_SERIAL, SELECT_CODE, default_properties, variant_serial
 from emulator.units import serial_for
 
@@ -17,21 +16,6 @@ from emulator.units import serial_for
 UNITS_SCENE = ('[scene]\nname = "units"\nduration_s = 0.2\n[sensor]\nunit = 17\n'
                '[[sensors]]\nindex = 2\nunit = 18\n[[sensors]]\nindex = 3\nunit = "nominal"\n'
                '[[sensors]]\nindex = 4\nunit = 5\nvariant = "biotac-sp"\n')
-
-
-def cheetah_serial(lib, h, select: int) -> bytes:
-    """The serial-number property (0x15) as the vendor library reads it: command, 60 µs, bytes with select held."""
-    buf = (C.c_uint8 * 32)()
-    lib.c_ch_spi_queue_clear(h)
-    lib.c_ch_spi_queue_ss(h, select)
-    lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x61, PROP_SERIAL))
-    lib.c_ch_spi_queue_ss(h, 0)
-    lib.c_ch_spi_queue_delay_ns(h, 60000)
-    lib.c_ch_spi_queue_ss(h, select)
-    lib.c_ch_spi_queue_byte(h, 18, 0x00)
-    lib.c_ch_spi_queue_ss(h, 0)
-    assert lib.c_ch_spi_batch_shift(h, 32, buf) == 20
-    return bytes(buf[2:20]).split(b"\x00")[0]
 
 
 def test_an_sp_units_serial_starts_btsp_and_others_are_unchanged():
@@ -43,18 +27,11 @@ def test_an_sp_units_serial_starts_btsp_and_others_are_unchanged():
 
 @pytest.mark.firmware  # builds the Cheetah library
 def test_each_unit_in_a_scene_reports_its_own_serial_through_the_cheetah_path(monkeypatch):
-    from bench.hosts.cheetah_server import CheetahBench
     from bench.hosts.scene_sensors import sensors_from_scene
 
     sc = parse_scene_text(UNITS_SCENE)
-    with CheetahBench(4, sensors=sensors_from_scene(sc, 4)) as cb:
-        lib = C.CDLL(str(cb.library))
-        monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
-        h = lib.c_ch_open(0)
-        assert h > 0
-        lib.c_ch_spi_bitrate(h, 4400)
-        got = {k: cheetah_serial(lib, h, SELECT_CODE[k]) for k in (1, 2, 3, 4)}
-        lib.c_ch_close(h)
+    with cheetah_adapter(monkeypatch, 4, sensors=sensors_from_scene(sc, 4)) as (_, lib, h):
+        got = {k: read_serial(lib, h, SELECT_CODE[k]).split(b"\x00")[0] for k in (1, 2, 3, 4)}
     assert got[1] == serial_for(17).encode() and got[2] == serial_for(18).encode()
     assert got[3] == b"BT0101EMU0000003" == default_properties(3)[PROP_SERIAL][0]  # nominal: the port's default
     assert got[4] == b"BTSP000000000005"  # an SP unit: still recognisably an SP
@@ -62,22 +39,9 @@ def test_each_unit_in_a_scene_reports_its_own_serial_through_the_cheetah_path(mo
 
 @pytest.mark.firmware
 def test_the_bridge_firmware_recognises_an_sp_unit_by_its_serial():
-    from bench.hosts.cosim import CoSim, VirtualBoard
-    from bench.hosts.driver import CMD_START, CMD_STATUS, FrameParser, Status, encode
     from bench.hosts.scene_sensors import sensors_from_scene
 
-    sensors = sensors_from_scene(parse_scene_text(UNITS_SCENE), 4)
-    out = bytearray()
-    board = VirtualBoard(sensors, uart_out=out.extend)
-    try:
-        sim = CoSim(board)
-        board.send_to_firmware(encode(CMD_START))
-        sim.run(0.05)
-        board.send_to_firmware(encode(CMD_STATUS))
-        sim.run(0.02)
-    finally:
-        board.bus.close()
-    status = [s for s in FrameParser().feed(bytes(out), now=0.0) if isinstance(s, Status)][-1]
+    status = run_firmware(sensors_from_scene(parse_scene_text(UNITS_SCENE), 4), 0.05).status
     assert status.sp_mask == 0b1000  # only sensor 4, the SP unit
 
 

@@ -2,7 +2,6 @@
 ``record`` keeps what it received whatever ends it and says how it ended; bad arguments are refused in one line
 naming the flag, exit status 2, never a traceback."""
 
-import os
 import signal
 import subprocess
 import sys
@@ -13,10 +12,10 @@ import numpy as np
 import pytest
 
 from bench.hosts.bridge import FirmwareBench
-from bench.hosts.cosim import CoSim, VirtualBoard
-from bench.hosts.driver import CMD_START, CMD_STOP, BridgeDriver, DataFrame, FrameParser, encode
+from bench.hosts.driver import CMD_START, CMD_STOP, BridgeDriver, encode
 from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
 from bench.scenes.scene import load_scene
+from bench.tests.host_benches import run_firmware
 
 pytestmark = pytest.mark.firmware
 REPO = Path(__file__).resolve().parents[2]
@@ -76,13 +75,7 @@ def test_sensors_from_a_scene_carry_its_parameters_faults_noise_fidelity_and_see
 
 def test_the_firmware_streams_the_scenes_broken_sensor_not_a_healthy_one(broken_scene):
     scene = load_scene(broken_scene)
-    parser, items = FrameParser(), []
-    board = VirtualBoard(sensors_from_scene(scene, 2), uart_out=lambda b: items.extend(parser.feed(b)))
-    sim = CoSim(board)
-    sim.set_pattern(firmware_pattern(scene))
-    board.send_to_firmware(encode(CMD_START))
-    sim.run(0.5)
-    frames = [i for i in items if isinstance(i, DataFrame)]
+    frames = run_firmware(sensors_from_scene(scene, 2), 0.5, pattern=firmware_pattern(scene), status=False).frames
     assert len(frames) > 100
     codes = np.stack([f.codes for f in frames])  # frame, slot, sensor
     assert list(frames[-1].channels) == [0, 1, 19, 20, 3]
@@ -151,7 +144,7 @@ def test_record_keeps_what_it_received_when_interrupted(tmp_path, sig, status, w
         p.send_signal(sig)
         stdout, stderr = p.communicate(timeout=30)
     assert p.returncode == status, stderr
-    assert f"partial recording: interrupted" in stderr or f"partial recording: terminated" in stderr
+    assert "partial recording: interrupted" in stderr or "partial recording: terminated" in stderr
     assert word in stderr and "Traceback" not in stderr
     data = np.load(out)
     assert str(data["end"]) in ("interrupted", "terminated") and float(data["requested_s"]) == 600
