@@ -16,8 +16,9 @@
   ``resonance_Hz`` at the nominal 0.5 mL (calibrated); how f moves with inflation is predicted (k_f ∝ dP/dV,
   fluid layer ∝ volume).  Damping: viscous shear in the fluid layer plus the skin's loss factor, the latter
   fixed by ``resonance_decay_s`` at 0.5 mL (calibrated); the decay's change with inflation is predicted.
-* Skin displacement imposed by an actuator reaches the liquid through the same resonance plus a
-  direct path through the incompressible liquid (a real zero, :class:`VibrationCoupling`).
+* Skin displacement imposed by an actuator over the loaded area A pushes A·d of liquid, so the pressure
+  rises by dP/dV·A·d = (k_f/A)·d — derived from inflation and geometry, like the force slope — through the
+  same resonance plus a direct path through the incompressible liquid (a real zero, :class:`VibrationCoupling`).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ class SkinFluid:
     skin_stiffness_instant_N_per_m: float  # k_s0 = k_s∞ / (E∞/E0)
     pressure_per_N_relaxed: float  # Pa/N, quasi-static (held force)
     pressure_per_N_instant: float  # Pa/N, just after a step (and at the resonance)
+    pressure_per_displacement_Pa_per_m: float  # k_f/A = A·dP/dV: skin pushed in by d over the loaded area
     creep_time_s: float  # retardation time of the pressure under a held force
     creep_ratio: float  # instantaneous / relaxed pressure
     layer_thickness_m: float  # fluid layer under the skin
@@ -112,6 +114,7 @@ def skin_fluid(p: SensorParams) -> SkinFluid:
     out = SkinFluid(
         fluid_stiffness_N_per_m=kf, skin_stiffness_relaxed_N_per_m=ks_inf, skin_stiffness_instant_N_per_m=ks_0,
         pressure_per_N_relaxed=phi_relaxed / A, pressure_per_N_instant=phi_relaxed * ratio / A,
+        pressure_per_displacement_Pa_per_m=kf / A,
         creep_time_s=tau, creep_ratio=ratio, layer_thickness_m=h, moving_mass_kg=m, skin_mass_kg=skin_mass,
         resonance_Hz=w / (2 * math.pi), decay_s=decay, fluid_damping_N_s_per_m=c_f, skin_loss_factor=eta,
         implied_skin_thickness_m=skin_mass / (p.skin_density_kg_per_m3 * A))
@@ -205,7 +208,7 @@ class VibrationCoupling(Effect):
     passive = True
 
     def __init__(self, params: SensorParams, fs: float, discretization: str):
-        self.gain = params.displacement_to_pressure_Pa_per_m
+        self.gain = skin_fluid(params).pressure_per_displacement_Pa_per_m
         self.filter = skin_resonance(params, fs, discretization, zero_hz=params.displacement_zero_Hz)
 
     def process(self, block: Block, inputs):

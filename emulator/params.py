@@ -36,9 +36,6 @@ class SensorParams:
     force_knee_width_N: float = _p(0.08, "N", 0.01, 2.0, "model", "smoothness of the transition at the knee")
     resonance_Hz: float = _p(330.0, "Hz", 200.0, 350.0, "D", "skin/fluid resonance at nominal inflation")
     resonance_decay_s: float = _p(0.020, "s", 0.002, 0.2, "D", "decay time constant of impact ringing")
-    displacement_to_pressure_Pa_per_m: float = _p(
-        3.17e6, "Pa/m", 1e4, 1e9, "model",
-        "static skin displacement -> fluid pressure (force slope x ~1 N/mm fingertip stiffness)")
     displacement_zero_Hz: float = _p(
         500.0, "Hz", 50.0, 1e4, "model", "zero of the displacement path (direct transmission through the liquid)")
     impact_restitution: float = _p(0.3, "1", 0.0, 1.0, "model", "coefficient of restitution of a sphere on the skin")

@@ -203,8 +203,8 @@ CATALOGUE: list[Mutant] = [
            (f"{_DOC}::test_an_impact_rings_with_the_amplitude_its_impulse_predicts",
             "emulator/tests/test_skin_mechanics.py::test_hertz_duration_scaling_and_energy"),
            "Hertz contacts last ten times longer than the contact mechanics gives"),
-    Mutant("displacement-gain-x10", "mechanics", "emulator/params.py",
-           "        3.17e6, \"Pa/m\"", "        3.17e7, \"Pa/m\"",
+    Mutant("displacement-gain-x10", "mechanics", "emulator/mechanics.py",
+           "pressure_per_displacement_Pa_per_m=kf / A,", "pressure_per_displacement_Pa_per_m=10 * kf / A,",
            (f"{_DOC}::test_skin_displacement_reaches_the_liquid_with_the_documented_gain_and_zero",),
            "skin displacement -> pressure ten times too strong"),
     Mutant("displacement-zero-5kHz", "mechanics", "emulator/params.py",
@@ -398,6 +398,10 @@ _SP_HOST = "firmware_tests/tests/test_variant_sp.py"
 _UNITS = "bench/tests/test_units.py"
 _FINGERS = "bench/tests/test_multi_finger.py"
 CATALOGUE += [
+    Mutant("displacement-gain-fixed", "skin", "emulator/mechanics.py",
+           "self.gain = skin_fluid(params).pressure_per_displacement_Pa_per_m", "self.gain = 3.17e6",
+           (f"{_SKIN}::test_displacement_gain_is_the_displaced_liquid_over_the_loaded_area",),
+           "the piezo path's gain a fixed number instead of the liquid displaced over the loaded area"),
     Mutant("pac-noise-every-channel", "noise", "emulator/adc.py",
            "(np.asarray(channels) == PAC)", "(np.asarray(channels) >= 0)",
            ("emulator/tests/test_channel_noise.py::"

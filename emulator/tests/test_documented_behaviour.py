@@ -266,11 +266,12 @@ def test_an_impact_rings_with_the_amplitude_its_impulse_predicts():
 
 # --- the displacement path (README "Fluid and skin") -------------------------------------------------------------
 def test_skin_displacement_reaches_the_liquid_with_the_documented_gain_and_zero():
-    """Skin displacement -> pressure: a static gain of the force slope × ~1 N/mm fingertip stiffness (3.2 Pa/µm),
-    through the 330 Hz / 20 ms resonance plus a direct path (a real zero at 500 Hz).  Reference profile: the
-    default one's discretization is 5 % low at 900 Hz (its documented price, see the benchmark)."""
+    """Skin displacement -> pressure: a static gain of the liquid displaced over the loaded area, A·dP/dV
+    (3.2 Pa/µm at 0.5 mL), through the 330 Hz / 20 ms resonance plus a direct path (a real zero at 500 Hz).
+    Reference profile: the default one's discretization is 5 % low at 900 Hz (its documented price, see the
+    benchmark)."""
     p = SensorParams()
-    k = (LSB / (10.0 * 0.218e-6 * 10.0)) / 0.0115  # Pa per N (published figures)
+    gain_Pa_per_m = p.skin_load_area_m2 * 12e3 * 1.5 * 0.5 ** 0.5 * 1e6  # A·dP/dV of P = 12 kPa/mL · V^1.5
     w0, sigma = 2 * np.pi * 330.0, 1 / 0.020
     for f in (20.0, 330.0, 900.0):
         vib = Vibration(0.0, 0.5, 1e-6, f, fade_s=0.0)
@@ -280,7 +281,7 @@ def test_skin_displacement_reaches_the_liquid_with_the_documented_gain_and_zero(
         s_ = 2j * np.pi * f
         h = (1 + s_ / (2 * np.pi * 500.0)) * w0**2 / (s_**2 + 2 * sigma * s_ + w0**2)
         h *= 1 / np.sqrt(1 + (f / 1040.0) ** 4)  # the PDC node's anti-alias filter
-        assert pa / 1e-6 == pytest.approx(k * 1e3 * abs(h), rel=0.03), f
+        assert pa / 1e-6 == pytest.approx(gain_Pa_per_m * abs(h), rel=0.03), f
 
 
 # --- noise sources against the budget (D Table 5-1; `biotac-bench noise-budget`) ----------------------------------

@@ -8,7 +8,7 @@ import pytest
 
 from emulator.conversions import ADC_LSB_V
 from emulator.effects import Block
-from emulator.mechanics import ForceCoupling, hertz_contact, skin_fluid
+from emulator.mechanics import ForceCoupling, VibrationCoupling, hertz_contact, skin_fluid
 from emulator.params import SensorParams
 from emulator.stimuli import (
     GRAVITY_M_PER_S2, SPHERE_RADII_M, SPHERES, ContactForce, Press, SphereDrop, sphere_density_kg_per_m3,
@@ -110,6 +110,25 @@ def test_force_slope_follows_geometry_and_inflation_not_the_pdc_scale():
     assert 1e3 * ADC_LSB_V / (wrong.pdc_V_per_Pa * wrong.force_to_pressure_Pa_per_N) == pytest.approx(mn_per_bit / 2)
     # ... and more inflation stiffens the fluid path: more of the load reaches the fluid
     assert SensorParams(inflation_volume_mL=0.7).force_to_pressure_Pa_per_N > p.force_to_pressure_Pa_per_N
+
+
+def _displacement_gain_Pa_per_m(params: SensorParams, f_Hz: float = 5.0, fs: float = 8000.0) -> float:
+    """Pressure amplitude (Pa) per metre of a slow sinusoidal skin displacement through VibrationCoupling."""
+    t = np.arange(int(2 * fs)) / fs
+    d = 1e-6 * np.sin(2 * np.pi * f_Hz * t)
+    out = VibrationCoupling(params, fs, "matched").process(Block(0, t.size, fs), {"skin_displacement_m": d})
+    return float(np.max(np.abs(out["fluid_pressure_Pa"][t.size // 2:]))) / 1e-6
+
+
+def test_displacement_gain_is_the_displaced_liquid_over_the_loaded_area():
+    """Skin pushed in by d over the loaded area A displaces A·d of liquid: P = dP/dV·A·d (prediction from
+    inflation and geometry, no parameter of its own), so the piezo path stiffens with inflation as dP/dV does."""
+    for volume in (0.5, 0.7):
+        p = SensorParams(inflation_volume_mL=volume)
+        dpdv = p.resting_pressure_Pa_per_mL * p.resting_pressure_exponent * volume ** 0.5 * 1e6
+        assert _displacement_gain_Pa_per_m(p) == pytest.approx(p.skin_load_area_m2 * dpdv, rel=0.01)
+    assert _displacement_gain_Pa_per_m(SensorParams(inflation_volume_mL=0.7)) > \
+        _displacement_gain_Pa_per_m(SensorParams()) * 1.1
 
 
 # --- resonance from stiffness and mass -----------------------------------------------------------------
