@@ -52,6 +52,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 from scipy import signal, special
 
 from emulator import filters
@@ -193,6 +194,134 @@ def indentation_fraction(p: SensorParams, force_N) -> np.ndarray:
     return 1.0 - np.exp(-np.asarray(force_N, float) / p.indentation_force_N)
 
 
+FAULT_NONE, FAULT_OPEN, FAULT_SHORT = 0, 1, 2  # an electrode's state in :func:`fault_codes`
+
+
+def fault_codes(faults: dict | None, n: int) -> np.ndarray:
+    """(n,) int: FAULT_OPEN (Z = ∞) or FAULT_SHORT (Z = 0) per electrode from a fault dict numbering 1..n, else
+    FAULT_NONE; an electrode listed both ways is shorted."""
+    codes = np.full(n, FAULT_NONE, np.int64)
+    faults = faults or {}
+    for key, code in (("electrode_open", FAULT_OPEN), ("electrode_short", FAULT_SHORT)):
+        for e in faults.get(key, ()):
+            codes[int(e) - 1] = code
+    return codes
+
+
+class Footprint:
+    """One contact seen from the electrodes: what of :func:`electrode_gaps_mm` does not change while it presses.
+
+    ``d2`` (N,) squared distance from each electrode to the contact's resting centre, mm²; ``along`` (N,) each
+    electrode's offset along the shear direction, mm; ``w2`` the indentation's squared width, mm²; ``ring_amp``
+    (g₀ − g_min)·κ, mm (κ: ``kappa``, default :func:`bulge_balance`).
+    """
+
+    def __init__(self, p: SensorParams, c: Contact, positions: np.ndarray, kappa: float | None = None):
+        self.w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
+        if kappa is None:
+            kappa = bulge_balance(p, c.center_mm, np.sqrt(self.w2))
+        self.ring_amp = (p.resting_gap_mm - p.minimum_gap_mm) * kappa
+        rel = positions - c.center_mm[None, :]
+        self.along = rel @ np.asarray(c.shear_direction, float)
+        self.d2 = (rel * rel).sum(axis=1)
+        self.shift_mm_per_N, self.ratio = p.shear_shift_mm_per_N, p.bulge_width_ratio
+        self._unshifted = None
+
+    def shapes(self, tangential_N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The dent exp(−u) and the ring u_s·exp(−u_s) over every electrode, (T, N) each (1): u = d²/2w²,
+        u_s = u/ratio², the centre shifted along the shear by ``shear_shift_mm_per_N``·F_t (``tangential_N``, N, one
+        per sample).  T = 1 (computed once per contact) while the centre does not move, else one row per sample."""
+        s_mm = self.shift_mm_per_N * tangential_N
+        if not s_mm.any():  # |p − c₀|² exactly: the shifted formula below adds only zeros
+            if self._unshifted is None:
+                self._unshifted = self._dent_and_ring(self.d2[None, :])
+            return self._unshifted
+        # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
+        return self._dent_and_ring(self.d2[None, :] - 2 * np.outer(s_mm, self.along) + (s_mm * s_mm)[:, None])
+
+    def _dent_and_ring(self, d2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        u = d2 / (2 * self.w2)
+        us = u / self.ratio**2
+        return np.exp(-u), us * np.exp(-us)
+
+
+def _stack(fractions: list, footprints: list, shapes: list, n: int, n_electrodes: int):
+    """The arguments of the gap kernels for the contacts that press: a (C, n), ring_amp (C,), dent and ring
+    (C, T, N) with T = 1 when no centre moves (each contact's rows broadcast to T otherwise)."""
+    T = max((d.shape[0] for d, _ in shapes), default=1)
+    dent, ring = np.empty((len(shapes), T, n_electrodes)), np.empty((len(shapes), T, n_electrodes))
+    for k, (d, r) in enumerate(shapes):
+        dent[k], ring[k] = d, r
+    a = np.array(fractions, float).reshape(len(fractions), n)
+    return a, np.array([f.ring_amp for f in footprints], float), dent, ring
+
+
+# The gap and voltage laws, one value at a time, compiled (numba): the kernels below run them over a chunk of
+# samples × electrodes in one pass.  The operations and their order are those of the array formulas in the
+# docstrings (no fast-math), so the results are the same to the last bit.  error_model="numpy": x/0 is ±inf;
+# inline="always": a call passing arrays costs more than the arithmetic it does.
+@njit(cache=True, error_model="numpy", inline="always")
+def _gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i):
+    """gap_i(t_j) = max(g_i − (g₀ − g_min)·Σ_c a_c·dent_c + Σ_c (ring_amp_c·a_c)·ring_c, g_min), mm."""
+    jt = j if dent.shape[1] > 1 else 0
+    frac = 0.0
+    bulge = 0.0
+    for c in range(a.shape[0]):
+        frac += a[c, j] * dent[c, jt, i]
+        bulge += (ring_amp[c] * a[c, j]) * ring[c, jt, i]
+    g = rest_mm[i] - depth_mm * frac + bulge  # the skin moves by the same depth over any gap ...
+    return gmin_mm if g < gmin_mm else g  # ... and stops on the core
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _load_volts(gap_mm, fault, series_ohm, sheet_ohm_mm, load_ohm):
+    """V = 3.3·R_load/(Z + R_load), Z = Z_series + ρ_sheet/gap (∞ for an open electrode, 0 for a short), V."""
+    z = series_ohm + sheet_ohm_mm / gap_mm
+    if fault == 1:  # FAULT_OPEN
+        z = np.inf
+    elif fault == 2:  # FAULT_SHORT
+        z = 0.0
+    return 3.3 * load_ohm / (z + load_ohm)
+
+
+@njit(cache=True, error_model="numpy")
+def _gaps_kernel(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, out):
+    for j in range(out.shape[0]):
+        for i in range(out.shape[1]):
+            out[j, i] = _gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i)
+
+
+@njit(cache=True, error_model="numpy")
+def _volts_kernel(gaps_mm, faults, series_ohm, sheet_ohm_mm, load_ohm, out):
+    for j in range(out.shape[0]):
+        for i in range(out.shape[1]):
+            out[j, i] = _load_volts(gaps_mm[j, i], faults[i], series_ohm, sheet_ohm_mm, load_ohm)
+
+
+@njit(cache=True, error_model="numpy")
+def _filtered_volts_kernel(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, faults, series_ohm, sheet_ohm_mm,
+                           load_ohm, b0, b1, a1, state, out):
+    """Gap -> voltage -> first-order low-pass y = b0·v + s, s ← b1·v − a1·y (scipy's lfilter, transposed direct
+    form II, ``state`` (N,) carried in place) for every sample j and electrode i of ``out`` (n, N)."""
+    for j in range(out.shape[0]):
+        for i in range(out.shape[1]):
+            v = _load_volts(_gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i), faults[i],
+                            series_ohm, sheet_ohm_mm, load_ohm)
+            y = state[i] + b0 * v
+            state[i] = v * b1 - y * a1
+            out[j, i] = y
+
+
+def _law_args(p: SensorParams) -> tuple[float, float]:
+    """(g₀ − g_min, g_min), mm: the gap law's constants as the kernels take them."""
+    return float(p.resting_gap_mm - p.minimum_gap_mm), float(p.minimum_gap_mm)
+
+
+def _volt_args(p: SensorParams) -> tuple[float, float, float]:
+    """(Z_series Ω, ρ_sheet Ω·mm, R_load Ω): the voltage law's constants as the kernels take them."""
+    return float(p.electrode_series_ohm), float(p.fluid_sheet_ohm_mm), float(p.electrode_load_ohm)
+
+
 def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray,
                       rest_mm: np.ndarray | None = None, fractions: list | None = None,
                       kappas: list | None = None) -> np.ndarray:
@@ -206,10 +335,8 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
     ``fractions`` : per contact, a(t) to use instead of the static a(F(t)) (the creeping skin), or None;
     ``kappas`` : per contact, its :func:`bulge_balance` if already known.
     """
-    g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
     rest = resting_gaps_mm(p, positions.shape[0]) if rest_mm is None else np.asarray(rest_mm, float)
-    frac = np.zeros((t.size, positions.shape[0]))
-    bulge = np.zeros_like(frac)
+    used, footprints, shapes = [], [], []
     for i, c in enumerate(contacts):
         a = None if fractions is None else fractions[i]
         if a is None:
@@ -218,33 +345,23 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
             a = indentation_fraction(p, c.state(t)[0])  # bounded: bottoms at g_min
         if not a.any():
             continue
-        ft = c.state(t)[1]
-        w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
-        kappa = bulge_balance(p, c.center_mm, np.sqrt(w2)) if kappas is None else kappas[i]
-        # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
-        rel = positions - c.center_mm[None, :]
-        along = rel @ np.asarray(c.shear_direction, float)
-        s_mm = p.shear_shift_mm_per_N * ft
-        d2 = (rel * rel).sum(axis=1)[None, :] - 2 * np.outer(s_mm, along) + (s_mm * s_mm)[:, None]
-        u = d2 / (2 * w2)
-        us = u / p.bulge_width_ratio**2
-        frac += a[:, None] * np.exp(-u)
-        bulge += ((g0 - gmin) * kappa * a)[:, None] * (us * np.exp(-us))
-    gaps = rest[None, :] - (g0 - gmin) * frac + bulge  # the skin moves by the same depth over any gap
-    return np.maximum(gaps, gmin)  # ... and stops on the core
+        fp = Footprint(p, c, positions, None if kappas is None else kappas[i])
+        used.append(np.broadcast_to(a, t.shape))
+        footprints.append(fp)
+        shapes.append(fp.shapes(c.state(t)[1]))
+    out = np.empty((t.size, positions.shape[0]))
+    _gaps_kernel(*_stack(used, footprints, shapes, t.size, positions.shape[0]),
+                 np.ascontiguousarray(rest, float), *_law_args(p), out)
+    return out
 
 
 def electrode_volts(p: SensorParams, gaps_mm: np.ndarray, faults: dict | None = None) -> np.ndarray:
-    """Peak voltage on the load for each gap (mm), with open/shorted electrode faults."""
-    z = p.electrode_series_ohm + p.fluid_sheet_ohm_mm / gaps_mm
-    faults = faults or {}
-    for n in faults.get("electrode_open", ()):
-        z[..., int(n) - 1] = np.inf
-    for n in faults.get("electrode_short", ()):
-        z[..., int(n) - 1] = 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = 3.3 * p.electrode_load_ohm / (z + p.electrode_load_ohm)
-    return np.nan_to_num(v, nan=0.0)
+    """Peak voltage on the load for each gap (mm; (..., N), N electrodes), with open/shorted electrode faults, V."""
+    g = np.asarray(gaps_mm, float)
+    flat = np.ascontiguousarray(g).reshape(-1, g.shape[-1])
+    v = np.empty(flat.shape)
+    _volts_kernel(flat, fault_codes(faults, g.shape[-1]), *_volt_args(p), v)
+    return np.nan_to_num(v.reshape(g.shape), nan=0.0)
 
 
 def _whole_in(e, n: int) -> bool:
@@ -310,29 +427,39 @@ class ElectrodeModel:
         self.lazy = not all(c.planned for c in contacts)  # compute no further than asked: commands are still coming
         self.kappas = [bulge_balance(p, c.center_mm, float(np.hypot(c.indenter_radius_mm, p.skin_spread_mm)))
                        for c in contacts]
+        self.footprints = [Footprint(p, c, self.positions, k) for c, k in zip(contacts, self.kappas)]
+        self.fault_codes = fault_codes(self.faults, n)
+        # the low-pass as the kernel runs it: lfilter's coefficients normalised by a[0], its state (1, N) in place
+        self._lowpass = (float(self.b[0] / self.a[0]), float(self.b[1] / self.a[0]), float(self.a[1] / self.a[0]))
 
     def _advance_chunk(self, n: int | None = None):
-        """Advance ``n`` samples (default: a whole chunk); results do not depend on how the time is cut."""
+        """Advance ``n`` samples (default: a whole chunk); results do not depend on how the time is cut.
+
+        A contact outside [start_s, end_s] exerts no force (see :class:`Contact`): while its skin creeps back
+        it has neither normal nor tangential force."""
         n = self.chunk if n is None else n
         t = (self.k + 1 + np.arange(n)) * self.dt
-        fractions = []
-        for c, cr in zip(self.contacts, self.creeps):
+        active = False
+        fractions, footprints, shapes = [], [], []
+        for c, cr, fp in zip(self.contacts, self.creeps, self.footprints):
             touching = c.end_s >= t[0] and c.start_s <= t[-1]
             if not touching and cr.last == 0.0 and np.all(np.abs(cr.state) < 1e-9):  # N: no trace left
                 cr.state[:] = 0.0  # released and recovered: nothing left to creep back
-                fractions.append(None)
                 continue
-            f = c.state(t)[0] if touching else np.zeros(t.size)
-            fractions.append(indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0)))
-        active = [i for i, a in enumerate(fractions) if a is not None]
-        if not active and np.allclose(self.zi, self.zi_rest, rtol=0, atol=1e-12):
+            active = True
+            f, ft = c.state(t) if touching else (np.zeros(t.size), np.zeros(t.size))
+            a = indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0))
+            if a.any():  # a contact whose dent is nil moves no electrode
+                fractions.append(a)
+                footprints.append(fp)
+                shapes.append(fp.shapes(ft))
+        if not active and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
             y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
         else:
-            gaps = electrode_gaps_mm(self.p, [self.contacts[i] for i in active], t, self.positions,
-                                     self.rest_gaps_mm, [fractions[i] for i in active],
-                                     [self.kappas[i] for i in active])
-            v = electrode_volts(self.p, gaps, self.faults)
-            y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
+            y = np.empty((n, self.n))
+            _filtered_volts_kernel(*_stack(fractions, footprints, shapes, n, self.n), self.rest_gaps_mm,
+                                   *_law_args(self.p), self.fault_codes, *_volt_args(self.p), *self._lowpass,
+                                   self.zi[0], y)
         self.k += n
         self._hist_t.append(t)
         self._hist.append(y)
