@@ -2,8 +2,8 @@
 
 A scene describes one sensor and what happens to it: its parameters, faults, noise switches, fidelity profile,
 seed and stimuli.  Behind the bridge or the Cheetah adapter every sensor is built exactly as a scene run builds
-its sensor (:func:`bench.running.runner.build_sensor`), reading every channel a host may ask for (the default
-44-slot frame covers them all):
+its sensor (:func:`bench.running.runner.build_sensor`), reading every channel a host may ask for (its variant's
+default frame covers them all: 44 slots, or the BioTac SP's 54 with E20..E24):
 
 * sensor k (1..N) is the scene's sensor k: its unit, parameters and variant (``[sensor]`` for sensor 1,
   ``[[sensors]]`` with ``index = k`` for the others), the stimuli addressed to it (``sensor = k`` on a
@@ -14,8 +14,11 @@ its sensor (:func:`bench.running.runner.build_sensor`), reading every channel a 
   property; None for the nominal unit, whose ports keep their default serial, one per sensor number);
 * the scene's ``[host]`` section describes the host.  The bridge firmware is the host of the SPI bus: a
   ``sequence`` becomes its sampling pattern; it samples at 4400 slots/s with a 4.4 MHz clock, so other slot
-  rates or clocks are refused (they could not be honoured); ``spi`` picks the SPI implementation.  Behind the
-  Cheetah adapter the host is the user's program, which decides those itself.
+  rates or clocks are refused (they could not be honoured); ``spi`` picks the SPI implementation.  Its pattern
+  (1..64 channel indices, each 0..3 or 17..40) holds E20..E24 (36..40) too, but one pattern goes to every
+  sensor on the bus: a sequence with E20..E24 needs every sensor to be a BioTac SP (a 19-electrode one would
+  answer them with error words only) and is refused otherwise, naming the electrodes and the sensor's variant.
+  Behind the Cheetah adapter the host is the user's program, which decides those itself.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 
 from bench.errors import SceneError
-from emulator.channels import CHANNEL_INDEX, SAMPLED_CHANNELS
+from emulator.channels import ALL_CHANNEL_INDEX, HAL, variant
 from emulator.sensor import Sensor
 from emulator.spi import protocol as proto
 
@@ -50,7 +53,9 @@ def sensors_from_scene(scene, n_sensors: int, seed: int | None = None) -> dict[i
 
 def firmware_pattern(scene) -> list[int] | None:
     """The bridge firmware's sampling pattern for the scene's ``host.sequence`` (None: the default frame).
-    Refuses, naming the field, what the firmware cannot do: other slot rates or SPI clocks, long patterns."""
+    Refuses, naming the field, what the firmware cannot do: other slot rates or SPI clocks, long patterns, and
+    E20..E24 unless every sensor of the scene is a BioTac SP (sensors the scene does not describe are sensor 1's
+    twins, so its sensors 1..N speak for any number served)."""
     problems = []
     if abs(scene.slot_rate_Hz - FIRMWARE_SLOT_RATE_HZ) > 1e-9:
         problems.append(f"host.slot_rate_Hz = {scene.slot_rate_Hz:g}: the bridge firmware samples at "
@@ -61,14 +66,35 @@ def firmware_pattern(scene) -> list[int] | None:
     pattern = None
     if scene.sequence != "default":
         names = list(scene.sequence)
-        pattern = [CHANNEL_INDEX[n] for n in names if n in CHANNEL_INDEX]
-        bad = [n for n in names if CHANNEL_INDEX.get(n) not in SAMPLED_CHANNELS]
+        pattern = [ALL_CHANNEL_INDEX[n] for n in names if n in ALL_CHANNEL_INDEX]
+        bad = [n for n in names if ALL_CHANNEL_INDEX.get(n, HAL) == HAL]
         if bad:
             problems.append(f"host.sequence: {', '.join(map(str, bad))}: the firmware samples PAC, PDC, TAC, TDC, "
-                            "E1..E19")
+                            "E1..E24 (E20..E24 from a \"biotac-sp\")")
+        problems += _electrodes_missing(scene, names)
         if not 1 <= len(names) <= FIRMWARE_MAX_PATTERN:
             problems.append(f"host.sequence has {len(names)} slots: the bridge firmware's pattern holds 1 to "
                             f"{FIRMWARE_MAX_PATTERN}")
     if problems:
         raise SceneError(scene.source, problems)
     return pattern
+
+
+def _electrodes_missing(scene, names: list) -> list[str]:
+    """A problem per sensor variant of the scene that lacks some of the electrodes ``names`` asks for."""
+    short: dict[str, tuple[list, list]] = {}  # variant -> (its sensors, the electrodes it lacks)
+    for k in range(1, scene.n_sensors + 1):
+        v = variant(scene.sensor_spec(k).variant)
+        missing = [n for n in dict.fromkeys(names) if n in ALL_CHANNEL_INDEX and n not in v.channel_index]
+        if missing:
+            short.setdefault(v.name, ([], missing))[0].append(k)
+    out = []
+    for name, (sensors, missing) in short.items():
+        who = (f"sensor {sensors[0]} is a" if len(sensors) == 1 else
+               f"sensors {', '.join(map(str, sensors))} are each a")
+        out.append(f"host.sequence: {', '.join(missing)}: {who} {name!r}, with E1..E{variant(name).n_electrodes} "
+                   "only; the bridge firmware sends one pattern to every sensor, so it "
+                   "samples E20..E24 only when every sensor is a \"biotac-sp\" (a 19-electrode sensor would "
+                   "answer them with error words, never data; 'biotac-bench run' reads them from the SPs of a mixed "
+                   "scene)")
+    return out

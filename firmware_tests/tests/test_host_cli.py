@@ -85,11 +85,16 @@ def test_the_firmware_streams_the_scenes_broken_sensor_not_a_healthy_one(broken_
     assert codes[:, 0, 0].std() < 0.5  # every noise source off: PAC is flat (the healthy default is 1.4 bits)
 
 
-def test_a_scene_the_firmware_cannot_honour_is_refused_naming_the_field(tmp_path):
-    path = tmp_path / "fast_slots.toml"
-    path.write_text(BROKEN.replace('sequence = ["PAC", "PDC", "E3", "E4", "TDC"]', "slot_rate_Hz = 3000.0"))
-    r = run_cli("bridge", "--scene", path, "--fast", "--seconds", "1")
-    assert r.returncode == 2 and "host.slot_rate_Hz = 3000" in r.stderr and "Traceback" not in r.stderr
+@pytest.mark.parametrize("host,says", [
+    ("slot_rate_Hz = 3000.0", "host.slot_rate_Hz = 3000"),
+    ('sequence = ["PDC", "E22"]\n[[sensors]]\nindex = 2\nvariant = "biotac-sp"',  # E22 of the BioTac, sensor 1
+     "host.sequence: E22: sensor 1 is a 'biotac', with E1..E19 only"),
+], ids=["slot rate", "E22 of a 19-electrode sensor"])
+def test_a_scene_the_firmware_cannot_honour_is_refused_naming_the_field(tmp_path, host, says):
+    path = tmp_path / "cannot.toml"
+    path.write_text(BROKEN.replace('sequence = ["PAC", "PDC", "E3", "E4", "TDC"]', host))
+    r = run_cli("bridge", "--scene", path, "--fast", "--seconds", "1", "--sensors", "2")
+    assert r.returncode == 2 and says in r.stderr and "Traceback" not in r.stderr
 
 
 def test_the_bridge_command_serves_the_scene_and_stops_cleanly_on_sigterm(broken_scene):

@@ -8,8 +8,8 @@ codes.  Runs the firmware natively in virtual time (in-memory UART, no threads) 
 import numpy as np
 import pytest
 
-from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
-from bench.hosts.driver import CMD_START, CMD_STATUS, DataFrame, FrameParser, Status, encode
+from bench.hosts.cosim import default_sensors
+from bench.tests.host_benches import run_firmware
 from emulator import channels as ch
 from emulator.spi import protocol as proto
 
@@ -17,29 +17,9 @@ pytestmark = pytest.mark.firmware
 SP = ch.variant("biotac-sp")
 
 
-def run_firmware(sensors, seconds=0.5, pattern=None, spi="software"):
-    """Firmware against ``sensors`` for ``seconds`` of virtual time: (data frames, last STATUS) via the driver's
-    parser."""
-    out = bytearray()
-    board = VirtualBoard(sensors, uart_out=out.extend, spi=spi)
-    try:
-        sim = CoSim(board)
-        if pattern is not None:
-            sim.set_pattern(pattern)
-        board.send_to_firmware(encode(CMD_START))
-        sim.run(seconds)
-        board.send_to_firmware(encode(CMD_STATUS))
-        sim.run(0.02)
-    finally:
-        board.bus.close()
-    items = FrameParser().feed(bytes(out), now=0.0)
-    frames = [f for f in items if isinstance(f, DataFrame)]
-    status = [s for s in items if isinstance(s, Status)]
-    return frames, status[-1] if status else None
-
-
 def test_an_sp_streams_the_54_slot_frame_with_data_in_every_slot():
-    frames, status = run_firmware(default_sensors(1, seed=3, variant="biotac-sp"))
+    run = run_firmware(default_sensors(1, seed=3, variant="biotac-sp"), 0.5)
+    frames, status = run.frames, run.status
     assert len(frames) >= 40
     for f in frames:
         assert [ch.variant("biotac-sp").channel_name[c] for c in f.channels] == list(SP.frame_names)
@@ -50,19 +30,19 @@ def test_an_sp_streams_the_54_slot_frame_with_data_in_every_slot():
 
 
 def test_a_biotac_keeps_the_44_slot_frame_and_a_mixed_bus_the_common_one():
-    frames, status = run_firmware(default_sensors(1, seed=3))
-    assert frames[-1].codes.shape == (44, 1) and status.sp_mask == 0
+    run = run_firmware(default_sensors(1, seed=3), 0.5)
+    assert run.frames[-1].codes.shape == (44, 1) and run.status.sp_mask == 0
     mixed = {**default_sensors(1, seed=3), 2: default_sensors(2, seed=3, variant="biotac-sp")[2]}
-    frames, status = run_firmware(mixed)
-    assert frames[-1].codes.shape == (44, 2) and status.sp_mask == 0b10 and frames[-1].ok.all()
+    run = run_firmware(mixed, 0.5)
+    assert run.frames[-1].codes.shape == (44, 2) and run.status.sp_mask == 0b10 and run.frames[-1].ok.all()
 
 
 def test_vendor_e20_to_e24_on_a_19_electrode_sensor_are_errors_never_data():
     """The SP pattern asked of a BioTac (sensor 1) and an SP (sensor 2) on one bus: the SP's E20..E24 are data,
     the BioTac's are its "EX" error words — status 2, absent from samples(), listed by errors()."""
     mixed = {**default_sensors(1, seed=3), 2: default_sensors(2, seed=3, variant="biotac-sp")[2]}
-    frames, status = run_firmware(mixed, seconds=0.3, pattern=SP.frame_names)
-    f = frames[-1]
+    run = run_firmware(mixed, 0.3, pattern=SP.frame_names)
+    f, status = run.frames[-1], run.status
     names = [ch.variant("biotac-sp").channel_name[c] for c in f.channels]
     bad = [n in {"E20", "E21", "E22", "E23", "E24"} for n in names]
     assert (f.status[bad, 0] == 2).all() and (f.status[~np.array(bad), 0] == 0).all()
@@ -77,12 +57,63 @@ def test_vendor_e20_to_e24_on_a_19_electrode_sensor_are_errors_never_data():
 @pytest.mark.rtl
 def test_sp_frames_are_identical_over_the_software_model_and_the_rtl():
     """Same sensors, same seed, same firmware: the 54-slot frames from the software bus and the Verilog bus."""
-    a, _ = run_firmware(default_sensors(1, seed=5, variant="biotac-sp"), seconds=0.25)
-    b, _ = run_firmware(default_sensors(1, seed=5, variant="biotac-sp"), seconds=0.25, spi="rtl")
+    a = run_firmware(default_sensors(1, seed=5, variant="biotac-sp"), 0.25).frames
+    b = run_firmware(default_sensors(1, seed=5, variant="biotac-sp"), 0.25, spi="rtl").frames
     assert len(a) == len(b) >= 20
     for x, y in zip(a, b):
         assert x.seq == y.seq and np.array_equal(x.codes, y.codes) and np.array_equal(x.status, y.status)
     assert a[0].codes.shape == (54, 1)
+
+
+# --- a scene's host.sequence with E20..E24 as the firmware's pattern (bridge --scene) -----------------------------------
+E20_E24 = ["E20", "E21", "E22", "E23", "E24"]
+SEQUENCE = '[host]\nsequence = ["E20", "E21", "E22", "E23", "E24", "PDC"]\n'
+#: two SPs (unit 5 and the nominal one); sensor 1 is pressed over E22 from 0.1 s
+SP_SCENE = ('[scene]\nname = "sp"\nduration_s = 0.5\n[sensor]\nvariant = "biotac-sp"\nunit = 5\n'
+            '[[sensors]]\nindex = 2\nvariant = "biotac-sp"\n'
+            '[[stimulus]]\nkind = "touch"\nelectrode = "E22"\nstart_s = 0.1\nforce_N = 1.0\nramp_s = 0.05\n'
+            '[noise]\nadc = false\nspi_coupling = false\n' + SEQUENCE)
+
+
+def test_a_scene_sampling_e20_to_e24_of_sp_sensors_gets_their_data_through_the_firmware():
+    from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
+    from bench.scenes.scene import parse_scene_text
+
+    sc = parse_scene_text(SP_SCENE)
+    pattern = firmware_pattern(sc)
+    assert pattern == [36, 37, 38, 39, 40, 1]  # E20..E24 = channels 36..40, then PDC
+    run = run_firmware(sensors_from_scene(sc, 2), 0.4, pattern=pattern)
+    assert len(run.frames) >= 250 and run.status.sp_mask == 0b11
+    assert run.status.error_words == 0 and run.status.parity_errors == 0
+    for f in run.frames:
+        assert [SP.channel_name[c] for c in f.channels] == [*E20_E24, "PDC"]
+        assert f.ok.all() and ((f.codes > 100) & (f.codes < 4000)).all()
+    codes = {k: {n: np.array([f.samples(k)[n][0] for f in run.frames], float) for n in E20_E24} for k in (1, 2)}
+    e22 = codes[1]["E22"]
+    assert e22[:30].mean() - e22[-30:].mean() > 100  # sensor 1's own E22 feels the press over it
+    assert all(np.ptp(c) <= 3 for c in codes[2].values())  # sensor 2 feels nothing
+
+
+def test_a_scene_sampling_e20_to_e24_of_a_19_electrode_sensor_is_refused_naming_them_and_its_variant():
+    """E20..E24 on a bus with 19-electrode sensors: the scene is valid for ``run`` (the SP reads them), but the
+    firmware's one pattern would ask the BioTacs too, which have no such electrodes."""
+    from bench.errors import SceneError
+    from bench.hosts.scene_sensors import firmware_pattern
+    from bench.scenes.scene import parse_scene_text
+
+    head = '[scene]\nname = "mixed"\nduration_s = 0.5\n[sensor]\nunit = 5\n'
+    sp = '[[sensors]]\nindex = {k}\nvariant = "biotac-sp"\n'
+    sc = parse_scene_text(head + sp.format(k=2) + SEQUENCE)
+    with pytest.raises(SceneError, match=r"host.sequence: E20, E21, E22, E23, E24: sensor 1 is a 'biotac', "
+                                         r"with E1..E19 only.*every sensor is a \"biotac-sp\""):
+        firmware_pattern(sc)
+    sc = parse_scene_text(head + '[[sensors]]\nindex = 3\n' + sp.format(k=2) + SEQUENCE.replace('"E20", ', ''))
+    with pytest.raises(SceneError, match=r"host.sequence: E21, E22, E23, E24: sensors 1, 3 are each a 'biotac'"):
+        firmware_pattern(sc)
+    sc = parse_scene_text(head)
+    sc.sequence = ["PDC", "E24"]  # set by a program (a scene file with only BioTacs is refused at parse)
+    with pytest.raises(SceneError, match=r"host.sequence: E24: sensor 1 is a 'biotac'"):
+        firmware_pattern(sc)
 
 
 # --- the same codes through every path -------------------------------------------------------------------------------
@@ -137,7 +168,7 @@ def test_the_54_slot_frame_reaches_the_host_with_the_software_models_codes(spi):
     """Firmware + driver (over the software bus or the Verilog one): every code the host receives, slot by slot,
     is the code the software model gives for that channel at that conversion instant."""
     rec = Recording(pressed_sp())
-    frames, _ = run_firmware({1: rec}, seconds=0.3, spi=spi)
+    frames = run_firmware({1: rec}, 0.3, spi=spi).frames
     c, k = check_against_a_fresh_model(rec)
     ch_host, codes_host = streamed_codes(frames)
     n = codes_host.size
