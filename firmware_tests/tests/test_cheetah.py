@@ -6,6 +6,7 @@ import subprocess
 import pytest
 
 from bench.hosts.cheetah_server import CheetahBench, build_client, build_library
+from bench.tests.host_benches import cheetah_adapter
 
 pytestmark = pytest.mark.firmware
 
@@ -40,11 +41,7 @@ def test_an_unmodified_client_detects_sensors_and_streams_frames():
 
 
 def test_queued_delays_and_sleep_advance_the_emulators_time_exactly(monkeypatch):
-    with CheetahBench(1) as cb:
-        lib = C.CDLL(str(cb.library))
-        monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
-        h = lib.c_ch_open(0)
-        assert h == 1
+    with cheetah_adapter(monkeypatch, 1, bitrate_khz=None) as (cb, lib, h):
         t0 = cb.t
         lib.c_ch_spi_queue_clear(h)
         lib.c_ch_spi_queue_delay_ns(h, 123456)

@@ -20,6 +20,7 @@ import pytest
 
 from bench.hosts import cheetah_server as cs
 from bench.hosts.cheetah_server import CheetahBench, build_client, build_library, build_vendor_rate_client
+from bench.tests.host_benches import open_adapter, read_serial
 
 pytestmark = pytest.mark.firmware
 REPO = Path(__file__).resolve().parents[2]
@@ -32,30 +33,6 @@ def lib(monkeypatch):
     lib = C.CDLL(str(build_library()))
     yield lib, monkeypatch
     lib.c_ch_close(1)
-
-
-def open_adapter(lib, monkeypatch, cb):
-    monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", cb.socket_path)
-    h = lib.c_ch_open(0)
-    assert h == 1
-    lib.c_ch_spi_bitrate(h, 4400)
-    return h
-
-
-def read_serial(lib, h, sensor_select=1) -> bytes:
-    """The serial-number property, as the vendor library reads it (command, 50 µs, bytes with select held)."""
-    buf = (C.c_uint8 * 32)()
-    lib.c_ch_spi_queue_clear(h)
-    lib.c_ch_spi_queue_ss(h, sensor_select)
-    lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x61, 0x15))
-    lib.c_ch_spi_queue_ss(h, 0)
-    lib.c_ch_spi_queue_delay_ns(h, 60000)
-    lib.c_ch_spi_queue_ss(h, sensor_select)
-    lib.c_ch_spi_queue_byte(h, 18, 0x00)
-    lib.c_ch_spi_queue_ss(h, 0)
-    n = lib.c_ch_spi_batch_shift(h, 32, buf)
-    assert n == 20
-    return bytes(buf[2:20])
 
 
 def sample_words(lib, h, commands=(0x80, 0x83, 0x86)) -> list[int]:

@@ -7,8 +7,8 @@ import ctypes as C
 import numpy as np
 import pytest
 
-from bench.hosts.cosim import CoSim, VirtualBoard, build_firmware, default_sensors
-from bench.hosts.driver import CMD_START, CMD_STATUS, DataFrame, FrameParser, Status, encode
+from bench.hosts.cosim import build_firmware, default_sensors
+from bench.tests.host_benches import run_firmware
 from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
 from emulator.spi.model import Faults
@@ -17,31 +17,25 @@ pytestmark = pytest.mark.firmware
 WORD_S = 16.5 / 4.4e6
 
 
-def run_firmware(seconds, faults=None, record=None):
-    """Firmware + one quiet emulated sensor: start streaming, optionally set SPI faults, run ``seconds`` of
-    virtual time, ask for the status; returns (frames, status, parser stats)."""
-    out = bytearray()
-    board = VirtualBoard(default_sensors(1, seed=3, noise=NoiseSources.none()), uart_out=out.extend)
-    sim = CoSim(board)  # bt_init has detected the sensor by its serial number
-    if record is not None:
-        exchange = board.bus.exchange_words
+def quiet_sensor_run(seconds, faults=None, record=None):
+    """Firmware + one quiet emulated sensor: optionally set SPI faults (once it has detected the sensor by its
+    serial number), stream for ``seconds`` of virtual time, ask for the status; returns (the frames streamed in
+    those seconds, status, parser stats)."""
 
-        def recording(start, cs, mosi, clock_hz, keep_cs=None):
-            record.append((np.array(start), np.array(cs), np.array(mosi)))
-            return exchange(start, cs, mosi, clock_hz, keep_cs)
+    def prepare(board):
+        if record is not None:
+            exchange = board.bus.exchange_words
 
-        board.bus.exchange_words = recording
-    if faults is not None:
-        board.bus.ports[1].faults = faults
-    board.send_to_firmware(encode(CMD_START))
-    sim.run(seconds)
-    parser = FrameParser()
-    frames = [x for x in parser.feed(bytes(out)) if isinstance(x, DataFrame)]
-    n = len(out)
-    board.send_to_firmware(encode(CMD_STATUS))
-    sim.run(0.02)
-    status = [x for x in parser.feed(bytes(out[n:])) if isinstance(x, Status)][-1]
-    return frames, status, parser.stats
+            def recording(start, cs, mosi, clock_hz, keep_cs=None):
+                record.append((np.array(start), np.array(cs), np.array(mosi)))
+                return exchange(start, cs, mosi, clock_hz, keep_cs)
+
+            board.bus.exchange_words = recording
+        if faults is not None:
+            board.bus.ports[1].faults = faults
+
+    run = run_firmware(default_sensors(1, seed=3, noise=NoiseSources.none()), seconds, prepare=prepare)
+    return run.frames[:run.n_streamed], run.status, run.stats
 
 
 @pytest.mark.parametrize("position", [7, 15])
@@ -49,7 +43,7 @@ def test_the_firmware_flags_parity_faults_in_either_byte(position):
     """MISO inverts bit 8 (the first byte's parity) or bit 0 (the second byte's) of every word: every sample is
     flagged with status 1 and counted as a parity error (within one second: re-detection reads the serial number,
     which the same fault corrupts)."""
-    frames, status, stats = run_firmware(0.5, Faults(miso_flip_bit=position))
+    frames, status, stats = quiet_sensor_run(0.5, Faults(miso_flip_bit=position))
     assert len(frames) >= 40 and stats.crc_errors == 0
     assert all((f.status == 1).all() for f in frames)
     assert status.parity_errors >= sum(f.status.size for f in frames)
@@ -59,7 +53,7 @@ def test_the_firmware_samples_with_the_vendor_timing():
     """One sensor, default 44-slot frame: each slot is a sampling command (odd parity) and, 50 µs after its chip
     select rises, a read; slots 1/4.4 kHz apart; 100 frames per second; every word good, every frame's CRC good."""
     record = []
-    frames, status, stats = run_firmware(1.0, record=record)
+    frames, status, stats = quiet_sensor_run(1.0, record=record)
     assert stats.crc_errors == 0 and stats.dropped_frames == 0
     assert 99 <= len(frames) <= 101
     assert all((f.status == 0).all() for f in frames) and status.parity_errors == status.error_words == 0
