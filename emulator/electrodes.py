@@ -256,20 +256,31 @@ def _stack(fractions: list, footprints: list, shapes: list, n: int, n_electrodes
     return a, np.array([f.ring_amp for f in footprints], float), dent, ring
 
 
-# The gap and voltage laws, one value at a time, compiled (numba): the kernels below run them over a chunk of
-# samples × electrodes in one pass.  The operations and their order are those of the array formulas in the
-# docstrings (no fast-math), so the results are the same to the last bit.  error_model="numpy": x/0 is ±inf;
-# inline="always": a call passing arrays costs more than the arithmetic it does.
-@njit(cache=True, error_model="numpy", inline="always")
-def _gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i):
-    """gap_i(t_j) = max(g_i − (g₀ − g_min)·Σ_c a_c·dent_c + Σ_c (ring_amp_c·a_c)·ring_c, g_min), mm."""
-    jt = j if dent.shape[1] > 1 else 0
-    frac = 0.0
-    bulge = 0.0
+# The gap and voltage laws, compiled (numba): the kernels below run them over a chunk of samples × electrodes.
+# The operations and their order are those of the array formulas in the docstrings (no fast-math), so the results
+# are the same to the last bit.  The contacts' sums come first, contact by contact over contiguous rows, then the
+# per-value laws run over each row of electrodes: both loops vectorise.  error_model="numpy": x/0 is ±inf.
+@njit(cache=True, error_model="numpy")
+def _contact_sums(a, ring_amp, dent, ring, n, n_electrodes):
+    """(Σ_c a_c·dent_c, Σ_c (ring_amp_c·a_c)·ring_c), (n, N) each, summed in contact order (a (C, n); dent and
+    ring (C, T, N), T = 1: the same row at every sample)."""
+    frac = np.zeros((n, n_electrodes))
+    bulge = np.zeros((n, n_electrodes))
     for c in range(a.shape[0]):
-        frac += a[c, j] * dent[c, jt, i]
-        bulge += (ring_amp[c] * a[c, j]) * ring[c, jt, i]
-    g = rest_mm[i] - depth_mm * frac + bulge  # the skin moves by the same depth over any gap ...
+        for j in range(n):
+            jt = j if dent.shape[1] > 1 else 0
+            aj = a[c, j]
+            rj = ring_amp[c] * aj
+            for i in range(n_electrodes):
+                frac[j, i] += aj * dent[c, jt, i]
+                bulge[j, i] += rj * ring[c, jt, i]
+    return frac, bulge
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _gap_mm(rest_mm, depth_mm, gmin_mm, frac, bulge):
+    """gap = max(g_i − (g₀ − g_min)·frac + bulge, g_min), mm (``depth_mm`` = g₀ − g_min)."""
+    g = rest_mm - depth_mm * frac + bulge  # the skin moves by the same depth over any gap ...
     return gmin_mm if g < gmin_mm else g  # ... and stops on the core
 
 
@@ -277,18 +288,16 @@ def _gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i):
 def _load_volts(gap_mm, fault, series_ohm, sheet_ohm_mm, load_ohm):
     """V = 3.3·R_load/(Z + R_load), Z = Z_series + ρ_sheet/gap (∞ for an open electrode, 0 for a short), V."""
     z = series_ohm + sheet_ohm_mm / gap_mm
-    if fault == 1:  # FAULT_OPEN
-        z = np.inf
-    elif fault == 2:  # FAULT_SHORT
-        z = 0.0
+    z = np.inf if fault == 1 else (0.0 if fault == 2 else z)  # FAULT_OPEN, FAULT_SHORT
     return 3.3 * load_ohm / (z + load_ohm)
 
 
 @njit(cache=True, error_model="numpy")
 def _gaps_kernel(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, out):
+    frac, bulge = _contact_sums(a, ring_amp, dent, ring, out.shape[0], out.shape[1])
     for j in range(out.shape[0]):
         for i in range(out.shape[1]):
-            out[j, i] = _gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i)
+            out[j, i] = _gap_mm(rest_mm[i], depth_mm, gmin_mm, frac[j, i], bulge[j, i])
 
 
 @njit(cache=True, error_model="numpy")
@@ -301,11 +310,12 @@ def _volts_kernel(gaps_mm, faults, series_ohm, sheet_ohm_mm, load_ohm, out):
 @njit(cache=True, error_model="numpy")
 def _filtered_volts_kernel(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, faults, series_ohm, sheet_ohm_mm,
                            load_ohm, b0, b1, a1, state, out):
-    """Gap -> voltage -> first-order low-pass y = b0·v + s, s ← b1·v − a1·y (scipy's lfilter, transposed direct
+    """Gap -> voltage -> first-order low-pass y = s + b0·v, s ← v·b1 − y·a1 (scipy's lfilter, transposed direct
     form II, ``state`` (N,) carried in place) for every sample j and electrode i of ``out`` (n, N)."""
+    frac, bulge = _contact_sums(a, ring_amp, dent, ring, out.shape[0], out.shape[1])
     for j in range(out.shape[0]):
         for i in range(out.shape[1]):
-            v = _load_volts(_gap_mm(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, j, i), faults[i],
+            v = _load_volts(_gap_mm(rest_mm[i], depth_mm, gmin_mm, frac[j, i], bulge[j, i]), faults[i],
                             series_ohm, sheet_ohm_mm, load_ohm)
             y = state[i] + b0 * v
             state[i] = v * b1 - y * a1
@@ -475,16 +485,17 @@ class ElectrodeModel:
                 self._advance_chunk(max(1, int(np.ceil(times.max() / self.dt - 1e-9)) - self.k))
             else:
                 self._advance_chunk()
-        ht, hv = np.concatenate(self._hist_t), np.vstack(self._hist)
+        if len(self._hist_t) > 1:
+            self._hist_t, self._hist = [np.concatenate(self._hist_t)], [np.vstack(self._hist)]
+        ht, hv = self._hist_t[0], self._hist[0]
         if times.min() < ht[0] - 1e-12:
             raise ValueError(f"electrode instant {times.min():.6f} s is older than the electrode history")
-        idx = np.clip(np.searchsorted(ht, times, side="right") - 1, 0, len(ht) - 2)
-        frac = (times - ht[idx]) / self.dt
-        cols = electrode - 1
-        lo, hi = hv[idx, cols], hv[idx + 1, cols]
+        out = np.empty(times.size)
+        _interpolate_kernel(ht, hv, np.ascontiguousarray(times, float),
+                            np.ascontiguousarray(electrode - 1, np.int64), self.dt, out)
         keep = max(0, int(np.searchsorted(ht, times.max(), side="right")) - 2)  # history still needed
         self._hist_t, self._hist = [ht[keep:]], [hv[keep:]]
-        return lo + (hi - lo) * frac
+        return out
 
     def sample(self, electrode: np.ndarray, times: np.ndarray) -> np.ndarray:
         """Voltages the ADC sees for electrode conversions in the order given (multiplexer memory applied)."""
@@ -496,11 +507,35 @@ class ElectrodeModel:
         if electrode.min() < 1 or electrode.max() > self.n:
             raise ValueError(f"electrode numbers {electrode.min()}..{electrode.max()}: this sensor has E1..E{self.n}")
         target = self.targets(electrode, np.asarray(times, float))
-        # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions
-        a = self.mux_keep
-        y, _ = signal.lfilter([1.0], [1.0, -a], (1 - a) * target + self.mux_injection, zi=[a * self.mux_node])
-        self.mux_node = float(y[-1])
+        y = np.empty(target.size)  # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), over conversions
+        self.mux_node = _hold_node_kernel(target, self.mux_keep, self.mux_injection, self.mux_node, y)
         return y
+
+
+@njit(cache=True)
+def _interpolate_kernel(ht, hv, times, cols, dt, out):
+    """out[k] = hv[:, cols[k]] linearly interpolated at times[k] (s) between the history's samples ``ht`` (s, evenly
+    ``dt`` apart, ascending), extrapolated from the first or last interval outside them."""
+    last = ht.shape[0] - 2
+    idx = np.searchsorted(ht, times, side="right")
+    for k in range(times.shape[0]):
+        i = min(max(idx[k] - 1, 0), last)
+        frac = (times[k] - ht[i]) / dt
+        lo, hi = hv[i, cols[k]], hv[i + 1, cols[k]]
+        out[k] = lo + (hi - lo) * frac
+
+
+@njit(cache=True)
+def _hold_node_kernel(target, keep, injection, node, out):
+    """The multiplexer's hold node over conversions in order: x_k = (1 − a)·target_k + a·(x_{k−1} + injection) with
+    a = ``keep`` and ``injection`` = a·q, V, computed as y_k = u_k + z, z ← a·y_k (u_k = (1 − a)·target_k + a·q: scipy's
+    ``lfilter([1], [1, −a], u, zi=[a·x_{−1}])``, the same operations).  ``node``: x_{−1}; returns the last x."""
+    z = keep * node
+    for k in range(target.shape[0]):
+        y = z + ((1 - keep) * target[k] + injection)
+        z = y * keep
+        out[k] = y
+    return out[-1] if target.shape[0] else node
 
 
 def electrode_number(channel) -> np.ndarray:
