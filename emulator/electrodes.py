@@ -52,7 +52,6 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 from scipy import signal, special
 
 from emulator import filters
@@ -194,20 +193,6 @@ def indentation_fraction(p: SensorParams, force_N) -> np.ndarray:
     return 1.0 - np.exp(-np.asarray(force_N, float) / p.indentation_force_N)
 
 
-FAULT_NONE, FAULT_OPEN, FAULT_SHORT = 0, 1, 2  # an electrode's state in :func:`fault_codes`
-
-
-def fault_codes(faults: dict | None, n: int) -> np.ndarray:
-    """(n,) int: FAULT_OPEN (Z = ∞) or FAULT_SHORT (Z = 0) per electrode from a fault dict numbering 1..n, else
-    FAULT_NONE; an electrode listed both ways is shorted."""
-    codes = np.full(n, FAULT_NONE, np.int64)
-    faults = faults or {}
-    for key, code in (("electrode_open", FAULT_OPEN), ("electrode_short", FAULT_SHORT)):
-        for e in faults.get(key, ()):
-            codes[int(e) - 1] = code
-    return codes
-
-
 class Footprint:
     """One contact seen from the electrodes: what of :func:`electrode_gaps_mm` does not change while it presses.
 
@@ -245,91 +230,46 @@ class Footprint:
         return np.exp(-u), us * np.exp(-us)
 
 
-def _stack(fractions: list, footprints: list, shapes: list, n: int, n_electrodes: int):
-    """The arguments of the gap kernels for the contacts that press: a (C, n), ring_amp (C,), dent and ring
-    (C, T, N) with T = 1 when no centre moves (each contact's rows broadcast to T otherwise)."""
-    T = max((d.shape[0] for d, _ in shapes), default=1)
-    dent, ring = np.empty((len(shapes), T, n_electrodes)), np.empty((len(shapes), T, n_electrodes))
-    for k, (d, r) in enumerate(shapes):
-        dent[k], ring[k] = d, r
-    a = np.array(fractions, float).reshape(len(fractions), n)
-    return a, np.array([f.ring_amp for f in footprints], float), dent, ring
+def _contact_gaps_mm(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int) -> np.ndarray:
+    """(n, N) gaps over the electrodes, mm, from their resting gaps ``rest_mm`` (N,) and the pressing contacts'
+    ``terms``: (a (n,), ring_amp mm, dent (T, N), ring (T, N)) each (see :class:`Footprint`), in contact order.
+
+    gap = max(g_i − (g₀ − g_min)·Σ_c a_c·dent_c + Σ_c (ring_amp_c·a_c)·ring_c, g_min): the law of
+    :func:`electrode_gaps_mm`, worked in place (the same operations, in the same order, as on fresh arrays)."""
+    depth, gmin = p.resting_gap_mm - p.minimum_gap_mm, p.minimum_gap_mm
+    if not terms:  # rest − depth·0 + 0: the resting gaps exactly
+        return np.maximum(np.broadcast_to(rest_mm, (n, rest_mm.size)), gmin)
+    frac = bulge = None
+    for a, ring_amp, dent, ring in terms:
+        f, b = a[:, None] * dent, (ring_amp * a)[:, None] * ring
+        frac = f if frac is None else np.add(frac, f, out=frac)
+        bulge = b if bulge is None else np.add(bulge, b, out=bulge)
+    g = np.multiply(depth, frac, out=frac)
+    g = np.subtract(rest_mm[None, :], g, out=g)  # the skin moves by the same depth over any gap ...
+    g = np.add(g, bulge, out=g)
+    return np.maximum(g, gmin, out=g)  # ... and stops on the core
 
 
-# The gap and voltage laws, compiled (numba): the kernels below run them over a chunk of samples × electrodes.
-# The operations and their order are those of the array formulas in the docstrings (no fast-math), so the results
-# are the same to the last bit.  The contacts' sums come first, contact by contact over contiguous rows, then the
-# per-value laws run over each row of electrodes: both loops vectorise.  error_model="numpy": x/0 is ±inf.
-@njit(cache=True, error_model="numpy")
-def _contact_sums(a, ring_amp, dent, ring, n, n_electrodes):
-    """(Σ_c a_c·dent_c, Σ_c (ring_amp_c·a_c)·ring_c), (n, N) each, summed in contact order (a (C, n); dent and
-    ring (C, T, N), T = 1: the same row at every sample)."""
-    frac = np.zeros((n, n_electrodes))
-    bulge = np.zeros((n, n_electrodes))
-    for c in range(a.shape[0]):
-        for j in range(n):
-            jt = j if dent.shape[1] > 1 else 0
-            aj = a[c, j]
-            rj = ring_amp[c] * aj
-            for i in range(n_electrodes):
-                frac[j, i] += aj * dent[c, jt, i]
-                bulge[j, i] += rj * ring[c, jt, i]
-    return frac, bulge
+def _volts_in_place(p: SensorParams, gaps_mm: np.ndarray, open_idx, short_idx) -> np.ndarray:
+    """Overwrite ``gaps_mm`` (..., N), mm, with the peak voltage on the load, V, and return it:
+    Z = Z_series + ρ_sheet/gap (∞ on the electrodes ``open_idx``, 0 on ``short_idx``: 0-based indices, the short
+    last), V = 3.3·R_load/(Z + R_load)."""
+    z = np.divide(p.fluid_sheet_ohm_mm, gaps_mm, out=gaps_mm)
+    z = np.add(p.electrode_series_ohm, z, out=z)
+    if open_idx:
+        z[..., open_idx] = np.inf
+    if short_idx:
+        z[..., short_idx] = 0.0
+    z = np.add(z, p.electrode_load_ohm, out=z)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.divide(3.3 * p.electrode_load_ohm, z, out=z)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _gap_mm(rest_mm, depth_mm, gmin_mm, frac, bulge):
-    """gap = max(g_i − (g₀ − g_min)·frac + bulge, g_min), mm (``depth_mm`` = g₀ − g_min)."""
-    g = rest_mm - depth_mm * frac + bulge  # the skin moves by the same depth over any gap ...
-    return gmin_mm if g < gmin_mm else g  # ... and stops on the core
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _load_volts(gap_mm, fault, series_ohm, sheet_ohm_mm, load_ohm):
-    """V = 3.3·R_load/(Z + R_load), Z = Z_series + ρ_sheet/gap (∞ for an open electrode, 0 for a short), V."""
-    z = series_ohm + sheet_ohm_mm / gap_mm
-    z = np.inf if fault == 1 else (0.0 if fault == 2 else z)  # FAULT_OPEN, FAULT_SHORT
-    return 3.3 * load_ohm / (z + load_ohm)
-
-
-@njit(cache=True, error_model="numpy")
-def _gaps_kernel(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, out):
-    frac, bulge = _contact_sums(a, ring_amp, dent, ring, out.shape[0], out.shape[1])
-    for j in range(out.shape[0]):
-        for i in range(out.shape[1]):
-            out[j, i] = _gap_mm(rest_mm[i], depth_mm, gmin_mm, frac[j, i], bulge[j, i])
-
-
-@njit(cache=True, error_model="numpy")
-def _volts_kernel(gaps_mm, faults, series_ohm, sheet_ohm_mm, load_ohm, out):
-    for j in range(out.shape[0]):
-        for i in range(out.shape[1]):
-            out[j, i] = _load_volts(gaps_mm[j, i], faults[i], series_ohm, sheet_ohm_mm, load_ohm)
-
-
-@njit(cache=True, error_model="numpy")
-def _filtered_volts_kernel(a, ring_amp, dent, ring, rest_mm, depth_mm, gmin_mm, faults, series_ohm, sheet_ohm_mm,
-                           load_ohm, b0, b1, a1, state, out):
-    """Gap -> voltage -> first-order low-pass y = s + b0·v, s ← v·b1 − y·a1 (scipy's lfilter, transposed direct
-    form II, ``state`` (N,) carried in place) for every sample j and electrode i of ``out`` (n, N)."""
-    frac, bulge = _contact_sums(a, ring_amp, dent, ring, out.shape[0], out.shape[1])
-    for j in range(out.shape[0]):
-        for i in range(out.shape[1]):
-            v = _load_volts(_gap_mm(rest_mm[i], depth_mm, gmin_mm, frac[j, i], bulge[j, i]), faults[i],
-                            series_ohm, sheet_ohm_mm, load_ohm)
-            y = state[i] + b0 * v
-            state[i] = v * b1 - y * a1
-            out[j, i] = y
-
-
-def _law_args(p: SensorParams) -> tuple[float, float]:
-    """(g₀ − g_min, g_min), mm: the gap law's constants as the kernels take them."""
-    return float(p.resting_gap_mm - p.minimum_gap_mm), float(p.minimum_gap_mm)
-
-
-def _volt_args(p: SensorParams) -> tuple[float, float, float]:
-    """(Z_series Ω, ρ_sheet Ω·mm, R_load Ω): the voltage law's constants as the kernels take them."""
-    return float(p.electrode_series_ohm), float(p.fluid_sheet_ohm_mm), float(p.electrode_load_ohm)
+def _fault_indices(faults: dict | None) -> tuple[list[int], list[int]]:
+    """0-based indices of the open and of the shorted electrodes of a fault dict numbering them 1..N."""
+    faults = faults or {}
+    return ([int(n) - 1 for n in faults.get("electrode_open", ())],
+            [int(n) - 1 for n in faults.get("electrode_short", ())])
 
 
 def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, positions: np.ndarray,
@@ -346,7 +286,7 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
     ``kappas`` : per contact, its :func:`bulge_balance` if already known.
     """
     rest = resting_gaps_mm(p, positions.shape[0]) if rest_mm is None else np.asarray(rest_mm, float)
-    used, footprints, shapes = [], [], []
+    terms = []
     for i, c in enumerate(contacts):
         a = None if fractions is None else fractions[i]
         if a is None:
@@ -356,22 +296,14 @@ def electrode_gaps_mm(p: SensorParams, contacts: list[Contact], t: np.ndarray, p
         if not a.any():
             continue
         fp = Footprint(p, c, positions, None if kappas is None else kappas[i])
-        used.append(np.broadcast_to(a, t.shape))
-        footprints.append(fp)
-        shapes.append(fp.shapes(c.state(t)[1]))
-    out = np.empty((t.size, positions.shape[0]))
-    _gaps_kernel(*_stack(used, footprints, shapes, t.size, positions.shape[0]),
-                 np.ascontiguousarray(rest, float), *_law_args(p), out)
-    return out
+        terms.append((np.broadcast_to(a, t.shape), fp.ring_amp, *fp.shapes(c.state(t)[1])))
+    return _contact_gaps_mm(p, rest, terms, t.size)
 
 
 def electrode_volts(p: SensorParams, gaps_mm: np.ndarray, faults: dict | None = None) -> np.ndarray:
-    """Peak voltage on the load for each gap (mm; (..., N), N electrodes), with open/shorted electrode faults, V."""
-    g = np.asarray(gaps_mm, float)
-    flat = np.ascontiguousarray(g).reshape(-1, g.shape[-1])
-    v = np.empty(flat.shape)
-    _volts_kernel(flat, fault_codes(faults, g.shape[-1]), *_volt_args(p), v)
-    return np.nan_to_num(v.reshape(g.shape), nan=0.0)
+    """Peak voltage on the load for each gap (mm), with open/shorted electrode faults."""
+    v = _volts_in_place(p, np.array(gaps_mm, float), *_fault_indices(faults))
+    return np.nan_to_num(v, nan=0.0)
 
 
 def _whole_in(e, n: int) -> bool:
@@ -438,9 +370,7 @@ class ElectrodeModel:
         self.kappas = [bulge_balance(p, c.center_mm, float(np.hypot(c.indenter_radius_mm, p.skin_spread_mm)))
                        for c in contacts]
         self.footprints = [Footprint(p, c, self.positions, k) for c, k in zip(contacts, self.kappas)]
-        self.fault_codes = fault_codes(self.faults, n)
-        # the low-pass as the kernel runs it: lfilter's coefficients normalised by a[0], its state (1, N) in place
-        self._lowpass = (float(self.b[0] / self.a[0]), float(self.b[1] / self.a[0]), float(self.a[1] / self.a[0]))
+        self._open, self._short = _fault_indices(self.faults)
 
     def _advance_chunk(self, n: int | None = None):
         """Advance ``n`` samples (default: a whole chunk); results do not depend on how the time is cut.
@@ -450,26 +380,23 @@ class ElectrodeModel:
         n = self.chunk if n is None else n
         t = (self.k + 1 + np.arange(n)) * self.dt
         active = False
-        fractions, footprints, shapes = [], [], []
+        terms = []
+        first, last = float(t[0]), float(t[-1])
         for c, cr, fp in zip(self.contacts, self.creeps, self.footprints):
-            touching = c.end_s >= t[0] and c.start_s <= t[-1]
-            if not touching and cr.last == 0.0 and np.all(np.abs(cr.state) < 1e-9):  # N: no trace left
+            touching = c.end_s >= first and c.start_s <= last
+            if not touching and cr.last == 0.0 and all(abs(x) < 1e-9 for x in cr.state.tolist()):  # N: no trace
                 cr.state[:] = 0.0  # released and recovered: nothing left to creep back
                 continue
             active = True
             f, ft = c.state(t) if touching else (np.zeros(t.size), np.zeros(t.size))
             a = indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0))
             if a.any():  # a contact whose dent is nil moves no electrode
-                fractions.append(a)
-                footprints.append(fp)
-                shapes.append(fp.shapes(ft))
+                terms.append((a, fp.ring_amp, *fp.shapes(ft)))
         if not active and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
             y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
-        else:
-            y = np.empty((n, self.n))
-            _filtered_volts_kernel(*_stack(fractions, footprints, shapes, n, self.n), self.rest_gaps_mm,
-                                   *_law_args(self.p), self.fault_codes, *_volt_args(self.p), *self._lowpass,
-                                   self.zi[0], y)
+        else:  # (the gaps stay ≥ g_min > 0: the voltages are finite, electrode_volts' NaN guard is not needed)
+            v = _volts_in_place(self.p, _contact_gaps_mm(self.p, self.rest_gaps_mm, terms, n), self._open, self._short)
+            y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
         self.k += n
         self._hist_t.append(t)
         self._hist.append(y)
@@ -490,12 +417,14 @@ class ElectrodeModel:
         ht, hv = self._hist_t[0], self._hist[0]
         if times.min() < ht[0] - 1e-12:
             raise ValueError(f"electrode instant {times.min():.6f} s is older than the electrode history")
-        out = np.empty(times.size)
-        _interpolate_kernel(ht, hv, np.ascontiguousarray(times, float),
-                            np.ascontiguousarray(electrode - 1, np.int64), self.dt, out)
+        idx = np.searchsorted(ht, times, side="right") - 1
+        idx = np.minimum(np.maximum(idx, 0), len(ht) - 2)  # np.clip's result, without its overhead
+        frac = (times - ht[idx]) / self.dt
+        flat, cols = hv.ravel(), electrode - 1  # row idx, column col of hv at idx·N + col of its C-order values
+        lo, hi = flat[idx * self.n + cols], flat[(idx + 1) * self.n + cols]
         keep = max(0, int(np.searchsorted(ht, times.max(), side="right")) - 2)  # history still needed
         self._hist_t, self._hist = [ht[keep:]], [hv[keep:]]
-        return out
+        return lo + (hi - lo) * frac
 
     def sample(self, electrode: np.ndarray, times: np.ndarray) -> np.ndarray:
         """Voltages the ADC sees for electrode conversions in the order given (multiplexer memory applied)."""
@@ -507,35 +436,11 @@ class ElectrodeModel:
         if electrode.min() < 1 or electrode.max() > self.n:
             raise ValueError(f"electrode numbers {electrode.min()}..{electrode.max()}: this sensor has E1..E{self.n}")
         target = self.targets(electrode, np.asarray(times, float))
-        y = np.empty(target.size)  # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), over conversions
-        self.mux_node = _hold_node_kernel(target, self.mux_keep, self.mux_injection, self.mux_node, y)
+        # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions
+        a = self.mux_keep
+        y, _ = signal.lfilter([1.0], [1.0, -a], (1 - a) * target + self.mux_injection, zi=[a * self.mux_node])
+        self.mux_node = float(y[-1])
         return y
-
-
-@njit(cache=True)
-def _interpolate_kernel(ht, hv, times, cols, dt, out):
-    """out[k] = hv[:, cols[k]] linearly interpolated at times[k] (s) between the history's samples ``ht`` (s, evenly
-    ``dt`` apart, ascending), extrapolated from the first or last interval outside them."""
-    last = ht.shape[0] - 2
-    idx = np.searchsorted(ht, times, side="right")
-    for k in range(times.shape[0]):
-        i = min(max(idx[k] - 1, 0), last)
-        frac = (times[k] - ht[i]) / dt
-        lo, hi = hv[i, cols[k]], hv[i + 1, cols[k]]
-        out[k] = lo + (hi - lo) * frac
-
-
-@njit(cache=True)
-def _hold_node_kernel(target, keep, injection, node, out):
-    """The multiplexer's hold node over conversions in order: x_k = (1 − a)·target_k + a·(x_{k−1} + injection) with
-    a = ``keep`` and ``injection`` = a·q, V, computed as y_k = u_k + z, z ← a·y_k (u_k = (1 − a)·target_k + a·q: scipy's
-    ``lfilter([1], [1, −a], u, zi=[a·x_{−1}])``, the same operations).  ``node``: x_{−1}; returns the last x."""
-    z = keep * node
-    for k in range(target.shape[0]):
-        y = z + ((1 - keep) * target[k] + injection)
-        z = y * keep
-        out[k] = y
-    return out[-1] if target.shape[0] else node
 
 
 def electrode_number(channel) -> np.ndarray:

@@ -31,7 +31,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from numba import njit
+from scipy import signal
 
 
 def instantaneous_to_relaxed_ratio(weights: Sequence[float]) -> float:
@@ -79,23 +79,23 @@ class Creep:
         self.ratio = instantaneous_to_relaxed_ratio(self.weights)
         self.state = np.zeros(len(self.taus))  # each low-pass output at the last sample
         self.last = 0.0  # the last input sample (the first-order hold needs it)
-        self._coeffs: dict[float, list[tuple[float, float, float]]] = {}
+        self._coeffs: dict[float, list[tuple[np.ndarray, np.ndarray]]] = {}
 
     @classmethod
     def standard_linear_solid(cls, tau_s: float, ratio: float) -> "Creep":
         """One-term model: response r·F at a step, creeping to F with retardation time ``tau_s``."""
         return cls([tau_s], [1.0 - ratio])
 
-    def _filters(self, fs: float) -> list[tuple[float, float, float]]:
-        """Exact first-order-hold discretization of each low-pass at ``fs`` (cached): (b0, b1, a1) of
-        y[n] = −a1·y[n−1] + b0·u[n] + b1·u[n−1]."""
+    def _filters(self, fs: float):
+        """Exact first-order-hold discretization of each low-pass at ``fs`` (cached)."""
         if fs not in self._coeffs:
             h = 1.0 / fs
             out = []
             for tau in self.taus:
                 a = math.exp(-h / tau)
                 g = tau / h * (1.0 - a)  # ∫ of the step response over one interval, per h
-                out.append((1.0 - g, g - a, -a))  # y[n] = a·y[n−1] + b0·u[n] + b1·u[n−1]   (a + b0 + b1 = 1)
+                b0, b1 = 1.0 - g, g - a  # y[n] = a·y[n−1] + b0·u[n] + b1·u[n−1]   (a + b0 + b1 = 1)
+                out.append((np.array([b0, b1]), np.array([1.0, -a])))
             self._coeffs[fs] = out
         return self._coeffs[fs]
 
@@ -106,25 +106,15 @@ class Creep:
 
     def step(self, force: np.ndarray, fs: float) -> np.ndarray:
         """Creep response of ``force`` samples at ``fs`` Hz, continuing from the carried state."""
-        u = np.ascontiguousarray(force, float)
+        u = np.asarray(force, float)
         if u.size == 0:
             return u.copy()
         y = self.ratio * u
-        lp = np.empty_like(u)
-        for i, (b0, b1, a1) in enumerate(self._filters(fs)):
-            # the filter's state for y[n] = −a1·y[n−1] + b0·u[n] + b1·u[n−1]: b1·u[−1] − a1·y[−1]
-            _lowpass(u, b0, b1, a1, b1 * self.last - a1 * self.state[i], lp)
+        for i, (b, a) in enumerate(self._filters(fs)):
+            # lfilter's state for y[n] = −a1·y[n−1] + b0·u[n] + b1·u[n−1]: zi = b1·u[−1] − a1·y[−1]
+            zi = np.array([b[1] * self.last - a[1] * self.state[i]])
+            lp, _ = signal.lfilter(b, a, u, zi=zi)
             self.state[i] = lp[-1]
             y += self.weights[i] * lp
         self.last = float(u[-1])
         return y
-
-
-@njit(cache=True)
-def _lowpass(u, b0, b1, a1, z, out):
-    """out[n] = z + b0·u[n], then z ← u[n]·b1 − out[n]·a1: scipy's ``lfilter([b0, b1], [1, a1], u, zi=[z])`` (its
-    transposed direct form II, the same operations in the same order), compiled for one short call per block."""
-    for n in range(u.shape[0]):
-        y = z + b0 * u[n]
-        z = u[n] * b1 - y * a1
-        out[n] = y
