@@ -1,20 +1,18 @@
 """The CLI end to end: runs write their outputs, bad input gets a clear error, failed runs keep their data."""
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from bench.cli import main as cli
+from bench.paths import REPO
 from bench.reporting.report import write_outputs
 from bench.running.runner import run_scene
 from bench.scenes.scene import parse_scene
+from bench.tests.cli_runs import run_cli
 
 pytestmark = pytest.mark.unit
-REPO = Path(__file__).resolve().parents[2]
 
 
 def test_run_writes_codes_record_report_and_plots(tmp_path, capsys):
@@ -71,15 +69,13 @@ def test_invalid_scene_gives_a_clear_error_and_no_traceback(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('[scene]\nname = "x"\nduration_s = 5\n[[stimulus]]\nkind = "vibration"\nstart_s = 0\n'
                    'duration_s = 1\namplitude_um = 1\nfrequency_Hz = 99999\n')
-    out = subprocess.run([sys.executable, "-m", "bench.cli", "run", str(bad)], capture_output=True, text=True,
-                         cwd=REPO)
+    out = run_cli("run", bad)
     assert out.returncode == 2
     assert "stimulus[0].frequency_Hz = 99999" in out.stderr and "Traceback" not in out.stderr
 
 
 def test_help_teaches_the_scene_format():
-    out = subprocess.run([sys.executable, "-m", "bench.cli", "run", "--help"], capture_output=True, text=True,
-                         cwd=REPO)
+    out = run_cli("run", "--help")
     assert out.returncode == 0
     for word in ("[[stimulus]]", "sphere_drop", "record.json", "fidelity"):
         assert word in out.stdout

@@ -130,14 +130,11 @@ def test_the_cheetah_adapter_serves_each_fingers_own_touch(monkeypatch):
 
 def test_the_run_command_writes_each_fingers_own_report(tmp_path):
     import json
-    import subprocess
-    import sys
 
-    from bench.paths import REPO
+    from bench.tests.cli_runs import run_cli
 
     out = tmp_path / "grasp"
-    r = subprocess.run([sys.executable, "-m", "bench.cli", "run", str(GRASP), "--out", str(out), "--quiet",
-                        "--no-plots"], capture_output=True, text=True, cwd=REPO, timeout=300)
+    r = run_cli("run", GRASP, "--out", out, "--quiet", "--no-plots", timeout=300)
     assert r.returncode == 0, r.stderr
     assert "for sensor 2 (unit 18, serial BTU0000000000018" in r.stdout
     for k, folder in ((1, out), (2, out / "sensor2"), (3, out / "sensor3")):

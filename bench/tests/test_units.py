@@ -5,14 +5,12 @@ published-figure claims of the fast groups hold for the nominal unit and for 10 
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-from bench.paths import REPO
 from bench.scenes.scene import SceneError, parse_scene_text
+from bench.tests.cli_runs import run_cli
 from emulator import conversions as conv
 from emulator.channels import channel_index
 from emulator.params import SensorParams
@@ -185,11 +183,6 @@ def test_bad_unit_sensor_and_variant_keys_are_refused_naming_the_field(text, nee
     with pytest.raises(SceneError) as e:
         parse_scene_text(BASE + text)
     assert needle in str(e.value), str(e.value)
-
-
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "bench.cli", *map(str, args)], capture_output=True, text=True,
-                          cwd=REPO, timeout=120)
 
 
 def test_the_units_command_prints_a_unit_compares_it_and_refuses_bad_values():

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from bench.scenes.scene import parse_scene_text
+from bench.tests.cli_runs import run_cli
 from bench.tests.host_benches import cheetah_adapter, read_serial, run_firmware
 from emulator.spi.model import PROP_SERIAL, SELECT_CODE, default_properties, variant_serial
 from emulator.units import serial_for
@@ -86,18 +87,12 @@ def test_a_scene_checks_an_sp_frame_and_accepts_its_electrodes_in_the_host_seque
 
 
 def test_the_run_command_stores_and_plots_an_sps_e20_to_e24(tmp_path):
-    import subprocess
-    import sys
-
     import h5py
-
-    from bench.paths import REPO
 
     scene = tmp_path / "sp.toml"
     scene.write_text(SP_RUN)
     out = tmp_path / "out"
-    r = subprocess.run([sys.executable, "-m", "bench.cli", "run", str(scene), "--out", str(out), "--quiet"],
-                       capture_output=True, text=True, cwd=REPO, timeout=300)
+    r = run_cli("run", scene, "--out", out, "--quiet", timeout=300)
     assert r.returncode == 0, r.stderr
     for folder in (out, out / "sensor2"):
         with h5py.File(folder / "samples.h5", "r") as f:
@@ -109,18 +104,14 @@ def test_the_run_command_stores_and_plots_an_sps_e20_to_e24(tmp_path):
 # --- --force over a sliding run's folder ---------------------------------------------------------------------------
 def test_a_sliding_run_can_be_redone_into_its_folder_with_force(tmp_path):
     import json
-    import subprocess
-    import sys
 
-    from bench.paths import FIXTURES, REPO
+    from bench.paths import FIXTURES
     from bench.reporting.outdir import RUN_FILES
 
     out = tmp_path / "foam"
 
     def run(*extra):
-        return subprocess.run([sys.executable, "-m", "bench.cli", "run", str(FIXTURES / "scenes" / "foam.toml"),
-                               "--out", str(out), "--quiet", *extra], capture_output=True, text=True, cwd=REPO,
-                              timeout=300)
+        return run_cli("run", FIXTURES / "scenes" / "foam.toml", "--out", out, "--quiet", *extra, timeout=300)
 
     r = run()
     assert r.returncode == 0, r.stderr

@@ -20,10 +20,10 @@ import pytest
 
 from bench.hosts import cheetah_server as cs
 from bench.hosts.cheetah_server import CheetahBench, build_client, build_library, build_vendor_rate_client
+from bench.paths import REPO
 from bench.tests.host_benches import open_adapter, read_serial
 
 pytestmark = pytest.mark.firmware
-REPO = Path(__file__).resolve().parents[2]
 CH_COMMUNICATION_ERROR, CH_UNABLE_TO_OPEN, CH_SPI_ASYNC_PENDING = -7, -8, -104
 
 

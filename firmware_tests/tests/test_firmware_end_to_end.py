@@ -7,8 +7,6 @@ import pytest
 from bench.verification import analysis
 from bench.hosts.bridge import FirmwareBench
 from bench.hosts.driver import CMD_PATTERN, CMD_START, CMD_STOP, BridgeDriver, Status
-from emulator.sensor import Sensor
-from emulator.channels import DEFAULT_FRAME_NAMES
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
 pytestmark = pytest.mark.firmware

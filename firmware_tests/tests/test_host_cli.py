@@ -4,9 +4,7 @@ naming the flag, exit status 2, never a traceback."""
 
 import signal
 import subprocess
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,12 +12,12 @@ import pytest
 from bench.hosts.bridge import FirmwareBench
 from bench.hosts.driver import CMD_START, CMD_STOP, BridgeDriver, encode
 from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
+from bench.paths import REPO
 from bench.scenes.scene import load_scene
+from bench.tests.cli_runs import CLI, run_cli
 from bench.tests.host_benches import run_firmware
 
 pytestmark = pytest.mark.firmware
-REPO = Path(__file__).resolve().parents[2]
-CLI = [sys.executable, "-m", "bench.cli"]
 
 BROKEN = """
 [scene]
@@ -53,10 +51,6 @@ def broken_scene(tmp_path):
     path = tmp_path / "broken.toml"
     path.write_text(BROKEN)
     return path
-
-
-def run_cli(*args, timeout=60, **kw):
-    return subprocess.run([*CLI, *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=REPO, **kw)
 
 
 # --- bridge --scene --------------------------------------------------------------------------------------------
