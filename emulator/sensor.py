@@ -7,6 +7,7 @@ samples.  Memory therefore stays bounded however long the run.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import asdict, dataclass
 
@@ -25,7 +26,7 @@ from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, elec
                                  surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
                               Touch, Vibration, calibration_pressure, skin_displacement)
-from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
+from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, patch_area_m2, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
 
 #: Which grid signal each pressure channel converts.
@@ -169,6 +170,10 @@ class Sensor:
     def _thermal_model(self, stimuli):
         """The thermal network when something thermal happens; otherwise the settled steady state (shortcut)."""
         p = self.params
+
+        def commanded_load_N(motion, t):  # N at instants t (s) the sensor has reached
+            return contact_force_from_depth(motion.depth_at(t), p, motion.texture)
+
         contacts = []
         for s in stimuli:
             if isinstance(s, Touch) and s.material is not None:
@@ -177,8 +182,13 @@ class Sensor:
                                                np.pi * (s.indenter_radius_mm * 1e-3) ** 2))
             elif isinstance(s, Slide):  # the texture at room temperature, over the patch at the slide's force
                 contacts.append(ThermalContact(s.start_s, s.end_s, material(s.texture.material),
+                                               p.ambient_temperature_C, patch_area_m2(s.force_N, p)))
+            elif isinstance(s, CommandedMotion):  # a rig's finger: touching while its commanded depth is > 0,
+                # read as the run goes (a partial, not a closure: a copy of the sensor, as the rig's snapshot, reads
+                # the copied motion)
+                contacts.append(ThermalContact(s.start_s, s.end_s, material(s.texture.material),
                                                p.ambient_temperature_C,
-                                               np.pi * (p.contact_radius_at_1N_m * s.force_N ** (1 / 3)) ** 2))
+                                               load_N=functools.partial(commanded_load_N, s)))
         power_on = [s.at_s for s in stimuli if isinstance(s, PowerOn)]
         steps = tuple(sorted((s.at_s, s.temperature_C) for s in stimuli if isinstance(s, AmbientStep)))
         failures = [s.at_s for s in stimuli if isinstance(s, HeaterFailure)]

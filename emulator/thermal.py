@@ -15,6 +15,11 @@ Integration is exact for a linear system with inputs held over each step (matrix
 network's own rate (100 Hz), in chunks aligned to absolute time: stable at any step, independent of how
 callers slice time.  Outputs are interpolated to the instants asked for.
 
+A contact decided while the run goes (a rig's commanded finger: ``ThermalContact.load_N``) touches while its load
+is > 0, over the Hertz patch of that load; the network then advances step by step only through the first step at
+or after the latest instant asked for, so it reads the load only at instants the sensor has already been asked
+for (later commands may still change the rest).
+
 Thermistor (NTC, the unit's own R25 and Beta: nominally 470 kΩ at 25 °C, B = 4025 K — the Beta model equivalent
 to D eq. 4.4) in a divider with 30 kΩ from 10 V, buffered with a gain of 1.1 so that TDC/4095 = 100 kΩ/(R + 30 kΩ)
 exactly as the published conversion assumes (whose constants are the nominal part's: a unit with another R25 or
@@ -26,6 +31,7 @@ at 0.45 Hz (Table 4-1; the text's 5 Hz is not used): for changes slower than 0.3
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +45,10 @@ _NOMINAL = SensorParams()
 
 THERMAL_RATE_HZ = 100.0
 CHUNK_STEPS = 100  # the network advances in 1 s chunks aligned to absolute time
+#: a live contact's patch radius is rounded to this step (at least one step while touching), so its load's many
+#: values share a few discretizations of the network (model choice: 50 µm is the first object layer; the area of a
+#: 1 N patch, radius 2.5 mm, is then within ±4 %)
+PATCH_RADIUS_STEP_M = 50e-6
 
 
 @dataclass(frozen=True)
@@ -150,15 +160,42 @@ def _object_layers(first_m: float = 50e-6, growth: float = 1.8) -> np.ndarray:
     return first_m * growth ** np.arange(OBJECT_LAYERS)
 
 
+def patch_radius_m(load_N, p: SensorParams):
+    """Radius (m) of the skin's contact patch under a normal load ``load_N`` (N): a_1N · N^(1/3) (Hertz)."""
+    return p.contact_radius_at_1N_m * load_N ** (1 / 3)
+
+
+def patch_area_m2(load_N, p: SensorParams):
+    """Area (m²) of the skin's contact patch under a normal load ``load_N`` (N): π (a_1N · N^(1/3))²."""
+    return np.pi * patch_radius_m(load_N, p) ** 2
+
+
+def live_patch_area_m2(load_N: np.ndarray, p: SensorParams) -> np.ndarray:
+    """:func:`patch_area_m2` (m²) of loads ``load_N`` (N, > 0) with the radius rounded to
+    :data:`PATCH_RADIUS_STEP_M`, at least one step."""
+    steps = np.maximum(1.0, np.rint(patch_radius_m(np.asarray(load_N, float), p) / PATCH_RADIUS_STEP_M))
+    return np.pi * (steps * PATCH_RADIUS_STEP_M) ** 2
+
+
 @dataclass
 class ThermalContact:
-    """An object touching the skin over [start_s, end_s]: material, temperature, contact area."""
+    """An object touching the skin over [start_s, end_s]: material, temperature (°C), contact area (m²).
+
+    ``load_N``: for a contact decided while the run goes (a rig's commanded finger), the normal load (N) at
+    instants (s, array), read only at instants already asked for; the object touches while it is > 0, over the
+    patch of that load (:func:`live_patch_area_m2`), and ``area_m2`` is not used."""
 
     start_s: float
     end_s: float
     material: Material
     temperature_C: float
-    area_m2: float
+    area_m2: float = 0.0
+    load_N: Callable[[np.ndarray], np.ndarray] | None = None
+
+    @property
+    def planned(self) -> bool:
+        """Known in advance (False: decided while the run goes)."""
+        return self.load_N is None
 
 
 @dataclass
@@ -177,13 +214,27 @@ class ThermalEvents:
 
 
 class ThermalNetwork:
-    """The network's matrices for a given contact (or none), and its exact discretization."""
+    """The network's matrices for a given contact (or none), and its exact discretization (remembered, up to
+    :data:`CACHE_SIZE` of them; a pure function of the parameters, so copies and models share it)."""
+
+    CACHE_SIZE = 1000
 
     def __init__(self, p: SensorParams):
         self.p = p
         self.layers = _object_layers()
         self.n = 4 + OBJECT_LAYERS
         self._cache: dict = {}
+
+    def __deepcopy__(self, memo):
+        return self
+
+    def _remember(self, key, value):
+        """Keep ``value`` under ``key`` (all is forgotten once :data:`CACHE_SIZE` are kept; a new dict, so a model
+        in another thread never meets one half cleared); returns it."""
+        if len(self._cache) >= self.CACHE_SIZE:
+            self._cache = {}
+        self._cache[key] = value
+        return value
 
     def heater_power_W(self) -> float:
         """Heater power that holds the core ``heater_rise_K`` above ambient (steady state, no contact)."""
@@ -194,9 +245,9 @@ class ThermalNetwork:
     def matrices(self, contact: tuple[Material, float] | None):
         """(A, B) of x' = A x + B u, x = [core, fluid, skin, bead, object layers] (°C),
         u = [heater W, ambient °C, object far field °C, bead self-heating W]."""
-        key = None if contact is None else (contact[0].name, round(contact[1], 12))
-        if key in self._cache:
-            return self._cache[key]
+        key = _contact_key(contact)
+        if key in (cache := self._cache):
+            return cache[key]
         p = self.p
         n = self.n
         C = np.zeros(n)
@@ -234,14 +285,13 @@ class ThermalNetwork:
         B[:, 1] = g_amb / C
         B[:, 2] = g_far / C
         B[BEAD, 3] = 1.0 / C[BEAD]
-        self._cache[key] = (A, B)
-        return A, B
+        return self._remember(key, (A, B))
 
-    def chunk_response(self, contact, dt: float, steps: int):
+    def chunk_response(self, contact, dt: float, steps: int, live: bool = False):
         """(Φʲ, Σ_{i<j} Φⁱ Γ) for j = 1..steps: a whole chunk with inputs held is x_j = Φʲ x₀ + S_j u."""
-        key = ("c", None if contact is None else (contact[0].name, round(contact[1], 12)), dt, steps)
-        if key not in self._cache:
-            Phi, Gam = self.discrete(contact, dt)
+        key = ("c", _contact_key(contact), dt, steps, live)
+        if key not in (cache := self._cache):
+            Phi, Gam = self.discrete(contact, dt, live)
             n = Phi.shape[0]
             powers = np.empty((steps, n, n))
             sums = np.empty((steps, n, Gam.shape[1]))
@@ -250,20 +300,49 @@ class ThermalNetwork:
                 S = Phi @ S + Gam
                 P = Phi @ P
                 powers[j], sums[j] = P, S
-            self._cache[key] = (powers, sums)
-        return self._cache[key]
+            return self._remember(key, (powers, sums))
+        return cache[key]
 
-    def discrete(self, contact, dt: float):
-        """Exact zero-order-hold discretization (Φ, Γ) over ``dt`` (matrix exponential of the augmented system)."""
-        key = ("d", None if contact is None else (contact[0].name, round(contact[1], 12)), dt)
-        if key not in self._cache:
+    def discrete(self, contact, dt: float, live: bool = False):
+        """Exact zero-order-hold discretization (Φ, Γ) over ``dt`` (matrix exponential of the augmented system;
+        ``live``: of a live contact's patch, by :func:`expm_products`)."""
+        key = ("d", _contact_key(contact), dt, live)
+        if key not in (cache := self._cache):
             A, B = self.matrices(contact)
             n, m = B.shape
             M = np.zeros((n + m, n + m))
             M[:n, :n], M[:n, n:] = A, B
-            E = linalg.expm(M * dt)
-            self._cache[key] = (E[:n, :n], E[:n, n:])
-        return self._cache[key]
+            E = (expm_products if live else linalg.expm)(M * dt)
+            return self._remember(key, (E[:n, :n], E[:n, n:]))
+        return cache[key]
+
+
+def _contact_key(contact: tuple[Material, float] | None):
+    """What a contact's matrices depend on: (material name, area m² to 1e-12 m²), or None."""
+    return None if contact is None else (contact[0].name, round(contact[1], 12))
+
+
+def expm_products(M: np.ndarray) -> np.ndarray:
+    """exp(M) by scaling and squaring a degree-12 Taylor series (truncation < 1e-17 at the scaled norm ≤ 1/4):
+    matrix products only.  A live contact meets dozens of patch areas per trial; scipy's expm runs through a second
+    BLAS whose threads, woken for each call, can cost milliseconds on a busy machine."""
+    norm = float(np.abs(M).sum(axis=0).max())
+    squarings = max(0, int(np.ceil(np.log2(norm / 0.25)))) if norm > 0 else 0
+    X = M / 2.0**squarings
+    term = E = np.eye(M.shape[0])
+    for k in range(1, 13):
+        term = term @ X / k
+        E = E + term
+    for _ in range(squarings):
+        E = E @ E
+    return E
+
+
+@functools.lru_cache(maxsize=16)
+def shared_network(p: SensorParams) -> ThermalNetwork:
+    """The network of parameters ``p``, shared by every model built with them (its discretizations are computed
+    once: a rig's live contact meets dozens of patch areas in each trial)."""
+    return ThermalNetwork(p)
 
 
 class ThermalModel:
@@ -274,7 +353,7 @@ class ThermalModel:
         self.p = p
         self.events = events
         self.faults = faults or {}
-        self.net = ThermalNetwork(p)
+        self.net = shared_network(p)
         self.dt = 1.0 / THERMAL_RATE_HZ
         self.heater_W = self.net.heater_power_W()
         self.rng = effect_rng(seed, "thermistor_noise")
@@ -283,6 +362,11 @@ class ThermalModel:
         self.k = 0
         self._touching = None
         self.x = self._initial_state()
+        # a live contact (decided while the run goes): advance step by step, no further than asked for
+        self.live = not all(c.planned for c in events.contacts)
+        self._p_self = 0.0  # bead self-heating (W) of the current chunk
+        self._last_touch = None  # (contact index, area m²) of the last step, or None
+        self._held = None  # (first step, inputs, closed-form states) while a chunk's inputs stay those at its start
         # read-out filters run at the network rate: 22.6 Hz low-pass on TDC, 0.45 Hz high-pass x 98 on TAC
         fs = THERMAL_RATE_HZ
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.tdc_bandwidth_Hz]), 2 * np.pi * p.tdc_bandwidth_Hz
@@ -324,10 +408,35 @@ class ThermalModel:
         return [t for t in times if t0 <= t <= t1]
 
     def contact_at(self, t: float):
+        """The first planned contact touching at ``t`` (s), or None."""
         for c in self.events.contacts:
             if c.start_s <= t < c.end_s:
                 return c
         return None
+
+    def touches(self, times: np.ndarray) -> list:
+        """Per instant (s): (contact index, area m²) of the first contact touching then, or None; a live contact
+        reads its load at these instants only."""
+        out = [None] * times.size
+        for i, c in enumerate(self.events.contacts):
+            on = (times >= c.start_s) & (times < c.end_s)
+            if not on.any():
+                continue
+            area = np.full(times.size, c.area_m2)
+            if not c.planned:
+                load = np.zeros(times.size)
+                load[on] = c.load_N(times[on])
+                on &= load > 0
+                area[on] = live_patch_area_m2(load[on], self.p)
+            for j in np.flatnonzero(on):
+                if out[j] is None:
+                    out[j] = (i, float(area[j]))
+        return out
+
+    def _input(self, t: float, contact: ThermalContact | None, p_self: float) -> np.ndarray:
+        """u = [heater W, ambient °C, object far field °C, bead self-heating W] at ``t`` (s)."""
+        return np.array([self.heater_at(t), self.ambient_at(t),
+                         contact.temperature_C if contact else self.ambient_at(t), p_self])
 
     def _initial_state(self) -> np.ndarray:
         heater = 0.0 if self.events.power_on_s is not None else self.heater_at(0.0)
@@ -354,6 +463,39 @@ class ThermalModel:
             self._pending = []
         return self._hist_t, self._hist
 
+    def _arrive(self, x: np.ndarray, contact: ThermalContact | None) -> np.ndarray:
+        """State ``x`` as ``contact`` touches (None: nothing): a newly touched object arrives at its own temperature."""
+        if contact is not None and contact is not self._touching:
+            x = x.copy()
+            x[4:] = contact.temperature_C
+        self._touching = contact
+        return x
+
+    def _response(self, contact: ThermalContact | None, area_m2: float | None, steps: int | None = None):
+        """The network's (Φ, Γ) over one step with ``contact`` touching over ``area_m2`` (None: nothing), or
+        with ``steps`` its :meth:`ThermalNetwork.chunk_response`."""
+        touching = None if contact is None else (contact.material, area_m2)
+        live = contact is not None and not contact.planned
+        if steps is None:
+            return self.net.discrete(touching, self.dt, live)
+        return self.net.chunk_response(touching, self.dt, steps, live)
+
+    def _step(self, x: np.ndarray, t: float, contact: ThermalContact | None, area_m2: float | None,
+              p_self: float) -> np.ndarray:
+        """The state one step after ``t`` (s), inputs held from ``t``; ``contact`` touches over ``area_m2``."""
+        x = self._arrive(x, contact)
+        Phi, Gam = self._response(contact, area_m2)
+        return Phi @ x + Gam @ self._input(t, contact, p_self)
+
+    def _emit(self, k_first: int, xs: np.ndarray) -> None:
+        """Read out states ``xs`` of steps ``k_first``, ``k_first`` + 1, …: thermistor noise, TDC and TAC filters."""
+        v = self._tdc_from_state(xs)
+        if self.noise_V:
+            v = v + self.noise_V * self.rng.standard_normal(v.shape)
+        tdc = self.tdc_filter(v)
+        tac = TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc)
+        self._append(k_first, xs, tdc, tac)
+
     def _advance_chunk(self) -> None:
         """Advance one chunk of CHUNK_STEPS steps (inputs held per step; contact and events at step starts)."""
         k0 = self.k
@@ -366,32 +508,52 @@ class ThermalModel:
         steady = all(inputs(t) == inputs(t0) for t in self._event_times(t0, t1)) and \
             (c0 is None or c0 is self._touching)
         if steady:  # inputs held over the whole chunk: closed form, one matrix product
-            powers, sums = self.net.chunk_response(None if c0 is None else (c0.material, c0.area_m2),
-                                                   self.dt, CHUNK_STEPS)
-            u = np.array([self.heater_at(t0), self.ambient_at(t0),
-                          c0.temperature_C if c0 else self.ambient_at(t0), p_self])
-            xs = powers @ x + sums @ u
+            powers, sums = self._response(c0, None if c0 is None else c0.area_m2, CHUNK_STEPS)
+            xs = powers @ x + sums @ self._input(t0, c0, p_self)
             x = xs[-1]
         for j in ([] if steady else range(CHUNK_STEPS)):
             t = (k0 + j) * self.dt
             c = self.contact_at(t)
-            if c is not None and c is not self._touching:
-                x = x.copy()
-                x[4:] = c.temperature_C  # a newly touched object arrives at its own temperature
-            self._touching = c
-            contact = None if c is None else (c.material, c.area_m2)
-            Phi, Gam = self.net.discrete(contact, self.dt)
-            u = np.array([self.heater_at(t), self.ambient_at(t), c.temperature_C if c else self.ambient_at(t), p_self])
-            x = Phi @ x + Gam @ u
+            x = self._step(x, t, c, None if c is None else c.area_m2, p_self)
             xs[j] = x
         self.x = x
         self.k = k0 + CHUNK_STEPS
-        v = self._tdc_from_state(xs)
-        if self.noise_V:
-            v = v + self.noise_V * self.rng.standard_normal(v.shape)
-        tdc = self.tdc_filter(v)
-        tac = TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc)
-        self._append(k0 + 1, xs, tdc, tac)
+        self._emit(k0 + 1, xs)
+
+    def _advance_live(self, k_end: int) -> None:
+        """Advance step by step through step ``k_end`` and not beyond (a live contact: its load is read only at
+        the steps' starts, all before ``k_end``·dt).  Independent of how time is cut: the self-heating is updated
+        at chunk boundaries (absolute time) and a chunk that starts with the previous step's contact runs in
+        closed form from its start for as long as its inputs stay those at its start, stepwise after."""
+        k0 = self.k
+        times = (k0 + np.arange(k_end - k0)) * self.dt
+        touches = self.touches(times)
+        xs = np.empty((times.size, self.net.n))
+        x = self.x
+        stepping = None  # (inputs, Φ, Γu) of the last step taken stepwise
+        for j, t in enumerate(times):
+            k, touch = k0 + j, touches[j]
+            contact, area = (None, None) if touch is None else (self.events.contacts[touch[0]], touch[1])
+            inputs = (self.heater_at(t), self.ambient_at(t), touch)
+            if k % CHUNK_STEPS == 0:
+                self._p_self = self._self_heating_W(float(x[BEAD]))  # updated once per chunk, as for planned
+                self._held, stepping = None, None
+                if touch == self._last_touch:
+                    powers, sums = self._response(contact, area, CHUNK_STEPS)
+                    self._held = (k, inputs, powers @ x + sums @ self._input(t, contact, self._p_self))
+            if self._held is not None and self._held[1] == inputs:
+                x = self._held[2][k - self._held[0]]
+            else:
+                self._held = None
+                if stepping is None or stepping[0] != inputs:
+                    Phi, Gam = self._response(contact, area)
+                    stepping = (inputs, Phi, Gam @ self._input(t, contact, self._p_self))
+                x = stepping[1] @ self._arrive(x, contact) + stepping[2]
+            self._last_touch = touch
+            xs[j] = x
+        self.x = x
+        self.k = k_end
+        self._emit(k0 + 1, xs)
 
     def values_at(self, times: np.ndarray) -> np.ndarray:
         """(core °C, TDC V, TAC V) at each instant, linearly interpolated between network steps."""
@@ -399,7 +561,10 @@ class ThermalModel:
         if times.size == 0:
             return np.zeros((0, 3))
         while self._last_t < times.max():
-            self._advance_chunk()
+            if self.live:  # through the first step at or after the latest instant asked for, not beyond
+                self._advance_live(max(self.k + 1, int(np.ceil(times.max() / self.dt - 1e-9))))
+            else:
+                self._advance_chunk()
         ht, hv = self._history()
         if times.min() < ht[0]:
             raise ValueError(f"instant {times.min():.6f} s is older than the thermal history")

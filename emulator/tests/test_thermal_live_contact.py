@@ -1,0 +1,122 @@
+"""Thermal contact of a commanded finger (a rig's CommandedMotion): touching while its commanded depth is > 0,
+read only as far as the sensor has been asked for, independent of block size, and right in a copy of the sensor."""
+
+import copy
+
+import numpy as np
+import pytest
+
+from emulator import channels as ch
+from emulator.sensor import NoiseSources, Sensor
+from emulator.sliding import CommandedMotion
+from emulator.stimuli import AmbientStep
+from emulator.texture import Texture
+
+pytestmark = pytest.mark.unit
+
+TDC, TAC, PDC = ch.TDC, ch.TAC, ch.PDC
+
+
+def flat(material: str) -> Texture:
+    """A flat, hard surface of thermal ``material`` (only the material differs between calls)."""
+    return Texture(1101, "flat", "test", rms_height_m=0.01e-6, correlation_length_m=50e-6, hurst=0.8, mu_static=1.0,
+                   mu_kinetic=0.8, modulus_Pa=70e9, material=material, seed=3)
+
+
+def lowered(material: str = "glass") -> CommandedMotion:
+    """A finger 0.2 mm above the surface lowered at 1 mm/s from 0.1 s, stopped at 1.5 s (1.2 mm deep, about
+    0.6 N on a hard flat), slid 3 cm at 5 cm/s, lifted at 5 mm/s from 3.5 s: every command given in advance."""
+    m = CommandedMotion(flat(material), max_travel_m=0.05, depth_m=-0.2e-3)
+    m.move_finger(0.1 - m.latency_s, 1e-3)
+    m.move_finger(1.5 - m.latency_s, 0.0)
+    m.move_stage(1.8 - m.latency_s, 0.05)
+    m.move_stage(2.4 - m.latency_s, 0.0)
+    m.move_finger(3.5 - m.latency_s, -5e-3)
+    return m
+
+
+def frame_codes(sensor: Sensor, t_end: float, read_s: float, channels=(TDC, TAC, PDC)) -> np.ndarray:
+    """Codes of ``channels`` every 10 ms up to ``t_end`` (s), asked for ``read_s`` of frames at a time."""
+    times = np.arange(0.0, t_end, 0.01)
+    chans = np.tile(channels, times.size)
+    tt = np.repeat(times, len(channels)) + np.tile(np.arange(len(channels)) * 1e-4, times.size)
+    parts = np.array_split(np.arange(tt.size), max(1, int(round(t_end / read_s))))
+    return np.concatenate([sensor.sample(chans[i], tt[i]) for i in parts]).reshape(times.size, len(channels))
+
+
+def test_the_commanded_finger_cools_the_fingertip_in_the_order_of_the_surfaces_effusivity():
+    """Aluminum draws heat faster than glass, glass than polystyrene foam: TDC falls and TAC goes below its bias
+    in that order (noise off: the analog values)."""
+    t = np.array([0.25, 3.5, 4.5])
+    drop = {}
+    for material in ("aluminum", "glass", "polystyrene foam"):
+        sensor = Sensor(stimuli=[lowered(material)], channels_read=("TDC", "TAC"), noise=NoiseSources.none())
+        v = sensor.analog(np.tile([TDC, TAC], t.size), np.repeat(t, 2)).reshape(t.size, 2)
+        assert v[0, 1] == pytest.approx(1.65, abs=1e-6)  # above the surface: TAC at its bias
+        drop[material] = (v[0, 0] - v[2, 0], 1.65 - v[1, 1])  # TDC fall by 4.5 s, TAC below bias at 3.5 s (V)
+    assert drop["aluminum"][0] > drop["glass"][0] > 10 * drop["polystyrene foam"][0] > 0
+    assert drop["aluminum"][1] > drop["glass"][1] > 10 * drop["polystyrene foam"][1] > 0
+    assert drop["glass"][1] > 3e-3  # about 4 TAC counts
+
+
+def test_a_finger_above_the_surface_changes_nothing_thermal():
+    """Never reaching the surface, the commanded finger leaves TDC and TAC bit for bit as a sensor whose network
+    runs with no contact at all (a far ambient step builds it), on glass as on aluminum."""
+    reference = frame_codes(Sensor(stimuli=[AmbientStep(1e6, 25.0)], channels_read=("TDC", "TAC"), seed=5), 3.0,
+                            0.5, (TDC, TAC))
+    for material in ("glass", "aluminum"):
+        hover = CommandedMotion(flat(material), depth_m=-1e-3)
+        hover.move_finger(0.2, 0.5e-3)  # lowered 0.5 mm, still 0.5 mm above the surface
+        hover.move_finger(1.2, 0.0)
+        sensor = Sensor(stimuli=[hover], channels_read=("TDC", "TAC"), seed=5)
+        assert sensor.thermal is not None  # the live contact builds the network
+        np.testing.assert_array_equal(frame_codes(sensor, 3.0, 0.5, (TDC, TAC)), reference)
+
+
+def test_codes_do_not_depend_on_block_size_or_on_how_reads_are_cut():
+    a = frame_codes(Sensor(stimuli=[lowered()], channels_read=("TDC", "TAC", "PDC"), seed=7, block_s=0.05), 5.0,
+                    0.13)
+    b = frame_codes(Sensor(stimuli=[lowered()], channels_read=("TDC", "TAC", "PDC"), seed=7, block_s=2.0), 5.0, 1.0)
+    c = frame_codes(Sensor(stimuli=[lowered()], channels_read=("TDC", "TAC", "PDC"), seed=7, block_s=0.37), 5.0,
+                    5.0)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a, c)
+    t = np.arange(0.0, 5.0, 0.01)
+    assert a[t < 0.3, 1].mean() - a[(t > 3.0) & (t < 3.5), 1].mean() > 2.0  # TAC counts: the contact mattered
+
+
+def test_reading_TDC_fixes_the_motion_only_through_the_instants_read():
+    """The thermal network reads the finger's depth only at instants already asked for: a command taking effect
+    after them is accepted, one reaching back into them is refused, as without the thermal model."""
+    motion = CommandedMotion(flat("glass"), depth_m=-0.2e-3)
+    motion.move_finger(0.0, 1e-3)  # touches at 0.22 s
+    sensor = Sensor(stimuli=[motion], channels_read=("TDC",), seed=1)
+    assert sensor.thermal is not None and not sensor.nodes  # only the thermal network reads the motion
+    sensor.sample(np.full(3, TDC), np.array([0.5, 1.0, 2.005]))
+    with pytest.raises(ValueError, match="already computed"):
+        motion.move_finger(1.99 - motion.latency_s, 0.0)
+    motion.move_finger(2.01 - motion.latency_s, 0.0)  # after everything read: accepted
+    assert sensor.sample(np.array([TDC]), np.array([2.5])).shape == (1,)
+
+
+def test_a_copy_of_the_sensor_reads_its_own_copy_of_the_motion():
+    """The rig snapshots its run (deepcopy) and goes back: the copy's thermal contact must follow the copy's
+    commands.  The copy stops the finger at 1 s, the original keeps lowering; the copy then reads as a fresh
+    sensor given the copy's commands."""
+
+    def run(stop: bool, copy_at_s: float | None):
+        m = CommandedMotion(flat("glass"), depth_m=-0.2e-3)
+        m.move_finger(0.0, 1e-3)
+        s = Sensor(stimuli=[m], channels_read=("TDC", "TAC"), seed=3)
+        first = frame_codes(s, 0.9, 0.9, (TDC, TAC))
+        if copy_at_s is not None:
+            s, m = copy.deepcopy((s, m))
+        if stop:
+            m.move_finger(1.0 - m.latency_s, 0.0)
+        times = np.arange(0.9, 3.0, 0.01)
+        rest = s.sample(np.tile([TDC, TAC], times.size), np.repeat(times, 2) + np.tile([0, 1e-4], times.size))
+        return np.concatenate([first.ravel(), rest])
+
+    fresh_stopped, copy_stopped, original_lowering = run(True, None), run(True, 0.9), run(False, None)
+    np.testing.assert_array_equal(copy_stopped, fresh_stopped)
+    assert not np.array_equal(copy_stopped, original_lowering)
