@@ -29,7 +29,8 @@ class MainsHum(Effect):
 
     The phase at a block's first sample is computed from the absolute grid index (cycles = k·f·n0/fs reduced
     modulo 1 before it becomes an angle), never accumulated, so it is exact however long the run and the output
-    does not depend on the block size.
+    does not depend on the block size.  A block whose first-sample phases and length equal the previous block's
+    (blocks a whole number of mains periods long: the sensor's 2 s blocks) is that block's hum again, copied.
     """
 
     name = "mains_hum"
@@ -40,8 +41,14 @@ class MainsHum(Effect):
         phases = rng.uniform(0, 2 * np.pi, 3)  # the first draw is the fundamental's phase
         self.components = [(f, a, float(ph)) for (_, f, a), ph in zip(hum_components(params), phases) if a > 0]
         self._table = None  # (n, fs, [(A·cos(w·k/fs), A·sin(w·k/fs)) per component]) for k in a block
+        self._last = (None, None)  # (n, fs, cycles per component) of the last block, and its hum (V)
 
     def process(self, block: Block, inputs):
+        # each component's phase at the block's first sample, in cycles: f·n0 is exact for whole-hertz f
+        cycles = tuple(math.fmod(f * block.n0, block.fs) / block.fs for f, _, _ in self.components)
+        key = (block.n, block.fs, cycles)
+        if key == self._last[0]:
+            return {"stage1_input_V": self._last[1].copy()}
         if self._table is None or self._table[:2] != (block.n, block.fs):
             k = np.arange(block.n)
             rows = []
@@ -50,9 +57,9 @@ class MainsHum(Effect):
                 rows.append((a * np.cos(wk), a * np.sin(wk)))
             self._table = (block.n, block.fs, rows)
         out = np.zeros(block.n)
-        for (f, _, phase), (cos_k, sin_k) in zip(self.components, self._table[2]):
+        for (_, _, phase), c, (cos_k, sin_k) in zip(self.components, cycles, self._table[2]):
             # sin(φ0 + w·k/fs) = sin φ0·cos(w·k/fs) + cos φ0·sin(w·k/fs); φ0 from the absolute index n0
-            cycles = math.fmod(f * block.n0, block.fs) / block.fs  # f·n0 is exact for whole-hertz f
-            phi0 = 2 * np.pi * cycles + phase
+            phi0 = 2 * np.pi * c + phase
             out += math.sin(phi0) * cos_k + math.cos(phi0) * sin_k
-        return {"stage1_input_V": out}
+        self._last = (key, out)
+        return {"stage1_input_V": out.copy()}

@@ -1,0 +1,76 @@
+"""The cheaper paths give the same numbers, bit for bit, as the plain formulas they replace.
+
+* the electrode gaps, worked in place from each contact's precomputed footprint, against the array formula of
+  ``electrode_gaps_mm``'s docstring written out directly (with and without a shear shift, several contacts);
+* a first-order section run as a 2-tap ``lfilter`` against the same section as a 3-tap biquad;
+* the mains hum of a block whose phases repeat (copied) against the hum computed for that block afresh.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from emulator import filters
+from emulator.effects import Block
+from emulator.electrodes import (Contact, bulge_balance, electrode_gaps_mm, electrode_positions_mm,
+                                 indentation_fraction, resting_gaps_mm, surface_point_mm)
+from emulator.extrinsic import MainsHum
+from emulator.params import SensorParams
+
+
+def _gaps_by_the_formula(p, contacts, t, positions, rest):
+    """gap_i = max(g_i − (g₀ − g_min)·Σ a·exp(−u) + Σ (g₀ − g_min)·κ·a·u_s·exp(−u_s), g_min), on fresh arrays."""
+    g0, gmin = p.resting_gap_mm, p.minimum_gap_mm
+    frac, bulge = np.zeros((t.size, len(positions))), np.zeros((t.size, len(positions)))
+    for c in contacts:
+        f, ft = c.state(t)
+        a = indentation_fraction(p, f)
+        w2 = c.indenter_radius_mm**2 + p.skin_spread_mm**2
+        kappa = bulge_balance(p, c.center_mm, np.sqrt(w2))
+        rel = positions - c.center_mm[None, :]
+        along = rel @ np.asarray(c.shear_direction, float)
+        s_mm = p.shear_shift_mm_per_N * ft
+        d2 = (rel * rel).sum(axis=1)[None, :] - 2 * np.outer(s_mm, along) + (s_mm * s_mm)[:, None]
+        u = d2 / (2 * w2)
+        us = u / p.bulge_width_ratio**2
+        frac += a[:, None] * np.exp(-u)
+        bulge += ((g0 - gmin) * kappa * a)[:, None] * (us * np.exp(-us))
+    return np.maximum(rest[None, :] - (g0 - gmin) * frac + bulge, gmin)
+
+
+def test_electrode_gaps_equal_the_array_formula_bit_for_bit():
+    p = SensorParams(electrode_gap_spread_mm=0.7, electrode_gap_seed=11)
+    pos = electrode_positions_mm()
+    rest = resting_gaps_mm(p, len(pos))
+    t = np.linspace(0.0, 2.0, 301)
+    ramp = lambda s: np.clip(s, 0.0, 1.0) * 2.5  # noqa: E731  N
+    contacts = [Contact(surface_point_mm(-4.0, 10.0), 3.0, ramp),  # no shear: the footprint's unshifted shapes
+                Contact(surface_point_mm(2.0, -30.0), 2.0, lambda s: 0.8 * s, 0.5, (0.6, 0.8, 0.0)),  # sheared
+                Contact(surface_point_mm(-12.0, 60.0), 5.0, lambda s: 4.0 + 0 * s)]  # bottoms the thin gaps
+    for cs in (contacts[:1], contacts[1:2], contacts):
+        expected = _gaps_by_the_formula(p, cs, t, pos, rest)
+        assert np.array_equal(electrode_gaps_mm(p, cs, t, pos, rest), expected)
+
+
+def test_a_first_order_section_runs_as_2_taps_with_the_biquads_numbers():
+    sos = filters.discretize(*filters.highpass_1st(10.0), 8800.0, "prewarped", gain_at_hz=1000.0)
+    assert sos[0, 2] == 0.0 and sos[0, 5] == 0.0
+    x = 1.2 + 1e-3 * np.random.default_rng(4).standard_normal(5000)
+    f = filters.SosFilter(sos)
+    f.settle(1.2)
+    zi = signal.sosfilt_zi(sos)[0] * 1.2
+    expected, _ = signal.lfilter(sos[0, :3], sos[0, 3:], x, zi=zi)
+    got = np.concatenate([f(x[:1234]), f(x[1234:1235]), f(x[1235:])])
+    assert np.array_equal(got, expected)
+
+
+def test_a_repeated_hum_block_is_the_hum_computed_for_it():
+    p = SensorParams()
+    for fs, n in ((8800.0, 17600), (8800.0, 1234), (4400.0, 8800)):
+        h = MainsHum(p, 7)
+        for k in range(4):
+            got = h.process(Block(k * n, n, fs), {})["stage1_input_V"]
+            fresh = MainsHum(p, 7).process(Block(k * n, n, fs), {})["stage1_input_V"]
+            assert np.array_equal(got, fresh)
+            got += 1.0  # the graph sums into what an effect returns: the next block must not see it
