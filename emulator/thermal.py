@@ -428,9 +428,10 @@ class ThermalModel:
                 load[on] = c.load_N(times[on])
                 on &= load > 0
                 area[on] = live_patch_area_m2(load[on], self.p)
-            for j in np.flatnonzero(on):
+            areas = area.tolist()
+            for j in np.flatnonzero(on).tolist():
                 if out[j] is None:
-                    out[j] = (i, float(area[j]))
+                    out[j] = (i, areas[j])
         return out
 
     def _input(self, t: float, contact: ThermalContact | None, p_self: float) -> np.ndarray:
@@ -531,7 +532,7 @@ class ThermalModel:
         xs = np.empty((times.size, self.net.n))
         x = self.x
         stepping = None  # (inputs, Φ, Γu) of the last step taken stepwise
-        for j, t in enumerate(times):
+        for j, t in enumerate(times.tolist()):
             k, touch = k0 + j, touches[j]
             contact, area = (None, None) if touch is None else (self.events.contacts[touch[0]], touch[1])
             inputs = (self.heater_at(t), self.ambient_at(t), touch)
