@@ -61,32 +61,40 @@ def _bristle_after(z, vr, dt, sigma0, mu_s, mu_k, vs):
 
 @njit(cache=True)
 def _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v):
-    """G(u) = skin force − friction force for skin velocity ``u`` over one step (increasing through its root)."""
+    """G(u) = skin force − friction force for skin velocity ``u`` over one step (increasing through its root), with
+    the bristle deflection after the step and the friction force (N) at ``u`` (the step's outcome if ``u`` is the
+    root)."""
     vr = v_stage - u
     znew = _bristle_after(z, vr, h, sigma0, mu_s, mu_k, vs)
     force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * vr)
-    return k_t * (x + u * h) + c_t * u - force
+    return k_t * (x + u * h) + c_t * u - force, znew, force
 
 
 @njit(cache=True)
-def _interp_tables(heights, slopes, radii, r, pos, dx):
-    """Bilinear reads of ``heights`` and ``slopes`` (radius index × position index) at radius ``r`` (m) and
-    position ``pos`` (m); the track repeats beyond its ends."""
+def _radius_weight(radii, r):
+    """The table row ``k`` and weight ``w`` toward row ``k + 1`` for patch radius ``r`` (m): linear in between,
+    clamped at the ends."""
+    if r <= radii[0]:
+        return 0, 0.0
+    if r >= radii[-1]:
+        return radii.size - 1, 0.0
+    k = 0
+    while radii[k + 1] < r:
+        k += 1
+    return k, (r - radii[k]) / (radii[k + 1] - radii[k])
+
+
+@njit(cache=True)
+def _interp_tables(heights, slopes, k, w, pos, dx):
+    """Bilinear reads of ``heights`` and ``slopes`` (radius index × position index) between rows ``k`` and ``k + 1``
+    (weight ``w`` toward the latter, from :func:`_radius_weight`) at position ``pos`` (m); the track repeats beyond
+    its ends."""
     n = heights.shape[1]
     u = pos / dx
     i = int(math.floor(u))
     f = u - i
     i = i % n
     j = (i + 1) % n
-    if r <= radii[0]:
-        k, w = 0, 0.0
-    elif r >= radii[-1]:
-        k, w = radii.size - 1, 0.0
-    else:
-        k = 0
-        while radii[k + 1] < r:
-            k += 1
-        w = (r - radii[k]) / (radii[k + 1] - radii[k])
     h = heights[k, i] * (1 - f) + heights[k, j] * f
     s = slopes[k, i] * (1 - f) + slopes[k, j] * f
     if w > 0.0:
@@ -115,6 +123,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
     touching = 1 if state[5] > 0.5 else 0
     u_prev = state[6]
     kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
+    n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
     for n in range(N0.size):
         n0 = N0[n]
         v_stage = V[n]
@@ -122,19 +131,20 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
         vr_sum = 0.0
         normal = 0.0
         slope = 0.0
-        r, kn, series = 0.0, 0.0, 0.0
-        if n0 > 0.0:  # what depends on the load alone: the patch radius and the stiffnesses
+        if n0 > 0.0 and n0 != n0_last:  # what depends on the load alone (kept while the load holds still)
             cbrt_n = n0 ** (1.0 / 3.0)
-            r = radius_1N * cbrt_n
+            r = radius_1N * cbrt_n  # the patch radius
             kn = kn_per_cbrt_n * cbrt_n
             # a soft texture layer in series with the skin: flat-punch stiffness, stiffening as the layer
             # densifies toward its thickness (the derivative of δ_t = T(1 − exp(−N/(kT))))
             k_flat = 2.0 * r * modulus_eff
             k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
             series = k_tex / (kn + k_tex)
+            row, row_w = _radius_weight(radii, r)
+            n0_last = n0
         for _ in range(substeps):
             if n0 > 0.0:
-                height, slope_here = _interp_tables(heights, slopes, radii, r, p, dx)
+                height, slope_here = _interp_tables(heights, slopes, row, row_w, p, dx)
                 if touching == 0 and touchdown_reference:  # touchdown: the skin settles onto this spot
                     h_ref, s_ref = height, slope_here
                     touching = 1
@@ -166,14 +176,23 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
             u_prev = min(max(u_prev, -bound), bound)  # the bound changes with the load: start inside it
             lo = max(-bound, u_prev - step)
             hi = min(bound, u_prev + step)
-            g_lo = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
-            g_hi = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+            # (the last evaluation's bristle deflection and force are kept: when the root is the last point
+            # evaluated, as it mostly is, the step's outcome is already known)
+            g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                                             mu_v)
+            g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                                             mu_v)
+            u_eval = hi
             while g_lo > 0.0 and lo > -bound:
                 lo = max(-bound, lo - 4.0 * (hi - lo))
-                g_lo = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+                g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k,
+                                                 vs, mu_v)
+                u_eval = lo
             while g_hi < 0.0 and hi < bound:
                 hi = min(bound, hi + 4.0 * (hi - lo))
-                g_hi = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+                g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k,
+                                                 vs, mu_v)
+                u_eval = hi
             u = 0.5 * (lo + hi)
             side = 0
             tol = 1e-13 * (1.0 + abs(v_stage))
@@ -183,7 +202,9 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
                 u = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
                 if not (lo < u < hi):
                     u = 0.5 * (lo + hi)
-                g = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+                g, z_eval, f_eval = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                                              mu_v)
+                u_eval = u
                 if g == 0.0:
                     break
                 if g > 0.0:
@@ -199,8 +220,11 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
                 if abs(g) < 1e-12 * (1.0 + normal):
                     break
             u_prev = u
-            znew = _bristle_after(z, v_stage - u, h, sigma0, mu_s, mu_k, vs)
-            force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * (v_stage - u))
+            if u == u_eval:
+                znew, force = z_eval, f_eval
+            else:
+                znew = _bristle_after(z, v_stage - u, h, sigma0, mu_s, mu_k, vs)
+                force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * (v_stage - u))
             vr = v_stage - u
             x += u * h
             z = znew

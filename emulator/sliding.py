@@ -26,7 +26,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import fftconvolve, lfilter
+from numba import njit
+from scipy import fft as scipy_fft
+from scipy.signal import lfilter
 
 from emulator import friction
 from emulator.effects import Block, Effect, effect_rng
@@ -122,6 +124,7 @@ class CommandedMotion:
     _stage: list = field(default_factory=list)  # (t, velocity m/s, acceleration m/s²)
     _stage_velocity: float = 0.0
     _computed_until_s: float = -math.inf  # latest instant the sensor has already evaluated the motion at
+    _column_cache: dict = field(default_factory=dict)  # "finger"/"stage" -> (segments, their column arrays)
 
     def __post_init__(self):
         self._finger = [(self.start_s, self.depth_m, 0.0)]
@@ -149,7 +152,7 @@ class CommandedMotion:
         (start, end) of the change."""
         t = t_s + self.latency_s
         self._check_not_past(t, "stage")
-        v0 = self._piecewise(self._stage, np.array([t]))[0]
+        v0 = self._piecewise("stage", np.array([t]))[0]
         dv = float(velocity_m_per_s) - v0
         dur = abs(dv) / accel_m_per_s2
         self._stage.append((t, v0, math.copysign(accel_m_per_s2, dv) if dur > 0 else 0.0))
@@ -158,22 +161,38 @@ class CommandedMotion:
 
     def depth_at(self, t: np.ndarray) -> np.ndarray:
         """Finger depth below the surface (m) at instants ``t`` (s), as the sensor computes them."""
-        return self._piecewise(self._finger, t, computing=True)
+        return self._piecewise("finger", t, computing=True)
 
     def stage_velocity_m_per_s(self, t: np.ndarray) -> np.ndarray:
         """Stage velocity (m/s) at instants ``t`` (s), as the sensor computes them."""
-        return self._piecewise(self._stage, t, computing=True)
+        return self._piecewise("stage", t, computing=True)
 
-    def _piecewise(self, segments: list, t, computing: bool = False) -> np.ndarray:
-        """Value of piecewise-linear ``segments`` (start s, value, slope) at ``t``; ``computing`` marks instants the
-        sensor has now evaluated (later commands must not reach back before them)."""
+    def _piecewise(self, which: str, t, computing: bool = False) -> np.ndarray:
+        """Value of the piecewise-linear segments (start s, value, slope) ``which`` ("finger" or "stage") at ``t``;
+        ``computing`` marks instants the sensor has now evaluated (later commands must not reach back before them)."""
         t = np.asarray(t, float)
-        if computing and t.size:
-            self._computed_until_s = max(self._computed_until_s, float(t.max()))
-        seg = np.array(segments)
-        k = np.clip(np.searchsorted(seg[:, 0], t, side="right") - 1, 0, None)
-        seg = seg[k]
-        return seg[:, 1] + seg[:, 2] * (t - seg[:, 0])
+        if t.size == 0:
+            return np.empty(t.shape)
+        t_lo, t_hi = float(t.min()), float(t.max())
+        if computing:
+            self._computed_until_s = max(self._computed_until_s, t_hi)
+        start, value, slope = self._columns(which)
+        k_lo, k_hi = (max(0, int(np.searchsorted(start, x, side="right")) - 1) for x in (t_lo, t_hi))
+        if k_lo == k_hi:  # one segment (the usual case within a block): scalars, the same arithmetic
+            return value[k_lo] + slope[k_lo] * (t - start[k_lo])
+        k = np.maximum(np.searchsorted(start, t, side="right") - 1, 0)
+        return value[k] + slope[k] * (t - start[k])
+
+    def _columns(self, which: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The segments ``which`` as three arrays (start s, value, slope), rebuilt only when a command was appended
+        (the lists only grow)."""
+        segments = self._finger if which == "finger" else self._stage
+        cached = self._column_cache.get(which)
+        if cached is None or cached[0] != len(segments):
+            seg = np.array(segments, dtype=float)
+            cached = (len(segments), (seg[:, 0].copy(), seg[:, 1].copy(), seg[:, 2].copy()))
+            self._column_cache[which] = cached
+        return cached[1]
 
     def decided_until(self) -> float:
         """Latest instant up to which the motion is fixed by commands already given."""
@@ -220,26 +239,70 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
     w_crest = max(1, int(round(skin.ridge_contact_width_m / dx_m)))
     crest = np.convolve(h, np.ones(w_crest) / w_crest, mode="same")
     crest_slope = np.gradient(crest, dx_m)
-    heights = np.empty((radii_m.size, n))
-    slopes = np.empty((radii_m.size, n))
-    for k, a in enumerate(radii_m):
-        m = max(1, int(np.floor(a / dx_m)))
-        xs = np.arange(-m, m + 1) * dx_m
-        w = np.clip(1.0 - (xs / a) ** 2, 0.0, None)
-        w /= w.sum()
-        patch = fftconvolve(h, w[::-1], mode="same")
-        heights[k] = patch[pad:pad + n]
-        smooth_slope = np.gradient(patch, dx_m)[pad:pad + n]
-        ridged = np.zeros(n)
-        j = np.arange(-int(a // skin.ridge_pitch_m), int(a // skin.ridge_pitch_m) + 1)
-        wj = np.clip(1.0 - (j * skin.ridge_pitch_m / a) ** 2, 0.0, None)
-        if wj.sum() > 0:
-            wj /= wj.sum()
-            for jj, ww in zip(j, wj):
-                shift = int(round(jj * skin.ridge_pitch_m / dx_m))
-                ridged += ww * crest_slope[pad + shift:pad + shift + n]
-        slopes[k] = smooth_slope + ridge_gain * (ridged - smooth_slope)
+    # the patch average at every radius: h convolved with each radius's Hertz line load, at positions
+    # pad - 1 .. pad + n (one beyond each end for the slope)
+    patch = np.empty((radii_m.size, n + 2))
+    spectra_of_h = {}
+    for k, (m, n_fft, spectrum) in enumerate(_patch_kernels(tuple(float(a) for a in radii_m), dx_m, h.size)):
+        if n_fft not in spectra_of_h:
+            spectra_of_h[n_fft] = scipy_fft.rfftn(h, [n_fft], axes=[0])
+        full = scipy_fft.irfftn(spectra_of_h[n_fft] * spectrum, [n_fft], axes=[0])
+        patch[k] = full[m + pad - 1:m + pad + n + 1]  # scipy's fftconvolve(h, w, "same") centres by m
+    heights = np.ascontiguousarray(patch[:, 1:-1])
+    smooth_slope = (patch[:, 2:] - patch[:, :-2]) / (2.0 * dx_m)  # np.gradient's central difference
+    # fingerprint ridges: each radius's ridges under the patch sample the crest slope, weighted by the line load
+    weights, shifts = _ridge_weights(tuple(float(a) for a in radii_m), skin.ridge_pitch_m, dx_m)
+    ridged = np.zeros((radii_m.size, n))
+    _ridge_sum(crest_slope, pad, weights, shifts, ridged)
+    slopes = smooth_slope + ridge_gain * (ridged - smooth_slope)
     return heights, slopes
+
+
+@functools.lru_cache(maxsize=4)
+def _patch_kernels(radii_m: tuple, dx_m: float, n_signal: int) -> list:
+    """Per patch radius ``a`` (m): the half-width m (samples of ``dx_m``) of its Hertz line-load kernel
+    ``∝ 1 − x²/a²`` (normalised to sum 1), the FFT length and the kernel's spectrum with which
+    :func:`scipy.signal.fftconvolve` convolves it with a signal of ``n_signal`` samples (the same arithmetic, with
+    the kernel's spectrum computed once)."""
+    out = []
+    for a in radii_m:
+        m = max(1, int(np.floor(a / dx_m)))
+        w = np.clip(1.0 - ((np.arange(-m, m + 1) * dx_m) / a) ** 2, 0.0, None)
+        w /= w.sum()
+        n_fft = scipy_fft.next_fast_len(n_signal + w.size - 1, True)
+        out.append((m, n_fft, scipy_fft.rfftn(w[::-1], [n_fft], axes=[0])))
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _ridge_weights(radii_m: tuple, pitch_m: float, dx_m: float):
+    """Per patch radius, the weights (line load at each ridge under the patch, summing to 1; rows padded with 0) and
+    the ridges' offsets (samples of ``dx_m``) for ridges at ``pitch_m``."""
+    rows = []
+    for a in radii_m:
+        j = np.arange(-int(a // pitch_m), int(a // pitch_m) + 1)
+        wj = np.clip(1.0 - (j * pitch_m / a) ** 2, 0.0, None)
+        wj = wj / wj.sum() if wj.sum() > 0 else np.zeros_like(wj)
+        rows.append((wj, [int(round(jj * pitch_m / dx_m)) for jj in j]))
+    width = max(len(w) for w, _ in rows)
+    weights, shifts = np.zeros((len(rows), width)), np.zeros((len(rows), width), dtype=np.int64)
+    for k, (w, sh) in enumerate(rows):
+        weights[k, :len(w)], shifts[k, :len(sh)] = w, sh
+    return weights, shifts
+
+
+@njit(cache=True)
+def _ridge_sum(crest_slope, pad, weights, shifts, out):
+    """out[k, i] += weights[k, j] · crest_slope[pad + shifts[k, j] + i] over j in order (zero weights skipped)."""
+    n = out.shape[1]
+    for k in range(weights.shape[0]):
+        for j in range(weights.shape[1]):
+            w = weights[k, j]
+            if w == 0.0:
+                continue
+            base = pad + shifts[k, j]
+            for i in range(n):
+                out[k, i] += w * crest_slope[base + i]
 
 
 class SlidingContact(Effect):

@@ -135,7 +135,8 @@ def periodic_profile(texture: Texture, x_m: np.ndarray) -> np.ndarray:
         w = 2 * np.pi / c.track_period_m
         out += c.amplitude_m * np.cos(w * x)
         for j, rel in enumerate(c.harmonics, start=2):
-            out += rel * c.amplitude_m * np.cos(j * w * x)
+            if rel:  # a zero harmonic (a square wave's even ones) adds exactly nothing: not evaluated
+                out += rel * c.amplitude_m * np.cos(j * w * x)
     return out
 
 
