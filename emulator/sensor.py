@@ -21,7 +21,7 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.sliding import CommandedMotion, Slide, SlidingContact, contact_force_from_depth
+from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N, contact_force_from_depth
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
                                  surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
@@ -211,11 +211,10 @@ class Sensor:
                                         s.normal_force_N, s.texture.mu_kinetic, (1.0, 0.0, 0.0), s.start_s, s.end_s))
                 continue
             if isinstance(s, CommandedMotion):  # a rig's finger: the load of its commanded depth, known as it goes
-                def load_N(t, m=s, p=self.params):
-                    return contact_force_from_depth(m.depth_at(t), p, m.texture)
+                # (a partial, not a closure: a copy of the sensor, as the rig's snapshot, reads the copied motion)
                 contacts.append(Contact(surface_point_mm(-5.0, 0.0), self.params.contact_radius_at_1N_m * 1e3,
-                                        load_N, s.texture.mu_kinetic, (1.0, 0.0, 0.0), s.start_s, s.end_s,
-                                        planned=False))
+                                        functools.partial(commanded_load_N, s, self.params), s.texture.mu_kinetic,
+                                        (1.0, 0.0, 0.0), s.start_s, s.end_s, planned=False))
                 continue
             if not isinstance(s, Touch):
                 continue

@@ -209,6 +209,12 @@ def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) ->
     return np.where(d > 0, np.interp(d, table_depth, table_N), 0.0)
 
 
+def commanded_load_N(motion: CommandedMotion, params: SensorParams, t) -> np.ndarray:
+    """Normal load (N) of a commanded finger at instants ``t`` (s) the sensor has reached: the contact law of its
+    depth.  Bind it with :func:`functools.partial`, not a closure, so that a copied sensor reads its copied motion."""
+    return contact_force_from_depth(motion.depth_at(t), params, motion.texture)
+
+
 @functools.lru_cache(maxsize=64)
 def _depth_table(K: float, radius_1N: float, modulus: float):
     N = np.concatenate([[0.0], np.geomspace(1e-5, 50.0, 2000)])
