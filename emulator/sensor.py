@@ -21,7 +21,7 @@ from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
-from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N, contact_force_from_depth
+from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
                                  surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
@@ -170,10 +170,6 @@ class Sensor:
     def _thermal_model(self, stimuli):
         """The thermal network when something thermal happens; otherwise the settled steady state (shortcut)."""
         p = self.params
-
-        def commanded_load_N(motion, t):  # N at instants t (s) the sensor has reached
-            return contact_force_from_depth(motion.depth_at(t), p, motion.texture)
-
         contacts = []
         for s in stimuli:
             if isinstance(s, Touch) and s.material is not None:
@@ -188,7 +184,7 @@ class Sensor:
                 # the copied motion)
                 contacts.append(ThermalContact(s.start_s, s.end_s, material(s.texture.material),
                                                p.ambient_temperature_C,
-                                               load_N=functools.partial(commanded_load_N, s)))
+                                               load_N=functools.partial(commanded_load_N, s, p)))
         power_on = [s.at_s for s in stimuli if isinstance(s, PowerOn)]
         steps = tuple(sorted((s.at_s, s.temperature_C) for s in stimuli if isinstance(s, AmbientStep)))
         failures = [s.at_s for s in stimuli if isinstance(s, HeaterFailure)]
