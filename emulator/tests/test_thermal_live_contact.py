@@ -7,10 +7,13 @@ import numpy as np
 import pytest
 
 from emulator import channels as ch
+from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.sliding import CommandedMotion
 from emulator.stimuli import AmbientStep
 from emulator.texture import Texture
+from emulator.thermal import ThermalNetwork, live_patch_area_m2, patch_area_m2, shared_network
+from emulator.thermal import material as thermal_material
 
 pytestmark = pytest.mark.unit
 
@@ -120,3 +123,16 @@ def test_a_copy_of_the_sensor_reads_its_own_copy_of_the_motion():
     fresh_stopped, copy_stopped, original_lowering = run(True, None), run(True, 0.9), run(False, None)
     np.testing.assert_array_equal(copy_stopped, fresh_stopped)
     assert not np.array_equal(copy_stopped, original_lowering)
+
+
+def test_a_planned_contact_never_takes_a_live_patchs_discretization():
+    """Models of the same parameters share one network; a live patch (its own expm) of the same material and area
+    as a planned contact (a 1 N slide: radius 2.5 mm, exactly 50 rounding steps) must not stand in for it, so a
+    scripted scene's codes do not depend on a rig trial run before it in the process."""
+    p = SensorParams()
+    glass, area = thermal_material("glass"), float(patch_area_m2(1.0, p))
+    assert float(live_patch_area_m2(np.array([1.0]), p)[0]) == pytest.approx(area, rel=1e-12)
+    net = shared_network(p)
+    net.discrete((glass, area), 0.01, live=True)
+    for planned, fresh in zip(net.discrete((glass, area), 0.01), ThermalNetwork(p).discrete((glass, area), 0.01)):
+        np.testing.assert_array_equal(planned, fresh)
