@@ -407,22 +407,23 @@ class ElectrodeModel:
             return np.zeros(0)
         if not self.contacts:  # nothing ever touches: every electrode rests (the steady-state shortcut)
             return self.rest[electrode - 1]
-        while self._hist_t[-1][-1] < times.max():
+        t_first, t_last = float(times.min()), float(times.max())
+        while self._hist_t[-1][-1] < t_last:
             if self.lazy:  # through the first sample at or after the latest instant asked for, not beyond
-                self._advance_chunk(max(1, int(np.ceil(times.max() / self.dt - 1e-9)) - self.k))
+                self._advance_chunk(max(1, int(np.ceil(t_last / self.dt - 1e-9)) - self.k))
             else:
                 self._advance_chunk()
         if len(self._hist_t) > 1:
             self._hist_t, self._hist = [np.concatenate(self._hist_t)], [np.vstack(self._hist)]
         ht, hv = self._hist_t[0], self._hist[0]
-        if times.min() < ht[0] - 1e-12:
-            raise ValueError(f"electrode instant {times.min():.6f} s is older than the electrode history")
+        if t_first < ht[0] - 1e-12:
+            raise ValueError(f"electrode instant {t_first:.6f} s is older than the electrode history")
         idx = np.searchsorted(ht, times, side="right") - 1
         idx = np.minimum(np.maximum(idx, 0), len(ht) - 2)  # np.clip's result, without its overhead
         frac = (times - ht[idx]) / self.dt
         flat, cols = hv.ravel(), electrode - 1  # row idx, column col of hv at idx·N + col of its C-order values
         lo, hi = flat[idx * self.n + cols], flat[(idx + 1) * self.n + cols]
-        keep = max(0, int(np.searchsorted(ht, times.max(), side="right")) - 2)  # history still needed
+        keep = max(0, int(np.searchsorted(ht, t_last, side="right")) - 2)  # history still needed
         self._hist_t, self._hist = [ht[keep:]], [hv[keep:]]
         return lo + (hi - lo) * frac
 
