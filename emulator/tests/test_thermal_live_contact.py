@@ -136,3 +136,11 @@ def test_a_planned_contact_never_takes_a_live_patchs_discretization():
     net.discrete((glass, area), 0.01, live=True)
     for planned, fresh in zip(net.discrete((glass, area), 0.01), ThermalNetwork(p).discrete((glass, area), 0.01)):
         np.testing.assert_array_equal(planned, fresh)
+
+
+def test_the_live_contact_builds_the_network_only_for_thermal_or_pressure_reads():
+    def built(channels):
+        return Sensor(stimuli=[lowered()], channels_read=channels).thermal is not None
+
+    assert not built(("E1", "E7"))  # electrodes only: no thermal network, the motion is not read for it
+    assert built(("TAC",)) and built(("PDC",))  # PDC: the core temperature drives the bridge's drift
