@@ -167,6 +167,11 @@ class CommandedMotion:
         """Stage velocity (m/s) at instants ``t`` (s), as the sensor computes them."""
         return self._piecewise("stage", t, computing=True)
 
+    def planned_depth_at(self, t: np.ndarray) -> np.ndarray:
+        """Finger depth (m) the commands given so far plan for instants ``t`` (s): a look ahead that, unlike
+        :meth:`depth_at`, does not mark the instants as computed (later commands may still change them)."""
+        return self._piecewise("finger", t)
+
     def _piecewise(self, which: str, t, computing: bool = False) -> np.ndarray:
         """Value of the piecewise-linear segments (start s, value, slope) ``which`` ("finger" or "stage") at ``t``;
         ``computing`` marks instants the sensor has now evaluated (later commands must not reach back before them)."""
@@ -302,13 +307,14 @@ def _ridge_sum(crest_slope, pad, weights, shifts, out):
     """out[k, i] += weights[k, j] · crest_slope[pad + shifts[k, j] + i] over j in order (zero weights skipped)."""
     n = out.shape[1]
     for k in range(weights.shape[0]):
+        row = out[k]
         for j in range(weights.shape[1]):
             w = weights[k, j]
             if w == 0.0:
                 continue
-            base = pad + shifts[k, j]
+            shifted = crest_slope[pad + shifts[k, j]:pad + shifts[k, j] + n]  # 1-D views: the loop vectorises
             for i in range(n):
-                out[k, i] += w * crest_slope[base + i]
+                row[i] += w * shifted[i]
 
 
 class SlidingContact(Effect):

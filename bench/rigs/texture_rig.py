@@ -7,11 +7,18 @@ the texture at the set velocity over the set distance while the stage's motor cu
 the tangential load — is sampled at the frame rate; then the finger lifts.  The controller sees only codes: it
 reads the sensor through the host sampler and the SPI peripheral like any host.  Its commands reach the motors
 ``latency_s`` later (20 ms).  It decides after every 10 ms frame while lowering; to avoid paying a Python round
-trip per frame, the emulator reads a window of frames as if the finger kept lowering (which it does until the
-controller stops it), finds the frame where the controller stops, goes back to a snapshot taken before the
-window and reads up to that frame in one block that ends exactly there, so the stop command (20 ms later) lies
-after everything computed — the same samples, since results do not depend on block size (tested); the motion
-refuses a command that would reach into computed instants.  Afterwards the motion is fixed in advance and read in long chunks.
+trip per frame, the emulator reads stretches of frames as if the finger kept lowering (which it does until the
+controller stops it) and checks the controller's rule on every frame read.  Each stretch is computed in one block
+that ends exactly at its last frame's needs.  A stretch that may hold the stop is read after a snapshot
+(``copy.deepcopy`` of the run); if the stop falls before its end, the emulator goes back to the snapshot and reads
+exactly up to the stop frame, so the stop command (20 ms later) lies after everything computed — the same
+samples, since results do not depend on block size (tested); the motion refuses a command that would reach into
+computed instants.  Stretches the stop is not expected in are read without a snapshot: the stop is predicted
+from the PDC change read so far against the commanded load ahead (the contact law of the planned depth), with a
+margin; should the stop still fall inside one, the lowering is run again from the trial's start with a snapshot
+before every window (deterministic from the seed, so the same trial; counted in ``Trial.extra["lowering"]``).
+None of this changes what the controller sees or decides (tested).  Afterwards the motion is fixed in advance and
+read in chunks of ``chunk_s``, each computed exactly.
 
 :func:`movement_grid` gives the 36 movements of D eqs 6.20–6.21.
 """
@@ -32,7 +39,7 @@ from emulator.effects import effect_rng
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.skin import Skin
-from emulator.sliding import CommandedMotion
+from emulator.sliding import CommandedMotion, contact_force_from_depth
 from emulator.spi.peripheral import SoftwarePeripheral
 from emulator.texture import SURFACE_LENGTH_M, Texture
 
@@ -78,7 +85,7 @@ class RigSettings:
     pdc_average_frames: int = 1
     motor: StageMotor = field(default_factory=StageMotor)  # the stage's motor current (traction)
     chunk_s: float = 0.5
-    speculation_s: float = 1.0  # while lowering, frames are read this far ahead and replayed up to the stop
+    speculation_s: float = 1.0  # while lowering: the longest window read after a snapshot (s)
 
     def __post_init__(self):
         for name, value in vars(self).items():
@@ -125,37 +132,12 @@ class TextureRig:
         if not (movement.force_N > 0 and movement.velocity_m_per_s > 0):
             raise ValueError(f"movement {movement}: force and velocity must be positive")
         start_position = float(effect_rng(seed, "rig.start_position").uniform(0.0, SURFACE_LENGTH_M))
-        motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
-                                 max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
-        run = _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
-                          fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
-                          record_signals=("stage_force_N", "normal_force_N")),
-                   motion, effect_rng(seed, "rig.motor_current"), s)
+        try:
+            run, reached, lowering = self._lowered(texture, movement, seed, start_position, read_ahead=True)
+        except _Overshot:  # the look-ahead misjudged the stop: again from the start, a snapshot before every window
+            run, reached, lowering = self._lowered(texture, movement, seed, start_position, read_ahead=False)
+            lowering["retried"] = True
         frame_s = run.frame / run.sampler.slot_rate_Hz
-        # baseline at rest, then lower until the PDC change reaches the target
-        run.read_exactly(int(round(s.baseline_s / frame_s)))  # the lowering command follows
-        baseline = float(np.mean(run.log.pdc_codes()))
-        target = movement.force_N / FORCE_PER_PDC_BIT_N
-        run.motion.move_finger(run.now, s.lower_rate_m_per_s)
-        reached, k = None, None
-        window = max(1, int(round(s.speculation_s / frame_s)))
-        for _ in range(int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / s.speculation_s) + 1):
-            # read a window as if the finger keeps lowering (it does, until the controller stops it); if the
-            # controller would stop inside it, go back to before the window and read exactly up to that frame
-            snapshot = run.snapshot()
-            before = run.log.pdc_codes().size
-            run.read(window)
-            pdc = run.log.pdc_codes()
-            means = np.convolve(pdc, np.ones(s.pdc_average_frames) / s.pdc_average_frames, "full")[:pdc.size]
-            over = np.flatnonzero(means[before:] - baseline >= target)
-            if over.size:
-                k = int(over[0]) + 1
-                reached = float(means[before + k - 1] - baseline)
-                run = snapshot
-                run.read_exactly(k)  # nothing is computed beyond the stop command's effect
-                break
-        if reached is None:
-            raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on {texture.name}")
         motion, sampler, log = run.motion, run.sampler, run.log
         t_stop = sampler.next_slot / sampler.slot_rate_Hz
         contact_s = motion.move_finger(t_stop, 0.0)
@@ -170,8 +152,11 @@ class TextureRig:
         slide_end = brake + ramp
         motion.move_finger(slide_end - s.latency_s, -s.lift_rate_m_per_s)
         end = slide_end + s.settle_after_s + (s.start_gap_m + 3e-3) / s.lift_rate_m_per_s
+        # the motion is fixed from here: the frames a reader of chunk_s at a time reads until the end, each chunk
+        # computed exactly (no grid beyond the last frame)
+        chunk = max(1, int(round(s.chunk_s / frame_s)))
         while run.now < end:
-            run.read(max(1, int(round(s.chunk_s / frame_s))))
+            run.read_exactly(chunk)
         true_normal = log.mean_load(slide_start + ramp, brake)
         skin_before = self.skin.state()
         if self.wear:
@@ -179,7 +164,134 @@ class TextureRig:
             self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic), movement.velocity_m_per_s)
         rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
-                     start_position, time.perf_counter() - wall0, log.n_frames(run.frame))
+                     start_position, time.perf_counter() - wall0, log.n_frames(run.frame), {"lowering": lowering})
+
+    def _lowered(self, texture: Texture, movement: Movement, seed: int, start_position: float,
+                 read_ahead: bool) -> tuple["_Run", float, dict]:
+        """The trial's run, its baseline read at rest, lowered until the controller's stop frame and read exactly
+        through it (nothing computed beyond); the PDC change (counts) it stopped at; and what the emulator did
+        to get there (windows, snapshots, frames computed and thrown away).
+
+        The controller decides after every frame; the emulator reads stretches of frames as if the finger keeps
+        lowering (it does until the controller stops it) and checks the rule on each frame read.  A stretch that
+        holds the stop frame before its end is read again from a snapshot taken before it, up to that frame.
+        With ``read_ahead``, stretches the stop is not expected in are read without a snapshot (see
+        :func:`_next_stretch`); should the stop fall inside one anyway, :class:`_Overshot` is raised and the caller
+        runs the lowering again without reading ahead (same result, slower)."""
+        s = self.settings
+        motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
+                                 max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
+        run = _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
+                          fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
+                          record_signals=("stage_force_N", "normal_force_N")),
+                   motion, effect_rng(seed, "rig.motor_current"), s)
+        frame_s = run.frame / run.sampler.slot_rate_Hz
+        # baseline at rest, then lower until the PDC change reaches the target
+        run.read_exactly(int(round(s.baseline_s / frame_s)))  # the lowering command follows
+        baseline = float(np.mean(run.log.pdc_codes()))
+        target = movement.force_N / FORCE_PER_PDC_BIT_N
+        run.motion.move_finger(run.now, s.lower_rate_m_per_s)
+        first = run.log.n_frames(run.frame)  # frames read before the lowering command
+        window = max(1, int(round(s.speculation_s / frame_s)))
+        budget = (int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / s.speculation_s) + 1) * window
+        stats = {"windows": 0, "snapshots": 0, "frames_recomputed": 0, "frames_discarded": 0, "retried": False}
+        # before any contact: the frames until the commanded load reaches the movement's force at the rig's own
+        # calibration; the first stretch reads a share of them without a snapshot
+        first_stretch = int(_AHEAD_FIRST_SHARE * _frames_to_load(run, movement.force_N, texture, budget)) \
+            if read_ahead else 0
+        while True:
+            lowered = run.log.n_frames(run.frame) - first
+            if lowered >= budget:
+                raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on "
+                                   f"{texture.name}")
+            if first_stretch >= _MIN_WINDOW_FRAMES:
+                n, safe, first_stretch = first_stretch, True, 0
+            else:
+                change = _predicted_change(run, first, baseline, texture, budget - lowered)
+                n, safe = _next_stretch(change, target, window, read_ahead)
+            n = min(n, budget - lowered)
+            snapshot = None if safe else run.snapshot()
+            stats["snapshots"] += int(snapshot is not None)
+            stats["windows"] += 1
+            before = run.log.pdc_codes().size
+            run.read_exactly(n)
+            pdc = run.log.pdc_codes()
+            means = np.convolve(pdc, np.ones(s.pdc_average_frames) / s.pdc_average_frames, "full")[:pdc.size]
+            over = np.flatnonzero(means[before:] - baseline >= target)
+            if over.size:
+                k = int(over[0]) + 1
+                reached = float(means[before + k - 1] - baseline)
+                if k < n:  # the stretch went past the stop: back to before it, and read exactly up to the stop
+                    if snapshot is None:
+                        raise _Overshot
+                    run = snapshot
+                    run.read_exactly(k)  # nothing is computed beyond the stop command's effect
+                    stats["frames_recomputed"] += k
+                    stats["frames_discarded"] += n - k
+                return run, reached, stats
+
+
+class _Overshot(Exception):
+    """The controller stopped inside a stretch read without a snapshot to go back to."""
+
+
+#: Reading ahead while lowering (how far the emulator computes between checks; the controller's decisions and the
+#: samples do not depend on it): the first stretch reads this share of the frames the contact law predicts at the
+#: rig's calibration, without a snapshot; later ones end where the predicted PDC change comes within this many
+#: counts, plus this share of the change still to go, of the target; a window with a snapshot then reads until the
+#: predicted change passes the target by this many counts (PDC noise is ~0.5 count RMS).
+_AHEAD_FIRST_SHARE = 0.6
+_AHEAD_MARGIN_COUNTS = 3.0
+_AHEAD_MARGIN_SHARE = 0.3
+_WINDOW_MARGIN_COUNTS = 2.0
+_MIN_WINDOW_FRAMES = 5
+_FIT_FRAMES = 30  # the PDC change is predicted from the last this many frames in contact
+
+
+def _next_stretch(change: np.ndarray | None, target: float, window: int, read_ahead: bool) -> tuple[int, bool]:
+    """The next stretch to read while lowering (frames), and whether the stop is not expected in it (it is then read
+    without a snapshot), from the PDC change (counts) predicted for the frames ahead (None: not known yet)."""
+    if change is None:
+        return window, False
+    if read_ahead:
+        margin = _AHEAD_MARGIN_COUNTS + _AHEAD_MARGIN_SHARE * max(0.0, target - change[0])
+        near = change >= target - margin
+        if near.any() and int(np.argmax(near)) >= _MIN_WINDOW_FRAMES:
+            return int(np.argmax(near)), True
+    past = change >= target + _WINDOW_MARGIN_COUNTS
+    if past.any():
+        return min(window, max(_MIN_WINDOW_FRAMES, int(np.argmax(past)))), False
+    return window, False
+
+
+def _commanded_load(run: "_Run", t: np.ndarray, texture: Texture) -> np.ndarray:
+    """The load (N) the contact law gives the depth planned for instants ``t`` (s) (texture relief aside)."""
+    return contact_force_from_depth(run.motion.planned_depth_at(t), run.sensor.params, texture)
+
+
+def _frames_to_load(run: "_Run", force_N: float, texture: Texture, horizon: int) -> int:
+    """Frames from now until the commanded load (:func:`_commanded_load`) reaches ``force_N`` (N); ``horizon`` if not
+    within that many frames."""
+    t = run.now + np.arange(horizon) * run.frame / run.sampler.slot_rate_Hz
+    reached = np.flatnonzero(_commanded_load(run, t, texture) >= force_N)
+    return int(reached[0]) if reached.size else horizon
+
+
+def _predicted_change(run: "_Run", first: int, baseline: float, texture: Texture, horizon: int) -> np.ndarray | None:
+    """The PDC change (counts) expected in each of the next ``horizon`` frames if the finger keeps lowering, or None
+    if it cannot be told yet: the PDC change of the last lowering frames in contact (read since frame ``first``),
+    fitted as a straight line in the commanded load (the line takes up the texture's relief pressing in as the
+    patch grows), along the commanded load of the frames ahead."""
+    load = _commanded_load(run, np.concatenate(run.log.cur_t)[first:], texture)
+    change = run.log.pdc_codes()[first:] - baseline
+    touching = np.flatnonzero(load > 0)[-_FIT_FRAMES:]
+    if touching.size < _FIT_FRAMES // 2:
+        return None
+    slope, offset = np.polyfit(load[touching], change[touching], 1)
+    if not slope > 0:
+        return None
+    t = run.now + np.arange(horizon) * run.frame / run.sampler.slot_rate_Hz
+    return offset + slope * _commanded_load(run, t, texture)
 
 
 class _Run:
