@@ -166,6 +166,16 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
                 p += (v_stage - u) * h
                 vr_sum += v_stage - u
                 continue
+            if v_stage == 0.0 and x == 0.0 and z == 0.0 and u_prev == 0.0:
+                # nothing moves (the stage still, the skin unstrained, the bristles relaxed: a finger lowering or
+                # held before the slide): G is odd about u = 0, so the step below would return u = 0 exactly,
+                # after three evaluations; the same outcome, written out (x and p take the + 0.0 it would add)
+                u_prev = 0.0
+                x += 0.0
+                p += 0.0
+                f_sum += 0.0
+                vr_sum += 0.0
+                continue
             # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0, bracketed around
             # the previous velocity (widened until G changes sign; G(±bound) always brackets a root), then
             # regula falsi with the Illinois modification (superlinear, never leaves the bracket)
