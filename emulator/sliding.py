@@ -185,6 +185,14 @@ class CommandedMotion:
         k_lo, k_hi = (max(0, int(np.searchsorted(start, x, side="right")) - 1) for x in (t_lo, t_hi))
         if k_lo == k_hi:  # one segment (the usual case within a block): scalars, the same arithmetic
             return value[k_lo] + slope[k_lo] * (t - start[k_lo])
+        if t.ndim == 1 and bool(np.all(t[1:] >= t[:-1])):  # in time order (a block): one slice per segment
+            out = np.empty(t.size)
+            ends = list(np.searchsorted(t, start[k_lo + 1:k_hi + 1], side="left")) + [t.size]
+            begin = 0
+            for k, end in zip(range(k_lo, k_hi + 1), ends):
+                out[begin:end] = value[k] + slope[k] * (t[begin:end] - start[k])
+                begin = end
+            return out
         k = np.maximum(np.searchsorted(start, t, side="right") - 1, 0)
         return value[k] + slope[k] * (t - start[k])
 
