@@ -412,9 +412,8 @@ class SlidingContact(Effect):
             stage, c["stage_zi"] = lfilter(*self._stage_ba, tang, zi=c["stage_zi"])
             stage_out[a:b] += stage
             # the force log: grid samples whose index is a multiple of log_every (independent of block size)
-            n_idx = block.n0 + a + np.arange(tt.size)
-            keep = n_idx % self.log_every == 0
-            if keep.any():
+            keep = slice(-(block.n0 + a) % self.log_every, None, self.log_every)
+            if tt[keep].size:
                 c["log"].append(np.stack([tt[keep], normal[keep], tang[keep], slip[keep], stage[keep]]))
         return {"contact_force_N": normal_out, "tangential_force_N": tangential_out, "normal_force_N": load_out,
                 "stage_force_N": stage_out}
