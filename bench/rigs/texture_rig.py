@@ -17,8 +17,9 @@ computed instants.  Stretches the stop is not expected in are read without a sna
 from the PDC change read so far against the commanded load ahead (the contact law of the planned depth), with a
 margin; should the stop still fall inside one, the lowering is run again from the trial's start with a snapshot
 before every window (deterministic from the seed, so the same trial; counted in ``Trial.extra["lowering"]``).
-None of this changes what the controller sees or decides (tested).  Afterwards the motion is fixed in advance and
-read in chunks of ``chunk_s``, each computed exactly.
+None of this changes what the controller sees or decides (tested).  Afterwards the motion is fixed in advance: the
+frames a reader of ``chunk_s`` at a time would read until the trial's end are computed in as few exact blocks as
+memory allows.
 
 :func:`movement_grid` gives the 36 movements of D eqs 6.20–6.21.
 """
