@@ -294,7 +294,7 @@ def _predicted_change(run: "_Run", first: int, baseline: float, texture: Texture
     load = _commanded_load(run, np.concatenate(run.log.cur_t)[first:], texture)
     change = run.log.pdc_codes()[first:] - baseline
     touching = np.flatnonzero(load > 0)[-_FIT_FRAMES:]
-    if touching.size < _FIT_FRAMES // 2:
+    if touching.size < _FIT_FRAMES // 2 or np.ptp(load[touching]) == 0:  # too few frames, or no line to fit
         return None
     slope, offset = np.polyfit(load[touching], change[touching], 1)
     if not slope > 0:
