@@ -124,7 +124,7 @@ class CommandedMotion:
     _stage: list = field(default_factory=list)  # (t, velocity m/s, acceleration m/s²)
     _stage_velocity: float = 0.0
     _computed_until_s: float = -math.inf  # latest instant the sensor has already evaluated the motion at
-    _column_cache: dict = field(default_factory=dict)  # "finger"/"stage" -> (segments, their column arrays)
+    _column_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)  # see _columns
 
     def __post_init__(self):
         self._finger = [(self.start_s, self.depth_m, 0.0)]
