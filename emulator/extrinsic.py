@@ -40,7 +40,7 @@ class MainsHum(Effect):
         rng = effect_rng(seed, self.name)
         phases = rng.uniform(0, 2 * np.pi, 3)  # the first draw is the fundamental's phase
         self.components = [(f, a, float(ph)) for (_, f, a), ph in zip(hum_components(params), phases) if a > 0]
-        self._table = None  # (n, fs, [(A·cos(w·k/fs), A·sin(w·k/fs)) per component]) for k in a block
+        self._table = None  # (n, fs, [(A·cos(w·k/fs), A·sin(w·k/fs)) per component]) for k < n, the longest block
         self._last = (None, None)  # (n, fs, cycles per component) of the last block, and its hum (V)
 
     def process(self, block: Block, inputs):
@@ -49,7 +49,8 @@ class MainsHum(Effect):
         key = (block.n, block.fs, cycles)
         if key == self._last[0]:
             return {"stage1_input_V": self._last[1].copy()}
-        if self._table is None or self._table[:2] != (block.n, block.fs):
+        if self._table is None or self._table[1] != block.fs or self._table[0] < block.n:
+            # the longest block so far: shorter blocks (a rig's exact-length reads) use its first samples
             k = np.arange(block.n)
             rows = []
             for f, a, _ in self.components:
@@ -60,6 +61,6 @@ class MainsHum(Effect):
         for (_, _, phase), c, (cos_k, sin_k) in zip(self.components, cycles, self._table[2]):
             # sin(φ0 + w·k/fs) = sin φ0·cos(w·k/fs) + cos φ0·sin(w·k/fs); φ0 from the absolute index n0
             phi0 = 2 * np.pi * c + phase
-            out += math.sin(phi0) * cos_k + math.cos(phi0) * sin_k
+            out += math.sin(phi0) * cos_k[:block.n] + math.cos(phi0) * sin_k[:block.n]
         self._last = (key, out)
         return {"stage1_input_V": out.copy()}

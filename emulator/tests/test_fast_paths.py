@@ -74,3 +74,14 @@ def test_a_repeated_hum_block_is_the_hum_computed_for_it():
             fresh = MainsHum(p, 7).process(Block(k * n, n, fs), {})["stage1_input_V"]
             assert np.array_equal(got, fresh)
             got += 1.0  # the graph sums into what an effect returns: the next block must not see it
+
+
+def test_hum_of_a_short_block_after_a_long_one_is_the_hum_computed_for_it():
+    """A rig reads exact-length blocks of varying size: the table of the longest block serves the shorter."""
+    p = SensorParams()
+    h = MainsHum(p, 7)
+    n0 = 0
+    for n in (17600, 97, 1, 5000, 17600, 20000, 333):
+        got = h.process(Block(n0, n, 8800.0), {})["stage1_input_V"]
+        assert np.array_equal(got, MainsHum(p, 7).process(Block(n0, n, 8800.0), {})["stage1_input_V"]), n
+        n0 += n
