@@ -33,7 +33,9 @@ import numpy as np
 from bench import tomlfile
 from bench.errors import BenchError
 from bench.experiments import exploration as ex
-from bench.experiments.trials import TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement
+from bench.experiments.trials import (
+    DETECTABLE_WEAR, TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
+)
 from bench.paths import FIXTURES, OUT, REPO
 from bench.rigs.texture_rig import movement_grid
 
@@ -69,6 +71,7 @@ class ExperimentSpec:
     training_trials: int = 5
     wear: bool = True
     replace_skin: bool = True
+    replace_at: float = DETECTABLE_WEAR  # fraction of the ridge height lost at which the skin is replaced
     pairs: list[tuple[int, int]] | None = None  # None = chosen from the training model
     n_pairs: int = 8
     pair_choice: str = "random-within-group"  # or "most-confused"
@@ -111,7 +114,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     problems: list[str] = []
     known = {"experiment": {"name", "seed", "fidelity"},
              "pilot": {"textures", "trials", "movements", "exclude_high_power"},
-             "training": {"textures", "trials", "wear", "replace_skin"},
+             "training": {"textures", "trials", "wear", "replace_skin", "replace_at"},
              "validation": {"pairs", "n_pairs", "trials", "pair_choice"},
              "exploration": {"strategies", "pair_threshold", "identification_threshold", "max_moves",
                              "pair_simulations", "identification_simulations", "identify_all_textures"},
@@ -179,6 +182,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.training_trials = get("training", "trials", int, 2, 100, spec.training_trials)
     spec.wear = get("training", "wear", bool, default=spec.wear)
     spec.replace_skin = get("training", "replace_skin", bool, default=spec.replace_skin)
+    spec.replace_at = get("training", "replace_at", float, 0.01, 1.0, spec.replace_at)
     pairs = t["validation"].get("pairs")
     if pairs is not None:
         if not isinstance(pairs, list) or not all(isinstance(p, list) and len(p) == 2 and all(isinstance(n, int)
@@ -345,7 +349,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                                            spec.fingerprints, stage="training", noise_scale=spec.noise_scale))
         # the same movement may be best for two properties: run it once
         tasks = list({(t.texture, t.movement_id, t.trial): t for t in tasks}.values())
-        replace_at = 0.5 if spec.replace_skin else None
+        replace_at = spec.replace_at if spec.replace_skin else None
         tasks, history = schedule_skin(tasks, wear=spec.wear, replace_at=replace_at)
         log(f"training: {len(tasks)} trials on {history[-1]['skin'] if history else 1} skin(s)")
         training_rows = run_stage("training", tasks, cache_dir, client=client, progress=progress)

@@ -34,6 +34,7 @@ def test_shipped_experiment_files_validate():
     ({"training": {"trails": 5}}, ["training: unknown field 'trails'"]),
     ({"validation": {"pairs": [[2, 3, 4]]}}, ["validation.pairs"]),
     ({"pilot": {"movements": [0, 99, 1]}}, ["pilot.movements"]),
+    ({"training": {"replace_at": 0.0}}, ["training.replace_at = 0.0", "0.01 to 1.0"]),
 ])
 def test_bad_experiment_files_name_field_and_value(data, words):
     with pytest.raises(E.ExperimentError) as e:
@@ -135,3 +136,19 @@ def test_the_double_noise_ablation_doubles_every_noise_source():
                  "amp_voltage_noise_V_per_rtHz", "amp_current_noise_A_per_rtHz", "mains_amplitude_V"):
         assert getattr(q, name) == pytest.approx(2 * getattr(p, name)), name
     assert q.bridge_resistance_ohm == pytest.approx(4 * p.bridge_resistance_ohm)
+
+
+def test_replace_at_sets_how_worn_a_skin_gets_before_it_is_replaced():
+    """The skin policy of the experiment file reaches the session: a smaller fraction, more and fresher skins."""
+    from bench.experiments.trials import TrialTask, schedule_skin
+
+    tasks = [TrialTask(2, 2.0, 0.01, k, k) for k in range(600)]
+    spec = E.parse_experiment({"experiment": {"name": "x"}, "training": {"replace_at": 0.1}}, "x.toml")
+    assert spec.replace_at == 0.1
+    for fraction in (0.5, spec.replace_at):
+        scheduled, _ = schedule_skin(tasks, replace_at=fraction)
+        lowest = min(t.ridge_height_m for t in scheduled)
+        assert lowest >= (1 - fraction) * scheduled[0].ridge_height_m * 0.99
+        assert lowest < (1 - fraction) * scheduled[0].ridge_height_m * 1.05  # it does get that worn
+    assert len({t.skin_serial for t in schedule_skin(tasks, replace_at=0.1)[0]}) > \
+        len({t.skin_serial for t in schedule_skin(tasks, replace_at=0.5)[0]}) > 1
