@@ -160,6 +160,6 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                "The disjoint pairs within a texture group that the training model confuses most at the three "
                "optimal movements (a harder test than D's, whose pairs were chosen by people):"), ""]
     lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}" for a, b in result.pairs]
-    lines += ["", f"Skin replacements during training: {record['skin_replacements']}.",
+    lines += ["", f"Skin replacements in the training and validation session: {record['skin_replacements']}.",
               "Wall time per stage (s): " + ", ".join(f"{k} {v:.1f}" for k, v in result.wall_s.items()), ""]
     return "\n".join(lines)
