@@ -225,10 +225,47 @@ def fit_model(table: TrialTable, sigma_floor: float = SIGMA_FLOOR,
     ss = np.bincount(flat, weights=(table.value - mean[flat]) ** 2, minlength=T * M * P)
     sigma = np.sqrt(np.where(n > 1, ss / np.maximum(n - 1, 1), 0.0))
     mean, sigma, n = mean.reshape(T, M, P), sigma.reshape(T, M, P), n.reshape(T, M, P)
+    floor = _sigma_floor(mean, sigma_floor, sigma_floor_rel)
+    return TextureModel(tex, mov, mean, np.maximum(sigma, floor), n)
+
+
+def _sigma_floor(mean: np.ndarray, sigma_floor: float, sigma_floor_rel: float) -> np.ndarray:
+    """σ floor per (movement, property) from the texture means (T, M, P): max(floor, rel × their spread)."""
     floor = np.maximum(sigma_floor, sigma_floor_rel * mean.std(axis=0))
     if not np.all(floor > 0):
         raise ExplorationError(f"sigma_floor must be > 0 (got {sigma_floor})")
-    return TextureModel(tex, mov, mean, np.maximum(sigma, floor), n)
+    return floor
+
+
+def spread_check(train: TrialTable, validation: TrialTable, sigma_floor: float = SIGMA_FLOOR,
+                 sigma_floor_rel: float = SIGMA_FLOOR_REL) -> dict:
+    """Do the validation trials look like the training trials?  Per property: the median |z| of each validation
+    trial against its texture's training normal (:func:`fit_model`), the median |z| of each training trial
+    against the normal of the *other* training trials of its texture and movement (leave-one-out, same σ floor;
+    cells with fewer than 3 trials skipped), and their ratio.  Near 1: validation trials scatter as training
+    trials do; well above 1: they are shifted (another skin state, another session).  Dimensionless."""
+    model = fit_model(train, sigma_floor, sigma_floor_rel)
+    floor = _sigma_floor(model.mean, sigma_floor, sigma_floor_rel)
+    ti, mi, p = model.texture_index(validation.texture), model.movement_index(validation.movement), validation.prop
+    z_val = (validation.value - model.mean[ti, mi, p]) / model.sigma[ti, mi, p]
+    T, M, P = model.mean.shape
+    x = train.value
+    g = (model.texture_index(train.texture) * M + model.movement_index(train.movement)) * P + train.prop
+    n, total, total_sq = (np.bincount(g, weights=w, minlength=T * M * P)[g] for w in (None, x, x * x))
+    n1 = n - 1  # trials left when one is held out
+    keep = n1 >= 2
+    n1, x, mean1 = n1[keep], x[keep], (total[keep] - x[keep]) / n1[keep]
+    var1 = (total_sq[keep] - x * x - n1 * mean1**2) / (n1 - 1)
+    floor_rows = floor[model.movement_index(train.movement)[keep], train.prop[keep]]
+    z_loo = (x - mean1) / np.maximum(np.sqrt(np.maximum(var1, 0.0)), floor_rows)
+    out = {}
+    for name, v_sel, t_sel in [(name, validation.prop == k, train.prop[keep] == k) for k, name in enumerate(PROPERTIES)] \
+            + [("all", np.ones(z_val.size, bool), np.ones(z_loo.size, bool))]:
+        zv = float(np.median(np.abs(z_val[v_sel]))) if v_sel.any() else float("nan")
+        zl = float(np.median(np.abs(z_loo[t_sel]))) if t_sel.any() else float("nan")
+        out[name] = {"validation_median_abs_z": zv, "leave_one_out_median_abs_z": zl, "ratio": zv / zl,
+                     "n_validation": int(v_sel.sum()), "n_training": int(t_sel.sum())}
+    return out
 
 
 # ------------------------------------------------------------------------------------------------ D's formulas

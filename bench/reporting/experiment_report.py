@@ -16,7 +16,7 @@ import numpy as np  # noqa: E402
 
 from bench.experiments import exploration as ex  # noqa: E402
 from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines, movement_label,  # noqa: E402
-                                          summary)
+                                          summary, table_from_rows)
 
 
 def _atomic(path: Path, text: str) -> None:
@@ -83,6 +83,9 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
               "pairs": result.pairs, "summary": s, "bayesian_beats_baselines_on": beats_baselines(result),
               "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
+              "spread_check": ex.spread_check(table_from_rows(result.training_rows),
+                                              table_from_rows(result.validation_rows))
+              if result.validation_rows else None,
               "wall_s": result.wall_s, "dissertation": D_FIGURES}
     _atomic(out / "summary.json", json.dumps(record, indent=2, default=str))
     names.append("summary.json")
@@ -160,6 +163,15 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                "The disjoint pairs within a texture group that the training model confuses most at the three "
                "optimal movements (a harder test than D's, whose pairs were chosen by people):"), ""]
     lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}" for a, b in result.pairs]
+    if record.get("spread_check"):
+        lines += ["", "## Do the validation trials look like the training trials?", "",
+                  "Median |z| of each validation trial against its texture's training normal, beside each training "
+                  "trial against the normal of the other training trials of its texture and movement (leave-one-out). "
+                  "A ratio near 1: validation scatters as training does; well above 1: the validation trials are "
+                  "shifted (e.g. another skin state).", "",
+                  "| property | validation | leave-one-out | ratio |", "|---|---|---|---|"]
+        lines += [f"| {k} | {v['validation_median_abs_z']:.2f} | {v['leave_one_out_median_abs_z']:.2f} | "
+                  f"{v['ratio']:.2f} |" for k, v in record["spread_check"].items()]
     lines += ["", f"Skin replacements in the training and validation session: {record['skin_replacements']}.",
               "Wall time per stage (s): " + ", ".join(f"{k} {v:.1f}" for k, v in result.wall_s.items()), ""]
     return "\n".join(lines)

@@ -354,3 +354,22 @@ def test_summaries():
     fake = dataclasses.replace(results[0], decided=decided, correct=decided == 1)
     labels, counts = ex.confusion_matrix(fake, labels=[1, 2, 3])
     assert counts[0].tolist() == [2, 2, 0] and ex.accuracy(fake) == 0.5
+
+
+def test_spread_check_sees_a_shift_of_the_validation_trials_and_nothing_else():
+    """Validation trials drawn like the training trials sit as far from the training normals as training trials
+    from their leave-one-out normals (ratio near 1); shifting one property by 3 σ raises only its ratio."""
+    T = 40
+    means = np.random.default_rng(1).normal(size=(T, 3)) * 10
+
+    def draw(seed, roughness_shift):
+        tex, trial = np.repeat(np.arange(T), 5), np.tile(np.arange(5), T)
+        v = means[tex] + np.random.default_rng(seed).normal(size=(tex.size, 3)) + [0.0, roughness_shift, 0.0]
+        return ex.TrialTable.from_wide(tex, np.zeros_like(tex), trial, v[:, 0], v[:, 1], v[:, 2])
+
+    same = ex.spread_check(draw(2, 0.0), draw(3, 0.0))
+    assert all(0.7 < same[p]["ratio"] < 1.4 for p in ex.PROPERTIES)
+    assert 0.6 < same["all"]["leave_one_out_median_abs_z"] < 1.1  # iid normals, 4 trials per held-out fit
+    shifted = ex.spread_check(draw(2, 0.0), draw(3, 3.0))
+    assert shifted["roughness"]["ratio"] > 3.0
+    assert shifted["traction"] == same["traction"] and shifted["fineness"] == same["fineness"]
