@@ -26,7 +26,8 @@ from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, elec
                                  surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
                               Touch, Vibration, calibration_pressure, skin_displacement)
-from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, patch_area_m2, steady_state
+from emulator.skin import contact_patch_area_m2
+from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
 
 #: Which grid signal each pressure channel converts.
@@ -178,7 +179,7 @@ class Sensor:
                                                np.pi * (s.indenter_radius_mm * 1e-3) ** 2))
             elif isinstance(s, Slide):  # the texture at room temperature, over the patch at the slide's force
                 contacts.append(ThermalContact(s.start_s, s.end_s, material(s.texture.material),
-                                               p.ambient_temperature_C, patch_area_m2(s.force_N, p)))
+                                               p.ambient_temperature_C, contact_patch_area_m2(s.force_N, p.contact_radius_at_1N_m)))
             elif isinstance(s, CommandedMotion):  # a rig's finger: touching while its commanded depth is > 0,
                 # read as the run goes (a partial, not a closure: a copy of the sensor, as the rig's snapshot, reads
                 # the copied motion)

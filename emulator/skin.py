@@ -19,6 +19,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+def contact_patch_radius_m(load_N, contact_radius_at_1N_m: float):
+    """Radius (m) of the skin's contact patch under a normal load ``load_N`` (N): a_1N · N^(1/3) (Hertz), with
+    ``contact_radius_at_1N_m`` = a_1N (m)."""
+    return contact_radius_at_1N_m * load_N ** (1 / 3)
+
+
+def contact_patch_area_m2(load_N, contact_radius_at_1N_m: float):
+    """Area (m²) of the skin's contact patch under a normal load ``load_N`` (N): π (a_1N · N^(1/3))²."""
+    return np.pi * contact_patch_radius_m(load_N, contact_radius_at_1N_m) ** 2
+
+
 @dataclass
 class Skin:
     """One silicone skin. Lengths in m, forces in N, hardness in Pa."""

@@ -40,6 +40,7 @@ from scipy import linalg
 from emulator import filters
 from emulator.effects import effect_rng
 from emulator.params import SensorParams
+from emulator.skin import contact_patch_radius_m
 
 _NOMINAL = SensorParams()
 
@@ -160,20 +161,11 @@ def _object_layers(first_m: float = 50e-6, growth: float = 1.8) -> np.ndarray:
     return first_m * growth ** np.arange(OBJECT_LAYERS)
 
 
-def patch_radius_m(load_N, p: SensorParams):
-    """Radius (m) of the skin's contact patch under a normal load ``load_N`` (N): a_1N · N^(1/3) (Hertz)."""
-    return p.contact_radius_at_1N_m * load_N ** (1 / 3)
-
-
-def patch_area_m2(load_N, p: SensorParams):
-    """Area (m²) of the skin's contact patch under a normal load ``load_N`` (N): π (a_1N · N^(1/3))²."""
-    return np.pi * patch_radius_m(load_N, p) ** 2
-
-
 def live_patch_area_m2(load_N: np.ndarray, p: SensorParams) -> np.ndarray:
-    """:func:`patch_area_m2` (m²) of loads ``load_N`` (N, > 0) with the radius rounded to
-    :data:`PATCH_RADIUS_STEP_M`, at least one step."""
-    steps = np.maximum(1.0, np.rint(patch_radius_m(np.asarray(load_N, float), p) / PATCH_RADIUS_STEP_M))
+    """The skin's contact patch area (m²) under loads ``load_N`` (N, > 0) with the radius rounded to
+    :data:`PATCH_RADIUS_STEP_M`, at least one step (:func:`emulator.skin.contact_patch_radius_m`)."""
+    radius = contact_patch_radius_m(np.asarray(load_N, float), p.contact_radius_at_1N_m)
+    steps = np.maximum(1.0, np.rint(radius / PATCH_RADIUS_STEP_M))
     return np.pi * (steps * PATCH_RADIUS_STEP_M) ** 2
 
 

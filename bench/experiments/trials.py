@@ -13,7 +13,6 @@ trials (the pilot's 36 movements × textures × repetitions) and returns a table
 from __future__ import annotations
 
 import hashlib
-import math
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -22,7 +21,7 @@ from bench.rigs.texture_rig import Movement, TextureRig, movement_grid
 from bench.textures.properties import properties
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources
-from emulator.skin import Skin
+from emulator.skin import Skin, contact_patch_area_m2
 
 #: relative ridge height lost at which wear counts as detectable and the skin is replaced (model choice: D
 #: replaced the skin "when wear was visible")
@@ -99,7 +98,7 @@ def schedule_skin(tasks: list[TrialTask], wear: bool = True, replace_at: float |
                            skin_serial=skin.serial))
         history.append({"trial_index": len(out) - 1, "skin": skin.serial, "ridge_height_m": skin.ridge_height_m})
         if wear:
-            area = math.pi * (p.contact_radius_at_1N_m * t.force_N ** (1 / 3)) ** 2
+            area = contact_patch_area_m2(t.force_N, p.contact_radius_at_1N_m)
             skin.wear(t.force_N, 0.05, area, velocity_m_per_s=t.velocity_m_per_s)
     return out, history
 
@@ -127,7 +126,7 @@ def wear_per_movement(movements: list[Movement] | None = None, trials: int = 100
     rows = []
     for m_id, m in enumerate(movements if movements is not None else movement_grid()):
         skin = Skin()
-        area = math.pi * (p.contact_radius_at_1N_m * m.force_N ** (1 / 3)) ** 2
+        area = contact_patch_area_m2(m.force_N, p.contact_radius_at_1N_m)
         for _ in range(trials):
             # the trial lasts distance / v at the rig; a high-speed trial is shorter, so wear per second grows
             skin.wear(m.force_N, distance_m, area, velocity_m_per_s=m.velocity_m_per_s)

@@ -39,7 +39,7 @@ from emulator import channels as ch
 from emulator.effects import effect_rng
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
-from emulator.skin import Skin
+from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import CommandedMotion, contact_force_from_depth
 from emulator.spi.peripheral import SoftwarePeripheral
 from emulator.texture import SURFACE_LENGTH_M, Texture
@@ -164,7 +164,7 @@ class TextureRig:
         true_normal = log.mean_load(slide_start + ramp, brake)
         skin_before = self.skin.state()
         if self.wear:
-            area = math.pi * (self.params.contact_radius_at_1N_m * movement.force_N ** (1 / 3)) ** 2
+            area = contact_patch_area_m2(movement.force_N, self.params.contact_radius_at_1N_m)
             self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic), movement.velocity_m_per_s)
         rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,

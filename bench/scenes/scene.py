@@ -23,7 +23,7 @@ from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERES
                               Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, sphere_drop_on,
                               sphere_radius_m)
 from emulator.effects import effect_rng
-from emulator.skin import Skin
+from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import Slide
 from emulator.texture import SURFACE_LENGTH_M
 from emulator.thermal import MATERIALS
@@ -528,7 +528,7 @@ def build_slides(specs: list, skin: Skin, seed: int, wear: bool, contact_radius_
         slides.append(Slide(sp.start_s, sp.texture, sp.force_N, sp.velocity_m_per_s, sp.distance_m, sp.approach_s,
                             sp.hold_s, sp.accel_s, sp.lift_s, position, skin=copy.deepcopy(skin)))
         if wear:
-            area = math.pi * (contact_radius_at_1N_m * sp.force_N ** (1 / 3)) ** 2
+            area = contact_patch_area_m2(sp.force_N, contact_radius_at_1N_m)
             skin.wear(sp.force_N, sp.distance_m, area, float(sp.texture.mu_kinetic), sp.velocity_m_per_s)
     return slides, states, skin
 

@@ -12,7 +12,8 @@ from emulator.sensor import NoiseSources, Sensor
 from emulator.sliding import CommandedMotion
 from emulator.stimuli import AmbientStep
 from emulator.texture import Texture
-from emulator.thermal import ThermalNetwork, live_patch_area_m2, patch_area_m2, shared_network
+from emulator.skin import contact_patch_area_m2
+from emulator.thermal import ThermalNetwork, live_patch_area_m2, shared_network
 from emulator.thermal import material as thermal_material
 
 pytestmark = pytest.mark.unit
@@ -130,7 +131,7 @@ def test_a_planned_contact_never_takes_a_live_patchs_discretization():
     as a planned contact (a 1 N slide: radius 2.5 mm, exactly 50 rounding steps) must not stand in for it, so a
     scripted scene's codes do not depend on a rig trial run before it in the process."""
     p = SensorParams()
-    glass, area = thermal_material("glass"), float(patch_area_m2(1.0, p))
+    glass, area = thermal_material("glass"), float(contact_patch_area_m2(1.0, p.contact_radius_at_1N_m))
     assert float(live_patch_area_m2(np.array([1.0]), p)[0]) == pytest.approx(area, rel=1e-12)
     net = shared_network(p)
     net.discrete((glass, area), 0.01, live=True)

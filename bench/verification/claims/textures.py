@@ -10,7 +10,7 @@ from bench.rigs.texture_rig import Movement, TextureRig
 from bench.textures.library import texture
 from bench.textures.properties import roughness
 from bench.verification.claims.core import Bench, Claim, claim_group
-from emulator.skin import Skin
+from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import Slide
 
 PAC_RATE_HZ = 2200.0
@@ -122,7 +122,7 @@ def rig_claims(b: Bench) -> list[Claim]:
     lost = {}
     for label, mv in (("low", Movement(0.2, 0.01)), ("high", Movement(2.0, 0.1))):
         skin = Skin()
-        area = np.pi * (b.params.contact_radius_at_1N_m * mv.force_N ** (1 / 3)) ** 2
+        area = contact_patch_area_m2(mv.force_N, b.params.contact_radius_at_1N_m)
         for _ in range(50):
             skin.wear(mv.force_N, 0.05, area, 0.6, mv.velocity_m_per_s)
         lost[label] = skin.ridge_height_new_m - skin.ridge_height_m
