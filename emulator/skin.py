@@ -1,20 +1,31 @@
 """The skin as an object with a history: fingerprint ridges that wear with frictional work (D ch. 4 and 6).
 
-Ridges (pitch and width 0.4 mm, height 0.2 mm when new, D ch. 4) lose height by an Archard-type law: the worn
-volume is ``k · (1 + v/v_h) · N · d / H`` (wear coefficient ``k``, normal force ``N``, sliding distance ``d``,
-hardness ``H``), spread over the ridge crests in contact.  The factor ``1 + v/v_h`` stands for the faster
-abrasion of elastomers at higher sliding speed (frictional heating at the asperities; ``v_h`` = 2.5 cm/s is a
-model choice), so over the rig's fixed 5 cm the movements of high force × high speed wear fastest, as D saw.  Worn ridges catch texture features less (the ridge term of the
-sliding model scales with ``ridge_height / ridge_height_new``) and less regularly: each trial's ridge gain
-varies by a relative spread that grows with the worn fraction (``irregularity``, a model choice standing for
-the uneven wear D saw as degraded repeatability).  A skin persists across the trials of a session until it is
-replaced; :meth:`Skin.history` lists its ridge height after each trial.
+Ridges (pitch and width 0.4 mm, height 0.2 mm when new, D ch. 4) lose height by an Archard-type law whose rate
+rises steeply with the sliding power: the worn volume is ``k · N · d / H · (N·v / P_ref)^β`` (wear coefficient
+``k``, normal force ``N``, sliding distance ``d``, hardness ``H``, sliding speed ``v``), spread over the ridge
+crests in contact.  ``N·v`` is D's sliding power (eq. 6.22) without the friction coefficient, which D's power
+levels hold constant for a texture (so does the law: a model choice).  Both knobs are calibrated to what D says
+about wear, never to an accuracy: ``k`` so that D's three training movements (all of power level 6) wear two
+skins to first visible wear over the 1755 training trials (D "replaced two times"); ``β`` so that after a
+pilot's worth of use (60 trials of one movement: 10 textures × 6 repetitions) the movements D kept (power level
+≤ 7) show no visible wear while those of level 8 do (D Fig. 6-7 excluded levels above 7 "due to the high wear
+rate").  :func:`bench.experiments.trials.wear_calibration` re-derives both.
+
+Wear is *visible* once the flat worn on a rounded ridge crest (radius ``r`` = half the ridge width) is
+``visible_flat_width_m`` wide: a crest worn down by ``δ`` shows a flat ``2·√(2rδ − δ²)`` wide, so the first
+visible wear is ``δ = r − √(r² − (w/2)²)``, 3.2 % of a new ridge's height (:attr:`Skin.first_visible_wear_fraction`).
+
+Worn ridges catch texture features less (the ridge term of the sliding model scales with ``ridge_height /
+ridge_height_new``) and less regularly: each trial's ridge gain varies by a relative spread that grows with the
+worn fraction (``irregularity``, a model choice standing for the uneven wear D saw as degraded repeatability).
+A skin persists across the trials of a session until it is replaced; :meth:`Skin.history` lists its ridge
+height after each trial.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -40,11 +51,16 @@ class Skin:
     ridge_height_new_m: float = 0.2e-3
     ridge_height_m: float = 0.2e-3
     ridge_contact_width_m: float = 0.1e-3  # crest width that touches a surface (model choice)
-    wear_coefficient: float = 2.5e-5  # Archard k (1), calibrated: a skin lasts ~600 trials of 1 N × 5 cm at 2.5 cm/s, as D replaced
-    # the skin twice over 117 textures × 15 trials
+    ridge_crest_radius_m: float = 0.2e-3  # a rounded crest, half the ridge width (model choice)
+    visible_flat_width_m: float = 0.1e-3  # a worn flat this wide is visible (model choice: the naked eye
+    # resolves ~1 arcmin, 0.07–0.1 mm at 25–35 cm)
+    wear_coefficient: float = 7.7e-6  # Archard k (1) at P_ref, calibrated: D's three training movements wear two
+    # skins to first visible wear over 117 textures × 3 movements × 5 trials (D "replaced two times")
+    wear_power_exponent: float = 3.4  # β (1), calibrated: after 60 trials of one movement (a pilot's worth)
+    # the movements of power level ≤ 7 show no visible wear and those of level 8 do (D Fig. 6-7)
+    reference_power_W: float = 0.02  # P_ref: N·v of D's main anti-diagonal, level 7 (model choice)
     hardness_Pa: float = 1.5e6  # silicone skin, ~45 Shore A (model choice)
     irregularity: float = 0.5  # relative spread of the ridge gain of a fully worn skin (model choice)
-    heating_velocity_m_per_s: float = 0.025  # v_h: abrasion doubles at this sliding speed (model choice)
     serial: int = 1
     trials: int = 0
     sliding_distance_m: float = 0.0
@@ -69,32 +85,44 @@ class Skin:
         spread = self.irregularity * self.worn_fraction
         return max(0.0, self.ridge_factor * (1.0 + spread * rng.standard_normal()))
 
-    def wear(self, normal_N: float, distance_m: float, contact_area_m2: float, mu: float = 0.0,
-             velocity_m_per_s: float = 0.0) -> float:
-        """Wear the ridges after sliding ``distance_m`` at ``normal_N`` and ``velocity_m_per_s`` over
-        ``contact_area_m2``; returns the height lost (m).  The worn volume k·(1 + v/v_h)·N·d/H is spread over the
-        crest area in contact."""
-        if normal_N < 0 or distance_m < 0 or contact_area_m2 <= 0 or velocity_m_per_s < 0:
+    @property
+    def first_visible_wear_fraction(self) -> float:
+        """Fraction of the new ridge height worn off when the flat on the crest becomes visible (1)."""
+        r, half = self.ridge_crest_radius_m, self.visible_flat_width_m / 2
+        return (r - math.sqrt(r * r - half * half)) / self.ridge_height_new_m
+
+    def height_lost(self, normal_N: float, distance_m: float, contact_area_m2: float,
+                    velocity_m_per_s: float) -> float:
+        """Ridge height (m) a new-enough skin loses sliding ``distance_m`` at ``normal_N`` and ``velocity_m_per_s``
+        over ``contact_area_m2``: the volume k·N·d/H·(N·v/P_ref)^β spread over the crest area in contact."""
+        if not (normal_N >= 0 and distance_m >= 0 and contact_area_m2 > 0 and velocity_m_per_s >= 0):
             raise ValueError("wear needs normal_N, distance_m, velocity_m_per_s ≥ 0 and a positive contact area")
+        crest_area = contact_area_m2 * self.ridge_contact_width_m / self.ridge_pitch_m
+        power = (normal_N * velocity_m_per_s / self.reference_power_W) ** self.wear_power_exponent
+        return self.wear_coefficient * power * normal_N * distance_m / self.hardness_Pa / crest_area
+
+    def wear(self, normal_N: float, distance_m: float, contact_area_m2: float, mu: float = 0.0,
+             velocity_m_per_s: float | None = None) -> float:
+        """Wear the ridges after sliding ``distance_m`` at ``normal_N`` and ``velocity_m_per_s`` over
+        ``contact_area_m2`` (``mu`` only counts the frictional work); returns the height lost (m)."""
+        if velocity_m_per_s is None:
+            raise ValueError("wear needs the sliding speed (velocity_m_per_s)")
+        lost = self.height_lost(normal_N, distance_m, contact_area_m2, velocity_m_per_s)
         self.trials += 1
         self.sliding_distance_m += distance_m
         self.frictional_work_J += mu * normal_N * distance_m
-        lost = 0.0
         if self.fingerprints and self.ridge_height_m > 0:
-            crest_area = contact_area_m2 * self.ridge_contact_width_m / self.ridge_pitch_m
-            k = self.wear_coefficient * (1.0 + velocity_m_per_s / self.heating_velocity_m_per_s)
-            lost = min(self.ridge_height_m, k * normal_N * distance_m / self.hardness_Pa / crest_area)
+            lost = min(self.ridge_height_m, lost)
             self.ridge_height_m -= lost
+        else:
+            lost = 0.0
         self._history.append((self.serial, self.trials, self.ridge_height_m))
         return lost
 
     def replace(self) -> "Skin":
         """A fresh skin of the same kind (ridges new); the history carries on under the next serial."""
-        fresh = Skin(self.fingerprints, self.ridge_pitch_m, self.ridge_width_m, self.ridge_height_new_m,
-                     self.ridge_height_new_m, self.ridge_contact_width_m, self.wear_coefficient, self.hardness_Pa,
-                     self.irregularity, self.heating_velocity_m_per_s, serial=self.serial + 1)
-        fresh._history = list(self._history)
-        return fresh
+        return replace(self, ridge_height_m=self.ridge_height_new_m, serial=self.serial + 1, trials=0,
+                       sliding_distance_m=0.0, frictional_work_J=0.0, _history=list(self._history))
 
     def history(self) -> list[tuple[int, int, float]]:
         """(skin serial, trials on that skin, ridge height in m) after each trial."""
@@ -115,5 +143,14 @@ class Skin:
         if not (0 <= self.ridge_height_m <= self.ridge_height_new_m):
             raise ValueError(f"skin.ridge_height_m = {self.ridge_height_m!r}: must be within 0 and the new height "
                              f"{self.ridge_height_new_m}")
-        if not (math.isfinite(self.wear_coefficient) and self.wear_coefficient >= 0):
-            raise ValueError(f"skin.wear_coefficient = {self.wear_coefficient!r}: must be ≥ 0")
+        for name in ("wear_coefficient", "wear_power_exponent"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"skin.{name} = {v!r}: must be ≥ 0")
+        for name in ("reference_power_W", "ridge_crest_radius_m", "visible_flat_width_m"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"skin.{name} = {v!r}: must be a positive number")
+        if self.visible_flat_width_m >= 2 * self.ridge_crest_radius_m:
+            raise ValueError(f"skin.visible_flat_width_m = {self.visible_flat_width_m!r}: must be narrower than the "
+                             f"crest ({2 * self.ridge_crest_radius_m} m)")

@@ -8,7 +8,7 @@ classifier or the strategies re-runs no sliding:
    property and movement with equal priors; the movement of least U per property, high-power movements
    excluded (their wear is shown, from the skin-wear law);
 2. **training** — every texture × the three chosen movements × repetitions, in one session on one skin that
-   wears and is replaced once wear is detectable (as D did);
+   wears and is replaced at the first visible wear (as D did);
 3. **validation** — a separate set of trials (other seeds, so other start positions), on the same skin as the
    session goes on, for pairs of similar textures: by default disjoint pairs drawn at random (from the seed)
    within the library's groups — textures of one kind, as D's pairs were; ``pair_choice = "most-confused"`` takes
@@ -34,7 +34,7 @@ from bench import tomlfile
 from bench.errors import BenchError
 from bench.experiments import exploration as ex
 from bench.experiments.trials import (
-    DETECTABLE_WEAR, TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
+    FIRST_VISIBLE_WEAR, TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
 )
 from bench.paths import FIXTURES, OUT, REPO
 from bench.rigs.texture_rig import movement_grid
@@ -71,7 +71,7 @@ class ExperimentSpec:
     training_trials: int = 5
     wear: bool = True
     replace_skin: bool = True
-    replace_at: float = DETECTABLE_WEAR  # fraction of the ridge height lost at which the skin is replaced
+    replace_at: float = FIRST_VISIBLE_WEAR  # fraction of the ridge height lost at which the skin is replaced
     pairs: list[tuple[int, int]] | None = None  # None = chosen from the training model
     n_pairs: int = 8
     pair_choice: str = "random-within-group"  # or "most-confused"
@@ -337,7 +337,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         u_full = np.full((len(grid), 3), np.nan)
         u_full[model.movements] = u
         wall["pilot"] = time.perf_counter() - t0
-        # 2. training: one session on one skin, in texture order, replaced when wear is detectable
+        # 2. training: one session on one skin, in texture order, replaced at the first visible wear
         t0 = time.perf_counter()
         textures = spec.training_textures or sorted(n for n in lib if n <= 117)
         tasks = []

@@ -2,9 +2,10 @@
 
 A :class:`TrialTask` says everything a trial depends on — texture, movement, repetition, the skin as it is at
 that trial, fidelity, noise and a seed derived from the trial's identity — so trials run in any order on any
-worker and give identical results.  Skin wear is deterministic (Archard's law on the nominal movement), so the
-skin a trial meets is known before anything runs: :func:`schedule_skin` walks a session's trials in order and
-hands each its skin, replacing the skin when wear becomes detectable, as D did.
+worker and give identical results.  Skin wear is deterministic (the wear law of :mod:`emulator.skin` on the
+nominal movement), so the skin a trial meets is known before anything runs: :func:`schedule_skin` walks a
+session's trials in order and hands each its skin, replacing the skin at the first visible wear, as D did.
+:func:`wear_calibration` re-derives the wear law's two calibrated knobs from D's wear observations.
 
 :func:`run_trial_task` is the pure, module-level function the campaign engine maps; :func:`sweep` runs a grid of
 trials (the pilot's 36 movements × textures × repetitions) and returns a table of rows.
@@ -23,9 +24,18 @@ from emulator.params import SensorParams
 from emulator.sensor import NoiseSources
 from emulator.skin import Skin, contact_patch_area_m2
 
-#: relative ridge height lost at which wear counts as detectable and the skin is replaced (model choice: D
-#: replaced the skin "when wear was visible")
-DETECTABLE_WEAR = 0.5
+#: fraction of the ridge height lost when the flat worn on a crest becomes visible (derived from the ridge geometry,
+#: :attr:`emulator.skin.Skin.first_visible_wear_fraction`, 0.032): D replaced the skin "if there were any visible
+#: signs of wear"
+FIRST_VISIBLE_WEAR = Skin().first_visible_wear_fraction
+#: D's pilot: 10 textures × 6 repetitions of every movement, so one movement's share of it is 60 trials
+PILOT_WORTH_TRIALS = 10 * 6
+#: D's training: the three movements D kept (grid ids: 1.26 N @ 1 cm/s, 0.2 N @ 6.31 cm/s, 0.5 N @ 2.5 cm/s, all
+#: of power level 6) × 5 trials on each of 117 textures, texture after texture
+D_TRAINING_MOVEMENTS = (24, 4, 14)
+D_TRAINING_TRIALS = 5
+#: the rig's sliding distance per trial (m)
+TRIAL_DISTANCE_M = 0.05
 
 
 @dataclass(frozen=True)
@@ -83,11 +93,11 @@ def run_trial_task(task: TrialTask) -> dict:
     return row
 
 
-def schedule_skin(tasks: list[TrialTask], wear: bool = True, replace_at: float | None = DETECTABLE_WEAR,
+def schedule_skin(tasks: list[TrialTask], wear: bool = True, replace_at: float | None = FIRST_VISIBLE_WEAR,
                   params: SensorParams | None = None) -> tuple[list[TrialTask], list[dict]]:
-    """Give each task (in the given order: the session's order) the skin it meets: Archard wear after each trial
-    and, with ``replace_at``, a fresh skin once the ridges lost that fraction of their height. Returns the tasks
-    and the skin's history (one row per trial: serial, ridge height before)."""
+    """Give each task (in the given order: the session's order) the skin it meets: wear after each trial and,
+    with ``replace_at``, a fresh skin once the ridges lost that fraction of their height (default: the first
+    visible wear). Returns the tasks and the skin's history (one row per trial: serial, ridge height before)."""
     p = params or SensorParams()
     skin = Skin(fingerprints=tasks[0].fingerprints if tasks else True)
     out, history = [], []
@@ -99,7 +109,7 @@ def schedule_skin(tasks: list[TrialTask], wear: bool = True, replace_at: float |
         history.append({"trial_index": len(out) - 1, "skin": skin.serial, "ridge_height_m": skin.ridge_height_m})
         if wear:
             area = contact_patch_area_m2(t.force_N, p.contact_radius_at_1N_m)
-            skin.wear(t.force_N, 0.05, area, velocity_m_per_s=t.velocity_m_per_s)
+            skin.wear(t.force_N, TRIAL_DISTANCE_M, area, velocity_m_per_s=t.velocity_m_per_s)
     return out, history
 
 
@@ -119,22 +129,89 @@ def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int =
     return out
 
 
-def wear_per_movement(movements: list[Movement] | None = None, trials: int = 100, distance_m: float = 0.05,
-                      params: SensorParams | None = None) -> list[dict]:
-    """Ridge height lost (m) after ``trials`` trials of each movement on a fresh skin (Archard's law)."""
+def wear_per_movement(movements: list[Movement] | None = None, trials: int = PILOT_WORTH_TRIALS,
+                      distance_m: float = TRIAL_DISTANCE_M, params: SensorParams | None = None) -> list[dict]:
+    """Each movement's wear on a fresh skin: ridge height lost (m) and worn fraction after ``trials`` trials (default
+    a pilot's worth), whether that is visible, and the trials it takes to reach the first visible wear."""
     p = params or SensorParams()
     rows = []
     for m_id, m in enumerate(movements if movements is not None else movement_grid()):
         skin = Skin()
         area = contact_patch_area_m2(m.force_N, p.contact_radius_at_1N_m)
+        per_trial = skin.height_lost(m.force_N, distance_m, area, m.velocity_m_per_s)
         for _ in range(trials):
-            # the trial lasts distance / v at the rig; a high-speed trial is shorter, so wear per second grows
             skin.wear(m.force_N, distance_m, area, velocity_m_per_s=m.velocity_m_per_s)
+        lost = skin.ridge_height_new_m - skin.ridge_height_m
+        visible_m = skin.first_visible_wear_fraction * skin.ridge_height_new_m
         rows.append({"movement_id": m_id, "force_N": m.force_N, "velocity_m_per_s": m.velocity_m_per_s,
-                     "ridge_lost_m": skin.ridge_height_new_m - skin.ridge_height_m,
-                     "lost_per_second_m": (skin.ridge_height_new_m - skin.ridge_height_m)
-                     / (trials * distance_m / m.velocity_m_per_s)})
+                     "trials": trials, "ridge_lost_m": lost, "worn_fraction": lost / skin.ridge_height_new_m,
+                     "visible_wear": bool(skin.worn_fraction >= skin.first_visible_wear_fraction),
+                     "trials_to_visible_wear": int(np.ceil(visible_m / per_trial)) if per_trial > 0 else -1,
+                     # the trial lasts distance / v at the rig: a fast trial is shorter
+                     "lost_per_second_m": per_trial * m.velocity_m_per_s / distance_m})
     return rows
+
+
+def d_training_tasks(textures=None) -> list[TrialTask]:
+    """D's training session in the shipped experiment's order: texture after texture (default the library's 117),
+    D's three movements × 5 trials each (seeds 0: only the skin schedule is of interest)."""
+    from bench.textures.library import load_library
+
+    grid = movement_grid()
+    textures = textures if textures is not None else sorted(n for n in load_library() if n <= 117)
+    return [TrialTask(int(tex), grid[m].force_N, grid[m].velocity_m_per_s, k, 0, m)
+            for tex in textures for m in D_TRAINING_MOVEMENTS for k in range(D_TRAINING_TRIALS)]
+
+
+def wear_calibration(params: SensorParams | None = None) -> dict:
+    """What the wear law gives for D's two wear observations, and the (k, β) that meet them at their centres.
+
+    (a) training: skins used over D's training session replaced at the first visible wear (D: 3 skins, "replaced
+    two times"); centre: the session wears 2.5 skins' worth of visible wear.  (b) pilot: worn fraction / first
+    visible wear after a pilot's worth of each movement on a fresh skin, worst of the kept levels (≤ 7) and mildest
+    of level 8 (D: level ≤ 7 kept, level 8 excluded for wear); centre: the visible wear at the geometric mean of the
+    two.  ``solved`` holds (k, β) meeting both centres; the shipped Skin defaults are those, rounded."""
+    from scipy.optimize import brentq
+
+    from bench.experiments.exploration import movement_grid as levels
+
+    p = params or SensorParams()
+    skin, grid, lv = Skin(), movement_grid(), levels()["power_level"]
+    tasks, history = schedule_skin(d_training_tasks(), params=p)
+    pilot = wear_per_movement(params=p)
+    seen = np.array([r["worn_fraction"] for r in pilot]) / skin.first_visible_wear_fraction
+
+    def per_trial(m, k, beta):  # height lost per trial of movement m (m) with knobs k, β
+        area = contact_patch_area_m2(m.force_N, p.contact_radius_at_1N_m)
+        return replace(skin, wear_coefficient=k, wear_power_exponent=beta).height_lost(
+            m.force_N, TRIAL_DISTANCE_M, area, m.velocity_m_per_s)
+
+    visible_m = skin.first_visible_wear_fraction * skin.ridge_height_new_m
+    worst7 = grid[int(np.argmax(np.where(lv <= 7, seen, -np.inf)))]
+    mildest8 = grid[int(np.argmin(np.where(lv == 8, seen, np.inf)))]
+
+    def k_for(beta):  # (a) at its centre: the session wears 2.5 × the visible wear
+        unit = sum(per_trial(grid[t.movement_id], 1.0, beta) for t in tasks)
+        return 2.5 * visible_m / unit
+
+    def gap(beta):  # (b) at its centre, in log units
+        k = k_for(beta)
+        return np.log(PILOT_WORTH_TRIALS * np.sqrt(per_trial(worst7, k, beta) * per_trial(mildest8, k, beta))
+                      / visible_m)
+
+    def margin(beta, which):  # (b)'s two inequalities at β, k from (a)'s centre: > 0 when met
+        k = k_for(beta)
+        m = worst7 if which == "kept" else mildest8
+        return np.log(visible_m / (PILOT_WORTH_TRIALS * per_trial(m, k, beta))) * (1 if which == "kept" else -1)
+
+    beta = brentq(gap, 1.5, 8.0)
+    return {"first_visible_wear_fraction": skin.first_visible_wear_fraction,
+            "training_trials": len(tasks), "training_skins": history[-1]["skin"],
+            "pilot_worth_trials": PILOT_WORTH_TRIALS,
+            "pilot_kept_worst": float(np.max(seen[lv <= 7])), "pilot_level8_mildest": float(np.min(seen[lv == 8])),
+            "pilot_mildest_by_level": {int(L): float(np.min(seen[lv == L])) for L in np.unique(lv)},
+            "solved": {"wear_coefficient": k_for(beta), "wear_power_exponent": beta},
+            "beta_range": (brentq(margin, 0.5, beta, args=("level8",)), brentq(margin, beta, 8.0, args=("kept",)))}
 
 
 def sweep(tasks: list[TrialTask], spec=None, client=None, progress: bool = True) -> list[dict]:

@@ -59,7 +59,8 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     names += ["trials.csv", "trials.json"]
     u = [{"movement_id": m, "movement": movement_label(m), "U_traction": result.pilot_uncertainty[m, 0],
           "U_roughness": result.pilot_uncertainty[m, 1], "U_fineness": result.pilot_uncertainty[m, 2],
-          "ridge_lost_um_per_100_trials": result.wear[m]["ridge_lost_m"] * 1e6}
+          "ridge_lost_um_per_pilot_worth": result.wear[m]["ridge_lost_m"] * 1e6,
+          "trials_to_visible_wear": result.wear[m]["trials_to_visible_wear"]}
          for m in range(result.pilot_uncertainty.shape[0])]
     write_rows_csv(out / "pilot_uncertainty.csv", u)
     names.append("pilot_uncertainty.csv")

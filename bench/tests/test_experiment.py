@@ -139,16 +139,45 @@ def test_the_double_noise_ablation_doubles_every_noise_source():
 
 
 def test_replace_at_sets_how_worn_a_skin_gets_before_it_is_replaced():
-    """The skin policy of the experiment file reaches the session: a smaller fraction, more and fresher skins."""
-    from bench.experiments.trials import TrialTask, schedule_skin
+    """The skin policy of the experiment file reaches the session: by default a fresh skin at the first visible
+    wear; a larger fraction, fewer and more worn skins."""
+    from bench.experiments.trials import FIRST_VISIBLE_WEAR, TrialTask, schedule_skin
 
-    tasks = [TrialTask(2, 2.0, 0.01, k, k) for k in range(600)]
+    tasks = [TrialTask(2, 2.0, 0.01, k, k) for k in range(600)]  # 2 N @ 1 cm/s: the hardest kept movement
     spec = E.parse_experiment({"experiment": {"name": "x"}, "training": {"replace_at": 0.1}}, "x.toml")
-    assert spec.replace_at == 0.1
-    for fraction in (0.5, spec.replace_at):
+    assert spec.replace_at == 0.1 and E.ExperimentSpec().replace_at == FIRST_VISIBLE_WEAR
+    for fraction in (FIRST_VISIBLE_WEAR, spec.replace_at):
         scheduled, _ = schedule_skin(tasks, replace_at=fraction)
         lowest = min(t.ridge_height_m for t in scheduled)
         assert lowest >= (1 - fraction) * scheduled[0].ridge_height_m * 0.99
-        assert lowest < (1 - fraction) * scheduled[0].ridge_height_m * 1.05  # it does get that worn
-    assert len({t.skin_serial for t in schedule_skin(tasks, replace_at=0.1)[0]}) > \
-        len({t.skin_serial for t in schedule_skin(tasks, replace_at=0.5)[0]}) > 1
+        assert lowest < (1 - fraction) * scheduled[0].ridge_height_m * 1.01  # it does get that worn
+    assert len({t.skin_serial for t in schedule_skin(tasks)[0]}) > \
+        len({t.skin_serial for t in schedule_skin(tasks, replace_at=0.1)[0]}) > 1
+
+
+def test_the_wear_law_meets_d_wear_observations_with_its_calibrated_knobs():
+    """Calibrated (k: training, β: pilot): D's training (117 × 3 × 5 trials of power level 6) uses 3 skins replaced
+    at the first visible wear; after a pilot's worth (60 trials) no kept movement (level ≤ 7) shows visible wear and
+    every level-8 one does; the shipped knobs are the centred solution, rounded, and β lies inside its allowed range.
+    Without the power factor (β = 0) the pilot condition fails."""
+    from dataclasses import replace
+
+    from bench.experiments import trials as T
+    from emulator.skin import Skin
+
+    cal = T.wear_calibration()
+    assert cal["training_trials"] == 1755 and cal["training_skins"] == 3
+    assert cal["pilot_kept_worst"] < 1.0 <= cal["pilot_level8_mildest"]
+    assert cal["solved"]["wear_coefficient"] == pytest.approx(Skin().wear_coefficient, rel=0.02)
+    assert cal["solved"]["wear_power_exponent"] == pytest.approx(Skin().wear_power_exponent, rel=0.02)
+    low, high = cal["beta_range"]
+    assert low < Skin().wear_power_exponent < high
+    flat = [r["worn_fraction"] for r in T.wear_per_movement([T.movement_grid()[i] for i in (11, 35)])]
+    assert flat[0] >= T.FIRST_VISIBLE_WEAR and flat[1] == 1.0  # 0.32 N @ 10 cm/s (level 8) and 2 N @ 10 cm/s
+    # β = 0 with k re-set by the training count: the mildest level-8 movement stays far from visible wear
+    skin = Skin(wear_power_exponent=0.0)
+    area = lambda N: T.contact_patch_area_m2(N, 2.5e-3)  # noqa: E731
+    unit = sum(skin.height_lost(t.force_N, 0.05, area(t.force_N), t.velocity_m_per_s) for t in T.d_training_tasks())
+    k = 2.5 * T.FIRST_VISIBLE_WEAR * skin.ridge_height_new_m / unit * skin.wear_coefficient
+    flat_law = replace(skin, wear_coefficient=k)
+    assert 60 * flat_law.height_lost(0.317, 0.05, area(0.317), 0.1) < 0.2 * T.FIRST_VISIBLE_WEAR * 2e-4

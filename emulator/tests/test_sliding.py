@@ -204,12 +204,40 @@ def test_contact_law_softer_texture_needs_more_depth_for_the_same_force():
 
 
 @pytest.mark.unit
-def test_wear_grows_with_sliding_speed_at_the_same_force_and_distance():
-    """The wear law's speed factor 1 + v/v_h: a fast slide over the same 5 cm wears more than a slow one."""
+def test_wear_grows_as_a_power_of_the_sliding_power_at_the_same_force_and_distance():
+    """The wear law's power factor (N·v/P_ref)^β: ten times the speed over the same 5 cm wears 10^β times more
+    (β calibrated to D's pilot, steep: without it speed would not matter at all)."""
     area = np.pi * (2.5e-3) ** 2
     slow, fast = Skin(), Skin()
-    slow.wear(1.0, 0.05, area, velocity_m_per_s=0.01)
-    fast.wear(1.0, 0.05, area, velocity_m_per_s=0.1)
-    lost_slow = slow.ridge_height_new_m - slow.ridge_height_m
-    lost_fast = fast.ridge_height_new_m - fast.ridge_height_m
-    assert lost_fast / lost_slow == pytest.approx((1 + 0.1 / 0.025) / (1 + 0.01 / 0.025), rel=1e-9)
+    lost_slow = slow.wear(1.0, 0.05, area, velocity_m_per_s=0.01)
+    lost_fast = fast.wear(1.0, 0.05, area, velocity_m_per_s=0.1)
+    assert lost_fast / lost_slow == pytest.approx(10 ** 3.4, rel=1e-9)
+    # twice the force on the same patch: Archard's N times the power factor's N^β
+    double = Skin()
+    assert double.wear(2.0, 0.05, area, velocity_m_per_s=0.01) / lost_slow == pytest.approx(2 ** 4.4, rel=1e-9)
+
+
+@pytest.mark.unit
+def test_first_visible_wear_is_a_flat_of_0_1_mm_on_the_rounded_crest():
+    """A crest of radius r worn down by δ shows a flat 2·√(2rδ − δ²) wide; visible at 0.1 mm: δ = 3.2 % of 0.2 mm."""
+    s = Skin()
+    delta, r = s.first_visible_wear_fraction * s.ridge_height_new_m, s.ridge_crest_radius_m
+    assert 2 * np.sqrt(2 * r * delta - delta ** 2) == pytest.approx(0.1e-3, rel=1e-9)
+    assert s.first_visible_wear_fraction == pytest.approx(0.0318, abs=1e-4)
+
+
+@pytest.mark.unit
+def test_wear_needs_a_sliding_speed_and_a_fresh_skin_restores_the_ridges():
+    area = np.pi * (2.5e-3) ** 2
+    with pytest.raises(ValueError, match="sliding speed"):
+        Skin().wear(1.0, 0.05, area)
+    assert Skin().wear(1.0, 0.05, area, velocity_m_per_s=0.0) == 0.0  # pressing without sliding wears nothing
+    worn = Skin(wear_power_exponent=2.0)
+    worn.wear(2.0, 0.05, area, velocity_m_per_s=0.1)
+    fresh = worn.replace()
+    assert worn.ridge_factor < 1 and fresh.ridge_factor == 1 and fresh.serial == 2 and fresh.trials == 0
+    assert fresh.wear_power_exponent == 2.0 and fresh.history() == worn.history()
+    for bad in (dict(wear_power_exponent=float("nan")), dict(reference_power_W=0.0),
+                dict(visible_flat_width_m=0.5e-3)):
+        with pytest.raises(ValueError):
+            Skin(**bad)

@@ -118,29 +118,66 @@ def rig_claims(b: Bench) -> list[Claim]:
                       f"(0.2–2 N) × 2 textures × 6 seeds; single trials reach {worst_trial:.1f} % at 0.2 N, where "
                       f"the target is 17 PDC counts against ~0.5 LSB of PDC noise and 20 ms of latency at 0.5 mm/s; the "
                       f"stepper stops at the first frame whose PDC change reaches the target (D ch. 6)")]
-    # wear: ridge height falls faster for high force × high speed than for low (same number of trials)
+    # wear: ridge height falls faster for high force × high speed than for low (one trial each on a fresh skin)
     lost = {}
     for label, mv in (("low", Movement(0.2, 0.01)), ("high", Movement(2.0, 0.1))):
         skin = Skin()
         area = contact_patch_area_m2(mv.force_N, b.params.contact_radius_at_1N_m)
-        for _ in range(50):
-            skin.wear(mv.force_N, 0.05, area, 0.6, mv.velocity_m_per_s)
-        lost[label] = skin.ridge_height_new_m - skin.ridge_height_m
-    out.append(Claim("ridge wear, high vs low power movement (50 trials each)", "high wears faster",
-                     lost["high"] / max(lost["low"], 1e-30), 1.0, np.inf, "ratio", "D ch. 6",
-                     {"lost_m": lost}, kind="consistency",
-                     note="the wear law: worn volume ∝ (1 + v/v_h)·N·d over the rig's fixed 5 cm"))
+        lost[label] = skin.wear(mv.force_N, 0.05, area, 0.6, mv.velocity_m_per_s)
+    out.append(Claim("ridge wear per trial, high vs low power movement (2 N @ 10 cm/s vs 0.2 N @ 1 cm/s)",
+                     "high wears > 1000× faster", lost["high"] / max(lost["low"], 1e-30), 1000.0, np.inf, "ratio",
+                     "D ch. 6", {"lost_m": lost}, kind="consistency",
+                     note="the wear law: worn volume ∝ N·d·(N·v)^β, crest area ∝ N^(2/3); 100 times the sliding "
+                          "power wears ~10^7 times faster at β = 3.4, and 2.2× without the power factor"))
+    out += _wear_calibration_claims(b)
     # after wear, roughness for a fixed texture and movement drops; a fresh skin restores it
-    mv, sand = Movement(0.5, 0.025), texture(901)
-    fresh = [roughness(TextureRig(skin=Skin(), wear=False).run_trial(sand, mv, seed=100 + k).recording)
-             for k in range(3)]
-    worn_skin = Skin(ridge_height_m=0.3 * Skin().ridge_height_new_m)
+    mv, sand, excluded = Movement(0.5, 0.025), texture(901), Movement(1.26, 0.0631)
+    worn_skin = Skin()
+    area = contact_patch_area_m2(excluded.force_N, b.params.contact_radius_at_1N_m)
+    for _ in range(20):  # the skin_wear scene: D's named high-wear movement, 20 slides
+        worn_skin.wear(excluded.force_N, 0.05, area, float(sand.mu_kinetic), excluded.velocity_m_per_s)
     worn = [roughness(TextureRig(skin=worn_skin, wear=False).run_trial(sand, mv, seed=100 + k).recording)
             for k in range(3)]
-    out.append(Claim("roughness after wear (30 % ridge height left) vs fresh skin", "drops",
+    fresh = [roughness(TextureRig(skin=worn_skin.replace(), wear=False).run_trial(sand, mv, seed=100 + k).recording)
+             for k in range(3)]
+    out.append(Claim("roughness after 20 slides of 1.26 N @ 6.31 cm/s (wear law) vs a fresh skin", "drops",
                      float(np.mean(fresh) - np.mean(worn)), 0.0, np.inf, "log units", "D ch. 6",
-                     {"fresh": fresh, "worn": worn}, kind="prediction"))
+                     {"fresh": fresh, "worn": worn, "ridge_left": worn_skin.ridge_factor}, kind="prediction",
+                     note="D names 1.26 N @ 6.31 cm/s among the movements excluded for wear; the fresh skin is the "
+                          "worn one replaced"))
     return out
+
+
+def _wear_calibration_claims(b: Bench) -> list[Claim]:
+    """D's two wear observations, which calibrate the wear law's k and β (bench.experiments.trials)."""
+    from bench.experiments.trials import PILOT_WORTH_TRIALS, wear_calibration
+
+    cal = wear_calibration(b.params)
+    knobs = {"first_visible_wear_fraction": cal["first_visible_wear_fraction"], "solved": cal["solved"],
+             "beta_range": cal["beta_range"]}
+    return [
+        Claim("skins used over D's training session (117 textures × 3 movements × 5 trials), replaced at the first "
+              "visible wear", "3 (replaced two times)", cal["training_skins"], 3, 3, "skins", "D ch. 6", knobs,
+              kind="calibrated",
+              calibration="wear_coefficient k: the session wears 2.5 skins' worth of visible wear (the middle of "
+                          "two replacements)",
+              note="D's three movements (all power level 6); visible wear = a 0.1 mm flat on the rounded 0.4 mm "
+                   "crest, 3.2 % of the ridge height (a model choice for what the eye sees)"),
+        Claim(f"a pilot's worth ({PILOT_WORTH_TRIALS} trials of one movement): worn fraction / visible wear, worst "
+              f"kept movement (power level ≤ 7)", "< 1 (no visible wear)", cal["pilot_kept_worst"], 0.0, 1.0,
+              "ratio", "D ch. 6 (Fig. 6-7)", cal["pilot_mildest_by_level"], kind="calibrated",
+              calibration="wear_power_exponent β: visible wear at the geometric middle of the worst level-7 and the "
+                          "mildest level-8 movement after a pilot's worth",
+              note="a pilot's worth: D's 10 pilot textures × 6 repetitions of each movement; the worst kept one is "
+                   "2 N @ 1 cm/s"),
+        Claim(f"a pilot's worth ({PILOT_WORTH_TRIALS} trials of one movement): worn fraction / visible wear, "
+              f"mildest excluded movement (power level 8)", "≥ 1 (visible wear)", cal["pilot_level8_mildest"], 1.0,
+              np.inf, "ratio", "D ch. 6 (Fig. 6-7)", cal["pilot_mildest_by_level"], kind="calibrated",
+              calibration="wear_power_exponent β (as above); without the power factor (β = 0, k set by the training "
+                          "count) the mildest level-8 movement reaches 0.07 of visible wear",
+              note="D excluded the lower-right half plane (levels above 7) 'due to the high wear rate'; the "
+                   "mildest level-8 movement is 0.32 N @ 10 cm/s"),
+    ]
 
 
 def _trials(b: Bench, textures, movements, trials: int, stage: str, fingerprints=True, ridge_height_m=None):
