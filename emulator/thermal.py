@@ -389,6 +389,21 @@ class ThermalModel:
             return 0.0
         return self.heater_W
 
+    def inputs_at(self, times: np.ndarray) -> tuple[list[float], list[float]]:
+        """:meth:`heater_at` (W) and :meth:`ambient_at` (°C) at each instant (s), as lists of floats."""
+        e = self.events
+        heater = np.full(times.size, self.heater_W)
+        if self.faults.get("heater_failed"):
+            heater[:] = 0.0
+        if e.heater_failed_s is not None:
+            heater[times >= e.heater_failed_s] = 0.0
+        if e.power_on_s is not None:
+            heater[times < e.power_on_s] = 0.0
+        ambient = np.full(times.size, self.p.ambient_temperature_C)
+        for when, value in e.ambient_steps:
+            ambient[times >= when] = value
+        return heater.tolist(), ambient.tolist()
+
     def _event_times(self, t0: float, t1: float) -> list[float]:
         """Instants in [t0, t1] where an input may change (plus t1), to test whether a chunk is uniform."""
         e = self.events
@@ -517,33 +532,49 @@ class ThermalModel:
         """Advance step by step through step ``k_end`` and not beyond (a live contact: its load is read only at
         the steps' starts, all before ``k_end``·dt).  Independent of how time is cut: the self-heating is updated
         at chunk boundaries (absolute time) and a chunk that starts with the previous step's contact runs in
-        closed form from its start for as long as its inputs stay those at its start, stepwise after."""
+        closed form from its start for as long as its inputs stay those at its start, stepwise after.  Steps are
+        taken in runs of equal inputs within a chunk: a run in closed form is one slice of the chunk's states, a
+        run stepwise repeats one step's (Φ, Γu)."""
         k0 = self.k
         times = (k0 + np.arange(k_end - k0)) * self.dt
         touches = self.touches(times)
+        t_list = times.tolist()
+        inputs = list(zip(*self.inputs_at(times), touches))
         xs = np.empty((times.size, self.net.n))
         x = self.x
         stepping = None  # (inputs, Φ, Γu) of the last step taken stepwise
-        for j, t in enumerate(times.tolist()):
-            k, touch = k0 + j, touches[j]
+        j = 0
+        while j < times.size:
+            k, here = k0 + j, inputs[j]
+            touch = here[2]
             contact, area = (None, None) if touch is None else (self.events.contacts[touch[0]], touch[1])
-            inputs = (self.heater_at(t), self.ambient_at(t), touch)
             if k % CHUNK_STEPS == 0:
                 self._p_self = self._self_heating_W(float(x[BEAD]))  # updated once per chunk, as for planned
                 self._held, stepping = None, None
                 if touch == self._last_touch:
                     powers, sums = self._response(contact, area, CHUNK_STEPS)
-                    self._held = (k, inputs, powers @ x + sums @ self._input(t, contact, self._p_self))
-            if self._held is not None and self._held[1] == inputs:
-                x = self._held[2][k - self._held[0]]
+                    self._held = (k, here, powers @ x + sums @ self._input(t_list[j], contact, self._p_self))
+            # the run: the steps from j on with these inputs, up to the chunk's end
+            end = min(times.size, j + CHUNK_STEPS - k % CHUNK_STEPS)
+            run_end = j + 1
+            while run_end < end and inputs[run_end] == here:
+                run_end += 1
+            if self._held is not None and self._held[1] == here:
+                first = k - self._held[0]
+                xs[j:run_end] = self._held[2][first:first + run_end - j]
+                x = xs[run_end - 1]
             else:
                 self._held = None
-                if stepping is None or stepping[0] != inputs:
+                if stepping is None or stepping[0] != here:
                     Phi, Gam = self._response(contact, area)
-                    stepping = (inputs, Phi, Gam @ self._input(t, contact, self._p_self))
-                x = stepping[1] @ self._arrive(x, contact) + stepping[2]
+                    stepping = (here, Phi, Gam @ self._input(t_list[j], contact, self._p_self))
+                _, Phi, gu = stepping
+                x = self._arrive(x, contact)  # (only the run's first step can meet a newly touched object)
+                for i in range(j, run_end):
+                    x = Phi @ x + gu
+                    xs[i] = x
             self._last_touch = touch
-            xs[j] = x
+            j = run_end
         self.x = x
         self.k = k_end
         self._emit(k0 + 1, xs)

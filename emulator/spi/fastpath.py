@@ -1,22 +1,28 @@
-"""Vectorized evaluation of plain sampling/read traffic for one sensor alone on its bus.
+"""Fast evaluation of plain sampling/read traffic for one sensor alone on its bus.
 
 The host sampler streams millions of 16-bit transfers that are only sampling commands and reads;
 this routine computes exactly what :class:`emulator.spi.model.SensorPort`'s transfer-level path
-would, with array operations, and leaves the port in the same state.  A differential test checks
+would, in two compiled passes (numba) around one call to the sensor, and leaves the port in the same state.  A differential test checks
 the two against each other; anything else (properties, resend, writes, faults) takes the
 transfer-level path.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
 from emulator.spi.model import (CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE, CONVERSION_TICKS,
-                                SAMPLE_DELAY_TICKS, _Prepared, ticks_array)
+                                SAMPLE_DELAY_TICKS, TIMER_HZ, _Prepared, ticks_array)
 
 _ERR = proto.ERROR_WORDS
+_ERR_BUSY, _ERR_NOT_RECOGNIZED = _ERR["insufficient_sampling_delay"], _ERR["channel_not_recognized"]
+_ERR_NOTHING, _ERR_DELAY = _ERR["nothing_to_resend"], _ERR["insufficient_delay"]
+_NO_TICK = -10**12  # the last sampling tick when there was none
 _SPECIAL = np.zeros(256, dtype=bool)
 _SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE]] = True
 
@@ -47,89 +53,113 @@ def is_plain(port, mosi: np.ndarray) -> bool:
     return not _SPECIAL[mosi >> 8].any()
 
 
+@njit(cache=True)
+def _commands(first, cmd_end, next_start, word_of_byte, recognized_of_byte, channel_of_byte, provided_lut,
+              last_sampling_tick, conversion_s, prepared, accepted, coupled):
+    """The word each command prepares (first bytes ``first``, chip select released at ``cmd_end`` s, the bus's
+    next activity after each at ``next_start`` s), in order: an error word, or a conversion (``accepted``; its
+    code comes from the sensor) that the bus disturbs if it clocks within ``conversion_s`` (``coupled``).
+    Returns (sampling commands met, the last one's tick, requests for channels not provided, the index of the
+    last conversion if nothing is known after it — it is then left to convert later — else -1)."""
+    sampling, unprovided, last = 0, 0, -1
+    for i in range(first.size):
+        b = first[i]
+        prepared[i] = word_of_byte[b]
+        if not recognized_of_byte[b]:
+            continue
+        tick = math.floor(cmd_end[i] * TIMER_HZ + 1e-3)  # ticks(): the sensor's 1 MHz timer
+        busy = tick - last_sampling_tick < CONVERSION_TICKS
+        sampling += 1
+        last_sampling_tick = tick
+        if busy:
+            prepared[i] = _ERR_BUSY
+        elif not provided_lut[channel_of_byte[b]]:
+            prepared[i] = _ERR_NOT_RECOGNIZED
+            unprovided += 1
+        else:
+            accepted[i] = True
+            coupled[i] = next_start[i] < cmd_end[i] + conversion_s
+            last = i
+    deferred = -1
+    if last >= 0 and not math.isfinite(next_start[last]):
+        accepted[last], coupled[last], deferred = False, False, last
+    return sampling, last_sampling_tick, unprovided, deferred
+
+
+@njit(cache=True)
+def _transfers(is_cmd, start, cmd_end, prepared, before_ready, before_word, before_consumed, out):
+    """MISO of each transfer (``out``) as the port walks through them: at chip-select fall the prepared word if
+    it is ready and not consumed, ``E.`` if not ready, ``E_`` if consumed or none; a read that receives the word
+    consumes it; a command prepares its word (``prepared``, in order).  ``before_ready`` < 0: nothing prepared
+    before the batch.  Returns (whether the last prepared word was consumed, the index of the last read that
+    consumed one, or -1)."""
+    have = before_ready >= 0
+    ready, word, consumed = before_ready, before_word, before_consumed
+    c, last_consuming = 0, -1
+    for i in range(start.size):
+        if not have or consumed:
+            out[i] = _ERR_NOTHING
+        elif math.floor(start[i] * TIMER_HZ + 1e-3) - ready < SAMPLE_DELAY_TICKS:
+            out[i] = _ERR_DELAY
+        else:
+            out[i] = word
+            if not is_cmd[i]:
+                consumed = True
+                last_consuming = i
+        if is_cmd[i]:
+            have, ready, word, consumed = True, math.floor(cmd_end[c] * TIMER_HZ + 1e-3), prepared[c], False
+            c += 1
+    return consumed, last_consuming
+
+
 def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray,
                    next_activity: np.ndarray | None = None) -> np.ndarray:
     """MISO words for plain 16-bit transfers starting at ``start`` and releasing chip select at ``end`` (s).
 
     ``next_activity`` (s) is when the bus clocks next after each transfer (another sensor's transfer may come
-    first); by default the port's own next transfer, and unknown (deferred) after the last one.
+    first); by default the port's own next transfer, and unknown (deferred) after the last one.  Two compiled
+    passes: the commands (what each prepares; the sensor converts the accepted ones in one call), then the
+    transfers in order.
     """
-    n = start.size
     port.resolve_conversion(float(start[0]))
     b0 = (mosi >> 8).astype(np.int64)
     is_cmd = b0 != 0
     cmd = np.flatnonzero(is_cmd)
-    reads = np.flatnonzero(~is_cmd)
     first = b0[cmd]
-    cmd_end = end[cmd]
-    cmd_tick = ticks_array(cmd_end)
+    cmd_end = np.ascontiguousarray(end[cmd], dtype=float)
+    nxt = np.append(start[1:], np.inf) if next_activity is None else np.asarray(next_activity, float)
     word_of_byte, recognized_of_byte, channel_of_byte = _TABLES[port.variant.name]
-    prepared = word_of_byte[first].copy()
-
-    # sampling commands for recognised channels: ADC busy (E-), not provided (EX), or converted
-    rs = np.flatnonzero(recognized_of_byte[first])
-    deferred = None
-    if rs.size:
-        rticks = cmd_tick[rs]
-        prev = np.concatenate([[port.last_sampling_tick if port.last_sampling_tick is not None else -10**12],
-                               rticks[:-1]])
-        busy = rticks - prev < CONVERSION_TICKS
-        channels = channel_of_byte[first[rs]]
-        provided = port.provided_lut[channels]
-        prepared[rs[busy]] = _ERR["insufficient_sampling_delay"]
-        unprovided = ~busy & ~provided
-        prepared[rs[unprovided]] = _ERR["channel_not_recognized"]
-        port.unprovided_requests += int(np.count_nonzero(unprovided))
-        acc = rs[~busy & provided]
-        acc_ch = channels[~busy & provided]
-        nxt = np.append(start[1:], np.inf) if next_activity is None else np.asarray(next_activity, float)
-        if acc.size and not np.isfinite(nxt[cmd[acc[-1]]]):  # nothing known after it: convert when something is
-            deferred = (int(acc_ch[-1]), float(cmd_end[acc[-1]]))
-            acc, acc_ch = acc[:-1], acc_ch[:-1]
-        if acc.size:
-            next_start = nxt[cmd[acc]]
-            coupled = next_start < cmd_end[acc] + port.conversion_s
-            port.coupled_conversions += int(np.count_nonzero(coupled))
-            codes = port.sensor.sample(acc_ch, cmd_end[acc], bus_active=coupled)
-            words = proto.RESPONSE_WORD[codes].astype(np.int64)
-            prepared[acc] = words
-        port.last_sampling_tick = int(rticks[-1])
-
-    # what each transfer shifts out, and which read consumes each prepared word
+    prepared = np.empty(cmd.size, dtype=np.int64)
+    accepted = np.zeros(cmd.size, dtype=bool)
+    coupled = np.zeros(cmd.size, dtype=bool)
+    last_tick = port.last_sampling_tick if port.last_sampling_tick is not None else _NO_TICK
+    sampling, last_tick, unprovided, deferred = _commands(
+        first, cmd_end, np.ascontiguousarray(nxt[cmd], dtype=float), word_of_byte, recognized_of_byte,
+        channel_of_byte, port.provided_lut, last_tick, float(port.conversion_s), prepared, accepted, coupled)
+    port.unprovided_requests += unprovided
+    if sampling:
+        port.last_sampling_tick = int(last_tick)
+    acc = np.flatnonzero(accepted)
+    if acc.size:
+        port.coupled_conversions += int(np.count_nonzero(coupled))
+        codes = port.sensor.sample(channel_of_byte[first[acc]], cmd_end[acc], bus_active=coupled[acc])
+        prepared[acc] = proto.RESPONSE_WORD[codes]
     before = port.prepared
-    idx = np.arange(n)
-    c = np.cumsum(is_cmd) - is_cmd - 1  # latest command before each transfer; -1: from before the batch
-    # per-command tables with the state from before the batch in front (index c + 1)
-    ready_of = np.concatenate([[before.ready_tick if before else 0], cmd_tick])
-    word_of = np.concatenate([[before.word if before else 0], prepared])
-    ready = ready_of[c + 1]
-    word = word_of[c + 1]
-    consumed_init = before.consumed if before is not None else True
-    delay_ok = ticks_array(start) - ready >= SAMPLE_DELAY_TICKS
-    nothing = consumed_init & (c == -1) if before is not None else c < 0  # no result to shift out
-    delay_ok &= ~nothing
-    can_consume = delay_ok[reads] & ~((c[reads] == -1) & consumed_init)
-    first_consume = np.full(cmd.size + 1, n)
-    if can_consume.any():
-        g = c[reads][can_consume]  # non-decreasing along the reads: the first of each run consumes
-        head = np.concatenate([[True], g[1:] != g[:-1]])
-        first_consume[g[head] + 1] = reads[can_consume][head]
-    consumed_before = (first_consume[c + 1] < idx) | nothing
-    out = np.where(delay_ok, word, _ERR["insufficient_delay"])
-    out[consumed_before] = _ERR["nothing_to_resend"]
-    consuming = first_consume[first_consume < n]
-    if consuming.size:
-        port.last_sent = int(out[consuming.max()])
-
+    out = np.empty(start.size, dtype=np.int64)
+    consumed, last_consuming = _transfers(
+        is_cmd, np.ascontiguousarray(start, dtype=float), cmd_end, prepared,
+        before.ready_tick if before is not None else -1, before.word if before is not None else 0,
+        before.consumed if before is not None else True, out)
+    if last_consuming >= 0:
+        port.last_sent = int(out[last_consuming])
     # the port's state after the batch
     if cmd.size:
-        last = cmd.size - 1
-        done = bool(first_consume[last + 1] < n)
-        if deferred is not None:
-            port.prepared = _Prepared("pending", int(cmd_tick[last]))
-            port._deferred = deferred
+        tick = int(ticks_array(cmd_end[-1:])[0])
+        if deferred >= 0:
+            port.prepared = _Prepared("pending", tick)
+            port._deferred = (int(channel_of_byte[first[deferred]]), float(cmd_end[deferred]))
         else:
-            port.prepared = _Prepared("word", int(cmd_tick[last]), word=int(prepared[last]), consumed=done)
-    elif before is not None and first_consume[0] < n:
+            port.prepared = _Prepared("word", tick, word=int(prepared[-1]), consumed=bool(consumed))
+    elif before is not None and consumed:
         before.consumed = True
     return out.astype(np.uint16)

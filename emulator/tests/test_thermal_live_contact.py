@@ -145,3 +145,21 @@ def test_the_live_contact_builds_the_network_only_for_thermal_or_pressure_reads(
 
     assert not built(("E1", "E7"))  # electrodes only: no thermal network, the motion is not read for it
     assert built(("TAC",)) and built(("PDC",))  # PDC: the core temperature drives the bridge's drift
+
+
+def test_the_inputs_of_many_steps_at_once_are_each_steps_own():
+    """:meth:`ThermalModel.inputs_at` (the live network's steps, all at once) equals :meth:`heater_at` and
+    :meth:`ambient_at` instant by instant, at and around a power-on, ambient steps and a heater failure."""
+    from emulator.thermal import ThermalEvents, ThermalModel
+
+    events = ThermalEvents([], power_on_s=0.5, ambient_steps=((0.3, 30.0), (0.7, 18)), heater_failed_s=0.9)
+    model = ThermalModel(SensorParams(), events, seed=1)
+    events_s = [0.3, 0.5, 0.7, 0.9]
+    t = np.sort(np.concatenate([np.arange(0.0, 1.2, 0.01), events_s, np.nextafter(events_s, 0)]))
+    heater, ambient = model.inputs_at(t)
+    assert heater == [model.heater_at(x) for x in t.tolist()]
+    assert ambient == [model.ambient_at(x) for x in t.tolist()]
+    assert heater[0] == 0.0 and max(heater) > 0 and heater[-1] == 0.0
+    assert set(ambient) == {SensorParams().ambient_temperature_C, 30.0, 18}
+    failed = ThermalModel(SensorParams(), ThermalEvents([]), seed=1, faults={"heater_failed": True})
+    assert failed.inputs_at(t)[0] == [0.0] * t.size
