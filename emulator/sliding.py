@@ -261,12 +261,14 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
     # the patch average at every radius: h convolved with each radius's Hertz line load, at positions
     # pad - 1 .. pad + n (one beyond each end for the slope)
     patch = np.empty((radii_m.size, n + 2))
-    spectra_of_h = {}
-    for k, (m, n_fft, spectrum) in enumerate(_patch_kernels(tuple(float(a) for a in radii_m), dx_m, h.size)):
-        if n_fft not in spectra_of_h:
-            spectra_of_h[n_fft] = scipy_fft.rfftn(h, [n_fft], axes=[0])
-        full = scipy_fft.irfftn(spectra_of_h[n_fft] * spectrum, [n_fft], axes=[0])
-        patch[k] = full[m + pad - 1:m + pad + n + 1]  # scipy's fftconvolve(h, w, "same") centres by m
+    kernels = _patch_kernels(tuple(float(a) for a in radii_m), dx_m, h.size)
+    for n_fft in dict.fromkeys(k[1] for k in kernels):  # the radii of one FFT length in one call (same values)
+        rows = [k for k, kernel in enumerate(kernels) if kernel[1] == n_fft]
+        spectra = np.stack([kernels[k][2] for k in rows])
+        full = scipy_fft.irfftn(scipy_fft.rfftn(h, [n_fft], axes=[0]) * spectra, [n_fft], axes=[1])
+        for row, k in zip(full, rows):
+            m = kernels[k][0]
+            patch[k] = row[m + pad - 1:m + pad + n + 1]  # scipy's fftconvolve(h, w, "same") centres by m
     heights = np.ascontiguousarray(patch[:, 1:-1])
     smooth_slope = (patch[:, 2:] - patch[:, :-2]) / (2.0 * dx_m)  # np.gradient's central difference
     # fingerprint ridges: each radius's ridges under the patch sample the crest slope, weighted by the line load
