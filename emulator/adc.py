@@ -41,13 +41,15 @@ class Adc:
         self.noise_rng = effect_rng(seed, "adc_noise")
         self.coupling_rng = effect_rng(seed, "spi_coupling")
 
-    def sigma_V(self, volts: np.ndarray, channels: np.ndarray | None = None) -> np.ndarray | float:
+    def sigma_V(self, volts: np.ndarray, channels: np.ndarray | None = None) -> np.ndarray:
         """RMS per-conversion noise (V) for analog values ``volts`` (V) on SPI channel indices ``channels``
-        (None: no channel-specific path noise)."""
-        var = self.noise_V**2 + (self.reference_rel * np.asarray(volts, float)) ** 2
+        (None: no channel-specific path noise): √(σ_adc² + (ppm·v)² + σ_PAC²·[channel is PAC]), a new array shaped as ``volts``."""
+        v = np.asarray(volts, float)
+        var = np.multiply(self.reference_rel, v, out=np.empty(v.shape))
+        var = np.add(self.noise_V**2, np.square(var, out=var), out=var)
         if self.pac_V and channels is not None:
-            var = var + self.pac_V**2 * (np.asarray(channels) == PAC)
-        return np.sqrt(var)
+            var = np.add(var, self.pac_V**2 * (np.asarray(channels) == PAC), out=var)
+        return np.sqrt(var, out=var)
 
     def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input",
                 channels: np.ndarray | None = None):
@@ -63,10 +65,20 @@ class Adc:
         if self.noise_V or self.reference_rel or self.pac_V:
             z = self.noise_rng.standard_normal(v.shape, dtype=np.float32)
             if self.reference_rel or (self.pac_V and channels is not None):
-                v = v + self.sigma_V(v, channels) * z
+                noise = self.sigma_V(v, channels)  # a new array: v + σ·z worked in place on it
+                noise *= z
+                v = np.add(v, noise, out=noise)
             else:
                 v = v + self.noise_V * z
         if self.coupling_V and bus_active is not None and np.any(bus_active):
             v = v.copy()
             v[bus_active] += self.coupling_V * self.coupling_rng.standard_normal(int(np.count_nonzero(bus_active)))
-        return np.clip(np.floor(v / ADC_LSB_V + 0.5), 0, ADC_CODES - 1).astype(np.uint16)
+        return quantize(v)
+
+
+def quantize(volts: np.ndarray) -> np.ndarray:
+    """Codes (uint16) of analog values (V): rounded to the nearest code, clipped to 0..4095 (``volts`` is kept)."""
+    c = np.divide(volts, ADC_LSB_V, out=np.empty(np.shape(volts)))
+    c += 0.5
+    np.floor(c, out=c)
+    return np.clip(c, 0, ADC_CODES - 1, out=c).astype(np.uint16)[()]  # [()]: a scalar for a scalar

@@ -343,17 +343,21 @@ class ElectrodeModel:
         self.chunk = max(1, int(round(CHUNK_S * rate_Hz)))
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.electrode_bandwidth_Hz]), 2 * np.pi * p.electrode_bandwidth_Hz
         sos = filters.discretize(z, pz, k, rate_Hz, discretization)
-        self.b, self.a = sos[0, :3], sos[0, 3:]
+        # a first-order section (b2 = a2 = 0) runs as 2 taps: the third tap's state stays 0 and adds only zeros,
+        # so the output is the same to the last bit, for a third less time (as filters.SosFilter does)
+        taps = 2 if sos[0, 2] == 0.0 and sos[0, 5] == 0.0 else 3
+        self.b, self.a = sos[0, :taps].copy(), sos[0, 3:3 + taps].copy()
         self.rest_gaps_mm = resting_gaps_mm(p, n)
         rest = electrode_volts(p, self.rest_gaps_mm[None, :], self.faults)[0]
         self.rest = rest
-        self.zi = signal.lfilter_zi(self.b, self.a)[:, None] * rest[None, :]
+        self.zi = signal.lfilter_zi(sos[0, :3], sos[0, 3:])[:taps - 1, None] * rest[None, :]
         self.zi_rest = self.zi.copy()
         self.k = 0
         self._hist_t = [np.array([0.0])]
         self._hist = [rest[None, :].copy()]
         a = np.exp(-p.mux_acquisition_s / p.mux_settling_s)
         self.mux_keep = a  # fraction of the previous electrode's value left in a sample
+        self._mux_b, self._mux_a = np.array([1.0]), np.array([1.0, -a])  # the hold node's recursion (see sample)
         self.mux_injection = a * p.mux_injection_V
         self.mux_node = float(rest[0])
         self.stuck = self.faults.get("mux_stuck")  # electrode number the multiplexer is stuck on
@@ -396,7 +400,7 @@ class ElectrodeModel:
             y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
         else:  # (the gaps stay ≥ g_min > 0: the voltages are finite, electrode_volts' NaN guard is not needed)
             v = _volts_in_place(self.p, _contact_gaps_mm(self.p, self.rest_gaps_mm, terms, n), self._open, self._short)
-            y, self.zi = signal.lfilter(self.b, self.a, v, axis=0, zi=self.zi)
+            y, self.zi = filters.lfilter(self.b, self.a, v, self.zi, axis=0)
         self.k += n
         self._hist_t.append(t)
         self._hist.append(y)
@@ -439,7 +443,8 @@ class ElectrodeModel:
         target = self.targets(electrode, np.asarray(times, float))
         # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions
         a = self.mux_keep
-        y, _ = signal.lfilter([1.0], [1.0, -a], (1 - a) * target + self.mux_injection, zi=[a * self.mux_node])
+        y, _ = filters.lfilter(self._mux_b, self._mux_a, (1 - a) * target + self.mux_injection,
+                               np.array([a * self.mux_node]))
         self.mux_node = float(y[-1])
         return y
 

@@ -24,13 +24,19 @@ def hum_components(params: SensorParams) -> list[tuple[int, float, float]]:
     return [(1, f, a), (2, 2 * f, a * params.mains_harmonic2_ratio), (3, 3 * f, a * params.mains_harmonic3_ratio)]
 
 
+#: the longest hum period (samples) tabulated; a longer one (or a non-whole-hertz hum) is computed per sample
+MAX_TABLE_SAMPLES = 1 << 20
+
+
 class MainsHum(Effect):
     """Mains hum at the first-stage input: fundamental + 2nd + 3rd harmonic, each with a seeded phase.
 
-    The phase at a block's first sample is computed from the absolute grid index (cycles = k·f·n0/fs reduced
-    modulo 1 before it becomes an angle), never accumulated, so it is exact however long the run and the output
-    does not depend on the block size.  A block whose first-sample phases and length equal the previous block's
-    (blocks a whole number of mains periods long: the sensor's 2 s blocks) is that block's hum again, copied.
+    Each sample is a function of its absolute grid index n alone, Σ a·sin(2π·((f·n) mod fs)/fs + φ) (the cycles
+    reduced modulo 1 before they become an angle, never accumulated), so it is exact however long the run and the
+    same whatever the block size.  With whole-hertz components on a whole-hertz grid the hum repeats every
+    P = lcm over the components of fs/gcd(f, fs) samples (440 at 60 Hz on the 8.8 kHz grid): one period is
+    tabulated from the formula and a block is read from it (the same numbers: f·n mod fs = f·(n mod P) mod fs,
+    exactly, while f·n < 2^53).
     """
 
     name = "mains_hum"
@@ -40,27 +46,31 @@ class MainsHum(Effect):
         rng = effect_rng(seed, self.name)
         phases = rng.uniform(0, 2 * np.pi, 3)  # the first draw is the fundamental's phase
         self.components = [(f, a, float(ph)) for (_, f, a), ph in zip(hum_components(params), phases) if a > 0]
-        self._table = None  # (n, fs, [(A·cos(w·k/fs), A·sin(w·k/fs)) per component]) for k < n, the longest block
-        self._last = (None, None)  # (n, fs, cycles per component) of the last block, and its hum (V)
+        self._tables: dict[float, np.ndarray | None] = {}  # grid rate (Hz) -> one period of hum (V), or None
+
+    def at(self, n: np.ndarray, fs: float) -> np.ndarray:
+        """The hum (V) at absolute grid indices ``n`` (whole numbers, as floats) of a grid at ``fs`` Hz."""
+        out = np.zeros(np.shape(n))
+        for f, a, phase in self.components:
+            out += a * np.sin(2 * np.pi * ((f * n) % fs) / fs + phase)
+        return out
+
+    def period(self, fs: float) -> int | None:
+        """Samples after which the hum on a grid at ``fs`` Hz repeats exactly, or None (not whole hertz)."""
+        if not float(fs).is_integer() or not all(float(f).is_integer() for f, _, _ in self.components):
+            return None
+        p = 1
+        for f, _, _ in self.components:
+            p = math.lcm(p, int(fs) // math.gcd(int(f), int(fs)))
+        return p
 
     def process(self, block: Block, inputs):
-        # each component's phase at the block's first sample, in cycles: f·n0 is exact for whole-hertz f
-        cycles = tuple(math.fmod(f * block.n0, block.fs) / block.fs for f, _, _ in self.components)
-        key = (block.n, block.fs, cycles)
-        if key == self._last[0]:
-            return {"stage1_input_V": self._last[1].copy()}
-        if self._table is None or self._table[1] != block.fs or self._table[0] < block.n:
-            # the longest block so far: shorter blocks (a rig's exact-length reads) use its first samples
-            k = np.arange(block.n)
-            rows = []
-            for f, a, _ in self.components:
-                wk = 2 * np.pi * (math.fmod(f, block.fs) / block.fs) * k
-                rows.append((a * np.cos(wk), a * np.sin(wk)))
-            self._table = (block.n, block.fs, rows)
-        out = np.zeros(block.n)
-        for (_, _, phase), c, (cos_k, sin_k) in zip(self.components, cycles, self._table[2]):
-            # sin(φ0 + w·k/fs) = sin φ0·cos(w·k/fs) + cos φ0·sin(w·k/fs); φ0 from the absolute index n0
-            phi0 = 2 * np.pi * c + phase
-            out += math.sin(phi0) * cos_k[:block.n] + math.cos(phi0) * sin_k[:block.n]
-        self._last = (key, out)
-        return {"stage1_input_V": out.copy()}
+        if block.fs not in self._tables:
+            p = self.period(block.fs)
+            self._tables[block.fs] = (self.at(np.arange(p, dtype=float), block.fs)
+                                      if p is not None and p <= MAX_TABLE_SAMPLES else None)
+        table = self._tables[block.fs]
+        if table is None:
+            return {"stage1_input_V": self.at(block.n0 + np.arange(block.n, dtype=float), block.fs)}
+        start = block.n0 % table.size  # the block's first sample in the period, then the period over and over
+        return {"stage1_input_V": np.resize(np.concatenate([table[start:], table[:start]]), block.n)}

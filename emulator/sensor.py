@@ -122,6 +122,7 @@ class Sensor:
         self._slow_cost = {"thermal": 0.0, "electrodes": 0.0}  # wall time of the slow models, s
         self._buf_n0 = int(np.ceil(start_s * self.fs))  # grid index of the first retained sample
         self._computed = self._buf_n0  # next grid index to compute
+        self._last_plan = None  # (channels, plan) of the last analog() call (see _plan)
 
     # --- construction --------------------------------------------------------------
     def _candidate_effects(self, stimuli) -> list[Effect]:
@@ -289,6 +290,32 @@ class Sensor:
         return self._computed / self.fs
 
     # --- sampling -------------------------------------------------------------------
+    def _plan(self, channels: np.ndarray) -> tuple:
+        """Where each kind of channel sits in ``channels`` (validated): a tuple of (grid node index, positions or
+        None for all) per grid node read, (column, positions) for TDC and TAC, and (electrode numbers, positions).
+        The host asks for the same frame batch after batch: the last plan is kept and reused for an equal array."""
+        last = self._last_plan
+        if last is not None and last[0].shape == channels.shape and np.array_equal(last[0], channels):
+            return last[1]
+        if channels.min() < 0 or channels.max() > 63:
+            raise ValueError("channel indices must be 0..63")
+        node_of = self._node_of_channel[channels]
+        if np.any(node_of < 0):
+            bad = int(channels[np.flatnonzero(node_of < 0)[0]])
+            raise ValueError(f"channel {ch.CHANNEL_NAME.get(bad, bad)} was not declared in channels_read")
+        nodes = []
+        for node_id in range(len(self.nodes)):
+            sel = node_of == node_id
+            if sel.all():
+                nodes.append((node_id, None))
+            elif sel.any():
+                nodes.append((node_id, np.flatnonzero(sel)))
+        thermal = [(column, np.flatnonzero(node_of == kind)) for kind, column in ((KIND_TDC, 1), (KIND_TAC, 2))]
+        at = np.flatnonzero(node_of == KIND_ELECTRODE)
+        plan = (nodes, [(c, w) for c, w in thermal if w.size], (electrode_number(channels[at]), at) if at.size else None)
+        self._last_plan = (channels.copy(), plan)
+        return plan
+
     def analog(self, channels, times) -> np.ndarray:
         """Analog value (V) at the ADC input for each (channel index, instant in s); no ADC effects."""
         channels = np.asarray(channels, dtype=np.int64)
@@ -298,42 +325,34 @@ class Sensor:
             return out
         if not np.isfinite(times.sum()) or times.min() < 0:
             raise ValueError("sample instants must be finite and ≥ 0 s")
-        if channels.min() < 0 or channels.max() > 63:
-            raise ValueError("channel indices must be 0..63")
+        nodes, thermal, electrodes = self._plan(channels)
         x = times * self.fs
         i = np.floor(x).astype(np.int64)
-        if i.min() < self._buf_n0:
+        i_min, i_max = int(i.min()), int(i.max())
+        if i_min < self._buf_n0:
             raise ValueError(f"instant {times.min():.6f} s is older than the retained history "
                              f"(from {self._buf_n0 / self.fs:.6f} s): ask for instants in time order")
-        self._advance_through(int(i.max()) + 1, keep_from=int(i.min()))
+        self._advance_through(i_max + 1, keep_from=i_min)
         frac = x - i
         k = i - self._buf_n0
-        node_of = self._node_of_channel[channels]
-        if np.any(node_of < 0):
-            bad = int(channels[np.flatnonzero(node_of < 0)[0]])
-            raise ValueError(f"channel {ch.CHANNEL_NAME.get(bad, bad)} was not declared in channels_read")
-        for node_id, node in enumerate(self.nodes):
-            sel = node_of == node_id
-            if sel.all():
-                h = self._history(node)
+        for node_id, at in nodes:  # linear interpolation between grid samples: h[k]·(1 − frac) + h[k + 1]·frac
+            h = self._history(self.nodes[node_id])
+            if at is None:
                 out = h[k] * (1.0 - frac) + h[k + 1] * frac
-            elif sel.any():
-                h = self._history(node)
-                ks, fs = k[sel], frac[sel]
-                out[sel] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
+            else:
+                ks, fs = k[at], frac[at]
+                out[at] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
         t0 = time.perf_counter()
-        for kind, column in ((KIND_TDC, 1), (KIND_TAC, 2)):
-            sel = node_of == kind
-            if sel.any():
-                out[sel] = (self.thermal.values_at(times[sel])[:, column] if self.thermal is not None
-                            else self.thermal_steady[column])
+        for column, at in thermal:
+            out[at] = (self.thermal.values_at(times[at])[:, column] if self.thermal is not None
+                       else self.thermal_steady[column])
         t1 = time.perf_counter()
-        sel = node_of == KIND_ELECTRODE
-        if sel.any():
-            out[sel] = self.electrodes.sample(electrode_number(channels[sel]), times[sel])
+        if electrodes is not None:
+            number, at = electrodes
+            out[at] = self.electrodes.sample(number, times[at])
         self._slow_cost["thermal"] += t1 - t0
         self._slow_cost["electrodes"] += time.perf_counter() - t1
-        self._trim(int(i.max()))
+        self._trim(i_max)
         if self.thermal is not None:
             self.thermal.forget_before(min(times.max(), self._buf_n0 / self.fs))
         return out

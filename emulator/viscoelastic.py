@@ -31,7 +31,8 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy import signal
+
+from emulator import filters
 
 
 def instantaneous_to_relaxed_ratio(weights: Sequence[float]) -> float:
@@ -113,7 +114,7 @@ class Creep:
         for i, (b, a) in enumerate(self._filters(fs)):
             # lfilter's state for y[n] = −a1·y[n−1] + b0·u[n] + b1·u[n−1]: zi = b1·u[−1] − a1·y[−1]
             zi = np.array([b[1] * self.last - a[1] * self.state[i]])
-            lp, _ = signal.lfilter(b, a, u, zi=zi)
+            lp, _ = filters.lfilter(b, a, u, zi)
             self.state[i] = lp[-1]
             y += self.weights[i] * lp
         self.last = float(u[-1])

@@ -283,6 +283,56 @@ def firmware_paths(say=lambda m: None) -> dict:
     return out
 
 
+def scene_code_fingerprints(scenes_dir=SCENES_DIR, profiles=("fast", "default", "reference"),
+                            seed_offsets=(0, 1, 5, 11), reference_cap_s: float = 30.0, say=print) -> dict[str, str]:
+    """A fingerprint (sha256 of every channel's codes, every sensor) per shipped scene × profile × seed (the scene's
+    own plus ``seed_offsets``), the reference profile over its first ``reference_cap_s`` s: two trees' fingerprints
+    compared show whether a change (a faster path) left every code as it was."""
+    import hashlib
+
+    out = {}
+    for path in sorted(scenes_dir.glob("*.toml")):
+        for fidelity in profiles:
+            for offset in seed_offsets:
+                scene = load_scene(path)
+                scene.fidelity, scene.seed = fidelity, scene.seed + offset
+                if fidelity == "reference":
+                    scene.duration_s = min(scene.duration_s, reference_cap_s)
+                rec = run_scene(scene, progress=False, keep_samples=True)
+                h = hashlib.sha256()
+                for r in [rec] + [rec.sensors[k] for k in sorted(rec.sensors)]:
+                    for name in r.channels:
+                        h.update(name.encode())
+                        h.update(np.ascontiguousarray(r.channels[name].codes).tobytes())
+                key = f"{path.stem}/{fidelity}/seed+{offset}"
+                out[key] = f"{h.hexdigest()[:16]} {rec.status}"
+                say(f"{key:44s} {out[key]}")
+    return out
+
+
+def _fingerprints_main(argv) -> int:
+    """``python -m bench.verification.benchmark OUT.json [OLD.json]``: write the fingerprints; with OLD.json (another
+    tree's), list the runs whose codes differ and exit 1 if any does."""
+    import argparse
+    from pathlib import Path
+
+    ap = argparse.ArgumentParser(description=scene_code_fingerprints.__doc__)
+    ap.add_argument("out", type=Path)
+    ap.add_argument("against", type=Path, nargs="?")
+    ap.add_argument("--scenes", type=Path, default=SCENES_DIR)
+    a = ap.parse_args(argv)
+    prints = scene_code_fingerprints(a.scenes)
+    a.out.write_text(json.dumps(prints, indent=1))
+    if a.against is None:
+        return 0
+    old = json.loads(a.against.read_text())
+    differ = sorted(k for k in set(old) | set(prints) if old.get(k) != prints.get(k))
+    for k in differ:
+        print(f"DIFFERENT {k}: {old.get(k)} -> {prints.get(k)}")
+    print(f"{len(prints)} runs, {len(differ)} with different codes")
+    return 1 if differ else 0
+
+
 def _fmt(v, spec):
     width = int("".join(ch for ch in spec.split(".")[0] if ch.isdigit()) or 0)
     return f"{'—':>{width}s}" if v is None else format(v, spec)
@@ -364,3 +414,7 @@ def main(args) -> int:
     print(f"  Cheetah-compatible library, example client streaming the default frame from 3 sensors: "
           f"{c['realtime_factor']:.1f}× real time")
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_fingerprints_main(sys.argv[1:]))

@@ -3,7 +3,7 @@
 * the electrode gaps, worked in place from each contact's precomputed footprint, against the array formula of
   ``electrode_gaps_mm``'s docstring written out directly (with and without a shear shift, several contacts);
 * a first-order section run as a 2-tap ``lfilter`` against the same section as a 3-tap biquad;
-* the mains hum of a block whose phases repeat (copied) against the hum computed for that block afresh.
+* the mains hum read from one tabulated period against the per-sample formula at the absolute index.
 """
 
 from __future__ import annotations
@@ -65,23 +65,23 @@ def test_a_first_order_section_runs_as_2_taps_with_the_biquads_numbers():
     assert np.array_equal(got, expected)
 
 
-def test_a_repeated_hum_block_is_the_hum_computed_for_it():
+def test_the_tabulated_hum_is_the_per_sample_formula_bit_for_bit():
+    """Blocks read from one tabulated period equal the formula at each sample's absolute index, whatever the cut
+    (a rig's exact-length reads, the sensor's 2 s blocks, ten hours in); a hum with no whole period on the grid
+    (59.5 Hz) takes the formula itself."""
     p = SensorParams()
-    for fs, n in ((8800.0, 17600), (8800.0, 1234), (4400.0, 8800)):
+    for fs in (4400.0, 8800.0, 70400.0):
         h = MainsHum(p, 7)
-        for k in range(4):
-            got = h.process(Block(k * n, n, fs), {})["stage1_input_V"]
-            fresh = MainsHum(p, 7).process(Block(k * n, n, fs), {})["stage1_input_V"]
-            assert np.array_equal(got, fresh)
+        n0 = int(10 * 3600 * fs) if fs == 8800.0 else 0
+        for n in (17600, 97, 1, 5000, 440, 20000, 333):
+            got = h.process(Block(n0, n, fs), {})["stage1_input_V"]
+            assert np.array_equal(got, h.at(n0 + np.arange(n, dtype=float), fs)), (fs, n)
             got += 1.0  # the graph sums into what an effect returns: the next block must not see it
-
-
-def test_hum_of_a_short_block_after_a_long_one_is_the_hum_computed_for_it():
-    """A rig reads exact-length blocks of varying size: the table of the longest block serves the shorter."""
-    p = SensorParams()
-    h = MainsHum(p, 7)
-    n0 = 0
-    for n in (17600, 97, 1, 5000, 17600, 20000, 333):
-        got = h.process(Block(n0, n, 8800.0), {})["stage1_input_V"]
-        assert np.array_equal(got, MainsHum(p, 7).process(Block(n0, n, 8800.0), {})["stage1_input_V"]), n
-        n0 += n
+            n0 += n
+    assert MainsHum(p, 7).period(8800.0) == 440  # 60, 120 and 180 Hz all repeat after 440 samples of 8.8 kHz
+    odd = MainsHum(p.replace(mains_frequency_Hz=59.5), 7)
+    assert odd.period(8800.0) is None
+    whole = odd.process(Block(0, 3000, 8800.0), {})["stage1_input_V"]
+    cut = np.concatenate([odd.process(Block(a, b - a, 8800.0), {})["stage1_input_V"]
+                          for a, b in ((0, 7), (7, 1234), (1234, 3000))])
+    assert np.array_equal(cut, whole)
