@@ -10,15 +10,17 @@ reads the sensor through the host sampler and the SPI peripheral like any host. 
 trip per frame, the emulator reads stretches of frames as if the finger kept lowering (which it does until the
 controller stops it) and checks the controller's rule on every frame read.  Each stretch is computed in one block
 that ends exactly at its last frame's needs.  A stretch that may hold the stop is read after a snapshot
-(``copy.deepcopy`` of the run); if the stop falls before its end, the emulator goes back to the snapshot and reads
-exactly up to the stop frame, so the stop command (20 ms later) lies after everything computed — the same
-samples, since results do not depend on block size (tested); the motion refuses a command that would reach into
-computed instants.  Stretches the stop is not expected in are read without a snapshot: the stop is predicted
+(``copy.deepcopy`` of the run); if the stop falls before its end, the emulator goes back to the snapshot, gives
+the stop command there (it acts 20 ms after the stop frame, so it lies after everything computed) and reads on
+through the stop — the same samples, since results do not depend on block size (tested); the motion refuses a
+command that would reach into computed instants.  The lowering command, which follows the 0.2 s baseline whatever
+it reads, is given before the baseline is read, so the baseline and the first stretch are one read.  Stretches the
+stop is not expected in are read without a snapshot: the stop is predicted
 from the PDC change read so far against the commanded load ahead (the contact law of the planned depth), with a
 margin; should the stop still fall inside one, the lowering is run again from the trial's start with a snapshot
 before every window (deterministic from the seed, so the same trial; counted in ``Trial.extra["lowering"]``).
-None of this changes what the controller sees or decides (tested).  Afterwards the motion is fixed in advance: the
-frames a reader of ``chunk_s`` at a time would read until the trial's end are computed in as few exact blocks as
+None of this changes what the controller sees or decides (tested).  From the stop the motion is fixed in advance:
+the frames a reader of ``chunk_s`` at a time would read until the trial's end are computed in as few exact blocks as
 memory allows.
 
 :func:`movement_grid` gives the 36 movements of D eqs 6.20–6.21.
@@ -134,13 +136,14 @@ class TextureRig:
             raise ValueError(f"movement {movement}: force and velocity must be positive")
         start_position = float(effect_rng(seed, "rig.start_position").uniform(0.0, SURFACE_LENGTH_M))
         try:
-            run, reached, lowering = self._lowered(texture, movement, seed, start_position, read_ahead=True)
+            run, reached, lowering, to_stop = self._lowered(texture, movement, seed, start_position, read_ahead=True)
         except _Overshot:  # the look-ahead misjudged the stop: again from the start, a snapshot before every window
-            run, reached, lowering = self._lowered(texture, movement, seed, start_position, read_ahead=False)
+            run, reached, lowering, to_stop = self._lowered(texture, movement, seed, start_position,
+                                                            read_ahead=False)
             lowering["retried"] = True
         frame_s = run.frame / run.sampler.slot_rate_Hz
         motion, sampler, log = run.motion, run.sampler, run.log
-        t_stop = sampler.next_slot / sampler.slot_rate_Hz
+        t_stop = (sampler.next_slot + to_stop * run.frame) / sampler.slot_rate_Hz  # after the stop frame
         contact_s = motion.move_finger(t_stop, 0.0)
         # hold, then slide over the distance: the stage starts, cruises and brakes at planned instants
         slide_start = contact_s + s.hold_s
@@ -157,8 +160,9 @@ class TextureRig:
         # blocks as memory allows (each computed exactly: no grid beyond the last frame)
         chunk = max(1, int(round(s.chunk_s / frame_s)))
         rest = 0
-        while (sampler.next_slot + rest * run.frame) / sampler.slot_rate_Hz < end:
+        while (sampler.next_slot + (to_stop + rest) * run.frame) / sampler.slot_rate_Hz < end:
             rest += chunk
+        rest += to_stop  # (the frames through the stop, if the lowering went back to before them)
         for part in np.array_split(np.arange(rest), math.ceil(rest * frame_s * run.sensor.fs / _MAX_BLOCK_SAMPLES)):
             run.read_exactly(part.size)
         true_normal = log.mean_load(slide_start + ramp, brake)
@@ -171,14 +175,17 @@ class TextureRig:
                      start_position, time.perf_counter() - wall0, log.n_frames(run.frame), {"lowering": lowering})
 
     def _lowered(self, texture: Texture, movement: Movement, seed: int, start_position: float,
-                 read_ahead: bool) -> tuple["_Run", float, dict]:
+                 read_ahead: bool) -> tuple["_Run", float, dict, int]:
         """The trial's run, its baseline read at rest, lowered until the controller's stop frame and read exactly
-        through it (nothing computed beyond); the PDC change (counts) it stopped at; and what the emulator did
-        to get there (windows, snapshots, frames computed and thrown away).
+        through it or up to a point before it (nothing computed beyond); the PDC change (counts) it stopped at;
+        what the emulator did to get there (windows, snapshots, frames computed and thrown away); and how many
+        frames are still to be read through the stop frame (0: none).
 
         The controller decides after every frame; the emulator reads stretches of frames as if the finger keeps
         lowering (it does until the controller stops it) and checks the rule on each frame read.  A stretch that
-        holds the stop frame before its end is read again from a snapshot taken before it, up to that frame.
+        holds the stop frame before its end is thrown away: the run goes back to a snapshot taken before it, and
+        the caller gives the stop command and reads on from there (the frames through the stop are the same: the
+        command acts a latency after the stop frame).
         With ``read_ahead``, stretches the stop is not expected in are read without a snapshot (see
         :func:`_next_stretch`); should the stop fall inside one anyway, :class:`_Overshot` is raised and the caller
         runs the lowering again without reading ahead (same result, slower)."""
@@ -190,21 +197,27 @@ class TextureRig:
                           record_signals=("stage_force_N", "normal_force_N")),
                    motion, effect_rng(seed, "rig.motor_current"), s)
         frame_s = run.frame / run.sampler.slot_rate_Hz
-        # baseline at rest, then lower until the PDC change reaches the target
-        run.read_exactly(int(round(s.baseline_s / frame_s)))  # the lowering command follows
-        baseline = float(np.mean(run.log.pdc_codes()))
+        # baseline at rest, then lower until the PDC change reaches the target.  The lowering command, given once the
+        # baseline is read whatever it reads, is given now for that instant (nothing is computed yet), so the
+        # baseline is read in one go with the first stretch of the lowering.
+        first = int(round(s.baseline_s / frame_s))  # frames read before the lowering command
+        run.motion.move_finger((run.sampler.next_slot + first * run.frame) / run.sampler.slot_rate_Hz,
+                               s.lower_rate_m_per_s)
         target = movement.force_N / FORCE_PER_PDC_BIT_N
-        run.motion.move_finger(run.now, s.lower_rate_m_per_s)
-        first = run.log.n_frames(run.frame)  # frames read before the lowering command
         window = max(1, int(round(s.speculation_s / frame_s)))
         budget = (int((s.start_gap_m + 0.01) / s.lower_rate_m_per_s / s.speculation_s) + 1) * window
         stats = {"windows": 0, "snapshots": 0, "frames_recomputed": 0, "frames_discarded": 0, "retried": False}
         # before any contact: the frames until the commanded load reaches the movement's force at the rig's own
         # calibration; the first stretch reads a share of them without a snapshot
-        first_stretch = int(_AHEAD_FIRST_SHARE * _frames_to_load(run, movement.force_N, texture, budget)) \
+        first_stretch = int(_AHEAD_FIRST_SHARE * _frames_to_load(run, movement.force_N, texture, budget, first)) \
             if read_ahead else 0
+        if first_stretch < _MIN_WINDOW_FRAMES:  # too short to be worth it: the baseline alone
+            run.read_exactly(first)
+        baseline = None
         while True:
-            lowered = run.log.n_frames(run.frame) - first
+            if baseline is None and first_stretch < _MIN_WINDOW_FRAMES:
+                baseline = float(np.mean(run.log.pdc_codes()))
+            lowered = max(0, run.log.n_frames(run.frame) - first)  # frames read since the lowering command
             if lowered >= budget:
                 raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on "
                                    f"{texture.name}")
@@ -217,22 +230,25 @@ class TextureRig:
             snapshot = None if safe else run.snapshot()
             stats["snapshots"] += int(snapshot is not None)
             stats["windows"] += 1
-            before = run.log.pdc_codes().size
-            run.read_exactly(n)
+            before = first + lowered
+            run.read_exactly(before + n - run.log.n_frames(run.frame))  # (with the baseline, the first time)
             pdc = run.log.pdc_codes()
+            if baseline is None:
+                baseline = float(np.mean(pdc[:first]))
             means = np.convolve(pdc, np.ones(s.pdc_average_frames) / s.pdc_average_frames, "full")[:pdc.size]
             over = np.flatnonzero(means[before:] - baseline >= target)
             if over.size:
                 k = int(over[0]) + 1
                 reached = float(means[before + k - 1] - baseline)
-                if k < n:  # the stretch went past the stop: back to before it, and read exactly up to the stop
-                    if snapshot is None:
-                        raise _Overshot
-                    run = snapshot
-                    run.read_exactly(k)  # nothing is computed beyond the stop command's effect
-                    stats["frames_recomputed"] += k
-                    stats["frames_discarded"] += n - k
-                return run, reached, stats
+                if k == n:
+                    return run, reached, stats, 0
+                # the stretch went past the stop: back to before it; the caller reads from there through the stop
+                # with the stop command given (it acts a latency after the stop frame, after all these frames)
+                if snapshot is None:
+                    raise _Overshot
+                stats["frames_recomputed"] += k
+                stats["frames_discarded"] += n - k
+                return snapshot, reached, stats, k
 
 
 #: The longest block of grid samples the rig has the sensor compute at once after the stop (memory: ~0.5 MB per
@@ -248,12 +264,17 @@ class _Overshot(Exception):
 #: samples do not depend on it): the first stretch reads this share of the frames the contact law predicts at the
 #: rig's calibration, without a snapshot; later ones end where the predicted PDC change comes within this many
 #: counts, plus this share of the change still to go, of the target; a window with a snapshot then reads until the
-#: predicted change passes the target by this many counts (PDC noise is ~0.5 count RMS).
+#: predicted change passes the target by this many counts (PDC noise is ~0.5 count RMS; a second window costs a read
+#: and a snapshot, a few frames more in the first cost little).  A stretch without a snapshot shorter than
+#: ``_MIN_AHEAD_FRAMES`` is not read on its own: a read costs about as much as computing 40 frames at the default
+#: profile, and the window with the snapshot takes its frames instead (over 60 trials: 3.0 reads and 1.0 snapshots
+#: while lowering, against 4.75 and 1.08 with stretches down to 5 frames and a 2-count window margin).
 _AHEAD_FIRST_SHARE = 0.6
 _AHEAD_MARGIN_COUNTS = 3.0
 _AHEAD_MARGIN_SHARE = 0.3
-_WINDOW_MARGIN_COUNTS = 2.0
+_WINDOW_MARGIN_COUNTS = 4.0
 _MIN_WINDOW_FRAMES = 5
+_MIN_AHEAD_FRAMES = 40
 _FIT_FRAMES = 30  # the PDC change is predicted from the last this many frames in contact
 
 
@@ -265,7 +286,7 @@ def _next_stretch(change: np.ndarray | None, target: float, window: int, read_ah
     if read_ahead:
         margin = _AHEAD_MARGIN_COUNTS + _AHEAD_MARGIN_SHARE * max(0.0, target - change[0])
         near = change >= target - margin
-        if near.any() and int(np.argmax(near)) >= _MIN_WINDOW_FRAMES:
+        if near.any() and int(np.argmax(near)) >= _MIN_AHEAD_FRAMES:
             return int(np.argmax(near)), True
     past = change >= target + _WINDOW_MARGIN_COUNTS
     if past.any():
@@ -278,10 +299,10 @@ def _commanded_load(run: "_Run", t: np.ndarray, texture: Texture) -> np.ndarray:
     return contact_force_from_depth(run.motion.planned_depth_at(t), run.sensor.params, texture)
 
 
-def _frames_to_load(run: "_Run", force_N: float, texture: Texture, horizon: int) -> int:
-    """Frames from now until the commanded load (:func:`_commanded_load`) reaches ``force_N`` (N); ``horizon`` if not
-    within that many frames."""
-    t = run.now + np.arange(horizon) * run.frame / run.sampler.slot_rate_Hz
+def _frames_to_load(run: "_Run", force_N: float, texture: Texture, horizon: int, after: int = 0) -> int:
+    """Frames from ``after`` frames from now until the commanded load (:func:`_commanded_load`) reaches ``force_N``
+    (N); ``horizon`` if not within that many frames."""
+    t = run.now + (after + np.arange(horizon)) * run.frame / run.sampler.slot_rate_Hz
     reached = np.flatnonzero(_commanded_load(run, t, texture) >= force_N)
     return int(reached[0]) if reached.size else horizon
 
@@ -380,6 +401,8 @@ class _Log:
         self.cur.append(amps)
 
     def _cat(self):
+        if not self.t:  # nothing read yet
+            return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint16)
         if len(self.t) > 1:
             self.t, self.ch, self.code = [np.concatenate(self.t)], [np.concatenate(self.ch)], [np.concatenate(self.code)]
         return self.t[0], self.ch[0], self.code[0]
