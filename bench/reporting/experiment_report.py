@@ -84,6 +84,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
               "pairs": result.pairs, "summary": s, "bayesian_beats_baselines_on": beats_baselines(result),
               "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
+              "skin_wear": _skin_wear(result.spec),
               "spread_check": ex.spread_check(table_from_rows(result.training_rows),
                                               table_from_rows(result.validation_rows))
               if result.validation_rows else None,
@@ -135,6 +136,17 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
     return names
 
 
+def _skin_wear(spec) -> dict:
+    """The skin policy and wear-law knobs an experiment ran with (fractions of the ridge height; k, β: 1)."""
+    from emulator.skin import Skin
+
+    skin = Skin()
+    return {"wear": spec.wear, "replace_at": spec.replace_at if spec.replace_skin else None,
+            "first_visible_wear_fraction": skin.first_visible_wear_fraction,
+            "wear_coefficient": skin.wear_coefficient, "wear_power_exponent": skin.wear_power_exponent,
+            "calibrated": "k: D's training session (3 skins); β: D's pilot boundary (level 8 visible, ≤ 7 not)"}
+
+
 def markdown(result: ExperimentResult, record: dict, lib) -> str:
     s = record["summary"]
     d = D_FIGURES
@@ -173,6 +185,14 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                   "| property | validation | leave-one-out | ratio |", "|---|---|---|---|"]
         lines += [f"| {k} | {v['validation_median_abs_z']:.2f} | {v['leave_one_out_median_abs_z']:.2f} | "
                   f"{v['ratio']:.2f} |" for k, v in record["spread_check"].items()]
-    lines += ["", f"Skin replacements in the training and validation session: {record['skin_replacements']}.",
+    w = record["skin_wear"]
+    policy = ("skin wear off" if not w["wear"] else "never replaced" if w["replace_at"] is None else
+              f"a fresh skin once the ridges lost {100 * w['replace_at']:.1f} % of their height (the first visible "
+              f"wear is {100 * w['first_visible_wear_fraction']:.1f} %)")
+    lines += ["", f"Skin replacements in the training and validation session: {record['skin_replacements']} "
+              f"({policy}). Wear law: worn volume k·N·d/H·(N·v/P_ref)^β with k = {w['wear_coefficient']:.2g} and "
+              f"β = {w['wear_power_exponent']:.2g}, both calibrated to D's wear observations (k: two replacements "
+              f"over D's training session at the first visible wear; β: after 60 trials of one movement, visible "
+              f"wear at power level 8 and none at ≤ 7, D Fig. 6-7).",
               "Wall time per stage (s): " + ", ".join(f"{k} {v:.1f}" for k, v in result.wall_s.items()), ""]
     return "\n".join(lines)
