@@ -448,16 +448,14 @@ class ThermalModel:
 
     def _initial_state(self) -> np.ndarray:
         heater = 0.0 if self.events.power_on_s is not None else self.heater_at(0.0)
-        return settled_state(self.net, heater, self.ambient_at(0.0), self._self_heating_W)
+        return _settled_state(self.p, heater, self.ambient_at(0.0)).copy()
 
     # --- outputs --------------------------------------------------------------------------------
     def _tdc_from_state(self, xs: np.ndarray) -> np.ndarray:
         return tdc_volts(thermistor_ohm(xs[:, BEAD], self.p), self.faults.get("thermistor"))
 
     def _self_heating_W(self, bead_C: float) -> float:
-        r = float(thermistor_ohm(bead_C, self.p))
-        v = DIVIDER_SUPPLY_V * r / (r + DIVIDER_OHM)
-        return v * v / r
+        return _self_heating_W(self.p, bead_C)
 
     def _append(self, k0, xs, tdc, tac):
         t = (k0 + np.arange(len(xs))) * self.dt
@@ -584,7 +582,22 @@ class ThermalModel:
         times = np.asarray(times, float)
         if times.size == 0:
             return np.zeros((0, 3))
-        while self._last_t < times.max():
+        ht, hv = self._history_through(times)
+        return np.column_stack([np.interp(times, ht, hv[:, i]) for i in range(3)])
+
+    def value_at(self, times: np.ndarray, column: int) -> np.ndarray:
+        """One of :meth:`values_at`'s columns (0 core °C, 1 TDC V, 2 TAC V) at each instant: the same values,
+        without interpolating the other two."""
+        times = np.asarray(times, float)
+        if times.size == 0:
+            return np.zeros(0)
+        ht, hv = self._history_through(times)
+        return np.interp(times, ht, hv[:, column])
+
+    def _history_through(self, times: np.ndarray):
+        """The history (step instants s, values), advanced through the latest of ``times`` (s, not empty)."""
+        t_max = times.max()
+        while self._last_t < t_max:
             if self.live:  # through the first step at or after the latest instant asked for, not beyond
                 self._advance_live(max(self.k + 1, int(np.ceil(times.max() / self.dt - 1e-9))))
             else:
@@ -592,7 +605,7 @@ class ThermalModel:
         ht, hv = self._history()
         if times.min() < ht[0]:
             raise ValueError(f"instant {times.min():.6f} s is older than the thermal history")
-        return np.column_stack([np.interp(times, ht, hv[:, i]) for i in range(3)])
+        return ht, hv
 
     def forget_before(self, t: float) -> None:
         """Drop history before ``t`` (s): no instant before it will be asked for again."""
@@ -600,6 +613,20 @@ class ThermalModel:
         keep_from = np.searchsorted(self._hist_t, t, side="right") - 1
         if keep_from > 0:
             self._hist_t, self._hist = self._hist_t[keep_from:], self._hist[keep_from:]
+
+
+@functools.lru_cache(maxsize=64)
+def _settled_state(p: SensorParams, heater_W: float, ambient_C: float) -> np.ndarray:
+    """:func:`settled_state` of the network and thermistor of parameters ``p`` (remembered: every rig trial starts
+    settled; callers copy it)."""
+    return settled_state(shared_network(p), heater_W, ambient_C, functools.partial(_self_heating_W, p))
+
+
+def _self_heating_W(p: SensorParams, bead_C: float) -> float:
+    """The thermistor's self-heating (W) at bead temperature ``bead_C`` (°C): V²/R across it in the divider."""
+    r = float(thermistor_ohm(bead_C, p))
+    v = DIVIDER_SUPPLY_V * r / (r + DIVIDER_OHM)
+    return v * v / r
 
 
 def settled_state(net: ThermalNetwork, heater_W: float, ambient_C: float, self_heating) -> np.ndarray:

@@ -312,12 +312,17 @@ def _predicted_change(run: "_Run", first: int, baseline: float, texture: Texture
     if it cannot be told yet: the PDC change of the last lowering frames in contact (read since frame ``first``),
     fitted as a straight line in the commanded load (the line takes up the texture's relief pressing in as the
     patch grows), along the commanded load of the frames ahead."""
-    load = _commanded_load(run, np.concatenate(run.log.cur_t)[first:], texture)
-    change = run.log.pdc_codes()[first:] - baseline
-    touching = np.flatnonzero(load > 0)[-_FIT_FRAMES:]
-    if touching.size < _FIT_FRAMES // 2 or np.ptp(load[touching]) == 0:  # too few frames, or no line to fit
+    # (the commanded load grows while lowering, so the frames in contact are the last ones)
+    last = max(first, run.log.n_frames(run.frame) - _FIT_FRAMES)
+    load = _commanded_load(run, np.concatenate(run.log.cur_t)[last:], texture)
+    change = run.log.pdc_codes()[last:] - baseline
+    touching = load > 0
+    if np.count_nonzero(touching) < _FIT_FRAMES // 2 or np.ptp(load[touching]) == 0:  # too few, or no line to fit
         return None
-    slope, offset = np.polyfit(load[touching], change[touching], 1)
+    x, y = load[touching], change[touching]
+    dx = x - x.mean()
+    slope = float(dx @ (y - y.mean()) / (dx @ dx))  # least squares
+    offset = float(y.mean() - slope * x.mean())
     if not slope > 0:
         return None
     t = run.now + np.arange(horizon) * run.frame / run.sampler.slot_rate_Hz

@@ -163,3 +163,14 @@ def test_the_inputs_of_many_steps_at_once_are_each_steps_own():
     assert set(ambient) == {SensorParams().ambient_temperature_C, 30.0, 18}
     failed = ThermalModel(SensorParams(), ThermalEvents([]), seed=1, faults={"heater_failed": True})
     assert failed.inputs_at(t)[0] == [0.0] * t.size
+
+
+def test_one_column_of_the_thermal_outputs_is_that_column_of_all_three():
+    """:meth:`ThermalModel.value_at` gives :meth:`values_at`'s column, bit for bit, for a live contact."""
+    a = Sensor(stimuli=[lowered()], channels_read=("TDC", "TAC", "PDC"), seed=7).thermal
+    b = Sensor(stimuli=[lowered()], channels_read=("TDC", "TAC", "PDC"), seed=7).thermal
+    for t0 in (0.0, 1.3, 2.0, 4.1):
+        t = t0 + np.arange(0.0, 0.5, 1e-3)
+        every = a.values_at(t)
+        for column in range(3):
+            np.testing.assert_array_equal(b.value_at(t, column), every[:, column])
