@@ -261,6 +261,8 @@ def _volts_in_place(p: SensorParams, gaps_mm: np.ndarray, open_idx, short_idx) -
     if short_idx:
         z[..., short_idx] = 0.0
     z = np.add(z, p.electrode_load_ohm, out=z)
+    if not (open_idx or short_idx):  # every Z finite and > 0: nothing for np.errstate to silence (same numbers)
+        return np.divide(3.3 * p.electrode_load_ohm, z, out=z)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.divide(3.3 * p.electrode_load_ohm, z, out=z)
 

@@ -145,12 +145,21 @@ def static_pressure_from_force(force_N, p: SensorParams, slope_Pa_per_N: float |
     F = np.maximum(np.asarray(force_N, float), 0.0)
     k = p.force_to_pressure_Pa_per_N if slope_Pa_per_N is None else slope_Pa_per_N
     r, w, Fk = p.force_slope_above_knee, p.force_knee_width_N, p.force_knee_N
-    out = np.zeros_like(F)
     touching = F > 0  # most samples of a scene carry no force: skip the transcendental functions there
-    x = (F[touching] - Fk) / w
-    softplus = np.where(x > 30, x, np.log1p(np.exp(np.minimum(x, 30))))
+    every = bool(touching.all())  # ... and after a contact (the creep never quite returns to 0) none is idle
+    Ft = F if every else F[touching]
+    x = (Ft - Fk) / w
+    if x.size and x.max() <= 30:  # softplus(x) = x beyond 30 (to double precision); below, log(1 + eˣ)
+        softplus = np.log1p(np.exp(x))
+    else:
+        softplus = np.where(x > 30, x, np.log1p(np.exp(np.minimum(x, 30))))
     softplus0 = np.log1p(np.exp(-Fk / w))  # so that P(0) = 0
-    out[touching] = k * (F[touching] - (1 - r) * w * (softplus - softplus0))
+    pressure = k * (Ft - (1 - r) * w * (softplus - softplus0))
+    if every:
+        out = pressure
+    else:
+        out = np.zeros_like(F)
+        out[touching] = pressure
     return out if out.ndim else float(out)
 
 

@@ -3,7 +3,9 @@
 * the electrode gaps, worked in place from each contact's precomputed footprint, against the array formula of
   ``electrode_gaps_mm``'s docstring written out directly (with and without a shear shift, several contacts);
 * a first-order section run as a 2-tap ``lfilter`` against the same section as a 3-tap biquad;
-* the mains hum read from one tabulated period against the per-sample formula at the absolute index.
+* the mains hum read from one tabulated period against the per-sample formula at the absolute index;
+* the static force curve on a block where every sample presses (no masks) against the same samples beside an idle one;
+* ``filters.lfilter`` (lfilter's C routine called directly) against ``scipy.signal.lfilter``.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from emulator.effects import Block
 from emulator.electrodes import (Contact, bulge_balance, electrode_gaps_mm, electrode_positions_mm,
                                  indentation_fraction, resting_gaps_mm, surface_point_mm)
 from emulator.extrinsic import MainsHum
+from emulator.mechanics import static_pressure_from_force
 from emulator.params import SensorParams
 
 
@@ -85,3 +88,28 @@ def test_the_tabulated_hum_is_the_per_sample_formula_bit_for_bit():
     cut = np.concatenate([odd.process(Block(a, b - a, 8800.0), {})["stage1_input_V"]
                           for a, b in ((0, 7), (7, 1234), (1234, 3000))])
     assert np.array_equal(cut, whole)
+
+
+def test_the_force_curve_of_a_block_that_presses_throughout_is_the_masked_formulas():
+    p = SensorParams()
+    rng = np.random.default_rng(2)
+    for F in (np.exp(-np.linspace(0.0, 30.0, 5000)),  # a released contact creeping back: tiny but > 0
+              rng.uniform(0.0, 3.0, 5000),  # through the knee
+              rng.uniform(0.0, 40.0, 5000)):  # beyond x = 30, where softplus(x) = x
+        F[0] = max(F[0], 1e-3)
+        every = static_pressure_from_force(F, p)
+        beside_idle = static_pressure_from_force(np.concatenate([F, [0.0]]), p)  # one idle sample: the masks
+        assert np.array_equal(every, beside_idle[:-1]) and beside_idle[-1] == 0.0
+
+
+def test_lfilter_without_the_wrapper_gives_scipys_numbers():
+    rng = np.random.default_rng(5)
+    x1, x2 = rng.standard_normal(3000), rng.standard_normal((400, 19))
+    for b, a in (([0.2, 0.2], [1.0, -0.6]), ([0.1, 0.2, 0.1], [1.0, -1.5, 0.6]), ([1.0], [1.0, -0.3])):
+        b, a = np.array(b), np.array(a)
+        zi1 = rng.standard_normal(len(a) - 1)
+        zi2 = rng.standard_normal((len(a) - 1, 19))
+        for got, want in ((filters.lfilter(b, a, x1, zi1), signal.lfilter(b, a, x1, zi=zi1)),
+                          (filters.lfilter(b, a, x2, zi2, axis=0), signal.lfilter(b, a, x2, axis=0, zi=zi2))):
+            assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+
