@@ -279,7 +279,7 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
     return heights, slopes
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=8)  # (the movement grid's 6 forces each have their radii; < 1 MB each at default)
 def _patch_kernels(radii_m: tuple, dx_m: float, n_signal: int) -> list:
     """Per patch radius ``a`` (m): the half-width m (samples of ``dx_m``) of its Hertz line-load kernel
     ``∝ 1 − x²/a²`` (normalised to sum 1), the FFT length and the kernel's spectrum with which

@@ -241,3 +241,28 @@ def test_wear_needs_a_sliding_speed_and_a_fresh_skin_restores_the_ridges():
                 dict(visible_flat_width_m=0.5e-3)):
         with pytest.raises(ValueError):
             Skin(**bad)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("dx_m", [10e-6, 2.5e-6])
+def test_patch_averaged_heights_are_each_radius_line_load_convolved_with_the_surface(dx_m):
+    """The tables' heights equal, bit for bit, the surface under the track convolved with each patch radius's
+    normalised Hertz line load by scipy.signal.fftconvolve ("same"): the spectra shared between radii change no
+    value."""
+    from scipy.signal import fftconvolve
+
+    from emulator.sliding import _random_track, spatial_tables
+    from emulator.texture import periodic_profile
+
+    skin, start, length = Skin(), 0.0123, 0.02
+    radii = SensorParams().contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, 1.25, 8))
+    heights, _ = spatial_tables(GRATING, skin, 0.7, start, length, dx_m, radii)
+    rough = _random_track(GRATING, dx_m)
+    pad = int(np.ceil((radii.max() + skin.ridge_pitch_m) / dx_m)) + 2
+    n = int(np.ceil(length / dx_m)) + 2
+    k = np.arange(-pad, n + pad)
+    h = rough[(int(round(start / dx_m)) + k) % rough.size] + periodic_profile(GRATING, k * dx_m + start)
+    for row, a in zip(heights, radii):
+        m = max(1, int(np.floor(a / dx_m)))
+        w = np.clip(1.0 - ((np.arange(-m, m + 1) * dx_m) / a) ** 2, 0.0, None)
+        assert np.array_equal(row, fftconvolve(h, w / w.sum(), "same")[pad:pad + n])
