@@ -344,7 +344,7 @@ class Sensor:
                 out[at] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
         t0 = time.perf_counter()
         for column, at in thermal:
-            out[at] = (self.thermal.values_at(times[at])[:, column] if self.thermal is not None
+            out[at] = (self.thermal.value_at(times[at], column) if self.thermal is not None
                        else self.thermal_steady[column])
         t1 = time.perf_counter()
         if electrodes is not None:

@@ -74,10 +74,10 @@ class CoreTemperature(Effect):
         self.thermal = thermal
 
     def settle(self, inputs):
-        return {"bridge_temperature_C": float(self.thermal.values_at(np.array([0.0]))[0, 0])}
+        return {"bridge_temperature_C": float(self.thermal.value_at(np.array([0.0]), 0)[0])}
 
     def process(self, block: Block, inputs):
-        return {"bridge_temperature_C": self.thermal.values_at(block.times)[:, 0].copy()}
+        return {"bridge_temperature_C": self.thermal.value_at(block.times, 0)}
 
 
 class WhiteNoise(Effect):
