@@ -174,3 +174,26 @@ def test_one_column_of_the_thermal_outputs_is_that_column_of_all_three():
         every = a.values_at(t)
         for column in range(3):
             np.testing.assert_array_equal(b.value_at(t, column), every[:, column])
+
+
+@pytest.mark.parametrize("name", ["aluminum", "glass", "polyurethane foam"])
+def test_compiled_steps_are_numpys_steps_bit_for_bit(name):
+    """The live network's stepwise runs (compiled) give numpy's Φ @ x + Γu step by step, to the bit, on the network's
+    own discretizations (the same BLAS product is called; a machine where it is not would fail here)."""
+    from emulator.thermal import _steps
+
+    net = shared_network(SensorParams())
+    rng = np.random.default_rng(4)
+    for area in np.geomspace(1e-7, 5e-5, 12):
+        Phi, Gam = net.discrete((thermal_material(name), float(area)), 0.01, True)
+        gu = Gam @ np.array([0.3, 22.0, 25.0, 1e-5])
+        x = 20.0 + 15.0 * rng.random(net.n)
+        expected = np.empty((40, net.n))
+        y = x
+        for i in range(40):
+            y = Phi @ y + gu
+            expected[i] = y
+        got = np.empty((40, net.n))
+        last = _steps(np.ascontiguousarray(Phi), x, gu, got)
+        np.testing.assert_array_equal(got, expected)
+        np.testing.assert_array_equal(last, expected[-1])
