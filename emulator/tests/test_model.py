@@ -163,3 +163,18 @@ def test_analog_trace_does_not_depend_on_how_the_instants_are_chunked():
     pieces = Sensor(stimuli=stimuli, channels_read=["PAC", "PDC"], seed=5).analog_trace("PAC", t, chunk_s=0.137)
     assert whole.shape == t.shape and np.all(np.isfinite(whole))
     np.testing.assert_array_equal(whole, pieces)
+
+
+def test_each_batch_is_read_by_its_own_channels_whatever_the_batch_before():
+    """analog() keeps the last batch's channel plan: batches of the same length with their channels in another
+    order read what a sensor planning every batch afresh reads (the multiplexer's memory included), and an
+    undeclared channel is still refused."""
+    from emulator.channels import channel_index
+    frame = np.array([channel_index(n) for n in DEFAULT_FRAME_NAMES])
+    kept, fresh = (Sensor(channels_read=DEFAULT_FRAME_NAMES, seed=2) for _ in range(2))
+    for k, channels in enumerate((frame, frame[::-1], frame[::-1], np.roll(frame, 5), frame)):
+        times = (np.arange(44) + 44 * k) / 4400.0
+        fresh._last_plan = None  # no plan kept: each batch planned from its own channels
+        assert np.array_equal(kept.analog(channels, times), fresh.analog(channels, times)), k
+    with pytest.raises(ValueError, match="not declared"):
+        kept.analog(np.r_[frame[:43], 9], (np.arange(44) + 44 * 5) / 4400.0)
