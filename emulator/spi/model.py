@@ -41,6 +41,7 @@ next transfer on the bus starts (or at :meth:`Bus.flush`), so results never depe
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -127,7 +128,7 @@ def default_properties(index: int = 1, variant: str = ch.DEFAULT_VARIANT,
     The sampling-pattern property holds the variant's default frame (44 commands, 54 on the SP).
     """
     v = ch.variant(variant)
-    pattern = bytes(int(proto.sample_command(v.channel_index[n])) for n in v.frame_names)
+    pattern = _pattern(v.name)
     flex, firmware = VERSIONS[v.name]
     return {
         PROP_FLEX: (flex, True),
@@ -137,6 +138,13 @@ def default_properties(index: int = 1, variant: str = ch.DEFAULT_VARIANT,
         PROP_FS: ((4400).to_bytes(2, "big"), False),
         PROP_PATTERN: (pattern, True),
     }
+
+
+@functools.lru_cache(maxsize=None)
+def _pattern(variant: str) -> bytes:
+    """The sampling commands of a variant's default frame (the sampling-pattern property's bytes)."""
+    v = ch.variant(variant)
+    return bytes(int(proto.sample_command(v.channel_index[n])) for n in v.frame_names)
 
 
 @dataclass
