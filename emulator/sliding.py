@@ -219,7 +219,10 @@ def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) ->
     table_N, table_depth = _depth_table(params.contact_stiffness_N_per_m1_5, params.contact_radius_at_1N_m,
                                         texture.modulus_Pa)
     d = np.asarray(depth_m, float)
-    return np.where(d > 0, np.interp(d, table_depth, table_N), 0.0)
+    out = np.zeros(d.shape)
+    pressed = d > 0
+    out[pressed] = np.interp(d[pressed], table_depth, table_N)  # (the finger above the surface: no load)
+    return out
 
 
 def commanded_load_N(motion: CommandedMotion, params: SensorParams, t) -> np.ndarray:
