@@ -186,9 +186,11 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
         lines += [f"| {k} | {v['validation_median_abs_z']:.2f} | {v['leave_one_out_median_abs_z']:.2f} | "
                   f"{v['ratio']:.2f} |" for k, v in record["spread_check"].items()]
     w = record["skin_wear"]
+    visible = f"{100 * w['first_visible_wear_fraction']:.1f} %"
     policy = ("skin wear off" if not w["wear"] else "never replaced" if w["replace_at"] is None else
-              f"a fresh skin once the ridges lost {100 * w['replace_at']:.1f} % of their height (the first visible "
-              f"wear is {100 * w['first_visible_wear_fraction']:.1f} %)")
+              f"at the first visible wear, {visible} of the ridge height lost"
+              if w["replace_at"] == w["first_visible_wear_fraction"] else
+              f"once the ridges lost {100 * w['replace_at']:.1f} % of their height; first visible wear: {visible}")
     lines += ["", f"Skin replacements in the training and validation session: {record['skin_replacements']} "
               f"({policy}). Wear law: worn volume k·N·d/H·(N·v/P_ref)^β with k = {w['wear_coefficient']:.2g} and "
               f"β = {w['wear_power_exponent']:.2g}, both calibrated to D's wear observations (k: two replacements "
