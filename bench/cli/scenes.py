@@ -55,7 +55,7 @@ scene file (TOML):
                   textures), force_N, velocity_mm_per_s, distance_mm; approach_s (0.3), hold_s (0.5),
                   accel_s (0.05), lift_s (0.2), start_position_mm (default: drawn from the seed)
      replace_skin at_s   (a fresh skin between slides)
-  [skin]     fingerprints = true | false, ridge_height_um (200 = new), wear = true, wear_coefficient (2.5e-5)
+  [skin]     fingerprints = true | false, ridge_height_um (200 = new), wear = true, wear_coefficient (7.7e-6)
   [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
              heater_failed = true
 

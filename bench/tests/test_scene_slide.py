@@ -31,8 +31,7 @@ def _problems(*stimuli, **kw):
 
 
 def test_every_start_time_is_a_trial_on_one_skin_that_wears():
-    sc = _scene(_slide(start_s=[0.5, 3.0, 5.5], force_N=2.0, velocity_mm_per_s=100, distance_mm=50),
-                skin={"wear_coefficient": 1e-3})
+    sc = _scene(_slide(start_s=[0.5, 3.0, 5.5], force_N=1.26, velocity_mm_per_s=63.1, distance_mm=50))
     slides = [s for s in sc.stimuli if isinstance(s, Slide)]
     assert [s.start_s for s in slides] == [0.5, 3.0, 5.5]
     heights = [st["ridge_height_m"] for st in sc.trial_skins]
@@ -42,8 +41,8 @@ def test_every_start_time_is_a_trial_on_one_skin_that_wears():
 
 
 def test_a_skin_replacement_restores_the_ridges_and_wear_can_be_switched_off():
-    sc = _scene(_slide(start_s=[0.5, 3.0], force_N=2.0, velocity_mm_per_s=100, distance_mm=50),
-                {"kind": "replace_skin", "at_s": 2.9}, skin={"wear_coefficient": 1e-3})
+    sc = _scene(_slide(start_s=[0.5, 3.0], force_N=1.26, velocity_mm_per_s=63.1, distance_mm=50),
+                {"kind": "replace_skin", "at_s": 2.9})
     assert sc.trial_skins[1]["ridge_height_m"] == sc.skin_before["ridge_height_m"]
     assert sc.trial_skins[1]["serial"] == 2
     still = _scene(_slide(start_s=[0.5, 3.0]), skin={"wear": False})
