@@ -10,9 +10,11 @@ classifier or the strategies re-runs no sliding:
 2. **training** — every texture × the three chosen movements × repetitions, in one session on one skin that
    wears and is replaced at the first visible wear (as D did);
 3. **validation** — a separate set of trials (other seeds, so other start positions), on the same skin as the
-   session goes on, for pairs of similar textures: by default disjoint pairs drawn at random (from the seed)
-   within the library's groups — textures of one kind, as D's pairs were; ``pair_choice = "most-confused"`` takes
-   the within-group pairs the training model confuses most instead (a harder test);
+   session goes on, for pairs of similar textures: by default (``pair_choice = "similar-description"``) the
+   disjoint pairs nearest in physical description that share group, thermal material and compliance
+   (:mod:`bench.experiments.pairs`, standing for D's hand choice); ``"random-within-group"`` draws pairs of one
+   library group from the seed, ``"most-confused"`` takes the within-group pairs the training model confuses most
+   (a harder test), or the file lists ``pairs``;
 4. **virtual exploration** — Monte Carlo as D: pairs (1000 simulations each, threshold 99.9 %) and 117-way
    identification of the validation textures (threshold 99 %), for each strategy (bayesian, cycle, random).
 
@@ -33,6 +35,7 @@ import numpy as np
 from bench import tomlfile
 from bench.errors import BenchError
 from bench.experiments import exploration as ex
+from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
 from bench.experiments.trials import (
     FIRST_VISIBLE_WEAR, TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
 )
@@ -74,7 +77,7 @@ class ExperimentSpec:
     replace_at: float = FIRST_VISIBLE_WEAR  # fraction of the ridge height lost at which the skin is replaced
     pairs: list[tuple[int, int]] | None = None  # None = chosen from the training model
     n_pairs: int = 8
-    pair_choice: str = "random-within-group"  # or "most-confused"
+    pair_choice: str = "similar-description"  # one of pairs.PAIR_CHOICES
     validation_trials: int = 5
     strategies: tuple[str, ...] = STRATEGY_NAMES
     pair_threshold: float = 0.999
@@ -195,8 +198,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
                 problems.append(f"validation.pairs: no texture {bad} in the library")
     spec.n_pairs = get("validation", "n_pairs", int, 1, 58, spec.n_pairs)
     choice = t["validation"].get("pair_choice", spec.pair_choice)
-    if choice not in ("random-within-group", "most-confused"):
-        problems.append(f"validation.pair_choice = {choice!r}: \"random-within-group\" or \"most-confused\"")
+    if choice not in PAIR_CHOICES:
+        problems.append(f"validation.pair_choice = {choice!r}: one of " + ", ".join(f'"{c}"' for c in PAIR_CHOICES))
     else:
         spec.pair_choice = choice
     spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
@@ -281,12 +284,21 @@ class ExperimentResult:
     wall_s: dict = field(default_factory=dict)
 
 
-def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: str, seed: int) -> list[tuple[int, int]]:
-    """``n_pairs`` disjoint pairs of textures of one library group: drawn at random (``random-within-group``),
-    or those with the highest mean confusion at the best movements (``most-confused``)."""
+def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: str, seed: int,
+                source: str = "<experiment>") -> list[tuple[int, int]]:
+    """``n_pairs`` disjoint pairs of textures of one library group: nearest in description
+    (``similar-description``, :mod:`bench.experiments.pairs`), drawn at random (``random-within-group``), or those
+    with the highest mean confusion at the best movements (``most-confused``). ExperimentError if the training
+    textures hold fewer such pairs."""
     from bench.textures.library import load_library
 
     lib = load_library()
+    if choice == "similar-description":
+        pairs = similar_description_pairs(model.textures, n_pairs, lib)
+        if len(pairs) < n_pairs:
+            raise ExperimentError(source, [f"validation.n_pairs = {n_pairs}: the training textures hold only "
+                                           f"{len(pairs)} disjoint similar pairs (pair_choice = {choice!r})"])
+        return pairs
     conf = model.confusion()  # (K, K, M, P)
     mi = model.movement_index(best)
     c = np.mean([conf[:, :, mi[p], p] for p in range(3)], axis=0)
@@ -357,7 +369,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         wall["training"] = time.perf_counter() - t0
         # 3. validation: the session goes on with the same skin
         t0 = time.perf_counter()
-        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs, spec.pair_choice, spec.seed)
+        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs, spec.pair_choice, spec.seed, spec.source)
         val_textures = sorted({n for p in pairs for n in p} | (set(textures) if spec.identify_all_textures else set()))
         val_tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,

@@ -1,0 +1,108 @@
+"""Which textures form the validation pairs of the texture experiment (D ch. 6: "eight pairs of similar textures").
+
+D's experimenter chose the pairs by hand, for a human discrimination study, taking care that the two textures of a
+pair had no property other than texture — compliance or thermal feel — that a person could tell them apart by.
+``similar-description`` (the default) stands for that choice with the textures' physical descriptions in the
+library, never with a classifier's outcome. Two textures are *admissible* as a pair when they
+
+- belong to one library group (one kind of material, as D's human subjects saw it);
+- are of one thermal ``material`` (same conductivity, density, heat capacity: same thermal feel);
+- feel equally compliant: both rigid to a fingertip (modulus ≥ :data:`RIGID_MODULUS_PA`, ten times the ~1 MPa
+  fingertip or BioTac skin, so the finger, not the surface, deforms) or moduli within a factor
+  :data:`COMPLIANCE_RATIO` (about two Weber fractions of compliance discrimination, ~22 %, Tan et al. 1995);
+- both have a periodic relief (ridges, weave) or both have none (they look alike).
+
+Among admissible pairs the *description distance* is the Euclidean distance of :func:`description_features` —
+log₁₀ RMS height, log₁₀ correlation length, Hurst exponent, static friction μ, and for ridged textures log₁₀ track
+period and log₁₀ amplitude of the strongest periodic component — each divided by its spread (standard deviation)
+over the 117 textures, so no feature weighs by its units. Logs for lengths (a ratio of heights or periods is
+what changes the feel, Weber's law); linear for μ and the Hurst exponent (dimensionless, narrow ranges).
+
+Pairs are taken greedily, nearest first (ties by texture number), disjoint, at most one pair per library group
+while groups remain (D's sixteen textures came from different kinds of material), then from any group.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+PAIR_CHOICES = ("similar-description", "random-within-group", "most-confused")
+#: a surface at least this stiff (Pa) feels rigid to a fingertip (~1 MPa pulp, BioTac skin alike)
+RIGID_MODULUS_PA = 10e6
+#: largest modulus ratio of two compliant surfaces that feel equally soft
+COMPLIANCE_RATIO = 1.5
+FEATURES = ("log10 RMS height", "log10 correlation length", "Hurst", "mu_static", "log10 track period",
+            "log10 ridge amplitude")
+
+
+def description_features(t) -> np.ndarray:
+    """The six :data:`FEATURES` of a texture (lengths in m before the log); the two periodic ones NaN without
+    a periodic relief."""
+    p = max(t.periodic, key=lambda c: c.amplitude_m) if t.periodic else None
+    return np.array([math.log10(t.rms_height_m), math.log10(t.correlation_length_m), t.hurst, t.mu_static,
+                     math.log10(p.track_period_m) if p else np.nan, math.log10(p.amplitude_m) if p else np.nan])
+
+
+def feature_scales(lib: dict) -> np.ndarray:
+    """Spread (standard deviation) of each feature over the library's 117 textures (periodic ones: over the
+    ridged textures)."""
+    f = np.array([description_features(t) for n, t in sorted(lib.items()) if n <= 117])
+    return np.nanstd(f, axis=0)
+
+
+def admissible(ta, tb) -> str | None:
+    """None if two textures may form a similar pair, else the reason they may not."""
+    if ta.group != tb.group:
+        return "different groups"
+    if ta.material != tb.material:
+        return "different thermal materials"
+    ea, eb = ta.modulus_Pa, tb.modulus_Pa
+    if min(ea, eb) < RIGID_MODULUS_PA and max(ea, eb) > COMPLIANCE_RATIO * min(ea, eb):
+        return "different compliance"
+    if bool(ta.periodic) != bool(tb.periodic):
+        return "one has a periodic relief, the other none"
+    return None
+
+
+def description_distance(ta, tb, scales: np.ndarray) -> float:
+    """Distance of two textures' descriptions in units of the library's spread (absent periodic features: 0)."""
+    d = np.nan_to_num((description_features(ta) - description_features(tb)) / scales)
+    return float(np.sqrt(np.sum(d * d)))
+
+
+def similar_description_pairs(textures, n_pairs: int, lib: dict) -> list[tuple[int, int]]:
+    """Up to ``n_pairs`` disjoint admissible pairs among ``textures`` (ids), nearest descriptions first, one per
+    library group while possible (see the module docstring)."""
+    scales = feature_scales(lib)
+    ids = sorted(int(n) for n in textures)
+    cands = sorted((description_distance(lib[a], lib[b], scales), a, b)
+                   for i, a in enumerate(ids) for b in ids[i + 1:] if admissible(lib[a], lib[b]) is None)
+    used, groups, pairs = set(), set(), []
+    for one_per_group in (True, False):
+        for _, a, b in cands:
+            if len(pairs) == n_pairs:
+                return pairs
+            if a in used or b in used or (one_per_group and lib[a].group in groups):
+                continue
+            pairs.append((a, b))
+            used |= {a, b}
+            groups.add(lib[a].group)
+    return pairs
+
+
+def pair_separation_sigma(model, best, pairs) -> list[list[float]]:
+    """Diagnostic only: per pair and property, |difference of the training means| over the pooled training σ,
+    √((σa² + σb²)/2), at the property's optimal movement."""
+    mi = model.movement_index(best)
+    out = []
+    for a, b in pairs:
+        ia, ib = model.texture_index([a, b])
+        row = []
+        for p in range(3):
+            ma, mb = model.mean[ia, mi[p], p], model.mean[ib, mi[p], p]
+            sa, sb = model.sigma[ia, mi[p], p], model.sigma[ib, mi[p], p]
+            row.append(float(abs(ma - mb) / math.sqrt((sa * sa + sb * sb) / 2)))
+        out.append(row)
+    return out
