@@ -17,6 +17,7 @@ import numpy as np  # noqa: E402
 from bench.experiments import exploration as ex  # noqa: E402
 from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines, movement_label,  # noqa: E402
                                           summary, table_from_rows)
+from bench.experiments.pairs import pair_separation_sigma  # noqa: E402
 
 
 def _atomic(path: Path, text: str) -> None:
@@ -82,7 +83,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
         names.append("confusion.csv")
     record = {"spec": {k: v for k, v in vars(result.spec).items()}, "best_movements":
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
-              "pairs": result.pairs, "summary": s, "bayesian_beats_baselines_on": beats_baselines(result),
+              "pairs": result.pairs, "pair_separation_sigma": _pair_separation(result), "summary": s, "bayesian_beats_baselines_on": beats_baselines(result),
               "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
               "skin_wear": _skin_wear(result.spec),
               "spread_check": ex.spread_check(table_from_rows(result.training_rows),
@@ -95,6 +96,28 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     _atomic(out / "report.md", markdown(result, record, lib))
     names.append("report.md")
     return names
+
+
+#: how the report introduces the validation pairs, per ``pair_choice``
+PAIR_TEXT = {
+    "similar-description": "Disjoint pairs of similar textures, chosen from the library's descriptions alone as D's "
+                           "experimenter chose them by eye and touch: same group, same thermal material, same "
+                           "compliance, both ridged or both not, nearest in roughness, correlation length, Hurst "
+                           "exponent, friction and ridge period/amplitude, one pair per group "
+                           "(bench/experiments/pairs.py):",
+    "random-within-group": "Disjoint pairs drawn at random (from the experiment's seed) within the library's texture "
+                           "groups: textures of one kind (D's pairs were chosen by people):",
+    "most-confused": "The disjoint pairs within a texture group that the training model confuses most at the three "
+                     "optimal movements (a harder test than D's, whose pairs were chosen by people):",
+}
+
+
+def _pair_separation(result: ExperimentResult) -> list[list[float]] | None:
+    """Per pair, its textures' training separation in pooled σ per property (diagnostic; None without training)."""
+    if not result.training_rows or not result.pairs:
+        return None
+    model = ex.fit_model(table_from_rows(result.training_rows))
+    return pair_separation_sigma(model, result.best_movements, result.pairs)
 
 
 def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
@@ -170,12 +193,14 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                   f"converges in no "
                   f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} identified textures.", "",
               "## Pairs of similar textures", "",
-              ("Disjoint pairs drawn at random (from the experiment's seed) within the library's texture groups: "
-               "textures of one kind, as D's were (D's pairs were chosen by people):"
-               if result.spec.pair_choice == "random-within-group" else
-               "The disjoint pairs within a texture group that the training model confuses most at the three "
-               "optimal movements (a harder test than D's, whose pairs were chosen by people):"), ""]
-    lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}" for a, b in result.pairs]
+              "The pairs as the experiment file lists them:" if result.spec.pairs else PAIR_TEXT[result.spec.pair_choice],
+              "", "Beside each pair, as a diagnostic only (the choice does not use it): how far apart its two textures "
+                  "are in the training data, |difference of means| / pooled σ at each property's optimal movement "
+                  "(traction / roughness / fineness).", ""]
+    sep = record.get("pair_separation_sigma") or [None] * len(result.pairs)
+    lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}"
+              + ("" if d is None else " — " + " / ".join(f"{x:.1f}" for x in d) + " σ")
+              for (a, b), d in zip(result.pairs, sep)]
     if record.get("spread_check"):
         lines += ["", "## Do the validation trials look like the training trials?", "",
                   "Median |z| of each validation trial against its texture's training normal, beside each training "
