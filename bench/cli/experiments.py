@@ -107,6 +107,11 @@ pilot (dissimilar textures × 36 movements) → the movement of least uncertaint
 texture × those movements, one skin that wears and is replaced) → validation trials for pairs of similar
 textures → virtual exploration (Monte Carlo: pairs, and 117-way identification) for each strategy.
 
+The pairs ([validation] pair_choice): "similar-description" (default; as D's experimenter chose them, from the
+library's descriptions: same group, thermal material and compliance, nearest in surface and friction),
+"random-within-group" (drawn from the seed), "most-confused" (the training model's hardest), or
+pairs = [[a, b], ...].
+
 Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
 stage's trials are cached in out/cache by content hash, so changing the classifier settings re-runs no sliding.
 
