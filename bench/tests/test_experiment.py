@@ -3,6 +3,7 @@ hash, outputs, and the experiment file's validation."""
 
 import json
 
+import numpy as np
 import pytest
 
 from bench.campaigns.engine import ClusterSpec
@@ -35,6 +36,7 @@ def test_shipped_experiment_files_validate():
     ({"validation": {"pairs": [[2, 3, 4]]}}, ["validation.pairs"]),
     ({"pilot": {"movements": [0, 99, 1]}}, ["pilot.movements"]),
     ({"training": {"replace_at": 0.0}}, ["training.replace_at = 0.0", "0.01 to 1.0"]),
+    ({"validation": {"pair_choice": "nearest"}}, ["validation.pair_choice = 'nearest'", '"similar-description"']),
 ])
 def test_bad_experiment_files_name_field_and_value(data, words):
     with pytest.raises(E.ExperimentError) as e:
@@ -181,3 +183,73 @@ def test_the_wear_law_meets_d_wear_observations_with_its_calibrated_knobs():
     k = 2.5 * T.FIRST_VISIBLE_WEAR * skin.ridge_height_new_m / unit * skin.wear_coefficient
     flat_law = replace(skin, wear_coefficient=k)
     assert 60 * flat_law.height_lost(0.317, 0.05, area(0.317), 0.1) < 0.2 * T.FIRST_VISIBLE_WEAR * 2e-4
+
+
+# ------------------------------------------------------------------------- the validation pairs (D: "similar")
+
+#: the eight pairs the shipped rule takes from the 117 (a change to the rule or the library shows here first)
+SHIPPED_PAIRS = [(85, 86), (4, 5), (59, 64), (101, 114), (74, 75), (116, 117), (48, 50), (14, 15)]
+
+
+def test_similar_pairs_meet_their_definition_and_are_taken_nearest_first():
+    from bench.experiments import pairs as P
+    from bench.textures.library import load_library
+
+    lib = load_library()
+    chosen = P.similar_description_pairs(range(1, 118), 8, lib)
+    assert chosen == SHIPPED_PAIRS
+    scales = P.feature_scales(lib)
+    dist = [P.description_distance(lib[a], lib[b], scales) for a, b in chosen]
+    assert dist == sorted(dist)  # greedy: nearest first
+    used, groups = set(), set()
+    for (a, b), d in zip(chosen, dist):
+        ta, tb = lib[a], lib[b]
+        assert ta.group == tb.group and ta.material == tb.material and bool(ta.periodic) == bool(tb.periodic)
+        e = sorted([ta.modulus_Pa, tb.modulus_Pa])
+        assert e[0] >= P.RIGID_MODULUS_PA or e[1] <= P.COMPLIANCE_RATIO * e[0]
+        assert not {a, b} & used and ta.group not in groups  # disjoint, one pair per group
+        # no nearer admissible pair was free when this one was taken
+        for i in range(1, 118):
+            for j in range(i + 1, 118):
+                if {i, j} & used or lib[i].group in groups or P.admissible(lib[i], lib[j]) is not None:
+                    continue
+                assert P.description_distance(lib[i], lib[j], scales) >= d
+        used |= {a, b}
+        groups.add(ta.group)
+
+
+@pytest.mark.parametrize("a, b, reason", [
+    (14, 15, None),                                        # 220- and 400-grit sandpaper: both rigid
+    (116, 117, None),                                      # rabbit and faux fur: 2 and 3 kPa, a factor 1.5
+    (1, 2, "periodic relief"),                             # copy paper / linen paper (ridged)
+    (47, 54, "thermal materials"),                         # rubber / silicone
+    (67, 70, "compliance"),                                # smooth leather 15 MPa / suede 2 MPa
+    (4, 16, "groups"),                                     # newsprint / cork
+])
+def test_similar_pair_admissibility_names_what_differs(a, b, reason):
+    from bench.experiments.pairs import admissible
+    from bench.textures.library import load_library
+
+    lib = load_library()
+    got = admissible(lib[a], lib[b])
+    assert (got is None) if reason is None else (reason in got)
+
+
+def test_too_few_similar_pairs_is_an_experiment_error_naming_n_pairs():
+    model = E.ex.TextureModel(textures=np.array([4, 5, 16]), movements=np.arange(3), mean=np.zeros((3, 3, 3)),
+                              sigma=np.ones((3, 3, 3)), n_trials=np.full((3, 3, 3), 5))
+    assert E._pick_pairs(model, np.arange(3), 1, "similar-description", 0) == [(4, 5)]
+    with pytest.raises(E.ExperimentError, match="validation.n_pairs = 2"):
+        E._pick_pairs(model, np.arange(3), 2, "similar-description", 0, "x.toml")
+
+
+def test_pair_separation_is_the_mean_difference_over_the_pooled_sigma():
+    from bench.experiments.pairs import pair_separation_sigma
+
+    mean = np.zeros((2, 3, 3))
+    mean[1, 2, 1] = 6.0  # roughness differs at movement 2
+    sigma = np.ones((2, 3, 3))
+    sigma[1] = 7.0 ** 0.5  # pooled σ √((1 + 7)/2) = 2
+    model = E.ex.TextureModel(textures=np.array([4, 5]), movements=np.arange(3), mean=mean, sigma=sigma,
+                              n_trials=np.full((2, 3, 3), 5))
+    assert pair_separation_sigma(model, np.array([0, 2, 1]), [(4, 5)]) == [[0.0, 3.0, 0.0]]
