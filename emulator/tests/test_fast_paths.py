@@ -90,16 +90,26 @@ def test_the_tabulated_hum_is_the_per_sample_formula_bit_for_bit():
     assert np.array_equal(cut, whole)
 
 
+def _force_curve_by_the_formula(F, p):
+    """k·(F − (1 − r)·w·(softplus((F − F_knee)/w) − softplus(−F_knee/w))), softplus(x) = x beyond x = 30."""
+    k, r, w, Fk = p.force_to_pressure_Pa_per_N, p.force_slope_above_knee, p.force_knee_width_N, p.force_knee_N
+    x = (F - Fk) / w
+    softplus = np.where(x > 30, x, np.log1p(np.exp(np.minimum(x, 30))))
+    return k * (F - (1 - r) * w * (softplus - np.log1p(np.exp(-Fk / w))))
+
+
 def test_the_force_curve_of_a_block_that_presses_throughout_is_the_masked_formulas():
     p = SensorParams()
     rng = np.random.default_rng(2)
     for F in (np.exp(-np.linspace(0.0, 30.0, 5000)),  # a released contact creeping back: tiny but > 0
               rng.uniform(0.0, 3.0, 5000),  # through the knee
-              rng.uniform(0.0, 40.0, 5000)):  # beyond x = 30, where softplus(x) = x
+              rng.uniform(0.0, 8.0, 5000),  # x = (F − F_knee)/w up to 75: across 30, where softplus(x) = x
+              rng.uniform(0.0, 40.0, 5000)):
         F[0] = max(F[0], 1e-3)
         every = static_pressure_from_force(F, p)
         beside_idle = static_pressure_from_force(np.concatenate([F, [0.0]]), p)  # one idle sample: the masks
         assert np.array_equal(every, beside_idle[:-1]) and beside_idle[-1] == 0.0
+        assert np.array_equal(every, _force_curve_by_the_formula(F, p))
 
 
 def test_lfilter_without_the_wrapper_gives_scipys_numbers():
