@@ -28,9 +28,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 from scipy import fft as scipy_fft
-from scipy.signal import lfilter
 
-from emulator import friction
+from emulator import filters, friction
 from emulator.effects import Block, Effect, effect_rng
 from emulator.params import SensorParams
 from emulator.skin import Skin
@@ -414,7 +413,7 @@ class SlidingContact(Effect):
             normal_out[a:b] += normal + p.tangential_coupling * tang
             tangential_out[a:b] += tang
             load_out[a:b] += normal
-            stage, c["stage_zi"] = lfilter(*self._stage_ba, tang, zi=c["stage_zi"])
+            stage, c["stage_zi"] = filters.lfilter(*self._stage_ba, tang, c["stage_zi"])
             stage_out[a:b] += stage
             # the force log: grid samples whose index is a multiple of log_every (independent of block size)
             keep = slice(-(block.n0 + a) % self.log_every, None, self.log_every)
