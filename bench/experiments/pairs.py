@@ -12,11 +12,12 @@ library, never with a classifier's outcome. Two textures are *admissible* as a p
   :data:`COMPLIANCE_RATIO` (about two Weber fractions of compliance discrimination, ~22 %, Tan et al. 1995);
 - both have a periodic relief (ridges, weave) or both have none (they look alike).
 
-Among admissible pairs the *description distance* is the Euclidean distance of :func:`description_features` —
-log₁₀ RMS height, log₁₀ correlation length, Hurst exponent, static friction μ, and for ridged textures log₁₀ track
-period and log₁₀ amplitude of the strongest periodic component — each divided by its spread (standard deviation)
-over the 117 textures, so no feature weighs by its units. Logs for lengths (a ratio of heights or periods is
-what changes the feel, Weber's law); linear for μ and the Hurst exponent (dimensionless, narrow ranges).
+Among admissible pairs the *description distance* is the Euclidean distance of
+:func:`description_features` — log₁₀ RMS height, log₁₀ correlation length, Hurst exponent, static friction μ,
+and for ridged textures log₁₀ track period and log₁₀ amplitude of the strongest periodic component — each
+divided by its spread (standard deviation) over the 117 textures, so no feature weighs by its units. Logs for lengths (a
+ratio of heights or periods is what changes the feel, Weber's law); linear for μ and the Hurst exponent
+(dimensionless, narrow ranges).
 
 Pairs are taken greedily, nearest first (ties by texture number), disjoint, at most one pair per library group
 while groups remain (D's sixteen textures came from different kinds of material), then from any group.
@@ -92,17 +93,12 @@ def similar_description_pairs(textures, n_pairs: int, lib: dict) -> list[tuple[i
     return pairs
 
 
-def pair_separation_sigma(model, best, pairs) -> list[list[float]]:
-    """Diagnostic only: per pair and property, |difference of the training means| over the pooled training σ,
-    √((σa² + σb²)/2), at the property's optimal movement."""
-    mi = model.movement_index(best)
+def pair_separation_sigma(model, pairs) -> list[list[float]]:
+    """Diagnostic only: per pair and property, the largest |difference of the training means| over the pooled
+    training σ, √((σa² + σb²)/2), over the model's movements (those exploration can choose)."""
     out = []
     for a, b in pairs:
         ia, ib = model.texture_index([a, b])
-        row = []
-        for p in range(3):
-            ma, mb = model.mean[ia, mi[p], p], model.mean[ib, mi[p], p]
-            sa, sb = model.sigma[ia, mi[p], p], model.sigma[ib, mi[p], p]
-            row.append(float(abs(ma - mb) / math.sqrt((sa * sa + sb * sb) / 2)))
-        out.append(row)
+        pooled = np.sqrt((model.sigma[ia] ** 2 + model.sigma[ib] ** 2) / 2)  # (M, 3)
+        out.append([float(x) for x in np.max(np.abs(model.mean[ia] - model.mean[ib]) / pooled, axis=0)])
     return out

@@ -83,7 +83,8 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
         names.append("confusion.csv")
     record = {"spec": {k: v for k, v in vars(result.spec).items()}, "best_movements":
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
-              "pairs": result.pairs, "pair_separation_sigma": _pair_separation(result), "summary": s, "bayesian_beats_baselines_on": beats_baselines(result),
+              "pairs": result.pairs, "pair_separation_sigma": _pair_separation(result), "summary": s,
+              "bayesian_beats_baselines_on": beats_baselines(result),
               "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
               "skin_wear": _skin_wear(result.spec),
               "spread_check": ex.spread_check(table_from_rows(result.training_rows),
@@ -117,7 +118,7 @@ def _pair_separation(result: ExperimentResult) -> list[list[float]] | None:
     if not result.training_rows or not result.pairs:
         return None
     model = ex.fit_model(table_from_rows(result.training_rows))
-    return pair_separation_sigma(model, result.best_movements, result.pairs)
+    return pair_separation_sigma(model, result.pairs)
 
 
 def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
@@ -193,10 +194,11 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                   f"converges in no "
                   f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} identified textures.", "",
               "## Pairs of similar textures", "",
-              "The pairs as the experiment file lists them:" if result.spec.pairs else PAIR_TEXT[result.spec.pair_choice],
-              "", "Beside each pair, as a diagnostic only (the choice does not use it): how far apart its two textures "
-                  "are in the training data, |difference of means| / pooled σ at each property's optimal movement "
-                  "(traction / roughness / fineness).", ""]
+              "The pairs as the experiment file lists them:" if result.spec.pairs
+              else PAIR_TEXT[result.spec.pair_choice],
+              "", "Beside each pair, as a diagnostic only (the choice does not use it): how far apart its two "
+                  "textures are in the training data: per property, the largest |difference of means| / pooled σ "
+                  "over the trained movements (traction / roughness / fineness).", ""]
     sep = record.get("pair_separation_sigma") or [None] * len(result.pairs)
     lines += [f"- T{a} {lib[a].name} / T{b} {lib[b].name}"
               + ("" if d is None else " — " + " / ".join(f"{x:.1f}" for x in d) + " σ")

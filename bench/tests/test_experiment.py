@@ -243,13 +243,14 @@ def test_too_few_similar_pairs_is_an_experiment_error_naming_n_pairs():
         E._pick_pairs(model, np.arange(3), 2, "similar-description", 0, "x.toml")
 
 
-def test_pair_separation_is_the_mean_difference_over_the_pooled_sigma():
+def test_pair_separation_is_the_largest_mean_difference_over_the_pooled_sigma():
     from bench.experiments.pairs import pair_separation_sigma
 
     mean = np.zeros((2, 3, 3))
-    mean[1, 2, 1] = 6.0  # roughness differs at movement 2
+    mean[1, 2, 1] = 6.0  # roughness differs by 6 at movement 2, by 1 at movement 0
+    mean[1, 0, 1] = -1.0
     sigma = np.ones((2, 3, 3))
     sigma[1] = 7.0 ** 0.5  # pooled σ √((1 + 7)/2) = 2
     model = E.ex.TextureModel(textures=np.array([4, 5]), movements=np.arange(3), mean=mean, sigma=sigma,
                               n_trials=np.full((2, 3, 3), 5))
-    assert pair_separation_sigma(model, np.array([0, 2, 1]), [(4, 5)]) == [[0.0, 3.0, 0.0]]
+    assert pair_separation_sigma(model, [(4, 5)]) == [[0.0, 3.0, 0.0]]
