@@ -201,6 +201,9 @@ class TextureRig:
         # baseline is read whatever it reads, is given now for that instant (nothing is computed yet), so the
         # baseline is read in one go with the first stretch of the lowering.
         first = int(round(s.baseline_s / frame_s))  # frames read before the lowering command
+        if first < 1:
+            raise ValueError(f"rig.baseline_s = {s.baseline_s!r}: the PDC baseline needs at least one frame "
+                             f"({frame_s * 1e3:.0f} ms)")
         run.motion.move_finger((run.sampler.next_slot + first * run.frame) / run.sampler.slot_rate_Hz,
                                s.lower_rate_m_per_s)
         target = movement.force_N / FORCE_PER_PDC_BIT_N

@@ -54,3 +54,17 @@ def test_the_stepper_stops_at_the_first_frame_whose_pdc_change_reaches_the_targe
     # the stop command reaches the motors one latency after the stop frame's last slot
     frame_s = 0.01
     assert rec.contact_s == pytest.approx((stop + 1) * frame_s + RigSettings().latency_s, abs=1e-9)
+
+
+def test_a_baseline_shorter_than_a_frame_is_refused_by_name():
+    with pytest.raises(ValueError, match="baseline_s"):
+        TextureRig(wear=False, settings=RigSettings(baseline_s=0.0)).run_trial(GRATING, Movement(0.5, 0.02), seed=1)
+
+
+def test_the_lowering_with_the_baseline_read_alone_is_the_same_trial(monkeypatch):
+    """No first stretch (the baseline read on its own, then windows with snapshots) reads the same trial."""
+    movement = Movement(0.5, 0.04)
+    ref = TextureRig(wear=False).run_trial(GRATING, movement, seed=3)
+    monkeypatch.setattr(texture_rig, "_AHEAD_FIRST_SHARE", 0.0)
+    alone = TextureRig(wear=False).run_trial(GRATING, movement, seed=3)
+    _same(ref, alone)
