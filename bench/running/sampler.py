@@ -20,6 +20,12 @@ from emulator.spi.peripheral import TRANSFER_PERIODS, TransferBatch
 STATUS_OK, STATUS_PARITY, STATUS_ERROR_WORD = 0, 1, 2
 STATUS_NAMES = {STATUS_OK: "ok", STATUS_PARITY: "parity error", STATUS_ERROR_WORD: "error word"}
 
+#: :func:`~emulator.spi.protocol.decode_response` of every 16-bit word (value, status before error words are told
+#: apart): a read decodes by two look-ups
+_VALUE_OF_WORD, _PARITY_OK_OF_WORD = proto.decode_response(np.arange(1 << 16, dtype=np.uint16))
+_VALUE_OF_WORD = _VALUE_OF_WORD.astype(np.uint16)
+_STATUS_OF_WORD = np.where(_PARITY_OK_OF_WORD, STATUS_OK, STATUS_PARITY).astype(np.uint8)
+
 
 @dataclass
 class Samples:
@@ -82,10 +88,9 @@ class Sampler:
         mosi[0::2] = self.command_words[k % len(self.sequence)]
         miso = self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz))
         words = miso[1::2]
-        value, parity_ok = proto.decode_response(words)
-        status = np.where(parity_ok, STATUS_OK, STATUS_PARITY).astype(np.uint8)
+        status = _STATUS_OF_WORD[words]
         status[proto.is_error_word(words)] = STATUS_ERROR_WORD
-        return Samples(t_sampled, channels, value.astype(np.uint16), words, status)
+        return Samples(t_sampled, channels, _VALUE_OF_WORD[words], words, status)
 
     def chunks(self, n_slots: int, chunk_slots: int):
         """Read the next ``n_slots`` slots in reads of at most ``chunk_slots``, yielding each :class:`Samples`."""
