@@ -73,6 +73,7 @@ _FW_DOC = "firmware_tests/tests/test_firmware_documented.py"
 _CLI = "bench/tests/test_cli_and_runs.py"
 _SLIDE = "emulator/tests/test_sliding.py"
 _RIG = "bench/tests/test_texture_rig.py"
+_LIVE = "emulator/tests/test_thermal_live_contact.py"
 
 CATALOGUE: list[Mutant] = [
     # --- physical constants -------------------------------------------------------------------------
@@ -413,6 +414,46 @@ CATALOGUE: list[Mutant] = [
            "pdc_average_frames: int = 1", "pdc_average_frames: int = 3",
            (f"{_RIG}::test_force_control_at_the_lightest_movement",),
            "the stepper stops on a 3-frame PDC average (a frame more lag) instead of each reading, as D describes"),
+    Mutant("thermal-live-stale-step", "thermal", "emulator/thermal.py",
+           "if stepping is None or stepping[0] != here:", "if stepping is None:",
+           (f"{_LIVE}::test_the_commanded_finger_cools_the_fingertip_in_the_order_of_the_surfaces_effusivity",
+            f"{_LIVE}::test_codes_do_not_depend_on_block_size_or_on_how_reads_are_cut"),
+           "the live contact keeps the first patch's discretization after the patch grows"),
+    Mutant("thermal-ambient-step-late", "thermal", "emulator/thermal.py",
+           "ambient[times >= when] = value", "ambient[times > when] = value",
+           (f"{_LIVE}::test_the_inputs_of_many_steps_at_once_are_each_steps_own",),
+           "the live network takes an ambient step one step late"),
+    Mutant("thermal-compiled-step-off", "thermal", "emulator/thermal.py",
+           "x = np.dot(Phi, x) + gu", "x = np.dot(Phi, x) + gu * 1.0000001",
+           (f"{_LIVE}::test_compiled_steps_are_numpys_steps_bit_for_bit",),
+           "the compiled steps of the live network drift from numpy's"),
+    Mutant("thermal-one-column-wrong", "thermal", "emulator/thermal.py",
+           "return np.interp(times, ht, hv[:, column])", "return np.interp(times, ht, hv[:, min(column, 1)])",
+           (f"{_LIVE}::test_one_column_of_the_thermal_outputs_is_that_column_of_all_three",),
+           "TAC read alone is read as TDC"),
+    Mutant("fastpath-reads-do-not-consume", "protocol", "emulator/spi/fastpath.py",
+           "                consumed = True\n                last_consuming = i",
+           "                last_consuming = i",
+           ("emulator/tests/test_spi_model.py::test_vectorized_path_matches_the_transfer_level_path",
+            "emulator/tests/test_spi_model.py::test_bus_word_path_matches_transfer_level_for_multi_sensor_frames"),
+           "a read never consumes its word: a second read returns the code again instead of an error word"),
+    Mutant("fastpath-adc-busy-at-5-ticks", "protocol", "emulator/spi/fastpath.py",
+           "busy = tick - last_sampling_tick < CONVERSION_TICKS", "busy = tick - last_sampling_tick <= CONVERSION_TICKS",
+           ("emulator/tests/test_spi_model.py::test_vectorized_path_matches_the_transfer_level_path",),
+           "a command exactly one conversion time after the last finds the ADC still busy"),
+    Mutant("rig-stop-command-at-window-start", "sliding", "bench/rigs/texture_rig.py",
+           "t_stop = (sampler.next_slot + to_stop * run.frame) / sampler.slot_rate_Hz",
+           "t_stop = sampler.next_slot / sampler.slot_rate_Hz",
+           (f"{_RIG}::test_force_control_at_the_lightest_movement",),
+           "the stepper's stop is commanded at the snapshot instead of after the frame that reached the target"),
+    Mutant("rig-final-read-misses-stop-frames", "sliding", "bench/rigs/texture_rig.py",
+           "rest += to_stop  #", "rest += 0  #",
+           ("bench/tests/test_texture_rig_reading.py::test_a_trial_does_not_depend_on_how_it_is_read_ahead",),
+           "after going back to the snapshot the trial's recording loses the frames through the stop"),
+    Mutant("patch-radii-mixed", "sliding", "emulator/sliding.py",
+           "for row, k in zip(full, rows):", "for row, k in zip(full[::-1], rows):",
+           (f"{_SLIDE}::test_patch_averaged_heights_are_each_radius_line_load_convolved_with_the_surface",),
+           "patch radii sharing an FFT length get each other's patch averages"),
 ]
 
 # --- issue 10: skin mechanics, local electrodes, units, the BioTac SP, several fingers -------------------------------
