@@ -20,6 +20,7 @@ def test_shipped_experiment_files_validate():
     assert full.pilot_trials == 6 and full.training_trials == 5 and full.pair_simulations == 1000
     assert full.identification_simulations == 8000 and full.training_textures is None  # all 117
     assert len(full.pilot_textures) == 10
+    assert full.pair_choice == "similar-description" and full.pairs is None  # D's kind of pairs (pairs.py)
     every = E.load_experiment(FIXTURES / "experiments" / "fishel2012_all.toml")
     assert every.identify_all_textures and vars(every) | {"identify_all_textures": False, "name": full.name,
                                                           "source": full.source} == vars(full)
