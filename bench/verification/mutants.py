@@ -74,6 +74,7 @@ _CLI = "bench/tests/test_cli_and_runs.py"
 _SLIDE = "emulator/tests/test_sliding.py"
 _RIG = "bench/tests/test_texture_rig.py"
 _LIVE = "emulator/tests/test_thermal_live_contact.py"
+_EXP = "bench/tests/test_experiment.py"
 
 CATALOGUE: list[Mutant] = [
     # --- physical constants -------------------------------------------------------------------------
@@ -454,6 +455,28 @@ CATALOGUE: list[Mutant] = [
            "for row, k in zip(full, rows):", "for row, k in zip(full[::-1], rows):",
            (f"{_SLIDE}::test_patch_averaged_heights_are_each_radius_line_load_convolved_with_the_surface",),
            "patch radii sharing an FFT length get each other's patch averages"),
+    Mutant("pairs-ignore-thermal-material", "exploration", "bench/experiments/pairs.py",
+           "if ta.material != tb.material:", "if False:",
+           (f"{_EXP}::test_similar_pairs_meet_their_definition_and_are_taken_nearest_first",
+            f"{_EXP}::test_similar_pair_admissibility_names_what_differs"),
+           "validation pairs may differ in thermal feel (D avoided pairs told apart by non-textural cues)"),
+    Mutant("pairs-compliance-x3", "exploration", "bench/experiments/pairs.py",
+           "COMPLIANCE_RATIO = 1.5", "COMPLIANCE_RATIO = 4.5",
+           (f"{_EXP}::test_similar_pairs_meet_their_definition_and_are_taken_nearest_first",),
+           "validation pairs that differ in softness are admitted"),
+    Mutant("pairs-rigid-1GPa", "exploration", "bench/experiments/pairs.py",
+           "RIGID_MODULUS_PA = 10e6", "RIGID_MODULUS_PA = 1e9",
+           (f"{_EXP}::test_similar_pairs_meet_their_definition_and_are_taken_nearest_first",
+            f"{_EXP}::test_too_few_similar_pairs_is_an_experiment_error_naming_n_pairs"),
+           "only materials stiffer than 1 GPa count as rigid alike"),
+    Mutant("pairs-many-per-group", "exploration", "bench/experiments/pairs.py",
+           "for one_per_group in (True, False):", "for one_per_group in (False,):",
+           (f"{_EXP}::test_similar_pairs_meet_their_definition_and_are_taken_nearest_first",),
+           "the validation pairs crowd into one kind of material"),
+    Mutant("pairs-linear-rms-height", "exploration", "bench/experiments/pairs.py",
+           "math.log10(t.rms_height_m), ", "t.rms_height_m * 1e6, ",
+           (f"{_EXP}::test_similar_pairs_meet_their_definition_and_are_taken_nearest_first",),
+           "texture similarity measured on RMS height in µm instead of its logarithm"),
 ]
 
 # --- issue 10: skin mechanics, local electrodes, units, the BioTac SP, several fingers -------------------------------
