@@ -359,7 +359,8 @@ class ElectrodeModel:
         self._hist = [rest[None, :].copy()]
         a = np.exp(-p.mux_acquisition_s / p.mux_settling_s)
         self.mux_keep = a  # fraction of the previous electrode's value left in a sample
-        self._mux_b, self._mux_a = np.array([1.0]), np.array([1.0, -a])  # the hold node's recursion (see sample)
+        # the hold node's recursion (see sample): b = [1] padded with the zero lfilter pads it with
+        self._mux_b, self._mux_a = np.array([1.0, 0.0]), np.array([1.0, -a])
         self.mux_injection = a * p.mux_injection_V
         self.mux_node = float(rest[0])
         self.stuck = self.faults.get("mux_stuck")  # electrode number the multiplexer is stuck on

@@ -5,7 +5,7 @@
 * a first-order section run as a 2-tap ``lfilter`` against the same section as a 3-tap biquad;
 * the mains hum read from one tabulated period against the per-sample formula at the absolute index;
 * the static force curve on a block where every sample presses (no masks) against the same samples beside an idle one;
-* ``filters.lfilter`` (lfilter's C routine called directly) against ``scipy.signal.lfilter``.
+* ``filters.lfilter`` (a compiled loop, or lfilter's C routine called directly) against ``scipy.signal.lfilter``.
 """
 
 from __future__ import annotations
@@ -112,14 +112,24 @@ def test_the_force_curve_of_a_block_that_presses_throughout_is_the_masked_formul
         assert np.array_equal(every, _force_curve_by_the_formula(F, p))
 
 
-def test_lfilter_without_the_wrapper_gives_scipys_numbers():
+def test_lfilter_compiled_or_without_the_wrapper_gives_scipys_numbers():
+    """1-D signals through 2 or 3 taps take the compiled loop, the rest lfilter's C routine: scipy's numbers either
+    way, a NaN or an infinity included (propagated, never hidden); b = [1] padded with a zero is lfilter's own b."""
     rng = np.random.default_rng(5)
     x1, x2 = rng.standard_normal(3000), rng.standard_normal((400, 19))
-    for b, a in (([0.2, 0.2], [1.0, -0.6]), ([0.1, 0.2, 0.1], [1.0, -1.5, 0.6]), ([1.0], [1.0, -0.3])):
+    x1[[100, 2000]] = np.nan, np.inf
+    for b, a in (([0.2, 0.2], [1.0, -0.6]), ([0.1, 0.2, 0.1], [1.0, -1.5, 0.6]), ([1.0], [1.0, -0.3]),
+                 ([1.0, 0.0], [1.0, -0.3])):
         b, a = np.array(b), np.array(a)
         zi1 = rng.standard_normal(len(a) - 1)
         zi2 = rng.standard_normal((len(a) - 1, 19))
+        kept = zi1.copy()
         for got, want in ((filters.lfilter(b, a, x1, zi1), signal.lfilter(b, a, x1, zi=zi1)),
+                          (filters.lfilter(b, a, x1[:99], zi1), signal.lfilter(b, a, x1[:99], zi=zi1)),
                           (filters.lfilter(b, a, x2, zi2, axis=0), signal.lfilter(b, a, x2, axis=0, zi=zi2))):
-            assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+            assert np.array_equal(got[0], want[0], equal_nan=True)
+            assert np.array_equal(got[1], want[1], equal_nan=True)
+        assert np.array_equal(zi1, kept)  # the caller's state is not touched
+    y, _ = filters.lfilter(np.array([1.0, 0.0]), np.array([1.0, -0.3]), x1[:99], np.array([0.4]))
+    assert np.array_equal(y, signal.lfilter([1.0], [1.0, -0.3], x1[:99], zi=[0.4])[0])
 
