@@ -17,6 +17,11 @@ Per grid step of ``dt`` (s), with the stage moving the texture at ``V`` (m/s) an
 * the texture position advances by the slip ``v_r·dt``: while the skin sticks it hardly moves, so the texture
   excites nothing; at slip the features start passing under the patch.
 
+The friction coefficient fluctuates with the slip: µs and µk (so the Stribeck curve ``g``) are scaled by
+``1 + ε(p)``, read from a table along the track at the texture position (:func:`emulator.texture.
+friction_fluctuation`); the bristles follow a change of ``g`` over their pre-sliding length, and while the skin
+sticks ``p`` hardly moves, so neither does ``ε``.
+
 The tangential force on the skin is the friction force plus ``N·s`` (ridges climbing feature slopes while the
 skin slips over them).
 """
@@ -106,14 +111,29 @@ def _interp_tables(heights, slopes, k, w, pos, dx):
     return h, s
 
 
+@njit(cache=True, inline="always")
+def _interp_line(line, pos, dx):
+    """Linear read of ``line`` (one value per ``dx``) at position ``pos`` (m); the track repeats beyond its ends."""
+    u = pos / dx
+    i = int(math.floor(u))
+    f = u - i
+    i = i % line.size
+    return line[i] * (1 - f) + line[(i + 1) % line.size] * f
+
+
+#: the friction's scale 1 + ε never falls below this (a guard for any amplitude; at 3 % RMS it is never reached)
+MIN_FLUCTUATION_SCALE = 0.1
+
+
 @njit(cache=True)
-def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdown_reference,
+def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, state, touchdown_reference,
                 K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
                 out_normal, out_tangential, out_slip_velocity, out_position):
     """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place.
 
     ``N0``, ``V``: nominal normal load (N) and stage velocity (m/s) per grid sample; ``heights``/``slopes``:
     spatial tables (radius × position) of the patch-averaged height (m) and the ridge-sampled slope (1);
+    ``fluctuation``: the friction coefficient's relative fluctuation ε (1) along the same positions;
     ``modulus_eff``: the texture's E/(1 − ν²) (Pa) and ``layer_m`` its layer thickness (m): soft textures yield
     in series with the skin, so their features reach the fluid attenuated by k_tex/(k_n + k_tex);
     ``state``: x, z, p, touchdown height and slope, touching (updated in place); ``touchdown_reference``: a
@@ -146,6 +166,8 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
             row, row_w = _radius_weight(radii, r)
             n0_last = n0
         for _ in range(substeps):
+            scale = max(1.0 + _interp_line(fluctuation, p, dx), MIN_FLUCTUATION_SCALE)
+            ms, mk = mu_s * scale, mu_k * scale
             if n0 > 0.0:
                 height, slope_here = _interp_tables(heights, slopes, row, row_w, p, dx)
                 if touching == 0 and touchdown_reference:  # touchdown: the skin settles onto this spot
@@ -164,7 +186,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
             if normal == 0.0:  # no load, no friction: the skin relaxes on its own, G(u) is linear
                 u = -k_t * x / (k_t * h + c_t)
                 u_prev = u
-                z = _bristle_after(z, v_stage - u, h, sigma0, mu_s, mu_k, vs)
+                z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)
                 x += u * h
                 p += (v_stage - u) * h
                 vr_sum += v_stage - u
@@ -182,7 +204,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
             # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0, bracketed around
             # the previous velocity (widened until G changes sign; G(±bound) always brackets a root), then
             # regula falsi with the Illinois modification (superlinear, never leaves the bracket)
-            zmax = max(abs(z), mu_s / sigma0)
+            zmax = max(abs(z), ms / sigma0)
             fmax = normal * (sigma0 * zmax + sigma1 * 2.0 * zmax / h + mu_v * (abs(v_stage) + 1.0))
             bound = abs(v_stage) + (k_t * abs(x) + fmax) / (c_t + k_t * h) + 1e-6
             step = 1e-4 * (1.0 + abs(v_stage))
@@ -191,19 +213,19 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
             hi = min(bound, u_prev + step)
             # (the last evaluation's bristle deflection and force are kept: when the root is the last point
             # evaluated, as it mostly is, the step's outcome is already known)
-            g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+            g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
                                              mu_v)
-            g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+            g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
                                              mu_v)
             u_eval = hi
             while g_lo > 0.0 and lo > -bound:
                 lo = max(-bound, lo - 4.0 * (hi - lo))
-                g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k,
+                g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk,
                                                  vs, mu_v)
                 u_eval = lo
             while g_hi < 0.0 and hi < bound:
                 hi = min(bound, hi + 4.0 * (hi - lo))
-                g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k,
+                g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk,
                                                  vs, mu_v)
                 u_eval = hi
             u = 0.5 * (lo + hi)
@@ -215,7 +237,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
                 u = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
                 if not (lo < u < hi):
                     u = 0.5 * (lo + hi)
-                g, z_eval, f_eval = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                g, z_eval, f_eval = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
                                               mu_v)
                 u_eval = u
                 if g == 0.0:
@@ -236,7 +258,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, dx, state, touchdow
             if u == u_eval:
                 znew, force = z_eval, f_eval
             else:
-                znew = _bristle_after(z, v_stage - u, h, sigma0, mu_s, mu_k, vs)
+                znew = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)
                 force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * (v_stage - u))
             vr = v_stage - u
             x += u * h

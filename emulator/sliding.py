@@ -7,6 +7,11 @@ its fluctuations, plus the tangential force's share of fluid pressure) and ``tan
 stage's motor current and plots) and ``normal_force_N`` (the true normal load, for checking force control).  ``contact_force_N`` then takes the existing path: force → fluid pressure →
 resonance → bridge → front end → codes.
 
+The friction coefficient fluctuates with the slip distance, µ → µ·(1 + ε(p)) (:func:`emulator.texture.
+friction_fluctuation`: 3 % RMS, power ∝ 1/q between 20 µm and 10 mm, on every texture): the micro stick-slip
+and junction turnover of skin sliding on any surface, smooth ones included.  It is a table along the track like
+the heights, read in the compiled step at the texture position, so it moves only while the skin slips.
+
 The texture under the finger is seen through the contact patch (radius ``a = a_1N·N^(1/3)``): heights are
 averaged with the Hertz line load ``∝ 1 − x²/a²`` (a spatial low-pass: coarse features pass, fine ones fade
 as force grows); fingerprint ridges sample the surface slope at the ridge pitch under the same load, each ridge
@@ -33,7 +38,7 @@ from emulator import filters, friction
 from emulator.effects import Block, Effect, effect_rng
 from emulator.params import SensorParams
 from emulator.skin import Skin
-from emulator.texture import Texture, random_profile, periodic_profile
+from emulator.texture import Texture, friction_fluctuation, periodic_profile, random_profile
 
 POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0.5 for rubbers changes it by 20 %)
 #: textures are layers on the rig's rigid backing: a soft one compresses at most this much (it densifies as it
@@ -245,6 +250,19 @@ def _random_track(texture: Texture, dx_m: float) -> np.ndarray:
     return random_profile(texture, dx_m)
 
 
+@functools.lru_cache(maxsize=32)
+def _fluctuation_track(texture: Texture, dx_m: float) -> np.ndarray:
+    return friction_fluctuation(texture, dx_m)
+
+
+def fluctuation_table(texture: Texture, start_m: float, length_m: float, dx_m: float) -> np.ndarray:
+    """The friction coefficient's relative fluctuation ε (1) along the track ``[start_m, start_m + length_m)`` at
+    the positions of :func:`spatial_tables` (relative to ``start_m``), from the texture's own fluctuation."""
+    track = _fluctuation_track(texture, dx_m)
+    n = int(np.ceil(length_m / dx_m)) + 2
+    return np.ascontiguousarray(track[(int(round(start_m / dx_m)) + np.arange(n)) % track.size])
+
+
 def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, length_m: float, dx_m: float,
                    radii_m: np.ndarray):
     """Tables (radius × position) of the patch-averaged height (m) and the slope the skin feels (1) along the
@@ -358,7 +376,9 @@ class SlidingContact(Effect):
             radii = params.contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, max(2.5 * force_max, 0.1), n_radii))
             length = m.max_travel_m + 4 * radii.max() + 0.01
             heights, slopes = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m, radii)
+            fluct = fluctuation_table(m.texture, m.start_position_m, length, dx_m)
             self._contacts.append({"motion": m, "gain": gain, "radii": radii, "heights": heights, "slopes": slopes,
+                                   "fluctuation": fluct,
                                    "state": friction.new_state(0.0), "skin_state": skin.state(), "log": [],
                                    "stage_zi": np.zeros(1)})
 
@@ -400,7 +420,7 @@ class SlidingContact(Effect):
             slip = np.empty(tt.size)
             pos = np.empty(tt.size)
             friction.slide_block(np.ascontiguousarray(n0), np.ascontiguousarray(v), dt, self.substeps,
-                                 c["heights"], c["slopes"], c["radii"], self.dx_m, c["state"],
+                                 c["heights"], c["slopes"], c["radii"], c["fluctuation"], self.dx_m, c["state"],
                                  not isinstance(m, Slide),
                                  p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
                                  tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,

@@ -20,6 +20,20 @@ import numpy as np
 #: Length of the stored surface (m): one period of the generated random component; tracks wrap around it.
 SURFACE_LENGTH_M = 1.0
 
+#: Relative RMS of the friction coefficient's fluctuation with slip distance (δµ/µ) over
+#: :data:`FRICTION_FLUCTUATION_BAND_M`, for every texture.  Literature: a finger pad sliding steadily on smooth
+#: glass varies its friction coefficient by less than ±10 % about the mean (stick-slip phases: more than ±25 %;
+#: Derler et al., Wear 2013, "Stick-slip phenomena in the friction of human skin"); for a trace whose peaks reach
+#: ~3 σ that is an RMS of ~3 %, taken here (plausible range 1–5 %; chosen before any claim was looked at).
+FRICTION_FLUCTUATION_RMS = 0.03
+#: Wavelengths (m) of the friction fluctuation along the slip, finest to coarsest: power ∝ 1/q in between (a
+#: finger's friction force on a smooth flat surface has a 1/f background, Wiertlewski, Hudin & Hayward, IEEE
+#: World Haptics 2011; a 1/f friction force is also what Xu, Zhou & Persson, Soft Matter 2025, find consistent
+#: with sliding blocks' displacement noise ∝ ω^-5).  Model choices: 10 mm, about the contact's diameter (longer
+#: drifts are traction, not vibration); 20 µm, below the LuGre pre-sliding corner 2π·µ/σ0 ≈ 60 µm that
+#: smooths finer changes anyway, and resolved by the default and reference profiles' 10 and 2.5 µm tracks.
+FRICTION_FLUCTUATION_BAND_M = (20e-6, 10e-3)
+
 
 @dataclass(frozen=True)
 class PeriodicComponent:
@@ -62,6 +76,8 @@ class Texture:
     seed: int = 0
     source: str = ""
     description: str = ""
+    #: relative RMS of the friction fluctuation (δµ/µ; override only with a sourced reason, 0 switches it off)
+    friction_fluctuation_rms: float = FRICTION_FLUCTUATION_RMS
 
     def friction_coefficient(self, v_m_per_s):
         """Steady-sliding friction coefficient at relative speed ``v`` (m/s): Stribeck curve plus a viscous rise."""
@@ -125,6 +141,28 @@ def _reference_psd(texture: Texture, length_m: float, dx_ref_m: float = 0.5e-6) 
 def _stable_draws(rng: np.random.Generator, n_total: int, n_used: int) -> np.ndarray:
     """The first ``n_used`` of ``n_total`` uniform draws, identical whatever ``n_used`` is."""
     return rng.random(n_total)[:n_used]
+
+
+def friction_fluctuation(texture: Texture, dx_m: float, length_m: float = SURFACE_LENGTH_M) -> np.ndarray:
+    """Relative fluctuation ε (1) of the friction coefficient along the texture (µ → µ·(1 + ε)), every ``dx_m``
+    over ``length_m`` (m; periodic, zero mean): power ∝ 1/q over the wavelengths of
+    :data:`FRICTION_FLUCTUATION_BAND_M`, RMS ``texture.friction_fluctuation_rms`` over that whole band (a track too
+    coarse to resolve its finest wavelengths lacks them).  Deterministic from ``texture.seed`` and the same at any
+    ``dx_m``: components are drawn on a fixed frequency list, as for :func:`random_profile`."""
+    n = int(round(length_m / dx_m))
+    if texture.friction_fluctuation_rms <= 0 or n < 4:
+        return np.zeros(max(n, 1))
+    finest, coarsest = FRICTION_FLUCTUATION_BAND_M
+    k = np.arange(max(1, math.ceil(length_m / coarsest)), math.floor(length_m / finest) + 1)
+    rng = np.random.default_rng(np.random.SeedSequence([texture.seed, 0xF1C7]))
+    phases = rng.random(k.size)
+    amplitude = 1.0 / np.sqrt(k)  # power ∝ 1/q
+    keep = k < n / 2  # below the track's Nyquist wavenumber
+    spectrum = np.zeros(n // 2 + 1, complex)
+    spectrum[k[keep]] = amplitude[keep] * np.exp(2j * np.pi * phases[keep])
+    # a bin of amplitude A is a cosine of variance 2·A²/n²: normalise to the whole band's variance
+    scale = texture.friction_fluctuation_rms * n / math.sqrt(2.0 * float(np.sum(amplitude**2)))
+    return np.fft.irfft(spectrum, n) * scale
 
 
 def periodic_profile(texture: Texture, x_m: np.ndarray) -> np.ndarray:

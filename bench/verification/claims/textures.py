@@ -87,7 +87,9 @@ def sliding_claims(b: Bench) -> list[Claim]:
     out.append(Claim("fingerprints over 60-grit at 0.5 N, 1 cm/s: 20–700 Hz PAC power", "≥ 10 dB over smooth skin",
                      10 * np.log10(band_power["ridged"] / band_power["smooth"]), 10.0, np.inf, "dB", "D ch. 4",
                      kind="prediction",
-                     note="ridge pitch and height from D; the crest contact width (0.1 mm) is a model choice"))
+                     note="ridge pitch and height from D; the crest contact width (0.1 mm) is a model choice; the "
+                          "smooth skin's signal is mostly the friction fluctuation's (3 % RMS of µ), which brought "
+                          "the margin from ~48 to ~18 dB"))
     # sliding on foam: signal-to-noise above 1000
     s = Slide(0.5, foam, 1.0, 0.03, 0.05, approach_s=0.2, hold_s=0.3)
     t, pac = _pac(b, s, s.slide_end_s)
@@ -224,21 +226,26 @@ def texture_property_claims(b: Bench) -> list[Claim]:
         Claim("foam, satin, rayon, burlap: the highest roughness", "the top four",
               min(position("roughness", t) for t in (30, 84, 87, 100)), len(named) - 4, len(named) - 1, "rank",
               "D ch. 6", {"roughness": by["roughness"]}, kind="prediction",
-              deviation="satin is a smooth filament weave in the library (2 µm RMS, 1.4 mm relief): along or "
-                        "across the warp it slides ~5 ln units below rayon, as the ridges average relief finer "
-                        "than their pitch; the lumped friction has no stick-slip of the skin on a regular weave, "
-                        "which fabric-on-skin friction studies report (issue 8 note)"),
+              deviation="satin is a smooth filament weave in the library (2 µm RMS, 1.4 mm relief): it slides "
+                        "~3.6 ln units below rayon, as the ridges average relief finer than their pitch; and the "
+                        "friction fluctuation every surface has (3 % RMS, 1/q) puts the grippiest smooth surfaces, "
+                        "polished aluminum and rubber (µ ≈ 1.2–1.3), ~0.8 ln units above satin (µ 0.45): the "
+                        "fluctuating force is ∝ µ·N, so high friction means more of it"),
         Claim("polished aluminum has the lowest roughness", "lowest", position("roughness", 46), 0, 0, "rank",
               "D ch. 6", kind="prediction",
-              note="aluminum and rubber both slide near the noise floor; with the quiet channels' own noise "
-                   "(issue 10) aluminum comes lowest, before it rubber did"),
+              deviation="with the friction fluctuation (3 % RMS of µ, the amplitude from a finger on glass, "
+                        "Derler et al. 2013) aluminum's µ = 1.2 makes a 1/f-like signal ~9 ln units over the floor, "
+                        "above graphite (µ 0.3) and satin (µ 0.45); without it aluminum made no signal at all and "
+                        "came lowest. D's lowest roughness on aluminum implies a smaller fluctuation of a silicone "
+                        "skin on polished metal in the 20–700 Hz band than a finger's on glass; the amplitude was "
+                        "taken from the literature and not adjusted toward this ordering"),
         Claim("graphite and satin: the highest spectral centroid", "the top two",
               min(position("fineness", 43), position("fineness", 84)), len(named) - 2, len(named) - 1, "rank",
               "D ch. 6", {"fineness": by["fineness"]}, kind="prediction",
-              deviation="the 330 Hz skin/fluid resonance shapes every broadband sliding signal (centroids "
-                        "300–325 Hz) and a surface that makes no signal keeps the rest floor's ~480 Hz; D's low "
-                        "centroids on aluminum and rubber need a 1/f-like friction fluctuation (a force PSD ∝ f⁻² "
-                        "reads ~144 Hz through the chain), which the model does not have"),
+              note="graphite and satin lead by small margins (~0.06 ln Hz over rubber, the third): the 330 Hz "
+                   "skin/fluid resonance shapes every broadband signal; aluminum and rubber no longer keep the rest "
+                   "floor's ~480 Hz since the friction fluctuation (power ∝ 1/f) makes them slide audibly, but "
+                   "they sit mid-table (~280 Hz), not low as D found"),
         Claim("burlap and velcro: low spectral centroid (bottom half)", "bottom half",
               max(position("fineness", 100), position("fineness", 10)), 0, len(named) // 2 - 1, "rank",
               "D ch. 6", kind="prediction"),
@@ -289,12 +296,15 @@ def texture_property_claims(b: Bench) -> list[Claim]:
     out.append(Claim("roughness and traction across the 117 textures (0.5 N @ 2.5 cm/s)", "negative correlation", r,
                      -1.0, 0.0, "Pearson r", "D ch. 6 (Table 6-3)", kind="derived",
                      note="partly built in: the library's friction falls with roughness for solids (its sources say "
-                          "so), so this is not an independent prediction"))
-    # smooth surfaces give no harmonics; a grating does: the largest rise of the sliding PAC spectrum over the
-    # resting one (Welch, 256-sample segments), 20–700 Hz
+                          "so), so this is not an independent prediction; the friction fluctuation (∝ µ) gives the "
+                          "grippy smooth surfaces a signal and weakened r from −0.53 to −0.22"))
+    # smooth surfaces give no harmonics; a grating does: a line is a narrow peak of the sliding PAC spectrum (Welch,
+    # 256-sample segments, 8.6 Hz bins) over the spectrum's own running median (9 bins, ±34 Hz), 20–700 Hz; the
+    # rise over the resting spectrum is kept in the detail (a broadband signal rises without any line)
+    from scipy.ndimage import median_filter
     from scipy.signal import welch
 
-    lines = {}
+    lines, rise = {}, {}
     for number in (46, 24, 902):
         s_ = Slide(2.0, texture(number), 0.5, 0.05, 0.1, approach_s=0.1, hold_s=0.3)
         t, pac = _pac(b, s_, s_.slide_end_s)
@@ -303,12 +313,17 @@ def texture_property_claims(b: Bench) -> list[Claim]:
         f, p_slide = welch(x - x.mean(), fs=PAC_RATE_HZ, nperseg=256)
         _, p_rest = welch(rest - rest.mean(), fs=PAC_RATE_HZ, nperseg=256)
         band = (f >= 20) & (f <= 700)
-        lines[number] = float(10 * np.log10(np.max(p_slide[band] / p_rest[band])))
+        lines[number] = float(10 * np.log10(np.max(p_slide[band] / median_filter(p_slide, 9, mode="nearest")[band])))
+        rise[number] = float(10 * np.log10(np.max(p_slide[band] / p_rest[band])))
+    detail = {"max_peak_over_median_dB": lines, "max_rise_over_rest_dB": rise}
     out += [Claim("smooth surfaces (polished aluminum, glass): no spectral lines while sliding",
-                  "< 10 dB over rest at every frequency", max(lines[46], lines[24]), -np.inf, 10.0, "dB", "D ch. 6",
-                  {"max_rise_dB": lines}, kind="prediction"),
-            Claim("3 mm grating: spectral lines (harmonics) while sliding", "≥ 20 dB over rest", lines[902],
-                  20.0, np.inf, "dB", "D ch. 3", kind="prediction")]
+                  "no peak ≥ 10 dB over the spectrum's running median", max(lines[46], lines[24]), -np.inf, 10.0,
+                  "dB", "D ch. 6", detail, kind="prediction",
+                  note="smooth surfaces do make a broadband (1/f-like) signal from the friction fluctuation, ~53 dB "
+                       "over rest, as D describes ('1/f-like spectra, no harmonics'); until the fluctuation existed "
+                       "they made none, and this row measured the rise over rest instead"),
+            Claim("3 mm grating: spectral lines (harmonics) while sliding", "≥ 20 dB over the running median",
+                  lines[902], 20.0, np.inf, "dB", "D ch. 3", detail, kind="prediction")]
     # wear: after wear, roughness drops and its trial-to-trial spread grows; a fresh skin restores it
     sand = 901
     fresh = [r["roughness"] for r in _trials(b, [sand], [main], 6, "claims-wear")]
