@@ -313,3 +313,10 @@ def test_cli_errors_print_cleanly(tmp_path, capsys):
     assert cli.main(["textures", "--library", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "bad.toml" in err and "mu_kinetic = 0.9" in err and "Traceback" not in err
+
+
+def test_every_texture_has_the_literature_friction_fluctuation(lib):
+    """No texture overrides the friction fluctuation's amplitude (an override needs a sourced reason)."""
+    from emulator.texture import FRICTION_FLUCTUATION_RMS
+
+    assert {t.friction_fluctuation_rms for t in lib.values()} == {FRICTION_FLUCTUATION_RMS}
