@@ -130,3 +130,34 @@ def test_the_break_away_force_scales_with_the_fluctuation_where_the_skin_sticks(
         peaks.append(s.signal("tangential_force_N", np.arange(0.0, slide.end_s, 1 / GRID_HZ)).max())
     assert eps.max() > 0.05
     assert peaks[0] / peaks[1] == pytest.approx(1 + eps.max(), abs=0.02)
+
+
+@pytest.mark.stability
+def test_an_absurd_fluctuation_stays_finite_and_bounded():
+    """ε of 200 % RMS (far beyond any source) reaches below −1: the scale is held at MIN_FLUCTUATION_SCALE and the
+    forces stay finite, within the largest friction µs·N·(1 + max ε) (the skin, stretched by a grippy stretch,
+    may spring back past zero where the friction drops to a tenth: violent stick-slip, not a failure)."""
+    wild = dataclasses.replace(FLAT, friction_fluctuation_rms=2.0)
+    slide, t, ft = _tangential(wild, 1.0, 0.05, 0.02)
+    assert np.all(np.isfinite(ft))
+    bound = wild.mu_static * 1.0 * (1 + friction_fluctuation(wild, 10e-6).max())
+    assert np.abs(ft).max() < 1.5 * bound
+
+
+@pytest.mark.unit
+def test_where_the_fluctuation_reaches_below_minus_one_friction_is_held_at_its_floor():
+    """A table of ε = −5 everywhere: steady sliding at 5 cm/s settles at MIN_FLUCTUATION_SCALE·µk·N (+ the viscous
+    term), not at a negative friction."""
+    from emulator import friction
+
+    p, n, dt = SensorParams(), 4000, 1 / GRID_HZ
+    force, v = 1.0, 0.05
+    out = [np.zeros(n) for _ in range(4)]
+    heights = np.zeros((1, 100))
+    friction.slide_block(np.full(n, force), np.full(n, v), dt, 1, heights, heights.copy(), np.array([2.5e-3]),
+                         np.full(100, -5.0), 10e-6, friction.new_state(), False, p.contact_stiffness_N_per_m1_5,
+                         p.contact_radius_at_1N_m, 1e9, 3e-3, p.skin_tangential_stiffness_N_per_m,
+                         p.skin_tangential_damping_N_s_per_m, p.bristle_stiffness_per_N, p.bristle_damping_per_N,
+                         FLAT.mu_static, FLAT.mu_kinetic, FLAT.stribeck_velocity_m_per_s, 0.0, *out)
+    expected = friction.MIN_FLUCTUATION_SCALE * FLAT.mu_kinetic * force
+    assert out[1][-1] == pytest.approx(expected, rel=1e-3)
