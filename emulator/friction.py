@@ -93,10 +93,10 @@ def _radius_weight(radii, r):
 
 
 @njit(cache=True, inline="always")
-def _interp_tables(heights, slopes, k, w, pos, dx):
+def _interp_tables(heights, slopes, fluctuation, k, w, pos, dx):
     """Bilinear reads of ``heights`` and ``slopes`` (radius index × position index) between rows ``k`` and ``k + 1``
-    (weight ``w`` toward the latter, from :func:`_radius_weight`) at position ``pos`` (m); the track repeats beyond
-    its ends."""
+    (weight ``w`` toward the latter, from :func:`_radius_weight`) and a linear read of ``fluctuation`` (position
+    index) at position ``pos`` (m); the track repeats beyond its ends."""
     n = heights.shape[1]
     u = pos / dx
     i = int(math.floor(u))
@@ -105,20 +105,11 @@ def _interp_tables(heights, slopes, k, w, pos, dx):
     j = (i + 1) % n
     h = heights[k, i] * (1 - f) + heights[k, j] * f
     s = slopes[k, i] * (1 - f) + slopes[k, j] * f
+    e = fluctuation[i] * (1 - f) + fluctuation[j] * f
     if w > 0.0:
         h = h * (1 - w) + (heights[k + 1, i] * (1 - f) + heights[k + 1, j] * f) * w
         s = s * (1 - w) + (slopes[k + 1, i] * (1 - f) + slopes[k + 1, j] * f) * w
-    return h, s
-
-
-@njit(cache=True, inline="always")
-def _interp_line(line, pos, dx):
-    """Linear read of ``line`` (one value per ``dx``) at position ``pos`` (m); the track repeats beyond its ends."""
-    u = pos / dx
-    i = int(math.floor(u))
-    f = u - i
-    i = i % line.size
-    return line[i] * (1 - f) + line[(i + 1) % line.size] * f
+    return h, s, e
 
 
 #: the friction's scale 1 + ε never falls below this (a guard for any amplitude; at 3 % RMS it is never reached)
@@ -166,10 +157,11 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
             row, row_w = _radius_weight(radii, r)
             n0_last = n0
         for _ in range(substeps):
-            scale = max(1.0 + _interp_line(fluctuation, p, dx), MIN_FLUCTUATION_SCALE)
-            ms, mk = mu_s * scale, mu_k * scale
+            ms, mk = mu_s, mu_k  # (no load: the fluctuation is not read, friction is nil anyway)
             if n0 > 0.0:
-                height, slope_here = _interp_tables(heights, slopes, row, row_w, p, dx)
+                height, slope_here, eps = _interp_tables(heights, slopes, fluctuation, row, row_w, p, dx)
+                scale = max(1.0 + eps, MIN_FLUCTUATION_SCALE)
+                ms, mk = mu_s * scale, mu_k * scale
                 if touching == 0 and touchdown_reference:  # touchdown: the skin settles onto this spot
                     h_ref, s_ref = height, slope_here
                     touching = 1
