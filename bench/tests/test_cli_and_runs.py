@@ -114,3 +114,18 @@ def test_claims_command_prints_json_and_exit_status_follows_the_verdicts(capsys,
     monkeypatch.setattr(claims, "Bench", miscalibrated)
     assert cli.main(["claims", "--only", "scales"]) == 1
     assert "FAIL" in capsys.readouterr().out
+
+
+def test_the_command_runs_blas_on_one_thread_unless_the_user_chose():
+    """Tiny matrix products: extra BLAS threads only spin (bench/cli/__init__.py); a user's own choice stands."""
+    import os
+    import subprocess
+    import sys
+
+    probe = "import bench.cli.main, os; print(os.environ.get('OPENBLAS_NUM_THREADS'), os.environ.get('OMP_NUM_THREADS'))"
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["1", "1"]
+    out = subprocess.run([sys.executable, "-c", probe], env={**env, "OPENBLAS_NUM_THREADS": "4"},
+                         capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["4", "1"]

@@ -498,6 +498,10 @@ CATALOGUE: list[Mutant] = [
            "z0 = z1 + xi * b1 - yi * a1", "z0 = xi * b1 - yi * a1 + z1",
            ("emulator/tests/test_fast_paths.py::test_lfilter_compiled_or_without_the_wrapper_gives_scipys_numbers",),
            "the compiled filter section adds in another order than lfilter (other bits)"),
+    Mutant("cli-blas-threads-unlimited", "host", "bench/cli/__init__.py",
+           '    os.environ.setdefault(_variable, "1")', "    pass",
+           (f"{_CLI}::test_the_command_runs_blas_on_one_thread_unless_the_user_chose",),
+           "the command lets BLAS spin a thread per core around the emulator's tiny matrix products"),
 ]
 
 # --- issue 10: skin mechanics, local electrodes, units, the BioTac SP, several fingers -------------------------------
