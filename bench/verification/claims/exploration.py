@@ -35,35 +35,38 @@ def exploration_claims(b: Bench) -> list[Claim]:
     worn = summary(_run(replace(spec, **ABLATIONS["unreplaced-wear"][1])))["identification/bayesian"]["accuracy"]
     # measured (docs/experiment/README.md): the validation pairs are D's kind of pairs, similar in description
     # (bench/experiments/pairs.py, chosen before any accuracy was seen); validation trials scatter like training
-    # trials since the skin is replaced at the first visible wear
+    # trials since the skin is replaced at the first visible wear; since friction fluctuates with slip distance
+    # (emulator/texture.py), six of the eight pairs lie within 3 training σ in every trained signal
     return [
         Claim("pairs of similar textures: Bayesian exploration accuracy", "≥ 99 % (D: 99.6 %)",
               100 * pairs["accuracy"], 99.0, 100.0, "%", "D ch. 6 Table 6-4", {"pairs": base.pairs},
-              kind="prediction"),
+              kind="prediction",
+              deviation="90.2 %: two pairs lie within 1 training σ in two of the three properties and are lost "
+                        "often — polyester taffeta / nylon ripstop (taffeta 33 %) and fine hessian / linen scrim "
+                        "(64 % / 57 %); the others are told apart ≥ 99 % of the time. D's pairs were easier for "
+                        "its sensor than these are for the emulator, or D's 5 training trials happened to separate "
+                        "them; cycling the three best movements does better here (94 %)"),
         Claim("pairs: median movements to converge", "2–5 (D: 3)", pairs["median_moves"], 2.0, 5.0, "movements",
-              "D ch. 6 Table 6-4", kind="prediction",
-              deviation="median 1 (12 of the 16 textures converge in one movement): even pairs alike in "
-                        "description (same group, material and compliance, nearest in surface and friction) differ "
-                        "in the training data by ≥ 4 σ in some trained signal (six of the eight; report.md lists "
-                        "them), so one movement crosses 99.9 %; D's similar pairs needed 3"),
+              "D ch. 6 Table 6-4", kind="prediction"),
         Claim("117-way identification of the validation textures: accuracy", "90–99 % (D: 95.4 %)",
-              100 * ident["accuracy"], 90.0, 99.0, "%", "D ch. 6 Table 6-5", kind="prediction"),
+              100 * ident["accuracy"], 90.0, 99.0, "%", "D ch. 6 Table 6-5", kind="prediction",
+              deviation="81.8 %: fine hessian (5 %, taken for other coarse weaves by every strategy), polyester "
+                        "taffeta (32 %) and kraft paper (49 %) are lost among similar library textures; 13 of the 16 "
+                        "are identified ≥ 71 % of the time, 11 ≥ 95 %. Over all 117 textures 83.4 %"),
         Claim("117-way identification: median movements", "3–7 (D: 5)",
               ident["median_moves"] if math.isfinite(ident["median_moves"]) else 99.0, 3.0, 7.0, "movements",
               "D ch. 6 Table 6-5", kind="prediction"),
         Claim("Bayesian exploration beats cycling and random choice", f"on ≥ 14 of {n_val} textures", float(beats),
               14.0, float(n_val), "textures", "D ch. 6", {"per_strategy": {k: v["accuracy"] for k, v in s.items()}},
               kind="prediction", note="at least as accurate as both, and no more movements (medians), per texture",
-              deviation="on 13 of 16: fine hessian T101 (mistaken for burlaps T100/T102 by every strategy; "
-                        "Bayesian 50 %, random 64 %), cotton poplin T74 (90 %, taken for jersey T78; cycling 100 %) "
-                        "and percale T75 (99.6 % against cycling's 99.8 %, within the Monte Carlo error)"),
+              deviation="on 9 of 16: overall Bayesian exploration leads (81.8 % against cycling 78.8 % and random "
+                        "73.2 %), but cycling the three best movements is more accurate on kraft paper, 400-grit, "
+                        "percale, EPDM and marine vinyl (all but kraft paper by < 5 points), random choice on fine "
+                        "hessian (9 % against 5 %), and taffeta takes more movements: on textures within ~1 σ of "
+                        "a neighbour the single most informative-looking property misleads, and forced variety helps"),
         Claim("removing the fingerprints lowers 117-way accuracy", "lower than with ridges",
               100 * (ident["accuracy"] - smooth), 0.0, math.inf, "points", "D ch. 4, 6",
-              {"with_ridges": ident["accuracy"], "smooth": smooth}, kind="prediction",
-              deviation="a smooth skin identifies 3.5 points better here: its pilot picks another roughness "
-                        "movement (0.2 N @ 10 cm/s instead of 0.32 N @ 1.58 cm/s), which separates fine hessian T101 "
-                        "from the burlaps (50 % → 100 %) and poplin T74 from jersey (90 % → 100 %) while newsprint T4 "
-                        "falls (100 % → 92 %); over 16 textures the vibration the ridges add shows no net gain"),
+              {"with_ridges": ident["accuracy"], "smooth": smooth}, kind="prediction"),
         Claim("skin wear without replacement lowers 117-way accuracy", "lower than with replacement",
               100 * (ident["accuracy"] - worn), 0.0, math.inf, "points", "D ch. 6",
               {"replaced": ident["accuracy"], "never_replaced": worn}, kind="prediction"),
