@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from emulator import channels as ch
-from emulator.channels import DEFAULT_FRAME_NAMES, SAMPLED_CHANNELS, channel_index
 from emulator.spi import protocol as proto
 
 TIMER_HZ = 1e6
