@@ -55,6 +55,7 @@ def test_stick_then_slip_tangential_force_ramps_to_static_then_settles_at_kineti
     early = (t > start + 0.005) & (t < start + 0.04)
     slope = np.polyfit(t[early], ft[early], 1)[0]
     assert slope == pytest.approx(p.skin_tangential_stiffness_N_per_m * v, rel=0.1)
+    assert slope == pytest.approx(1.5e3 * v, rel=0.1)  # the documented skin: 1.5 N/mm tangentially (README)
     sliding = (t > start + 0.8) & (t < slide.slide_end_s - 0.01)
     assert ft.max() == pytest.approx(SMOOTH.mu_static * F, rel=0.05)
     assert np.mean(ft[sliding]) == pytest.approx(float(SMOOTH.friction_coefficient(v)) * F, rel=0.02)
