@@ -196,6 +196,18 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             bad = [n for p in pairs for n in p if n not in lib]
             if bad:
                 problems.append(f"validation.pairs: no texture {bad} in the library")
+            same = [p for p in pairs if p[0] == p[1]]
+            if same:
+                problems.append(f"validation.pairs: {same} pair a texture with itself")
+            listed = [n for p in pairs for n in p]
+            twice = sorted({n for n in listed if listed.count(n) > 1})
+            if twice and not same:
+                problems.append(f"validation.pairs: texture(s) {twice} in more than one pair (pairs must be disjoint)")
+            untrained = sorted({n for n in listed if n in lib} - set(spec.training_textures or
+                                                                    [n for n in lib if n <= 117]))
+            if untrained:
+                problems.append(f"validation.pairs: texture(s) {untrained} not among the training textures (the "
+                                f"classifier knows only those)")
     spec.n_pairs = get("validation", "n_pairs", int, 1, 58, spec.n_pairs)
     choice = t["validation"].get("pair_choice", spec.pair_choice)
     if choice not in PAIR_CHOICES:
@@ -316,8 +328,9 @@ def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: 
             pairs.append((a, b))
             used |= {a, b}
         if len(pairs) == n_pairs:
-            break
-    return pairs
+            return pairs
+    raise ExperimentError(source, [f"validation.n_pairs = {n_pairs}: the training textures hold only {len(pairs)} "
+                                   f"disjoint pairs within one library group (pair_choice = {choice!r})"])
 
 
 def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache", cluster=None,

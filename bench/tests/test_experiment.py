@@ -38,6 +38,10 @@ def test_shipped_experiment_files_validate():
     ({"pilot": {"movements": [0, 99, 1]}}, ["pilot.movements"]),
     ({"training": {"replace_at": 0.0}}, ["training.replace_at = 0.0", "0.01 to 1.0"]),
     ({"validation": {"pair_choice": "nearest"}}, ["validation.pair_choice = 'nearest'", '"similar-description"']),
+    ({"validation": {"pairs": [[2, 2]]}}, ["validation.pairs", "[[2, 2]]", "with itself"]),
+    ({"validation": {"pairs": [[2, 3], [3, 4]]}}, ["validation.pairs", "[3]", "disjoint"]),
+    ({"training": {"textures": [2, 3, 4, 5]}, "validation": {"pairs": [[2, 3], [4, 9]]}},
+     ["validation.pairs", "[9]", "not among the training textures"]),
 ])
 def test_bad_experiment_files_name_field_and_value(data, words):
     with pytest.raises(E.ExperimentError) as e:
@@ -242,6 +246,15 @@ def test_too_few_similar_pairs_is_an_experiment_error_naming_n_pairs():
     assert E._pick_pairs(model, np.arange(3), 1, "similar-description", 0) == [(4, 5)]
     with pytest.raises(E.ExperimentError, match="validation.n_pairs = 2"):
         E._pick_pairs(model, np.arange(3), 2, "similar-description", 0, "x.toml")
+
+
+@pytest.mark.parametrize("choice", ["random-within-group", "most-confused"])
+def test_too_few_pairs_by_confusion_or_chance_is_an_experiment_error_too(choice):
+    model = E.ex.TextureModel(textures=np.array([4, 5, 16]), movements=np.arange(3), mean=np.zeros((3, 3, 3)),
+                              sigma=np.ones((3, 3, 3)), n_trials=np.full((3, 3, 3), 5))
+    assert E._pick_pairs(model, np.arange(3), 1, choice, 0) == [(4, 5)]  # 16 is of another group
+    with pytest.raises(E.ExperimentError, match=f"validation.n_pairs = 2.*only 1.*{choice}"):
+        E._pick_pairs(model, np.arange(3), 2, choice, 0, "x.toml")
 
 
 def test_pair_separation_is_the_largest_mean_difference_over_the_pooled_sigma():
