@@ -43,9 +43,10 @@ def exploration_claims(b: Bench) -> list[Claim]:
               kind="prediction",
               deviation="90.2 %: two pairs lie within 1 training σ in two of the three properties and are lost "
                         "often — polyester taffeta / nylon ripstop (taffeta 33 %) and fine hessian / linen scrim "
-                        "(64 % / 57 %); the others are told apart ≥ 99 % of the time. D's pairs were easier for "
-                        "its sensor than these are for the emulator, or D's 5 training trials happened to separate "
-                        "them; cycling the three best movements does better here (94 %)"),
+                        "(64 % / 57 %); the others are told apart ≥ 99 % of the time. D's set was a mix chosen "
+                        "partly from the training confusion: pairs similar to people but not to the sensor, the "
+                        "reverse, and similar to both (D p. 138); these eight are all nearest in description, a "
+                        "harder set than D's mix. Cycling the three best movements does better here (94 %)"),
         Claim("pairs: median movements to converge", "2–5 (D: 3)", pairs["median_moves"], 2.0, 5.0, "movements",
               "D ch. 6 Table 6-4", kind="prediction"),
         Claim("117-way identification of the validation textures: accuracy", "90–99 % (D: 95.4 %)",
