@@ -2,8 +2,10 @@
 
 D's experimenter chose the pairs by hand, for a human discrimination study, taking care that the two textures of a
 pair had no property other than texture — compliance or thermal feel — that a person could tell them apart by.
-``similar-description`` (the default) stands for that choice with the textures' physical descriptions in the
-library, never with a classifier's outcome. Two textures are *admissible* as a pair when they
+D's eight pairs were a mix, picked partly with the training confusion matrices (D p. 138): pairs people found
+similar but the sensor did not, the reverse, and pairs similar to both; D gives neither the counts nor a rule.
+``similar-description`` (the default) stands for the human side of that choice with the textures' physical
+descriptions in the library, never with a classifier's outcome. Two textures are *admissible* as a pair when they
 
 - belong to one library group (one kind of material, as D's human subjects saw it);
 - are of one thermal ``material`` (same conductivity, density, heat capacity: same thermal feel);
