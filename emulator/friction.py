@@ -48,34 +48,43 @@ STATE_SIZE = 7  # ... whether the finger is touching (1.0) or not (0.0), and the
 
 @njit(cache=True, inline="always")
 def _stribeck(v, mu_s, mu_k, vs):
+    """The Stribeck curve ``g`` (1) at slip velocity ``v`` (m/s) and its slope dg/d|v| (s/m)."""
     r = abs(v) / vs
     if r > 30.0:  # the static part has decayed below 1e-390 of itself
-        return mu_k
-    return mu_k + (mu_s - mu_k) * math.exp(-r * r)
+        return mu_k, 0.0
+    e = (mu_s - mu_k) * math.exp(-r * r)
+    return mu_k + e, -2.0 * r * e / vs
 
 
 @njit(cache=True, inline="always")
 def _bristle_after(z, vr, dt, sigma0, mu_s, mu_k, vs):
-    """Bristle deflection after ``dt`` with the slip velocity ``vr`` held (exact solution of the linear ODE)."""
+    """Bristle deflection (m) after ``dt`` with the slip velocity ``vr`` held (exact solution of the linear ODE),
+    and its derivative with respect to ``vr`` (s; at ``vr = 0``, where it has a corner, the mean of both sides)."""
     if vr == 0.0:
-        return z
-    g = _stribeck(vr, mu_s, mu_k, vs)
+        return z, dt
+    g, dg = _stribeck(vr, mu_s, mu_k, vs)
     a = sigma0 * abs(vr) / g
     z_ss = g / sigma0 if vr > 0 else -g / sigma0
     if a * dt < 1e-12:
-        return z + vr * dt
-    return z_ss + (z - z_ss) * math.exp(-a * dt)
+        return z + vr * dt, dt
+    decay = math.exp(-a * dt)
+    # d z_ss/d vr = g'/σ0 on both sides; d a/d vr = σ0·sign(vr)·(g − |vr| g')/g²
+    da = sigma0 * (g - abs(vr) * dg) / (g * g)
+    if vr < 0:
+        da = -da
+    return z_ss + (z - z_ss) * decay, dg / sigma0 * (1.0 - decay) - (z - z_ss) * dt * decay * da
 
 
 @njit(cache=True, inline="always")
 def _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v):
-    """G(u) = skin force − friction force for skin velocity ``u`` over one step (increasing through its root), with
-    the bristle deflection after the step and the friction force (N) at ``u`` (the step's outcome if ``u`` is the
-    root)."""
+    """G(u) = skin force − friction force (N) for skin velocity ``u`` (m/s) over one step (increasing through its
+    root), its slope dG/du (N·s/m), the bristle deflection after the step (m) and the friction force (N) at ``u``
+    (the step's outcome if ``u`` is the root)."""
     vr = v_stage - u
-    znew = _bristle_after(z, vr, h, sigma0, mu_s, mu_k, vs)
+    znew, dz = _bristle_after(z, vr, h, sigma0, mu_s, mu_k, vs)
     force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * vr)
-    return k_t * (x + u * h) + c_t * u - force, znew, force
+    slope = k_t * h + c_t + normal * ((sigma0 + sigma1 / h) * dz + mu_v)
+    return k_t * (x + u * h) + c_t * u - force, slope, znew, force
 
 
 @njit(cache=True, inline="always")
@@ -110,6 +119,105 @@ def _interp_tables(heights, slopes, fluctuation, k, w, pos, dx):
         h = h * (1 - w) + (heights[k + 1, i] * (1 - f) + heights[k + 1, j] * f) * w
         s = s * (1 - w) + (slopes[k + 1, i] * (1 - f) + slopes[k + 1, j] * f) * w
     return h, s, e
+
+
+#: Newton iterations tried per step before the bracketed solver takes over (a warm start needs 1–2)
+NEWTON_ITERATIONS = 6
+
+
+@njit(cache=True, inline="always")
+def _step_velocity(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v):
+    """The skin velocity ``u`` (m/s) that solves one implicit step G(u) = 0, with the bristle deflection (m) and
+    friction force (N) at it: Newton from the last velocity ``u_prev`` (m/s), kept inside the bracket its own
+    evaluations establish; should a step leave it or the slope not be positive (the Stribeck curve's falling
+    part can bend G back), or Newton not settle within :data:`NEWTON_ITERATIONS`, :func:`_solve_bracketed`
+    solves the step from scratch (unconditionally stable)."""
+    bound = _velocity_bound(x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_v)
+    u = min(max(u_prev, -bound), bound)
+    lo, hi = -bound, bound  # G(±bound) brackets a root
+    tol = 1e-13 * (1.0 + abs(v_stage))
+    skin_slope = k_t * h + c_t  # G's slope without friction (N·s/m)
+    for _it in range(NEWTON_ITERATIONS):
+        g, slope, znew, force = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                                          mu_v)
+        if not slope > 0.5 * skin_slope:  # the friction weakens with slip here: G may bend back to other roots
+            break
+        # converged: G nil to the bracketed solver's tolerance, or the next Newton correction below the velocity
+        # tolerance (quadratic convergence: the one after it is smaller still)
+        if abs(g) < 1e-12 * (1.0 + normal) or abs(g) < tol * slope:
+            return u, znew, force
+        if g > 0.0:
+            hi = u
+        else:
+            lo = u
+        u_next = u - g / slope
+        if not (lo < u_next < hi):
+            break
+        u = u_next
+    return _solve_bracketed(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v, bound)
+
+
+@njit(cache=True, inline="always")
+def _velocity_bound(x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_v):
+    """A skin velocity (m/s) beyond which G cannot change sign: G(−bound) ≤ 0 ≤ G(bound)."""
+    zmax = max(abs(z), mu_s / sigma0)
+    fmax = normal * (sigma0 * zmax + sigma1 * 2.0 * zmax / h + mu_v * (abs(v_stage) + 1.0))
+    return abs(v_stage) + (k_t * abs(x) + fmax) / (c_t + k_t * h) + 1e-6
+
+
+@njit(cache=True)
+def _solve_bracketed(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v, bound):
+    """The implicit step solved without derivatives: bracketed around ``u_prev`` (widened until G changes sign;
+    G(±``bound``) always brackets a root), then regula falsi with the Illinois modification (superlinear, never
+    leaves the bracket). Returns ``u`` (m/s), the bristle deflection (m) and the friction force (N) at it."""
+    step = 1e-4 * (1.0 + abs(v_stage))
+    u_prev = min(max(u_prev, -bound), bound)  # the bound changes with the load: start inside it
+    lo = max(-bound, u_prev - step)
+    hi = min(bound, u_prev + step)
+    # (the last evaluation's bristle deflection and force are kept: when the root is the last point
+    # evaluated, as it mostly is, the step's outcome is already known)
+    g_lo, _, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+    g_hi, _, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+    u_eval = hi
+    while g_lo > 0.0 and lo > -bound:
+        lo = max(-bound, lo - 4.0 * (hi - lo))
+        g_lo, _, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                                            mu_v)
+        u_eval = lo
+    while g_hi < 0.0 and hi < bound:
+        hi = min(bound, hi + 4.0 * (hi - lo))
+        g_hi, _, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
+                                            mu_v)
+        u_eval = hi
+    u = 0.5 * (lo + hi)
+    side = 0
+    tol = 1e-13 * (1.0 + abs(v_stage))
+    for _it in range(100):
+        if hi - lo < tol or g_hi == g_lo:
+            break
+        u = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+        if not (lo < u < hi):
+            u = 0.5 * (lo + hi)
+        g, _, z_eval, f_eval = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+        u_eval = u
+        if g == 0.0:
+            break
+        if g > 0.0:
+            hi, g_hi = u, g
+            if side == 1:
+                g_lo *= 0.5
+            side = 1
+        else:
+            lo, g_lo = u, g
+            if side == -1:
+                g_hi *= 0.5
+            side = -1
+        if abs(g) < 1e-12 * (1.0 + normal):
+            break
+    if u == u_eval:
+        return u, z_eval, f_eval
+    _, _, znew, force = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v)
+    return u, znew, force
 
 
 #: the friction's scale 1 + ε never falls below this (a guard for any amplitude; at 3 % RMS it is never reached)
@@ -178,7 +286,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
             if normal == 0.0:  # no load, no friction: the skin relaxes on its own, G(u) is linear
                 u = -k_t * x / (k_t * h + c_t)
                 u_prev = u
-                z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)
+                z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)[0]
                 x += u * h
                 p += (v_stage - u) * h
                 vr_sum += v_stage - u
@@ -193,65 +301,10 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
                 f_sum += 0.0
                 vr_sum += 0.0
                 continue
-            # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0, bracketed around
-            # the previous velocity (widened until G changes sign; G(±bound) always brackets a root), then
-            # regula falsi with the Illinois modification (superlinear, never leaves the bracket)
-            zmax = max(abs(z), ms / sigma0)
-            fmax = normal * (sigma0 * zmax + sigma1 * 2.0 * zmax / h + mu_v * (abs(v_stage) + 1.0))
-            bound = abs(v_stage) + (k_t * abs(x) + fmax) / (c_t + k_t * h) + 1e-6
-            step = 1e-4 * (1.0 + abs(v_stage))
-            u_prev = min(max(u_prev, -bound), bound)  # the bound changes with the load: start inside it
-            lo = max(-bound, u_prev - step)
-            hi = min(bound, u_prev + step)
-            # (the last evaluation's bristle deflection and force are kept: when the root is the last point
-            # evaluated, as it mostly is, the step's outcome is already known)
-            g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
-                                             mu_v)
-            g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
-                                             mu_v)
-            u_eval = hi
-            while g_lo > 0.0 and lo > -bound:
-                lo = max(-bound, lo - 4.0 * (hi - lo))
-                g_lo, z_eval, f_eval = _residual(lo, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk,
-                                                 vs, mu_v)
-                u_eval = lo
-            while g_hi < 0.0 and hi < bound:
-                hi = min(bound, hi + 4.0 * (hi - lo))
-                g_hi, z_eval, f_eval = _residual(hi, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk,
-                                                 vs, mu_v)
-                u_eval = hi
-            u = 0.5 * (lo + hi)
-            side = 0
-            tol = 1e-13 * (1.0 + abs(v_stage))
-            for _it in range(100):
-                if hi - lo < tol or g_hi == g_lo:
-                    break
-                u = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
-                if not (lo < u < hi):
-                    u = 0.5 * (lo + hi)
-                g, z_eval, f_eval = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
-                                              mu_v)
-                u_eval = u
-                if g == 0.0:
-                    break
-                if g > 0.0:
-                    hi, g_hi = u, g
-                    if side == 1:
-                        g_lo *= 0.5
-                    side = 1
-                else:
-                    lo, g_lo = u, g
-                    if side == -1:
-                        g_hi *= 0.5
-                    side = -1
-                if abs(g) < 1e-12 * (1.0 + normal):
-                    break
+            # implicit step for the skin velocity u: G(u) = k_t(x + u h) + c_t u - F(u) = 0
+            u, znew, force = _step_velocity(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, ms, mk, vs,
+                                            mu_v)
             u_prev = u
-            if u == u_eval:
-                znew, force = z_eval, f_eval
-            else:
-                znew = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)
-                force = normal * (sigma0 * znew + sigma1 * (znew - z) / h + mu_v * (v_stage - u))
             vr = v_stage - u
             x += u * h
             z = znew
