@@ -52,7 +52,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from scipy import signal, special
+from scipy import special
 
 from emulator import filters
 from emulator.channels import DEFAULT_VARIANT, ELECTRODE_FIRST
@@ -71,8 +71,14 @@ ELECTRODES_CSV = ELECTRODE_TABLES["biotac"]
 
 
 def electrode_positions_mm(variant: str = DEFAULT_VARIANT) -> np.ndarray:
-    """(N, 3) electrode positions on the core in the sensor frame (mm) of a sensor variant."""
-    v = variant_of(variant)  # ValueError naming the known variants
+    """(N, 3) electrode positions on the core in the sensor frame (mm) of a sensor variant (a new array; the table
+    is read once)."""
+    return _electrode_table(variant_of(variant).name).copy()  # ValueError naming the known variants
+
+
+@lru_cache(maxsize=None)
+def _electrode_table(name: str) -> np.ndarray:
+    v = variant_of(name)
     path = ELECTRODE_TABLES[v.name]
     rows = [r for r in csv.reader(line for line in path.read_text().splitlines()
                                   if line and not line.startswith("#"))]
@@ -352,7 +358,7 @@ class ElectrodeModel:
         self.rest_gaps_mm = resting_gaps_mm(p, n)
         rest = electrode_volts(p, self.rest_gaps_mm[None, :], self.faults)[0]
         self.rest = rest
-        self.zi = signal.lfilter_zi(sos[0, :3], sos[0, 3:])[:taps - 1, None] * rest[None, :]
+        self.zi = filters.sosfilt_zi(sos[:1])[0, :taps - 1, None] * rest[None, :]
         self.zi_rest = self.zi.copy()
         self.k = 0
         self._hist_t = [np.array([0.0])]

@@ -142,7 +142,7 @@ class SosFilter:
 
     def settle(self, x0: float) -> None:
         """Set the state to the steady state for a constant input ``x0`` (no start-up transient)."""
-        self.zi = signal.sosfilt_zi(self.sos) * x0
+        self.zi = sosfilt_zi(self.sos) * x0
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         if self.sos.shape[0] == 1:
@@ -152,6 +152,18 @@ class SosFilter:
             return y
         y, self.zi = signal.sosfilt(self.sos, x, zi=self.zi)
         return y
+
+
+def sosfilt_zi(sos: np.ndarray) -> np.ndarray:
+    """``scipy.signal.sosfilt_zi(sos)`` (a new array), remembered per coefficient set: every sensor built with the
+    same parameters settles the same filters (a rig builds one per trial)."""
+    sos = np.ascontiguousarray(sos, dtype=float)
+    return _sosfilt_zi(sos.shape, sos.tobytes()).copy()
+
+
+@functools.lru_cache(maxsize=256)
+def _sosfilt_zi(shape: tuple, coefficients: bytes) -> np.ndarray:
+    return signal.sosfilt_zi(np.frombuffer(coefficients).reshape(shape))
 
 
 def lowpass_butter2(f_hz: float):

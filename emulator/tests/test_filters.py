@@ -66,3 +66,18 @@ def test_settle_starts_at_steady_state_without_a_transient():
     f.settle(0.7)
     y = f(np.full(1000, 0.7))
     assert np.max(np.abs(y)) < 1e-12
+
+
+def test_remembered_steady_state_is_scipys_and_a_fresh_array():
+    """Consistency: the remembered ``sosfilt_zi`` equals scipy's to the bit, and a caller scaling or editing the
+    array it got (SosFilter.settle multiplies it) never changes what the next sensor gets."""
+    from emulator import electrodes
+
+    sos = signal.butter(4, 0.1, output="sos")
+    first = filters.sosfilt_zi(sos)
+    assert np.array_equal(first, signal.sosfilt_zi(sos))
+    first *= 7.0
+    assert np.array_equal(filters.sosfilt_zi(sos), signal.sosfilt_zi(sos))
+    table = electrodes.electrode_positions_mm()
+    table[:] = 0.0
+    assert np.any(electrodes.electrode_positions_mm() != 0.0)
