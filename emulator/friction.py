@@ -137,7 +137,8 @@ def _step_velocity(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, m
     lo, hi = -bound, bound  # G(±bound) brackets a root
     tol = 1e-13 * (1.0 + abs(v_stage))
     skin_slope = k_t * h + c_t  # G's slope without friction (N·s/m)
-    for _it in range(NEWTON_ITERATIONS):
+    u_last, slope_last = u, 0.0
+    for it in range(NEWTON_ITERATIONS):
         g, slope, znew, force = _residual(u, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs,
                                           mu_v)
         if not slope > 0.5 * skin_slope:  # the friction weakens with slip here: G may bend back to other roots
@@ -150,9 +151,18 @@ def _step_velocity(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, m
             hi = u
         else:
             lo = u
-        u_next = u - g / slope
+        du = -g / slope
+        u_next = u + du
         if not (lo < u_next < hi):
             break
+        # the last correction taken to first order (no evaluation): its error, ½·G''·du²/G' with G'' from the
+        # last two slopes, is below a quarter of the tolerance, and the slip keeps its sign (G's corner at v_r = 0)
+        if it > 0 and (v_stage - u_next > 0.0) == (v_stage - u > 0.0) and \
+                2.0 * abs(slope - slope_last) / abs(u - u_last) * du * du < tol * slope:
+            force_slope = slope - skin_slope  # −dF/du (N·s/m)
+            dz = (force_slope / normal - mu_v) / (sigma0 + sigma1 / h)  # −dz/du (s)
+            return u_next, znew - dz * du, force - force_slope * du
+        u_last, slope_last = u, slope
         u = u_next
     return _solve_bracketed(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v, bound)
 
