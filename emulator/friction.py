@@ -110,8 +110,9 @@ def _interp_tables(heights, slopes, fluctuation, k, w, pos, dx):
     u = pos / dx
     i = int(math.floor(u))
     f = u - i
-    i = i % n
-    j = (i + 1) % n
+    if i < 0 or i >= n:  # (an integer modulo costs more than the test)
+        i = i % n
+    j = i + 1 if i + 1 < n else 0
     h = heights[k, i] * (1 - f) + heights[k, j] * f
     s = slopes[k, i] * (1 - f) + slopes[k, j] * f
     e = fluctuation[i] * (1 - f) + fluctuation[j] * f
