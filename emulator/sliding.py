@@ -180,25 +180,14 @@ class CommandedMotion:
         """Value of the piecewise-linear segments (start s, value, slope) ``which`` ("finger" or "stage") at ``t``;
         ``computing`` marks instants the sensor has now evaluated (later commands must not reach back before them)."""
         t = np.asarray(t, float)
+        out = np.empty(t.shape)
         if t.size == 0:
-            return np.empty(t.shape)
-        t_lo, t_hi = float(t.min()), float(t.max())
+            return out
+        start, value, slope = self._columns(which)
+        t_hi = _piecewise_fill(t.reshape(-1), start, value, slope, out.reshape(-1))
         if computing:
             self._computed_until_s = max(self._computed_until_s, t_hi)
-        start, value, slope = self._columns(which)
-        k_lo, k_hi = (max(0, int(np.searchsorted(start, x, side="right")) - 1) for x in (t_lo, t_hi))
-        if k_lo == k_hi:  # one segment (the usual case within a block): scalars, the same arithmetic
-            return value[k_lo] + slope[k_lo] * (t - start[k_lo])
-        if t.ndim == 1 and bool(np.all(t[1:] >= t[:-1])):  # in time order (a block): one slice per segment
-            out = np.empty(t.size)
-            ends = list(np.searchsorted(t, start[k_lo + 1:k_hi + 1], side="left")) + [t.size]
-            begin = 0
-            for k, end in zip(range(k_lo, k_hi + 1), ends):
-                out[begin:end] = value[k] + slope[k] * (t[begin:end] - start[k])
-                begin = end
-            return out
-        k = np.maximum(np.searchsorted(start, t, side="right") - 1, 0)
-        return value[k] + slope[k] * (t - start[k])
+        return out
 
     def _columns(self, which: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The segments ``which`` as three arrays (start s, value, slope), rebuilt only when a command was appended
@@ -216,6 +205,39 @@ class CommandedMotion:
         return max(self._finger[-1][0], self._stage[-1][0])
 
 
+@njit(cache=True)
+def _piecewise_fill(t, start, value, slope, out):
+    """``out[i] = value[k] + slope[k]·(t[i] − start[k])`` with ``k`` the last segment starting at or before ``t[i]``
+    (the first for instants before it); returns the latest instant (NaN if any is NaN).  One pass; a time-ordered
+    ``t`` (a block) walks the segments forward."""
+    n_seg = start.size
+    k = 0
+    seg_lo, seg_hi = start[0], start[1] if n_seg > 1 else math.inf
+    v0, v1 = value[0], slope[0]
+    t_hi = -math.inf
+    for i in range(t.size):
+        ti = t[i]
+        if not (seg_lo <= ti < seg_hi):
+            if ti != ti:  # NaN: after every segment, as searchsorted puts it
+                k = n_seg - 1
+            else:  # the last start <= ti (binary search), the first segment before them all
+                lo, hi = 0, n_seg
+                while lo < hi:
+                    mid = (lo + hi) // 2
+                    if start[mid] <= ti:
+                        lo = mid + 1
+                    else:
+                        hi = mid
+                k = max(lo - 1, 0)
+            seg_lo, seg_hi = start[k], start[k + 1] if k + 1 < n_seg else math.inf
+            v0, v1 = value[k], slope[k]
+            if ti != ti:
+                t_hi = ti
+        if ti > t_hi:
+            t_hi = ti
+        out[i] = v0 + v1 * (ti - seg_lo)
+    return t_hi
+
 def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) -> np.ndarray:
     """Normal load (N) at finger depth ``depth_m`` (m): skin (N = K δ_s^1.5) in series with the texture layer,
     δ_t = T·(1 − exp(−N / (k T))) with the flat-punch stiffness k = 2 a E* and the layer thickness T (soft at
@@ -223,6 +245,8 @@ def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) ->
     table_N, table_depth = _depth_table(params.contact_stiffness_N_per_m1_5, params.contact_radius_at_1N_m,
                                         texture.modulus_Pa)
     d = np.asarray(depth_m, float)
+    if d.ndim == 1 and d.size > 1 and d[0] == d[-1] and bool(np.all(d == d[0])):  # a finger held still: one value
+        return np.full(d.shape, np.interp(d[0], table_depth, table_N) if d[0] > 0 else 0.0)
     out = np.zeros(d.shape)
     pressed = d > 0
     out[pressed] = np.interp(d[pressed], table_depth, table_N)  # (the finger above the surface: no load)
@@ -231,8 +255,20 @@ def contact_force_from_depth(depth_m, params: SensorParams, texture: Texture) ->
 
 def commanded_load_N(motion: CommandedMotion, params: SensorParams, t) -> np.ndarray:
     """Normal load (N) of a commanded finger at instants ``t`` (s) the sensor has reached: the contact law of its
-    depth.  Bind it with :func:`functools.partial`, not a closure, so that a copied sensor reads its copied motion."""
-    return contact_force_from_depth(motion.depth_at(t), params, motion.texture)
+    depth.  Bind it with :func:`functools.partial`, not a closure, so that a copied sensor reads its copied motion.
+    (Evaluated piece by piece between the finger's commands, so a piece where the finger holds still costs one
+    interpolation; the law is applied element by element, so the values are the same.)"""
+    depth = motion.depth_at(t)
+    if depth.ndim != 1 or depth.size < 2:
+        return contact_force_from_depth(depth, params, motion.texture)
+    t = np.asarray(t, float)
+    start = motion._columns("finger")[0]
+    cuts = np.searchsorted(t, start[(start > t[0]) & (start <= t[-1])], side="left") if t[-1] > t[0] else []
+    edges = [0, *(int(c) for c in cuts), depth.size]
+    if len(edges) == 2:
+        return contact_force_from_depth(depth, params, motion.texture)
+    return np.concatenate([contact_force_from_depth(depth[b:e], params, motion.texture)
+                           for b, e in zip(edges[:-1], edges[1:])])
 
 
 @functools.lru_cache(maxsize=64)
@@ -365,7 +401,8 @@ class SlidingContact(Effect):
         self.params, self.fs, self.dx_m, self.substeps = params, fs, dx_m, int(substeps)
         self.log_every = max(1, int(round(fs / self.LOG_RATE_HZ)))
         a = np.exp(-2 * np.pi * self.STAGE_CORNER_HZ / fs)  # first-order low-pass, exact pole
-        self._stage_ba = (np.array([1.0 - a]), np.array([1.0, -a]))
+        # (b padded to a's length: lfilter pads it so anyway, and 2 taps run in filters' compiled loop)
+        self._stage_ba = (np.array([1.0 - a, 0.0]), np.array([1.0, -a]))
         self.motions = sorted(motions, key=lambda m: m.start_s)
         rng = effect_rng(seed, self.name)
         self._contacts = []
@@ -412,7 +449,7 @@ class SlidingContact(Effect):
             if isinstance(m, Slide):
                 n0 = m.normal_force_N(tt)
             else:
-                n0 = contact_force_from_depth(m.depth_at(tt), p, m.texture)
+                n0 = commanded_load_N(m, p, tt)
             v = m.stage_velocity_m_per_s(tt)
             tex = m.texture
             normal = np.empty(tt.size)
