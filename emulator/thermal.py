@@ -553,6 +553,7 @@ class ThermalModel:
         xs = np.empty((times.size, self.net.n))
         x = self.x
         stepping = None  # (inputs, Φ, Γu) of the last step taken stepwise
+        responses = {}  # one step's (Φ contiguous, Γ) per touch met in this call
         j = 0
         while j < times.size:
             k, here = k0 + j, inputs[j]
@@ -576,8 +577,12 @@ class ThermalModel:
             else:
                 self._held = None
                 if stepping is None or stepping[0] != here:
-                    Phi, Gam = self._response(contact, area)
-                    stepping = (here, np.ascontiguousarray(Phi), Gam @ self._input(t_list[j], contact, self._p_self))
+                    if touch not in responses:
+                        Phi, Gam = self._response(contact, area)
+                        responses[touch] = (np.ascontiguousarray(Phi), Gam)
+                    Phi, Gam = responses[touch]
+                    u = np.array([here[0], here[1], contact.temperature_C if contact else here[1], self._p_self])
+                    stepping = (here, Phi, Gam @ u)  # u: _input's, from the inputs already at hand
                 _, Phi, gu = stepping
                 x = self._arrive(x, contact)  # (only the run's first step can meet a newly touched object)
                 x = _steps(Phi, x, gu, xs[j:run_end])
