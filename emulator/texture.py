@@ -116,26 +116,40 @@ def random_profile(texture: Texture, dx_m: float, length_m: float = SURFACE_LENG
     # finer components and never changes the coarser ones
     rng = np.random.default_rng(np.random.SeedSequence([texture.seed, 0x5EED]))
     k = np.arange(1, n // 2 + 1)
-    q = 2 * np.pi * k / length_m
-    q0 = 2 * np.pi / texture.correlation_length_m
-    psd = np.where(q < q0, 1.0, (q / q0) ** -(1 + 2 * texture.hurst))
+    psd = _self_affine_psd(texture, 2 * np.pi * k / length_m)
     n_max = int(round(length_m / 0.5e-6)) // 2  # the finest resolution ever used: 0.5 µm
     phases = _stable_draws(rng, n_max, k.size)
-    spectrum = np.zeros(n // 2 + 1, complex)
-    spectrum[1:] = np.sqrt(psd) * np.exp(2j * np.pi * phases)
-    h = np.fft.irfft(spectrum, n)
-    rms = float(np.sqrt(np.mean(h**2)))
     # scale so that the RMS over the band resolved at the reference spacing is the texture's RMS height
     full = float(np.sqrt(np.sum(_reference_psd(texture, length_m))))
     resolved = float(np.sqrt(np.sum(psd)))
-    return h / rms * texture.rms_height_m * (resolved / full)
+    return _spectral_track(n, k, np.sqrt(psd), phases, texture.rms_height_m) * (resolved / full)
+
+
+def _self_affine_psd(texture: Texture, q: np.ndarray) -> np.ndarray:
+    """The random component's one-sided power spectrum (relative) at wavenumbers ``q`` (rad/m): flat below
+    2π / correlation length, ∝ q^-(1 + 2H) above."""
+    q0 = 2 * np.pi / texture.correlation_length_m
+    return np.where(q < q0, 1.0, (q / q0) ** -(1 + 2 * texture.hurst))
 
 
 def _reference_psd(texture: Texture, length_m: float, dx_ref_m: float = 0.5e-6) -> np.ndarray:
     k = np.arange(1, int(round(length_m / dx_ref_m)) // 2 + 1)
-    q = 2 * np.pi * k / length_m
-    q0 = 2 * np.pi / texture.correlation_length_m
-    return np.where(q < q0, 1.0, (q / q0) ** -(1 + 2 * texture.hurst))
+    return _self_affine_psd(texture, 2 * np.pi * k / length_m)
+
+
+def _spectral_track(n: int, k: np.ndarray, amplitude: np.ndarray, phases: np.ndarray, rms: float,
+                    band_power: float | None = None) -> np.ndarray:
+    """A periodic track of ``n`` samples from a one-sided spectrum: cosines of relative ``amplitude`` and
+    ``phases`` (turns) at the wavenumbers ``k`` (cycles per track, at most n/2), scaled to the RMS ``rms``
+    (the track's unit) by one of two rules: the track's own RMS (``band_power`` None), or that of a whole band
+    whose amplitudes have the total power ``band_power`` = Σ A² (a bin of amplitude A is a cosine of variance
+    2·A²/n²), so a track lacking some of the band's bins has less."""
+    spectrum = np.zeros(n // 2 + 1, complex)
+    spectrum[k] = amplitude * np.exp(2j * np.pi * phases)
+    track = np.fft.irfft(spectrum, n)
+    if band_power is None:
+        return track / float(np.sqrt(np.mean(track**2))) * rms
+    return track * (rms * n / math.sqrt(2.0 * band_power))
 
 
 def _stable_draws(rng: np.random.Generator, n_total: int, n_used: int) -> np.ndarray:
@@ -158,11 +172,9 @@ def friction_fluctuation(texture: Texture, dx_m: float, length_m: float = SURFAC
     phases = rng.random(k.size)
     amplitude = 1.0 / np.sqrt(k)  # power ∝ 1/q
     keep = k < n / 2  # below the track's Nyquist wavenumber
-    spectrum = np.zeros(n // 2 + 1, complex)
-    spectrum[k[keep]] = amplitude[keep] * np.exp(2j * np.pi * phases[keep])
-    # a bin of amplitude A is a cosine of variance 2·A²/n²: normalise to the whole band's variance
-    scale = texture.friction_fluctuation_rms * n / math.sqrt(2.0 * float(np.sum(amplitude**2)))
-    return np.fft.irfft(spectrum, n) * scale
+    # normalised to the whole band's variance
+    return _spectral_track(n, k[keep], amplitude[keep], phases[keep], texture.friction_fluctuation_rms,
+                           float(np.sum(amplitude**2)))
 
 
 def periodic_profile(texture: Texture, x_m: np.ndarray) -> np.ndarray:
