@@ -13,7 +13,9 @@ Per grid step of ``dt`` (s), with the stage moving the texture at ``V`` (m/s) an
   ``N·(σ0 z + σ1 dz/dt + µv v_r)``;
 * the skin is a massless spring–damper (``k_t``, ``c_t``) between the core and the contact, so the skin's
   velocity ``u`` satisfies ``k_t (x + u dt) + c_t u = F_friction(u)`` with ``v_r = V − u``: an implicit step,
-  solved for ``u`` by regula falsi (Illinois) on a bracket that always holds a root (unconditionally stable);
+  solved for ``u`` by Newton from the last velocity (analytic slope; 2 evaluations a step while sliding), and
+  where friction weakens with slip (G may have several roots) or Newton strays, by regula falsi (Illinois) on a
+  bracket that always holds a root (unconditionally stable);
 * the texture position advances by the slip ``v_r·dt``: while the skin sticks it hardly moves, so the texture
   excites nothing; at slip the features start passing under the patch.
 

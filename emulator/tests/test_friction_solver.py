@@ -1,0 +1,143 @@
+"""The sliding step's solvers (emulator.friction): the implicit step's residual slope is its derivative, Newton's
+step lands on a root of the residual with the bristle deflection and force of that root, and where the root is
+unique it is the bracketed solver's root to the tolerance; the commanded motion's compiled segment evaluation and
+the piecewise load are the plain formulas to the bit.  All consistency checks (no physics figure)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from emulator import friction
+from emulator.params import SensorParams
+from emulator.sliding import CommandedMotion, commanded_load_N, contact_force_from_depth
+from emulator.texture import Texture
+
+P = SensorParams()
+H = 1 / 8800.0  # the default profile's step (s)
+K_T, C_T = P.skin_tangential_stiffness_N_per_m, P.skin_tangential_damping_N_s_per_m
+SIGMA0, SIGMA1 = P.bristle_stiffness_per_N, P.bristle_damping_per_N
+VS = 0.005
+FOAM = Texture(30, "foam", "test", rms_height_m=20e-6, correlation_length_m=300e-6, hurst=0.8, mu_static=1.0,
+               mu_kinetic=0.8, modulus_Pa=1e5, seed=4)
+
+
+def _states(n, seed, stribeck=True):
+    """Random step states: skin displacement x (m), bristle z (m), stage velocity V (m/s), load N (N), last
+    skin velocity (m/s), µs, µk, µv (s/m)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        mu_s = rng.uniform(0.3, 1.5)
+        mu_k = mu_s * (rng.uniform(0.5, 1.0) if stribeck else 1.0)
+        z_max = mu_k / SIGMA0 if not stribeck else 1.5 * mu_s / SIGMA0
+        v = rng.choice([0.0, rng.uniform(0.0, 0.1), rng.uniform(-0.1, 0.1)])
+        yield (rng.uniform(-1e-3, 1e-3), rng.uniform(-z_max, z_max), v, 10 ** rng.uniform(-2, 0.7),
+               v + rng.normal() * 10 ** rng.uniform(-6, -1), mu_s, mu_k, rng.choice([0.0, 0.1]))
+
+
+def _residual(u, x, z, v, normal, mu_s, mu_k, mu_v):
+    return friction._residual(u, x, z, v, H, normal, K_T, C_T, SIGMA0, SIGMA1, mu_s, mu_k, VS, mu_v)
+
+
+@pytest.mark.unit
+def test_the_residual_slope_is_its_derivative():
+    """dG/du against a central difference (step 1e-7 of the slip, away from its corner at v_r = 0): within 1e-5
+    relative plus 1e-6 N·s/m (the difference's own truncation and rounding)."""
+    checked = 0
+    for x, z, v, normal, u, mu_s, mu_k, mu_v in _states(400, 1):
+        du = 1e-7 * max(abs(v - u), 1e-3)
+        if abs(v - u) < 10 * du:
+            continue
+        slope = _residual(u, x, z, v, normal, mu_s, mu_k, mu_v)[1]
+        numeric = (_residual(u + du, x, z, v, normal, mu_s, mu_k, mu_v)[0]
+                   - _residual(u - du, x, z, v, normal, mu_s, mu_k, mu_v)[0]) / (2 * du)
+        assert slope == pytest.approx(numeric, rel=1e-5, abs=1e-6), (x, z, v, normal, u)
+        checked += 1
+    assert checked > 300
+
+
+@pytest.mark.unit
+def test_newton_lands_on_a_root_with_that_roots_bristle_and_force():
+    """Any state (Stribeck weakening included): |G(u)| ≤ 1e-10 N·(1 + N) at the returned velocity, and the bristle
+    deflection (m) and friction force (N) returned are those at it, within 1e-15 m and 1e-10 N (the last Newton
+    correction may be taken to first order)."""
+    for x, z, v, normal, u_prev, mu_s, mu_k, mu_v in _states(2000, 2):
+        u, znew, force = friction._step_velocity(u_prev, x, z, v, H, normal, K_T, C_T, SIGMA0, SIGMA1, mu_s, mu_k,
+                                                 VS, mu_v)
+        g, _, z_at, f_at = _residual(u, x, z, v, normal, mu_s, mu_k, mu_v)
+        assert abs(g) <= 1e-10 * (1 + normal), (x, z, v, normal, u_prev)
+        assert znew == pytest.approx(z_at, abs=1e-15)
+        assert force == pytest.approx(f_at, abs=1e-10)
+
+
+@pytest.mark.unit
+def test_newton_finds_the_bracketed_solvers_root_where_the_root_is_unique():
+    """Without Stribeck weakening (µs = µk) and with the bristles inside their steady deflection, G increases
+    everywhere: one root, and Newton's velocity is the bracketed solver's within 1e-12·(1 + |V|) m/s (ten times
+    the solvers' tolerance)."""
+    for x, z, v, normal, u_prev, mu_s, mu_k, mu_v in _states(1000, 3, stribeck=False):
+        args = (x, z, v, H, normal, K_T, C_T, SIGMA0, SIGMA1, mu_s, mu_k, VS, mu_v)
+        u = friction._step_velocity(u_prev, *args)[0]
+        bound = friction._velocity_bound(x, z, v, H, normal, K_T, C_T, SIGMA0, SIGMA1, mu_s, mu_v)
+        u_ref = friction._solve_bracketed(u_prev, *args, bound)[0]
+        assert u == pytest.approx(u_ref, abs=1e-12 * (1 + abs(v))), (x, z, v, normal, u_prev)
+
+
+@pytest.mark.unit
+def test_the_compiled_segment_evaluation_is_the_plain_formula_to_the_bit():
+    """value[k] + slope[k]·(t − start[k]) with k the last segment started (the first before any), for time-ordered,
+    shuffled, 2-D and scalar instants, including instants before the first segment and on segment starts; the
+    latest instant is marked as computed."""
+    rng = np.random.default_rng(4)
+    for case in range(60):
+        m = CommandedMotion(FOAM, depth_m=-2e-4)
+        t_cmd = 0.0
+        for _ in range(rng.integers(0, 5)):
+            t_cmd += rng.uniform(0.0, 1.0)
+            m.move_finger(t_cmd, rng.choice([0.0, rng.normal() * 1e-3]))
+        start, value, slope = m._columns("finger")
+        t = np.sort(rng.uniform(-0.5, t_cmd + 1.0, 3000))
+        t = np.concatenate([start, t]) if case % 4 == 0 else t
+        t = rng.permutation(t) if case % 4 == 1 else t
+        t = t.reshape(30, -1) if case % 4 == 2 and t.size % 30 == 0 else t
+        t = np.array(t.flat[0]) if case % 12 == 3 else t
+        k = np.maximum(np.searchsorted(start, t, side="right") - 1, 0)
+        expected = value[k] + slope[k] * (t - start[k])
+        got = m.depth_at(t)
+        assert got.shape == expected.shape
+        assert np.array_equal(got, expected) and np.array_equal(np.signbit(got), np.signbit(expected))
+        assert m._computed_until_s == float(np.max(t))
+
+
+@pytest.mark.unit
+def test_the_load_taken_piece_by_piece_is_the_contact_law_of_the_depth_to_the_bit():
+    """A finger lowered, held, raised past the surface: the load read over blocks that span the commands equals
+    the contact law applied to the whole depth array."""
+    m = CommandedMotion(FOAM, depth_m=-2e-4, latency_s=0.0)
+    m.move_finger(0.1, 5e-4)
+    m.move_finger(2.0, 0.0)
+    m.move_finger(3.0, -5e-3)
+    t = np.arange(0.0, 4.0, 1 / 8800)
+    for block in np.array_split(t, 7):
+        got = commanded_load_N(m, P, block)
+        expected = contact_force_from_depth(m.planned_depth_at(block), P, FOAM)
+        assert np.array_equal(got, expected)
+    assert math.isclose(m._computed_until_s, t[-1])
+
+
+@pytest.mark.unit
+def test_where_the_friction_weakens_with_slip_the_step_keeps_the_bracketed_solvers_root():
+    """A lift-off step of the skin-wear scene (seed 4; stage still, 0.56 N, the skin slipping back through the
+    Stribeck curve's falling part) where G has three roots: Newton, which would settle on the nearest, hands the
+    step to the bracketed solver, so the outcome is the one the scenes always had (to the bit)."""
+    state = dict(x=0.00026201447388640367, z=6.8465480021606956e-06, v_stage=0.0, h=H, normal=0.5584683772242441,
+                 k_t=K_T, c_t=C_T, sigma0=SIGMA0, sigma1=SIGMA1, mu_s=0.7200828574215904, mu_k=0.5760662859372724,
+                 vs=VS, mu_v=0.0)
+    u_prev = -0.003506709585069863
+    args = tuple(state.values())
+    g = [_residual(u, state["x"], state["z"], 0.0, state["normal"], state["mu_s"], state["mu_k"], 0.0)[0]
+         for u in np.linspace(-0.0095, -0.0035, 61)]
+    assert np.count_nonzero(np.diff(np.sign(g))) == 3  # three roots around the last velocity
+    bound = friction._velocity_bound(state["x"], state["z"], 0.0, H, state["normal"], K_T, C_T, SIGMA0, SIGMA1,
+                                     state["mu_s"], 0.0)
+    assert friction._step_velocity(u_prev, *args) == friction._solve_bracketed(u_prev, *args, bound)
