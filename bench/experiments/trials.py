@@ -65,17 +65,22 @@ def trial_seed(base_seed: int, *identity) -> int:
     return int.from_bytes(h[:8], "little") >> 1
 
 
+#: every noise amplitude of the sensor (SensorParams fields, scaled linearly by the noise ablation); the bridge's
+#: Johnson noise scales as √R, so its resistance goes with the square (and the amplifier's current noise, which
+#: flows through R, with the inverse); mains harmonics are ratios of the fundamental
+NOISE_AMPLITUDES = ("adc_noise_rms_bits", "adc_reference_noise_ppm", "pac_path_noise_rms_bits",
+                    "amp_voltage_noise_V_per_rtHz", "amp_current_noise_A_per_rtHz", "stage2_voltage_noise_V_per_rtHz",
+                    "mains_amplitude_V", "spi_coupling_rms_V", "tdc_noise_V")
+
+
 def _params(noise_scale: float) -> SensorParams:
-    if noise_scale == 1.0:
-        return SensorParams()
+    """Nominal parameters with every noise source scaled by ``noise_scale`` in amplitude."""
     p = SensorParams()
-    return p.replace(adc_noise_rms_bits=p.adc_noise_rms_bits * noise_scale,
-                     adc_reference_noise_ppm=p.adc_reference_noise_ppm * noise_scale,
-                     pac_path_noise_rms_bits=p.pac_path_noise_rms_bits * noise_scale,
-                     amp_voltage_noise_V_per_rtHz=p.amp_voltage_noise_V_per_rtHz * noise_scale,
-                     amp_current_noise_A_per_rtHz=p.amp_current_noise_A_per_rtHz * noise_scale,
-                     mains_amplitude_V=p.mains_amplitude_V * noise_scale,
-                     bridge_resistance_ohm=p.bridge_resistance_ohm * noise_scale ** 2)
+    if noise_scale == 1.0:
+        return p
+    scaled = {name: getattr(p, name) * noise_scale for name in NOISE_AMPLITUDES}
+    scaled["amp_current_noise_A_per_rtHz"] /= noise_scale ** 2  # i·R: ×k overall with R ×k²
+    return p.replace(bridge_resistance_ohm=p.bridge_resistance_ohm * noise_scale ** 2, **scaled)
 
 
 def run_trial_task(task: TrialTask) -> dict:
