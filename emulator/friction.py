@@ -54,8 +54,8 @@ def _stribeck(v, mu_s, mu_k, vs):
     r = abs(v) / vs
     if r > 30.0:  # the static part has decayed below 1e-390 of itself
         return mu_k, 0.0
-    e = (mu_s - mu_k) * math.exp(-r * r)
-    return mu_k + e, -2.0 * r * e / vs
+    # (one exponential: the compiler merges the two identical calls)
+    return mu_k + (mu_s - mu_k) * math.exp(-r * r), -2.0 * r * ((mu_s - mu_k) * math.exp(-r * r)) / vs
 
 
 @njit(cache=True, inline="always")
