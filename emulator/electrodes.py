@@ -217,6 +217,7 @@ class Footprint:
         self.d2 = (rel * rel).sum(axis=1)
         self.shift_mm_per_N, self.ratio = p.shear_shift_mm_per_N, p.bulge_width_ratio
         self._unshifted = None
+        self._shifted = None  # (shift mm, (dent, ring) (1, N)) of the last steady shear
 
     def shapes(self, tangential_N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The dent exp(−u) and the ring u_s·exp(−u_s) over every electrode, (T, N) each (1): u = d²/2w²,
@@ -227,6 +228,17 @@ class Footprint:
             if self._unshifted is None:
                 self._unshifted = self._dent_and_ring(self.d2[None, :])
             return self._unshifted
+        if s_mm[0] == s_mm[-1] and (s_mm == s_mm[0]).all():  # a steady shear: every row would be the same row
+            if self._shifted is None or self._shifted[0] != s_mm[0]:
+                self._shifted = (s_mm[0], self._shifted_shapes(s_mm[:1]))
+            return self._shifted[1]
+        starts = np.flatnonzero(np.concatenate(([True], s_mm[1:] != s_mm[:-1])))  # runs of one shift
+        if 4 * starts.size < s_mm.size:  # mostly held (the finger still, the stage cruising): one row per run
+            lengths = np.diff(np.append(starts, s_mm.size))
+            return tuple(np.repeat(x, lengths, axis=0) for x in self._shifted_shapes(s_mm[starts]))
+        return self._shifted_shapes(s_mm)
+
+    def _shifted_shapes(self, s_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # the centre moves along the shear direction u by s(t): |p − c₀ − s·u|² = |p − c₀|² − 2s (p − c₀)·u + s²
         return self._dent_and_ring(self.d2[None, :] - 2 * np.outer(s_mm, self.along) + (s_mm * s_mm)[:, None])
 

@@ -110,15 +110,46 @@ def _df2t(b, a, x, z):  # pragma: no cover - compiled (coverage does not see ins
     return y
 
 
+@njit(cache=True, nogil=True)
+def _df2t_rows(b, a, x, z):  # pragma: no cover - compiled (coverage does not see inside)
+    """:func:`_df2t` down each column of ``x`` (samples along axis 0), the columns' states in ``z`` (taps − 1,
+    columns), updated in place: the same operations per column as lfilter along axis 0."""
+    n, m = x.shape
+    y = np.empty((n, m))
+    if b.size == 3:
+        b0, b1, b2, a1, a2 = b[0], b[1], b[2], a[1], a[2]
+        for i in range(n):
+            for j in range(m):
+                xi = x[i, j]
+                yi = z[0, j] + b0 * xi
+                z[0, j] = z[1, j] + xi * b1 - yi * a1
+                z[1, j] = xi * b2 - yi * a2
+                y[i, j] = yi
+    else:
+        b0, b1, a1 = b[0], b[1], a[1]
+        for i in range(n):
+            for j in range(m):
+                xi = x[i, j]
+                yi = z[0, j] + b0 * xi
+                z[0, j] = xi * b1 - yi * a1
+                y[i, j] = yi
+    return y
+
+
 def lfilter(b: np.ndarray, a: np.ndarray, x: np.ndarray, zi: np.ndarray, axis: int = -1):
     """``scipy.signal.lfilter(b, a, x, axis, zi)`` -> (y, zf) for float64 ``b``, ``a`` (a[0] = 1) and ``zi`` of the
     exact state shape, the same arithmetic so the same bits: a 1-D signal through 2 or 3 taps (b as long as a) in
     the compiled loop :func:`_df2t`, anything else through lfilter's C routine called without the public function's
-    array-API checks (~20 µs a call, which a 1 s batch of a few thousand samples feels)."""
+    array-API checks (~20 µs a call, which a 1 s batch of a few thousand samples feels); a 2-D signal filtered
+    along axis 0 (the electrodes' columns) through :func:`_df2t_rows` (1500 × 19 samples: 19 µs against 150)."""
     x = np.asarray(x, dtype=float)
     if x.ndim == 1 and 2 <= len(b) == len(a) <= 3 and a[0] == 1.0:
         z = np.array(zi, dtype=float)  # a copy: the caller's state is left as it was
         return _df2t(np.asarray(b, float), np.asarray(a, float), np.ascontiguousarray(x), z), z
+    columns = x.ndim == 2 and axis == 0 and np.shape(zi) == (len(b) - 1, x.shape[1])
+    if columns and 2 <= len(b) == len(a) <= 3 and a[0] == 1.0:
+        z = np.array(zi, dtype=float)  # columns filtered along axis 0, as lfilter does them
+        return _df2t_rows(np.asarray(b, float), np.asarray(a, float), np.ascontiguousarray(x), z), z
     if _linear_filter is None:  # pragma: no cover
         return signal.lfilter(b, a, x, axis=axis, zi=zi)
     return _linear_filter(b, a, x, axis, zi)

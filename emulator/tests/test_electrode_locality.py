@@ -185,3 +185,20 @@ def test_the_displaced_liquid_is_put_back_on_the_free_skin(x_mm, angle_deg):
     # the skin under the nail cannot take the liquid: the free rim takes more of it near the tether
     if angle_deg == 100.0:
         assert kappa > bulge_balance(p, surface_point_mm(x_mm, 0.0), w)
+
+
+def test_a_held_shear_computes_one_row_per_run_with_the_same_bits():
+    """Consistency: the dent and ring under a tangential load held in runs (a finger still, the stage cruising) or
+    held throughout are computed once per run and repeated; they equal the row-by-row computation bit for bit."""
+    from emulator.electrodes import Footprint
+
+    p = SensorParams()
+    press = Contact(surface_point_over_mm(electrode_positions_mm()[8]), 2.0, lambda t: np.ones(np.shape(t)),
+                    0.6, (1.0, 0.0, 0.0))
+    fp = Footprint(p, press, electrode_positions_mm())
+    runs = np.repeat([0.3, 0.45, 0.45001, 0.2], [40, 300, 7, 120])
+    for ft in (runs, np.full(500, 0.37), np.linspace(0.1, 0.5, 50)):
+        dent, ring = fp.shapes(ft)
+        ref_dent, ref_ring = fp._shifted_shapes(fp.shift_mm_per_N * ft)
+        assert np.array_equal(np.broadcast_to(dent, ref_dent.shape), ref_dent)
+        assert np.array_equal(np.broadcast_to(ring, ref_ring.shape), ref_ring)
