@@ -75,6 +75,7 @@ _SLIDE = "emulator/tests/test_sliding.py"
 _RIG = "bench/tests/test_texture_rig.py"
 _LIVE = "emulator/tests/test_thermal_live_contact.py"
 _EXP = "bench/tests/test_experiment.py"
+_SOLVER = "emulator/tests/test_friction_solver.py"
 
 CATALOGUE: list[Mutant] = [
     # --- physical constants -------------------------------------------------------------------------
@@ -477,6 +478,38 @@ CATALOGUE: list[Mutant] = [
            "math.log10(t.rms_height_m), ", "t.rms_height_m * 1e6, ",
            (f"{_EXP}::test_similar_pairs_meet_their_definition_and_are_taken_nearest_first",),
            "texture similarity measured on RMS height in µm instead of its logarithm"),
+    Mutant("newton-slope-without-bristle-damping", "sliding", "emulator/friction.py",
+           "slope = k_t * h + c_t + normal * ((sigma0 + sigma1 / h) * dz + mu_v)",
+           "slope = k_t * h + c_t + normal * ((sigma0) * dz + mu_v)",
+           (f"{_SOLVER}::test_the_residual_slope_is_its_derivative",),
+           "Newton's slope of the skin step forgets the bristle damping σ1"),
+    Mutant("newton-last-correction-sign", "sliding", "emulator/friction.py",
+           "return u_next, znew - dz * du, force - force_slope * du",
+           "return u_next, znew - dz * du, force + force_slope * du",
+           (f"{_SOLVER}::test_newton_lands_on_a_root_with_that_roots_bristle_and_force",),
+           "a step finished to first order corrects its force the wrong way"),
+    Mutant("newton-curvature-guard-off", "sliding", "emulator/friction.py",
+           "2.0 * abs(slope - slope_last) / abs(u - u_last) * du * du < tol * slope",
+           "0.0 * abs(slope - slope_last) / abs(u - u_last) * du * du < tol * slope",
+           (f"{_SOLVER}::test_newton_lands_on_a_root_with_that_roots_bristle_and_force",),
+           "Newton accepts a step before it has converged"),
+    Mutant("newton-keeps-weakening-roots", "sliding", "emulator/friction.py",
+           "if not slope > 0.5 * skin_slope:", "if not slope > 0.0:",
+           (f"{_SOLVER}::test_where_the_friction_weakens_with_slip_the_step_keeps_the_bracketed_solvers_root",),
+           "where friction weakens with slip, Newton keeps the nearest of several roots (lift-off changes)"),
+    Mutant("segments-before-first-command", "sliding", "emulator/sliding.py",
+           "k = max(lo - 1, 0)", "k = lo - 1",
+           (f"{_SOLVER}::test_the_compiled_segment_evaluation_is_the_plain_formula_to_the_bit",),
+           "instants before the first motion command read the last segment"),
+    Mutant("random-track-unscaled", "sliding", "emulator/texture.py",
+           "return track / float(np.sqrt(np.mean(track**2))) * rms", "return track * rms",
+           ("emulator/tests/test_texture_tracks.py",),
+           "a texture's random relief is not scaled to its RMS height"),
+    Mutant("fluctuation-band-variance-halved", "sliding", "emulator/texture.py",
+           "return track * (rms * n / math.sqrt(2.0 * band_power))", "return track * (rms * n / math.sqrt(band_power))",
+           ("emulator/tests/test_friction_fluctuation.py::"
+            "test_fluctuation_rms_is_the_textures_and_the_same_surface_at_any_resolution",),
+           "the friction fluctuation's RMS off by √2 (one-sided band power taken as two-sided)"),
     Mutant("explicit-pairs-may-overlap", "exploration", "bench/experiments/experiment.py",
            "if twice and not same:", "if False:",
            (f"{_EXP}::test_bad_experiment_files_name_field_and_value",),
