@@ -346,9 +346,12 @@ class _Run:
         """A copy to go back to: everything that changes while the run goes is copied; what stays fixed for
         the whole trial (parameters, texture, skin, the texture's spatial tables, filter coefficients, the channel
         maps, the sensor's last sampling plan — replaced, never edited) is shared, and each random generator is
-        copied through its state (a quarter of deepcopy's cost), which makes the copy several times cheaper."""
+        copied through its state (a quarter of deepcopy's cost), which makes the copy several times cheaper.  The
+        cost accounting (seconds per effect) is shared too: it counts all the work done, windows thrown away
+        included."""
         sensor, port = self.sensor, self.sampler.peripheral
         shared = [sensor.params, sensor.fidelity, self.motion.texture, self.motion.skin, self.settings,
+                  sensor.noise, sensor._slow_cost, sensor.graph.costs, *sensor.graph.costs.values(),
                   sensor.variant, sensor._node_of_channel, sensor._last_plan, self.sampler.sequence,
                   self.sampler.command_words, getattr(port, "variant", None), getattr(port, "recognized", None),
                   getattr(port, "provided", None), getattr(port, "provided_lut", None)]
