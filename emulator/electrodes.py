@@ -186,7 +186,13 @@ def indentation_profile(d2_mm2, w_mm: float, ratio: float, kappa: float = 1.0):
 
 
 def bulge_balance(p: SensorParams, center_mm, w_mm: float) -> float:
-    """κ: the rim bulge's amplitude that puts back on the free skin the volume the indentation displaced, 1."""
+    """κ: the rim bulge's amplitude that puts back on the free skin the volume the indentation displaced, 1
+    (remembered per parameters, centre and width: a rig builds a sensor per trial)."""
+    return _bulge_balance(p, tuple(float(c) for c in np.asarray(center_mm, float)), float(w_mm))
+
+
+@lru_cache(maxsize=256)
+def _bulge_balance(p: SensorParams, center_mm: tuple, w_mm: float) -> float:
     pts, area = free_skin_grid(float(p.free_skin_half_angle_deg))
     d2 = ((pts - np.asarray(center_mm, float)[None, :]) ** 2).sum(axis=1)
     u = d2 / (2.0 * w_mm * w_mm)

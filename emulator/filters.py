@@ -198,7 +198,14 @@ def _sosfilt_zi(shape: tuple, coefficients: bytes) -> np.ndarray:
 
 
 def lowpass_butter2(f_hz: float):
-    """Analog 2nd-order Butterworth low-pass, unit DC gain: (z, p, k) in rad/s."""
+    """Analog 2nd-order Butterworth low-pass, unit DC gain: (z, p, k) in rad/s (new arrays; the design is
+    remembered)."""
+    z, p, k = _butter2(float(f_hz))
+    return z.copy(), p.copy(), k
+
+
+@functools.lru_cache(maxsize=64)
+def _butter2(f_hz: float):
     return signal.butter(2, 2 * np.pi * f_hz, analog=True, output="zpk")
 
 

@@ -231,9 +231,12 @@ class ThermalNetwork:
 
     def heater_power_W(self) -> float:
         """Heater power that holds the core ``heater_rise_K`` above ambient (steady state, no contact)."""
-        A, B = self.matrices(None)
-        per_watt = np.linalg.solve(A, -B[:, 0])  # steady rise of every node per watt of heater (ambient 0)
-        return self.p.heater_rise_K / per_watt[CORE]
+        key = ("heater",)
+        if key not in (cache := self._cache):
+            A, B = self.matrices(None)
+            per_watt = np.linalg.solve(A, -B[:, 0])  # steady rise of every node per watt of heater (ambient 0)
+            return self._remember(key, self.p.heater_rise_K / per_watt[CORE])
+        return cache[key]
 
     def matrices(self, contact: tuple[Material, float] | None):
         """(A, B) of x' = A x + B u, x = [core, fluid, skin, bead, object layers] (°C),
