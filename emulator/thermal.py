@@ -150,6 +150,8 @@ def tdc_volts(r_ohm, fault: str | None = None):
         r = np.zeros_like(r)
     with np.errstate(divide="ignore", invalid="ignore"):
         v = TDC_BUFFER_GAIN * DIVIDER_SUPPLY_V * DIVIDER_OHM / (r + DIVIDER_OHM)
+    if np.isfinite(v).all():  # (a new array: nan_to_num would only copy it)
+        return v
     return np.nan_to_num(v, nan=0.0, posinf=0.0)
 
 
