@@ -307,9 +307,15 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
     n_surface = rough.size
     pad = int(np.ceil((radii_m.max() + skin.ridge_pitch_m) / dx_m)) + 2
     n = int(np.ceil(length_m / dx_m)) + 2
-    idx = (int(round(start_m / dx_m)) + np.arange(-pad, n + pad)) % n_surface
-    x = (np.arange(-pad, n + pad)) * dx_m + start_m
-    h = rough[idx] + periodic_profile(texture, x)
+    first = (int(round(start_m / dx_m)) - pad) % n_surface
+    if first + n + 2 * pad <= n_surface:  # the stretch does not wrap: a slice (the same samples)
+        h = rough[first:first + n + 2 * pad]
+    else:
+        h = rough[(first + np.arange(n + 2 * pad)) % n_surface]
+    if texture.periodic:
+        h = h + periodic_profile(texture, (np.arange(-pad, n + pad)) * dx_m + start_m)
+    else:  # (a fresh array, as the sum with the zero profile made it: -0.0 becomes 0.0 as before)
+        h = h + 0.0
     # the crest of a ridge sees the surface through its contact width
     w_crest = max(1, int(round(skin.ridge_contact_width_m / dx_m)))
     crest = np.convolve(h, np.ones(w_crest) / w_crest, mode="same")
@@ -317,21 +323,15 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
     # the patch average at every radius: h convolved with each radius's Hertz line load, at positions
     # pad - 1 .. pad + n (one beyond each end for the slope)
     patch = np.empty((radii_m.size, n + 2))
-    kernels = _patch_kernels(tuple(float(a) for a in radii_m), dx_m, h.size)
-    for n_fft in dict.fromkeys(k[1] for k in kernels):  # the radii of one FFT length in one call (same values)
-        rows = [k for k, kernel in enumerate(kernels) if kernel[1] == n_fft]
-        spectra = np.stack([kernels[k][2] for k in rows])
-        full = scipy_fft.irfftn(scipy_fft.rfftn(h, [n_fft], axes=[0]) * spectra, [n_fft], axes=[1])
-        for row, k in zip(full, rows):
-            m = kernels[k][0]
+    for n_fft, rows, spectra in _patch_kernels(tuple(float(a) for a in radii_m), dx_m, h.size):
+        full = scipy_fft.irfft(scipy_fft.rfft(h, n_fft) * spectra, n_fft, axis=1)  # the radii of one FFT length
+        for row, (k, m) in zip(full, rows):
             patch[k] = row[m + pad - 1:m + pad + n + 1]  # scipy's fftconvolve(h, w, "same") centres by m
     heights = np.ascontiguousarray(patch[:, 1:-1])
-    smooth_slope = (patch[:, 2:] - patch[:, :-2]) / (2.0 * dx_m)  # np.gradient's central difference
     # fingerprint ridges: each radius's ridges under the patch sample the crest slope, weighted by the line load
     weights, shifts = _ridge_weights(tuple(float(a) for a in radii_m), skin.ridge_pitch_m, dx_m)
-    ridged = np.zeros((radii_m.size, n))
-    _ridge_sum(crest_slope, pad, weights, shifts, ridged)
-    slopes = smooth_slope + ridge_gain * (ridged - smooth_slope)
+    slopes = np.empty((radii_m.size, n))
+    _ridge_slopes(patch, crest_slope, pad, weights, shifts, float(ridge_gain), 2.0 * dx_m, slopes)
     return heights, slopes
 
 
@@ -340,15 +340,17 @@ def _patch_kernels(radii_m: tuple, dx_m: float, n_signal: int) -> list:
     """Per patch radius ``a`` (m): the half-width m (samples of ``dx_m``) of its Hertz line-load kernel
     ``∝ 1 − x²/a²`` (normalised to sum 1), the FFT length and the kernel's spectrum with which
     :func:`scipy.signal.fftconvolve` convolves it with a signal of ``n_signal`` samples (the same arithmetic, with
-    the kernel's spectrum computed once)."""
-    out = []
-    for a in radii_m:
+    the kernel's spectrum computed once).  Grouped by FFT length: [(length, [(radius index, m), …], spectra
+    stacked one row per radius)], in order of first appearance."""
+    groups: dict = {}
+    for k, a in enumerate(radii_m):
         m = max(1, int(np.floor(a / dx_m)))
         w = np.clip(1.0 - ((np.arange(-m, m + 1) * dx_m) / a) ** 2, 0.0, None)
         w /= w.sum()
         n_fft = scipy_fft.next_fast_len(n_signal + w.size - 1, True)
-        out.append((m, n_fft, scipy_fft.rfftn(w[::-1], [n_fft], axes=[0])))
-    return out
+        groups.setdefault(n_fft, []).append((k, m, scipy_fft.rfftn(w[::-1], [n_fft], axes=[0])))
+    return [(n_fft, [(k, m) for k, m, _ in g], np.stack([spectrum for _, _, spectrum in g]))
+            for n_fft, g in groups.items()]
 
 
 @functools.lru_cache(maxsize=16)
@@ -369,18 +371,26 @@ def _ridge_weights(radii_m: tuple, pitch_m: float, dx_m: float):
 
 
 @njit(cache=True)
-def _ridge_sum(crest_slope, pad, weights, shifts, out):
-    """out[k, i] += weights[k, j] · crest_slope[pad + shifts[k, j] + i] over j in order (zero weights skipped)."""
+def _ridge_slopes(patch, crest_slope, pad, weights, shifts, gain, two_dx, out):
+    """The slope the skin feels, per radius k and position i: the patch average's central difference
+    ``s = (patch[k, i + 2] − patch[k, i]) / two_dx`` (np.gradient's) and the ridges' ``r = Σ_j weights[k, j] ·
+    crest_slope[pad + shifts[k, j] + i]`` (in order of j from 0, zero weights skipped) blended as
+    ``s + gain·(r − s)``; written to ``out`` (radii × positions)."""
     n = out.shape[1]
+    ridged = np.empty(n)
     for k in range(weights.shape[0]):
-        row = out[k]
+        ridged[:] = 0.0
         for j in range(weights.shape[1]):
             w = weights[k, j]
             if w == 0.0:
                 continue
             shifted = crest_slope[pad + shifts[k, j]:pad + shifts[k, j] + n]  # 1-D views: the loop vectorises
             for i in range(n):
-                row[i] += w * shifted[i]
+                ridged[i] += w * shifted[i]
+        p, row = patch[k], out[k]
+        for i in range(n):
+            s = (p[i + 2] - p[i]) / two_dx
+            row[i] = s + gain * (ridged[i] - s)
 
 
 class SlidingContact(Effect):

@@ -245,25 +245,43 @@ def test_wear_needs_a_sliding_speed_and_a_fresh_skin_restores_the_ridges():
 
 
 @pytest.mark.unit
-@pytest.mark.parametrize("dx_m", [10e-6, 2.5e-6])
-def test_patch_averaged_heights_are_each_radius_line_load_convolved_with_the_surface(dx_m):
-    """The tables' heights equal, bit for bit, the surface under the track convolved with each patch radius's
-    normalised Hertz line load by scipy.signal.fftconvolve ("same"): the spectra shared between radii change no
-    value."""
+@pytest.mark.parametrize("dx_m, surface, start", [(10e-6, GRATING, 0.0123), (2.5e-6, GRATING, 0.0123),
+                                                  (10e-6, SAND, 0.0123), (10e-6, GRATING, 0.995),
+                                                  (10e-6, SAND, 0.9999), (10e-6, SAND, 0), (10e-6, SAND, 1)])
+def test_spatial_tables_are_the_line_load_convolutions_and_ridge_sums_of_the_surface(dx_m, surface, start):
+    """Consistency, bit for bit: the tables' heights are the surface under the track (wrapping past the stored 1 m
+    when the stretch runs over its end; with and without periodic components) convolved with each patch radius's
+    normalised Hertz line load by scipy.signal.fftconvolve ("same"), and the slopes the blend
+    ``s + gain·(r − s)`` of the patch average's central difference ``s`` and the line-load-weighted sum ``r`` of the
+    ridge crests' slopes (np.convolve box of the contact width, np.gradient), summed ridge after ridge.  The
+    spectra shared between radii, the slice taken where the stretch does not wrap and the compiled ridge loop
+    change no value.  (Integer starts: the stretch ends that many samples past the stored surface's last one: 0
+    the last that needs no wrap, 1 the first that does.)"""
     from scipy.signal import fftconvolve
 
-    from emulator.sliding import _random_track, spatial_tables
+    from emulator.sliding import _random_track, _ridge_weights, spatial_tables
     from emulator.texture import periodic_profile
 
-    skin, start, length = Skin(), 0.0123, 0.02
+    skin, length, gain = Skin(), 0.02, 0.7
     radii = SensorParams().contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, 1.25, 8))
-    heights, _ = spatial_tables(GRATING, skin, 0.7, start, length, dx_m, radii)
-    rough = _random_track(GRATING, dx_m)
+    rough = _random_track(surface, dx_m)
     pad = int(np.ceil((radii.max() + skin.ridge_pitch_m) / dx_m)) + 2
     n = int(np.ceil(length / dx_m)) + 2
+    if isinstance(start, int):
+        start = (rough.size - n - pad + start) * dx_m
+    heights, slopes = spatial_tables(surface, skin, gain, start, length, dx_m, radii)
     k = np.arange(-pad, n + pad)
-    h = rough[(int(round(start / dx_m)) + k) % rough.size] + periodic_profile(GRATING, k * dx_m + start)
-    for row, a in zip(heights, radii):
+    h = rough[(int(round(start / dx_m)) + k) % rough.size] + periodic_profile(surface, k * dx_m + start)
+    w_crest = max(1, int(round(skin.ridge_contact_width_m / dx_m)))
+    crest_slope = np.gradient(np.convolve(h, np.ones(w_crest) / w_crest, mode="same"), dx_m)
+    weights, shifts = _ridge_weights(tuple(radii), skin.ridge_pitch_m, dx_m)
+    for row, slope, a, wj, sj in zip(heights, slopes, radii, weights, shifts):
         m = max(1, int(np.floor(a / dx_m)))
         w = np.clip(1.0 - ((np.arange(-m, m + 1) * dx_m) / a) ** 2, 0.0, None)
-        assert np.array_equal(row, fftconvolve(h, w / w.sum(), "same")[pad:pad + n])
+        patch = fftconvolve(h, w / w.sum(), "same")[pad - 1:pad + n + 1]
+        assert np.array_equal(row, patch[1:-1])
+        smooth = (patch[2:] - patch[:-2]) / (2.0 * dx_m)
+        ridged = np.zeros(n)
+        for weight, shift in zip(wj[wj != 0], sj[wj != 0]):
+            ridged += weight * crest_slope[pad + shift:pad + shift + n]
+        assert np.array_equal(slope, smooth + gain * (ridged - smooth))
