@@ -48,6 +48,36 @@ def test_filter_passband_is_20_to_700_hz():
     assert a20 == pytest.approx(0.5, abs=0.06) and a700 == pytest.approx(0.5, abs=0.06)  # −6 dB at the edges
 
 
+def test_filter_is_designed_once_and_handed_out_as_a_copy():
+    """Consistency: the remembered design is scipy's firwin to the bit, and a caller changing its taps changes
+    no later design."""
+    h = tp.roughness_filter(FS)
+    assert np.array_equal(h, signal.firwin(67, [20.0, 700.0], pass_zero=False, window="hamming", fs=FS))
+    h[:] = 0.0
+    assert np.array_equal(tp.roughness_filter(FS), signal.firwin(67, [20.0, 700.0], pass_zero=False, fs=FS))
+
+
+@pytest.mark.parametrize("lead, tail, guard_s, taps", [(0.2, 0.1, 0.05, None), (0.0, 0.0, 0.0, None),
+                                                       (0.0, 0.0, 0.0, 4), (0.2, 0.1, 0.05, 8)])
+def test_band_powers_are_the_mean_squares_of_the_whole_record_filtered(lead, tail, guard_s, taps, monkeypatch):
+    """Consistency, bit for bit: the window powers equal the mean squares, over each window, of the whole
+    mean-removed record convolved ("same") with the filter, though only the windows' samples are filtered — also
+    for windows reaching to within the filter's half-length of the record's ends (here the background window
+    from the first sample, the measurement window to the last) and for even filters (``taps``: a stand-in filter
+    of that many taps, whose centring is one sample off the middle)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(int(STOP * FS)) / FS
+    rec = tp.TrialRecording(pac_t=t, pac=2048.0 + 5.0 * rng.standard_normal(t.size), pdc_t=t, pdc=t, current_t=t,
+                            current_A=t, contact_s=0.0, slide_start_s=1.0, slide_end_s=t[-1] if not lead else END)
+    if taps is not None:
+        stand_in = rng.random(taps)
+        monkeypatch.setattr(tp, "roughness_filter", lambda fs: stand_in)
+    y = np.convolve(rec.pac - rec.pac.mean(), tp.roughness_filter(rec.pac_rate_hz), mode="same")
+    windows = tp.measurement_window(rec, lead, tail), tp.background_window(rec, guard_s)
+    expected = tuple(float(np.mean(y[(t >= w[0]) & (t <= w[1])] ** 2)) for w in windows)
+    assert tp.band_powers(rec, lead, tail, guard_s) == expected
+
+
 # ------------------------------------------------------------------------------------------------ fineness
 
 

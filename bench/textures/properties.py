@@ -43,6 +43,7 @@ Samples are taken as uniformly spaced; the sampling rate is 1 / median spacing o
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import dataclass, field
@@ -152,9 +153,9 @@ class TrialRecording:
                 f"PAC ({self.pac_t[0]:.4g}…{self.pac_t[-1]:.4g} s) must cover contact_s…slide_end_s "
                 f"({phases['contact_s']:.4g}…{phases['slide_end_s']:.4g} s)")
 
-    @property
+    @functools.cached_property
     def pac_rate_hz(self) -> float:
-        """PAC sampling rate (Hz): 1 / median spacing of the instants."""
+        """PAC sampling rate (Hz): 1 / median spacing of the instants (computed once: the record is frozen)."""
         return 1.0 / float(np.median(np.diff(self.pac_t)))
 
     def metadata(self) -> dict:
@@ -257,7 +258,24 @@ def roughness_filter(fs_hz: float, order: int = FIR_ORDER, band_hz: tuple[float,
     750 Hz)."""
     if not band_hz[1] < fs_hz / 2:
         raise RecordingError(f"PAC sampled at {fs_hz:.1f} Hz: the {band_hz[1]} Hz band edge is above Nyquist")
-    return signal.firwin(order + 1, list(band_hz), pass_zero=False, window="hamming", fs=fs_hz)
+    return _fir_taps(fs_hz, order, tuple(band_hz)).copy()
+
+
+@functools.lru_cache(maxsize=16)
+def _fir_taps(fs_hz: float, order: int, band_hz: tuple) -> np.ndarray:
+    """:func:`roughness_filter`'s taps, designed once per (rate Hz, order, band Hz) and kept read-only."""
+    taps = signal.firwin(order + 1, list(band_hz), pass_zero=False, window="hamming", fs=fs_hz)
+    taps.setflags(write=False)
+    return taps
+
+
+def _centred_convolution(x: np.ndarray, h: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """``np.convolve(x, h, "same")[lo:hi]``, computed only there where the filter lies wholly inside ``x`` (the
+    same dot products, so the same values), else over the whole of ``x``."""
+    left, right = h.size - 1 - (h.size - 1) // 2, (h.size - 1) // 2
+    if lo - left >= 0 and hi + right <= x.size and x.size >= h.size:
+        return np.convolve(x[lo - left:hi + right], h, mode="valid")
+    return np.convolve(x, h, mode="same")[lo:hi]
 
 
 def traction(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL) -> float:
@@ -273,19 +291,19 @@ def band_powers(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = M
                 guard_s: float = BACKGROUND_GUARD_S) -> tuple[float, float]:
     """(sliding power, background power) of band-passed PAC (bits²): mean square over each window.
 
-    PAC's mean is removed, the whole record is filtered once with :func:`roughness_filter` (zero-phase alignment:
-    centred convolution, i.e. the 33-sample delay compensated), then each window's samples are averaged.
+    PAC's mean is removed, the record is filtered with :func:`roughness_filter` (zero-phase alignment: centred
+    convolution of the whole record, i.e. the 33-sample delay compensated; evaluated only inside the windows),
+    then each window's samples are averaged.
     """
-    fs = rec.pac_rate_hz
-    h = roughness_filter(fs)
-    y = np.convolve(rec.pac - rec.pac.mean(), h, mode="same")
+    h = roughness_filter(rec.pac_rate_hz)
+    x = rec.pac - rec.pac.mean()
     out = []
     windows = (("measurement", measurement_window(rec, lead, tail)), ("background", background_window(rec, guard_s)))
     for name, w in windows:
-        sel = _in(rec.pac_t, w)
-        if not sel.any():
+        inside = np.flatnonzero(_in(rec.pac_t, w))  # (instants increase: one run of samples)
+        if not inside.size:
             raise RecordingError(f"PAC: no samples in the {name} window {w[0]:.4g}…{w[1]:.4g} s")
-        out.append(float(np.mean(y[sel] ** 2)))
+        out.append(float(np.mean(_centred_convolution(x, h, int(inside[0]), int(inside[-1]) + 1) ** 2)))
     return out[0], out[1]
 
 
@@ -310,9 +328,17 @@ def averaged_spectrum(x: np.ndarray, fs_hz: float, window: int = CENTROID_WINDOW
         raise RecordingError(f"PAC: {x.size} sample(s) in the measurement window; need at least 2")
     step = max(1, int(round(n * (1.0 - overlap))))
     seg = np.lib.stride_tricks.sliding_window_view(x, n)[::step]
-    seg = (seg - seg.mean(axis=1, keepdims=True)) * signal.get_window("hann", n)  # periodic Hann
+    seg = (seg - seg.mean(axis=1, keepdims=True)) * _hann(n)  # periodic Hann
     power = (np.abs(np.fft.rfft(seg, axis=1)) ** 2).mean(axis=0)
     return np.fft.rfftfreq(n, 1.0 / fs_hz), power
+
+
+@functools.lru_cache(maxsize=8)
+def _hann(n: int) -> np.ndarray:
+    """The periodic Hann window of ``n`` samples (scipy's ``get_window("hann", n)``), read-only."""
+    w = signal.get_window("hann", n)
+    w.setflags(write=False)
+    return w
 
 
 def spectral_centroid(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
