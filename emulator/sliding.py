@@ -296,7 +296,10 @@ def fluctuation_table(texture: Texture, start_m: float, length_m: float, dx_m: f
     the positions of :func:`spatial_tables` (relative to ``start_m``), from the texture's own fluctuation."""
     track = _fluctuation_track(texture, dx_m)
     n = int(np.ceil(length_m / dx_m)) + 2
-    return np.ascontiguousarray(track[(int(round(start_m / dx_m)) + np.arange(n)) % track.size])
+    first = int(round(start_m / dx_m)) % track.size
+    if first + n <= track.size:  # no wrap: a copy of a slice (the same samples)
+        return track[first:first + n].copy()
+    return np.ascontiguousarray(track[(first + np.arange(n)) % track.size])
 
 
 def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, length_m: float, dx_m: float,
