@@ -38,7 +38,7 @@ from emulator import filters, friction
 from emulator.effects import Block, Effect, effect_rng
 from emulator.params import SensorParams
 from emulator.skin import Skin
-from emulator.texture import Texture, friction_fluctuation, periodic_profile, random_profile
+from emulator.texture import Texture, friction_fluctuation, periodic_on_grid, random_profile
 
 POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0.5 for rubbers changes it by 20 %)
 #: textures are layers on the rig's rigid backing: a soft one compresses at most this much (it densifies as it
@@ -315,8 +315,8 @@ def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: flo
         h = rough[first:first + n + 2 * pad]
     else:
         h = rough[(first + np.arange(n + 2 * pad)) % n_surface]
-    if texture.periodic:
-        h = h + periodic_profile(texture, (np.arange(-pad, n + pad)) * dx_m + start_m)
+    if texture.periodic:  # (positions start_m + i·dx, i from -pad)
+        h = h + periodic_on_grid(texture, start_m - pad * dx_m, dx_m, n + 2 * pad)
     else:  # (a fresh array, as the sum with the zero profile made it: -0.0 becomes 0.0 as before)
         h = h + 0.0
     # the crest of a ridge sees the surface through its contact width

@@ -12,6 +12,7 @@ texture is the same surface in every trial; a trial only starts somewhere else o
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -188,6 +189,42 @@ def periodic_profile(texture: Texture, x_m: np.ndarray) -> np.ndarray:
             if rel:  # a zero harmonic (a square wave's even ones) adds exactly nothing: not evaluated
                 out += rel * c.amplitude_m * np.cos(j * w * x)
     return out
+
+
+def periodic_on_grid(texture: Texture, x0_m: float, dx_m: float, n: int) -> np.ndarray:
+    """:func:`periodic_profile` at the ``n`` positions ``x0_m + i·dx_m`` (m), by angle addition: each harmonic
+    ``A·cos(k·(x0 + i·dx)) = A·cos(k·x0)·cos(k·i·dx) − A·sin(k·x0)·sin(k·i·dx)``, the tables of cos and sin of
+    ``k·i·dx`` kept per texture and spacing (a trial then costs no cosine per sample).  The same values to
+    rounding (~1e-15 of the amplitude; test_texture_tracks)."""
+    if not texture.periodic:
+        return np.zeros(n)
+    wavenumbers, amplitudes, cos_table, sin_table = _harmonic_tables(texture, dx_m, n)
+    phase = wavenumbers * x0_m
+    return (amplitudes * np.cos(phase)) @ cos_table[:, :n] - (amplitudes * np.sin(phase)) @ sin_table[:, :n]
+
+
+def _harmonic_tables(texture: Texture, dx_m: float, n: int) -> tuple:
+    """(wavenumbers rad/m, amplitudes m, cos table, sin table) of the texture's periodic harmonics (zero ones left
+    out), the tables (harmonic × position) of ``cos``/``sin(k·i·dx)`` for at least ``n`` positions."""
+    n_table = 1 << max(10, (int(n) - 1).bit_length())  # (a power of two: a longer trial rebuilds it seldom)
+    return _harmonic_tables_of_length(texture, dx_m, n_table)
+
+
+@functools.lru_cache(maxsize=4)  # (4 harmonics x 16384 positions x 2 tables: 1 MB at default; 4 MB at reference)
+def _harmonic_tables_of_length(texture: Texture, dx_m: float, n_table: int) -> tuple:
+    k, amp = [], []
+    for c in texture.periodic:
+        w = 2 * np.pi / c.track_period_m
+        for j, rel in enumerate((1.0, *c.harmonics), start=1):
+            if rel:
+                k.append(j * w)
+                amp.append(rel * c.amplitude_m)
+    k, amp = np.array(k), np.array(amp)
+    arg = k[:, None] * (np.arange(n_table) * dx_m)[None, :]
+    tables = (k, amp, np.cos(arg), np.sin(arg))
+    for a in tables:
+        a.setflags(write=False)
+    return tables
 
 
 def surface_track(texture: Texture, dx_m: float, start_m: float = 0.0, length_m: float = SURFACE_LENGTH_M) -> SurfaceTrack:

@@ -250,7 +250,8 @@ def test_wear_needs_a_sliding_speed_and_a_fresh_skin_restores_the_ridges():
                                                   (10e-6, SAND, 0.9999), (10e-6, SAND, 0), (10e-6, SAND, 1)])
 def test_spatial_tables_are_the_line_load_convolutions_and_ridge_sums_of_the_surface(dx_m, surface, start):
     """Consistency, bit for bit: the tables' heights are the surface under the track (wrapping past the stored 1 m
-    when the stretch runs over its end; with and without periodic components) convolved with each patch radius's
+    when the stretch runs over its end; with and without periodic components, these from
+    :func:`emulator.texture.periodic_on_grid`, tested against the plain cosines in test_texture_tracks) convolved with each patch radius's
     normalised Hertz line load by scipy.signal.fftconvolve ("same"), and the slopes the blend
     ``s + gain·(r − s)`` of the patch average's central difference ``s`` and the line-load-weighted sum ``r`` of the
     ridge crests' slopes (np.convolve box of the contact width, np.gradient), summed ridge after ridge.  The
@@ -260,7 +261,7 @@ def test_spatial_tables_are_the_line_load_convolutions_and_ridge_sums_of_the_sur
     from scipy.signal import fftconvolve
 
     from emulator.sliding import _random_track, _ridge_weights, spatial_tables
-    from emulator.texture import periodic_profile
+    from emulator.texture import periodic_on_grid
 
     skin, length, gain = Skin(), 0.02, 0.7
     radii = SensorParams().contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, 1.25, 8))
@@ -271,7 +272,7 @@ def test_spatial_tables_are_the_line_load_convolutions_and_ridge_sums_of_the_sur
         start = (rough.size - n - pad + start) * dx_m
     heights, slopes = spatial_tables(surface, skin, gain, start, length, dx_m, radii)
     k = np.arange(-pad, n + pad)
-    h = rough[(int(round(start / dx_m)) + k) % rough.size] + periodic_profile(surface, k * dx_m + start)
+    h = rough[(int(round(start / dx_m)) + k) % rough.size] + periodic_on_grid(surface, start - pad * dx_m, dx_m, k.size)
     w_crest = max(1, int(round(skin.ridge_contact_width_m / dx_m)))
     crest_slope = np.gradient(np.convolve(h, np.ones(w_crest) / w_crest, mode="same"), dx_m)
     weights, shifts = _ridge_weights(tuple(radii), skin.ridge_pitch_m, dx_m)

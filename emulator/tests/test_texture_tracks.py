@@ -4,7 +4,7 @@ the reference spacing and zero mean, and coarser tracks are the same surface wit
 import numpy as np
 import pytest
 
-from emulator.texture import Texture, random_profile
+from emulator.texture import PeriodicComponent, Texture, periodic_on_grid, periodic_profile, random_profile
 
 ROUGH = Texture(906, "rough", "test", rms_height_m=3e-6, correlation_length_m=200e-6, hurst=0.7, mu_static=1.0,
                 mu_kinetic=0.8, seed=11)
@@ -32,3 +32,27 @@ def test_a_coarser_random_track_is_the_same_surface_without_its_finest_component
     c = np.fft.rfft(coarse)
     c[-1] = 0.0
     np.testing.assert_allclose(np.fft.irfft(c, coarse.size), low_passed, atol=1e-5 * ROUGH.rms_height_m)
+
+
+GRATED = Texture(907, "grated", "test", rms_height_m=0.0, correlation_length_m=200e-6, hurst=0.7, mu_static=1.0,
+                 mu_kinetic=0.8, periodic=(PeriodicComponent(3e-3, 100e-6, (0.0, -0.333, 0.0, 0.2)),
+                                           PeriodicComponent(0.7e-3, 20e-6, (0.5,), orientation_deg=40.0)))
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("x0_m, dx_m, n", [(0.0739, 10e-6, 11300), (0.99, 2.5e-6, 45000), (1.02, 10e-6, 70000),
+                                           (-0.006, 10e-6, 3)])
+def test_the_periodic_relief_on_a_grid_is_the_sum_of_its_cosines(x0_m, dx_m, n):
+    """Consistency: the angle-addition evaluation on ``x0 + i·dx`` equals :func:`periodic_profile` at those positions
+    to the rounding of the positions themselves: |Δ| ≤ Σ A·(k·16 ulp(x) + 16 ε) (here ~1e-12 of the amplitude;
+    a wrong sign or harmonic is off by the amplitude)."""
+    x = np.arange(n) * dx_m + x0_m
+    expected = periodic_profile(GRATED, x)
+    got = periodic_on_grid(GRATED, x0_m, dx_m, n)
+    bound = 0.0
+    for c in GRATED.periodic:
+        k = 2 * np.pi / c.track_period_m
+        for j, rel in enumerate((1.0, *c.harmonics), start=1):
+            bound += abs(rel * c.amplitude_m) * (j * k * 16 * np.spacing(np.abs(x).max()) + 16 * np.finfo(float).eps)
+    assert got.shape == (n,) and np.abs(got - expected).max() <= bound
+    assert np.array_equal(periodic_on_grid(ROUGH, x0_m, dx_m, n), np.zeros(n))  # no relief: zeros
