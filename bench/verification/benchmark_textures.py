@@ -13,7 +13,8 @@ from emulator.sensor import NoiseSources, Sensor
 from emulator.sliding import Slide
 
 PAC_RATE_HZ = 2200.0
-TRIAL_REPEATS = 3  # a rig trial's cost: the shortest wall time of this many runs after a warm-up run
+TRIAL_REPEATS = 10  # a rig trial's cost: the shortest wall time of this many runs after a warm-up run (a shared
+# machine's load only adds time; 10 runs of ~20 ms cost 0.2 s a row and find a quiet moment far more often than 3)
 
 
 def _slide_pac_bits(texture, fidelity: str) -> tuple[np.ndarray, float]:
