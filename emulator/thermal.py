@@ -314,6 +314,15 @@ class ThermalNetwork:
             return self._remember(key, (E[:n, :n], E[:n, n:]))
         return cache[key]
 
+    def step_response(self, contact, dt: float, live: bool = False):
+        """:meth:`discrete` with Φ made contiguous (for :func:`_steps`), remembered under the contact's exact area
+        (m²): a live contact's repeated patches cost one look-up."""
+        key = ("s", None if contact is None else (contact[0].name, contact[1]), dt, live)
+        if key not in (cache := self._cache):
+            Phi, Gam = self.discrete(contact, dt, live)
+            return self._remember(key, (np.ascontiguousarray(Phi), Gam))
+        return cache[key]
+
 
 def _contact_key(contact: tuple[Material, float] | None):
     """What a contact's matrices depend on: (material name, area m² to 1e-12 m²), or None."""
@@ -375,7 +384,7 @@ class ThermalModel:
         self.live = not all(c.planned for c in events.contacts)
         self._p_self = 0.0  # bead self-heating (W) of the current chunk
         self._last_touch = None  # (contact index, area m²) of the last step, or None
-        self._held = None  # (first step, inputs, closed-form states) while a chunk's inputs stay those at its start
+        self._held = None  # (first step, inputs, x, u) of a chunk's closed form while its inputs stay those at its start
         # read-out filters run at the network rate: 22.6 Hz low-pass on TDC, 0.45 Hz high-pass x 98 on TAC
         fs = THERMAL_RATE_HZ
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.tdc_bandwidth_Hz]), 2 * np.pi * p.tdc_bandwidth_Hz
@@ -408,6 +417,11 @@ class ThermalModel:
 
     def inputs_at(self, times: np.ndarray) -> tuple[list[float], list[float]]:
         """:meth:`heater_at` (W) and :meth:`ambient_at` (°C) at each instant (s), as lists of floats."""
+        heater, ambient = self._input_arrays(times)
+        return heater.tolist(), ambient.tolist()
+
+    def _input_arrays(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`inputs_at` as arrays (W, °C)."""
         e = self.events
         heater = np.full(times.size, self.heater_W)
         if self.faults.get("heater_failed"):
@@ -419,7 +433,7 @@ class ThermalModel:
         ambient = np.full(times.size, self.p.ambient_temperature_C)
         for when, value in e.ambient_steps:
             ambient[times >= when] = value
-        return heater.tolist(), ambient.tolist()
+        return heater, ambient
 
     def _event_times(self, t0: float, t1: float) -> list[float]:
         """Instants in [t0, t1] where an input may change (plus t1), to test whether a chunk is uniform."""
@@ -441,22 +455,28 @@ class ThermalModel:
     def touches(self, times: np.ndarray) -> list:
         """Per instant (s): (contact index, area m²) of the first contact touching then, or None; a live contact
         reads its load at these instants only."""
-        out = [None] * times.size
+        index, area = self._touch_arrays(times)
+        return [None if i < 0 else (i, a) for i, a in zip(index.tolist(), area.tolist())]
+
+    def _touch_arrays(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`touches` as arrays: per instant (s) the first touching contact's index (-1: none) and area (m²,
+        0 where none)."""
+        index = np.full(times.size, -1)
+        area = np.zeros(times.size)
         for i, c in enumerate(self.events.contacts):
             on = (times >= c.start_s) & (times < c.end_s)
             if not on.any():
                 continue
-            area = np.full(times.size, c.area_m2)
-            if not c.planned:
-                load = np.zeros(times.size)
-                load[on] = c.load_N(times[on])
-                on &= load > 0
-                area[on] = live_patch_area_m2(load[on], self.p)
-            areas = area.tolist()
-            for j in np.flatnonzero(on).tolist():
-                if out[j] is None:
-                    out[j] = (i, areas[j])
-        return out
+            if c.planned:
+                a = c.area_m2
+            else:
+                load = c.load_N(times[on])
+                on[on] = load > 0
+                a = live_patch_area_m2(load[load > 0], self.p)
+            first = on & (index < 0)
+            area[first] = a if c.planned else a[first[on]]
+            index[first] = i
+        return index, area
 
     def _input(self, t: float, contact: ThermalContact | None, p_self: float) -> np.ndarray:
         """u = [heater W, ambient °C, object far field °C, bead self-heating W] at ``t`` (s)."""
@@ -552,47 +572,45 @@ class ThermalModel:
         run stepwise repeats one step's (Φ, Γu)."""
         k0 = self.k
         times = (k0 + np.arange(k_end - k0)) * self.dt
-        touches = self.touches(times)
-        t_list = times.tolist()
-        inputs = list(zip(*self.inputs_at(times), touches))
+        index, area = self._touch_arrays(times)
+        heater, ambient = self._input_arrays(times)
+        # runs: a step starts one where its inputs differ from the previous step's or a chunk starts
+        starts = np.ones(times.size, bool)
+        starts[1:] = (heater[1:] != heater[:-1]) | (ambient[1:] != ambient[:-1]) | (index[1:] != index[:-1]) | \
+            (area[1:] != area[:-1])
+        starts[(k0 + np.arange(times.size)) % CHUNK_STEPS == 0] = True
+        bounds = np.flatnonzero(starts).tolist() + [times.size]
+        t_list, heater, ambient, index, area = (v.tolist() for v in (times, heater, ambient, index, area))
         xs = np.empty((times.size, self.net.n))
         x = self.x
         stepping = None  # (inputs, Φ, Γu) of the last step taken stepwise
-        responses = {}  # one step's (Φ contiguous, Γ) per touch met in this call
-        j = 0
-        while j < times.size:
-            k, here = k0 + j, inputs[j]
-            touch = here[2]
-            contact, area = (None, None) if touch is None else (self.events.contacts[touch[0]], touch[1])
+        for j, run_end in zip(bounds[:-1], bounds[1:]):
+            k = k0 + j
+            touch = None if index[j] < 0 else (index[j], area[j])
+            here = (heater[j], ambient[j], touch)
+            contact, area_j = (None, None) if touch is None else (self.events.contacts[touch[0]], touch[1])
             if k % CHUNK_STEPS == 0:
                 self._p_self = self._self_heating_W(float(x[BEAD]))  # updated once per chunk, as for planned
                 self._held, stepping = None, None
                 if touch == self._last_touch:
-                    powers, sums = self._response(contact, area, CHUNK_STEPS)
-                    self._held = (k, here, powers @ x + sums @ self._input(t_list[j], contact, self._p_self))
-            # the run: the steps from j on with these inputs, up to the chunk's end
-            end = min(times.size, j + CHUNK_STEPS - k % CHUNK_STEPS)
-            run_end = j + 1
-            while run_end < end and inputs[run_end] == here:
-                run_end += 1
+                    self._held = (k, here, x, self._input(t_list[j], contact, self._p_self))
             if self._held is not None and self._held[1] == here:
-                first = k - self._held[0]
-                xs[j:run_end] = self._held[2][first:first + run_end - j]
+                k_held, _, x_held, u_held = self._held
+                powers, sums = self._response(contact, area_j, CHUNK_STEPS)
+                rows = slice(k - k_held, k - k_held + run_end - j)  # only the chunk's states used
+                xs[j:run_end] = powers[rows] @ x_held + sums[rows] @ u_held
                 x = xs[run_end - 1]
             else:
                 self._held = None
                 if stepping is None or stepping[0] != here:
-                    if touch not in responses:
-                        Phi, Gam = self._response(contact, area)
-                        responses[touch] = (np.ascontiguousarray(Phi), Gam)
-                    Phi, Gam = responses[touch]
+                    Phi, Gam = self.net.step_response(None if touch is None else (contact.material, area_j), self.dt,
+                                                      contact is not None and not contact.planned)
                     u = np.array([here[0], here[1], contact.temperature_C if contact else here[1], self._p_self])
                     stepping = (here, Phi, Gam @ u)  # u: _input's, from the inputs already at hand
                 _, Phi, gu = stepping
                 x = self._arrive(x, contact)  # (only the run's first step can meet a newly touched object)
                 x = _steps(Phi, x, gu, xs[j:run_end])
             self._last_touch = touch
-            j = run_end
         self.x = x
         self.k = k_end
         self._emit(k0 + 1, xs)

@@ -197,3 +197,41 @@ def test_compiled_steps_are_numpys_steps_bit_for_bit(name):
         last = _steps(np.ascontiguousarray(Phi), x, gu, got)
         np.testing.assert_array_equal(got, expected)
         np.testing.assert_array_equal(last, expected[-1])
+
+
+def test_the_touches_of_many_steps_at_once_are_the_first_touching_contact_instant_by_instant():
+    """:meth:`ThermalModel.touches` (the live network's steps, all at once): per instant the first contact touching
+    then (overlapping planned contacts, a live one whose load is zero part of the time), its area (m²), or None."""
+    from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel
+
+    glass, foam = thermal_material("glass"), thermal_material("polyurethane foam")
+    live = ThermalContact(0.2, 1.0, glass, 25.0, load_N=lambda t: np.where(t < 0.6, 0.0, 0.5 + t))
+    contacts = [ThermalContact(0.1, 0.4, foam, 30.0, area_m2=2e-5), live, ThermalContact(0.3, 0.8, glass, 20.0, 1e-5)]
+    model = ThermalModel(SensorParams(), ThermalEvents(contacts), seed=1)
+    t = np.arange(0.0, 1.2, 0.01)
+    got = model.touches(t)
+    for when, touch in zip(t.tolist(), got):
+        first = next((i for i, c in enumerate(contacts) if c.start_s <= when < c.end_s and
+                      (c.planned or live.load_N(np.array([when]))[0] > 0)), None)
+        if first is None:
+            assert touch is None
+            continue
+        c = contacts[first]
+        area = c.area_m2 if c.planned else float(live_patch_area_m2(c.load_N(np.array([when])), model.p)[0])
+        assert touch == (first, area)
+    assert {None if g is None else g[0] for g in got} == {None, 0, 1, 2}
+
+
+def test_a_steps_contiguous_response_is_the_discretization_remembered():
+    """:meth:`ThermalNetwork.step_response` is :meth:`ThermalNetwork.discrete` to the bit, Φ C-contiguous, and the
+    same arrays when asked again (no contact, a planned and a live patch)."""
+    net = shared_network(SensorParams())
+    for contact, live in ((None, False), ((thermal_material("glass"), 3e-6), False),
+                          ((thermal_material("aluminum"), 7.1e-6), True)):
+        Phi, Gam = net.step_response(contact, 0.01, live)
+        Phi_d, Gam_d = net.discrete(contact, 0.01, live)
+        assert Phi.flags.c_contiguous
+        np.testing.assert_array_equal(Phi, Phi_d)
+        np.testing.assert_array_equal(Gam, Gam_d)
+        again = net.step_response(contact, 0.01, live)
+        assert again[0] is Phi and again[1] is Gam
