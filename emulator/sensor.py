@@ -54,6 +54,34 @@ class NoiseSources:
         return cls(False, False, False, False, False, False)
 
 
+
+@functools.lru_cache(maxsize=64)
+def _frame_plan(node_of_channel: bytes, n_nodes: int, channels: bytes) -> tuple:
+    """:meth:`Sensor._plan` of the int64 ``channels`` (bytes) for a sensor whose channel map (int64 per channel
+    index, bytes) and number of grid nodes are given: remembered, since a rig builds a sensor per trial and its
+    host reads the same batches every trial."""
+    channels = np.frombuffer(channels, dtype=np.int64)
+    if channels.min() < 0 or channels.max() > 63:
+        raise ValueError("channel indices must be 0..63")
+    node_of = np.frombuffer(node_of_channel, dtype=np.int64)[channels]
+    if np.any(node_of < 0):
+        bad = int(channels[np.flatnonzero(node_of < 0)[0]])
+        raise ValueError(f"channel {ch.CHANNEL_NAME.get(bad, bad)} was not declared in channels_read")
+    nodes = []
+    for node_id in range(n_nodes):
+        sel = node_of == node_id
+        if sel.all():
+            nodes.append((node_id, None))
+        elif sel.any():
+            nodes.append((node_id, np.flatnonzero(sel)))
+    thermal = [(column, np.flatnonzero(node_of == kind)) for kind, column in ((KIND_TDC, 1), (KIND_TAC, 2))]
+    at = np.flatnonzero(node_of == KIND_ELECTRODE)
+    electrodes = (electrode_number(channels[at]), at) if at.size else None
+    for a in [w for _, w in nodes if w is not None] + [w for _, w in thermal] + list(electrodes or ()):
+        a.flags.writeable = False  # shared by every sensor asking for these channels
+    return nodes, [(c, w) for c, w in thermal if w.size], electrodes
+
+
 class Sensor:
     """One emulated BioTac.
 
@@ -293,26 +321,12 @@ class Sensor:
     def _plan(self, channels: np.ndarray) -> tuple:
         """Where each kind of channel sits in ``channels`` (validated): a tuple of (grid node index, positions or
         None for all) per grid node read, (column, positions) for TDC and TAC, and (electrode numbers, positions).
-        The host asks for the same frame batch after batch: the last plan is kept and reused for an equal array."""
+        The host asks for the same frame batch after batch: the last plan is kept and reused for an equal array
+        (and plans are remembered across sensors, :func:`_frame_plan`)."""
         last = self._last_plan
         if last is not None and last[0].shape == channels.shape and np.array_equal(last[0], channels):
             return last[1]
-        if channels.min() < 0 or channels.max() > 63:
-            raise ValueError("channel indices must be 0..63")
-        node_of = self._node_of_channel[channels]
-        if np.any(node_of < 0):
-            bad = int(channels[np.flatnonzero(node_of < 0)[0]])
-            raise ValueError(f"channel {ch.CHANNEL_NAME.get(bad, bad)} was not declared in channels_read")
-        nodes = []
-        for node_id in range(len(self.nodes)):
-            sel = node_of == node_id
-            if sel.all():
-                nodes.append((node_id, None))
-            elif sel.any():
-                nodes.append((node_id, np.flatnonzero(sel)))
-        thermal = [(column, np.flatnonzero(node_of == kind)) for kind, column in ((KIND_TDC, 1), (KIND_TAC, 2))]
-        at = np.flatnonzero(node_of == KIND_ELECTRODE)
-        plan = (nodes, [(c, w) for c, w in thermal if w.size], (electrode_number(channels[at]), at) if at.size else None)
+        plan = _frame_plan(self._node_of_channel.tobytes(), len(self.nodes), channels.tobytes())
         self._last_plan = (channels.copy(), plan)
         return plan
 

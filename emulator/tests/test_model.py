@@ -178,3 +178,20 @@ def test_each_batch_is_read_by_its_own_channels_whatever_the_batch_before():
         assert np.array_equal(kept.analog(channels, times), fresh.analog(channels, times)), k
     with pytest.raises(ValueError, match="not declared"):
         kept.analog(np.r_[frame[:43], 9], (np.arange(44) + 44 * 5) / 4400.0)
+
+
+def test_a_batchs_channel_plan_is_shared_by_sensors_with_the_same_channel_map_only():
+    """Plans are remembered across sensors (a rig builds one per trial): a second sensor reading the same channels
+    gets the same (read-only) plan; a sensor whose grid nodes differ (PDC alone: node 0, not 1) gets its own, and
+    reads PDC to the bit as the first does."""
+    from emulator.channels import channel_index
+    pdc = np.full(44, channel_index("PDC"))
+    times = np.arange(44) / 4400.0
+    both, again, alone = (Sensor(channels_read=names, seed=2) for names in (("PAC", "PDC"), ("PAC", "PDC"), ("PDC",)))
+    plan = both._plan(pdc)
+    assert again._plan(pdc) is plan and plan[0] == [(1, None)]
+    assert alone._plan(pdc)[0] == [(0, None)]
+    frame = np.array([channel_index(n) for n in DEFAULT_FRAME_NAMES])
+    for _, at in Sensor(channels_read=DEFAULT_FRAME_NAMES, seed=2)._plan(frame)[0]:
+        assert at is None or not at.flags.writeable
+    np.testing.assert_array_equal(alone.analog(pdc, times), both.analog(pdc, times))
