@@ -384,7 +384,7 @@ class ThermalModel:
         self.live = not all(c.planned for c in events.contacts)
         self._p_self = 0.0  # bead self-heating (W) of the current chunk
         self._last_touch = None  # (contact index, area m²) of the last step, or None
-        self._held = None  # (first step, inputs, x, u) of a chunk's closed form while its inputs stay those at its start
+        self._held = None  # (first step, inputs, x, u) of a chunk's closed form while its inputs stay those then
         # read-out filters run at the network rate: 22.6 Hz low-pass on TDC, 0.45 Hz high-pass x 98 on TAC
         fs = THERMAL_RATE_HZ
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.tdc_bandwidth_Hz]), 2 * np.pi * p.tdc_bandwidth_Hz
