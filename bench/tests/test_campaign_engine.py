@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.campaigns.engine import CampaignError, ClusterSpec, run_tasks
+from bench.campaigns.engine import CampaignError, ClusterSpec, group_size, run_tasks
 from bench.experiments.trials import TrialTask, run_trial_task, trial_seed
 
 pytestmark = pytest.mark.unit
@@ -33,6 +33,19 @@ def test_results_are_identical_for_one_and_two_workers_and_in_task_order():
     one = run_tasks(seeded_value, tasks, ClusterSpec(workers=1), progress=False)
     two = run_tasks(seeded_value, tasks, ClusterSpec(workers=2), progress=False)
     assert one == two == [seeded_value(t) for t in tasks]
+
+
+def test_grouped_tasks_give_the_same_results_in_task_order_and_name_a_failing_task_by_its_own_index():
+    """50 short tasks travel in groups (6 a group on 1 worker, 3 on 2): the same results in the same order as one
+    by one; a failing task deep in a group is reported by its own index."""
+    assert group_size(50, 1) == 6 and group_size(50, 2) == 3 and group_size(2160, 2) == 16 and group_size(3, 2) == 1
+    tasks = [(trial_seed(8, "g", k), 100) for k in range(50)]
+    expected = [seeded_value(t) for t in tasks]
+    assert run_tasks(seeded_value, tasks, ClusterSpec(workers=1), progress=False) == expected
+    assert run_tasks(seeded_value, tasks, ClusterSpec(workers=2), progress=False) == expected
+    tasks[39] = ("not a seed", 1)
+    with pytest.raises(CampaignError, match=r"task 39 \(\('not a seed', 1\)\) failed: TypeError"):
+        run_tasks(seeded_value, tasks, ClusterSpec(workers=1), progress=False, retries=0)
 
 
 def test_a_rig_trial_is_the_same_on_any_worker():
