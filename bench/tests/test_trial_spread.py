@@ -1,7 +1,7 @@
 """Where a texture property's trial-to-trial spread comes from (the σ the texture experiment's classifier learns).
 
-Derived: the rig starts every trial at a random place on the texture, as D's rig did, so the roughness of one
-texture and movement scatters by the sampling variance of a stationary vibration over the measurement window:
+Derived: the rig starts every trial at a random place on the texture, as D's rig did, so the roughness of
+one texture and movement scatters by the sampling variance of a stationary vibration over the measurement window:
 σ(ln P) ≈ 1/√(T·B), T the window (s) and B = (∫S df)² / ∫S² df the effective bandwidth (Hz) of the band-passed
 PAC's spectrum S. A rig that always started at one place would scatter by sensor noise alone, ~0.1 of that.
 """
@@ -31,8 +31,8 @@ def _roughness_and_sampling_sigma(rec) -> tuple[float, float]:
 
 
 def test_roughness_scatters_by_the_sampling_variance_of_a_random_start():
-    """Polyester taffeta (T85, a smooth fabric) at D's roughness movement, 0.2 N @ 6.31 cm/s, 20 trials: the
-    observed σ over the predicted 1/√(T·B) in 0.6–1.7 (measured 1.29; the sample σ of 20 trials is good to ±16 %,
+    """Polyester taffeta (T85, a smooth fabric) at D's roughness movement, 0.2 N @ 6.31 cm/s, 20 trials:
+    the observed σ over the predicted 1/√(T·B) in 0.6–1.7 (measured 1.29; the sample σ of 20 trials is good to ±16 %,
     and textures whose relief varies along the track reach ~2). A fixed start measures 0.15."""
     rig = TextureRig(skin=Skin(), wear=False)
     rough, predicted = [], []

@@ -122,7 +122,8 @@ def report(say=lambda m: None) -> str:
                      f"{r['spectral_error_dB']:18.3f} {r['trial_simulated_s']:12.2f} {r['trial_wall_s']:13.3f} "
                      f"{r['realtime_factor']:12.0f}")
     d = dask_scaling(say=say)
-    lines += [f"\nCampaign engine (Dask LocalCluster), {d['trials']} rig trials (best of {SCALING_ROUNDS} alternating runs each):",
+    lines += [f"\nCampaign engine (Dask LocalCluster), {d['trials']} rig trials "
+              f"(best of {SCALING_ROUNDS} alternating runs each):",
               f"  1 worker: {d['workers_1']['wall_s']:.2f} s; 2 workers: {d['workers_2']['wall_s']:.2f} s; "
               f"speed-up {d['speedup']:.2f}×",
               f"  overhead per task: {d['workers_2']['overhead_per_task_s'] * 1e3:.1f} ms (2 workers), "
