@@ -331,11 +331,11 @@ def _gaps_to_volts(frac, bulge, rest_mm, depth, gmin, sheet, series, load, is_op
 
 
 def _contact_volts(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int, open_idx, short_idx) -> np.ndarray:
-    """``_volts_in_place(p, _contact_gaps_mm(p, rest_mm, terms, n), open_idx, short_idx)`` (n, N), V, for at least
-    one term, in two compiled passes (the same bits, tested; a third of the time, and no slow broadcasting of a
+    """``_volts_in_place(p, _contact_gaps_mm(p, rest_mm, terms, n), open_idx, short_idx)`` (n, N), V, in two
+    compiled passes (the same bits, tested, with no term too; a third of the time, and no slow broadcasting of a
     one-row dent)."""
     m = rest_mm.size
-    frac, bulge = np.empty((n, m)), np.empty((n, m))
+    frac, bulge = (np.empty((n, m)), np.empty((n, m))) if terms else (np.zeros((n, m)), np.zeros((n, m)))
     for k, (a, ring_amp, dent, ring) in enumerate(terms):
         _add_term(np.ascontiguousarray(a, dtype=float), float(ring_amp), np.ascontiguousarray(dent, dtype=float),
                   np.ascontiguousarray(ring, dtype=float), frac, bulge, k == 0)
@@ -481,8 +481,7 @@ class ElectrodeModel:
         if not active and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
             y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
         else:  # (the gaps stay ≥ g_min > 0: the voltages are finite, electrode_volts' NaN guard is not needed)
-            v = _contact_volts(self.p, self.rest_gaps_mm, terms, n, self._open, self._short) if terms else \
-                _volts_in_place(self.p, _contact_gaps_mm(self.p, self.rest_gaps_mm, terms, n), self._open, self._short)
+            v = _contact_volts(self.p, self.rest_gaps_mm, terms, n, self._open, self._short)
             y, self.zi = filters.lfilter(self.b, self.a, v, self.zi, axis=0)
         self.k += n
         self._hist_t.append(t)

@@ -208,14 +208,14 @@ def test_a_held_shear_computes_one_row_per_run_with_the_same_bits():
 @pytest.mark.parametrize("faults", [([], []), ([3], [7]), ([2, 5], [])])
 def test_compiled_gaps_and_volts_are_the_numpy_laws_to_the_bit(rows, faults):
     """Consistency: the electrodes' compiled gap and voltage passes equal :func:`_contact_gaps_mm` then
-    :func:`_volts_in_place` bit for bit, for one or two pressing contacts, one-row or per-sample dents, with open
+    :func:`_volts_in_place` bit for bit, for none, one or two pressing contacts, one-row or per-sample dents, with open
     and shorted electrodes, and contacts pressed to the core (the g_min floor)."""
     from emulator.electrodes import _contact_gaps_mm, _contact_volts, _volts_in_place, resting_gaps_mm
 
     p, n = SensorParams(), 300
     rng = np.random.default_rng(rows + len(faults[0]))
     rest = resting_gaps_mm(p, 19)
-    for k in (1, 2):
+    for k in (0, 1, 2):  # no contact pressing (a released finger while the filter settles), one, two
         terms = [(rng.uniform(0.0, 1.5, n), 0.05, rng.random((rows, 19)), rng.random((rows, 19))) for _ in range(k)]
         ref = _volts_in_place(p, _contact_gaps_mm(p, rest, terms, n), *faults)
         assert np.array_equal(_contact_volts(p, rest, terms, n, *faults), ref)
