@@ -415,13 +415,9 @@ class ThermalModel:
             return 0.0
         return self.heater_W
 
-    def inputs_at(self, times: np.ndarray) -> tuple[list[float], list[float]]:
-        """:meth:`heater_at` (W) and :meth:`ambient_at` (°C) at each instant (s), as lists of floats."""
-        heater, ambient = self._input_arrays(times)
-        return heater.tolist(), ambient.tolist()
-
     def _input_arrays(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`inputs_at` as arrays (W, °C)."""
+        """:meth:`heater_at` (W) and :meth:`ambient_at` (°C) at each instant (s) of ``times``, as arrays (the live
+        path's vector form of the two scalar rules above; tested equal instant by instant)."""
         e = self.events
         heater = np.full(times.size, self.heater_W)
         if self.faults.get("heater_failed"):

@@ -148,7 +148,7 @@ def test_the_live_contact_builds_the_network_only_for_thermal_or_pressure_reads(
 
 
 def test_the_inputs_of_many_steps_at_once_are_each_steps_own():
-    """:meth:`ThermalModel.inputs_at` (the live network's steps, all at once) equals :meth:`heater_at` and
+    """``ThermalModel._input_arrays`` (the live network's steps, all at once) equals :meth:`heater_at` and
     :meth:`ambient_at` instant by instant, at and around a power-on, ambient steps and a heater failure."""
     from emulator.thermal import ThermalEvents, ThermalModel
 
@@ -156,7 +156,7 @@ def test_the_inputs_of_many_steps_at_once_are_each_steps_own():
     model = ThermalModel(SensorParams(), events, seed=1)
     events_s = [0.3, 0.5, 0.7, 0.9]
     t = np.sort(np.concatenate([np.arange(0.0, 1.2, 0.01), events_s, np.nextafter(events_s, 0)]))
-    heater, ambient = model.inputs_at(t)
+    heater, ambient = (a.tolist() for a in model._input_arrays(t))
     assert heater == [model.heater_at(x) for x in t.tolist()]
     assert ambient == [model.ambient_at(x) for x in t.tolist()]
     assert heater[0] == 0.0 and max(heater) > 0 and heater[-1] == 0.0
