@@ -162,7 +162,7 @@ def test_the_inputs_of_many_steps_at_once_are_each_steps_own():
     assert heater[0] == 0.0 and max(heater) > 0 and heater[-1] == 0.0
     assert set(ambient) == {SensorParams().ambient_temperature_C, 30.0, 18}
     failed = ThermalModel(SensorParams(), ThermalEvents([]), seed=1, faults={"heater_failed": True})
-    assert failed.inputs_at(t)[0] == [0.0] * t.size
+    assert failed._input_arrays(t)[0].tolist() == [0.0] * t.size
 
 
 def test_one_column_of_the_thermal_outputs_is_that_column_of_all_three():
