@@ -551,7 +551,8 @@ CATALOGUE: list[Mutant] = [
     Mutant("grid-relief-harmonic-shift", "sliding", "emulator/texture.py",
            "        for j, rel in enumerate((1.0, *c.harmonics), start=1):",
            "        for j, rel in enumerate((1.0, *c.harmonics), start=2):",
-           ("emulator/tests/test_texture_tracks.py::test_the_periodic_relief_on_a_grid_is_the_sum_of_its_cosines",),
+           ("emulator/tests/test_texture_tracks.py::"
+            "test_a_periodic_component_is_its_fundamental_plus_its_harmonics_at_their_orders",),
            "every periodic component's harmonics one order too high"),
     Mutant("window-convolution-centre", "sliding", "bench/textures/properties.py",
            "    left, right = h.size - 1 - (h.size - 1) // 2, (h.size - 1) // 2",

@@ -56,3 +56,18 @@ def test_the_periodic_relief_on_a_grid_is_the_sum_of_its_cosines(x0_m, dx_m, n):
             bound += abs(rel * c.amplitude_m) * (j * k * 16 * np.spacing(np.abs(x).max()) + 16 * np.finfo(float).eps)
     assert got.shape == (n,) and np.abs(got - expected).max() <= bound
     assert np.array_equal(periodic_on_grid(ROUGH, x0_m, dx_m, n), np.zeros(n))  # no relief: zeros
+
+
+@pytest.mark.unit
+def test_a_periodic_component_is_its_fundamental_plus_its_harmonics_at_their_orders():
+    """Derived (the definition of ``harmonics``: amplitudes of the 2nd, 3rd, … harmonic relative to the
+    fundamental): a 3 mm grating with harmonics (0, −1/3, 0, 0.2) is A·[cos(wx) − cos(3wx)/3 + 0.2·cos(5wx)],
+    w = 2π/3 mm, to 1e-12 of A; a harmonic one order off is off by ~A/3."""
+    c = GRATED.periodic[0]
+    one = Texture(908, "grating", "test", rms_height_m=0.0, correlation_length_m=200e-6, hurst=0.7, mu_static=1.0,
+                  mu_kinetic=0.8, periodic=(c,))
+    x = np.linspace(0.0, 0.01, 2001)
+    w = 2 * np.pi / c.track_period_m
+    expected = c.amplitude_m * (np.cos(w * x) - 0.333 * np.cos(3 * w * x) + 0.2 * np.cos(5 * w * x))
+    assert c.track_period_m == pytest.approx(3e-3)
+    np.testing.assert_allclose(periodic_profile(one, x), expected, rtol=0, atol=1e-12 * c.amplitude_m)
