@@ -57,9 +57,10 @@ def test_a_rig_trial_is_the_same_on_any_worker():
             assert row[key] == here[key]
 
 
-def test_a_worker_killed_mid_task_loses_nothing(tmp_path):
-    tasks = [(str(tmp_path / "died-once"), k) for k in range(4)]
-    assert run_tasks(die_once, tasks, ClusterSpec(workers=2), progress=False) == [0, 2, 4, 6]
+@pytest.mark.parametrize("n", [4, 40])  # one task a Dask task; groups of 2
+def test_a_worker_killed_mid_task_loses_nothing(tmp_path, n):
+    tasks = [(str(tmp_path / "died-once"), k) for k in range(n)]
+    assert run_tasks(die_once, tasks, ClusterSpec(workers=2), progress=False) == [2 * k for k in range(n)]
     assert (tmp_path / "died-once").read_text() == "died"  # the kill did happen
 
 
