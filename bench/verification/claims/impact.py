@@ -118,7 +118,8 @@ def threshold_scaling(b: Bench, sigma_bits: float, spheres=None, contact_modulus
     per_sphere = {"energy_J": {n: d.energy_J for n, d in drops.items()},
                   "momentum_Ns": {n: d.momentum_Ns for n, d in drops.items()},
                   "peak_force_N": {n: d.peak_force_N for n, d in drops.items()}}
-    out = {"threshold_height_m": heights, "contact_over_period": {n: d.contact_duration_s * f0 for n, d in drops.items()},
+    out = {"threshold_height_m": heights,
+           "contact_over_period": {n: d.contact_duration_s * f0 for n, d in drops.items()},
            "spectrum_share_at_ring": {n: pulse_spectrum_share(d, f0) for n, d in drops.items()}}
     out.update({f"threshold_{k}": v for k, v in per_sphere.items()})
     out.update({f"spread_{k.rsplit('_', 1)[0]}": max(v.values()) / min(v.values()) for k, v in per_sphere.items()})
