@@ -38,15 +38,21 @@ def vibration_claims(b: Bench) -> list[Claim]:
     background = resting_background_bits2(b)
     dmins = sensitivity_curve(b, background=background)
     res = b.params.resonance_at_inflation_Hz
-    near = min(d for f, d in dmins.items() if 250 <= f <= 400)
+    peak = sensitivity_curve(b, background=background, frequencies_Hz=peak_search_frequencies_Hz(b))
+    peak_Hz = min(peak, key=peak.get)
+    near = peak[peak_Hz]
     ratios = {f: float(human_threshold_m(f) / d) for f, d in dmins.items()}
     worst_f = min(ratios, key=ratios.get)
-    rows.append(Claim("d_min near the 330 Hz resonance", "≤ 10 nm", near * 1e9, 0.0, 10.0, "nm", "D ch. 5; §7",
-                      {"d_min_m": dmins, "background_bits2": background, "resonance_Hz": res}, kind="prediction",
+    rows.append(Claim("d_min near the 330 Hz resonance", "a few nm: 1–10 nm", near * 1e9, 1.0, 10.0, "nm",
+                      "D ch. 5; §7",
+                      {"d_min_m": dmins, "peak_search_d_min_m": peak, "peak_Hz": peak_Hz,
+                       "background_bits2": background, "resonance_Hz": res}, kind="prediction",
                       note="D eq. 5.3 with the background measured at rest on the emulator (the largest 2 Hz band, "
                            "which the calibrated mains hum dominates) and the displacement gain (force slope × an "
-                           "assumed 1 N/mm fingertip stiffness, not tuned to d_min); the 1/3-octave grid "
-                           "(250, 315, 400 Hz) does not contain the resonance parameter"))
+                           "assumed 1 N/mm fingertip stiffness, not tuned to d_min), at the peak sensitivity as D "
+                           "measured it: the least d_min on a fixed 5 Hz grid over 250–400 Hz clear of mains "
+                           "harmonics (the grid is not placed on the resonance parameter; a unit's own resonance, "
+                           "320–345 Hz, falls between grid points at most 2.5 Hz away)"))
     rows.append(Claim("sensor beats human threshold at every frequency", "human / d_min > 1", ratios[worst_f], 1.0,
                       np.inf, "worst ratio", "D Fig. 5-4; Bolanowski et al. 1988",
                       {"ratio_by_frequency": ratios, "worst_Hz": worst_f}, kind="prediction",
@@ -64,11 +70,22 @@ def resting_background_bits2(b: Bench, seconds: int = 20) -> float:
                             for k in range(len(pac) // 2200)]))
 
 
-def sensitivity_curve(b: Bench, drive_m: float = 1e-6, background: float | None = None) -> dict[float, float]:
-    """d_min (m) at each sweep frequency from a 1 µm drive, by D eq. 5.3 with the measured resting background."""
+def peak_search_frequencies_Hz(b: Bench, low_Hz: float = 250.0, high_Hz: float = 400.0, step_Hz: float = 5.0,
+                               clear_of_mains_Hz: float = 3.0) -> tuple[float, ...]:
+    """Drive frequencies (Hz) for finding the peak sensitivity, as D did ("including the peak sensitivity"): every
+    ``step_Hz`` over ``low_Hz``–``high_Hz``, leaving out those within ``clear_of_mains_Hz`` of a mains harmonic (a
+    hum line in the drive's 2 Hz band would read as response).  The grid is fixed, not placed on the resonance."""
+    mains = b.params.mains_frequency_Hz
+    grid = np.arange(low_Hz, high_Hz + step_Hz / 2, step_Hz)
+    return tuple(float(f) for f in grid if abs(f - mains * round(f / mains)) > clear_of_mains_Hz)
+
+
+def sensitivity_curve(b: Bench, drive_m: float = 1e-6, background: float | None = None,
+                      frequencies_Hz=SWEEP_FREQUENCIES_HZ) -> dict[float, float]:
+    """d_min (m) at each drive frequency (Hz) from a 1 µm drive, by D eq. 5.3 with the measured resting background."""
     background = resting_background_bits2(b) if background is None else background
     out = {}
-    for f in SWEEP_FREQUENCIES_HZ:
+    for f in frequencies_Hz:
         rec = b.acquire([Vibration(0.0, 2.0, drive_m, float(f), fade_s=0.0)], 2.0, sequence=("PAC",),
                         slot_rate_Hz=2200.0, seed_offset=1000 + f)
         p = analysis.band_power_2hz(rec["PAC"][1][2200:4400], 2200.0, float(f))
