@@ -219,6 +219,7 @@ class ThermalNetwork:
         self.layers = _object_layers()
         self.n = 4 + OBJECT_LAYERS
         self._cache: dict = {}
+        self._steps_table = ({}, np.zeros((0, self.n, self.n)), np.zeros((0, self.n, 4)))
 
     def __deepcopy__(self, memo):
         return self
@@ -324,6 +325,28 @@ class ThermalNetwork:
         return cache[key]
 
 
+    def step_table(self, contacts: list, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Φ and Γ of :meth:`step_response` stacked, and the row of each of ``contacts`` ((material, area m², live)
+        or None: nothing touching) in them: one look-up per contact, no arrays built once its row exists (the
+        stacks are replaced, never edited, as rows are added; forgotten past :data:`CACHE_SIZE` rows)."""
+        keys = [None if c is None else (c[0].name, c[1], c[2]) for c in contacts]
+        index, phis, gams = self._steps_table
+        rows = [index.get((k, dt)) for k in keys]
+        if None in rows:
+            index = dict(index) if len(index) + len(keys) <= self.CACHE_SIZE else {}
+            new = {}
+            for c, k in zip(contacts, keys):
+                if (k, dt) not in index and (k, dt) not in new:
+                    new[(k, dt)] = self.step_response(None if c is None else c[:2], dt, c is not None and c[2])
+            base = len(index) if index else 0
+            phis, gams = (np.concatenate(([] if not index else [a]) + [np.stack([v[i] for v in new.values()])])
+                          for i, a in enumerate((phis, gams)))
+            index.update({key: base + r for r, key in enumerate(new)})
+            self._steps_table = (index, phis, gams)
+            rows = [index[(k, dt)] for k in keys]
+        return phis, gams, np.array(rows)
+
+
 def _contact_key(contact: tuple[Material, float] | None):
     """What a contact's matrices depend on: (material name, area m² to 1e-12 m²), or None."""
     return None if contact is None else (contact[0].name, round(contact[1], 12))
@@ -353,6 +376,21 @@ def _steps(Phi: np.ndarray, x: np.ndarray, gu: np.ndarray, out: np.ndarray) -> n
     for i in range(out.shape[0]):
         x = np.dot(Phi, x) + gu
         out[i] = x
+    return x
+
+
+@njit(cache=True)
+def _step_runs(phis: np.ndarray, gams: np.ndarray, rows: np.ndarray, u: np.ndarray, bounds: np.ndarray,
+               arrive: np.ndarray, temperature: np.ndarray, x: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Run r: rows ``bounds[r]``..``bounds[r + 1]`` of ``out`` by :func:`_steps` with Φ = ``phis[rows[r]]`` and
+    Γu = ``gams[rows[r]]`` · ``u[r]`` (numpy's matrix-vector product, the same BLAS call), from the state the run
+    before left (first: ``x``), its object layers first set to ``temperature[r]`` (°C) where ``arrive[r]`` (a newly
+    touched object); returns the last state."""
+    for r in range(bounds.size - 1):
+        if arrive[r]:
+            x = x.copy()
+            x[4:] = temperature[r]
+        x = _steps(phis[rows[r]], x, np.dot(gams[rows[r]], u[r]), out[bounds[r]:bounds[r + 1]])
     return x
 
 
@@ -400,24 +438,11 @@ class ThermalModel:
         self._append(self.k, self.x[None, :], np.array([v0]), np.array([TAC_BIAS_V]))
 
     # --- inputs ------------------------------------------------------------------------------
-    def ambient_at(self, t: float) -> float:
-        amb = self.p.ambient_temperature_C
-        for when, value in self.events.ambient_steps:
-            if t >= when:
-                amb = value
-        return amb
-
-    def heater_at(self, t: float) -> float:
-        e = self.events
-        if self.faults.get("heater_failed") or (e.heater_failed_s is not None and t >= e.heater_failed_s):
-            return 0.0
-        if e.power_on_s is not None and t < e.power_on_s:
-            return 0.0
-        return self.heater_W
-
-    def _input_arrays(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`heater_at` (W) and :meth:`ambient_at` (°C) at each instant (s) of ``times``, as arrays (the live
-        path's vector form of the two scalar rules above; tested equal instant by instant)."""
+    def inputs_at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Heater power (W) and ambient temperature (°C) at each instant (s) of ``times``: the one rule for both
+        (no heater before power-on, from a heater failure on, or with the ``heater_failed`` fault; ambient steps take
+        effect at their instant)."""
+        times = np.asarray(times, float)
         e = self.events
         heater = np.full(times.size, self.heater_W)
         if self.faults.get("heater_failed"):
@@ -474,14 +499,17 @@ class ThermalModel:
             index[first] = i
         return index, area
 
-    def _input(self, t: float, contact: ThermalContact | None, p_self: float) -> np.ndarray:
-        """u = [heater W, ambient °C, object far field °C, bead self-heating W] at ``t`` (s)."""
-        return np.array([self.heater_at(t), self.ambient_at(t),
-                         contact.temperature_C if contact else self.ambient_at(t), p_self])
+    @staticmethod
+    def _u(heater_W: float, ambient_C: float, contact: ThermalContact | None, p_self: float) -> np.ndarray:
+        """u = [heater W, ambient °C, object far field °C, bead self-heating W] with ``contact`` touching (None:
+        nothing; the far field is then at ambient)."""
+        return np.array([heater_W, ambient_C, contact.temperature_C if contact else ambient_C, p_self])
 
     def _initial_state(self) -> np.ndarray:
-        heater = 0.0 if self.events.power_on_s is not None else self.heater_at(0.0)
-        return _settled_state(self.p, heater, self.ambient_at(0.0)).copy()
+        heater, ambient = (float(v[0]) for v in self.inputs_at(np.zeros(1)))
+        if self.events.power_on_s is not None:
+            heater = 0.0
+        return _settled_state(self.p, heater, ambient).copy()
 
     # --- outputs --------------------------------------------------------------------------------
     def _tdc_from_state(self, xs: np.ndarray) -> np.ndarray:
@@ -519,13 +547,6 @@ class ThermalModel:
             return self.net.discrete(touching, self.dt, live)
         return self.net.chunk_response(touching, self.dt, steps, live)
 
-    def _step(self, x: np.ndarray, t: float, contact: ThermalContact | None, area_m2: float | None,
-              p_self: float) -> np.ndarray:
-        """The state one step after ``t`` (s), inputs held from ``t``; ``contact`` touches over ``area_m2``."""
-        x = self._arrive(x, contact)
-        Phi, Gam = self._response(contact, area_m2)
-        return Phi @ x + Gam @ self._input(t, contact, p_self)
-
     def _emit(self, k_first: int, xs: np.ndarray) -> None:
         """Read out states ``xs`` of steps ``k_first``, ``k_first`` + 1, …: thermistor noise, TDC and TAC filters."""
         v = self._tdc_from_state(xs)
@@ -543,18 +564,23 @@ class ThermalModel:
         p_self = self._self_heating_W(float(x[BEAD]))  # updated once per chunk: it changes slowly
         t0, t1 = k0 * self.dt, (k0 + CHUNK_STEPS - 1) * self.dt
         c0 = self.contact_at(t0)
-        inputs = lambda t: (self.heater_at(t), self.ambient_at(t), self.contact_at(t))  # noqa: E731
-        steady = all(inputs(t) == inputs(t0) for t in self._event_times(t0, t1)) and \
-            (c0 is None or c0 is self._touching)
+        checks = [t0] + self._event_times(t0, t1)  # the instants where an input may change
+        heater, ambient = self.inputs_at(np.array(checks))
+        steady = bool((heater == heater[0]).all() and (ambient == ambient[0]).all()) and \
+            all(self.contact_at(t) == c0 for t in checks) and (c0 is None or c0 is self._touching)
         if steady:  # inputs held over the whole chunk: closed form, one matrix product
             powers, sums = self._response(c0, None if c0 is None else c0.area_m2, CHUNK_STEPS)
-            xs = powers @ x + sums @ self._input(t0, c0, p_self)
+            xs = powers @ x + sums @ self._u(heater[0], ambient[0], c0, p_self)
             x = xs[-1]
-        for j in ([] if steady else range(CHUNK_STEPS)):
-            t = (k0 + j) * self.dt
-            c = self.contact_at(t)
-            x = self._step(x, t, c, None if c is None else c.area_m2, p_self)
-            xs[j] = x
+        else:
+            times = (k0 + np.arange(CHUNK_STEPS)) * self.dt
+            heater, ambient = self.inputs_at(times)
+            for j, t in enumerate(times.tolist()):
+                c = self.contact_at(t)
+                x = self._arrive(x, c)
+                Phi, Gam = self._response(c, None if c is None else c.area_m2)
+                x = Phi @ x + Gam @ self._u(heater[j], ambient[j], c, p_self)
+                xs[j] = x
         self.x = x
         self.k = k0 + CHUNK_STEPS
         self._emit(k0 + 1, xs)
@@ -564,52 +590,78 @@ class ThermalModel:
         the steps' starts, all before ``k_end``·dt).  Independent of how time is cut: the self-heating is updated
         at chunk boundaries (absolute time) and a chunk that starts with the previous step's contact runs in
         closed form from its start for as long as its inputs stay those at its start, stepwise after.  Steps are
-        taken in runs of equal inputs within a chunk: a run in closed form is one slice of the chunk's states, a
-        run stepwise repeats one step's (Φ, Γu)."""
+        taken in runs of equal inputs within a chunk: a run in closed form is one slice of the chunk's states; the
+        runs stepwise of a chunk are one compiled pass (:func:`_step_runs`), each run repeating its one step's
+        (Φ, Γu)."""
         k0 = self.k
         times = (k0 + np.arange(k_end - k0)) * self.dt
         index, area = self._touch_arrays(times)
-        heater, ambient = self._input_arrays(times)
+        heater, ambient = self.inputs_at(times)
         # runs: a step starts one where its inputs differ from the previous step's or a chunk starts
         starts = np.ones(times.size, bool)
         starts[1:] = (heater[1:] != heater[:-1]) | (ambient[1:] != ambient[:-1]) | (index[1:] != index[:-1]) | \
             (area[1:] != area[:-1])
-        starts[(k0 + np.arange(times.size)) % CHUNK_STEPS == 0] = True
+        chunk_starts = (k0 + np.arange(times.size)) % CHUNK_STEPS == 0
+        starts[chunk_starts] = True
         bounds = np.flatnonzero(starts).tolist() + [times.size]
-        t_list, heater, ambient, index, area = (v.tolist() for v in (times, heater, ambient, index, area))
+        segments = np.flatnonzero(chunk_starts).tolist()
+        segments = ([0] if not segments or segments[0] else []) + segments + [times.size]
+        arrays = heater, ambient, index, area
+        bound_array = np.array(bounds)
+        heater, ambient, index, area = (v.tolist() for v in arrays)
+        contacts = self.events.contacts
         xs = np.empty((times.size, self.net.n))
         x = self.x
-        stepping = None  # (inputs, Φ, Γu) of the last step taken stepwise
-        for j, run_end in zip(bounds[:-1], bounds[1:]):
+        b = 0  # bounds[b]: the next run's first step
+        for j, seg_end in zip(segments[:-1], segments[1:]):
             k = k0 + j
             touch = None if index[j] < 0 else (index[j], area[j])
             here = (heater[j], ambient[j], touch)
-            contact, area_j = (None, None) if touch is None else (self.events.contacts[touch[0]], touch[1])
+            contact = None if touch is None else contacts[touch[0]]
             if k % CHUNK_STEPS == 0:
                 self._p_self = self._self_heating_W(float(x[BEAD]))  # updated once per chunk, as for planned
-                self._held, stepping = None, None
+                self._held = None
                 if touch == self._last_touch:
-                    self._held = (k, here, x, self._input(t_list[j], contact, self._p_self))
-            if self._held is not None and self._held[1] == here:
+                    self._held = (k, here, x, self._u(heater[j], ambient[j], contact, self._p_self))
+            run_end = bounds[b + 1]
+            if self._held is not None and self._held[1] == here:  # the segment's first run, in closed form
                 k_held, _, x_held, u_held = self._held
-                powers, sums = self._response(contact, area_j, CHUNK_STEPS)
+                powers, sums = self._response(contact, None if touch is None else touch[1], CHUNK_STEPS)
                 rows = slice(k - k_held, k - k_held + run_end - j)  # only the chunk's states used
                 xs[j:run_end] = powers[rows] @ x_held + sums[rows] @ u_held
                 x = xs[run_end - 1]
-            else:
+                self._last_touch = touch
+                b += 1
+            if bounds[b] < seg_end:  # the rest of the segment stepwise, one compiled pass over its runs
                 self._held = None
-                if stepping is None or stepping[0] != here:
-                    Phi, Gam = self.net.step_response(None if touch is None else (contact.material, area_j), self.dt,
-                                                      contact is not None and not contact.planned)
-                    u = np.array([here[0], here[1], contact.temperature_C if contact else here[1], self._p_self])
-                    stepping = (here, Phi, Gam @ u)  # u: _input's, from the inputs already at hand
-                _, Phi, gu = stepping
-                x = self._arrive(x, contact)  # (only the run's first step can meet a newly touched object)
-                x = _steps(Phi, x, gu, xs[j:run_end])
-            self._last_touch = touch
+                b_end = bounds.index(seg_end, b)
+                x = self._step_runs(x, bound_array[b:b_end + 1], *arrays, xs)
+                b = b_end
         self.x = x
         self.k = k_end
         self._emit(k0 + 1, xs)
+
+    def _step_runs(self, x: np.ndarray, bounds: np.ndarray, heater: np.ndarray, ambient: np.ndarray,
+                   index: np.ndarray, area: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """Take the runs of steps ``bounds[r]``..``bounds[r + 1]`` (rows of ``out``) stepwise from state ``x``, each
+        with its first step's inputs (``heater`` W, ``ambient`` °C, contact ``index`` or -1, ``area`` m², per row),
+        writing each state to ``out``; returns the last.  A newly touched object arrives at its temperature
+        (:meth:`_arrive`)."""
+        contacts = self.events.contacts
+        first = bounds[:-1]
+        i, a = index[first], area[first]
+        touching = [None if k < 0 else (contacts[k].material, s, not contacts[k].planned)
+                    for k, s in zip(i.tolist(), a.tolist())]
+        phis, gams, rows = self.net.step_table(touching, self.dt)
+        temperature = np.array([c.temperature_C for c in contacts] + [0.0])  # (index -1: the last, unused)
+        u = np.empty((first.size, 4))  # :meth:`_u` of each run
+        u[:, 0], u[:, 1], u[:, 3] = heater[first], ambient[first], self._p_self
+        u[:, 2] = np.where(i >= 0, temperature[i], u[:, 1])
+        previous = -1 if self._touching is None else next(k for k, c in enumerate(contacts) if c is self._touching)
+        arrive = (i >= 0) & (i != np.append(previous, i[:-1]))
+        self._touching = None if i[-1] < 0 else contacts[i[-1]]
+        self._last_touch = None if i[-1] < 0 else (int(i[-1]), float(a[-1]))
+        return _step_runs(phis, gams, rows, u, bounds, arrive, temperature[i], x, out)
 
     def values_at(self, times: np.ndarray) -> np.ndarray:
         """(core °C, TDC V, TAC V) at each instant, linearly interpolated between network steps."""

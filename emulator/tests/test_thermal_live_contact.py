@@ -148,21 +148,22 @@ def test_the_live_contact_builds_the_network_only_for_thermal_or_pressure_reads(
 
 
 def test_the_inputs_of_many_steps_at_once_are_each_steps_own():
-    """``ThermalModel._input_arrays`` (the live network's steps, all at once) equals :meth:`heater_at` and
-    :meth:`ambient_at` instant by instant, at and around a power-on, ambient steps and a heater failure."""
+    """(derived) :meth:`ThermalModel.inputs_at` (the one rule for the heater and the ambient, every path's) equals the
+    written-out rule instant by instant, at, just before and around a power-on, ambient steps and a heater failure:
+    no heater before power-on or from the failure on, each ambient step from its instant on."""
     from emulator.thermal import ThermalEvents, ThermalModel
 
     events = ThermalEvents([], power_on_s=0.5, ambient_steps=((0.3, 30.0), (0.7, 18)), heater_failed_s=0.9)
     model = ThermalModel(SensorParams(), events, seed=1)
     events_s = [0.3, 0.5, 0.7, 0.9]
     t = np.sort(np.concatenate([np.arange(0.0, 1.2, 0.01), events_s, np.nextafter(events_s, 0)]))
-    heater, ambient = (a.tolist() for a in model._input_arrays(t))
-    assert heater == [model.heater_at(x) for x in t.tolist()]
-    assert ambient == [model.ambient_at(x) for x in t.tolist()]
-    assert heater[0] == 0.0 and max(heater) > 0 and heater[-1] == 0.0
-    assert set(ambient) == {SensorParams().ambient_temperature_C, 30.0, 18}
+    heater, ambient = (a.tolist() for a in model.inputs_at(t))
+    room = SensorParams().ambient_temperature_C
+    assert heater == [model.heater_W if 0.5 <= x < 0.9 else 0.0 for x in t.tolist()]
+    assert ambient == [18 if x >= 0.7 else 30.0 if x >= 0.3 else room for x in t.tolist()]
+    assert model.heater_W > 0
     failed = ThermalModel(SensorParams(), ThermalEvents([]), seed=1, faults={"heater_failed": True})
-    assert failed._input_arrays(t)[0].tolist() == [0.0] * t.size
+    assert failed.inputs_at(t)[0].tolist() == [0.0] * t.size
 
 
 def test_one_column_of_the_thermal_outputs_is_that_column_of_all_three():
@@ -237,3 +238,52 @@ def test_a_steps_contiguous_response_is_the_discretization_remembered():
         np.testing.assert_array_equal(Gam, Gam_d)
         again = net.step_response(contact, 0.01, live)
         assert again[0] is Phi and again[1] is Gam
+
+
+def test_the_step_table_holds_each_contacts_step_response_to_the_bit():
+    """(consistency) :meth:`ThermalNetwork.step_table`'s rows are :meth:`ThermalNetwork.step_response`'s Φ and Γ to
+    the bit (nothing touching, live and planned patches; a patch both live and planned gets two rows), one row per
+    distinct contact, and rows added later replace the stacks without editing the ones handed out."""
+    net = shared_network(SensorParams())
+    glass, aluminum = thermal_material("glass"), thermal_material("aluminum")
+    contacts = [None, (glass, 3e-6, True), (aluminum, 7.1e-6, True), (glass, 3e-6, False), (glass, 3e-6, True)]
+    phis, gams, rows = net.step_table(contacts, 0.01)
+    for c, r in zip(contacts, rows.tolist()):
+        Phi, Gam = net.step_response(None if c is None else c[:2], 0.01, c is not None and c[2])
+        np.testing.assert_array_equal(phis[r], Phi)
+        np.testing.assert_array_equal(gams[r], Gam)
+    assert rows[1] == rows[4] and len(set(rows.tolist())) == 4
+    before = phis.copy()
+    more, _, rows_more = net.step_table([(glass, 3e-6, True), (aluminum, 1.3e-5, True)], 0.01)
+    np.testing.assert_array_equal(phis, before)
+    assert rows_more[0] == rows[1]
+    np.testing.assert_array_equal(more[rows_more[1]], net.step_response((aluminum, 1.3e-5), 0.01, True)[0])
+
+
+def test_the_compiled_runs_are_numpys_steps_run_by_run():
+    """(consistency) :func:`emulator.thermal._step_runs` — the live network's stepwise runs in one compiled pass —
+    gives numpy's x ← Φ x + Γu step by step with each run's own Φ and Γu, to the bit, a newly touched object's layers
+    set to its temperature before its run's first step."""
+    from emulator.thermal import _step_runs
+
+    net = shared_network(SensorParams())
+    glass = thermal_material("glass")
+    contacts = [None, (glass, 3e-6, True), (glass, 5e-6, True), None, (glass, 5e-6, True)]
+    phis, gams, rows = net.step_table(contacts, 0.01)
+    bounds = np.array([0, 3, 4, 9, 11, 16])
+    u = np.column_stack([np.full(5, 0.3), np.full(5, 22.0), [22.0, 25.0, 25.0, 22.0, 25.0], np.full(5, 1e-5)])
+    arrive = np.array([False, True, False, False, True])
+    temperature = np.array([0.0, 25.0, 25.0, 0.0, 25.0])
+    x = 20.0 + 15.0 * np.random.default_rng(2).random(net.n)
+    expected, y = np.empty((16, net.n)), x
+    for r in range(5):
+        if arrive[r]:
+            y = y.copy()
+            y[4:] = temperature[r]
+        for i in range(bounds[r], bounds[r + 1]):
+            y = phis[rows[r]] @ y + gams[rows[r]] @ u[r]
+            expected[i] = y
+    got = np.empty((16, net.n))
+    last = _step_runs(phis, gams, rows, u, bounds, arrive, temperature, x, got)
+    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(last, expected[-1])
