@@ -736,6 +736,21 @@ CATALOGUE += [
            "return self.status == 0", "return self.status != 1",
            (f"{_SP_HOST}::test_vendor_e20_to_e24_on_a_19_electrode_sensor_are_errors_never_data",),
            "the driver hands error words (status 2) out as data"),
+    # the texture library against its sources, the rig's geometry against D's 75 mm squares
+    Mutant("window-ignores-lead-tail", "texture", "bench/textures/properties.py",
+           "return rec.slide_start_s + lead * d, rec.slide_end_s - tail * d",
+           "return rec.slide_start_s + MEASURE_LEAD * d, rec.slide_end_s - MEASURE_TAIL * d",
+           ("bench/tests/test_library_sources.py::test_roughness_sigma_falls_about_as_one_over_root_window",),
+           "the measurement window's arguments are silently ignored"),
+    Mutant("rig-stroke-10cm", "texture", "bench/rigs/texture_rig.py",
+           "distance_m: float = 0.05", "distance_m: float = 0.1",
+           ("bench/tests/test_library_sources.py::test_stroke_and_contact_patch_fit_on_ds_texture_squares",),
+           "the stroke no longer fits D's 75 mm texture squares"),
+    Mutant("library-ripstop-mu-off-class", "texture", "fixtures/textures/library.toml",
+           'mu_static = 0.45\nmu_kinetic = 0.383\nmodulus_MPa = 1.0\nmaterial = "cotton fabric"\nseed = 86',
+           'mu_static = 0.5\nmu_kinetic = 0.383\nmodulus_MPa = 1.0\nmaterial = "cotton fabric"\nseed = 86',
+           ("bench/tests/test_library_sources.py::test_every_texture_friction_follows_its_cited_class",),
+           "one texture's friction moved off its cited class without a source"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
