@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
@@ -22,9 +23,33 @@ STATUS_NAMES = {STATUS_OK: "ok", STATUS_PARITY: "parity error", STATUS_ERROR_WOR
 
 #: :func:`~emulator.spi.protocol.decode_response` of every 16-bit word (value, status before error words are told
 #: apart): a read decodes by two look-ups
-_VALUE_OF_WORD, _PARITY_OK_OF_WORD = proto.decode_response(np.arange(1 << 16, dtype=np.uint16))
-_VALUE_OF_WORD = _VALUE_OF_WORD.astype(np.uint16)
-_STATUS_OF_WORD = np.where(_PARITY_OK_OF_WORD, STATUS_OK, STATUS_PARITY).astype(np.uint8)
+def _decode_tables() -> tuple[np.ndarray, np.ndarray]:
+    """The code and the status of every 16-bit response word (a bad word's status: parity error, or error word)."""
+    words = np.arange(1 << 16, dtype=np.uint16)
+    value, parity_ok = proto.decode_response(words)
+    status = np.where(parity_ok, STATUS_OK, STATUS_PARITY).astype(np.uint8)
+    status[proto.is_error_word(words)] = STATUS_ERROR_WORD
+    return value.astype(np.uint16), status
+
+
+#: :func:`~emulator.spi.protocol.decode_response` of every 16-bit word, and its status: a read decodes by two look-ups
+_VALUE_OF_WORD, _STATUS_OF_WORD = _decode_tables()
+
+
+@njit(cache=True)
+def _slot_transfers(k0, n, slot_rate_Hz, word_s, sample_delay_s, sequence, command_words, start, mosi, t_sampled,
+                    channels):
+    """Slots ``k0`` .. ``k0 + n - 1`` as transfers: each slot's sampling command at k/``slot_rate_Hz`` (s) and its
+    read ``word_s`` + ``sample_delay_s`` later (``start``, ``mosi``: 2 per slot), the instant sampled (the command's
+    chip-select release, ``t_sampled``) and the channel (``channels``) — :meth:`Sampler.slots`, one pass."""
+    m = sequence.size
+    for i in range(n):
+        k = k0 + i
+        t_cmd = k / slot_rate_Hz
+        t = t_cmd + word_s
+        start[2 * i], start[2 * i + 1] = t_cmd, t + sample_delay_s
+        mosi[2 * i], mosi[2 * i + 1] = command_words[k % m], 0
+        t_sampled[i], channels[i] = t, sequence[k % m]
 
 
 @dataclass
@@ -78,19 +103,14 @@ class Sampler:
 
     def read(self, n_slots: int) -> Samples:
         """Sample the next ``n_slots`` slots."""
-        k = self.next_slot + np.arange(n_slots)
+        start, mosi = np.empty(2 * n_slots), np.empty(2 * n_slots, dtype=np.uint16)
+        t_sampled, channels = np.empty(n_slots), np.empty(n_slots, dtype=self.sequence.dtype)
+        _slot_transfers(self.next_slot, n_slots, self.slot_rate_Hz, self.word_s, self.sample_delay_s, self.sequence,
+                        self.command_words, start, mosi, t_sampled, channels)
         self.next_slot += n_slots
-        t_cmd, t_sampled, channels = self.slots(k)
-        t_read = t_sampled + self.sample_delay_s
-        start = np.empty(2 * n_slots)
-        start[0::2], start[1::2] = t_cmd, t_read
-        mosi = np.zeros(2 * n_slots, dtype=np.uint16)
-        mosi[0::2] = self.command_words[k % len(self.sequence)]
         miso = self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz))
         words = miso[1::2]
-        status = _STATUS_OF_WORD[words]
-        status[proto.is_error_word(words)] = STATUS_ERROR_WORD
-        return Samples(t_sampled, channels, _VALUE_OF_WORD[words], words, status)
+        return Samples(t_sampled, channels, _VALUE_OF_WORD[words], words, _STATUS_OF_WORD[words])
 
     def chunks(self, n_slots: int, chunk_slots: int):
         """Read the next ``n_slots`` slots in reads of at most ``chunk_slots``, yielding each :class:`Samples`."""

@@ -281,3 +281,37 @@ def test_bus_word_path_matches_transfer_level_for_multi_sensor_frames(seed):
     b = np.array([slow.transfer(Transfer(float(s), int(c), int(m), 16, 4.4e6, bool(k)))
                   for s, c, m, k in zip(start, cs, mosi, keep)])
     assert np.array_equal(a, b)
+
+
+def test_the_samplers_transfers_are_its_slots_command_then_read():
+    """(consistency) :meth:`Sampler.read` (one compiled pass over the slots) sends, per slot of :meth:`Sampler.slots`,
+    the slot's sampling command at its start and a read of zeros ``word_s`` + ``sample_delay_s`` after it, and
+    reports the instant sampled and the channel of each slot, to the bit, from any slot on (here a 44-slot frame
+    read in three uneven parts)."""
+    from bench.running.sampler import Sampler
+    from emulator.spi import protocol as proto
+
+    class Recorder:
+        variant = None
+
+        def __init__(self):
+            self.batches = []
+
+        def exchange(self, batch):
+            self.batches.append(batch)
+            return np.zeros(batch.start_s.size, dtype=np.uint16)
+
+    rec = Recorder()
+    sampler = Sampler(rec)
+    parts = [samples for n in (7, 100, 61) for samples in [sampler.read(n)]]
+    k = np.arange(168)
+    t_cmd, t_sampled, channel = sampler.slots(k)
+    start = np.concatenate([b.start_s for b in rec.batches])
+    mosi = np.concatenate([b.mosi for b in rec.batches])
+    np.testing.assert_array_equal(start[0::2], t_cmd)
+    np.testing.assert_array_equal(start[1::2], t_sampled + sampler.sample_delay_s)
+    np.testing.assert_array_equal(mosi[0::2], proto.sample_command(channel).astype(np.uint16) << 8)
+    assert not mosi[1::2].any() and mosi.dtype == np.uint16
+    np.testing.assert_array_equal(np.concatenate([p.times for p in parts]), t_sampled)
+    np.testing.assert_array_equal(np.concatenate([p.channels for p in parts]), channel)
+    assert parts[0].channels.dtype == channel.dtype and sampler.next_slot == 168
