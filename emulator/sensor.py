@@ -8,10 +8,12 @@ samples.  Memory therefore stays bounded however long the run.
 from __future__ import annotations
 
 import functools
+import math
 import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from numba import njit
 
 from emulator import channels as ch
 from emulator.adc import Adc
@@ -80,6 +82,36 @@ def _frame_plan(node_of_channel: bytes, n_nodes: int, channels: bytes) -> tuple:
     for a in [w for _, w in nodes if w is not None] + [w for _, w in thermal] + list(electrodes or ()):
         a.flags.writeable = False  # shared by every sensor asking for these channels
     return nodes, [(c, w) for c, w in thermal if w.size], electrodes
+
+
+_ALL = np.zeros(0, dtype=np.int64)  # (_interpolate: every position)
+
+
+@njit(cache=True)
+def _grid_positions(times, fs):
+    """Each instant (s) on the grid of rate ``fs`` (Hz): index i = ⌊t·fs⌋ and fraction t·fs − i, and the least and
+    greatest index; (-1, -1) for those if an instant is negative or not finite (or beyond the grid's range)."""
+    i = np.empty(times.size, dtype=np.int64)
+    frac = np.empty(times.size)
+    i_min, i_max = np.iinfo(np.int64).max, -1
+    for p in range(times.size):
+        x = times[p] * fs
+        if not (x >= 0.0 and x < 2.0**62):
+            return i, frac, -1, -1
+        i[p] = int(math.floor(x))
+        frac[p] = x - i[p]
+        i_min, i_max = min(i_min, i[p]), max(i_max, i[p])
+    return i, frac, i_min, i_max
+
+
+@njit(cache=True)
+def _interpolate(h, k, frac, at, out):
+    """Linear interpolation between grid samples ``h``: out[p] = h[k]·(1 − frac) + h[k + 1]·frac at each position p
+    of ``at`` (empty: every position), with k = ``k[p]`` and frac = ``frac[p]``."""
+    n = at.size if at.size else k.size
+    for q in range(n):
+        p = at[q] if at.size else q
+        out[p] = h[k[p]] * (1.0 - frac[p]) + h[k[p] + 1] * frac[p]
 
 
 class Sensor:
@@ -304,14 +336,13 @@ class Sensor:
         times = np.asarray(times, dtype=float)
         if times.size == 0:
             return np.empty(0)
-        x = times * self.fs
-        i = np.floor(x).astype(np.int64)
-        if i.min() < self._buf_n0:
+        i, frac, i_min, i_max = _grid_positions(times.reshape(-1), self.fs)
+        if i_min < self._buf_n0:
             raise ValueError(f"instant {times.min():.6f} s is older than the retained history")
-        self._advance_through(int(i.max()) + 1, keep_from=self._buf_n0)
-        h = self._history(name)
-        k = i - self._buf_n0
-        return h[k] * (1.0 - (x - i)) + h[k + 1] * (x - i)
+        self._advance_through(i_max + 1, keep_from=self._buf_n0)
+        out = np.empty(times.shape)
+        _interpolate(self._history(name), i - self._buf_n0, frac, _ALL, out.reshape(-1))
+        return out
 
     @property
     def simulated_s(self) -> float:
@@ -337,25 +368,17 @@ class Sensor:
         out = np.empty(times.shape)
         if times.size == 0:
             return out
-        if not np.isfinite(times.sum()) or times.min() < 0:
+        i, frac, i_min, i_max = _grid_positions(times.reshape(-1), self.fs)
+        if i_min < 0:
             raise ValueError("sample instants must be finite and ≥ 0 s")
         nodes, thermal, electrodes = self._plan(channels)
-        x = times * self.fs
-        i = np.floor(x).astype(np.int64)
-        i_min, i_max = int(i.min()), int(i.max())
         if i_min < self._buf_n0:
             raise ValueError(f"instant {times.min():.6f} s is older than the retained history "
                              f"(from {self._buf_n0 / self.fs:.6f} s): ask for instants in time order")
         self._advance_through(i_max + 1, keep_from=i_min)
-        frac = x - i
         k = i - self._buf_n0
-        for node_id, at in nodes:  # linear interpolation between grid samples: h[k]·(1 − frac) + h[k + 1]·frac
-            h = self._history(self.nodes[node_id])
-            if at is None:
-                out = h[k] * (1.0 - frac) + h[k + 1] * frac
-            else:
-                ks, fs = k[at], frac[at]
-                out[at] = h[ks] * (1.0 - fs) + h[ks + 1] * fs
+        for node_id, at in nodes:
+            _interpolate(self._history(self.nodes[node_id]), k, frac, _ALL if at is None else at, out.reshape(-1))
         t0 = time.perf_counter()
         for column, at in thermal:
             out[at] = (self.thermal.value_at(times[at], column) if self.thermal is not None

@@ -195,3 +195,33 @@ def test_a_batchs_channel_plan_is_shared_by_sensors_with_the_same_channel_map_on
     for _, at in Sensor(channels_read=DEFAULT_FRAME_NAMES, seed=2)._plan(frame)[0]:
         assert at is None or not at.flags.writeable
     np.testing.assert_array_equal(alone.analog(pdc, times), both.analog(pdc, times))
+
+
+def test_the_compiled_interpolation_is_the_numpy_formula_to_the_bit():
+    """(consistency) :func:`emulator.sensor._grid_positions` and :func:`_interpolate` (the sensor's reading between
+    grid samples, compiled) give numpy's i = ⌊t·fs⌋, frac = t·fs − i and h[i]·(1 − frac) + h[i + 1]·frac to the bit,
+    at every position or at chosen ones; instants that are negative, NaN or infinite are refused by name."""
+    from emulator.sensor import _ALL, _grid_positions, _interpolate
+
+    rng = np.random.default_rng(3)
+    fs = 8800.0
+    t = np.sort(rng.uniform(0.0, 2.0, 5000))
+    h = rng.standard_normal(int(2.0 * fs) + 2)
+    i, frac, i_min, i_max = _grid_positions(t, fs)
+    x = t * fs
+    expected_i = np.floor(x).astype(np.int64)
+    np.testing.assert_array_equal(i, expected_i)
+    np.testing.assert_array_equal(frac, x - expected_i)
+    assert (i_min, i_max) == (expected_i.min(), expected_i.max())
+    out = np.full(t.size, np.nan)
+    _interpolate(h, i, frac, _ALL, out)
+    np.testing.assert_array_equal(out, h[i] * (1.0 - frac) + h[i + 1] * frac)
+    at = np.flatnonzero(rng.random(t.size) < 0.3)
+    some = np.full(t.size, np.nan)
+    _interpolate(h, i, frac, at, some)
+    np.testing.assert_array_equal(some[at], out[at])
+    assert np.isnan(np.delete(some, at)).all()
+    s = Sensor(channels_read=["PAC"])
+    for bad in (-1e-3, np.nan, np.inf):
+        with pytest.raises(ValueError, match="finite and ≥ 0"):
+            s.analog([0, 0], [0.1, bad])
