@@ -15,7 +15,10 @@ clipping to 0..4095.  A non-finite input is a modelling error and is reported, n
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from emulator.channels import PAC
 from emulator.conversions import ADC_CODES, ADC_LSB_V
@@ -44,12 +47,17 @@ class Adc:
     def sigma_V(self, volts: np.ndarray, channels: np.ndarray | None = None) -> np.ndarray:
         """RMS per-conversion noise (V) for analog values ``volts`` (V) on SPI channel indices ``channels``
         (None: no channel-specific path noise): √(σ_adc² + (ppm·v)² + σ_PAC²·[channel is PAC]), a new array shaped as ``volts``."""
+        return self._sigma_times(volts, channels, _NO_DRAWS)
+
+    def _sigma_times(self, volts, channels, z) -> np.ndarray:
+        """:meth:`sigma_V` of ``volts`` (V) on ``channels``, or with draws ``z`` (one per value) the noisy values
+        volts + σ·z (V): a new array shaped as ``volts``, one compiled pass."""
         v = np.asarray(volts, float)
-        var = np.multiply(self.reference_rel, v, out=np.empty(v.shape))
-        var = np.add(self.noise_V**2, np.square(var, out=var), out=var)
-        if self.pac_V and channels is not None:
-            var = np.add(var, self.pac_V**2 * (np.asarray(channels) == PAC), out=var)
-        return np.sqrt(var, out=var)
+        pac = self.pac_V and channels is not None
+        out = np.empty(v.shape)
+        _sigma_times(v.reshape(-1), np.asarray(channels, np.int64).reshape(-1) if pac else _NO_CHANNELS,
+                     self.noise_V**2, self.reference_rel, self.pac_V**2, z.reshape(-1), out.reshape(-1))
+        return out
 
     def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input",
                 channels: np.ndarray | None = None):
@@ -65,15 +73,31 @@ class Adc:
         if self.noise_V or self.reference_rel or self.pac_V:
             z = self.noise_rng.standard_normal(v.shape, dtype=np.float32)
             if self.reference_rel or (self.pac_V and channels is not None):
-                noise = self.sigma_V(v, channels)  # a new array: v + σ·z worked in place on it
-                noise *= z
-                v = np.add(v, noise, out=noise)
+                v = self._sigma_times(v, channels, z)
             else:
                 v = v + self.noise_V * z
         if self.coupling_V and bus_active is not None and np.any(bus_active):
             v = v.copy()
             v[bus_active] += self.coupling_V * self.coupling_rng.standard_normal(int(np.count_nonzero(bus_active)))
         return quantize(v)
+
+
+_NO_DRAWS = np.zeros(0, dtype=np.float32)
+_NO_CHANNELS = np.zeros(0, dtype=np.int64)
+
+
+@njit(cache=True)
+def _sigma_times(v, channels, noise_var, reference_rel, pac_var, z, out):
+    """Per value of ``v`` (V): σ = √(σ_adc² + (ppm·v)² + σ_PAC²·[channel is PAC]) (V) — ``noise_var`` = σ_adc²,
+    ``reference_rel`` = ppm·1e-6, ``pac_var`` = σ_PAC², the PAC term only with ``channels`` (empty: none) — into
+    ``out``, or with draws ``z`` (not empty) v + σ·z."""
+    for p in range(v.size):
+        r = reference_rel * v[p]
+        var = noise_var + r * r
+        if channels.size and channels[p] == PAC:
+            var = var + pac_var
+        sigma = math.sqrt(var)
+        out[p] = v[p] + sigma * z[p] if z.size else sigma
 
 
 def quantize(volts: np.ndarray) -> np.ndarray:

@@ -134,3 +134,24 @@ def test_hum_off_removes_fundamental_and_harmonics_only():
         keep[k] = spec[k]
     residue = diff - np.fft.irfft(keep, diff.size)
     assert np.std(residue) < 0.05 * np.std(diff)  # the old fundamental-only check would leave 15 % (3rd harmonic)
+
+
+def test_the_compiled_conversion_noise_is_numpys_formula_to_the_bit():
+    """(consistency) The ADC's per-conversion noise (one compiled pass) is numpy's σ = √(σ_adc² + (ppm·v)² +
+    σ_PAC²·[PAC]) times the conversion's float32 standard-normal draw, added to the value, to the bit: σ itself
+    (:meth:`Adc.sigma_V`, with and without channels) and the codes of :meth:`Adc.convert`."""
+    from emulator.adc import Adc, quantize
+    from emulator.effects import effect_rng
+
+    p = SensorParams()
+    rng = np.random.default_rng(8)
+    v = rng.uniform(0.0, 3.3, 3000)
+    channels = rng.choice([ch.PAC, ch.PDC, ch.TDC, ch.ELECTRODE_FIRST], v.size)
+    adc = Adc(p, seed=4, spi_coupling=False)
+    noise_var, rel, pac_var = adc.noise_V**2, adc.reference_rel, adc.pac_V**2
+    base = noise_var + np.square(rel * v)
+    sigma = np.sqrt(base + pac_var * (channels == ch.PAC))
+    np.testing.assert_array_equal(adc.sigma_V(v, channels), sigma)
+    np.testing.assert_array_equal(adc.sigma_V(v), np.sqrt(base))
+    z = effect_rng(4, "adc_noise").standard_normal(v.size, dtype=np.float32)
+    np.testing.assert_array_equal(adc.convert(v, channels=channels), quantize(v + sigma * z))
