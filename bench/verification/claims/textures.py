@@ -282,10 +282,15 @@ def texture_property_claims(b: Bench) -> list[Claim]:
         Claim("more force damps vibration power (5 textures, 0.2 → 1.26 N at 2.5 cm/s)", "falls on average",
               float(np.mean(heavier)), -np.inf, 0.0, "ln units", "D ch. 6", {"change_ln": heavier},
               kind="prediction", note="D ch. 3 saw the opposite on a coarse grating (see the grating rows)",
-              deviation="below the 2 N knee the texture force under the fingerprint ridges scales with the load "
-                        "(power ~N^1.6 up to 1.26 N; it falls above the knee, where the skin meets the core); a "
-                        "smooth skin's growing patch does damp with force. D's remark may partly reflect ridge "
-                        "wear during the pilot's high-power movements, which D reports changed the vibration"),
+              deviation="below the 2 N knee the sliding vibration is tangential and grows ~N^1.7–1.9 (friction "
+                        "∝ µN, the ridges' slope force ∝ N; a smooth skin rises as much); the one factor that "
+                        "falls with force, the patch-averaged height on the normal load, carries < 1e-3 of the "
+                        "power, and the power falls only above the knee, where the skin meets the core. Every "
+                        "force-varying measurement found rises with force (D ch. 3 on the grating; an accelerometer "
+                        "skin, Howe & Cutkosky 1989; human skin vibration at half and twice the spontaneous force); "
+                        "D ch. 6 prints no roughness-against-force values, and no damping mechanism (ridge crests "
+                        "widening, contact loss, fluid squeezed out under the patch) is sourced well enough to add "
+                        "(docs/experiment/force_damping.md)"),
     ]
     # across the whole library at one movement: roughness and traction correlate negatively (D ch. 6)
     from bench.textures.library import load_library
