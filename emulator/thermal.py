@@ -380,17 +380,26 @@ def _steps(Phi: np.ndarray, x: np.ndarray, gu: np.ndarray, out: np.ndarray) -> n
 
 
 @njit(cache=True)
-def _step_runs(phis: np.ndarray, gams: np.ndarray, rows: np.ndarray, u: np.ndarray, bounds: np.ndarray,
-               arrive: np.ndarray, temperature: np.ndarray, x: np.ndarray, out: np.ndarray) -> np.ndarray:
-    """Run r: rows ``bounds[r]``..``bounds[r + 1]`` of ``out`` by :func:`_steps` with Φ = ``phis[rows[r]]`` and
-    Γu = ``gams[rows[r]]`` · ``u[r]`` (numpy's matrix-vector product, the same BLAS call), from the state the run
-    before left (first: ``x``), its object layers first set to ``temperature[r]`` (°C) where ``arrive[r]`` (a newly
-    touched object); returns the last state."""
+def _step_runs(phis: np.ndarray, gams: np.ndarray, rows: np.ndarray, bounds: np.ndarray, heater: np.ndarray,
+               ambient: np.ndarray, index: np.ndarray, temperature: np.ndarray, p_self: float, previous: int,
+               x: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """Run r: rows j = ``bounds[r]``..``bounds[r + 1]`` of ``out`` by :func:`_steps` with Φ = ``phis[rows[r]]`` and
+    Γu = ``gams[rows[r]]`` · u (numpy's matrix-vector product, the same BLAS call), u = [``heater[j]`` W,
+    ``ambient[j]`` °C, far field: the touched contact's ``temperature`` (°C, contact ``index[j]``) or the ambient,
+    ``p_self`` W] (:meth:`ThermalModel._u`), from the state the run before left (first: ``x``); a newly touched
+    object (its index not the run before's, first: ``previous``; -1: none) arrives at its temperature first.
+    Returns the last state."""
+    u = np.empty(4)
     for r in range(bounds.size - 1):
-        if arrive[r]:
+        j = bounds[r]
+        i = index[j]
+        if i >= 0 and i != previous:
             x = x.copy()
-            x[4:] = temperature[r]
-        x = _steps(phis[rows[r]], x, np.dot(gams[rows[r]], u[r]), out[bounds[r]:bounds[r + 1]])
+            x[4:] = temperature[i]
+        previous = i
+        u[0], u[1], u[3] = heater[j], ambient[j], p_self
+        u[2] = temperature[i] if i >= 0 else ambient[j]
+        x = _steps(phis[rows[r]], x, np.dot(gams[rows[r]], u), out[j:bounds[r + 1]])
     return x
 
 
@@ -423,6 +432,7 @@ class ThermalModel:
         self._p_self = 0.0  # bead self-heating (W) of the current chunk
         self._last_touch = None  # (contact index, area m²) of the last step, or None
         self._held = None  # (first step, inputs, x, u) of a chunk's closed form while its inputs stay those then
+        self._contact_temperatures = None  # (see _temperatures)
         # read-out filters run at the network rate: 22.6 Hz low-pass on TDC, 0.45 Hz high-pass x 98 on TAC
         fs = THERMAL_RATE_HZ
         z, pz, k = np.array([]), np.array([-2 * np.pi * p.tdc_bandwidth_Hz]), 2 * np.pi * p.tdc_bandwidth_Hz
@@ -649,19 +659,21 @@ class ThermalModel:
         (:meth:`_arrive`)."""
         contacts = self.events.contacts
         first = bounds[:-1]
-        i, a = index[first], area[first]
-        touching = [None if k < 0 else (contacts[k].material, s, not contacts[k].planned)
-                    for k, s in zip(i.tolist(), a.tolist())]
+        runs = list(zip(index[first].tolist(), area[first].tolist()))
+        touching = [None if i < 0 else (contacts[i].material, a, not contacts[i].planned) for i, a in runs]
         phis, gams, rows = self.net.step_table(touching, self.dt)
-        temperature = np.array([c.temperature_C for c in contacts] + [0.0])  # (index -1: the last, unused)
-        u = np.empty((first.size, 4))  # :meth:`_u` of each run
-        u[:, 0], u[:, 1], u[:, 3] = heater[first], ambient[first], self._p_self
-        u[:, 2] = np.where(i >= 0, temperature[i], u[:, 1])
         previous = -1 if self._touching is None else next(k for k, c in enumerate(contacts) if c is self._touching)
-        arrive = (i >= 0) & (i != np.append(previous, i[:-1]))
-        self._touching = None if i[-1] < 0 else contacts[i[-1]]
-        self._last_touch = None if i[-1] < 0 else (int(i[-1]), float(a[-1]))
-        return _step_runs(phis, gams, rows, u, bounds, arrive, temperature[i], x, out)
+        i, a = runs[-1]
+        self._touching = None if i < 0 else contacts[i]
+        self._last_touch = None if i < 0 else (i, a)
+        return _step_runs(phis, gams, rows, bounds, heater, ambient, index, self._temperatures(), self._p_self,
+                          previous, x, out)
+
+    def _temperatures(self) -> np.ndarray:
+        """Each contact's object temperature (°C), by contact index."""
+        if self._contact_temperatures is None:
+            self._contact_temperatures = np.array([c.temperature_C for c in self.events.contacts], dtype=float)
+        return self._contact_temperatures
 
     def values_at(self, times: np.ndarray) -> np.ndarray:
         """(core °C, TDC V, TAC V) at each instant, linearly interpolated between network steps."""

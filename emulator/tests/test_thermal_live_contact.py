@@ -262,8 +262,9 @@ def test_the_step_table_holds_each_contacts_step_response_to_the_bit():
 
 def test_the_compiled_runs_are_numpys_steps_run_by_run():
     """(consistency) :func:`emulator.thermal._step_runs` — the live network's stepwise runs in one compiled pass —
-    gives numpy's x ← Φ x + Γu step by step with each run's own Φ and Γu, to the bit, a newly touched object's layers
-    set to its temperature before its run's first step."""
+    gives numpy's x ← Φ x + Γu step by step with each run's own Φ and u (heater, ambient, the touched object's
+    temperature or the ambient, self-heating), to the bit, a newly touched object's layers set to its temperature
+    before its run's first step (and not again while it stays touched)."""
     from emulator.thermal import _step_runs
 
     net = shared_network(SensorParams())
@@ -271,19 +272,22 @@ def test_the_compiled_runs_are_numpys_steps_run_by_run():
     contacts = [None, (glass, 3e-6, True), (glass, 5e-6, True), None, (glass, 5e-6, True)]
     phis, gams, rows = net.step_table(contacts, 0.01)
     bounds = np.array([0, 3, 4, 9, 11, 16])
-    u = np.column_stack([np.full(5, 0.3), np.full(5, 22.0), [22.0, 25.0, 25.0, 22.0, 25.0], np.full(5, 1e-5)])
-    arrive = np.array([False, True, False, False, True])
-    temperature = np.array([0.0, 25.0, 25.0, 0.0, 25.0])
+    heater = np.full(16, 0.3)
+    ambient = np.r_[np.full(9, 22.0), np.full(7, 21.0)]
+    index = np.repeat([-1, 0, 0, -1, 0], np.diff(bounds))
+    temperature, p_self = np.array([25.0]), 1e-5
     x = 20.0 + 15.0 * np.random.default_rng(2).random(net.n)
     expected, y = np.empty((16, net.n)), x
-    for r in range(5):
-        if arrive[r]:
+    for r, arrive in enumerate([False, True, False, False, True]):
+        j = bounds[r]
+        if arrive:
             y = y.copy()
-            y[4:] = temperature[r]
-        for i in range(bounds[r], bounds[r + 1]):
-            y = phis[rows[r]] @ y + gams[rows[r]] @ u[r]
+            y[4:] = 25.0
+        u = np.array([heater[j], ambient[j], 25.0 if index[j] >= 0 else ambient[j], p_self])
+        for i in range(j, bounds[r + 1]):
+            y = phis[rows[r]] @ y + gams[rows[r]] @ u
             expected[i] = y
     got = np.empty((16, net.n))
-    last = _step_runs(phis, gams, rows, u, bounds, arrive, temperature, x, got)
+    last = _step_runs(phis, gams, rows, bounds, heater, ambient, index, temperature, p_self, -1, x, got)
     np.testing.assert_array_equal(got, expected)
     np.testing.assert_array_equal(last, expected[-1])
