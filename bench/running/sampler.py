@@ -73,6 +73,14 @@ def variant_of(peripheral) -> str:
     return ch.DEFAULT_VARIANT
 
 
+@njit(cache=True)
+def _decode(miso, value_of_word, status_of_word, codes, status):
+    """The code and status of each slot's read (the second of its two transfers' MISO words), by look-up."""
+    for i in range(codes.size):
+        w = miso[2 * i + 1]
+        codes[i], status[i] = value_of_word[w], status_of_word[w]
+
+
 class Sampler:
     """Reads a repeating channel sequence through any peripheral with an ``exchange(TransferBatch)`` method."""
 
@@ -109,8 +117,9 @@ class Sampler:
                         self.command_words, start, mosi, t_sampled, channels)
         self.next_slot += n_slots
         miso = self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz))
-        words = miso[1::2]
-        return Samples(t_sampled, channels, _VALUE_OF_WORD[words], words, _STATUS_OF_WORD[words])
+        codes, status = np.empty(n_slots, dtype=np.uint16), np.empty(n_slots, dtype=np.uint8)
+        _decode(miso, _VALUE_OF_WORD, _STATUS_OF_WORD, codes, status)
+        return Samples(t_sampled, channels, codes, miso[1::2], status)
 
     def chunks(self, n_slots: int, chunk_slots: int):
         """Read the next ``n_slots`` slots in reads of at most ``chunk_slots``, yielding each :class:`Samples`."""

@@ -46,6 +46,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
@@ -412,9 +413,18 @@ def _check_batch(start, mosi, clock, last_end) -> np.ndarray:
         raise ValueError(f"transfer #{bad}: SCK {c[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
     end = start + 16.5 / clock
     eps = proto.TIME_TOLERANCE_S
-    if start[0] < last_end - eps or (start.size > 1 and (start[1:] - end[:-1]).min() < -eps):
+    if start[0] < last_end - eps or _overlapping(start, end, -eps):
         raise ValueError("transfers must be in time order and must not overlap")
     return end
+
+
+@njit(cache=True)
+def _overlapping(start, end, least_gap) -> bool:
+    """Whether a transfer starts less than ``least_gap`` (s) after the one before it ends."""
+    for i in range(1, start.size):
+        if start[i] - end[i - 1] < least_gap:
+            return True
+    return False
 
 
 @dataclass

@@ -315,3 +315,28 @@ def test_the_samplers_transfers_are_its_slots_command_then_read():
     np.testing.assert_array_equal(np.concatenate([p.times for p in parts]), t_sampled)
     np.testing.assert_array_equal(np.concatenate([p.channels for p in parts]), channel)
     assert parts[0].channels.dtype == channel.dtype and sampler.next_slot == 168
+
+
+def test_the_sampler_decodes_each_reads_word_as_the_protocol_does():
+    """(consistency) :meth:`Sampler.read` decodes each slot's read word (a table look-up, compiled) as
+    :func:`~emulator.spi.protocol.decode_response` does — the code, and status ok, parity error, or error word —
+    for every 16-bit word, the commands' words ignored."""
+    from bench.running.sampler import STATUS_ERROR_WORD, STATUS_OK, STATUS_PARITY, Sampler
+
+    words = np.arange(1 << 16, dtype=np.uint16)
+
+    class Words:
+        variant = None
+
+        def exchange(self, batch):
+            miso = np.full(batch.start_s.size, 0xFFFF, dtype=np.uint16)
+            miso[1::2] = words
+            return miso
+
+    got = Sampler(Words()).read(words.size)
+    value, parity_ok = proto.decode_response(words)
+    status = np.where(proto.is_error_word(words), STATUS_ERROR_WORD, np.where(parity_ok, STATUS_OK, STATUS_PARITY))
+    np.testing.assert_array_equal(got.words, words)
+    np.testing.assert_array_equal(got.codes, value)
+    np.testing.assert_array_equal(got.status, status)
+    assert got.codes.dtype == np.uint16 and got.status.dtype == np.uint8
