@@ -29,7 +29,10 @@ GRID = profile("default")
 VELOCITY_M_PER_S = 0.025
 LIGHT_N, HEAVY_N = 0.2, 1.26  # the claim's forces (D eq. 6.20's grid)
 BAND_HZ = (20.0, 700.0)  # D's roughness band of PAC
-DURATION_S = 16.0  # simulated per contact (the first SETTLE_S dropped: the stage's 50 ms ramp and the skin's stick)
+# simulated per contact (s; the first SETTLE_S dropped: the stage's 50 ms ramp and the skin's stick).  40 cm of
+# track: at 1.6 s foam's normal-path exponent ranged −0.39 … +0.22 over texture seeds and start offsets and
+# burlap's normal share reached 1.2e-3 at 3 s; at 16 s every verdict holds on 10 seeds × 4 offsets (margins below)
+DURATION_S = 16.0
 SETTLE_S = 0.3
 START_M = 0.123  # where on the texture's track the slide begins (m)
 TEXTURES = (43, 30, 100)  # graphite, foam, burlap
@@ -89,17 +92,21 @@ def _exponent(powers: dict, path: int) -> float:
 @pytest.mark.parametrize("number", TEXTURES)
 def test_the_normal_path_power_falls_with_force(number):
     """Consistency: the patch-averaged height on the normal load is the model's one force-damped path — its band
-    power falls from 0.2 to 1.26 N (exponent < 0)."""
+    power falls from 0.2 to 1.26 N (exponent < 0).  On foam the growing contact stiffness k_n·series nearly
+    cancels the patch's low-pass (exponent −0.19, the thinnest margin); without patch averaging (one kernel
+    sample) the exponents turn +0.7 … +1.4."""
     exponent = _exponent(_path_powers(number), 0)
-    assert exponent < 0, f"T{number}: normal-path exponent {exponent:+.2f}"
+    assert exponent < 0, (f"T{number}: normal-path exponent {exponent:+.2f} (measured over 10 seeds × 4 offsets: T43 "
+                          "−0.93 … −0.80, T30 −0.22 … −0.15, T100 −1.08 … −0.96)")
 
 
 @pytest.mark.parametrize("number", TEXTURES)
 def test_the_tangential_path_power_grows_about_as_force_squared(number):
     """Consistency: friction ∝ µN and the ridge slope force ∝ N make the tangential path's band power grow about
-    as N² — the exponent from 0.2 to 1.26 N lies within 1.5–2.5."""
+    as N² — the exponent from 0.2 to 1.26 N lies within 1.5–2.5 (a load-independent slope force gives −0.3 … 0.5)."""
     exponent = _exponent(_path_powers(number), 1)
-    assert 1.5 <= exponent <= 2.5, f"T{number}: tangential-path exponent {exponent:.2f}"
+    assert 1.5 <= exponent <= 2.5, (f"T{number}: tangential-path exponent {exponent:.2f} (measured over 10 seeds × 4 "
+                                    "offsets: T43 1.85 … 1.89, T30 2.35 … 2.39, T100 1.70 … 1.74)")
 
 
 @pytest.mark.parametrize("number", TEXTURES)
@@ -107,7 +114,8 @@ def test_the_tangential_path_carries_the_band_power(number):
     """Consistency: at both forces the tangential path carries > 99.9 % of the two paths' band power."""
     for force, (normal, tangential) in _path_powers(number).items():
         share = normal / (normal + tangential)
-        assert share < 1e-3, f"T{number} at {force} N: normal-path share {share:.1e}"
+        assert share < 1e-3, (f"T{number} at {force} N: normal-path share {share:.1e} (largest measured over 10 seeds × "
+                              "4 offsets: T43 1.1e-6, T30 8.2e-5, T100 7.3e-4)")
 
 
 def test_the_force_to_pressure_slope_is_linear_below_the_knee_and_falls_above_it():
@@ -120,5 +128,5 @@ def test_the_force_to_pressure_slope_is_linear_below_the_knee_and_falls_above_it
         return float(rise[1] - rise[0]) / (2 * step * p.force_to_pressure_Pa_per_N)
 
     below, above = relative_slope(HEAVY_N), relative_slope(2.5)
-    assert below >= 0.999, f"relative slope at {HEAVY_N} N: {below:.5f}"
-    assert above <= 0.35, f"relative slope at 2.5 N: {above:.4f}"
+    assert below >= 0.999, f"relative slope at {HEAVY_N} N: {below:.5f} (the model's: 0.99993)"
+    assert above <= 0.35, f"relative slope at 2.5 N: {above:.4f} (the model's: 0.2514)"
