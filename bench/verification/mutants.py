@@ -751,6 +751,19 @@ CATALOGUE += [
            'mu_static = 0.5\nmu_kinetic = 0.383\nmodulus_MPa = 1.0\nmaterial = "cotton fabric"\nseed = 86',
            ("bench/tests/test_library_sources.py::test_every_texture_friction_follows_its_cited_class",),
            "one texture's friction moved off its cited class without a source"),
+    # how sliding vibration scales with the normal force (bench/tests/test_force_scaling.py)
+    Mutant("slope-force-load-independent", "sliding", "emulator/friction.py",
+           "out_tangential[n] = f_sum / substeps + normal * slope", "out_tangential[n] = f_sum / substeps + slope",
+           ("bench/tests/test_force_scaling.py::test_the_tangential_path_power_grows_about_as_force_squared",),
+           "the ridges' slope force no longer scales with the normal load: tangential vibration stops growing ~N²"),
+    Mutant("patch-kernel-one-sample", "sliding", "emulator/sliding.py",
+           "m = max(1, int(np.floor(a / dx_m)))", "m = 1",
+           ("bench/tests/test_force_scaling.py::test_the_normal_path_power_falls_with_force",),
+           "no patch averaging: the normal path's vibration power grows with force instead of falling"),
+    Mutant("patch-radius-fixed-at-1N", "sliding", "emulator/friction.py",
+           "r = radius_1N * cbrt_n  # the patch radius", "r = radius_1N  # the patch radius",
+           ("bench/tests/test_force_scaling.py::test_the_normal_path_power_falls_with_force",),
+           "the contact patch does not grow with load (foam's normal path then rises with force)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
