@@ -468,10 +468,14 @@ def _copy_generator(g: np.random.Generator) -> np.random.Generator:
 
 
 class _Log:
-    """What the rig recorded: samples as read, motor current, and the true normal load for the report."""
+    """What the rig recorded: samples as read, motor current, and the true normal load for the report.  PAC's and
+    PDC's samples are also kept apart as they are read (what the controller and the recording use: no pass over
+    every sample read so far at each check)."""
 
     def __init__(self):
         self.t, self.ch, self.code, self.cur_t, self.cur, self.load_N = [], [], [], [], [], []
+        self.slots = 0  # samples read
+        self.of = {ch.PAC: ([], []), ch.PDC: ([], [])}  # channel -> (instants, codes) read, per read
 
     def load(self, t, newtons):
         self.load_N.append(newtons)
@@ -485,29 +489,39 @@ class _Log:
         self.t.append(s.times)
         self.ch.append(s.channels)
         self.code.append(s.codes)
+        self.slots += s.times.size
+        for channel, (times, codes) in self.of.items():
+            at = s.channels == channel
+            times.append(s.times[at])
+            codes.append(s.codes[at])
 
     def current(self, t, amps):
         self.cur_t.append(t)
         self.cur.append(amps)
 
     def _cat(self):
+        """Every sample read: instants (s), channels, codes."""
         if not self.t:  # nothing read yet
             return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.uint16)
         if len(self.t) > 1:
             self.t, self.ch, self.code = [np.concatenate(self.t)], [np.concatenate(self.ch)], [np.concatenate(self.code)]
         return self.t[0], self.ch[0], self.code[0]
 
+    def _channel(self, channel: int) -> tuple[np.ndarray, np.ndarray]:
+        """The instants (s) and codes of one channel's samples read (PAC or PDC)."""
+        times, codes = self.of[channel]
+        if len(times) > 1:
+            times[:], codes[:] = [np.concatenate(times)], [np.concatenate(codes)]
+        return (times[0], codes[0]) if times else (np.zeros(0), np.zeros(0, dtype=np.uint16))
+
     def pdc_codes(self) -> np.ndarray:
-        t, c, code = self._cat()
-        return code[c == ch.PDC].astype(float)
+        return self._channel(ch.PDC)[1].astype(float)
 
     def n_frames(self, frame: int) -> int:
-        return self._cat()[0].size // frame
+        return self.slots // frame
 
     def recording(self, contact_s, slide_start, slide_end, texture, movement, trial, seed) -> TrialRecording:
-        t, c, code = self._cat()
-        pac, pdc = c == ch.PAC, c == ch.PDC
-        return TrialRecording(t[pac], code[pac], t[pdc], code[pdc], np.concatenate(self.cur_t),
+        (pac_t, pac), (pdc_t, pdc) = self._channel(ch.PAC), self._channel(ch.PDC)
+        return TrialRecording(pac_t, pac, pdc_t, pdc, np.concatenate(self.cur_t),
                               np.concatenate(self.cur), contact_s, slide_start, slide_end, texture=texture,
                               force_N=movement.force_N, velocity_m_s=movement.velocity_m_per_s, trial=trial, seed=seed)
-
