@@ -460,9 +460,12 @@ def _clone_items(source: dict, target: dict, memo: dict) -> None:
         target[k if type(k) in _ATOMIC else _clone(k, memo)] = v if type(v) in _ATOMIC else _clone(v, memo)
 
 
+_ANY_SEED = np.random.SeedSequence(0)  # (a bit generator built from it is at once given another's state)
+
+
 def _copy_generator(g: np.random.Generator) -> np.random.Generator:
     """A generator that draws what ``g`` would draw from here on (its bit generator's full state copied)."""
-    bits = type(g.bit_generator)(0)
+    bits = type(g.bit_generator)(_ANY_SEED)
     bits.state = g.bit_generator.state
     return np.random.Generator(bits)
 
