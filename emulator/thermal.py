@@ -697,7 +697,7 @@ class ThermalModel:
         t_max = times.max()
         while self._last_t < t_max:
             if self.live:  # through the first step at or after the latest instant asked for, not beyond
-                self._advance_live(max(self.k + 1, int(np.ceil(times.max() / self.dt - 1e-9))))
+                self._advance_live(max(self.k + 1, int(np.ceil(t_max / self.dt - 1e-9))))
             else:
                 self._advance_chunk()
         ht, hv = self._history()
