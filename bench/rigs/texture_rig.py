@@ -5,7 +5,9 @@ through PDC: the rig converts the target force to PDC counts with the published 
 and skin and texture compliance decide the force it actually reaches); it holds ~0.5 s; a linear stage slides
 the texture at the set velocity over the set distance while the stage's motor current — rising linearly with
 the tangential load — is sampled at the frame rate; then the finger lifts.  The controller sees only codes: it
-reads the sensor through the host sampler and the SPI peripheral like any host.  Its commands reach the motors
+reads the sensor through the host sampler and the SPI peripheral like any host.  Each texture is one 75 mm
+square, as D's were; a trial starts at a random place on it, drawn from the trial's seed, such that the contact
+patch stays on the square from touchdown to the end of the stroke (:meth:`TextureRig.start_range_m`).  Its commands reach the motors
 ``latency_s`` later (20 ms).  It decides after every 10 ms frame while lowering; to avoid paying a Python round
 trip per frame, the emulator reads stretches of frames as if the finger kept lowering (which it does until the
 controller stops it) and checks the controller's rule on every frame read.  Each stretch is computed in one block
@@ -42,10 +44,10 @@ from emulator import channels as ch
 from emulator.effects import effect_rng
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
-from emulator.skin import Skin, contact_patch_area_m2
+from emulator.skin import Skin, contact_patch_area_m2, contact_patch_radius_m
 from emulator.sliding import CommandedMotion, contact_force_from_depth
 from emulator.spi.peripheral import SoftwarePeripheral
-from emulator.texture import SURFACE_LENGTH_M, Texture
+from emulator.texture import Texture
 
 FORCE_PER_PDC_BIT_N = 0.0115  # the rig's calibration: the published 11.5 mN per PDC bit (D ch. 4)
 
@@ -80,6 +82,9 @@ class RigSettings:
     baseline_s: float = 0.2  # PDC and PAC at rest before lowering
     hold_s: float = 0.5  # D ch. 6: "held for ~0.5 s"
     distance_m: float = 0.05
+    #: D ch. 6: the textures were cut into 75 mm squares; every trial of a texture runs on its one square (the first
+    #: 75 mm of the texture's periodic surface), starting at a random place on it
+    texture_side_m: float = 0.075
     stage_accel_m_per_s2: float = 1.0
     lift_rate_m_per_s: float = 5e-3
     settle_after_s: float = 0.2
@@ -135,7 +140,8 @@ class TextureRig:
         s = self.settings
         if not (movement.force_N > 0 and movement.velocity_m_per_s > 0):
             raise ValueError(f"movement {movement}: force and velocity must be positive")
-        start_position = float(effect_rng(seed, "rig.start_position").uniform(0.0, SURFACE_LENGTH_M))
+        first, last = self.start_range_m(movement)
+        start_position = float(effect_rng(seed, "rig.start_position").uniform(first, last))
         try:
             run, reached, lowering, to_stop = self._lowered(texture, movement, seed, start_position, read_ahead=True)
         except _Overshot:  # the look-ahead misjudged the stop: again from the start, a snapshot before every window
@@ -174,6 +180,19 @@ class TextureRig:
         rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
                      start_position, time.perf_counter() - wall0, log.n_frames(run.frame), {"lowering": lowering})
+
+    def start_range_m(self, movement: Movement) -> tuple[float, float]:
+        """(first, last) start position (m) on the texture's square for ``movement``: the contact patch (radius a at
+        the movement's force) stays on the square from touchdown (a ≤ start) to the stroke's end (start + distance
+        + a ≤ side).  Raises if the stroke and the patch do not fit on the square."""
+        s = self.settings
+        a = float(contact_patch_radius_m(movement.force_N, self.params.contact_radius_at_1N_m))
+        last = s.texture_side_m - s.distance_m - a
+        if last < a:
+            raise ValueError(f"rig.distance_m = {s.distance_m} m and the contact patch at {movement.force_N:g} N "
+                             f"({2 * a * 1e3:.1f} mm across) do not fit on rig.texture_side_m = "
+                             f"{s.texture_side_m} m: shorten the stroke or use a larger square")
+        return a, last
 
     def _lowered(self, texture: Texture, movement: Movement, seed: int, start_position: float,
                  read_ahead: bool) -> tuple["_Run", float, dict, int]:

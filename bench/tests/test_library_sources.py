@@ -87,12 +87,13 @@ def test_the_class_rule_catches_a_texture_moved_off_its_class():
 
 
 def test_stroke_and_contact_patch_fit_on_ds_texture_squares():
-    """Consistency with D: the 5 cm stroke plus the contact patch's diameter at the grid's largest force (2 N)
-    fits on a 75 mm square, leaving ≥ 15 mm for the random start (here 18.7 mm)."""
-    stroke = RigSettings().distance_m
+    """Consistency with D: the rig's square is D's 75 mm; the 5 cm stroke plus the contact patch's diameter at the
+    grid's largest force (2 N) fits on it, leaving ≥ 15 mm for the random start (here 18.7 mm)."""
+    settings = RigSettings()
+    assert settings.texture_side_m == D_TEXTURE_SQUARE_M
     force = max(m.force_N for m in movement_grid())
     patch = 2 * contact_patch_radius_m(force, SensorParams().contact_radius_at_1N_m)
-    assert D_TEXTURE_SQUARE_M - stroke - patch >= 0.015, (stroke, patch)
+    assert D_TEXTURE_SQUARE_M - settings.distance_m - patch >= 0.015, (settings.distance_m, patch)
 
 
 def test_roughness_sigma_falls_about_as_one_over_root_window():

@@ -4,7 +4,7 @@ properties, skin wear between trials, and determinism from the trial's seed."""
 import numpy as np
 import pytest
 
-from bench.rigs.texture_rig import Movement, TextureRig, movement_grid
+from bench.rigs.texture_rig import Movement, RigSettings, TextureRig, movement_grid
 from bench.textures.properties import properties
 from emulator.skin import Skin
 from emulator.texture import Texture
@@ -71,6 +71,23 @@ def test_a_trial_is_determined_by_its_seed_and_the_skin_state():
     c = TextureRig(wear=False).run_trial(SAND, Movement(0.5, 0.025), seed=12)
     assert np.array_equal(a.recording.pac, b.recording.pac)
     assert a.start_position_m != c.start_position_m
+
+
+def test_every_trial_of_a_texture_runs_on_its_one_75_mm_square():
+    """D ch. 6: 75 mm squares, random start.  Starts drawn from the seeds spread over the room the square leaves
+    for the stroke and the patch at the movement's force (heavier: larger patch, less room), the patch stays on
+    the square from touchdown to the stroke's end, and a stroke that cannot fit is refused naming the settings."""
+    rig = TextureRig(wear=False)
+    side, stroke = rig.settings.texture_side_m, rig.settings.distance_m
+    light, heavy = rig.start_range_m(Movement(0.2, 0.025)), rig.start_range_m(Movement(2.0, 0.025))
+    a_light, a_heavy = light[0], heavy[0]
+    assert 0 < a_light < a_heavy and heavy[1] - heavy[0] < light[1] - light[0]
+    assert light[1] + stroke + a_light == pytest.approx(side) and heavy[1] + stroke + a_heavy == pytest.approx(side)
+    starts = [rig.run_trial(SAND, Movement(2.0, 0.1), seed=s).start_position_m for s in range(4)]
+    assert all(heavy[0] <= x <= heavy[1] for x in starts) and len(set(starts)) == 4, starts
+    short = TextureRig(wear=False, settings=RigSettings(distance_m=0.072))
+    with pytest.raises(ValueError, match="texture_side_m"):
+        short.run_trial(SAND, Movement(2.0, 0.1), seed=1)
 
 
 def test_high_power_movements_wear_the_skin_faster_and_wear_lowers_roughness():
