@@ -55,8 +55,10 @@ class Adc:
         v = np.asarray(volts, float)
         pac = self.pac_V and channels is not None
         out = np.empty(v.shape)
-        _sigma_times(v.reshape(-1), np.asarray(channels, np.int64).reshape(-1) if pac else _NO_CHANNELS,
-                     self.noise_V**2, self.reference_rel, self.pac_V**2, z.reshape(-1), out.reshape(-1))
+        # one channel per value: a scalar or a broadcastable shape is spread over ``volts`` (an incompatible one raises)
+        per_value = np.broadcast_to(np.asarray(channels, np.int64), v.shape).reshape(-1) if pac else _NO_CHANNELS
+        _sigma_times(v.reshape(-1), per_value, self.noise_V**2, self.reference_rel, self.pac_V**2, z.reshape(-1),
+                     out.reshape(-1))
         return out
 
     def convert(self, volts: np.ndarray, bus_active: np.ndarray | None = None, where: str = "ADC input",

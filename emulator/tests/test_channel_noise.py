@@ -53,6 +53,15 @@ def test_pac_path_noise_lands_on_pac_conversions_only_and_leaves_the_others_unch
 def test_adc_rejects_mismatched_channels():
     with pytest.raises(ValueError, match="channels"):
         Adc(SensorParams(), seed=0).convert(np.zeros(4), channels=np.zeros(3, int))
+    with pytest.raises(ValueError):  # σ alone: a shape that does not broadcast is refused, not read past its end
+        Adc(SensorParams(), seed=0).sigma_V(np.zeros(6), np.zeros(2, int))
+
+
+def test_one_channel_for_all_values_is_spread_over_them():
+    """sigma_V(v, PAC) with a scalar channel: every value carries the PAC path's term, as an array of PACs gives."""
+    adc, v = Adc(SensorParams(), seed=0), np.linspace(0.1, 3.0, 6)
+    assert np.array_equal(adc.sigma_V(v, ch.PAC), adc.sigma_V(v, np.full(6, ch.PAC)))
+    assert np.all(adc.sigma_V(v, ch.PAC) > adc.sigma_V(v, ch.PDC))
 
 
 def test_quiet_channels_read_half_an_lsb_and_pac_1_4_bits_at_rest():
