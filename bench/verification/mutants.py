@@ -214,7 +214,7 @@ CATALOGUE: list[Mutant] = [
            "a drop's impulse grows with its energy, not its momentum (the energy/momentum deviation would then pass)"),
     Mutant("pac-highpass-100Hz", "chain", "emulator/params.py",
            "stage2_highpass_Hz: float = _p(10.0,", "stage2_highpass_Hz: float = _p(100.0,",
-           ("bench/tests/test_impact_regimes.py::test_heavy_steel_balls_set_down_slowly_are_detected_by_energy",),
+           ("bench/tests/test_impact_regimes.py::test_pulses_long_against_the_period_make_the_threshold_follow_energy",),
            "the PAC band's lower edge at 100 Hz differentiates slow contact pulses"),
     Mutant("displacement-gain-x10", "mechanics", "emulator/mechanics.py",
            "pressure_per_displacement_Pa_per_m=kf / A,", "pressure_per_displacement_Pa_per_m=10 * kf / A,",
