@@ -187,12 +187,22 @@ class TextureRig:
         + a ≤ side).  Raises if the stroke and the patch do not fit on the square."""
         s = self.settings
         a = float(contact_patch_radius_m(movement.force_N, self.params.contact_radius_at_1N_m))
-        last = s.texture_side_m - s.distance_m - a
+        travel = self.stage_travel_m(movement)
+        last = s.texture_side_m - travel - a
         if last < a:
-            raise ValueError(f"rig.distance_m = {s.distance_m} m and the contact patch at {movement.force_N:g} N "
-                             f"({2 * a * 1e3:.1f} mm across) do not fit on rig.texture_side_m = "
-                             f"{s.texture_side_m} m: shorten the stroke or use a larger square")
+            raise ValueError(f"the stage's travel {travel * 1e3:.1f} mm (rig.distance_m = {s.distance_m} m; at "
+                             f"{movement.velocity_m_per_s:g} m/s its ramps alone take v²/rig.stage_accel_m_per_s2 = "
+                             f"{movement.velocity_m_per_s ** 2 / s.stage_accel_m_per_s2 * 1e3:.1f} mm) and the contact "
+                             f"patch at {movement.force_N:g} N ({2 * a * 1e3:.1f} mm across) do not fit on "
+                             f"rig.texture_side_m = {s.texture_side_m} m: shorten the stroke, raise the stage's "
+                             f"acceleration or use a larger square")
         return a, last
+
+    def stage_travel_m(self, movement: Movement) -> float:
+        """How far (m) the stage moves the texture: the set distance, or more when the ramps up to the velocity and
+        back take longer than the distance allows (v²/accel, no cruise)."""
+        s = self.settings
+        return max(s.distance_m, movement.velocity_m_per_s ** 2 / s.stage_accel_m_per_s2)
 
     def _lowered(self, texture: Texture, movement: Movement, seed: int, start_position: float,
                  read_ahead: bool) -> tuple["_Run", float, dict, int]:

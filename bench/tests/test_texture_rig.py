@@ -88,6 +88,10 @@ def test_every_trial_of_a_texture_runs_on_its_one_75_mm_square():
     short = TextureRig(wear=False, settings=RigSettings(distance_m=0.072))
     with pytest.raises(ValueError, match="texture_side_m"):
         short.run_trial(SAND, Movement(2.0, 0.1), seed=1)
+    # the stage's real travel: at 30 cm/s and 1 m/s² the ramps alone move the texture 90 mm, off the square
+    assert rig.stage_travel_m(Movement(0.5, 0.3)) == pytest.approx(0.09)
+    with pytest.raises(ValueError, match="stage_accel_m_per_s2"):
+        rig.run_trial(SAND, Movement(0.5, 0.3), seed=1)
 
 
 def test_high_power_movements_wear_the_skin_faster_and_wear_lowers_roughness():

@@ -62,9 +62,9 @@ def test_roughness_scatters_by_the_sampling_variance_of_independent_stretches():
 
 
 def test_on_ds_square_overlapping_strokes_scatter_less_but_more_than_the_sensor_noise():
-    """The same 20 trials on D's 75 mm square: the scatter lies between the sensor-noise floor (0.15) and the
-    overlap bound √(R/(3L) + 0.15²) (R the room for the start, L the window's length of track; 0.48 here), with 20 %
-    allowed on each side for the sample σ. Measured 0.24: the taffeta's power fluctuates less locally than a Gaussian
+    """The same 20 trials on D's 75 mm square: the scatter lies above the sensor-noise floor (0.15; 0.18 asked, so a
+    rig that always started in one place fails) and below the overlap bound √(R/(3L) + 0.15²) (R the room for the
+    start, L the window's length of track; 0.48 here, 20 % allowed for the sample σ). Measured 0.24: the taffeta's power fluctuates less locally than a Gaussian
     vibration of its bandwidth, whose scatter over independent stretches also holds structure longer than the room."""
     rig = TextureRig(skin=Skin(), wear=False)
     first, last = rig.start_range_m(MOVEMENT)
@@ -73,4 +73,4 @@ def test_on_ds_square_overlapping_strokes_scatter_less_but_more_than_the_sensor_
     window_track_m = (t1 - t0) * MOVEMENT.velocity_m_per_s
     bound = np.sqrt((last - first) / (3 * window_track_m) + FIXED_START_RATIO ** 2)
     ratio = _scatter_over_sampling_sigma(rig)
-    assert 0.8 * FIXED_START_RATIO <= ratio <= 1.2 * bound, (ratio, bound)
+    assert 1.2 * FIXED_START_RATIO <= ratio <= 1.2 * bound, (ratio, bound)
