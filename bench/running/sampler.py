@@ -81,6 +81,22 @@ def _decode(miso, value_of_word, status_of_word, codes, status):
         codes[i], status[i] = value_of_word[w], status_of_word[w]
 
 
+def _checked_reply(peripheral, miso, n_words: int) -> np.ndarray:
+    """The peripheral's MISO words as uint16, after checking there is one 16-bit word per transfer (a malformed
+    reply is refused naming the peripheral, never decoded past its end or folded into a status)."""
+    words = np.asarray(miso)
+    name = type(peripheral).__name__
+    if words.shape != (n_words,):
+        raise ValueError(f"{name}.exchange returned {words.shape} words for {n_words} transfers: one 16-bit MISO "
+                         f"word per transfer expected")
+    if words.dtype == np.uint16:
+        return words
+    if words.dtype.kind not in "iu" or (words.size and (words.min() < 0 or words.max() > 0xFFFF)):
+        raise ValueError(f"{name}.exchange returned {words.dtype} words outside 0..0xFFFF: 16-bit MISO words "
+                         f"expected")
+    return words.astype(np.uint16)
+
+
 class Sampler:
     """Reads a repeating channel sequence through any peripheral with an ``exchange(TransferBatch)`` method."""
 
@@ -116,7 +132,8 @@ class Sampler:
         _slot_transfers(self.next_slot, n_slots, self.slot_rate_Hz, self.word_s, self.sample_delay_s, self.sequence,
                         self.command_words, start, mosi, t_sampled, channels)
         self.next_slot += n_slots
-        miso = self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz))
+        miso = _checked_reply(self.peripheral, self.peripheral.exchange(TransferBatch(start, mosi, self.clock_hz)),
+                              2 * n_slots)
         codes, status = np.empty(n_slots, dtype=np.uint16), np.empty(n_slots, dtype=np.uint8)
         _decode(miso, _VALUE_OF_WORD, _STATUS_OF_WORD, codes, status)
         return Samples(t_sampled, channels, codes, miso[1::2], status)

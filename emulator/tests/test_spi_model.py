@@ -340,3 +340,30 @@ def test_the_sampler_decodes_each_reads_word_as_the_protocol_does():
     np.testing.assert_array_equal(got.codes, value)
     np.testing.assert_array_equal(got.status, status)
     assert got.codes.dtype == np.uint16 and got.status.dtype == np.uint8
+
+
+@pytest.mark.parametrize("reply, needle", [
+    (lambda n: np.zeros(n // 2, dtype=np.uint16), "words for"),             # half the words
+    (lambda n: np.full(n, 70000, dtype=np.int64), "outside 0..0xFFFF"),     # not 16-bit words
+    (lambda n: np.full(n, -1, dtype=np.int64), "outside 0..0xFFFF"),
+    (lambda n: np.zeros(n, dtype=float), "outside 0..0xFFFF"),              # not integers
+])
+def test_the_sampler_refuses_a_malformed_reply_naming_the_peripheral(reply, needle):
+    """A peripheral whose exchange() returns the wrong number of words, or words that are not 16-bit integers, is
+    refused with its name — never decoded past the reply's end or folded into a status code; 16-bit words in a
+    wider integer type are accepted as they are."""
+    from bench.running.sampler import Sampler
+
+    class Odd:
+        variant = None
+
+        def __init__(self, make):
+            self.make = make
+
+        def exchange(self, batch):
+            return self.make(batch.start_s.size)
+
+    with pytest.raises(ValueError, match=f"Odd.exchange returned .*{needle}"):
+        Sampler(Odd(reply)).read(8)
+    wide = Sampler(Odd(lambda n: np.full(n, 0x1234, dtype=np.int64))).read(8)
+    assert wide.words.dtype == np.uint16 and np.all(wide.words == 0x1234)
