@@ -32,3 +32,18 @@ def test_a_quick_sample_of_the_catalogue_is_caught_on_a_scratch_copy():
     assert {n: results[n].status for n in mu.FAST} == {n: "caught" for n in mu.FAST}, \
         {n: results[n].detail for n in mu.FAST}
     assert results[blind.name].status == "survived"
+
+
+def test_a_mutant_in_one_module_reaches_the_compiled_code_of_the_modules_that_import_it():
+    """Numba caches a compiled function by its own file and freezes the globals it reads: a mutant of the SPI
+    model's timing constants must invalidate the fast path's cache (it reads them), one of the friction step the
+    sliding module's, and a data file none."""
+    root = mu.REPO
+
+    def names(rel):
+        return {str(p.relative_to(root)) for p in mu.compiled_dependents(root, rel)}
+
+    assert "emulator/spi/fastpath.py" in names("emulator/spi/model.py")
+    assert "emulator/sliding.py" in names("emulator/friction.py")
+    assert names("fixtures/textures/library.toml") == set()
+    assert "emulator/spi/model.py" not in names("emulator/spi/model.py")

@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -904,17 +905,48 @@ def run_pytest(scratch: Path, tests, timeout_s: float) -> tuple[int | None, str,
     return r.returncode, tail, time.perf_counter() - t0
 
 
+def compiled_dependents(scratch: Path, rel: str) -> list[Path]:
+    """The scratch copy's modules with numba-compiled functions that import the module at ``rel`` (a path in the
+    tree).  Numba's on-disk cache is keyed on a function's own source file only, and a compiled function freezes the
+    globals it reads (another module's constants) into its machine code: a mutant in ``rel`` reaches their cached
+    code only if their caches are invalidated too."""
+    if not rel.endswith(".py"):
+        return []
+    module = rel[:-3].replace("/", ".").removesuffix(".__init__")
+    package, _, name = module.rpartition(".")
+    imports = re.compile(rf"^\s*(import {re.escape(module)}\b|from {re.escape(module)} import|"
+                         rf"from {re.escape(package)} import .*\b{name}\b|from \.{name} import|"
+                         rf"from \. import .*\b{name}\b)", re.M)
+    out = []
+    for other in sorted(Path(scratch).rglob("*.py")):
+        if other == Path(scratch) / rel or "tests" in other.relative_to(scratch).parts:
+            continue
+        text = other.read_text(encoding="utf-8")
+        if ("njit" in text or "@jit" in text) and imports.search(text):
+            out.append(other)
+    return out
+
+
+def _invalidate_compiled(paths) -> None:
+    """Give ``paths`` a new modification time, so numba recompiles their cached functions on next use."""
+    for p in paths:
+        os.utime(p, ns=(time.time_ns(), time.time_ns()))
+
+
 def run_mutant(scratch: Path, m: Mutant, timeout_s: float = 900.0) -> Result:
     path = Path(scratch) / m.file
     text = path.read_text(encoding="utf-8")
     if text.count(m.original) != 1:
         return Result(m.name, m.area, m.file, "error", 0.0,
                       f"snippet found {text.count(m.original)} times in {m.file} (must be exactly once)")
+    dependents = compiled_dependents(scratch, m.file)
     path.write_text(text.replace(m.original, m.replacement), encoding="utf-8")
+    _invalidate_compiled(dependents)  # their cached code may hold the unmutated module's constants
     try:
         code, tail, seconds = run_pytest(scratch, m.tests, timeout_s)
     finally:
         path.write_text(text, encoding="utf-8")
+        _invalidate_compiled(dependents)  # ... and now the mutated ones
     if code == 1:
         return Result(m.name, m.area, m.file, "caught", seconds, _failed_line(tail))
     if code == 0:
