@@ -90,12 +90,16 @@ def fit_decaying_sinusoid(t: np.ndarray, x: np.ndarray) -> RingFit:
     best = None
     for ph in np.linspace(0, 2 * np.pi, 8, endpoint=False):
         try:
-            with warnings.catch_warnings():  # some starting phases leave the covariance undefined: only p is used
+            # some starting phases leave the covariance undefined (only p is used), and trial steps through a
+            # negative τ overflow exp: such a step's residual is infinite and the solver steps back
+            with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):
                 warnings.simplefilter("ignore", optimize.OptimizeWarning)
                 p, _ = optimize.curve_fit(model, t, x, p0=[np.abs(x).max(), 0.02, f_guess, ph], maxfev=4000)
+                r = float(np.sum((model(t, *p) - x) ** 2))
         except RuntimeError:
             continue
-        r = float(np.sum((model(t, *p) - x) ** 2))
+        if not np.isfinite(r):
+            continue
         if best is None or r < best[0]:
             best = (r, p)
     if best is None:
