@@ -9,6 +9,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import NullFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
 PROPERTIES = (("traction", "traction (A)"), ("roughness", "roughness (ln bits²)"), ("fineness", "fineness (ln Hz)"))
@@ -21,8 +22,9 @@ def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], p
     fig, axes = plt.subplots(len(PROPERTIES), 2, figsize=(11, 3.2 * len(PROPERTIES)), squeeze=False)
     cmap = plt.get_cmap("tab10")
     for r, (key, label) in enumerate(PROPERTIES):
-        for c, (x_key, line_key, x_label) in enumerate((("force_N", "velocity_m_per_s", "normal force (N)"),
-                                                        ("velocity_m_per_s", "force_N", "velocity (m/s)"))):
+        for c, (x_key, line_key, x_label, x_scale) in enumerate((
+                ("force_N", "velocity_m_per_s", "normal force (N)", 1.0),
+                ("velocity_m_per_s", "force_N", "velocity (cm/s)", 100.0))):
             ax = axes[r][c]
             for k, tex in enumerate(textures):
                 sel_t = cols["texture"] == tex
@@ -32,9 +34,13 @@ def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], p
                     xs = sorted(set(cols[x_key][sel].round(6).tolist()))
                     mean = [cols[key][sel & np.isclose(cols[x_key], x)].mean() for x in xs]
                     sd = [cols[key][sel & np.isclose(cols[x_key], x)].std() for x in xs]
-                    ax.errorbar(xs, mean, yerr=sd, color=cmap(k % 10), alpha=0.35 + 0.65 * (j + 1) / len(lines),
+                    ax.errorbar(np.multiply(xs, x_scale), mean, yerr=sd, color=cmap(k % 10), alpha=0.35 + 0.65 * (j + 1) / len(lines),
                                 lw=1, capsize=2, label=names.get(tex, str(tex)) if j == len(lines) - 1 else None)
             ax.set_xscale("log")
+            # the grid's own values as plain-number ticks (log-axis defaults overlap as 2×10⁻¹, 3×10⁻¹, …)
+            grid = sorted(set((cols[x_key] * x_scale).round(6).tolist()))
+            ax.set_xticks(grid, [f"{x:.3g}" for x in grid])
+            ax.xaxis.set_minor_formatter(NullFormatter())
             ax.set_xlabel(x_label)
             ax.set_ylabel(label)
             ax.grid(alpha=0.3)
