@@ -157,7 +157,9 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
     ``samples.h5`` is written from the recording's in-memory channels.  ``npz``: export codes.npz (and samples.csv
     when ``csv``) whatever the run's length (``True``), never (``False``), or for runs up to
     :data:`~bench.reporting.exports.EXPORT_MAX_S` (``None``).  ``guard``: a signal guard whose ``checkpoint()``
-    raises to stop exports and plots early; the record is still written, with status ``"interrupted"``.
+    raises (:class:`~bench.running.signals.StopRequested`, with the signal's name) to stop exports and plots
+    early — :class:`~bench.running.signals.StopSignals` does so only for a signal arriving after its
+    ``begin_writing()``; the record is still written, with status ``"interrupted"`` if the guard saw any signal.
     """
     from bench.running.signals import StopRequested
 
@@ -167,21 +169,21 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
     outputs: list[str] = []
     skipped: dict[str, str] = {}
     problems: list[str] = []
-    stopped = False
+    stopped: str | None = None  # the signal that stopped exports and plots
 
     def step(name: str, fn):
         nonlocal stopped
         if stopped:
-            skipped[name] = "not written: the run was interrupted while writing its outputs"
+            skipped[name] = f"not written: {stopped} arrived while the outputs were being written"
             return
         try:
             guard.checkpoint()
             with folder.atomic(name) as tmp:
                 fn(tmp)
             outputs.append(name)
-        except StopRequested:
-            stopped = True
-            skipped[name] = "not written: the run was interrupted while writing its outputs"
+        except StopRequested as stop:
+            stopped = stop.args[0] if stop.args else "a signal"
+            skipped[name] = f"not written: {stopped} arrived while the outputs were being written"
         except Exception as e:
             problems.append(f"writing {name}: {type(e).__name__}: {e}")
 

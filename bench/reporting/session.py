@@ -1,11 +1,12 @@
 """One run into one out folder, as ``biotac-bench run`` does it: nothing lost, nothing mixed, nothing wedged.
 
 1. The out folder is checked, created and locked before anything runs (:mod:`bench.reporting.outdir`).
-2. The scene streams into ``samples.h5`` under a temporary name while SIGINT/SIGTERM only ask to stop
-   (:mod:`bench.running.signals`); memory holds the streaming summary, not the samples.
+2. The scene streams into ``samples.h5`` under a temporary name while SIGINT/SIGTERM only ask to stop at the
+   next chunk (:mod:`bench.running.signals`); memory holds the streaming summary, not the samples.
 3. Exports, plots, then ``samples.h5``, ``report.md`` and ``record.json`` are renamed into place
-   (:func:`bench.reporting.report.write_outputs`); the record's status is ``ok``, ``failed`` (with the error) or
-   ``interrupted`` (with the signal).
+   (:func:`bench.reporting.report.write_outputs`), all of them also after a signal that stopped the simulation;
+   only a signal arriving while they are written stops exports and plots.  The record's status is ``ok``,
+   ``failed`` (with the error) or ``interrupted`` (with the signal).
 
 Exit status follows the record: 0 ok, 1 failed, 128 + the signal's number when interrupted (130 SIGINT, 143
 SIGTERM).
@@ -55,6 +56,7 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
             except BaseException:
                 store.abort()
                 raise
+            guard.begin_writing()  # a signal from now on stops exports and plots; one before it only the simulation
             try:
                 store.close("running", rec.simulated_s, rec.error)
             except Exception as e:

@@ -1,9 +1,11 @@
 """SIGINT and SIGTERM as requests to stop, never as exceptions in the middle of a write.
 
-While a :class:`StopSignals` guard is active, the first SIGINT or SIGTERM (and any after it) only records the
-signal: the runner stops at its next chunk boundary (``should_stop``), exports and plots stop at their next block
-(``checkpoint`` raises :class:`StopRequested`), and the record is still written, with status ``"interrupted"``.
-The exit status is 128 + the first signal's number (130 for SIGINT, 143 for SIGTERM).  Writes go through
+While a :class:`StopSignals` guard is active, a SIGINT or SIGTERM only records the signal.  During the
+simulation, the first one stops the runner at its next chunk boundary (``should_stop``); everything recorded so
+far is then written in full — exports and plots included — with status ``"interrupted"``.  Once the caller has
+called :meth:`StopSignals.begin_writing`, only a signal arriving after that call (e.g. a second Ctrl-C) stops
+exports and plots at their next block (``checkpoint`` raises :class:`StopRequested`); the record is still
+written.  The exit status is 128 + the first signal's number (130 for SIGINT, 143 for SIGTERM).  Writes go through
 temporary files renamed into place, so no signal leaves a half-written file behind.
 """
 
@@ -17,7 +19,8 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class StopRequested(Exception):
-    """Raised by :meth:`StopSignals.checkpoint` once a stop signal has arrived."""
+    """Raised by :meth:`StopSignals.checkpoint` once a stop signal has arrived while the outputs are written;
+    its argument is that signal's name."""
 
 
 class StopSignals:
@@ -26,21 +29,28 @@ class StopSignals:
     def __init__(self, signals=STOP_SIGNALS, announce: bool = True):
         self.signals = tuple(signals)
         self.announce = announce
-        self.signum: int | None = None
+        self.signum: int | None = None  # the first signal: the run's status and exit code
         self.count = 0
+        self._writing_signum: int | None = None  # the first signal after begin_writing()
+        self._writing = False
         self._previous: dict = {}
 
     def _handler(self, signum, frame):
         self.count += 1
+        name = signal.Signals(signum).name
+        msg = None
+        if self._writing and self._writing_signum is None:
+            self._writing_signum = signum
+            msg = f"\n{name}: stopping the exports and plots; writing the record (status \"interrupted\")\n"
         if self.signum is None:
             self.signum = signum
-            if self.announce:
-                msg = (f"\n{signal.Signals(signum).name}: stopping at the next chunk and writing what was "
-                       f"recorded (status \"interrupted\")\n")
-                try:
-                    os.write(2, msg.encode())
-                except OSError:
-                    pass
+            msg = msg or (f"\n{name}: stopping at the next chunk and writing what was recorded "
+                          f"(status \"interrupted\"); another signal stops the exports and plots\n")
+        if msg and self.announce:
+            try:
+                os.write(2, msg.encode())
+            except OSError:
+                pass
 
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
@@ -57,9 +67,17 @@ class StopSignals:
     def should_stop(self) -> bool:
         return self.signum is not None
 
+    def begin_writing(self) -> None:
+        """The simulation is over and the outputs are being written: from now on only a signal that arrives
+        after this call makes :meth:`checkpoint` raise."""
+        self._writing = True
+
     def checkpoint(self) -> None:
-        if self.signum is not None:
-            raise StopRequested(self.signal_name)
+        """Raise :class:`StopRequested` if a signal arrived since :meth:`begin_writing` (before that call: since
+        the guard was entered)."""
+        signum = self._writing_signum if self._writing else self.signum
+        if signum is not None:
+            raise StopRequested(signal.Signals(signum).name)
 
     @property
     def signal_name(self) -> str | None:

@@ -1,0 +1,104 @@
+"""Fixes from a fresh user's review: one signal during ``run`` stops only the simulation (exports and plots are
+still written), only a signal while the outputs are written stops them."""
+
+import json
+import os
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from bench.reporting import exports
+from bench.reporting.session import run_to_folder
+from bench.scenes.scene import parse_scene
+from bench.tests.test_outputs import _bench, _scene_file, _wait_for_streaming, check_consistent
+
+PLOTS = ("traces.png", "spectrogram.png")
+
+
+def _check_everything_written_for_the_recorded_part(out, record: dict, duration_s: float) -> None:
+    """Exports and plots all written, nothing skipped, and the exports hold the recorded part only."""
+    assert 0 < record["simulated_s"] < duration_s
+    assert {"samples.h5", "codes.npz", "samples.csv", *PLOTS} <= set(record["outputs"]), record["outputs"]
+    assert "skipped_outputs" not in record, record.get("skipped_outputs")
+    for name in PLOTS:
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+    times = np.loadtxt(out / "samples.csv", delimiter=",", skiprows=1, usecols=0)
+    assert times.size == sum(c["samples"] for c in record["channels"].values())
+    assert times.max() < record["simulated_s"]
+    npz_last = max(float(a[-1]) for k, a in np.load(out / "codes.npz").items() if k.endswith("_t") and a.size)
+    assert abs(npz_last - times.max()) < 1e-6  # the CSV rounds the instants
+
+
+@pytest.mark.stability
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_one_signal_mid_simulation_still_writes_exports_and_plots(tmp_path, sig):
+    """As the review's `run midrest.toml --csv` (a 590 s rest scene) with one signal mid-simulation."""
+    duration_s = 590.0
+    scene = _scene_file(tmp_path, duration_s, "midrest")
+    out = tmp_path / "o"
+    p = _bench("run", scene, "--out", out, "--quiet", "--csv")
+    _wait_for_streaming(out, p)
+    time.sleep(0.5)
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=180)
+    assert p.returncode == 128 + sig, err  # README / run --help: 130 for SIGINT, 143 for SIGTERM
+    assert "Traceback" not in err and "arrived while the outputs" not in err, err
+    record = check_consistent(out, "interrupted")  # codes.npz equals samples.h5, which holds simulated_s exactly
+    assert record["interrupted_by"] == sig.name
+    _check_everything_written_for_the_recorded_part(out, record, duration_s)
+
+
+def _signal_at_first_chunk(monkeypatch, sig=signal.SIGINT):
+    """The run gets ``sig`` at its first chunk boundary, i.e. mid-simulation (deterministic, in this process)."""
+    from bench.reporting import session
+
+    original = session.run_scene
+
+    def run_scene(*args, should_stop, **kw):
+        def stop_asked():
+            if not sent:
+                sent.append(sig)
+                os.kill(os.getpid(), sig)
+            return should_stop()
+
+        sent = []
+        return original(*args, should_stop=stop_asked, **kw)
+
+    monkeypatch.setattr(session, "run_scene", run_scene)
+
+
+@pytest.mark.unit
+def test_one_signal_mid_simulation_in_process_writes_everything(tmp_path, monkeypatch):
+    _signal_at_first_chunk(monkeypatch)
+    sc = parse_scene({"scene": {"name": "w", "duration_s": 3.0}})
+    res = run_to_folder(sc, tmp_path / "o", csv=True, progress=False, chunk_s=0.5)
+    assert res.exit_code == 130 and res.record["interrupted_by"] == "SIGINT"
+    record = check_consistent(tmp_path / "o", "interrupted")
+    _check_everything_written_for_the_recorded_part(tmp_path / "o", record, 3.0)
+    assert record["simulated_s"] == 0.5
+
+
+@pytest.mark.unit
+def test_a_second_signal_while_writing_stops_the_exports_and_plots(tmp_path, monkeypatch):
+    """SIGINT mid-simulation, then SIGTERM as samples.csv starts: codes.npz (written before) is kept; samples.csv
+    and the plots are skipped with the signal that stopped them; the status and exit code are the first signal's."""
+    _signal_at_first_chunk(monkeypatch)
+    original = exports.export_csv
+
+    def signalled_csv(h5, dest, base, checkpoint):
+        os.kill(os.getpid(), signal.SIGTERM)
+        original(h5, dest, base, checkpoint)
+
+    monkeypatch.setattr(exports, "export_csv", signalled_csv)
+    sc = parse_scene({"scene": {"name": "w", "duration_s": 3.0}})
+    res = run_to_folder(sc, tmp_path / "o", csv=True, progress=False, chunk_s=0.5)
+    assert res.exit_code == 130 and res.record["interrupted_by"] == "SIGINT"
+    record = check_consistent(tmp_path / "o", "interrupted")
+    assert "codes.npz" in record["outputs"] and record["simulated_s"] == 0.5
+    assert set(record["skipped_outputs"]) == {"samples.csv", *PLOTS}
+    for why in record["skipped_outputs"].values():
+        assert why == "not written: SIGTERM arrived while the outputs were being written"
+    assert json.loads((tmp_path / "o" / "record.json").read_text()) == record
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # handlers restored
