@@ -297,16 +297,15 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
     if kind == "tap":
         peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
         dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
-        for t in c.times(st, "at_s", w, duration):
-            if peak is not None and dur is not None:
-                out.append(Tap(t, peak, dur))
+        taps = [Tap(t, peak, dur) for t in c.times(st, "at_s", w, duration) if None not in (peak, dur)]
+        out += _ending_in_scene(c, w, "tap", taps, duration)
     elif kind == "press":
         start = c.times(st, "start_s", w, duration)
         force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
         ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
         hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
         if None not in (force, ramp, hold):
-            out += [Press(t, force, ramp, hold) for t in start]
+            out += _ending_in_scene(c, w, "press", [Press(t, force, ramp, hold) for t in start], duration)
     elif kind == "sphere_drop":
         # a Hertz impact on this sensor's skin (emulator.stimuli.sphere_drop_on): a named sphere gives its mass and
         # radius; a mass_mg drop its radius from diameter_mm, or from its material's density (default steel)
@@ -363,7 +362,9 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
             f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
             f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
         if None not in (dur, amp, fade, f0) and (f1 is not None or "frequency_Hz" in st):
-            out += [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start]
+            what = "vibration" if f1 is None else f"vibration (a {f0:g} → {f1:g} Hz sweep)"
+            out += _ending_in_scene(c, w, what, [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start],
+                                    duration)
     elif kind == "pressure":
         start = c.times(st, "start_s", w, duration)
         dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
@@ -372,7 +373,8 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
         fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
         if None not in (dur, offset, amp, freq, fade):
-            out += [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) for t in start]
+            out += _ending_in_scene(c, w, "pressure", [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade)
+                                                       for t in start], duration)
     elif kind == "touch":
         start = c.times(st, "start_s", w, duration)
         vals = dict(
@@ -401,7 +403,8 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
             c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
                               f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
         if None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
-            out += [Touch(t, electrode=electrode, material=mat, **vals) for t in start]
+            out += _ending_in_scene(c, w, "touch", [Touch(t, electrode=electrode, material=mat, **vals)
+                                                    for t in start], duration)
     elif kind in ("power_on", "heater_failure"):
         at = c.times(st, "at_s", w, duration)
         what = ("the sensor is powered on once (heaters start from ambient)" if kind == "power_on" else
@@ -458,16 +461,29 @@ def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
         c.problems.append(f"{w}.distance_mm = {vals['distance_mm']!r}: shorter than the stage's acceleration and "
                           f"braking at this velocity ({v * a * 1e3:.3g} mm); lower accel_s or slide farther")
         return []
-    out = []
-    for t in starts:
-        spec = SlideSpec(t, tex, vals["force_N"], v, d, vals["approach_s"], vals["hold_s"], a, vals["lift_s"],
-                         None if vals["start_position_mm"] is None else vals["start_position_mm"] * 1e-3, where=w)
-        if duration is not None and spec.end_s > duration:
-            c.problems.append(f"{w}: the slide starting at {t} s ends at {spec.end_s:.3f} s, after the end of the "
-                              f"scene (duration_s = {duration})")
-            continue
-        out.append(spec)
-    return out
+    start_m = None if vals["start_position_mm"] is None else vals["start_position_mm"] * 1e-3
+    return _ending_in_scene(c, w, "slide", [SlideSpec(t, tex, vals["force_N"], v, d, vals["approach_s"],
+                                                      vals["hold_s"], a, vals["lift_s"], start_m, where=w)
+                                            for t in starts], duration)
+
+
+#: how far (s) a stimulus may end past the scene's end for float rounding (e.g. 0.1 + 2·0.2 + 0.3 s in a 0.6 s scene)
+END_TOLERANCE_S = 1e-9
+
+
+def _ending_in_scene(c: _Checker, w: str, what: str, stimuli: list, duration) -> list:
+    """The ``stimuli`` (each with ``start_s`` and ``end_s`` in s) that end by the scene's end (``duration`` in s);
+    a problem naming ``w``, ``what``, the start, the end and duration_s for each that ends after it, which the
+    run would silently cut off."""
+    kept = []
+    for s in stimuli:
+        if duration is not None and s.end_s > duration + END_TOLERANCE_S:
+            c.problems.append(f"{w}: the {what} starting at {s.start_s} s ends at {s.end_s:.3f} s, after the end of "
+                              f"the scene (duration_s = {duration}); start it earlier, shorten it or lengthen the "
+                              f"scene")
+        else:
+            kept.append(s)
+    return kept
 
 
 @dataclass

@@ -50,6 +50,34 @@ def test_stimulus_after_the_end_and_unknown_sphere_are_refused():
     assert "stimulus[0].at_s[1] = 3.0 s: after the end of the scene" in text
 
 
+@pytest.mark.parametrize("stimulus, duration_s, needle", [
+    ({"kind": "press", "start_s": 1.5, "force_N": 1.0, "ramp_s": 0.5, "hold_s": 5.0}, 2.0,
+     "stimulus[0]: the press starting at 1.5 s ends at 7.500 s, after the end of the scene (duration_s = 2.0)"),
+    ({"kind": "vibration", "start_s": 0.5, "duration_s": 5.0, "amplitude_um": 1, "frequency_Hz": 100.0}, 2.0,
+     "stimulus[0]: the vibration starting at 0.5 s ends at 5.500 s, after the end of the scene (duration_s = 2.0)"),
+    ({"kind": "vibration", "start_s": 0.5, "duration_s": 10.0, "amplitude_um": 1, "f_start_Hz": 10.0,
+      "f_stop_Hz": 900.0}, 3.0, "stimulus[0]: the vibration (a 10 → 900 Hz sweep) starting at 0.5 s ends at 10.500 s"),
+    ({"kind": "pressure", "start_s": 0.5, "duration_s": 2.0, "offset_kPa": 5.0}, 1.0,
+     "stimulus[0]: the pressure starting at 0.5 s ends at 2.500 s"),
+    ({"kind": "touch", "start_s": 0.2, "force_N": 1.0, "electrode": "E7"}, 1.0,  # default ramps 0.5 s, hold 1 s
+     "stimulus[0]: the touch starting at 0.2 s ends at 2.200 s"),
+    ({"kind": "tap", "at_s": [0.3, 0.9], "peak_N": 1.0, "duration_s": 0.2}, 1.0,
+     "stimulus[0]: the tap starting at 0.9 s ends at 1.100 s"),
+], ids=["press", "vibration", "sweep", "pressure", "touch", "tap"])
+def test_a_stimulus_ending_after_the_scene_is_refused_as_a_slide_is(stimulus, duration_s, needle):
+    """Finding 7 of the user review: these were accepted and silently cut off at the scene's end."""
+    (msg,) = problems({"scene": {"name": "t", "duration_s": duration_s}, "stimulus": [stimulus]})
+    assert needle in msg and "after the end of the scene" in msg
+
+
+def test_stimuli_ending_exactly_at_the_end_of_the_scene_are_accepted():
+    sc = parse_scene({**MINIMAL, "stimulus": [
+        {"kind": "press", "start_s": 0.2, "force_N": 1.0, "ramp_s": 0.2, "hold_s": 0.4},  # 0.2 + 0.4 + 0.4 s
+        {"kind": "vibration", "start_s": 0.3, "duration_s": 0.7, "amplitude_um": 1, "frequency_Hz": 50.0},
+        {"kind": "tap", "at_s": 0.97, "peak_N": 0.5, "duration_s": 0.03}]})
+    assert [round(s.end_s, 12) for s in sc.stimuli] == [1.0, 1.0, 1.0]
+
+
 def test_vibration_too_fast_for_the_fidelity_grid_is_refused_with_advice():
     msgs = problems({"scene": {"name": "t", "duration_s": 1.0, "fidelity": "fast"},
                      "stimulus": [{"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1,
@@ -77,7 +105,7 @@ def test_each_stimulus_kind_builds_its_object():
     sc = parse_scene({**MINIMAL, "stimulus": [
         {"kind": "sphere_drop", "sphere": "1 mm steel bearing", "at_s": [0.1, 0.2]},
         {"kind": "sphere_drop", "mass_mg": 2.0, "height_m": 0.2, "at_s": 0.3},
-        {"kind": "press", "start_s": 0.1, "force_N": 1.0},
+        {"kind": "press", "start_s": 0.1, "force_N": 1.0, "ramp_s": 0.2, "hold_s": 0.3},
         {"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1, "f_start_Hz": 10,
          "f_stop_Hz": 900},
         {"kind": "pressure", "start_s": 0.0, "duration_s": 0.5, "offset_kPa": 5.0},
@@ -97,7 +125,8 @@ def test_shipped_scenes_are_all_valid():
 
 def test_touch_thermal_kinds_and_faults_are_validated():
     sc = parse_scene({**MINIMAL, "stimulus": [
-        {"kind": "touch", "start_s": 0.1, "force_N": 1.0, "electrode": "E7", "material": "glass"},
+        {"kind": "touch", "start_s": 0.1, "force_N": 1.0, "ramp_s": 0.2, "hold_s": 0.3, "electrode": "E7",
+         "material": "glass"},
         {"kind": "power_on", "at_s": 0.0}, {"kind": "ambient_step", "at_s": 0.5, "temperature_C": 18.0}],
         "faults": {"electrode_open": [3], "mux_stuck": 4, "thermistor": "open", "heater_failed": True}})
     assert len(sc.stimuli) == 3 and sc.faults["mux_stuck"] == 4
