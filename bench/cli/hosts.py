@@ -73,8 +73,44 @@ END_STATUS = {"complete": 0, "stream stopped": 1, "disconnected": 1, "port error
               "terminated": 143}
 
 
+def recording_file(text: str) -> str:
+    """argparse type of record's --out: a file to write (:func:`output_file`); a folder — an existing one, or a
+    path ending in "/" — is refused with the file name to give instead (a path ending in "/" would otherwise be
+    written as a file named like the folder)."""
+    if text.endswith(("/", os.sep)) or Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text}: is a folder; give the file to write, e.g. "
+                                         f"{Path(text) / 'recording.npz'}")
+    return output_file(text)
+
+
+def _csv_beside(out: Path) -> Path:
+    """Where ``record --csv`` writes the CSV: beside the NPZ, same name, suffix .csv."""
+    return out.with_suffix(".csv")
+
+
+def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
+    """Before the port is opened: an earlier recording at ``out`` or a CSV beside it (which would no longer match
+    the NPZ) is refused unless ``force``; a --out that the CSV would overwrite is refused always."""
+    from bench.errors import BenchError
+
+    if csv and _csv_beside(out) == out:
+        raise BenchError(f"--out {out}: the CSV is written beside the NPZ with the suffix .csv, i.e. over it; "
+                         f"give the NPZ's name (e.g. {out.with_suffix('.npz')})")
+    present = [p for p in (out, _csv_beside(out)) if p.exists() or p.is_symlink()]
+    folders = [p for p in present if p.is_dir()]
+    if folders:
+        raise BenchError(f"--out {out}: {folders[0]} is a folder, where the recording's CSV would go; give "
+                         f"another --out")
+    if present and not force:
+        raise BenchError(f"--out {out}: {' and '.join(map(str, present))} already there (an earlier recording?); "
+                         f"give another --out, or --force to replace {'it' if len(present) == 1 else 'them'}")
+
+
 def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
-    """Write the frames (atomically: temporary name, then rename); returns the files written."""
+    """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV); returns the files written.
+
+    Atomic: every file is written whole under a temporary name first; then a CSV beside ``out`` left by the
+    recording being replaced is removed (it would not match), and the new files are renamed into place."""
     import numpy as np
 
     n = len(frames)
@@ -99,30 +135,25 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
     arrays = dict(seq=np.array([f.seq for f in frames]), mask=np.array([f.sensor_mask for f in frames]),
                   channels=channels, codes=codes, status=status, layout=np.array(layout),
                   **{k: np.array(v) for k, v in meta.items()})
-    written = []
     out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.partial")
+    written = [out] + ([_csv_beside(out)] if csv else [])
+    temps = {path: path.with_name(f".{path.name}.{os.getpid()}.partial") for path in written}
     try:
-        with open(tmp, "wb") as fh:
+        with open(temps[out], "wb") as fh:
             np.savez_compressed(fh, **arrays)
-        os.replace(tmp, out)
-    finally:
-        tmp.unlink(missing_ok=True)
-    written.append(out)
-    if csv:
-        path = out.with_suffix(".csv")
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.partial")
-        try:
-            with open(tmp, "w") as fh:
+        if csv:
+            with open(temps[_csv_beside(out)], "w") as fh:
                 fh.write("seq,slot,channel,sensor,code,status\n")
                 for f in frames:
                     for k, ch in enumerate(f.channels):
                         for j, s in enumerate(f.sensors):
                             fh.write(f"{f.seq},{k},{ch},{s},{f.codes[k, j]},{f.status[k, j]}\n")
+        _csv_beside(out).unlink(missing_ok=True)  # the replaced recording's CSV, or the one rewritten below
+        for path, tmp in temps.items():
             os.replace(tmp, path)
-        finally:
+    finally:
+        for tmp in temps.values():
             tmp.unlink(missing_ok=True)
-        written.append(path)
     return written
 
 
@@ -143,6 +174,7 @@ def _cmd_record(a) -> int:
     from bench.hosts.driver import CMD_START, SLOT_RATE_HZ
 
     out = Path(a.out)
+    _refuse_overwriting(out, a.csv, a.force)
     frames, end, detail = [], "complete", ""
     recorded_s = 0.0
     drv = None
@@ -244,19 +276,30 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "such as socket://host:port) and writes codes, status and sequence numbers to NPZ; reports "
                     "CRC errors and dropped frames.\n\n"
                     "Whatever ends the recording, what was received is written (to a temporary name, then "
-                    "renamed), with 'end', 'requested_s' and 'recorded_s' in the file. Exit status: 0 complete; "
+                    "renamed), with 'end', 'requested_s' and 'recorded_s' in the file. An earlier recording at "
+                    "--out (or a CSV beside it) is refused before anything is recorded unless --force, which "
+                    "replaces it and removes its CSV if this recording writes none. Exit status: 0 complete; "
                     "1 the stream stopped, the bridge went away or the port failed before --seconds (a warning "
                     "says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments or nothing received.\n\n"
                     "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
                     "the set of sensors changes during the recording, codes[frame, slot, sensor - 1] with status "
                     "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt))
-    rc.add_argument("port")
+    rc.add_argument("port", help="the bridge's serial port: a device, a pty (`biotac-bench bridge` prints it) or "
+                                 "a pyserial URL such as socket://host:port")
     rc.add_argument("--seconds", type=number(0, 86_400 * 7, lo_open=True), default=1.0,
                     help="seconds of stream to record (> 0; default 1)")
-    rc.add_argument("--out", type=output_file, default="out/recording.npz")
-    rc.add_argument("--csv", action="store_true")
-    rc.add_argument("--baud", type=whole(50, 12_000_000), default=3_000_000)
+    rc.add_argument("--out", type=recording_file, default="out/recording.npz", metavar="FILE",
+                    help="the NPZ file to write (default out/recording.npz); a folder is refused: give the file's "
+                         "name in it")
+    rc.add_argument("--csv", action="store_true",
+                    help="also write the frames as CSV beside the NPZ (same name, suffix .csv): seq, slot, "
+                         "channel, sensor, code, status")
+    rc.add_argument("--force", action="store_true",
+                    help="replace an earlier recording at --out (and remove its CSV beside it when this recording "
+                         "writes none)")
+    rc.add_argument("--baud", type=whole(50, 12_000_000), default=3_000_000,
+                    help="the serial line's baud rate (default 3000000, the bridge's)")
     rc.add_argument("--idle-timeout", type=number(0, 3600, lo_open=True), default=5.0, metavar="S",
                     help="the stream has stopped when nothing arrives for this long (default 5 s)")
-    rc.add_argument("--quiet", action="store_true")
+    rc.add_argument("--quiet", action="store_true", help="no progress bar and no 'recording ...' line")
     rc.set_defaults(func=_cmd_record)

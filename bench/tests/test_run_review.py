@@ -102,3 +102,64 @@ def test_a_second_signal_while_writing_stops_the_exports_and_plots(tmp_path, mon
         assert why == "not written: SIGTERM arrived while the outputs were being written"
     assert json.loads((tmp_path / "o" / "record.json").read_text()) == record
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # handlers restored
+
+
+# --- record: never a silent overwrite, never a file named like a folder ------------------------------------------
+def _record(port, out, *extra):
+    from bench.tests.cli_runs import run_cli
+
+    return run_cli("record", port, "--out", out, "--quiet", *extra, timeout=120)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("given", ["new/", "existing", "existing/"])
+def test_record_refuses_a_folder_as_out_and_writes_nothing(tmp_path, given):
+    """`record --out dir/` used to write a FILE named dir; an existing folder or a path ending in / is refused."""
+    (tmp_path / "existing").mkdir()
+    r = _record("loop://", f"{tmp_path}/{given}")
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert "argument --out" in r.stderr and "is a folder" in r.stderr and "recording.npz" in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["existing"] and not any((tmp_path / "existing").iterdir())
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("earlier, csv", [(("rec.npz",), ()), (("rec.npz", "rec.csv"), ()), (("rec.csv",), ()),
+                                          (("rec.npz",), ("--csv",))],
+                         ids=["npz", "npz and csv", "a csv alone", "npz, asked for csv"])
+def test_record_refuses_an_earlier_recording_before_opening_the_port(tmp_path, earlier, csv):
+    """Refused before the port is opened (loop:// would otherwise be read), naming the files and --force."""
+    for name in earlier:
+        (tmp_path / name).write_text("earlier")
+    r = _record("loop://", tmp_path / "rec.npz", *csv)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert r.stderr.startswith("error: --out ") and "--force" in r.stderr
+    assert all(str(tmp_path / name) in r.stderr for name in earlier)
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == dict.fromkeys(earlier, "earlier")
+
+
+@pytest.mark.unit
+def test_record_refuses_an_out_its_csv_would_overwrite(tmp_path):
+    r = _record("loop://", tmp_path / "rec.csv", "--csv", "--force")
+    assert r.returncode == 2 and "over it" in r.stderr and str(tmp_path / "rec.npz") in r.stderr, r.stderr
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.firmware
+def test_record_force_replaces_the_earlier_recording_and_its_csv_consistently(tmp_path):
+    from bench.hosts.bridge import FirmwareBench
+
+    out, csv = tmp_path / "rec.npz", tmp_path / "rec.csv"
+    with FirmwareBench(1) as fb:
+        first = _record(fb.port, out, "--seconds", "0.3", "--csv")
+        assert first.returncode == 0, first.stderr
+        assert len(np.load(out)["seq"]) == 30 and csv.read_text().count("\n") == 1 + 30 * 44
+        again = _record(fb.port, out, "--seconds", "0.2")
+        assert again.returncode == 2 and "--force" in again.stderr, again.stderr
+        assert len(np.load(out)["seq"]) == 30 and csv.exists()  # untouched
+        forced = _record(fb.port, out, "--seconds", "0.2", "--force")
+        assert forced.returncode == 0, forced.stderr
+        assert len(np.load(out)["seq"]) == 20 and not csv.exists()  # the earlier CSV would not match: removed
+        with_csv = _record(fb.port, out, "--seconds", "0.1", "--force", "--csv")
+        assert with_csv.returncode == 0, with_csv.stderr
+    assert len(np.load(out)["seq"]) == 10 and csv.read_text().count("\n") == 1 + 10 * 44
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv", "rec.npz"]  # no temporary file left
