@@ -149,6 +149,7 @@ def test_a_finger_can_be_a_biotac_sp_and_its_own_e22_feels_its_touch():
 
     sc = parse_scene_text('[scene]\nname = "sp"\nduration_s = 1.0\n[[sensors]]\nindex = 2\nvariant = "biotac-sp"\n'
                           'unit = 5\n[[stimulus]]\nkind = "touch"\nsensor = 2\nelectrode = "E22"\nstart_s = 0.2\n'
+                          'ramp_s = 0.05\nhold_s = 0.7\n'  # ends at 1.0 s, with the scene
                           'force_N = 1.0\n[noise]\nadc = false\nspi_coupling = false\n')
     sensors = sensors_from_scene(sc, 2)
     assert [s.variant.name for s in sensors.values()] == ["biotac", "biotac-sp"]

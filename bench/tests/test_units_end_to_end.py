@@ -50,6 +50,7 @@ def test_the_bridge_firmware_recognises_an_sp_unit_by_its_serial():
 SP_RUN = ('[scene]\nname = "sp"\nduration_s = 0.3\n[sensor]\nvariant = "biotac-sp"\nunit = 5\n'
           '[[sensors]]\nindex = 2\nvariant = "biotac-sp"\n'
           '[[stimulus]]\nkind = "touch"\nelectrode = "E22"\nstart_s = 0.1\nforce_N = 1.0\nramp_s = 0.05\n'
+          'hold_s = 0.1\n'  # the touch ends (0.3 s) with the scene: a stimulus must end within it
           '[noise]\nadc = false\nspi_coupling = false\n')
 
 

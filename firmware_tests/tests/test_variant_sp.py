@@ -72,6 +72,7 @@ SEQUENCE = '[host]\nsequence = ["E20", "E21", "E22", "E23", "E24", "PDC"]\n'
 SP_SCENE = ('[scene]\nname = "sp"\nduration_s = 0.5\n[sensor]\nvariant = "biotac-sp"\nunit = 5\n'
             '[[sensors]]\nindex = 2\nvariant = "biotac-sp"\n'
             '[[stimulus]]\nkind = "touch"\nelectrode = "E22"\nstart_s = 0.1\nforce_N = 1.0\nramp_s = 0.05\n'
+            'hold_s = 0.3\n'  # the touch ends (0.5 s) with the scene: a stimulus must end within it
             '[noise]\nadc = false\nspi_coupling = false\n' + SEQUENCE)
 
 
