@@ -1,5 +1,6 @@
-"""Argument checks and signal handling shared by every command group: argparse types that name the flag in their
-one-line errors, and SIGTERM/SIGINT helpers for long-running commands."""
+"""Argument checks, help formatting and signal handling shared by every command group: argparse types that name the
+flag in their one-line errors, the help formatter that shows defaults, and SIGTERM/SIGINT helpers for long-running
+commands."""
 
 from __future__ import annotations
 
@@ -9,6 +10,32 @@ import os
 import signal
 from contextlib import contextmanager
 from pathlib import Path
+
+
+# --- help ------------------------------------------------------------
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
+    """Descriptions as written (their examples keep their lines), and each option's default after its help
+    ("(default: 60.0)") unless the help already states it or there is none to state (None, an off flag)."""
+
+    def _get_help_string(self, action):
+        if action.help is None or "default" in action.help or action.default is None or action.default is False:
+            return action.help
+        return super()._get_help_string(action)
+
+
+def describe_on_demand(parser: argparse.ArgumentParser, describe) -> argparse.ArgumentParser:
+    """``parser``'s description is ``describe()``, built only when its --help is printed (for descriptions that
+    list a registry whose import would slow every other command down)."""
+    format_help = parser.format_help
+
+    def with_description() -> str:
+        parser.description = describe()
+        return format_help()
+
+    parser.format_help = with_description
+    return parser
 
 
 # --- argument checks -------------------------------------------------

@@ -1,40 +1,49 @@
 """biotac-bench: run scenes against the emulated BioTac, check the published figures, measure costs.
 
-Each command group lives in its own module with an ``add_commands(sub)`` function; :data:`COMMAND_GROUPS` joins
-them into one parser, in the order ``--help`` lists them.
+Each command group lives in its own module with an ``add_commands(sub, fmt)`` function; :data:`COMMAND_GROUPS`
+joins them into one parser, in the order ``--help`` lists them.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import select
+import signal
 import sys
 
 from bench.cli import campaigns, cheetah, experiments, hosts, rtl, scenes, textures, units, verification
+from bench.cli.args import HelpFormatter
 
 MAIN_HELP = """\
 An emulated BioTac fingertip — pressure (PDC, PAC), temperature (TDC, TAC) and 19 impedance electrodes at
 sample level — behind its SPI protocol (software model or Verilog RTL), driven by scene files.
 
 typical session:
-  biotac-bench scenes                                  # what ships
-  biotac-bench run fixtures/scenes/sphere_drops.toml   # run one: codes.npz, record.json, report.md, plots
-  biotac-bench claims                                  # check every published figure (PASS/FAIL table)
-  biotac-bench noise-budget                            # where the 1.4 bits of PAC noise come from
-  biotac-bench benchmark                               # what each fidelity profile costs and how wrong it is
+  biotac-bench scenes                 # what ships: each scene's name, file and what it does
+  biotac-bench run sphere_drops       # run one (a shipped scene's name or any scene file): samples.h5,
+                                      #   codes.npz, record.json, report.md, plots in out/sphere_drops/
+  biotac-bench claims                 # check every published figure (PASS/FAIL table)
+  biotac-bench noise-budget           # where the 1.4 bits of PAC noise come from
+  biotac-bench benchmark              # what each fidelity profile costs and how wrong it is
 
-Every subcommand has its own --help.
+Every subcommand has its own --help.  Exit status: 0 done, 1 a check failed, 2 bad input (one line on stderr),
+130 / 143 stopped by Ctrl-C / SIGTERM, 141 the reader of the output went away (`biotac-bench params | head`).
 """
 
 #: The command groups, in the order ``--help`` lists them.
 COMMAND_GROUPS = (scenes, units, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
 
+#: Exit status when the program reading our output has gone (``biotac-bench params | head -1``): 128 + SIGPIPE,
+#: what a shell reports for a standard tool stopped by SIGPIPE.
+READER_GONE = 128 + signal.SIGPIPE
+
 
 def build_parser() -> argparse.ArgumentParser:
-    fmt = argparse.RawDescriptionHelpFormatter
-    p = argparse.ArgumentParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=fmt)
+    p = argparse.ArgumentParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=HelpFormatter)
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for group in COMMAND_GROUPS:
-        group.add_commands(sub, fmt)
+        group.add_commands(sub, HelpFormatter)
     return p
 
 
@@ -42,15 +51,44 @@ def main(argv=None) -> int:
     from bench.errors import BenchError
     from emulator.adc import NumericalError
 
-    args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
+        try:
+            args = build_parser().parse_args(argv)
+            return args.func(args)
+        finally:
+            sys.stdout.flush()  # output still buffered meets a reader that has gone here, not in Python's exit
+    except BrokenPipeError as e:
+        if _stdout_reader_gone():
+            _discard_stdout()
+            return READER_GONE
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     except (BenchError, ValueError, NumericalError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def _stdout_reader_gone() -> bool:
+    """Whether stdout is a pipe (or socket) whose reader has closed it: poll reports an error on its write end.
+    A broken pipe elsewhere (a child process, a socket) is a real error and reported as one."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError):  # not a file (captured output)
+        return False
+    poller = select.poll()
+    poller.register(fd, select.POLLOUT)
+    return any(events & (select.POLLERR | select.POLLHUP) for _, events in poller.poll(0))
+
+
+def _discard_stdout() -> None:
+    """Point stdout at /dev/null, so that what is still buffered is dropped quietly at exit (the Python
+    documentation's recipe for SIGPIPE) instead of raising again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
 
 if __name__ == "__main__":
