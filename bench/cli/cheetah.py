@@ -6,7 +6,7 @@ import argparse
 import shlex
 import sys
 
-from bench.cli.args import existing_file, number, one_line_errors, sigterm_raises, signals_deferred, whole
+from bench.cli.args import number, one_line_errors, sigterm_raises, signals_deferred, whole
 
 
 def _cmd_serve(a) -> int:
@@ -56,10 +56,16 @@ def _cmd_serve(a) -> int:
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    from bench.cli.scenes import scene_argument
+
     ch = sub.add_parser("cheetah", help="the emulated Cheetah SPI adapter for unmodified Cheetah-based programs",
                         description="Emulated BioTac sensors behind a Cheetah-compatible adapter: programs written "
                                     "against Total Phase's Cheetah API load the bench's cheetah.so and talk to "
-                                    "the emulated sensors over SPI, in virtual time.", formatter_class=fmt)
+                                    "the emulated sensors over SPI, in virtual time.\n\n"
+                                    "  biotac-bench cheetah serve --sensors 3            # 3 sensors at rest\n"
+                                    "  biotac-bench cheetah serve taps --seconds 60      # built from a scene\n\n"
+                                    "biotac-bench cheetah serve --help says how to point your program at it.",
+                        formatter_class=fmt)
     chsub = ch.add_subparsers(dest="cheetah_command", metavar="ACTION", required=True)
     sv = one_line_errors(chsub.add_parser(
         "serve", help="serve an emulated adapter until stopped",
@@ -69,11 +75,18 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "then serves until Ctrl-C or SIGTERM (or --seconds), and stops cleanly whatever clients did. "
                     "With SCENE every sensor is built from the scene (parameters, faults, noise, fidelity, seed; "
                     "sensor 1 feels its stimuli, in the adapter's virtual time). One program at a time may open "
-                    "the adapter, as with the real device.", formatter_class=fmt))
-    sv.add_argument("scene", nargs="?", type=existing_file, help="scene file the sensors are built from")
-    sv.add_argument("--sensors", type=whole(1, 5), default=3, help="emulated sensors, 1 to 5 (default 3)")
+                    "the adapter, as with the real device.\n\n"
+                    "  biotac-bench cheetah serve taps --sensors 1   # prints: export BIOTAC_CHEETAH_SOCKET=...\n"
+                    "  # then, in another shell: paste that line and run your program with the printed cheetah.so "
+                    "beside it",
+        formatter_class=fmt))
+    sv.add_argument("scene", nargs="?", type=scene_argument,
+                    help="scene file, or a shipped scene's name, the sensors are built from (default: none, the "
+                         "sensors at rest)")
+    sv.add_argument("--sensors", type=whole(1, 5), default=3, help="emulated sensors, 1 to 5")
     sv.add_argument("--seed", type=whole(0),
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")
-    sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")
+    sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds (s; default: "
+                                                                        "serve until Ctrl-C or SIGTERM)")
     sv.set_defaults(func=_cmd_serve)

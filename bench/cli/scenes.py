@@ -11,7 +11,9 @@ from emulator.fidelity import PROFILES
 
 
 RUN_HELP = """\
-Runs a scene file through sensor -> SPI peripheral -> host sampler and writes, into --out:
+Runs a scene through sensor -> SPI peripheral -> host sampler.  The scene is a scene file, or the name of a
+shipped scene (`biotac-bench scenes` lists them): `taps` is fixtures/scenes/taps.toml when no file "taps" is in
+the current folder.  It writes, into --out:
   samples.h5    every sample, streamed to disk as the run goes (HDF5): /<CH>/t (s), /<CH>/code (12-bit),
                 /<CH>/status (0 ok, 1 parity error, 2 error word); the scene, seed, fidelity and status as
                 attributes
@@ -70,6 +72,51 @@ problem is listed with its field, value and allowed range, and so is a scene who
 (impact_detection without PAC, slides without PAC and PDC, a sequence the scene is too short to read); exit
 status 2. A run that fails part-way still writes what it recorded (record.json says "failed" and why); exit
 status 1.
+
+examples:
+  biotac-bench run taps                                   # a shipped scene by name: out/taps/
+  biotac-bench run my_scene.toml --out out/mine --csv     # your own scene file, also samples.csv
+  biotac-bench run sphere_drops --fidelity reference --seed 3 --no-plots
+  biotac-bench run taps --spi rtl                         # the same scene over the Verilog RTL
+"""
+
+SCENES_HELP = """\
+Lists the shipped scenes (fixtures/scenes/*.toml): each one's name, its file (a path that works from the current
+folder), what it does and how many simulated seconds it lasts.  Give the name or the path to run or validate:
+
+  biotac-bench scenes
+  biotac-bench run taps          # the same as: biotac-bench run <the path printed for taps>
+  biotac-bench validate rest
+"""
+
+PROFILES_HELP = """\
+Lists the fidelity profiles: each one's simulation grid rate and what it resolves.  A scene picks one in
+[scene] fidelity (default "default"); run --fidelity overrides it; `biotac-bench benchmark` measures what each
+costs and how far it is from "reference".
+
+  biotac-bench profiles
+  biotac-bench run taps --fidelity fast
+"""
+
+PARAMS_HELP = """\
+Lists every sensor parameter, one a line: name, nominal value, unit, [allowed range], (source: D = the
+dissertation, model = this emulator's choice) and what it is.  Any of them can be set by name in a scene's
+[sensor] table (or a [[sensors]] table) on top of the sensor unit, within its range:
+
+  biotac-bench params
+  biotac-bench params | grep -i inflation
+  # in a scene file:   [sensor]
+  #                    inflation_volume_mL = 0.6
+"""
+
+VALIDATE_HELP = """\
+Validates each scene completely (nothing runs) and prints "ok" with its name, duration, stimuli and fidelity, or
+every problem with its field, value and allowed range.  Exit status 0 if every scene is valid, 1 if any is not,
+2 for bad arguments.
+
+  biotac-bench validate my_scene.toml
+  biotac-bench validate fixtures/scenes/*.toml
+  biotac-bench validate taps rest          # shipped scenes by name
 """
 
 
@@ -133,7 +180,7 @@ def _cmd_validate(a) -> int:
     bad = 0
     for f in a.scenes:
         try:
-            sc = load_scene(f)
+            sc = load_scene(scene_file(f))
             more = (f", {sc.n_sensors} sensors ({sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))}"
                     f" stimuli in all)" if sc.n_sensors > 1 else "")
             print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {len(sc.stimuli)} stimuli, fidelity {sc.fidelity}{more})")
@@ -143,12 +190,62 @@ def _cmd_validate(a) -> int:
     return 1 if bad else 0
 
 
+def shipped_scenes() -> dict[str, Path]:
+    """The shipped scene files by name (the file's stem, which ``biotac-bench run NAME`` accepts)."""
+    return {f.stem: f for f in sorted(SCENES_DIR.glob("*.toml"))}
+
+
+def shown_path(path: Path) -> str:
+    """``path`` as it works from the current folder: relative to it when inside it, else absolute."""
+    path = path.resolve()
+    try:
+        return str(path.relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+def scene_file(text: str) -> str:
+    """A scene argument as a path: a file that exists as given; else the shipped scene of that name ("taps" or
+    "taps.toml", without a folder); else :class:`SceneError` with the shipped scenes that come close."""
+    import difflib
+
+    from bench.errors import SceneError
+
+    given = Path(text)
+    if given.exists() or given.is_symlink():
+        return text  # a file, folder or device: the scene loader says what is wrong with it, if anything
+    shipped = shipped_scenes()
+    name = given.name.removesuffix(".toml")
+    if given.parent == Path(".") and name in shipped:
+        return str(shipped[name])
+    hint = "give a scene file, or a shipped scene's name (`biotac-bench scenes` lists them"
+    near = difflib.get_close_matches(name, list(shipped), n=3, cutoff=0.6)
+    hint += f"; close matches: {', '.join(near)})" if near else ")"
+    if not given.is_absolute() and (REPO / given).is_file():
+        hint = f"did you mean {REPO / given} (that path in the repository)?"
+    raise SceneError(text, [f"cannot read the file: No such file or directory; {hint}"])
+
+
+def scene_argument(text: str) -> str:
+    """argparse type: a scene file or a shipped scene's name, as a path (:func:`scene_file`); a path that names
+    nothing is refused in one line."""
+    from bench.errors import SceneError
+
+    text = _path("a scene file")(text)
+    try:
+        return scene_file(text)
+    except SceneError as e:
+        raise argparse.ArgumentTypeError(f"{text}: {e.problems[0]}") from None
+
+
 def _cmd_scenes(a) -> int:
     from bench.scenes.scene import load_scene
 
-    for f in sorted(SCENES_DIR.glob("*.toml")):
+    shipped = shipped_scenes()
+    width = max(map(len, shipped))
+    for name, f in shipped.items():
         sc = load_scene(f)
-        print(f"{f.relative_to(REPO)}\n    {sc.description or sc.name} ({sc.duration_s:g} s)")
+        print(f"{name:<{width}}  {shown_path(f)}\n    {sc.description or sc.name} ({sc.duration_s:g} s)")
     return 0
 
 
@@ -188,9 +285,10 @@ def _path(what: str):
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     from bench.cli.args import one_line_errors, whole
 
-    r = one_line_errors(sub.add_parser("run", help="run a scene file and write codes, record, report and plots",
+    r = one_line_errors(sub.add_parser("run", help="run a scene and write samples, codes, record, report and plots",
                                        description=RUN_HELP, formatter_class=fmt))
-    r.add_argument("scene", type=_path("a scene file"), help="scene file (TOML), e.g. fixtures/scenes/sphere_drops.toml")
+    r.add_argument("scene", type=scene_argument,
+                   help="scene file (TOML) or a shipped scene's name, e.g. sphere_drops or my_scene.toml")
     r.add_argument("--out", help="output folder (default: a fresh out/<scene name>[-n])")  # checked by OutFolder
     r.add_argument("--csv", action="store_true", help="also write samples.csv")
     r.add_argument("--force", action="store_true",
@@ -199,22 +297,26 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                    help="export codes.npz (and samples.csv with --csv) even for runs longer than 600 simulated s")
     r.add_argument("--compression", choices=["gzip", "lzf", "none"], default="gzip",
                    help="samples.h5 compression (default gzip: level 1 with shuffle, readable everywhere)")
-    r.add_argument("--fidelity", choices=list(PROFILES), help="override the scene's profile")
-    r.add_argument("--seed", type=whole(0, 2**63 - 1), help="override the scene's seed (0 to 2^63 - 1)")
+    r.add_argument("--fidelity", choices=list(PROFILES),
+                   help="override the scene's profile (default: the scene's [scene] fidelity; biotac-bench profiles)")
+    r.add_argument("--seed", type=whole(0, 2**63 - 1),
+                   help="override the scene's seed, 0 to 2^63 - 1 (default: the scene's [scene] seed)")
     r.add_argument("--spi", choices=["software", "rtl"],
-                   help="the sensor's SPI side: the software model (default) or the RTL via the C++ harness")
+                   help="the sensor's SPI side: the software model or the RTL via the C++ harness (default: the "
+                        "scene's [host] spi, else software)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
     r.set_defaults(func=_cmd_run)
 
-    v = one_line_errors(sub.add_parser(
-        "validate", help="check scene files without running them",
-        description="Validates each scene file completely (nothing runs) and prints 'ok' or every problem with its "
-                    "field and value. Exit status 0 if every file is valid, 1 if any is not, 2 for bad arguments."))
-    v.add_argument("scenes", nargs="+", type=_path("a scene file"))
+    v = one_line_errors(sub.add_parser("validate", help="check scene files without running them",
+                                       description=VALIDATE_HELP, formatter_class=fmt))
+    v.add_argument("scenes", nargs="+", type=_path("a scene file"),
+                   help="scene file (TOML) or a shipped scene's name; several are checked one after another")
     v.set_defaults(func=_cmd_validate)
 
-    one_line_errors(sub.add_parser("scenes", help="list the shipped scenes")).set_defaults(func=_cmd_scenes)
-    one_line_errors(sub.add_parser("profiles", help="list the fidelity profiles")).set_defaults(func=_cmd_profiles)
-    one_line_errors(sub.add_parser("params", help="list every sensor parameter with unit, range and source")
-                    ).set_defaults(func=_cmd_params)
+    for name, help_line, description, func in (
+            ("scenes", "list the shipped scenes: name, file, what each does", SCENES_HELP, _cmd_scenes),
+            ("profiles", "list the fidelity profiles", PROFILES_HELP, _cmd_profiles),
+            ("params", "list every sensor parameter with unit, range and source", PARAMS_HELP, _cmd_params)):
+        one_line_errors(sub.add_parser(name, help=help_line, description=description, formatter_class=fmt)
+                        ).set_defaults(func=func)
