@@ -13,13 +13,15 @@ of the random component, periods of the periodic components along the sliding di
 friction against the silicone skin, the texture's Young's modulus, thermal material.
 
 The file is validated completely before anything is listed; every problem names the texture, the field, the
-value and what is allowed.  --json prints the textures in the file's own fields and units (it round-trips).
+value and what is allowed.  --json prints the textures in the file's own fields and units; saved as a .json
+file, that list is a library --library reads back (edit it to try your own surfaces).
 
 examples:
   biotac-bench textures                      # all of them
   biotac-bench textures --group "coarse weaves"
   biotac-bench textures --show 100           # or --show T100, --show burlap: every field and its source
   biotac-bench textures --json > textures.json
+  biotac-bench textures --library textures.json --show 100
 """
 
 
@@ -88,11 +90,14 @@ def _table(textures) -> str:
 
 
 def _cmd_textures(a) -> int:
-    from bench.textures.library import load_library, texture, texture_record
+    from bench.textures.library import UnknownTextureError, load_library, texture, texture_record
 
     lib = load_library(a.library)
     if a.show is not None:
-        t = texture(a.show, a.library)
+        try:
+            t = texture(a.show, a.library)
+        except UnknownTextureError as e:
+            raise ValueError(e.for_option("--show")) from None
         print(json.dumps(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
         return 0
     items = list(lib.values())
@@ -114,5 +119,6 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     p.add_argument("--show", metavar="N", help="one texture in full: number (10, T10) or name (\"velcro hooks\")")
     p.add_argument("--json", action="store_true", help="JSON in the library file's fields and units")
     p.add_argument("--library", metavar="FILE",
-                   help="another library file (default fixtures/textures/library.toml, which must be complete)")
+                   help="another library file: TOML as the shipped one, or .json as --json prints (default: "
+                        "fixtures/textures/library.toml, which must hold all of T1..T117)")
     p.set_defaults(func=_cmd_textures)

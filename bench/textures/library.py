@@ -4,7 +4,9 @@ The file holds one ``[[texture]]`` table per texture (the 117 of D Table 6-1 by 
 numbered 900-999), with units in the field names (``rms_height_um``, ``modulus_MPa``, ...); :func:`load_library`
 returns ``{number: emulator.texture.Texture}`` in SI units, or raises :class:`~bench.errors.TextureError` listing
 every problem found, each naming the texture (number and name), the field, the value and what is allowed — like
-scene files (:mod:`bench.scenes.scene`).  :func:`texture` looks one texture up by number or name.
+scene files (:mod:`bench.scenes.scene`).  :func:`texture` looks one texture up by number or name, and raises
+:class:`UnknownTextureError` (a ``TextureError``) for one the library does not hold.  A library file may also be
+JSON (``.json``): the list of textures ``biotac-bench textures --json`` prints, the same fields and units.
 
 Allowed values (physical ranges, wide enough for any real surface, narrow enough to catch a wrong unit):
 
@@ -36,6 +38,7 @@ from __future__ import annotations
 
 import difflib
 import functools
+import json
 import math
 import re
 from dataclasses import dataclass, field
@@ -221,7 +224,7 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
         if k != "texture":
             c.add("library", f"unknown top-level key {k!r}: the file holds [[texture]] tables only")
     items = data.get("texture")
-    if items is None:
+    if items is None or items == []:
         c.add("library", "no [[texture]] tables")
         items = []
     elif not isinstance(items, list):
@@ -337,11 +340,33 @@ def _ranges(numbers: list[int]) -> str:
     return ", ".join(runs)
 
 
+MAX_NESTING = 8  # arrays or tables deep; a library needs 4 (texture, periodic, harmonics)
+
+
 def read_library_file(path: str | Path) -> dict:
-    """The parsed TOML of a library file; an unreadable or oversized file, a device or pipe, non-UTF-8 bytes, TOML
-    syntax errors and absurd nesting raise :class:`TextureError` naming the file (:mod:`bench.tomlfile`)."""
+    """The parsed library file, TOML (``{"texture": [...]}``) or JSON (``.json``: a list of textures as
+    ``biotac-bench textures --json`` prints, one texture as ``--show N --json`` prints, or the TOML's object); an
+    unreadable or oversized file, a device or pipe, non-UTF-8 bytes, syntax errors and absurd nesting raise
+    :class:`TextureError` naming the file (:mod:`bench.tomlfile`)."""
     text = tomlfile.read_text(path, TextureError, MAX_LIBRARY_BYTES, "no [[texture]] tables: the library is empty")
-    return tomlfile.parse(text, str(path), TextureError, 8, "a library needs 4 levels")
+    if Path(path).suffix.lower() != ".json":
+        return tomlfile.parse(text, str(path), TextureError, MAX_NESTING, "a library needs 4 levels")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise TextureError(str(path), [f"JSON syntax error: {e.msg} (line {e.lineno}, column {e.colno})"]) from None
+    except RecursionError:
+        raise TextureError(str(path), [f"arrays or objects nested too deeply to read (a library needs 4 levels; "
+                                       f"at most {MAX_NESTING} are allowed)"]) from None
+    except ValueError as e:  # e.g. an integer of more than 4300 digits
+        raise TextureError(str(path), [f"JSON value error: {e}"]) from None
+    deep = tomlfile.too_deep(data, MAX_NESTING)
+    if deep is not None:
+        raise TextureError(str(path), [f"{deep}: nested more than {MAX_NESTING} arrays or objects deep (a library "
+                                       "needs 4 levels)"])
+    if isinstance(data, dict) and "texture" not in data:
+        data = [data]  # one texture, as `biotac-bench textures --show N --json` prints it
+    return {"texture": data} if isinstance(data, list) else data
 
 
 @functools.lru_cache(maxsize=8)
@@ -367,6 +392,23 @@ def load_library(path: str | Path | None = None, complete: bool | None = None) -
 _NUMBER_RE = re.compile(r"^\s*[Tt]?\s*(\d+)\s*$")
 
 
+class UnknownTextureError(TextureError):
+    """A texture asked for by number or name is not in the library (the library itself is fine); ``problem``
+    says what was asked, what the library holds and the close matches.  A command line words it with its flag:
+    :meth:`for_option`."""
+
+    def __init__(self, source: str, query, problem: str):
+        super().__init__(source, [problem])
+        self.query, self.problem = query, problem
+
+    def __str__(self) -> str:
+        return f"{self.problem} (library: {self.source})"
+
+    def for_option(self, option: str) -> str:
+        """The message for a command-line flag: ``--show: no texture number 999; the library holds ...``."""
+        return f"{option}: {self.problem}"
+
+
 def texture(number_or_name: int | str, path: str | Path | None = None) -> Texture:
     """One texture by number (``10``, ``"T10"``, ``"10"``) or name (``"velcro hooks"``, case-insensitive)."""
     lib = load_library(path)
@@ -381,8 +423,8 @@ def texture(number_or_name: int | str, path: str | Path | None = None) -> Textur
             return lib[n]
         nums = sorted(lib)
         near = sorted(nums, key=lambda k: abs(k - n))[:3]
-        raise TextureError(source, [f"no texture number {n}; the library holds {_ranges(nums)}; closest: "
-                                    + ", ".join(f"T{k} {lib[k].name!r}" for k in sorted(near))])
+        raise UnknownTextureError(source, q, f"no texture number {n}; the library holds {_ranges(nums)}; closest: "
+                                  + ", ".join(f"T{k} {lib[k].name!r}" for k in sorted(near)))
     by_name = {t.name.casefold(): t for t in lib.values()}
     key = q.strip().casefold()
     if key in by_name:
@@ -392,7 +434,7 @@ def texture(number_or_name: int | str, path: str | Path | None = None) -> Textur
     near += [nm for nm in names if key and key in nm and nm not in near][:5 - len(near)]
     hint = ("close matches: " + ", ".join(f"T{by_name[nm].number} {by_name[nm].name!r}" for nm in near)
             if near else "no close matches (`biotac-bench textures` lists them all)")
-    raise TextureError(source, [f"no texture named {q!r}; {hint}"])
+    raise UnknownTextureError(source, q, f"no texture named {q!r}; {hint}")
 
 
 def texture_record(t: Texture) -> dict:
