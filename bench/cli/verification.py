@@ -62,20 +62,62 @@ def _cmd_benchmark(a) -> int:
     return bench_main(a)
 
 
+NOISE_BUDGET_HELP = """\
+The PAC noise budget at rest, source by source: bridge Johnson noise, amplifier noise, mains hum and its
+harmonics, the ADC's quantization, input and reference noise, the calibrated extra path noise, SPI coupling.
+Each row gives µV referred to the input (over the 1040 Hz band), Pa and PAC bits RMS, and they add up (in
+quadrature) to the total at the ADC output, beside the published 1.4 ± 0.1 bits; then every other channel's
+noise at rest in LSB RMS.  Computed from the model's parameters: nothing is simulated, it takes a second.
+
+  biotac-bench noise-budget
+  biotac-bench noise-budget --json > budget.json
+"""
+
+CLAIMS_HELP = """\
+Runs each claim (a figure of the dissertation D or a § of docs/SENSOR.md) on the emulator's output and prints the
+claim, its kind (prediction, calibrated, derived, consistency), its source, expected, measured, accepted range
+and PASS / FAIL / DEVIATES (a known deviation, explained below the table).  Exit status 1 if any claim fails.
+
+Time on the project's 2 cores: about 1 min (55 s measured) once out/cache holds the exploration's stages; a
+first run also slides D ch. 6's texture experiment and two ablations from an empty cache, several minutes more
+(12 min in a test-suite run on busy cores).  --only picks groups; --seeds N repeats the seeded runs N times.
+
+  biotac-bench claims
+  biotac-bench claims --only noise --only impact          # two groups, seconds
+  biotac-bench claims --seeds 5 --only vibration          # each row's spread over seeds 2012..2016
+  biotac-bench claims --unit 17 --json > unit17.json      # on sensor unit 17 (biotac-bench units)
+"""
+
+BENCHMARK_HELP = """\
+For every fidelity profile and shipped scene: PAC RMS error (bits) and spectral error (dB) against the reference
+profile, and wall time per simulated second; then throughput (× real time), memory (MB, streaming 600 simulated
+s, or an hour with --hour) and demand-driven savings.  Takes about 2-3 min on the project's 2 cores (2 min 17 s
+measured on an idle machine); --textures instead runs the sliding, rig, Dask and exploration benchmarks.
+
+  biotac-bench benchmark
+  biotac-bench benchmark --no-rtl --seconds 10      # quicker: no Verilator build, shorter throughput runs
+  biotac-bench benchmark --json > benchmark.json
+"""
+
+
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    nb = sub.add_parser("noise-budget", help="the PAC noise budget, source by source")
-    nb.add_argument("--json", action="store_true")
+    from bench.cli.args import one_line_errors
+
+    nb = one_line_errors(sub.add_parser("noise-budget", help="the PAC noise budget, source by source",
+                                        description=NOISE_BUDGET_HELP, formatter_class=fmt))
+    nb.add_argument("--json", action="store_true",
+                    help="print the budget's rows as JSON (source, channel, rti_uV, pac_bits, note)")
     nb.set_defaults(func=_cmd_noise_budget)
 
     c = sub.add_parser("claims", help="measure every published figure on the emulator; exit 1 if any fails",
-                       description="Runs each claim (SENSOR.md figure) on the emulator's output and prints "
-                                   "claim, its kind (prediction, calibrated, derived, consistency), its source, "
-                                   "expected, measured, accepted range and PASS/FAIL.", formatter_class=fmt)
+                       description=CLAIMS_HELP, formatter_class=fmt)
     c.add_argument("--json", action="store_true", help="print the results as JSON")
     from bench.verification.claims import CLAIM_GROUPS
 
-    c.add_argument("--only", action="append", choices=list(CLAIM_GROUPS), help="run one group (repeatable)")
-    c.add_argument("--fidelity", default="default", choices=list(PROFILES))
+    c.add_argument("--only", action="append", choices=list(CLAIM_GROUPS),
+                   help="run one group (repeatable; default: every group)")
+    c.add_argument("--fidelity", default="default", choices=list(PROFILES),
+                   help="fidelity profile of the claims' runs (biotac-bench profiles)")
     c.add_argument("--seed", type=whole(0), default=2012, help="scene seed (with --seeds: the first of N)")
     c.add_argument("--seeds", type=int, metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
@@ -88,16 +130,13 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.set_defaults(func=_cmd_claims)
 
     b = sub.add_parser("benchmark", help="error vs the reference profile and cost per simulated second",
-                       description="For every fidelity profile and shipped scene: PAC RMS error (bits) and "
-                                   "spectral error (dB) against the reference profile, and wall time per "
-                                   "simulated second; then throughput, memory and demand-driven savings.",
-                       formatter_class=fmt)
+                       description=BENCHMARK_HELP, formatter_class=fmt)
     b.add_argument("--json", action="store_true", help="print the results as JSON")
     b.add_argument("--seconds", type=number(0.0, 36000.0, lo_open=True), default=60.0,
-                   help="simulated seconds for the throughput runs")
-    b.add_argument("--hour", action="store_true", help="stream a full simulated hour for the memory check")
+                   help="simulated seconds (s) of each throughput run, > 0 and ≤ 36000")
+    b.add_argument("--hour", action="store_true",
+                   help="stream a full simulated hour for the memory check (default: 600 simulated s)")
     b.add_argument("--no-rtl", action="store_true", help="skip the RTL measurements (no Verilator build)")
     b.add_argument("--textures", action="store_true",
                    help="only the sliding, texture-rig, Dask-scaling and exploration benchmarks")
     b.set_defaults(func=_cmd_benchmark)
-
