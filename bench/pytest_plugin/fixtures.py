@@ -4,10 +4,20 @@ Installed with the package (entry point ``pytest11``), so in any test:
 
     def test_my_driver_reads_rest_noise(biotac_serial_port):
         my_driver = MyDriver(biotac_serial_port)        # a real serial device path (a pty)
-        ...
+        my_driver.start()     # your driver sends START first: like the real bridge, the firmware streams nothing
+        ...                   # until the host sends START (0xAA 0x55 0x01 0x00 0x00 0xAC 0xFB: type 1, CRC-16)
+
+    def test_with_the_bench_driver(biotac_serial_port):
+        from bench.hosts.driver import BridgeDriver
+        driver = BridgeDriver(biotac_serial_port)
+        driver.start()                                  # sends START
+        frame = next(driver.frames(max_frames=1))       # codes[slot, sensor]: the 44-slot default frame
+        assert frame.codes.shape == (44, 1)
+        driver.close()
 
     def test_my_host_code(biotac_bridge):
         bench = biotac_bridge(n_sensors=3, stimuli=[Tap(0.5, 1.0)])   # firmware on a pty, 3 sensors
+        driver = BridgeDriver(bench.port); driver.start()               # streaming starts at START
         bench.at(bench.virtual_time + 1.0, lambda board: board.unplug(2))   # a fault, in virtual time
         ...
 
@@ -17,12 +27,16 @@ Installed with the package (entry point ``pytest11``), so in any test:
 
 Fixtures
     biotac_sensor       factory -> emulator.spi.model.SensorPort over an emulated sensor (in process)
-    biotac_bridge       factory -> bench.hosts.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown).
+    biotac_bridge       factory -> bench.hosts.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown),
+                        at ``bench.port``.  The firmware speaks the real bridge's protocol: it answers each
+                        command, and streams frames only after the host sends START
+                        (``BridgeDriver(bench.port).start()``).
                         Unpaced by default: the firmware waits for your program to read, nothing is lost.  With
                         ``realtime=True`` the pty is a UART without flow control: a program that stops reading
                         overruns the 4096-byte receive buffer and loses frames (``keep_arrivals=True`` and
                         ``bench.overrun_frames()`` tell which), as a real one would
-    biotac_serial_port  the pty path of a one-sensor bridge that is already running
+    biotac_serial_port  the pty path of a one-sensor bridge whose firmware is running and waiting for the host:
+                        it sends nothing until START (``BridgeDriver(port).start()``, or the 7 bytes above)
     biotac_cheetah      factory -> bench.hosts.cheetah_server.CheetahBench: emulated sensors behind cheetah.so; run
                         your Cheetah-based program with ``cwd``/copy at ``.lib_dir`` and ``env=bench.env``.  One
                         program at a time may open the adapter; teardown is clean whatever the program did
@@ -43,6 +57,8 @@ import pytest
 
 @pytest.fixture
 def biotac_sensor():
+    """Factory: ``biotac_sensor(stimuli=(), channels=..., seed=0, unit=None)`` -> the SPI side of an emulated
+    sensor, in process (``spi.exchange(TransferBatch(...))``)."""
     from emulator.channels import DEFAULT_FRAME_NAMES
     from emulator.sensor import Sensor
     from emulator.spi.model import SensorPort
@@ -98,6 +114,8 @@ def _benches(bench_class):
 
 @pytest.fixture
 def biotac_bridge():
+    """Factory: ``biotac_bridge(n_sensors=1, stimuli=(), units=None, **kw)`` -> the bridge firmware on a pty at
+    ``bench.port``; it streams frames only after the host sends START (``BridgeDriver(bench.port).start()``)."""
     from bench.hosts.bridge import FirmwareBench
 
     yield from _benches(FirmwareBench)
@@ -105,11 +123,15 @@ def biotac_bridge():
 
 @pytest.fixture
 def biotac_serial_port(biotac_bridge):
+    """The pty path of a one-sensor bridge, firmware running and waiting for the host: it sends nothing until
+    START (``BridgeDriver(port).start()``, or the bytes AA 55 01 00 00 AC FB)."""
     return biotac_bridge(1).port
 
 
 @pytest.fixture
 def biotac_cheetah():
+    """Factory: ``biotac_cheetah(n_sensors=1, stimuli=(), units=None, **kw)`` -> emulated sensors behind cheetah.so
+    (``bench.lib_dir``, ``bench.env`` for your Cheetah-based program)."""
     from bench.hosts.cheetah_server import CheetahBench
 
     yield from _benches(CheetahBench)
