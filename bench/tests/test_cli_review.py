@@ -1,0 +1,268 @@
+"""A first-day user's review of the command line: help pages that teach (a description with an example, defaults,
+choices from the real registries), quiet exits into a closed pipe, shipped scenes by name and paths that work
+from any folder, texture look-ups that name their flag, a texture library read back from its JSON, and the pytest
+plugin's serial fixtures used as their documentation says."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from bench.cli import main as cli
+from bench.paths import REPO, SCENES_DIR
+from bench.tests.cli_runs import CLI
+
+unit = pytest.mark.unit
+
+#: The subcommands this review covers (texture-sweep, explore, record and bridge have their own).
+COMMANDS = [("run",), ("validate",), ("scenes",), ("profiles",), ("params",), ("units",), ("textures",),
+            ("noise-budget",), ("claims",), ("benchmark",), ("rtl",), ("cheetah",), ("cheetah", "serve"),
+            ("campaign",)]
+
+
+def invoke(argv, capsys) -> tuple[int, str, str]:
+    """``biotac-bench ARGV`` in process: exit status, stdout, stderr."""
+    try:
+        status = cli.main([str(a) for a in argv])
+    except SystemExit as e:
+        status = e.code
+    out = capsys.readouterr()
+    return status, out.out, out.err
+
+
+def subcommand(*names):
+    parser = cli.build_parser()
+    for name in names:
+        parser = next(a for a in parser._actions if a.dest in ("command", "cheetah_command")).choices[name]
+    return parser
+
+
+# ------------------------------------------------------------------------------------------ help pages
+@unit
+@pytest.mark.parametrize("names", COMMANDS, ids=" ".join)
+def test_every_help_page_has_a_description_with_an_example_and_every_argument_a_help(names, capsys):
+    status, out, _ = invoke([*names, "--help"], capsys)
+    assert status == 0
+    description = out.split("\n\n", 1)[1].split("\npositional arguments:")[0].split("\noptions:")[0]
+    assert len(description) > 150, out
+    assert f"biotac-bench {names[0]}" in description, f"no example in the help of {' '.join(names)}"
+    undocumented = [a.dest for a in subcommand(*names)._actions if not a.help and a.dest != "help"
+                    and a.dest not in ("cheetah_command",)]
+    assert not undocumented, f"{' '.join(names)}: no help for {undocumented}"
+
+
+@unit
+@pytest.mark.parametrize("names, shown", [
+    (("benchmark",), ["(default: 60.0)"]),
+    (("claims",), ["(default: 2012)", "(default: default)"]),
+    (("campaign",), ["(default: 1)", "(default: out/campaign.xml)", "(default: all)"]),
+    (("rtl",), ["(default: 1.0)"]),
+    (("cheetah", "serve"), ["(default: 3)"]),
+    (("run",), ["(default gzip"]),
+])
+def test_help_pages_show_their_defaults(names, shown, capsys):
+    _, out, _ = invoke([*names, "--help"], capsys)
+    text = " ".join(out.split())  # argparse wraps lines
+    assert all(s in text for s in shown), text
+    assert "(default: None)" not in text and "(default: False)" not in text
+
+
+@unit
+def test_campaign_help_lists_the_faults_and_scenes_of_the_campaign_itself(capsys):
+    from bench.campaigns import faults as campaign
+
+    _, out, _ = invoke(["campaign", "--help"], capsys)
+    for name, fault in campaign.FAULTS.items():
+        assert re.search(rf"^  {name} +{re.escape(fault.expected)}$", out, re.M), name
+    for name in campaign.SCENES:
+        assert re.search(rf"^  {name} +\S", out, re.M), name
+    assert "not the scene files" in out  # its "press" is not a shipped scene
+
+
+@unit
+def test_the_top_level_help_names_every_file_a_run_writes(capsys):
+    _, out, _ = invoke(["--help"], capsys)
+    assert all(f in out for f in ("samples.h5", "codes.npz", "record.json", "report.md"))
+
+
+@unit
+def test_rtl_help_says_when_waves_are_vcd(capsys):
+    _, out, _ = invoke(["rtl", "--help"], capsys)
+    text = " ".join(out.split())
+    assert "VCD" in text and "lz4" in text and "out/rtl_build_waves/" in text
+
+
+@unit
+@pytest.mark.parametrize("argv, words", [
+    (["rtl", "lint", "extra.json"], ["argument files", "extra.json"]),
+    (["rtl", "stream", "a.json", "--seconds", "1"], ["argument files", "a.json"]),
+    (["rtl", "lint", "--waves"], ["argument --waves"]),
+])
+def test_rtl_refuses_what_its_action_would_ignore(argv, words, capsys):
+    status, _, err = invoke(argv, capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and all(w in err for w in words), err
+
+
+# ------------------------------------------------------------------------------------------ closed pipes
+@unit
+@pytest.mark.parametrize("argv, status", [(["params"], {141}), (["scenes"], {141}),
+                                          (["run", "--help"], {0, 141})], ids=["params", "scenes", "run --help"])
+def test_a_reader_that_has_gone_ends_the_command_quietly(argv, status):
+    """As `biotac-bench params | head -1`, made certain: the pipe's reader is closed before the command writes.
+    (argparse itself ignores a failed write of --help: that exits 0 or, when the text was still buffered, 141.)"""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        r = subprocess.run([*CLI, *argv], stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=120,
+                           cwd=REPO)
+    finally:
+        os.close(write_end)
+    assert cli.READER_GONE == 141 and r.returncode in status
+    assert r.stderr == ""
+
+
+@unit
+def test_a_broken_pipe_elsewhere_is_still_an_error(monkeypatch, capsys):
+    from bench.cli import scenes
+
+    def broken(a):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(scenes, "_cmd_profiles", broken)
+    status, _, err = invoke(["profiles"], capsys)
+    assert status == 2 and err.startswith("error: ") and "Broken pipe" in err
+
+
+# ------------------------------------------------------------------------------------------ scenes by name
+@unit
+def test_scenes_prints_names_and_paths_that_work_from_another_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    status, out, _ = invoke(["scenes"], capsys)
+    assert status == 0
+    listed = dict(re.findall(r"^(\w+) +(\S+\.toml)$", out, re.M))
+    assert set(listed) == {f.stem for f in SCENES_DIR.glob("*.toml")}
+    assert all(Path(p).is_file() for p in listed.values())
+    monkeypatch.chdir(REPO)
+    _, out, _ = invoke(["scenes"], capsys)
+    assert re.search(r"^taps +fixtures/scenes/taps\.toml$", out, re.M)  # inside the repository: relative
+
+
+@unit
+def test_a_shipped_scene_is_found_by_name_from_any_folder(tmp_path, monkeypatch, capsys):
+    from bench.cli.scenes import scene_argument, scene_file
+
+    monkeypatch.chdir(tmp_path)
+    assert scene_argument("taps") == scene_file("taps.toml") == str(SCENES_DIR / "taps.toml")
+    status, out, err = invoke(["validate", "taps", "rest"], capsys)
+    assert status == 0 and "taps: ok (taps, 6.0 s" in out, err
+    (tmp_path / "taps").write_text('[scene]\nname = "mine"\nduration_s = 1.0\n')
+    assert scene_file("taps") == "taps"  # a file of that name comes first
+    _, out, _ = invoke(["validate", "taps"], capsys)
+    assert "taps: ok (mine, 1.0 s" in out
+
+
+@unit
+@pytest.mark.parametrize("argv", [["run", "tap"], ["validate", "tap"]], ids=" ".join)
+def test_a_name_that_is_neither_a_file_nor_a_shipped_scene_points_at_the_list(argv, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    status, _, err = invoke(argv, capsys)
+    assert status == (2 if argv[0] == "run" else 1)
+    assert "No such file or directory" in err and "biotac-bench scenes" in err and "close matches: taps" in err
+
+
+@unit
+def test_a_repository_path_given_from_another_folder_gets_the_full_path(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    status, _, err = invoke(["run", "fixtures/scenes/taps.toml"], capsys)
+    assert status == 2 and str(SCENES_DIR / "taps.toml") in err and len(err.strip().splitlines()) == 1
+
+
+# ------------------------------------------------------------------------------------------ textures
+@unit
+@pytest.mark.parametrize("query, words", [("999", ["no texture number 999", "closest: "]),
+                                          ("burlapp", ["no texture named 'burlapp'", "T100 'burlap'"])])
+def test_an_unknown_texture_names_the_flag_not_a_broken_library(query, words, capsys):
+    status, _, err = invoke(["textures", "--show", query], capsys)
+    assert status == 2 and err.startswith("error: --show: ") and all(w in err for w in words), err
+    assert "library.toml" not in err and "problem(s)" not in err
+
+
+@unit
+def test_an_unknown_texture_is_still_a_texture_error_with_its_problem():
+    from bench.errors import TextureError
+    from bench.textures.library import UnknownTextureError, texture
+
+    with pytest.raises(TextureError) as e:
+        texture(999)
+    assert isinstance(e.value, UnknownTextureError) and e.value.query == 999
+    assert e.value.problems == [e.value.problem] and "problem(s)" not in str(e.value)
+    assert e.value.for_option("--textures").startswith("--textures: no texture number 999")
+
+
+@unit
+def test_the_json_listing_is_a_library_the_command_reads_back(tmp_path, capsys):
+    _, listing, _ = invoke(["textures", "--json"], capsys)
+    (tmp_path / "lib.json").write_text(listing)
+    status, again, err = invoke(["textures", "--library", tmp_path / "lib.json", "--json"], capsys)
+    assert status == 0 and json.loads(again) == json.loads(listing), err
+    _, one, _ = invoke(["textures", "--show", "burlap", "--json"], capsys)
+    (tmp_path / "one.json").write_text(one)
+    status, out, err = invoke(["textures", "--library", tmp_path / "one.json"], capsys)
+    assert status == 0 and "T100  burlap" in out and "1 texture(s)" in out, err
+
+
+@unit
+@pytest.mark.parametrize("text, words", [("[", ["JSON syntax error", "line 1"]),
+                                         ("[" * 5000 + "]" * 5000, ["nested too deeply"]),
+                                         ('[{"texture": [[[[[[[[[1]]]]]]]]]}]', ["nested more than 8"]),
+                                         ("[]", ["no [[texture]] tables"])])
+def test_a_broken_json_library_is_refused_naming_the_file(text, words, tmp_path, capsys):
+    f = tmp_path / "bad.json"
+    f.write_text(text)
+    status, _, err = invoke(["textures", "--library", f], capsys)
+    assert status == 2 and str(f) in err and all(w in err for w in words), err
+
+
+# ------------------------------------------------------------------------------------------ pytest plugin
+def _documented_test(name: str) -> str:
+    """A test function from the plugin's documentation (bench/pytest_plugin/fixtures.py), as a user copies it."""
+    from bench.pytest_plugin import fixtures
+
+    block = re.search(rf"^    def {name}\(.*?(?=^\s*$)", fixtures.__doc__, re.M | re.S)
+    assert block, f"{name} is not in the plugin's documentation"
+    return textwrap.dedent(block.group(0))
+
+
+@pytest.mark.firmware
+def test_the_serial_fixtures_work_as_their_documentation_says(tmp_path):
+    from bench.hosts.driver import CMD_START, encode
+    from bench.pytest_plugin import fixtures
+
+    start = bytes(int(b, 16) for b in re.search(r"until the host sends START \(((?:0x[0-9A-F]{2} ?){7})",
+                                                 fixtures.__doc__).group(1).split())
+    assert start == encode(CMD_START)  # the documented bytes are the START frame
+    user_tests = "\n".join([
+        "import serial",
+        "from bench.hosts.driver import BridgeDriver",
+        "from emulator.stimuli import Tap",
+        "",
+        _documented_test("test_with_the_bench_driver"),
+        _documented_test("test_my_host_code"),
+        "def test_nothing_comes_before_start_and_frames_after_the_raw_start_frame(biotac_serial_port):",
+        "    port = serial.Serial(biotac_serial_port, 3000000, timeout=0.5)",
+        "    assert port.read(100) == b''",
+        f"    port.write({start!r})",
+        "    assert b'\\xaa\\x55\\x10' in port.read(2000)",
+        "    port.close()",
+    ])
+    (tmp_path / "test_user.py").write_text(user_tests)
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert "3 passed" in r.stdout, r.stdout + r.stderr
