@@ -63,6 +63,8 @@ scene file (TOML):
 
 Every at_s / start_s may be a list: one stimulus per instant (power_on and heater_failure happen once per sensor).
 Every [[stimulus]] may name its sensor: sensor = 2 (default 1); it reaches that sensor only.
+Every stimulus must end within the scene (a press ends at start_s + 2·ramp_s + hold_s): one that would run past
+duration_s is refused, never cut off.
 
 Several sensors: each runs through its own SPI side and host sampler (the scene's [host], seed + k - 1); --out
 holds sensor 1's files as for one sensor, and sensor<k>/ the same files for sensor k (its own report, traces,
