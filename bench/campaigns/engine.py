@@ -11,12 +11,19 @@ Short tasks travel in groups: each Dask task runs up to :data:`MAX_GROUP` consec
 ~40 ms does not pay the scheduler's few milliseconds a round trip on its own, while every worker still gets at least
 :data:`GROUPS_PER_WORKER` groups to balance the load.  Grouping changes nothing in the results (each task keeps
 its own seed); a failing task is still reported by its own index.
+
+Ctrl-C reaches only the client: a terminal sends SIGINT to the whole process group, and a LocalCluster's worker
+processes (Python, each with its own event loop) would each die with a KeyboardInterrupt traceback.  They start
+with SIGINT blocked (:func:`sigint_blocked`), so the client's KeyboardInterrupt alone closes the cluster, which
+stops the workers quietly.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+import signal
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
@@ -46,6 +53,25 @@ class ClusterSpec:
         return self.workers or max(1, os.cpu_count() or 1)
 
 
+@contextlib.contextmanager
+def sigint_blocked():
+    """Block SIGINT in the calling thread within the block.  Threads started meanwhile (a LocalCluster's event
+    loop) and the processes they spawn — the workers, now and on any later restart — inherit the blocked mask,
+    also across exec, so they never see a Ctrl-C.  A SIGINT to this process meanwhile is held, not lost: it is
+    delivered (KeyboardInterrupt) when the block ends."""
+    from multiprocessing import resource_tracker
+
+    # multiprocessing launches its resource tracker at the first spawn and unblocks SIGINT in the launching thread
+    # afterwards — that would be the cluster's thread, and the workers would inherit the unblocked mask; launched
+    # here first (it ignores SIGINT itself), it leaves the mask alone
+    resource_tracker.ensure_running()
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def connect(spec: ClusterSpec):
     """A ``distributed.Client`` for ``spec`` (the caller closes it; closing also stops a LocalCluster)."""
     from distributed import Client, LocalCluster
@@ -59,9 +85,18 @@ def connect(spec: ClusterSpec):
             raise CampaignError(f"no Dask scheduler answers at {spec.scheduler}: {e}") from None
     # no dashboard; the scheduler's small HTTP server takes any free port (not 8787, which another campaign or
     # notebook on this machine may hold: that only made distributed warn)
-    cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL)
-    client = Client(cluster)
+    cluster = client = None
+    try:
+        with sigint_blocked():  # the workers never see Ctrl-C: only the client does, and closes the cluster
+            cluster = LocalCluster(n_workers=spec.n_workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},
+                                   silence_logs=logging.CRITICAL)
+            client = Client(cluster)
+    except BaseException:  # a failed start, or a Ctrl-C held during it (delivered as the block ends)
+        for part in (client, cluster):
+            if part is not None:
+                part.close()
+        raise
     client._owned_cluster = cluster  # closed with the client
     return client
 
