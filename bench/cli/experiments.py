@@ -7,27 +7,42 @@ import argparse
 import json
 import sys
 import time
+from contextlib import contextmanager
 
 from bench.cli.args import whole
+from bench.experiments.experiment import ExperimentSpec
+from bench.experiments.trials import PILOT_WORTH_TRIALS
 from emulator.fidelity import PROFILES
 
-SWEEP_HELP = """\
+#: what texture-sweep writes into its out folder (what --force may replace)
+SWEEP_FILES = ("trials.csv", "trials.json", "wear.csv", "properties.png")
+#: D ch. 6's pilot textures: the experiment's default (fixtures/experiments/fishel2012.toml)
+PILOT_TEXTURES = ",".join(map(str, ExperimentSpec().pilot_textures))
+
+SWEEP_HELP = f"""\
 Runs the texture rig (lower until the PDC target, hold, slide 5 cm, lift) over chosen textures × movements ×
 repetitions — each trial an independent task on Dask (a LocalCluster on this machine's cores, or an existing
 scheduler with --scheduler / DASK_SCHEDULER_ADDRESS) — and computes traction, roughness and fineness per trial.
 
-Writes into --out: trials.csv and trials.json (one row per trial: texture, movement, repetition, seed, skin,
-the three properties, the true normal force, simulated and wall time), wear.csv (ridge height each movement
-wears off in 100 trials on a fresh skin), properties.png (each property against force and velocity).
+Writes into --out (default: a fresh out/texture-sweep[-n]): trials.csv and trials.json (one row per trial:
+texture, movement, repetition, seed, skin, the three properties, the true normal force, simulated and wall time),
+wear.csv (ridge height each movement wears off in {PILOT_WORTH_TRIALS} trials, a pilot's worth, on a fresh skin),
+properties.png (each property against force and velocity).  Movements keep their grid ids in every file.  An
+--out folder that holds anything is refused; --force replaces an earlier sweep's files there.
 
-Every trial runs on a fresh skin with a seed derived from its identity, so the table is identical for any number
-of workers.  Examples:
-  biotac-bench texture-sweep --textures 43,46,47,30,84,87,100,10,2,3 --trials 6      # D ch. 6's pilot (2160 trials)
+Every trial runs on a fresh skin with a seed derived from its identity (sweep seed, texture, grid movement id,
+repetition), so a trial's result is the same in any selection of textures and movements and for any number of
+workers.  Ctrl-C stops the sweep (exit 130) and writes nothing — or, once the writing has begun, finishes every
+file first.  Examples:
+  biotac-bench texture-sweep --textures {PILOT_TEXTURES} --trials 6      # D ch. 6's pilot (2160 trials)
   biotac-bench texture-sweep --textures 902 --movements 7,14,21 --trials 2 --workers 1
 """
 
 
 def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
+    """Comma-separated whole numbers within [lo, hi], none twice (ValueError naming ``flag`` otherwise)."""
+    from bench.experiments.trials import listed_twice
+
     try:
         values = [int(x) for x in text.split(",") if x.strip()]
     except ValueError:
@@ -35,50 +50,98 @@ def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
     bad = [v for v in values if not lo <= v <= hi]
     if not values or bad:
         raise ValueError(f"{flag} = {text!r}: every value must be within {lo} and {hi}")
+    if listed_twice(values):
+        raise ValueError(f"{flag} = {text!r}: {listed_twice(values)} listed twice")
     return values
 
 
-def _cmd_texture_sweep(a) -> int:
-    from dataclasses import replace
-
-    from bench.campaigns.engine import ClusterSpec
-    from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
-    from bench.reporting.experiment_report import write_rows_csv
-    from bench.reporting.sweep_plots import properties_vs_movement
-    from bench.rigs.texture_rig import movement_grid
+def _texture_numbers(text: str) -> list[int]:
+    """--textures: texture numbers or names, comma-separated, each in the library and none twice (ValueError
+    naming --textures and the value otherwise)."""
+    from bench.errors import TextureError
+    from bench.experiments.trials import listed_twice
     from bench.textures.library import load_library, texture
 
-    from bench.reporting.outdir import writable_folder
+    load_library()  # a broken library file is reported as such
+    numbers = []
+    for item in (x.strip() for x in text.split(",")):
+        if not item:
+            continue
+        try:
+            numbers.append(texture(item).number)
+        except TextureError as e:
+            raise ValueError(f"--textures: {'; '.join(e.problems)} (biotac-bench textures lists them)") from None
+    if not numbers:
+        raise ValueError("--textures: give at least one texture (numbers or names, comma-separated)")
+    if listed_twice(numbers):
+        raise ValueError(f"--textures = {text!r}: texture(s) {listed_twice(numbers)} listed twice")
+    return numbers
+
+
+@contextmanager
+def _outputs_whole():
+    """Within the block Ctrl-C and SIGTERM are held, so that a signal while the outputs are written (a second or
+    two) cannot leave some of them missing; one that arrived is raised as KeyboardInterrupt after the block."""
+    from bench.cli.args import signals_deferred
+
+    with signals_deferred() as seen:
+        yield
+    if seen:
+        raise KeyboardInterrupt
+
+
+def _open_out(path, default, force: bool, kind, keep=()):
+    """The out folder, checked and locked: ``path`` (refused if it holds anything but ``keep``, unless ``force``)
+    or, without it, a fresh ``default[-n]`` (``default`` itself with ``force``) — as ``run`` does."""
+    from pathlib import Path
+
+    from bench.reporting.outdir import OutFolder, fresh_folder
+
+    if path is None:
+        return fresh_folder(Path(default), force=force, kind=kind)
+    return OutFolder.open(path, force=force, kind=kind, keep=keep)
+
+
+def _cmd_texture_sweep(a) -> int:
+    from bench.campaigns.engine import ClusterSpec
+    from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
+    from bench.reporting.experiment_report import write_rows_csv, write_text
+    from bench.reporting.outdir import FolderKind
+    from bench.reporting.sweep_plots import properties_vs_movement
+    from bench.rigs.texture_rig import movement_grid
+    from bench.textures.library import load_library
 
     if a.trials < 1:
         raise ValueError(f"--trials = {a.trials}: must be at least 1")
     if a.workers is not None and a.workers < 1:
         raise ValueError(f"--workers = {a.workers}: must be at least 1")
     grid = movement_grid()
-    textures = [texture(t).number for t in (a.textures.split(",") if a.textures else [])]
-    if not textures:
-        raise ValueError("--textures: give at least one texture (numbers or names, comma-separated)")
+    textures = _texture_numbers(a.textures)
     ids = list(range(len(grid))) if a.movements == "all" else _int_list("--movements", a.movements, 0, len(grid) - 1)
     movements = [grid[i] for i in ids]
-    out = writable_folder(a.out, "--out")  # checked before anything runs
-    tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin)
-    # keep the grid's own movement ids in the table
-    tasks = [replace(t, movement_id=ids[t.movement_id]) for t in tasks]
-    spec = ClusterSpec.from_env(a.scheduler, a.workers)
-    print(f"{len(tasks)} trials ({len(textures)} textures × {len(movements)} movements × {a.trials}) on "
-          f"{spec.describe()}", file=sys.stderr)
-    t0 = time.perf_counter()
-    rows = sweep(tasks, spec=spec, progress=not a.quiet)
-    wall = time.perf_counter() - t0
-    write_rows_csv(out / "trials.csv", rows)
-    tmp = out / "trials.json.tmp"
-    tmp.write_text(json.dumps({"wall_s": wall, "workers": spec.describe(), "rows": rows}, indent=1))
-    tmp.replace(out / "trials.json")
-    write_rows_csv(out / "wear.csv", wear_per_movement(movements))
-    lib = load_library()
-    properties_vs_movement(rows_to_arrays(rows), {n: lib[n].name for n in textures}, out / "properties.png")
+    kind = FolderKind("an earlier sweep's files", SWEEP_FILES)
+    folder = _open_out(a.out, "out/texture-sweep", a.force, kind)  # checked and locked before anything runs
+    try:
+        out = folder.path
+        tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin, movement_ids=ids)
+        spec = ClusterSpec.from_env(a.scheduler, a.workers)
+        print(f"{len(tasks)} trials ({len(textures)} textures × {len(movements)} movements × {a.trials}) on "
+              f"{spec.describe()}", file=sys.stderr)
+        t0 = time.perf_counter()
+        rows = sweep(tasks, spec=spec, progress=not a.quiet)
+        wall = time.perf_counter() - t0
+        with _outputs_whole():
+            write_rows_csv(out / "trials.csv", rows)
+            write_text(out / "trials.json", json.dumps({"wall_s": wall, "workers": spec.describe(), "rows": rows},
+                                                       indent=1))
+            write_rows_csv(out / "wear.csv", wear_per_movement(movements, movement_ids=ids))
+            lib = load_library()
+            properties_vs_movement(rows_to_arrays(rows), {n: lib[n].name for n in textures},
+                                   out / "properties.png")
+    finally:
+        folder.close()
     sim = sum(r["simulated_s"] for r in rows)
-    print(f"wrote {out}/ (trials.csv, trials.json, wear.csv, properties.png): {len(rows)} trials, "
+    print(f"wrote {out}/ ({', '.join(SWEEP_FILES)}): {len(rows)} trials, "
           f"{sim:.0f} simulated s in {wall:.1f} s wall ({sim / wall:.0f}× real time)")
     return 0
 
@@ -93,7 +156,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--seed", type=whole(0), default=0, help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
-    s.add_argument("--out", default="out/texture-sweep", help="output folder (out/texture-sweep)")
+    s.add_argument("--out", help="output folder (default: a fresh out/texture-sweep[-n]); refused if it holds "
+                                 "anything, unless --force")
+    s.add_argument("--force", action="store_true", help="replace an earlier sweep's files in --out (anything else "
+                                                        "there is still refused)")
     s.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     s.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -113,58 +179,82 @@ library's descriptions: same group, thermal material and compliance, nearest in 
 pairs = [[a, b], ...].
 
 Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
-stage's trials are cached in out/cache by content hash, so changing the classifier settings re-runs no sliding.
+stage's trials are cached in --cache (out/cache) by content hash, so changing the classifier settings re-runs no
+sliding.  Ctrl-C stops the experiment (exit 130); the stages already finished stay cached.
 
-Writes into --out: report.md (beside D's numbers), summary.json, accuracy.csv, accuracy_per_texture.csv,
-confusion.csv, pilot_uncertainty.csv, trials.csv/json, properties_at_optimal_movements.png,
-probability_evolution.png.  --ablation NAME runs a variant (smooth-skin, unreplaced-wear, fewer-trials,
-double-noise; or all) into --out/<name>/ and adds a comparison table to --out/ablations.md.
+Writes into --out (default: a fresh out/explore/<name>[-n]): report.md (beside D's numbers), summary.json,
+accuracy.csv, accuracy_per_texture.csv, confusion.csv, pilot_uncertainty.csv, trials.csv/json,
+properties_at_optimal_movements.png, probability_evolution.png.  --ablation NAME runs a variant (smooth-skin,
+unreplaced-wear, fewer-trials, double-noise; or all) into --out/<name>/ and adds a comparison table to
+--out/ablations.md.  An --out folder that holds anything is refused: to re-run into it (say, after changing the
+classifier settings), add --force — it replaces the earlier results and keeps the stage cache, so no trial runs
+again.
 
   biotac-bench explore fixtures/experiments/fishel2012.toml
   biotac-bench explore fixtures/experiments/quick.toml --ablation smooth-skin
+  biotac-bench explore fixtures/experiments/quick.toml --out out/quick --force   # re-run, the trials from the cache
 """
+
+
+def _entry_inside(path, folder) -> str | None:
+    """The name of the entry of ``folder`` that holds ``path`` (or is it), if ``path`` lies inside ``folder``."""
+    from pathlib import Path
+
+    try:
+        rel = Path(path).resolve().relative_to(Path(folder).resolve())
+    except ValueError:
+        return None
+    return rel.parts[0] if rel.parts else None
 
 
 def _cmd_explore(a) -> int:
     from dataclasses import replace
 
     from bench.campaigns.engine import ClusterSpec
-    from bench.experiments.experiment import ABLATIONS, load_experiment, run_experiment, summary
-    from bench.reporting.experiment_report import write_outputs
+    from bench.experiments.experiment import ABLATIONS, identified_among, load_experiment, run_experiment, summary
+    from bench.reporting.experiment_report import OUTPUT_FILES, write_outputs, write_text
+    from bench.reporting.outdir import FolderKind, writable_folder
 
     spec = load_experiment(a.experiment)
     if a.workers is not None and a.workers < 1:
         raise ValueError(f"--workers = {a.workers}: must be at least 1")
     names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
-    from bench.reporting.outdir import writable_folder
-
-    out = writable_folder(a.out or f"out/explore/{spec.name}", "--out")  # both checked before anything runs
-    cluster = ClusterSpec.from_env(a.scheduler, a.workers)
-    cache = None if a.no_cache else writable_folder(a.cache, "--cache")
-    variants = [("baseline", spec)] + [(n, replace(spec, **ABLATIONS[n][1])) for n in names]
-    rows = []
-    for label, sp in variants:
-        t0 = time.perf_counter()
-        print(f"== {label}: {cluster.describe()}", file=sys.stderr)
-        result = run_experiment(sp, cache_dir=cache, cluster=cluster, progress=not a.quiet,
-                                log=lambda m: print(m, file=sys.stderr))
-        folder = out if label == "baseline" else out / label
-        files = write_outputs(result, folder)
-        s = summary(result)
-        rows.append((label, s, time.perf_counter() - t0))
-        print(f"wrote {folder}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
-    if names:
-        lines = ["# Ablations", "", "| variant | pairs (bayesian) | 117-way (bayesian) | median movements |",
-                 "|---|---|---|---|"]
-        for label, s, _ in rows:
-            what = "as specified" if label == "baseline" else ABLATIONS[label][0]
-            lines.append(f"| {label} ({what}) | {100 * s['pairs/bayesian']['accuracy']:.1f} % | "
-                         f"{100 * s['identification/bayesian']['accuracy']:.1f} % | "
-                         f"{s['identification/bayesian']['median_moves']:g} |")
-        (out / "ablations.md").write_text("\n".join(lines) + "\n")
-        print("\n".join(lines))
-    else:
-        print((out / "report.md").read_text())
+    cache_kept = "" if a.no_cache else f" (the stage cache {a.cache} is kept: no trial runs again)"
+    kind = FolderKind("the earlier results" + cache_kept, OUTPUT_FILES + ("ablations.md",), tuple(ABLATIONS))
+    keep = () if a.no_cache or a.out is None else tuple(filter(None, [_entry_inside(a.cache, a.out)]))
+    # both checked before anything runs; the out folder is locked while the experiment runs
+    folder = _open_out(a.out, f"out/explore/{spec.name}", a.force, kind, keep)
+    try:
+        out = folder.path
+        cache = None if a.no_cache else writable_folder(a.cache, "--cache")
+        cluster = ClusterSpec.from_env(a.scheduler, a.workers)
+        variants = [("baseline", spec)] + [(n, replace(spec, **ABLATIONS[n][1])) for n in names]
+        rows = []
+        for label, sp in variants:
+            t0 = time.perf_counter()
+            print(f"== {label}: {cluster.describe()}", file=sys.stderr)
+            result = run_experiment(sp, cache_dir=cache, cluster=cluster, progress=not a.quiet,
+                                    log=lambda m: print(m, file=sys.stderr))
+            where = out if label == "baseline" else out / label
+            with _outputs_whole():
+                files = write_outputs(result, where)
+            rows.append((label, summary(result), identified_among(result)))
+            print(f"wrote {where}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
+        if names:
+            lines = ["# Ablations", "", f"| variant | pairs (bayesian) | {rows[0][2]}-way (bayesian) | "
+                                        f"median movements |", "|---|---|---|---|"]
+            for label, s, _ in rows:
+                what = "as specified" if label == "baseline" else ABLATIONS[label][0]
+                lines.append(f"| {label} ({what}) | {100 * s['pairs/bayesian']['accuracy']:.1f} % | "
+                             f"{100 * s['identification/bayesian']['accuracy']:.1f} % | "
+                             f"{s['identification/bayesian']['median_moves']:g} |")
+            with _outputs_whole():
+                write_text(out / "ablations.md", "\n".join(lines) + "\n")
+            print("\n".join(lines))
+        else:
+            print((out / "report.md").read_text())
+    finally:
+        folder.close()
     return 0
 
 
@@ -174,7 +264,11 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     e = sub.add_parser("explore", help="the texture experiment of D ch. 6: pilot, training, validation, "
                                        "Bayesian exploration (Dask)", description=EXPLORE_HELP, formatter_class=fmt)
     e.add_argument("experiment", help="experiment file (TOML), e.g. fixtures/experiments/fishel2012.toml")
-    e.add_argument("--out", help="output folder (default out/explore/<name>)")
+    e.add_argument("--out", help="output folder (default: a fresh out/explore/<name>[-n]); refused if it holds "
+                                 "anything, unless --force")
+    e.add_argument("--force", action="store_true", help="replace the earlier results in --out (its ablation "
+                                                        "folders too; anything else there is still refused); the "
+                                                        "stage cache is kept, so no trial runs again")
     e.add_argument("--ablation", choices=list(ABLATIONS) + ["all"], help="also run a variant and compare")
     e.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     e.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")

@@ -27,7 +27,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +37,7 @@ from bench.errors import BenchError
 from bench.experiments import exploration as ex
 from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
 from bench.experiments.trials import (
-    FIRST_VISIBLE_WEAR, TrialTask, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
+    FIRST_VISIBLE_WEAR, TrialTask, listed_twice, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
 )
 from bench.paths import FIXTURES, OUT, REPO
 from bench.rigs.texture_rig import movement_grid
@@ -162,8 +162,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         missing = [n for n in v if n not in lib]
         if missing:
             problems.append(f"{table}.{key}: no texture {missing} in the library (biotac-bench textures)")
-        if len(set(v)) != len(v):
-            problems.append(f"{table}.{key}: a texture is listed twice")
+        if listed_twice(v):
+            problems.append(f"{table}.{key}: texture(s) {listed_twice(v)} listed twice")
         return v
 
     spec.name = get("experiment", "name", str, default=spec.name)
@@ -178,6 +178,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     if mv is not None and mv != "all":
         if not isinstance(mv, list) or not all(isinstance(m, int) and 0 <= m < 36 for m in mv) or len(mv) < 3:
             problems.append(f"pilot.movements = {mv!r}: \"all\" or a list of at least 3 grid ids 0..35")
+        elif listed_twice(mv):
+            problems.append(f"pilot.movements: grid id(s) {listed_twice(mv)} listed twice")
         else:
             spec.pilot_movements = mv
     spec.exclude_high_power = get("pilot", "exclude_high_power", bool, default=spec.exclude_high_power)
@@ -200,7 +202,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             if same:
                 problems.append(f"validation.pairs: {same} pair a texture with itself")
             listed = [n for p in pairs for n in p]
-            twice = sorted({n for n in listed if listed.count(n) > 1})
+            twice = listed_twice(listed)
             if twice and not same:
                 problems.append(f"validation.pairs: texture(s) {twice} in more than one pair (pairs must be disjoint)")
             untrained = sorted({n for n in listed if n in lib} - set(spec.training_textures or
@@ -280,6 +282,13 @@ def table_from_rows(rows: list[dict], movement_ids: dict | None = None) -> ex.Tr
     return ex.TrialTable(texture, movement, prop, trial, value)
 
 
+def excluded_movements(spec: ExperimentSpec, movement_ids) -> list[int]:
+    """The pilot movements (grid ids, of ``movement_ids``) left out of the choice of the best: the high-power ones
+    when ``spec.exclude_high_power`` (their wear, D Fig. 6-7)."""
+    high = ex.movement_grid()["high_power"]
+    return [int(m) for m in movement_ids if high[m]] if spec.exclude_high_power else []
+
+
 @dataclass
 class ExperimentResult:
     spec: ExperimentSpec
@@ -350,13 +359,12 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         t0 = time.perf_counter()
         ids = spec.pilot_movements if spec.pilot_movements is not None else list(range(len(grid)))
         tasks = sweep_tasks(spec.pilot_textures, [grid[i] for i in ids], spec.pilot_trials, spec.seed,
-                            spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale)
-        tasks = [replace(t, movement_id=ids[t.movement_id]) for t in tasks]
+                            spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale,
+                            movement_ids=ids)
         log(f"pilot: {len(tasks)} trials")
         pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress)
         model = ex.fit_model(table_from_rows(pilot_rows))
-        high = ex.movement_grid()["high_power"]
-        exclude = [m for m in ids if high[m]] if spec.exclude_high_power else []
+        exclude = excluded_movements(spec, ids)
         u = ex.pilot_uncertainty(model, exclude_movements=exclude)
         best = ex.least_uncertain_movements(model, exclude_movements=exclude)
         u_full = np.full((len(grid), 3), np.nan)
@@ -416,6 +424,11 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     wall["exploration"] = time.perf_counter() - t0
     return ExperimentResult(spec, pilot_rows, u_full, best, wear_per_movement(), training_rows, history, pairs,
                             validation_rows, pair_results, ident_results, wall)
+
+
+def identified_among(result: ExperimentResult) -> int:
+    """How many textures the identification chooses among: the training textures (D: 117)."""
+    return len({int(r["texture"]) for r in result.training_rows})
 
 
 def summary(result: ExperimentResult) -> dict:

@@ -118,29 +118,57 @@ def schedule_skin(tasks: list[TrialTask], wear: bool = True, replace_at: float |
     return out, history
 
 
+def listed_twice(values) -> list:
+    """The values that occur more than once in ``values``, sorted."""
+    values = list(values)
+    return sorted({v for v in values if values.count(v) > 1})
+
+
+def _movement_ids(movements: list[Movement], movement_ids) -> list[int]:
+    """The ids naming ``movements``: ``movement_ids`` (checked: one per movement, none twice) or, without them, the
+    positions (the grid ids when ``movements`` is the whole grid)."""
+    if movement_ids is None:
+        return list(range(len(movements)))
+    ids = [int(i) for i in movement_ids]
+    if len(ids) != len(movements):
+        raise ValueError(f"{len(ids)} movement ids for {len(movements)} movements")
+    if listed_twice(ids):
+        raise ValueError(f"movement id(s) {listed_twice(ids)} listed twice")
+    return ids
+
+
 def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int = 6, seed: int = 0,
                 fidelity: str = "default", fingerprints: bool = True, stage: str = "sweep",
-                noise_scale: float = 1.0) -> list[TrialTask]:
+                noise_scale: float = 1.0, movement_ids: list[int] | None = None) -> list[TrialTask]:
     """Tasks for every texture × movement × repetition, each on a fresh skin (wear is shown apart, by
-    :func:`wear_per_movement`), seeds from the trial's identity."""
-    movements = movements if movements is not None else movement_grid()
+    :func:`wear_per_movement`).  ``movement_ids`` name the movements (grid ids; default their positions, which are
+    the grid ids for the whole grid); a trial's seed comes from its identity (``seed``, ``stage``, texture,
+    movement id, repetition), whatever the order of the lists.  A texture or movement id listed twice is refused
+    (ValueError)."""
+    movements = list(movements) if movements is not None else movement_grid()
+    ids = _movement_ids(movements, movement_ids)
+    textures = [int(t) for t in textures]
+    if listed_twice(textures):
+        raise ValueError(f"texture(s) {listed_twice(textures)} listed twice")
     out = []
     for tex in textures:
-        for m_id, m in enumerate(movements):
+        for m_id, m in zip(ids, movements):
             for k in range(trials):
-                out.append(TrialTask(int(tex), m.force_N, m.velocity_m_per_s, k,
-                                     trial_seed(seed, stage, int(tex), m_id, k), m_id, fidelity, fingerprints,
-                                     stage=stage, noise_scale=noise_scale))
+                out.append(TrialTask(tex, m.force_N, m.velocity_m_per_s, k, trial_seed(seed, stage, tex, m_id, k),
+                                     m_id, fidelity, fingerprints, stage=stage, noise_scale=noise_scale))
     return out
 
 
 def wear_per_movement(movements: list[Movement] | None = None, trials: int = PILOT_WORTH_TRIALS,
-                      distance_m: float = TRIAL_DISTANCE_M, params: SensorParams | None = None) -> list[dict]:
+                      distance_m: float = TRIAL_DISTANCE_M, params: SensorParams | None = None,
+                      movement_ids: list[int] | None = None) -> list[dict]:
     """Each movement's wear on a fresh skin: ridge height lost (m) and worn fraction after ``trials`` trials (default
-    a pilot's worth), whether that is visible, and the trials it takes to reach the first visible wear."""
+    a pilot's worth), whether that is visible, and the trials it takes to reach the first visible wear; rows named
+    by ``movement_ids`` (grid ids; default the positions, as :func:`sweep_tasks`)."""
     p = params or SensorParams()
+    movements = list(movements) if movements is not None else movement_grid()
     rows = []
-    for m_id, m in enumerate(movements if movements is not None else movement_grid()):
+    for m_id, m in zip(_movement_ids(movements, movement_ids), movements):
         skin = Skin()
         area = contact_patch_area_m2(m.force_N, p.contact_radius_at_1N_m)
         per_trial = skin.height_lost(m.force_N, distance_m, area, m.velocity_m_per_s)

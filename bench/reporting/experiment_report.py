@@ -1,6 +1,6 @@
 """What the texture experiment leaves behind: trial tables, accuracy and movement tables, the confusion matrix,
 plots like D Figs 6-5 and 6-10, and a Markdown report beside D's numbers.  Every file is written to a temporary
-name and renamed into place."""
+name and renamed into place (:func:`bench.reporting.outdir.atomic_write`)."""
 
 from __future__ import annotations
 
@@ -15,15 +15,25 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from bench.experiments import exploration as ex  # noqa: E402
-from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines, movement_label,  # noqa: E402
-                                          summary, table_from_rows)
+from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines,  # noqa: E402
+                                          excluded_movements, movement_label, summary, table_from_rows)
 from bench.experiments.pairs import pair_separation_sigma  # noqa: E402
+from bench.reporting.outdir import atomic_write  # noqa: E402
+from bench.reporting.sweep_plots import save_figure  # noqa: E402
+
+#: every file :func:`write_outputs` may write (what ``explore --force`` may replace)
+OUTPUT_FILES = ("trials.csv", "trials.json", "pilot_uncertainty.csv", "accuracy.csv", "accuracy_per_texture.csv",
+                "confusion.csv", "summary.json", "properties_at_optimal_movements.png", "probability_evolution.png",
+                "report.md")
+#: decimals kept in the accuracy tables (a percentage to 1e-4 %, a fraction to 1e-6): no float noise such as
+#: 56.49999999999999
+PERCENT_DECIMALS = 4
 
 
-def _atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
+def write_text(path: Path, text: str) -> None:
+    """``text`` into ``path`` (UTF-8), under a temporary name renamed into place."""
+    with atomic_write(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
 
 
 def write_rows_csv(path: Path, rows: list[dict]) -> None:
@@ -32,19 +42,19 @@ def write_rows_csv(path: Path, rows: list[dict]) -> None:
     if not rows:
         return
     columns = list(dict.fromkeys(k for r in rows for k in r))
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", newline="") as fh:
+    with atomic_write(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=columns, restval="")
         w.writeheader()
         w.writerows(rows)
-    tmp.replace(path)
 
 
-def _savefig(fig, path: Path) -> None:
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
+def pilot_status(result: ExperimentResult) -> dict[int, str]:
+    """Per grid movement, what the pilot did with it: ``run`` (its U counts), ``excluded-high-power`` (run, but
+    left out of the choice for its wear) or ``not-run`` (not among the pilot's movements)."""
+    ran = sorted({int(r["movement_id"]) for r in result.pilot_rows})
+    excluded = set(excluded_movements(result.spec, ran))
+    return {m: "not-run" if m not in ran else "excluded-high-power" if m in excluded else "run"
+            for m in range(result.pilot_uncertainty.shape[0])}
 
 
 def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
@@ -56,9 +66,11 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     names = []
     rows = result.pilot_rows + result.training_rows + result.validation_rows
     write_rows_csv(out / "trials.csv", rows)
-    _atomic(out / "trials.json", json.dumps(rows))
+    write_text(out / "trials.json", json.dumps(rows))
     names += ["trials.csv", "trials.json"]
-    u = [{"movement_id": m, "movement": movement_label(m), "U_traction": result.pilot_uncertainty[m, 0],
+    status = pilot_status(result)
+    u = [{"movement_id": m, "movement": movement_label(m), "status": status[m],
+          "U_traction": result.pilot_uncertainty[m, 0],
           "U_roughness": result.pilot_uncertainty[m, 1], "U_fineness": result.pilot_uncertainty[m, 2],
           "ridge_lost_um_per_pilot_worth": result.wear[m]["ridge_lost_m"] * 1e6,
           "trials_to_visible_wear": result.wear[m]["trials_to_visible_wear"]}
@@ -66,11 +78,13 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     write_rows_csv(out / "pilot_uncertainty.csv", u)
     names.append("pilot_uncertainty.csv")
     s = summary(result)
-    acc_rows = [{"task": k.split("/")[0], "strategy": k.split("/")[1], "accuracy_%": 100 * v["accuracy"],
+    acc_rows = [{"task": k.split("/")[0], "strategy": k.split("/")[1],
+                 "accuracy_%": round(100 * v["accuracy"], PERCENT_DECIMALS),
                  "median_moves": v["median_moves"], "simulations": v["simulations"]} for k, v in s.items()]
     write_rows_csv(out / "accuracy.csv", acc_rows)
-    per_tex = [{"texture": t, "name": lib[t].name, **{f"{k}_accuracy": v["per_texture_accuracy"][t] for k, v in s.items()
-                                                       if t in v["per_texture_accuracy"]}}
+    per_tex = [{"texture": t, "name": lib[t].name,
+                **{f"{k}_accuracy": round(v["per_texture_accuracy"][t], PERCENT_DECIMALS + 2) for k, v in s.items()
+                   if t in v["per_texture_accuracy"]}}
                for t in sorted({t for v in s.values() for t in v["per_texture_accuracy"]})]
     write_rows_csv(out / "accuracy_per_texture.csv", per_tex)
     names += ["accuracy.csv", "accuracy_per_texture.csv"]
@@ -91,10 +105,10 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
                                               table_from_rows(result.validation_rows))
               if result.validation_rows else None,
               "wall_s": result.wall_s, "dissertation": D_FIGURES}
-    _atomic(out / "summary.json", json.dumps(record, indent=2, default=str))
+    write_text(out / "summary.json", json.dumps(record, indent=2, default=str))
     names.append("summary.json")
     names += _plots(result, out, lib)
-    _atomic(out / "report.md", markdown(result, record, lib))
+    write_text(out / "report.md", markdown(result, record, lib))
     names.append("report.md")
     return names
 
@@ -136,7 +150,7 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
         axes[p].set_title(f"{prop} at {movement_label(m)}")
         axes[p].grid(alpha=0.3)
     fig.tight_layout()
-    _savefig(fig, out / "properties_at_optimal_movements.png")
+    save_figure(fig, out / "properties_at_optimal_movements.png")
     names.append("properties_at_optimal_movements.png")
     # probability evolution of a few simulations (like D Fig. 6-10)
     if "bayesian" in result.identification_results:
@@ -155,7 +169,7 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
             ax.legend(fontsize=7)
             ax.grid(alpha=0.3)
         fig.tight_layout()
-        _savefig(fig, out / "probability_evolution.png")
+        save_figure(fig, out / "probability_evolution.png")
         names.append("probability_evolution.png")
     return names
 

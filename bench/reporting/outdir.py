@@ -3,11 +3,13 @@
 * :meth:`OutFolder.open` checks the path (no NUL byte, not a file, creatable, writable), takes an exclusive
   ``fcntl.flock`` on :data:`LOCK_NAME` inside it (a second run into the same folder is refused at once), and
   refuses a folder that already holds anything unless ``force``; with ``force`` it removes an earlier run's
-  files first — ``record.json`` before everything else — and refuses to touch anything that is not a run's own
-  file (:data:`RUN_FILES`, leftover temporary files).
+  files first — ``record.json`` before everything else — and refuses to touch anything that is not the
+  command's own (its :class:`FolderKind`: a run's :data:`RUN_FILES`, a texture sweep's or an experiment's files
+  and subfolders, leftover temporary files).
 * Every file is written under a temporary name in the folder itself (``.<name>.<random>.part``, created with
   ``O_EXCL``, so a symlink planted there is never followed) and renamed into place with ``os.replace``, which
-  replaces a symlink rather than writing through it.  A reader sees a file complete or not at all.
+  replaces a symlink rather than writing through it (:func:`atomic_write`).  A reader sees a file complete or not
+  at all; an error or a signal while writing removes the temporary file.
 
 The lock file stays in the folder after the run (removing it would let two runs lock two different files of
 the same name); it holds the pid of the run that last locked it.
@@ -20,6 +22,7 @@ import errno
 import fcntl
 import os
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 from bench.errors import BenchError
@@ -31,6 +34,20 @@ LOCK_NAME = ".biotac-bench.lock"
 RUN_FILES = ("record.json", "samples.h5", "codes.npz", "samples.csv", "report.md", "traces.png",
              "spectrogram.png", "electrode_map.png", "forces.png", "properties.png")
 TEMP_SUFFIX = ".part"
+
+
+@dataclass(frozen=True)
+class FolderKind:
+    """What a command writes into its out folder: ``files`` and ``subfolders`` (each holding such files), which
+    ``--force`` may replace, and ``what`` they are, for the refusal (``pass --force to replace <what>``)."""
+
+    what: str
+    files: tuple[str, ...]
+    subfolders: tuple[str, ...] = ()
+
+
+#: a scene run's folder (``biotac-bench run``)
+RUN = FolderKind("an earlier run's files", RUN_FILES)
 
 
 class OutDirError(BenchError, ValueError):
@@ -48,21 +65,67 @@ def _umask() -> int:
     return _UMASK[0]
 
 
-def _is_temp(name: str) -> bool:
-    return name.startswith(".") and name.endswith(TEMP_SUFFIX) and any(
-        name.startswith(f".{f}.") for f in RUN_FILES)
+def _is_temp(name: str, files=RUN_FILES) -> bool:
+    """Whether ``name`` is a temporary file (:func:`temp_path`) of one of ``files``."""
+    return name.startswith(".") and name.endswith(TEMP_SUFFIX) and any(name.startswith(f".{f}.") for f in files)
+
+
+def temp_path(final: Path) -> Path:
+    """A fresh, empty temporary file beside ``final`` (``.<name>.<random>.part``, created with O_EXCL, with the
+    permissions an ordinary open() would give)."""
+    fd, tmp = tempfile.mkstemp(dir=final.parent, prefix=f".{final.name}.", suffix=TEMP_SUFFIX)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())  # mkstemp makes 0600
+    finally:
+        os.close(fd)
+    return Path(tmp)
+
+
+def commit(tmp: Path, final: Path) -> Path:
+    """Move a finished temporary file into place as ``final`` (atomic; replaces a symlink, never follows it)."""
+    fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+    os.replace(tmp, final)
+    with contextlib.suppress(OSError):
+        dfd = os.open(final.parent, os.O_RDONLY | os.O_DIRECTORY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    return final
+
+
+@contextlib.contextmanager
+def atomic_write(final):
+    """``with atomic_write(path) as tmp: write tmp`` → renamed to ``path`` on success; removed on an error or a
+    signal (KeyboardInterrupt), so nothing half-written is ever left under either name."""
+    final = Path(final)
+    tmp = temp_path(final)
+    try:
+        yield tmp
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    commit(tmp, final)
 
 
 class OutFolder:
     """A checked, locked out folder; use :meth:`open`, then :meth:`atomic` / :meth:`write_text`, then
     :meth:`close` (or use it as a context manager)."""
 
-    def __init__(self, path: Path, lock_fd: int, flag: str = "--out"):
-        self.path, self._lock_fd, self.flag = path, lock_fd, flag
+    def __init__(self, path: Path, lock_fd: int, flag: str = "--out", kind: FolderKind = RUN):
+        self.path, self._lock_fd, self.flag, self.kind = path, lock_fd, flag, kind
 
     # ---- opening
     @classmethod
-    def open(cls, path, force: bool = False, flag: str = "--out") -> "OutFolder":
+    def open(cls, path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN,
+             keep: tuple[str, ...] = ()) -> "OutFolder":
+        """Check, create and lock ``path``; refuse it if it holds anything but ``keep`` (names of entries to leave
+        alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before."""
         p = _make_folder(path, flag)
         where = f"{flag} {os.fspath(path)!r}"
         lock_path = p / LOCK_NAME
@@ -86,12 +149,12 @@ class OutFolder:
         except OSError as e:
             os.close(fd)
             raise OutDirError(f"{where}: cannot lock the folder ({e.strerror or e})") from None
-        folder = cls(p, fd, flag)
+        folder = cls(p, fd, flag, kind)
         try:
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
             folder._probe_writable()
-            folder._prepare(force)
+            folder._prepare(force, keep)
         except OSError as e:
             folder.close()
             raise OutDirError(f"{where}: {e.strerror or e}") from None
@@ -111,23 +174,39 @@ class OutFolder:
         os.close(fd)
         os.unlink(name)
 
-    def _prepare(self, force: bool) -> None:
-        entries = sorted(e.name for e in os.scandir(self.path) if e.name != LOCK_NAME)
+    def _prepare(self, force: bool, keep: tuple[str, ...] = ()) -> None:
+        entries = sorted(e.name for e in os.scandir(self.path) if e.name != LOCK_NAME and e.name not in keep)
         if not entries:
             return
         listed = ", ".join(entries[:6]) + (f", … ({len(entries)} entries)" if len(entries) > 6 else "")
         if not force:
-            raise OutDirError(f"{self._where()}: the folder is not empty ({listed}); pass --force to replace an "
-                              f"earlier run's files, or choose a fresh folder")
+            raise OutDirError(f"{self._where()}: the folder is not empty ({listed}); pass --force to replace "
+                              f"{self.kind.what}, or choose a fresh folder")
+        files, subfolders = [], []
         foreign = []
         for name in entries:
             full = self.path / name
-            if not (name in RUN_FILES or _is_temp(name)) or (full.is_dir() and not full.is_symlink()):
+            real_dir = full.is_dir() and not full.is_symlink()
+            if name in self.kind.subfolders and real_dir:
+                subfolders.append(name)
+            elif (name in self.kind.files or _is_temp(name, self.kind.files)) and not real_dir:
+                files.append(name)
+            else:
                 foreign.append(name)
         if foreign:
-            raise OutDirError(f"{self._where()}: --force only replaces a run's own files, and the folder also "
+            raise OutDirError(f"{self._where()}: --force only replaces {self.kind.what}, and the folder also "
                               f"holds: {', '.join(foreign[:6])}" + (" …" if len(foreign) > 6 else ""))
-        for name in sorted(entries, key=lambda n: n != "record.json"):  # the record first: never a stale "ok"
+        for name in subfolders:  # emptied of the command's files (refused if anything else is in it), then removed
+            sub = OutFolder.open(self.path / name, force=True, flag=self.flag, kind=self.kind)
+            sub.close()
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(sub.path / LOCK_NAME)
+            try:
+                os.rmdir(sub.path)
+            except OSError as e:
+                raise OutDirError(f"{self._where()}: cannot remove {name}/ of an earlier run "
+                                  f"({e.strerror or e})") from None
+        for name in sorted(files, key=lambda n: n != "record.json"):  # the record first: never a stale "ok"
             try:
                 os.unlink(self.path / name)
             except FileNotFoundError:
@@ -138,45 +217,16 @@ class OutFolder:
 
     # ---- writing
     def temp_path(self, name: str) -> Path:
-        """A fresh, empty temporary file in the folder for ``name`` (created with O_EXCL)."""
-        fd, tmp = tempfile.mkstemp(dir=self.path, prefix=f".{name}.", suffix=TEMP_SUFFIX)
-        try:
-            os.fchmod(fd, 0o666 & ~_umask())  # as an ordinary open() would create it (mkstemp makes 0600)
-        finally:
-            os.close(fd)
-        return Path(tmp)
+        """A fresh, empty temporary file in the folder for ``name`` (:func:`temp_path`)."""
+        return temp_path(self.path / name)
 
     def commit(self, tmp: Path, name: str) -> Path:
-        """Move a finished temporary file into place as ``name`` (atomic; replaces a symlink, never follows it)."""
-        fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        final = self.path / name
-        os.replace(tmp, final)
-        self._sync_dir()
-        return final
+        """Move a finished temporary file into place as ``name`` (:func:`commit`)."""
+        return commit(tmp, self.path / name)
 
-    def _sync_dir(self) -> None:
-        with contextlib.suppress(OSError):
-            fd = os.open(self.path, os.O_RDONLY | os.O_DIRECTORY)
-            try:
-                os.fsync(fd)
-            finally:
-                os.close(fd)
-
-    @contextlib.contextmanager
     def atomic(self, name: str):
         """``with folder.atomic("x.png") as tmp: write tmp`` → renamed to ``x.png`` on success, removed on error."""
-        tmp = self.temp_path(name)
-        try:
-            yield tmp
-        except BaseException:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-            raise
-        self.commit(tmp, name)
+        return atomic_write(self.path / name)
 
     def write_text(self, name: str, text: str) -> Path:
         with self.atomic(name) as tmp:
@@ -186,7 +236,7 @@ class OutFolder:
     def remove_temps(self) -> None:
         """Remove temporary files this run left behind (after an error)."""
         for e in os.scandir(self.path):
-            if _is_temp(e.name):
+            if _is_temp(e.name, self.kind.files):
                 with contextlib.suppress(OSError):
                     os.unlink(e.path)
 
@@ -204,16 +254,16 @@ class OutFolder:
         self.close()
 
 
-def fresh_folder(base: Path, force: bool = False, flag: str = "--out") -> OutFolder:
+def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN) -> OutFolder:
     """The default out folder: ``base`` if it is absent or empty, else ``base-2``, ``base-3``, … — the first
-    that is free and not locked by another run."""
+    that is free and not locked by another run (with ``force``: ``base``, its earlier files replaced)."""
     last = None
     for n in range(1, 1000):
         p = base if n == 1 else base.with_name(f"{base.name}-{n}")
         if not force and p.is_dir() and any(e.name != LOCK_NAME for e in os.scandir(p)):
             continue
         try:
-            return OutFolder.open(p, force=force, flag=flag)
+            return OutFolder.open(p, force=force, flag=flag, kind=kind)
         except OutDirError as e:
             last = e
             if "is writing into this folder" in str(e) or "not empty" in str(e):
@@ -248,9 +298,9 @@ def _make_folder(path, flag: str) -> Path:
 
 
 def writable_folder(path, flag: str = "--out") -> Path:
-    """Check a plain output folder before a long job (a sweep, an experiment) runs: :func:`_make_folder`'s checks
-    and a write probe — :class:`OutDirError` naming ``flag`` otherwise. No lock, nothing removed (the job writes
-    each file under a temporary name and renames it into place)."""
+    """Check a shared folder before a long job runs (an experiment's stage cache, which runs share on purpose):
+    :func:`_make_folder`'s checks and a write probe — :class:`OutDirError` naming ``flag`` otherwise. No lock,
+    nothing refused or removed (each file goes in under a temporary name, renamed into place)."""
     p = _make_folder(path, flag)
     try:
         fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)

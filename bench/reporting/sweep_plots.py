@@ -12,7 +12,18 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
+from bench.reporting.outdir import atomic_write  # noqa: E402
+
 PROPERTIES = (("traction", "traction (A)"), ("roughness", "roughness (ln bits²)"), ("fineness", "fineness (ln Hz)"))
+
+
+def save_figure(fig, path: Path) -> None:
+    """A matplotlib figure as PNG into ``path`` (under a temporary name renamed into place); the figure is closed."""
+    try:
+        with atomic_write(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
 
 
 def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], path: Path) -> Path:
@@ -49,8 +60,5 @@ def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], p
     axes[0][1].set_title("against velocity (shade: force)")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
+    save_figure(fig, path)
     return path
