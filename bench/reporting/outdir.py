@@ -46,8 +46,8 @@ class FolderKind:
     subfolders: tuple[str, ...] = ()
 
 
-#: a scene run's folder (``biotac-bench run``)
-RUN = FolderKind("an earlier run's files", RUN_FILES)
+#: a scene run's folder (``biotac-bench run``): its files, and a several-sensor run's sensor<k>/ folders of them
+RUN = FolderKind("an earlier run's files", RUN_FILES, tuple(f"sensor{k}" for k in range(10)))
 
 
 class OutDirError(BenchError, ValueError):

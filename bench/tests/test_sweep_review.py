@@ -218,3 +218,22 @@ def test_a_sweep_stopped_by_ctrl_c_ends_quietly_with_nothing_written(tmp_path):
     assert {p.name for p in out.iterdir()} <= {LOCK_NAME}  # nothing written, nothing half-written
     gone, alive = psutil.wait_procs(workers, timeout=10)
     assert not alive
+
+
+def test_force_clears_a_several_sensor_runs_sensor_folders(tmp_path):
+    """`run --force` into the folder of an earlier several-sensor run: its sensor<k>/ folders (run files and their
+    lock) are replaced too — they were refused as foreign before; anything else in one is still refused."""
+    from bench.reporting.outdir import OutDirError, OutFolder
+
+    out = tmp_path / "o"
+    for folder in (out, out / "sensor2"):
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "record.json").write_text("{}")
+        (folder / LOCK_NAME).write_text("1\n")
+    OutFolder.open(out, force=True).close()
+    assert {p.name for p in out.iterdir()} == {LOCK_NAME}
+    (out / "sensor3").mkdir()
+    (out / "sensor3" / "mine.txt").write_text("mine")
+    with pytest.raises(OutDirError, match="mine.txt"):
+        OutFolder.open(out, force=True)
+    assert (out / "sensor3" / "mine.txt").read_text() == "mine"
