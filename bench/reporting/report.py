@@ -318,7 +318,7 @@ def markdown_report(record: dict) -> str:
         b, a = sliding["skin_before"], sliding["skin_after"]
         lines += ["", f"Skin before: serial {b['serial']}, ridge height {1e6 * b['ridge_height_m']:.1f} µm; after: "
                       f"serial {a['serial']}, ridge height {1e6 * a['ridge_height_m']:.1f} µm "
-                      f"({a['trials']} trials on it, {a['sliding_distance_m']:.2f} m slid).", ""]
+                      f"({a['trials']} trial{'' if a['trials'] == 1 else 's'} on it, {a['sliding_distance_m']:.2f} m slid).", ""]
     lines += ["## Channels", "", "| channel | samples | rate (Hz) | mean | std | min | max | bad |",
               "|---|---|---|---|---|---|---|---|"]
     for name, s in record["channels"].items():
