@@ -152,7 +152,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--textures", required=True, help="comma-separated texture numbers or names (biotac-bench textures)")
     s.add_argument("--movements", default="all", help="'all' (the 36 of D eqs 6.20–6.21) or grid ids 0..35 "
                                                       "(id = 6 × force step + velocity step)")
-    s.add_argument("--trials", type=int, default=6, help="repetitions per texture and movement (6)")
+    s.add_argument("--trials", type=int, default=6, help="repetitions per texture and movement")
     s.add_argument("--seed", type=whole(0), default=0, help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
@@ -272,7 +272,7 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     e.add_argument("--ablation", choices=list(ABLATIONS) + ["all"], help="also run a variant and compare")
     e.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     e.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
-    e.add_argument("--cache", default="out/cache", help="where stage results are cached (out/cache)")
+    e.add_argument("--cache", default="out/cache", help="where stage results are cached, kept across runs")
     e.add_argument("--no-cache", action="store_true", help="run every trial again")
     e.add_argument("--quiet", action="store_true", help="no progress bars")
     e.set_defaults(func=_cmd_explore)
