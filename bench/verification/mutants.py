@@ -803,6 +803,21 @@ CATALOGUE += [
            "r = radius_1N * cbrt_n  # the patch radius", "r = radius_1N  # the patch radius",
            ("bench/tests/test_force_scaling.py::test_the_normal_path_power_falls_with_force",),
            "the contact patch does not grow with load (foam's normal path then rises with force)"),
+    # the user review's fixes (2026-11-22): each documented behaviour has a test that catches its removal
+    Mutant("stimulus-past-the-end-accepted", "scenes", "bench/scenes/scene.py",
+           "if duration is not None and s.end_s > duration + END_TOLERANCE_S:",
+           "if duration is not None and s.start_s > duration + END_TOLERANCE_S:",
+           ("bench/tests/test_scene.py::test_a_stimulus_ending_after_the_scene_is_refused_as_a_slide_is",),
+           "a press, vibration or sweep that runs past the scene's end is accepted and silently cut off"),
+    Mutant("first-signal-stops-the-exports", "outputs", "bench/running/signals.py",
+           "signum = self._writing_signum if self._writing else self.signum",
+           "signum = self.signum",
+           ("bench/tests/test_run_review.py::test_one_signal_mid_simulation_in_process_writes_everything",),
+           "one Ctrl-C mid-simulation also skips codes.npz, samples.csv and the plots"),
+    Mutant("trial-seed-by-list-position", "experiments", "bench/experiments/trials.py",
+           "trial_seed(seed, stage, tex, m_id, k)", "trial_seed(seed, stage, tex, movements.index(m), k)",
+           ("bench/tests/test_sweep_review.py::test_a_trials_seed_depends_on_its_grid_movement_not_on_its_place_in_the_list",),
+           "a trial's seed follows where its movement sits in the list, so a selection changes its result"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
