@@ -818,6 +818,10 @@ CATALOGUE += [
            "trial_seed(seed, stage, tex, m_id, k)", "trial_seed(seed, stage, tex, movements.index(m), k)",
            ("bench/tests/test_sweep_review.py::test_a_trials_seed_depends_on_its_grid_movement_not_on_its_place_in_the_list",),
            "a trial's seed follows where its movement sits in the list, so a selection changes its result"),
+    Mutant("pilot-trend-sign-flipped", "experiments", "bench/verification/claims/exploration.py",
+           '"force": float(stats.spearmanr(u[:, p], force)[0])', '"force": -float(stats.spearmanr(u[:, p], force)[0])',
+           ("bench/tests/test_pilot_trends.py",),
+           "the pilot-trend claims read U's trend against force with the wrong sign (a deviation would pass)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
