@@ -4,10 +4,11 @@ exploration experiment of D ch. 6, both on Dask."""
 from __future__ import annotations
 
 import argparse
+import functools
 import json
+import signal
 import sys
 import time
-from contextlib import contextmanager
 
 from bench.cli.args import whole
 from bench.experiments.experiment import ExperimentSpec
@@ -32,8 +33,8 @@ properties.png (each property against force and velocity).  Movements keep their
 
 Every trial runs on a fresh skin with a seed derived from its identity (sweep seed, texture, grid movement id,
 repetition), so a trial's result is the same in any selection of textures and movements and for any number of
-workers.  Ctrl-C stops the sweep (exit 130) and writes nothing — or, once the writing has begun, finishes every
-file first.  Examples:
+workers.  Ctrl-C stops the sweep (exit 130; SIGTERM: 143) and writes nothing — or, once the writing has begun,
+finishes every file first.  Examples:
   biotac-bench texture-sweep --textures {PILOT_TEXTURES} --trials 6      # D ch. 6's pilot (2160 trials)
   biotac-bench texture-sweep --textures 902 --movements 7,14,21 --trials 2 --workers 1
 """
@@ -78,16 +79,22 @@ def _texture_numbers(text: str) -> list[int]:
     return numbers
 
 
-@contextmanager
-def _outputs_whole():
-    """Within the block Ctrl-C and SIGTERM are held, so that a signal while the outputs are written (a second or
-    two) cannot leave some of them missing; one that arrived is raised as KeyboardInterrupt after the block."""
-    from bench.cli.args import signals_deferred
+def _sigterm_like_ctrl_c(command):
+    """``command`` with SIGTERM handled as Ctrl-C is (the cluster closed, no output half-written) and reported as
+    "terminated", exit status 143."""
 
-    with signals_deferred() as seen:
-        yield
-    if seen:
-        raise KeyboardInterrupt
+    @functools.wraps(command)
+    def run(a) -> int:
+        from bench.cli.args import Terminated, sigterm_raises
+
+        try:
+            with sigterm_raises():
+                return command(a)
+        except Terminated:
+            print("terminated", file=sys.stderr)
+            return 128 + signal.SIGTERM
+
+    return run
 
 
 def _open_out(path, default, force: bool, kind, keep=()):
@@ -103,7 +110,7 @@ def _open_out(path, default, force: bool, kind, keep=()):
 
 
 def _cmd_texture_sweep(a) -> int:
-    from bench.campaigns.engine import ClusterSpec
+    from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
     from bench.reporting.experiment_report import write_rows_csv, write_text
     from bench.reporting.outdir import FolderKind
@@ -130,7 +137,7 @@ def _cmd_texture_sweep(a) -> int:
         t0 = time.perf_counter()
         rows = sweep(tasks, spec=spec, progress=not a.quiet)
         wall = time.perf_counter() - t0
-        with _outputs_whole():
+        with signals_held():  # a signal meanwhile: every file finished first, then the stop
             write_rows_csv(out / "trials.csv", rows)
             write_text(out / "trials.json", json.dumps({"wall_s": wall, "workers": spec.describe(), "rows": rows},
                                                        indent=1))
@@ -163,7 +170,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     s.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
-    s.set_defaults(func=_cmd_texture_sweep)
+    s.set_defaults(func=_sigterm_like_ctrl_c(_cmd_texture_sweep))
     add_explore_command(sub, fmt)
 
 
@@ -180,7 +187,8 @@ pairs = [[a, b], ...].
 
 Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
 stage's trials are cached in --cache (out/cache) by content hash, so changing the classifier settings re-runs no
-sliding.  Ctrl-C stops the experiment (exit 130); the stages already finished stay cached.
+sliding.  Ctrl-C stops the experiment (exit 130; SIGTERM: 143); the stages already finished stay cached, and a
+file being written is finished first.
 
 Writes into --out (default: a fresh out/explore/<name>[-n]): report.md (beside D's numbers), summary.json,
 accuracy.csv, accuracy_per_texture.csv, confusion.csv, pilot_uncertainty.csv, trials.csv/json,
@@ -197,20 +205,25 @@ again.
 
 
 def _entry_inside(path, folder) -> str | None:
-    """The name of the entry of ``folder`` that holds ``path`` (or is it), if ``path`` lies inside ``folder``."""
+    """The name of the entry of ``folder`` that holds ``path`` (or is it), if ``path`` lies inside ``folder`` —
+    as written (a symbolic link in ``folder``, wherever it points) or once links are resolved."""
+    import os
     from pathlib import Path
 
-    try:
-        rel = Path(path).resolve().relative_to(Path(folder).resolve())
-    except ValueError:
-        return None
-    return rel.parts[0] if rel.parts else None
+    for where, inside in ((os.path.abspath(path), os.path.abspath(folder)), (Path(path).resolve(),
+                                                                             Path(folder).resolve())):
+        try:
+            rel = Path(where).relative_to(inside)
+        except ValueError:
+            continue
+        return rel.parts[0] if rel.parts else None
+    return None
 
 
 def _cmd_explore(a) -> int:
     from dataclasses import replace
 
-    from bench.campaigns.engine import ClusterSpec
+    from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.experiment import ABLATIONS, identified_among, load_experiment, run_experiment, summary
     from bench.reporting.experiment_report import OUTPUT_FILES, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, writable_folder
@@ -236,7 +249,7 @@ def _cmd_explore(a) -> int:
             result = run_experiment(sp, cache_dir=cache, cluster=cluster, progress=not a.quiet,
                                     log=lambda m: print(m, file=sys.stderr))
             where = out if label == "baseline" else out / label
-            with _outputs_whole():
+            with signals_held():
                 files = write_outputs(result, where)
             rows.append((label, summary(result), identified_among(result)))
             print(f"wrote {where}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
@@ -248,7 +261,7 @@ def _cmd_explore(a) -> int:
                 lines.append(f"| {label} ({what}) | {100 * s['pairs/bayesian']['accuracy']:.1f} % | "
                              f"{100 * s['identification/bayesian']['accuracy']:.1f} % | "
                              f"{s['identification/bayesian']['median_moves']:g} |")
-            with _outputs_whole():
+            with signals_held():
                 write_text(out / "ablations.md", "\n".join(lines) + "\n")
             print("\n".join(lines))
         else:
@@ -275,4 +288,4 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     e.add_argument("--cache", default="out/cache", help="where stage results are cached, kept across runs")
     e.add_argument("--no-cache", action="store_true", help="run every trial again")
     e.add_argument("--quiet", action="store_true", help="no progress bars")
-    e.set_defaults(func=_cmd_explore)
+    e.set_defaults(func=_sigterm_like_ctrl_c(_cmd_explore))

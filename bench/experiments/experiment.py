@@ -40,6 +40,7 @@ from bench.experiments.trials import (
     FIRST_VISIBLE_WEAR, TrialTask, listed_twice, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
 )
 from bench.paths import FIXTURES, OUT, REPO
+from bench.reporting.outdir import atomic_write
 from bench.rigs.texture_rig import movement_grid
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"
@@ -265,9 +266,8 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
     rows = sweep(tasks, spec=spec, client=client, progress=progress) if tasks else []
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(json.dumps(rows))
-        tmp.replace(path)
+        with atomic_write(path) as tmp:  # a unique temporary name: explores sharing a cache never collide
+            tmp.write_text(json.dumps(rows))
     return rows
 
 

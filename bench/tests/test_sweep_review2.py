@@ -1,0 +1,198 @@
+"""The second review of texture-sweep and explore: the stage cache writes like every other file (a unique
+temporary name, none left by a Ctrl-C), a signal while the outputs are written lets every file finish, SIGTERM
+ends a sweep as Ctrl-C does (quietly, exit 143, cluster closed), a second Ctrl-C does not slow the exit, a signal
+during the cluster's start is held even when another thread takes it, and a symlinked cache inside --out is kept."""
+
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+
+from bench.campaigns import engine
+from bench.cli import main as cli
+from bench.cli.experiments import SWEEP_FILES
+from bench.experiments import experiment as E
+from bench.experiments import trials as T
+from bench.paths import REPO
+from bench.reporting import experiment_report
+from bench.reporting.outdir import LOCK_NAME, TEMP_SUFFIX, atomic_write
+from bench.rigs.texture_rig import movement_grid
+from bench.tests import test_sweep_review as first_review
+from bench.tests.test_sweep_review import TINY, _in_process_sweep
+
+pytestmark = pytest.mark.unit
+no_cluster = first_review.no_cluster  # the fixture: explore's trials in this process
+
+SWEEP_ARGV = ["texture-sweep", "--textures", "902", "--movements", "21,7", "--trials", "1", "--quiet"]
+
+
+def _stage_tasks():
+    return T.sweep_tasks([902], [movement_grid()[7]], 1, 0, movement_ids=[7])
+
+
+def test_two_explores_sharing_a_cache_write_a_stage_without_colliding(tmp_path, monkeypatch):
+    """A second explore finishes the same stage while the first one is writing it: both end, the entry is whole,
+    no temporary file is left (a fixed-name ``.tmp`` was taken from under the first one: FileNotFoundError)."""
+    monkeypatch.setattr(E, "sweep", _in_process_sweep)
+    write_text, other_ran = pathlib.Path.write_text, []
+
+    def write_then_let_the_other_finish(path, *a, **k):
+        n = write_text(path, *a, **k)
+        if not other_ran:
+            monkeypatch.setattr(pathlib.Path, "write_text", write_text)
+            other_ran.append(E.run_stage("pilot", _stage_tasks(), tmp_path))
+        return n
+
+    monkeypatch.setattr(pathlib.Path, "write_text", write_then_let_the_other_finish)
+    rows = E.run_stage("pilot", _stage_tasks(), tmp_path)
+    assert len(other_ran[0]) == len(rows) == 1
+    (entry,) = tmp_path.iterdir()
+    assert entry.name.startswith("pilot-") and entry.suffix == ".json"
+    assert json.loads(entry.read_text()) in (rows, other_ran[0])  # whole
+
+
+def test_a_ctrl_c_while_the_stage_cache_is_written_leaves_no_temporary_file(tmp_path, monkeypatch):
+    monkeypatch.setattr(E, "sweep", _in_process_sweep)
+    write_text = pathlib.Path.write_text
+
+    def cut_short(path, text, *a, **k):
+        write_text(path, text[:10], *a, **k)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pathlib.Path, "write_text", cut_short)
+    with pytest.raises(KeyboardInterrupt):
+        E.run_stage("pilot", _stage_tasks(), tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_write_removes_its_temporary_file_on_ctrl_c(tmp_path):
+    final = tmp_path / "trials.csv"
+    with pytest.raises(KeyboardInterrupt):
+        with atomic_write(final) as tmp:
+            tmp.write_text("half a ta")
+            raise KeyboardInterrupt
+    assert list(tmp_path.iterdir()) == []
+
+
+def _signal_at_the_first_csv(monkeypatch, signum):
+    write_rows_csv = experiment_report.write_rows_csv
+
+    def signal_then_write(*a, **k):
+        monkeypatch.setattr(experiment_report, "write_rows_csv", write_rows_csv)
+        os.kill(os.getpid(), signum)
+        return write_rows_csv(*a, **k)
+
+    monkeypatch.setattr(experiment_report, "write_rows_csv", signal_then_write)
+
+
+@pytest.mark.parametrize("signum, status, said", [(signal.SIGINT, 130, "interrupted"),
+                                                  (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_while_the_sweep_writes_finishes_every_file_first(tmp_path, monkeypatch, capsys, signum, status,
+                                                                   said):
+    monkeypatch.setattr(T, "sweep", _in_process_sweep)
+    _signal_at_the_first_csv(monkeypatch, signum)
+    out = tmp_path / "sweep"
+    assert cli.main([*SWEEP_ARGV, "--out", str(out)]) == status
+    assert capsys.readouterr().err.strip().splitlines()[-1] == said
+    assert sorted(p.name for p in out.iterdir()) == sorted([*SWEEP_FILES, LOCK_NAME])
+    assert not [p for p in out.iterdir() if p.name.endswith(TEMP_SUFFIX)]
+
+
+def _start_sweep(tmp_path, out):
+    """A texture sweep on a 2-worker LocalCluster in its own process group, and its worker processes once they
+    run trials."""
+    import psutil
+
+    env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "bench.cli", "texture-sweep", "--textures", "43",
+                             "--movements", "all", "--trials", "30", "--workers", "2", "--out", str(out), "--quiet"],
+                            cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    deadline, workers = time.monotonic() + 60, []
+    while time.monotonic() < deadline and len(workers) < 2 and proc.poll() is None:
+        time.sleep(0.2)
+        workers = [p for p in psutil.Process(proc.pid).children(recursive=True)
+                   if "spawn_main" in " ".join(p.cmdline()) and "resource_tracker" not in " ".join(p.cmdline())]
+    if len(workers) < 2:
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail("the workers did not start")
+    time.sleep(2.0)  # the workers are running trials
+    return proc, workers
+
+
+def _ended_cleanly(proc, workers, out, status, said, within_s):
+    import psutil
+
+    t0 = time.monotonic()
+    try:
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    took = time.monotonic() - t0
+    assert proc.returncode == status, stderr
+    assert "Traceback" not in stderr and "leaked" not in stderr, stderr
+    assert stderr.strip().splitlines()[-1] == said, stderr
+    assert {p.name for p in out.iterdir()} <= {LOCK_NAME}  # nothing written, nothing half-written
+    assert took < within_s, f"the exit took {took:.1f} s"
+    assert not psutil.wait_procs(workers, timeout=10)[1]  # no worker left
+
+
+def test_sigterm_during_the_trials_ends_a_sweep_quietly_with_143(tmp_path):
+    """As `timeout 60 biotac-bench texture-sweep …` does: SIGTERM to the main process only."""
+    out = tmp_path / "sweep"
+    proc, workers = _start_sweep(tmp_path, out)
+    os.kill(proc.pid, signal.SIGTERM)
+    _ended_cleanly(proc, workers, out, 143, "terminated", within_s=8)
+
+
+def test_a_second_ctrl_c_does_not_slow_the_exit(tmp_path):
+    """The second Ctrl-C used to interrupt the client's closing, and the exit then waited out a timeout (10 s)."""
+    out = tmp_path / "sweep"
+    proc, workers = _start_sweep(tmp_path, out)
+    os.killpg(proc.pid, signal.SIGINT)
+    time.sleep(0.1)
+    os.killpg(proc.pid, signal.SIGINT)
+    _ended_cleanly(proc, workers, out, 130, "interrupted", within_s=6)
+
+
+def test_a_ctrl_c_during_the_clusters_start_is_held_even_when_another_thread_takes_it():
+    """A SIGINT that the kernel gives another thread (tqdm's monitor, say) is not raised inside the block, where it
+    would cut LocalCluster's start short with nothing to close; it is raised as the block ends."""
+    idle = threading.Event()
+    other = threading.Thread(target=idle.wait, daemon=True)
+    other.start()  # its signal mask is not blocked
+    reached_the_end = False
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with engine.sigint_blocked():
+                signal.pthread_kill(other.ident, signal.SIGINT)
+                for _ in range(50):  # the main thread runs Python handlers between bytecodes
+                    time.sleep(0.01)
+                reached_the_end = True
+    finally:
+        idle.set()
+    assert reached_the_end
+
+
+@pytest.mark.usefixtures("no_cluster")
+def test_a_symlinked_cache_inside_out_is_kept_by_force(tmp_path, monkeypatch, capsys):
+    exp = tmp_path / "tiny.toml"
+    exp.write_text(TINY.format(max_moves=10))
+    out, elsewhere = tmp_path / "res", tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    out.mkdir()
+    (out / "cache").symlink_to(elsewhere)
+    monkeypatch.chdir(tmp_path)
+    argv = ["explore", str(exp), "--quiet", "--out", "res", "--cache", "res/cache"]
+    assert cli.main(argv) == 0, capsys.readouterr().err  # the cache is the only entry: not refused
+    assert (out / "report.md").exists() and any(elsewhere.iterdir())
+    monkeypatch.setattr(E, "sweep", lambda *a, **k: pytest.fail("a cached stage ran trials again"))
+    assert cli.main([*argv, "--force"]) == 0, capsys.readouterr().err
+    assert (out / "cache").is_symlink() and any(elsewhere.iterdir())
