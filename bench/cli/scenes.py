@@ -131,8 +131,6 @@ def _cmd_run(a) -> int:
     overrides = {k: v for k, v in (("scene.fidelity", a.fidelity), ("scene.seed", a.seed), ("host.spi", a.spi))
                  if v is not None}
     scene = load_scene(a.scene, overrides)  # validated completely, then the out folder checked: both before running
-    if a.out is not None and a.force:
-        _clear_sensor_folders(Path(a.out))
     folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
     try:
         res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
@@ -144,12 +142,12 @@ def _cmd_run(a) -> int:
     if not a.quiet:
         print((out / "report.md").read_text())
     print(f"wrote {out}/ ({', '.join(record['outputs'])})" + (" for sensor 1" if scene.n_sensors > 1 else ""))
-    for k, sub in sorted(res.recording.sensors.items()):
-        from bench.reporting.report import write_outputs
-
-        sub_record = write_outputs(sub, out / f"sensor{k}", csv=a.csv, plots=not a.no_plots, force=a.force)
+    for k, sub_record in sorted(res.sensor_records.items()):
+        sub = res.recording.sensors[k].scene
         print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} (unit "
-              f"{sub.scene.unit}, serial {sub.scene.serial}, {len(sub.scene.stimuli)} stimuli)")
+              f"{sub.unit}, serial {sub.serial}, {len(sub.stimuli)} stimuli)")
+        for name, why in sub_record.get("skipped_outputs", {}).items():
+            print(f"note: sensor{k}/{name} {why}", file=sys.stderr)
     for name, why in record.get("skipped_outputs", {}).items():
         print(f"note: {name} {why}", file=sys.stderr)
     if record["status"] == "interrupted":
@@ -158,22 +156,6 @@ def _cmd_run(a) -> int:
     elif record["status"] != "ok":
         print(f"error: the run stopped at {record['simulated_s']:.3f} s: {record['error']}", file=sys.stderr)
     return res.exit_code
-
-
-def _clear_sensor_folders(out: Path) -> None:
-    """--force: an earlier several-sensor run's sensor<k>/ folders, emptied of run files (nothing else) and removed,
-    so that the out folder holds only a run's own files again."""
-    from bench.reporting.outdir import OutFolder
-
-    if not out.is_dir():
-        return
-    for sub in sorted(out.glob("sensor[0-9]")):
-        if sub.is_dir() and not sub.is_symlink():
-            OutFolder.open(sub, force=True).close()
-            try:
-                sub.rmdir()
-            except OSError:
-                pass  # something else is in it: the out folder's own check names it
 
 
 def _cmd_validate(a) -> int:

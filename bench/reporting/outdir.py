@@ -2,10 +2,11 @@
 
 * :meth:`OutFolder.open` checks the path (no NUL byte, not a file, creatable, writable), takes an exclusive
   ``fcntl.flock`` on :data:`LOCK_NAME` inside it (a second run into the same folder is refused at once), and
-  refuses a folder that already holds anything unless ``force``; with ``force`` it removes an earlier run's
-  files first — ``record.json`` before everything else — and refuses to touch anything that is not the
-  command's own (its :class:`FolderKind`: a run's :data:`RUN_FILES`, a texture sweep's or an experiment's files
-  and subfolders, leftover temporary files).
+  refuses a folder that already holds anything unless ``force``.  With ``force`` it first checks the whole
+  tree — the folder and each of its kind's subfolders, symbolic links not followed — and refuses, removing
+  nothing, if anything in it is not the command's own (its :class:`FolderKind`: a run's :data:`RUN_FILES` and
+  sensor<k>/ folders, a texture sweep's or an experiment's files and subfolders, leftover temporary files); only
+  then does it remove the earlier files, ``record.json`` before everything else.
 * Every file is written under a temporary name in the folder itself (``.<name>.<random>.part``, created with
   ``O_EXCL``, so a symlink planted there is never followed) and renamed into place with ``os.replace``, which
   replaces a symlink rather than writing through it (:func:`atomic_write`).  A reader sees a file complete or not
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from bench.errors import BenchError
+from bench.scenes.scene import MAX_SENSORS
 
 LOCK_NAME = ".biotac-bench.lock"
 #: Files a run writes; ``--force`` removes only these (and leftover temporary files).
@@ -45,9 +47,15 @@ class FolderKind:
     files: tuple[str, ...]
     subfolders: tuple[str, ...] = ()
 
+    def inner(self) -> "FolderKind":
+        """The kind of one of the subfolders: the same files, no subfolders of its own."""
+        return FolderKind(self.what, self.files)
+
 
 #: a scene run's folder (``biotac-bench run``): its files, and a several-sensor run's sensor<k>/ folders of them
-RUN = FolderKind("an earlier run's files", RUN_FILES, tuple(f"sensor{k}" for k in range(10)))
+RUN = FolderKind("an earlier run's files", RUN_FILES, tuple(f"sensor{k}" for k in range(2, MAX_SENSORS + 1)))
+#: one sensor<k>/ folder of a several-sensor run: a run's files, no subfolders
+RUN_SENSOR = RUN.inner()
 
 
 class OutDirError(BenchError, ValueError):
@@ -128,27 +136,7 @@ class OutFolder:
         alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before."""
         p = _make_folder(path, flag)
         where = f"{flag} {os.fspath(path)!r}"
-        lock_path = p / LOCK_NAME
-        try:
-            fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
-        except OSError as e:
-            if e.errno == errno.ELOOP:
-                raise OutDirError(f"{where}: {LOCK_NAME} in it is a symbolic link; remove it") from None
-            raise OutDirError(f"{where}: the folder is not writable ({e.strerror or e})") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            try:
-                holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
-            except OSError:
-                holder = ""
-            os.close(fd)
-            who = f"another run (pid {holder})" if holder.isdigit() else "another run"
-            raise OutDirError(f"{where}: {who} is writing into this folder; wait for it to end or choose "
-                              f"another {flag}") from None
-        except OSError as e:
-            os.close(fd)
-            raise OutDirError(f"{where}: cannot lock the folder ({e.strerror or e})") from None
+        fd = _lock(p, where, flag)
         folder = cls(p, fd, flag, kind)
         try:
             os.ftruncate(fd, 0)
@@ -175,6 +163,10 @@ class OutFolder:
         os.unlink(name)
 
     def _prepare(self, force: bool, keep: tuple[str, ...] = ()) -> None:
+        """Refuse a folder that is not empty unless ``force``; with it, check the whole tree first (every entry of
+        the folder and of each of ``kind``'s subfolders, symbolic links not followed) and remove nothing unless
+        all of it is the command's own — then remove ``record.json`` first (never a stale "ok"), then the
+        subfolders, then the rest."""
         entries = sorted(e.name for e in os.scandir(self.path) if e.name != LOCK_NAME and e.name not in keep)
         if not entries:
             return
@@ -182,31 +174,37 @@ class OutFolder:
         if not force:
             raise OutDirError(f"{self._where()}: the folder is not empty ({listed}); pass --force to replace "
                               f"{self.kind.what}, or choose a fresh folder")
-        files, subfolders = [], []
-        foreign = []
-        for name in entries:
-            full = self.path / name
-            real_dir = full.is_dir() and not full.is_symlink()
-            if name in self.kind.subfolders and real_dir:
-                subfolders.append(name)
-            elif (name in self.kind.files or _is_temp(name, self.kind.files)) and not real_dir:
-                files.append(name)
-            else:
-                foreign.append(name)
+        files, subfolders, foreign = _own_entries(self.path, self.kind, keep)
+        sub_files: dict[str, list[str]] = {}
+        for name in subfolders:
+            own, nested, more = _own_entries(self.path / name, self.kind.inner())
+            sub_files[name] = own
+            foreign += [f"{name}/{n}" for n in nested + more]
         if foreign:
             raise OutDirError(f"{self._where()}: --force only replaces {self.kind.what}, and the folder also "
                               f"holds: {', '.join(foreign[:6])}" + (" …" if len(foreign) > 6 else ""))
-        for name in subfolders:  # emptied of the command's files (refused if anything else is in it), then removed
-            sub = OutFolder.open(self.path / name, force=True, flag=self.flag, kind=self.kind)
-            sub.close()
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(sub.path / LOCK_NAME)
-            try:
-                os.rmdir(sub.path)
-            except OSError as e:
-                raise OutDirError(f"{self._where()}: cannot remove {name}/ of an earlier run "
-                                  f"({e.strerror or e})") from None
-        for name in sorted(files, key=lambda n: n != "record.json"):  # the record first: never a stale "ok"
+        locks = []  # each subfolder locked (a writer still in one is refused) before anything is removed
+        try:
+            for name in subfolders:
+                locks.append(_lock(self.path / name, f"{self._where()} ({name}/)", self.flag))
+            self._remove([n for n in files if n == "record.json"])
+            for name in subfolders:
+                self._remove([f"{name}/{n}" for n in sorted(sub_files[name], key=lambda n: n != "record.json")]
+                             + [f"{name}/{LOCK_NAME}"])
+                try:
+                    os.rmdir(self.path / name)
+                except OSError as e:
+                    raise OutDirError(f"{self._where()}: cannot remove {name}/ of an earlier run "
+                                      f"({e.strerror or e})") from None
+            self._remove([n for n in files if n != "record.json"])
+        finally:
+            for fd in locks:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+
+    def _remove(self, names: list[str]) -> None:
+        """Remove these files of an earlier run (paths relative to the folder), in this order."""
+        for name in names:
             try:
                 os.unlink(self.path / name)
             except FileNotFoundError:
@@ -252,6 +250,49 @@ class OutFolder:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _lock(folder: Path, where: str, flag: str) -> int:
+    """Take the exclusive, non-blocking ``flock`` on ``folder``'s :data:`LOCK_NAME` (created, never followed if it
+    is a symbolic link); returns its file descriptor, or raises :class:`OutDirError` naming ``where``."""
+    try:
+        fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+    except OSError as e:
+        if e.errno == errno.ELOOP:
+            raise OutDirError(f"{where}: {LOCK_NAME} in it is a symbolic link; remove it") from None
+        raise OutDirError(f"{where}: the folder is not writable ({e.strerror or e})") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        try:
+            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+        except OSError:
+            holder = ""
+        os.close(fd)
+        who = f"another run (pid {holder})" if holder.isdigit() else "another run"
+        raise OutDirError(f"{where}: {who} is writing into this folder; wait for it to end or choose "
+                          f"another {flag}") from None
+    except OSError as e:
+        os.close(fd)
+        raise OutDirError(f"{where}: cannot lock the folder ({e.strerror or e})") from None
+    return fd
+
+
+def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> tuple[list[str], list[str], list[str]]:
+    """``folder``'s entries (its lock and ``keep`` aside) sorted into ``kind``'s files (and their temporary
+    files), ``kind``'s subfolders (real folders, not symbolic links) and anything else (foreign); by lstat."""
+    files, subfolders, foreign = [], [], []
+    for e in sorted(os.scandir(folder), key=lambda e: e.name):
+        if e.name == LOCK_NAME or e.name in keep:
+            continue
+        real_dir = e.is_dir(follow_symlinks=False)
+        if e.name in kind.subfolders and real_dir:
+            subfolders.append(e.name)
+        elif (e.name in kind.files or _is_temp(e.name, kind.files)) and not real_dir:
+            files.append(e.name)
+        else:
+            foreign.append(e.name)
+    return files, subfolders, foreign
 
 
 def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN) -> OutFolder:

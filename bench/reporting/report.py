@@ -149,7 +149,7 @@ class _NoGuard:
 
 def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True, *, npz: bool | None = None,
                   samples_tmp: Path | None = None, force: bool = False, guard=None,
-                  compression: str = "gzip") -> dict:
+                  compression: str = "gzip", sensors: dict[int, dict] | None = None) -> dict:
     """Write everything about ``rec`` into ``out_dir`` (a path, checked and locked here, or an open
     :class:`~bench.reporting.outdir.OutFolder`); returns the JSON record.
 
@@ -160,6 +160,8 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
     raises (:class:`~bench.running.signals.StopRequested`, with the signal's name) to stop exports and plots
     early — :class:`~bench.running.signals.StopSignals` does so only for a signal arriving after its
     ``begin_writing()``; the record is still written, with status ``"interrupted"`` if the guard saw any signal.
+    ``sensors``: a several-sensor run's records of sensors 2..N (already written into ``sensor<k>/``), listed in
+    this record under ``"sensors"`` (status, error, outputs); one that failed makes this record failed too.
     """
     from bench.running.signals import StopRequested
 
@@ -229,6 +231,12 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
         interrupted_by = guard.signal_name if rec.status == "interrupted" else None
         planned = (["samples.h5"] if h5 is not None else []) + outputs + ["report.md", "record.json"]
         record = _safe_record(rec, planned, skipped, interrupted_by)
+        if sensors:
+            record["sensors"] = {f"sensor{k}": {key: r.get(key) for key in ("status", "error", "outputs")}
+                                 for k, r in sorted(sensors.items())}
+            for k, r in sorted(sensors.items()):
+                if r.get("status") == "failed" and record["status"] != "failed":
+                    _fail(record, f"sensor {k}: {r.get('error')}")
         text = markdown_report(record)
         if h5 is not None:
             try:
@@ -331,6 +339,10 @@ def markdown_report(record: dict) -> str:
     for e in record["effects"]:
         lines.append(f"| {e['name']} | {e['description']} | {1e3 * e['seconds_per_simulated_s']:.3f} |")
     lines += ["", "Outputs: " + ", ".join(f"`{o}`" for o in record["outputs"]), ""]
+    for folder, r in record.get("sensors", {}).items():
+        lines.append(f"- `{folder}/`: {r['status']}" + (f" — {r['error']}" if r.get("error") else ""))
+    if record.get("sensors"):
+        lines.append("")
     for name, why in record.get("skipped_outputs", {}).items():
         lines.append(f"- `{name}` {why}")
     if record.get("skipped_outputs"):

@@ -6,7 +6,9 @@
 3. Exports, plots, then ``samples.h5``, ``report.md`` and ``record.json`` are renamed into place
    (:func:`bench.reporting.report.write_outputs`), all of them also after a signal that stopped the simulation;
    only a signal arriving while they are written stops exports and plots.  The record's status is ``ok``,
-   ``failed`` (with the error) or ``interrupted`` (with the signal).
+   ``failed`` (with the error) or ``interrupted`` (with the signal).  A several-sensor run writes sensors
+   2..N into ``sensor<k>/`` first, in the same guarded, locked phase (each gets its record.json), and sensor 1's
+   record, written last, lists their status.
 
 Exit status follows the record: 0 ok, 1 failed, 128 + the signal's number when interrupted (130 SIGINT, 143
 SIGTERM).
@@ -16,10 +18,10 @@ from __future__ import annotations
 
 import contextlib
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from bench.reporting.outdir import OutFolder, fresh_folder
+from bench.reporting.outdir import RUN_SENSOR, OutFolder, fresh_folder
 from bench.reporting.report import write_outputs
 from bench.reporting.store import SampleStore
 from bench.running.runner import Recording, read_channel_names, run_scene
@@ -32,6 +34,7 @@ class RunResult:
     exit_code: int
     folder: Path
     recording: Recording
+    sensor_records: dict[int, dict] = field(default_factory=dict)  # sensors 2..N: number -> its record.json
 
 
 def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, npz: bool | None = None,
@@ -67,13 +70,27 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
                 h5 = None
             if guard.signum is not None and rec.status == "ok":
                 rec.status = "interrupted"
-            record = write_outputs(rec, folder, csv=csv, plots=plots, npz=npz, samples_tmp=h5, guard=guard)
+            sensor_records = {k: _write_sensor(sub, folder, k, guard=guard, csv=csv, plots=plots, npz=npz,
+                                               compression=compression)
+                              for k, sub in sorted(rec.sensors.items())}
+            record = write_outputs(rec, folder, csv=csv, plots=plots, npz=npz, samples_tmp=h5, guard=guard,
+                                   sensors=sensor_records)
             code = {"ok": 0, "interrupted": guard.exit_code or 130}.get(record["status"], 1)
         if h5 is not None and "samples.h5" in record["outputs"]:
             from bench.reporting.store import StoredChannels
 
             rec.channels = StoredChannels(folder.path / "samples.h5")
-        return RunResult(record, code, folder.path, rec)
+        return RunResult(record, code, folder.path, rec, sensor_records)
     finally:
         folder.remove_temps()
         folder.close()
+
+
+def _write_sensor(sub: Recording, folder: OutFolder, k: int, **kw) -> dict:
+    """Sensor ``k``'s outputs into ``folder``/sensor<k>/ (its own lock, taken while ``folder``'s is held), under
+    the run's signal guard (in ``kw``): its record, or — if even the folder cannot be used — a failed stand-in."""
+    try:
+        with OutFolder.open(folder.path / f"sensor{k}", flag=folder.flag, kind=RUN_SENSOR) as sub_folder:
+            return write_outputs(sub, sub_folder, **kw)
+    except Exception as e:
+        return {"status": "failed", "error": f"{type(e).__name__}: {e}", "outputs": []}

@@ -2,10 +2,10 @@
 
 While a :class:`StopSignals` guard is active, a SIGINT or SIGTERM only records the signal.  During the
 simulation, the first one stops the runner at its next chunk boundary (``should_stop``); everything recorded so
-far is then written in full — exports and plots included — with status ``"interrupted"``.  Once the caller has
-called :meth:`StopSignals.begin_writing`, only a signal arriving after that call (e.g. a second Ctrl-C) stops
-exports and plots at their next block (``checkpoint`` raises :class:`StopRequested`); the record is still
-written.  The exit status is 128 + the first signal's number (130 for SIGINT, 143 for SIGTERM).  Writes go through
+far is then written in full — exports and plots included — with status ``"interrupted"``.  A second signal —
+whenever it arrives, even before the chunk has ended — or any signal arriving after
+:meth:`StopSignals.begin_writing` stops exports and plots at their next block (``checkpoint`` raises
+:class:`StopRequested`); the record is still written.  The exit status is 128 + the first signal's number (130 for SIGINT, 143 for SIGTERM).  Writes go through
 temporary files renamed into place, so no signal leaves a half-written file behind.
 """
 
@@ -31,7 +31,8 @@ class StopSignals:
         self.announce = announce
         self.signum: int | None = None  # the first signal: the run's status and exit code
         self.count = 0
-        self._writing_signum: int | None = None  # the first signal after begin_writing()
+        self._writing_signum: int | None = None  # the signal that stops the writing: a second one, or one after
+        #                                            begin_writing()
         self._writing = False
         self._previous: dict = {}
 
@@ -39,9 +40,12 @@ class StopSignals:
         self.count += 1
         name = signal.Signals(signum).name
         msg = None
-        if self._writing and self._writing_signum is None:
+        if self._writing_signum is None and (self._writing or self.signum is not None):
             self._writing_signum = signum
-            msg = f"\n{name}: stopping the exports and plots; writing the record (status \"interrupted\")\n"
+            msg = (f"\n{name}: stopping the exports and plots; writing the record (status \"interrupted\")\n"
+                   if self._writing else
+                   f"\n{name}: the exports and plots will be skipped; the record is still written (status "
+                   f"\"interrupted\")\n")
         if self.signum is None:
             self.signum = signum
             msg = msg or (f"\n{name}: stopping at the next chunk and writing what was recorded "
@@ -68,13 +72,14 @@ class StopSignals:
         return self.signum is not None
 
     def begin_writing(self) -> None:
-        """The simulation is over and the outputs are being written: from now on only a signal that arrives
-        after this call makes :meth:`checkpoint` raise."""
+        """The simulation is over and the outputs are being written: from now on :meth:`checkpoint` raises if a
+        signal arrived after this call, or a second signal arrived at any time (one signal before this call only
+        stopped the simulation)."""
         self._writing = True
 
     def checkpoint(self) -> None:
-        """Raise :class:`StopRequested` if a signal arrived since :meth:`begin_writing` (before that call: since
-        the guard was entered)."""
+        """Raise :class:`StopRequested` if the writing is to stop (:meth:`begin_writing`; before that call: if
+        any signal arrived since the guard was entered)."""
         signum = self._writing_signum if self._writing else self.signum
         if signum is not None:
             raise StopRequested(signal.Signals(signum).name)

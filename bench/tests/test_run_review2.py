@@ -1,0 +1,233 @@
+"""Fixes from the second adversarial review: `run --force` removes nothing before the whole folder is checked; a
+second Ctrl-C before the chunk ends still stops the exports; a several-sensor run writes every sensor under the
+signal guard and the lock; only sensor2..sensor<MAX_SENSORS> folders are a run's own."""
+
+import json
+import os
+import signal
+
+import pytest
+
+from bench.reporting import exports
+from bench.reporting.outdir import LOCK_NAME, RUN, OutDirError, OutFolder
+from bench.reporting.session import run_to_folder
+from bench.scenes.scene import MAX_SENSORS, parse_scene
+from bench.tests.cli_runs import run_cli
+from bench.tests.test_outputs import check_consistent
+
+PLOTS = ("traces.png", "spectrogram.png")
+
+
+def _tree(folder) -> dict[str, str]:
+    """Every file under ``folder`` (lock files aside) with its text."""
+    return {p.relative_to(folder).as_posix(): p.read_text() for p in sorted(folder.rglob("*"))
+            if p.is_file() and p.name != LOCK_NAME}
+
+
+def _earlier_several_sensor_run(out, sensors=(2, 3)) -> None:
+    for folder in (out, *(out / f"sensor{k}" for k in sensors)):
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "record.json").write_text('{"status": "ok"}')
+        (folder / "codes.npz").write_text("earlier")
+
+
+# --- 1. --force checks the whole tree before it removes anything --------------------------------------------------
+@pytest.mark.unit
+def test_force_refuses_a_foreign_file_in_a_later_sensor_folder_and_removes_nothing(tmp_path):
+    """A clean sensor2/ and a foreign file in sensor3/: refused, naming it, and sensor2/ and the top-level record
+    are still there (they used to be removed before the refusal)."""
+    out = tmp_path / "o"
+    _earlier_several_sensor_run(out)
+    (out / "sensor3" / "mine.txt").write_text("mine")
+    before = _tree(out)
+    with pytest.raises(OutDirError, match="sensor3/mine.txt"):
+        OutFolder.open(out, force=True)
+    assert _tree(out) == before
+
+
+@pytest.mark.unit
+def test_run_force_refuses_a_foreign_top_level_file_and_removes_no_sensor_folder(tmp_path):
+    """The review's CLI case: notes.txt beside an earlier run with sensor2/ — exit 2, nothing removed."""
+    out = tmp_path / "my out"
+    _earlier_several_sensor_run(out, sensors=(2,))
+    (out / "notes.txt").write_text("mine")
+    before = _tree(out)
+    r = run_cli("run", "taps", "--out", out, "--force", "--quiet", "--no-plots")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "notes.txt" in r.stderr, r.stderr
+    assert _tree(out) == before
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("foreign", ["sensor0", "sensor1", f"sensor{MAX_SENSORS + 1}", "sensor2/sensor3"])
+def test_only_sensor2_to_max_sensors_folders_are_a_runs_own(tmp_path, foreign):
+    """sensor0, sensor1, one past MAX_SENSORS, or a sensor folder nested in another: refused, nothing removed."""
+    out = tmp_path / "o"
+    _earlier_several_sensor_run(out, sensors=(2,))
+    (out / foreign).mkdir(parents=True, exist_ok=True)
+    (out / foreign / "record.json").write_text("{}")
+    before = _tree(out)
+    with pytest.raises(OutDirError, match=foreign.split("/")[-1]):
+        OutFolder.open(out, force=True)
+    assert _tree(out) == before
+    assert RUN.subfolders == tuple(f"sensor{k}" for k in range(2, MAX_SENSORS + 1))
+
+
+@pytest.mark.unit
+def test_force_replaces_every_sensor_folder_of_an_earlier_run(tmp_path):
+    out = tmp_path / "o"
+    _earlier_several_sensor_run(out, sensors=range(2, MAX_SENSORS + 1))
+    (out / "sensor2" / ".codes.npz.x1y2.part").write_text("left over")
+    OutFolder.open(out, force=True).close()
+    assert [p.name for p in out.iterdir()] == [LOCK_NAME]
+
+
+# --- 2. a second signal before the chunk ends -----------------------------------------------------------------
+@pytest.mark.unit
+def test_two_signals_before_the_chunk_ends_stop_the_exports_and_plots(tmp_path, monkeypatch, capfd):
+    """Both Ctrl-Cs arrive before the first chunk boundary: the simulation stops there, exports and plots are
+    skipped (as the first signal's message promises), the record is still written, exit status 130."""
+    from bench.reporting import session
+
+    original = session.run_scene
+
+    def run_scene(*args, should_stop, **kw):
+        def stop_asked():
+            if not sent:
+                sent.append(1)
+                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), signal.SIGINT)
+            return should_stop()
+
+        sent = []
+        return original(*args, should_stop=stop_asked, **kw)
+
+    monkeypatch.setattr(session, "run_scene", run_scene)
+    sc = parse_scene({"scene": {"name": "w", "duration_s": 3.0}})
+    res = run_to_folder(sc, tmp_path / "o", csv=True, progress=False, chunk_s=0.5)
+    err = capfd.readouterr().err
+    assert "another signal stops the exports and plots" in err and "exports and plots will be skipped" in err
+    assert res.exit_code == 130 and res.record["interrupted_by"] == "SIGINT"
+    record = check_consistent(tmp_path / "o", "interrupted")
+    assert record["simulated_s"] == 0.5
+    assert set(record["skipped_outputs"]) == {"codes.npz", "samples.csv", *PLOTS}
+
+
+# --- 3. several sensors: every sensor written under the guard, before sensor 1's record -----------------------
+@pytest.mark.unit
+def test_a_signal_while_sensor_2_is_written_still_writes_every_sensors_record(tmp_path, monkeypatch):
+    """SIGINT while sensor 2's samples.csv is exported (the first export of a 3-sensor run): each sensor's
+    record.json is written ("interrupted", its skipped outputs named), sensor 1's lists sensors 2 and 3."""
+    original = exports.export_csv
+    sent = []
+
+    def signalled_csv(*args):
+        if not sent:
+            sent.append(1)
+            os.kill(os.getpid(), signal.SIGINT)
+        original(*args)
+
+    monkeypatch.setattr(exports, "export_csv", signalled_csv)
+    sc = parse_scene({"scene": {"name": "three", "duration_s": 0.5}, "sensors": [{"index": 2}, {"index": 3}]})
+    out = tmp_path / "o"
+    res = run_to_folder(sc, out, csv=True, progress=False, chunk_s=0.25)
+    assert res.exit_code == 130
+    sensor2 = json.loads((out / "sensor2" / "record.json").read_text())
+    sensor3 = json.loads((out / "sensor3" / "record.json").read_text())
+    assert sensor2["status"] == sensor3["status"] == "interrupted"
+    assert "codes.npz" in sensor2["outputs"] and set(sensor2["skipped_outputs"]) == {"samples.csv", *PLOTS}
+    assert set(sensor3["skipped_outputs"]) == {"codes.npz", "samples.csv", *PLOTS}
+    record = check_consistent(out / "sensor2", "interrupted") and check_consistent(out, "interrupted")
+    assert record["sensors"] == {
+        f"sensor{k}": {"status": "interrupted", "error": None, "outputs": r["outputs"]}
+        for k, r in ((2, sensor2), (3, sensor3))}
+    assert {k: (r["status"], r["outputs"]) for k, r in res.sensor_records.items()} == {
+        2: ("interrupted", sensor2["outputs"]), 3: ("interrupted", sensor3["outputs"])}
+    assert not [p for p in out.rglob("*.part")]
+
+
+@pytest.mark.unit
+def test_a_sensor_folder_that_cannot_be_written_fails_the_run(tmp_path, monkeypatch):
+    """Sensor 3's folder refused (a writer holds its lock): sensors 1 and 2 written, the run "failed", naming it."""
+    from bench.reporting import outdir
+
+    sc = parse_scene({"scene": {"name": "three", "duration_s": 0.3}, "sensors": [{"index": 2}, {"index": 3}]})
+    out = tmp_path / "o"
+    original = outdir.OutFolder._prepare
+
+    def prepare(self, force, keep=()):
+        original(self, force, keep)
+        if self.path == out:  # after the out folder is checked: another writer takes sensor3/
+            (out / "sensor3").mkdir()
+            held.append(outdir._lock(out / "sensor3", "x", "--out"))
+
+    held = []
+    monkeypatch.setattr(outdir.OutFolder, "_prepare", prepare)
+    try:
+        res = run_to_folder(sc, out, progress=False, plots=False)
+    finally:
+        for fd in held:
+            os.close(fd)
+    assert res.exit_code == 1
+    record = check_consistent(out, "failed")
+    assert record["sensors"]["sensor2"]["status"] == "ok" and record["sensors"]["sensor3"]["status"] == "failed"
+    assert "sensor 3: OutDirError" in record["error"] and "sensor3/" in (out / "report.md").read_text()
+
+
+# --- 4, 5, 7. record: a CSV beside --out that is not a recording is never removed; names in the CSV -------------
+def _frames():
+    import numpy as np
+
+    from bench.hosts.driver import DataFrame
+
+    ch = np.array([0, 17, 40])  # PAC, E1, E24 (a BioTac SP's)
+    return [DataFrame(seq, 0b1, ch, np.array([[10 + seq], [20], [30]], np.uint16), np.zeros((3, 1), np.uint8))
+            for seq in range(2)]
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("csv", [(), ("--csv",)], ids=["no csv", "csv"])
+def test_record_force_refuses_a_csv_beside_out_that_is_not_a_recording(tmp_path, csv):
+    """`record --out data.npz --force` used to delete the user's data.csv whatever it held: now refused before
+    the port is opened (loop:// would be read), naming the file, and nothing is touched."""
+    from bench.tests.cli_runs import run_cli
+
+    (tmp_path / "data.csv").write_text("my own measurements\n")
+    r = run_cli("record", "loop://", "--out", tmp_path / "data.npz", "--quiet", "--force", *csv)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert f"{tmp_path / 'data.csv'} is not a recording's CSV" in r.stderr
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == {"data.csv": "my own measurements\n"}
+
+
+@pytest.mark.unit
+def test_saving_a_recording_removes_only_a_recordings_csv_beside_it(tmp_path):
+    from bench.cli.hosts import RECORDING_CSV_HEADER, _save_recording
+
+    out, beside = tmp_path / "r.npz", tmp_path / "r.csv"
+    beside.write_text(RECORDING_CSV_HEADER + "\n0,0,PAC,1,5,0\n")
+    _save_recording(out, _frames(), {"end": "complete"}, csv=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.npz"]
+    beside.write_text("seq,slot,channel\n")  # not a recording's (another header), e.g. written meanwhile
+    _save_recording(out, _frames(), {"end": "complete"}, csv=False)
+    assert beside.read_text() == "seq,slot,channel\n"
+
+
+@pytest.mark.unit
+def test_a_recordings_csv_names_the_channels_and_its_files_replace_symlinks(tmp_path):
+    """The CSV's channel column holds names as run's samples.csv does (the NPZ keeps the indices); both files go
+    in through outdir's temporary files, so a symbolic link at --out is replaced, never written through."""
+    import numpy as np
+
+    from bench.cli.hosts import RECORDING_CSV_HEADER, _save_recording
+
+    target = tmp_path / "elsewhere.npz"
+    target.write_text("not to be touched")
+    out = tmp_path / "r.npz"
+    out.symlink_to(target)
+    written = _save_recording(out, _frames(), {"end": "complete"}, csv=True)
+    assert written == [out, tmp_path / "r.csv"]
+    assert target.read_text() == "not to be touched" and not out.is_symlink()
+    assert np.load(out)["channels"][0].tolist() == [0, 17, 40]
+    lines = (tmp_path / "r.csv").read_text().splitlines()
+    assert lines[0] == RECORDING_CSV_HEADER
+    assert lines[1:4] == ["0,0,PAC,1,10,0", "0,1,E1,1,20,0", "0,2,E24,1,30,0"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["elsewhere.npz", "r.csv", "r.npz"]  # no temporary file
