@@ -83,9 +83,25 @@ def recording_file(text: str) -> str:
     return output_file(text)
 
 
+#: The first line of the CSV ``record --csv`` writes; a file beside --out is only ever replaced if it starts so.
+RECORDING_CSV_HEADER = "seq,slot,channel,sensor,code,status"
+
+
 def _csv_beside(out: Path) -> Path:
     """Where ``record --csv`` writes the CSV: beside the NPZ, same name, suffix .csv."""
     return out.with_suffix(".csv")
+
+
+def _is_recording_csv(path: Path) -> bool:
+    """Whether ``path`` is a regular file (not a symbolic link) whose first line is :data:`RECORDING_CSV_HEADER`."""
+    if path.is_symlink() or not path.is_file():
+        return False
+    try:
+        with open(path, "rb") as fh:
+            first = fh.readline(len(RECORDING_CSV_HEADER) + 3)
+    except OSError:
+        return False
+    return first.rstrip(b"\r\n") == RECORDING_CSV_HEADER.encode()
 
 
 def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
@@ -104,14 +120,24 @@ def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
     if present and not force:
         raise BenchError(f"--out {out}: {' and '.join(map(str, present))} already there (an earlier recording?); "
                          f"give another --out, or --force to replace {'it' if len(present) == 1 else 'them'}")
+    csv_path = _csv_beside(out)
+    if csv_path in present and not _is_recording_csv(csv_path):
+        raise BenchError(f"--out {out}: {csv_path} is not a recording's CSV (its first line is not "
+                         f"{RECORDING_CSV_HEADER!r}); --force replaces only an earlier recording: move it away, or "
+                         f"give another --out")
 
 
 def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
-    """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV); returns the files written.
+    """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV: channels by name); returns the files
+    written.
 
-    Atomic: every file is written whole under a temporary name first; then a CSV beside ``out`` left by the
-    recording being replaced is removed (it would not match), and the new files are renamed into place."""
+    Atomic: every file is written whole under a temporary name first (:func:`bench.reporting.outdir.temp_path`);
+    then a recording's CSV beside ``out`` left by the recording being replaced is removed (it would not match),
+    and the new files are renamed into place (:func:`bench.reporting.outdir.commit`)."""
     import numpy as np
+
+    from bench.reporting.outdir import commit, temp_path
+    from emulator.channels import variant
 
     n = len(frames)
     shapes = {(tuple(f.channels), f.sensor_mask) for f in frames}
@@ -137,20 +163,25 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
                   **{k: np.array(v) for k, v in meta.items()})
     out.parent.mkdir(parents=True, exist_ok=True)
     written = [out] + ([_csv_beside(out)] if csv else [])
-    temps = {path: path.with_name(f".{path.name}.{os.getpid()}.partial") for path in written}
+    name_of = variant("biotac-sp").channel_name  # every variant's channel indices, E1..E24
+    temps: dict[Path, Path] = {}
     try:
+        for path in written:
+            temps[path] = temp_path(path)
         with open(temps[out], "wb") as fh:
             np.savez_compressed(fh, **arrays)
         if csv:
             with open(temps[_csv_beside(out)], "w") as fh:
-                fh.write("seq,slot,channel,sensor,code,status\n")
+                fh.write(RECORDING_CSV_HEADER + "\n")
                 for f in frames:
                     for k, ch in enumerate(f.channels):
                         for j, s in enumerate(f.sensors):
-                            fh.write(f"{f.seq},{k},{ch},{s},{f.codes[k, j]},{f.status[k, j]}\n")
-        _csv_beside(out).unlink(missing_ok=True)  # the replaced recording's CSV, or the one rewritten below
+                            fh.write(f"{f.seq},{k},{name_of.get(int(ch), ch)},{s},{f.codes[k, j]},"
+                                     f"{f.status[k, j]}\n")
+        if _is_recording_csv(_csv_beside(out)):
+            _csv_beside(out).unlink()  # the replaced recording's CSV, or the one rewritten below
         for path, tmp in temps.items():
-            os.replace(tmp, path)
+            commit(tmp, path)
     finally:
         for tmp in temps.values():
             tmp.unlink(missing_ok=True)
@@ -278,7 +309,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "Whatever ends the recording, what was received is written (to a temporary name, then "
                     "renamed), with 'end', 'requested_s' and 'recorded_s' in the file. An earlier recording at "
                     "--out (or a CSV beside it) is refused before anything is recorded unless --force, which "
-                    "replaces it and removes its CSV if this recording writes none. Exit status: 0 complete; "
+                    "replaces it and removes its CSV if this recording writes none (a CSV there that is not a "
+                    "recording's is refused even with --force). Exit status: 0 complete; "
                     "1 the stream stopped, the bridge went away or the port failed before --seconds (a warning "
                     "says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments or nothing received.\n\n"
                     "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
@@ -293,10 +325,11 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                          "name in it")
     rc.add_argument("--csv", action="store_true",
                     help="also write the frames as CSV beside the NPZ (same name, suffix .csv): seq, slot, "
-                         "channel, sensor, code, status")
+                         "channel (its name, e.g. PAC or E7, as in run's samples.csv; the NPZ's 'channels' holds "
+                         "the channel indices), sensor, code, status")
     rc.add_argument("--force", action="store_true",
                     help="replace an earlier recording at --out (and remove its CSV beside it when this recording "
-                         "writes none)")
+                         "writes none); a .csv beside --out that is not a recording's is refused, never removed")
     rc.add_argument("--baud", type=whole(50, 12_000_000), default=3_000_000,
                     help="the serial line's baud rate (default 3000000, the bridge's)")
     rc.add_argument("--idle-timeout", type=number(0, 3600, lo_open=True), default=5.0, metavar="S",
