@@ -47,7 +47,7 @@ def test_textures_separating_at_low_force_give_positive_rho_against_force():
 
 def test_the_scatter_per_velocity_reads_the_trials_spread():
     rho = pilot_trends(_pilot(lambda p, f, v: 2.0, trials=30))
-    per_v = rho["scatter_per_velocity_cm_s"]
+    per_v = rho["per_velocity_cm_s"]
     assert len(per_v) == 6
     for row in per_v.values():
         assert row["roughness_trial_sd"] == pytest.approx(1.0, rel=0.2)  # the unit normal's SD

@@ -17,6 +17,7 @@ from bench.experiments.experiment import (ABLATIONS, beats_baselines, load_exper
                                           table_from_rows)
 from bench.paths import FIXTURES, OUT
 from bench.verification.claims.core import Bench, Claim, claim_group
+from emulator.skin import Skin
 
 EXPERIMENT = FIXTURES / "experiments" / "fishel2012.toml"
 
@@ -26,28 +27,49 @@ TREND_RHO = 0.33
 
 
 def pilot_trends(pilot_rows: list[dict]) -> dict:
-    """Spearman ρ of the pilot's expected uncertainty U (equal priors over the pilot textures, every movement the
-    pilot ran, the high-power ones included as in D Fig. 6-7) against the movement's force and velocity, per
-    property: ``{"traction": {"force": ρ, "velocity": ρ}, …}`` (ρ < 0: the property discriminates better — U
-    falls — as force or velocity rises); and per velocity (cm/s), medians over textures and forces of the trial
-    scatter: traction's SD relative to its mean (%), roughness's SD (ln units), and the SD of the textures'
-    mean roughness (ln units) — what U weighs against each other."""
+    """What D's pilot-trend sentence is checked with, from the pilot's trials (traction in A, roughness in ln
+    units):
+
+    * per property, Spearman ρ of the pilot's expected uncertainty U (equal priors over the pilot textures) against
+      the movement's force and velocity, over every movement the pilot ran — the high-power ones included, as in
+      D Fig. 6-7 — and over the kept (not high-power) ones: ``{"traction": {"force": ρ, "velocity": ρ,
+      "force_kept": ρ, "velocity_kept": ρ}, …}``; ρ < 0: the property discriminates better (U falls) as force or
+      velocity rises;
+    * per velocity (cm/s) and per force (N), medians over the textures and the other axis of what U weighs: the
+      trial scatter (traction's SD relative to its mean, %; roughness's SD), the spread of the textures' means
+      (roughness's SD across textures), each texture's separation from its nearest neighbour in units of their
+      pooled trial SD (d′, per property), and the textures' median roughness;
+    * per force, the velocity (cm/s) of the highest roughness U."""
     model = ex.fit_model(table_from_rows(pilot_rows))
     u = ex.pilot_uncertainty(model)
     grid = ex.movement_grid()
     force, velocity = grid["force_N"][model.movements], grid["velocity_m_s"][model.movements]
-    out = {name: {"force": float(stats.spearmanr(u[:, p], force)[0]),
-                  "velocity": float(stats.spearmanr(u[:, p], velocity)[0])}
+    kept = ~grid["high_power"][model.movements]
+
+    def rho(x, y):
+        return float(stats.spearmanr(x, y)[0])
+
+    out = {name: {"force": rho(u[:, p], force), "velocity": rho(u[:, p], velocity),
+                  "force_kept": rho(u[kept, p], force[kept]), "velocity_kept": rho(u[kept, p], velocity[kept])}
            for p, name in enumerate(ex.PROPERTIES)}
     mean, sigma = model.mean, model.sigma  # (T, M, 3)
-    per_v = {}
-    for v in np.unique(velocity):
-        sel = velocity == v
-        per_v[f"{100 * v:.3g}"] = {
-            "traction_rel_sd_pct": float(np.median(100 * sigma[:, sel, 0] / np.abs(mean[:, sel, 0]))),
-            "roughness_trial_sd": float(np.median(sigma[:, sel, 1])),
-            "roughness_texture_sd": float(np.median(np.std(mean[:, sel, 1], axis=0)))}
-    out["scatter_per_velocity_cm_s"] = per_v
+    # d′ of each texture to its nearest neighbour, per movement and property: |Δµ| / √((σ_i² + σ_j²)/2)
+    gap = np.abs(mean[:, None] - mean[None, :]) / np.sqrt(0.5 * (sigma[:, None] ** 2 + sigma[None, :] ** 2))
+    gap[np.arange(mean.shape[0]), np.arange(mean.shape[0])] = np.inf
+    nearest = gap.min(axis=1)  # (T, M, 3)
+
+    def medians(sel) -> dict:
+        return {"traction_rel_sd_pct": float(np.median(100 * sigma[:, sel, 0] / np.abs(mean[:, sel, 0]))),
+                "traction_nearest_dprime": float(np.median(nearest[:, sel, 0])),
+                "roughness_trial_sd": float(np.median(sigma[:, sel, 1])),
+                "roughness_texture_sd": float(np.median(np.std(mean[:, sel, 1], axis=0))),
+                "roughness_nearest_dprime": float(np.median(nearest[:, sel, 1])),
+                "roughness_median": float(np.median(mean[:, sel, 1]))}
+
+    out["per_velocity_cm_s"] = {f"{100 * v:.3g}": medians(velocity == v) for v in np.unique(velocity)}
+    out["per_force_N"] = {f"{f:.3g}": medians(force == f) for f in np.unique(force)}
+    out["roughness_worst_velocity_cm_s_per_force_N"] = {
+        f"{f:.3g}": float(100 * velocity[force == f][np.argmax(u[force == f, 1])]) for f in np.unique(force)}
     return out
 
 
@@ -115,29 +137,49 @@ def _pilot_trend_claims(rho: dict) -> list[Claim]:
     src, note = "D ch. 6 (pilot, Fig. 6-7 text)", ("Spearman ρ of the pilot's U (10 textures, equal priors) "
                                                   "against the movement over all 36 movements; |ρ| ≥ 0.33 is "
                                                   "p < 0.05 for 36 points")
-    tr, ro, per_v = rho["traction"], rho["roughness"], rho["scatter_per_velocity_cm_s"]
-    lo, hi = per_v[min(per_v, key=float)], per_v[max(per_v, key=float)]
-    rel = [x["traction_rel_sd_pct"] for x in per_v.values()]
+    tr, ro = rho["traction"], rho["roughness"]
+    per_v, per_f = rho["per_velocity_cm_s"], rho["per_force_N"]
+    v_lo, v_hi = per_v[min(per_v, key=float)], per_v[max(per_v, key=float)]
+    f_lo, f_hi = per_f[min(per_f, key=float)], per_f[max(per_f, key=float)]
+    worst = rho["roughness_worst_velocity_cm_s_per_force_N"]
+    worst_v = max(set(worst.values()), key=list(worst.values()).count)
+    rough_peak_f = max(per_f, key=lambda f: per_f[f]["roughness_median"])
+
+    def span(key, rows, fmt=".2f"):
+        return " → ".join(f"{rows[k][key]:{fmt}}" for k in sorted(rows, key=float))
+
     return [
         Claim("pilot: traction discriminates better at higher force", f"U falls with force: ρ ≤ −{TREND_RHO}",
               tr["force"], -1.0, -TREND_RHO, "Spearman ρ", src, rho, kind="prediction", note=note),
         Claim("pilot: traction discriminates better at lower velocity", f"U rises with velocity: ρ ≥ {TREND_RHO}",
               tr["velocity"], TREND_RHO, 1.0, "Spearman ρ", src, kind="prediction", note=note,
-              deviation=f"ρ = {tr['velocity']:.2f}: the model's traction scatters by {min(rel):.2f}–{max(rel):.2f} % "
-                        "of its mean from trial to trial at every velocity (medians per velocity); D saw \"more "
-                        "stable sliding forces as measured by the motor current\" at slower velocities, a "
-                        "property of the real stage and its drive that the model's stage (current linear in the "
-                        "friction force, the same noise at any speed) does not have"),
+              deviation=f"ρ = {tr['velocity']:.2f} over the 36 movements ({tr['velocity_kept']:+.2f} over the 21 "
+                        f"kept ones, D's sign but not significant there). The model's traction does scatter more "
+                        f"when faster, in D's direction (trial SD {span('traction_rel_sd_pct', per_v)} % of the "
+                        f"mean from 1 to 10 cm/s), but the textures' means draw apart faster than that (each "
+                        f"one's nearest neighbour at a median d′ of {span('traction_nearest_dprime', per_v)}), so "
+                        f"U does not rise; D saw \"more stable sliding forces as measured by the motor current\" "
+                        f"at slower velocities"),
         Claim("pilot: roughness discriminates better at higher velocity", f"U falls with velocity: ρ ≤ −{TREND_RHO}",
               ro["velocity"], -1.0, -TREND_RHO, "Spearman ρ", src, kind="prediction", note=note,
-              deviation=f"ρ = {ro['velocity']:.2f}: from the slowest to the fastest movement the textures' mean "
-                        f"roughness spreads wider (SD {lo['roughness_texture_sd']:.2f} → "
-                        f"{hi['roughness_texture_sd']:.2f} ln units) but each texture's trials scatter more too "
-                        f"(SD {lo['roughness_trial_sd']:.3f} → {hi['roughness_trial_sd']:.3f}), and U, set by the "
-                        "closest pairs, shows no trend"),
+              deviation=f"ρ = {ro['velocity']:.2f} ({ro['velocity_kept']:+.2f} over the kept movements): from 1 "
+                        f"to 10 cm/s the textures' mean roughness spreads wider (SD across textures "
+                        f"{v_lo['roughness_texture_sd']:.2f} → {v_hi['roughness_texture_sd']:.2f}) but their "
+                        f"trials scatter more too (SD {v_lo['roughness_trial_sd']:.3f} → "
+                        f"{v_hi['roughness_trial_sd']:.3f}); the nearest-neighbour d′ is "
+                        f"{span('roughness_nearest_dprime', per_v)}, and roughness is least informative at "
+                        f"{worst_v:.3g} cm/s for {list(worst.values()).count(worst_v)} of the {len(worst)} forces, "
+                        f"where the ridges' second harmonic 2v/pitch is "
+                        f"{2e-2 * worst_v / Skin().ridge_pitch_m:.0f} Hz, beside the ~330 Hz resonance — no "
+                        f"monotone trend"),
         Claim("pilot: roughness discriminates better at lower force", f"U rises with force: ρ ≥ {TREND_RHO}",
               ro["force"], TREND_RHO, 1.0, "Spearman ρ", src, kind="prediction", note=note,
-              deviation=f"ρ = {ro['force']:.2f}: more force raises the sliding vibration in the model (the "
-                        "force-damping deviation, docs/experiment/force_damping.md), lifting the quietest textures "
-                        "off the noise floor, so roughness separates better with force, not worse"),
+              deviation=f"ρ = {ro['force']:.2f} ({ro['force_kept']:+.2f} over the kept movements), the opposite "
+                        f"sign: in the model the textures' median roughness rises with force up to "
+                        f"{rough_peak_f} N (medians {span('roughness_median', per_f)} ln units from "
+                        f"{min(per_f, key=float)} to {max(per_f, key=float)} N; docs/experiment/force_damping.md) "
+                        f"while each texture's trials scatter less (SD {f_lo['roughness_trial_sd']:.3f} → "
+                        f"{f_hi['roughness_trial_sd']:.3f}) and the textures' spread stays "
+                        f"{f_lo['roughness_texture_sd']:.2f} → {f_hi['roughness_texture_sd']:.2f}: roughness "
+                        f"separates better with force, not worse"),
     ]
