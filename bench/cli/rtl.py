@@ -66,6 +66,10 @@ def _cmd_rtl(a) -> int:
                 else f"argument --waves: only 'vectors' writes waveforms, {a.action} does not")
         print(f"biotac-bench rtl: error: {what}", file=sys.stderr)
         return 2
+    if a.action != "stream" and a.seconds is not None:
+        print(f"biotac-bench rtl: error: argument --seconds: only 'stream' runs for a time, {a.action} does not",
+              file=sys.stderr)
+        return 2
     if a.action == "lint":
         r = build.lint(REPO / "out" / "rtl_lint")
         print((r.stdout + r.stderr).strip() or "lint clean: verilator --lint-only -Wall")
@@ -101,9 +105,10 @@ def _cmd_rtl(a) -> int:
         return 1 if bad else 0
     from emulator.rtl.harness import Harness
 
-    res = Harness().stream_frames(a.seconds)
-    print(f"streamed {a.seconds:g} s of the default frame through the RTL (C++ harness): "
-          f"{a.seconds / res['wall_s']:.1f}× real time")
+    seconds = 1.0 if a.seconds is None else a.seconds
+    res = Harness().stream_frames(seconds)
+    print(f"streamed {seconds:g} s of the default frame through the RTL (C++ harness): "
+          f"{seconds / res['wall_s']:.1f}× real time")
     return 0
 
 
@@ -135,6 +140,6 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     rt.add_argument("--waves", action="store_true",
                     help="with vectors: dump a waveform (FST with the lz4 headers, else VCD) into "
                          "out/rtl_build_waves/")
-    rt.add_argument("--seconds", type=number(0, 3600, lo_open=True), default=1.0,
-                    help="simulated seconds (s) for 'stream', > 0 and ≤ 3600")
+    rt.add_argument("--seconds", type=number(0, 3600, lo_open=True), default=None,
+                    help="simulated seconds (s) for 'stream', > 0 and ≤ 3600 (default: 1)")
     rt.set_defaults(func=_cmd_rtl)

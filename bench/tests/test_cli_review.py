@@ -63,7 +63,7 @@ def test_every_help_page_has_a_description_with_an_example_and_every_argument_a_
     (("benchmark",), ["(default: 60.0)"]),
     (("claims",), ["(default: 2012)", "(default: default)"]),
     (("campaign",), ["(default: 1)", "(default: out/campaign.xml)", "(default: all)"]),
-    (("rtl",), ["(default: 1.0)"]),
+    (("rtl",), ["(default: 1)"]),
     (("cheetah", "serve"), ["(default: 3)"]),
     (("run",), ["(default gzip"]),
 ])
@@ -104,6 +104,8 @@ def test_rtl_help_says_when_waves_are_vcd(capsys):
     (["rtl", "lint", "extra.json"], ["argument files", "extra.json"]),
     (["rtl", "stream", "a.json", "--seconds", "1"], ["argument files", "a.json"]),
     (["rtl", "lint", "--waves"], ["argument --waves"]),
+    (["rtl", "lint", "--seconds", "5"], ["argument --seconds", "lint"]),
+    (["rtl", "vectors", "fixtures/spi_vectors/properties.json", "--seconds", "5"], ["argument --seconds", "vectors"]),
 ])
 def test_rtl_refuses_what_its_action_would_ignore(argv, words, capsys):
     status, _, err = invoke(argv, capsys)
