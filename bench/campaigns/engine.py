@@ -59,7 +59,7 @@ def signals_held():
     """Within the block SIGINT and SIGTERM are noted, not acted on (main thread only); the first that arrived is
     delivered after the block to the handler then in place (KeyboardInterrupt, :class:`~bench.cli.args.Terminated`,
     or the default) — unless an exception is already propagating: a stop under way keeps its first signal."""
-    from bench.cli.args import signals_deferred
+    from bench.running.signals import signals_deferred
 
     with signals_deferred() as seen:
         yield

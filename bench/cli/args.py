@@ -167,23 +167,3 @@ def sigterm_raises():
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
-
-
-@contextmanager
-def signals_deferred():
-    """Within the block SIGINT and SIGTERM are noted, not raised (a second Ctrl-C cannot cut a file short)."""
-    seen = []
-
-    def note(signum, frame):
-        seen.append(signum)
-
-    try:
-        old = {s: signal.signal(s, note) for s in (signal.SIGINT, signal.SIGTERM)}
-    except ValueError:
-        yield seen
-        return
-    try:
-        yield seen
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)

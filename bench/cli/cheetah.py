@@ -6,7 +6,8 @@ import argparse
 import shlex
 import sys
 
-from bench.cli.args import number, one_line_errors, sigterm_raises, signals_deferred, whole
+from bench.cli.args import number, one_line_errors, sigterm_raises, whole
+from bench.running.signals import signals_deferred
 
 
 def _cmd_serve(a) -> int:

@@ -8,8 +8,8 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import (Terminated, existing_file, number, one_line_errors, output_file, sigterm_raises,
-                             signals_deferred, whole)
+from bench.cli.args import Terminated, existing_file, number, one_line_errors, output_file, sigterm_raises, whole
+from bench.running.signals import signals_deferred
 
 
 # --- bridge ------------------------------------------------------------------------------------------------------
@@ -131,12 +131,12 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
     """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV: channels by name); returns the files
     written.
 
-    Atomic: every file is written whole under a temporary name first (:func:`bench.reporting.outdir.temp_path`);
+    Atomic: every file is written whole under a temporary name first (:func:`bench.atomic.temp_path`);
     then a recording's CSV beside ``out`` left by the recording being replaced is removed (it would not match),
-    and the new files are renamed into place (:func:`bench.reporting.outdir.commit`)."""
+    and the new files are renamed into place (:func:`bench.atomic.commit`)."""
     import numpy as np
 
-    from bench.reporting.outdir import commit, temp_path
+    from bench.atomic import commit, temp_path
     from emulator.channels import variant
 
     n = len(frames)

@@ -40,7 +40,7 @@ from bench.experiments.trials import (
     FIRST_VISIBLE_WEAR, TrialTask, listed_twice, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
 )
 from bench.paths import FIXTURES, OUT, REPO
-from bench.reporting.outdir import atomic_write
+from bench.atomic import atomic_write
 from bench.rigs.texture_rig import movement_grid
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"

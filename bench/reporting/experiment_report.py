@@ -1,6 +1,6 @@
 """What the texture experiment leaves behind: trial tables, accuracy and movement tables, the confusion matrix,
 plots like D Figs 6-5 and 6-10, and a Markdown report beside D's numbers.  Every file is written to a temporary
-name and renamed into place (:func:`bench.reporting.outdir.atomic_write`)."""
+name and renamed into place (:func:`bench.atomic.atomic_write`)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from bench.experiments import exploration as ex  # noqa: E402
 from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines,  # noqa: E402
                                           excluded_movements, movement_label, summary, table_from_rows)
 from bench.experiments.pairs import pair_separation_sigma  # noqa: E402
-from bench.reporting.outdir import atomic_write  # noqa: E402
+from bench.atomic import atomic_write  # noqa: E402
 from bench.reporting.sweep_plots import save_figure  # noqa: E402
 
 #: every file :func:`write_outputs` may write (what ``explore --force`` may replace)

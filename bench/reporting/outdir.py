@@ -26,6 +26,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from bench.atomic import TEMP_SUFFIX, atomic_write, commit, temp_path  # noqa: F401 (re-exported)
 from bench.errors import BenchError
 from bench.scenes.scene import MAX_SENSORS
 
@@ -35,7 +36,6 @@ LOCK_NAME = ".biotac-bench.lock"
 #: each plot of bench.reporting.plots.scene_plots, a sliding run's forces.png and properties.png included).
 RUN_FILES = ("record.json", "samples.h5", "codes.npz", "samples.csv", "report.md", "traces.png",
              "spectrogram.png", "electrode_map.png", "forces.png", "properties.png")
-TEMP_SUFFIX = ".part"
 
 
 @dataclass(frozen=True)
@@ -62,63 +62,9 @@ class OutDirError(BenchError, ValueError):
     """The out folder cannot be used (the message names the flag and the path)."""
 
 
-_UMASK: list[int] = []
-
-
-def _umask() -> int:
-    if not _UMASK:
-        m = os.umask(0o022)
-        os.umask(m)
-        _UMASK.append(m)
-    return _UMASK[0]
-
-
 def _is_temp(name: str, files=RUN_FILES) -> bool:
     """Whether ``name`` is a temporary file (:func:`temp_path`) of one of ``files``."""
     return name.startswith(".") and name.endswith(TEMP_SUFFIX) and any(name.startswith(f".{f}.") for f in files)
-
-
-def temp_path(final: Path) -> Path:
-    """A fresh, empty temporary file beside ``final`` (``.<name>.<random>.part``, created with O_EXCL, with the
-    permissions an ordinary open() would give)."""
-    fd, tmp = tempfile.mkstemp(dir=final.parent, prefix=f".{final.name}.", suffix=TEMP_SUFFIX)
-    try:
-        os.fchmod(fd, 0o666 & ~_umask())  # mkstemp makes 0600
-    finally:
-        os.close(fd)
-    return Path(tmp)
-
-
-def commit(tmp: Path, final: Path) -> Path:
-    """Move a finished temporary file into place as ``final`` (atomic; replaces a symlink, never follows it)."""
-    fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-    os.replace(tmp, final)
-    with contextlib.suppress(OSError):
-        dfd = os.open(final.parent, os.O_RDONLY | os.O_DIRECTORY)
-        try:
-            os.fsync(dfd)
-        finally:
-            os.close(dfd)
-    return final
-
-
-@contextlib.contextmanager
-def atomic_write(final):
-    """``with atomic_write(path) as tmp: write tmp`` → renamed to ``path`` on success; removed on an error or a
-    signal (KeyboardInterrupt), so nothing half-written is ever left under either name."""
-    final = Path(final)
-    tmp = temp_path(final)
-    try:
-        yield tmp
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    commit(tmp, final)
 
 
 class OutFolder:

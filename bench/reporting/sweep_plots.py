@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 
-from bench.reporting.outdir import atomic_write  # noqa: E402
+from bench.atomic import atomic_write  # noqa: E402
 
 PROPERTIES = (("traction", "traction (A)"), ("roughness", "roughness (ln bits²)"), ("fineness", "fineness (ln Hz)"))
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import signal
+from contextlib import contextmanager
 import threading
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -91,3 +92,23 @@ class StopSignals:
     @property
     def exit_code(self) -> int | None:
         return 128 + int(self.signum) if self.signum is not None else None
+
+
+@contextmanager
+def signals_deferred():
+    """Within the block SIGINT and SIGTERM are noted, not raised (a second Ctrl-C cannot cut a file short)."""
+    seen = []
+
+    def note(signum, frame):
+        seen.append(signum)
+
+    try:
+        old = {s: signal.signal(s, note) for s in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:
+        yield seen
+        return
+    try:
+        yield seen
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)

@@ -841,7 +841,7 @@ CATALOGUE += [
            "if True:  # a signal meanwhile: every file finished first, then the stop",
            ("bench/tests/test_sweep_review2.py::test_a_signal_while_the_sweep_writes_finishes_every_file_first",),
            "a Ctrl-C while a sweep writes its files leaves some unwritten"),
-    Mutant("atomic-write-keeps-its-temporary", "outputs", "bench/reporting/outdir.py",
+    Mutant("atomic-write-keeps-its-temporary", "outputs", "bench/atomic.py",
            "        with contextlib.suppress(OSError):\n            os.unlink(tmp)\n        raise",
            "        raise",
            ("bench/tests/test_sweep_review2.py::test_atomic_write_removes_its_temporary_file_on_ctrl_c",),
