@@ -148,11 +148,16 @@ def _pilot_trend_claims(rho: dict) -> list[Claim]:
     def span(key, rows, fmt=".2f"):
         return " → ".join(f"{rows[k][key]:{fmt}}" for k in sorted(rows, key=float))
 
+    def trend(name: str, measured: float, axis: str, u_rises: bool, details=None, deviation: str = "") -> Claim:
+        """D's "discriminates better at lower/higher <axis>" as U rising/falling with it: |ρ| ≥ TREND_RHO."""
+        expected = (f"U rises with {axis}: ρ ≥ {TREND_RHO}" if u_rises else f"U falls with {axis}: ρ ≤ −{TREND_RHO}")
+        low, high = (TREND_RHO, 1.0) if u_rises else (-1.0, -TREND_RHO)
+        return Claim(f"pilot: {name}", expected, measured, low, high, "Spearman ρ", src, details or {},
+                     kind="prediction", note=note, deviation=deviation)
+
     return [
-        Claim("pilot: traction discriminates better at higher force", f"U falls with force: ρ ≤ −{TREND_RHO}",
-              tr["force"], -1.0, -TREND_RHO, "Spearman ρ", src, rho, kind="prediction", note=note),
-        Claim("pilot: traction discriminates better at lower velocity", f"U rises with velocity: ρ ≥ {TREND_RHO}",
-              tr["velocity"], TREND_RHO, 1.0, "Spearman ρ", src, kind="prediction", note=note,
+        trend("traction discriminates better at higher force", tr["force"], "force", False, details=rho),
+        trend("traction discriminates better at lower velocity", tr["velocity"], "velocity", True,
               deviation=f"ρ = {tr['velocity']:.2f} over the 36 movements ({tr['velocity_kept']:+.2f} over the 21 "
                         f"kept ones, D's sign but not significant there). The model's traction does scatter more "
                         f"when faster, in D's direction (trial SD {span('traction_rel_sd_pct', per_v)} % of the "
@@ -160,8 +165,7 @@ def _pilot_trend_claims(rho: dict) -> list[Claim]:
                         f"one's nearest neighbour at a median d′ of {span('traction_nearest_dprime', per_v)}), so "
                         f"U does not rise; D saw \"more stable sliding forces as measured by the motor current\" "
                         f"at slower velocities"),
-        Claim("pilot: roughness discriminates better at higher velocity", f"U falls with velocity: ρ ≤ −{TREND_RHO}",
-              ro["velocity"], -1.0, -TREND_RHO, "Spearman ρ", src, kind="prediction", note=note,
+        trend("roughness discriminates better at higher velocity", ro["velocity"], "velocity", False,
               deviation=f"ρ = {ro['velocity']:.2f} ({ro['velocity_kept']:+.2f} over the kept movements): from 1 "
                         f"to 10 cm/s the textures' mean roughness spreads wider (SD across textures "
                         f"{v_lo['roughness_texture_sd']:.2f} → {v_hi['roughness_texture_sd']:.2f}) but their "
@@ -172,8 +176,7 @@ def _pilot_trend_claims(rho: dict) -> list[Claim]:
                         f"where the ridges' second harmonic 2v/pitch is "
                         f"{2e-2 * worst_v / Skin().ridge_pitch_m:.0f} Hz, beside the ~330 Hz resonance — no "
                         f"monotone trend"),
-        Claim("pilot: roughness discriminates better at lower force", f"U rises with force: ρ ≥ {TREND_RHO}",
-              ro["force"], TREND_RHO, 1.0, "Spearman ρ", src, kind="prediction", note=note,
+        trend("roughness discriminates better at lower force", ro["force"], "force", True,
               deviation=f"ρ = {ro['force']:.2f} ({ro['force_kept']:+.2f} over the kept movements), the opposite "
                         f"sign: in the model the textures' median roughness rises with force up to "
                         f"{rough_peak_f} N (medians {span('roughness_median', per_f)} ln units from "
