@@ -28,7 +28,7 @@ from pathlib import Path
 
 from bench.atomic import TEMP_SUFFIX, atomic_write, commit, temp_path  # noqa: F401 (re-exported)
 from bench.errors import BenchError
-from bench.scenes.scene import MAX_SENSORS
+from bench.scenes.limits import MAX_SENSORS
 
 LOCK_NAME = ".biotac-bench.lock"
 #: Files a run writes; ``--force`` removes only these (and leftover temporary files).

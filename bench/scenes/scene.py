@@ -14,6 +14,7 @@ from pathlib import Path
 
 from bench import tomlfile
 from bench.errors import SceneError
+from bench.scenes.limits import MAX_SENSORS
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
 from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
@@ -37,8 +38,6 @@ MAX_SCENE_BYTES = 1_000_000  # a scene file larger than 1 MB is refused before i
 MAX_NESTING = 16  # arrays and tables nested deeper than this are refused (a scene needs 4 levels)
 MAX_INSTANTS = 10_000  # instants of all stimuli together (each one is a stimulus the sensor computes)
 TABLES = ("scene", "sensor", "host", "noise", "analysis", "faults", "skin")
-#: sensors a scene can describe: the bridge firmware and the Cheetah adapter serve at most 5
-MAX_SENSORS = 5
 #: keys of [sensor] and of each [[sensors]] table besides the parameters (``biotac-bench params``)
 SENSOR_KEYS = ("unit", "variant")
 #: D ch. 5's impact detection rule as ``bench.verification.analysis.DetectionRule`` applies it (more than
