@@ -8,18 +8,14 @@ import csv
 import json
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from bench.experiments import exploration as ex  # noqa: E402
-from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines,  # noqa: E402
+from bench.experiments import exploration as ex
+from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines,
                                           excluded_movements, movement_label, summary, table_from_rows)
-from bench.experiments.pairs import pair_separation_sigma  # noqa: E402
-from bench.atomic import atomic_write  # noqa: E402
-from bench.reporting.sweep_plots import save_figure  # noqa: E402
+from bench.experiments.pairs import pair_separation_sigma
+from bench.atomic import atomic_write
+from bench.reporting.figures import figure_file
 
 #: every file :func:`write_outputs` may write (what ``explore --force`` may replace)
 OUTPUT_FILES = ("trials.csv", "trials.json", "pilot_uncertainty.csv", "accuracy.csv", "accuracy_per_texture.csv",
@@ -139,37 +135,35 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
     names = []
     # properties per texture at the optimal movements (like D Fig. 6-5)
     rows = result.training_rows
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
-    for p, (prop, m) in enumerate(zip(ex.PROPERTIES, result.best_movements)):
-        sel = [r for r in rows if r["movement_id"] == int(m)]
-        tex = sorted({r["texture"] for r in sel})
-        vals = [[r[prop] for r in sel if r["texture"] == t] for t in tex]
-        axes[p].errorbar(tex, [np.mean(v) for v in vals], yerr=[np.std(v) for v in vals], fmt=".", ms=3, lw=0.7)
-        axes[p].set_xlabel("texture number")
-        axes[p].set_ylabel(prop)
-        axes[p].set_title(f"{prop} at {movement_label(m)}")
-        axes[p].grid(alpha=0.3)
-    fig.tight_layout()
-    save_figure(fig, out / "properties_at_optimal_movements.png")
+    with figure_file(out / "properties_at_optimal_movements.png", 1, 3, figsize=(15, 4.5)) as (_, axes):
+        for p, (prop, m) in enumerate(zip(ex.PROPERTIES, result.best_movements)):
+            sel = [r for r in rows if r["movement_id"] == int(m)]
+            tex = sorted({r["texture"] for r in sel})
+            vals = [[r[prop] for r in sel if r["texture"] == t] for t in tex]
+            axes[p].errorbar(tex, [np.mean(v) for v in vals], yerr=[np.std(v) for v in vals], fmt=".", ms=3,
+                             lw=0.7)
+            axes[p].set_xlabel("texture number")
+            axes[p].set_ylabel(prop)
+            axes[p].set_title(f"{prop} at {movement_label(m)}")
+            axes[p].grid(alpha=0.3)
     names.append("properties_at_optimal_movements.png")
     # probability evolution of a few simulations (like D Fig. 6-10)
     if "bayesian" in result.identification_results:
         rs = result.identification_results["bayesian"][:4]
-        fig, axes = plt.subplots(1, len(rs), figsize=(4 * len(rs), 3.6), squeeze=False)
-        for ax, r in zip(axes[0], rs):
-            h = r.posterior[0]
-            steps = int(r.n_moves[0]) + 1
-            top = np.argsort(-np.nanmax(h[:steps], axis=0))[:5]
-            for k in top:
-                ax.plot(range(steps), h[:steps, k], marker=".", label=f"T{int(r.candidates[k])}")
-            ax.set_title(f"true T{int(r.true_texture)} ({lib[int(r.true_texture)].name})", fontsize=9)
-            ax.set_xlabel("movement")
-            ax.set_ylabel("P(texture)")
-            ax.set_ylim(0, 1.02)
-            ax.legend(fontsize=7)
-            ax.grid(alpha=0.3)
-        fig.tight_layout()
-        save_figure(fig, out / "probability_evolution.png")
+        with figure_file(out / "probability_evolution.png", 1, len(rs), figsize=(4 * len(rs), 3.6),
+                         squeeze=False) as (_, axes):
+            for ax, r in zip(axes[0], rs):
+                h = r.posterior[0]
+                steps = int(r.n_moves[0]) + 1
+                top = np.argsort(-np.nanmax(h[:steps], axis=0))[:5]
+                for k in top:
+                    ax.plot(range(steps), h[:steps, k], marker=".", label=f"T{int(r.candidates[k])}")
+                ax.set_title(f"true T{int(r.true_texture)} ({lib[int(r.true_texture)].name})", fontsize=9)
+                ax.set_xlabel("movement")
+                ax.set_ylabel("P(texture)")
+                ax.set_ylim(0, 1.02)
+                ax.legend(fontsize=7)
+                ax.grid(alpha=0.3)
         names.append("probability_evolution.png")
     return names
 

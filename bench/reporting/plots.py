@@ -8,13 +8,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.patches import Rectangle
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from emulator.stimuli import AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration  # noqa: E402,E501
+from bench.reporting.figures import figure_file
+from emulator.stimuli import AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration
 
 
 def _mark_stimuli(ax, stimuli, t_max):
@@ -71,8 +69,8 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
               if all(n in names for n in need)]
 
     def traces(path: Path):
-        fig, axes = plt.subplots(len(panels), 1, figsize=(11, 3.2 * len(panels)), sharex=True, squeeze=False)
-        try:
+        size = (11, 3.2 * len(panels))
+        with figure_file(path, len(panels), 1, figsize=size, sharex=True, squeeze=False) as (_, axes):
             for ax, (key, label) in zip(axes[:, 0], panels):
                 if key == "E_kohm":
                     for n in range(1, 25):  # E20..E24: a BioTac SP's
@@ -86,10 +84,6 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
                 _mark_stimuli(ax, rec.scene.stimuli, rec.simulated_s)
             axes[-1, 0].set_xlabel("time (s)")
             axes[0, 0].set_title(f"{rec.scene.name}: channel traces (markers: stimuli)")
-            fig.tight_layout()
-            fig.savefig(path, dpi=110, format="png")
-        finally:
-            plt.close(fig)
 
     if panels:
         plots.append(("traces.png", traces))
@@ -99,8 +93,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
             from emulator.conversions import PAC_PA_PER_BIT
 
             f, tt, sxx = spec.result()
-            fig, ax = plt.subplots(figsize=(11, 4))
-            try:
+            with figure_file(path, figsize=(11, 4)) as (fig, ax):
                 psd = sxx * PAC_PA_PER_BIT ** 2  # codes²/Hz → Pa²/Hz (the offset does not enter: windows are detrended)
                 mesh = ax.pcolormesh(tt, f, 10 * np.log10(np.maximum(psd, 1e-12)), shading="auto", cmap="magma")
                 fig.colorbar(mesh, ax=ax, label="PAC PSD (dB re 1 Pa²/Hz)")
@@ -108,10 +101,6 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
                 ax.set_ylabel("frequency (Hz)")
                 avg = f", each column the mean of {spec.group}" if spec.group > 1 else ""
                 ax.set_title(f"{rec.scene.name}: PAC spectrogram (80 ms windows{avg})")
-                fig.tight_layout()
-                fig.savefig(path, dpi=110, format="png")
-            finally:
-                plt.close(fig)
 
         plots.append(("spectrogram.png", spectrogram))
     if "E1" in names and any(isinstance(s, Touch) for s in rec.scene.stimuli):
@@ -126,8 +115,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
 def sliding_forces(rec, path: Path) -> None:
     """Normal and tangential force on the skin and the slip velocity, at 100 Hz, over every slide."""
     f = rec.forces
-    fig, axes = plt.subplots(2, 1, figsize=(11, 5.5), sharex=True)
-    try:
+    with figure_file(path, 2, 1, figsize=(11, 5.5), sharex=True) as (_, axes):
         axes[0].plot(f["t"], f["normal_N"], ".", ms=1.5, label="normal")
         axes[0].plot(f["t"], f["tangential_N"], ".", ms=1.5, label="tangential")
         axes[0].set_ylabel("force on the skin (N)")
@@ -138,18 +126,13 @@ def sliding_forces(rec, path: Path) -> None:
         for ax in axes:
             ax.grid(alpha=0.3)
         axes[0].set_title(f"{rec.scene.name}: contact forces and slip (100 Hz)")
-        fig.tight_layout()
-        fig.savefig(path, dpi=110, format="png")
-    finally:
-        plt.close(fig)
 
 
 def sliding_properties(rec, path: Path) -> None:
     """Traction, roughness and fineness of each sliding trial, in trial order, with the skin's ridge height."""
     rows = rec.slides
     k = [r["trial"] for r in rows]
-    fig, axes = plt.subplots(4, 1, figsize=(9, 8), sharex=True)
-    try:
+    with figure_file(path, 4, 1, figsize=(9, 8), sharex=True) as (_, axes):
         for ax, key, label in zip(axes, ("traction", "roughness", "fineness"),
                                   ("traction (A)", "roughness (ln bits²)", "fineness (ln Hz)")):
             ax.plot(k, [r[key] for r in rows], "o-", ms=4)
@@ -160,10 +143,6 @@ def sliding_properties(rec, path: Path) -> None:
         axes[3].set_xlabel("sliding trial")
         axes[3].grid(alpha=0.3)
         axes[0].set_title(f"{rec.scene.name}: texture properties per trial")
-        fig.tight_layout()
-        fig.savefig(path, dpi=110, format="png")
-    finally:
-        plt.close(fig)
 
 
 def electrode_map(rec, path: Path) -> None:
@@ -186,9 +165,8 @@ def electrode_map(rec, path: Path) -> None:
         nz = np.flatnonzero(cs.hist)
         extreme = np.abs(impedance_ohm(np.array([nz[0], nz[-1]])) - rest)
         change.append(100 * float(extreme.max()) / rest)
-    fig, ax = plt.subplots(figsize=(8, 4.2))
-    try:
-        ax.add_patch(plt.Rectangle((-16, -np.pi * CORE_RADIUS_MM / 1.6), 21, 2 * np.pi * CORE_RADIUS_MM / 1.6,
+    with figure_file(path, figsize=(8, 4.2)) as (fig, ax):
+        ax.add_patch(Rectangle((-16, -np.pi * CORE_RADIUS_MM / 1.6), 21, 2 * np.pi * CORE_RADIUS_MM / 1.6,
                                    fill=False, ls="--", color="gray"))
         sc = ax.scatter(pos[:, 0], arc, c=change, s=260, cmap="viridis", edgecolors="black")
         for n, (x, a) in enumerate(zip(pos[:, 0], arc), start=1):
@@ -206,31 +184,27 @@ def electrode_map(rec, path: Path) -> None:
         ax.set_ylabel("around the finger from the ventral midline (mm)")
         ax.set_title(f"{rec.scene.name}: electrode map (red ×: touches)")
         ax.set_aspect("equal")
-        fig.tight_layout()
-        fig.savefig(path, dpi=110, format="png")
-    finally:
-        plt.close(fig)
 
 
 def sensitivity_plot(claims, out_dir: Path) -> Path:
     """d_min versus frequency for the sensor, with the human threshold curve (D Fig. 5-4)."""
     from bench.verification.psychophysics import human_threshold_m
 
-    d = next(c.details["d_min_m"] for c in claims if "d_min_m" in c.details)
+    d = next((c.details["d_min_m"] for c in claims if "d_min_m" in c.details), None)
+    if d is None:
+        raise ValueError("the frequency-sensitivity plot needs the vibration claims' d_min (claims --only vibration)")
     f = np.array(sorted(d))
     dm = np.array([d[x] for x in f])
     ff = np.geomspace(10, 900, 200)
     out_dir.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.loglog(ff, human_threshold_m(ff) * 1e6, color="tab:green", label="human threshold (Bolanowski et al. 1988, thenar)")
-    ax.loglog(f, dm * 1e6, "o-", color="tab:red", label="emulated BioTac d_min (D eq. 5.3)")
-    ax.set_xlabel("vibration frequency (Hz)")
-    ax.set_ylabel("minimum detectable amplitude (µm)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend()
-    ax.set_title("Frequency sensitivity (D Fig. 5-4)")
-    fig.tight_layout()
     path = out_dir / "frequency_sensitivity.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    with figure_file(path, figsize=(7, 4.5)) as (_, ax):
+        ax.loglog(ff, human_threshold_m(ff) * 1e6, color="tab:green",
+                  label="human threshold (Bolanowski et al. 1988, thenar)")
+        ax.loglog(f, dm * 1e6, "o-", color="tab:red", label="emulated BioTac d_min (D eq. 5.3)")
+        ax.set_xlabel("vibration frequency (Hz)")
+        ax.set_ylabel("minimum detectable amplitude (µm)")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend()
+        ax.set_title("Frequency sensitivity (D Fig. 5-4)")
     return path

@@ -5,33 +5,28 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.ticker import NullFormatter
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import NullFormatter  # noqa: E402
-import numpy as np  # noqa: E402
-
-from bench.atomic import atomic_write  # noqa: E402
+from bench.reporting.figures import figure_file
 
 PROPERTIES = (("traction", "traction (A)"), ("roughness", "roughness (ln bits²)"), ("fineness", "fineness (ln Hz)"))
-
-
-def save_figure(fig, path: Path) -> None:
-    """A matplotlib figure as PNG into ``path`` (under a temporary name renamed into place); the figure is closed."""
-    try:
-        with atomic_write(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-    finally:
-        plt.close(fig)
 
 
 def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], path: Path) -> Path:
     """Mean ± SD of each property over repetitions, against force (one line per velocity) and against velocity
     (one line per force), for each texture; written to ``path`` (PNG)."""
     textures = sorted(set(cols["texture"].tolist()))
-    fig, axes = plt.subplots(len(PROPERTIES), 2, figsize=(11, 3.2 * len(PROPERTIES)), squeeze=False)
-    cmap = plt.get_cmap("tab10")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with figure_file(path, len(PROPERTIES), 2, figsize=(11, 3.2 * len(PROPERTIES)), squeeze=False) as (_, axes):
+        _draw_properties(axes, cols, names, textures)
+    return path
+
+
+def _draw_properties(axes, cols: dict[str, np.ndarray], names: dict[int, str], textures: list[int]) -> None:
+    """One panel per property and axis (force, velocity): a line per texture and the other axis's value."""
+    cmap = colormaps["tab10"]
     for r, (key, label) in enumerate(PROPERTIES):
         for c, (x_key, line_key, x_label, x_scale) in enumerate((
                 ("force_N", "velocity_m_per_s", "normal force (N)", 1.0),
@@ -58,7 +53,3 @@ def properties_vs_movement(cols: dict[str, np.ndarray], names: dict[int, str], p
     axes[0][0].legend(fontsize=7, ncol=2)
     axes[0][0].set_title("against force (shade: velocity)")
     axes[0][1].set_title("against velocity (shade: force)")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    save_figure(fig, path)
-    return path
