@@ -39,3 +39,12 @@ def test_the_sensitivity_plot_draws_d_min_and_names_what_it_needs(tmp_path):
     assert path.read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(ValueError, match="claims --only vibration"):
         sensitivity_plot([SimpleNamespace(details={})], tmp_path / "none")
+
+
+def test_figures_is_the_only_module_that_saves_a_figure():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    writers = sorted(str(p.relative_to(root)) for d in ("bench", "emulator") for p in (root / d).rglob("*.py")
+                     if "tests" not in p.parts and ".savefig(" in p.read_text(encoding="utf-8"))
+    assert writers == ["bench/reporting/figures.py"]
