@@ -11,14 +11,13 @@ import sys
 import time
 
 from bench.cli.args import whole
-from bench.experiments.experiment import ExperimentSpec
-from bench.experiments.trials import PILOT_WORTH_TRIALS
+from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from emulator.fidelity import PROFILES
 
 #: what texture-sweep writes into its out folder (what --force may replace)
 SWEEP_FILES = ("trials.csv", "trials.json", "wear.csv", "properties.png")
 #: D ch. 6's pilot textures: the experiment's default (fixtures/experiments/fishel2012.toml)
-PILOT_TEXTURES = ",".join(map(str, ExperimentSpec().pilot_textures))
+PILOT_TEXTURES = ",".join(map(str, D_PILOT_TEXTURES))
 
 SWEEP_HELP = f"""\
 Runs the texture rig (lower until the PDC target, hold, slide 5 cm, lift) over chosen textures × movements ×
@@ -224,7 +223,7 @@ def _cmd_explore(a) -> int:
     from dataclasses import replace
 
     from bench.campaigns.engine import ClusterSpec, signals_held
-    from bench.experiments.experiment import ABLATIONS, identified_among, load_experiment, run_experiment, summary
+    from bench.experiments.experiment import identified_among, load_experiment, run_experiment, summary
     from bench.reporting.experiment_report import OUTPUT_FILES, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, writable_folder
 
@@ -272,8 +271,6 @@ def _cmd_explore(a) -> int:
 
 
 def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    from bench.experiments.experiment import ABLATIONS
-
     e = sub.add_parser("explore", help="the texture experiment of D ch. 6: pilot, training, validation, "
                                        "Bayesian exploration (Dask)", description=EXPLORE_HELP, formatter_class=fmt)
     e.add_argument("experiment", help="experiment file (TOML), e.g. fixtures/experiments/fishel2012.toml")

@@ -47,10 +47,17 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv=None) -> int:
+def _bad_input_errors() -> tuple[type[Exception], ...]:
+    """The errors reported as one line on stderr with exit status 2.  The emulator's NumericalError (a NaN or Inf
+    reached the ADC) is among them only once its module is loaded: it cannot have been raised before, and
+    importing it would load numba for every command (even --help)."""
     from bench.errors import BenchError
-    from emulator.adc import NumericalError
 
+    adc = sys.modules.get("emulator.adc")
+    return (BenchError, ValueError, OSError) + ((adc.NumericalError,) if adc is not None else ())
+
+
+def main(argv=None) -> int:
     try:
         try:
             args = build_parser().parse_args(argv)
@@ -63,7 +70,7 @@ def main(argv=None) -> int:
             return READER_GONE
         print(f"error: {e}", file=sys.stderr)
         return 2
-    except (BenchError, ValueError, NumericalError, OSError) as e:
+    except _bad_input_errors() as e:  # evaluated when an exception arrives here, after the command ran
         print(f"error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -34,6 +34,7 @@ import numpy as np
 
 from bench import tomlfile
 from bench.errors import BenchError
+from bench.experiments import design
 from bench.experiments import exploration as ex
 from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
 from bench.experiments.trials import (
@@ -67,7 +68,7 @@ class ExperimentSpec:
     name: str = "experiment"
     seed: int = 2012
     fidelity: str = "default"
-    pilot_textures: list[int] = field(default_factory=lambda: [10, 30, 43, 46, 47, 84, 87, 100, 38, 58])
+    pilot_textures: list[int] = field(default_factory=lambda: list(design.D_PILOT_TEXTURES))
     pilot_trials: int = 6
     pilot_movements: list[int] | None = None  # grid ids; None = all 36
     exclude_high_power: bool = True
@@ -95,12 +96,8 @@ class ExperimentSpec:
         return hashlib.sha256(repr(self).encode()).hexdigest()[:12]
 
 
-ABLATIONS = {
-    "smooth-skin": ("a skin without fingerprints", {"fingerprints": False}),
-    "unreplaced-wear": ("skin wear on, never replaced", {"replace_skin": False}),
-    "fewer-trials": ("2 training trials instead of 5", {"training_trials": 2}),
-    "double-noise": ("every sensor noise source doubled", {"noise_scale": 2.0}),
-}
+#: the ablation variants (``explore --ablation``); defined in :mod:`bench.experiments.design`, light for the help
+ABLATIONS = design.ABLATIONS
 
 
 def load_experiment(path: str | Path) -> ExperimentSpec:

@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
+from bench.experiments.design import PILOT_WORTH_TRIALS
 from bench.rigs.texture_rig import Movement, TextureRig, movement_grid
 from bench.textures.properties import properties
 from emulator.params import SensorParams
@@ -28,8 +29,6 @@ from emulator.skin import Skin, contact_patch_area_m2
 #: :attr:`emulator.skin.Skin.first_visible_wear_fraction`, 0.032): D replaced the skin "if there were any visible
 #: signs of wear"
 FIRST_VISIBLE_WEAR = Skin().first_visible_wear_fraction
-#: D's pilot: 10 textures × 6 repetitions of every movement, so one movement's share of it is 60 trials
-PILOT_WORTH_TRIALS = 10 * 6
 #: D's training: the three movements D kept (grid ids: 1.26 N @ 1 cm/s, 0.2 N @ 6.31 cm/s, 0.5 N @ 2.5 cm/s, all
 #: of power level 6) × 5 trials on each of 117 textures, texture after texture
 D_TRAINING_MOVEMENTS = (24, 4, 14)

@@ -1,0 +1,16 @@
+"""The experiment's design figures that the command line shows in its help: D ch. 6's pilot textures, a pilot's
+worth of trials, and the ablation variants.  Plain data with no imports, so that ``biotac-bench --help`` need not
+load the trial machinery (:mod:`bench.experiments.trials` and :mod:`bench.experiments.experiment` re-export
+them)."""
+
+#: D ch. 6's pilot: ten dissimilar textures (library numbers), the default of ``[pilot] textures``
+D_PILOT_TEXTURES = (10, 30, 43, 46, 47, 84, 87, 100, 38, 58)
+#: D's pilot: 10 textures × 6 repetitions of every movement, so one movement's share of it is 60 trials
+PILOT_WORTH_TRIALS = 10 * 6
+#: ``explore --ablation NAME``: what the variant is, and the experiment fields it overrides
+ABLATIONS = {
+    "smooth-skin": ("a skin without fingerprints", {"fingerprints": False}),
+    "unreplaced-wear": ("skin wear on, never replaced", {"replace_skin": False}),
+    "fewer-trials": ("2 training trials instead of 5", {"training_trials": 2}),
+    "double-noise": ("every sensor noise source doubled", {"noise_scale": 2.0}),
+}
