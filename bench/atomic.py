@@ -7,6 +7,7 @@ reader never sees a half-written file under its final name, and an interruption 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import tempfile
 from pathlib import Path
@@ -37,21 +38,59 @@ def temp_path(final: Path) -> Path:
     return Path(tmp)
 
 
-def commit(tmp: Path, final: Path) -> Path:
-    """Move a finished temporary file into place as ``final`` (atomic; replaces a symlink, never follows it)."""
-    fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW)
+def _fsync_file(path: Path) -> None:
+    """Flush a finished temporary file's contents to disk (never through a symbolic link)."""
+    fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
     try:
         os.fsync(fd)
     finally:
         os.close(fd)
-    os.replace(tmp, final)
+
+
+def _fsync_folder(folder: Path) -> None:
+    """Flush a folder's entries (a new name in it) to disk, where the file system allows it."""
     with contextlib.suppress(OSError):
-        dfd = os.open(final.parent, os.O_RDONLY | os.O_DIRECTORY)
+        dfd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
         try:
             os.fsync(dfd)
         finally:
             os.close(dfd)
+
+
+def commit(tmp: Path, final: Path) -> Path:
+    """Move a finished temporary file into place as ``final`` (atomic; replaces a symlink, never follows it)."""
+    _fsync_file(tmp)
+    os.replace(tmp, final)
+    _fsync_folder(final.parent)
     return final
+
+
+def commit_new(temps: dict[Path, Path]) -> list[Path]:
+    """Move finished temporary files into place (``temps``: final name -> temporary file), replacing nothing: all
+    or none.  Each final name is taken with ``os.link``, which fails (FileExistsError, naming it) if anything is
+    there — a file, a folder, a dangling symbolic link — so no other program's file that appeared after a check is
+    ever replaced (no check-then-rename race).  If one name is taken, the names already linked are removed again and
+    every temporary file is left as it was; once all are linked, the temporary names are removed."""
+    placed: list[Path] = []
+    try:
+        for final, tmp in temps.items():
+            _fsync_file(tmp)
+            try:
+                os.link(tmp, final, follow_symlinks=False)
+            except FileExistsError:
+                raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(final)) from None
+            placed.append(final)
+    except BaseException:
+        for final in placed:
+            with contextlib.suppress(OSError):
+                if os.path.samefile(final, temps[final]):  # still our link (its data stays under the temp name)
+                    os.unlink(final)
+        raise
+    for tmp in temps.values():
+        os.unlink(tmp)
+    for folder in {final.parent for final in temps}:
+        _fsync_folder(folder)
+    return placed
 
 
 @contextlib.contextmanager

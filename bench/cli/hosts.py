@@ -127,16 +127,15 @@ def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
                          f"give another --out")
 
 
-def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
+def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True) -> list[Path]:
     """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV: channels by name); returns the files
     written.
 
-    Atomic: every file is written whole under a temporary name first (:func:`bench.atomic.temp_path`);
-    then a recording's CSV beside ``out`` left by the recording being replaced is removed (it would not match),
-    and the new files are renamed into place (:func:`bench.atomic.commit`)."""
+    Atomic: every file is written whole under a temporary name first (:func:`bench.atomic.temp_path`), then put in
+    place by :func:`_place_recording` (replacing an earlier recording only with ``force``)."""
     import numpy as np
 
-    from bench.atomic import commit, temp_path
+    from bench.atomic import temp_path
     from emulator.channels import variant
 
     n = len(frames)
@@ -178,14 +177,51 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool) -> list[Path]:
                         for j, s in enumerate(f.sensors):
                             fh.write(f"{f.seq},{k},{name_of.get(int(ch), ch)},{s},{f.codes[k, j]},"
                                      f"{f.status[k, j]}\n")
-        if _is_recording_csv(_csv_beside(out)):
-            _csv_beside(out).unlink()  # the replaced recording's CSV, or the one rewritten below
-        for path, tmp in temps.items():
-            commit(tmp, path)
-    finally:
-        for tmp in temps.values():
+    except BaseException:
+        for tmp in temps.values():  # unfinished: nothing worth keeping
             tmp.unlink(missing_ok=True)
+        raise
+    _place_recording(out, temps, csv, force)
     return written
+
+
+def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool) -> None:
+    """Move a finished recording's temporary files (``temps``: final name -> temporary file) into place.
+
+    Without ``force`` nothing is replaced: the files take their names only where nothing is there, all or none
+    (:func:`bench.atomic.commit_new`: a hard link, so even a file that appears at the last moment is never
+    replaced), and a CSV beside ``out`` that would not match it is refused too: whatever appeared there during the
+    recording (:func:`_refuse_overwriting` found nothing at the start) is refused.  With ``force`` the replaced
+    recording's CSV beside ``out`` is removed (it would not match) and the files replace what is there
+    (:func:`bench.atomic.commit`), except a CSV that is not a recording's, come meanwhile.  Refused or failed, the
+    recording stays in its temporary files beside ``out``, which the BenchError names."""
+    import errno
+
+    from bench.atomic import commit, commit_new
+    from bench.errors import BenchError
+
+    beside = _csv_beside(out)
+    beside_taken = beside.exists() or beside.is_symlink()
+    try:
+        if force:
+            if csv and beside_taken and not _is_recording_csv(beside):
+                raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(beside))
+            if _is_recording_csv(beside):
+                beside.unlink()  # the replaced recording's CSV, or the one rewritten below
+            for path, tmp in temps.items():
+                commit(tmp, path)
+        else:
+            if not csv and beside_taken:  # a CSV that would not match this NPZ (with --csv commit_new refuses it)
+                raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(beside))
+            commit_new(temps)
+    except OSError as e:
+        if isinstance(e, FileExistsError):
+            why = (f"{e.filename} appeared during the recording (written by another program?) and is not replaced"
+                   + ("" if force else " without --force"))
+        else:
+            why = f"cannot put the recording in place: {e}"
+        kept = " and ".join(str(tmp) for tmp in temps.values() if tmp.exists())
+        raise BenchError(f"--out {out}: {why}; the recording is kept as {kept} (rename it to use it)") from None
 
 
 def _open_driver(port: str, baud: int):
@@ -259,7 +295,7 @@ def _cmd_record(a) -> int:
         st = drv.parser.stats
         meta = {"end": end, "requested_s": a.seconds, "recorded_s": recorded_s, "dropped_frames": st.dropped_frames,
                 "crc_errors": st.crc_errors}
-        written = _save_recording(out, frames, meta, a.csv)
+        written = _save_recording(out, frames, meta, a.csv, force=a.force)
     summary = (f"wrote {', '.join(map(str, written))}: {len(frames)} frames ({recorded_s:.2f} s of {a.seconds:g} s "
                f"asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes skipped "
                f"{st.bytes_skipped}")
@@ -310,9 +346,12 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "renamed), with 'end', 'requested_s' and 'recorded_s' in the file. An earlier recording at "
                     "--out (or a CSV beside it) is refused before anything is recorded unless --force, which "
                     "replaces it and removes its CSV if this recording writes none (a CSV there that is not a "
-                    "recording's is refused even with --force). Exit status: 0 complete; "
-                    "1 the stream stopped, the bridge went away or the port failed before --seconds (a warning "
-                    "says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments or nothing received.\n\n"
+                    "recording's is refused even with --force). Without --force, a file that appears there "
+                    "during the recording is not replaced either: the recording is then kept under its temporary "
+                    "name beside --out (.NAME.XXXXXXXX.part, which the error gives; rename it to use it). Exit "
+                    "status: 0 complete; 1 the stream stopped, the bridge went away or the port failed before "
+                    "--seconds (a warning says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments, nothing received, "
+                    "or --out taken during the recording.\n\n"
                     "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
                     "the set of sensors changes during the recording, codes[frame, slot, sensor - 1] with status "
                     "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt))
