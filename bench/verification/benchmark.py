@@ -23,7 +23,7 @@ import numpy as np
 from bench.verification import analysis
 from bench.running.runner import build_sensor, run_scene
 from bench.running.sampler import Sampler
-from bench.paths import REPO, SCENES_DIR
+from bench.paths import FIXTURES, REPO, SCENES_DIR
 from bench.scenes.scene import load_scene
 from emulator.channels import DEFAULT_FRAME_NAMES, PAC
 from emulator.conversions import ADC_LSB_V
@@ -296,6 +296,13 @@ def firmware_paths(say=lambda m: None) -> dict:
     return out
 
 
+def _channel_codes(rec):
+    """(sensor number, channel name, codes) for every channel of every sensor of ``rec``, sensor 1 first."""
+    for number, r in [(1, rec)] + sorted(rec.sensors.items()):
+        for name in r.channels:
+            yield number, name, np.ascontiguousarray(r.channels[name].codes)
+
+
 def scene_code_fingerprints(scenes_dir=SCENES_DIR, profiles=("fast", "default", "reference"),
                             seed_offsets=(0, 1, 5, 11), reference_cap_s: float = 30.0, say=print) -> dict[str, str]:
     """A fingerprint (sha256 of every channel's codes, every sensor) per shipped scene × profile × seed (the scene's
@@ -313,27 +320,118 @@ def scene_code_fingerprints(scenes_dir=SCENES_DIR, profiles=("fast", "default", 
                     scene.duration_s = min(scene.duration_s, reference_cap_s)
                 rec = run_scene(scene, progress=False, keep_samples=True)
                 h = hashlib.sha256()
-                for r in [rec] + [rec.sensors[k] for k in sorted(rec.sensors)]:
-                    for name in r.channels:
-                        h.update(name.encode())
-                        h.update(np.ascontiguousarray(r.channels[name].codes).tobytes())
+                for _, name, codes in _channel_codes(rec):
+                    h.update(name.encode())
+                    h.update(codes.tobytes())
                 key = f"{path.stem}/{fidelity}/seed+{offset}"
                 out[key] = f"{h.hexdigest()[:16]} {rec.status}"
                 say(f"{key:44s} {out[key]}")
     return out
 
 
+#: the committed codes of the shipped scenes that do not slide (issue 8: adding sliding leaves them bit for bit);
+#: bench/tests/test_scene_fingerprints.py recomputes them
+SCENE_FINGERPRINT_FIXTURE = FIXTURES / "fingerprints" / "scenes_default.json"
+SCENE_FINGERPRINT_COMMAND = ".venv/bin/python -m bench.verification.benchmark --write-fixture"
+
+
+def scene_slides(scene) -> bool:
+    """Whether any sensor of ``scene`` has a slide or a skin replacement (the sliding path: texture, friction,
+    skin wear)."""
+    from bench.scenes.scene import SkinReplacement
+    from emulator.sliding import Slide
+
+    return any(isinstance(s, (Slide, SkinReplacement))
+               for k in range(1, scene.n_sensors + 1) for s in scene.sensor_spec(k).stimuli)
+
+
+def channel_fingerprints(scene) -> dict:
+    """Run ``scene`` as it is (profile, seed) and fingerprint each channel: {"status": run status, "channels":
+    {"sensor<k>/<channel>": {"codes": how many, "sha256": first 16 hex digits of the codes as little-endian
+    int32}}}."""
+    import hashlib
+
+    rec = run_scene(scene, progress=False, keep_samples=True)
+    channels = {}
+    for number, name, codes in _channel_codes(rec):
+        if codes.size == 0 and rec.status == "ok":
+            raise ValueError(f"scene {scene.name}: sensor {number} channel {name} kept no codes to fingerprint")
+        as_int32 = np.asarray(codes, dtype="<i4")
+        channels[f"sensor{number}/{name}"] = {"codes": int(codes.size),
+                                             "sha256": hashlib.sha256(as_int32.tobytes()).hexdigest()[:16]}
+    return {"status": rec.status, "channels": channels}
+
+
+def non_sliding_scene_fingerprints(scenes_dir=SCENES_DIR, fidelity: str = "default") -> dict[str, dict]:
+    """:func:`channel_fingerprints` of every shipped scene that does not slide, at ``fidelity`` and the scene's own
+    seed, by scene file stem (about 3 s at the default profile)."""
+    out = {}
+    for path in sorted(scenes_dir.glob("*.toml")):
+        scene = load_scene(path)
+        if not scene_slides(scene):
+            scene.fidelity = fidelity
+            out[path.stem] = channel_fingerprints(scene)
+    return out
+
+
+def fingerprint_environment() -> dict:
+    """The versions and machine the codes were computed with (a mismatch elsewhere may be floating point)."""
+    import platform
+
+    import numba
+    import scipy
+
+    return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "numba": numba.__version__, "machine": platform.machine()}
+
+
+def write_scene_fingerprint_fixture(path=None) -> dict:
+    """Recompute the non-sliding scenes' fingerprints and write them to ``path`` (default
+    :data:`SCENE_FINGERPRINT_FIXTURE`; do it only for an intended change of their codes, and say why in the
+    commit)."""
+    from bench.atomic import atomic_write
+
+    path = SCENE_FINGERPRINT_FIXTURE if path is None else path
+    doc = {"about": "Codes of the shipped scenes that do not slide (fixtures/scenes/*.toml without a slide or skin "
+                    "replacement on any sensor), default profile, each scene's own seed: per channel the number of "
+                    "codes and the first 16 hex digits of the sha256 of the codes as little-endian int32. "
+                    "bench/tests/test_scene_fingerprints.py recomputes them: any change of these codes fails there "
+                    "(issue 8 item 8: sliding leaves scenes without sliding unchanged bit for bit).",
+           "regenerate": f"only for an intended change of these codes, said in the commit message: "
+                         f"{SCENE_FINGERPRINT_COMMAND}",
+           "profile": "default",
+           "made_with": fingerprint_environment(),
+           "scenes": non_sliding_scene_fingerprints()}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as tmp:
+        tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return doc
+
+
 def _fingerprints_main(argv) -> int:
     """``python -m bench.verification.benchmark OUT.json [OLD.json]``: write the fingerprints; with OLD.json (another
-    tree's), list the runs whose codes differ and exit 1 if any does."""
+    tree's), list the runs whose codes differ and exit 1 if any does.  ``--write-fixture``: rewrite
+    :data:`SCENE_FINGERPRINT_FIXTURE` instead."""
     import argparse
     from pathlib import Path
 
     ap = argparse.ArgumentParser(description=scene_code_fingerprints.__doc__)
-    ap.add_argument("out", type=Path)
+    ap.add_argument("out", type=Path, nargs="?")
     ap.add_argument("against", type=Path, nargs="?")
     ap.add_argument("--scenes", type=Path, default=SCENES_DIR)
+    ap.add_argument("--write-fixture", action="store_true",
+                    help="rewrite the committed fingerprints of the scenes that do not slide (fixtures/fingerprints/"
+                         "scenes_default.json) and nothing else; only for an intended change of their codes")
     a = ap.parse_args(argv)
+    if a.write_fixture:
+        if a.out is not None or a.scenes != SCENES_DIR:
+            ap.error("--write-fixture takes no OUT.json, OLD.json or --scenes (it fingerprints the shipped scenes)")
+        doc = write_scene_fingerprint_fixture()
+        print(f"wrote {SCENE_FINGERPRINT_FIXTURE}: {len(doc['scenes'])} scenes "
+              f"({', '.join(doc['scenes'])})")
+        return 0
+    if a.out is None:
+        ap.error("OUT.json is required (or --write-fixture)")
     prints = scene_code_fingerprints(a.scenes)
     a.out.write_text(json.dumps(prints, indent=1))
     if a.against is None:
