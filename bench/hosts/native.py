@@ -1,7 +1,9 @@
 """Building the C parts of the bench (bridge firmware, cheetah.so, the example client) with the system compiler.
 
 Builds are cached in folders named after a hash of their inputs, and each output is written under a temporary
-name and moved into place, so an interrupted build never leaves a half-written library behind.
+name of its own (per process and thread) and moved into place, so an interrupted build never leaves a half-written
+library behind, and builds of the same output at once (the threads of a Dask worker running fault-campaign cases)
+each finish, the last one's rename winning with identical contents.
 """
 
 from __future__ import annotations
@@ -9,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import os
 import subprocess
+import threading
 from pathlib import Path
 
 from bench.errors import BuildError
@@ -33,7 +36,7 @@ def compile_c(sources, output: Path, flags=(), libs=(), what: str = "C code") ->
     if output.exists():
         return output
     output.parent.mkdir(parents=True, exist_ok=True)
-    partial = output.with_name(f".{output.name}.{os.getpid()}.partial")
+    partial = output.with_name(f".{output.name}.{os.getpid()}.{threading.get_ident()}.partial")
     cmd = ["cc", *C_FLAGS, *flags, *map(str, sources), *libs, "-o", str(partial)]
     try:
         r = subprocess.run(cmd, capture_output=True, text=True)
