@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from bench.cli.args import one_line_errors, output_file, whole
+from bench.cli.experiments import _sigterm_like_ctrl_c
 
 
 def _names(kind: str):
@@ -32,10 +33,14 @@ def _names(kind: str):
 
 def _cmd_campaign(a) -> int:
     from bench.campaigns import faults as campaign
+    from bench.campaigns.engine import ClusterSpec, signals_held
 
-    results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds),
-                                    progress=lambda m: print(f"… {m}", file=sys.stderr))
-    campaign.write_junit(results, Path(a.junit))
+    spec = ClusterSpec.from_env(a.scheduler, a.workers)
+    print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
+          f"{a.seeds} seed(s)) on {spec.describe()}", file=sys.stderr)
+    results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet)
+    with signals_held():  # a signal meanwhile: the report is finished first, then the stop
+        campaign.write_junit(results, Path(a.junit))
     print(campaign.summary(results))
     print(f"JUnit XML: {a.junit}")
     return 0 if all(r["passed"] for r in results) else 1
@@ -50,7 +55,10 @@ def _campaign_help() -> str:
     return f"""\
 Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a pty and the host
 driver (one case: about 150 frames), and checks that the firmware and driver react as stated; prints a summary
-and writes JUnit XML.  Exit status 1 if any case fails, 2 for bad arguments.
+and writes JUnit XML (each case's wall time as its time).  Each case is an independent task on Dask (a LocalCluster
+on this machine's cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the verdicts are the
+same for any number of workers.  Exit status 1 if any case fails, 2 for bad arguments or no scheduler at the
+address; Ctrl-C stops the campaign (exit 130; SIGTERM: 143) and writes no report.
 
 faults (--faults), each with what a correct firmware and driver do:
 {faults}
@@ -60,6 +68,7 @@ scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene 
 
   biotac-bench campaign                                   # every fault in every scene, seed 0
   biotac-bench campaign --faults unplug_replug,serial_loss --scenes rest --seeds 3 --junit out/c.xml
+  biotac-bench campaign --seeds 10 --scheduler tcp://10.0.0.5:8786        # on an existing Dask cluster
 """
 
 
@@ -85,4 +94,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
     cp.add_argument("--junit", type=output_file, default="out/campaign.xml",
                     help="where to write the JUnit XML report (one test case per fault × scene × seed)")
-    cp.set_defaults(func=_cmd_campaign)
+    cp.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core)")
+    cp.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    cp.add_argument("--quiet", action="store_true", help="no progress bar")
+    cp.set_defaults(func=_sigterm_like_ctrl_c(_cmd_campaign))
