@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from bench.cli.args import number, unit_choice, whole
+from bench.cli.experiments import _sigterm_like_ctrl_c
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
 
@@ -49,16 +50,24 @@ def _cmd_claims(a) -> int:
     unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
+        from bench.campaigns.engine import ClusterSpec
+
         if a.seeds < 1:
             print(f"error: --seeds {a.seeds}: give at least 1", file=sys.stderr)
             return 2
+        spec = ClusterSpec.from_env(a.scheduler, a.workers)
+        if progress:
+            progress(f"{a.seeds} seed(s) × {len(groups)} group(s) on {spec.describe()}")
         rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, **unit_kw),
-                                     range(a.seed, a.seed + a.seeds), groups, progress)
+                                     range(a.seed, a.seed + a.seeds), groups, progress, spec=spec)
         if a.json:
             print(json.dumps([r.as_dict() for r in rows], indent=2, default=float))
         else:
             print(format_spread_table(rows))
         return 0 if not any(r.failed_seeds for r in rows) else 1
+    if a.workers is not None or a.scheduler is not None:
+        print("error: --workers and --scheduler go with --seeds (one seed runs in this process)", file=sys.stderr)
+        return 2
     bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, **unit_kw)
     claims = run_claims(bench, groups, progress=progress)
     if a.json:
@@ -99,9 +108,15 @@ Time on the project's 2 cores: about 1 min (55 s measured) once out/cache holds 
 first run also slides D ch. 6's texture experiment and two ablations from an empty cache, several minutes more
 (12 min in a test-suite run on busy cores).  --only picks groups; --seeds N repeats the seeded runs N times.
 
+With --seeds, each group for each seed is an independent task on Dask (a LocalCluster on this machine's cores, or
+an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the rows are the same for any number of workers.
+The exploration group starts a cluster of its own for the texture experiment, so it runs in this process after
+the others.  Without --seeds the claims run in this process.
+
   biotac-bench claims
   biotac-bench claims --only noise --only impact          # two groups, seconds
   biotac-bench claims --seeds 5 --only vibration          # each row's spread over seeds 2012..2016
+  biotac-bench claims --seeds 20 --scheduler tcp://10.0.0.5:8786   # on an existing Dask cluster
   biotac-bench claims --unit 17 --json > unit17.json      # on sensor unit 17 (biotac-bench units)
 """
 
@@ -137,12 +152,14 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.add_argument("--seeds", type=int, metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")
+    c.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core)")
+    c.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     c.add_argument("--unit", type=unit_choice, default=None,
                    help="run the claims on this sensor unit: a unit seed, \"nominal\" (default) or a serial "
                         "number \"BT...\" (biotac-bench units)")
     c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
     c.add_argument("--plots", metavar="DIR", help="write the frequency-sensitivity plot into DIR")
-    c.set_defaults(func=_cmd_claims)
+    c.set_defaults(func=_sigterm_like_ctrl_c(_cmd_claims))
 
     b = sub.add_parser("benchmark", help="error vs the reference profile and cost per simulated second",
                        description=BENCHMARK_HELP, formatter_class=fmt)

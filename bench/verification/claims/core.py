@@ -15,6 +15,7 @@ Every claim says what kind of evidence it is (``kind``):
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import asdict, dataclass, field
 from typing import Callable
 
@@ -202,20 +203,68 @@ class Spread:
         return d
 
 
-def run_claims_over_seeds(make_bench: Callable[[int], Bench], seeds, groups=None, progress=None) -> list[Spread]:
-    """Run the claims once per seed (``make_bench(seed)``) and gather each claim's values across the seeds."""
+#: Claim groups that start a Dask cluster of their own, so they cannot run as a task on a Dask worker (a worker
+#: process cannot start worker processes): ``exploration`` runs the texture experiment through
+#: ``bench.experiments.experiment.run_experiment``, which connects to a cluster even when every stage is cached.
+#: Over seeds they run on the client, one after another, after the other groups' tasks (and their cluster) are done.
+STARTS_A_CLUSTER = frozenset({"exploration"})
+
+
+@dataclass(frozen=True)
+class ClaimTask:
+    """One claim group for one seed, as a campaign-engine task: the group's name (a worker finds it in its own
+    registry) and the Bench it runs with (its seed among the settings)."""
+
+    bench: Bench
+    group: str
+
+    def __repr__(self) -> str:  # how a failed task is named (the Bench's parameters are long)
+        return f"ClaimTask(seed={self.bench.seed}, group={self.group!r})"
+
+
+def run_claim_task(task: ClaimTask) -> list[dict]:
+    """The engine's task: the group's claims as plain data, what a :class:`Spread` row takes from each."""
+    importlib.import_module(__package__)  # in a worker: every shipped group registers itself
+    return [{"name": c.name, "kind": c.kind, "source": c.source, "expected": c.expected, "unit": c.unit,
+             "low": c.low, "high": c.high, "deviation": c.deviation, "measured": float(c.measured),
+             "passed": c.passed, "ok": c.ok} for c in CLAIM_GROUPS[task.group](task.bench)]
+
+
+def runs_on_workers(group: str) -> bool:
+    """Whether ``group`` can run as a task on a Dask worker: a shipped group (one that importing this package
+    registers, as a worker does), and one that starts no cluster of its own (:data:`STARTS_A_CLUSTER`).  A group
+    registered at run time (a test's, a plugin's) is unknown to the workers: it runs on the client."""
+    return (group not in STARTS_A_CLUSTER
+            and CLAIM_GROUPS[group].__module__.startswith(__package__ + "."))
+
+
+def run_claims_over_seeds(make_bench: Callable[[int], Bench], seeds, groups=None, progress=None, spec=None,
+                          client=None) -> list[Spread]:
+    """Run the claims once per seed (``make_bench(seed)``) and gather each claim's values across the seeds, in the
+    order the seeds and groups are given.  Each (seed, group) pair is a task on the campaign engine (``spec``: a
+    :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment; or a connected ``client``), so two
+    workers share even one seed's groups; groups that cannot run on a worker (:func:`runs_on_workers`) run here
+    afterwards, each announced through ``progress(text)``.  ``progress`` also turns the engine's progress bar on."""
+    from bench.campaigns.engine import run_tasks
+
+    groups = list(groups or CLAIM_GROUPS)
+    tasks = [ClaimTask(make_bench(seed), group) for seed in seeds for group in groups]
+    on_workers = [i for i, t in enumerate(tasks) if runs_on_workers(t.group)]
+    found = dict(zip(on_workers, run_tasks(run_claim_task, [tasks[i] for i in on_workers], spec=spec,
+                                           client=client, progress=progress is not None, desc="claim groups")))
     rows: dict[str, Spread] = {}
-    seeds = list(seeds)
-    for seed in seeds:
-        claims = run_claims(make_bench(seed), groups,
-                            progress=None if progress is None else (lambda g, s=seed: progress(f"seed {s}: {g}")))
-        for c in claims:
-            r = rows.setdefault(c.name, Spread(c.name, c.kind, c.source, c.expected, c.unit, c.low, c.high,
-                                               [], [], [], [], c.deviation))
-            r.seeds.append(seed)
-            r.measured.append(float(c.measured))
-            r.passed.append(c.passed)
-            r.ok.append(c.ok)
+    for i, task in enumerate(tasks):
+        if i not in found:
+            if progress:
+                progress(f"seed {task.bench.seed}: {task.group}")
+            found[i] = run_claim_task(task)
+        for c in found[i]:
+            r = rows.setdefault(c["name"], Spread(c["name"], c["kind"], c["source"], c["expected"], c["unit"],
+                                                  c["low"], c["high"], [], [], [], [], c["deviation"]))
+            r.seeds.append(task.bench.seed)
+            r.measured.append(c["measured"])
+            r.passed.append(c["passed"])
+            r.ok.append(c["ok"])
     return list(rows.values())
 
 
