@@ -7,17 +7,38 @@ the texture at the set velocity over the set distance while the stage's motor cu
 the tangential load — is sampled at the frame rate; then the finger lifts.  The controller sees only codes: it
 reads the sensor through the host sampler and the SPI peripheral like any host.  Each texture is one 75 mm
 square, as D's were; a trial starts at a random place on it, drawn from the trial's seed, such that the contact
-patch stays on the square from touchdown to the end of the stroke (:meth:`TextureRig.start_range_m`).  Its commands reach the motors
-``latency_s`` later (20 ms).  It decides after every 10 ms frame while lowering; to avoid paying a Python round
-trip per frame, the emulator reads stretches of frames as if the finger kept lowering (which it does until the
-controller stops it) and checks the controller's rule on every frame read.  Each stretch is computed in one block
-that ends exactly at its last frame's needs.  A stretch that may hold the stop is read after a snapshot
-(a deep copy of the run, :func:`_clone`); if the stop falls before its end, the emulator goes back to the snapshot,
-gives the stop command there (it acts 20 ms after the stop frame, so it lies after everything computed) and reads on
-through the stop — the same samples, since results do not depend on block size (tested); the motion refuses a
-command that would reach into computed instants.  The lowering command, which follows the 0.2 s baseline whatever
-it reads, is given before the baseline is read, so the baseline and the first stretch are one read.  Stretches the
-stop is not expected in are read without a snapshot: the stop is predicted
+patch stays on the square from touchdown to the end of the stroke (:meth:`TextureRig.start_range_m`).
+
+Timing, as D ch. 6 describes its rig (l. 1216–1220): "Data was sampled continuously and transmitted back to the
+computer in batches every 100ms. The digital controls for the stepper motor were also updated every 100ms through a
+DAQ card".  Modelled so: the host samples frame after frame (10 ms each) without pause; the frames reach the
+controller in batches of ``batch_s`` (0.1 s), each batch at its end; the controller evaluates its rules on every
+frame of a batch when the batch arrives, and a command it then gives (the lowering once the baseline has arrived,
+the stop once a frame of the batch reaches the target) is given at that arrival and reaches the motor
+``latency_s`` later.  The stop frame is therefore still the first frame whose PDC change reaches the target, but
+the finger keeps lowering until the end of that frame's batch plus the latency — on average half a batch more than
+a controller deciding after every frame.  Model choices, not D's: the batches are aligned to the start of sampling
+(batch k holds frames 10k … 10k + 9), the DAQ update is taken to happen at the batch's arrival (D updated the
+stepper "every 100ms" too, in step or not with the data, which D does not say), and ``latency_s`` = 20 ms between
+arrival and the motor's response (the host's processing and the DAQ's output; D gives no figure).  A ``batch_s``
+of one frame is a controller deciding after every frame.  The commands planned in advance from the stop (the hold,
+the slide's start and braking, the lift) are given at their planned instants, not on the batch ticks: the linear
+stage ran its own motion controller from preset commands (D), and the lift comes after everything the properties
+use.  The stage's motor current is recorded once per frame, not at D's 100 ms queries: the traction (the mean
+current over the measurement window, D eq. 6.14) estimates the same mean from ten times the readings (a choice: the
+means agree within 1 %; 100 ms queries would widen the trial-to-trial spread by up to ~7× on smooth textures, where
+the current-sense noise, a model figure not D's, dominates it).
+
+While lowering, to avoid paying a Python round trip per frame, the emulator reads stretches of frames as if the
+finger kept lowering (which it does until the controller's stop acts) and checks the controller's rule on every
+frame read.  Each stretch is computed in one block that ends exactly at its last frame's needs.  A stretch that may
+hold the stop is read after a snapshot (a deep copy of the run, :func:`_clone`); if the stop's batch ends before
+the stretch does, the emulator goes back to the snapshot, gives the stop command at the batch's end (it acts a
+latency later, after everything computed) and reads on through that batch — the same samples, since results do not
+depend on block size (tested); if the batch ends after the stretch, it reads on to the batch's end from there.  The
+motion refuses a command that would reach into computed instants.  The lowering command, which follows the
+baseline whatever it reads, is given before the baseline is read, so the baseline and the first stretch are one
+read.  Stretches the stop is not expected in are read without a snapshot: the stop is predicted
 from the PDC change read so far against the commanded load ahead (the contact law of the planned depth), with a
 margin; should the stop still fall inside one, the lowering is run again from the trial's start with a snapshot
 before every window (deterministic from the seed, so the same trial; counted in ``Trial.extra["lowering"]``).
@@ -88,7 +109,10 @@ class RigSettings:
     stage_accel_m_per_s2: float = 1.0
     lift_rate_m_per_s: float = 5e-3
     settle_after_s: float = 0.2
-    latency_s: float = 0.02
+    #: D ch. 6: data reached the computer "in batches every 100ms" and the stepper's controls were "updated every
+    #: 100ms"; a whole number of frames (one frame: a controller deciding after every frame)
+    batch_s: float = 0.1
+    latency_s: float = 0.02  # from a batch's arrival to the motor's response (a model choice)
     # D ch. 6: the stepper stops "when this value [the DC pressure] reached the target change" — each frame's
     # reading itself; averaging n frames (a choice D does not describe) adds (n − 1)/2 frames of lag
     pdc_average_frames: int = 1
@@ -109,7 +133,7 @@ class Trial:
     recording: TrialRecording
     movement: Movement
     true_normal_N: float  # mean true normal load during the slide (the emulator's contact force, not a code)
-    reached_pdc_change: float  # PDC change (counts) at which the stepper stopped
+    reached_pdc_change: float  # PDC change (counts) of the stop frame (the first to reach the target)
     skin_before: dict
     skin_after: dict
     texture: int
@@ -134,6 +158,11 @@ class TextureRig:
     def run_trial(self, texture: Texture, movement: Movement, seed: int, trial: int = 0) -> Trial:
         """Lower, hold, slide, lift: one trial on ``texture``; ``seed`` decides the start position and every
         noise stream, so a trial is the same whatever else ran before it (given the skin's state)."""
+        return self._trial(texture, movement, seed, trial, self._lowered_ahead)
+
+    def _trial(self, texture: Texture, movement: Movement, seed: int, trial: int, lower) -> Trial:
+        """:meth:`run_trial`, lowered by ``lower(texture, movement, seed, start_position)``, which returns what
+        :meth:`_lowered` does."""
         import time
 
         wall0 = time.perf_counter()
@@ -142,15 +171,10 @@ class TextureRig:
             raise ValueError(f"movement {movement}: force and velocity must be positive")
         first, last = self.start_range_m(movement)
         start_position = float(effect_rng(seed, "rig.start_position").uniform(first, last))
-        try:
-            run, reached, lowering, to_stop = self._lowered(texture, movement, seed, start_position, read_ahead=True)
-        except _Overshot:  # the look-ahead misjudged the stop: again from the start, a snapshot before every window
-            run, reached, lowering, to_stop = self._lowered(texture, movement, seed, start_position,
-                                                            read_ahead=False)
-            lowering["retried"] = True
+        run, reached, lowering, to_stop = lower(texture, movement, seed, start_position)
         frame_s = run.frame / run.sampler.slot_rate_Hz
         motion, sampler, log = run.motion, run.sampler, run.log
-        t_stop = (sampler.next_slot + to_stop * run.frame) / sampler.slot_rate_Hz  # after the stop frame
+        t_stop = (sampler.next_slot + to_stop * run.frame) / sampler.slot_rate_Hz  # the stop frame's batch arrives
         contact_s = motion.move_finger(t_stop, 0.0)
         # hold, then slide over the distance: the stage starts, cruises and brakes at planned instants
         slide_start = contact_s + s.hold_s
@@ -204,36 +228,55 @@ class TextureRig:
         s = self.settings
         return max(s.distance_m, movement.velocity_m_per_s ** 2 / s.stage_accel_m_per_s2)
 
+    def _lowered_ahead(self, texture: Texture, movement: Movement, seed: int,
+                       start_position: float) -> tuple["_Run", float, dict, int]:
+        """:meth:`_lowered` reading ahead; should the look-ahead misjudge the stop, again from the start with a
+        snapshot before every window."""
+        try:
+            return self._lowered(texture, movement, seed, start_position, read_ahead=True)
+        except _Overshot:
+            run, reached, lowering, to_stop = self._lowered(texture, movement, seed, start_position, read_ahead=False)
+            lowering["retried"] = True
+            return run, reached, lowering, to_stop
+
+    def _new_run(self, texture: Texture, seed: int, start_position: float) -> "_Run":
+        """A trial's run at its start: the finger ``start_gap_m`` above ``texture`` at ``start_position`` (m),
+        nothing read, no command given."""
+        s = self.settings
+        motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
+                                 max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
+        return _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
+                           fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
+                           record_signals=("stage_force_N", "normal_force_N")),
+                    motion, effect_rng(seed, "rig.motor_current"), s)
+
     def _lowered(self, texture: Texture, movement: Movement, seed: int, start_position: float,
                  read_ahead: bool) -> tuple["_Run", float, dict, int]:
-        """The trial's run, its baseline read at rest, lowered until the controller's stop frame and read exactly
-        through it or up to a point before it (nothing computed beyond); the PDC change (counts) it stopped at;
-        what the emulator did to get there (windows, snapshots, frames computed and thrown away); and how many
-        frames are still to be read through the stop frame (0: none).
+        """The trial's run, its baseline read at rest, lowered until the controller gives the stop (at the arrival
+        of the stop frame's batch) and read exactly up to that instant or to a point before it (nothing computed
+        beyond); the PDC change (counts) it stopped at; what the emulator did to get there (windows, snapshots,
+        frames computed and thrown away); and how many frames are still to be read until the stop is given (0: none).
 
-        The controller decides after every frame; the emulator reads stretches of frames as if the finger keeps
-        lowering (it does until the controller stops it) and checks the rule on each frame read.  A stretch that
-        holds the stop frame before its end is thrown away: the run goes back to a snapshot taken before it, and
-        the caller gives the stop command and reads on from there (the frames through the stop are the same: the
-        command acts a latency after the stop frame).
+        The controller decides on each batch's frames when the batch arrives; the emulator reads stretches of frames
+        as if the finger keeps lowering (it does until the controller's stop acts) and checks the rule on each frame
+        read.  A stretch that goes past the arrival of the stop frame's batch is thrown away: the run goes back to a
+        snapshot taken before it, and the caller reads on from there to the arrival and gives the stop command then
+        (the frames through the arrival are the same: the command acts a latency after it).
         With ``read_ahead``, stretches the stop is not expected in are read without a snapshot (see
         :func:`_next_stretch`); should the stop fall inside one anyway, :class:`_Overshot` is raised and the caller
         runs the lowering again without reading ahead (same result, slower)."""
         s = self.settings
-        motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
-                                 max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
-        run = _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
-                          fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
-                          record_signals=("stage_force_N", "normal_force_N")),
-                   motion, effect_rng(seed, "rig.motor_current"), s)
+        run = self._new_run(texture, seed, start_position)
         frame_s = run.frame / run.sampler.slot_rate_Hz
-        # baseline at rest, then lower until the PDC change reaches the target.  The lowering command, given once the
-        # baseline is read whatever it reads, is given now for that instant (nothing is computed yet), so the
-        # baseline is read in one go with the first stretch of the lowering.
-        first = int(round(s.baseline_s / frame_s))  # frames read before the lowering command
-        if first < 1:
+        batch = _batch_frames(s, frame_s)
+        # baseline at rest, then lower until the PDC change reaches the target.  The lowering command, given when the
+        # baseline's last batch arrives whatever it reads, is given now for that instant (nothing is computed yet),
+        # so the baseline is read in one go with the first stretch of the lowering.
+        baseline_frames = int(round(s.baseline_s / frame_s))
+        if baseline_frames < 1:
             raise ValueError(f"rig.baseline_s = {s.baseline_s!r}: the PDC baseline needs at least one frame "
                              f"({frame_s * 1e3:.0f} ms)")
+        first = _batch_end(baseline_frames - 1, batch)  # frames read before the lowering command
         run.motion.move_finger((run.sampler.next_slot + first * run.frame) / run.sampler.slot_rate_Hz,
                                s.lower_rate_m_per_s)
         target = movement.force_N / FORCE_PER_PDC_BIT_N
@@ -249,7 +292,7 @@ class TextureRig:
         baseline = None
         while True:
             if baseline is None and first_stretch < _MIN_WINDOW_FRAMES:
-                baseline = float(np.mean(run.log.pdc_codes()))
+                baseline = float(np.mean(run.log.pdc_codes()[:baseline_frames]))
             lowered = max(0, run.log.n_frames(run.frame) - first)  # frames read since the lowering command
             if lowered >= budget:
                 raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on "
@@ -259,6 +302,8 @@ class TextureRig:
             else:
                 change = _predicted_change(run, first, baseline, texture, budget - lowered)
                 n, safe = _next_stretch(change, target, window, read_ahead)
+            if not safe:  # a window that may hold the stop ends at a batch's arrival: no going back if it is the last
+                n = _batch_end(first + lowered + n - 1, batch) - first - lowered
             n = min(n, budget - lowered)
             snapshot = None if safe else run.snapshot()
             stats["snapshots"] += int(snapshot is not None)
@@ -267,21 +312,38 @@ class TextureRig:
             run.read_exactly(before + n - run.log.n_frames(run.frame))  # (with the baseline, the first time)
             pdc = run.log.pdc_codes()
             if baseline is None:
-                baseline = float(np.mean(pdc[:first]))
+                baseline = float(np.mean(pdc[:baseline_frames]))
             means = np.convolve(pdc, np.ones(s.pdc_average_frames) / s.pdc_average_frames, "full")[:pdc.size]
             over = np.flatnonzero(means[before:] - baseline >= target)
             if over.size:
-                k = int(over[0]) + 1
-                reached = float(means[before + k - 1] - baseline)
-                if k == n:
-                    return run, reached, stats, 0
-                # the stretch went past the stop: back to before it; the caller reads from there through the stop
-                # with the stop command given (it acts a latency after the stop frame, after all these frames)
+                stop = before + int(over[0])  # the stop frame
+                reached = float(means[stop] - baseline)
+                k = _batch_end(stop, batch) - before  # frames from the stretch's start to the stop's batch arrival
+                if k >= n:  # the arrival is at the stretch's end or after it: read on to it from here
+                    return run, reached, stats, k - n
+                # the stretch went past the arrival: back to before it; the caller reads from there to the arrival
+                # and gives the stop command then (it acts a latency later, after all these frames)
                 if snapshot is None:
                     raise _Overshot
                 stats["frames_recomputed"] += k
                 stats["frames_discarded"] += n - k
                 return snapshot, reached, stats, k
+
+
+def _batch_frames(settings: RigSettings, frame_s: float) -> int:
+    """Frames per batch the controller receives (``settings.batch_s`` over the frame's length ``frame_s``, s);
+    raises unless the batch is a whole number of frames."""
+    n = round(settings.batch_s / frame_s)
+    if n < 1 or abs(n * frame_s - settings.batch_s) > 1e-9:
+        raise ValueError(f"rig.batch_s = {settings.batch_s!r}: must be a whole number of frames "
+                         f"({frame_s * 1e3:g} ms each), at least one")
+    return n
+
+
+def _batch_end(frame: int, batch: int) -> int:
+    """Frames from the start of sampling to the arrival of the batch holding frame ``frame`` (0-based): batches of
+    ``batch`` frames, aligned to the start of sampling."""
+    return (frame // batch + 1) * batch
 
 
 #: The longest block of grid samples the rig has the sensor compute at once after the stop (memory: ~0.5 MB per

@@ -44,16 +44,21 @@ def test_a_trial_does_not_depend_on_how_it_is_read_ahead(texture, force, monkeyp
     _same(ref, again)
 
 
-def test_the_stepper_stops_at_the_first_frame_whose_pdc_change_reaches_the_target():
+@pytest.mark.parametrize("batch_s", [0.01, 0.1], ids=["frame by frame", "D's 100 ms batches"])
+def test_the_stepper_stops_at_the_first_frame_whose_pdc_change_reaches_the_target(batch_s):
+    """The stop frame is the first whose PDC change reaches the target; the stop command is given when that frame's
+    batch arrives (batches aligned to the start of sampling) and reaches the motor one latency later."""
     movement = Movement(0.5, 0.02)
-    trial = TextureRig(wear=False).run_trial(GRATING, movement, seed=8)
+    trial = TextureRig(wear=False, settings=RigSettings(batch_s=batch_s)).run_trial(GRATING, movement, seed=8)
     rec, target = trial.recording, movement.force_N / FORCE_PER_PDC_BIT_N
     change = rec.pdc.astype(float) - np.mean(rec.pdc[:20])
     stop = int(np.flatnonzero(change[20:] >= target)[0]) + 20
     assert change[stop] == trial.reached_pdc_change
-    # the stop command reaches the motors one latency after the stop frame's last slot
-    frame_s = 0.01
-    assert rec.contact_s == pytest.approx((stop + 1) * frame_s + RigSettings().latency_s, abs=1e-9)
+    frame_s, per_batch = 0.01, round(batch_s / 0.01)
+    arrival = (stop // per_batch + 1) * per_batch * frame_s
+    assert rec.contact_s == pytest.approx(arrival + RigSettings().latency_s, abs=1e-9)
+    if per_batch > 1:  # (this seed's stop frame is not a batch's last: the batch makes the finger go on lowering)
+        assert arrival > (stop + 1) * frame_s + 0.015
 
 
 def test_a_baseline_shorter_than_a_frame_is_refused_by_name():
