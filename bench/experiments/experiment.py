@@ -51,6 +51,16 @@ D_FIGURES = {"pairs accuracy %": 99.6, "pairs median moves": 3, "117-way accurac
              "best movements": {"traction": "1.26 N @ 1 cm/s", "roughness": "0.2 N @ 6.31 cm/s",
                                 "fineness": "0.5 N @ 2.5 cm/s"}}
 STRATEGY_NAMES = ("bayesian", "cycle", "random")
+#: D's pilot picks (ch. 6) as (normal force N, velocity m/s), per property
+D_BEST_MOVEMENTS = {"traction": (1.26, 0.01), "roughness": (0.2, 0.0631), "fineness": (0.5, 0.025)}
+
+
+def d_best_movement_ids() -> dict[str, int]:
+    """D's pilot picks as grid movement ids (the grid movement nearest each in log force and log velocity)."""
+    grid = movement_grid()
+    return {p: min(range(len(grid)), key=lambda m: abs(math.log(grid[m].force_N / f))
+                   + abs(math.log(grid[m].velocity_m_per_s / v)))
+            for p, (f, v) in D_BEST_MOVEMENTS.items()}
 
 
 class ExperimentError(BenchError, ValueError):
@@ -441,20 +451,22 @@ def summary(result: ExperimentResult) -> dict:
     return out
 
 
-def beats_baselines(result: ExperimentResult) -> int:
+def beats_baselines(result: ExperimentResult, strict: bool = False) -> int:
     """Validation textures on which Bayesian exploration is at least as accurate as cycling and as random choice,
-    and converges in no more movements (medians)."""
+    and converges in no more movements (medians).  ``strict``: and, against each baseline, strictly better in at
+    least one of the two (a tie — say 100 % in the same median number of movements — does not count)."""
     s = summary(result)
     bay = s["identification/bayesian"]
     count = 0
     for tex, acc in bay["per_texture_accuracy"].items():
+        moves = bay["per_texture_median_moves"][tex]
         ok = True
         for other in ("cycle", "random"):
             key = f"identification/{other}"
             if key not in s:
                 continue
-            if acc < s[key]["per_texture_accuracy"][tex] or \
-                    bay["per_texture_median_moves"][tex] > s[key]["per_texture_median_moves"][tex]:
+            acc_b, moves_b = s[key]["per_texture_accuracy"][tex], s[key]["per_texture_median_moves"][tex]
+            if acc < acc_b or moves > moves_b or (strict and acc == acc_b and moves == moves_b):
                 ok = False
         count += ok
     return count

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.experiments import exploration as ex
-from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines,
+from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines, d_best_movement_ids,
                                           excluded_movements, movement_label, summary, table_from_rows)
 from bench.experiments.pairs import pair_separation_sigma
 from bench.atomic import atomic_write
@@ -51,6 +51,21 @@ def pilot_status(result: ExperimentResult) -> dict[int, str]:
     excluded = set(excluded_movements(result.spec, ran))
     return {m: "not-run" if m not in ran else "excluded-high-power" if m in excluded else "run"
             for m in range(result.pilot_uncertainty.shape[0])}
+
+
+def pilot_pick_comparison(result: ExperimentResult) -> dict[str, dict]:
+    """Per property: U of the pilot's pick and of D's pick (D ch. 6), and D's pick's rank (1 = least uncertain)
+    among the movements the pilot kept (None if the pilot excluded or did not run it)."""
+    status = pilot_status(result)
+    kept = [m for m, st in status.items() if st == "run"]
+    out = {}
+    for prop, d_id in d_best_movement_ids().items():
+        u = result.pilot_uncertainty[:, ex.PROPERTIES.index(prop)]
+        order = sorted(kept, key=lambda m: u[m])
+        out[prop] = {"pick_U": float(u[int(result.best_movements[ex.PROPERTIES.index(prop)])]),
+                     "d_U": float(u[d_id]) if np.isfinite(u[d_id]) else None, "d_status": status[d_id],
+                     "d_rank": order.index(d_id) + 1 if d_id in kept else None, "kept": len(kept)}
+    return out
 
 
 def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
@@ -95,6 +110,8 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
               "pairs": result.pairs, "pair_separation_sigma": _pair_separation(result), "summary": s,
               "bayesian_beats_baselines_on": beats_baselines(result),
+              "bayesian_strictly_beats_baselines_on": beats_baselines(result, strict=True),
+              "pilot_picks_against_d": pilot_pick_comparison(result),
               "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
               "skin_wear": _skin_wear(result.spec),
               "spread_check": ex.spread_check(table_from_rows(result.training_rows),
@@ -185,9 +202,17 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
     lines = [f"# Texture experiment: {result.spec.name}", "",
              "Bayesian exploration (D ch. 6) run end to end on the emulated BioTac: every value below comes from "
              "sliding trials of the texture rig read over SPI. Nothing was tuned toward these numbers.", "",
-             "## Optimal movements (pilot)", "", "| property | emulator | dissertation |", "|---|---|---|"]
-    for p in ex.PROPERTIES:
-        lines.append(f"| {p} | {record['best_movements'][p]} | {d['best movements'][p]} |")
+             "## Optimal movements (pilot)", "",
+             "Expected uncertainty U over the pilot's textures (lower is better); D's pick's rank is among the "
+             "movements this pilot kept (high-power ones excluded for wear).", "",
+             "| property | emulator's pick (U) | dissertation's pick | its U here | its rank here |",
+             "|---|---|---|---|---|"]
+    for p, row in pilot_pick_comparison(result).items():
+        rank = {"excluded-high-power": "excluded (high power)", "not-run": "not in this pilot"}.get(
+            row["d_status"], f"{row['d_rank']} of {row['kept']}")
+        d_u = "—" if row["d_U"] is None else f"{row['d_U']:.3g}"
+        lines.append(f"| {p} | {record['best_movements'][p]} ({row['pick_U']:.3g}) | {d['best movements'][p]} | "
+                     f"{d_u} | {rank} |")
     lines += ["", "## Accuracy and movements to converge", "",
               "| task | strategy | accuracy | median movements | dissertation |", "|---|---|---|---|---|"]
     for k, v in s.items():
@@ -200,7 +225,9 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
     n_val = len({int(r.true_texture) for r in result.identification_results.get("bayesian", ())})  # identified
     lines += ["", f"In identification, Bayesian exploration is at least as accurate as cycling and random choice and "
                   f"converges in no "
-                  f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} identified textures.", "",
+                  f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} identified textures; it is "
+                  f"strictly better than both (better in accuracy or in movements, no worse in the other) on "
+                  f"{record['bayesian_strictly_beats_baselines_on']} of them — the rest tie.", "",
               "## Pairs of similar textures", "",
               "The pairs as the experiment file lists them:" if result.spec.pairs
               else PAIR_TEXT[result.spec.pair_choice],

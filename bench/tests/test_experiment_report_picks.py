@@ -1,0 +1,75 @@
+"""The report's comparison of the pilot's picks with D's, and the strict count of textures beating the baselines."""
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from bench.experiments.experiment import D_BEST_MOVEMENTS, beats_baselines, d_best_movement_ids
+from bench.reporting.experiment_report import pilot_pick_comparison, pilot_status
+from bench.rigs.texture_rig import movement_grid
+
+
+def test_d_picks_map_to_their_grid_movements():
+    grid = movement_grid()
+    for prop, m in d_best_movement_ids().items():
+        f, v = D_BEST_MOVEMENTS[prop]
+        assert abs(grid[m].force_N / f - 1) < 0.01 and abs(grid[m].velocity_m_per_s / v - 1) < 0.01
+    assert d_best_movement_ids() == {"traction": 24, "roughness": 4, "fineness": 14}
+
+
+def _pilot(u, ran, exclude_high_power=True):
+    rows = [{"movement_id": m} for m in ran]
+    spec = SimpleNamespace(exclude_high_power=exclude_high_power)
+    return SimpleNamespace(spec=spec, pilot_rows=rows, pilot_uncertainty=u,
+                           best_movements=np.array([int(np.nanargmin(u[:, k])) for k in range(3)]))
+
+
+def _kept(result):
+    return [m for m, st in pilot_status(result).items() if st == "run"]
+
+
+def test_d_pick_rank_counts_only_kept_movements():
+    u = np.random.default_rng(1).uniform(0.1, 0.9, (36, 3))
+    result = _pilot(u, range(36))
+    kept = _kept(result)
+    assert 0 < len(kept) < 36  # the high-power movements are left out
+    row = pilot_pick_comparison(result)["traction"]
+    assert row["d_status"] == "run" and row["kept"] == len(kept) and row["d_U"] == u[24, 0]
+    assert row["d_rank"] == 1 + sum(u[m, 0] < u[24, 0] for m in kept)
+    u[24, 0] = 0.0  # D's traction pick the least uncertain: rank 1
+    assert pilot_pick_comparison(_pilot(u, range(36)))["traction"]["d_rank"] == 1
+
+
+def test_a_d_pick_outside_the_pilot_is_said_so():
+    u = np.full((36, 3), np.nan)
+    for m, value in ((0, 0.3), (7, 0.4), (14, 0.2)):
+        u[m] = value
+    cmp = pilot_pick_comparison(_pilot(u, (0, 7, 14)))
+    assert cmp["traction"]["d_status"] == "not-run" and cmp["traction"]["d_U"] is None
+    assert cmp["fineness"]["d_status"] == "run" and cmp["fineness"]["d_rank"] == 1
+
+
+def _identification(per_strategy):
+    """summary()-shaped results: strategy -> {texture: (accuracy, median moves)}."""
+    out = {}
+    for strat, per_tex in per_strategy.items():
+        out[strat] = [SimpleNamespace(true_texture=t, correct=np.array([1.0] * round(100 * a) + [0.0] * (100 - round(100 * a))),
+                                      n_moves=np.full(100, m), decided=np.array([t])) for t, (a, m) in per_tex.items()]
+    return out
+
+
+def test_ties_count_as_not_worse_but_not_as_strictly_better(monkeypatch):
+    from bench.experiments import experiment
+
+    stats = {"bayesian": {1: (1.0, 2), 2: (0.9, 2), 3: (1.0, 1)},
+             "cycle": {1: (1.0, 2), 2: (0.8, 2), 3: (1.0, 2)},
+             "random": {1: (1.0, 2), 2: (0.8, 3), 3: (0.9, 2)}}
+
+    def fake_summary(result):
+        return {f"identification/{s}": {"per_texture_accuracy": {t: a for t, (a, _) in v.items()},
+                                        "per_texture_median_moves": {t: float(m) for t, (_, m) in v.items()}}
+                for s, v in stats.items()}
+
+    monkeypatch.setattr(experiment, "summary", fake_summary)
+    assert beats_baselines(None) == 3  # texture 1 ties both: not worse
+    assert beats_baselines(None, strict=True) == 2  # ... but not strictly better
