@@ -214,32 +214,35 @@ def dask_workers_of(proc, n: int, within_s: float = 60.0) -> list:
     return found
 
 
-@pytest.mark.parametrize("signum, status, said", [(signal.SIGINT, 130, "interrupted"),
-                                                  (signal.SIGTERM, 143, "terminated")])
-def test_a_signal_ends_a_campaign_with_one_line_its_status_and_no_report(tmp_path, signum, status, said):
+CAMPAIGN_ON_2 = ["campaign", "--seeds", "5", "--workers", "2", "--junit", "c.xml", "--quiet"]
+
+
+@pytest.mark.parametrize("argv, signum, status, said", [
+    (CAMPAIGN_ON_2, signal.SIGINT, 130, "interrupted"), (CAMPAIGN_ON_2, signal.SIGTERM, 143, "terminated"),
+    (["claims", "--seeds", "20", "--only", "impact", "--workers", "2"], signal.SIGTERM, 143, "terminated")])
+def test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no_report(tmp_path, argv, signum,
+                                                                                       status, said):
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM (to the main process, as `timeout`
-    sends it) while the cases run on 2 workers: one line, 130 / 143, the cluster closed, no JUnit file."""
+    sends it) while the tasks run on 2 workers: one line, 130 / 143, the cluster closed, no JUnit file."""
     import psutil
 
-    junit = tmp_path / "c.xml"
     env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    proc = subprocess.Popen([sys.executable, "-m", "bench.cli", "campaign", "--seeds", "5", "--workers", "2",
-                             "--junit", str(junit), "--quiet"], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    proc = subprocess.Popen([sys.executable, "-m", "bench.cli", *argv], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         workers = dask_workers_of(proc, 2)
-        time.sleep(3.0)  # the workers are running cases
+        time.sleep(3.0)  # the workers are running tasks
         if signum == signal.SIGINT:
             os.killpg(proc.pid, signum)
         else:
             os.kill(proc.pid, signum)
-        _, stderr = proc.communicate(timeout=30)
+        stdout, stderr = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == status, stderr
     assert "Traceback" not in stderr and stderr.strip().splitlines()[-1] == said, stderr
-    assert not junit.exists() and not list(tmp_path.glob(".c.xml.*"))
+    assert stdout == "" and not list(tmp_path.iterdir())  # no report, no temporary file
     assert not psutil.wait_procs(workers, timeout=10)[1]  # no worker left
 
 
