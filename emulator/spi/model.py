@@ -157,9 +157,30 @@ class Faults:
     bad_parity: bool = False  # data words leave with the first byte's parity bit inverted
     slow_response: bool = False  # results take 100 µs instead of 50 µs
 
+    def __post_init__(self):
+        self.miso_flip_bit = _fault_value("miso_flip_bit", self.miso_flip_bit, range(16),
+                                          "None or a bit position 0 to 15 (from chip-select fall)")
+        self.mosi_flip_bit = _fault_value("mosi_flip_bit", self.mosi_flip_bit, range(16),
+                                          "None or a bit position 0 to 15 (from chip-select fall)")
+        self.miso_stuck = _fault_value("miso_stuck", self.miso_stuck, (0, 1), "None, 0 or 1")
+        for name in ("bad_parity", "slow_response"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"Faults.{name} = {getattr(self, name)!r}: must be True or False")
+
     @property
     def any(self) -> bool:
-        return any(v not in (None, False) for v in vars(self).values())
+        """Whether any fault is set (bit 0 and stuck-at-0 count: they are faults too)."""
+        return (self.miso_flip_bit is not None or self.mosi_flip_bit is not None or self.miso_stuck is not None
+                or self.bad_parity or self.slow_response)
+
+
+def _fault_value(name: str, value, allowed, what: str) -> int | None:
+    """A fault setting as an int, or None (no fault); refused outside ``allowed`` (a bool is not a number here)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) not in allowed:
+        raise ValueError(f"Faults.{name} = {value!r}: must be {what}")
+    return int(value)
 
 
 @dataclass
