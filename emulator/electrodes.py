@@ -105,10 +105,16 @@ def surface_point_over_mm(position_mm) -> np.ndarray:
 class Contact:
     """A contact on the skin: where, how hard (normal and tangential force profiles), with what.
 
-    ``normal_N(t)`` and ``tangential_N(t)`` give forces in N; the tangential force acts along
-    ``shear_direction`` (unit vector in the sensor frame, default along +x toward the tip).  ``planned``: the force
-    profile is known in advance (a scripted stimulus); a contact driven by commands given while the run goes (a rig)
-    is not, and the model then computes no instant beyond those asked for.
+    ``normal_N(t)`` gives the normal force in N and the tangential force is ``tangential_per_normal`` times it; the
+    tangential force acts along ``shear_direction`` (unit vector in the sensor frame, default along +x toward the
+    tip).  ``planned``: the force profile is known in advance (a scripted stimulus); a contact driven by commands
+    given while the run goes (a rig) is not, and the model then computes no instant beyond those asked for.
+
+    ``forces``: the forces come from a model that runs on the sensor's grid (a sliding contact's
+    :class:`emulator.sliding.ForceFeed`): ``forces(t)`` gives (normal, tangential) N at the model's instants and
+    replaces ``normal_N`` and the ratio (``normal_N`` then only gives the load held before t = 0), and
+    ``forces.last_grid_index(t)`` says how far the grid must have run first (see :meth:`ElectrodeModel.grid_needed`).
+    Such a contact is not planned: its forces exist only as far as the grid has run.
     """
 
     center_mm: np.ndarray
@@ -119,10 +125,19 @@ class Contact:
     start_s: float = -np.inf  # the contact exerts no force outside [start_s, end_s]
     end_s: float = np.inf
     planned: bool = True
+    forces: object = None
 
     def state(self, t: np.ndarray):
+        """(normal, tangential) force (N) at instants ``t`` (s)."""
+        if self.forces is not None:
+            normal, tangential = self.forces(t)
+            return np.maximum(normal, 0.0), tangential
         f = np.maximum(np.asarray(self.normal_N(t), float), 0.0)
         return f, self.tangential_per_normal * f
+
+    def resting_load_N(self) -> float:
+        """The normal force (N) held before t = 0 (a contact loaded at t = 0 has been forever)."""
+        return float(np.maximum(np.asarray(self.normal_N(np.array([0.0])), float), 0.0)[0])
 
 
 SKIN_BASE_X_MM = -20.0  # the skin is clamped to the core this far behind the tip's centre (wetted length ~25 mm)
@@ -450,9 +465,12 @@ class ElectrodeModel:
         self.creep_time_s, self.creep_ratio = sf.creep_time_s, sf.creep_ratio
         self.creeps = [Creep.standard_linear_solid(sf.creep_time_s, sf.creep_ratio) for _ in contacts]
         for c, cr in zip(contacts, self.creeps):
-            cr.settle(float(c.state(np.array([0.0]))[0][0]))  # a contact loaded at t = 0 has been forever
+            cr.settle(c.resting_load_N())
         self.rate_Hz = rate_Hz
-        self.lazy = not all(c.planned for c in contacts)  # compute no further than asked: commands are still coming
+        if any(c.forces is not None and c.planned for c in contacts):
+            raise ValueError("a contact whose forces come from the grid cannot be planned in advance")
+        # compute no further than asked: commands are still coming, or the grid has not run beyond
+        self.lazy = not all(c.planned for c in contacts)
         self.kappas = [bulge_balance(p, c.center_mm, float(np.hypot(c.indenter_radius_mm, p.skin_spread_mm)))
                        for c in contacts]
         self.footprints = [Footprint(p, c, self.positions, k) for c, k in zip(contacts, self.kappas)]
@@ -487,6 +505,23 @@ class ElectrodeModel:
         self._hist_t.append(t)
         self._hist.append(y)
 
+    def _steps_through(self, t_last: float) -> int:
+        """How many steps a lazy model has computed once asked for instants up to ``t_last`` (s): through the first
+        step at or after it, not beyond."""
+        steps = max(self.k, int(np.ceil(t_last / self.dt - 1e-9)))
+        while steps * self.dt < t_last:  # (the step's instant as the history holds it)
+            steps += 1
+        return steps
+
+    def grid_needed(self, t_last: float) -> int:
+        """The last grid sample (index) the contacts fed from the grid (``Contact.forces``) need before the model
+        serves instants up to ``t_last`` (s); -1 if none does.  The sensor runs its grid that far first."""
+        fed = [c.forces for c in self.contacts if c.forces is not None]
+        if not fed:
+            return -1
+        t_end = self._steps_through(t_last) * self.dt  # (a model with a fed contact is lazy)
+        return max(f.last_grid_index(t_end) for f in fed)
+
     def targets(self, electrode: np.ndarray, times: np.ndarray) -> np.ndarray:
         """Settled voltage of electrode n (1..N) at each instant (no multiplexer memory)."""
         if times.size == 0:
@@ -496,7 +531,7 @@ class ElectrodeModel:
         t_first, t_last = float(times.min()), float(times.max())
         while self._hist_t[-1][-1] < t_last:
             if self.lazy:  # through the first sample at or after the latest instant asked for, not beyond
-                self._advance_chunk(max(1, int(np.ceil(t_last / self.dt - 1e-9)) - self.k))
+                self._advance_chunk(max(1, self._steps_through(t_last) - self.k))
             else:
                 self._advance_chunk()
         if len(self._hist_t) > 1:

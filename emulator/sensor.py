@@ -161,8 +161,15 @@ class Sensor:
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
         self.record_signals = tuple(record_signals)
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)
+        motions = [s for s in stimuli if isinstance(s, (Slide, CommandedMotion))]
+        f = self.fidelity
+        self.sliding = (SlidingContact(motions, self.params, self.fs, f.sliding_dx_m, f.friction_substeps,
+                                       f.patch_radii, self.seed) if motions else None)  # built only for scenes that slide
         self.electrodes = self._electrode_model(stimuli)
-        self.graph = build_graph(self._candidate_effects(stimuli), set(self.nodes) | set(self.record_signals))
+        # a sliding motion's electrode contact reads the sliding contact's forces: it runs when electrodes are read
+        fed = self.electrodes is not None and self.sliding is not None
+        self.graph = build_graph(self._candidate_effects(stimuli),
+                                 set(self.nodes) | set(self.record_signals) | ({"normal_force_N"} if fed else set()))
         self.resting = self.graph.settle()
         self.adc = Adc(self.params, self.seed, noise=noise.adc, spi_coupling=noise.spi_coupling)
         # per channel index: which grid node or slow model it converts
@@ -190,7 +197,6 @@ class Sensor:
         forces = [s for s in stimuli if isinstance(s, ForceStimulus)]
         vibrations = [s for s in stimuli if isinstance(s, Vibration)]
         calibrations = [s for s in stimuli if isinstance(s, PressureCalibrator)]
-        motions = [s for s in stimuli if isinstance(s, (Slide, CommandedMotion))]
         other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator, PowerOn,
                                                          AmbientStep, HeaterFailure, Slide, CommandedMotion))]
         if other:
@@ -207,9 +213,8 @@ class Sensor:
             effects.append(skin_displacement(vibrations))
         if calibrations:
             effects.append(calibration_pressure(calibrations))
-        if motions:  # built only for scenes that slide
-            effects.append(SlidingContact(motions, p, fs, f.sliding_dx_m, f.friction_substeps, f.patch_radii,
-                                          self.seed))
+        if self.sliding is not None:
+            effects.append(self.sliding)
         dynamic = self.thermal is not None
         if dynamic:
             effects.append(CoreTemperature(self.thermal))
@@ -264,15 +269,8 @@ class Sensor:
         positions = electrode_positions_mm(self.variant.name)
         contacts = []
         for s in stimuli:
-            if isinstance(s, Slide):  # the ventral pad on the texture, sheared along +x by kinetic friction
-                contacts.append(Contact(surface_point_mm(-5.0, 0.0), self.params.contact_radius_at_1N_m * 1e3,
-                                        s.normal_force_N, s.texture.mu_kinetic, (1.0, 0.0, 0.0), s.start_s, s.end_s))
-                continue
-            if isinstance(s, CommandedMotion):  # a rig's finger: the load of its commanded depth, known as it goes
-                # (a partial, not a closure: a copy of the sensor, as the rig's snapshot, reads the copied motion)
-                contacts.append(Contact(surface_point_mm(-5.0, 0.0), self.params.contact_radius_at_1N_m * 1e3,
-                                        functools.partial(commanded_load_N, s, self.params), s.texture.mu_kinetic,
-                                        (1.0, 0.0, 0.0), s.start_s, s.end_s, planned=False))
+            if isinstance(s, (Slide, CommandedMotion)):
+                contacts.append(self._pad_contact(s))
                 continue
             if not isinstance(s, Touch):
                 continue
@@ -292,11 +290,27 @@ class Sensor:
         return ElectrodeModel(self.params, contacts, self.faults, self.fidelity.discretization,
                               self.fidelity.electrode_rate_Hz, positions=positions)
 
+    def _pad_contact(self, motion) -> Contact:
+        """The electrodes' contact of a sliding motion: the ventral pad (x = −5 mm, angle 0) on the texture, pressed
+        and sheared by the forces the sliding contact computes on the grid — its normal load and its friction force,
+        signed, along the stage's axis (+x) — handed over at the electrode rate by a :class:`ForceFeed` (the mean
+        over each electrode period).  While the stage holds still the friction, and so the shear, is zero; at slip
+        the shear comes with the friction's ramp, stick-slip and fluctuations.  ``normal_N`` (the nominal load: the
+        scripted force, or the contact law of a rig's commanded depth, a partial so that a copied sensor reads the
+        copied motion) gives only the load held before t = 0."""
+        nominal = (motion.normal_force_N if isinstance(motion, Slide)
+                   else functools.partial(commanded_load_N, motion, self.params))
+        feed = self.sliding.force_feed(motion, self.fidelity.electrode_rate_Hz)
+        return Contact(surface_point_mm(-5.0, 0.0), self.params.contact_radius_at_1N_m * 1e3, nominal, 0.0,
+                       (1.0, 0.0, 0.0), motion.start_s, motion.end_s, planned=False, forces=feed)
+
     # --- time advance ---------------------------------------------------------------
-    def _advance_through(self, n_last: int, keep_from: int) -> None:
-        """Compute the grid through index ``n_last``, retaining nothing before ``keep_from``."""
+    def _advance_through(self, n_last: int, keep_from: int, exact: bool = False) -> None:
+        """Compute the grid through index ``n_last``, retaining nothing before ``keep_from``; ``exact``: not beyond
+        it (the last block is cut short), so a rig's command given next still lies ahead of everything computed."""
         while self._computed <= n_last:
-            block = Block(self._computed, self.block_n, self.fs)
+            n = min(self.block_n, n_last + 1 - self._computed) if exact else self.block_n
+            block = Block(self._computed, n, self.fs)
             signals = self.graph.run(block)
             self._computed += block.n
             if self._computed <= keep_from:  # a whole block nobody will ask for: do not keep it
@@ -375,7 +389,12 @@ class Sensor:
         if i_min < self._buf_n0:
             raise ValueError(f"instant {times.min():.6f} s is older than the retained history "
                              f"(from {self._buf_n0 / self.fs:.6f} s): ask for instants in time order")
-        self._advance_through(i_max + 1, keep_from=i_min)
+        # (a grid that keeps no signal serves at most the electrodes' feed: computed no further than asked)
+        self._advance_through(i_max + 1, keep_from=i_min, exact=not self._kept)
+        if electrodes is not None:  # a contact fed from the grid (a sliding motion's) needs the grid through the
+            # electrode step after the latest instant: computed that far and no further
+            self._advance_through(self.electrodes.grid_needed(float(times.reshape(-1)[electrodes[1]].max())),
+                                  keep_from=i_min, exact=True)
         k = i - self._buf_n0
         for node_id, at in nodes:
             _interpolate(self._history(self.nodes[node_id]), k, frac, _ALL if at is None else at, out.reshape(-1))

@@ -29,6 +29,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 from numba import njit
@@ -396,6 +397,106 @@ def _ridge_slopes(patch, crest_slope, pad, weights, shifts, gain, two_dx, out):
             row[i] = s + gain * (ridged[i] - s)
 
 
+@njit(cache=True)
+def _period_means(j0, normal, tangential, den, num, carry, first_kept, last_kept, out_k, out_normal, out_tangential):
+    """Mean of grid samples ``j0 + i`` (values ``normal``, ``tangential``) over each period k of a slower rate: grid
+    sample j belongs to period k = ⌊j·den/num⌋ + 1 (num/den: grid samples per period), i.e. its instant lies in
+    [t_{k−1}, t_k).  A period closes with its last grid sample; closed periods in [``first_kept``, ``last_kept``]
+    are written to the outputs (k, means), their count returned.  ``carry`` = (open period, sums, count), carried across calls: the
+    samples are added one by one in grid order, so the means do not depend on how the grid was cut into blocks."""
+    k_open, sum_n, sum_t, count = int(carry[0]), carry[1], carry[2], carry[3]
+    m = 0
+    for i in range(normal.size):
+        j = j0 + i
+        k = j * den // num + 1
+        if k != k_open:  # (only before the first sample: a period is closed by its own last sample)
+            k_open, sum_n, sum_t, count = k, 0.0, 0.0, 0.0
+        sum_n += normal[i]
+        sum_t += tangential[i]
+        count += 1.0
+        if (j + 1) * den // num + 1 != k:  # the period's last grid sample
+            if first_kept <= k <= last_kept:
+                out_k[m], out_normal[m], out_tangential[m] = k, sum_n / count, sum_t / count
+                m += 1
+            k_open, sum_n, sum_t, count = k + 1, 0.0, 0.0, 0.0
+    carry[0], carry[1], carry[2], carry[3] = k_open, sum_n, sum_t, count
+    return m
+
+
+class ForceFeed:
+    """One sliding contact's normal and tangential force (N) handed to a slower model (the electrodes, at
+    ``rate_Hz``): the mean of the grid samples over each period [t_{k−1}, t_k), t_k = k/``rate_Hz`` (a boxcar
+    decimation: the texture's fast vibration is averaged out rather than aliased), filled as
+    the grid runs, with the open period carried across blocks (the means do not depend on the block size), and kept
+    until read.
+
+    Calling it with instants t_k (s, on the slower model's grid, increasing from call to call) returns the (normal,
+    tangential) means of their periods.  The tangential force is the friction model's, signed along the stage's axis
+    (+x).  Only periods around the motion's span [``start_s``, ``end_s``] are kept (the others read zero), as are
+    periods before the first grid sample the feed saw (a sensor started later); periods read are dropped, so the
+    feed holds what the grid has computed since the last read.  :meth:`last_grid_index` says how far the grid must
+    have run for an instant."""
+
+    def __init__(self, rate_Hz: float, fs: float, start_s: float, end_s: float):
+        per_period = Fraction(fs).limit_denominator(10**6) / Fraction(rate_Hz).limit_denominator(10**6)
+        self.rate_Hz, self._num, self._den = float(rate_Hz), per_period.numerator, per_period.denominator
+        self._span = (math.floor(start_s * rate_Hz) - 1,  # periods that may hold a sample of the motion
+                      math.ceil(end_s * rate_Hz) + 1 if math.isfinite(end_s) else np.iinfo(np.int64).max)
+        self._carry = np.array([-1.0, 0.0, 0.0, 0.0])  # open period, its sums and count
+        self._first = None  # the first period the grid reached
+        self._next = self._span[0]  # the first period not yet read (none before the span is kept)
+        self._k, self._normal, self._tangential = [], [], []  # closed periods not yet read
+
+    def last_grid_index(self, t_s: float) -> int:
+        """The last grid sample (index) of the period ending at instant ``t_s`` (s)."""
+        k = int(round(t_s * self.rate_Hz))
+        return -(-k * self._num // self._den) - 1  # ⌈k·num/den⌉ − 1
+
+    def _period(self, j: int) -> int:
+        return j * self._den // self._num + 1
+
+    def push(self, n0: int, n: int, normal: np.ndarray | None = None, tangential: np.ndarray | None = None) -> None:
+        """Take grid samples ``n0`` … ``n0 + n − 1`` of the contact's forces (N; None: zero), in grid order."""
+        if self._first is None:
+            self._first = self._period(n0)
+        if self._period(n0 + n - 1) < self._span[0] or self._period(n0) > self._span[1]:
+            return  # no period kept: nothing to add (the open period restarts at the next sample pushed)
+        if normal is None:
+            normal = tangential = np.zeros(n)
+        size = n * self._den // self._num + 2
+        out_k, out_n, out_t = np.empty(size, dtype=np.int64), np.empty(size), np.empty(size)
+        m = _period_means(n0, normal, tangential, self._den, self._num, self._carry, self._next, self._span[1], out_k,
+                          out_n, out_t)
+        if m:
+            self._k.append(out_k[:m])
+            self._normal.append(out_n[:m])
+            self._tangential.append(out_t[:m])
+
+    def __call__(self, t) -> tuple[np.ndarray, np.ndarray]:
+        k = np.rint(np.asarray(t, float) * self.rate_Hz).astype(np.int64)
+        normal, tangential = np.zeros(k.size), np.zeros(k.size)
+        if k.size == 0:
+            return normal, tangential
+        if self._first is None:
+            raise RuntimeError("force feed: read before the grid ran")
+        if len(self._k) > 1:
+            self._k, self._normal, self._tangential = ([np.concatenate(x)] for x in (self._k, self._normal,
+                                                                                     self._tangential))
+        have = self._k[0] if self._k else np.zeros(0, dtype=np.int64)
+        at = np.minimum(np.searchsorted(have, k), max(have.size - 1, 0))
+        found = have[at] == k if have.size else np.zeros(k.size, bool)
+        normal[found], tangential[found] = self._normal[0][at[found]], self._tangential[0][at[found]]
+        waiting = ~found & (k >= max(self._first, self._next)) & (k >= self._span[0]) & (k <= self._span[1])
+        if waiting.any():
+            raise RuntimeError(f"force feed: the grid has not reached the period ending at "
+                               f"{k[waiting][0] / self.rate_Hz:.6f} s")
+        if have.size:
+            drop = int(np.searchsorted(have, k.max(), side="right"))
+            self._k, self._normal, self._tangential = ([x[0][drop:]] for x in (self._k, self._normal, self._tangential))
+        self._next = max(self._next, int(k.max()) + 1)
+        return normal, tangential
+
+
 class SlidingContact(Effect):
     """Skin–texture sliding: stick-slip friction, patch-averaged texture, fingerprint ridges (N)."""
 
@@ -430,13 +531,23 @@ class SlidingContact(Effect):
             self._contacts.append({"motion": m, "gain": gain, "radii": radii, "heights": heights, "slopes": slopes,
                                    "fluctuation": fluct,
                                    "state": friction.new_state(0.0), "skin_state": skin.state(), "log": [],
-                                   "stage_zi": np.zeros(1)})
+                                   "stage_zi": np.zeros(1), "feeds": []})
 
     def describe(self) -> str:
         return "sliding contact: stick-slip friction, patch-averaged texture, fingerprint ridges (N)"
 
     def ridge_gains(self) -> list[float]:
         return [c["gain"] for c in self._contacts]
+
+    def force_feed(self, motion, rate_Hz: float) -> ForceFeed:
+        """A :class:`ForceFeed` of ``motion``'s (one of :attr:`motions`, by identity) normal and tangential force at
+        ``rate_Hz``, filled from now on as the grid runs (the electrode model reads its contact's forces from it)."""
+        contact = next((c for c in self._contacts if c["motion"] is motion), None)
+        if contact is None:
+            raise ValueError(f"force_feed: {motion!r} is not one of this sliding contact's motions")
+        feed = ForceFeed(rate_Hz, self.fs, motion.start_s, motion.end_s)
+        contact["feeds"].append(feed)
+        return feed
 
     def force_log(self, k: int) -> dict[str, np.ndarray]:
         """Contact ``k``'s forces at :data:`LOG_RATE_HZ` so far: instants (s), normal and tangential force (N),
@@ -455,6 +566,8 @@ class SlidingContact(Effect):
         for c in self._contacts:
             m = c["motion"]
             if m.end_s < t[0] or m.start_s > t[-1]:
+                for feed in c["feeds"]:
+                    feed.push(block.n0, block.n)  # no force: the periods still close
                 continue
             a = int(np.searchsorted(t, m.start_s, side="left"))
             b = int(np.searchsorted(t, m.end_s, side="right"))
@@ -480,6 +593,13 @@ class SlidingContact(Effect):
                                  tex.mu_per_velocity_s_per_m, normal, tang, slip, pos)
             # the tangential load's share of fluid pressure, signed: its fluctuations enter linearly (no
             # rectification); slides run along +x, so the mean friction raises the pressure
+            for feed in c["feeds"]:
+                if a == 0 and b == block.n:
+                    feed.push(block.n0, block.n, normal, tang)
+                else:
+                    whole_n, whole_t = np.zeros(block.n), np.zeros(block.n)
+                    whole_n[a:b], whole_t[a:b] = normal, tang
+                    feed.push(block.n0, block.n, whole_n, whole_t)
             normal_out[a:b] += normal + p.tangential_coupling * tang
             tangential_out[a:b] += tang
             load_out[a:b] += normal
