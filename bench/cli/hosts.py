@@ -15,33 +15,41 @@ from bench.running.signals import signals_deferred
 # --- bridge ------------------------------------------------------------------------------------------------------
 
 
+def bridge_scene_kw(scene, n_sensors: int | None = None, seed: int | None = None, spi: str | None = None) -> dict:
+    """:class:`~bench.hosts.bridge.FirmwareBench`'s keywords for the bridge firmware on ``scene``'s sensors:
+    ``n_sensors`` (None: the scene's count; fewer are refused), ``sensors``
+    (:func:`~bench.hosts.scene_sensors.sensors_from_scene`: units, variants, parameters, faults, noise, fidelity,
+    stimuli), ``pattern`` (from host.sequence), ``spi`` (given, else host.spi) and ``seed`` (given, else the
+    scene's).  :class:`~bench.errors.SceneError` for what the firmware cannot do."""
+    from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
+
+    n_sensors = scene.n_sensors if n_sensors is None else n_sensors
+    return {"n_sensors": n_sensors, "sensors": sensors_from_scene(scene, n_sensors, seed=seed),
+            "pattern": firmware_pattern(scene), "spi": spi or scene.spi, "seed": scene.seed if seed is None else seed}
+
+
 def _cmd_bridge(a) -> int:
     import time
 
     from bench.hosts.bridge import FirmwareBench
-    from bench.hosts.scene_sensors import firmware_pattern, sensors_from_scene
 
-    kw = {}
-    what = f"{a.sensors} emulated sensor(s) at rest"
-    seed = 1 if a.seed is None else a.seed
-    spi = a.spi or "software"
     if a.scene:
         from bench.scenes.scene import load_scene
 
         scene = load_scene(a.scene)
-        kw["pattern"] = firmware_pattern(scene)
-        kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
-        spi = a.spi or scene.spi
-        seed = scene.seed if a.seed is None else a.seed
+        kw = bridge_scene_kw(scene, a.sensors, a.seed, a.spi)
         faults = ", ".join(f"{k}={v}" for k, v in scene.faults.items()) or "none"
         feels = "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
                           for k in range(1, scene.n_sensors + 1))
-        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' (units, parameters, faults: {faults}, "
-                f"noise, fidelity {scene.fidelity}, seed {seed}; {feels})")
+        what = (f"{kw['n_sensors']} emulated sensor(s) built from scene '{scene.name}' (units, parameters, faults: "
+                f"{faults}, noise, fidelity {scene.fidelity}, seed {kw['seed']}; {feels})")
+    else:
+        kw = {"n_sensors": a.sensors or 1, "seed": 1 if a.seed is None else a.seed, "spi": a.spi or "software"}
+        what = f"{kw['n_sensors']} emulated sensor(s) at rest"
     with sigterm_raises():
         try:
-            fb = FirmwareBench(a.sensors, seed=seed, realtime=not a.fast, speed=a.speed, spi=spi,
-                               baudrate=a.baud, rx_buffer=a.rx_buffer, **kw).start()
+            fb = FirmwareBench(realtime=not a.fast, speed=a.speed, baudrate=a.baud, rx_buffer=a.rx_buffer,
+                               **kw).start()
         except KeyboardInterrupt:
             return 130
         try:
@@ -291,7 +299,7 @@ def _cmd_record(a) -> int:
         status = END_STATUS[end]
         if not frames:
             print(f"error: {detail or 'no frames arrived'}; nothing received, no file written", file=sys.stderr)
-            return status or 1
+            return status if end in ("interrupted", "terminated") else 2  # no stream there: as a bad port
         st = drv.parser.stats
         meta = {"end": end, "requested_s": a.seconds, "recorded_s": recorded_s, "dropped_frames": st.dropped_frames,
                 "crc_errors": st.crc_errors}
@@ -318,9 +326,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "what does not fit (an overrun, as on a real UART without flow control) and the firmware "
                     "streams on; with --fast the firmware waits for a reading host instead. Stops on Ctrl-C or "
                     "SIGTERM.", formatter_class=fmt))
-    br.add_argument("--sensors", type=whole(1, 5), default=1, help="emulated sensors, 1 to 5 (default 1)")
+    br.add_argument("--sensors", type=whole(1, 5), default=None,
+                    help="emulated sensors, 1 to 5 (default: the scene's count with --scene, else 1)")
     br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it (units, variants, each its own "
-                                                           "stimuli; --sensors at least the scene's count)")
+                                                           "stimuli; --sensors, if given, at least the scene's count)")
     br.add_argument("--seed", type=whole(0),
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")

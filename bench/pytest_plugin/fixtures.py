@@ -21,6 +21,10 @@ Installed with the package (entry point ``pytest11``), so in any test:
         bench.at(bench.virtual_time + 1.0, lambda board: board.unplug(2))   # a fault, in virtual time
         ...
 
+    def test_a_scene_on_the_bridge(biotac_bridge):
+        bench = biotac_bridge(scene="taps")      # a shipped scene's name, a scene file, or a Scene
+        ...
+
     def test_my_spi_code(biotac_sensor):
         spi = biotac_sensor(stimuli=[Tap(0.1, 1.0)])   # the sensor's SPI side, in process
         miso = spi.exchange(TransferBatch(start_s, mosi_words))   # or spi.bus for multi-sensor traffic
@@ -43,68 +47,180 @@ Fixtures
                         (malformed requests are listed in ``bench.client_errors``); ``trace=True`` keeps every
                         transfer with its time
 
-Sensor units: every factory takes a unit (``emulator.units``: a unit seed, "nominal" or a serial "BT..."):
-``biotac_sensor(unit=17)``, ``biotac_bridge(3, units=[17, 18, "nominal"])`` (sensor k is ``units[k - 1]``; the
-sensors read the default frame, sensor 1 feels ``stimuli``, sensor k draws its noise from ``seed + k``).  Each
-sensor then carries the unit's parameters and its serial number (``sensor.serial``, None for the nominal unit;
-``biotac_sensor`` also answers it as its serial property).
+Keywords (every one optional)
+    ``biotac_sensor(...)``: one sensor, whose SPI side your code drives
+        stimuli       what the sensor feels (``emulator.stimuli``; default: nothing)
+        channels      the channels it answers (default: its variant's whole frame — E1..E24 on a "biotac-sp";
+                      others answer 0xA558, channel not recognised)
+        seed          its noise seed (default 0; with ``scene``: the scene's)
+        unit          its unit (``emulator.units``): a unit seed, "nominal" (default) or a serial "BT..."
+        variant       "biotac" (default, 19 electrodes) or "biotac-sp" (24)
+        params        ``SensorParams`` (with ``unit``: the unit's spreads are drawn around them)
+        fidelity, noise, faults   as ``emulator.sensor.Sensor``: profile name, ``NoiseSources``, sensor faults
+                      ({"electrode_open": [3]}, ...); SPI faults: ``spi.faults = Faults(...)``
+        block_s, start_s, record_signals   as ``emulator.sensor.Sensor``
+        scene         a scene (below): the sensor is the scene's sensor 1; only ``seed`` may be given with it
+    ``biotac_bridge(...)`` / ``biotac_cheetah(...)``: sensors 1..n on a bus
+        n_sensors     1..5 (default: ``len(units)``, the number of variants given, the scene's count, else 1)
+        stimuli       what sensor 1 feels (sensor k > 1 feels nothing)
+        units         one unit per sensor (sensor k is ``units[k - 1]``; default: all nominal)
+        variant       "biotac" or "biotac-sp" for every sensor, or one per sensor; each sensor then reads its
+                      variant's whole frame (an all-SP bridge streams the 54-slot frame)
+        seed          sensor k draws its noise from ``seed + k`` (default 1; with ``scene``: the scene's,
+                      sensor k ``seed + k - 1``)
+        params, fidelity, noise, faults   for every sensor, as for ``biotac_sensor``
+        sensors       your own ``{k: Sensor}`` instead (refused with units, variant, stimuli, params, fidelity,
+                      noise, faults or scene: they would be ignored)
+        scene         the sensors of a scene (below); refused with sensors, stimuli, units, variant, params,
+                      fidelity, noise, faults (the scene says them) and, on the bridge, pattern (its
+                      host.sequence is the pattern)
+      biotac_bridge only (``FirmwareBench``):
+        realtime      pace the firmware to the wall clock (default False: it waits for your program to read)
+        speed         virtual seconds per wall second when paced (default 1)
+        spi           "software" (default; with ``scene``: its host.spi) or "rtl" (the Verilog twin)
+        pattern       the firmware's sampling pattern: channel indices (default: the variant's default frame)
+        baudrate      the UART's (default 3000000); rx_buffer: the host's receive buffer (bytes, default 4096)
+        keep_arrivals keep every byte's arrival (``bench.overrun_frames()``)
+        pull_up       MISO pulled up when no sensor drives it (default False)
+        corrupt_rate, drop_rate   line faults: the probability that each byte is corrupted / dropped
+        step_s        the firmware's virtual-time step (s, default 0.01)
+        SPI faults in virtual time: ``bench.at(t_s, lambda board: setattr(board.bus.ports[k], "faults",
+        Faults(miso_stuck=1)))``; unplug/plug/glitch: ``board.unplug(k)``
+      biotac_cheetah only (``CheetahBench``):
+        trace         keep every transfer (start s, select code, bits, MOSI) in ``bench.trace``
+
+``scene``: a ``Scene``, a scene file's path, or a shipped scene's name as ``biotac-bench run`` takes it ("taps").
+Sensor k is the scene's sensor k (unit, parameters, variant, stimuli, faults, noise, fidelity; see
+``bench.hosts.scene_sensors``); on the bridge its ``host.sequence`` becomes the firmware's pattern and
+``host.spi`` the SPI side.  Behind the Cheetah adapter your program is the host: the scene's [host] section is not
+used (a scene asking for the RTL is refused: the adapter serves the software model).  A scene that is not valid,
+or a keyword the fixture does not take, fails the test with the problem in one message (no traceback).
+
+Sensor units: each sensor carries its unit's parameters and serial number (``sensor.serial``, None for the nominal
+unit), and answers that serial as its serial property (a BioTac SP's as "BTSP…"; the nominal unit: its port's
+default, one per sensor number).
 """
 
 from __future__ import annotations
 
+import inspect
+
 import pytest
+
+#: Keywords of emulator.sensor.Sensor the factories pass on to every sensor they build.
+SENSOR_KEYWORDS = ("params", "fidelity", "noise", "faults", "block_s", "start_s", "record_signals")
+#: What a scene (or your own ``sensors=``) already says about the sensors: refused beside it.
+SENSOR_DESCRIPTION = ("stimuli", "units", "variant") + SENSOR_KEYWORDS
+
+
+def _fail(message: str):
+    """Fail the calling test with ``message`` alone (a misused fixture: no traceback into the plugin)."""
+    __tracebackhide__ = True
+    raise pytest.fail.Exception(message, pytrace=False) from None  # not "during handling of ... another exception"
+
+
+def load_scene_like(scene):
+    """A :class:`~bench.scenes.scene.Scene` from a Scene, a scene file's path or a shipped scene's name (as
+    ``biotac-bench run`` takes it); :class:`~bench.errors.SceneError` for what is wrong."""
+    from bench.cli.scenes import scene_file
+    from bench.scenes.scene import Scene, load_scene
+
+    return scene if isinstance(scene, Scene) else load_scene(scene_file(str(scene)))
+
+
+def one_sensor(unit=None, variant=None, stimuli=(), channels=None, seed: int = 0, params=None, **sensor_kw):
+    """An emulated sensor of ``unit`` (None/"nominal", a unit seed or a serial; its spreads drawn around ``params``)
+    and ``variant`` (None: "biotac"), answering ``channels`` (None: its variant's whole frame), carrying the unit's
+    serial as ``.serial`` (None for the nominal unit: its port answers the default serial)."""
+    from emulator.channels import variant as variant_of
+    from emulator.sensor import Sensor
+    from emulator.units import unit as unit_of
+
+    u = unit_of(unit, base=params)
+    v = variant_of("biotac" if variant is None else variant)
+    sensor = Sensor(params=u.params, stimuli=list(stimuli), channels_read=v.frame_names if channels is None else channels,
+                    seed=seed, variant=v.name, **sensor_kw)
+    sensor.serial = None if u.seed is None else u.serial
+    return sensor
+
+
+def unit_sensors(n_sensors: int, units=None, stimuli=(), seed: int = 1, variant=None, **sensor_kw) -> dict:
+    """Sensors 1..n (:func:`one_sensor`) of ``units`` (None: all nominal; else one per sensor) and ``variant`` (one
+    for all, or one per sensor), each reading its variant's whole frame; sensor 1 feels ``stimuli``; sensor k draws
+    its noise from ``seed + k`` (as the benches' own sensors); ``sensor_kw`` go to every sensor."""
+    units = ["nominal"] * n_sensors if units is None else list(units)
+    variants = [variant] * n_sensors if variant is None or isinstance(variant, str) else list(variant)
+    if len(units) != n_sensors:
+        raise ValueError(f"units = {units!r}: give one unit per sensor ({n_sensors})")
+    if len(variants) != n_sensors:
+        raise ValueError(f"variant = {variant!r}: give one variant for every sensor, or one per sensor ({n_sensors})")
+    return {k: one_sensor(which, variants[k - 1], stimuli if k == 1 else (), seed=seed + k, **sensor_kw)
+            for k, which in enumerate(units, start=1)}
+
+
+def _check_keywords(fixture: str, given: dict, allowed) -> None:
+    """Fail the test if ``given`` holds a keyword not in ``allowed`` (naming it and the fixture's keywords)."""
+    __tracebackhide__ = True
+    unknown = sorted(set(given) - set(allowed))
+    if unknown:
+        _fail(f"{fixture}(): unknown keyword(s) {', '.join(unknown)}; it takes {', '.join(sorted(allowed))}")
+
+
+def _refuse_beside(fixture: str, what: str, given: dict, refused) -> None:
+    """Fail the test if any of ``refused`` was given beside ``what`` (scene or sensors), which already says it."""
+    __tracebackhide__ = True
+    clash = [k for k in refused if k in given]
+    if clash:
+        _fail(f"{fixture}(): {', '.join(clash)} given with {what}, which already describes the sensors; "
+              f"leave {'it' if len(clash) == 1 else 'them'} out (or {what})")
 
 
 @pytest.fixture
 def biotac_sensor():
-    """Factory: ``biotac_sensor(stimuli=(), channels=..., seed=0, unit=None)`` -> the SPI side of an emulated
-    sensor, in process (``spi.exchange(TransferBatch(...))``)."""
-    from emulator.channels import DEFAULT_FRAME_NAMES
-    from emulator.sensor import Sensor
+    """Factory: ``biotac_sensor(stimuli=(), channels=None, seed=0, unit=None, variant=None, scene=None, **kw)``
+    -> the SPI side of an emulated sensor, in process (``spi.exchange(TransferBatch(...))``); keywords in the
+    module docstring."""
+    from bench.errors import SceneError
     from emulator.spi.model import SensorPort
 
-    def make(stimuli=(), channels=DEFAULT_FRAME_NAMES, seed: int = 0, unit=None, **sensor_kw):
-        if unit is None:
-            return SensorPort(Sensor(stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw))
-        from emulator.spi.model import default_properties
-        from emulator.units import unit as make_unit
+    allowed = {"stimuli", "channels", "seed", "unit", "variant", "scene", *SENSOR_KEYWORDS}
 
-        u = make_unit(unit)
-        sensor = Sensor(params=u.params, stimuli=list(stimuli), channels_read=channels, seed=seed, **sensor_kw)
-        sensor.serial = None if u.seed is None else u.serial
-        return SensorPort(sensor, properties=default_properties(1, sensor.variant.name, serial=sensor.serial))
+    def make(**kw):
+        __tracebackhide__ = True
+        _check_keywords("biotac_sensor", kw, allowed)
+        scene = kw.pop("scene", None)
+        try:
+            if scene is None:
+                return SensorPort(one_sensor(**{"seed": 0, **kw}))
+            _refuse_beside("biotac_sensor", "scene", kw, ("stimuli", "channels", "unit", "variant", *SENSOR_KEYWORDS))
+            from bench.hosts.scene_sensors import sensors_from_scene
+
+            scene = load_scene_like(scene)
+            return SensorPort(sensors_from_scene(scene, scene.n_sensors, seed=kw.get("seed"))[1])
+        except (SceneError, ValueError) as e:
+            _fail(f"biotac_sensor(): {e}")
 
     return make
 
 
-def unit_sensors(n_sensors: int, units, stimuli=(), seed: int = 1) -> dict:
-    """Sensors 1..n of the given units (a list of n unit seeds / "nominal" / serials), reading the default frame;
-    sensor 1 feels ``stimuli``; sensor k draws its noise from ``seed + k`` (as the benches' own sensors)."""
-    from emulator.channels import DEFAULT_FRAME_NAMES
-    from emulator.sensor import Sensor
-    from emulator.units import unit
+def _benches(fixture: str, bench_class, scene_kw):
+    """A factory fixture's body: build the sensors (module docstring; ``scene_kw(scene, n_sensors, seed, kw)``:
+    the bench's keywords for a scene's sensors), start ``bench_class`` on them on demand, stop each after the
+    test."""
+    from bench.errors import SceneError
 
-    units = list(units)
-    if len(units) != n_sensors:
-        raise ValueError(f"units = {units!r}: give one unit per sensor ({n_sensors})")
-    out = {}
-    for k, which in enumerate(units, start=1):
-        u = unit(which)
-        out[k] = Sensor(params=u.params, stimuli=list(stimuli) if k == 1 else [], channels_read=DEFAULT_FRAME_NAMES,
-                        seed=seed + k)
-        out[k].serial = None if u.seed is None else u.serial  # nominal: the port's own default serial
-    return out
-
-
-def _benches(bench_class):
-    """A factory fixture's body: start ``bench_class(n_sensors, stimuli=..., **kw)`` on demand, stop each after."""
+    own = set(inspect.signature(bench_class).parameters) - {"n_sensors", "stimuli", "seed", "sensors", "variant"}
+    allowed = {"n_sensors", "stimuli", "seed", "sensors", "scene", *SENSOR_DESCRIPTION, *own}
     started = []
 
-    def make(n_sensors: int = 1, stimuli=(), units=None, **kw):
-        if units is not None:
-            kw["sensors"] = unit_sensors(n_sensors, units, stimuli, kw.pop("seed", 1))
-        bench = bench_class(n_sensors, stimuli=stimuli, **kw).start()
-        started.append(bench)
+    def make(n_sensors: int | None = None, **kw):
+        __tracebackhide__ = True
+        _check_keywords(fixture, kw, allowed)
+        try:
+            bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
+        except (SceneError, ValueError) as e:
+            _fail(f"{fixture}(): {e}")
+        started.append(bench.start())
         return bench
 
     yield make
@@ -112,13 +228,60 @@ def _benches(bench_class):
         bench.stop()
 
 
+def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw) -> dict:
+    """A bench's keywords for a factory's call (``kw``: its keywords but ``n_sensors``): the sensors built from a
+    scene, taken as given, or built from units, variants and sensor keywords; the bench's own keywords passed on."""
+    __tracebackhide__ = True
+    kw = dict(kw)
+    if "scene" in kw:
+        _refuse_beside(fixture, "scene", kw, ("sensors", "pattern") + SENSOR_DESCRIPTION)
+        scene = load_scene_like(kw.pop("scene"))
+        return scene_kw(scene, n_sensors, kw.pop("seed", None), kw)
+    seed = kw.pop("seed", 1)
+    if "sensors" in kw:
+        _refuse_beside(fixture, "sensors", kw, SENSOR_DESCRIPTION)
+        sensors = kw.pop("sensors")
+        return {**kw, "n_sensors": len(sensors) if n_sensors is None else n_sensors, "sensors": sensors,
+                "seed": seed}
+    units, variant, stimuli = kw.pop("units", None), kw.pop("variant", None), kw.pop("stimuli", ())
+    if n_sensors is None:
+        n_sensors = (len(units) if units is not None else
+                     1 if variant is None or isinstance(variant, str) else len(variant))
+    sensor_kw = {k: kw.pop(k) for k in SENSOR_KEYWORDS if k in kw}
+    return {**kw, "n_sensors": n_sensors, "seed": seed,
+            "sensors": unit_sensors(n_sensors, units, stimuli, seed, variant, **sensor_kw)}
+
+
+def _bridge_scene_kw(scene, n_sensors: int | None, seed: int | None, kw: dict) -> dict:
+    """FirmwareBench's keywords for ``scene``'s sensors (:func:`bench.cli.hosts.bridge_scene_kw`) and ``kw``."""
+    from bench.cli.hosts import bridge_scene_kw
+
+    spi = kw.pop("spi", None)
+    return {**kw, **bridge_scene_kw(scene, n_sensors, seed, spi)}
+
+
+def _cheetah_scene_kw(scene, n_sensors: int | None, seed: int | None, kw: dict) -> dict:
+    """CheetahBench's keywords for ``scene``'s sensors and ``kw`` (the scene's [host] section is the user's
+    program's business; the adapter serves the software SPI model only)."""
+    from bench.errors import SceneError
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    if scene.spi != "software":
+        raise SceneError(scene.source, [f"host.spi = {scene.spi!r}: the Cheetah adapter serves the software SPI "
+                                        "model only"])
+    n_sensors = scene.n_sensors if n_sensors is None else n_sensors
+    return {**kw, "n_sensors": n_sensors, "sensors": sensors_from_scene(scene, n_sensors, seed=seed),
+            "seed": scene.seed if seed is None else seed}
+
+
 @pytest.fixture
 def biotac_bridge():
-    """Factory: ``biotac_bridge(n_sensors=1, stimuli=(), units=None, **kw)`` -> the bridge firmware on a pty at
-    ``bench.port``; it streams frames only after the host sends START (``BridgeDriver(bench.port).start()``)."""
+    """Factory: ``biotac_bridge(n_sensors=None, stimuli=(), units=None, variant=None, scene=None, **kw)`` -> the
+    bridge firmware on a pty at ``bench.port``; it streams frames only after the host sends START
+    (``BridgeDriver(bench.port).start()``); keywords in the module docstring."""
     from bench.hosts.bridge import FirmwareBench
 
-    yield from _benches(FirmwareBench)
+    yield from _benches("biotac_bridge", FirmwareBench, _bridge_scene_kw)
 
 
 @pytest.fixture
@@ -130,8 +293,9 @@ def biotac_serial_port(biotac_bridge):
 
 @pytest.fixture
 def biotac_cheetah():
-    """Factory: ``biotac_cheetah(n_sensors=1, stimuli=(), units=None, **kw)`` -> emulated sensors behind cheetah.so
-    (``bench.lib_dir``, ``bench.env`` for your Cheetah-based program)."""
+    """Factory: ``biotac_cheetah(n_sensors=None, stimuli=(), units=None, variant=None, scene=None, **kw)`` ->
+    emulated sensors behind cheetah.so (``bench.lib_dir``, ``bench.env`` for your Cheetah-based program); keywords
+    in the module docstring."""
     from bench.hosts.cheetah_server import CheetahBench
 
-    yield from _benches(CheetahBench)
+    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw)

@@ -1,0 +1,162 @@
+"""The pytest plugin as its docstring and the README promise it (review 3): the variant reaches the sensors the
+factories build (units or not, bridge and Cheetah alike), ``scene=`` on every factory that builds a sensor, a
+bridge or a Cheetah bench, a BioTac SP sensor answers its whole frame, and misuse fails the user's test with one
+clear message (no traceback into the plugin)."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+from bench.hosts.driver import BridgeDriver
+from bench.tests.test_cli_review3 import sp_scene as write_sp_scene
+from emulator.spi import protocol as proto
+from emulator.spi.model import PROP_SERIAL
+from emulator.spi.peripheral import TransferBatch
+
+pytestmark = pytest.mark.firmware
+pytest_plugins = ["pytester"]
+
+@pytest.fixture
+def sp_scene(tmp_path):
+    """A scene file of two BioTac SPs, units 17 and 18."""
+    return write_sp_scene(tmp_path)
+
+
+def first_frame(port: str):
+    """One data frame from the bridge at ``port`` (after START)."""
+    driver = BridgeDriver(port)
+    try:
+        driver.start()
+        return next(driver.frames(max_frames=1))
+    finally:
+        driver.close()
+
+
+def read_channel(spi, channel: int, n: int = 3, t0: float = 0.05):
+    """``n`` samples of ``channel`` (index) read from a sensor's SPI side: (values, parity ok, raw answers)."""
+    start, mosi = [], []
+    for k in range(n):
+        t = t0 + k * 250e-6
+        start += [t, t + 60e-6]
+        mosi += [int(proto.sample_command(channel)) << 8, 0]
+    miso = spi.exchange(TransferBatch(np.array(start), np.array(mosi, np.uint16)))
+    values, ok = proto.decode_response(miso[1::2])
+    return values, ok, miso[1::2]
+
+
+# --- 1. the variant reaches the sensors built from units ----------------------------------------------------------
+
+
+def test_units_with_the_sp_variant_stream_the_54_slot_frame(biotac_bridge):
+    bench = biotac_bridge(2, units=[17, 18], variant="biotac-sp")
+    assert [bench.board.sensors[k].variant.name for k in (1, 2)] == ["biotac-sp", "biotac-sp"]
+    assert first_frame(bench.port).codes.shape == (54, 2)
+    assert [bench.board.bus.ports[k].properties[PROP_SERIAL][0] for k in (1, 2)] == [b"BTSP000000000017",
+                                                                                    b"BTSP000000000018"]
+
+
+def test_a_variant_per_sensor_and_n_sensors_from_the_units(biotac_bridge, biotac_cheetah):
+    bench = biotac_bridge(units=[17, "nominal"], variant=["biotac-sp", "biotac"])
+    assert [bench.board.sensors[k].variant.name for k in (1, 2)] == ["biotac-sp", "biotac"]
+    assert first_frame(bench.port).codes.shape == (44, 2)  # one 19-electrode sensor: the 44-slot frame
+    cb = biotac_cheetah(2, units=[17, 18], variant="biotac-sp")
+    assert [cb.bus.ports[k].sensor.variant.name for k in (1, 2)] == ["biotac-sp", "biotac-sp"]
+    assert cb.bus.ports[2].properties[PROP_SERIAL][0] == b"BTSP000000000018"
+
+
+# --- 3. a BioTac SP sensor answers its whole frame -----------------------------------------------------------------
+
+
+def test_an_sp_sensor_answers_e20_to_e24_by_default(biotac_sensor):
+    spi = biotac_sensor(variant="biotac-sp", unit=17)
+    for i, channel in enumerate(range(36, 41)):  # E20..E24
+        _, ok, raw = read_channel(spi, channel, t0=0.05 + 0.01 * i)
+        assert ok.all() and not any(w >> 8 == 0xA5 for w in raw), (channel, [hex(w) for w in raw])
+    assert spi.properties[PROP_SERIAL][0] == b"BTSP000000000017"  # the serial an SP answers
+    assert read_channel(biotac_sensor(), 40)[2][0] == 0xA558  # a 19-electrode sensor has no E24
+
+
+# --- 2. scene= on every factory ---------------------------------------------------------------------------------
+
+
+def test_a_scene_builds_the_bridge_its_sensors_and_their_count(biotac_bridge, sp_scene):
+    from bench.cli.scenes import scene_file
+    from bench.scenes.scene import load_scene
+
+    bench = biotac_bridge(scene=sp_scene)  # n_sensors: the scene's 2
+    assert first_frame(bench.port).codes.shape == (54, 2)
+    assert bench.board.sensors[1].params != bench.board.sensors[2].params  # units 17 and 18
+    assert bench.board.bus.ports[2].properties[PROP_SERIAL][0] == b"BTSP000000000018"
+    taps = biotac_bridge(scene="taps", n_sensors=2)  # a shipped scene by name, as `run` takes it
+    assert sorted(taps.board.sensors) == [1, 2]
+    assert [taps.board.sensors[k].seed for k in (1, 2)] == [load_scene(scene_file("taps")).seed + k for k in (0, 1)]
+
+
+def test_a_scene_on_the_sensor_and_the_cheetah_factories(biotac_sensor, biotac_cheetah, sp_scene):
+    from bench.scenes.scene import load_scene
+
+    spi = biotac_sensor(scene=sp_scene)
+    assert spi.sensor.variant.name == "biotac-sp" and spi.sensor.seed == 5
+    assert read_channel(spi, 40)[1].all()  # E24
+    cb = biotac_cheetah(scene=load_scene(sp_scene))  # a Scene object
+    assert sorted(cb.bus.ports) == [1, 2] and cb.bus.ports[1].properties[PROP_SERIAL][0] == b"BTSP000000000017"
+
+
+def test_the_module_docstring_lists_every_keyword_the_factories_take():
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cheetah_server import CheetahBench
+    from bench.pytest_plugin import fixtures
+
+    doc = fixtures.__doc__
+    keywords = {"scene", "units", "unit", "variant", "channels", "stimuli", "seed", "sensors", "n_sensors",
+                *fixtures.SENSOR_KEYWORDS}
+    for bench in (FirmwareBench, CheetahBench):
+        keywords |= set(inspect.signature(bench).parameters)
+    missing = sorted(k for k in keywords if k not in doc)
+    assert not missing, f"not in the plugin's docstring: {missing}"
+
+
+# --- misuse: one clear message, no traceback ----------------------------------------------------------------------
+
+MISUSE = '''
+from bench.hosts.cosim import default_sensors
+
+def test_variant_beside_sensors(biotac_bridge):
+    biotac_bridge(2, sensors=default_sensors(2), variant="biotac-sp")
+
+def test_bad_scene(biotac_bridge):
+    biotac_bridge(scene="{bad}")
+
+def test_unknown_scene_name(biotac_cheetah):
+    biotac_cheetah(scene="tapz")
+
+def test_scene_beside_units(biotac_sensor):
+    biotac_sensor(scene="taps", unit=17)
+
+def test_too_few_for_the_scene(biotac_bridge):
+    biotac_bridge(1, scene="{sp}")
+
+def test_typo(biotac_bridge):
+    biotac_bridge(1, realtme=True)
+'''
+
+
+def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_path, sp_scene):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[scene]\nname = "bad"\nduration_s = 1.0\n[host]\nsequence = ["PAC", "QQQ"]\n')
+    pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene))
+    result = pytester.runpytest("-p", "no:cacheprovider")
+    result.assert_outcomes(failed=6)
+    out = result.stdout.str()
+    result.stdout.fnmatch_lines([
+        "*biotac_bridge(): variant given with sensors, which already describes the sensors*",
+        "*biotac_bridge(): */bad.toml: 1 problem(s):*", "*host.sequence[[]1[]] = 'QQQ'*",
+        "*biotac_cheetah(): tapz: 1 problem(s):*", "*close matches: taps*",
+        "*biotac_sensor(): unit given with scene*",
+        "*the scene describes 2 sensors*not 1*",
+        "*biotac_bridge(): unknown keyword(s) realtme; it takes*realtime*",
+    ])
+    assert "Traceback" not in out and "fixtures.py" not in out and "scene.py:" not in out, out
