@@ -124,6 +124,7 @@ every problem with its field, value and allowed range.  Exit status 0 if every s
 
 def _cmd_run(a) -> int:
     from bench.reporting.outdir import OutFolder
+    from bench.reporting.report import sensor_serial
     from bench.reporting.session import run_to_folder
     from bench.scenes.scene import load_scene
 
@@ -143,9 +144,9 @@ def _cmd_run(a) -> int:
         print((out / "report.md").read_text())
     print(f"wrote {out}/ ({', '.join(record['outputs'])})" + (" for sensor 1" if scene.n_sensors > 1 else ""))
     for k, sub_record in sorted(res.sensor_records.items()):
-        sub = res.recording.sensors[k].scene
+        spec = scene.sensor_spec(k)
         print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} (unit "
-              f"{sub.unit}, serial {sub.serial}, {len(sub.stimuli)} stimuli)")
+              f"{spec.unit}, serial {sensor_serial(spec, k)}, {len(spec.stimuli)} stimuli)")
         for name, why in sub_record.get("skipped_outputs", {}).items():
             print(f"note: sensor{k}/{name} {why}", file=sys.stderr)
     for name, why in record.get("skipped_outputs", {}).items():

@@ -96,9 +96,25 @@ def _stimulus_record(s) -> dict:
     return d
 
 
+def sensor_serial(spec, k: int) -> str:
+    """The serial number a sensor (``spec``: a :class:`~bench.scenes.scene.SensorSpec`, ``scene.sensor_spec(k)``)
+    answers as sensor ``k`` of a bus (its serial property, what a host reads): its unit's — a BioTac SP's in the
+    "BTSP…" form (:func:`emulator.spi.model.variant_serial`) — or, for the nominal unit and sensors the scene does
+    not describe (no serial of their own, as :func:`bench.running.runner.build_sensor` builds them), sensor ``k``'s
+    default (:func:`emulator.spi.model.default_serial`)."""
+    from emulator.spi.model import default_serial, variant_serial
+
+    if spec.unit == "nominal" or not spec.serial:
+        return default_serial(k, spec.variant)
+    return variant_serial(spec.serial, spec.variant)
+
+
 def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None,
-                 interrupted_by: str | None = None) -> dict:
+                 interrupted_by: str | None = None, sensor_index: int = 1) -> dict:
+    """The JSON record of ``rec``; ``sensor_index``: which sensor of the scene ``rec`` is (sensors 2..N are run as
+    one-sensor scenes, :meth:`~bench.scenes.scene.Scene.for_sensor`)."""
     sc = rec.scene
+    spec = sc.sensor_spec(1)
     summary = _summary(rec)
     stats = {name: cs.stats(rec.simulated_s) for name, cs in summary.channels.items()}
     record = {
@@ -111,6 +127,9 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
         "host": {"sequence": sc.sequence, "slot_rate_Hz": sc.slot_rate_Hz, "spi_clock_Hz": sc.spi_clock_Hz,
                  "spi": sc.spi},
         "faults": dict(sc.faults),
+        # the sensor: the serial is the one it answers as sensor sensor_index of a bus (bridge, Cheetah adapter)
+        "sensor": {"index": sensor_index, "unit": spec.unit, "variant": spec.variant,
+                   "serial": sensor_serial(spec, sensor_index)},
         "analysis": {"impact_detection": sc.impact_detection},
         "noise": asdict(sc.noise),
         "sensor_parameters": asdict(sc.params),
@@ -149,7 +168,7 @@ class _NoGuard:
 
 def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True, *, npz: bool | None = None,
                   samples_tmp: Path | None = None, force: bool = False, guard=None,
-                  compression: str = "gzip", sensors: dict[int, dict] | None = None) -> dict:
+                  compression: str = "gzip", sensors: dict[int, dict] | None = None, sensor_index: int = 1) -> dict:
     """Write everything about ``rec`` into ``out_dir`` (a path, checked and locked here, or an open
     :class:`~bench.reporting.outdir.OutFolder`); returns the JSON record.
 
@@ -161,7 +180,8 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
     early — :class:`~bench.running.signals.StopSignals` does so only for a signal arriving after its
     ``begin_writing()``; the record is still written, with status ``"interrupted"`` if the guard saw any signal.
     ``sensors``: a several-sensor run's records of sensors 2..N (already written into ``sensor<k>/``), listed in
-    this record under ``"sensors"`` (status, error, outputs); one that failed makes this record failed too.
+    this record under ``"sensors"`` (status, error, outputs, the serial each answers); one that failed makes this
+    record failed too.  ``sensor_index``: which sensor of the scene ``rec`` is (for its serial: :func:`sensor_serial`).
     """
     from bench.running.signals import StopRequested
 
@@ -230,9 +250,10 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
             rec.error = "; ".join(([rec.error] if rec.error else []) + problems)
         interrupted_by = guard.signal_name if rec.status == "interrupted" else None
         planned = (["samples.h5"] if h5 is not None else []) + outputs + ["report.md", "record.json"]
-        record = _safe_record(rec, planned, skipped, interrupted_by)
+        record = _safe_record(rec, planned, skipped, interrupted_by, sensor_index)
         if sensors:
-            record["sensors"] = {f"sensor{k}": {key: r.get(key) for key in ("status", "error", "outputs")}
+            record["sensors"] = {f"sensor{k}": {**{key: r.get(key) for key in ("status", "error", "outputs")},
+                                                "serial": sensor_serial(rec.scene.sensor_spec(k), k)}
                                  for k, r in sorted(sensors.items())}
             for k, r in sorted(sensors.items()):
                 if r.get("status") == "failed" and record["status"] != "failed":
@@ -269,10 +290,11 @@ def _fail(record: dict, problem: str, missing: str | None = None) -> None:
         record["outputs"].remove(missing)
 
 
-def _safe_record(rec: Recording, outputs: list[str], skipped: dict, interrupted_by: str | None) -> dict:
+def _safe_record(rec: Recording, outputs: list[str], skipped: dict, interrupted_by: str | None,
+                 sensor_index: int = 1) -> dict:
     """:func:`build_record`, or — if building it fails — a minimal record saying so (a record is always written)."""
     try:
-        return build_record(rec, outputs, skipped, interrupted_by)
+        return build_record(rec, outputs, skipped, interrupted_by, sensor_index)
     except Exception as e:
         sc = rec.scene
         record = {"status": rec.status, "error": rec.error,
@@ -302,7 +324,11 @@ def markdown_report(record: dict) -> str:
     status = record["status"] + (f" by {record['interrupted_by']}" if record.get("interrupted_by") else "")
     lines += [f"- status: **{status}**" + (f" — {record['error']}" if record["error"] else ""),
               f"- simulated {record['simulated_s']:.2f} s of {sc['duration_s']:g} s in {record['wall_s']:.2f} s wall "
-              f"({record['realtime_factor']:.0f}× real time), fidelity `{sc['fidelity']}`, seed {sc['seed']}", ""]
+              f"({record['realtime_factor']:.0f}× real time), fidelity `{sc['fidelity']}`, seed {sc['seed']}"]
+    if "sensor" in record:
+        who = record["sensor"]
+        lines.append(f"- sensor {who['index']}: {who['variant']}, unit {who['unit']}, serial `{who['serial']}`")
+    lines.append("")
     if "pac_resting" in record:
         lines += [f"PAC at rest: baseline {record['pac_resting']['baseline_code']:.1f}, "
                   f"σ = {record['pac_resting']['sigma_bits']:.2f} bits RMS (published 1.4 ± 0.1)", ""]
@@ -340,7 +366,8 @@ def markdown_report(record: dict) -> str:
         lines.append(f"| {e['name']} | {e['description']} | {1e3 * e['seconds_per_simulated_s']:.3f} |")
     lines += ["", "Outputs: " + ", ".join(f"`{o}`" for o in record["outputs"]), ""]
     for folder, r in record.get("sensors", {}).items():
-        lines.append(f"- `{folder}/`: {r['status']}" + (f" — {r['error']}" if r.get("error") else ""))
+        lines.append(f"- `{folder}/`: {r['status']}" + (f", serial `{r['serial']}`" if r.get("serial") else "")
+                     + (f" — {r['error']}" if r.get("error") else ""))
     if record.get("sensors"):
         lines.append("")
     for name, why in record.get("skipped_outputs", {}).items():
