@@ -45,6 +45,16 @@ POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0
 #: textures are layers on the rig's rigid backing: a soft one compresses at most this much (it densifies as it
 #: approaches its thickness), so a finger always reaches a force (model choice: the library has no thickness)
 TEXTURE_LAYER_M = 3e-3
+#: A track's tables (patch-averaged heights and ridge slopes per patch radius, the friction's fluctuation) are
+#: computed whole when they hold at most this many positions (1.3 m at the default 10 µm, 0.33 m at the reference
+#: 2.5 µm): a slide's whole travel, as they always were.  A longer track (a long slide) is held as a ring of
+#: RING_TILES tiles of TABLE_TILE positions centred on the finger, a tile computed as the stage reaches it, so the
+#: memory is bounded by the ring (12.6 MB at default, 25 MB at reference), not the travel.
+TABLE_WHOLE_MAX = 2**17
+TABLE_TILE = 2**15
+RING_TILES = 3
+#: the finger is kept this far inside the ring's ends (within one grid step the skin moves tens of microns)
+RING_MARGIN_M = 0.01
 
 
 @dataclass
@@ -292,32 +302,49 @@ def _fluctuation_track(texture: Texture, dx_m: float) -> np.ndarray:
     return friction_fluctuation(texture, dx_m)
 
 
+def table_positions(length_m: float, dx_m: float) -> int:
+    """How many positions (spacing ``dx_m``) the tables of a track ``length_m`` long hold: ⌈length/dx⌉ + 2."""
+    return int(np.ceil(length_m / dx_m)) + 2
+
+
 def fluctuation_table(texture: Texture, start_m: float, length_m: float, dx_m: float) -> np.ndarray:
     """The friction coefficient's relative fluctuation ε (1) along the track ``[start_m, start_m + length_m)`` at
     the positions of :func:`spatial_tables` (relative to ``start_m``), from the texture's own fluctuation."""
+    return fluctuation_stretch(texture, start_m, 0, table_positions(length_m, dx_m), dx_m)
+
+
+def fluctuation_stretch(texture: Texture, start_m: float, first: int, n: int, dx_m: float) -> np.ndarray:
+    """:func:`fluctuation_table`'s positions ``first`` … ``first + n − 1`` (position i at ``start_m + i·dx_m``): the
+    same samples, whichever stretch they are asked in."""
     track = _fluctuation_track(texture, dx_m)
-    n = int(np.ceil(length_m / dx_m)) + 2
-    first = int(round(start_m / dx_m)) % track.size
-    if first + n <= track.size:  # no wrap: a copy of a slice (the same samples)
-        return track[first:first + n].copy()
-    return np.ascontiguousarray(track[(first + np.arange(n)) % track.size])
+    i0 = (int(round(start_m / dx_m)) + first) % track.size
+    if i0 + n <= track.size:  # no wrap: a copy of a slice (the same samples)
+        return track[i0:i0 + n].copy()
+    return np.ascontiguousarray(track[(i0 + np.arange(n)) % track.size])
 
 
 def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, length_m: float, dx_m: float,
                    radii_m: np.ndarray):
     """Tables (radius × position) of the patch-averaged height (m) and the slope the skin feels (1) along the
     track ``[start_m, start_m + length_m)``, positions relative to ``start_m``."""
+    return table_stretch(texture, skin, ridge_gain, start_m, 0, table_positions(length_m, dx_m), dx_m, radii_m)
+
+
+def table_stretch(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, first: int, n: int, dx_m: float,
+                  radii_m: np.ndarray):
+    """:func:`spatial_tables` at positions ``first`` … ``first + n − 1`` (position i at ``start_m + i·dx_m``), computed
+    from the surface around them alone (the patch average by one FFT over the stretch and its margins): a whole
+    track's tables are the stretch from 0, and a long track is computed stretch by stretch (:data:`TABLE_TILE`)."""
     rough = _random_track(texture, dx_m)
     n_surface = rough.size
     pad = int(np.ceil((radii_m.max() + skin.ridge_pitch_m) / dx_m)) + 2
-    n = int(np.ceil(length_m / dx_m)) + 2
-    first = (int(round(start_m / dx_m)) - pad) % n_surface
-    if first + n + 2 * pad <= n_surface:  # the stretch does not wrap: a slice (the same samples)
-        h = rough[first:first + n + 2 * pad]
+    i0 = (int(round(start_m / dx_m)) + first - pad) % n_surface
+    if i0 + n + 2 * pad <= n_surface:  # the stretch does not wrap: a slice (the same samples)
+        h = rough[i0:i0 + n + 2 * pad]
     else:
-        h = rough[(first + np.arange(n + 2 * pad)) % n_surface]
-    if texture.periodic:  # (positions start_m + i·dx, i from -pad)
-        h = h + periodic_on_grid(texture, start_m - pad * dx_m, dx_m, n + 2 * pad)
+        h = rough[(i0 + np.arange(n + 2 * pad)) % n_surface]
+    if texture.periodic:  # (positions start_m + i·dx, i from first - pad)
+        h = h + periodic_on_grid(texture, start_m + (first - pad) * dx_m, dx_m, n + 2 * pad)
     else:  # (a fresh array, as the sum with the zero profile made it: -0.0 becomes 0.0 as before)
         h = h + 0.0
     # the crest of a ridge sees the surface through its contact width
@@ -526,12 +553,108 @@ class SlidingContact(Effect):
             force_max = getattr(m, "force_N", 5.0)
             radii = params.contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, max(2.5 * force_max, 0.1), n_radii))
             length = m.max_travel_m + 4 * radii.max() + 0.01
-            heights, slopes = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m, radii)
-            fluct = fluctuation_table(m.texture, m.start_position_m, length, dx_m)
-            self._contacts.append({"motion": m, "gain": gain, "radii": radii, "heights": heights, "slopes": slopes,
-                                   "fluctuation": fluct,
-                                   "state": friction.new_state(0.0), "skin_state": skin.state(), "log": [],
-                                   "stage_zi": np.zeros(1), "feeds": []})
+            c = {"motion": m, "gain": gain, "radii": radii, "skin": skin, "table_n": table_positions(length, dx_m),
+                 "ring_first": None, "state": friction.new_state(0.0), "skin_state": skin.state(), "log": [],
+                 "stage_zi": np.zeros(1), "feeds": []}
+            if c["table_n"] <= TABLE_WHOLE_MAX:  # the whole track's tables, once
+                c["heights"], c["slopes"] = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m,
+                                                           radii)
+                c["fluctuation"] = fluctuation_table(m.texture, m.start_position_m, length, dx_m)
+            else:  # a ring around the finger, which starts at position 0
+                self._centre_ring(c, 0)
+            self._contacts.append(c)
+
+    # --- the tables of a long track: a ring of tiles around the finger -------------------------------------------
+    def _centre_ring(self, c: dict, tile: int) -> None:
+        """Hold ``c``'s tables for tiles ``tile − RING_TILES // 2`` … (tile b: positions b·T … b·T + T − 1, T =
+        :data:`TABLE_TILE`) in new arrays (the old ones are replaced, never edited: a rig's snapshot shares them).
+        Position i sits in column i mod (RING_TILES·T), which is where the compiled step reads it (it reads a table
+        modulo its length), so the step reads exactly what the whole table holds there; a position beyond the
+        track's end (or before its start) holds what the whole table's wrapped read gives, its position modulo the
+        track's length.  Tiles the ring already held are copied, the others computed (:func:`table_stretch`, one
+        FFT per tile of the track, so a position's values do not depend on which ring asked for them)."""
+        T, n_total, m = TABLE_TILE, c["table_n"], c["motion"]
+        first = tile - RING_TILES // 2
+        old = c["ring_first"]
+        width = RING_TILES * T
+        if old is None:
+            heights, slopes = np.empty((c["radii"].size, width)), np.empty((c["radii"].size, width))
+            fluct = np.empty(width)
+        else:
+            heights, slopes, fluct = c["heights"].copy(), c["slopes"].copy(), c["fluctuation"].copy()
+        computed = {}  # track tile -> its tables (a ring tile beyond the track's end may need two)
+        for b in range(first, first + RING_TILES):
+            if old is not None and old <= b < old + RING_TILES:
+                continue  # held already, in the same columns
+            column = (b % RING_TILES) * T
+            v = b * T
+            while v < (b + 1) * T:  # positions v …, as their wrapped positions w in the track's tiles
+                w = v % n_total
+                k = w // T
+                if k not in computed:
+                    start, n = k * T, min(T, n_total - k * T)
+                    computed[k] = (start, *table_stretch(m.texture, c["skin"], c["gain"], m.start_position_m, start,
+                                                         n, self.dx_m, c["radii"]),
+                                   fluctuation_stretch(m.texture, m.start_position_m, start, n, self.dx_m))
+                start, h, s, e = computed[k]
+                run = min((b + 1) * T - v, start + h.shape[1] - w)
+                at = column + v - b * T
+                heights[:, at:at + run], slopes[:, at:at + run] = h[:, w - start:w - start + run], \
+                    s[:, w - start:w - start + run]
+                fluct[at:at + run] = e[w - start:w - start + run]
+                v += run
+        c["heights"], c["slopes"], c["fluctuation"], c["ring_first"] = heights, slopes, fluct, first
+
+    def _friction(self, c: dict, n0: np.ndarray, v: np.ndarray, dt: float, out: tuple, i: int, j: int) -> None:
+        """:func:`friction.slide_block` over samples ``i`` … ``j − 1`` of a block (nominal load ``n0``, N, and stage
+        velocity ``v``, m/s, per grid sample of ``dt`` s) into the outputs ``out`` (normal N, tangential N, slip m/s,
+        texture position m); the state is carried, so a block cut into pieces gives the same samples."""
+        m, p, tex = c["motion"], self.params, c["motion"].texture
+        friction.slide_block(n0[i:j], v[i:j], dt, self.substeps,
+                             c["heights"], c["slopes"], c["radii"], c["fluctuation"], self.dx_m, c["state"],
+                             not isinstance(m, Slide),
+                             p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
+                             tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
+                             p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
+                             p.bristle_stiffness_per_N, p.bristle_damping_per_N,
+                             tex.mu_static, tex.mu_kinetic, tex.stribeck_velocity_m_per_s,
+                             tex.mu_per_velocity_s_per_m, *(x[i:j] for x in out))
+
+    def _friction_in_ring(self, c: dict, n0: np.ndarray, v: np.ndarray, dt: float, out: tuple) -> None:
+        """:meth:`_friction` over a whole block in pieces over which the stage moves at most half a tile, each with
+        the ring centred on the tile the finger is on.  Should the skin leave the ring within a piece after all (it
+        cannot at physical speeds), the piece runs again from the state it started from, shorter, so no position is
+        ever read outside the ring."""
+        half_tile_m = 0.5 * TABLE_TILE * self.dx_m
+        fastest = float(np.max(np.abs(v))) if v.size else 0.0
+        piece = v.size if fastest == 0.0 else max(1, int(half_tile_m / (fastest * dt)))
+        positions_m = out[3]
+        done = 0
+        while done < v.size:
+            start_m = c["state"][2]
+            tile = int(np.floor(start_m / self.dx_m)) // TABLE_TILE if np.isfinite(start_m) else c["ring_first"]
+            if tile != c["ring_first"] + RING_TILES // 2:
+                self._centre_ring(c, tile)
+            end = min(v.size, done + piece)
+            state = c["state"].copy()
+            self._friction(c, n0, v, dt, out, done, end)
+            if self._ring_holds(c, np.append(positions_m[done:end], start_m)):
+                done = end
+                continue
+            c["state"][:] = state
+            if end - done == 1:
+                raise RuntimeError(f"sliding: the skin moved more than {RING_MARGIN_M * 1e3:g} mm along the texture "
+                                   f"within one grid step (position {c['state'][2]:.6g} m)")
+            piece = max(1, (end - done) // 2)
+
+    def _ring_holds(self, c: dict, positions_m: np.ndarray) -> bool:
+        """Whether every position (m) lies in the ring, :data:`RING_MARGIN_M` inside its ends (the step reads a
+        position's column and the next; the margin covers the skin's travel within one grid step between the
+        positions it records)."""
+        margin = min(RING_MARGIN_M / self.dx_m, TABLE_TILE / 4)
+        lo, hi = c["ring_first"] * TABLE_TILE + margin, (c["ring_first"] + RING_TILES) * TABLE_TILE - 1 - margin
+        u = positions_m / self.dx_m
+        return bool(np.all((u >= lo) & (u < hi)))  # (NaN: not held)
 
     def describe(self) -> str:
         return "sliding contact: stick-slip friction, patch-averaged texture, fingerprint ridges (N)"
@@ -576,30 +699,21 @@ class SlidingContact(Effect):
                 n0 = m.normal_force_N(tt)
             else:
                 n0 = commanded_load_N(m, p, tt)
-            v = m.stage_velocity_m_per_s(tt)
-            tex = m.texture
-            normal = np.empty(tt.size)
-            tang = np.empty(tt.size)
-            slip = np.empty(tt.size)
-            pos = np.empty(tt.size)
-            friction.slide_block(np.ascontiguousarray(n0), np.ascontiguousarray(v), dt, self.substeps,
-                                 c["heights"], c["slopes"], c["radii"], c["fluctuation"], self.dx_m, c["state"],
-                                 not isinstance(m, Slide),
-                                 p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
-                                 tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
-                                 p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
-                                 p.bristle_stiffness_per_N, p.bristle_damping_per_N,
-                                 tex.mu_static, tex.mu_kinetic, tex.stribeck_velocity_m_per_s,
-                                 tex.mu_per_velocity_s_per_m, normal, tang, slip, pos)
-            # the tangential load's share of fluid pressure, signed: its fluctuations enter linearly (no
-            # rectification); slides run along +x, so the mean friction raises the pressure
-            for feed in c["feeds"]:
+            n0, v = np.ascontiguousarray(n0), np.ascontiguousarray(m.stage_velocity_m_per_s(tt))
+            normal, tang, slip, pos = out = tuple(np.empty(tt.size) for _ in range(4))
+            if c["ring_first"] is None:
+                self._friction(c, n0, v, dt, out, 0, tt.size)
+            else:
+                self._friction_in_ring(c, n0, v, dt, out)
+            for feed in c["feeds"]:  # (the whole block: zero force outside the motion)
                 if a == 0 and b == block.n:
                     feed.push(block.n0, block.n, normal, tang)
                 else:
                     whole_n, whole_t = np.zeros(block.n), np.zeros(block.n)
                     whole_n[a:b], whole_t[a:b] = normal, tang
                     feed.push(block.n0, block.n, whole_n, whole_t)
+            # the tangential load's share of fluid pressure, signed: its fluctuations enter linearly (no
+            # rectification); slides run along +x, so the mean friction raises the pressure
             normal_out[a:b] += normal + p.tangential_coupling * tang
             tangential_out[a:b] += tang
             load_out[a:b] += normal
