@@ -158,6 +158,11 @@ def unit_sensors(n_sensors: int, units=None, stimuli=(), seed: int = 1, variant=
             for k, which in enumerate(units, start=1)}
 
 
+def _given(**kw) -> dict:
+    """The keywords given a value (not None)."""
+    return {k: v for k, v in kw.items() if v is not None}
+
+
 def _check_keywords(fixture: str, given: dict, allowed) -> None:
     """Fail the test if ``given`` holds a keyword not in ``allowed`` (naming it and the fixture's keywords)."""
     __tracebackhide__ = True
@@ -185,9 +190,10 @@ def biotac_sensor():
 
     allowed = {"stimuli", "channels", "seed", "unit", "variant", "scene", *SENSOR_KEYWORDS}
 
-    def make(**kw):
+    def make(stimuli=None, channels=None, seed=None, unit=None, **kw):  # the first four by position too
         __tracebackhide__ = True
         _check_keywords("biotac_sensor", kw, allowed)
+        kw.update(_given(stimuli=stimuli, channels=channels, seed=seed, unit=unit))
         scene = kw.pop("scene", None)
         try:
             if scene is None:
@@ -213,9 +219,10 @@ def _benches(fixture: str, bench_class, scene_kw):
     allowed = {"n_sensors", "stimuli", "seed", "sensors", "scene", *SENSOR_DESCRIPTION, *own}
     started = []
 
-    def make(n_sensors: int | None = None, **kw):
+    def make(n_sensors: int | None = None, stimuli=None, units=None, **kw):  # the first three by position too
         __tracebackhide__ = True
         _check_keywords(fixture, kw, allowed)
+        kw.update(_given(stimuli=stimuli, units=units))
         try:
             bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
         except (SceneError, ValueError) as e:

@@ -79,6 +79,15 @@ def test_an_sp_sensor_answers_e20_to_e24_by_default(biotac_sensor):
     assert read_channel(biotac_sensor(), 40)[2][0] == 0xA558  # a 19-electrode sensor has no E24
 
 
+def test_the_first_arguments_still_go_by_position(biotac_sensor, biotac_bridge):
+    from emulator.stimuli import Tap
+
+    spi = biotac_sensor([Tap(0.1, 1.0)], ["PDC"], 3, 17)  # stimuli, channels, seed, unit
+    assert spi.sensor.seed == 3 and spi.properties[PROP_SERIAL][0] == b"BTU0000000000017"
+    bench = biotac_bridge(2, [Tap(0.1, 1.0)], [17, 18])  # n_sensors, stimuli, units
+    assert bench.board.bus.ports[2].properties[PROP_SERIAL][0] == b"BTU0000000000018"
+
+
 # --- 2. scene= on every factory ---------------------------------------------------------------------------------
 
 
