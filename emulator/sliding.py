@@ -4,8 +4,15 @@ Data flow (per block, state carried): texture + skin → spatial tables along th
 ridge-sampled slope, one row per patch radius) → :func:`emulator.friction.slide_block` (LuGre stick-slip
 against the compliant skin, texture position advanced by the slip) → ``contact_force_N`` (normal load with
 its fluctuations, plus the tangential force's share of fluid pressure) and ``tangential_force_N`` (for the
-stage's motor current and plots) and ``normal_force_N`` (the true normal load, for checking force control).  ``contact_force_N`` then takes the existing path: force → fluid pressure →
-resonance → bridge → front end → codes.
+stage's motor current and plots) and ``normal_force_N`` (the true normal load, for checking force control).
+``contact_force_N`` then takes the existing path: force → fluid pressure → resonance → bridge → front end → codes.
+The electrodes read each motion's normal and tangential force through a :class:`ForceFeed` (the mean over each
+electrode period), so they feel the friction's shear: none while the stage holds still, its ramp, stick-slip and
+fluctuations once it moves.
+
+The tables cover the motion's whole travel when it is short (:data:`TABLE_WHOLE_MAX` positions); a long slide's
+are held as a ring of tiles around the finger, computed as the stage reaches them, so memory does not grow with the
+travel (:meth:`SlidingContact._centre_ring`).
 
 The friction coefficient fluctuates with the slip distance, µ → µ·(1 + ε(p)) (:func:`emulator.texture.
 friction_fluctuation`: 3 % RMS, power ∝ 1/q between 20 µm and 10 mm, on every texture): the micro stick-slip
