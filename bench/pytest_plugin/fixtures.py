@@ -138,8 +138,8 @@ def one_sensor(unit=None, variant=None, stimuli=(), channels=None, seed: int = 0
 
     u = unit_of(unit, base=params)
     v = variant_of("biotac" if variant is None else variant)
-    sensor = Sensor(params=u.params, stimuli=list(stimuli), channels_read=v.frame_names if channels is None else channels,
-                    seed=seed, variant=v.name, **sensor_kw)
+    sensor = Sensor(params=u.params, stimuli=list(stimuli), seed=seed, variant=v.name,
+                    channels_read=v.frame_names if channels is None else channels, **sensor_kw)
     sensor.serial = None if u.seed is None else u.serial
     return sensor
 

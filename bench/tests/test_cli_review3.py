@@ -74,7 +74,8 @@ def test_rtl_lint_says_lint_clean_when_verilator_exits_0_and_shows_warnings_othe
     assert cli.main(["rtl", "lint"]) == 0
     out = capsys.readouterr().out
     assert REPORT.strip() in out and out.strip().endswith("lint clean: verilator --lint-only -Wall"), out
-    warning = "%Warning-WIDTH: biotac_spi.sv:10:5: Operator ASSIGNW expects 2 bits\n%Error: Exiting due to 1 warning(s)\n"
+    warning = ("%Warning-WIDTH: biotac_spi.sv:10:5: Operator ASSIGNW expects 2 bits\n"
+               "%Error: Exiting due to 1 warning(s)\n")
     verilator_says(1, warning + REPORT)
     assert cli.main(["rtl", "lint"]) == 1
     out = capsys.readouterr().out
