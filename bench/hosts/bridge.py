@@ -16,11 +16,18 @@ loses what does not fit (an overrun) while the firmware streams on; ``overrun_fr
 lost bytes.  Unpaced (``realtime=False``, the default for tests), virtual time has no relation to the host's
 clock, so the firmware waits for a host that is reading (back-pressure: nothing is lost however slow the host);
 a host that has not read for :data:`HOST_GONE_S` is taken as gone, and bytes overrun as in real time.
+
+Virtual time, and so every stimulus and scheduled fault, counts from power-on (t = 0, when the bench starts).
+Unpaced, it stands still at the end of the firmware's start-up until the host sends its first byte (usually
+START): however long the host takes to open the port and set up, it finds the sensors as at power-on, so a tap
+scripted at 0.5 s comes ≈ 0.5 s into the stream, and the same host commands give the same frames on every run
+(and over the software and the RTL SPI).  Paced to the wall clock, time runs from power-on as on a real bench.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 import queue
 import random
 import threading
@@ -28,9 +35,31 @@ import time
 
 from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
+from bench.scenes.limits import MAX_SENSORS
 
 #: Unpaced, a host whose receive buffer has stayed full this long (wall s) is taken as gone (bytes overrun).
 HOST_GONE_S = 0.2
+#: Unpaced, before the host's first byte: how often (wall s) the bench looks for it (virtual time stands still).
+HOST_POLL_S = 0.002
+
+
+def _whole_1_to_max(n) -> bool:
+    return isinstance(n, numbers.Integral) and not isinstance(n, bool) and 1 <= n <= MAX_SENSORS
+
+
+def bench_sensors(n_sensors, sensors, stimuli, seed: int, variant: str) -> dict:
+    """The emulated sensors a host bench serves: ``sensors`` (sensor number -> Sensor) if given, else ``n_sensors``
+    default ones (:func:`bench.hosts.cosim.default_sensors`).  A count or numbers outside 1..MAX_SENSORS (what the
+    bridge firmware and the Cheetah adapter address) are refused with a ValueError naming them."""
+    if sensors:
+        bad = [n for n in sensors if not _whole_1_to_max(n)]
+        if bad:
+            raise ValueError(f"sensors numbered {bad!r}: sensor numbers are 1 to {MAX_SENSORS}")
+        return dict(sensors)
+    if not _whole_1_to_max(n_sensors):
+        raise ValueError(f"n_sensors = {n_sensors!r}: must be a whole number from 1 to {MAX_SENSORS} "
+                         f"(sensors on the bus)")
+    return default_sensors(int(n_sensors), stimuli, seed, variant)
 
 
 class FirmwareBench:
@@ -43,6 +72,7 @@ class FirmwareBench:
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
         if not (isinstance(baudrate, int) and baudrate > 0):
             raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
+        sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)
         self.link = PtyLink(baudrate, rx_buffer=rx_buffer, keep_arrivals=keep_arrivals)
         self.baudrate = baudrate
         self._line_free_at = 0.0  # wall time when the paced UART has sent everything so far
@@ -50,8 +80,7 @@ class FirmwareBench:
         self.port = self.link.path
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
-        self.board = VirtualBoard(sensors or default_sensors(n_sensors, stimuli, seed, variant), uart_out=self._line,
-                                  pull_up=pull_up, spi=spi)
+        self.board = VirtualBoard(sensors, uart_out=self._line, pull_up=pull_up, spi=spi)
         self.sim = CoSim(self.board)
         if pattern is not None:
             self.sim.set_pattern(pattern)
@@ -98,13 +127,21 @@ class FirmwareBench:
             time.sleep(min(left, 0.001))
 
     def _loop(self) -> None:
+        """Run the firmware in steps of ``step_s`` virtual s, passing the host's bytes in between; unpaced,
+        virtual time waits for the host's first byte (see the module's docstring)."""
         wall0, virt0 = time.perf_counter(), self.board.t
+        host_spoke = self.realtime
         try:
             while not self._stop.is_set():
                 self._take_requests()
                 data = self.link.read_available()
                 if data:
                     self.board.send_to_firmware(data)
+                    host_spoke = True
+                if not host_spoke:
+                    self.link.pump()
+                    self._stop.wait(HOST_POLL_S)
+                    continue
                 self.sim.run(self.step_s)
                 self.link.pump()
                 if self.realtime:

@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.hosts.cosim import default_sensors
+from bench.hosts.bridge import bench_sensors
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
 from emulator.spi.model import Bus, SensorPort, Transfer
@@ -138,11 +138,11 @@ class CheetahBench:
 
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False,
                  variant: str = "biotac"):
+        sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)  # variant: "biotac" or "biotac-sp"
         self.library = build_library()
         self.lib_dir = self.library.parent
         self._tmp = private_folder()
         self.socket_path = os.path.join(self._tmp, "cheetah.sock")
-        sensors = sensors or default_sensors(n_sensors, stimuli, seed, variant)  # variant: "biotac" or "biotac-sp"
         self.bus = Bus({n: SensorPort(s, n) for n, s in sensors.items()})
         self.t_host = 0.0  # the host program's time (s)
         self.t_bus = 0.0  # when the adapter's bus is free
