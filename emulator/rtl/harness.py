@@ -25,6 +25,8 @@ DEFAULT_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_harness"
 TRANSFER = np.dtype([("t_ps", "<i8"), ("half_ps", "<i4"), ("nbits", "<u2"), ("cs", "u1"), ("keep_cs", "u1"),
                      ("mosi", "<u8"), ("reset_mask", "u1"), ("pad", "u1", 7)])
 CODE = np.dtype([("sensor", "u1"), ("channel", "u1"), ("code", "<u2")])
+#: How long (wall s) :meth:`RtlBus.close` waits for the streaming harness to exit after its input ends.
+CLOSE_TIMEOUT_S = 5.0
 
 
 class HarnessError(RuntimeError):
@@ -224,8 +226,7 @@ class RtlBus:
                                      stdout=subprocess.PIPE)
         self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False}, 0))
         self.proc.stdin.flush()
-        self.mismatches = 0
-        self._pending_codes: list[tuple[int, int, float, float]] = []  # (sensor, channel, end, next start)
+        self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
 
     def _codes_for(self, start, end, cs, mosi, nbits):
         """ADC codes of the sampling commands among these transfers, for every sensor they select."""
@@ -265,7 +266,8 @@ class RtlBus:
             codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
         self.proc.stdin.write(struct.pack("<II", start.size, len(codes)) + tr.tobytes() + codes.tobytes())
         self.proc.stdin.flush()
-        raw = np.frombuffer(self._read(8 * (start.size + 2)), dtype="<u8")
+        raw = np.frombuffer(self._read(8 * (start.size + 3)), dtype="<u8")
+        self.evals = int(raw[start.size + 2])
         if raw[start.size]:
             raise HarnessError(f"the RTL requested conversions the emulator did not compute ({int(raw[start.size])})")
         return raw[:start.size]
@@ -288,6 +290,18 @@ class RtlBus:
                               [tr.keep_cs])[0])
 
     def close(self) -> None:
-        if self.proc.poll() is None:
+        """Stop the harness: end its input (it exits), and kill it if it has not within :data:`CLOSE_TIMEOUT_S`;
+        never leaves the process behind.  Idempotent."""
+        try:
             self.proc.stdin.close()
-            self.proc.wait(timeout=10)
+        except OSError:  # the harness is gone already (broken pipe while flushing)
+            pass
+        try:
+            self.proc.wait(timeout=CLOSE_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            pass
+        finally:  # also when interrupted (Ctrl-C, SIGTERM) while waiting
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+            self.proc.stdout.close()

@@ -1,0 +1,81 @@
+"""The streaming RTL harness behind ``spi="rtl"``: closing it never leaves the process behind (even one that hangs),
+and an idle stretch of virtual time costs the harness little work however long it is (the RTL's timer is used
+only as differences, so the harness skips idle timer edges), with MISO still matching the reference model."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from emulator.rtl import harness as H
+from emulator.sensor import NoiseSources, Sensor
+from emulator.spi import protocol as proto
+from emulator.spi.model import SELECT_CODE, Bus, SensorPort
+
+HANGS = "import signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(120)"
+
+
+def _bus_with(proc) -> H.RtlBus:
+    """An RtlBus around ``proc`` instead of a harness (close() only needs the process)."""
+    bus = object.__new__(H.RtlBus)
+    bus.proc = proc
+    return bus
+
+
+def test_close_kills_a_harness_that_does_not_exit(monkeypatch):
+    """A harness that ignores the end of its input (and SIGTERM) is killed and reaped: no orphan, no exception."""
+    monkeypatch.setattr(H, "CLOSE_TIMEOUT_S", 0.5)
+    proc = subprocess.Popen([sys.executable, "-c", HANGS], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        _bus_with(proc).close()
+        assert proc.returncode is not None, "the harness process is still running"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def test_close_of_a_harness_that_already_exited_is_quiet():
+    proc = subprocess.Popen([sys.executable, "-c", "pass"], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    proc.wait()
+    bus = _bus_with(proc)
+    bus.close()
+    bus.close()
+    assert proc.returncode == 0
+
+
+def _sensor() -> Sensor:
+    return Sensor(channels_read=["PDC"], seed=2, noise=NoiseSources.none())
+
+
+def _command_then_read(t_command: float, t_read: float):
+    """(start times s, select codes, MOSI words) of a PDC sampling command and a read of its result."""
+    return (np.array([t_command, t_read]), np.full(2, SELECT_CODE[1]),
+            np.array([int(proto.sample_command(1)) << 8, 0], np.uint16))
+
+
+@pytest.mark.rtl
+def test_an_idle_gap_in_virtual_time_costs_the_harness_little_work():
+    """A command, then 2 s of idle bus, then a read: the harness evaluates the RTL a bounded number of times (the
+    idle timer edges are skipped: clocking them all would be 4 million evaluations), and a 1000 s gap, and one
+    across the 32-bit timer's wrap (4295 s) between a command and its read, give the reference model's words."""
+    rtl = H.RtlBus({1: _sensor()})
+    try:
+        rtl.exchange_words(*_command_then_read(1e-3, 1.06e-3), proto.HOST_DEFAULT_CLOCK_HZ)
+        per_word_pair = rtl.evals
+        rtl.exchange_words(*_command_then_read(2.001, 2.00106), proto.HOST_DEFAULT_CLOCK_HZ)
+        gap_cost = rtl.evals - per_word_pair
+        assert gap_cost < per_word_pair + 2000, f"2 s of idle bus cost {gap_cost} evaluations"
+        schedule = [_command_then_read(2.01, 1002.01), _command_then_read(1003.0, 6000.0)]
+        software = Bus({1: SensorPort(_sensor())})
+        software.exchange_words(*_command_then_read(1e-3, 1.06e-3), proto.HOST_DEFAULT_CLOCK_HZ)
+        software.exchange_words(*_command_then_read(2.001, 2.00106), proto.HOST_DEFAULT_CLOCK_HZ)
+        for start, cs, mosi in schedule:
+            got = rtl.exchange_words(start, cs, mosi, proto.HOST_DEFAULT_CLOCK_HZ)
+            want = software.exchange_words(start, cs, mosi, proto.HOST_DEFAULT_CLOCK_HZ)
+            assert np.array_equal(got, want), f"gap of {start[1] - start[0]:.0f} s: RTL {got} model {want}"
+            assert proto.decode_response(got[1:])[1].all(), "the read after the gap is not a good data word"
+    finally:
+        rtl.close()
+    assert rtl.proc.returncode == 0, "the harness did not exit when its input ended"
