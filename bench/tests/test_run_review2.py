@@ -138,8 +138,10 @@ def test_a_signal_while_sensor_2_is_written_still_writes_every_sensors_record(tm
     assert set(sensor3["skipped_outputs"]) == {"codes.npz", "samples.csv", *PLOTS}
     record = check_consistent(out / "sensor2", "interrupted") and check_consistent(out, "interrupted")
     assert record["sensors"] == {
-        f"sensor{k}": {"status": "interrupted", "error": None, "outputs": r["outputs"]}
+        f"sensor{k}": {"status": "interrupted", "error": None, "outputs": r["outputs"], "serial": r["sensor"]["serial"]}
         for k, r in ((2, sensor2), (3, sensor3))}
+    assert [sensor2["sensor"]["index"], sensor3["sensor"]["index"]] == [2, 3]
+    assert len({sensor2["sensor"]["serial"], sensor3["sensor"]["serial"], record["sensor"]["serial"]}) == 3
     assert {k: (r["status"], r["outputs"]) for k, r in res.sensor_records.items()} == {
         2: ("interrupted", sensor2["outputs"]), 3: ("interrupted", sensor3["outputs"])}
     assert not [p for p in out.rglob("*.part")]
