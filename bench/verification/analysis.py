@@ -173,3 +173,82 @@ def minimum_detectable_amplitude(drive_m: float, p_drive_bits2: float, noise_ban
 def welch_db(x: np.ndarray, fs: float, nperseg: int = 1024) -> tuple[np.ndarray, np.ndarray]:
     f, p = signal.welch(np.asarray(x, float), fs=fs, nperseg=min(nperseg, len(x)))
     return f, 10 * np.log10(np.maximum(p, 1e-30))
+
+
+# --- sliding: slip onset and a grating's harmonics (D ch. 3) --------------------------------
+def causal_band_pass(x: np.ndarray, fs: float, lo: float, hi: float, order: int = 4) -> np.ndarray:
+    """``x`` through a causal Butterworth band-pass ``lo``–``hi`` Hz (``order`` poles per edge), started in the
+    steady state of ``x[0]``: its output at an instant depends only on what came before, so the power of a short
+    window (a stick phase) takes nothing from the louder phase that follows it."""
+    x = np.asarray(x, float)
+    sos = signal.butter(order, [lo, hi], "bandpass", fs=fs, output="sos")
+    return signal.sosfilt(sos, x, zi=signal.sosfilt_zi(sos) * x[0])[0]
+
+
+@dataclass
+class StickPhase:
+    """Where the skin sticks while the stage already moves (s, on the instants of a force log)."""
+
+    stage_start_s: float  # the first instant the stage moves
+    last_stuck_s: float  # the last instant the skin still moves with the stage
+    slip_onset_s: float  # the first instant the skin slips
+
+
+def stick_phase(t: np.ndarray, stage_velocity: np.ndarray, slip_velocity: np.ndarray,
+                slipping_fraction: float = 0.5) -> StickPhase:
+    """The stick phase of a slide from its log (instants ``t`` in s, stage and slip velocity in m/s): from the
+    first instant the stage moves to the last one before slip onset, the first instant the slip reaches
+    ``slipping_fraction`` of the stage's velocity. ValueError if the stage never moves, the skin never slips,
+    or it slips at once (no instant of stick)."""
+    t, v, slip = (np.asarray(a, float) for a in (t, stage_velocity, slip_velocity))
+    moving = v > 0
+    if not moving.any():
+        raise ValueError("the stage never moves: no stick phase")
+    slipping = moving & (slip >= slipping_fraction * v)
+    if not slipping.any():
+        raise ValueError("the skin never slips: no slip onset")
+    onset = int(np.argmax(slipping))
+    stuck = np.flatnonzero(moving[:onset])
+    if not stuck.size:
+        raise ValueError(f"the skin slips at the stage's first move ({t[onset]:.4g} s): no stick phase")
+    return StickPhase(float(t[stuck[0]]), float(t[onset - 1]), float(t[onset]))
+
+
+def ramp_ratio(force: np.ndarray, floor_fraction: float = 1e-3) -> float:
+    """How much a force builds up over a phase (samples in time order): its last value over its first if a
+    least-squares line through the samples rises (by more than rounding), else 0 (a flat or falling force). A
+    first value below ``floor_fraction`` of the last counts as that fraction (the ratio is at most
+    1/floor_fraction)."""
+    f = np.asarray(force, float)
+    if f.size < 3:
+        raise ValueError(f"a ramp needs at least 3 samples, got {f.size}")
+    rise = np.polyfit(np.arange(f.size), f, 1)[0] * (f.size - 1)
+    if not (rise > 1e-9 * np.max(np.abs(f)) and f[-1] > 0):
+        return 0.0
+    return float(f[-1] / max(f[0], floor_fraction * f[-1]))
+
+
+def harmonic_levels_db(x: np.ndarray, fs: float, f0: float, orders, tolerance: float = 0.05,
+                       nperseg: int | None = None) -> dict[int, float]:
+    """Level (dB) of each harmonic ``n·f0`` (n in ``orders``) of ``x`` over the local spectral floor: the Welch
+    spectrum's largest bin within ± ``tolerance`` of ``n·f0`` (at least ± 2 bins, the Hann main lobe) over the
+    median of the bins within ± f0/2 of ``n·f0`` outside that band (the floor between the neighbouring
+    harmonics). Segments of ``nperseg`` samples (default: the power of two giving bins ≤ f0/8)."""
+    x = np.asarray(x, float)
+    if nperseg is None:
+        nperseg = 1 << int(np.ceil(np.log2(8 * fs / f0)))
+    if nperseg > x.size:
+        raise ValueError(f"{x.size} samples are fewer than one {nperseg}-sample segment: resolve f0 = {f0:.4g} Hz "
+                         "with a longer record")
+    f, p = signal.welch(x, fs=fs, nperseg=nperseg, detrend="constant")
+    df = f[1] - f[0]
+    levels = {}
+    for n in orders:
+        centre = n * f0
+        line = np.abs(f - centre) <= max(tolerance * centre, 2 * df)
+        floor = (np.abs(f - centre) <= f0 / 2) & ~line
+        if centre + f0 / 2 > f[-1] or floor.sum() < 4:
+            raise ValueError(f"harmonic {n} of {f0:.4g} Hz: too few bins of floor beside it ({floor.sum()}; bins "
+                             f"{df:.3g} Hz, Nyquist {f[-1]:.4g} Hz)")
+        levels[int(n)] = float(10 * np.log10(p[line].max() / np.median(p[floor])))
+    return levels
