@@ -11,6 +11,9 @@ Displacement stimuli are smooth and are sampled at the grid instants.
 
 from __future__ import annotations
 
+import dataclasses
+import math
+import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -70,6 +73,58 @@ def _hertz_pulse_table(n: int = 4096):
 _HERTZ_X, _HERTZ_C, HERTZ_SHAPE_INTEGRAL = _hertz_pulse_table()
 
 
+@dataclass(frozen=True)
+class Limit:
+    """What a stimulus field may hold: a finite number from ``lo`` (excluded if ``lo_open``) to ``hi``; None too
+    if ``optional``.  These are physical limits (no negative duration or force); a scene file's tighter ranges
+    are the scene validator's (bench.scenes.scene)."""
+
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    optional: bool = False
+
+    def allows(self, value) -> bool:
+        if value is None:
+            return self.optional
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+            return False
+        return (value > self.lo if self.lo_open else value >= self.lo) and value <= self.hi
+
+    def describe(self) -> str:
+        text = "a finite number"
+        if self.hi < math.inf:
+            text += f" from {self.lo:g} to {self.hi:g}"
+        elif self.lo > -math.inf:
+            text += f" {'>' if self.lo_open else '≥'} {self.lo:g}"
+        return text + (" or None" if self.optional else "")
+
+    def or_none(self) -> "Limit":
+        """The same range, None allowed too (an optional field)."""
+        return dataclasses.replace(self, optional=True)
+
+
+FINITE = Limit()
+NON_NEGATIVE = Limit(0.0)
+INSTANT_S = NON_NEGATIVE  # virtual time starts at 0
+POSITIVE = Limit(0.0, lo_open=True)
+CELSIUS = Limit(-273.15, lo_open=True)  # above absolute zero
+
+
+class CheckedFields:
+    """Checks the fields named in ``LIMITS`` (field -> :class:`Limit`) when a stimulus is made: a wrong value is a
+    ValueError naming the stimulus, the field, the value and what is allowed (a NaN or negative force would
+    otherwise produce nothing, silently)."""
+
+    LIMITS: dict = {}
+
+    def __post_init__(self):
+        for name, limit in self.LIMITS.items():
+            value = getattr(self, name)
+            if not limit.allows(value):
+                raise ValueError(f"{type(self).__name__}.{name} = {value!r}: must be {limit.describe()}")
+
+
 class ForceStimulus(ABC):
     """A contact force on the skin over a finite time span [start_s, end_s]."""
 
@@ -84,9 +139,10 @@ class ForceStimulus(ABC):
 
 
 @dataclass
-class Tap(ForceStimulus):
+class Tap(CheckedFields, ForceStimulus):
     """A finger tap: raised-cosine force pulse of ``peak_N`` lasting ``duration_s`` from ``time_s``."""
 
+    LIMITS = {"time_s": INSTANT_S, "peak_N": NON_NEGATIVE, "duration_s": POSITIVE}
     time_s: float
     peak_N: float
     duration_s: float = 0.03
@@ -106,7 +162,7 @@ class Tap(ForceStimulus):
 
 
 @dataclass
-class SphereDrop(ForceStimulus):
+class SphereDrop(CheckedFields, ForceStimulus):
     """A sphere of ``mass_kg`` dropped from ``height_m`` landing at ``time_s``: a Hertz impact.
 
     The force pulse is F(t) ∝ sin^(3/2)(π·t/t_c) (Hertz: F ∝ δ^(3/2), δ ≈ δ_max·sin(π·t/t_c)) with the elastic
@@ -116,6 +172,9 @@ class SphereDrop(ForceStimulus):
     speed.  ``contact_s`` (s), if given, replaces the Hertz pulse by a half-sine of that duration (legacy).
     """
 
+    LIMITS = {"time_s": INSTANT_S, "mass_kg": POSITIVE, "height_m": POSITIVE, "restitution": Limit(0.0, 1.0),
+              "contact_s": POSITIVE.or_none(), "radius_m": POSITIVE.or_none(),
+              "density_kg_per_m3": POSITIVE, "contact_modulus_Pa": POSITIVE}
     time_s: float
     mass_kg: float
     height_m: float = DROP_HEIGHT_M
@@ -124,19 +183,6 @@ class SphereDrop(ForceStimulus):
     radius_m: float | None = None
     density_kg_per_m3: float = MATERIAL_DENSITY_KG_PER_M3["steel"]
     contact_modulus_Pa: float = SKIN_CONTACT_MODULUS_PA
-
-    def __post_init__(self):
-        checks = {"mass_kg": self.mass_kg, "height_m": self.height_m, "density_kg_per_m3": self.density_kg_per_m3,
-                  "contact_modulus_Pa": self.contact_modulus_Pa}
-        if self.radius_m is not None:
-            checks["radius_m"] = self.radius_m
-        if self.contact_s is not None:
-            checks["contact_s"] = self.contact_s
-        for name, value in checks.items():
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"SphereDrop.{name} = {value!r}: must be a finite number > 0")
-        if not 0.0 <= self.restitution <= 1.0:
-            raise ValueError(f"SphereDrop.restitution = {self.restitution!r}: allowed range is 0 to 1")
 
     @property
     def impact_speed_m_per_s(self) -> float:
@@ -201,9 +247,10 @@ def sphere_drop_on(params: SensorParams, time_s: float, mass_kg: float, height_m
 
 
 @dataclass
-class Press(ForceStimulus):
+class Press(CheckedFields, ForceStimulus):
     """Press and hold: ramp to ``force_N`` over ``ramp_s``, hold ``hold_s``, ramp back down."""
 
+    LIMITS = {"start": INSTANT_S, "force_N": NON_NEGATIVE, "ramp_s": POSITIVE, "hold_s": NON_NEGATIVE}
     start: float
     force_N: float
     ramp_s: float = 0.5
@@ -234,6 +281,9 @@ class Touch(Press):
     the indenter's radius, a tangential force (N at full normal force, direction ``shear_angle_deg``
     from +x toward +angle) and, for thermal contact, the object's ``material`` and temperature."""
 
+    LIMITS = {**Press.LIMITS, "x_mm": FINITE, "angle_deg": FINITE, "indenter_radius_mm": POSITIVE,
+              "tangential_N": FINITE, "shear_angle_deg": FINITE,
+              "object_temperature_C": CELSIUS.or_none()}
     x_mm: float = -5.0
     angle_deg: float = 0.0
     electrode: str | None = None
@@ -256,9 +306,10 @@ class Touch(Press):
 
 
 @dataclass
-class PowerOn:
+class PowerOn(CheckedFields):
     """The sensor is powered at ``at_s``, from ambient temperature: the heaters start warming the core."""
 
+    LIMITS = {"at_s": INSTANT_S}
     at_s: float = 0.0
 
     @property
@@ -269,9 +320,10 @@ class PowerOn:
 
 
 @dataclass
-class HeaterFailure:
+class HeaterFailure(CheckedFields):
     """The heaters stop at ``at_s`` (a fault during a run): the core cools toward ambient over minutes."""
 
+    LIMITS = {"at_s": INSTANT_S}
     at_s: float
 
     @property
@@ -282,9 +334,10 @@ class HeaterFailure:
 
 
 @dataclass
-class AmbientStep:
+class AmbientStep(CheckedFields):
     """The room temperature changes to ``temperature_C`` at ``at_s``."""
 
+    LIMITS = {"at_s": INSTANT_S, "temperature_C": CELSIUS}
     at_s: float
     temperature_C: float
 
@@ -296,13 +349,15 @@ class AmbientStep:
 
 
 @dataclass
-class Vibration:
+class Vibration(CheckedFields):
     """Sinusoidal skin displacement from a stiff actuator, optionally swept logarithmically.
 
     ``amplitude_m`` peak; frequency goes from ``f_start_Hz`` to ``f_stop_Hz`` over ``duration_s``;
     ``fade_s`` raised-cosine fades at both ends avoid clicks.
     """
 
+    LIMITS = {"start_s": INSTANT_S, "duration_s": POSITIVE, "amplitude_m": NON_NEGATIVE, "f_start_Hz": POSITIVE,
+              "f_stop_Hz": POSITIVE.or_none(), "fade_s": NON_NEGATIVE}
     start_s: float
     duration_s: float
     amplitude_m: float
@@ -398,13 +453,15 @@ def calibration_pressure(stimuli: list["PressureCalibrator"]) -> SampledStimuli:
 
 
 @dataclass
-class PressureCalibrator:
+class PressureCalibrator(CheckedFields):
     """A calibrated pressure applied straight to the liquid (bypassing the skin), as a lab calibrator would.
 
     ``offset_Pa`` plus an optional sinusoid of ``amplitude_Pa`` at ``frequency_Hz`` during
     [start_s, start_s + duration_s], with raised-cosine fades of ``fade_s``.
     """
 
+    LIMITS = {"start_s": INSTANT_S, "duration_s": POSITIVE, "offset_Pa": FINITE, "amplitude_Pa": NON_NEGATIVE,
+              "frequency_Hz": NON_NEGATIVE, "fade_s": NON_NEGATIVE}
     start_s: float
     duration_s: float
     offset_Pa: float = 0.0

@@ -1,0 +1,141 @@
+"""Inputs are checked where they are made: a stimulus with a NaN, infinite or negative value where that is not
+physical, an SPI fault outside its range, or a bench with a sensor count the bridge firmware and the Cheetah
+adapter cannot address, is a ValueError naming the field, the value and what is allowed — never a stimulus that
+silently produces nothing or a numpy overflow later."""
+
+import pytest
+
+from emulator.spi.model import Faults
+from emulator.stimuli import (AmbientStep, HeaterFailure, PowerOn, Press, PressureCalibrator, SphereDrop, Tap, Touch,
+                              Vibration)
+
+NAN, INF = float("nan"), float("inf")
+
+#: (what is made, the field named in the error, a word of the allowed range)
+BAD_STIMULI = [
+    (lambda: Tap(0.1, NAN), "Tap.peak_N", "≥ 0"),
+    (lambda: Tap(0.1, -3.0), "Tap.peak_N", "≥ 0"),
+    (lambda: Tap(NAN, 1.0), "Tap.time_s", "≥ 0"),
+    (lambda: Tap(-0.1, 1.0), "Tap.time_s", "≥ 0"),
+    (lambda: Tap(0.1, 1.0, 0.0), "Tap.duration_s", "> 0"),
+    (lambda: Tap(0.1, "1"), "Tap.peak_N", "finite number"),
+    (lambda: Tap(0.1, True), "Tap.peak_N", "finite number"),
+    (lambda: Press(0.1, INF), "Press.force_N", "≥ 0"),
+    (lambda: Press(0.1, 1.0, ramp_s=0.0), "Press.ramp_s", "> 0"),
+    (lambda: Press(0.1, 1.0, hold_s=-1.0), "Press.hold_s", "≥ 0"),
+    (lambda: Touch(0.1, -1.0), "Touch.force_N", "≥ 0"),
+    (lambda: Touch(0.1, 1.0, x_mm=NAN), "Touch.x_mm", "finite number"),
+    (lambda: Touch(0.1, 1.0, indenter_radius_mm=0.0), "Touch.indenter_radius_mm", "> 0"),
+    (lambda: Touch(0.1, 1.0, tangential_N=INF), "Touch.tangential_N", "finite number"),
+    (lambda: Touch(0.1, 1.0, material="aluminum", object_temperature_C=-300.0), "Touch.object_temperature_C",
+     "> -273.15"),
+    (lambda: SphereDrop(0.1, -1e-6), "SphereDrop.mass_kg", "> 0"),
+    (lambda: SphereDrop(0.1, 1e-6, restitution=1.5), "SphereDrop.restitution", "from 0 to 1"),
+    (lambda: SphereDrop(NAN, 1e-6), "SphereDrop.time_s", "≥ 0"),
+    (lambda: Vibration(0.0, 1.0, -1e-6, 100.0), "Vibration.amplitude_m", "≥ 0"),
+    (lambda: Vibration(0.0, 1.0, 1e-6, 0.0), "Vibration.f_start_Hz", "> 0"),
+    (lambda: Vibration(0.0, 1.0, 1e-6, 100.0, f_stop_Hz=-5.0), "Vibration.f_stop_Hz", "> 0"),
+    (lambda: Vibration(0.0, 0.0, 1e-6, 100.0), "Vibration.duration_s", "> 0"),
+    (lambda: PressureCalibrator(0.0, 1.0, offset_Pa=NAN), "PressureCalibrator.offset_Pa", "finite number"),
+    (lambda: PressureCalibrator(0.0, 1.0, amplitude_Pa=-1.0), "PressureCalibrator.amplitude_Pa", "≥ 0"),
+    (lambda: PressureCalibrator(0.0, 1.0, fade_s=-0.1), "PressureCalibrator.fade_s", "≥ 0"),
+    (lambda: AmbientStep(1.0, NAN), "AmbientStep.temperature_C", "> -273.15"),
+    (lambda: AmbientStep(-1.0, 20.0), "AmbientStep.at_s", "≥ 0"),
+    (lambda: PowerOn(INF), "PowerOn.at_s", "≥ 0"),
+    (lambda: HeaterFailure(NAN), "HeaterFailure.at_s", "≥ 0"),
+]
+
+
+@pytest.mark.parametrize("make,field,allowed", BAD_STIMULI, ids=[f"{f}-{i}" for i, (_, f, _a) in
+                                                                  enumerate(BAD_STIMULI)])
+def test_a_stimulus_with_an_impossible_value_is_refused_naming_field_value_and_range(make, field, allowed):
+    with pytest.raises(ValueError) as e:
+        make()
+    message = str(e.value)
+    assert message.startswith(f"{field} = "), message
+    assert allowed in message, message
+
+
+def test_the_message_shows_the_value():
+    with pytest.raises(ValueError, match=r"Tap\.peak_N = -3\.0: must be a finite number ≥ 0"):
+        Tap(0.1, -3.0)
+
+
+def test_good_stimuli_are_still_made():
+    """Boundary values that are physical (zero force, zero hold, no fade, restitution 1, an optional left out)."""
+    made = [Tap(0.0, 0.0), Press(0.0, 0.0, 1e-3, 0.0), Touch(0.3, 1.0, 0.2, 0.6, electrode="E17"),
+            Touch(0.0, 1.0, x_mm=-20.0, angle_deg=-180.0, tangential_N=-2.0, material="aluminum",
+                  object_temperature_C=-40.0),
+            SphereDrop(0.4, 4e-6, restitution=1.0), Vibration(0.0, 1.0, 0.0, 1.0, None, fade_s=0.0),
+            PressureCalibrator(0.0, 1.0, offset_Pa=-5e4), AmbientStep(1.0, -10.0), PowerOn(), HeaterFailure(2.0)]
+    assert len(made) == 10
+    assert Tap(0.1, 1.0).cumulative(1.0) == pytest.approx(0.015)
+
+
+def test_scenes_and_the_fault_campaign_still_build_their_stimuli():
+    from bench.campaigns.faults import SCENES
+    from bench.scenes.scene import load_scene
+    from bench.paths import REPO
+
+    assert all(isinstance(s, list) for s in SCENES.values())
+    for path in sorted((REPO / "fixtures" / "scenes").glob("*.toml")):
+        load_scene(path)
+
+
+# --- SPI faults -------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("kw,field,allowed", [
+    (dict(miso_flip_bit=99), "miso_flip_bit", "0 to 15"),
+    (dict(miso_flip_bit=-1), "miso_flip_bit", "0 to 15"),
+    (dict(mosi_flip_bit=16), "mosi_flip_bit", "0 to 15"),
+    (dict(mosi_flip_bit=2.0), "mosi_flip_bit", "0 to 15"),
+    (dict(miso_flip_bit=True), "miso_flip_bit", "0 to 15"),
+    (dict(miso_stuck=2), "miso_stuck", "0 or 1"),
+    (dict(miso_stuck=-1), "miso_stuck", "0 or 1"),
+    (dict(slow_response="yes"), "slow_response", "True or False"),
+    (dict(bad_parity=1), "bad_parity", "True or False"),
+])
+def test_an_spi_fault_out_of_range_is_refused(kw, field, allowed):
+    with pytest.raises(ValueError) as e:
+        Faults(**kw)
+    assert str(e.value).startswith(f"Faults.{field} = {kw[field]!r}: ") and allowed in str(e.value), str(e.value)
+
+
+def test_spi_faults_in_range_are_made():
+    for k in (0, 15):
+        assert Faults(miso_flip_bit=k).miso_flip_bit == k and Faults(mosi_flip_bit=k).mosi_flip_bit == k
+    assert Faults(miso_stuck=0).miso_stuck == 0 and Faults(miso_stuck=1).miso_stuck == 1
+    assert Faults(bad_parity=True, slow_response=True).any and not Faults().any
+
+
+# --- sensor counts of the host benches ------------------------------------------------------------------------
+@pytest.mark.parametrize("n", [0, 6, 7, -1, 2.5, True, "3"])
+def test_a_bench_with_an_impossible_sensor_count_is_refused(n):
+    """FirmwareBench and CheetahBench take 1..MAX_SENSORS sensors, as the CLI does (--sensors 1 to 5); the check
+    comes before anything is built or opened."""
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cheetah_server import CheetahBench
+    from bench.scenes.limits import MAX_SENSORS
+
+    for bench in (FirmwareBench, CheetahBench):
+        with pytest.raises(ValueError, match=rf"n_sensors = {n!r}: must be a whole number from 1 to {MAX_SENSORS}"):
+            bench(n)
+
+
+def test_a_bench_with_sensors_numbered_outside_1_to_5_is_refused():
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cosim import default_sensors
+
+    sensors = default_sensors(1)
+    with pytest.raises(ValueError, match=r"sensors numbered \[9\]: sensor numbers are 1 to 5"):
+        FirmwareBench(sensors={9: sensors[1]})
+
+
+def test_nan_checks_cover_every_numeric_field():
+    """Every float field of the checked stimuli has a limit (a new field without one would go unchecked)."""
+    import dataclasses
+    import typing
+
+    for cls in (Tap, Press, Touch, SphereDrop, Vibration, PressureCalibrator, AmbientStep, PowerOn, HeaterFailure):
+        hints = typing.get_type_hints(cls)
+        numeric = {f.name for f in dataclasses.fields(cls) if hints[f.name] in (float, float | None)}
+        assert numeric <= set(cls.LIMITS), f"{cls.__name__}: unchecked {sorted(numeric - set(cls.LIMITS))}"
