@@ -86,7 +86,7 @@ def _slip_onset_claims(b: Bench, slide: Slide, t: np.ndarray, pac: np.ndarray) -
     window = (f"stick = the stage moving while the skin's slip stays below {SLIPPING_FRACTION:.0%} of the stage's "
               "speed, on the 100 Hz force log")
     return [
-        Claim("slip onset: 30–200 Hz PAC power, slip over stick", "≥ 10 dB rise", rise_db, 10.0, np.inf, "dB",
+        Claim("slip onset: 30–200 Hz PAC power, sliding over stick", "≥ 10 dB rise", rise_db, 10.0, np.inf, "dB",
               "D ch. 3 Fig. 3-5", detail, kind="prediction",
               note=f"{window}; slip = the {SLIP_WINDOW_S * 1e3:.0f} ms after the onset; PAC through a causal 4th-order "
                    "Butterworth 30–200 Hz band-pass, so the short stick window takes nothing from the slip after it "
