@@ -115,20 +115,35 @@ def _ask(drv: BridgeDriver, send, reply_type, tries: int):
     return None
 
 
+def _schedule_after_start(board, schedule) -> None:
+    """Schedule ``schedule``'s actions (virtual s after streaming starts, action) when the firmware receives the
+    host's first bytes (its START), in the firmware's own thread: when the host reads the virtual time or when its
+    request is taken moves nothing.  (Scheduled from the host, a host slowed by a busy machine placed the actions
+    late, several at once: cs_glitch then failed with "errors on a healthy link".)"""
+    receive = board.send_to_firmware
+
+    def first_bytes(data: bytes) -> None:
+        board.send_to_firmware = receive
+        for dt, action in schedule:
+            board.at(board.t + dt, action)
+        receive(data)
+
+    board.send_to_firmware = first_bytes
+
+
 def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) -> dict:
     """One fault in one scene: the verdict (``passed``, ``problem``), what was expected, and ``seconds`` (the case's
     wall time, s).  A crash or hang of the firmware or driver is this case's failure, never an exception."""
     t0 = time.perf_counter()
     problem = None
     try:
-        with FirmwareBench(stimuli=SCENES[scene], seed=seed, **{"n_sensors": 1, **fault.bench_kw}) as fb:
+        fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, **{"n_sensors": 1, **fault.bench_kw})
+        _schedule_after_start(fb.board, fault.schedule)
+        with fb:
             drv = BridgeDriver(fb.port)
             tries = LOSSY_LINE_TRIES if fb.corrupt_rate or fb.drop_rate else 1
             if _ask(drv, drv.start, CMD_START, tries) is None:
                 raise TimeoutError(f"no acknowledgement of START within {tries} × {REPLY_HORIZON_S:g} s")
-            start = fb.virtual_time
-            for dt, action in fault.schedule:
-                fb.at(start + dt, action)
             frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
             status = _ask(drv, drv.request_status, Status, tries)
             drv.close()

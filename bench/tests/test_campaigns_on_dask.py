@@ -266,3 +266,22 @@ def test_a_lost_reply_is_asked_again_on_a_lossy_line_only(monkeypatch, fault, pa
     assert result["passed"] == passes, result["problem"]
     if not passes:
         assert result["problem"] == "TimeoutError: no acknowledgement of START within 1 × 5 s"
+
+
+def test_a_slow_host_does_not_move_the_faults_schedule(monkeypatch):
+    """A host descheduled for 50 ms between reading the virtual time and scheduling each action (a busy machine, two
+    workers on two cores) placed the glitches late, several at once: cs_glitch failed with "errors on a healthy
+    link".  The actions are now scheduled in the firmware's thread when START arrives."""
+    from bench.hosts.bridge import FirmwareBench
+
+    def stalled(fn):
+        def slow(*a):
+            time.sleep(0.05)
+            return fn(*a)
+        return slow
+
+    monkeypatch.setattr(FirmwareBench, "virtual_time", property(stalled(FirmwareBench.virtual_time.fget)))
+    monkeypatch.setattr(FirmwareBench, "at", stalled(FirmwareBench.at))
+    for scene in ("rest", "sphere_drops"):
+        result = campaign.run_case(campaign.FAULTS["cs_glitch"], scene, 0)
+        assert result["passed"], (scene, result["problem"])
