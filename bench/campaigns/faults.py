@@ -66,8 +66,10 @@ def _resyncs(frames, status, stats):
 
 
 def _clean(frames, status, stats):
-    if stats.crc_errors or stats.dropped_frames or any(f.status.any() for f in frames):
-        return "errors on a healthy link"
+    flagged = sum(int((f.status != 0).sum()) for f in frames)
+    if stats.crc_errors or stats.dropped_frames or flagged:
+        return (f"errors on a healthy link ({stats.crc_errors} CRC errors, {stats.dropped_frames} dropped frames, "
+                f"{flagged} flagged samples)")
 
 
 FAULTS = {f.name: f for f in (
