@@ -104,3 +104,18 @@ def pair_separation_sigma(model, pairs) -> list[list[float]]:
         pooled = np.sqrt((model.sigma[ia] ** 2 + model.sigma[ib] ** 2) / 2)  # (M, 3)
         out.append([float(x) for x in np.max(np.abs(model.mean[ia] - model.mean[ib]) / pooled, axis=0)])
     return out
+
+
+def nearest_neighbour_sigma(model, textures) -> dict[int, tuple[float, int]]:
+    """Diagnostic only: per texture of ``textures``, how far its nearest other texture of the model lies — the
+    largest |difference of the training means| over the pooled σ, over every property and movement of the model
+    — and which texture that is: {texture: (separation in σ, nearest texture)}."""
+    out = {}
+    for t in textures:
+        i = int(model.texture_index([t])[0])
+        pooled = np.sqrt((model.sigma[i] ** 2 + model.sigma ** 2) / 2)  # (T, M, 3)
+        sep = np.max(np.abs(model.mean[i] - model.mean) / pooled, axis=(1, 2))
+        sep[i] = np.inf
+        j = int(np.argmin(sep))
+        out[int(t)] = (float(sep[j]), int(model.textures[j]))
+    return out
