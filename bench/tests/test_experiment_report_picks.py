@@ -73,3 +73,16 @@ def test_ties_count_as_not_worse_but_not_as_strictly_better(monkeypatch):
     monkeypatch.setattr(experiment, "summary", fake_summary)
     assert beats_baselines(None) == 3  # texture 1 ties both: not worse
     assert beats_baselines(None, strict=True) == 2  # ... but not strictly better
+
+
+def test_nearest_neighbour_sigma_finds_the_closest_other_texture():
+    from bench.experiments.pairs import nearest_neighbour_sigma
+
+    mean = np.zeros((3, 2, 3))
+    mean[1, 0, 0] = 2.0  # texture 20 differs from 10 by 2 σ in one property and movement
+    mean[2, 1, 2] = 5.0  # texture 30 by 5 σ
+    model = SimpleNamespace(textures=np.array([10, 20, 30]), mean=mean, sigma=np.ones((3, 2, 3)),
+                            texture_index=lambda ids: np.searchsorted([10, 20, 30], ids))
+    out = nearest_neighbour_sigma(model, [10, 30])
+    assert out[10] == (2.0, 20)
+    assert out[30][1] in (10, 20) and abs(out[30][0] - 5.0) < 1e-12
