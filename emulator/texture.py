@@ -80,6 +80,17 @@ class Texture:
     #: relative RMS of the friction fluctuation (δµ/µ; override only with a sourced reason, 0 switches it off)
     friction_fluctuation_rms: float = FRICTION_FLUCTUATION_RMS
 
+    def __post_init__(self):
+        """Refuse what the friction model cannot take (its Stribeck curve divides by µ and by the Stribeck velocity),
+        naming the texture, field and value; the library's own ranges are narrower (bench/textures/library.py)."""
+        for name in ("mu_static", "mu_kinetic", "stribeck_velocity_m_per_s"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"texture {self.number} ({self.name}): {name} = {value!r} must be a finite number > 0")
+        if self.mu_kinetic > self.mu_static:
+            raise ValueError(f"texture {self.number} ({self.name}): mu_kinetic = {self.mu_kinetic!r} must not exceed "
+                             f"mu_static = {self.mu_static!r}")
+
     def friction_coefficient(self, v_m_per_s):
         """Steady-sliding friction coefficient at relative speed ``v`` (m/s): Stribeck curve plus a viscous rise."""
         v = np.abs(np.asarray(v_m_per_s, float))
