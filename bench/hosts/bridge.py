@@ -109,12 +109,16 @@ class FirmwareBench:
             self._line_free_at = max(self._line_free_at, now) + len(data) * 10 / (self.baudrate * self.speed)
             if self._line_free_at > now:
                 self._sleep(self._line_free_at - now)
-        elif self.link.room() < len(data):  # unpaced: wait for a host that reads, not for one that is gone
+            self.link.deliver(data)
+            return
+        # unpaced: wait for a host that reads, not for one that is gone; what the host's reading made room for is
+        # all kept, also when the pty's fill count, lagging the kernel, finds less room once delivering
+        if self.link.room() < len(data):
             if not self._host_gone:
                 self._host_gone = not self.link.wait_for_room(len(data), HOST_GONE_S, self._stop)
         else:
             self._host_gone = False
-        self.link.deliver(data)
+        self.link.deliver(data, keep_all=not self._host_gone)
 
     def _sleep(self, seconds: float) -> None:
         """Sleep, moving buffered bytes on to the pty as the host reads them."""
