@@ -216,9 +216,17 @@ def rig_claims(b: Bench) -> list[Claim]:
                  max(abs(e) for e in mean_err.values()), 0.0, 10.0, "% (worst target)", "D ch. 6", detail,
                  kind="prediction",
                  note=f"true force = the emulator's normal load while sliding, never read from codes; 4 targets "
-                      f"(0.2–2 N) × 2 textures × 6 seeds; single trials reach {worst_trial:.1f} % at 0.2 N, where "
-                      f"the target is 17 PDC counts against ~0.5 LSB of PDC noise and 20 ms of latency at 0.5 mm/s; the "
-                      f"stepper stops at the first frame whose PDC change reaches the target (D ch. 6)")]
+                      f"(0.2–2 N) × 2 textures × 6 seeds; single trials reach {worst_trial:.1f} %; the stop frame is "
+                      f"the first whose PDC change reaches the target (D ch. 6; at 0.2 N the target is 17 PDC counts "
+                      f"against ~0.5 LSB of PDC noise), and the stop acts 20 ms after that frame's 100 ms batch "
+                      f"arrives (D ch. 6: data in 100 ms batches, the stepper updated every 100 ms)",
+                 deviation=f"the controller acts on D's 100 ms batches, so the finger lowers on at 0.5 mm/s for up "
+                           f"to 120 ms (60 µm) past the frame that met the target; the skin's contact stiffness turns "
+                           f"that into a mean overshoot of {mean_err[0.2]:+.1f} % at 0.2 N ({mean_err[0.5]:+.1f} % at "
+                           f"0.5 N, {mean_err[1.26]:+.1f} % at 1.26 N, {mean_err[2.0]:+.1f} % at 2 N). With the rule "
+                           f"acted on at every 10 ms frame the 0.2 N mean was about +6 %; the ± 10 % is the issue's "
+                           f"figure, not D's, whose rig had the same 100 ms period (bench/tests/test_texture_rig.py "
+                           f"pins each trial's force to the stop frame's load plus stiffness × 0.5 mm/s × the delay)")]
     # wear: ridge height falls faster for high force × high speed than for low (one trial each on a fresh skin)
     lost = {}
     for label, mv in (("low", Movement(0.2, 0.01)), ("high", Movement(2.0, 0.1))):
@@ -237,9 +245,11 @@ def rig_claims(b: Bench) -> list[Claim]:
     area = contact_patch_area_m2(excluded.force_N, b.params.contact_radius_at_1N_m)
     for _ in range(20):  # the skin_wear scene: D's named high-wear movement, 20 slides
         worn_skin.wear(excluded.force_N, 0.05, area, float(sand.mu_kinetic), excluded.velocity_m_per_s)
-    worn = [roughness(TextureRig(skin=worn_skin, wear=False).run_trial(sand, mv, seed=100 + k).recording)
+    worn = [roughness(TextureRig(skin=worn_skin, wear=False, fidelity=b.fidelity, params=b.params)
+                      .run_trial(sand, mv, seed=100 + k).recording)
             for k in range(3)]
-    fresh = [roughness(TextureRig(skin=worn_skin.replace(), wear=False).run_trial(sand, mv, seed=100 + k).recording)
+    fresh = [roughness(TextureRig(skin=worn_skin.replace(), wear=False, fidelity=b.fidelity, params=b.params)
+                       .run_trial(sand, mv, seed=100 + k).recording)
              for k in range(3)]
     out.append(Claim("roughness after 20 slides of 1.26 N @ 6.31 cm/s (wear law) vs a fresh skin", "drops",
                      float(np.mean(fresh) - np.mean(worn)), 0.0, np.inf, "log units", "D ch. 6",
