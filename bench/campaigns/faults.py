@@ -7,7 +7,10 @@ bounded).  Results go to JUnit XML and a summary table.
 The cases are independent tasks on the campaign engine (:mod:`bench.campaigns.engine`: a Dask LocalCluster or an
 existing scheduler).  A task is a case's description — fault name, scene name, seed (:class:`CaseTask`) — and a
 worker builds the case from the registries below, so the verdicts are the same for any number of workers; each
-case's wall time is measured where it runs.  The firmware is built once on the client before the tasks go out; a
+case's wall time is measured where it runs.  The faults' and scenes' names, the faults' expected reactions and the
+scenes' descriptions live in :mod:`bench.campaigns.case_names` (light: what the command line's help lists); the
+registries here hold the heavy objects keyed by those names.  The bench and the driver are imported only where a
+case runs.  The firmware is built once on the client before the tasks go out; a
 worker on another machine builds its own (the build is atomic, also between threads: bench.hosts.native).
 """
 
@@ -17,15 +20,17 @@ import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bench.atomic import atomic_write
-from bench.hosts.bridge import FirmwareBench
-from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, BridgeDriver, Status
-from emulator.channels import PAC
+from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
+
+if TYPE_CHECKING:
+    from bench.hosts.driver import BridgeDriver
 
 
 @dataclass
@@ -72,29 +77,34 @@ def _clean(frames, status, stats):
                 f"{flagged} flagged samples)")
 
 
-FAULTS = {f.name: f for f in (
-    FaultCase("none", "no errors, no drops", {}, [], _clean),
-    FaultCase("unplug_replug", "sensor 2 lost within 2 frames, found again within 1 s", {"n_sensors": 2},
-              [(0.3, lambda b: b.unplug(2)), (0.8, lambda b: b.plug(2))], _mask_returns),
-    FaultCase("parity_errors", "every sample flagged, counted", {},
-              [(0.1, lambda b: setattr(b.bus.ports[1], "faults", Faults(bad_parity=True)))], _flags_parity),
-    FaultCase("miso_stuck", "stuck sensor treated as absent", {"n_sensors": 2},
-              [(0.2, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))], _drops_sensor),
-    FaultCase("brownout_reset", "at most two bad samples, sensor kept", {},
-              [(0.3, lambda b: b.bus.ports[1].reset())], _survives_reset),
-    FaultCase("cs_glitch", "chip select toggled with no clock edges: ignored, no errors", {},
-              [(0.1 + 0.05 * k, lambda b: b.glitch(1)) for k in range(10)], _clean),
-    FaultCase("serial_corruption", "CRC errors counted, resync, clean frames", {"corrupt_rate": 5e-4}, [],
-              _resyncs),
-    FaultCase("serial_loss", "dropped frames counted from sequence numbers", {"drop_rate": 5e-4}, [], _resyncs),
-)}
+#: How each fault of :data:`~bench.campaigns.case_names.FAULT_EXPECTED` is made and checked: name -> (bench
+#: keywords, schedule, check).
+FAULT_CASES = {
+    "none": ({}, [], _clean),
+    "unplug_replug": ({"n_sensors": 2}, [(0.3, lambda b: b.unplug(2)), (0.8, lambda b: b.plug(2))], _mask_returns),
+    "parity_errors": ({}, [(0.1, lambda b: setattr(b.bus.ports[1], "faults", Faults(bad_parity=True)))],
+                      _flags_parity),
+    "miso_stuck": ({"n_sensors": 2}, [(0.2, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))],
+                   _drops_sensor),
+    "brownout_reset": ({}, [(0.3, lambda b: b.bus.ports[1].reset())], _survives_reset),
+    "cs_glitch": ({}, [(0.1 + 0.05 * k, lambda b: b.glitch(1)) for k in range(10)], _clean),
+    "serial_corruption": ({"corrupt_rate": 5e-4}, [], _resyncs),
+    "serial_loss": ({"drop_rate": 5e-4}, [], _resyncs),
+}
 
-SCENES = {
+#: The campaign's faults, in :data:`~bench.campaigns.case_names.FAULT_EXPECTED`'s order with its expected reactions.
+FAULTS = {name: FaultCase(name, expected, *FAULT_CASES[name]) for name, expected in FAULT_EXPECTED.items()}
+
+#: Each scene of :data:`~bench.campaigns.case_names.SCENE_DESCRIPTIONS`: its stimuli for sensor 1, as described there.
+SCENE_STIMULI = {
     "rest": [],
     "taps": [Tap(0.5, 0.5), Tap(1.0, 1.0)],
     "sphere_drops": [SphereDrop(0.4 + 0.3 * k, SPHERES["1 mm steel bearing"][0]) for k in range(4)],
     "press": [Touch(0.3, 1.0, 0.2, 0.6, electrode="E17")],
 }
+
+#: The campaign's scenes (name -> stimuli), in :data:`~bench.campaigns.case_names.SCENE_DESCRIPTIONS`' order.
+SCENES = {name: SCENE_STIMULI[name] for name in SCENE_DESCRIPTIONS}
 
 
 #: How often a case sends START or STATUS on a lossy line (a fault with ``corrupt_rate`` or ``drop_rate``) before
@@ -107,8 +117,10 @@ LOSSY_LINE_TRIES = 3
 
 def _ask(drv: BridgeDriver, send, reply_type, tries: int):
     """``send()`` and the reply of type ``reply_type`` (a command type, or Status), up to ``tries`` times; None if
-    none came.  Each try waits :data:`REPLY_HORIZON_S` (s), after which the driver takes the earlier request as
-    lost, so a late reply goes to the latest request."""
+    none came.  Each try waits the driver's ``REPLY_HORIZON_S`` (s), after which the driver takes the earlier
+    request as lost, so a late reply goes to the latest request."""
+    from bench.hosts.driver import REPLY_HORIZON_S
+
     for _ in range(tries):
         send()
         reply = drv.wait_for(reply_type, timeout_s=REPLY_HORIZON_S)
@@ -136,6 +148,10 @@ def _schedule_after_start(board, schedule) -> None:
 def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) -> dict:
     """One fault in one scene: the verdict (``passed``, ``problem``), what was expected, and ``seconds`` (the case's
     wall time, s).  A crash or hang of the firmware or driver is this case's failure, never an exception."""
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, BridgeDriver, Status
+    from emulator.channels import PAC
+
     t0 = time.perf_counter()
     problem = None
     try:

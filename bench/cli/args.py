@@ -1,13 +1,18 @@
-"""Argument checks, help formatting and signal handling shared by every command group: argparse types that name the
-flag in their one-line errors, the help formatter that shows defaults, and SIGTERM/SIGINT helpers for long-running
-commands."""
+"""Argument checks, help formatting, output and signal handling shared by every command group: argparse types that
+name the flag in their one-line errors, the help formatter that shows defaults, strict JSON for --json output, and
+SIGTERM/SIGINT helpers for long-running commands."""
 
 from __future__ import annotations
 
 import argparse
+import functools
+import json
 import math
+import numbers
 import os
 import signal
+import sys
+import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -23,19 +28,6 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefau
         if action.help is None or "default" in action.help or action.default is None or action.default is False:
             return action.help
         return super()._get_help_string(action)
-
-
-def describe_on_demand(parser: argparse.ArgumentParser, describe) -> argparse.ArgumentParser:
-    """``parser``'s description is ``describe()``, built only when its --help is printed (for descriptions that
-    list a registry whose import would slow every other command down)."""
-    format_help = parser.format_help
-
-    def with_description() -> str:
-        parser.description = describe()
-        return format_help()
-
-    parser.format_help = with_description
-    return parser
 
 
 # --- argument checks -------------------------------------------------
@@ -94,7 +86,9 @@ def existing_file(text: str) -> str:
 
 
 def output_file(text: str) -> str:
-    """argparse type: a path a file can be written to (its folder exists or can be made, and is writable)."""
+    """argparse type: a path a file can be written to (its folder exists or can be made, and a file can be created
+    in it: tried with a file removed at once, so a path that only permissions would allow is refused before a long
+    command runs, not after)."""
     if not text or "\0" in text:
         raise argparse.ArgumentTypeError("an empty path or one with a NUL byte")
     p = Path(text)
@@ -109,6 +103,12 @@ def output_file(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text}: {parent} is a file, not a folder")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise argparse.ArgumentTypeError(f"{text}: cannot write in {parent}")
+    try:  # permissions do not tell everything (root, /proc, a read-only mount): create a file there and remove it
+        fd, probe = tempfile.mkstemp(dir=parent, prefix=".biotac-bench-write-check-")
+    except OSError as e:
+        raise argparse.ArgumentTypeError(f"{text}: cannot write in {parent} ({e.strerror})") from None
+    os.close(fd)
+    os.unlink(probe)
     return text
 
 
@@ -147,6 +147,33 @@ def one_line_errors(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return parser
 
 
+# --- output ----------------------------------------------------------
+
+
+def strict_json(doc, **dumps_kw) -> str:
+    """``doc`` as standard JSON: a non-finite number (inf, nan: an unbounded tolerance, say) becomes null, since
+    JSON has none and jq, Go and JavaScript reject Python's ``Infinity``/``NaN``; numpy numbers become plain ones.
+    ``allow_nan=False`` makes any other way of emitting them an error, never output."""
+    return json.dumps(_finite_or_null(doc), allow_nan=False, default=float, **dumps_kw)
+
+
+def _finite_or_null(value):
+    if isinstance(value, dict):
+        return {k: _finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_null(v) for v in value]
+    if isinstance(value, (str, bool)) or value is None:
+        return value
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real):
+        return float(value) if math.isfinite(value) else None
+    return value
+
+
+# --- signals ---------------------------------------------------------
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised like Ctrl-C so that the same clean-up runs."""
 
@@ -167,3 +194,19 @@ def sigterm_raises():
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+def sigterm_like_ctrl_c(command):
+    """``command`` with SIGTERM handled as Ctrl-C is (the cluster closed, no output half-written) and reported as
+    "terminated", exit status 143."""
+
+    @functools.wraps(command)
+    def run(a) -> int:
+        try:
+            with sigterm_raises():
+                return command(a)
+        except Terminated:
+            print("terminated", file=sys.stderr)
+            return 128 + signal.SIGTERM
+
+    return run

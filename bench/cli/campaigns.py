@@ -6,17 +6,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import one_line_errors, output_file, whole
-from bench.cli.experiments import _sigterm_like_ctrl_c
+from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS
+from bench.cli.args import one_line_errors, output_file, sigterm_like_ctrl_c, whole
 
 
 def _names(kind: str):
     """argparse type: ``all`` or a comma-separated list of known fault / scene names."""
 
     def parse(text: str) -> list[str]:
-        from bench.campaigns import faults as campaign
-
-        known = campaign.FAULTS if kind == "faults" else campaign.SCENES
+        known = FAULT_EXPECTED if kind == "faults" else SCENE_DESCRIPTIONS
         if text == "all":
             return list(known)
         names = [n.strip() for n in text.split(",")]
@@ -39,32 +37,40 @@ def _cmd_campaign(a) -> int:
     print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
           f"{a.seeds} seed(s)) on {spec.describe()}", file=sys.stderr)
     results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet)
-    with signals_held():  # a signal meanwhile: the report is finished first, then the stop
-        campaign.write_junit(results, Path(a.junit))
-    print(campaign.summary(results))
+    print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
+    try:
+        with signals_held():  # a signal meanwhile: the report is finished first, then the stop
+            campaign.write_junit(results, Path(a.junit))
+    except OSError as e:
+        print(f"error: --junit {a.junit}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
+              f"holds the results", file=sys.stderr)
+        return 2
     print(f"JUnit XML: {a.junit}")
     return 0 if all(r["passed"] for r in results) else 1
 
 
-def _campaign_help() -> str:
-    """The campaign's description with its faults and scenes, listed from the campaign's own registries."""
-    from bench.campaigns import faults as campaign
+def _listed(table: dict) -> str:
+    """A table's entries as the help lists faults and scenes: one "  name  text" line each."""
+    return "\n".join(f"  {name:<18} {text}" for name, text in table.items())
 
-    faults = "\n".join(f"  {f.name:<18} {f.expected}" for f in campaign.FAULTS.values())
-    scenes = "\n".join(f"  {name:<18} {_stimuli(stimuli)}" for name, stimuli in campaign.SCENES.items())
-    return f"""\
+
+#: campaign's --help: its faults and scenes listed from :mod:`bench.campaigns.case_names` (light: the names the
+#: campaign's registries are built from)
+CAMPAIGN_HELP = f"""\
 Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a pty and the host
 driver (one case: about 150 frames), and checks that the firmware and driver react as stated; prints a summary
 and writes JUnit XML (each case's wall time as its time).  Each case is an independent task on Dask (a LocalCluster
 on this machine's cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the verdicts are the
-same for any number of workers.  Exit status 1 if any case fails, 2 for bad arguments or no scheduler at the
-address; Ctrl-C stops the campaign (exit 130; SIGTERM: 143) and writes no report.
+same for any number of workers.  An --junit path where no file can be created is refused before anything runs;
+the summary is printed before the report is written.  Exit status 1 if any case fails, 2 for bad arguments, no
+scheduler at the address or a report that could not be written after all; Ctrl-C stops the campaign (exit 130;
+SIGTERM: 143) and writes no report.
 
 faults (--faults), each with what a correct firmware and driver do:
-{faults}
+{_listed(FAULT_EXPECTED)}
 
 scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene files of `biotac-bench scenes`):
-{scenes}
+{_listed(SCENE_DESCRIPTIONS)}
 
   biotac-bench campaign                                   # every fault in every scene, seed 0
   biotac-bench campaign --faults unplug_replug,serial_loss --scenes rest --seeds 3 --junit out/c.xml
@@ -72,20 +78,10 @@ scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene 
 """
 
 
-def _stimuli(stimuli) -> str:
-    """A stimulus set in a few words: "no stimulus", "2 × Tap", ..."""
-    if not stimuli:
-        return "no stimulus (at rest)"
-    kinds = [type(s).__name__ for s in stimuli]
-    return ", ".join(f"{kinds.count(k)} × {k}" for k in dict.fromkeys(kinds))
-
-
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    from bench.cli.args import describe_on_demand
-
     cp = one_line_errors(sub.add_parser(
-        "campaign", help="fault campaign: fault × scene × seed through firmware and driver", formatter_class=fmt))
-    describe_on_demand(cp, _campaign_help)
+        "campaign", help="fault campaign: fault × scene × seed through firmware and driver", description=CAMPAIGN_HELP,
+        formatter_class=fmt))
     cp.add_argument("--faults", type=_names("faults"), default="all",
                     help="comma-separated fault names (listed above), or all")
     cp.add_argument("--scenes", type=_names("scenes"), default="all",
@@ -97,4 +93,4 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     cp.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core)")
     cp.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     cp.add_argument("--quiet", action="store_true", help="no progress bar")
-    cp.set_defaults(func=_sigterm_like_ctrl_c(_cmd_campaign))
+    cp.set_defaults(func=sigterm_like_ctrl_c(_cmd_campaign))

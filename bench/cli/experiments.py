@@ -4,13 +4,10 @@ exploration experiment of D ch. 6, both on Dask."""
 from __future__ import annotations
 
 import argparse
-import functools
-import json
-import signal
 import sys
 import time
 
-from bench.cli.args import whole
+from bench.cli.args import sigterm_like_ctrl_c, strict_json, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from emulator.fidelity import PROFILES
 
@@ -78,24 +75,6 @@ def _texture_numbers(text: str) -> list[int]:
     return numbers
 
 
-def _sigterm_like_ctrl_c(command):
-    """``command`` with SIGTERM handled as Ctrl-C is (the cluster closed, no output half-written) and reported as
-    "terminated", exit status 143."""
-
-    @functools.wraps(command)
-    def run(a) -> int:
-        from bench.cli.args import Terminated, sigterm_raises
-
-        try:
-            with sigterm_raises():
-                return command(a)
-        except Terminated:
-            print("terminated", file=sys.stderr)
-            return 128 + signal.SIGTERM
-
-    return run
-
-
 def _open_out(path, default, force: bool, kind, keep=()):
     """The out folder, checked and locked: ``path`` (refused if it holds anything but ``keep``, unless ``force``)
     or, without it, a fresh ``default[-n]`` (``default`` itself with ``force``) — as ``run`` does."""
@@ -138,8 +117,8 @@ def _cmd_texture_sweep(a) -> int:
         wall = time.perf_counter() - t0
         with signals_held():  # a signal meanwhile: every file finished first, then the stop
             write_rows_csv(out / "trials.csv", rows)
-            write_text(out / "trials.json", json.dumps({"wall_s": wall, "workers": spec.describe(), "rows": rows},
-                                                       indent=1))
+            write_text(out / "trials.json", strict_json({"wall_s": wall, "workers": spec.describe(), "rows": rows},
+                                                        indent=1))
             write_rows_csv(out / "wear.csv", wear_per_movement(movements, movement_ids=ids))
             lib = load_library()
             properties_vs_movement(rows_to_arrays(rows), {n: lib[n].name for n in textures},
@@ -169,7 +148,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
     s.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     s.add_argument("--quiet", action="store_true", help="no progress bar")
-    s.set_defaults(func=_sigterm_like_ctrl_c(_cmd_texture_sweep))
+    s.set_defaults(func=sigterm_like_ctrl_c(_cmd_texture_sweep))
     add_explore_command(sub, fmt)
 
 
@@ -285,4 +264,4 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     e.add_argument("--cache", default="out/cache", help="where stage results are cached, kept across runs")
     e.add_argument("--no-cache", action="store_true", help="run every trial again")
     e.add_argument("--quiet", action="store_true", help="no progress bars")
-    e.set_defaults(func=_sigterm_like_ctrl_c(_cmd_explore))
+    e.set_defaults(func=sigterm_like_ctrl_c(_cmd_explore))

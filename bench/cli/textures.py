@@ -4,7 +4,8 @@ texture in full with where its numbers come from."""
 from __future__ import annotations
 
 import argparse
-import json
+
+from bench.cli.args import strict_json
 
 TEXTURES_HELP = """\
 Lists the texture library (fixtures/textures/library.toml): the 117 textures of D Table 6-1 in the
@@ -98,14 +99,14 @@ def _cmd_textures(a) -> int:
             t = texture(a.show, a.library)
         except UnknownTextureError as e:
             raise ValueError(e.for_option("--show")) from None
-        print(json.dumps(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
+        print(strict_json(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
         return 0
     items = list(lib.values())
     if a.group:
         group = _pick_group(a.group)
         items = [t for t in items if t.group == group]
     if a.json:
-        print(json.dumps([texture_record(t) for t in items], indent=2, ensure_ascii=False))
+        print(strict_json([texture_record(t) for t in items], indent=2, ensure_ascii=False))
         return 0
     print(_table(items))
     print(f"\n{len(items)} texture(s); `biotac-bench textures --show N` prints one with its source")

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from bench.cli.args import one_line_errors, unit_serial, whole
+from bench.cli.args import one_line_errors, strict_json, unit_serial, whole
 
 UNITS_HELP = """\
 A sensor unit is one real device: its parameters drawn deterministically from documented manufacturing spreads
@@ -42,7 +41,7 @@ def _units_cmd(a) -> int:
         doc = {"serial": u.serial, "unit": u.name, "parameters": rows}
         if a.compare:
             doc["nominal"] = ref
-        print(json.dumps(doc, indent=2, default=float))
+        print(strict_json(doc, indent=2))
         return 0
     print(f"unit {u.name}  serial {u.serial}")
     head = f"{'parameter':34s} {'value':>14s}"

@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-from bench.cli.args import number, unit_choice, whole
-from bench.cli.experiments import _sigterm_like_ctrl_c
+from bench.cli.args import number, sigterm_like_ctrl_c, strict_json, unit_choice, whole
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
 
@@ -34,7 +32,7 @@ def _cmd_noise_budget(a) -> int:
 
     lines = budget()
     if a.json:
-        print(json.dumps([vars(x) for x in lines], indent=2))
+        print(strict_json([vars(x) for x in lines], indent=2))
     else:
         print(format_budget(lines))
     return 0
@@ -61,7 +59,7 @@ def _cmd_claims(a) -> int:
         rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, **unit_kw),
                                      range(a.seed, a.seed + a.seeds), groups, progress, spec=spec)
         if a.json:
-            print(json.dumps([r.as_dict() for r in rows], indent=2, default=float))
+            print(strict_json([r.as_dict() for r in rows], indent=2))
         else:
             print(format_spread_table(rows))
         return 0 if not any(r.failed_seeds for r in rows) else 1
@@ -71,7 +69,7 @@ def _cmd_claims(a) -> int:
     bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, **unit_kw)
     claims = run_claims(bench, groups, progress=progress)
     if a.json:
-        print(json.dumps([c.as_dict() for c in claims], indent=2, default=float))
+        print(strict_json([c.as_dict() for c in claims], indent=2))
     else:
         print(format_table(claims))
     if a.plots:
@@ -138,12 +136,15 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     nb = one_line_errors(sub.add_parser("noise-budget", help="the PAC noise budget, source by source",
                                         description=NOISE_BUDGET_HELP, formatter_class=fmt))
     nb.add_argument("--json", action="store_true",
-                    help="print the budget's rows as JSON (source, channel, rti_uV, pac_bits, note)")
+                    help="print the budget's rows as JSON (source, channel, rti_uV, pac_bits, note; a non-finite "
+                         "number is null)")
     nb.set_defaults(func=_cmd_noise_budget)
 
     c = sub.add_parser("claims", help="measure every published figure on the emulator; exit 1 if any fails",
                        description=CLAIMS_HELP, formatter_class=fmt)
-    c.add_argument("--json", action="store_true", help="print the results as JSON")
+    c.add_argument("--json", action="store_true",
+                   help="print the results as JSON (standard JSON: a non-finite number, e.g. the unbounded side of "
+                        "a tolerance such as \"high\": inf, is null)")
     c.add_argument("--only", action="append", choices=ClaimGroupChoices(),
                    help="run one group (repeatable; default: every group)")
     c.add_argument("--fidelity", default="default", choices=list(PROFILES),
@@ -159,7 +160,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                         "number \"BT...\" (biotac-bench units)")
     c.add_argument("--quick", action="store_true", help="fewer drops and a shorter rest run (a look, not proof)")
     c.add_argument("--plots", metavar="DIR", help="write the frequency-sensitivity plot into DIR")
-    c.set_defaults(func=_sigterm_like_ctrl_c(_cmd_claims))
+    c.set_defaults(func=sigterm_like_ctrl_c(_cmd_claims))
 
     b = sub.add_parser("benchmark", help="error vs the reference profile and cost per simulated second",
                        description=BENCHMARK_HELP, formatter_class=fmt)

@@ -1,0 +1,27 @@
+"""The fault campaign's faults and scenes by name, with what each fault's correct reaction is and what each scene
+holds: what ``biotac-bench campaign --help`` lists and ``--faults`` / ``--scenes`` accept.
+
+This module imports nothing.  :mod:`bench.campaigns.faults` builds the heavy objects — each fault's bench settings,
+schedule and check, each scene's stimuli (the emulator) — keyed by these names, and takes each fault's expected
+reaction from here: one source of truth.  ``bench/tests/test_cli_followups.py`` checks that the two agree (the same
+names in the same order, and each scene's description names its stimuli as they are built)."""
+
+#: fault name -> what a correct firmware and driver do, in the order the campaign runs them
+FAULT_EXPECTED = {
+    "none": "no errors, no drops",
+    "unplug_replug": "sensor 2 lost within 2 frames, found again within 1 s",
+    "parity_errors": "every sample flagged, counted",
+    "miso_stuck": "stuck sensor treated as absent",
+    "brownout_reset": "at most two bad samples, sensor kept",
+    "cs_glitch": "chip select toggled with no clock edges: ignored, no errors",
+    "serial_corruption": "CRC errors counted, resync, clean frames",
+    "serial_loss": "dropped frames counted from sequence numbers",
+}
+
+#: campaign scene name -> its stimuli for sensor 1 ("count × kind: ...", times from power-on), in campaign order
+SCENE_DESCRIPTIONS = {
+    "rest": "no stimulus (at rest)",
+    "taps": "2 × Tap: 0.5 N at 0.5 s, 1 N at 1 s",
+    "sphere_drops": "4 × SphereDrop: a 1 mm steel bearing landing at 0.4, 0.7, 1 and 1.3 s",
+    "press": "1 × Touch: 1 N over E17 from 0.3 s (0.2 s ramps, 0.6 s hold)",
+}
