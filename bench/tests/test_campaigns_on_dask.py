@@ -4,6 +4,7 @@ workers as the serial code gives; claim groups that start a cluster of their own
 builds at once in two threads without colliding; a reply lost on a lossy line is asked for again; a bad --scheduler
 is one line and exit 2; Ctrl-C and SIGTERM end a campaign with 130 and 143."""
 
+import math
 import os
 import re
 import signal
@@ -90,7 +91,9 @@ def _spread_rows(seeds, groups):
     rows: dict[str, dict] = {}
     for seed in seeds:
         for c in claims.run_claims(claims.Bench(seed=seed), groups):
-            r = rows.setdefault(c.name, {"name": c.name, "kind": c.kind, "low": c.low, "high": c.high,
+            r = rows.setdefault(c.name, {"name": c.name, "kind": c.kind,  # JSON has null for an unbounded side
+                                         "low": c.low if math.isfinite(c.low) else None,
+                                         "high": c.high if math.isfinite(c.high) else None,
                                          "seeds": [], "measured": [], "passed": [], "ok": []})
             r["seeds"].append(seed)
             r["measured"].append(float(c.measured))

@@ -475,7 +475,9 @@ def main(args) -> int:
     result["spi"] = spi_paths(rtl=not args.no_rtl, say=say)
     result["firmware"] = firmware_paths(say=say)
     if args.json:
-        print(json.dumps(result, indent=2))
+        from bench.cli.args import strict_json
+
+        print(strict_json(result, indent=2))
         return 0
     print("Fidelity profiles: error against the reference profile, and cost")
     print(f"{'scene':16s} {'profile':24s} {'PAC RMS err (bits)':>19s} {'spectral err (dB)':>18s} "
