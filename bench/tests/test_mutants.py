@@ -19,6 +19,16 @@ def test_the_catalogue_matches_the_tree_and_covers_every_area():
         mu.by_name(["no-such-mutant"])
 
 
+@pytest.mark.unit
+def test_the_catalogue_check_names_a_test_that_no_longer_exists():
+    import dataclasses
+
+    m = next(m for m in mu.CATALOGUE if "::" in m.tests[0])
+    renamed = dataclasses.replace(m, tests=(m.tests[0].split("::")[0] + "::test_renamed_since",))
+    assert mu.check_catalogue(mutants=[renamed]) == [f"{m.name}: no test test_renamed_since in "
+                                                     f"{m.tests[0].split('::')[0]}"]
+
+
 @pytest.mark.mutants
 def test_a_quick_sample_of_the_catalogue_is_caught_on_a_scratch_copy():
     """The sample (Boltzmann's constant, the second byte's parity on the host, the multiplexer's memory, the TDC

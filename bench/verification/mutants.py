@@ -408,7 +408,7 @@ CATALOGUE: list[Mutant] = [
            "the first visible flat taken as its half-width: the replacement threshold 4× too high"),
     Mutant("ridges-catch-when-stuck", "sliding", "emulator/friction.py",
            "catching = abs(vr_last) / (abs(vr_last) + CATCH_VELOCITY_M_PER_S)", "catching = 1.0",
-           (f"{_RIG}::test_force_control_through_pdc_reaches_the_target_within_10_percent",),
+           (f"{_RIG}::test_force_control_through_pdc_overshoots_by_the_descent_over_the_batch_and_latency",),
            "ridges load feature slopes even when the skin does not slip (a pressed finger feels slope forces)"),
     Mutant("thermal-live-reads-ahead", "thermal", "emulator/thermal.py",
            "int(np.ceil(t_max / self.dt - 1e-9))))", "int(np.ceil(t_max / self.dt - 1e-9)) + 5))",
@@ -923,8 +923,11 @@ def check_catalogue(repo: Path = REPO, mutants=None) -> list[str]:
         if m.original == m.replacement:
             problems.append(f"{m.name}: the replacement equals the original")
         for t in m.tests:
-            if not (repo / t.split("::")[0]).exists():
-                problems.append(f"{m.name}: test file {t.split('::')[0]} does not exist")
+            test_file, _, test_name = t.partition("::")
+            if not (repo / test_file).exists():
+                problems.append(f"{m.name}: test file {test_file} does not exist")
+            elif test_name and f"def {test_name.split('[')[0]}(" not in (repo / test_file).read_text(encoding="utf-8"):
+                problems.append(f"{m.name}: no test {test_name.split('[')[0]} in {test_file}")
     return problems
 
 
