@@ -357,7 +357,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "replaces it and removes its CSV if this recording writes none (a CSV there that is not a "
                     "recording's is refused even with --force). Without --force, a file that appears there "
                     "during the recording is not replaced either: the recording is then kept under its temporary "
-                    "name beside --out (.NAME.XXXXXXXX.part, which the error gives; rename it to use it). Exit "
+                    "name beside --out (.NAME.<random>.part, which the error gives; rename it to use it). Exit "
                     "status: 0 complete; 1 the stream stopped, the bridge went away or the port failed before "
                     "--seconds (a warning says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments, nothing received, "
                     "or --out taken during the recording.\n\n"
