@@ -56,17 +56,26 @@ def _cmd_claims(a) -> int:
         spec = ClusterSpec.from_env(a.scheduler, a.workers)
         if progress:
             progress(f"{a.seeds} seed(s) × {len(groups)} group(s) on {spec.describe()}")
-        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, **unit_kw),
+        rows = run_claims_over_seeds(lambda s: Bench(fidelity=a.fidelity, seed=s, quick=a.quick, cluster=spec,
+                                                     **unit_kw),
                                      range(a.seed, a.seed + a.seeds), groups, progress, spec=spec)
         if a.json:
             print(strict_json([r.as_dict() for r in rows], indent=2))
         else:
             print(format_spread_table(rows))
         return 0 if not any(r.failed_seeds for r in rows) else 1
+    cluster = None
     if a.workers is not None or a.scheduler is not None:
-        print("error: --workers and --scheduler go with --seeds (one seed runs in this process)", file=sys.stderr)
-        return 2
-    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, **unit_kw)
+        from bench.campaigns.engine import ClusterSpec
+        from bench.verification.claims.core import STARTS_A_CLUSTER
+
+        if not STARTS_A_CLUSTER.intersection(groups):
+            print(f"error: --workers and --scheduler go with --seeds or a group that runs a campaign of its own "
+                  f"({', '.join(sorted(STARTS_A_CLUSTER))}); one seed of the other groups runs in this process",
+                  file=sys.stderr)
+            return 2
+        cluster = ClusterSpec.from_env(a.scheduler, a.workers)
+    bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, cluster=cluster, **unit_kw)
     claims = run_claims(bench, groups, progress=progress)
     if a.json:
         print(strict_json([c.as_dict() for c in claims], indent=2))
@@ -108,8 +117,8 @@ first run also slides D ch. 6's texture experiment and two ablations from an emp
 
 With --seeds, each group for each seed is an independent task on Dask (a LocalCluster on this machine's cores, or
 an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the rows are the same for any number of workers.
-The exploration group starts a cluster of its own for the texture experiment, so it runs in this process after
-the others.  Without --seeds the claims run in this process.
+The exploration group runs the texture experiment as a campaign of its own, from this process after the others,
+on the same --scheduler / --workers (also without --seeds).  Without --seeds the other claims run in this process.
 
   biotac-bench claims
   biotac-bench claims --only noise --only impact          # two groups, seconds
@@ -153,8 +162,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.add_argument("--seeds", type=int, metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")
-    c.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core)")
-    c.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    c.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core); with "
+                   "--seeds for every (seed, group) task, and for the exploration group's experiment")
+    c.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS); used as "
+                   "--workers is")
     c.add_argument("--unit", type=unit_choice, default=None,
                    help="run the claims on this sensor unit: a unit seed, \"nominal\" (default) or a serial "
                         "number \"BT...\" (biotac-bench units)")

@@ -199,8 +199,32 @@ def test_no_workers_is_a_usage_error(argv, capsys):
 
 def test_workers_and_scheduler_without_seeds_are_refused_for_claims(capsys):
     assert cli.main(["claims", "--only", "scales", "--workers", "2"]) == 2
-    assert capsys.readouterr().err.strip() == ("error: --workers and --scheduler go with --seeds (one seed runs in "
-                                               "this process)")
+    assert capsys.readouterr().err.strip() == ("error: --workers and --scheduler go with --seeds or a group that "
+                                               "runs a campaign of its own (exploration); one seed of the other "
+                                               "groups runs in this process")
+
+
+class _ExperimentReached(Exception):
+    pass
+
+
+@pytest.mark.parametrize("extra", [[], ["--seeds", "1"]])
+def test_the_exploration_group_runs_its_experiment_on_the_claims_cluster(extra, monkeypatch):
+    """``claims --scheduler`` (with or without --seeds) is where the exploration group's experiment runs; it used to
+    take its cluster only from DASK_SCHEDULER_ADDRESS."""
+    from bench.verification.claims import exploration
+
+    seen = []
+
+    def reached(spec, cluster, **kw):
+        seen.append(cluster)
+        raise _ExperimentReached
+
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    monkeypatch.setattr(exploration, "run_experiment", reached)
+    with pytest.raises(_ExperimentReached):
+        cli.main(["claims", "--only", "exploration", "--scheduler", "tcp://127.0.0.1:1", "--workers", "1", *extra])
+    assert [(c.scheduler, c.workers) for c in seen] == [("tcp://127.0.0.1:1", 1)]
 
 
 def dask_workers_of(proc, n: int, within_s: float = 60.0) -> list:

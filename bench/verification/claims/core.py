@@ -92,6 +92,9 @@ class Bench:
     seed: int = 2012
     params: SensorParams = field(default_factory=SensorParams)
     quick: bool = False  # fewer drops and hours, for a fast look (the suite never uses it)
+    #: where a group that runs a campaign of its own (:data:`STARTS_A_CLUSTER`) runs it: a
+    #: :class:`~bench.campaigns.engine.ClusterSpec`, or None for DASK_SCHEDULER_ADDRESS or else a LocalCluster
+    cluster: object | None = None
 
     def acquire(self, stimuli, duration_s, sequence=("PAC", "PDC"), slot_rate_Hz=4400.0,
                 noise=NoiseSources(), seed_offset=0) -> dict[str, tuple[np.ndarray, np.ndarray]]:

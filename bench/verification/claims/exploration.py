@@ -74,17 +74,18 @@ def pilot_trends(pilot_rows: list[dict]) -> dict:
     return out
 
 
-def _run(spec):
+def _run(spec, b: Bench):
+    """The experiment ``spec`` on ``b``'s cluster (``claims --scheduler/--workers``; default from the environment)."""
     from bench.campaigns.engine import ClusterSpec
 
-    return run_experiment(spec, cache_dir=OUT / "cache", cluster=ClusterSpec.from_env(), progress=False,
-                          log=lambda m: None)
+    return run_experiment(spec, cache_dir=OUT / "cache", cluster=b.cluster or ClusterSpec.from_env(),
+                          progress=False, log=lambda m: None)
 
 
 @claim_group("exploration")
 def exploration_claims(b: Bench) -> list[Claim]:
     spec = replace(load_experiment(EXPERIMENT), fidelity=b.fidelity)
-    base = _run(spec)
+    base = _run(spec, b)
     s = summary(base)
     pairs, ident = s["pairs/bayesian"], s["identification/bayesian"]
     n_val = len({t for p in base.pairs for t in p})
@@ -100,8 +101,8 @@ def exploration_claims(b: Bench) -> list[Claim]:
                 f"the textures' differences than the model's, whose trial-to-trial spread is the sensor noise, the "
                 f"force control and where on the square a trial starts (bench/tests/test_trial_spread.py) — other "
                 f"sources of a real rig's variation are not modelled and none was added to move this figure")
-    smooth = summary(_run(replace(spec, **ABLATIONS["smooth-skin"][1])))["identification/bayesian"]["accuracy"]
-    worn = summary(_run(replace(spec, **ABLATIONS["unreplaced-wear"][1])))["identification/bayesian"]["accuracy"]
+    smooth = summary(_run(replace(spec, **ABLATIONS["smooth-skin"][1]), b))["identification/bayesian"]["accuracy"]
+    worn = summary(_run(replace(spec, **ABLATIONS["unreplaced-wear"][1]), b))["identification/bayesian"]["accuracy"]
     # measured (docs/experiment/README.md): the validation pairs are D's kind of pairs, similar in description
     # (bench/experiments/pairs.py, chosen before any accuracy was seen); validation trials scatter like training
     # trials since the skin is replaced at the first visible wear; every trial of a texture runs on its one 75 mm
