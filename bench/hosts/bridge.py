@@ -27,39 +27,19 @@ scripted at 0.5 s comes ≈ 0.5 s into the stream, and the same host commands gi
 from __future__ import annotations
 
 import math
-import numbers
 import queue
 import random
 import threading
 import time
 
-from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+from bench.hosts.cosim import CoSim, VirtualBoard
+from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
-from bench.scenes.limits import MAX_SENSORS
 
 #: Unpaced, a host whose receive buffer has stayed full this long (wall s) is taken as gone (bytes overrun).
 HOST_GONE_S = 0.2
 #: Unpaced, before the host's first byte: how often (wall s) the bench looks for it (virtual time stands still).
 HOST_POLL_S = 0.002
-
-
-def _whole_1_to_max(n) -> bool:
-    return isinstance(n, numbers.Integral) and not isinstance(n, bool) and 1 <= n <= MAX_SENSORS
-
-
-def bench_sensors(n_sensors, sensors, stimuli, seed: int, variant: str) -> dict:
-    """The emulated sensors a host bench serves: ``sensors`` (sensor number -> Sensor) if given, else ``n_sensors``
-    default ones (:func:`bench.hosts.cosim.default_sensors`).  A count or numbers outside 1..MAX_SENSORS (what the
-    bridge firmware and the Cheetah adapter address) are refused with a ValueError naming them."""
-    if sensors:
-        bad = [n for n in sensors if not _whole_1_to_max(n)]
-        if bad:
-            raise ValueError(f"sensors numbered {bad!r}: sensor numbers are 1 to {MAX_SENSORS}")
-        return dict(sensors)
-    if not _whole_1_to_max(n_sensors):
-        raise ValueError(f"n_sensors = {n_sensors!r}: must be a whole number from 1 to {MAX_SENSORS} "
-                         f"(sensors on the bus)")
-    return default_sensors(int(n_sensors), stimuli, seed, variant)
 
 
 class FirmwareBench:

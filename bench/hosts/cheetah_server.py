@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.hosts.bridge import bench_sensors
+from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
 from emulator.spi.model import Bus, SensorPort, Transfer

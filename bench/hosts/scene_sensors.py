@@ -24,8 +24,11 @@ default frame covers them all: 44 slots, or the BioTac SP's 54 with E20..E24):
 from __future__ import annotations
 
 import dataclasses
+import numbers
 
 from bench.errors import SceneError
+from bench.hosts.cosim import default_sensors
+from bench.scenes.limits import MAX_SENSORS
 from emulator.channels import ALL_CHANNEL_INDEX, HAL, variant
 from emulator.sensor import Sensor
 from emulator.spi import protocol as proto
@@ -98,3 +101,22 @@ def _electrodes_missing(scene, names: list) -> list[str]:
                    "answer them with error words, never data; 'biotac-bench run' reads them from the SPs of a mixed "
                    "scene)")
     return out
+
+
+def _whole_1_to_max(n) -> bool:
+    return isinstance(n, numbers.Integral) and not isinstance(n, bool) and 1 <= n <= MAX_SENSORS
+
+
+def bench_sensors(n_sensors, sensors, stimuli, seed: int, variant: str) -> dict:
+    """The emulated sensors a host bench serves: ``sensors`` (sensor number -> Sensor) if given, else ``n_sensors``
+    default ones (:func:`bench.hosts.cosim.default_sensors`).  A count or numbers outside 1..MAX_SENSORS (what the
+    bridge firmware and the Cheetah adapter address) are refused with a ValueError naming them."""
+    if sensors:
+        bad = [n for n in sensors if not _whole_1_to_max(n)]
+        if bad:
+            raise ValueError(f"sensors numbered {bad!r}: sensor numbers are 1 to {MAX_SENSORS}")
+        return dict(sensors)
+    if not _whole_1_to_max(n_sensors):
+        raise ValueError(f"n_sensors = {n_sensors!r}: must be a whole number from 1 to {MAX_SENSORS} "
+                         f"(sensors on the bus)")
+    return default_sensors(int(n_sensors), stimuli, seed, variant)
