@@ -7,8 +7,9 @@ For every profile and shipped scene:
     against the reference profile; the row "reference (other seed)" shows the statistical floor of
     this estimate (two noise realisations of the same model);
   * cost: wall time per simulated second of the full run through SPI.
-Then throughput of the full 44-slot frame, the demand-driven saving of reading only PAC, and the
-peak memory of streaming one simulated hour (in a subprocess, so the number is the stream's own).
+Then throughput of the full 44-slot frame, the demand-driven saving of reading only PAC, the cost of each of
+issue 10's effects (:func:`effect_costs`: the full frame with and without it), and the peak memory of streaming
+one simulated hour (in a subprocess, so the number is the stream's own).
 """
 
 from __future__ import annotations
@@ -25,9 +26,10 @@ from bench.running.runner import build_sensor, run_scene
 from bench.running.sampler import Sampler
 from bench.paths import FIXTURES, REPO, SCENES_DIR
 from bench.scenes.scene import load_scene
-from emulator.channels import DEFAULT_FRAME_NAMES, PAC
+from emulator.channels import DEFAULT_FRAME_NAMES, DEFAULT_VARIANT, PAC
 from emulator.conversions import ADC_LSB_V
 from emulator.fidelity import PROFILES
+from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.spi.peripheral import SoftwarePeripheral
 
@@ -88,13 +90,16 @@ def fidelity_table(progress=print) -> list[dict]:
 
 
 def stream_realtime_factor(fidelity: str, channels, sequence, slot_rate_Hz: float, seconds: float,
-                           stimuli=(), repeats: int = 3) -> dict:
+                           stimuli=(), repeats: int = 3, params: SensorParams | None = None,
+                           noise: NoiseSources = NoiseSources(), variant: str = DEFAULT_VARIANT) -> dict:
     """Throughput of streaming ``seconds`` of samples through SPI, in 1 s host batches: the fastest of ``repeats``
     runs, each with a fresh sensor (another process on the machine only ever slows a run down, so the fastest run is
-    the code's own speed; every run's factor is kept), with that run's process CPU time beside its wall time."""
+    the code's own speed; every run's factor is kept), with that run's process CPU time beside its wall time.
+    ``params`` (default nominal), ``noise`` and ``variant`` build the sensor; ``markers`` in the result says what that
+    sensor ran (:func:`effect_markers`)."""
     runs = []
     for _ in range(max(1, int(repeats))):
-        sensor = Sensor(None, list(stimuli), channels, fidelity, seed=1)
+        sensor = Sensor(params, list(stimuli), channels, fidelity, seed=1, noise=noise, variant=variant)
         sampler = Sampler(SoftwarePeripheral(sensor), sequence, slot_rate_Hz)
         per_batch = int(slot_rate_Hz)
         t0, c0 = time.perf_counter(), time.process_time()
@@ -109,18 +114,186 @@ def stream_realtime_factor(fidelity: str, channels, sequence, slot_rate_Hz: floa
         if e["name"] in slow:
             modality_ms[e["name"].replace("_", " ")] = 1e3 * e["seconds"]
     modality_ms["SPI, ADC and host (the rest)"] = 1e3 * wall - sum(modality_ms.values())
-    return {"fidelity": fidelity, "sequence": "default 44-slot frame" if sequence == "default" else sequence,
+    slots = sampler.sequence.size
+    return {"fidelity": fidelity, "sequence": f"default {slots}-slot frame" if sequence == "default" else sequence,
+            "slot_rate_Hz": slot_rate_Hz, "frame_slots": slots,
             "simulated_s": seconds, "wall_s": wall, "realtime_factor": seconds / wall,
             "cpu_realtime_factor": seconds / max(cpu, 1e-9), "runs": [seconds / r[0] for r in runs],
-            "effects": [e["name"] for e in report],
+            "effects": [e["name"] for e in report], "markers": effect_markers(sensor),
             "grid_ms_per_simulated_s": {e["name"]: 1e3 * e["seconds"] / seconds for e in report},
             "ms_per_simulated_s": {k: v / seconds for k, v in modality_ms.items()}}
+
+
+def effect_markers(sensor: Sensor) -> dict:
+    """What ``sensor`` runs of issue 10's effects, read from the sensor itself: the skin's creep ratio
+    (instantaneous/relaxed pressure of its force coupling; 1 = elastic skin; None: no force path), the ADC's
+    per-conversion noise terms (input V, reference relative RMS, PAC path V), the mains-hum components (Hz; empty:
+    hum off), the unit's electrode-gap spread (mm) and seed (0 mm: the nominal unit's equal gaps), the variant and
+    its electrode count."""
+    coupling = next((e for e in sensor.graph.effects if e.name == "force_coupling"), None)
+    hum = next((e for e in sensor.graph.effects if e.name == "mains_hum"), None)
+    p = sensor.params
+    return {"skin_creep_ratio": None if coupling is None else float(coupling.creep.ratio),
+            "adc_noise": {"input_V": sensor.adc.noise_V, "reference_relative": sensor.adc.reference_rel,
+                          "pac_path_V": sensor.adc.pac_V},
+            "mains_hum_Hz": [] if hum is None else [float(f) for f, _, _ in hum.components],
+            "electrode_gap": {"spread_mm": float(p.electrode_gap_spread_mm), "seed": int(p.electrode_gap_seed)},
+            "variant": sensor.variant.name, "electrodes": sensor.variant.n_electrodes}
 
 
 def _runs(r: dict) -> str:
     """"best of 3 runs: 1012, 987, 1120×; CPU 1130×" for a :func:`stream_realtime_factor` result."""
     return (f"best of {len(r['runs'])} runs: {', '.join(f'{x:.0f}' for x in r['runs'])}×; "
             f"that run's CPU time {r['cpu_realtime_factor']:.0f}×")
+
+
+#: the drawn unit of the per-effect table (any seed: a unit's spreads change values, not the work done)
+EFFECT_UNIT_SEED = 17
+#: the full frame's target (issue 10, Performance: the default full frame stays ≥ 1000× real time)
+FULL_FRAME_TARGET_X = 1000.0
+
+
+def _repeated_presses(seconds: float) -> list:
+    """The presses-grid scene's twelve 1 N touches (PDC and the touched electrodes creep under each), repeated every
+    scene duration (19.5 s) so that they cover ``seconds``."""
+    import dataclasses
+
+    scene = load_scene(SCENES_DIR / "presses_grid.toml")
+    repeats = max(1, int(np.ceil(seconds / scene.duration_s)))
+    return [dataclasses.replace(s, start=s.start + k * scene.duration_s)
+            for k in range(repeats) for s in scene.stimuli]
+
+
+def _effect_configs(seconds: float) -> dict[str, dict]:
+    """The sensors the per-effect table streams, by name: keyword arguments of :func:`stream_realtime_factor`."""
+    from emulator.channels import variant
+    from emulator.units import unit
+
+    nominal = SensorParams()
+    presses = _repeated_presses(seconds)
+    return {
+        "rest": {},
+        "presses": {"stimuli": presses},
+        "presses, elastic skin": {"stimuli": presses, "params": nominal.replace(skin_relaxed_modulus_fraction=1.0)},
+        "rest, one ADC noise": {"params": nominal.replace(adc_reference_noise_ppm=0.0, pac_path_noise_rms_bits=0.0)},
+        "rest, hum fundamental only": {"params": nominal.replace(mains_harmonic2_ratio=0.0, mains_harmonic3_ratio=0.0)},
+        "rest, hum off": {"noise": NoiseSources(mains_hum=False)},
+        f"rest, unit {EFFECT_UNIT_SEED}": {"params": unit(EFFECT_UNIT_SEED).params},
+        "rest, BioTac SP": {"variant": "biotac-sp", "channels": variant("biotac-sp").frame_names},
+    }
+
+
+#: (effect, configuration with it, configuration without it, the :func:`effect_markers` key that tells them apart)
+EFFECT_ROWS = (
+    ("viscoelastic skin (E∞/E0 0.6) vs elastic (1.0)", "presses", "presses, elastic skin", "skin_creep_ratio"),
+    ("per-channel ADC noise vs one ADC noise", "rest", "rest, one ADC noise", "adc_noise"),
+    ("mains hum + 2nd, 3rd harmonic vs fundamental", "rest", "rest, hum fundamental only", "mains_hum_Hz"),
+    ("mains hum + harmonics vs hum off", "rest", "rest, hum off", "mains_hum_Hz"),
+    (f"drawn unit (seed {EFFECT_UNIT_SEED}) vs nominal unit", f"rest, unit {EFFECT_UNIT_SEED}", "rest", "electrode_gap"),
+    ("BioTac SP (54 slots) vs BioTac (44 slots)", "rest, BioTac SP", "rest", "variant"),
+)
+
+
+def _ms_per_simulated_s(realtime_factor: float) -> float:
+    """Wall time (ms) per simulated second of a run at ``realtime_factor``× real time."""
+    return 1e3 / realtime_factor
+
+
+def _run_spread_ms(r: dict) -> float:
+    """How far the second-fastest run of a :func:`stream_realtime_factor` result lies behind the fastest, in ms per
+    simulated s: the timing's own scatter (0 with a single run)."""
+    fastest = sorted(r["runs"], reverse=True)
+    return _ms_per_simulated_s(fastest[1]) - _ms_per_simulated_s(fastest[0]) if len(fastest) > 1 else 0.0
+
+
+def creep_filter_ms_per_simulated_s(seconds: float, fidelity: str = "default", repeats: int = 3) -> float:
+    """Wall time (ms per simulated s) of the skin's creep filter alone (the nominal standard linear solid) on the
+    grid of ``fidelity`` in the sensor's 2 s blocks: the fastest of ``repeats`` runs.  PDC's force path runs it once;
+    each touching contact runs one more at the electrode rate."""
+    from emulator.fidelity import profile
+    from emulator.mechanics import skin_fluid
+    from emulator.viscoelastic import Creep
+
+    sf, fs = skin_fluid(SensorParams()), profile(fidelity).grid_Hz
+    block = np.linspace(0.0, 1.0, int(round(2.0 * fs)))  # a force ramp (N): the filter's work does not depend on it
+    blocks = max(1, int(np.ceil(seconds / 2.0)))
+    best = np.inf
+    for _ in range(max(1, int(repeats))):
+        creep = Creep.standard_linear_solid(sf.creep_time_s, sf.creep_ratio)
+        t0 = time.perf_counter()
+        for _ in range(blocks):
+            creep.step(block, fs)
+        best = min(best, time.perf_counter() - t0)
+    return 1e3 * best / (2.0 * blocks)
+
+
+#: the per-effect table measures every configuration in turn this many times and keeps each one's fastest result:
+#: the machine's speed drifts within a minute, and alternating spreads that drift over all of them alike (the first
+#: round also compiles what a configuration needs for the first time)
+EFFECT_ROUNDS = 3
+
+
+def effect_costs(seconds: float = 60.0, repeats: int = 3, rounds: int = EFFECT_ROUNDS, say=lambda m: None) -> dict:
+    """Issue 10's per-effect cost table: the default full frame through SPI (default profile, 4.4 kHz slots) with and
+    without each new effect, each the fastest of ``repeats`` runs of ``seconds`` simulated s
+    (:func:`stream_realtime_factor`), in ``rounds`` alternating rounds (the fastest round kept).  The skin's creep
+    runs under repeated 1 N touches, the rest at rest.  Per row: both factors, the difference in ms per simulated s
+    (with − without), the larger run scatter of the two, and both sensors' markers (:func:`effect_markers`) showing
+    the effect ran in one and not the other."""
+    t0 = time.perf_counter()
+    configs = {}
+    for k in range(max(1, int(rounds))):
+        for name, options in _effect_configs(seconds).items():
+            say(f"… effect costs, round {k + 1}: {name}")
+            options = {"channels": DEFAULT_FRAME_NAMES, **options}
+            r = stream_realtime_factor("default", options.pop("channels"), "default", 4400.0, seconds,
+                                       repeats=repeats, **options)
+            if name not in configs or r["realtime_factor"] > configs[name]["realtime_factor"]:
+                configs[name] = r
+    rows = []
+    for effect, with_name, without_name, marker in EFFECT_ROWS:
+        w, wo = configs[with_name], configs[without_name]
+        rows.append({"effect": effect, "with": with_name, "without": without_name,
+                     "with_realtime_factor": w["realtime_factor"], "without_realtime_factor": wo["realtime_factor"],
+                     "delta_ms_per_simulated_s": _ms_per_simulated_s(w["realtime_factor"])
+                     - _ms_per_simulated_s(wo["realtime_factor"]),
+                     "scatter_ms_per_simulated_s": max(_run_spread_ms(w), _run_spread_ms(wo)),
+                     "marker": marker, "marker_with": w["markers"][marker], "marker_without": wo["markers"][marker]})
+    per_slot = {name: {"us_per_slot": 1e6 / (configs[name]["realtime_factor"] * configs[name]["slot_rate_Hz"]),
+                       "frame_slots": configs[name]["frame_slots"]} for name in ("rest", "rest, BioTac SP")}
+    for v in per_slot.values():
+        v["us_per_frame"] = v["us_per_slot"] * v["frame_slots"]
+    rest = configs["rest"]["realtime_factor"]
+    return {"simulated_s": seconds, "repeats": repeats, "rounds": rounds, "configs": configs, "rows": rows, "per_slot": per_slot,
+            "creep_filter_ms_per_simulated_s": creep_filter_ms_per_simulated_s(seconds),
+            "full_frame": {"realtime_factor": rest, "target": FULL_FRAME_TARGET_X, "met": rest >= FULL_FRAME_TARGET_X},
+            "wall_s": time.perf_counter() - t0}
+
+
+def effect_cost_lines(e: dict) -> list[str]:
+    """The per-effect cost table of an :func:`effect_costs` result, as printed lines."""
+    rest = e["configs"]["rest"]
+    lines = [f"Cost of each issue-10 effect: default full frame through SPI, default profile, 4.4 kHz slots; "
+             f"best of {e['rounds']} rounds × {e['repeats']} runs of {e['simulated_s']:g} simulated s each",
+             f"  {'effect':48s} {'stimulus':9s} {'with ×':>8s} {'without ×':>10s} {'Δ ms / sim s':>13s} "
+             f"{'scatter':>8s}"]
+    for r in e["rows"]:
+        lines.append(f"  {r['effect']:48s} {r['with'].split(',')[0]:9s} {r['with_realtime_factor']:8.0f} "
+                     f"{r['without_realtime_factor']:10.0f} {r['delta_ms_per_simulated_s']:+13.3f} "
+                     f"{r['scatter_ms_per_simulated_s']:8.3f}")
+    sp, bt = e["per_slot"]["rest, BioTac SP"], e["per_slot"]["rest"]
+    full = e["full_frame"]
+    lines += ["  (scatter: the larger of the two configurations' gaps between their fastest and second-fastest run, ms "
+              "per simulated s; a Δ within it is no measurable cost)",
+              f"  BioTac SP: {sp['us_per_slot']:.3f} µs per slot, {sp['us_per_frame']:.1f} µs per {sp['frame_slots']}-slot "
+              f"frame; BioTac: {bt['us_per_slot']:.3f} µs per slot, {bt['us_per_frame']:.1f} µs per "
+              f"{bt['frame_slots']}-slot frame",
+              f"  the skin's creep filter alone: {e['creep_filter_ms_per_simulated_s']:.3f} ms per simulated s on the "
+              f"grid (PDC's force path; one more per touching contact at the electrode rate); an elastic skin runs the "
+              f"same filter with a zero weight (the code has no switch that skips it)",
+              f"  default full frame at rest, every effect on: {full['realtime_factor']:.0f}× real time ({_runs(rest)}); "
+              f"target ≥ {full['target']:.0f}×: {'met' if full['met'] else 'NOT met'}"]
+    return lines
 
 
 def _own_peak_MB() -> float:
@@ -411,11 +584,19 @@ def write_scene_fingerprint_fixture(path=None) -> dict:
 def _fingerprints_main(argv) -> int:
     """``python -m bench.verification.benchmark OUT.json [OLD.json]``: write the fingerprints; with OLD.json (another
     tree's), list the runs whose codes differ and exit 1 if any does.  ``--write-fixture``: rewrite
-    :data:`SCENE_FINGERPRINT_FIXTURE` instead."""
+    :data:`SCENE_FINGERPRINT_FIXTURE` instead; ``--effects [--seconds N] [--json]``: print only the per-effect cost
+    table (:func:`effect_costs`)."""
     import argparse
     from pathlib import Path
 
+    from bench.cli.args import number
+
     ap = argparse.ArgumentParser(description=scene_code_fingerprints.__doc__)
+    ap.add_argument("--effects", action="store_true",
+                    help="print only issue 10's per-effect cost table (about 30 s) instead of fingerprints")
+    ap.add_argument("--seconds", type=number(0.0, 36000.0, lo_open=True), default=60.0,
+                    help="with --effects: simulated seconds (s) of each run, > 0 and ≤ 36000")
+    ap.add_argument("--json", action="store_true", help="with --effects: print the table as JSON")
     ap.add_argument("out", type=Path, nargs="?")
     ap.add_argument("against", type=Path, nargs="?")
     ap.add_argument("--scenes", type=Path, default=SCENES_DIR)
@@ -423,6 +604,10 @@ def _fingerprints_main(argv) -> int:
                     help="rewrite the committed fingerprints of the scenes that do not slide (fixtures/fingerprints/"
                          "scenes_default.json) and nothing else; only for an intended change of their codes")
     a = ap.parse_args(argv)
+    if a.effects:
+        if a.out is not None or a.write_fixture:
+            ap.error("--effects takes no OUT.json, OLD.json or --write-fixture")
+        return main(argparse.Namespace(effects=True, json=a.json, seconds=a.seconds))
     if a.write_fixture:
         if a.out is not None or a.scenes != SCENES_DIR:
             ap.error("--write-fixture takes no OUT.json, OLD.json or --scenes (it fingerprints the shipped scenes)")
@@ -456,6 +641,15 @@ def main(args) -> int:
 
         print(report(say))
         return 0
+    if getattr(args, "effects", False):
+        costs = effect_costs(args.seconds, say=say)
+        if args.json:
+            from bench.cli.args import strict_json
+
+            print(strict_json({"effect_costs": costs}, indent=2))
+        else:
+            print("\n".join(effect_cost_lines(costs)))
+        return 0
     result = {"fidelity": fidelity_table(say)}
     sec = args.seconds
     say("… throughput")
@@ -470,6 +664,7 @@ def main(args) -> int:
     say("… modalities")
     touches = load_scene(SCENES_DIR / "thermal_contacts.toml").stimuli
     result["modalities"] = stream_realtime_factor("default", DEFAULT_FRAME_NAMES, "default", 4400.0, 100.0, touches)
+    result["effect_costs"] = effect_costs(sec, say=say)
     say("… memory (streaming)")
     result["memory"] = stream_hour(3600.0 if args.hour else 600.0)
     result["spi"] = spi_paths(rtl=not args.no_rtl, say=say)
@@ -509,6 +704,8 @@ def main(args) -> int:
     print(f"  saved when a scene needs neither: thermal network {ms.get('thermal network', 0):.3f} ms/s (steady-state "
           f"shortcut instead), electrodes {ms.get('electrodes', 0):.3f} ms/s (not built when no electrode is read; "
           f"resting values when nothing touches)")
+    print()
+    print("\n".join(effect_cost_lines(result["effect_costs"])))
     m = result["memory"]
     print(f"\nStreaming {m['simulated_s']:.0f} simulated s of the full frame: {m['realtime_factor']:.0f}× real time, "
           f"peak RSS {m['peak_rss_MB']:.0f} MB")
