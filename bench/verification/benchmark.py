@@ -230,7 +230,7 @@ def creep_filter_ms_per_simulated_s(seconds: float, fidelity: str = "default", r
 #: the per-effect table measures every configuration in turn this many times and keeps each one's fastest result:
 #: the machine's speed drifts within a minute, and alternating spreads that drift over all of them alike (the first
 #: round also compiles what a configuration needs for the first time)
-EFFECT_ROUNDS = 3
+EFFECT_ROUNDS = 5
 
 
 def effect_costs(seconds: float = 60.0, repeats: int = 3, rounds: int = EFFECT_ROUNDS, say=lambda m: None) -> dict:
@@ -593,7 +593,7 @@ def _fingerprints_main(argv) -> int:
 
     ap = argparse.ArgumentParser(description=scene_code_fingerprints.__doc__)
     ap.add_argument("--effects", action="store_true",
-                    help="print only issue 10's per-effect cost table (about 30 s) instead of fingerprints")
+                    help="print only issue 10's per-effect cost table (about 15 s) instead of fingerprints")
     ap.add_argument("--seconds", type=number(0.0, 36000.0, lo_open=True), default=60.0,
                     help="with --effects: simulated seconds (s) of each run, > 0 and ≤ 36000")
     ap.add_argument("--json", action="store_true", help="with --effects: print the table as JSON")
