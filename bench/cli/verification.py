@@ -130,12 +130,15 @@ on the same --scheduler / --workers (also without --seeds).  Without --seeds the
 BENCHMARK_HELP = """\
 For every fidelity profile and shipped scene: PAC RMS error (bits) and spectral error (dB) against the reference
 profile, and wall time per simulated second; then throughput (× real time), memory (MB, streaming 600 simulated
-s, or an hour with --hour) and demand-driven savings.  Takes about 2-3 min on the project's 2 cores (2 min 17 s
-measured on an idle machine); --textures instead runs the sliding, rig, Dask and exploration benchmarks.
+s, or an hour with --hour), demand-driven savings, and the cost of each of issue 10's effects (viscoelastic skin,
+per-channel ADC noise, hum harmonics, a drawn unit, the BioTac SP's frame: the full frame with and without it).
+Takes about 2-3 min on the project's 2 cores (2 min 17 s measured on an idle machine); --textures instead runs the
+sliding, rig, Dask and exploration benchmarks; --effects only the per-effect table (about 10 s).
 
   biotac-bench benchmark
   biotac-bench benchmark --no-rtl --seconds 10      # quicker: no Verilator build, shorter throughput runs
   biotac-bench benchmark --json > benchmark.json
+  biotac-bench benchmark --effects                  # each effect's cost, with and without it
 """
 
 
@@ -183,4 +186,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     b.add_argument("--no-rtl", action="store_true", help="skip the RTL measurements (no Verilator build)")
     b.add_argument("--textures", action="store_true",
                    help="only the sliding, texture-rig, Dask-scaling and exploration benchmarks")
+    b.add_argument("--effects", action="store_true",
+                   help="only the per-effect cost table: the default full frame with and without each of issue "
+                        "10's effects (--seconds per run; about 10 s at 60)")
     b.set_defaults(func=_cmd_benchmark)

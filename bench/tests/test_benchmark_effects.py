@@ -4,7 +4,6 @@ table reaches the printed and JSON output."""
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import pytest
@@ -68,7 +67,10 @@ def test_table_lines_name_every_effect_and_the_target(costs):
 
 
 def test_effects_only_json(capsys):
-    assert benchmark.main(argparse.Namespace(effects=True, json=True, seconds=1.0)) == 0
+    """`biotac-bench benchmark --effects --json` (the CLI's flag reaches the table)."""
+    from bench.cli import main as cli
+
+    assert cli.main(["benchmark", "--effects", "--json", "--seconds", "1"]) == 0
     doc = json.loads(capsys.readouterr().out)
     rows = doc["effect_costs"]["rows"]
     assert [r["effect"] for r in rows] == [row[0] for row in benchmark.EFFECT_ROWS]
