@@ -891,6 +891,15 @@ CATALOGUE += [
            "(strict and acc == acc_b and moves == moves_b)", "(strict and False)",
            ("bench/tests/test_experiment_report_picks.py",),
            "the strict beats-the-baselines count takes a tie for a win"),
+    Mutant("claims-exploration-ignores-its-cluster", "experiments", "bench/verification/claims/exploration.py",
+           "cluster=b.cluster or ClusterSpec.from_env()", "cluster=ClusterSpec.from_env()",
+           ("bench/tests/test_campaigns_on_dask.py::"
+            "test_the_exploration_group_runs_its_experiment_on_the_claims_cluster",),
+           "claims --scheduler/--workers do not reach the exploration group's experiment"),
+    Mutant("benchmark-effects-variant-dropped", "benchmark", "bench/verification/benchmark.py",
+           "seed=1, noise=noise, variant=variant)", "seed=1, noise=noise)",
+           ("bench/tests/test_benchmark_effects.py::test_every_row_runs_its_effect_with_and_not_without",),
+           "the per-effect table's BioTac SP row streams the 19-electrode sensor"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
