@@ -1,7 +1,8 @@
 """Fidelity profiles: what accuracy costs in time.
 
 A profile sets the simulation grid (the 4.4 kHz slot rate times an oversampling factor), how
-each analog stage is discretized, and which second-order effects run.  ``scripts/benchmark``
+each analog stage is discretized, and which second-order effects run (the reference profile also resolves each
+fingerprint ridge's catch and release).  ``scripts/benchmark``
 measures every profile's error against ``reference`` and its cost per simulated second.
 """
 
@@ -10,6 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from emulator.channels import DEFAULT_SLOT_RATE_HZ
+
+#: the fingerprint ridge models a profile may choose (see :class:`Fidelity`)
+RIDGE_MODELS = ("effective", "resolved")
 
 
 @dataclass(frozen=True)
@@ -24,6 +28,13 @@ class Fidelity:
     friction_substeps: int  # friction integrated at the grid rate × substeps
     patch_radii: int  # patch radii tabulated for the contact patch (interpolated between)
     description: str
+    #: fingerprint ridges: "effective" (a rigid comb, the slope table) or "resolved" (each ridge under the patch a
+    #: compliant element that catches and releases; :mod:`emulator.friction`)
+    ridges: str = "effective"
+
+    def __post_init__(self):
+        if self.ridges not in RIDGE_MODELS:
+            raise ValueError(f"fidelity {self.name!r}: ridges = {self.ridges!r}; choose one of: {', '.join(RIDGE_MODELS)}")
 
     @property
     def grid_Hz(self) -> float:
@@ -41,7 +52,8 @@ PROFILES: dict[str, Fidelity] = {
                  "grid, 8 patch radii, first-order effects only"),
         Fidelity("reference", 16, "prewarped", True, True, 2000.0, 2.5e-6, 4, 16,
                  "70.4 kHz grid, prewarped, electrodes at 2 kHz, textures at 2.5 µm, friction oversampled ×4, "
-                 "16 patch radii, plus duct resonance and second-stage noise"),
+                 "16 patch radii, ridge-resolved fingerprints, plus duct resonance and second-stage noise",
+                 ridges="resolved"),
     )
 }
 

@@ -26,11 +26,21 @@ sticks ``p`` hardly moves, so neither does ``ε``.
 
 The tangential force on the skin is the friction force plus ``N·s`` (ridges climbing feature slopes while the
 skin slips over them).
+
+Ridge-resolved fingerprints (the reference profile, :class:`Ridges`): ``s`` then holds the patch part alone,
+``(1 − g)·s_patch``, and each ridge under the patch is a compliant element with its own force ``F_j``.  Its limit
+is the comb's own term, ``L_j = N·f·c·g·w_j·σ_j`` (load share ``w_j`` × crest slope ``σ_j`` under it, with the
+series factor ``f``, the catch factor ``c`` and the ridge gain ``g``); in the slip's direction a ridge over a
+positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per length × its chord
+across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes), releases to it
+within the step; over a negative limit (a feature's back) it follows it.  The tangential force gains ``Σ F_j``;
+rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -237,10 +247,148 @@ def _solve_bracketed(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1,
 MIN_FLUCTUATION_SCALE = 0.1
 
 
-@njit(cache=True)
+class Ridges(NamedTuple):
+    """The ridge-resolved fingerprint (one contact): ridge ``j`` sits at ``offsets_m[j]`` (m) from the patch centre
+    and reads the crest slope (1) at ``crest[(i + shifts[j]) mod len]`` for the texture position index ``i`` (see
+    :func:`emulator.sliding.crest_table`); ``weights`` (radius row × ridge) is its share of the load, the comb's
+    line-load weights; ``gain`` the skin's ridge gain (1); ``stiffness_per_length`` (N/m per m of ridge in contact,
+    ``inf``: rigid ridges, the comb) from :meth:`emulator.skin.Skin.ridge_stiffness_per_length`; ``state`` (2 × ridges,
+    carried): each ridge's force (N) and whether it was releasing at the last substep (1.0) or not."""
+
+    crest: np.ndarray
+    weights: np.ndarray
+    shifts: np.ndarray
+    offsets_m: np.ndarray
+    gain: float
+    stiffness_per_length: float
+    state: np.ndarray
+
+
+def new_ridge_state(n_ridges: int) -> np.ndarray:
+    """:attr:`Ridges.state` of ridges at rest: no force, none releasing."""
+    return np.zeros((2, n_ridges))
+
+
+# the effective comb passes these in the ridge arguments (the compiled step reads them only when resolved)
+_NO_RIDGES = Ridges(np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1), 0.0, 0.0,
+                    new_ridge_state(1))
+
+
 def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, state, touchdown_reference,
                 K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
-                out_normal, out_tangential, out_slip_velocity, out_position):
+                out_normal, out_tangential, out_slip_velocity, out_position, ridges: Ridges | None = None,
+                out_releases=None, out_released_N=None):
+    """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place (see
+    :func:`_slide_kernel`).  With ``ridges`` (:class:`Ridges`) the fingerprint is ridge-resolved: ``slopes`` then
+    holds the patch part alone, the ridges' forces are added to the tangential force, and ``out_releases`` /
+    ``out_released_N`` (arrays of the grid's length) receive each grid sample's release events (count) and the force
+    they released (N)."""
+    resolved = ridges is not None
+    if not resolved:
+        ridges = _NO_RIDGES
+        out_releases = out_released_N = _NO_RIDGES.offsets_m
+    elif out_releases is None or out_released_N is None:
+        raise ValueError("slide_block: ridge-resolved fingerprints need out_releases and out_released_N")
+    _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, state, touchdown_reference,
+                  K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
+                  out_normal, out_tangential, out_slip_velocity, out_position, resolved, ridges.crest,
+                  ridges.weights, ridges.shifts, ridges.offsets_m, float(ridges.gain),
+                  float(ridges.stiffness_per_length), ridges.state, out_releases, out_released_N)
+
+
+@njit(cache=True, inline="always")
+def _crest_at(crest, i, f):
+    """The crest slope table read at index ``i`` (any integer: the table repeats) and fraction ``f`` toward the
+    next (linear)."""
+    n = crest.size
+    if i < 0 or i >= n:
+        i = i % n
+    j = i + 1 if i + 1 < n else 0
+    return crest[i] * (1.0 - f) + crest[j] * f
+
+
+@njit(cache=True, inline="always")
+def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_scale, catching, slip):
+    """One substep of the ridge-resolved fingerprint.  Ridge ``j``'s base sits at texture position ``pos`` (m) plus
+    its offset; its crest lags the base by its deflection ``δ_j`` (m, ``ridge_state[0]``), and the surface holds the
+    crest with the limit ``L_j(x) = limit_scale · shares[j]`` × the crest slope at the crest's position ``x``.  The
+    texture slips by ``slip`` (m) under the base: a held crest moves with the texture, so ``δ_j`` grows by the slip
+    and the ridge loads elastically, ``F_j = stiffness[j]·δ_j``.  When ``F_j`` exceeds the limit where its crest is
+    (in the slip's direction: a feature's crest has passed under it, or the load fell) the crest is released: it
+    slides on with the slip to the first position where the spring force no longer exceeds the limit (the
+    piecewise-linear crossing), so the force drops to the limit within the step — a snap, where the limit falls
+    along the track faster than the ridge's stiffness.  Rigid ridges (``stiffness`` inf) keep ``δ = 0``: ``F_j =
+    L_j`` at the base, the comb.  A ridge with no limit (outside the patch, no load, a smooth skin) or no stiffness
+    carries nothing.  The
+    ridges' force on the skin is ``catching · Σ F_j`` (they catch only while the skin slips, as the comb's slope
+    force).  Returns that force (N), the release events begun (a ridge's crest released after a step in which it
+    was held, ``ridge_state[1]``) and the force released (N, as felt: × ``catching``)."""
+    u = pos / dx
+    i0 = int(math.floor(u))
+    f0 = u - i0
+    direction = 1.0 if slip >= 0.0 else -1.0
+    total, events, released = 0.0, 0, 0.0
+    for j in range(shares.size):
+        k = stiffness[j]
+        scale = limit_scale * shares[j]
+        if scale == 0.0 or k == 0.0:  # (no share, no load or gain, or no stiffness)
+            ridge_state[0, j] = 0.0
+            ridge_state[1, j] = 0.0
+            continue
+        if math.isinf(k):  # rigid: the crest at the base, its force the limit there
+            total += catching * scale * _crest_at(crest, i0 + shifts[j], f0)
+            continue
+        base = u + shifts[j]  # the base's position in table indices
+        held = ridge_state[0, j]
+        deflection = held + slip
+        x = base - deflection / dx  # the crest's position, held by the surface
+        xi = int(math.floor(x))
+        excess = direction * (k * deflection - scale * _crest_at(crest, xi, x - xi))
+        if excess > 0.0:  # released: the crest slides on to where the spring force meets the limit
+            grid = xi + 1 if direction > 0.0 else (xi if x > xi else xi - 1)
+            for _ in range(crest.size):  # (ends well within: the spring force falls by k·dx a position)
+                at_grid = direction * (k * (base - grid) * dx - scale * _crest_at(crest, grid, 0.0))
+                if at_grid <= 0.0:  # the crossing, on the straight piece between x and this position
+                    x = x + (grid - x) * excess / (excess - at_grid)
+                    break
+                x, excess = float(grid), at_grid
+                grid += 1 if direction > 0.0 else -1
+            deflection = (base - x) * dx
+        if direction * (held - deflection) > 0.0:  # the force fell: the crest outran the base (a release)
+            released += catching * k * direction * (held - deflection)
+            if ridge_state[1, j] == 0.0:
+                events += 1
+            ridge_state[1, j] = 1.0
+        else:
+            ridge_state[1, j] = 0.0
+        ridge_state[0, j] = deflection
+        total += catching * k * deflection
+    return total, events, released
+
+
+@njit(cache=True, inline="always")
+def _ridge_elements(weights, row, row_w, offsets_m, radius_m, stiffness_per_length, shares, stiffness):
+    """Each ridge's load share (1: ``weights`` between rows ``row`` and ``row + 1`` by ``row_w``, as the comb's
+    slopes are read) and tangential stiffness (N/m: ``stiffness_per_length`` × its chord across a patch of radius
+    ``radius_m``, m; inf for rigid ridges), written to ``shares`` and ``stiffness``."""
+    for j in range(offsets_m.size):
+        share = weights[row, j]
+        if row_w > 0.0:
+            share = share * (1 - row_w) + weights[row + 1, j] * row_w
+        shares[j] = share
+        if math.isinf(stiffness_per_length):
+            stiffness[j] = math.inf
+        else:
+            half_chord_sq = radius_m * radius_m - offsets_m[j] * offsets_m[j]
+            stiffness[j] = stiffness_per_length * 2.0 * math.sqrt(half_chord_sq) if half_chord_sq > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, state, touchdown_reference,
+                  K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
+                  out_normal, out_tangential, out_slip_velocity, out_position, resolved, crest, ridge_weights,
+                  ridge_shifts, ridge_offsets, ridge_gain, ridge_stiffness_per_length, ridge_state, out_releases,
+                  out_released):
     """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place.
 
     ``N0``, ``V``: nominal normal load (N) and stage velocity (m/s) per grid sample; ``heights``/``slopes``:
@@ -252,6 +400,11 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
     position-held finger (a rig) takes the touchdown spot as its reference, so its load changes with the height
     from there; a force-controlled finger (scripted slides) holds the commanded force on average, so heights are
     taken from the track's mean (zero).
+
+    ``resolved``: the fingerprint is ridge-resolved (:class:`Ridges`' fields, passed one by one: ``crest``,
+    ``ridge_weights``, ``ridge_shifts``, ``ridge_offsets`` m, ``ridge_gain``, ``ridge_stiffness_per_length`` N/m per
+    m, ``ridge_state`` updated in place), with each grid sample's release events (count) and released force (N)
+    written to ``out_releases`` and ``out_released``; otherwise those arguments are not read.
     """
     x, z, p, h_ref, s_ref = state[0], state[1], state[2], state[3], state[4]
     h = dt / substeps
@@ -259,6 +412,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
     u_prev = state[6]
     kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
     n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
+    ridge_shares, ridge_stiffness = np.zeros(ridge_offsets.size), np.zeros(ridge_offsets.size)
     for n in range(N0.size):
         n0 = N0[n]
         v_stage = V[n]
@@ -266,6 +420,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
         vr_sum = 0.0
         normal = 0.0
         slope = 0.0
+        ridge_force, releases, released = 0.0, 0, 0.0
         if n0 > 0.0 and n0 != n0_last:  # what depends on the load alone (kept while the load holds still)
             cbrt_n = n0 ** (1.0 / 3.0)
             r = radius_1N * cbrt_n  # the patch radius
@@ -276,6 +431,9 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
             k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
             series = k_tex / (kn + k_tex)
             row, row_w = _radius_weight(radii, r)
+            if resolved:  # each ridge's load share (the comb's weights, between the same rows) and stiffness
+                _ridge_elements(ridge_weights, row, row_w, ridge_offsets, r, ridge_stiffness_per_length,
+                                ridge_shares, ridge_stiffness)
             n0_last = n0
         for _ in range(substeps):
             ms, mk = mu_s, mu_k  # (no load: the fluctuation is not read, friction is nil anyway)
@@ -297,6 +455,9 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
                 normal = 0.0
                 slope = 0.0
             if normal == 0.0:  # no load, no friction: the skin relaxes on its own, G(u) is linear
+                if resolved:  # the ridges leave the surface: unloaded, no release events
+                    ridge_state[:, :] = 0.0
+                    ridge_force = 0.0
                 u = -k_t * x / (k_t * h + c_t)
                 u_prev = u
                 z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)[0]
@@ -309,6 +470,12 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
                 # held before the slide): G is odd about u = 0, so the step below would return u = 0 exactly,
                 # after three evaluations; the same outcome, written out (x and p take the + 0.0 it would add)
                 u_prev = 0.0
+                if resolved:  # (no slip, no catching: the same ridge step as below with v_r = 0)
+                    ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
+                                                             ridge_stiffness, p, dx, normal * series * ridge_gain,
+                                                             0.0, 0.0)
+                    releases += events
+                    released += drop
                 x += 0.0
                 p += 0.0
                 f_sum += 0.0
@@ -319,6 +486,12 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
                                             mu_v)
             u_prev = u
             vr = v_stage - u
+            if resolved:  # the ridges under the patch catch and release, read where the tables were
+                ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
+                                                         ridge_stiffness, p, dx, normal * series * ridge_gain,
+                                                         catching, vr * h)
+                releases += events
+                released += drop
             x += u * h
             z = znew
             p += vr * h
@@ -326,6 +499,10 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
             vr_sum += vr
         out_normal[n] = normal
         out_tangential[n] = f_sum / substeps + normal * slope
+        if resolved:
+            out_tangential[n] += ridge_force
+            out_releases[n] = releases
+            out_released[n] = released
         out_slip_velocity[n] = vr_sum / substeps
         out_position[n] = p
     state[0], state[1], state[2], state[3], state[4], state[5], state[6] = x, z, p, h_ref, s_ref, float(touching), u_prev

@@ -24,7 +24,11 @@ averaged with the Hertz line load ``∝ 1 − x²/a²`` (a spatial low-pass: coa
 as force grows); fingerprint ridges sample the surface slope at the ridge pitch under the same load, each ridge
 crest seeing the surface through its contact width — a comb that folds fine texture into vibrations at
 ``v/pitch`` and its harmonics.  A smooth skin sees only the patch-averaged slope.  Worn ridges interpolate
-between the two by the skin's ridge gain (:mod:`emulator.skin`).
+between the two by the skin's ridge gain (:mod:`emulator.skin`).  That comb is the *effective* ridge model (rigid
+ridges, a slope table).  The *resolved* one (``ridges="resolved"``, the reference profile) keeps only the patch part
+in the table and makes each ridge under the patch a compliant element that catches and releases (its crest slope
+read from :func:`crest_table`, its stiffness :meth:`emulator.skin.Skin.ridge_stiffness_per_length` × its chord;
+:class:`emulator.friction.Ridges`); :meth:`SlidingContact.ridge_releases` logs its release events.
 
 Two kinds of motion: :class:`Slide` (scripted: force ramp, hold, slide at a velocity over a distance, lift;
 force-controlled) and :class:`CommandedMotion` (a rig's stepper and stage commands added while the run goes,
@@ -44,6 +48,7 @@ from scipy import fft as scipy_fft
 
 from emulator import filters, friction
 from emulator.effects import Block, Effect, effect_rng
+from emulator.fidelity import RIDGE_MODELS
 from emulator.params import SensorParams
 from emulator.skin import Skin
 from emulator.texture import Texture, friction_fluctuation, periodic_on_grid, random_profile
@@ -331,33 +336,46 @@ def fluctuation_stretch(texture: Texture, start_m: float, first: int, n: int, dx
 
 
 def spatial_tables(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, length_m: float, dx_m: float,
-                   radii_m: np.ndarray):
+                   radii_m: np.ndarray, ridge_comb: bool = True):
     """Tables (radius × position) of the patch-averaged height (m) and the slope the skin feels (1) along the
-    track ``[start_m, start_m + length_m)``, positions relative to ``start_m``."""
-    return table_stretch(texture, skin, ridge_gain, start_m, 0, table_positions(length_m, dx_m), dx_m, radii_m)
+    track ``[start_m, start_m + length_m)``, positions relative to ``start_m``.  ``ridge_comb`` False: the slope
+    leaves the ridges out, ``(1 − gain)·s_patch`` (ridge-resolved fingerprints add theirs in the step)."""
+    return table_stretch(texture, skin, ridge_gain, start_m, 0, table_positions(length_m, dx_m), dx_m, radii_m,
+                         ridge_comb)
 
 
-def table_stretch(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, first: int, n: int, dx_m: float,
-                  radii_m: np.ndarray):
-    """:func:`spatial_tables` at positions ``first`` … ``first + n − 1`` (position i at ``start_m + i·dx_m``), computed
-    from the surface around them alone (the patch average by one FFT over the stretch and its margins): a whole
-    track's tables are the stretch from 0, and a long track is computed stretch by stretch (:data:`TABLE_TILE`)."""
+def _surface_around(texture: Texture, start_m: float, first: int, n: int, pad: int, dx_m: float) -> np.ndarray:
+    """The surface's heights (m) at positions ``first − pad`` … ``first + n + pad − 1`` (position i at ``start_m +
+    i·dx_m``): the texture's random track (wrapping past its stored 1 m) plus its periodic components."""
     rough = _random_track(texture, dx_m)
     n_surface = rough.size
-    pad = int(np.ceil((radii_m.max() + skin.ridge_pitch_m) / dx_m)) + 2
     i0 = (int(round(start_m / dx_m)) + first - pad) % n_surface
     if i0 + n + 2 * pad <= n_surface:  # the stretch does not wrap: a slice (the same samples)
         h = rough[i0:i0 + n + 2 * pad]
     else:
         h = rough[(i0 + np.arange(n + 2 * pad)) % n_surface]
     if texture.periodic:  # (positions start_m + i·dx, i from first - pad)
-        h = h + periodic_on_grid(texture, start_m + (first - pad) * dx_m, dx_m, n + 2 * pad)
-    else:  # (a fresh array, as the sum with the zero profile made it: -0.0 becomes 0.0 as before)
-        h = h + 0.0
-    # the crest of a ridge sees the surface through its contact width
+        return h + periodic_on_grid(texture, start_m + (first - pad) * dx_m, dx_m, n + 2 * pad)
+    return h + 0.0  # (a fresh array, as the sum with the zero profile made it: -0.0 becomes 0.0 as before)
+
+
+def _crest_slope(h: np.ndarray, skin: Skin, dx_m: float) -> np.ndarray:
+    """The slope (1) a ridge crest feels over heights ``h`` (m, spacing ``dx_m``): the surface seen through the
+    crest's contact width (a box average), differentiated (np.gradient)."""
     w_crest = max(1, int(round(skin.ridge_contact_width_m / dx_m)))
     crest = np.convolve(h, np.ones(w_crest) / w_crest, mode="same")
-    crest_slope = np.gradient(crest, dx_m)
+    return np.gradient(crest, dx_m)
+
+
+def table_stretch(texture: Texture, skin: Skin, ridge_gain: float, start_m: float, first: int, n: int, dx_m: float,
+                  radii_m: np.ndarray, ridge_comb: bool = True):
+    """:func:`spatial_tables` at positions ``first`` … ``first + n − 1`` (position i at ``start_m + i·dx_m``), computed
+    from the surface around them alone (the patch average by one FFT over the stretch and its margins): a whole
+    track's tables are the stretch from 0, and a long track is computed stretch by stretch (:data:`TABLE_TILE`)."""
+    pad = int(np.ceil((radii_m.max() + skin.ridge_pitch_m) / dx_m)) + 2
+    h = _surface_around(texture, start_m, first, n, pad, dx_m)
+    # the crest of a ridge sees the surface through its contact width
+    crest_slope = _crest_slope(h, skin, dx_m)
     # the patch average at every radius: h convolved with each radius's Hertz line load, at positions
     # pad - 1 .. pad + n (one beyond each end for the slope)
     patch = np.empty((radii_m.size, n + 2))
@@ -368,6 +386,8 @@ def table_stretch(texture: Texture, skin: Skin, ridge_gain: float, start_m: floa
     heights = np.ascontiguousarray(patch[:, 1:-1])
     # fingerprint ridges: each radius's ridges under the patch sample the crest slope, weighted by the line load
     weights, shifts = _ridge_weights(tuple(float(a) for a in radii_m), skin.ridge_pitch_m, dx_m)
+    if not ridge_comb:  # no ridge enters the sum
+        weights = np.zeros_like(weights)
     slopes = np.empty((radii_m.size, n))
     _ridge_slopes(patch, crest_slope, pad, weights, shifts, float(ridge_gain), 2.0 * dx_m, slopes)
     return heights, slopes
@@ -406,6 +426,42 @@ def _ridge_weights(radii_m: tuple, pitch_m: float, dx_m: float):
     for k, (w, sh) in enumerate(rows):
         weights[k, :len(w)], shifts[k, :len(sh)] = w, sh
     return weights, shifts
+
+
+def ridge_reach(radii_m: np.ndarray, dx_m: float) -> int:
+    """How far (positions of ``dx_m``) a ridge under the largest patch (radius, m) lies from its centre, at most."""
+    return int(np.ceil(float(np.max(radii_m)) / dx_m)) + 1
+
+
+def ridge_elements(radii_m: tuple, pitch_m: float, dx_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ridges of the ridge-resolved fingerprint, one column per ridge at ``j·pitch_m`` (j = −J … J, J the most
+    the largest patch holds): each patch radius's load shares (radius × ridge, the comb's :func:`_ridge_weights`,
+    0 for ridges outside that patch), each ridge's offset in positions of ``dx_m`` and in m."""
+    weights, _ = _ridge_weights(radii_m, pitch_m, dx_m)
+    most = max(int(a // pitch_m) for a in radii_m)
+    aligned = np.zeros((len(radii_m), 2 * most + 1))
+    for k, a in enumerate(radii_m):
+        held = int(a // pitch_m)  # the row's ridges j = −held … held sit in its first 2·held + 1 columns
+        aligned[k, most - held:most + held + 1] = weights[k, :2 * held + 1]
+    offsets_m = np.arange(-most, most + 1) * pitch_m
+    shifts = np.array([int(round(o / dx_m)) for o in offsets_m], dtype=np.int64)
+    return aligned, shifts, offsets_m
+
+
+def crest_table(texture: Texture, skin: Skin, start_m: float, first: int, n: int, n_track: int, reach: int,
+                dx_m: float) -> np.ndarray:
+    """The ridge crests' slope (1) for the ridge-resolved step at table indices ``first`` … ``first + n − 1`` of a track
+    of ``n_track`` positions (spacing ``dx_m`` from ``start_m``): index q holds position q, except the last
+    ``reach`` (:func:`ridge_reach`) indices, which hold the positions just before the track's start (q − n_track),
+    where the ridges behind the patch's centre read at first (the step reads the table modulo its length)."""
+    out = np.empty(n)
+    margin = max(1, int(round(skin.ridge_contact_width_m / dx_m))) + 2  # the box average's and gradient's reach
+    ahead = int(np.clip(n_track - reach - first, 0, n))  # indices holding their own position
+    for at, position, count in ((0, first, ahead), (ahead, first + ahead - n_track, n - ahead)):
+        if count:
+            h = _surface_around(texture, start_m, position, count, margin, dx_m)
+            out[at:at + count] = _crest_slope(h, skin, dx_m)[margin:margin + count]
+    return out
 
 
 @njit(cache=True)
@@ -545,8 +601,11 @@ class SlidingContact(Effect):
     LOG_RATE_HZ = 100.0
 
     def __init__(self, motions: list, params: SensorParams, fs: float, dx_m: float, substeps: int, n_radii: int,
-                 seed: int):
+                 seed: int, ridges: str = "effective"):
+        if ridges not in RIDGE_MODELS:
+            raise ValueError(f"sliding contact: ridges = {ridges!r}; choose one of: {', '.join(RIDGE_MODELS)}")
         self.params, self.fs, self.dx_m, self.substeps = params, fs, dx_m, int(substeps)
+        self.ridges = ridges
         self.log_every = max(1, int(round(fs / self.LOG_RATE_HZ)))
         a = np.exp(-2 * np.pi * self.STAGE_CORNER_HZ / fs)  # first-order low-pass, exact pole
         # (b padded to a's length: lfilter pads it so anyway, and 2 taps run in filters' compiled loop)
@@ -562,11 +621,21 @@ class SlidingContact(Effect):
             length = m.max_travel_m + 4 * radii.max() + 0.01
             c = {"motion": m, "gain": gain, "radii": radii, "skin": skin, "table_n": table_positions(length, dx_m),
                  "ring_first": None, "state": friction.new_state(0.0), "skin_state": skin.state(), "log": [],
-                 "stage_zi": np.zeros(1), "feeds": []}
+                 "stage_zi": np.zeros(1), "feeds": [], "releases": []}
+            if ridges == "resolved":  # each ridge under the patch a compliant element (friction.Ridges)
+                weights, shifts, offsets = ridge_elements(tuple(float(a) for a in radii), skin.ridge_pitch_m, dx_m)
+                c["ridge_parts"] = (weights, shifts, offsets, gain,
+                                    skin.ridge_stiffness_per_length(params.skin_youngs_modulus_Pa,
+                                                                    params.skin_poisson_ratio),
+                                    friction.new_ridge_state(offsets.size))
+                c["reach"] = ridge_reach(radii, dx_m)
             if c["table_n"] <= TABLE_WHOLE_MAX:  # the whole track's tables, once
                 c["heights"], c["slopes"] = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m,
-                                                           radii)
+                                                           radii, ridge_comb=ridges == "effective")
                 c["fluctuation"] = fluctuation_table(m.texture, m.start_position_m, length, dx_m)
+                if ridges == "resolved":
+                    c["crest"] = crest_table(m.texture, skin, m.start_position_m, 0, c["table_n"], c["table_n"],
+                                             c["reach"], dx_m)
             else:  # a ring around the finger, which starts at position 0
                 self._centre_ring(c, 0)
             self._contacts.append(c)
@@ -584,11 +653,14 @@ class SlidingContact(Effect):
         first = tile - RING_TILES // 2
         old = c["ring_first"]
         width = RING_TILES * T
+        resolved = self.ridges == "resolved"
         if old is None:
             heights, slopes = np.empty((c["radii"].size, width)), np.empty((c["radii"].size, width))
             fluct = np.empty(width)
+            crest = np.empty(width) if resolved else None
         else:
             heights, slopes, fluct = c["heights"].copy(), c["slopes"].copy(), c["fluctuation"].copy()
+            crest = c["crest"].copy() if resolved else None
         computed = {}  # track tile -> its tables (a ring tile beyond the track's end may need two)
         for b in range(first, first + RING_TILES):
             if old is not None and old <= b < old + RING_TILES:
@@ -601,22 +673,33 @@ class SlidingContact(Effect):
                 if k not in computed:
                     start, n = k * T, min(T, n_total - k * T)
                     computed[k] = (start, *table_stretch(m.texture, c["skin"], c["gain"], m.start_position_m, start,
-                                                         n, self.dx_m, c["radii"]),
-                                   fluctuation_stretch(m.texture, m.start_position_m, start, n, self.dx_m))
-                start, h, s, e = computed[k]
+                                                         n, self.dx_m, c["radii"], not resolved),
+                                   fluctuation_stretch(m.texture, m.start_position_m, start, n, self.dx_m),
+                                   crest_table(m.texture, c["skin"], m.start_position_m, start, n, n_total,
+                                               c["reach"], self.dx_m) if resolved else None)
+                start, h, s, e, r = computed[k]
                 run = min((b + 1) * T - v, start + h.shape[1] - w)
                 at = column + v - b * T
                 heights[:, at:at + run], slopes[:, at:at + run] = h[:, w - start:w - start + run], \
                     s[:, w - start:w - start + run]
                 fluct[at:at + run] = e[w - start:w - start + run]
+                if resolved:
+                    crest[at:at + run] = r[w - start:w - start + run]
                 v += run
         c["heights"], c["slopes"], c["fluctuation"], c["ring_first"] = heights, slopes, fluct, first
+        if resolved:
+            c["crest"] = crest
 
     def _friction(self, c: dict, n0: np.ndarray, v: np.ndarray, dt: float, out: tuple, i: int, j: int) -> None:
         """:func:`friction.slide_block` over samples ``i`` … ``j − 1`` of a block (nominal load ``n0``, N, and stage
         velocity ``v``, m/s, per grid sample of ``dt`` s) into the outputs ``out`` (normal N, tangential N, slip m/s,
-        texture position m); the state is carried, so a block cut into pieces gives the same samples."""
+        texture position m, and with ridge-resolved fingerprints release events and released force N); the state is
+        carried, so a block cut into pieces gives the same samples."""
         m, p, tex = c["motion"], self.params, c["motion"].texture
+        ridges, releases = None, {}
+        if self.ridges == "resolved":
+            ridges = friction.Ridges(c["crest"], *c["ridge_parts"])
+            releases = {"out_releases": out[4][i:j], "out_released_N": out[5][i:j]}
         friction.slide_block(n0[i:j], v[i:j], dt, self.substeps,
                              c["heights"], c["slopes"], c["radii"], c["fluctuation"], self.dx_m, c["state"],
                              not isinstance(m, Slide),
@@ -625,7 +708,7 @@ class SlidingContact(Effect):
                              p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
                              p.bristle_stiffness_per_N, p.bristle_damping_per_N,
                              tex.mu_static, tex.mu_kinetic, tex.stribeck_velocity_m_per_s,
-                             tex.mu_per_velocity_s_per_m, *(x[i:j] for x in out))
+                             tex.mu_per_velocity_s_per_m, *(x[i:j] for x in out[:4]), ridges=ridges, **releases)
 
     def _friction_in_ring(self, c: dict, n0: np.ndarray, v: np.ndarray, dt: float, out: tuple) -> None:
         """:meth:`_friction` over a whole block in pieces over which the stage moves at most half a tile, each with
@@ -669,6 +752,15 @@ class SlidingContact(Effect):
     def ridge_gains(self) -> list[float]:
         return [c["gain"] for c in self._contacts]
 
+    def ridge_releases(self, k: int) -> dict[str, np.ndarray]:
+        """Contact ``k``'s ridge releases so far (ridge-resolved fingerprints; none with effective ridges), at the grid
+        instants (s) where a ridge's force fell: how many release events began there and the force released (N) in
+        that grid step (a release lasting several steps counts once, where it began, and adds its force step by
+        step)."""
+        log = self._contacts[k]["releases"]
+        a = np.concatenate(log, axis=1) if log else np.zeros((3, 0))
+        return {"t": a[0], "count": a[1], "released_N": a[2]}
+
     def force_feed(self, motion, rate_Hz: float) -> ForceFeed:
         """A :class:`ForceFeed` of ``motion``'s (one of :attr:`motions`, by identity) normal and tangential force at
         ``rate_Hz``, filled from now on as the grid runs (the electrode model reads its contact's forces from it)."""
@@ -707,7 +799,9 @@ class SlidingContact(Effect):
             else:
                 n0 = commanded_load_N(m, p, tt)
             n0, v = np.ascontiguousarray(n0), np.ascontiguousarray(m.stage_velocity_m_per_s(tt))
-            normal, tang, slip, pos = out = tuple(np.empty(tt.size) for _ in range(4))
+            resolved = self.ridges == "resolved"
+            out = tuple(np.empty(tt.size) for _ in range(6 if resolved else 4))  # (+ releases, released force)
+            normal, tang, slip, pos = out[:4]
             if c["ring_first"] is None:
                 self._friction(c, n0, v, dt, out, 0, tt.size)
             else:
@@ -726,6 +820,10 @@ class SlidingContact(Effect):
             load_out[a:b] += normal
             stage, c["stage_zi"] = filters.lfilter(*self._stage_ba, tang, c["stage_zi"])
             stage_out[a:b] += stage
+            if resolved:  # the ridges' release events and released force, where there were any
+                at = np.flatnonzero(out[5])
+                if at.size:
+                    c["releases"].append(np.stack([tt[at], out[4][at], out[5][at]]))
             # the force log: grid samples whose index is a multiple of log_every (independent of block size)
             keep = slice(-(block.n0 + a) % self.log_every, None, self.log_every)
             if tt[keep].size:

@@ -1,0 +1,227 @@
+"""Ridge-resolved fingerprints (issue 8, items 2 and 8: "ridge release events", "ridge-resolved vs effective
+ridges").  With ``ridges="resolved"`` (the reference profile) each ridge under the contact patch is a compliant
+element whose crest the surface holds with the comb's own limit; it loads with the slip and releases — often as a
+snap — when a feature's crest passes.  Rigid ridges give the effective comb's tangential force; a smooth skin, ridges
+worn flat and a sticking skin release nothing; the samples do not depend on the block size or on the ring of table
+tiles; no hard case makes a NaN; the fast and default profiles keep the effective comb."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import emulator.sliding as sliding
+from emulator.effects import Block
+from emulator.fidelity import Fidelity, profile
+from emulator.params import SensorParams
+from emulator.sensor import Sensor
+from emulator.skin import Skin
+from emulator.sliding import CommandedMotion, Slide, SlidingContact
+from emulator.texture import PeriodicComponent, Texture
+
+SAND = Texture(901, "sand", "test", rms_height_m=53e-6, correlation_length_m=265e-6, hurst=0.8, mu_static=0.7,
+               mu_kinetic=0.56, modulus_Pa=4e9, seed=901)
+GRATING = Texture(902, "grating", "test", rms_height_m=0.5e-6, correlation_length_m=100e-6, hurst=0.8,
+                  mu_static=0.6, mu_kinetic=0.45, seed=8, periodic=(PeriodicComponent(3e-3, 250e-6, (0.0, 0.33)),))
+GRID = profile("default")
+
+
+def _slide(texture=SAND, skin=None, velocity=0.01, force=0.5, distance=0.004) -> Slide:
+    """A short slide: 20 ms to the force, 20 ms held, ``distance`` m at ``velocity`` m/s."""
+    return Slide(0.0, texture, force, velocity, distance, approach_s=0.02, hold_s=0.02, accel_s=0.01,
+                 lift_s=0.02, skin=skin)
+
+
+def _run(motion, ridges="resolved", params=SensorParams(), grid: Fidelity = GRID, block_n: int | None = None,
+         end_s: float | None = None):
+    """The sliding contact's outputs at every grid sample (blocks of ``block_n``) and the contact itself."""
+    contact = SlidingContact([motion], params, grid.grid_Hz, grid.sliding_dx_m, grid.friction_substeps,
+                             grid.patch_radii, 3, ridges=ridges)
+    n = int(round((motion.end_s if end_s is None else end_s) * grid.grid_Hz)) + 5
+    block_n = block_n or n
+    outs = [contact.process(Block(n0, min(block_n, n - n0), grid.grid_Hz), {}) for n0 in range(0, n, block_n)]
+    return contact, {k: np.concatenate([o[k] for o in outs]) for k in outs[0]}
+
+
+RIGID = dataclasses.replace(SensorParams(), skin_youngs_modulus_Pa=math.inf)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("texture", [SAND, GRATING], ids=["sand", "grating"])
+def test_rigid_ridges_give_the_effective_combs_tangential_force(texture):
+    """Consistency: ridges of infinite stiffness sit at their bases and carry the comb's force there, so the
+    resolved tangential force equals the effective one within 1e-12 of its range (float rounding: the patch part
+    and the ridge sum are added in another order); a finite stiffness does differ (the test is not vacuous)."""
+    slide = _slide(texture)
+    _, comb = _run(slide, "effective")
+    rigid_contact, rigid = _run(slide, "resolved", RIGID)
+    _, compliant = _run(slide, "resolved")
+    scale = np.max(np.abs(comb["tangential_force_N"]))
+    assert np.max(np.abs(rigid["tangential_force_N"] - comb["tangential_force_N"])) <= 1e-12 * scale
+    assert np.array_equal(rigid["normal_force_N"], comb["normal_force_N"])
+    assert rigid_contact.ridge_releases(0)["count"].sum() == 0  # rigid ridges follow the limit: no state
+    assert np.max(np.abs(compliant["tangential_force_N"] - comb["tangential_force_N"])) > 1e-3 * scale
+
+
+def _releases_while(contact, t0: float, t1: float) -> tuple[float, float]:
+    log = contact.ridge_releases(0)
+    sel = (log["t"] >= t0) & (log["t"] < t1)
+    return float(log["count"][sel].sum()), float(log["released_N"][sel].sum())
+
+
+@pytest.mark.unit
+def test_release_events_appear_on_sandpaper_and_not_on_a_smooth_skin_or_worn_flat_ridges():
+    """Prediction: over 60-grit at 0.5 N, 1 cm/s a fresh skin's ridges release hundreds of times a second (each
+    ridge at most once per feature, ~10 ridges under the patch), many as snaps (a force drop ≥ 10 mN within one grid
+    step); a smooth skin (gain 0) and ridges worn flat (height 0: rigid, and gain 0) release nothing and add no
+    force."""
+    slide = _slide()
+    contact, out = _run(slide)
+    t0, t1 = slide.slide_start_s + 0.05, slide.slide_end_s
+    events, released = _releases_while(contact, t0, t1)
+    assert 100 <= events / (t1 - t0) <= 20000
+    log = contact.ridge_releases(0)
+    assert np.any(log["released_N"] >= 0.01)  # snaps
+    assert released > 0
+    for skin in (Skin(fingerprints=False), Skin(ridge_height_m=0.0)):
+        quiet_contact, quiet = _run(_slide(skin=skin))
+        _, comb = _run(_slide(skin=skin), "effective")
+        assert quiet_contact.ridge_releases(0)["count"].size == 0
+        assert np.max(np.abs(quiet["tangential_force_N"] - comb["tangential_force_N"])) <= 1e-12 * np.max(
+            np.abs(comb["tangential_force_N"]))
+
+
+@pytest.mark.unit
+def test_ridges_release_nothing_while_the_skin_sticks():
+    """Prediction: while the stage holds still nothing releases, and while the skin sticks after the stage starts
+    (its slip below half the stage's speed) the ridges release less than 1 % of the force they release per second
+    of slipping."""
+    slide = _slide(force=1.0, distance=0.003)  # sticks for ~50 ms (µs·N over the skin's 1500 N/m at 1 cm/s)
+    contact, out = _run(slide)
+    log = contact.force_log(0)
+    moving = slide.stage_velocity_m_per_s(log["t"]) > 0
+    slipping = log["slip_m_per_s"] > 0.5 * slide.velocity_m_per_s
+    stick_end = log["t"][np.argmax(moving & slipping)] - 1.0 / contact.LOG_RATE_HZ  # (the log's resolution)
+    assert stick_end - slide.slide_start_s >= 0.02  # a stick phase
+    held_events, held_released = _releases_while(contact, 0.0, slide.slide_start_s)
+    assert held_events == 0 and held_released == 0
+    _, stick_released = _releases_while(contact, slide.slide_start_s, stick_end)
+    _, slip_released = _releases_while(contact, stick_end + 0.02, slide.slide_end_s)
+    stick_rate = stick_released / (stick_end - slide.slide_start_s)
+    slip_rate = slip_released / (slide.slide_end_s - stick_end - 0.02)
+    assert stick_rate < 0.01 * slip_rate
+
+
+@pytest.mark.unit
+def test_the_samples_do_not_depend_on_the_block_size():
+    """Consistency: blocks of 1, 7, 441 and 8800 grid samples give the same forces and release log, to the bit
+    (the ridges' deflections are carried state)."""
+    slide = _slide(distance=0.002, velocity=0.02)
+    results = [_run(slide, block_n=n) for n in (8800, 441, 7, 1)]
+    first_contact, first = results[0]
+    for contact, out in results[1:]:
+        for name in first:
+            assert np.array_equal(out[name], first[name]), name
+        for name, values in first_contact.ridge_releases(0).items():
+            assert np.array_equal(contact.ridge_releases(0)[name], values), name
+
+
+@pytest.mark.unit
+def test_the_ring_of_tiles_gives_the_whole_tables_samples(monkeypatch):
+    """Consistency: a slide whose tables are held as a ring of small tiles (refilled as the stage moves on, the crest
+    slopes with them) gives the whole tables' forces within float rounding (1e-9 of their range) and the same release
+    events."""
+    slide = _slide(distance=0.03, velocity=0.1)
+    whole_contact, whole = _run(slide)
+    monkeypatch.setattr(sliding, "TABLE_TILE", 1024)
+    monkeypatch.setattr(sliding, "TABLE_WHOLE_MAX", 2048)
+    ring_contact, ring = _run(slide)
+    assert ring_contact._contacts[0]["ring_first"] is not None
+    scale = np.max(np.abs(whole["tangential_force_N"]))
+    assert np.max(np.abs(ring["tangential_force_N"] - whole["tangential_force_N"])) <= 1e-9 * scale
+    assert abs(ring_contact.ridge_releases(0)["count"].sum() - whole_contact.ridge_releases(0)["count"].sum()) <= 2
+
+
+ROUGH = Texture(990, "boulders", "test", rms_height_m=1e-3, correlation_length_m=300e-6, hurst=0.5, mu_static=1.2,
+                mu_kinetic=0.9, seed=5)
+SMOOTH = Texture(991, "mirror", "test", rms_height_m=0.0, correlation_length_m=100e-6, hurst=0.8, mu_static=0.3,
+                 mu_kinetic=0.2, seed=6)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("texture, velocity", [(SMOOTH, 0.01), (ROUGH, 0.01), (SAND, 1e-4), (SAND, 0.2)],
+                         ids=["perfectly-smooth", "extremely-rough", "creep-0.1-mm-per-s", "20-cm-per-s"])
+def test_hard_cases_stay_finite(texture, velocity):
+    """Hard cases (issue 8): no NaN or Inf in any force or release, the released force finite and ≥ 0."""
+    slide = _slide(texture, velocity=velocity, distance=max(velocity * 0.05, 0.0005))
+    contact, out = _run(slide)
+    for name, values in out.items():
+        assert np.all(np.isfinite(values)), name
+    log = contact.ridge_releases(0)
+    assert np.all(np.isfinite(log["released_N"])) and np.all(log["released_N"] >= 0)
+
+
+@pytest.mark.unit
+def test_lift_off_mid_slide_unloads_the_ridges_and_stays_finite():
+    """Hard case: a commanded finger pressed in, slid, lifted off the surface mid-slide and pressed again: every
+    force stays finite, and off the surface the ridges carry no force (the tangential force is the relaxing skin's
+    friction, zero without load)."""
+    motion = CommandedMotion(SAND, max_travel_m=0.02, latency_s=0.0)
+    motion.move_finger(0.0, 0.02)  # 20 mm/s down from 1 mm above
+    motion.move_finger(0.1, 0.0)  # 1 mm deep
+    motion.move_stage(0.12, 0.02, 1.0)
+    motion.move_finger(0.3, -0.05)  # lifted: off the surface from ~0.32 s
+    motion.move_finger(0.36, 0.0)
+    motion.move_finger(0.4, 0.05)
+    motion.move_finger(0.46, 0.0)  # 1 mm deep again from ~0.44 s
+    contact, out = _run(motion, end_s=0.6)
+    for name, values in out.items():
+        assert np.all(np.isfinite(values)), name
+    t = np.arange(out["normal_force_N"].size) / GRID.grid_Hz
+    off = (t > 0.33) & (t < 0.39)
+    assert np.all(out["normal_force_N"][off] == 0)
+    assert np.all(np.abs(out["tangential_force_N"][off]) < 1e-3)  # the skin's friction only, relaxing
+    assert out["normal_force_N"][-1] > 0.3 and contact.ridge_releases(0)["count"].sum() > 0
+
+
+@pytest.mark.unit
+def test_the_profiles_ridge_models_and_the_effective_path_is_the_comb_alone():
+    """The fast and default profiles keep the effective comb (their sliding samples are those from before the
+    resolved model: the step reads no ridge state), reference resolves the ridges; a sliding contact built as the
+    sensor builds it is effective, and a default sensor's sliding codes are those of an explicitly effective
+    contact's forces."""
+    assert profile("fast").ridges == profile("default").ridges == "effective"
+    assert profile("reference").ridges == "resolved"
+    with pytest.raises(ValueError, match="ridges"):
+        dataclasses.replace(profile("default"), ridges="rigid")
+    with pytest.raises(ValueError, match="ridges"):
+        SlidingContact([], SensorParams(), 8800.0, 10e-6, 1, 8, 0, ridges="rigid")
+    slide = Slide(0.05, SAND, 0.5, 0.01, 0.004, approach_s=0.05, hold_s=0.05, accel_s=0.01, lift_s=0.02)
+    sensor = Sensor(stimuli=[slide], channels_read=["PAC"], fidelity="default", seed=3,
+                    record_signals=("tangential_force_N",))
+    assert sensor.sliding.ridges == "effective"
+    n = int(slide.end_s * GRID.grid_Hz)
+    sensor.signal("tangential_force_N", np.arange(n) / GRID.grid_Hz)
+    contact = SlidingContact([slide], SensorParams(), GRID.grid_Hz, GRID.sliding_dx_m, GRID.friction_substeps,
+                             GRID.patch_radii, 3, ridges="effective")
+    contact.process(Block(0, n, GRID.grid_Hz), {})
+    logged, explicit = sensor.sliding.force_log(0), contact.force_log(0)  # (grid samples, not interpolated)
+    m = explicit["t"].size  # (the sensor's grid ran on to the end of its block)
+    assert m > 10 and np.array_equal(logged["t"][:m], explicit["t"])
+    for name in ("normal_N", "tangential_N", "slip_m_per_s"):
+        assert np.array_equal(logged[name][:m], explicit[name]), name
+
+
+@pytest.mark.unit
+def test_the_ridge_stiffness_is_derived_from_the_ridge_geometry_and_stiffens_as_ridges_wear():
+    """Derived: a ridge 0.4 mm wide and 0.2 mm high in E = 0.97 MPa, ν = 0.5, bending (E·w³/4h³ = 1.94 MPa) in
+    series with shear (κ·G·w/h = 0.54 MPa) is 0.42 MPa (N/m per m of ridge); half worn it is 2.4× stiffer, worn flat
+    rigid."""
+    p = SensorParams()
+    new = Skin().ridge_stiffness_per_length(p.skin_youngs_modulus_Pa, p.skin_poisson_ratio)
+    assert new == pytest.approx(1.0 / (1.0 / 1.94e6 + 1.0 / (5.0 / 6.0 * 0.97e6 / 3.0 * 2.0)), rel=1e-12)
+    assert new == pytest.approx(0.4216e6, rel=1e-3)
+    half = Skin(ridge_height_m=0.1e-3).ridge_stiffness_per_length(p.skin_youngs_modulus_Pa, p.skin_poisson_ratio)
+    assert half / new == pytest.approx(2.39, rel=0.01)
+    assert Skin(ridge_height_m=0.0).ridge_stiffness_per_length(p.skin_youngs_modulus_Pa, 0.5) == math.inf
