@@ -164,7 +164,8 @@ class Sensor:
         motions = [s for s in stimuli if isinstance(s, (Slide, CommandedMotion))]
         f = self.fidelity
         self.sliding = (SlidingContact(motions, self.params, self.fs, f.sliding_dx_m, f.friction_substeps,
-                                       f.patch_radii, self.seed) if motions else None)  # built only for scenes that slide
+                                       f.patch_radii, self.seed, ridges=f.ridges)
+                        if motions else None)  # built only for scenes that slide
         self.electrodes = self._electrode_model(stimuli)
         # a sliding motion's electrode contact reads the sliding contact's forces: it runs when electrodes are read
         fed = self.electrodes is not None and self.sliding is not None
