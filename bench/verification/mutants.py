@@ -900,6 +900,15 @@ CATALOGUE += [
            "seed=1, noise=noise, variant=variant)", "seed=1, noise=noise)",
            ("bench/tests/test_benchmark_effects.py::test_every_row_runs_its_effect_with_and_not_without",),
            "the per-effect table's BioTac SP row streams the 19-electrode sensor"),
+    Mutant("ridge-crest-held-at-its-base", "sliding", "emulator/friction.py",
+           "x = base - deflection / dx  # the crest's position", "x = base  # the crest's position",
+           ("emulator/tests/test_ridge_release.py::test_caught_crests_add_friction_as_prandtl_tomlinson_predicts",),
+           "the resolved ridges read their limit under the base, not where the held crest is: no snaps"),
+    Mutant("reference-ridges-effective", "sliding", "emulator/fidelity.py",
+           'ridges="resolved"', 'ridges="effective"',
+           ("emulator/tests/test_ridge_release.py::"
+            "test_the_profiles_ridge_models_and_the_effective_path_is_the_comb_alone",),
+           "the reference profile treats the ridges as a rigid comb (no release events)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
