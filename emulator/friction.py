@@ -34,7 +34,9 @@ series factor ``f``, the catch factor ``c`` and the ridge gain ``g``); in the sl
 positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per length × its chord
 across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes), releases to it
 within the step; over a negative limit (a feature's back) it follows it.  The tangential force gains ``Σ F_j``;
-rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.
+rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a drop of ``F_j`` by
+``k_j`` × :data:`RIDGE_RELEASE_LENGTH_M` (peak to trough, small reloads ignored); a slip slower than
+:data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge.
 """
 
 from __future__ import annotations
@@ -48,6 +50,18 @@ from numba import njit
 #: ridges catch feature slopes only while the skin slips over them: the slope force is scaled by
 #: |v_r| / (|v_r| + this) (model choice: 1 mm/s, so a finger pressed without sliding feels no slope force)
 CATCH_VELOCITY_M_PER_S = 1e-3
+
+#: a ridge release event is a drop of a ridge's force by at least its stiffness × this length (its crest running
+#: ahead of its base by 20 µm, a fifth of the crest's contact width), not interrupted by a reload as large (model
+#: choice: the limit the surface sets on a crest carries the sandpaper's roughness down to the texture step, so
+#: smaller drops multiply as the step shrinks — 2 µm gives 851, 1408, 2057, 2860 events/s for dx 10, 5, 2.5,
+#: 1.25 µm on 60-grit — while drops of 20 µm converge, 2 % apart between the last two; a near-rigid ridge, whose
+#: crest keeps to its base, never releases)
+RIDGE_RELEASE_LENGTH_M = 20e-6
+
+#: a ridge's slip slower than this is no motion: its crest stays, nothing releases and the slip's direction stays
+#: (model choice: 1 µm/s, a thousandth of the catch velocity; the skin settling after the stage stops creeps slower)
+RIDGE_SLIP_FLOOR_M_PER_S = 1e-6
 
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
 #: (m) and slope (1) where the finger touched down (a position-held finger's load changes with the height from
@@ -264,9 +278,14 @@ class Ridges(NamedTuple):
     state: np.ndarray
 
 
+#: rows of :attr:`Ridges.state`: each ridge's deflection (m), and its release count's peak or trough (N), whether
+#: a release is under way (1.0) and the slip's direction (±1; 0 before the first slip), see :func:`_count_release`
+RIDGE_STATE_ROWS = 4
+
+
 def new_ridge_state(n_ridges: int) -> np.ndarray:
     """:attr:`Ridges.state` of ridges at rest: no force, none releasing."""
-    return np.zeros((2, n_ridges))
+    return np.zeros((RIDGE_STATE_ROWS, n_ridges))
 
 
 # the effective comb passes these in the ridge arguments (the compiled step reads them only when resolved)
@@ -308,7 +327,39 @@ def _crest_at(crest, i, f):
 
 
 @njit(cache=True, inline="always")
-def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_scale, catching, slip):
+def _count_release(ridge_state, j, force_before, force_after, direction, threshold):
+    """Ridge ``j``'s release events, counted on its force in the slip's ``direction`` (±1) as it goes from
+    ``force_before`` to ``force_after`` (N) in one substep: a release event begins when the force has fallen by
+    ``threshold`` (N) from its peak, and lasts, however the force wiggles, until it has risen ``threshold`` above its
+    lowest since (a peak-to-trough count with hysteresis; ``ridge_state[1]`` holds that peak or trough, N in the
+    slip's direction, ``ridge_state[2]`` whether a release is under way, ``ridge_state[3]`` the slip's direction;
+    a new direction starts the count afresh).  Returns the events begun (0 or 1) and the force released (N: from
+    the peak down to each new trough, so an event's releases add up to its drop)."""
+    if ridge_state[3, j] != direction:
+        ridge_state[1, j] = direction * force_before
+        ridge_state[2, j] = 0.0
+        ridge_state[3, j] = direction
+    force = direction * force_after
+    extreme = ridge_state[1, j]
+    if ridge_state[2, j] == 0.0:  # loading: the extreme is the peak since the last release
+        if force > extreme:
+            ridge_state[1, j] = force
+        elif extreme - force >= threshold:  # a release
+            ridge_state[1, j] = force
+            ridge_state[2, j] = 1.0
+            return 1, extreme - force
+        return 0, 0.0
+    if force < extreme:  # releasing: the extreme is the trough
+        ridge_state[1, j] = force
+        return 0, extreme - force
+    if force - extreme >= threshold:  # loaded again: the release is over
+        ridge_state[1, j] = force
+        ridge_state[2, j] = 0.0
+    return 0, 0.0
+
+
+@njit(cache=True, inline="always")
+def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_scale, catching, slip, slip_floor):
     """One substep of the ridge-resolved fingerprint.  Ridge ``j``'s base sits at texture position ``pos`` (m) plus
     its offset; its crest lags the base by its deflection ``δ_j`` (m, ``ridge_state[0]``), and the surface holds the
     crest with the limit ``L_j(x) = limit_scale · shares[j]`` × the crest slope at the crest's position ``x``.  The
@@ -317,51 +368,51 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
     (in the slip's direction: a feature's crest has passed under it, or the load fell) the crest is released: it
     slides on with the slip to the first position where the spring force no longer exceeds the limit (the
     piecewise-linear crossing), so the force drops to the limit within the step — a snap, where the limit falls
-    along the track faster than the ridge's stiffness.  Rigid ridges (``stiffness`` inf) keep ``δ = 0``: ``F_j =
-    L_j`` at the base, the comb.  A ridge with no limit (outside the patch, no load, a smooth skin) or no stiffness
-    carries nothing.  The
-    ridges' force on the skin is ``catching · Σ F_j`` (they catch only while the skin slips, as the comb's slope
-    force).  Returns that force (N), the release events begun (a ridge's crest released after a step in which it
-    was held, ``ridge_state[1]``) and the force released (N, as felt: × ``catching``)."""
+    along the track faster than the ridge's stiffness.  A slip smaller than ``slip_floor`` (m) is no motion: no
+    crest moves or releases and the slip's direction stays.  Rigid ridges (``stiffness`` inf) keep ``δ = 0``:
+    ``F_j = L_j`` at the base, the comb.  A ridge with no limit (outside the patch, no load, a smooth skin) or no
+    stiffness carries nothing.  The ridges' force on the skin is ``catching · Σ F_j`` (they catch only while the
+    skin slips, as the comb's slope force).  Returns that force (N), the release events begun (a drop of
+    :data:`RIDGE_RELEASE_LENGTH_M` × ``stiffness[j]``, :func:`_count_release`) and the force they released (N, as
+    felt: × ``catching``)."""
     u = pos / dx
     i0 = int(math.floor(u))
     f0 = u - i0
-    direction = 1.0 if slip >= 0.0 else -1.0
+    moving = abs(slip) >= slip_floor
+    direction = 1.0 if slip > 0.0 else -1.0
     total, events, released = 0.0, 0, 0.0
     for j in range(shares.size):
         k = stiffness[j]
         scale = limit_scale * shares[j]
         if scale == 0.0 or k == 0.0:  # (no share, no load or gain, or no stiffness)
-            ridge_state[0, j] = 0.0
-            ridge_state[1, j] = 0.0
+            ridge_state[:, j] = 0.0
             continue
         if math.isinf(k):  # rigid: the crest at the base, its force the limit there
             total += catching * scale * _crest_at(crest, i0 + shifts[j], f0)
             continue
-        base = u + shifts[j]  # the base's position in table indices
         held = ridge_state[0, j]
-        deflection = held + slip
-        x = base - deflection / dx  # the crest's position, held by the surface
-        xi = int(math.floor(x))
-        excess = direction * (k * deflection - scale * _crest_at(crest, xi, x - xi))
-        if excess > 0.0:  # released: the crest slides on to where the spring force meets the limit
-            grid = xi + 1 if direction > 0.0 else (xi if x > xi else xi - 1)
-            for _ in range(crest.size):  # (ends well within: the spring force falls by k·dx a position)
-                at_grid = direction * (k * (base - grid) * dx - scale * _crest_at(crest, grid, 0.0))
-                if at_grid <= 0.0:  # the crossing, on the straight piece between x and this position
-                    x = x + (grid - x) * excess / (excess - at_grid)
-                    break
-                x, excess = float(grid), at_grid
-                grid += 1 if direction > 0.0 else -1
-            deflection = (base - x) * dx
-        if direction * (held - deflection) > 0.0:  # the force fell: the crest outran the base (a release)
-            released += catching * k * direction * (held - deflection)
-            if ridge_state[1, j] == 0.0:
-                events += 1
-            ridge_state[1, j] = 1.0
-        else:
-            ridge_state[1, j] = 0.0
-        ridge_state[0, j] = deflection
+        deflection = held
+        if moving:
+            base = u + shifts[j]  # the base's position in table indices
+            deflection = held + slip
+            x = base - deflection / dx  # the crest's position, held by the surface
+            xi = int(math.floor(x))
+            excess = direction * (k * deflection - scale * _crest_at(crest, xi, x - xi))
+            if excess > 0.0:  # released: the crest slides on to where the spring force meets the limit
+                grid = xi + 1 if direction > 0.0 else (xi if x > xi else xi - 1)
+                for _ in range(crest.size):  # (ends well within: the spring force falls by k·dx a position)
+                    at_grid = direction * (k * (base - grid) * dx - scale * _crest_at(crest, grid, 0.0))
+                    if at_grid <= 0.0:  # the crossing, on the straight piece between x and this position
+                        x = x + (grid - x) * excess / (excess - at_grid)
+                        break
+                    x, excess = float(grid), at_grid
+                    grid += 1 if direction > 0.0 else -1
+                deflection = (base - x) * dx
+            ridge_state[0, j] = deflection
+            began, drop = _count_release(ridge_state, j, k * held, k * deflection, direction,
+                                         k * RIDGE_RELEASE_LENGTH_M)
+            events += began
+            released += catching * drop
         total += catching * k * deflection
     return total, events, released
 
@@ -413,6 +464,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
     kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
     n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
     ridge_shares, ridge_stiffness = np.zeros(ridge_offsets.size), np.zeros(ridge_offsets.size)
+    slip_floor = RIDGE_SLIP_FLOOR_M_PER_S * h  # (m per substep)
     for n in range(N0.size):
         n0 = N0[n]
         v_stage = V[n]
@@ -473,7 +525,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                 if resolved:  # (no slip, no catching: the same ridge step as below with v_r = 0)
                     ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                              ridge_stiffness, p, dx, normal * series * ridge_gain,
-                                                             0.0, 0.0)
+                                                             0.0, 0.0, slip_floor)
                     releases += events
                     released += drop
                 x += 0.0
@@ -489,7 +541,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
             if resolved:  # the ridges under the patch catch and release, read where the tables were
                 ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                          ridge_stiffness, p, dx, normal * series * ridge_gain,
-                                                         catching, vr * h)
+                                                         catching, vr * h, slip_floor)
                 releases += events
                 released += drop
             x += u * h

@@ -753,10 +753,10 @@ class SlidingContact(Effect):
         return [c["gain"] for c in self._contacts]
 
     def ridge_releases(self, k: int) -> dict[str, np.ndarray]:
-        """Contact ``k``'s ridge releases so far (ridge-resolved fingerprints; none with effective ridges), at the grid
-        instants (s) where a ridge's force fell: how many release events began there and the force released (N) in
-        that grid step (a release lasting several steps counts once, where it began, and adds its force step by
-        step)."""
+        """Contact ``k``'s ridge release events so far (ridge-resolved fingerprints; none with effective ridges; an
+        event: :func:`emulator.friction._count_release`), at the grid instants (s) where one began or went on: how
+        many began there and the force they released (N) in that grid step (an event lasting several steps counts
+        once, where its drop reached the threshold, and adds its force step by step, peak to trough)."""
         log = self._contacts[k]["releases"]
         a = np.concatenate(log, axis=1) if log else np.zeros((3, 0))
         return {"t": a[0], "count": a[1], "released_N": a[2]}

@@ -241,3 +241,65 @@ def test_caught_crests_add_friction_as_prandtl_tomlinson_predicts():
     steady = (t >= slide.slide_start_s + 0.1) & (t < slide.slide_end_s - 0.02)
     ratio = resolved["tangential_force_N"][steady].mean() / comb["tangential_force_N"][steady].mean()
     assert ratio >= 1.05, ratio
+
+
+def _events_per_s(contact, t0: float, t1: float) -> float:
+    return _releases_while(contact, t0, t1)[0] / (t1 - t0)
+
+
+@pytest.mark.unit
+def test_the_release_count_converges_as_the_texture_step_shrinks():
+    """Consistency: a release event is a drop of a ridge's force by its stiffness × 20 µm, so halving the texture
+    step (2.5 → 1.25 µm, which adds roughness below either) changes the events per second by less than 10 %
+    (counting every step in which a ridge's force fell, 3633 → 6061 /s, they grew with each halving)."""
+    slide = _slide(distance=0.005)
+    t0, t1 = slide.slide_start_s + 0.05, slide.slide_end_s
+    rates = []
+    for dx in (2.5e-6, 1.25e-6):
+        contact, _ = _run(slide, grid=dataclasses.replace(GRID, sliding_dx_m=dx))
+        rates.append(_events_per_s(contact, t0, t1))
+    assert rates[0] > 100, rates
+    assert abs(rates[1] / rates[0] - 1) < 0.1, rates
+
+
+@pytest.mark.unit
+def test_near_rigid_ridges_do_not_release():
+    """Consistency: ridges 100× and 1e6× stiffer than the skin's follow the limit at their bases (their crests keep
+    within a fraction of a µm of the base), so they release nothing, while the skin's own ridges do."""
+    slide = _slide()
+    t0, t1 = slide.slide_start_s + 0.05, slide.slide_end_s
+    contact, _ = _run(slide)
+    assert _events_per_s(contact, t0, t1) > 100
+    for factor in (1e2, 1e6):
+        stiff = dataclasses.replace(SensorParams(), skin_youngs_modulus_Pa=factor * SensorParams().skin_youngs_modulus_Pa)
+        contact, _ = _run(slide, params=stiff)
+        assert contact.ridge_releases(0)["count"].sum() == 0, factor
+
+
+def _press_slide_stop(velocity=0.01) -> CommandedMotion:
+    """A commanded finger pressed 1 mm deep (from 0.1 s), the stage at ``velocity`` m/s from 0.15 to 0.45 s, then
+    still until 0.6 s."""
+    motion = CommandedMotion(SAND, max_travel_m=0.02, latency_s=0.0)
+    motion.move_finger(0.0, 0.02)
+    motion.move_finger(0.1, 0.0)
+    motion.move_stage(0.15, velocity, 1.0)
+    motion.move_stage(0.45, 0.0, 1.0)
+    return motion
+
+
+@pytest.mark.unit
+def test_a_pressed_finger_and_a_stopped_stage_release_nothing_and_keep_their_ridges():
+    """Consistency: a slip slower than 1 µm/s is no motion. While the finger is pressed before the stage moves, the
+    ridges stay undeflected (they no longer settle onto the back slopes' negative limits); after the stage stops,
+    the skin's settling creep releases nothing (it gave 21 437 events in 0.15 s, the slip's sign flipping at
+    ±1e-13 m) and the ridges keep their deflections."""
+    contact, _ = _run(_press_slide_stop(), end_s=0.6)
+    ridge_state = contact._contacts[0]["ridge_parts"][5]
+    contact_held, _ = _run(_press_slide_stop(), end_s=0.149)
+    assert np.all(contact_held._contacts[0]["ridge_parts"][5][0] == 0.0)
+    assert _releases_while(contact, 0.0, 0.15) == (0.0, 0.0)
+    assert _releases_while(contact, 0.15, 0.45)[0] > 10
+    assert _releases_while(contact, 0.47, 0.6) == (0.0, 0.0)
+    stopped, _ = _run(_press_slide_stop(), end_s=0.5)
+    assert np.array_equal(stopped._contacts[0]["ridge_parts"][5][0], ridge_state[0])
+    assert np.any(ridge_state[0] != 0.0)
