@@ -29,11 +29,12 @@ skin slips over them).
 
 Ridge-resolved fingerprints (the reference profile, :class:`Ridges`): ``s`` then holds the patch part alone,
 ``(1 − g)·s_patch``, and each ridge under the patch is a compliant element with its own force ``F_j``.  Its limit
-is the comb's own term, ``L_j = N·f·c·g·w_j·σ_j`` (load share ``w_j`` × crest slope ``σ_j`` under it, with the
-series factor ``f``, the catch factor ``c`` and the ridge gain ``g``); in the slip's direction a ridge over a
-positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per length × its chord
-across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes), releases to it
-within the step; over a negative limit (a feature's back) it follows it.  The tangential force gains ``Σ F_j``;
+is the comb's own term without the catch factor, ``L_j = N·f·g·w_j·σ_j`` (load share ``w_j`` × crest slope ``σ_j``
+under it, with the series factor ``f`` and the ridge gain ``g``; only a slip deflects a ridge, so a finger pressed
+without slipping feels no ridge force, and a ridge deflected by a slip keeps pushing when it stops); in the slip's
+direction a ridge over a positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per
+length × its chord across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes),
+releases to it within the step; over a negative limit (a feature's back) it follows it.  The tangential force gains ``Σ F_j``;
 rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a drop of ``F_j`` by
 ``k_j`` × :data:`RIDGE_RELEASE_LENGTH_M` (peak to trough, small reloads ignored); a slip slower than
 :data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge.
@@ -369,12 +370,13 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
     slides on with the slip to the first position where the spring force no longer exceeds the limit (the
     piecewise-linear crossing), so the force drops to the limit within the step — a snap, where the limit falls
     along the track faster than the ridge's stiffness.  A slip smaller than ``slip_floor`` (m) is no motion: no
-    crest moves or releases and the slip's direction stays.  Rigid ridges (``stiffness`` inf) keep ``δ = 0``:
-    ``F_j = L_j`` at the base, the comb.  A ridge with no limit (outside the patch, no load, a smooth skin) or no
-    stiffness carries nothing.  The ridges' force on the skin is ``catching · Σ F_j`` (they catch only while the
-    skin slips, as the comb's slope force).  Returns that force (N), the release events begun (a drop of
-    :data:`RIDGE_RELEASE_LENGTH_M` × ``stiffness[j]``, :func:`_count_release`) and the force they released (N, as
-    felt: × ``catching``)."""
+    crest moves or releases and the slip's direction stays.  The ridges' force on the skin is ``Σ F_j``: a deflected
+    ridge pushes whether the skin slips or not, and only a slip deflects it (so a finger pressed without slipping
+    feels none).  Rigid ridges (``stiffness`` inf) have no deflection to remember: their force is the limit at the
+    base times ``catching`` (the comb's catch factor, so they give the comb's force).  A ridge with no limit
+    (outside the patch, no load, a smooth skin) or no stiffness carries nothing.  Returns the ridges' force (N), the
+    release events begun (a drop of :data:`RIDGE_RELEASE_LENGTH_M` × ``stiffness[j]``, :func:`_count_release`) and
+    the force they released (N)."""
     u = pos / dx
     i0 = int(math.floor(u))
     f0 = u - i0
@@ -412,8 +414,8 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
             began, drop = _count_release(ridge_state, j, k * held, k * deflection, direction,
                                          k * RIDGE_RELEASE_LENGTH_M)
             events += began
-            released += catching * drop
-        total += catching * k * deflection
+            released += drop
+        total += k * deflection
     return total, events, released
 
 
