@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+import emulator.friction as friction
 import emulator.sliding as sliding
 from emulator.effects import Block
 from emulator.fidelity import Fidelity, profile
@@ -322,3 +323,58 @@ def test_a_deflected_ridge_keeps_pushing_when_the_stage_stops():
     held = (resolved["tangential_force_N"] - comb["tangential_force_N"])[(t > 0.5) & (t < 0.6)]
     assert np.min(np.abs(held)) > 0.02, held.mean()
     assert np.ptp(held) < 1e-3 * np.abs(held).mean()
+
+
+@pytest.mark.unit
+def test_a_reverse_slide_mirrors_the_forward_one():
+    """Consistency: a finger slid 3 mm forward and back over the same track at the same speed feels the same mean
+    tangential force both ways, with the slip's sign (within 15 %: the ridges meet the features' other flanks), and
+    the ridges add about as much over the comb each way (a ridge that always released forward made it −19 N)."""
+    motion = _press_slide_stop()
+    motion.move_stage(0.6, -0.01, 1.0)
+    motion.move_stage(0.9, 0.0, 1.0)
+    _, resolved = _run(motion, end_s=0.9)
+    motion = _press_slide_stop()
+    motion.move_stage(0.6, -0.01, 1.0)
+    motion.move_stage(0.9, 0.0, 1.0)
+    _, comb = _run(motion, "effective", end_s=0.9)
+    t = np.arange(resolved["tangential_force_N"].size) / GRID.grid_Hz
+    forward, backward = (t > 0.25) & (t < 0.45), (t > 0.7) & (t < 0.9)
+    f_res, b_res = (resolved["tangential_force_N"][s].mean() for s in (forward, backward))
+    f_comb, b_comb = (comb["tangential_force_N"][s].mean() for s in (forward, backward))
+    assert f_res > 0 > b_res
+    assert -b_res / f_res == pytest.approx(1.0, abs=0.15)
+    assert (b_res / b_comb) / (f_res / f_comb) == pytest.approx(1.0, abs=0.1)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("direction", [1.0, -1.0], ids=["forward", "backward"])
+def test_a_released_crest_stops_where_its_force_meets_the_limit(direction):
+    """Consistency (the step alone): one ridge (k = 1000 N/m) slid 2 mm over a sinusoidal limit 0.05 N × sin(2πx/200
+    µm), whose steepest fall (1571 N/m) beats its stiffness.  Held, its crest stays put on the surface and its force
+    never exceeds the limit there (in the slip's direction); released, its crest moves on to where its force equals
+    the limit, to rounding (not to zero force); it snaps once per period (drops of tens of mN within a step), one
+    release event each."""
+    dx, k, scale, period = 1e-6, 1000.0, 0.05, 200
+    crest = np.sin(2 * np.pi * np.arange(2000) / period)
+    state = friction.new_ridge_state(1)
+    shifts, shares, stiffness = np.zeros(1, dtype=np.int64), np.ones(1), np.array([k])
+    slip, pos = direction * 0.1e-6, 0.0
+    events, snaps, moved = 0, 0, 0
+    crest_before = None
+    for _ in range(20000):
+        force_before = k * state[0, 0]
+        _, began, _ = friction._ridges_step(state, crest, shifts, shares, stiffness, pos + slip, dx, scale, 1.0,
+                                            slip, 1e-12)
+        pos += slip
+        events += began
+        force = k * state[0, 0]
+        x = pos / dx - state[0, 0] / dx  # the crest's position (table indices)
+        limit = scale * np.interp(x % 2000, np.arange(2001), np.append(crest, crest[0]))
+        assert direction * (force - limit) <= 1e-12
+        if crest_before is not None and abs(x - crest_before) > 1e-6:
+            moved += 1
+            assert force == pytest.approx(limit, abs=1e-12)
+        snaps += direction * (force_before - force) > 0.01
+        crest_before = x
+    assert moved > 0 and 9 <= snaps <= 11 and 9 <= events <= 11
