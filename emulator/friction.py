@@ -34,10 +34,10 @@ under it, with the series factor ``f`` and the ridge gain ``g``; only a slip def
 without slipping feels no ridge force, and a ridge deflected by a slip keeps pushing when it stops); in the slip's
 direction a ridge over a positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per
 length × its chord across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes),
-releases to it within the step; over a negative limit (a feature's back) it follows it.  The tangential force gains ``Σ F_j``;
-rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a drop of ``F_j`` by
-``k_j`` × :data:`RIDGE_RELEASE_LENGTH_M` (peak to trough, small reloads ignored); a slip slower than
-:data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge.
+releases to it within the step; over a negative limit (a feature's back) it follows it.  The tangential force
+gains ``Σ F_j``; rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a
+drop of ``F_j`` by ``k_j`` × :data:`RIDGE_RELEASE_LENGTH_M` (peak to trough, small reloads ignored); a slip slower
+than :data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge; a change of chord adds no energy (:func:`_rechord`).
 """
 
 from __future__ import annotations
@@ -267,8 +267,8 @@ class Ridges(NamedTuple):
     and reads the crest slope (1) at ``crest[(i + shifts[j]) mod len]`` for the texture position index ``i`` (see
     :func:`emulator.sliding.crest_table`); ``weights`` (radius row × ridge) is its share of the load, the comb's
     line-load weights; ``gain`` the skin's ridge gain (1); ``stiffness_per_length`` (N/m per m of ridge in contact,
-    ``inf``: rigid ridges, the comb) from :meth:`emulator.skin.Skin.ridge_stiffness_per_length`; ``state`` (2 × ridges,
-    carried): each ridge's force (N) and whether it was releasing at the last substep (1.0) or not."""
+    ``inf``: rigid ridges, the comb) from :meth:`emulator.skin.Skin.ridge_stiffness_per_length`; ``state`` (rows ×
+    ridges, carried): see :data:`RIDGE_STATE_ROWS`."""
 
     crest: np.ndarray
     weights: np.ndarray
@@ -279,9 +279,10 @@ class Ridges(NamedTuple):
     state: np.ndarray
 
 
-#: rows of :attr:`Ridges.state`: each ridge's deflection (m), and its release count's peak or trough (N), whether
-#: a release is under way (1.0) and the slip's direction (±1; 0 before the first slip), see :func:`_count_release`
-RIDGE_STATE_ROWS = 4
+#: rows of :attr:`Ridges.state`: each ridge's deflection (m), its release count's peak or trough (N), whether a
+#: release is under way (1.0) and the slip's direction (±1; 0 before the first slip) (see :func:`_count_release`),
+#: and the stiffness (N/m) its deflection was reached with (see :func:`_rechord`)
+RIDGE_STATE_ROWS = 5
 
 
 def new_ridge_state(n_ridges: int) -> np.ndarray:
@@ -360,6 +361,20 @@ def _count_release(ridge_state, j, force_before, force_after, direction, thresho
 
 
 @njit(cache=True, inline="always")
+def _rechord(ridge_state, j, stiffness):
+    """Ridge ``j``'s state when its chord across the patch, so its stiffness, changes to ``stiffness`` (N/m) from
+    ``ridge_state[4, j]``, without energy from nothing: a longer chord keeps the force (the new length enters
+    undeflected, so the deflection falls and so does the energy F²/2k); a shorter one keeps the deflection, so the
+    force (and the release count's peak or trough with it) falls with the length."""
+    before = ridge_state[4, j]
+    if before > stiffness:
+        ridge_state[1, j] *= stiffness / before
+    elif before > 0.0:
+        ridge_state[0, j] *= before / stiffness
+    ridge_state[4, j] = stiffness
+
+
+@njit(cache=True, inline="always")
 def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_scale, catching, slip, slip_floor):
     """One substep of the ridge-resolved fingerprint.  Ridge ``j``'s base sits at texture position ``pos`` (m) plus
     its offset; its crest lags the base by its deflection ``δ_j`` (m, ``ridge_state[0]``), and the surface holds the
@@ -392,6 +407,8 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
         if math.isinf(k):  # rigid: the crest at the base, its force the limit there
             total += catching * scale * _crest_at(crest, i0 + shifts[j], f0)
             continue
+        if k != ridge_state[4, j]:  # the chord changed with the load (the state holds the last stiffness)
+            _rechord(ridge_state, j, k)
         held = ridge_state[0, j]
         deflection = held
         if moving:

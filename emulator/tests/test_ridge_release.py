@@ -276,7 +276,8 @@ def test_near_rigid_ridges_do_not_release():
     contact, _ = _run(slide)
     assert _events_per_s(contact, t0, t1) > 100
     for factor in (1e2, 1e6):
-        stiff = dataclasses.replace(SensorParams(), skin_youngs_modulus_Pa=factor * SensorParams().skin_youngs_modulus_Pa)
+        stiff = dataclasses.replace(SensorParams(),
+                                    skin_youngs_modulus_Pa=factor * SensorParams().skin_youngs_modulus_Pa)
         contact, _ = _run(slide, params=stiff)
         assert contact.ridge_releases(0)["count"].sum() == 0, factor
 
@@ -378,3 +379,30 @@ def test_a_released_crest_stops_where_its_force_meets_the_limit(direction):
         snaps += direction * (force_before - force) > 0.01
         crest_before = x
     assert moved > 0 and 9 <= snaps <= 11 and 9 <= events <= 11
+
+
+
+@pytest.mark.unit
+def test_a_chord_change_adds_no_ridge_energy():
+    """Consistency (the step alone): a ridge deflected by a slip, then held (no slip) while the load changes its
+    chord: a longer chord (twice the stiffness) keeps its force and halves its energy F²/2k (the new length enters
+    undeflected; keeping the deflection would double both); a shorter one (a quarter) keeps its deflection, so
+    force and energy fall with the length; and the release count sees no event in either."""
+    dx, scale = 1e-6, 0.05
+    crest = np.ones(2000)  # a limit of 0.05 N everywhere
+    state = friction.new_ridge_state(1)
+    shifts, shares = np.zeros(1, dtype=np.int64), np.ones(1)
+
+    def step(stiffness, slip):
+        force, began, _ = friction._ridges_step(state, crest, shifts, shares, np.array([stiffness]), 0.0, dx, scale,
+                                                1.0, slip, 1e-12)
+        return force, force**2 / (2 * stiffness), began
+
+    for _ in range(20):
+        force, energy, _ = step(1000.0, 1e-6)  # loads by 1 mN a step (below the limit)
+    assert force == pytest.approx(0.02)
+    longer = step(2000.0, 0.0)
+    assert longer[0] == pytest.approx(force, rel=1e-12) and longer[1] == pytest.approx(energy / 2, rel=1e-12)
+    shorter = step(500.0, 0.0)
+    assert shorter[0] == pytest.approx(force / 4, rel=1e-12) and shorter[1] < longer[1]
+    assert longer[2] == shorter[2] == 0
