@@ -402,7 +402,8 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
         k = stiffness[j]
         scale = limit_scale * shares[j]
         if scale == 0.0 or k == 0.0:  # (no share, no load or gain, or no stiffness)
-            ridge_state[:, j] = 0.0
+            for row in range(RIDGE_STATE_ROWS):  # (a slice's assignment costs more, every substep)
+                ridge_state[row, j] = 0.0
             continue
         if math.isinf(k):  # rigid: the crest at the base, its force the limit there
             total += catching * scale * _crest_at(crest, i0 + shifts[j], f0)
