@@ -909,6 +909,10 @@ CATALOGUE += [
            ("emulator/tests/test_ridge_release.py::"
             "test_the_profiles_ridge_models_and_the_effective_path_is_the_comb_alone",),
            "the reference profile treats the ridges as a rigid comb (no release events)"),
+    Mutant("closed-figures-kept-until-later", "reporting", "bench/reporting/figures.py",
+           "    gc.collect()  # earlier figures'", "    pass  # earlier figures'",
+           ("bench/tests/test_run_memory_release.py::test_a_drawn_figure_is_freed_before_the_next_one_is_made",),
+           "a run's closed figures stay in memory under the next one (the run's peak grows)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
