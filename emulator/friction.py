@@ -61,8 +61,11 @@ CATCH_VELOCITY_M_PER_S = 1e-3
 RIDGE_RELEASE_LENGTH_M = 20e-6
 
 #: a ridge's slip slower than this is no motion: its crest stays, nothing releases and the slip's direction stays
-#: (model choice: 1 µm/s, a thousandth of the catch velocity; the skin settling after the stage stops creeps slower)
-RIDGE_SLIP_FLOOR_M_PER_S = 1e-6
+#: (model choice: the catch velocity, the comb's own scale for "the skin slips" — the pre-sliding micro-slip of the
+#: stuck skin and its settling after the stage stops move no crest; with a floor of 1 µm/s the stuck skin's micro-slip
+#: let crests over back slopes fall to their negative limits at the stage's start, pushing the skin forward while it
+#: stuck and taking the reference profile's slip-onset rise from 22.8 to 10.0 dB)
+RIDGE_SLIP_FLOOR_M_PER_S = CATCH_VELOCITY_M_PER_S
 
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
 #: (m) and slope (1) where the finger touched down (a position-held finger's load changes with the height from

@@ -909,6 +909,10 @@ CATALOGUE += [
            ("emulator/tests/test_ridge_release.py::"
             "test_the_profiles_ridge_models_and_the_effective_path_is_the_comb_alone",),
            "the reference profile treats the ridges as a rigid comb (no release events)"),
+    Mutant("ridge-slip-floor-1-um-per-s", "sliding", "emulator/friction.py",
+           "RIDGE_SLIP_FLOOR_M_PER_S = CATCH_VELOCITY_M_PER_S", "RIDGE_SLIP_FLOOR_M_PER_S = 1e-6",
+           ("emulator/tests/test_ridge_release.py::test_ridges_release_nothing_while_the_skin_sticks",),
+           "the stuck skin's micro-slip moves the resolved ridges' crests: they push it forward before it slips"),
     Mutant("closed-figures-kept-until-later", "reporting", "bench/reporting/figures.py",
            "    gc.collect()  # earlier figures'", "    pass  # earlier figures'",
            ("bench/tests/test_run_memory_release.py::test_a_drawn_figure_is_freed_before_the_next_one_is_made",),

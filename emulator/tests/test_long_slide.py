@@ -38,8 +38,9 @@ TODAY = {
     # the reference profile's ridges are resolved since commit 6265ec8 (its own catch-and-release samples; the
     # effective comb's, pinned before, were 73114dc1…); re-pinned by the ridge review's commit "Ridge release
     # events: a drop of k x 20 um, a 1 um/s slip floor" (a pressed finger's ridges no longer settle; was 46eb6e8b…)
-    # and again by "Ridges push by their elastic force, without the catch factor" (was b1bb061e…)
-    ("sand", "reference"): "7d0f148d595e93d1c7da7e9e08750b2f6bc7e7e96a84118998bfcb1aae3277d6",
+    # and again by "Ridges push by their elastic force, without the catch factor" (was b1bb061e…) and by the ridges'
+    # slip floor at the catch velocity (was 7d0f148d…)
+    ("sand", "reference"): "13394dbe402dd576f202b74cf30c4af4df449289005177a9103650790c44cb4c",
 }
 
 
