@@ -727,11 +727,14 @@ class SlidingContact(Effect):
                 self._centre_ring(c, tile)
             end = min(v.size, done + piece)
             state = c["state"].copy()
+            ridge_state = c["ridge_parts"][-1].copy() if "ridge_parts" in c else None
             self._friction(c, n0, v, dt, out, done, end)
             if self._ring_holds(c, np.append(positions_m[done:end], start_m)):
                 done = end
                 continue
-            c["state"][:] = state
+            c["state"][:] = state  # the piece runs again from where it started: the skin's state and the ridges'
+            if ridge_state is not None:
+                c["ridge_parts"][-1][:] = ridge_state
             if end - done == 1:
                 raise RuntimeError(f"sliding: the skin moved more than {RING_MARGIN_M * 1e3:g} mm along the texture "
                                    f"within one grid step (position {c['state'][2]:.6g} m)")

@@ -420,3 +420,31 @@ def test_the_sliding_claims_hold_at_the_reference_profile():
 
     claims = run_claims(Bench(fidelity="reference"), ["sliding"])
     assert [c.name for c in claims if not c.ok] == []
+
+
+@pytest.mark.unit
+def test_a_ring_piece_run_again_starts_from_the_ridges_state_it_started_from(monkeypatch):
+    """Consistency: should the skin leave the ring within a piece (it cannot at physical speeds, so the check is
+    made to refuse each piece once here), the piece runs again from the state it started from — the ridges'
+    deflections included, or the second run would load them twice — and the samples are those of a run that never
+    retried."""
+    slide = _slide(distance=0.01, velocity=0.05)
+    monkeypatch.setattr(sliding, "TABLE_TILE", 1024)
+    monkeypatch.setattr(sliding, "TABLE_WHOLE_MAX", 2048)
+    straight_contact, straight = _run(slide)
+    holds = sliding.SlidingContact._ring_holds
+    refused = []
+
+    def refuse_three_sliding_pieces(self, c, positions_m):
+        """Refuse the first three pieces that start once the texture has moved 1 mm (ridges deflected)."""
+        if positions_m[-1] > 1e-3 and len(refused) < 3:
+            refused.append(float(np.abs(c["ridge_parts"][-1][0]).max()))
+            return False
+        return holds(self, c, positions_m)
+
+    monkeypatch.setattr(sliding.SlidingContact, "_ring_holds", refuse_three_sliding_pieces)
+    retried_contact, retried = _run(slide)
+    assert len(refused) == 3 and max(refused) > 0  # pieces ran again, with the ridges deflected
+    for name in straight:
+        assert np.array_equal(retried[name], straight[name]), name
+    assert np.array_equal(retried_contact.ridge_releases(0)["count"], straight_contact.ridge_releases(0)["count"])
