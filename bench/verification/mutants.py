@@ -913,6 +913,11 @@ CATALOGUE += [
            "RIDGE_SLIP_FLOOR_M_PER_S = CATCH_VELOCITY_M_PER_S", "RIDGE_SLIP_FLOOR_M_PER_S = 1e-6",
            ("emulator/tests/test_ridge_release.py::test_ridges_release_nothing_while_the_skin_sticks",),
            "the stuck skin's micro-slip moves the resolved ridges' crests: they push it forward before it slips"),
+    Mutant("ring-retry-keeps-the-ridges-loaded", "sliding", "emulator/sliding.py",
+           '                c["ridge_parts"][-1][:] = ridge_state', "                pass",
+           ("emulator/tests/test_ridge_release.py::"
+            "test_a_ring_piece_run_again_starts_from_the_ridges_state_it_started_from",),
+           "a long slide's piece run again starts from the ridges' state at its end (loaded twice)"),
     Mutant("closed-figures-kept-until-later", "reporting", "bench/reporting/figures.py",
            "    gc.collect()  # earlier figures'", "    pass  # earlier figures'",
            ("bench/tests/test_run_memory_release.py::test_a_drawn_figure_is_freed_before_the_next_one_is_made",),
