@@ -75,10 +75,3 @@ def test_effects_only_json(capsys):
     rows = doc["effect_costs"]["rows"]
     assert [r["effect"] for r in rows] == [row[0] for row in benchmark.EFFECT_ROWS]
     assert isinstance(doc["effect_costs"]["full_frame"]["met"], bool)
-
-
-def test_module_effects_flag_refuses_fingerprint_arguments(capsys):
-    with pytest.raises(SystemExit) as e:
-        benchmark._fingerprints_main(["--effects", "out.json"])
-    assert e.value.code == 2
-    assert "--effects takes no OUT.json" in capsys.readouterr().err

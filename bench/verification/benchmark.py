@@ -241,9 +241,9 @@ def effect_costs(seconds: float = 60.0, repeats: int = 3, rounds: int = EFFECT_R
     (with − without), the larger run scatter of the two, and both sensors' markers (:func:`effect_markers`) showing
     the effect ran in one and not the other."""
     t0 = time.perf_counter()
-    configs = {}
+    configs, options_by_name = {}, _effect_configs(seconds)
     for k in range(max(1, int(rounds))):
-        for name, options in _effect_configs(seconds).items():
+        for name, options in options_by_name.items():
             say(f"… effect costs, round {k + 1}: {name}")
             options = {"channels": DEFAULT_FRAME_NAMES, **options}
             r = stream_realtime_factor("default", options.pop("channels"), "default", 4400.0, seconds,
@@ -584,19 +584,11 @@ def write_scene_fingerprint_fixture(path=None) -> dict:
 def _fingerprints_main(argv) -> int:
     """``python -m bench.verification.benchmark OUT.json [OLD.json]``: write the fingerprints; with OLD.json (another
     tree's), list the runs whose codes differ and exit 1 if any does.  ``--write-fixture``: rewrite
-    :data:`SCENE_FINGERPRINT_FIXTURE` instead; ``--effects [--seconds N] [--json]``: print only the per-effect cost
-    table (:func:`effect_costs`)."""
+    :data:`SCENE_FINGERPRINT_FIXTURE` instead.  (The per-effect cost table is ``biotac-bench benchmark --effects``.)"""
     import argparse
     from pathlib import Path
 
-    from bench.cli.args import number
-
     ap = argparse.ArgumentParser(description=scene_code_fingerprints.__doc__)
-    ap.add_argument("--effects", action="store_true",
-                    help="print only issue 10's per-effect cost table (about 15 s) instead of fingerprints")
-    ap.add_argument("--seconds", type=number(0.0, 36000.0, lo_open=True), default=60.0,
-                    help="with --effects: simulated seconds (s) of each run, > 0 and ≤ 36000")
-    ap.add_argument("--json", action="store_true", help="with --effects: print the table as JSON")
     ap.add_argument("out", type=Path, nargs="?")
     ap.add_argument("against", type=Path, nargs="?")
     ap.add_argument("--scenes", type=Path, default=SCENES_DIR)
@@ -604,10 +596,6 @@ def _fingerprints_main(argv) -> int:
                     help="rewrite the committed fingerprints of the scenes that do not slide (fixtures/fingerprints/"
                          "scenes_default.json) and nothing else; only for an intended change of their codes")
     a = ap.parse_args(argv)
-    if a.effects:
-        if a.out is not None or a.write_fixture:
-            ap.error("--effects takes no OUT.json, OLD.json or --write-fixture")
-        return main(argparse.Namespace(effects=True, json=a.json, seconds=a.seconds))
     if a.write_fixture:
         if a.out is not None or a.scenes != SCENES_DIR:
             ap.error("--write-fixture takes no OUT.json, OLD.json or --scenes (it fingerprints the shipped scenes)")
