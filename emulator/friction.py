@@ -35,7 +35,10 @@ without slipping feels no ridge force, and a ridge deflected by a slip keeps pus
 direction a ridge over a positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per
 length × its chord across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes),
 releases to it within the step; over a negative limit (a feature's back) it follows it.  The tangential force
-gains ``Σ F_j``; rigid ridges (``k_j`` → ∞) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a
+gains ``Σ F_j`` less its mean while slipping, ``c·µ_r·N`` (``µ_r``, :func:`ridge_friction_coefficients`: the
+ridges' catch-and-release dissipates, a share of friction the texture's measured µ holds already, so the skin's
+stick-slip keeps that µ and the ridges add their fluctuation about their mean); rigid ridges (``k_j`` → ∞,
+``µ_r`` = 0) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a
 drop of ``F_j`` by ``k_j`` × :data:`RIDGE_RELEASE_LENGTH_M` (peak to trough, small reloads ignored); a slip slower
 than :data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge; a change of chord adds no energy (:func:`_rechord`).
 """
@@ -279,6 +282,7 @@ class Ridges(NamedTuple):
     offsets_m: np.ndarray
     gain: float
     stiffness_per_length: float
+    friction: np.ndarray
     state: np.ndarray
 
 
@@ -295,7 +299,7 @@ def new_ridge_state(n_ridges: int) -> np.ndarray:
 
 # the effective comb passes these in the ridge arguments (the compiled step reads them only when resolved)
 _NO_RIDGES = Ridges(np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1), 0.0, 0.0,
-                    new_ridge_state(1))
+                    np.zeros(1), new_ridge_state(1))
 
 
 def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, state, touchdown_reference,
@@ -317,7 +321,7 @@ def slide_block(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, st
                   K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
                   out_normal, out_tangential, out_slip_velocity, out_position, resolved, ridges.crest,
                   ridges.weights, ridges.shifts, ridges.offsets_m, float(ridges.gain),
-                  float(ridges.stiffness_per_length), ridges.state, out_releases, out_released_N)
+                  float(ridges.stiffness_per_length), ridges.friction, ridges.state, out_releases, out_released_N)
 
 
 @njit(cache=True, inline="always")
@@ -441,6 +445,58 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
 
 
 @njit(cache=True, inline="always")
+def _texture_series(n0, r, kn, modulus_eff, layer_m):
+    """The share (1) of the skin's indentation a texture leaves to the skin at load ``n0`` (N), patch radius ``r``
+    (m) and skin contact stiffness ``kn`` (N/m): a soft texture layer (``modulus_eff`` Pa, ``layer_m`` m thick) yields
+    in series with the skin, a flat-punch stiffness stiffening as the layer densifies toward its thickness (the
+    derivative of δ_t = T(1 − exp(−N/(kT))))."""
+    k_flat = 2.0 * r * modulus_eff
+    k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
+    return k_tex / (kn + k_tex)
+
+
+#: how far (m) :func:`ridge_friction_coefficients` slides the ridges, and the share of it (1) they load over first
+RIDGE_FRICTION_TRAVEL_M = 0.02
+RIDGE_FRICTION_SETTLE = 0.25
+
+
+@njit(cache=True)
+def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffness_per_length, radii, radius_1N, K,
+                                modulus_eff, layer_m, dx, travel_m):
+    """The ridge-resolved ridges' share of the friction coefficient (1), per patch radius of ``radii`` (m): their
+    mean force per N of load over a slow forward slide of ``travel_m`` (m) from rest at the crest table's start
+    (:func:`_ridges_step` in slips of half a table step, at the load N = (r / ``radius_1N``)³ that makes radius r
+    and its texture series factor, averaged after the first :data:`RIDGE_FRICTION_SETTLE` of the travel).  A
+    texture's measured friction coefficient is a fingertip's, ridges included, so while the skin slips the step
+    adds the ridges' force less this mean (times the load and the catch factor).  Compliant ridges dissipate what
+    they store at each release (Prandtl–Tomlinson), so this is positive; rigid ridges (``stiffness_per_length`` inf,
+    the comb) or no gain store nothing: 0.  The ridges move only with the slip, not with time, so the slide's speed
+    does not enter."""
+    out = np.zeros(radii.size)
+    if gain == 0.0 or math.isinf(stiffness_per_length) or stiffness_per_length == 0.0:
+        return out
+    shares, stiffness = np.zeros(offsets_m.size), np.zeros(offsets_m.size)
+    slip = 0.5 * dx
+    steps = int(travel_m / slip)
+    settle = int(RIDGE_FRICTION_SETTLE * steps)
+    kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
+    for k in range(radii.size):
+        r = radii[k]
+        load = (r / radius_1N) ** 3
+        kn = kn_per_cbrt_n * load ** (1.0 / 3.0)
+        scale = load * _texture_series(load, r, kn, modulus_eff, layer_m) * gain
+        _ridge_elements(weights, k, 0.0, offsets_m, r, stiffness_per_length, shares, stiffness)
+        state = np.zeros((RIDGE_STATE_ROWS, offsets_m.size))
+        total = 0.0
+        for n in range(steps):
+            force, _, _ = _ridges_step(state, crest, shifts, shares, stiffness, n * slip, dx, scale, 1.0, slip, 0.0)
+            if n >= settle:
+                total += force
+        out[k] = total / (steps - settle) / load
+    return out
+
+
+@njit(cache=True, inline="always")
 def _ridge_elements(weights, row, row_w, offsets_m, radius_m, stiffness_per_length, shares, stiffness):
     """Each ridge's load share (1: ``weights`` between rows ``row`` and ``row + 1`` by ``row_w``, as the comb's
     slopes are read) and tangential stiffness (N/m: ``stiffness_per_length`` × its chord across a patch of radius
@@ -461,8 +517,8 @@ def _ridge_elements(weights, row, row_w, offsets_m, radius_m, stiffness_per_leng
 def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, state, touchdown_reference,
                   K, radius_1N, modulus_eff, layer_m, k_t, c_t, sigma0, sigma1, mu_s, mu_k, vs, mu_v,
                   out_normal, out_tangential, out_slip_velocity, out_position, resolved, crest, ridge_weights,
-                  ridge_shifts, ridge_offsets, ridge_gain, ridge_stiffness_per_length, ridge_state, out_releases,
-                  out_released):
+                  ridge_shifts, ridge_offsets, ridge_gain, ridge_stiffness_per_length, ridge_friction, ridge_state,
+                  out_releases, out_released):
     """Advance the contact over one block (arrays of the grid's length); fills the four outputs in place.
 
     ``N0``, ``V``: nominal normal load (N) and stage velocity (m/s) per grid sample; ``heights``/``slopes``:
@@ -486,6 +542,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
     u_prev = state[6]
     kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
     n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
+    mu_ridges = 0.0
     ridge_shares, ridge_stiffness = np.zeros(ridge_offsets.size), np.zeros(ridge_offsets.size)
     slip_floor = RIDGE_SLIP_FLOOR_M_PER_S * h  # (m per substep)
     for n in range(N0.size):
@@ -495,20 +552,20 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
         vr_sum = 0.0
         normal = 0.0
         slope = 0.0
-        ridge_force, releases, released = 0.0, 0, 0.0
+        ridge_force, ridge_mean, releases, released = 0.0, 0.0, 0, 0.0
         if n0 > 0.0 and n0 != n0_last:  # what depends on the load alone (kept while the load holds still)
             cbrt_n = n0 ** (1.0 / 3.0)
             r = radius_1N * cbrt_n  # the patch radius
             kn = kn_per_cbrt_n * cbrt_n
-            # a soft texture layer in series with the skin: flat-punch stiffness, stiffening as the layer
-            # densifies toward its thickness (the derivative of δ_t = T(1 − exp(−N/(kT))))
-            k_flat = 2.0 * r * modulus_eff
-            k_tex = k_flat * math.exp(min(n0 / (k_flat * layer_m), 50.0))
-            series = k_tex / (kn + k_tex)
+            series = _texture_series(n0, r, kn, modulus_eff, layer_m)
             row, row_w = _radius_weight(radii, r)
             if resolved:  # each ridge's load share (the comb's weights, between the same rows) and stiffness
                 _ridge_elements(ridge_weights, row, row_w, ridge_offsets, r, ridge_stiffness_per_length,
                                 ridge_shares, ridge_stiffness)
+                # the ridges' mean share of the texture's friction coefficient (already in its measured µ)
+                mu_ridges = ridge_friction[row]
+                if row_w > 0.0:
+                    mu_ridges = mu_ridges * (1 - row_w) + ridge_friction[row + 1] * row_w
             n0_last = n0
         for _ in range(substeps):
             ms, mk = mu_s, mu_k  # (no load: the fluctuation is not read, friction is nil anyway)
@@ -532,7 +589,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
             if normal == 0.0:  # no load, no friction: the skin relaxes on its own, G(u) is linear
                 if resolved:  # the ridges leave the surface: unloaded, no release events
                     ridge_state[:, :] = 0.0
-                    ridge_force = 0.0
+                    ridge_force, ridge_mean = 0.0, 0.0
                 u = -k_t * x / (k_t * h + c_t)
                 u_prev = u
                 z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)[0]
@@ -549,6 +606,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                     ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                              ridge_stiffness, p, dx, normal * series * ridge_gain,
                                                              0.0, 0.0, slip_floor)
+                    ridge_mean = 0.0
                     releases += events
                     released += drop
                 x += 0.0
@@ -565,6 +623,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                 ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                          ridge_stiffness, p, dx, normal * series * ridge_gain,
                                                          catching, vr * h, slip_floor)
+                ridge_mean = catching * mu_ridges * normal if vr > 0.0 else -catching * mu_ridges * normal
                 releases += events
                 released += drop
             x += u * h
@@ -574,8 +633,8 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
             vr_sum += vr
         out_normal[n] = normal
         out_tangential[n] = f_sum / substeps + normal * slope
-        if resolved:
-            out_tangential[n] += ridge_force
+        if resolved:  # the ridges' force about its mean while slipping, which the texture's µ holds already
+            out_tangential[n] += ridge_force - ridge_mean
             out_releases[n] = releases
             out_released[n] = released
         out_slip_velocity[n] = vr_sum / substeps

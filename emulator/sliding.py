@@ -624,10 +624,9 @@ class SlidingContact(Effect):
                  "stage_zi": np.zeros(1), "feeds": [], "releases": []}
             if ridges == "resolved":  # each ridge under the patch a compliant element (friction.Ridges)
                 weights, shifts, offsets = ridge_elements(tuple(float(a) for a in radii), skin.ridge_pitch_m, dx_m)
-                c["ridge_parts"] = (weights, shifts, offsets, gain,
-                                    skin.ridge_stiffness_per_length(params.skin_youngs_modulus_Pa,
-                                                                    params.skin_poisson_ratio),
-                                    friction.new_ridge_state(offsets.size))
+                stiffness = skin.ridge_stiffness_per_length(params.skin_youngs_modulus_Pa, params.skin_poisson_ratio)
+                c["ridge_parts"] = [weights, shifts, offsets, gain, stiffness, None,
+                                    friction.new_ridge_state(offsets.size)]
                 c["reach"] = ridge_reach(radii, dx_m)
             if c["table_n"] <= TABLE_WHOLE_MAX:  # the whole track's tables, once
                 c["heights"], c["slopes"] = spatial_tables(m.texture, skin, gain, m.start_position_m, length, dx_m,
@@ -638,7 +637,24 @@ class SlidingContact(Effect):
                                              c["reach"], dx_m)
             else:  # a ring around the finger, which starts at position 0
                 self._centre_ring(c, 0)
+            if ridges == "resolved":  # the ridges' share of the texture's friction, from the track's start
+                c["ridge_parts"][5] = self._ridge_friction(c)
             self._contacts.append(c)
+
+    def _ridge_friction(self, c: dict) -> np.ndarray:
+        """The ridge-resolved ridges' mean share of contact ``c``'s friction coefficient per patch radius (1:
+        :func:`friction.ridge_friction_coefficients` over :data:`friction.RIDGE_FRICTION_TRAVEL_M` of the track from
+        its start, on a crest table of its own, so however the contact holds its tables)."""
+        weights, shifts, offsets, gain, stiffness = c["ridge_parts"][:5]
+        p, m = self.params, c["motion"]
+        travel, tex = friction.RIDGE_FRICTION_TRAVEL_M, m.texture
+        n = int(np.ceil(travel / self.dx_m)) + 2 * c["reach"] + 2
+        crest = crest_table(tex, c["skin"], m.start_position_m, 0, n, n, c["reach"], self.dx_m)
+        return friction.ridge_friction_coefficients(crest, weights, shifts, offsets, float(gain), float(stiffness),
+                                                    c["radii"], p.contact_radius_at_1N_m,
+                                                    p.contact_stiffness_N_per_m1_5,
+                                                    tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
+                                                    self.dx_m, travel)
 
     # --- the tables of a long track: a ring of tiles around the finger -------------------------------------------
     def _centre_ring(self, c: dict, tile: int) -> None:

@@ -6,11 +6,11 @@ the stage moves on.  The ring gives the same samples for any ring size, margin a
 table's codes; a 10-minute slide at 10 cm/s (60 m, the 1 m texture track wrapping 60 times) peaks within 20 % +
 30 MB of a short slide's memory and its PAC power stays constant minute after minute."""
 
-import hashlib
 import json
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,20 +28,22 @@ GRATING = Texture(902, "grating", "test", rms_height_m=0.5e-6, correlation_lengt
                   periodic=(PeriodicComponent(3e-3, 250e-6, (0.0, 0.33)),))
 SIGNALS = ("contact_force_N", "tangential_force_N", "normal_force_N", "stage_force_N")
 
-#: sha256 of a short slide's PAC and PDC codes (noise on) and its four force signals at every grid sample, made with
-#: the code before the ring (the tables of commit 9bc8ebf and earlier; the same for block sizes 2 s and 37.1 ms) with
-#: this project's pinned numpy, scipy and numba on x86-64 Linux
-TODAY = {
-    ("grating", "default"): "99c0cc8001a7d8f2755759027e2400064e8305465b8342cdd67c99aa84dbc6d6",
-    ("grating", "fast"): "08ec4799eb5c1a7179bacc39031d6e9b87f3919acab434eb165d082f4fb589da",
-    ("sand", "default"): "6c3d37860bf5f6e8b5e2036689dba7e5064ecc42e5d1226f63404768cef4f741",
-    # the reference profile's ridges are resolved since commit 6265ec8 (its own catch-and-release samples; the
-    # effective comb's, pinned before, were 73114dc1…); re-pinned by the ridge review's commit "Ridge release
-    # events: a drop of k x 20 um, a 1 um/s slip floor" (a pressed finger's ridges no longer settle; was 46eb6e8b…)
-    # and again by "Ridges push by their elastic force, without the catch factor" (was b1bb061e…) and by the ridges'
-    # slip floor at the catch velocity (was 7d0f148d…)
-    ("sand", "reference"): "13394dbe402dd576f202b74cf30c4af4df449289005177a9103650790c44cb4c",
-}
+#: A short slide's saved samples (``short_slides.json`` beside this file): per case its PAC/PDC codes, and per force
+#: signal every ``FORCE_STRIDE``-th grid sample with the sum and sum of squares of all of them.  Pinned from the
+#: code before the ring (commit 9bc8ebf and earlier) by sha256 of the raw bytes until 2026-11-23; those hashes held
+#: on the machine that pinned them and on CI but not on another x86-64 (an AMD EPYC with the same pinned packages:
+#: three of the four differed at HEAD 9be69b0; the cause was not found — there, numba's generic CPU and numpy without
+#: its AVX2/AVX-512 paths give the same samples to the bit), so the samples are saved instead and compared within
+#: rounding.  The reference profile's ridges are resolved since commit 6265ec8 (its own samples,
+#: re-pinned with each change of the ridge model, the last by "the ridges' share of friction").
+SAVED = Path(__file__).with_name("short_slides.json")
+CASES = (("grating", "default"), ("grating", "fast"), ("sand", "default"), ("sand", "reference"))
+FORCE_STRIDE = 97
+#: codes may differ in this many samples, by one code (a value on a rounding edge; none did on the pinning machine)
+CODE_FLIPS_ALLOWED = 2
+#: forces agree within this fraction of the signal's range (far above rounding; a change of the model moves them far
+#: more: the ridges' share of friction moved the reference slide's codes by up to 543)
+FORCE_TOLERANCE = 1e-9
 
 
 def _short_slide(texture) -> Slide:
@@ -60,21 +62,57 @@ def _outputs(texture, fidelity: str, block_s: float) -> tuple[np.ndarray, list[n
     return codes, [forces.signal(name, grid) for name in SIGNALS]
 
 
-def _fingerprint(codes: np.ndarray, signals: list[np.ndarray]) -> str:
-    h = hashlib.sha256(np.ascontiguousarray(codes).tobytes())
-    for x in signals:
-        h.update(np.ascontiguousarray(x).tobytes())
-    return h.hexdigest()
+def _summary(codes: np.ndarray, signals: list[np.ndarray]) -> dict:
+    """What :data:`SAVED` holds of a short slide's outputs."""
+    return {"codes": codes.astype(int).tolist(),
+            "signals": {name: {"samples": x[::FORCE_STRIDE].tolist(), "sum": float(x.sum()),
+                               "sum_sq": float(np.square(x).sum()), "n": int(x.size)}
+                        for name, x in zip(SIGNALS, signals)}}
+
+
+def _problems(saved: dict, codes: np.ndarray, signals: list[np.ndarray]) -> list[str]:
+    """How a short slide's outputs differ from the saved ones beyond rounding (empty: they agree)."""
+    out = []
+    old = np.array(saved["codes"])
+    if old.shape != codes.shape:
+        return [f"{codes.size} codes, saved {old.size}"]
+    diff = np.abs(codes.astype(int) - old)
+    if diff.max() > 1 or np.count_nonzero(diff) > CODE_FLIPS_ALLOWED:
+        out.append(f"codes: {np.count_nonzero(diff)} differ, by up to {diff.max()}")
+    for name, x in zip(SIGNALS, signals):
+        ref = saved["signals"][name]
+        if x.size != ref["n"]:
+            out.append(f"{name}: {x.size} samples, saved {ref['n']}")
+            continue
+        samples = np.array(ref["samples"])
+        scale = max(float(np.ptp(samples)), float(np.abs(samples).max()), 1e-300)
+        worst = float(np.max(np.abs(x[::FORCE_STRIDE] - samples)))
+        if worst > FORCE_TOLERANCE * scale:
+            out.append(f"{name}: samples differ by {worst / scale:.3g} of the range")
+        for key, value in (("sum", float(x.sum())), ("sum_sq", float(np.square(x).sum()))):
+            if abs(value - ref[key]) > FORCE_TOLERANCE * max(abs(ref[key]), scale * scale * x.size):
+                out.append(f"{name}: {key} {value!r}, saved {ref[key]!r}")
+    return out
 
 
 @pytest.mark.unit
-@pytest.mark.parametrize("name, fidelity", sorted(TODAY))
+@pytest.mark.parametrize("name, fidelity", CASES)
 def test_a_short_slides_samples_are_those_saved_before_the_ring(name, fidelity):
-    """A short slide's tables are computed whole, as before: its codes and forces are the saved ones to the bit."""
+    """A short slide's tables are computed whole, as before: for blocks of 2 s and 37.1 ms its codes are the saved
+    ones (at most two a code apart) and its forces agree with the saved ones within 1e-9 of their range, sample by
+    sample and in sum and sum of squares over every grid sample (a change of the model moves them by far more)."""
+    saved = json.loads(SAVED.read_text())[f"{name}-{fidelity}"]
     texture = {"sand": SAND, "grating": GRATING}[name]
     for block_s in (2.0, 0.0371):
-        got = _fingerprint(*_outputs(texture, fidelity, block_s))
-        assert got == TODAY[(name, fidelity)], (block_s, "floating point may differ on another platform")
+        assert _problems(saved, *_outputs(texture, fidelity, block_s)) == [], block_s
+
+
+def pin() -> None:
+    """Write :data:`SAVED` from the present code, after a deliberate change of the sliding model (say why in the
+    commit): ``.venv/bin/python -m emulator.tests.test_long_slide``."""
+    textures = {"sand": SAND, "grating": GRATING}
+    SAVED.write_text(json.dumps({f"{n}-{f}": _summary(*_outputs(textures[n], f, 2.0)) for n, f in CASES},
+                                separators=(",", ":")) + "\n")
 
 
 def _ring(monkeypatch, tile: int, ring_tiles: int = 3, margin_m: float = 0.01) -> None:
@@ -174,3 +212,7 @@ def test_a_ten_minute_slide_at_10_cm_per_s_keeps_its_memory_and_its_pac_power():
     assert np.all(np.isfinite(power)) and power.min() > 0
     assert np.max(np.abs(power / power.mean() - 1)) < 0.01, power
     assert abs(power.mean() / short["power_V2"][0] - 1) < 0.05  # the same sliding as a short slide's
+
+
+if __name__ == "__main__":
+    pin()
