@@ -325,15 +325,17 @@ def _add_term(a, ring_amp, dent, ring, frac, bulge, first):  # pragma: no cover 
 
 
 @njit(cache=True, error_model="numpy")
-def _gaps_to_volts(frac, bulge, rest_mm, depth, gmin, sheet, series, load, is_open, is_short,
+def _gaps_to_volts(frac, bulge, rest_mm, settled_mm, depth, gmin, sheet, series, load, is_open, is_short,
                    v33_load):  # pragma: no cover - compiled
-    """:func:`_contact_gaps_mm`'s gaps from the summed terms, then :func:`_volts_in_place`, in place in ``frac``:
-    the same operations element by element (max as np.maximum, NaN kept; an open electrode's Z infinite, a shorted
-    one's 0, the short last)."""
+    """:func:`_contact_gaps_mm`'s gaps from the summed terms, less how far a leaking finger's skin has settled
+    (``settled_mm`` (n,), mm: 0 without a leak, and g − 0 is g to the bit), then :func:`_volts_in_place`, in place in
+    ``frac``: the same operations element by element (max as np.maximum, NaN kept; an open electrode's Z infinite, a
+    shorted one's 0, the short last)."""
     n, m = frac.shape
     for i in range(n):
         for j in range(m):
             g = rest_mm[j] - depth * frac[i, j]
+            g = g - settled_mm[i]
             g = g + bulge[i, j]
             g = gmin if g < gmin else g
             z = series + sheet / g
@@ -345,10 +347,11 @@ def _gaps_to_volts(frac, bulge, rest_mm, depth, gmin, sheet, series, load, is_op
     return frac
 
 
-def _contact_volts(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int, open_idx, short_idx) -> np.ndarray:
+def _contact_volts(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int, open_idx, short_idx,
+                   settled_mm: np.ndarray | None = None) -> np.ndarray:
     """``_volts_in_place(p, _contact_gaps_mm(p, rest_mm, terms, n), open_idx, short_idx)`` (n, N), V, in two
     compiled passes (the same bits, tested, with no term too; a third of the time, and no slow broadcasting of a
-    one-row dent)."""
+    one-row dent); a leaking finger's skin settled by ``settled_mm`` (n,) mm at each step."""
     m = rest_mm.size
     frac, bulge = (np.empty((n, m)), np.empty((n, m))) if terms else (np.zeros((n, m)), np.zeros((n, m)))
     for k, (a, ring_amp, dent, ring) in enumerate(terms):
@@ -356,7 +359,8 @@ def _contact_volts(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int, op
                   np.ascontiguousarray(ring, dtype=float), frac, bulge, k == 0)
     is_open, is_short = np.zeros(m, bool), np.zeros(m, bool)
     is_open[list(open_idx)], is_short[list(short_idx)] = True, True
-    return _gaps_to_volts(frac, bulge, np.asarray(rest_mm, float), p.resting_gap_mm - p.minimum_gap_mm,
+    settled = np.zeros(n) if settled_mm is None else np.ascontiguousarray(settled_mm, dtype=float)
+    return _gaps_to_volts(frac, bulge, np.asarray(rest_mm, float), settled, p.resting_gap_mm - p.minimum_gap_mm,
                           p.minimum_gap_mm, p.fluid_sheet_ohm_mm, p.electrode_series_ohm, p.electrode_load_ohm,
                           is_open, is_short, 3.3 * p.electrode_load_ohm)
 
@@ -422,12 +426,13 @@ class ElectrodeModel:
     """Serves E1..EN voltages at conversion instants, the multiplexer's memory included.
 
     ``positions`` : (N, 3) electrode positions on the core, mm (default: the 19 of fixtures/electrodes.csv;
-    the BioTac SP passes its 24).  Fault dicts number electrodes 1..N.
+    the BioTac SP passes its 24).  Fault dicts number electrodes 1..N.  ``leak`` (:class:`emulator.mechanics.
+    FluidLeak`): the skin settles toward the core by the volume lost over the wetted area, thinning every gap alike.
     """
 
     def __init__(self, p: SensorParams, contacts: list[Contact], faults: dict | None = None,
-                 discretization: str = "prewarped", rate_Hz: float = 500.0, *, positions=None):
-        self.p, self.contacts, self.faults = p, contacts, faults or {}
+                 discretization: str = "prewarped", rate_Hz: float = 500.0, *, positions=None, leak=None):
+        self.p, self.contacts, self.faults, self.leak = p, contacts, faults or {}, leak
         self.positions = electrode_positions_mm() if positions is None else np.asarray(positions, float)
         if self.positions.ndim != 2 or self.positions.shape[1] != 3 or self.positions.shape[0] < 1:
             raise ValueError(f"electrode positions: shape {self.positions.shape}, expected (N, 3) in mm with N >= 1")
@@ -496,14 +501,23 @@ class ElectrodeModel:
             a = indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0))
             if a.any():  # a contact whose dent is nil moves no electrode
                 terms.append((a, fp.ring_amp, *fp.shapes(ft)))
-        if not active and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
+        settled = self._settled_mm(t)
+        if not active and settled is None and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
             y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
         else:  # (the gaps stay ≥ g_min > 0: the voltages are finite, electrode_volts' NaN guard is not needed)
-            v = _contact_volts(self.p, self.rest_gaps_mm, terms, n, self._open, self._short)
+            v = _contact_volts(self.p, self.rest_gaps_mm, terms, n, self._open, self._short, settled)
             y, self.zi = filters.lfilter(self.b, self.a, v, self.zi, axis=0)
         self.k += n
         self._hist_t.append(t)
         self._hist.append(y)
+
+    def _settled_mm(self, t: np.ndarray) -> np.ndarray | None:
+        """How far (mm) a leaking finger's skin has settled toward the core at instants ``t`` (s): the volume lost
+        spread over the wetted core area; None while nothing has leaked."""
+        if self.leak is None or t[-1] <= self.leak.start_s:
+            return None
+        lost_mL = self.p.inflation_volume_mL - self.leak.volume_mL(self.p.inflation_volume_mL, t)
+        return lost_mL * 1e-6 / self.p.fluid_wetted_area_m2 * 1e3
 
     def _steps_through(self, t_last: float) -> int:
         """How many steps a lazy model has computed once asked for instants up to ``t_last`` (s): through the first
@@ -526,7 +540,7 @@ class ElectrodeModel:
         """Settled voltage of electrode n (1..N) at each instant (no multiplexer memory)."""
         if times.size == 0:
             return np.zeros(0)
-        if not self.contacts:  # nothing ever touches: every electrode rests (the steady-state shortcut)
+        if not self.contacts and self.leak is None:  # nothing ever touches: every electrode rests (the shortcut)
             return self.rest[electrode - 1]
         t_first, t_last = float(times.min()), float(times.max())
         while self._hist_t[-1][-1] < t_last:

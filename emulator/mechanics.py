@@ -16,6 +16,10 @@
   ``resonance_Hz`` at the nominal 0.5 mL (calibrated); how f moves with inflation is predicted (k_f ∝ dP/dV,
   fluid layer ∝ volume).  Damping: viscous shear in the fluid layer plus the skin's loss factor, the latter
   fixed by ``resonance_decay_s`` at 0.5 mL (calibrated); the decay's change with inflation is predicted.
+* A fluid leak (a mechanical fault, :class:`FluidLeak`; D ch. 3: "the DC pressure component of the signal can be
+  used to detect leakage") lowers the inflation volume with time: the resting pressure follows P(V) down, and a
+  contact's share of the load that reaches the fluid, φ(V), falls with k_f ∝ dP/dV.  The resonance, its decay and
+  the creep keep the run's starting inflation (they move by a few per cent over the first 0.1 mL lost).
 * Skin displacement imposed by an actuator over the loaded area A pushes A·d of liquid, so the pressure
   rises by dP/dV·A·d = (k_f/A)·d — derived from inflation and geometry, like the force slope — through the
   same resonance plus a direct path through the incompressible liquid (a real zero, :class:`VibrationCoupling`).
@@ -67,6 +71,15 @@ def _stiffness(p: SensorParams, volume_mL: float):
     dp_dv = p.resting_pressure_Pa_per_mL * p.resting_pressure_exponent * volume_mL ** (p.resting_pressure_exponent - 1)
     dp_dv *= 1e6  # per mL -> per m³
     return p.skin_load_area_m2**2 * dp_dv, dp_dv
+
+
+def fluid_load_share(p: SensorParams, volume_mL):
+    """φ = k_f/(k_f + k_s) (1, scalar or array): the share of a held contact force the fluid carries at an
+    inflation volume (mL; the skin relaxed, as :func:`skin_fluid`'s ``pressure_per_N_relaxed`` = φ/A).  An empty
+    finger (0 mL) has no fluid stiffness: the core carries everything."""
+    kf = _stiffness(p, np.maximum(volume_mL, 0.0))[0]
+    ks = p.skin_direct_stiffness_N_per_m
+    return np.where(kf > 0.0, kf / np.where(kf > 0.0, kf + ks, 1.0), 0.0) if ks > 0.0 else np.ones_like(kf)
 
 
 def _fluid_mass_and_damping(p: SensorParams, volume_mL: float):
@@ -170,20 +183,49 @@ def skin_resonance(params: SensorParams, fs: float, discretization: str, zero_hz
     return filters.SosFilter(filters.discretize(z, p, k, fs, discretization))
 
 
+@dataclass(frozen=True)
+class FluidLeak:
+    """Fluid leaving the finger (a mechanical fault: a worn seal or a punctured skin): the inflation volume falls
+    by ``rate_mL_per_min`` from ``start_s`` (s) on, until the finger is empty."""
+
+    rate_mL_per_min: float
+    start_s: float = 0.0
+
+    def __post_init__(self):
+        for name, low in (("rate_mL_per_min", 0.0), ("start_s", 0.0)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < low:
+                raise ValueError(f"fluid leak: {name} = {v!r}: must be a finite number ≥ {low:g}")
+
+    def volume_mL(self, volume0_mL: float, t_s) -> np.ndarray:
+        """The inflation volume (mL) at instants ``t_s`` (s) of a finger filled with ``volume0_mL``."""
+        lost = self.rate_mL_per_min / 60.0 * np.maximum(np.asarray(t_s, float) - self.start_s, 0.0)
+        return np.maximum(volume0_mL - lost, 0.0)
+
+    def force_gain(self, p: SensorParams, t_s) -> np.ndarray:
+        """How much of a contact's fluid pressure is left at instants ``t_s`` (1): φ(V(t)) / φ(V₀)."""
+        v0 = p.inflation_volume_mL
+        return fluid_load_share(p, self.volume_mL(v0, t_s)) / fluid_load_share(p, v0)
+
+
 class RestingPressure(Effect):
-    """Resting fluid pressure set by the inflation volume."""
+    """Resting fluid pressure set by the inflation volume (falling with a :class:`FluidLeak`)."""
 
     name = "resting_pressure"
     produces = ("fluid_pressure_Pa",)
 
-    def __init__(self, params: SensorParams):
+    def __init__(self, params: SensorParams, leak: FluidLeak | None = None):
+        self.params, self.leak = params, leak
         self.value = params.resting_pressure_Pa
 
     def settle(self, inputs):
         return {"fluid_pressure_Pa": self.value}
 
     def process(self, block: Block, inputs):
-        return {"fluid_pressure_Pa": np.full(block.n, self.value)}
+        if self.leak is None:
+            return {"fluid_pressure_Pa": np.full(block.n, self.value)}
+        volume = self.leak.volume_mL(self.params.inflation_volume_mL, block.times)
+        return {"fluid_pressure_Pa": self.params.resting_pressure_at(volume)}
 
 
 class ForceCoupling(Effect):
@@ -194,8 +236,8 @@ class ForceCoupling(Effect):
     produces = ("fluid_pressure_Pa",)
     passive = True
 
-    def __init__(self, params: SensorParams, fs: float, discretization: str):
-        self.params = params
+    def __init__(self, params: SensorParams, fs: float, discretization: str, leak: FluidLeak | None = None):
+        self.params, self.leak = params, leak
         sf = skin_fluid(params)
         self.slope = sf.pressure_per_N_relaxed
         # the creep response r·F + (1 − r)·L[F] tends to F under a held force: the relaxed slope then applies
@@ -205,6 +247,8 @@ class ForceCoupling(Effect):
     def process(self, block: Block, inputs):
         crept = self.creep.step(np.maximum(inputs["contact_force_N"], 0.0), block.fs)
         static = static_pressure_from_force(crept, self.params, self.slope)
+        if self.leak is not None:  # less fluid carries less of the load
+            static = static * self.leak.force_gain(self.params, block.times)
         return {"fluid_pressure_Pa": self.filter(static)}
 
 

@@ -229,7 +229,11 @@ class SensorParams:
     @property
     def resting_pressure_Pa(self) -> float:
         """Resting (DC) fluid pressure from the inflation volume."""
-        return self.resting_pressure_Pa_per_mL * self.inflation_volume_mL ** self.resting_pressure_exponent
+        return self.resting_pressure_at(self.inflation_volume_mL)
+
+    def resting_pressure_at(self, volume_mL):
+        """Resting fluid pressure (Pa) at an inflation volume (mL, scalar or array; P = a·V^n)."""
+        return self.resting_pressure_Pa_per_mL * volume_mL ** self.resting_pressure_exponent
 
     def bridge_span_at(self, temperature_C):
         """Bridge output per Pa (V/Pa) at a bridge temperature (°C, scalar or array)."""

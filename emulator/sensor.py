@@ -21,7 +21,7 @@ from emulator.effects import Block, Effect, build_graph
 from emulator.extrinsic import MainsHum
 from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
-from emulator.mechanics import ForceCoupling, RestingPressure, VibrationCoupling
+from emulator.mechanics import FluidLeak, ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
 from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
@@ -36,7 +36,8 @@ from emulator.transducer import Bridge, CoreTemperature, johnson_noise
 CHANNEL_NODE = {ch.PAC: "pac_V", ch.PDC: "pdc_V"}
 #: Kinds of channel in Sensor.analog (grid nodes are 0..len(nodes)-1).
 KIND_TDC, KIND_TAC, KIND_ELECTRODE, KIND_NOT_READ = 100, 101, 102, -1
-FAULT_NAMES = ("electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed")
+FAULT_NAMES = ("electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed", "fluid_leak_mL_per_min",
+               "fluid_leak_start_s")
 
 
 @dataclass(frozen=True)
@@ -128,7 +129,8 @@ class Sensor:
     block_s : physics block length in s (results do not depend on it)
     start_s : the instant (s) at which the sensor starts, settled at rest; earlier instants do not exist
     faults : sensor faults: ``electrode_open``/``electrode_short`` (lists of electrode numbers), ``mux_stuck``
-        (electrode number), ``thermistor`` ("open" or "short"), ``heater_failed`` (True)
+        (electrode number), ``thermistor`` ("open" or "short"), ``heater_failed`` (True), ``fluid_leak_mL_per_min``
+        (mL/min) from ``fluid_leak_start_s`` (s, default 0): a leak (:class:`emulator.mechanics.FluidLeak`)
     record_signals : grid signals besides the channels' nodes to keep for :meth:`signal` (e.g.
         ``"tangential_force_N"`` for a rig's stage current, ``"contact_force_N"`` for the true normal load)
     variant : ``"biotac"`` (19 electrodes, the dissertation's sensor) or ``"biotac-sp"`` (24 electrodes,
@@ -145,6 +147,7 @@ class Sensor:
         unknown_faults = set(self.faults) - set(FAULT_NAMES)
         if unknown_faults:
             raise ValueError(f"unknown sensor fault(s): {', '.join(sorted(unknown_faults))}; known: {', '.join(FAULT_NAMES)}")
+        self.leak = self._fluid_leak()
         stimuli = list(stimuli)
         self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
         self.seed = int(seed)
@@ -219,7 +222,7 @@ class Sensor:
         dynamic = self.thermal is not None
         if dynamic:
             effects.append(CoreTemperature(self.thermal))
-        effects += [RestingPressure(p), ForceCoupling(p, fs, disc), VibrationCoupling(p, fs, disc),
+        effects += [RestingPressure(p, self.leak), ForceCoupling(p, fs, disc, self.leak), VibrationCoupling(p, fs, disc),
                     Bridge(p, fs, disc, duct_resonance=f.duct_resonance, thermal=dynamic,
                            settled_temperature_C=None if dynamic else self.thermal_steady[0])]
         if self.noise.johnson:
@@ -234,6 +237,15 @@ class Sensor:
             effects.append(stage2_noise(p, fs, self.seed))
         effects.append(Stage2(p, fs, disc, own_noise=own_noise))
         return effects
+
+    def _fluid_leak(self) -> FluidLeak | None:
+        """The leak the faults name (None: no leak; a start without a rate is refused)."""
+        rate = self.faults.get("fluid_leak_mL_per_min")
+        if rate is None:
+            if "fluid_leak_start_s" in self.faults:
+                raise ValueError("fluid_leak_start_s is set but fluid_leak_mL_per_min is not: a leak needs its rate")
+            return None
+        return FluidLeak(rate, self.faults.get("fluid_leak_start_s", 0.0))
 
     def _thermal_model(self, stimuli):
         """The thermal network when something thermal happens; otherwise the settled steady state (shortcut)."""
@@ -289,7 +301,7 @@ class Sensor:
                                     s.tangential_N / s.force_N if s.force_N else 0.0, tuple(direction),
                                     s.start_s, s.end_s))
         return ElectrodeModel(self.params, contacts, self.faults, self.fidelity.discretization,
-                              self.fidelity.electrode_rate_Hz, positions=positions)
+                              self.fidelity.electrode_rate_Hz, positions=positions, leak=self.leak)
 
     def _pad_contact(self, motion) -> Contact:
         """The electrodes' contact of a sliding motion: the ventral pad (x = −5 mm, angle 0) on the texture, pressed

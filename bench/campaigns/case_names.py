@@ -16,6 +16,7 @@ FAULT_EXPECTED = {
     "cs_glitch": "chip select toggled with no clock edges: ignored, no errors",
     "serial_corruption": "CRC errors counted, resync, clean frames",
     "serial_loss": "dropped frames counted from sequence numbers",
+    "fluid_leak": "resting PDC falls as the pressure-volume curve predicts",
 }
 
 #: campaign scene name -> its stimuli for sensor 1 ("count × kind: ...", times from power-on), in campaign order

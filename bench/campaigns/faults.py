@@ -70,6 +70,41 @@ def _resyncs(frames, status, stats):
         return "corruption went unnoticed"
 
 
+#: the fluid leak case's rate (mL/min): a punctured skin, which loses ~0.15 mL over a case's 150 frames
+LEAK_CASE_ML_PER_MIN = 6.0
+#: frames the leak case compares at each end of its run (medians: a tap or a drop in them moves nothing)
+LEAK_CASE_FRAMES = 15
+
+
+def _resting_pdc_falls_as_the_fluid_leaks(frames, status, stats):
+    """The resting PDC the driver hands over falls as the pressure–volume curve predicts for the fluid lost
+    between the run's first and last frames (each frame its slots / 4400 s; the leak runs from the sensor's
+    power-on, the first frame within 0.1 s of it): the medians of the first and last :data:`LEAK_CASE_FRAMES` frames' PDC
+    differ by the predicted drop within 15 % + 2 codes."""
+    from bench.hosts.driver import SLOT_RATE_HZ
+    from emulator.channels import PDC
+    from emulator.mechanics import FluidLeak
+    from emulator.params import SensorParams
+    from emulator.units import derived
+
+    p = SensorParams()
+    good = [f for f in frames if f.ok[f.channels == PDC, 0].all()]
+    if len(good) < 4 * LEAK_CASE_FRAMES:
+        return f"only {len(good)} frames with a clean PDC"
+    first, last = good[:LEAK_CASE_FRAMES], good[-LEAK_CASE_FRAMES:]
+    pdc = [float(np.median(np.concatenate([f.codes[f.channels == PDC, 0] for f in part]))) for part in (first, last)]
+    frame_s = len(frames[0].channels) / SLOT_RATE_HZ
+    span_s = (np.median([f.seq for f in last]) - np.median([f.seq for f in first])) * frame_s
+    leak = FluidLeak(LEAK_CASE_ML_PER_MIN)
+    drops = [(p.resting_pressure_at(leak.volume_mL(p.inflation_volume_mL, t0))
+              - p.resting_pressure_at(leak.volume_mL(p.inflation_volume_mL, t0 + span_s))) / derived(p)["PDC_Pa_per_bit"]
+             for t0 in (0.0, 0.1)]
+    drop = pdc[0] - pdc[1]
+    if not min(drops) / 1.15 - 2 <= drop <= max(drops) * 1.15 + 2:
+        return (f"resting PDC fell by {drop:.1f} codes over {span_s:.2f} s; the leak predicts "
+                f"{min(drops):.1f} to {max(drops):.1f}")
+
+
 def _clean(frames, status, stats):
     flagged = sum(int((f.status != 0).sum()) for f in frames)
     if stats.crc_errors or stats.dropped_frames or flagged:
@@ -90,6 +125,8 @@ FAULT_CASES = {
     "cs_glitch": ({}, [(0.1 + 0.05 * k, lambda b: b.glitch(1)) for k in range(10)], _clean),
     "serial_corruption": ({"corrupt_rate": 5e-4}, [], _resyncs),
     "serial_loss": ({"drop_rate": 5e-4}, [], _resyncs),
+    "fluid_leak": ({"sensor_faults": {"fluid_leak_mL_per_min": LEAK_CASE_ML_PER_MIN}}, [],
+                   _resting_pdc_falls_as_the_fluid_leaks),
 }
 
 #: The campaign's faults, in :data:`~bench.campaigns.case_names.FAULT_EXPECTED`'s order with its expected reactions.
@@ -149,13 +186,18 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) 
     """One fault in one scene: the verdict (``passed``, ``problem``), what was expected, and ``seconds`` (the case's
     wall time, s).  A crash or hang of the firmware or driver is this case's failure, never an exception."""
     from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cosim import default_sensors
     from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, BridgeDriver, Status
     from emulator.channels import PAC
 
     t0 = time.perf_counter()
     problem = None
     try:
-        fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, **{"n_sensors": 1, **fault.bench_kw})
+        kw = {"n_sensors": 1, **fault.bench_kw}
+        sensor_faults = kw.pop("sensor_faults", None)
+        if sensor_faults:  # the sensors the bench would build, with these faults of their own
+            kw["sensors"] = default_sensors(kw["n_sensors"], SCENES[scene], seed, faults=sensor_faults)
+        fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, **kw)
         _schedule_after_start(fb.board, fault.schedule)
         with fb:
             drv = BridgeDriver(fb.port)

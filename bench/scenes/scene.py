@@ -563,8 +563,13 @@ def _skin(c: _Checker, table) -> tuple[Skin, bool]:
                 wear_coefficient=k if k is not None else Skin().wear_coefficient), wear
 
 
-def _faults(c: _Checker, table: dict) -> dict:
-    c.known_keys(table, "faults", {"electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed"})
+#: the fastest fluid leak a scene may set (mL/min): a punctured skin empties the 0.5 mL finger in half a second
+MAX_LEAK_ML_PER_MIN = 60.0
+
+
+def _faults(c: _Checker, table: dict, duration) -> dict:
+    c.known_keys(table, "faults", {"electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed",
+                                   "fluid_leak_mL_per_min", "fluid_leak_start_s"})
     out = {}
     for key in ("electrode_open", "electrode_short"):
         if key in table:
@@ -593,6 +598,19 @@ def _faults(c: _Checker, table: dict) -> dict:
             out["thermistor"] = v
     if c.boolean(table, "heater_failed", "faults", False):
         out["heater_failed"] = True
+    rate = c.number(table, "fluid_leak_mL_per_min", "faults", 0.0, MAX_LEAK_ML_PER_MIN, "mL/min")
+    if "fluid_leak_start_s" in table and "fluid_leak_mL_per_min" not in table:
+        c.problems.append(f"faults.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: a leak needs its rate too "
+                          f"(faults.fluid_leak_mL_per_min, 0 to {MAX_LEAK_ML_PER_MIN:g} mL/min)")
+    elif rate is not None:
+        out["fluid_leak_mL_per_min"] = float(rate)
+        if isinstance(table.get("fluid_leak_start_s"), list):
+            c.problems.append(f"faults.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: one instant (s), "
+                              f"not a list: a leak starts once")
+        elif "fluid_leak_start_s" in table:
+            out["fluid_leak_start_s"] = next(iter(c.times(table, "fluid_leak_start_s", "faults", duration)), None)
+            if out["fluid_leak_start_s"] is None:
+                del out["fluid_leak_start_s"]
     return out
 
 
@@ -875,7 +893,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                     c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
                                       f"({a.start_s} s to {a.end_s:.3f} s)")
     faults = _faults(c, c.table(data, "faults", "electrode_open, electrode_short, mux_stuck, thermistor, "
-                                               "heater_failed"))
+                                               "heater_failed, fluid_leak_mL_per_min, fluid_leak_start_s"), duration)
     analysis = c.table(data, "analysis", "impact_detection = true | false")
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
