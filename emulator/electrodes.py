@@ -325,17 +325,17 @@ def _add_term(a, ring_amp, dent, ring, frac, bulge, first):  # pragma: no cover 
 
 
 @njit(cache=True, error_model="numpy")
-def _gaps_to_volts(frac, bulge, rest_mm, settled_mm, depth, gmin, sheet, series, load, is_open, is_short,
+def _gaps_to_volts(frac, bulge, rest_mm, lost, depth, gmin, sheet, series, load, is_open, is_short,
                    v33_load):  # pragma: no cover - compiled
-    """:func:`_contact_gaps_mm`'s gaps from the summed terms, less how far a leaking finger's skin has settled
-    (``settled_mm`` (n,), mm: 0 without a leak, and g − 0 is g to the bit), then :func:`_volts_in_place`, in place in
-    ``frac``: the same operations element by element (max as np.maximum, NaN kept; an open electrode's Z infinite, a
-    shorted one's 0, the short last)."""
+    """:func:`_contact_gaps_mm`'s gaps from the summed terms, each resting gap thinned by the share of its fluid a
+    leaking finger has lost (``lost`` (n,), 1: 0 without a leak, and g − 0 is g to the bit), then
+    :func:`_volts_in_place`, in place in ``frac``: the same operations element by element (max as np.maximum, NaN
+    kept; an open electrode's Z infinite, a shorted one's 0, the short last)."""
     n, m = frac.shape
     for i in range(n):
         for j in range(m):
             g = rest_mm[j] - depth * frac[i, j]
-            g = g - settled_mm[i]
+            g = g - rest_mm[j] * lost[i]
             g = g + bulge[i, j]
             g = gmin if g < gmin else g
             z = series + sheet / g
@@ -348,10 +348,10 @@ def _gaps_to_volts(frac, bulge, rest_mm, settled_mm, depth, gmin, sheet, series,
 
 
 def _contact_volts(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int, open_idx, short_idx,
-                   settled_mm: np.ndarray | None = None) -> np.ndarray:
+                   lost: np.ndarray | None = None) -> np.ndarray:
     """``_volts_in_place(p, _contact_gaps_mm(p, rest_mm, terms, n), open_idx, short_idx)`` (n, N), V, in two
     compiled passes (the same bits, tested, with no term too; a third of the time, and no slow broadcasting of a
-    one-row dent); a leaking finger's skin settled by ``settled_mm`` (n,) mm at each step."""
+    one-row dent); a leaking finger's resting gaps thinned by the share of its fluid lost, ``lost`` (n,), each step."""
     m = rest_mm.size
     frac, bulge = (np.empty((n, m)), np.empty((n, m))) if terms else (np.zeros((n, m)), np.zeros((n, m)))
     for k, (a, ring_amp, dent, ring) in enumerate(terms):
@@ -359,8 +359,8 @@ def _contact_volts(p: SensorParams, rest_mm: np.ndarray, terms: list, n: int, op
                   np.ascontiguousarray(ring, dtype=float), frac, bulge, k == 0)
     is_open, is_short = np.zeros(m, bool), np.zeros(m, bool)
     is_open[list(open_idx)], is_short[list(short_idx)] = True, True
-    settled = np.zeros(n) if settled_mm is None else np.ascontiguousarray(settled_mm, dtype=float)
-    return _gaps_to_volts(frac, bulge, np.asarray(rest_mm, float), settled, p.resting_gap_mm - p.minimum_gap_mm,
+    lost = np.zeros(n) if lost is None else np.ascontiguousarray(lost, dtype=float)
+    return _gaps_to_volts(frac, bulge, np.asarray(rest_mm, float), lost, p.resting_gap_mm - p.minimum_gap_mm,
                           p.minimum_gap_mm, p.fluid_sheet_ohm_mm, p.electrode_series_ohm, p.electrode_load_ohm,
                           is_open, is_short, 3.3 * p.electrode_load_ohm)
 
@@ -427,7 +427,7 @@ class ElectrodeModel:
 
     ``positions`` : (N, 3) electrode positions on the core, mm (default: the 19 of fixtures/electrodes.csv;
     the BioTac SP passes its 24).  Fault dicts number electrodes 1..N.  ``leak`` (:class:`emulator.mechanics.
-    FluidLeak`): the skin settles toward the core by the volume lost over the wetted area, thinning every gap alike.
+    FluidLeak`): each resting gap thins with the share of the fluid lost, down to the core when the finger is empty.
     """
 
     def __init__(self, p: SensorParams, contacts: list[Contact], faults: dict | None = None,
@@ -501,23 +501,24 @@ class ElectrodeModel:
             a = indentation_fraction(self.p, np.maximum(cr.step(f, self.rate_Hz), 0.0))
             if a.any():  # a contact whose dent is nil moves no electrode
                 terms.append((a, fp.ring_amp, *fp.shapes(ft)))
-        settled = self._settled_mm(t)
-        if not active and settled is None and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
+        lost = self._fluid_lost(t)
+        if not active and lost is None and np.abs(self.zi - self.zi_rest).max() <= 1e-12:
             y = np.broadcast_to(self.rest, (n, self.n))  # nothing touching and the filter settled: rest
         else:  # (the gaps stay ≥ g_min > 0: the voltages are finite, electrode_volts' NaN guard is not needed)
-            v = _contact_volts(self.p, self.rest_gaps_mm, terms, n, self._open, self._short, settled)
+            v = _contact_volts(self.p, self.rest_gaps_mm, terms, n, self._open, self._short, lost)
             y, self.zi = filters.lfilter(self.b, self.a, v, self.zi, axis=0)
         self.k += n
         self._hist_t.append(t)
         self._hist.append(y)
 
-    def _settled_mm(self, t: np.ndarray) -> np.ndarray | None:
-        """How far (mm) a leaking finger's skin has settled toward the core at instants ``t`` (s): the volume lost
-        spread over the wetted core area; None while nothing has leaked."""
+    def _fluid_lost(self, t: np.ndarray) -> np.ndarray | None:
+        """The share (1) of its fluid a leaking finger has lost at instants ``t`` (s): every resting gap thins by it
+        (the fluid layer in proportion to the volume, as the mean layer is volume / wetted area); None while nothing
+        has leaked."""
         if self.leak is None or t[-1] <= self.leak.start_s:
             return None
-        lost_mL = self.p.inflation_volume_mL - self.leak.volume_mL(self.p.inflation_volume_mL, t)
-        return lost_mL * 1e-6 / self.p.fluid_wetted_area_m2 * 1e3
+        v0 = self.p.inflation_volume_mL
+        return 1.0 - self.leak.volume_mL(v0, t) / v0
 
     def _steps_through(self, t_last: float) -> int:
         """How many steps a lazy model has computed once asked for instants up to ``t_last`` (s): through the first

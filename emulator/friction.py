@@ -35,7 +35,7 @@ without slipping feels no ridge force, and a ridge deflected by a slip keeps pus
 direction a ridge over a positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per
 length × its chord across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes),
 releases to it within the step; over a negative limit (a feature's back) it follows it.  The tangential force
-gains ``Σ F_j`` less its mean while slipping, ``c·µ_r·N`` (``µ_r``, :func:`ridge_friction_coefficients`: the
+gains ``Σ F_j`` less its mean while the ridges move, ``µ_r·N`` (``µ_r``, :func:`ridge_friction_coefficients`: the
 ridges' catch-and-release dissipates, a share of friction the texture's measured µ holds already, so the skin's
 stick-slip keeps that µ and the ridges add their fluctuation about their mean); rigid ridges (``k_j`` → ∞,
 ``µ_r`` = 0) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a
@@ -468,9 +468,10 @@ def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffne
     (:func:`_ridges_step` in slips of half a table step, at the load N = (r / ``radius_1N``)³ that makes radius r
     and its texture series factor, averaged after the first :data:`RIDGE_FRICTION_SETTLE` of the travel).  A
     texture's measured friction coefficient is a fingertip's, ridges included, so while the skin slips the step
-    adds the ridges' force less this mean (times the load and the catch factor).  Compliant ridges dissipate what
-    they store at each release (Prandtl–Tomlinson), so this is positive; rigid ridges (``stiffness_per_length`` inf,
-    the comb) or no gain store nothing: 0.  The ridges move only with the slip, not with time, so the slide's speed
+    adds the ridges' force less this mean times the load while the ridges move.  Compliant ridges dissipate what
+    they store at each release (Prandtl–Tomlinson), so this is positive on rough tracks and ~0 on smooth ones (a
+    numerically tiny negative mean is taken as 0); rigid ridges (``stiffness_per_length`` inf, the comb) or no gain
+    store nothing: 0.  The ridges move only with the slip, not with time, so the slide's speed
     does not enter."""
     out = np.zeros(radii.size)
     if gain == 0.0 or math.isinf(stiffness_per_length) or stiffness_per_length == 0.0:
@@ -492,7 +493,7 @@ def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffne
             force, _, _ = _ridges_step(state, crest, shifts, shares, stiffness, n * slip, dx, scale, 1.0, slip, 0.0)
             if n >= settle:
                 total += force
-        out[k] = total / (steps - settle) / load
+        out[k] = max(total / (steps - settle) / load, 0.0)  # (dissipation: ≥ 0; ~1e-5 below on smooth tracks)
     return out
 
 
@@ -623,7 +624,9 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                 ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                          ridge_stiffness, p, dx, normal * series * ridge_gain,
                                                          catching, vr * h, slip_floor)
-                ridge_mean = catching * mu_ridges * normal if vr > 0.0 else -catching * mu_ridges * normal
+                # (their mean while they move: a slip below the floor moves no ridge and takes no share)
+                moving = abs(vr * h) >= slip_floor
+                ridge_mean = math.copysign(mu_ridges * normal, vr) if moving else 0.0
                 releases += events
                 released += drop
             x += u * h

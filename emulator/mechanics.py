@@ -18,8 +18,9 @@
   fixed by ``resonance_decay_s`` at 0.5 mL (calibrated); the decay's change with inflation is predicted.
 * A fluid leak (a mechanical fault, :class:`FluidLeak`; D ch. 3: "the DC pressure component of the signal can be
   used to detect leakage") lowers the inflation volume with time: the resting pressure follows P(V) down, and a
-  contact's share of the load that reaches the fluid, φ(V), falls with k_f ∝ dP/dV.  The resonance, its decay and
-  the creep keep the run's starting inflation (they move by a few per cent over the first 0.1 mL lost).
+  contact's share of the load that reaches the fluid, φ(V), and the pressure a skin displacement makes, k_f/A, fall
+  with k_f ∝ dP/dV.  The resonance, its decay, the creep and the 2 N knee keep the run's starting inflation (the
+  resonance moves by a few per cent over the first 0.1 mL lost).
 * Skin displacement imposed by an actuator over the loaded area A pushes A·d of liquid, so the pressure
   rises by dP/dV·A·d = (k_f/A)·d — derived from inflation and geometry, like the force slope — through the
   same resonance plus a direct path through the incompressible liquid (a real zero, :class:`VibrationCoupling`).
@@ -207,6 +208,12 @@ class FluidLeak:
         v0 = p.inflation_volume_mL
         return fluid_load_share(p, self.volume_mL(v0, t_s)) / fluid_load_share(p, v0)
 
+    def stiffness_gain(self, p: SensorParams, t_s) -> np.ndarray:
+        """How much of the fluid stiffness k_f ∝ dP/dV is left at instants ``t_s`` (1): k_f(V(t)) / k_f(V₀), the
+        pressure a skin displacement makes (:class:`VibrationCoupling`)."""
+        v0 = p.inflation_volume_mL
+        return _stiffness(p, self.volume_mL(v0, t_s))[0] / _stiffness(p, v0)[0]
+
 
 class RestingPressure(Effect):
     """Resting fluid pressure set by the inflation volume (falling with a :class:`FluidLeak`)."""
@@ -214,12 +221,15 @@ class RestingPressure(Effect):
     name = "resting_pressure"
     produces = ("fluid_pressure_Pa",)
 
-    def __init__(self, params: SensorParams, leak: FluidLeak | None = None):
+    def __init__(self, params: SensorParams, leak: FluidLeak | None = None, start_s: float = 0.0):
         self.params, self.leak = params, leak
         self.value = params.resting_pressure_Pa
+        # the sensor starts settled at the pressure of the fluid left by then (a leak may have begun before)
+        self.start_value = self.value if leak is None else \
+            float(params.resting_pressure_at(leak.volume_mL(params.inflation_volume_mL, start_s)))
 
     def settle(self, inputs):
-        return {"fluid_pressure_Pa": self.value}
+        return {"fluid_pressure_Pa": self.start_value}
 
     def process(self, block: Block, inputs):
         if self.leak is None:
@@ -260,9 +270,13 @@ class VibrationCoupling(Effect):
     produces = ("fluid_pressure_Pa",)
     passive = True
 
-    def __init__(self, params: SensorParams, fs: float, discretization: str):
+    def __init__(self, params: SensorParams, fs: float, discretization: str, leak: FluidLeak | None = None):
+        self.params, self.leak = params, leak
         self.gain = skin_fluid(params).pressure_per_displacement_Pa_per_m
         self.filter = skin_resonance(params, fs, discretization, zero_hz=params.displacement_zero_Hz)
 
     def process(self, block: Block, inputs):
-        return {"fluid_pressure_Pa": self.gain * self.filter(inputs["skin_displacement_m"])}
+        pressure = self.gain * self.filter(inputs["skin_displacement_m"])
+        if self.leak is not None:  # less fluid, a softer fluid path: k_f/A per metre of skin pushed in
+            pressure = pressure * self.leak.stiffness_gain(self.params, block.times)
+        return {"fluid_pressure_Pa": pressure}

@@ -148,6 +148,9 @@ class Sensor:
         if unknown_faults:
             raise ValueError(f"unknown sensor fault(s): {', '.join(sorted(unknown_faults))}; known: {', '.join(FAULT_NAMES)}")
         self.leak = self._fluid_leak()
+        if not (np.isfinite(start_s) and start_s >= 0):
+            raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
+        self._start_s = float(start_s)
         stimuli = list(stimuli)
         self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
         self.seed = int(seed)
@@ -188,8 +191,6 @@ class Sensor:
             else:
                 self._node_of_channel[c] = KIND_ELECTRODE
         self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self._kept}
-        if not (np.isfinite(start_s) and start_s >= 0):
-            raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
         self._slow_cost = {"thermal": 0.0, "electrodes": 0.0}  # wall time of the slow models, s
         self._buf_n0 = int(np.ceil(start_s * self.fs))  # grid index of the first retained sample
         self._computed = self._buf_n0  # next grid index to compute
@@ -222,7 +223,8 @@ class Sensor:
         dynamic = self.thermal is not None
         if dynamic:
             effects.append(CoreTemperature(self.thermal))
-        effects += [RestingPressure(p, self.leak), ForceCoupling(p, fs, disc, self.leak), VibrationCoupling(p, fs, disc),
+        effects += [RestingPressure(p, self.leak, self._start_s), ForceCoupling(p, fs, disc, self.leak),
+                    VibrationCoupling(p, fs, disc, self.leak),
                     Bridge(p, fs, disc, duct_resonance=f.duct_resonance, thermal=dynamic,
                            settled_temperature_C=None if dynamic else self.thermal_steady[0])]
         if self.noise.johnson:

@@ -59,7 +59,8 @@ scene file (TOML):
      replace_skin at_s   (a fresh skin between slides)
   [skin]     fingerprints = true | false, ridge_height_um (200 = new), wear = true, wear_coefficient (7.7e-6)
   [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
-             heater_failed = true
+             heater_failed = true, fluid_leak_mL_per_min (0..60) from fluid_leak_start_s (0): a leak
+             (every sensor of the scene has the scene's faults)
 
 Every at_s / start_s may be a list: one stimulus per instant (power_on and heater_failure happen once per sensor).
 Every [[stimulus]] may name its sensor: sensor = 2 (default 1); it reaches that sensor only.

@@ -85,19 +85,61 @@ def test_a_press_reaches_the_fluid_less_as_the_finger_empties():
 
 
 @pytest.mark.unit
-def test_the_electrodes_read_a_gap_thinned_by_the_volume_lost_over_the_wetted_area():
-    """Derived: the skin settles toward the core by ΔV / A (0.1 mm per 0.1 mL over the 1000 mm² wetted core), so each
-    electrode reads the voltage of its resting gap less that (within 1 code); the codes fall (a thinner sheet of
-    fluid, a higher impedance), the same for every electrode's gap alike."""
-    t = np.array([0.5, 0.5005, 61.0, 61.0005])
-    codes = Sensor(channels_read=["E1", "E10"], faults=LEAK, noise=QUIET).sample(np.array([E1, E10, E1, E10]), t)
+def test_the_electrodes_read_gaps_thinned_with_the_fluid_lost():
+    """Derived: each resting gap thins with the share of the fluid lost (the layer in proportion to the volume: a
+    fifth thinner after 0.1 mL of 0.5 mL), so each electrode reads its thinner gap's voltage (within 1 code); the
+    codes fall (a thinner sheet of fluid, a higher impedance); an empty finger's skin rests on the core (g_min)."""
+    # each electrode read twice in a row: the multiplexer keeps 0.67 % of the conversion before, its own then
+    t = np.array([0.5, 0.5002, 0.5004, 0.5006, 61.0, 61.0002, 61.0004, 61.0006])
+    codes = Sensor(channels_read=["E1", "E10"], faults=LEAK, noise=QUIET).sample(
+        np.array([E1, E1, E10, E10] * 2), t).astype(int)
     gaps = resting_gaps_mm(P, 19)
-    settled = (P.inflation_volume_mL - _volume(61.0)) * 1e-6 / P.fluid_wetted_area_m2 * 1e3
-    assert settled == pytest.approx(0.1, rel=1e-9)
-    for k, electrode in ((2, 0), (3, 9)):
-        volts = electrode_volts(P, (gaps - settled)[None, :])[0, electrode]
+    lost = 1.0 - _volume(61.0) / P.inflation_volume_mL
+    assert lost == pytest.approx(0.2, rel=1e-9)
+    for k, electrode in ((5, 0), (7, 9)):
+        volts = electrode_volts(P, (gaps * (1.0 - lost))[None, :])[0, electrode]
         assert codes[k] == pytest.approx(volts / 3.3 * 4096, abs=1.0)
-        assert codes[k] < codes[k - 2] - 20
+        assert codes[k] < codes[k - 4] - 50
+    empty = Sensor(channels_read=["E1"], faults=PUNCTURE, noise=QUIET).sample(np.array([E1] * 3),
+                                                                             np.array([6.0, 6.0002, 6.0004]))
+    floor = electrode_volts(P, np.full((1, 19), P.minimum_gap_mm))[0, 0]
+    assert empty[-1] == pytest.approx(floor / 3.3 * 4096, abs=1.0)
+
+
+@pytest.mark.unit
+def test_a_sensor_started_after_the_leak_began_starts_at_the_pressure_left():
+    """Consistency: a sensor started at 3 s on a finger leaking since 0 s reads what one started at 0 s reads then
+    (noise off): PDC within 1 code from its first instant — it settles at the fluid left (settled at the full
+    finger's pressure, it stepped down 80 codes and railed PAC at 0) — and PAC within 1 code from 60 ms on: PAC's
+    10 Hz high-pass settles at rest, while on the falling pressure it had carried a 34-code offset, which decays."""
+    t = np.array([3.0, 3.001, 3.01, 3.06, 3.1, 3.5])
+    pac, pdc = ([Sensor(channels_read=["PAC", "PDC"], faults=PUNCTURE, noise=QUIET, start_s=start)
+                 .sample(np.full(t.size, channel), t).astype(int) for start in (0.0, 3.0)] for channel in (PAC, PDC))
+    assert np.max(np.abs(pdc[0] - pdc[1])) <= 1, pdc
+    assert np.max(np.abs(pac[0] - pac[1])[3:]) <= 1, pac
+    assert np.all(np.abs(pac[1] - 2048) < 60), pac  # nowhere near a rail
+
+
+@pytest.mark.unit
+def test_a_skin_displacement_makes_less_pressure_as_the_finger_empties():
+    """Prediction: a displaced skin pushes fluid against its stiffness k_f ∝ dP/dV ∝ √V, so a 100 Hz, 2 µm
+    vibration's PAC swing falls as √(V/V₀) — to 0.45 of a healthy finger's with 0.1 mL left (within 3 % + 1 code) —
+    and to nothing on an emptied finger."""
+    from emulator.stimuli import Vibration
+
+    vib = [Vibration(22.0, 2.0, 2e-6, 100.0)]
+    t = np.arange(23.0, 23.5, 1 / 4400.0)
+
+    def swing(faults):
+        c = Sensor(stimuli=vib, channels_read=["PAC"], faults=faults, noise=QUIET).sample(np.full(t.size, PAC), t)
+        return float(np.ptp(c.astype(int)))
+
+    healthy = swing({})
+    leaking = swing({"fluid_leak_mL_per_min": 1.0, "fluid_leak_start_s": 0.0})  # 0.117 to 0.108 mL left
+    gain = FluidLeak(1.0).stiffness_gain(P, 23.25)
+    assert 0.44 < gain < 0.48 and healthy > 30
+    assert leaking == pytest.approx(gain * healthy, rel=0.03, abs=1.0)
+    assert swing(PUNCTURE) <= 1
 
 
 @pytest.mark.unit

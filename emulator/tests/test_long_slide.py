@@ -89,8 +89,9 @@ def _problems(saved: dict, codes: np.ndarray, signals: list[np.ndarray]) -> list
         worst = float(np.max(np.abs(x[::FORCE_STRIDE] - samples)))
         if worst > FORCE_TOLERANCE * scale:
             out.append(f"{name}: samples differ by {worst / scale:.3g} of the range")
-        for key, value in (("sum", float(x.sum())), ("sum_sq", float(np.square(x).sum()))):
-            if abs(value - ref[key]) > FORCE_TOLERANCE * max(abs(ref[key]), scale * scale * x.size):
+        for key, value, bound in (("sum", float(x.sum()), scale * x.size),
+                                  ("sum_sq", float(np.square(x).sum()), scale * scale * x.size)):
+            if abs(value - ref[key]) > FORCE_TOLERANCE * max(abs(ref[key]), bound):
                 out.append(f"{name}: {key} {value!r}, saved {ref[key]!r}")
     return out
 

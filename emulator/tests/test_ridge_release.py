@@ -270,32 +270,57 @@ def test_caught_crests_add_friction_as_prandtl_tomlinson_predicts(force):
 
 
 @pytest.mark.unit
-@pytest.mark.parametrize("force", [0.2, 1.26])
-@pytest.mark.parametrize("texture", [SAND, GRATING], ids=["sand", "grating"])
-def test_the_textures_measured_friction_holds_the_ridges_share(texture, force):
-    """Consistency: a texture's µ is a fingertip's, ridges included, so the resolved ridges add their force about
-    its mean (the quasi-static share µ_r × load × the catch factor) and the steady friction stays the comb's within
-    8 % (measured: ≤ 1 % at 0.2 N; +5.7 % on sand at 1.26 N and 1 cm/s, where the skin sticks now and then and its
-    deflected ridges keep pushing while the catch factor drops; without the share +12 to +41 %), while the ridges'
-    snaps remain (the resolved force differs from the comb's)."""
-    slide = _slide(texture, force=force, distance=0.006)
+@pytest.mark.parametrize("force, tolerance", [(0.2, 0.03), (0.5, 0.03), (1.26, 0.08)])
+def test_the_textures_measured_friction_holds_the_ridges_share(force, tolerance):
+    """Consistency: a texture's µ is a fingertip's, ridges included, so while they move the resolved ridges add
+    their force less its mean µ_r × load, and the steady friction over sandpaper at 1 cm/s stays the comb's: within
+    3 % at 0.2 and 0.5 N (measured −0.5 % and −1.5 %; without the share +5 % and +13 %) and 8 % at 1.26 N
+    (measured +5 %, where the skin sticks now and then and its deflected ridges push while it sticks; without the
+    share +25 %), while the ridges' snaps remain (the resolved force differs from the comb's)."""
+    slide = _slide(force=force, distance=0.006)
     _, resolved = _run(slide)
     _, comb = _run(slide, "effective")
     mu_resolved, mu_comb = (_steady_friction_coefficient(o, slide) for o in (resolved, comb))
-    assert mu_resolved == pytest.approx(mu_comb, rel=0.08)
+    assert mu_resolved == pytest.approx(mu_comb, rel=tolerance)
     scale = np.max(np.abs(comb["tangential_force_N"]))
     assert np.max(np.abs(resolved["tangential_force_N"] - comb["tangential_force_N"])) > 1e-3 * scale
 
 
 @pytest.mark.unit
+def test_the_share_is_taken_only_while_the_ridges_move():
+    """Consistency: before the skin first slips (the stage started, the skin stuck) no ridge moves, so nothing is
+    taken off: the tangential force is the one made with no share at all, to the bit; once it slides it is not.
+    A smooth track's share is ~0 and never negative (a rough one's positive)."""
+    slide = _slide(force=1.0, distance=0.003)
+    contact, with_share = _run(slide)
+    zero = SlidingContact([slide], SensorParams(), GRID.grid_Hz, GRID.sliding_dx_m, GRID.friction_substeps,
+                          GRID.patch_radii, 3, ridges="resolved")
+    zero._contacts[0]["ridge_parts"][5][:] = 0.0
+    without = zero.process(Block(0, with_share["tangential_force_N"].size, GRID.grid_Hz), {})
+    slip = np.abs(with_share["tangential_force_N"] - without["tangential_force_N"]) > 0
+    first = int(np.argmax(slip))
+    t_first = first / GRID.grid_Hz
+    assert slide.slide_start_s + 0.02 < t_first < slide.slide_end_s  # the stick phase lasts ~50 ms
+    assert np.array_equal(with_share["tangential_force_N"][:first], without["tangential_force_N"][:first])
+    assert np.all(contact._contacts[0]["ridge_parts"][5] > 0)
+    for texture in (SMOOTH, GRATING):  # (no slope at all; a fine slope whose mean came out −3e-5 before the clamp)
+        smooth = SlidingContact([_slide(texture)], SensorParams(), GRID.grid_Hz, GRID.sliding_dx_m,
+                                GRID.friction_substeps, GRID.patch_radii, 3, ridges="resolved")
+        assert np.all(smooth._contacts[0]["ridge_parts"][5] >= 0.0)
+        assert np.all(smooth._contacts[0]["ridge_parts"][5] < 1e-3)
+
+
+@pytest.mark.unit
 def test_the_mean_friction_converges_as_the_texture_step_shrinks():
     """Consistency: with the ridges' share held by the texture's µ, the steady friction at texture steps of 5, 2.5
-    and 1.25 µm stays within 5 % of one another (without it the resolved ridges' mean force grew with each halving,
-    1.12 → 1.22 × the comb's from 10 to 1.25 µm)."""
+    and 1.25 µm is the comb's within 2 % at each (measured 0.998, 1.002, 1.003; without the share it grew with each
+    halving, 1.19, 1.23, 1.25 × the comb's)."""
     slide = _slide(distance=0.005)
-    mus = [_steady_friction_coefficient(_run(slide, grid=dataclasses.replace(GRID, sliding_dx_m=dx))[1], slide)
-           for dx in (5e-6, 2.5e-6, 1.25e-6)]
-    assert max(mus) / min(mus) - 1 < 0.05, mus
+    for dx in (5e-6, 2.5e-6, 1.25e-6):
+        grid = dataclasses.replace(GRID, sliding_dx_m=dx)
+        ratio = (_steady_friction_coefficient(_run(slide, grid=grid)[1], slide)
+                 / _steady_friction_coefficient(_run(slide, "effective", grid=grid)[1], slide))
+        assert ratio == pytest.approx(1.0, abs=0.02), (dx, ratio)
 
 
 def _events_per_s(contact, t0: float, t1: float) -> float:
