@@ -563,20 +563,34 @@ def _skin(c: _Checker, table) -> tuple[Skin, bool]:
                 wear_coefficient=k if k is not None else Skin().wear_coefficient), wear
 
 
-#: the fastest fluid leak a scene may set (mL/min): a punctured skin empties the 0.5 mL finger in half a second
+def _variant_electrodes(name: str) -> int:
+    """How many electrodes a sensor variant has (19 for a name that is no variant: that problem is reported where
+    the variant is read)."""
+    from emulator.channels import VARIANTS, variant
+
+    return variant(name).n_electrodes if name in VARIANTS else 19
+
+
+def _every_sensor(n_electrodes: int) -> str:
+    """What a 19-electrode limit means in a scene with a BioTac SP (its E20..E24 cannot be faulted scene-wide)."""
+    return "" if n_electrodes > 19 else " (every sensor of the scene has its [faults]; E20..E24 only when every " \
+                                        "sensor is a \"biotac-sp\")"
 MAX_LEAK_ML_PER_MIN = 60.0
 
 
-def _faults(c: _Checker, table: dict, duration) -> dict:
+def _faults(c: _Checker, table: dict, duration, n_electrodes: int = 19) -> dict:
+    """The scene's sensor faults (every sensor of the scene has them, so electrode numbers run 1..``n_electrodes``,
+    the fewest any of its sensors has)."""
     c.known_keys(table, "faults", {"electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed",
                                    "fluid_leak_mL_per_min", "fluid_leak_start_s"})
     out = {}
     for key in ("electrode_open", "electrode_short"):
         if key in table:
             v = table[key]
-            if not isinstance(v, list) or not all(isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= 19
-                                                  for n in v):
-                c.problems.append(f"faults.{key} = {_r(v)}: a list of electrode numbers 1..19")
+            if not isinstance(v, list) or not all(isinstance(n, int) and not isinstance(n, bool)
+                                                  and 1 <= n <= n_electrodes for n in v):
+                c.problems.append(f"faults.{key} = {_r(v)}: a list of electrode numbers 1..{n_electrodes}"
+                                  + _every_sensor(n_electrodes))
             elif len(set(v)) < len(v):
                 twice = sorted({n for n in v if v.count(n) > 1})
                 c.problems.append(f"faults.{key} = {_r(v)}: electrode {', '.join(map(str, twice))} listed more "
@@ -589,7 +603,7 @@ def _faults(c: _Checker, table: dict, duration) -> dict:
                           f"{_r(out['electrode_open'])}) and shorted (faults.electrode_short = "
                           f"{_r(out['electrode_short'])}); an electrode is one or the other")
     if "mux_stuck" in table:
-        n = c.number(table, "mux_stuck", "faults", 1, 19, "electrode number", integer=True)
+        n = c.number(table, "mux_stuck", "faults", 1, n_electrodes, "electrode number", integer=True)
         if n is not None:
             out["mux_stuck"] = n
     if "thermistor" in table:
@@ -892,8 +906,10 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                 if a.start_s < r.at_s < a.end_s:
                     c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
                                       f"({a.start_s} s to {a.end_s:.3f} s)")
+    n_electrodes = min(_variant_electrodes(v) for v in {variant, *(o[1] for o in others.values())})
     faults = _faults(c, c.table(data, "faults", "electrode_open, electrode_short, mux_stuck, thermistor, "
-                                               "heater_failed, fluid_leak_mL_per_min, fluid_leak_start_s"), duration)
+                                               "heater_failed, fluid_leak_mL_per_min, fluid_leak_start_s"), duration,
+                     n_electrodes)
     analysis = c.table(data, "analysis", "impact_detection = true | false")
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
