@@ -80,7 +80,7 @@ def fluid_load_share(p: SensorParams, volume_mL):
     finger (0 mL) has no fluid stiffness: the core carries everything."""
     kf = _stiffness(p, np.maximum(volume_mL, 0.0))[0]
     ks = p.skin_direct_stiffness_N_per_m
-    return np.where(kf > 0.0, kf / np.where(kf > 0.0, kf + ks, 1.0), 0.0) if ks > 0.0 else np.ones_like(kf)
+    return kf / (kf + ks) if ks > 0.0 else np.ones_like(kf)
 
 
 def _fluid_mass_and_damping(p: SensorParams, volume_mL: float):

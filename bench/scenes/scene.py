@@ -622,9 +622,9 @@ def _faults(c: _Checker, table: dict, duration, n_electrodes: int = 19) -> dict:
             c.problems.append(f"faults.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: one instant (s), "
                               f"not a list: a leak starts once")
         elif "fluid_leak_start_s" in table:
-            out["fluid_leak_start_s"] = next(iter(c.times(table, "fluid_leak_start_s", "faults", duration)), None)
-            if out["fluid_leak_start_s"] is None:
-                del out["fluid_leak_start_s"]
+            start = c.times(table, "fluid_leak_start_s", "faults", duration)  # (a problem noted, if not an instant)
+            if start:
+                out["fluid_leak_start_s"] = start[0]
     return out
 
 
