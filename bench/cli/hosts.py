@@ -38,7 +38,8 @@ def _cmd_bridge(a) -> int:
 
         scene = load_scene(a.scene)
         kw = bridge_scene_kw(scene, a.sensors, a.seed, a.spi)
-        faults = ", ".join(f"{k}={v}" for k, v in scene.faults.items()) or "none"
+        faults = "; ".join(f"sensor {k}: " + (", ".join(f"{n}={v}" for n, v in scene.sensor_spec(k).faults.items())
+                                              or "none") for k in range(1, scene.n_sensors + 1))
         feels = "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
                           for k in range(1, scene.n_sensors + 1))
         what = (f"{kw['n_sensors']} emulated sensor(s) built from scene '{scene.name}' (units, parameters, faults: "

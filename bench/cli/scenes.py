@@ -38,6 +38,7 @@ scene file (TOML):
              (see `biotac-bench params`)
   [[sensors]] one table per further finger: index = 2..5, unit, variant, parameters (sensors not described are
              sensor 1's twin, at rest)
+  [sensor.faults] / [sensors.faults] (after its [[sensors]] table): that finger's own faults, keys as [faults]
   [host]     sequence = "default" (44-slot frame) or ["PAC", "PDC"]; slot_rate_Hz (4400); spi_clock_Hz (4.4e6);
              spi = "software" (the Python model) | "rtl" (the Verilog twin, run by the C++ Verilator harness)
   [noise]    johnson, amplifier, mains_hum, adc, spi_coupling = true | false
@@ -60,7 +61,8 @@ scene file (TOML):
   [skin]     fingerprints = true | false, ridge_height_um (200 = new), wear = true, wear_coefficient (7.7e-6)
   [faults]   electrode_open = [3], electrode_short = [5], mux_stuck = 7, thermistor = "open" | "short",
              heater_failed = true, fluid_leak_mL_per_min (0..60) from fluid_leak_start_s (0): a leak
-             (every sensor of the scene has the scene's faults)
+             (every sensor of the scene has these; a finger's own go in its [sensor.faults] / [sensors.faults],
+             each fault in one place)
 
 Every at_s / start_s may be a list: one stimulus per instant (power_on and heater_failure happen once per sensor).
 Every [[stimulus]] may name its sensor: sensor = 2 (default 1); it reaches that sensor only.

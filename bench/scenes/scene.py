@@ -10,6 +10,7 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 from pathlib import Path
 
 from bench import tomlfile
@@ -96,12 +97,17 @@ class Scene:
     variant: str = "biotac"  # sensor 1's variant (emulator.channels.VARIANTS)
     #: sensors 2..N (declared in [[sensors]] or addressed by a stimulus), by number; sensor 1 is the scene itself
     sensors: dict = field(default_factory=dict)
+    #: the [faults] every sensor of the scene has (``faults`` is sensor 1's: these and its own [sensor.faults]);
+    #: None: the same as ``faults`` (a scene built in code)
+    common_faults: dict | None = None
 
     def __post_init__(self):
         if self.serial is None:
             from emulator.units import serial_for
 
             self.serial = serial_for(None if self.unit == "nominal" else int(self.unit))
+        if self.common_faults is None:
+            self.common_faults = dict(self.faults)
 
     @property
     def n_sensors(self) -> int:
@@ -110,17 +116,18 @@ class Scene:
 
     def sensor_spec(self, k: int) -> "SensorSpec":
         """Sensor ``k`` (1..N) of the scene; sensors the scene does not describe share sensor 1's unit,
-        parameters and variant and feel nothing (with no serial of their own: the host sees the port's default)."""
+        parameters and variant, feel nothing and have the faults every sensor has (with no serial of their own:
+        the host sees the port's default)."""
         if k == 1:
             return SensorSpec(1, self.unit, self.serial, self.params, self.variant, list(self.stimuli),
-                              self.skin_before, self.skin_after, list(self.trial_skins))
+                              self.skin_before, self.skin_after, list(self.trial_skins), dict(self.faults))
         if k in self.sensors:
             return self.sensors[k]
-        return SensorSpec(k, self.unit, "", self.params, self.variant, [], {}, {}, [])
+        return SensorSpec(k, self.unit, "", self.params, self.variant, [], {}, {}, [], dict(self.common_faults))
 
     def for_sensor(self, k: int) -> "Scene":
-        """A one-sensor scene of sensor ``k``: its unit, parameters, variant, stimuli and skin; the scene's host,
-        noise, faults, fidelity; seed ``seed + k - 1`` (independent noise per sensor)."""
+        """A one-sensor scene of sensor ``k``: its unit, parameters, variant, stimuli, skin and faults; the scene's
+        host, noise, fidelity; seed ``seed + k - 1`` (independent noise per sensor)."""
         import dataclasses
 
         if k == 1 and not self.sensors:
@@ -130,7 +137,8 @@ class Scene:
                                    seed=self.seed + k - 1, params=sp.params, stimuli=list(sp.stimuli),
                                    unit=sp.unit, serial=sp.serial, variant=sp.variant, sensors={},
                                    skin_before=sp.skin_before, skin_after=sp.skin_after,
-                                   trial_skins=list(sp.trial_skins),
+                                   trial_skins=list(sp.trial_skins), faults=dict(sp.faults),
+                                   common_faults=dict(sp.faults),
                                    impact_detection=self.impact_detection and k == 1)
 
     @property
@@ -146,7 +154,8 @@ class Scene:
 
 @dataclass
 class SensorSpec:
-    """One sensor of a scene: number, unit ("nominal" or its seed), serial, parameters, variant, stimuli, skin."""
+    """One sensor of a scene: number, unit ("nominal" or its seed), serial, parameters, variant, stimuli, skin,
+    faults (the scene's [faults] and the sensor's own)."""
 
     index: int
     unit: str
@@ -157,6 +166,7 @@ class SensorSpec:
     skin_before: dict = field(default_factory=dict)
     skin_after: dict = field(default_factory=dict)
     trial_skins: list = field(default_factory=list)
+    faults: dict = field(default_factory=dict)
 
 
 class _Checker:
@@ -571,61 +581,94 @@ def _variant_electrodes(name: str) -> int:
     return variant(name).n_electrodes if name in VARIANTS else 19
 
 
-def _every_sensor(n_electrodes: int) -> str:
-    """What a 19-electrode limit means in a scene with a BioTac SP (its E20..E24 cannot be faulted scene-wide)."""
-    return "" if n_electrodes > 19 else " (every sensor of the scene has its [faults]; E20..E24 only when every " \
-                                        "sensor is a \"biotac-sp\")"
+FAULT_KEYS = ("electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed", "fluid_leak_mL_per_min",
+              "fluid_leak_start_s")
 MAX_LEAK_ML_PER_MIN = 60.0
 
 
-def _faults(c: _Checker, table: dict, duration, n_electrodes: int = 19) -> dict:
-    """The scene's sensor faults (every sensor of the scene has them, so electrode numbers run 1..``n_electrodes``,
-    the fewest any of its sensors has)."""
-    c.known_keys(table, "faults", {"electrode_open", "electrode_short", "mux_stuck", "thermistor", "heater_failed",
-                                   "fluid_leak_mL_per_min", "fluid_leak_start_s"})
+def _faults(c: _Checker, table: dict, duration, n_electrodes: int = 19, where: str = "faults",
+            hint: str = "") -> dict:
+    """The sensor faults of the table ``where`` (``faults``: every sensor of the scene has them, so electrode numbers
+    run 1..``n_electrodes``, the fewest any of its sensors has; ``sensor.faults``, ``sensors[i].faults``: one
+    sensor's own, 1..its electrodes).  ``hint`` follows a refused electrode number (what limits it)."""
+    c.known_keys(table, where, FAULT_KEYS)
     out = {}
     for key in ("electrode_open", "electrode_short"):
         if key in table:
             v = table[key]
             if not isinstance(v, list) or not all(isinstance(n, int) and not isinstance(n, bool)
                                                   and 1 <= n <= n_electrodes for n in v):
-                c.problems.append(f"faults.{key} = {_r(v)}: a list of electrode numbers 1..{n_electrodes}"
-                                  + _every_sensor(n_electrodes))
+                c.problems.append(f"{where}.{key} = {_r(v)}: a list of electrode numbers 1..{n_electrodes}{hint}")
             elif len(set(v)) < len(v):
                 twice = sorted({n for n in v if v.count(n) > 1})
-                c.problems.append(f"faults.{key} = {_r(v)}: electrode {', '.join(map(str, twice))} listed more "
+                c.problems.append(f"{where}.{key} = {_r(v)}: electrode {', '.join(map(str, twice))} listed more "
                                   f"than once")
             else:
                 out[key] = v
-    both = sorted(set(out.get("electrode_open", ())) & set(out.get("electrode_short", ())))
-    if both:
-        c.problems.append(f"faults: electrode {', '.join(map(str, both))} is both open (faults.electrode_open = "
-                          f"{_r(out['electrode_open'])}) and shorted (faults.electrode_short = "
-                          f"{_r(out['electrode_short'])}); an electrode is one or the other")
+    _open_and_short(c, (f"{where}.electrode_open", out.get("electrode_open", [])),
+                    (f"{where}.electrode_short", out.get("electrode_short", [])), where)
     if "mux_stuck" in table:
-        n = c.number(table, "mux_stuck", "faults", 1, n_electrodes, "electrode number", integer=True)
+        n = c.number(table, "mux_stuck", where, 1, n_electrodes, "electrode number", integer=True)
         if n is not None:
             out["mux_stuck"] = n
     if "thermistor" in table:
-        v = c.choice(table, "thermistor", "faults", ("open", "short"))
+        v = c.choice(table, "thermistor", where, ("open", "short"))
         if v:
             out["thermistor"] = v
-    if c.boolean(table, "heater_failed", "faults", False):
+    if c.boolean(table, "heater_failed", where, False):
         out["heater_failed"] = True
-    rate = c.number(table, "fluid_leak_mL_per_min", "faults", 0.0, MAX_LEAK_ML_PER_MIN, "mL/min")
+    rate = c.number(table, "fluid_leak_mL_per_min", where, 0.0, MAX_LEAK_ML_PER_MIN, "mL/min")
     if "fluid_leak_start_s" in table and "fluid_leak_mL_per_min" not in table:
-        c.problems.append(f"faults.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: a leak needs its rate too "
-                          f"(faults.fluid_leak_mL_per_min, 0 to {MAX_LEAK_ML_PER_MIN:g} mL/min)")
+        c.problems.append(f"{where}.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: a leak needs its rate "
+                          f"too ({where}.fluid_leak_mL_per_min, 0 to {MAX_LEAK_ML_PER_MIN:g} mL/min)")
     elif rate is not None:
         out["fluid_leak_mL_per_min"] = float(rate)
         if isinstance(table.get("fluid_leak_start_s"), list):
-            c.problems.append(f"faults.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: one instant (s), "
+            c.problems.append(f"{where}.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: one instant (s), "
                               f"not a list: a leak starts once")
         elif "fluid_leak_start_s" in table:
-            start = c.times(table, "fluid_leak_start_s", "faults", duration)  # (a problem noted, if not an instant)
+            start = c.times(table, "fluid_leak_start_s", where, duration)  # (a problem noted, if not an instant)
             if start:
                 out["fluid_leak_start_s"] = start[0]
     return out
+
+
+def _open_and_short(c: _Checker, opened: tuple, shorted: tuple, where: str) -> None:
+    """An electrode both open and shorted is a problem; ``opened``, ``shorted``: (field name, its list)."""
+    both = sorted(set(opened[1]) & set(shorted[1]))
+    if both:
+        c.problems.append(f"{where}: electrode {', '.join(map(str, both))} is both open ({opened[0]} = "
+                          f"{_r(opened[1])}) and shorted ({shorted[0]} = {_r(shorted[1])}); an electrode is one or "
+                          f"the other")
+
+
+def _sensor_faults(c: _Checker, table: dict, where: str, duration, variant: str) -> dict:
+    """A sensor's own faults: the ``faults`` sub-table of its [sensor] or [[sensors]] table ({} if none), electrode
+    numbers 1..its variant's electrodes."""
+    if "faults" not in table:
+        return {}
+    own = table["faults"]
+    if not isinstance(own, dict):
+        c.problems.append(f"{where}.faults = {_r(own)}: must be a table ([{where.split('[')[0]}.faults] after the "
+                          f"sensor's table) of faults by name: {', '.join(FAULT_KEYS)}")
+        return {}
+    n = _variant_electrodes(variant)
+    return _faults(c, own, duration, n, f"{where}.faults", f" (this sensor is a {variant!r})")
+
+
+def _with_common_faults(c: _Checker, common: dict, own: dict, where: str) -> dict:
+    """A sensor's faults: the scene's [faults] every sensor has and its own ``where`` (a fault given in both places
+    is refused: which one holds would be a guess)."""
+    for key in sorted(set(common) & set(own)):
+        c.problems.append(f"{where}.{key}: [faults] already gives {key} = {_r(common[key])} to every sensor of the "
+                          f"scene; give a fault in one place (in [faults] for all, or in each sensor's own table)")
+    if "electrode_open" in common and "electrode_short" in own:
+        _open_and_short(c, ("faults.electrode_open", common["electrode_open"]),
+                        (f"{where}.electrode_short", own["electrode_short"]), where)
+    if "electrode_open" in own and "electrode_short" in common:
+        _open_and_short(c, (f"{where}.electrode_open", own["electrode_open"]),
+                        ("faults.electrode_short", common["electrode_short"]), where)
+    return {**common, **own}
 
 
 def _frame(variant: str) -> tuple[str, ...]:
@@ -757,13 +800,24 @@ def _unit_value(c: _Checker, table: dict, where: str):
     return None
 
 
-def _sensor_table(c: _Checker, table: dict, where: str, extra=()):
-    """(unit name, variant, parameters, serial) of a [sensor] or [[sensors]] table: the unit's parameters with
-    the table's parameter overrides on top."""
+class _SensorTable(NamedTuple):
+    """What a [sensor] or [[sensors]] table says: unit name, variant, parameters (the unit's with the table's
+    overrides on top), serial, the sensor's own faults, and the table's name in messages."""
+
+    unit: str
+    variant: str
+    params: SensorParams
+    serial: str
+    faults: dict
+    where: str
+
+
+def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _SensorTable:
+    """The :class:`_SensorTable` of ``table`` (named ``where``), its problems noted."""
     from emulator.channels import VARIANTS
     from emulator.units import unit as make_unit
 
-    c.known_keys(table, where, set(PARAMETER_FIELDS) | set(SENSOR_KEYS) | set(extra))
+    c.known_keys(table, where, set(PARAMETER_FIELDS) | set(SENSOR_KEYS) | {"faults"} | set(extra))
     which = _unit_value(c, table, where)
     variant = c.choice(table, "variant", where, VARIANTS, default="biotac") or "biotac"
     changes = {}
@@ -780,11 +834,11 @@ def _sensor_table(c: _Checker, table: dict, where: str, extra=()):
                 c.problems.append(_cut(str(e)))
     u = make_unit(which if which is not None else None)
     params = u.params.replace(**changes)
-    return u.name, variant, params, u.serial
+    return _SensorTable(u.name, variant, params, u.serial, _sensor_faults(c, table, where, duration, variant), where)
 
 
-def _sensors_tables(c: _Checker, items) -> dict:
-    """Sensors 2..N from ``[[sensors]]``: number -> (unit name, variant, parameters, serial)."""
+def _sensors_tables(c: _Checker, items, duration) -> dict:
+    """Sensors 2..N from ``[[sensors]]``: number -> :class:`_SensorTable`."""
     out: dict = {}
     if isinstance(items, dict):
         c.problems.append(f"sensors = {_r(items)}: must be an array of tables ([[sensors]]), one per sensor 2.."
@@ -802,7 +856,7 @@ def _sensors_tables(c: _Checker, items) -> dict:
                               f"sensors 2..{MAX_SENSORS}")
             continue
         k = c.number(t, "index", w, 2, MAX_SENSORS, "(a sensor number)", required=True, integer=True)
-        spec = _sensor_table(c, t, w, extra=("index",))
+        spec = _sensor_table(c, t, w, duration, extra=("index",))
         if k is None:
             continue
         if k in seen:
@@ -845,8 +899,9 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
 
     sensor = c.table(data, "sensor", "sensor 1: unit, variant and parameters by name (biotac-bench params, "
                                      "biotac-bench units)")
-    unit, variant, params, serial = _sensor_table(c, sensor, "sensor")
-    others = _sensors_tables(c, data.get("sensors", []))
+    first = _sensor_table(c, sensor, "sensor", duration)
+    unit, variant, params, serial = first.unit, first.variant, first.params, first.serial
+    others = _sensors_tables(c, data.get("sensors", []), duration)
 
     host = c.table(data, "host", "sequence, slot_rate_Hz, spi_clock_Hz, spi")
     c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz", "spi"})
@@ -859,7 +914,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             sequence = "default"
         else:
             # E20..E24 when a sensor is a BioTac SP (a 19-electrode sensor answers them with error words)
-            sp = "biotac-sp" in {variant, *(o[1] for o in others.values())}
+            sp = "biotac-sp" in {variant, *(o.variant for o in others.values())}
             known = ALL_CHANNEL_INDEX if sp else CHANNEL_INDEX
             for i, n in enumerate(sequence):
                 if not isinstance(n, str) or n.upper() not in known or n.upper() == "HAL":
@@ -878,8 +933,8 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
 
     targets: list[int] = []
     stimuli = _stimuli(c, data.get("stimulus", []), duration, params, targets,
-                       params_of=lambda k: others[k][2] if k in others else params,
-                       variant_of=lambda k: others[k][1] if k in others else variant)
+                       params_of=lambda k: others[k].params if k in others else params,
+                       variant_of=lambda k: others[k].variant if k in others else variant)
     if len(stimuli) > MAX_INSTANTS:
         c.problems.append(f"stimulus: {len(stimuli)} stimuli (every instant of every [[stimulus]] counts): at most "
                           f"{MAX_INSTANTS} per scene")
@@ -906,18 +961,23 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                 if a.start_s < r.at_s < a.end_s:
                     c.problems.append(f"replace_skin at {r.at_s} s falls during the slide of {a.where} "
                                       f"({a.start_s} s to {a.end_s:.3f} s)")
-    n_electrodes = min(_variant_electrodes(v) for v in {variant, *(o[1] for o in others.values())})
-    faults = _faults(c, c.table(data, "faults", "electrode_open, electrode_short, mux_stuck, thermistor, "
-                                               "heater_failed, fluid_leak_mL_per_min, fluid_leak_start_s"), duration,
-                     n_electrodes)
+    # the faults every sensor has ([faults]: electrodes 1..the fewest any sensor has), then each sensor's own
+    n_electrodes = min(_variant_electrodes(v) for v in {variant, *(o.variant for o in others.values())})
+    common = _faults(c, c.table(data, "faults", ", ".join(FAULT_KEYS)), duration, n_electrodes,
+                     hint="" if n_electrodes > 19 else " (every sensor of the scene has the [faults]; a \"biotac-sp\"'s "
+                                                       "E20..E24 go in its own [sensor.faults] or [sensors.faults])")
+    faults_of = {k: _with_common_faults(c, common, t.faults, f"{t.where}.faults") for k, t in
+                 ((1, first), *others.items())}
     analysis = c.table(data, "analysis", "impact_detection = true | false")
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
-    if faults.get("heater_failed"):
-        for s in (x for lst in per_sensor.values() for x in lst):
-            if isinstance(s, HeaterFailure):
-                c.problems.append(f"heater_failure at {s.at_s} s: faults.heater_failed = true says the heaters never "
-                                  f"ran, so they cannot fail during the run; give one or the other")
+    own_where = {k: f"{t.where}.faults" for k, t in ((1, first), *others.items()) if "heater_failed" in t.faults}
+    for k, lst in per_sensor.items():
+        dead = "faults" if common.get("heater_failed") else own_where.get(k)
+        for s in (x for x in lst if dead and isinstance(x, HeaterFailure)):
+            c.problems.append(f"heater_failure at {s.at_s} s{f' (sensor {k})' if k != 1 else ''}: {dead}.heater_failed"
+                              f" = true says the heaters never ran, so they cannot fail during the run; give one or "
+                              f"the other")
     for k, lst in per_sensor.items():
         steps: dict[float, float] = {}
         for s in lst:
@@ -928,7 +988,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                                       + (f" for sensor {k}" if k != 1 else ""))
                 steps[s.at_s] = s.temperature_C
     if host_ok and duration is not None:
-        variant_of = {k: others[k][1] if k in others else variant for k in (1, *others, *slide_specs_of)}
+        variant_of = {k: others[k].variant if k in others else variant for k in (1, *others, *slide_specs_of)}
         longest = max(set(variant_of.values()), key=lambda v: len(_frame(v)))
         _check_host(c, sequence, float(slot_rate), float(clock), float(duration), longest)
         for k, specs in slide_specs_of.items():
@@ -957,16 +1017,18 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     for k in sorted(set(others) | set(per_sensor)):
         if k == 1:
             continue
-        u, var, p_k, ser = others.get(k, (unit, variant, params, ""))  # not declared: sensor 1's twin
+        # not declared: sensor 1's twin, with the faults every sensor has
+        u, var, p_k, ser, _, _ = others.get(k, (unit, variant, params, "", {}, ""))
         own = copy.deepcopy(fresh_skin)  # each finger its own skin, as the [skin] table describes it
         before = own.state()
         slides_k, skins_k, own = build_slides(slide_specs_of.get(k, []), own, int(seed) + k - 1, wear,
                                               p_k.contact_radius_at_1N_m)
-        sensors[k] = SensorSpec(k, u, ser, p_k, var, per_sensor.get(k, []) + slides_k, before, own.state(), skins_k)
+        sensors[k] = SensorSpec(k, u, ser, p_k, var, per_sensor.get(k, []) + slides_k, before, own.state(), skins_k,
+                                faults_of.get(k, common))
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=description, params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
-                 faults=faults,
+                 faults=faults_of[1], common_faults=common,
                  impact_detection=impact_detection, source=source, text=text,
                  skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins,
                  unit=unit, serial=serial, variant=variant, sensors=sensors)

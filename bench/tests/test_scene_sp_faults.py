@@ -1,7 +1,8 @@
 """A scene's sensor faults number electrodes as its sensors do: a scene of BioTac SPs can fault E20..E24 (the SP's
-24 electrodes), a 19-electrode scene cannot, and a scene mixing the two cannot either (every sensor of a scene has
-its [faults]) — each refusal names the field, the value and the allowed range.  (The scene format allowed 1..19
-only, whatever the variant, though the emulator's sensors accept 1..24 on an SP.)"""
+24 electrodes), a 19-electrode scene cannot, and a scene mixing the two cannot either in its [faults] (every sensor
+has them; an SP's own [sensor.faults] can: bench/tests/test_scene_sensor_faults.py) — each refusal names the field,
+the value and the allowed range.  (The scene format allowed 1..19 only, whatever the variant, though the emulator's
+sensors accept 1..24 on an SP.)"""
 
 import numpy as np
 import pytest
@@ -38,8 +39,8 @@ def test_a_biotac_sp_scene_faults_its_extra_electrodes():
     ("", "mux_stuck = 20", "faults.mux_stuck = 20: allowed range is 1 to 19"),
     (SP, "electrode_short = [25]", "faults.electrode_short = [25]: a list of electrode numbers 1..24"),
     (SP + '\n[[sensors]]\nindex = 2\nvariant = "biotac"', "electrode_open = [21]",
-     "a list of electrode numbers 1..19 (every sensor of the scene has its [faults]; E20..E24 only when every sensor "
-     "is a \"biotac-sp\")"),
+     "a list of electrode numbers 1..19 (every sensor of the scene has the [faults]; a \"biotac-sp\"'s E20..E24 go "
+     "in its own [sensor.faults] or [sensors.faults])"),
 ])
 def test_electrode_faults_beyond_a_sensors_electrodes_are_refused_by_name(sensor, faults, words):
     with pytest.raises(SceneError) as e:
