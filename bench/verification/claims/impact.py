@@ -200,6 +200,15 @@ def impact_ring_claims(b: Bench) -> list[Claim]:
     spread_e, spread_p = short["spread_energy"], short["spread_momentum"]
     ratio = short["contact_over_period"].values()
     long_ratio = long["contact_over_period"].values()
+    smallest = min(D_SPHERES, key=lambda n: D_SPHERES[n][0])
+    rows.append(Claim(
+        "the sphere missed at 7 cm is detected from higher", "threshold height above 0.07 m, within a 2 m drop",
+        short["threshold_height_m"][smallest], DROP_HEIGHT_M, 2.0, "m", "D ch. 5 (Table 5-2 text)",
+        {"sphere": smallest, "threshold_height_m": short["threshold_height_m"]}, kind="prediction",
+        note="D: \"sensitivity scaled with impact energy rather than mass as smaller masses were readily detected "
+             "from larger\" [heights]: detection is not a mass threshold. D gives no heights, so the upper bound (a "
+             "drop a person makes standing at a bench) is this row's choice; either law, energy or momentum, "
+             "passes it, and a detector that ignored the drop height fails it"))
     rows.append(Claim(
         "detection threshold spread: energy / momentum", "energy varies less: < 1", spread_e / spread_p, 0.0, 1.0,
         "ratio of max/min spreads", "D ch. 5 (Table 5-2 text)",
