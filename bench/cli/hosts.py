@@ -39,11 +39,11 @@ def _cmd_bridge(a) -> int:
         scene = load_scene(a.scene)
         kw = bridge_scene_kw(scene, a.sensors, a.seed, a.spi)
         faults = "; ".join(f"sensor {k}: " + (", ".join(f"{n}={v}" for n, v in scene.sensor_spec(k).faults.items())
-                                              or "none") for k in range(1, scene.n_sensors + 1))
+                                              or "none") for k in range(1, kw["n_sensors"] + 1))
         feels = "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
                           for k in range(1, scene.n_sensors + 1))
-        what = (f"{kw['n_sensors']} emulated sensor(s) built from scene '{scene.name}' (units, parameters, faults: "
-                f"{faults}, noise, fidelity {scene.fidelity}, seed {kw['seed']}; {feels})")
+        what = (f"{kw['n_sensors']} emulated sensor(s) built from scene '{scene.name}' (units, parameters, noise, "
+                f"fidelity {scene.fidelity}, seed {kw['seed']}; {feels}; faults — {faults})")
     else:
         kw = {"n_sensors": a.sensors or 1, "seed": 1 if a.seed is None else a.seed, "spi": a.spi or "software"}
         what = f"{kw['n_sensors']} emulated sensor(s) at rest"
@@ -320,8 +320,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
         "bridge", help="run the bridge firmware against emulated sensors on a serial port (pty)",
         description="Compiles and runs the reference bridge firmware (firmware_tests/firmware) against emulated "
                     "sensors in virtual time and exposes its UART as a pty that any program can open as a serial "
-                    "port. Real-time paced unless --fast. With --scene every sensor is built from the scene "
-                    "(parameters, faults, noise, fidelity, seed; sensor 1 feels its stimuli) and its "
+                    "port. Real-time paced unless --fast. With --scene sensor k is the scene's sensor k "
+                    "(unit, parameters, its faults, noise, fidelity, seed; the stimuli addressed to it) and the scene's "
                     "host.sequence becomes the firmware's sampling pattern.\n\n"
                     "The host's receive buffer holds --rx-buffer bytes: paced, a host that stops reading loses "
                     "what does not fit (an overrun, as on a real UART without flow control) and the firmware "

@@ -149,7 +149,8 @@ def _cmd_run(a) -> int:
     for k, sub_record in sorted(res.sensor_records.items()):
         spec = scene.sensor_spec(k)
         print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} (unit "
-              f"{spec.unit}, serial {sensor_serial(spec, k)}, {len(spec.stimuli)} stimuli)")
+              f"{spec.unit}, serial {sensor_serial(spec, k)}, {len(spec.stimuli)} stimuli"
+              + "".join(f", {n} = {v}" for n, v in spec.faults.items()) + ")")
         for name, why in sub_record.get("skipped_outputs", {}).items():
             print(f"note: sensor{k}/{name} {why}", file=sys.stderr)
     for name, why in record.get("skipped_outputs", {}).items():

@@ -9,7 +9,9 @@ default frame covers them all: 44 slots, or the BioTac SP's 54 with E20..E24):
   ``[[sensors]]`` with ``index = k`` for the others), the stimuli addressed to it (``sensor = k`` on a
   ``[[stimulus]]``; default 1), and seed ``seed + k - 1`` (independent noise);
 * sensors the scene does not describe share sensor 1's unit, parameters and variant and feel nothing;
-* every sensor shares the scene's faults, noise switches and fidelity;
+* every sensor has the scene's ``[faults]``, and its own ``[sensor.faults]`` / ``[sensors.faults]`` on top (a
+  sensor the scene does not describe has the ``[faults]`` only); every sensor shares the noise switches and
+  fidelity;
 * each sensor carries its unit's serial number as ``sensor.serial`` (what the host should read as its serial
   property; None for the nominal unit, whose ports keep their default serial, one per sensor number);
 * the scene's ``[host]`` section describes the host.  The bridge firmware is the host of the SPI bus: a

@@ -328,6 +328,8 @@ def markdown_report(record: dict) -> str:
     if "sensor" in record:
         who = record["sensor"]
         lines.append(f"- sensor {who['index']}: {who['variant']}, unit {who['unit']}, serial `{who['serial']}`")
+    if record.get("faults"):
+        lines.append("- faults: " + ", ".join(f"`{k} = {v}`" for k, v in record["faults"].items()))
     lines.append("")
     if "pac_resting" in record:
         lines += [f"PAC at rest: baseline {record['pac_resting']['baseline_code']:.1f}, "

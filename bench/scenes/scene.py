@@ -10,8 +10,8 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass, field
-from typing import NamedTuple
 from pathlib import Path
+from typing import NamedTuple
 
 from bench import tomlfile
 from bench.errors import SceneError
@@ -97,8 +97,9 @@ class Scene:
     variant: str = "biotac"  # sensor 1's variant (emulator.channels.VARIANTS)
     #: sensors 2..N (declared in [[sensors]] or addressed by a stimulus), by number; sensor 1 is the scene itself
     sensors: dict = field(default_factory=dict)
-    #: the [faults] every sensor of the scene has (``faults`` is sensor 1's: these and its own [sensor.faults]);
-    #: None: the same as ``faults`` (a scene built in code)
+    #: ``faults`` is sensor 1's, as ``params``, ``unit`` and ``stimuli`` are (the scene's [faults] and its own
+    #: [sensor.faults]); ``common_faults`` the scene's [faults] alone, which sensors it does not describe have
+    #: (None: the same as ``faults``, a scene built in code).  Sensors 2..N keep theirs in ``sensors``.
     common_faults: dict | None = None
 
     def __post_init__(self):
@@ -611,16 +612,22 @@ def _faults(c: _Checker, table: dict, duration, n_electrodes: int = 19, where: s
         n = c.number(table, "mux_stuck", where, 1, n_electrodes, "electrode number", integer=True)
         if n is not None:
             out["mux_stuck"] = n
+        else:
+            c.problems[-1] += hint  # (c.number named the problem)
     if "thermistor" in table:
         v = c.choice(table, "thermistor", where, ("open", "short"))
         if v:
             out["thermistor"] = v
-    if c.boolean(table, "heater_failed", where, False):
-        out["heater_failed"] = True
+    if "heater_failed" in table:  # kept when false too: a finger's own "false" must not meet [faults]' "true" unseen
+        if isinstance(table["heater_failed"], bool):
+            out["heater_failed"] = table["heater_failed"]
+        else:
+            c.boolean(table, "heater_failed", where, False)  # the problem, named
     rate = c.number(table, "fluid_leak_mL_per_min", where, 0.0, MAX_LEAK_ML_PER_MIN, "mL/min")
     if "fluid_leak_start_s" in table and "fluid_leak_mL_per_min" not in table:
         c.problems.append(f"{where}.fluid_leak_start_s = {_r(table['fluid_leak_start_s'])}: a leak needs its rate "
-                          f"too ({where}.fluid_leak_mL_per_min, 0 to {MAX_LEAK_ML_PER_MIN:g} mL/min)")
+                          f"too, in the same table ({where}.fluid_leak_mL_per_min, 0 to {MAX_LEAK_ML_PER_MIN:g} "
+                          f"mL/min)")
     elif rate is not None:
         out["fluid_leak_mL_per_min"] = float(rate)
         if isinstance(table.get("fluid_leak_start_s"), list):
@@ -662,12 +669,10 @@ def _with_common_faults(c: _Checker, common: dict, own: dict, where: str) -> dic
     for key in sorted(set(common) & set(own)):
         c.problems.append(f"{where}.{key}: [faults] already gives {key} = {_r(common[key])} to every sensor of the "
                           f"scene; give a fault in one place (in [faults] for all, or in each sensor's own table)")
-    if "electrode_open" in common and "electrode_short" in own:
-        _open_and_short(c, ("faults.electrode_open", common["electrode_open"]),
-                        (f"{where}.electrode_short", own["electrode_short"]), where)
-    if "electrode_open" in own and "electrode_short" in common:
-        _open_and_short(c, (f"{where}.electrode_open", own["electrode_open"]),
-                        ("faults.electrode_short", common["electrode_short"]), where)
+    for opens, shorts in ((("faults", common), (where, own)), ((where, own), ("faults", common))):
+        if "electrode_open" in opens[1] and "electrode_short" in shorts[1]:
+            _open_and_short(c, (f"{opens[0]}.electrode_open", opens[1]["electrode_open"]),
+                            (f"{shorts[0]}.electrode_short", shorts[1]["electrode_short"]), where)
     return {**common, **own}
 
 
@@ -898,7 +903,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         description = ""
 
     sensor = c.table(data, "sensor", "sensor 1: unit, variant and parameters by name (biotac-bench params, "
-                                     "biotac-bench units)")
+                                     "biotac-bench units), its own faults in [sensor.faults]")
     first = _sensor_table(c, sensor, "sensor", duration)
     unit, variant, params, serial = first.unit, first.variant, first.params, first.serial
     others = _sensors_tables(c, data.get("sensors", []), duration)
@@ -966,18 +971,19 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     common = _faults(c, c.table(data, "faults", ", ".join(FAULT_KEYS)), duration, n_electrodes,
                      hint="" if n_electrodes > 19 else " (every sensor of the scene has the [faults]; a \"biotac-sp\"'s "
                                                        "E20..E24 go in its own [sensor.faults] or [sensors.faults])")
-    faults_of = {k: _with_common_faults(c, common, t.faults, f"{t.where}.faults") for k, t in
-                 ((1, first), *others.items())}
+    tables = {1: first, **others}
+    faults_of = {k: _with_common_faults(c, common, t.faults, f"{t.where}.faults") for k, t in tables.items()}
     analysis = c.table(data, "analysis", "impact_detection = true | false")
     c.known_keys(analysis, "analysis", {"impact_detection"})
     impact_detection = c.boolean(analysis, "impact_detection", "analysis", False)
-    own_where = {k: f"{t.where}.faults" for k, t in ((1, first), *others.items()) if "heater_failed" in t.faults}
     for k, lst in per_sensor.items():
-        dead = "faults" if common.get("heater_failed") else own_where.get(k)
-        for s in (x for x in lst if dead and isinstance(x, HeaterFailure)):
-            c.problems.append(f"heater_failure at {s.at_s} s{f' (sensor {k})' if k != 1 else ''}: {dead}.heater_failed"
-                              f" = true says the heaters never ran, so they cannot fail during the run; give one or "
-                              f"the other")
+        if not faults_of.get(k, common).get("heater_failed"):
+            continue
+        said_by = f"{tables[k].where}.faults" if k in tables and tables[k].faults.get("heater_failed") else "faults"
+        for s in (x for x in lst if isinstance(x, HeaterFailure)):
+            c.problems.append(f"heater_failure at {s.at_s} s{f' (sensor {k})' if k != 1 else ''}: {said_by}."
+                              f"heater_failed = true says the heaters never ran, so they cannot fail during the run; "
+                              f"give one or the other")
     for k, lst in per_sensor.items():
         steps: dict[float, float] = {}
         for s in lst:
@@ -1017,18 +1023,18 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     for k in sorted(set(others) | set(per_sensor)):
         if k == 1:
             continue
-        # not declared: sensor 1's twin, with the faults every sensor has
-        u, var, p_k, ser, _, _ = others.get(k, (unit, variant, params, "", {}, ""))
+        t = others.get(k, first)  # not declared: sensor 1's twin (no serial of its own), with the common faults
+        u, var, p_k, ser = t.unit, t.variant, t.params, (t.serial if k in others else "")
         own = copy.deepcopy(fresh_skin)  # each finger its own skin, as the [skin] table describes it
         before = own.state()
         slides_k, skins_k, own = build_slides(slide_specs_of.get(k, []), own, int(seed) + k - 1, wear,
                                               p_k.contact_radius_at_1N_m)
         sensors[k] = SensorSpec(k, u, ser, p_k, var, per_sensor.get(k, []) + slides_k, before, own.state(), skins_k,
-                                faults_of.get(k, common))
+                                dict(faults_of.get(k, common)))
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=description, params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
-                 faults=faults_of[1], common_faults=common,
+                 faults=faults_of[1], common_faults=dict(common),
                  impact_detection=impact_detection, source=source, text=text,
                  skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins,
                  unit=unit, serial=serial, variant=variant, sensors=sensors)

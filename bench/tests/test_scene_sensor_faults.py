@@ -82,9 +82,16 @@ def test_a_biotac_sp_finger_faults_its_own_e20_to_e24_in_a_mixed_hand():
      "sensors[0].faults.electrode_open = [22]: a list of electrode numbers 1..19 (this sensor is a 'biotac')"),
     ('[sensor]\nvariant = "biotac-sp"\n[sensor.faults]\nmux_stuck = 25\n',
      "sensor.faults.mux_stuck = 25: allowed range is 1 to 24"),
+    ('[sensor]\nvariant = "biotac-sp"\n[[sensors]]\nindex = 2\n[faults]\nmux_stuck = 22\n',  # a mixed hand
+     "faults.mux_stuck = 22: allowed range is 1 to 19 electrode number (every sensor of the scene has the [faults]; "
+     "a \"biotac-sp\"'s E20..E24 go in its own [sensor.faults] or [sensors.faults])"),
     # one fault in two places
     ('[faults]\nthermistor = "short"\n[sensor.faults]\nthermistor = "open"\n',
      "sensor.faults.thermistor: [faults] already gives thermistor = 'short' to every sensor"),
+    ('[faults]\nheater_failed = true\n[sensor.faults]\nheater_failed = false\n',  # "false" is a statement too
+     "sensor.faults.heater_failed: [faults] already gives heater_failed = True to every sensor"),
+    ('[faults]\nfluid_leak_mL_per_min = 5.0\n[sensor.faults]\nfluid_leak_start_s = 0.1\n',
+     "sensor.faults.fluid_leak_start_s = 0.1: a leak needs its rate too, in the same table"),
     # open in one, shorted in the other
     ('[faults]\nelectrode_open = [4]\n[[sensors]]\nindex = 2\n[sensors.faults]\nelectrode_short = [4, 5]\n',
      "sensors[0].faults: electrode 4 is both open (faults.electrode_open = [4]) and shorted "
@@ -111,6 +118,25 @@ def test_a_dead_heater_on_one_finger_leaves_the_others_heater_failure_alone():
     sc = parse_scene_text('[scene]\nname = "f"\nduration_s = 0.5\n[[sensors]]\nindex = 2\n[sensors.faults]\n'
                           'heater_failed = true\n[[stimulus]]\nkind = "heater_failure"\nat_s = 0.1\n', "f.toml")
     assert sc.sensor_spec(2).faults == {"heater_failed": True} and "heater_failed" not in sc.faults
+
+
+@pytest.mark.unit
+def test_the_sensors_of_a_scene_do_not_share_one_faults_table():
+    sc = parse_scene_text(HAND, "hand.toml")
+    sc.sensor_spec(3).faults["thermistor"] = "short"  # a caller changing one finger's faults in memory
+    assert sc.common_faults == {"electrode_open": [3]} and sc.sensor_spec(4).faults == {"electrode_open": [3]}
+
+
+@pytest.mark.firmware
+def test_the_bridge_command_names_every_served_fingers_faults(tmp_path, capsys):
+    from bench.cli import main as cli
+
+    scene = tmp_path / "hand.toml"
+    scene.write_text(HAND)
+    assert cli.main(["bridge", "--scene", str(scene), "--sensors", "4", "--fast", "--seconds", "0.1"]) == 0
+    out = capsys.readouterr().out
+    assert ("faults — sensor 1: electrode_open=[3], mux_stuck=3; sensor 2: electrode_open=[3], thermistor=open; "
+            "sensor 3: electrode_open=[3]; sensor 4: electrode_open=[3])") in out, out
 
 
 @pytest.mark.firmware
@@ -140,3 +166,5 @@ def test_the_run_command_records_each_fingers_faults(tmp_path):
         assert record["faults"] == parse_scene_text(HAND).sensor_spec(k).faults, k
         tdc = np.load(folder / "codes.npz")["TDC_code"]
         assert (tdc == 0).all() == (k == 2), k
+        assert "- faults: `electrode_open = [3]`" in (folder / "report.md").read_text()
+    assert "for sensor 2 (unit nominal, serial BT" in r.stdout and "electrode_open = [3], thermistor = open)" in r.stdout
