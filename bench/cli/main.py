@@ -22,7 +22,8 @@ sample level — behind its SPI protocol (software model or Verilog RTL), driven
 typical session:
   biotac-bench scenes                 # what ships: each scene's name, file and what it does
   biotac-bench run sphere_drops       # run one (a shipped scene's name or any scene file): samples.h5,
-                                      #   codes.npz, record.json, report.md, plots in out/sphere_drops/
+                                      #   codes.npz, record.json, report.md, plots in out/sphere-drops/
+                                      #   (the folder is the scene's [scene] name)
   biotac-bench claims                 # check every published figure (PASS/FAIL table)
   biotac-bench noise-budget           # where the 1.4 bits of PAC noise come from
   biotac-bench benchmark              # what each fidelity profile costs and how wrong it is
@@ -34,13 +35,27 @@ Every subcommand has its own --help.  Exit status: 0 done, 1 a check failed, 2 b
 #: The command groups, in the order ``--help`` lists them.
 COMMAND_GROUPS = (scenes, units, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
 
+#: What a bare value after these commands was probably meant to be (``biotac-bench units 17``)
+BARE_VALUE_HINTS = {"units": "a unit is chosen with --seed N or --serial BT... (biotac-bench units --seed 17)",
+                    "textures": "one texture is shown with --show N (biotac-bench textures --show 30)"}
+
 #: Exit status when the program reading our output has gone (``biotac-bench params | head -1``): 128 + SIGPIPE,
 #: what a shell reports for a standard tool stopped by SIGPIPE.
 READER_GONE = 128 + signal.SIGPIPE
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("biotac-bench")
+    except PackageNotFoundError:  # run from a checkout that was not installed
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=HelpFormatter)
+    p.add_argument("--version", action="version", version=f"biotac-bench {_version()}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for group in COMMAND_GROUPS:
         group.add_commands(sub, HelpFormatter)
@@ -60,7 +75,18 @@ def _bad_input_errors() -> tuple[type[Exception], ...]:
 def main(argv=None) -> int:
     try:
         try:
-            args = build_parser().parse_args(argv)
+            parser = build_parser()
+            argv = sys.argv[1:] if argv is None else list(argv)
+            if not argv:  # no command: the help, which lists them, and the error
+                parser.print_help()
+                print("biotac-bench: error: the following arguments are required: COMMAND", file=sys.stderr)
+                return 2
+            args, extra = parser.parse_known_args(argv)
+            if extra:
+                hint = BARE_VALUE_HINTS.get(args.command, f"see biotac-bench {args.command} --help")
+                print(f"biotac-bench {args.command}: error: unrecognized arguments: {' '.join(extra)}; {hint}",
+                      file=sys.stderr)
+                return 2
             return args.func(args)
         finally:
             sys.stdout.flush()  # output still buffered meets a reader that has gone here, not in Python's exit

@@ -172,7 +172,9 @@ def _cmd_validate(a) -> int:
             sc = load_scene(scene_file(f))
             more = (f", {sc.n_sensors} sensors ({sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))}"
                     f" stimuli in all)" if sc.n_sensors > 1 else "")
-            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {len(sc.stimuli)} stimuli, fidelity {sc.fidelity}{more})")
+            n = len(sc.stimuli)
+            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {n} {'stimulus' if n == 1 else 'stimuli'}, fidelity "
+                  f"{sc.fidelity}{more})")
         except SceneError as e:
             print(e, file=sys.stderr)
             bad += 1

@@ -322,9 +322,13 @@ def markdown_report(record: dict) -> str:
     if sc["description"]:
         lines += [sc["description"], ""]
     status = record["status"] + (f" by {record['interrupted_by']}" if record.get("interrupted_by") else "")
+    speed = record["realtime_factor"]
+    spi = {"rtl": "the Verilog RTL (C++ Verilator harness)", "software": "the software model"}.get(
+        record.get("host", {}).get("spi"), "not recorded")  # (a record that could not be built holds no host)
     lines += [f"- status: **{status}**" + (f" — {record['error']}" if record["error"] else ""),
               f"- simulated {record['simulated_s']:.2f} s of {sc['duration_s']:g} s in {record['wall_s']:.2f} s wall "
-              f"({record['realtime_factor']:.0f}× real time), fidelity `{sc['fidelity']}`, seed {sc['seed']}"]
+              + (f"({speed:.0f}× real time)" if speed >= 10 else f"({speed:.2g}× real time)"),
+              f"- fidelity `{sc['fidelity']}`, seed {sc['seed']}, SPI side: {spi}"]
     if "sensor" in record:
         who = record["sensor"]
         lines.append(f"- sensor {who['index']}: {who['variant']}, unit {who['unit']}, serial `{who['serial']}`")
@@ -355,14 +359,23 @@ def markdown_report(record: dict) -> str:
         lines += ["", f"Skin before: serial {b['serial']}, ridge height {1e6 * b['ridge_height_m']:.1f} µm; after: "
                       f"serial {a['serial']}, ridge height {1e6 * a['ridge_height_m']:.1f} µm "
                       f"({a['trials']} trial{'' if a['trials'] == 1 else 's'} on it, {a['sliding_distance_m']:.2f} m slid).", ""]
-    lines += ["## Channels", "", "| channel | samples | rate (Hz) | mean | std | min | max | bad |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["## Channels", "", "Statistics of the 12-bit ADC codes (0–4095) the host read. *At rails*: good samples "
+              "reading 0 or 4095, where the signal reached the ADC's range or went beyond it (clipped); *bad*: words the "
+              "host rejected (parity error or an error word), left out of the statistics.", "",
+              "| channel | samples | rate (Hz) | mean | std | min | max | at rails | bad |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for name, s in record["channels"].items():
         if s["mean_code"] is None:
-            lines.append(f"| {name} | {s['samples']} | | | | | | {s['bad_samples']} |")
+            lines.append(f"| {name} | {s['samples']} | | | | | | | {s['bad_samples']} |")
         else:
             lines.append(f"| {name} | {s['samples']} | {s['rate_Hz']:.0f} | {s['mean_code']:.1f} | "
-                         f"{s['std_code']:.2f} | {s['min_code']} | {s['max_code']} | {s['bad_samples']} |")
+                         f"{s['std_code']:.2f} | {s['min_code']} | {s['max_code']} | {s.get('rail_samples', 0)} | "
+                         f"{s['bad_samples']} |")
+    clipped = {n: s["rail_samples"] for n, s in record["channels"].items() if s.get("rail_samples")}
+    if clipped:
+        lines += ["", "**Clipped:** " + ", ".join(f"{n} reached the ADC's rails in {k} sample{'s' if k > 1 else ''}"
+                                                  for n, k in clipped.items())
+                  + " — codes there are the rail, not the signal."]
     lines += ["", "## Effects that ran", "", "| effect | what it models | ms per simulated s |", "|---|---|---|"]
     for e in record["effects"]:
         lines.append(f"| {e['name']} | {e['description']} | {1e3 * e['seconds_per_simulated_s']:.3f} |")

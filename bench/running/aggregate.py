@@ -107,6 +107,8 @@ class ChannelSummary:
             var = max(0.0, (n * s2 - s1 * s1) / (n * n))
             nz = np.flatnonzero(hist)
         return {"samples": self.samples, "bad_samples": self.bad,
+                # good samples at the ADC's rails (0 or 4095): the signal went there or beyond, clipped
+                "rail_samples": int(hist[0] + hist[-1]),
                 "rate_Hz": float(self.samples / simulated_s) if simulated_s else 0.0,
                 "mean_code": s1 / n if n else None, "std_code": float(math.sqrt(var)) if n else None,
                 "min_code": int(nz[0]) if n else None, "max_code": int(nz[-1]) if n else None}

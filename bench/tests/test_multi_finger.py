@@ -59,7 +59,7 @@ def test_run_records_every_finger_and_each_rises_at_its_own_touch():
     rec = run_scene(load_scene(GRASP), progress=False)
     assert rec.status == "ok", rec.error
     recs = {1: rec, **rec.sensors}
-    assert sorted(recs) == [1, 2, 3] and recs[3].scene.name == "grasp_three_fingers-sensor3"
+    assert sorted(recs) == [1, 2, 3] and recs[3].scene.name == "grasp-three-fingers-sensor3"
     times = {k: r.channels["PDC"].times for k, r in recs.items()}
     rises = check_own_touch_only(times, {k: r.channels["PDC"].codes for k, r in recs.items()})
     assert rises[1] > rises[2] > rises[3]  # 2.0 N, 1.2 N, 0.8 N

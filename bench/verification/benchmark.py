@@ -273,8 +273,9 @@ def effect_costs(seconds: float = 60.0, repeats: int = 3, rounds: int = EFFECT_R
 def effect_cost_lines(e: dict) -> list[str]:
     """The per-effect cost table of an :func:`effect_costs` result, as printed lines."""
     rest = e["configs"]["rest"]
-    lines = [f"Cost of each issue-10 effect: default full frame through SPI, default profile, 4.4 kHz slots; "
-             f"best of {e['rounds']} rounds × {e['repeats']} runs of {e['simulated_s']:g} simulated s each",
+    lines = [f"Cost of each realism effect (units, noise sources, local electrodes, creep, Hertz impacts, variants): "
+             f"default full frame through SPI, default profile, 4.4 kHz slots; best of {e['rounds']} rounds × "
+             f"{e['repeats']} runs of {e['simulated_s']:g} simulated s each",
              f"  {'effect':48s} {'stimulus':9s} {'with ×':>8s} {'without ×':>10s} {'Δ ms / sim s':>13s} "
              f"{'scatter':>8s}"]
     for r in e["rows"]:

@@ -141,6 +141,9 @@ def test_a_scene_yields_identical_codes_over_software_and_rtl(tmp_path):
         other = results["rtl"].channels[name]
         assert np.array_equal(r.codes, other.codes), name
         assert np.array_equal(r.status, other.status) and not r.status.any(), name
+    from bench.reporting.report import build_record, markdown_report
+
+    assert "SPI side: the Verilog RTL" in markdown_report(build_record(results["rtl"], []))  # the report says which
 
 
 def test_waveforms_on_request(tmp_path):

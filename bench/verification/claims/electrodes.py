@@ -127,14 +127,14 @@ def electrode_claims(b: Bench) -> list[Claim]:
               note="the indentation depth is monotonic in force and Z = Z_series + ρ/gap by construction; where "
                    "the skin reaches the core the gap stops at its minimum"),
         Claim("pressing over an electrode moves it most", "19 of 19", float(hits), 19.0, 19.0, "electrodes",
-              "issue 4; §5 (G positions)", kind="consistency",
+              "§5 (electrode positions)", kind="consistency",
               note="the indentation is centred on the pressed electrode; checks positions and plumbing (changes "
                    "compared as fluid-thickness changes in common-rest codes: a unit's resting gaps differ)"),
         Claim(f"a 1 N contact's change stays in the nearest {LOCAL_K} electrodes",
               f"≥ {LOCAL_SHARE:.0%} of Σ|Δcode| (common-rest; median over E1..E19)", share, LOCAL_SHARE, 0.95,
               "of Σ|Δcode|",
-              "issue 10 (review: the change concentrates in the few electrodes nearest a contact); D ch. 4; "
-              "G positions",
+              "realism requirement (on real units a contact changes mostly the electrodes near it); D ch. 4; "
+              "electrode positions",
               {"share_per_electrode": shares, "k": LOCAL_K, "largest_change_beyond_10_mm_codes": far},
               kind="calibrated",
               calibration="bulge_width_ratio = 1/√2: the displaced liquid's rim bulge peaks at the indentation "

@@ -76,11 +76,11 @@ def force_claims(b: Bench) -> list[Claim]:
         Claim("slope above the knee / slope below", "clear departure: < 0.5", ratio, 0.0, 0.5, "ratio",
               "D ch. 6; §1", kind="consistency", note="reads back force_slope_above_knee = 0.25 (a model choice)"),
         Claim("PDC creep under a held 1 N, 0.2 → 10 s", "present, bounded: 2–15 %", 100 * creep, 2.0, 15.0, "%",
-              "issue 10.4; silicone stress relaxation", {"early_codes": early, "late_codes": late},
+              "silicone stress relaxation (no published BioTac figure)", {"early_codes": early, "late_codes": late},
               kind="consistency",
               note="D gives no creep figure: the bounds say the skin is viscoelastic (not elastic) yet a held force "
                    "reads within 15 %; set by skin_relaxation_time_s and skin_relaxed_modulus_fraction"),
         Claim("PDC hysteresis loop, 0–2 N at 0.5 N/s", "present, bounded: 1–10 % of the 2 N rise", 100 * hysteresis,
-              1.0, 10.0, "%", "issue 10.4; D ch. 6 (R² = 0.995)", kind="consistency",
+              1.0, 10.0, "%", "D ch. 6 (R² = 0.995)", kind="consistency",
               note="widest unloading − loading difference at equal force; the viscoelastic skin makes the loop"),
     ]

@@ -182,12 +182,12 @@ def impact_ring_claims(b: Bench) -> list[Claim]:
     big, d = ring(b)
     expected = predicted_ring_amplitude_bits(b, d.mass_kg * d.impact_speed_m_per_s * (1 + b.params.impact_restitution))
     rows += [
-        Claim("impact amplitude linear in impulse", "R² ≥ 0.999", lin.r_squared, 0.999, 1.0, "R²", "issue 1",
+        Claim("impact amplitude linear in impulse", "R² ≥ 0.999", lin.r_squared, 0.999, 1.0, "R²", "the model's linear chain (no published figure)",
               {"impulse_Ns": impulses, "peak_bits": peaks}, kind="consistency",
               note="the model is a linear system below clipping and every Hertz pulse is short next to the 3 ms "
                    "period; not a published figure"),
         Claim("impact ring amplitude / momentum change m·v·(1+e)", "1 ± 10 %", big.amplitude / expected, 0.9, 1.1,
-              "ratio", "issue 11 (impulse check)", {"measured_bits": big.amplitude, "expected_bits": expected},
+              "ratio", "the chain's impulse response (no published figure)", {"measured_bits": big.amplitude, "expected_bits": expected},
               kind="consistency",
               note="the ring an impulse m·v·(1+e) must make through the unrelaxed force slope, the resonance and the "
                    "PAC chain: an impulse too large or too small, or restitution ignored, fails it"),

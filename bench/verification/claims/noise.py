@@ -79,22 +79,22 @@ def noise_claims(b: Bench) -> list[Claim]:
         Claim("largest 2 Hz band of a 1 s PAC spectrum at rest", "0.2 bits² ± 30 %", float(np.median(bands)),
               0.14, 0.26, "bits²", "D ch. 5; §3", {"per_second": bands}, kind="calibrated",
               calibration="mains_amplitude_V = 0.516 µV, sized so the largest 2 Hz band at rest holds 0.2 bits²"),
-        Claim("PDC noise at rest", "0.3–0.7 LSB RMS", quiet["PDC"], 0.3, 0.7, "LSB", "issue 10.2",
+        Claim("PDC noise at rest", "0.3–0.7 LSB RMS", quiet["PDC"], 0.3, 0.7, "LSB", "real units at rest (realism requirement)",
               kind="prediction", note=_QUIET + "; the path adds ~0.01 LSB (stage-1 noise and hum)"),
-        Claim("TDC noise at rest", "0.3–0.7 LSB RMS", quiet["TDC"], 0.3, 0.7, "LSB", "issue 10.2",
+        Claim("TDC noise at rest", "0.3–0.7 LSB RMS", quiet["TDC"], 0.3, 0.7, "LSB", "real units at rest (realism requirement)",
               kind="prediction", note=_QUIET + "; settled at rest (no thermal event: the steady-state shortcut)"),
-        Claim("TAC noise at rest", "0.3–0.7 LSB RMS", quiet["TAC"], 0.3, 0.7, "LSB", "issue 10.2",
+        Claim("TAC noise at rest", "0.3–0.7 LSB RMS", quiet["TAC"], 0.3, 0.7, "LSB", "real units at rest (realism requirement)",
               kind="prediction", note=_QUIET + "; settled at rest (no thermal event: the steady-state shortcut)"),
         Claim("electrode noise at rest (E1..E19, farthest from 0.5)", "0.3–0.7 LSB RMS", quiet[worst_e], 0.3, 0.7,
-              "LSB", "issue 10.2", {"per_channel_LSB": {n: quiet[n] for n in ELECTRODES}, "worst": worst_e},
+              "LSB", "real units at rest (realism requirement)", {"per_channel_LSB": {n: quiet[n] for n in ELECTRODES}, "worst": worst_e},
               kind="prediction", note=_QUIET),
         Claim("TAC noise at rest, thermal network running", "0.3–0.7 LSB RMS", tac_net, 0.3, 0.7, "LSB",
-              "issue 10.2", {"TDC_LSB": float(np.std(net["TDC"][1]))}, kind="prediction",
+              "real units at rest (realism requirement)", {"TDC_LSB": float(np.std(net["TDC"][1]))}, kind="prediction",
               note=_QUIET + "; the thermistor node's own noise (tdc_noise_V = 0.3 µV per 10 ms step, from the "
                    "divider's Johnson noise and the buffer's: it was an unexplained 20 µV, 1.6 LSB on TAC, "
                    "before) reaches TAC through its ×98 gain; any value below ~5 µV passes"),
         Claim("mains harmonics (2nd, 3rd) visible in PAC at rest", "each line ≥ 3 dB above the local floor",
-              min(excess.values()), 3.0, np.inf, "dB (weaker line)", "issue 10.2", {"excess_dB": excess},
+              min(excess.values()), 3.0, np.inf, "dB (weaker line)", "real units at rest (realism requirement)", {"excess_dB": excess},
               kind="consistency",
               note="the harmonics are put in at the stage-1 input by mains_harmonic2_ratio / 3_ratio (basis: "
                    "capacitive pickup ∝ n·V_n with IEC 61000-2-2 voltage harmonics); the row checks that they "

@@ -251,8 +251,8 @@ def rig_claims(b: Bench) -> list[Claim]:
                            f"to 120 ms (60 µm) past the frame that met the target; the skin's contact stiffness turns "
                            f"that into a mean overshoot of {mean_err[0.2]:+.1f} % at 0.2 N ({mean_err[0.5]:+.1f} % at "
                            f"0.5 N, {mean_err[1.26]:+.1f} % at 1.26 N, {mean_err[2.0]:+.1f} % at 2 N). With the rule "
-                           f"acted on at every 10 ms frame the 0.2 N mean was about +6 %; the ± 10 % is the issue's "
-                           f"figure, not D's, whose rig had the same 100 ms period (bench/tests/test_texture_rig.py "
+                           f"acted on at every 10 ms frame the 0.2 N mean was about +6 %; the ± 10 % is the project's "
+                           f"requirement, not D's figure, whose rig had the same 100 ms period (bench/tests/test_texture_rig.py "
                            f"pins each trial's force to the stop frame's load plus stiffness × 0.5 mm/s × the delay)")]
     # wear: ridge height falls faster for high force × high speed than for low (one trial each on a fresh skin)
     lost = {}
