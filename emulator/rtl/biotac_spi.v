@@ -170,7 +170,7 @@ module biotac_spi #(
             last_word <= 16'd0;
             sampling_valid <= 1'b0;
             sampling_tick <= 32'd0;
-            sample_req <= 1'b0;
+            sample_req <= sample_ack;  // no toggle: a reset is not a request (the bench saw the last one)
             sample_channel <= 6'd0;
             for (r = 0; r < 4; r = r + 1) registers[r] <= 3'd0;
         end else if (rx_count >= 12'd8) begin

@@ -115,8 +115,11 @@ def fault_vectors() -> dict[str, dict]:
     out["clock_above_limit"] = record("fault: SCK above 10 MHz", s.items)
     out["sensor_absent"] = five_sensors((1, 2, 4), name="sensors 3 and 5 absent (MISO pulled down)")
     out["sensor_absent_pull_up"] = five_sensors((1, 2, 4), pull_up=True, name="sensors 3 and 5 absent (pull-up)")
-    s = Script().sample(1).sample(0).read()
-    out["reset_mid_stream"] = record("fault: sensor reset between command and read", s.items, resets={2: [1]})
+    # a reset between command and read (the pending result is gone), then one between a served read and a resend
+    # command (the resend buffer is gone too)
+    s = Script().sample(1).sample(0).read().sample(1).read().add(S1, 0x2000).read()
+    out["reset_mid_stream"] = record("fault: sensor reset between command and read, and before a resend", s.items,
+                                     resets={2: [1], 5: [1]})
     return out
 
 

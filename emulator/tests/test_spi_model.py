@@ -211,6 +211,23 @@ def test_reset_mid_stream_forgets_the_pending_result():
     assert b.transfer(read(100e-6)) == E["nothing_to_resend"]
 
 
+def test_reset_forgets_the_resend_buffer_too():
+    """docs/faults.md: after a reset "the pending result and the resend buffer are gone" — a resend command after a
+    served result gets it again, unless the sensor was reset in between."""
+    from emulator.spi.model import CMD_RESEND
+
+    for reset in (False, True):
+        b = bus()
+        b.transfer(cmd(0.0, 0x83))
+        served = b.transfer(read(100e-6))
+        assert proto.decode_response(served)[1]
+        if reset:
+            b.ports[1].reset()
+        b.transfer(cmd(200e-6, CMD_RESEND))
+        again = b.transfer(read(300e-6))
+        assert again == (E["nothing_to_resend"] if reset else served)
+
+
 def _random_word_traffic(rng, n):
     """Plain traffic: sampling commands (good and bad), odd first bytes, reads, at varied spacings and clocks."""
     firsts = np.concatenate([proto.sample_command(np.arange(64)), rng.integers(1, 256, 40)])
