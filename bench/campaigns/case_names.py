@@ -12,7 +12,7 @@ FAULT_EXPECTED = {
     "unplug_replug": "sensor 2 lost within 2 frames, found again within 1 s",
     "parity_errors": "every sample flagged, counted",
     "miso_stuck": "stuck sensor treated as absent",
-    "brownout_reset": "at most two bad samples, sensor kept",
+    "brownout_reset": "a reset between command and read: that sample flagged (error word), at most two, sensor kept",
     "cs_glitch": "chip select toggled with no clock edges: ignored, no errors",
     "serial_corruption": "CRC errors counted, resync, clean frames",
     "serial_loss": "dropped frames counted from sequence numbers",

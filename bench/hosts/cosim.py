@@ -75,6 +75,7 @@ class VirtualBoard:
         self.uart_out = uart_out or (lambda data: None)
         self.uart_in: deque[int] = deque()
         self.events: list[tuple[float, object]] = []
+        self.resets: list[tuple[float, int]] = []  # (virtual time s, sensor): brown-outs inside an SPI sequence
         self.error: BaseException | None = None
 
     # --- faults and events ---------------------------------------------------------------
@@ -95,6 +96,14 @@ class VirtualBoard:
         self._software_bus("plugging a sensor")
         port = SensorPort(self.sensors[n], n)
         self.bus.ports[n] = port
+
+    def reset_at(self, n: int, t_s: float) -> None:
+        """Reset sensor n (a brown-out: power-on state, :meth:`SensorPort.reset`) at virtual time ``t_s`` exactly,
+        even inside a frame's SPI sequence — between a sampling command and its read, say, where it loses the
+        pending result.  (Events of :meth:`at` act between the firmware's HAL calls.)"""
+        self._software_bus("resetting a sensor")
+        self.resets.append((float(t_s), int(n)))
+        self.resets.sort()
 
     def glitch(self, n: int) -> None:
         """Toggle sensor n's chip select with no clock edges (a glitch on the line), now."""
@@ -128,8 +137,19 @@ class VirtualBoard:
         self._events_due()
         w = np.ctypeslib.as_array(words, shape=(n,))
         start = self.t + w["offset_ns"] * 1e-9
-        out = self.bus.exchange_words(start, w["cs"], w["mosi"], SPI_CLOCK_HZ, w["keep_cs"].astype(bool))
-        np.ctypeslib.as_array(miso, shape=(n,))[:] = out
+        keep, out = w["keep_cs"].astype(bool), np.ctypeslib.as_array(miso, shape=(n,))
+        i = 0
+        while i < n:  # the words before each reset due within the sequence, the reset, the rest
+            j = n
+            if self.resets and self.resets[0][0] <= start[-1]:
+                j = max(i, int(np.searchsorted(start, self.resets[0][0], side="left")))
+            if j > i:
+                out[i:j] = self.bus.exchange_words(start[i:j], w["cs"][i:j], w["mosi"][i:j], SPI_CLOCK_HZ, keep[i:j])
+            if j < n:
+                _, sensor = self.resets.pop(0)
+                if sensor in self.bus.ports:
+                    self.bus.ports[sensor].reset()
+            i = j
         self.t = float(start[-1] + 16.5 / SPI_CLOCK_HZ)
 
     @_guard

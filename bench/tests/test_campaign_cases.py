@@ -1,0 +1,54 @@
+"""Every case of the default fault campaign (9 faults × 4 scenes, seed 0) through the bridge firmware, a pty and the
+host driver passes — and every check that can tell a fault from its absence fails on the same bench without the
+fault, so a case cannot pass because nothing happened.  ``none`` and ``cs_glitch`` expect nothing to be seen (a
+healthy link; a chip-select window with no clock edges is ignored), so they have no negative.  The fluid leak's
+negatives are in test_campaign_leak.py."""
+
+from __future__ import annotations
+
+import pytest
+
+from bench.campaigns import faults as campaign
+from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS
+from bench.campaigns.faults import FaultCase, run_case
+
+pytestmark = pytest.mark.unit
+
+
+def test_the_default_campaign_has_36_cases_and_every_one_passes():
+    tasks = campaign.campaign_tasks(FAULT_EXPECTED, SCENE_DESCRIPTIONS, [0])
+    assert len(tasks) == 36  # README: "36 cases"
+    failed = [(t.fault, t.scene, r["problem"]) for t in tasks
+              if not (r := run_case(campaign.FAULTS[t.fault], t.scene, t.seed))["passed"]]
+    assert not failed, failed
+
+
+@pytest.mark.parametrize("fault, words", [
+    ("unplug_replug", "sensor 2 was not lost and found again"),
+    ("parity_errors", "bad parity was not flagged"),
+    ("miso_stuck", "the stuck sensor is still streamed"),
+    ("brownout_reset", "no error word reached the host"),
+    ("serial_corruption", "corruption went unnoticed"),
+    ("serial_loss", "corruption went unnoticed"),
+])
+def test_each_check_fails_without_its_fault(fault, words):
+    """The same bench (sensor count) without the fault's schedule or line errors: the check must object."""
+    kw, _, check = campaign.FAULT_CASES[fault]
+    healthy = FaultCase(f"{fault} without the fault", "—", {k: v for k, v in kw.items() if k == "n_sensors"}, [],
+                        check)
+    result = run_case(healthy, "rest", 0)
+    assert not result["passed"] and words in result["problem"], result
+
+
+def test_a_brownout_inside_a_frame_loses_exactly_the_pending_result():
+    """The brown-out lands between a slot's sampling command and its read: that read gets an error word (flagged,
+    counted by the firmware), the sensor stays on the bus."""
+    seen = {}
+
+    def record(frames, status, stats):
+        seen.update(bad=sum(int((f.status != 0).sum()) for f in frames), error_words=status.error_words,
+                    mask=frames[-1].sensor_mask)
+
+    kw, schedule, _ = campaign.FAULT_CASES["brownout_reset"]
+    run_case(FaultCase("brownout", "—", kw, schedule, record), "taps", 0)
+    assert seen == {"bad": 1, "error_words": 1, "mask": 0b01}
