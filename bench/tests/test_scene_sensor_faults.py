@@ -70,9 +70,40 @@ def test_the_sensors_built_for_a_host_carry_each_fingers_own_faults():
 
 @pytest.mark.unit
 def test_a_biotac_sp_finger_faults_its_own_e20_to_e24_in_a_mixed_hand():
-    sc = parse_scene_text('[scene]\nname = "mixed"\nduration_s = 0.5\n[sensor]\nvariant = "biotac-sp"\n'
-                          '[sensor.faults]\nelectrode_open = [22]\n[[sensors]]\nindex = 2\n', "mixed.toml")
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    sc = parse_scene_text('[scene]\nname = "mixed"\nduration_s = 0.5\n[noise]\nadc = false\n[sensor]\n'
+                          'variant = "biotac-sp"\n[sensor.faults]\nelectrode_open = [22]\n[[sensors]]\nindex = 2\n'
+                          'variant = "biotac-sp"\n[[sensors]]\nindex = 3\n', "mixed.toml")
     assert sc.faults == {"electrode_open": [22]} and sc.sensor_spec(2).faults == {}
+    sensors = sensors_from_scene(sc, 3)
+    e22 = {k: int(sensors[k].sample([sensors[k].variant.channel_index["E22"]] * 2, [0.3, 0.3002])[-1]) for k in (1, 2)}
+    assert e22[1] < 100 and e22[2] > 2000, e22  # the faulted SP finger's E22 only
+
+
+@pytest.mark.unit
+def test_one_fingers_leak_empties_that_finger_only():
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    sc = parse_scene_text('[scene]\nname = "leak"\nduration_s = 10.0\n[noise]\nadc = false\n[[sensors]]\nindex = 3\n'
+                          '[sensors.faults]\nfluid_leak_mL_per_min = 6.0\n', "leak.toml")
+    sensors = sensors_from_scene(sc, 3)
+    pdc = {k: s.sample([channel_index("PDC")] * 2, [0.05, 5.0]).astype(int) for k, s in sensors.items()}
+    assert pdc[1][1] == pdc[1][0] and pdc[2][1] == pdc[2][0], pdc  # the healthy fingers keep their pressure
+    assert pdc[3][0] - pdc[3][1] > 100, pdc  # a punctured finger: empty after 5 s
+
+
+@pytest.mark.unit
+def test_a_sensor_served_beyond_the_scenes_has_the_common_faults_and_rests():
+    """``bridge --sensors 4`` on a three-finger scene: sensor 4 is sensor 1's unit with the scene's [faults] only
+    (E3 open; its multiplexer, sensor 1's own fault, not stuck), feeling nothing."""
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    fourth = sensors_from_scene(parse_scene_text(HAND, "hand.toml"), 4)[4]
+    pdc = fourth.sample([channel_index("PDC")] * 3, [0.05, 0.2, 0.25]).astype(int)
+    assert np.ptp(pdc) <= 1, pdc  # no stimulus reaches it (sensor 3's tap at 0.2 s is sensor 3's)
+    codes = _codes(fourth, ["TDC", "E3", "E12"])
+    assert codes["E3"] < 100 and codes["E12"] > 2000 and codes["TDC"] > 100
 
 
 @pytest.mark.unit

@@ -156,9 +156,29 @@ def test_before_the_leak_the_sensor_is_a_healthy_ones_to_the_bit_and_blocks_do_n
 
     healthy, leaking = codes({}), codes(LEAK)
     before = t < 1.0
+    assert np.array_equal(healthy, codes({"fluid_leak_mL_per_min": 0.0}))  # a leak at rate 0 changes nothing
     assert np.array_equal(healthy[before], leaking[before])
     assert not np.array_equal(healthy[~before], leaking[~before])
     assert np.array_equal(leaking, codes(LEAK, block_s=0.0371))
+
+
+@pytest.mark.unit
+def test_the_ring_keeps_the_starting_inflations_frequency_and_decay():
+    """A stated simplification (docs/model.md): the resonance and its decay are not carried with the volume — a
+    sphere hitting a finger that has lost 0.1 mL rings like a full one's (within 1 %), though less strongly."""
+    from bench.verification.analysis import fit_decaying_sinusoid
+    from emulator.stimuli import SPHERES, sphere_drop_on
+
+    def ring(faults):
+        drop = sphere_drop_on(P, 61.5, SPHERES["5/64 in aluminum bearing"][0], 0.07, sphere="5/64 in aluminum bearing")
+        t = 61.5 + np.arange(1, 500) / 8800.0
+        x = Sensor(stimuli=[drop], channels_read=["PAC"], faults=faults, noise=QUIET).sample(np.full(t.size, PAC), t)
+        return fit_decaying_sinusoid(t - 61.5, x.astype(float) - 2048.0)
+
+    full, leaking = ring({}), ring(LEAK)
+    assert leaking.frequency_Hz == pytest.approx(full.frequency_Hz, rel=0.01)
+    assert leaking.decay_s == pytest.approx(full.decay_s, rel=0.01)
+    assert leaking.amplitude < full.amplitude
 
 
 @pytest.mark.unit

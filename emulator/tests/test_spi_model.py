@@ -178,6 +178,23 @@ def test_clock_above_the_limit_makes_the_host_sample_each_bit_late():
     assert not proto.decode_response(late)[1] or late != good
 
 
+@pytest.mark.parametrize("clock_hz, shift", [(10.5e6, 0), (11.0e6, 0), (12.5e6, 1), (1 / 28e-9, 2)])
+def test_a_clock_past_10_MHz_is_counted_and_shifts_the_word_once_past_11_1_MHz(clock_hz, shift):
+    """docs/faults.md: MISO is valid 45 ns after it changes, so above ~11.1 MHz (half period < 45 ns) each bit is
+    sampled one bit late, by one bit down to 15 ns half periods and two below; every transfer above the 10 MHz limit
+    is counted out of spec, shifted or not."""
+    from emulator.spi.model import late_bits
+
+    assert late_bits(1 / (2 * clock_hz)) == shift
+    b = bus()
+    b.transfer(cmd(0.0, 0x83))
+    good = b.transfer(read(100e-6))
+    b.transfer(cmd(300e-6, 0x20))  # resend the same word, read at clock_hz
+    word = b.transfer(read(400e-6, clock_hz=clock_hz))
+    assert b.out_of_spec_transfers == 1
+    assert (word << shift) & 0xFFFF == (good >> shift << shift) & 0xFFFF and (shift == 0) == (word == good)
+
+
 @pytest.mark.parametrize("faults,check", [
     (Faults(miso_flip_bit=3), lambda good, bad: bad == good ^ (1 << 12)),
     (Faults(miso_stuck=1), lambda good, bad: bad == 0xFFFF),

@@ -81,9 +81,10 @@ def test_the_firmware_streams_the_scenes_broken_sensor_not_a_healthy_one(broken_
 
 @pytest.mark.parametrize("host,says", [
     ("slot_rate_Hz = 3000.0", "host.slot_rate_Hz = 3000"),
+    ("spi_clock_Hz = 2e6", "host.spi_clock_Hz = 2e+06: the bridge firmware clocks SPI at 4.4e+06 Hz"),
     ('sequence = ["PDC", "E22"]\n[[sensors]]\nindex = 2\nvariant = "biotac-sp"',  # E22 of the BioTac, sensor 1
      "host.sequence: E22: sensor 1 is a 'biotac', with E1..E19 only"),
-], ids=["slot rate", "E22 of a 19-electrode sensor"])
+], ids=["slot rate", "SPI clock", "E22 of a 19-electrode sensor"])
 def test_a_scene_the_firmware_cannot_honour_is_refused_naming_the_field(tmp_path, host, says):
     path = tmp_path / "cannot.toml"
     path.write_text(BROKEN.replace('sequence = ["PAC", "PDC", "E3", "E4", "TDC"]', host))
