@@ -167,8 +167,12 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
     # probability evolution of a few simulations (like D Fig. 6-10)
     if "bayesian" in result.identification_results:
         rs = result.identification_results["bayesian"][:4]
-        with figure_file(out / "probability_evolution.png", 1, len(rs), figsize=(4 * len(rs), 3.6),
-                         squeeze=False) as (_, axes):
+        from matplotlib.ticker import MaxNLocator
+
+        with figure_file(out / "probability_evolution.png", 1, len(rs), figsize=(4 * len(rs), 3.8),
+                         squeeze=False) as (fig, axes):
+            fig.suptitle("Bayesian exploration (117-way): the posterior of the five likeliest textures after each "
+                         "movement, first simulations", fontsize=10)
             for ax, r in zip(axes[0], rs):
                 h = r.posterior[0]
                 steps = int(r.n_moves[0]) + 1
@@ -176,7 +180,8 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
                 for k in top:
                     ax.plot(range(steps), h[:steps, k], marker=".", label=f"T{int(r.candidates[k])}")
                 ax.set_title(f"true T{int(r.true_texture)} ({lib[int(r.true_texture)].name})", fontsize=9)
-                ax.set_xlabel("movement")
+                ax.set_xlabel("movements made")
+                ax.xaxis.set_major_locator(MaxNLocator(integer=True))
                 ax.set_ylabel("P(texture)")
                 ax.set_ylim(0, 1.02)
                 ax.legend(fontsize=7)

@@ -28,8 +28,19 @@ def _mark_stimuli(ax, stimuli, t_max):
             ax.axvline(s.start_s, color=color, alpha=0.35, lw=0.8)
 
 
+#: a channel whose codes stay within this many codes, top to bottom, over the whole run is at rest: its noise is
+#: the ADC's (±1–2 LSB), drawn as a band around its mean instead of a zig-zag that fills the panel like a barcode
+QUIET_SPAN_CODES = 5
+
+
+def at_rest(summary, channel: str) -> bool:
+    """Whether ``channel``'s good samples stayed within :data:`QUIET_SPAN_CODES` codes over the whole run."""
+    _, lo, hi, _ = summary.channels[channel].envelope()
+    return bool(lo.size) and hi.max() - lo.min() <= QUIET_SPAN_CODES
+
+
 def _envelope_panel(summary, key: str, base: dict):
-    """(centre instants, low, high) of one trace panel in physical units, from the streamed min/max envelope
+    """(centre instants, low, high, mean) of one trace panel in physical units, from the streamed min/max envelope
     (one bin per pixel column at most: the zig-zag low → high → low draws what the full trace would)."""
     from emulator import conversions as conv
 
@@ -48,7 +59,39 @@ def _envelope_panel(summary, key: str, base: dict):
     else:
         f = lambda x: conv.impedance_ohm(x) / 1e3  # noqa: E731
     a, b = f(lo), f(hi)
-    return c, np.minimum(a, b), np.maximum(a, b)
+    return c, np.minimum(a, b), np.maximum(a, b), f(mean)
+
+
+def _trace(ax, summary, key: str, base: dict, quiet_note: bool = True, **kw) -> bool:
+    """One channel's trace: its zig-zag envelope, or — PAC aside, whose noise is the signal — its mean within a
+    min–max band when the channel stayed at rest (:func:`at_rest`; a note says so).  Returns whether it was."""
+    c, lo, hi, mean = _envelope_panel(summary, key, base)
+    channel = key.split("_")[0]
+    if channel == "PAC" or not at_rest(summary, channel):
+        _zigzag(ax, c, lo, hi, **kw)
+        return False
+    color = kw.get("color", "black")
+    ax.axhspan(lo.min(), hi.max(), color=color, alpha=0.12, lw=0)
+    ax.plot(c, _smoothed(mean), lw=1.0, color=color, label=kw.get("label"))
+    if quiet_note:
+        ax.text(0.01, 0.96, f"at rest throughout: the band spans the lowest to the highest code read (ADC noise, "
+                            f"within {QUIET_SPAN_CODES} codes); the line is the mean, smoothed over "
+                            f"{100 * SMOOTH_BINS / max(c.size, 1):.2g} % of the run",
+                transform=ax.transAxes, fontsize=7, va="top", color="0.3")
+    return True
+
+
+#: envelope bins a resting channel's mean is averaged over (of at most 1000 across the run)
+SMOOTH_BINS = 25
+
+
+def _smoothed(x: np.ndarray) -> np.ndarray:
+    """``x`` averaged over :data:`SMOOTH_BINS` neighbouring bins (fewer at the ends)."""
+    if x.size < 3:
+        return x
+    k = min(SMOOTH_BINS, x.size)
+    window = np.ones(k)
+    return np.convolve(x, window, "same") / np.convolve(np.ones(x.size), window, "same")
 
 
 #: envelope bins per piece of a traced line: Agg rasterizes each piece on its own, and a zig-zag spanning the panel's
@@ -107,12 +150,21 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
         with figure_file(path, len(panels), 1, figsize=size, sharex=True, squeeze=False) as (_, axes):
             for ax, (key, label) in zip(axes[:, 0], panels):
                 if key == "E_kohm":
-                    for n in range(1, 25):  # E20..E24: a BioTac SP's
-                        if f"E{n}" in names:
-                            _zigzag(ax, *_envelope_panel(summary, f"E{n}_ohm", base), lw=0.7, label=f"E{n}")
-                    ax.legend(ncol=10, fontsize=6, loc="upper right")
+                    electrodes = [f"E{n}" for n in range(1, 25) if f"E{n}" in names]  # E20..E24: a BioTac SP's
+                    resting = [e for e in electrodes if at_rest(summary, e)]
+                    for e in electrodes:
+                        c, lo, hi, mean = _envelope_panel(summary, f"{e}_ohm", base)
+                        if e in resting:  # a grey mean line each (their levels differ from unit to unit)
+                            ax.plot(c, _smoothed(mean), lw=0.8, color="0.55", label="_nolegend_")
+                        else:
+                            _zigzag(ax, c, lo, hi, lw=0.7, label=e)
+                    if resting:
+                        ax.plot([], [], color="0.55", label=f"{len(resting)} at rest: "
+                                + (f"{resting[0]}..{resting[-1]}" if len(resting) == len(electrodes) else
+                                   ", ".join(resting)) + " (smoothed mean)")
+                    ax.legend(ncol=10 if len(resting) < len(electrodes) else 1, fontsize=6, loc="upper right")
                 else:
-                    _zigzag(ax, *_envelope_panel(summary, key, base), lw=0.5, color="black")
+                    _trace(ax, summary, key, base, lw=0.5, color="black")
                 ax.set_ylabel(label)
                 ax.grid(alpha=0.3)
                 _mark_stimuli(ax, rec.scene.stimuli, rec.simulated_s)
@@ -199,21 +251,24 @@ def electrode_map(rec, path: Path) -> None:
         nz = np.flatnonzero(cs.hist)
         extreme = np.abs(impedance_ohm(np.array([nz[0], nz[-1]])) - rest)
         change.append(100 * float(extreme.max()) / rest)
-    with figure_file(path, figsize=(8, 4.2)) as (fig, ax):
+    with figure_file(path, figsize=(6.4, 4.6)) as (fig, ax):
         ax.add_patch(Rectangle((-16, -np.pi * CORE_RADIUS_MM / 1.6), 21, 2 * np.pi * CORE_RADIUS_MM / 1.6,
                                    fill=False, ls="--", color="gray"))
-        sc = ax.scatter(pos[:, 0], arc, c=change, s=260, cmap="viridis", edgecolors="black")
-        for n, (x, a) in enumerate(zip(pos[:, 0], arc), start=1):
-            ax.annotate(f"E{n}", (x, a), ha="center", va="center", fontsize=7, color="white")
-        for s in rec.scene.stimuli:
+        for s in rec.scene.stimuli:  # under the electrodes, so that no label is hidden
             if isinstance(s, Touch):
                 if s.electrode:
                     k = int(s.electrode[1:]) - 1
                     x, a = pos[k, 0], arc[k]
                 else:
                     x, a = s.x_mm, CORE_RADIUS_MM * np.radians(s.angle_deg)
-                ax.plot(x, a, "x", color="red", ms=10, mew=2)
-        fig.colorbar(sc, ax=ax, label="largest impedance change (%)")
+                ax.plot(x, a, "x", color="red", ms=9, mew=2, zorder=1)
+        sc = ax.scatter(pos[:, 0], arc, c=change, s=300, cmap="viridis", edgecolors="black", zorder=2)
+        shade = sc.to_rgba(np.asarray(change, float))
+        for n, (x, a, rgba) in enumerate(zip(pos[:, 0], arc, shade), start=1):
+            light = 0.299 * rgba[0] + 0.587 * rgba[1] + 0.114 * rgba[2] > 0.5  # dark text on light colours
+            ax.annotate(f"E{n}", (x, a), ha="center", va="center", fontsize=7, zorder=3,
+                        color="black" if light else "white")
+        fig.colorbar(sc, ax=ax, label="largest impedance change (%)", shrink=0.8)
         ax.set_xlabel("along the finger, x (mm; tip at right)")
         ax.set_ylabel("around the finger from the ventral midline (mm)")
         ax.set_title(f"{rec.scene.name}: electrode map (red ×: touches)")

@@ -46,3 +46,17 @@ def test_a_slow_run_keeps_the_digits_of_its_real_time_factor(taps):
     _, record = taps
     assert "(0.74× real time)" in markdown_report({**record, "realtime_factor": 0.7412})
     assert "(1234× real time)" in markdown_report({**record, "realtime_factor": 1234.4})
+
+
+def test_a_channel_at_rest_is_drawn_as_a_band_not_a_barcode(taps, tmp_path):
+    """traces.png: a channel whose codes stay within a few codes (noise) is at rest and drawn as its mean in a band;
+    one that moves (PDC under the taps) keeps its full trace; PAC is always traced (its noise is the signal)."""
+    from bench.reporting.plots import QUIET_SPAN_CODES, at_rest, scene_plots
+
+    rec, _ = taps
+    pdc, tdc = rec.channels["PDC"].codes, rec.channels["TDC"].codes
+    assert np.ptp(tdc) <= QUIET_SPAN_CODES < np.ptp(pdc)
+    assert at_rest(rec.summary, "TDC") and not at_rest(rec.summary, "PDC")
+    draw = dict(scene_plots(rec, {"PAC": 2048.0, "PDC": float(np.median(pdc[:50])), "TAC": 2048.0}))["traces.png"]
+    draw(tmp_path / "traces.png")
+    assert (tmp_path / "traces.png").stat().st_size > 10_000
