@@ -89,7 +89,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     cp.add_argument("--seeds", type=whole(1, 10_000), default=1,
                     help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
     cp.add_argument("--junit", type=output_file, default="out/campaign.xml",
-                    help="where to write the JUnit XML report (one test case per fault × scene × seed)")
+                    help="where to write the JUnit XML report (one test case per fault × scene × seed; replaced on "
+                         "each run, as CI tools expect of a report)")
     cp.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core)")
     cp.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
     cp.add_argument("--quiet", action="store_true", help="no progress bar")

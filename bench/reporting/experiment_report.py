@@ -216,7 +216,7 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
         rank = {"excluded-high-power": "excluded (high power)", "not-run": "not in this pilot"}.get(
             row["d_status"], f"{row['d_rank']} of {row['kept']}")
         d_u = "—" if row["d_U"] is None else f"{row['d_U']:.3g}"
-        lines.append(f"| {p} | {record['best_movements'][p]} ({row['pick_U']:.3g}) | {d['best movements'][p]} | "
+        lines.append(f"| {p} | {record['best_movements'][p]} (U = {row['pick_U']:.3g}) | {d['best movements'][p]} | "
                      f"{d_u} | {rank} |")
     lines += ["", "## Accuracy and movements to converge", "",
               "| task | strategy | accuracy | median movements | dissertation |", "|---|---|---|---|---|"]
