@@ -74,3 +74,33 @@ class MainsHum(Effect):
             return {"stage1_input_V": self.at(block.n0 + np.arange(block.n, dtype=float), block.fs)}
         start = block.n0 % table.size  # the block's first sample in the period, then the period over and over
         return {"stage1_input_V": np.resize(np.concatenate([table[start:], table[:start]]), block.n)}
+
+
+#: the PAC band (Hz) a mount vibration's ``rms_Pa`` is given in: stage 2's high-pass to stage 1's low-pass (nominal)
+PAC_BAND_HZ = (10.0, 1040.0)
+
+
+class MountNoise(Effect):
+    """Fluid pressure (Pa) of :class:`~emulator.stimuli.MountVibration` stimuli: white Gaussian noise whose density
+    gives each one's ``rms_Pa`` over :data:`PAC_BAND_HZ`, switched on at its ``start_s``.  One standard normal is
+    drawn per grid sample, switched on or not, so a sample is the same whatever the block size."""
+
+    name = "mount_vibration"
+    produces = ("fluid_pressure_Pa",)
+
+    def __init__(self, stimuli: list, fs: float, seed: int):
+        self.stimuli = list(stimuli)
+        per_sample = np.sqrt(fs / 2.0 / (PAC_BAND_HZ[1] - PAC_BAND_HZ[0]))  # σ per sample / RMS in the band
+        self.levels = [(s.start_s, s.rms_Pa * per_sample) for s in self.stimuli]
+        self.rng = effect_rng(seed, self.name)
+
+    def describe(self) -> str:
+        return "random vibration through the finger's mount (a rig's stepper holding), white in fluid pressure"
+
+    def process(self, block: Block, inputs):
+        t = block.times
+        z = self.rng.standard_normal(block.n)
+        sigma = np.zeros(block.n)
+        for start_s, level in self.levels:
+            sigma[t >= start_s] += level
+        return {"fluid_pressure_Pa": sigma * z}

@@ -18,7 +18,7 @@ from numba import njit
 from emulator import channels as ch
 from emulator.adc import Adc
 from emulator.effects import Block, Effect, build_graph
-from emulator.extrinsic import MainsHum
+from emulator.extrinsic import MainsHum, MountNoise
 from emulator.fidelity import Fidelity, profile
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import FluidLeak, ForceCoupling, RestingPressure, VibrationCoupling
@@ -26,8 +26,8 @@ from emulator.params import SensorParams
 from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
                                  surface_point_over_mm)
-from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, PowerOn, PressureCalibrator,
-                              Touch, Vibration, calibration_pressure, skin_displacement)
+from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, MountVibration, PowerOn,
+                              PressureCalibrator, Touch, Vibration, calibration_pressure, skin_displacement)
 from emulator.skin import contact_patch_area_m2
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
@@ -202,8 +202,10 @@ class Sensor:
         forces = [s for s in stimuli if isinstance(s, ForceStimulus)]
         vibrations = [s for s in stimuli if isinstance(s, Vibration)]
         calibrations = [s for s in stimuli if isinstance(s, PressureCalibrator)]
+        mounts = [s for s in stimuli if isinstance(s, MountVibration) and s.rms_Pa > 0]
         other = [s for s in stimuli if not isinstance(s, (ForceStimulus, Vibration, PressureCalibrator, PowerOn,
-                                                         AmbientStep, HeaterFailure, Slide, CommandedMotion))]
+                                                         AmbientStep, HeaterFailure, Slide, CommandedMotion,
+                                                         MountVibration))]
         if other:
             raise TypeError(f"not a stimulus: {other[0]!r}")
         for v in vibrations:
@@ -218,6 +220,8 @@ class Sensor:
             effects.append(skin_displacement(vibrations))
         if calibrations:
             effects.append(calibration_pressure(calibrations))
+        if mounts:
+            effects.append(MountNoise(mounts, fs, self.seed))
         if self.sliding is not None:
             effects.append(self.sliding)
         dynamic = self.thermal is not None

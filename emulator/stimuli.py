@@ -453,6 +453,24 @@ def calibration_pressure(stimuli: list["PressureCalibrator"]) -> SampledStimuli:
 
 
 @dataclass
+class MountVibration(CheckedFields):
+    """Random vibration reaching the liquid through the finger's mount from ``start_s`` on, such as a rig's stepper
+    motor makes while it holds (D ch. 6: "even when locked in a fixed position, the stepper motor produced some
+    background noise that was not consistent from trial to trial").
+
+    White in fluid pressure, ``rms_Pa`` in the PAC band (10–1040 Hz: what PAC reads of it); its spectrum is an
+    assumption (D gives none).  The samples come from the sensor's seed (:class:`emulator.extrinsic.MountNoise`)."""
+
+    LIMITS = {"start_s": INSTANT_S, "rms_Pa": NON_NEGATIVE}
+    start_s: float
+    rms_Pa: float
+
+    @property
+    def end_s(self):
+        return math.inf
+
+
+@dataclass
 class PressureCalibrator(CheckedFields):
     """A calibrated pressure applied straight to the liquid (bypassing the skin), as a lab calibrator would.
 

@@ -13,4 +13,8 @@ ABLATIONS = {
     "unreplaced-wear": ("skin wear on, never replaced", {"replace_skin": False}),
     "fewer-trials": ("2 training trials instead of 5", {"training_trials": 2}),
     "double-noise": ("every sensor noise source doubled", {"noise_scale": 2.0}),
+    # D ch. 6's stepper "background noise that was not consistent from trial to trial", at a level chosen before
+    # the run: the sensor's own resting PAC noise (1.4 bits = 0.52 Pa), ×/÷ e^0.5 from trial to trial
+    "stepper-noise": ("the rig's stepper background: 0.52 Pa RMS median, varying from trial to trial",
+                      {"stepper_noise_Pa": 0.52}),
 }

@@ -100,6 +100,7 @@ class ExperimentSpec:
     identify_all_textures: bool = False  # beyond D: 117-way for every texture (validation trials for all)
     fingerprints: bool = True
     noise_scale: float = 1.0
+    stepper_noise_Pa: float = 0.0  # the rig's stepper background ([rig] stepper_noise_Pa; RigSettings)
     source: str = "<experiment>"
 
     def key(self) -> str:
@@ -129,7 +130,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
              "validation": {"pairs", "n_pairs", "trials", "pair_choice"},
              "exploration": {"strategies", "pair_threshold", "identification_threshold", "max_moves",
                              "pair_simulations", "identification_simulations", "identify_all_textures"},
-             "skin": {"fingerprints"}, "sensor": {"noise_scale"}}
+             "skin": {"fingerprints"}, "sensor": {"noise_scale"}, "rig": {"stepper_noise_Pa"}}
     if not isinstance(data, dict):
         raise ExperimentError(source, ["the file must hold tables"])
     for k, v in data.items():
@@ -240,6 +241,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
     spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
+    spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)
     if "name" not in t["experiment"]:
         problems.append("[experiment] table with a name is missing (e.g. name = \"my-variant\")")
     if problems:
@@ -367,7 +369,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         ids = spec.pilot_movements if spec.pilot_movements is not None else list(range(len(grid)))
         tasks = sweep_tasks(spec.pilot_textures, [grid[i] for i in ids], spec.pilot_trials, spec.seed,
                             spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale,
-                            movement_ids=ids)
+                            movement_ids=ids, stepper_noise_Pa=spec.stepper_noise_Pa)
         log(f"pilot: {len(tasks)} trials")
         pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress)
         model = ex.fit_model(table_from_rows(pilot_rows))
@@ -386,7 +388,8 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                 for k in range(spec.training_trials):
                     tasks.append(TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                            trial_seed(spec.seed, "training", tex, int(m), k), int(m), spec.fidelity,
-                                           spec.fingerprints, stage="training", noise_scale=spec.noise_scale))
+                                           spec.fingerprints, stage="training", noise_scale=spec.noise_scale,
+                                           stepper_noise_Pa=spec.stepper_noise_Pa))
         # the same movement may be best for two properties: run it once
         tasks = list({(t.texture, t.movement_id, t.trial): t for t in tasks}.values())
         replace_at = spec.replace_at if spec.replace_skin else None
@@ -401,7 +404,8 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         val_textures = sorted({n for p in pairs for n in p} | (set(textures) if spec.identify_all_textures else set()))
         val_tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,
-                               spec.fingerprints, stage="validation", noise_scale=spec.noise_scale)
+                               spec.fingerprints, stage="validation", noise_scale=spec.noise_scale,
+                               stepper_noise_Pa=spec.stepper_noise_Pa)
                      for tex in val_textures for m in sorted(set(best.tolist())) for k in range(spec.validation_trials)]
         session, history = schedule_skin(tasks + val_tasks, wear=spec.wear, replace_at=replace_at)
         tasks = session[len(tasks):]

@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from bench.experiments.design import PILOT_WORTH_TRIALS
-from bench.rigs.texture_rig import Movement, TextureRig, movement_grid
+from bench.rigs.texture_rig import Movement, RigSettings, TextureRig, movement_grid
 from bench.textures.properties import properties
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources
@@ -52,6 +52,7 @@ class TrialTask:
     ridge_height_m: float = Skin().ridge_height_new_m
     skin_serial: int = 1
     noise_scale: float = 1.0  # 2.0: every noise source doubled (an ablation)
+    stepper_noise_Pa: float = 0.0  # the rig's stepper background, median RMS in the PAC band (RigSettings)
     stage: str = ""  # which stage of an experiment the trial belongs to (pilot, training, validation)
 
     def movement(self) -> Movement:
@@ -88,7 +89,7 @@ def run_trial_task(task: TrialTask) -> dict:
 
     skin = Skin(fingerprints=task.fingerprints, ridge_height_m=task.ridge_height_m, serial=task.skin_serial)
     rig = TextureRig(skin=skin, params=_params(task.noise_scale), fidelity=task.fidelity, noise=NoiseSources(),
-                     wear=False)
+                     settings=RigSettings(stepper_noise_Pa=task.stepper_noise_Pa), wear=False)
     trial = rig.run_trial(texture(task.texture), task.movement(), seed=task.seed, trial=task.trial)
     row = asdict(task)
     row.update(properties(trial.recording))
@@ -138,7 +139,8 @@ def _movement_ids(movements: list[Movement], movement_ids) -> list[int]:
 
 def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int = 6, seed: int = 0,
                 fidelity: str = "default", fingerprints: bool = True, stage: str = "sweep",
-                noise_scale: float = 1.0, movement_ids: list[int] | None = None) -> list[TrialTask]:
+                noise_scale: float = 1.0, movement_ids: list[int] | None = None,
+                stepper_noise_Pa: float = 0.0) -> list[TrialTask]:
     """Tasks for every texture × movement × repetition, each on a fresh skin (wear is shown apart, by
     :func:`wear_per_movement`).  ``movement_ids`` name the movements (grid ids; default their positions, which are
     the grid ids for the whole grid); a trial's seed comes from its identity (``seed``, ``stage``, texture,
@@ -154,7 +156,8 @@ def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int =
         for m_id, m in zip(ids, movements):
             for k in range(trials):
                 out.append(TrialTask(tex, m.force_N, m.velocity_m_per_s, k, trial_seed(seed, stage, tex, m_id, k),
-                                     m_id, fidelity, fingerprints, stage=stage, noise_scale=noise_scale))
+                                     m_id, fidelity, fingerprints, stage=stage, noise_scale=noise_scale,
+                                     stepper_noise_Pa=stepper_noise_Pa))
     return out
 
 

@@ -67,6 +67,7 @@ from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.skin import Skin, contact_patch_area_m2, contact_patch_radius_m
 from emulator.sliding import CommandedMotion, contact_force_from_depth
+from emulator.stimuli import MountVibration
 from emulator.spi.peripheral import SoftwarePeripheral
 from emulator.texture import Texture
 
@@ -119,6 +120,12 @@ class RigSettings:
     motor: StageMotor = field(default_factory=StageMotor)  # the stage's motor current (traction)
     chunk_s: float = 0.5
     speculation_s: float = 1.0  # while lowering: the longest window read after a snapshot (s)
+    #: D ch. 6: "even when locked in a fixed position, the stepper motor produced some background noise that was not
+    #: consistent from trial to trial" (D subtracts it: the roughness's background).  Its median RMS in the PAC band
+    #: (Pa; 0: a silent stepper, the default, as D gives no level) and its trial-to-trial spread (the standard
+    #: deviation of its natural log): each trial draws its level from its seed, on for the whole trial
+    stepper_noise_Pa: float = 0.0
+    stepper_noise_log_spread: float = 0.5
 
     def __post_init__(self):
         for name, value in vars(self).items():
@@ -205,6 +212,13 @@ class TextureRig:
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
                      start_position, time.perf_counter() - wall0, log.n_frames(run.frame), {"lowering": lowering})
 
+    def stepper_noise_Pa(self, seed: int) -> float:
+        """The stepper's background (RMS Pa in the PAC band) during the trial of ``seed``: the settings' median
+        times e^(spread·z), z a standard normal drawn from the seed (0 for a silent stepper)."""
+        s = self.settings
+        z = float(effect_rng(seed, "rig.stepper_noise").standard_normal())
+        return s.stepper_noise_Pa * math.exp(s.stepper_noise_log_spread * z)
+
     def start_range_m(self, movement: Movement) -> tuple[float, float]:
         """(first, last) start position (m) on the texture's square for ``movement``: the contact patch (radius a at
         the movement's force) stays on the square from touchdown (a ≤ start) to the stroke's end (start + distance
@@ -245,7 +259,8 @@ class TextureRig:
         s = self.settings
         motion = CommandedMotion(texture, start_position_m=start_position, latency_s=s.latency_s,
                                  max_travel_m=s.distance_m + 0.01, skin=self.skin, depth_m=-s.start_gap_m)
-        return _Run(Sensor(params=self.params, stimuli=[motion], channels_read=ch.DEFAULT_FRAME_NAMES,
+        hum = [MountVibration(0.0, self.stepper_noise_Pa(seed))] if s.stepper_noise_Pa > 0 else []
+        return _Run(Sensor(params=self.params, stimuli=[motion, *hum], channels_read=ch.DEFAULT_FRAME_NAMES,
                            fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
                            record_signals=("stage_force_N", "normal_force_N")),
                     motion, effect_rng(seed, "rig.motor_current"), s)
