@@ -217,7 +217,10 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) 
             frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
             status = _ask(drv, drv.request_status, Status, tries)
             drv.close()
-        if len(frames) < frames_wanted // 2:
+        unapplied = len(fb.board.events) + len(fb.board.resets)  # the fault's actions the run never reached
+        if fault.schedule and unapplied:
+            problem = f"{unapplied} of the fault's scheduled actions never happened (the stream ended before them)"
+        elif len(frames) < frames_wanted // 2:
             problem = f"only {len(frames)} frames arrived"
         elif status is None:
             problem = "no status reply"

@@ -1,7 +1,8 @@
 """Every case of the default fault campaign (9 faults × 4 scenes, seed 0) through the bridge firmware, a pty and the
 host driver passes — and every check that can tell a fault from its absence fails on the same bench without the
 fault, so a case cannot pass because nothing happened.  ``none`` and ``cs_glitch`` expect nothing to be seen (a
-healthy link; a chip-select window with no clock edges is ignored), so they have no negative.  The fluid leak's
+healthy link; a chip-select window with no clock edges is ignored), so they have no negative; a case whose
+scheduled actions never happened fails for that.  The fluid leak's
 negatives are in test_campaign_leak.py."""
 
 from __future__ import annotations
@@ -52,3 +53,11 @@ def test_a_brownout_inside_a_frame_loses_exactly_the_pending_result():
     kw, schedule, _ = campaign.FAULT_CASES["brownout_reset"]
     run_case(FaultCase("brownout", "—", kw, schedule, record), "taps", 0)
     assert seen == {"bad": 1, "error_words": 1, "mask": 0b01}
+
+
+def test_a_fault_whose_actions_never_happen_fails_the_case():
+    """A case whose fault is scheduled after the stream ends checks nothing: it fails, saying so (this is what keeps
+    ``cs_glitch``, whose correct reaction is that nothing is seen, from passing without a glitch)."""
+    late = FaultCase("late glitch", "—", {}, [(100.0, lambda b: b.glitch(1))], campaign.FAULT_CASES["cs_glitch"][2])
+    result = run_case(late, "rest", 0)
+    assert not result["passed"] and "1 of the fault's scheduled actions never happened" in result["problem"]
