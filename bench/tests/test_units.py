@@ -97,6 +97,14 @@ def test_units_move_resting_pdc_within_the_adc_and_keep_the_scales():
     rest = [derived(unit(s).params)["resting_PDC_code"] for s in range(200)]
     nominal = derived(SensorParams())["resting_PDC_code"]
     assert 200 < min(rest) and max(rest) < 1400 and np.std(rest) > 20, (min(rest), max(rest), nominal)
+    # README: "Over 500 units: resting PDC 387–1107 (nominal 735), resonance 312–345 Hz, PDC scale 36.70–37.22
+    # Pa/bit" (seeds 0..499), to its printed digits
+    d = [derived(unit(s).params) for s in range(500)]
+    ranges = {k: (min(x[k] for x in d), max(x[k] for x in d))
+              for k in ("resting_PDC_code", "resonance_at_inflation_Hz", "PDC_Pa_per_bit")}
+    assert [round(v) for v in ranges["resting_PDC_code"]] == [387, 1107] and round(nominal) == 735, ranges
+    assert [round(v) for v in ranges["resonance_at_inflation_Hz"]] == [312, 345], ranges
+    assert [round(v, 2) for v in ranges["PDC_Pa_per_bit"]] == [36.70, 37.22], ranges
     spans = [unit(s).params.bridge_sensitivity_V_per_V_Pa / SensorParams().bridge_sensitivity_V_per_V_Pa - 1
              for s in range(200)]
     assert max(map(abs, spans)) <= SPAN_LIMIT + 1e-12
