@@ -307,15 +307,17 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
     if kind == "tap":
         peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
         dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
-        taps = [Tap(t, peak, dur) for t in c.times(st, "at_s", w, duration) if None not in (peak, dur)]
-        out += _ending_in_scene(c, w, "tap", taps, duration)
+        if dur is not None:  # its span is checked whatever its force (a bad peak_N is a problem of its own)
+            taps = [Tap(t, 0.0 if peak is None else peak, dur) for t in c.times(st, "at_s", w, duration)]
+            out += _valid(peak is not None, _ending_in_scene(c, w, "tap", taps, duration))
     elif kind == "press":
         start = c.times(st, "start_s", w, duration)
         force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
         ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
         hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
-        if None not in (force, ramp, hold):
-            out += _ending_in_scene(c, w, "press", [Press(t, force, ramp, hold) for t in start], duration)
+        if None not in (ramp, hold):
+            presses = [Press(t, 0.0 if force is None else force, ramp, hold) for t in start]
+            out += _valid(force is not None, _ending_in_scene(c, w, "press", presses, duration))
     elif kind == "sphere_drop":
         # a Hertz impact on this sensor's skin (emulator.stimuli.sphere_drop_on): a named sphere gives its mass and
         # radius; a mass_mg drop its radius from diameter_mm, or from its material's density (default steel)
@@ -382,9 +384,11 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
         freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
         fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
-        if None not in (dur, offset, amp, freq, fade):
-            out += _ending_in_scene(c, w, "pressure", [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade)
-                                                       for t in start], duration)
+        if None not in (dur, fade):
+            given = None not in (offset, amp, freq)
+            calibrators = [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) if given else
+                           PressureCalibrator(t, dur, fade=fade) for t in start]
+            out += _valid(given, _ending_in_scene(c, w, "pressure", calibrators, duration))
     elif kind == "touch":
         start = c.times(st, "start_s", w, duration)
         vals = dict(
@@ -412,9 +416,12 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         if "object_temperature_C" in st and "material" not in st:
             c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
                               f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
-        if None not in [v for k, v in vals.items() if k != "object_temperature_C"]:
-            out += _ending_in_scene(c, w, "touch", [Touch(t, electrode=electrode, material=mat, **vals)
-                                                    for t in start], duration)
+        if None not in (vals["ramp_s"], vals["hold_s"]):
+            given = None not in [v for k, v in vals.items() if k != "object_temperature_C"]
+            span = {k: vals[k] for k in ("ramp_s", "hold_s")}
+            touches = [Touch(t, electrode=electrode, material=mat, **vals) if given else Touch(t, 0.0, **span)
+                       for t in start]
+            out += _valid(given, _ending_in_scene(c, w, "touch", touches, duration))
     elif kind in ("power_on", "heater_failure"):
         at = c.times(st, "at_s", w, duration)
         what = ("the sensor is powered on once (heaters start from ambient)" if kind == "power_on" else
@@ -479,6 +486,12 @@ def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
 
 #: how far (s) a stimulus may end past the scene's end for float rounding (e.g. 0.1 + 2·0.2 + 0.3 s in a 0.6 s scene)
 END_TOLERANCE_S = 1e-9
+
+
+def _valid(given: bool, stimuli: list) -> list:
+    """``stimuli`` if their values were ``given`` validly, else none: a stimulus with a bad value still has its span
+    checked (with placeholder values), so that every problem of a [[stimulus]] is reported at once."""
+    return stimuli if given else []
 
 
 def _ending_in_scene(c: _Checker, w: str, what: str, stimuli: list, duration) -> list:
