@@ -63,7 +63,11 @@ def test_run_records_every_finger_and_each_rises_at_its_own_touch():
     times = {k: r.channels["PDC"].times for k, r in recs.items()}
     rises = check_own_touch_only(times, {k: r.channels["PDC"].codes for k, r in recs.items()})
     assert rises[1] > rises[2] > rises[3]  # 2.0 N, 1.2 N, 0.8 N
+    # README: each finger's own force, read through the published 11.5 mN per PDC bit (each unit's own scale and the
+    # skin's creep within 10 %)
+    assert [r * 0.0115 for r in rises.values()] == pytest.approx([2.0, 1.2, 0.8], rel=0.10), rises
     assert len(recs[3].slides) == 1 and not recs[1].slides  # the slip is the middle finger's
+    assert recs[3].slides[0]["distance_m"] == pytest.approx(0.008)  # "slips 8 mm over acrylic"
     rest = [r.channels["PDC"].codes[:20].mean() for r in recs.values()]
     assert np.ptp(rest) > 10  # three units: three resting levels
 
