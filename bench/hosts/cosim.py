@@ -10,6 +10,7 @@ time; ``run(..., realtime=True)`` paces virtual time to the wall clock.
 from __future__ import annotations
 
 import ctypes as C
+import math
 import time
 from collections import deque
 from pathlib import Path
@@ -98,12 +99,22 @@ class VirtualBoard:
         self.bus.ports[n] = port
 
     def reset_at(self, n: int, t_s: float) -> None:
-        """Reset sensor n (a brown-out: power-on state, :meth:`SensorPort.reset`) at virtual time ``t_s`` exactly,
-        even inside a frame's SPI sequence — between a sampling command and its read, say, where it loses the
-        pending result.  (Events of :meth:`at` act between the firmware's HAL calls.)"""
-        self._software_bus("resetting a sensor")
+        """Reset sensor n (a brown-out: power-on state, :meth:`SensorPort.reset`) at virtual time ``t_s`` (s):
+        inside a frame's SPI sequence at the first word boundary at or after ``t_s`` that is not inside a window the
+        firmware holds open on one sensor — between a sampling command and its read, say, where it loses the
+        pending result; elsewhere at the firmware's first HAL call from ``t_s`` on.  (Events of :meth:`at` act
+        between the firmware's HAL calls.)"""
+        self._software_bus("a timed reset (a brown-out)")
+        if not math.isfinite(t_s) or t_s < 0:
+            raise ValueError(f"reset_at: t_s = {t_s!r} s: must be a finite instant ≥ 0")
         self.resets.append((float(t_s), int(n)))
         self.resets.sort()
+
+    def _reset(self) -> None:
+        """Apply the earliest pending reset."""
+        _, sensor = self.resets.pop(0)
+        if sensor in self.bus.ports:
+            self.bus.ports[sensor].reset()
 
     def glitch(self, n: int) -> None:
         """Toggle sensor n's chip select with no clock edges (a glitch on the line), now."""
@@ -115,6 +126,8 @@ class VirtualBoard:
         self.t = tr.end_s
 
     def _events_due(self) -> None:
+        while self.resets and self.resets[0][0] <= self.t:
+            self._reset()
         while self.events and self.events[0][0] <= self.t:
             _, action = self.events.pop(0)
             action(self)
@@ -143,12 +156,12 @@ class VirtualBoard:
             j = n
             if self.resets and self.resets[0][0] <= start[-1]:
                 j = max(i, int(np.searchsorted(start, self.resets[0][0], side="left")))
+                while 0 < j < n and keep[j - 1]:  # not inside a window held open (a batch is one bus operation)
+                    j += 1
             if j > i:
                 out[i:j] = self.bus.exchange_words(start[i:j], w["cs"][i:j], w["mosi"][i:j], SPI_CLOCK_HZ, keep[i:j])
             if j < n:
-                _, sensor = self.resets.pop(0)
-                if sensor in self.bus.ports:
-                    self.bus.ports[sensor].reset()
+                self._reset()
             i = j
         self.t = float(start[-1] + 16.5 / SPI_CLOCK_HZ)
 

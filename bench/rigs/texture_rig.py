@@ -129,8 +129,12 @@ class RigSettings:
 
     def __post_init__(self):
         for name, value in vars(self).items():
-            if isinstance(value, float) and not (math.isfinite(value) and value >= 0):
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and not (math.isfinite(value)
+                                                                                          and value >= 0):
                 raise ValueError(f"rig.{name} = {value!r}: must be a finite number ≥ 0")
+        if self.stepper_noise_log_spread > 3.0:
+            raise ValueError(f"rig.stepper_noise_log_spread = {self.stepper_noise_log_spread!r}: at most 3 (a factor "
+                             f"of e^3 ≈ 20 either way for one standard deviation)")
 
 
 @dataclass

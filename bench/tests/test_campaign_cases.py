@@ -61,3 +61,46 @@ def test_a_fault_whose_actions_never_happen_fails_the_case():
     late = FaultCase("late glitch", "—", {}, [(100.0, lambda b: b.glitch(1))], campaign.FAULT_CASES["cs_glitch"][2])
     result = run_case(late, "rest", 0)
     assert not result["passed"] and "1 of the fault's scheduled actions never happened" in result["problem"]
+
+
+def test_a_brownout_lands_whenever_it_is_due():
+    """A reset due outside a frame's sequence (the firmware's once-a-second detection, a delay) acts at the next HAL
+    call, not at the next frame; inside a sequence it never splits a window held open on one sensor; a reset at no
+    instant is refused."""
+    from bench.hosts.cosim import VirtualBoard, default_sensors
+
+    board = VirtualBoard(default_sensors(1))
+    with pytest.raises(ValueError, match="finite instant"):
+        board.reset_at(1, float("nan"))
+    resets = []
+    board.bus.ports[1].reset = lambda: resets.append(board.t)
+    board.reset_at(1, 0.5e-3)
+    board.delay_us(None, 400)
+    assert resets == [] and board.resets
+    board.delay_us(None, 200)  # past the instant: applied at this call
+    assert resets == [pytest.approx(0.6e-3)] and not board.resets
+
+
+def test_a_reset_due_inside_a_held_window_waits_for_it_to_close():
+    """A sampling command, then a 32-bit read held over two words: a reset due between the two words acts after
+    the window (here: the sequence's end, at the firmware's next HAL call), so the read is the unsplit one's."""
+    import ctypes as C
+
+    import numpy as np
+
+    from bench.hosts.cosim import BtWord, VirtualBoard, default_sensors
+    from emulator.spi import protocol as proto
+    from emulator.spi.model import SELECT_CODE
+
+    def run(reset):
+        board = VirtualBoard(default_sensors(1, seed=3))
+        words = (BtWord * 3)((0, SELECT_CODE[1], 0, int(proto.sample_command(1)) << 8),
+                             (60_000, SELECT_CODE[1], 1, 0), (64_000, SELECT_CODE[1], 0, 0))
+        if reset:
+            board.reset_at(1, board.t + 62e-6)
+        miso = (C.c_uint16 * 3)()
+        board.spi_sequence(None, words, miso, 3)
+        return list(miso), board.resets
+
+    (plain, _), (with_reset, pending) = run(False), run(True)
+    assert with_reset == plain and np.any(plain) and pending == [(pytest.approx(62e-6), 1)]

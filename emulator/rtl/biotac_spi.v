@@ -157,6 +157,18 @@ module biotac_spi #(
         end
     endtask
 
+    // The ADC request toggles with every accepted sampling command (the main block's sampling branch below). It
+    // has no reset: a reset is not a request (toggling it asked the bench for a conversion nobody commanded), and
+    // the ADC is not reset, so a conversion already started completes; its result is never served (as in
+    // emulator/spi/model.py).
+    wire accept_sample = rx_count >= 12'd16 && b0[7] && (^b0) && is_sampled(channel) && !busy;
+    // (A command ending while the sensor is held in reset still starts the ADC, which is not reset; nothing serves
+    // its result, as the reset branch below prepares nothing.)
+    initial sample_req = 1'b0;
+    always @(posedge cs_n) begin
+        if (accept_sample) sample_req <= ~sample_req;
+    end
+
     integer r;
     always @(posedge cs_n or negedge rst_n) begin
         if (!rst_n) begin
@@ -170,7 +182,6 @@ module biotac_spi #(
             last_word <= 16'd0;
             sampling_valid <= 1'b0;
             sampling_tick <= 32'd0;
-            sample_req <= sample_ack;  // no toggle: a reset is not a request (the bench saw the last one)
             sample_channel <= 6'd0;
             for (r = 0; r < 4; r = r + 1) registers[r] <= 3'd0;
         end else if (rx_count >= 12'd8) begin
@@ -200,8 +211,7 @@ module biotac_spi #(
                             prep_consumed <= 1'b0;
                             prep_kind <= K_PENDING;
                             prep_tick <= timer;
-                            sample_channel <= channel;
-                            sample_req <= ~sample_req;
+                            sample_channel <= channel;  // sample_req toggles below
                         end
                     end
                 end else if (b0 == 8'h61) begin
