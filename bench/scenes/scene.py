@@ -373,10 +373,13 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         else:
             f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
             f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
-        if None not in (dur, amp, fade, f0) and (f1 is not None or "frequency_Hz" in st):
-            what = "vibration" if f1 is None else f"vibration (a {f0:g} → {f1:g} Hz sweep)"
-            out += _ending_in_scene(c, w, what, [Vibration(t, dur, amp * 1e-6, f0, f1, fade) for t in start],
-                                    duration)
+        if None not in (dur, fade):
+            given = None not in (amp, f0) and (f1 is not None or "frequency_Hz" in st)
+            what = "vibration" if not given or f1 is None else f"vibration (a {f0:g} → {f1:g} Hz sweep)"
+            vibrations = [Vibration(t, dur, amp * 1e-6, f0, f1, fade) if given else Vibration(t, dur, 0.0, 1.0,
+                                                                                            fade_s=fade)
+                          for t in start]
+            out += _valid(given, _ending_in_scene(c, w, what, vibrations, duration))
     elif kind == "pressure":
         start = c.times(st, "start_s", w, duration)
         dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
