@@ -62,23 +62,20 @@ def _envelope_panel(summary, key: str, base: dict):
     return c, np.minimum(a, b), np.maximum(a, b), f(mean)
 
 
-def _trace(ax, summary, key: str, base: dict, quiet_note: bool = True, **kw) -> bool:
+def _trace(ax, summary, key: str, base: dict, color: str = "black", lw: float = 0.5) -> None:
     """One channel's trace: its zig-zag envelope, or — PAC aside, whose noise is the signal — its mean within a
-    min–max band when the channel stayed at rest (:func:`at_rest`; a note says so).  Returns whether it was."""
+    min–max band when the channel stayed at rest (:func:`at_rest`; a note says so)."""
     c, lo, hi, mean = _envelope_panel(summary, key, base)
     channel = key.split("_")[0]
     if channel == "PAC" or not at_rest(summary, channel):
-        _zigzag(ax, c, lo, hi, **kw)
-        return False
-    color = kw.get("color", "black")
+        _zigzag(ax, c, lo, hi, lw=lw, color=color)
+        return
     ax.axhspan(lo.min(), hi.max(), color=color, alpha=0.12, lw=0)
-    ax.plot(c, _smoothed(mean), lw=1.0, color=color, label=kw.get("label"))
-    if quiet_note:
-        ax.text(0.01, 0.96, f"at rest throughout: the band spans the lowest to the highest code read (ADC noise, "
-                            f"within {QUIET_SPAN_CODES} codes); the line is the mean, smoothed over "
-                            f"{100 * SMOOTH_BINS / max(c.size, 1):.2g} % of the run",
-                transform=ax.transAxes, fontsize=7, va="top", color="0.3")
-    return True
+    ax.plot(c, _smoothed(mean), lw=1.0, color=color)
+    ax.text(0.01, 0.96, f"at rest throughout: the band spans the lowest to the highest code read (ADC noise, within "
+                        f"{QUIET_SPAN_CODES} codes); the line is the mean, smoothed over "
+                        f"{100 * SMOOTH_BINS / max(c.size, 1):.2g} % of the run",
+            transform=ax.transAxes, fontsize=7, va="top", color="0.3")
 
 
 #: envelope bins a resting channel's mean is averaged over (of at most 1000 across the run)
@@ -164,7 +161,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
                                    ", ".join(resting)) + " (smoothed mean)")
                     ax.legend(ncol=10 if len(resting) < len(electrodes) else 1, fontsize=6, loc="upper right")
                 else:
-                    _trace(ax, summary, key, base, lw=0.5, color="black")
+                    _trace(ax, summary, key, base)
                 ax.set_ylabel(label)
                 ax.grid(alpha=0.3)
                 _mark_stimuli(ax, rec.scene.stimuli, rec.simulated_s)

@@ -82,19 +82,39 @@ def cheetah_adapter(monkeypatch, *bench_args, bitrate_khz: int | None = 4400, **
             lib.c_ch_close(h)
 
 
+def _command_then_read(lib, h, select: int, command: tuple[int, int], wait_ns: int, n_read: int) -> bytes:
+    """The vendor library's exchange: the two command bytes, ``wait_ns``, then ``n_read`` bytes with select held;
+    returns the bytes read."""
+    buf = (C.c_uint8 * (2 + n_read))()
+    lib.c_ch_spi_queue_clear(h)
+    lib.c_ch_spi_queue_ss(h, select)
+    lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(*command))
+    lib.c_ch_spi_queue_ss(h, 0)
+    lib.c_ch_spi_queue_delay_ns(h, wait_ns)
+    lib.c_ch_spi_queue_ss(h, select)
+    lib.c_ch_spi_queue_byte(h, n_read, 0x00)
+    lib.c_ch_spi_queue_ss(h, 0)
+    assert lib.c_ch_spi_batch_shift(h, 2 + n_read, buf) == 2 + n_read
+    return bytes(buf[2:])
+
+
 def read_serial(lib, h, select: int = 1) -> bytes:
     """The serial-number property (0x15) of the sensor at chip-select code ``select`` as the vendor library reads
     it: command, 60 µs, then 18 bytes with select held; returns those 18 bytes (the serial, then padding)."""
     from emulator.spi.model import PROP_SERIAL
 
-    buf = (C.c_uint8 * 32)()
-    lib.c_ch_spi_queue_clear(h)
-    lib.c_ch_spi_queue_ss(h, select)
-    lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x61, PROP_SERIAL))
-    lib.c_ch_spi_queue_ss(h, 0)
-    lib.c_ch_spi_queue_delay_ns(h, 60000)
-    lib.c_ch_spi_queue_ss(h, select)
-    lib.c_ch_spi_queue_byte(h, 18, 0x00)
-    lib.c_ch_spi_queue_ss(h, 0)
-    assert lib.c_ch_spi_batch_shift(h, 32, buf) == 20
-    return bytes(buf[2:20])
+    return _command_then_read(lib, h, select, (0x61, PROP_SERIAL), 60000, 18)
+
+
+def read_sample(lib, h, channel: str, select: int = 1) -> int:
+    """One sample of ``channel`` from the sensor at chip-select code ``select`` (0x01, 0x02, 0x04 for sensors 1..3)
+    as vendor host code reads it: the sampling command, 50 µs, the 16-bit read; its parity must hold."""
+    import numpy as np
+
+    from emulator.channels import channel_index
+    from emulator.spi import protocol as proto
+
+    word = _command_then_read(lib, h, select, (int(proto.sample_command(channel_index(channel))), 0x00), 50000, 2)
+    value, ok = proto.decode_response(np.array([int.from_bytes(word, "big")], np.uint16))
+    assert ok.all()
+    return int(value[0])

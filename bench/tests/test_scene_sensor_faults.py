@@ -201,30 +201,6 @@ def test_the_run_command_records_each_fingers_faults(tmp_path):
     assert "for sensor 2 (unit nominal, serial BT" in r.stdout and "electrode_open = [3], thermistor = open)" in r.stdout
 
 
-def _tdc_through_cheetah(lib, h, select: int) -> int:
-    """One TDC sample of the sensor at chip-select ``select`` (0x01, 0x02, 0x04 for sensors 1..3, as the vendor host
-    code selects them) as that code reads it: the sampling
-    command, 50 µs, the 16-bit read."""
-    import ctypes as C
-
-    from emulator.spi import protocol as proto
-
-    buf = (C.c_uint8 * 4)()
-    lib.c_ch_spi_queue_clear(h)
-    lib.c_ch_spi_queue_ss(h, select)
-    lib.c_ch_spi_queue_byte(h, 1, int(proto.sample_command(channel_index("TDC"))))
-    lib.c_ch_spi_queue_byte(h, 1, 0x00)
-    lib.c_ch_spi_queue_ss(h, 0)
-    lib.c_ch_spi_queue_delay_ns(h, 50000)
-    lib.c_ch_spi_queue_ss(h, select)
-    lib.c_ch_spi_queue_byte(h, 2, 0x00)
-    lib.c_ch_spi_queue_ss(h, 0)
-    assert lib.c_ch_spi_batch_shift(h, 4, buf) == 4
-    value, ok = proto.decode_response(np.array([(buf[2] << 8) | buf[3]], np.uint16))
-    assert ok.all()
-    return int(value[0])
-
-
 @pytest.mark.firmware
 def test_cheetah_serve_with_the_scene_serves_each_fingers_faults(tmp_path, monkeypatch):
     """``biotac-bench cheetah serve SCENE`` as a user starts it: a vendor-style program reads TDC 0 from finger 2
@@ -235,6 +211,7 @@ def test_cheetah_serve_with_the_scene_serves_each_fingers_faults(tmp_path, monke
 
     from bench.hosts.cheetah_server import build_library
     from bench.paths import REPO
+    from bench.tests.host_benches import read_sample
 
     scene = tmp_path / "hand.toml"
     scene.write_text(HAND)
@@ -248,7 +225,7 @@ def test_cheetah_serve_with_the_scene_serves_each_fingers_faults(tmp_path, monke
         h = lib.c_ch_open(0)
         assert h == 1
         lib.c_ch_spi_bitrate(h, 4400)
-        tdc = {k: _tdc_through_cheetah(lib, h, 1 << (k - 1)) for k in (1, 2, 3)}  # selects 0x01, 0x02, 0x04
+        tdc = {k: read_sample(lib, h, "TDC", select=1 << (k - 1)) for k in (1, 2, 3)}  # selects 0x01, 0x02, 0x04
         lib.c_ch_close(h)
     finally:
         p.terminate()
