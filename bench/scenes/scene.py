@@ -474,17 +474,20 @@ def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
             tex = find_texture(st["texture"])
         except TextureError as e:
             c.problems.append(f"{w}.texture = {_r(st['texture'])}: " + "; ".join(_cut(p) for p in e.problems))
-    if tex is None or None in [v for k, v in vals.items() if k != "start_position_mm"]:
+    timing = ("velocity_mm_per_s", "distance_mm", "approach_s", "hold_s", "accel_s", "lift_s")
+    if None in [vals[k] for k in timing]:
         return []
     v, d, a = vals["velocity_mm_per_s"] * 1e-3, vals["distance_mm"] * 1e-3, vals["accel_s"]
     if d < v * a:
         c.problems.append(f"{w}.distance_mm = {vals['distance_mm']!r}: shorter than the stage's acceleration and "
                           f"braking at this velocity ({v * a * 1e3:.3g} mm); lower accel_s or slide farther")
         return []
+    # its span is checked whatever its texture and force (a bad one is a problem of its own)
     start_m = None if vals["start_position_mm"] is None else vals["start_position_mm"] * 1e-3
-    return _ending_in_scene(c, w, "slide", [SlideSpec(t, tex, vals["force_N"], v, d, vals["approach_s"],
-                                                      vals["hold_s"], a, vals["lift_s"], start_m, where=w)
-                                            for t in starts], duration)
+    force = 0.0 if vals["force_N"] is None else vals["force_N"]
+    slides = [SlideSpec(t, tex, force, v, d, vals["approach_s"], vals["hold_s"], a, vals["lift_s"], start_m, where=w)
+              for t in starts]
+    return _valid(tex is not None and vals["force_N"] is not None, _ending_in_scene(c, w, "slide", slides, duration))
 
 
 #: how far (s) a stimulus may end past the scene's end for float rounding (e.g. 0.1 + 2·0.2 + 0.3 s in a 0.6 s scene)
