@@ -82,8 +82,9 @@ PAC_BAND_HZ = (10.0, 1040.0)
 
 class MountNoise(Effect):
     """Fluid pressure (Pa) of :class:`~emulator.stimuli.MountVibration` stimuli: white Gaussian noise whose density
-    gives each one's ``rms_Pa`` over :data:`PAC_BAND_HZ`, switched on at its ``start_s``.  One standard normal is
-    drawn per grid sample, switched on or not, so a sample is the same whatever the block size."""
+    gives each one's ``rms_Pa`` over :data:`PAC_BAND_HZ`, switched on at its ``start_s``; several are independent
+    sources, so their powers add.  One standard normal is drawn per grid sample, switched on or not, so a sample is
+    the same whatever the block size."""
 
     name = "mount_vibration"
     produces = ("fluid_pressure_Pa",)
@@ -100,7 +101,7 @@ class MountNoise(Effect):
     def process(self, block: Block, inputs):
         t = block.times
         z = self.rng.standard_normal(block.n)
-        sigma = np.zeros(block.n)
+        variance = np.zeros(block.n)
         for start_s, level in self.levels:
-            sigma[t >= start_s] += level
-        return {"fluid_pressure_Pa": sigma * z}
+            variance[t >= start_s] += level ** 2
+        return {"fluid_pressure_Pa": np.sqrt(variance) * z}

@@ -31,6 +31,15 @@ def test_the_pac_band_carries_the_given_rms_from_the_start_on(rms_Pa):
 
 
 @pytest.mark.unit
+def test_two_mount_vibrations_add_in_power():
+    """Consistency: two independent sources of 2 and 3 Pa read √(2² + 3²) = 3.61 Pa together (within 5 %), not the
+    5 Pa of amplitudes added; each alone still reads its own level."""
+    x = _pac([MountVibration(0.5, 2.0), MountVibration(1.0, 3.0)])
+    assert np.std(x[(T > 0.7) & (T < 1.0)]) * PAC_PA_PER_BIT == pytest.approx(2.0, rel=0.08)
+    assert np.std(x[T > 1.5]) * PAC_PA_PER_BIT == pytest.approx(np.hypot(2.0, 3.0), rel=0.05)
+
+
+@pytest.mark.unit
 def test_any_block_size_gives_the_same_codes_and_zero_is_nothing():
     assert np.array_equal(_pac([MountVibration(0.5, 2.0)]), _pac([MountVibration(0.5, 2.0)], block_s=0.0371))
     assert np.array_equal(_pac([MountVibration(0.5, 0.0)]), _pac([]))
