@@ -28,6 +28,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -148,6 +149,74 @@ def hertz_contact(mass_kg: float, radius_m: float, speed_m_per_s: float, modulus
     d_max = (15.0 * mass_kg * speed_m_per_s**2 / (16.0 * modulus_Pa * math.sqrt(radius_m))) ** 0.4
     f_max = 4.0 / 3.0 * modulus_Pa * math.sqrt(radius_m) * d_max**1.5
     return 2.9432 * d_max / speed_m_per_s, f_max, d_max
+
+
+#: standard gravity (m/s²)
+GRAVITY_M_PER_S2 = 9.80665
+#: dry air at 20 °C and 101.325 kPa: density (kg/m³) and dynamic viscosity (Pa·s), for spheres falling onto the skin
+AIR_DENSITY_KG_PER_M3 = 1.204
+AIR_VISCOSITY_PA_S = 1.81e-5
+
+
+def sphere_drag_coefficient(reynolds: float) -> float:
+    """Drag coefficient of a smooth sphere at Reynolds number ``reynolds`` (Morrison 2013's fit to the standard
+    curve, 0 < Re ≤ 10⁶; 24/Re, Stokes, as Re → 0)."""
+    re = reynolds
+    return (24.0 / re + 2.6 * (re / 5.0) / (1.0 + (re / 5.0) ** 1.52)
+            + 0.411 * (re / 2.63e5) ** -7.94 / (1.0 + (re / 2.63e5) ** -8.0) + 0.25 * (re / 1e6) / (1.0 + re / 1e6))
+
+
+@functools.lru_cache(maxsize=1024)
+def fall_speed_m_per_s(mass_kg: float, radius_m: float, height_m: float,
+                       air_density_kg_per_m3: float = AIR_DENSITY_KG_PER_M3,
+                       air_viscosity_Pa_s: float = AIR_VISCOSITY_PA_S) -> float:
+    """Speed (m/s) of a sphere released at rest after falling ``height_m`` through still air: weight less buoyancy
+    against the sphere's drag (:func:`sphere_drag_coefficient`), so a small sphere approaches its terminal speed
+    (a 0.25 mm solder ball about 4.3 m/s); √(2·g·h) in vacuum (``air_density_kg_per_m3`` = 0).  Integrated in
+    height for u = v²: du/dh = 2·(g·(1 − ρ_air/ρ) − F_drag/m), with an implicit method (the light spheres' approach
+    to their terminal speed is stiff)."""
+    from scipy.integrate import solve_ivp
+
+    if min(mass_kg, radius_m, height_m) <= 0 or air_density_kg_per_m3 < 0 or air_viscosity_Pa_s <= 0:
+        raise ValueError(f"fall_speed_m_per_s: mass {mass_kg!r} kg, radius {radius_m!r} m and height {height_m!r} m "
+                         f"must be > 0, air density {air_density_kg_per_m3!r} kg/m³ ≥ 0, viscosity > 0")
+    if air_density_kg_per_m3 == 0:
+        return math.sqrt(2.0 * GRAVITY_M_PER_S2 * height_m)
+    density = mass_kg / (4.0 / 3.0 * math.pi * radius_m**3)
+    if density <= air_density_kg_per_m3:
+        raise ValueError(f"fall_speed_m_per_s: a sphere of {mass_kg!r} kg and radius {radius_m!r} m "
+                         f"({density:.3g} kg/m³) does not fall through air")
+    g_net = GRAVITY_M_PER_S2 * (1.0 - air_density_kg_per_m3 / density)
+    area = math.pi * radius_m**2
+
+    def du_dh(_h, u):
+        v = math.sqrt(max(u[0], 0.0))
+        if v == 0.0:
+            return [2.0 * g_net]
+        re = air_density_kg_per_m3 * v * 2.0 * radius_m / air_viscosity_Pa_s
+        drag = 0.5 * air_density_kg_per_m3 * sphere_drag_coefficient(re) * area * v * v
+        return [2.0 * (g_net - drag / mass_kg)]
+
+    sol = solve_ivp(du_dh, (0.0, height_m), [0.0], method="LSODA", rtol=1e-9, atol=1e-12)
+    if not sol.success:
+        raise ArithmeticError(f"fall_speed_m_per_s: the fall did not integrate ({sol.message})")
+    return math.sqrt(max(float(sol.y[0, -1]), 0.0))
+
+
+def terminal_speed_m_per_s(mass_kg: float, radius_m: float, air_density_kg_per_m3: float = AIR_DENSITY_KG_PER_M3,
+                           air_viscosity_Pa_s: float = AIR_VISCOSITY_PA_S) -> float:
+    """Speed (m/s) at which a sphere's drag in still air equals its weight less buoyancy: what no fall exceeds."""
+    from scipy.optimize import brentq
+
+    density = mass_kg / (4.0 / 3.0 * math.pi * radius_m**3)
+    weight = mass_kg * GRAVITY_M_PER_S2 * (1.0 - air_density_kg_per_m3 / density)
+
+    def excess_drag(log_v):
+        v = math.exp(log_v)
+        re = air_density_kg_per_m3 * v * 2.0 * radius_m / air_viscosity_Pa_s
+        return 0.5 * air_density_kg_per_m3 * sphere_drag_coefficient(re) * math.pi * radius_m**2 * v * v - weight
+
+    return math.exp(brentq(excess_drag, math.log(1e-9), math.log(1e4), xtol=1e-12))
 
 
 def static_pressure_from_force(force_N, p: SensorParams, slope_Pa_per_N: float | None = None):

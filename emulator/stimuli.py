@@ -20,10 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from emulator.effects import Block, Effect
-from emulator.mechanics import hertz_contact
+from emulator.mechanics import (AIR_DENSITY_KG_PER_M3, AIR_VISCOSITY_PA_S, GRAVITY_M_PER_S2, fall_speed_m_per_s,
+                                hertz_contact)
 from emulator.params import SensorParams
-
-GRAVITY_M_PER_S2 = 9.80665
 
 #: The spheres of D Table 5-2: name -> (mass kg, published impact energy J from 7 cm).
 SPHERES: dict[str, tuple[float, float]] = {
@@ -163,7 +162,11 @@ class Tap(CheckedFields, ForceStimulus):
 
 @dataclass
 class SphereDrop(CheckedFields, ForceStimulus):
-    """A sphere of ``mass_kg`` dropped from ``height_m`` landing at ``time_s``: a Hertz impact.
+    """A sphere of ``mass_kg`` dropped from ``height_m`` through still air landing at ``time_s``: a Hertz impact.
+
+    It lands at the speed the fall through air gives (:func:`emulator.mechanics.fall_speed_m_per_s`: within 5 % of
+    √(2·g·h) from 7 cm, but a small sphere from higher nears its terminal speed); ``air_density_kg_per_m3`` = 0
+    drops it in vacuum.
 
     The force pulse is F(t) ∝ sin^(3/2)(π·t/t_c) (Hertz: F ∝ δ^(3/2), δ ≈ δ_max·sin(π·t/t_c)) with the elastic
     Hertz duration t_c = 2.94·δ_max/v of a sphere of radius ``radius_m`` (default: from the mass and
@@ -174,7 +177,8 @@ class SphereDrop(CheckedFields, ForceStimulus):
 
     LIMITS = {"time_s": INSTANT_S, "mass_kg": POSITIVE, "height_m": POSITIVE, "restitution": Limit(0.0, 1.0),
               "contact_s": POSITIVE.or_none(), "radius_m": POSITIVE.or_none(),
-              "density_kg_per_m3": POSITIVE, "contact_modulus_Pa": POSITIVE}
+              "density_kg_per_m3": POSITIVE, "contact_modulus_Pa": POSITIVE,
+              "air_density_kg_per_m3": NON_NEGATIVE, "air_viscosity_Pa_s": POSITIVE}
     time_s: float
     mass_kg: float
     height_m: float = DROP_HEIGHT_M
@@ -183,14 +187,24 @@ class SphereDrop(CheckedFields, ForceStimulus):
     radius_m: float | None = None
     density_kg_per_m3: float = MATERIAL_DENSITY_KG_PER_M3["steel"]
     contact_modulus_Pa: float = SKIN_CONTACT_MODULUS_PA
+    air_density_kg_per_m3: float = AIR_DENSITY_KG_PER_M3
+    air_viscosity_Pa_s: float = AIR_VISCOSITY_PA_S
 
     @property
     def impact_speed_m_per_s(self) -> float:
-        return float(np.sqrt(2 * GRAVITY_M_PER_S2 * self.height_m))
+        """Speed at impact after the fall through air (m/s)."""
+        return fall_speed_m_per_s(self.mass_kg, self.sphere_radius_m, self.height_m, self.air_density_kg_per_m3,
+                                  self.air_viscosity_Pa_s)
 
     @property
     def energy_J(self) -> float:
+        """Potential energy m·g·h before the drop (J): D's "impact energy" (Table 5-2)."""
         return self.mass_kg * GRAVITY_M_PER_S2 * self.height_m
+
+    @property
+    def kinetic_energy_J(self) -> float:
+        """Kinetic energy at impact ½·m·v² (J): less than :attr:`energy_J` by what the air took."""
+        return 0.5 * self.mass_kg * self.impact_speed_m_per_s**2
 
     @property
     def momentum_Ns(self) -> float:

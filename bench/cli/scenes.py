@@ -46,7 +46,7 @@ scene file (TOML):
   [[stimulus]] one table per stimulus, by kind:
      tap          at_s (s or list), peak_N, duration_s (0.03)
      press        start_s, force_N, ramp_s (0.5), hold_s (1.0)
-     sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07)
+     sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07; falls through air)
      vibration    start_s, duration_s, amplitude_um, frequency_Hz  | f_start_Hz + f_stop_Hz (log sweep), fade_s
      pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz  (calibrator on the liquid)
      touch        start_s, force_N, ramp_s, hold_s; where: electrode ("E17") or x_mm + angle_deg;

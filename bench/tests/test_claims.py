@@ -48,7 +48,7 @@ EXPECTED_KINDS = {
     "impact ringing over 0.3–0.7 mL: highest": "prediction",
     "ringing frequency change 0.4 → 0.6 mL": "prediction",
     "impact ring amplitude / momentum change m·v·(1+e)": "consistency",  # the model's own impulse formula
-    "the sphere missed at 7 cm is detected from higher": "prediction",  # D: not a mass threshold
+    "the sphere missed at 7 cm is detected from higher": "prediction",  # deviates: the air caps its speed
     "detection threshold spread: energy / momentum": "prediction",  # a documented deviation from D
     "false detections at rest": "consistency",  # P ≈ 1e-9 per window
     "settled thermistor above ambient": "consistency",  # heater_rise_K

@@ -85,9 +85,10 @@ def test_johnson_noise_follows_sqrt_4kTR():
 
 
 def test_sphere_impulse_and_energy_follow_the_drop_height():
-    s = SphereDrop(0.0, 0.422e-6, 0.07, restitution=0.0)
+    s = SphereDrop(0.0, 0.422e-6, 0.07, restitution=0.0, air_density_kg_per_m3=0.0)
     assert s.energy_J == pytest.approx(0.289e-6, rel=0.01)  # D Table 5-2
     assert s.impulse_Ns == pytest.approx(0.422e-6 * np.sqrt(2 * 9.80665 * 0.07))
+    assert SphereDrop(0.0, 0.422e-6, 0.07, restitution=0.0).impulse_Ns < s.impulse_Ns  # the air slows it
 
 
 def test_force_pulses_deliver_the_same_impulse_on_any_grid():

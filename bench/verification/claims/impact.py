@@ -6,13 +6,15 @@ duration against the resonance period."""
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
+from scipy.optimize import brentq
 
 from bench.verification import analysis
 from bench.verification.claims.core import Bench, Claim, claim_group
 from emulator import conversions as conv
-from emulator.mechanics import skin_fluid
+from emulator.mechanics import GRAVITY_M_PER_S2, fall_speed_m_per_s, skin_fluid, terminal_speed_m_per_s
 from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERE_RADII_M, SPHERES, SphereDrop,
                               sphere_drop_on)
 
@@ -70,34 +72,54 @@ def resting_pac_sigma_bits(b: Bench) -> float:
 
 def sphere_drop(b: Bench, t: float, mass_kg: float, radius_m: float, height_m: float,
                 contact_modulus_Pa: float | None = None) -> SphereDrop:
-    """A Hertz drop on the bench's sensor; ``contact_modulus_Pa`` (plane-strain, Pa) replaces the skin's."""
+    """A Hertz drop through air on the bench's sensor; ``contact_modulus_Pa`` (plane-strain, Pa) replaces the
+    skin's."""
     d = sphere_drop_on(b.params, t, mass_kg, height_m, radius_m=radius_m)
     return d if contact_modulus_Pa is None else dataclasses.replace(d, contact_modulus_Pa=contact_modulus_Pa)
 
 
-def threshold_heights(b: Bench, sigma_bits: float, rule=analysis.DetectionRule(), spheres=None,
-                      contact_modulus_Pa: float | None = None, bracket_m=(1e-8, 1e3), iterations: int = 30
-                      ) -> dict[str, float]:
-    """Per sphere (name -> (mass kg, radius m); default D Table 5-2), the drop height (m) at which the noise-free
-    PAC first has more than ``rule.min_points`` samples at 2200 S/s beyond ``rule.n_sigma``·σ within the window
-    (bisection in log height inside ``bracket_m``, which must hold the threshold)."""
+def landing_at(b: Bench, t: float, mass_kg: float, radius_m: float, speed_m_per_s: float,
+               contact_modulus_Pa: float | None = None) -> SphereDrop:
+    """A sphere landing at ``speed_m_per_s`` (a vacuum drop from v²/2g: the impact whatever height gave it)."""
+    d = sphere_drop(b, t, mass_kg, radius_m, speed_m_per_s**2 / (2.0 * GRAVITY_M_PER_S2), contact_modulus_Pa)
+    return dataclasses.replace(d, air_density_kg_per_m3=0.0)
+
+
+def threshold_speeds(b: Bench, sigma_bits: float, rule=analysis.DetectionRule(), spheres=None,
+                     contact_modulus_Pa: float | None = None, bracket_m_per_s=(1e-5, 1e2), iterations: int = 30
+                     ) -> dict[str, float]:
+    """Per sphere (name -> (mass kg, radius m); default D Table 5-2), the impact speed (m/s) at which the
+    noise-free PAC first has more than ``rule.min_points`` samples at 2200 S/s beyond ``rule.n_sigma``·σ within the
+    window (bisection in log speed inside ``bracket_m_per_s``, which must hold the threshold)."""
     out = {}
     for name, (mass, radius) in (spheres or D_SPHERES).items():
 
-        def detected(log_h):
-            d = sphere_drop(b, 0.05, mass, radius, float(np.exp(log_h)), contact_modulus_Pa)
+        def detected(log_v):
+            d = landing_at(b, 0.05, mass, radius, float(np.exp(log_v)), contact_modulus_Pa)
             t, x = b.analog_pac_bits([d], 0.05 + rule.window_s, rate_Hz=2200.0)
             x = x - x[t < 0.045].mean()
             return np.count_nonzero(np.abs(x[t >= 0.05]) > rule.n_sigma * sigma_bits) > rule.min_points
 
-        lo, hi = np.log(bracket_m[0]), np.log(bracket_m[1])
+        lo, hi = np.log(bracket_m_per_s[0]), np.log(bracket_m_per_s[1])
         if detected(lo) or not detected(hi):
-            raise ValueError(f"threshold_heights: {name}'s threshold lies outside {bracket_m} m")
+            raise ValueError(f"threshold_speeds: {name}'s threshold lies outside {bracket_m_per_s} m/s")
         for _ in range(iterations):
             mid = 0.5 * (lo + hi)
             lo, hi = (lo, mid) if detected(mid) else (mid, hi)
         out[name] = float(np.exp(hi))
     return out
+
+
+def height_in_air(mass_kg: float, radius_m: float, speed_m_per_s: float) -> float:
+    """Drop height (m) from which a sphere falling through air lands at ``speed_m_per_s``; inf at or above its
+    terminal speed (no height gives it)."""
+    if speed_m_per_s >= terminal_speed_m_per_s(mass_kg, radius_m):
+        return math.inf
+    vacuum = speed_m_per_s**2 / (2.0 * GRAVITY_M_PER_S2)  # the air only slows: the height is above this
+    hi = 2.0 * vacuum
+    while fall_speed_m_per_s(mass_kg, radius_m, hi) < speed_m_per_s:
+        hi *= 2.0
+    return float(brentq(lambda h: fall_speed_m_per_s(mass_kg, radius_m, h) - speed_m_per_s, vacuum, hi, rtol=1e-9))
 
 
 def pulse_spectrum_share(d: SphereDrop, frequency_Hz: float, points: int = 4000) -> float:
@@ -110,23 +132,39 @@ def pulse_spectrum_share(d: SphereDrop, frequency_Hz: float, points: int = 4000)
 
 
 def threshold_scaling(b: Bench, sigma_bits: float, spheres=None, contact_modulus_Pa: float | None = None,
-                      bracket_m=(1e-8, 1e3)) -> dict:
-    """At each sphere's detection threshold: height (m), energy m·g·h (J), momentum m·v (N·s), peak Hertz force (N),
-    contact duration over the resonance period, the pulse's spectrum share at the ringing frequency; and the
+                      bracket_m_per_s=(1e-5, 1e2)) -> dict:
+    """At each sphere's detection threshold: impact speed (m/s), kinetic energy ½·m·v² (J), momentum m·v (N·s),
+    peak Hertz force (N), contact duration over the resonance period, the pulse's spectrum share at the ringing
+    frequency, and the drop height through air that gives the speed (m; inf above the terminal speed); and the
     max/min spread of energy, momentum and peak force across the spheres."""
-    heights = threshold_heights(b, sigma_bits, spheres=spheres, contact_modulus_Pa=contact_modulus_Pa,
-                                bracket_m=bracket_m)
+    table = spheres or D_SPHERES
+    speeds = threshold_speeds(b, sigma_bits, spheres=table, contact_modulus_Pa=contact_modulus_Pa,
+                              bracket_m_per_s=bracket_m_per_s)
     f0 = skin_fluid(b.params).resonance_Hz
-    drops = {n: sphere_drop(b, 0.05, *(spheres or D_SPHERES)[n], h, contact_modulus_Pa) for n, h in heights.items()}
-    per_sphere = {"energy_J": {n: d.energy_J for n, d in drops.items()},
+    drops = {n: landing_at(b, 0.05, *table[n], v, contact_modulus_Pa) for n, v in speeds.items()}
+    per_sphere = {"energy_J": {n: d.kinetic_energy_J for n, d in drops.items()},
                   "momentum_Ns": {n: d.momentum_Ns for n, d in drops.items()},
                   "peak_force_N": {n: d.peak_force_N for n, d in drops.items()}}
-    out = {"threshold_height_m": heights,
+    out = {"threshold_speed_m_per_s": speeds,
+           "threshold_height_in_air_m": {n: height_in_air(*table[n], v) for n, v in speeds.items()},
+           "terminal_speed_m_per_s": {n: terminal_speed_m_per_s(*table[n]) for n in speeds},
            "contact_over_period": {n: d.contact_duration_s * f0 for n, d in drops.items()},
            "spectrum_share_at_ring": {n: pulse_spectrum_share(d, f0) for n, d in drops.items()}}
     out.update({f"threshold_{k}": v for k, v in per_sphere.items()})
     out.update({f"spread_{k.rsplit('_', 1)[0]}": max(v.values()) / min(v.values()) for k, v in per_sphere.items()})
     return out
+
+
+def detection_rate_from(b: Bench, name: str, height_m: float, drops: int, seed_offset: int) -> float:
+    """Share (%) of ``drops`` noisy drops of sphere ``name`` from ``height_m`` through air that D's rule detects."""
+    rng = np.random.default_rng(b.seed + seed_offset)
+    times = 1.0 + np.cumsum(rng.uniform(0.25, 0.6, drops))
+    rec = b.acquire([drop(b, float(t), name, height_m) for t in times], float(times[-1] + 0.3),
+                    seed_offset=seed_offset)
+    t, pac = rec["PAC"]
+    rest = pac[t < 0.95]
+    hits = sum(analysis.detected_in_window(pac, t, float(tt), rest.mean(), rest.std()) for tt in times)
+    return 100.0 * hits / drops
 
 
 @claim_group("impact")
@@ -196,27 +234,45 @@ def impact_ring_claims(b: Bench) -> list[Claim]:
     # detectability: energy or momentum?  (D: "sensitivity scaled with impact energy rather than mass")
     sigma = resting_pac_sigma_bits(b)
     short = threshold_scaling(b, sigma)
-    long = threshold_scaling(b, sigma, HEAVY_STEEL_SPHERES, bracket_m=(1e-12, 1e-3))
+    long = threshold_scaling(b, sigma, HEAVY_STEEL_SPHERES, bracket_m_per_s=(1e-6, 0.1))
     spread_e, spread_p = short["spread_energy"], short["spread_momentum"]
     ratio = short["contact_over_period"].values()
     long_ratio = long["contact_over_period"].values()
     smallest = min(D_SPHERES, key=lambda n: D_SPHERES[n][0])
+    high_m = 2.0
+    drops = 30 if b.quick else 200
+    rate = detection_rate_from(b, smallest, high_m, drops, seed_offset=91)
+    v_high = drop(b, 0.0, smallest, high_m).impact_speed_m_per_s
+    v_threshold, v_terminal = short["threshold_speed_m_per_s"][smallest], short["terminal_speed_m_per_s"][smallest]
     rows.append(Claim(
-        "the sphere missed at 7 cm is detected from higher", "threshold height above 0.07 m, within a 2 m drop",
-        short["threshold_height_m"][smallest], DROP_HEIGHT_M, 2.0, "m", "D ch. 5 (Table 5-2 text)",
-        {"sphere": smallest, "threshold_height_m": short["threshold_height_m"]}, kind="prediction",
+        "the sphere missed at 7 cm is detected from higher", "readily: ≥ 95 % of drops from 2 m", rate, 95.0, 100.0,
+        "%", "D ch. 5 (Table 5-2 text)",
+        {"sphere": smallest, "height_m": high_m, "drops": drops, "impact_speed_m_per_s": v_high,
+         "noise_free_threshold_speed_m_per_s": v_threshold, "terminal_speed_m_per_s": v_terminal,
+         "threshold_height_in_air_m": short["threshold_height_in_air_m"],
+         "threshold_height_in_vacuum_m": v_threshold**2 / (2.0 * GRAVITY_M_PER_S2)}, kind="prediction",
         note="D: \"sensitivity scaled with impact energy rather than mass as smaller masses were readily detected "
-             "from larger\" [heights]: detection is not a mass threshold. D gives no heights, so the upper bound (a "
-             "drop a person makes standing at a bench) is this row's choice; either law, energy or momentum, "
-             "passes it, and a detector that ignored the drop height fails it"))
+             "from larger\" [heights]. D gives no heights, so the 2 m (a drop a person makes standing at a bench) is "
+             "this row's choice; drops through still air (Morrison 2013 sphere drag, air at 20 °C), D's noisy 4σ / >3 "
+             "points rule as in the detection table",
+        deviation=f"the air caps the {smallest}'s speed at its terminal {v_terminal:.2f} m/s, below the "
+                  f"{v_threshold:.2f} m/s at which its noise-free ring passes D's rule (reached from "
+                  f"{v_threshold**2 / (2.0 * GRAVITY_M_PER_S2):.2f} m in vacuum): from {high_m:g} m it lands at "
+                  f"{v_high:.2f} m/s and only the noise lifts some rings over 4σ, so no height makes it readily "
+                  "detected. The margin is small (the terminal ring is ~0.95 of the threshold's, within the "
+                  "uncertainty of the restitution e = 0.3, a model choice, that sets the momentum change m·v·(1+e)), and "
+                  "D's "
+                  "truncated sentence does not say which of its small spheres it meant: the 0.45 mm ball, detected at "
+                  "7 cm, is detected from "
+                  f"{1e3 * short['threshold_height_in_air_m']['0.45 mm solder ball']:.0f} mm up"))
     rows.append(Claim(
         "detection threshold spread: energy / momentum", "energy varies less: < 1", spread_e / spread_p, 0.0, 1.0,
         "ratio of max/min spreads", "D ch. 5 (Table 5-2 text)",
         {**short, "sigma_bits": sigma, "long_contacts_4_to_16_mm_steel_balls": long},
         kind="prediction",
-        note="threshold drop height per sphere (six masses, 0.072–11.4 mg) by bisection on the noise-free PAC with "
-             "D's 4σ / >3 points rule",
-        deviation="D dropped every sphere from 7 cm, where energy m·g·h is proportional to mass and to momentum, so "
+        note="threshold impact speed per sphere (six masses, 0.072–11.4 mg) by bisection on the noise-free PAC with "
+             "D's 4σ / >3 points rule; energy ½·m·v² and momentum m·v at that speed",
+        deviation="D dropped every sphere from 7 cm, where energy and momentum are both proportional to mass, so "
                   "its data cannot separate them. In the model the spheres' Hertz pulses at their thresholds last "
                   f"{min(ratio):.2f}–{max(ratio):.2f} of the {1e3 / sf.resonance_Hz:.1f} ms resonance period (their "
                   f"spectrum at the ring keeps ≥ {min(short['spectrum_share_at_ring'].values()):.2f} of the impulse): "
