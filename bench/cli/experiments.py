@@ -199,10 +199,8 @@ def _entry_inside(path, folder) -> str | None:
 
 
 def _cmd_explore(a) -> int:
-    from dataclasses import replace
-
     from bench.campaigns.engine import ClusterSpec, signals_held
-    from bench.experiments.experiment import identified_among, load_experiment, run_experiment, summary
+    from bench.experiments.experiment import ablated, identified_among, load_experiment, run_experiment, summary
     from bench.reporting.experiment_report import OUTPUT_FILES, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, writable_folder
 
@@ -219,9 +217,9 @@ def _cmd_explore(a) -> int:
         out = folder.path
         cache = None if a.no_cache else writable_folder(a.cache, "--cache")
         cluster = ClusterSpec.from_env(a.scheduler, a.workers)
-        variants = [("baseline", spec)] + [(n, replace(spec, **ABLATIONS[n][1])) for n in names]
+        variants = [("baseline", spec, "as specified")] + [(n, *ablated(spec, n)) for n in names]
         rows = []
-        for label, sp in variants:
+        for label, sp, what in variants:
             t0 = time.perf_counter()
             print(f"== {label}: {cluster.describe()}", file=sys.stderr)
             result = run_experiment(sp, cache_dir=cache, cluster=cluster, progress=not a.quiet,
@@ -229,13 +227,12 @@ def _cmd_explore(a) -> int:
             where = out if label == "baseline" else out / label
             with signals_held():
                 files = write_outputs(result, where)
-            rows.append((label, summary(result), identified_among(result)))
+            rows.append((label, what, summary(result), identified_among(result)))
             print(f"wrote {where}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
         if names:
-            lines = ["# Ablations", "", f"| variant | pairs (bayesian) | {rows[0][2]}-way (bayesian) | "
+            lines = ["# Ablations", "", f"| variant | pairs (bayesian) | {rows[0][3]}-way (bayesian) | "
                                         f"median movements |", "|---|---|---|---|"]
-            for label, s, _ in rows:
-                what = "as specified" if label == "baseline" else ABLATIONS[label][0]
+            for label, what, s, _ in rows:
                 lines.append(f"| {label} ({what}) | {100 * s['pairs/bayesian']['accuracy']:.1f} % | "
                              f"{100 * s['identification/bayesian']['accuracy']:.1f} % | "
                              f"{s['identification/bayesian']['median_moves']:g} |")

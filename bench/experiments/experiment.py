@@ -27,7 +27,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +40,7 @@ from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
 from bench.experiments.trials import (
     FIRST_VISIBLE_WEAR, TrialTask, listed_twice, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
 )
-from bench.paths import FIXTURES, OUT, REPO
+from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
 from bench.atomic import atomic_write
 from bench.rigs.texture_rig import movement_grid
 
@@ -111,6 +111,16 @@ class ExperimentSpec:
 ABLATIONS = design.ABLATIONS
 
 
+def ablated(spec: ExperimentSpec, name: str) -> tuple[ExperimentSpec, str]:
+    """The experiment ``spec`` as ablation ``name`` changes it, and what changed in words ("field old → new"; a
+    variant that changes nothing says so, rather than passing the baseline off as the variant)."""
+    what, change = ABLATIONS[name]
+    fields = change(spec)
+    diffs = ", ".join(f"{k} {getattr(spec, k)!r} → {v!r}" for k, v in fields.items())
+    same = all(getattr(spec, k) == v for k, v in fields.items())
+    return replace(spec, **fields), f"{what}: {diffs}" + (" (the same as the baseline)" if same else "")
+
+
 def load_experiment(path: str | Path) -> ExperimentSpec:
     """Read and validate an experiment file (TOML); every problem is reported at once."""
     text = tomlfile.read_text(path, ExperimentError, 1_000_000,
@@ -150,6 +160,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         if key not in t[table]:
             return default
         v = t[table][key]
+        if kind is float and isinstance(v, int) and not isinstance(v, bool):
+            v = float(v)  # 2 means 2.0
         ok = isinstance(v, kind) and not isinstance(v, bool) if kind is not bool else isinstance(v, bool)
         if ok and lo is not None and not (lo <= v <= hi):
             ok = False
@@ -175,17 +187,25 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             problems.append(f"{table}.{key}: texture(s) {listed_twice(v)} listed twice")
         return v
 
-    spec.name = get("experiment", "name", str, default=spec.name)
+    if "name" in t["experiment"] and folder_name_problem(t["experiment"]["name"], "experiment.name"):
+        problems.append(folder_name_problem(t["experiment"]["name"], "experiment.name"))
+    else:
+        spec.name = t["experiment"].get("name", spec.name)
     spec.seed = get("experiment", "seed", int, 0, 2**63 - 1, spec.seed)
     fid = get("experiment", "fidelity", str, default=spec.fidelity)
     if fid not in PROFILES:
         problems.append(f"experiment.fidelity = {fid!r}: one of {', '.join(PROFILES)}")
     spec.fidelity = fid
-    spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or spec.pilot_textures
+    every = [n for n in lib if n <= 117]  # "all": the 117 textures of D's library
+    spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or every
+    if len(spec.pilot_textures) < 2:
+        problems.append(f"pilot.textures = {spec.pilot_textures!r}: at least 2 textures (the pilot measures how "
+                        f"well each movement tells textures apart)")
     spec.pilot_trials = get("pilot", "trials", int, 2, 100, spec.pilot_trials)
     mv = t["pilot"].get("movements")
     if mv is not None and mv != "all":
-        if not isinstance(mv, list) or not all(isinstance(m, int) and 0 <= m < 36 for m in mv) or len(mv) < 3:
+        if not isinstance(mv, list) or len(mv) < 3 or not all(isinstance(m, int) and not isinstance(m, bool)
+                                                              and 0 <= m < 36 for m in mv):
             problems.append(f"pilot.movements = {mv!r}: \"all\" or a list of at least 3 grid ids 0..35")
         elif listed_twice(mv):
             problems.append(f"pilot.movements: grid id(s) {listed_twice(mv)} listed twice")
@@ -199,8 +219,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.replace_at = get("training", "replace_at", float, 0.01, 1.0, spec.replace_at)
     pairs = t["validation"].get("pairs")
     if pairs is not None:
-        if not isinstance(pairs, list) or not all(isinstance(p, list) and len(p) == 2 and all(isinstance(n, int)
-                                                                                             for n in p) for p in pairs):
+        if not isinstance(pairs, list) or not all(isinstance(p, list) and len(p) == 2 and all(
+                isinstance(n, int) and not isinstance(n, bool) for n in p) for p in pairs):
             problems.append(f"validation.pairs = {pairs!r}: a list of [a, b] texture-number pairs")
         else:
             spec.pairs = [tuple(p) for p in pairs]
@@ -225,6 +245,16 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         problems.append(f"validation.pair_choice = {choice!r}: one of " + ", ".join(f'"{c}"' for c in PAIR_CHOICES))
     else:
         spec.pair_choice = choice
+    trained = [n for n in (spec.training_textures or every) if n in lib]
+    if spec.pairs is None and not problems:  # how many pairs the training textures can give, known before any trial
+        if spec.pair_choice == "similar-description":
+            available = len(similar_description_pairs(trained, spec.n_pairs, lib))
+        else:
+            groups = [lib[n].group for n in trained]
+            available = sum(groups.count(g) // 2 for g in set(groups))
+        if available < spec.n_pairs:
+            problems.append(f"validation.n_pairs = {spec.n_pairs}: the training textures hold only {available} "
+                            f"disjoint pairs for pair_choice = {spec.pair_choice!r}")
     spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
     strategies = t["exploration"].get("strategies", list(spec.strategies))
     if not isinstance(strategies, list) or not strategies or any(s not in ex.STRATEGIES for s in strategies):
@@ -235,7 +265,10 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.identification_threshold = get("exploration", "identification_threshold", float, 0.01, 0.999999,
                                         spec.identification_threshold)
     spec.max_moves = get("exploration", "max_moves", int, 1, 100, spec.max_moves)
-    spec.pair_simulations = get("exploration", "pair_simulations", int, 1, 10**6, spec.pair_simulations)
+    spec.pair_simulations = get("exploration", "pair_simulations", int, 2, 10**6, spec.pair_simulations)
+    if spec.pair_simulations % 2:
+        problems.append(f"exploration.pair_simulations = {spec.pair_simulations}: an even number (per pair, half "
+                        f"with each of its textures as the truth)")
     spec.identification_simulations = get("exploration", "identification_simulations", int, 1, 10**7,
                                           spec.identification_simulations)
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)

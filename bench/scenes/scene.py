@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 from bench import tomlfile
 from bench.errors import SceneError
+from bench.paths import folder_name_problem
 from bench.scenes.limits import MAX_SENSORS
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
 from emulator.fidelity import PROFILES
@@ -906,12 +907,8 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     name = meta.get("name")
     if "scene" in data and not isinstance(data["scene"], dict):
         pass  # the table's shape is the problem; its fields are not looked for
-    elif not isinstance(name, str) or not name:
-        c.problems.append(f"scene.name = {_r(name)}: must be a non-empty string")
-    elif len(name) > 100 or name in (".", "..") or not all(ch.isascii() and (ch.isalnum() or ch in "-_.")
-                                                           for ch in name):
-        c.problems.append(f"scene.name = {_r(name)}: must be a name, not a path (it names the default out "
-                          f"folder): 1 to 100 letters, digits, '-', '_' or '.', and not '.' or '..'")
+    elif folder_name_problem(name, "scene.name"):
+        c.problems.append(folder_name_problem(name, "scene.name"))
     duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s",
                         required=isinstance(data.get("scene", {}), dict))
     seed = c.number(meta, "seed", "scene", 0, 2**63 - 1, "", default=0, integer=True)

@@ -42,12 +42,45 @@ def test_shipped_experiment_files_validate():
     ({"validation": {"pairs": [[2, 3], [3, 4]]}}, ["validation.pairs", "[3]", "disjoint"]),
     ({"training": {"textures": [2, 3, 4, 5]}, "validation": {"pairs": [[2, 3], [4, 9]]}},
      ["validation.pairs", "[9]", "not among the training textures"]),
+    # found by a hostile pass: each was accepted, or refused only after the pilot and training had run
+    ({"experiment": {"name": "../escaped"}}, ["experiment.name = '../escaped'", "not a path"]),
+    ({"experiment": {"name": "."}}, ["experiment.name = '.'"]),
+    ({"experiment": {"name": "x" * 300}}, ["experiment.name", "1 to 100"]),
+    ({"pilot": {"textures": [30]}}, ["pilot.textures = [30]", "at least 2"]),
+    ({"pilot": {"movements": [True, False, 5]}}, ["pilot.movements"]),
+    ({"validation": {"pairs": [[True, 2]]}}, ["validation.pairs"]),
+    ({"exploration": {"pair_simulations": 1}}, ["exploration.pair_simulations = 1", "2 to"]),
+    ({"exploration": {"pair_simulations": 999}}, ["exploration.pair_simulations = 999", "even"]),
+    ({"training": {"textures": [1, 2, 3, 4]}, "validation": {"n_pairs": 8}},
+     ["validation.n_pairs = 8", "only 1 disjoint pairs", "similar-description"]),
+    ({"training": {"textures": [1, 2, 3, 4]}, "validation": {"n_pairs": 3, "pair_choice": "most-confused"}},
+     ["validation.n_pairs = 3", "most-confused"]),
 ])
 def test_bad_experiment_files_name_field_and_value(data, words):
     with pytest.raises(E.ExperimentError) as e:
         E.parse_experiment(data, "x.toml")
     for w in words:
         assert w in str(e.value)
+
+
+def test_all_pilot_textures_means_the_117_and_whole_numbers_serve_as_floats():
+    spec = E.parse_experiment({"experiment": {"name": "x"}, "pilot": {"textures": "all"},
+                               "sensor": {"noise_scale": 2}, "training": {"replace_at": 1}}, "x.toml")
+    assert spec.pilot_textures == list(range(1, 118))
+    assert spec.noise_scale == 2.0 and spec.replace_at == 1.0
+
+
+def test_an_ablation_changes_the_experiment_as_given_and_says_so():
+    """'double-noise' doubles the file's own noise scale (a file at 2 runs at 4, not again at 2), and a variant
+    that changes nothing is labelled the same as the baseline."""
+    spec = E.parse_experiment({"experiment": {"name": "x"}, "sensor": {"noise_scale": 2.0},
+                               "training": {"trials": 2}}, "x.toml")
+    noisy, what = E.ablated(spec, "double-noise")
+    assert noisy.noise_scale == 4.0 and "noise_scale 2.0 → 4.0" in what
+    fewer, what = E.ablated(spec, "fewer-trials")
+    assert fewer == spec and "(the same as the baseline)" in what
+    smooth, what = E.ablated(spec, "smooth-skin")
+    assert not smooth.fingerprints and "same" not in what
 
 
 def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkeypatch):

@@ -13,7 +13,7 @@ import numpy as np
 from scipy import stats
 
 from bench.experiments import exploration as ex
-from bench.experiments.experiment import (ABLATIONS, beats_baselines, load_experiment, movement_label, run_experiment,
+from bench.experiments.experiment import (ablated, beats_baselines, load_experiment, movement_label, run_experiment,
                                           summary, table_from_rows)
 from bench.experiments.pairs import nearest_neighbour_sigma, pair_separation_sigma
 from bench.paths import FIXTURES, OUT
@@ -101,8 +101,8 @@ def exploration_claims(b: Bench) -> list[Claim]:
                 f"the textures' differences than the model's, whose trial-to-trial spread is the sensor noise, the "
                 f"force control and where on the square a trial starts (bench/tests/test_trial_spread.py) — other "
                 f"sources of a real rig's variation are not modelled and none was added to move this figure")
-    smooth = summary(_run(replace(spec, **ABLATIONS["smooth-skin"][1]), b))["identification/bayesian"]["accuracy"]
-    worn = summary(_run(replace(spec, **ABLATIONS["unreplaced-wear"][1]), b))["identification/bayesian"]["accuracy"]
+    smooth = summary(_run(ablated(spec, "smooth-skin")[0], b))["identification/bayesian"]["accuracy"]
+    worn = summary(_run(ablated(spec, "unreplaced-wear")[0], b))["identification/bayesian"]["accuracy"]
     # measured (docs/experiment/README.md): the validation pairs are D's kind of pairs, similar in description
     # (bench/experiments/pairs.py, chosen before any accuracy was seen); validation trials scatter like training
     # trials since the skin is replaced at the first visible wear; every trial of a texture runs on its one 75 mm
