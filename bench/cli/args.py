@@ -71,6 +71,30 @@ def whole(lo: int | None = None, hi: int | None = None):
     return parse
 
 
+#: the most LocalCluster workers a command starts: 4 per core of this machine (more only thrash and exhaust its
+#: memory, each worker a Python process of ~100 MB); a bigger cluster is an existing scheduler's (--scheduler)
+MAX_LOCAL_WORKERS = 4 * (os.cpu_count() or 1)
+
+
+def local_workers(text: str) -> int:
+    """argparse type of ``--workers``: 1 to :data:`MAX_LOCAL_WORKERS` LocalCluster worker processes."""
+    try:
+        return whole(1, MAX_LOCAL_WORKERS)(text)
+    except argparse.ArgumentTypeError as e:
+        raise argparse.ArgumentTypeError(f"{e} (4 per core of this machine; for a bigger cluster, start one and give "
+                                         f"--scheduler)") from None
+
+
+local_workers.__name__ = "a number of workers"
+
+
+def add_cluster_arguments(parser) -> None:
+    """``--workers`` and ``--scheduler``, as every command that runs on Dask takes them."""
+    parser.add_argument("--workers", type=local_workers,
+                        help=f"LocalCluster worker processes, 1 to {MAX_LOCAL_WORKERS} (default: one per core)")
+    parser.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+
+
 def existing_file(text: str) -> str:
     """argparse type: a readable regular file."""
     if "\0" in text:
@@ -92,8 +116,10 @@ def output_file(text: str) -> str:
     if not text or "\0" in text:
         raise argparse.ArgumentTypeError("an empty path or one with a NUL byte")
     p = Path(text)
-    if p.is_dir():
+    if p.is_dir() or text.endswith(("/", os.sep)):
         raise argparse.ArgumentTypeError(f"{text}: is a folder, not a file")
+    if p.exists() and not p.is_file():
+        raise argparse.ArgumentTypeError(f"{text}: is not a regular file (a device, pipe or socket): never replaced")
     if p.exists() and not os.access(p, os.W_OK):
         raise argparse.ArgumentTypeError(f"{text}: not writable")
     parent = p.parent
@@ -210,3 +236,26 @@ def sigterm_like_ctrl_c(command):
             return 128 + signal.SIGTERM
 
     return run
+
+
+def replaceable_report(marker: bytes, what: str):
+    """argparse type: an :func:`output_file` that, if a file is already there, holds ``marker`` in its first 4 KB
+    (a report this command wrote, which it replaces as CI tools expect); any other file is refused, never
+    overwritten."""
+
+    def parse(text: str) -> str:
+        text = output_file(text)
+        p = Path(text)
+        if p.exists():
+            try:
+                with open(p, "rb") as fh:
+                    head = fh.read(4096)
+            except OSError as e:
+                raise argparse.ArgumentTypeError(f"{text}: cannot be read ({e.strerror})") from None
+            if marker not in head:
+                raise argparse.ArgumentTypeError(f"{text}: already there and not {what}: give another path, or "
+                                                 f"move it away (only an earlier report is replaced)")
+        return text
+
+    parse.__name__ = what
+    return parse

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS
-from bench.cli.args import one_line_errors, output_file, sigterm_like_ctrl_c, whole
+from bench.cli.args import add_cluster_arguments, one_line_errors, replaceable_report, sigterm_like_ctrl_c, whole
 
 
 def _names(kind: str):
@@ -88,10 +88,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="comma-separated campaign scene names (listed above), or all")
     cp.add_argument("--seeds", type=whole(1, 10_000), default=1,
                     help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
-    cp.add_argument("--junit", type=output_file, default="out/campaign.xml",
-                    help="where to write the JUnit XML report (one test case per fault × scene × seed; replaced on "
-                         "each run, as CI tools expect of a report)")
-    cp.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core)")
-    cp.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    cp.add_argument("--junit", type=replaceable_report(b"<testsuite", "a JUnit XML report"),
+                    default="out/campaign.xml",
+                    help="where to write the JUnit XML report (one test case per fault × scene × seed; an earlier "
+                         "report there is replaced, as CI tools expect; any other file is refused)")
+    add_cluster_arguments(cp)
     cp.add_argument("--quiet", action="store_true", help="no progress bar")
     cp.set_defaults(func=sigterm_like_ctrl_c(_cmd_campaign))

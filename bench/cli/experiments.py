@@ -7,7 +7,7 @@ import argparse
 import sys
 import time
 
-from bench.cli.args import sigterm_like_ctrl_c, strict_json, whole
+from bench.cli.args import add_cluster_arguments, sigterm_like_ctrl_c, strict_json, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from emulator.fidelity import PROFILES
 
@@ -96,10 +96,6 @@ def _cmd_texture_sweep(a) -> int:
     from bench.rigs.texture_rig import movement_grid
     from bench.textures.library import load_library
 
-    if a.trials < 1:
-        raise ValueError(f"--trials = {a.trials}: must be at least 1")
-    if a.workers is not None and a.workers < 1:
-        raise ValueError(f"--workers = {a.workers}: must be at least 1")
     grid = movement_grid()
     textures = _texture_numbers(a.textures)
     ids = list(range(len(grid))) if a.movements == "all" else _int_list("--movements", a.movements, 0, len(grid) - 1)
@@ -137,7 +133,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--textures", required=True, help="comma-separated texture numbers or names (biotac-bench textures)")
     s.add_argument("--movements", default="all", help="'all' (the 36 of D eqs 6.20–6.21) or grid ids 0..35 "
                                                       "(id = 6 × force step + velocity step)")
-    s.add_argument("--trials", type=int, default=6, help="repetitions per texture and movement")
+    s.add_argument("--trials", type=whole(1, 1000), default=6, help="repetitions per texture and movement, 1 to "
+                                                                   "1000 (D's pilot: 6)")
     s.add_argument("--seed", type=whole(0), default=0, help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
@@ -145,8 +142,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                  "anything, unless --force")
     s.add_argument("--force", action="store_true", help="replace an earlier sweep's files in --out (anything else "
                                                         "there is still refused)")
-    s.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
-    s.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    add_cluster_arguments(s)
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=sigterm_like_ctrl_c(_cmd_texture_sweep))
     add_explore_command(sub, fmt)
@@ -205,8 +201,6 @@ def _cmd_explore(a) -> int:
     from bench.reporting.outdir import FolderKind, writable_folder
 
     spec = load_experiment(a.experiment)
-    if a.workers is not None and a.workers < 1:
-        raise ValueError(f"--workers = {a.workers}: must be at least 1")
     names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
     cache_kept = "" if a.no_cache else f" (the stage cache {a.cache} is kept: no trial runs again)"
     kind = FolderKind("the earlier results" + cache_kept, OUTPUT_FILES + ("ablations.md",), tuple(ABLATIONS))
@@ -256,8 +250,7 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                                         "folders too; anything else there is still refused); the "
                                                         "stage cache is kept, so no trial runs again")
     e.add_argument("--ablation", choices=list(ABLATIONS) + ["all"], help="also run a variant and compare")
-    e.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core)")
-    e.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    add_cluster_arguments(e)
     e.add_argument("--cache", default="out/cache", help="where stage results are cached, kept across runs")
     e.add_argument("--no-cache", action="store_true", help="run every trial again")
     e.add_argument("--quiet", action="store_true", help="no progress bars")

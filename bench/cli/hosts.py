@@ -113,6 +113,20 @@ def _is_recording_csv(path: Path) -> bool:
     return first.rstrip(b"\r\n") == RECORDING_CSV_HEADER.encode()
 
 
+def _is_recording_npz(path: Path) -> bool:
+    """Whether ``path`` is a regular file (not a symbolic link) holding a recording: an NPZ with its codes and
+    layout arrays."""
+    import zipfile
+
+    if path.is_symlink() or not path.is_file():
+        return False
+    try:
+        with zipfile.ZipFile(path) as z:
+            return {"codes.npy", "layout.npy"} <= set(z.namelist())
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
 def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
     """Before the port is opened: an earlier recording at ``out`` or a CSV beside it (which would no longer match
     the NPZ) is refused unless ``force``; a --out that the CSV would overwrite is refused always."""
@@ -129,6 +143,9 @@ def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
     if present and not force:
         raise BenchError(f"--out {out}: {' and '.join(map(str, present))} already there (an earlier recording?); "
                          f"give another --out, or --force to replace {'it' if len(present) == 1 else 'them'}")
+    if out in present and not _is_recording_npz(out):
+        raise BenchError(f"--out {out}: already there and not a recording (an NPZ with codes and layout); --force "
+                         f"replaces only an earlier recording: move it away, or give another --out")
     csv_path = _csv_beside(out)
     if csv_path in present and not _is_recording_csv(csv_path):
         raise BenchError(f"--out {out}: {csv_path} is not a recording's CSV (its first line is not "
@@ -201,8 +218,8 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
     (:func:`bench.atomic.commit_new`: a hard link, so even a file that appears at the last moment is never
     replaced), and a CSV beside ``out`` that would not match it is refused too: whatever appeared there during the
     recording (:func:`_refuse_overwriting` found nothing at the start) is refused.  With ``force`` the replaced
-    recording's CSV beside ``out`` is removed (it would not match) and the files replace what is there
-    (:func:`bench.atomic.commit`), except a CSV that is not a recording's, come meanwhile.  Refused or failed, the
+    recording's CSV beside ``out`` is removed (it would not match) and the files replace an earlier recording
+    (:func:`bench.atomic.commit`), never a file that is not a recording's, come meanwhile.  Refused or failed, the
     recording stays in its temporary files beside ``out``, which the BenchError names."""
     import errno
 
@@ -215,6 +232,8 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
         if force:
             if csv and beside_taken and not _is_recording_csv(beside):
                 raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(beside))
+            if (out.exists() or out.is_symlink()) and not _is_recording_npz(out):
+                raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(out))
             if _is_recording_csv(beside):
                 beside.unlink()  # the replaced recording's CSV, or the one rewritten below
             for path, tmp in temps.items():

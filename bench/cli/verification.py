@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import number, sigterm_like_ctrl_c, strict_json, unit_choice, whole
+from bench.cli.args import MAX_LOCAL_WORKERS, local_workers, number, sigterm_like_ctrl_c, strict_json, unit_choice, whole
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
 
@@ -50,9 +50,6 @@ def _cmd_claims(a) -> int:
     if a.seeds is not None:
         from bench.campaigns.engine import ClusterSpec
 
-        if a.seeds < 1:
-            print(f"error: --seeds {a.seeds}: give at least 1", file=sys.stderr)
-            return 2
         spec = ClusterSpec.from_env(a.scheduler, a.workers)
         if progress:
             progress(f"{a.seeds} seed(s) × {len(groups)} group(s) on {spec.describe()}")
@@ -162,10 +159,11 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.add_argument("--fidelity", default="default", choices=list(PROFILES),
                    help="fidelity profile of the claims' runs (biotac-bench profiles)")
     c.add_argument("--seed", type=whole(0), default=2012, help="scene seed (with --seeds: the first of N)")
-    c.add_argument("--seeds", type=int, metavar="N",
+    c.add_argument("--seeds", type=whole(1, 1000), metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")
-    c.add_argument("--workers", type=whole(1), help="LocalCluster worker processes (default: one per core); with "
+    c.add_argument("--workers", type=local_workers, help=f"LocalCluster worker processes, 1 to {MAX_LOCAL_WORKERS} "
+                   "(default: one per core); with "
                    "--seeds for every (seed, group) task, and for the exploration group's experiment")
     c.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS); used as "
                    "--workers is")

@@ -114,12 +114,29 @@ def test_a_csv_come_beside_out_meanwhile_is_not_left_beside_a_recording_it_does_
     assert not out.exists() and beside.read_text() == header and list(_kept(tmp_path)) == ["r.npz"]
 
 
-def test_force_replaces_what_appeared_meanwhile(tmp_path, monkeypatch, capsys):
+def test_force_replaces_a_recording_that_appeared_meanwhile(tmp_path, monkeypatch, capsys):
+    import numpy as np
+
     out = tmp_path / "r.npz"
-    assert _record(monkeypatch, out, "--force", meanwhile=lambda: out.write_text("theirs")) == 0
+    assert _record(monkeypatch, out, "--force",
+                   meanwhile=lambda: np.savez(out, codes=np.zeros(1), layout=np.array("compact"))) == 0
     assert f"wrote {out}: {FRAMES} frames" in capsys.readouterr().out
     _assert_a_whole_recording(out)
     assert [p.name for p in tmp_path.iterdir()] == ["r.npz"]
+
+
+def test_force_refuses_any_other_file_at_out_before_or_come_meanwhile(tmp_path, monkeypatch, capsys):
+    """--force replaces only a recording: a file of the user's at --out is refused before the port opens, or when
+    it appears during the recording (which is then kept under its temporary name)."""
+    out = tmp_path / "r.npz"
+    assert _record(monkeypatch, out, "--force", meanwhile=lambda: out.write_text("theirs")) == 2
+    assert f"{out} appeared during the recording" in capsys.readouterr().err
+    assert out.read_text() == "theirs" and list(_kept(tmp_path)) == ["r.npz"]
+    _assert_a_whole_recording(_kept(tmp_path)["r.npz"])
+    mine = tmp_path / "mine.npz"
+    mine.write_text("my notes")
+    assert _record(monkeypatch, mine, "--force") == 2
+    assert "not a recording" in capsys.readouterr().err and mine.read_text() == "my notes"
 
 
 def test_force_still_refuses_a_csv_that_is_not_a_recordings_come_meanwhile(tmp_path, monkeypatch, capsys):
