@@ -53,6 +53,8 @@ def _cmd_serve(a) -> int:
     print(f"stopped: {cb.batches} batches served, {cb.t:.3f} s of the host's virtual time"
           + (f"; {len(cb.client_errors)} client connection(s) ended for malformed requests" if cb.client_errors
              else ""), file=sys.stderr)
+    for why in cb.client_errors[:5]:
+        print(f"  {why}", file=sys.stderr)
     return 0
 
 

@@ -66,7 +66,11 @@ CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "biotac_client.c"
 VENDOR_RATE_CLIENT_SOURCE = REPO / "firmware_tests" / "cheetah_client" / "vendor_rate_client.c"
 OP_SS, OP_BYTES, OP_DELAY_NS, OP_OE = 1, 2, 3, 4
 REQ_SHIFT, REQ_SLEEP, REQ_HELLO, REQ_QUERY, REQ_SUBMIT, REQ_COLLECT = 1, 2, 3, 4, 5, 6
-MAX_REQUEST_BYTES = 64 << 20
+#: The largest request a client may send (bytes): 1 MiB, 1.9 s of SPI at 4.4 MHz (a BioTac frame is ~100 bytes).
+MAX_REQUEST_BYTES = 1 << 20
+#: The most virtual time one request (a sleep, or a batch with its delays) may advance (s): the emulated sensors
+#: are simulated through all of it, at ~1000× real time, so a 49-day ch_sleep_ms would hold the adapter for an hour.
+MAX_ADVANCE_S = 3600.0
 UNIQUE_ID = 1365000042
 
 #: Every queued slave-select command occupies one byte slot of the adapter's shift engine (SCK periods).
@@ -245,7 +249,11 @@ class CheetahBench:
             if kind == REQ_SLEEP:
                 if len(payload) != 4:
                     raise ProtocolError("sleep needs 4 bytes")
-                self.t_host += struct.unpack("<I", payload)[0] * 1e-3
+                ms = struct.unpack("<I", payload)[0]
+                if ms * 1e-3 > MAX_ADVANCE_S:
+                    raise ProtocolError(f"ch_sleep_ms({ms}): more than {MAX_ADVANCE_S:g} s of virtual time in one "
+                                        f"request (the sensors are simulated through all of it)")
+                self.t_host += ms * 1e-3
                 return b""
             if kind == REQ_SHIFT:
                 miso, end = self.execute(payload, max(self.t_host, self.t_bus))
@@ -365,6 +373,9 @@ class CheetahBench:
             flush(keep=cur != 0)
         if sel is not None:
             emit_select(*sel)
+        if t > MAX_ADVANCE_S:
+            raise ProtocolError(f"a batch lasting {t:.6g} s: more than {MAX_ADVANCE_S:g} s of virtual time in one "
+                                f"request (the sensors are simulated through all of it)")
         return _Plan(steps, clock, mode, t, (host_ss, bus_open, bus_code))
 
     def _clock(self, plan: "_Plan", start: float) -> bytes:
@@ -421,7 +432,9 @@ class CheetahBench:
         return self
 
     def stop(self) -> None:
-        """Close every connection, join every thread, remove the socket's folder; never raises."""
+        """Close every connection, join every thread (a few seconds at most: a client still busy clocking a long
+        request is left to end with the process, its thread being a daemon), remove the socket's folder; never
+        raises and never waits on the lock a busy request holds."""
         if self._stopped:
             return
         self._stopped = True
@@ -432,8 +445,7 @@ class CheetahBench:
             pass
         if self._thread.is_alive():
             self._thread.join(timeout=5)
-        with self._lock:
-            clients = list(self._clients)
+        clients = list(self._clients)  # not under the lock: a request being clocked holds it
         for c in clients:
             try:
                 c.conn.shutdown(socket.SHUT_RDWR)

@@ -61,3 +61,45 @@ def test_without_the_emulator_the_client_finds_no_adapter(tmp_path):
     env = {"BIOTAC_CHEETAH_SOCKET": str(tmp_path / "nothing.sock"), "PATH": "/usr/bin:/bin"}
     r = subprocess.run([str(exe), "1"], capture_output=True, text=True, env=env, timeout=30)
     assert r.returncode == 4 and "no Cheetah adapter found" in r.stderr
+
+
+def test_a_request_past_an_hour_of_virtual_time_ends_the_connection_with_the_reason():
+    """The sensors are simulated through every virtual second a program sleeps or queues, so one request may
+    advance at most MAX_ADVANCE_S (3600 s): a 49-day ch_sleep_ms (it held the adapter, and Ctrl-C, for an hour) or a
+    batch of delays past it ends that program's connection, the reason kept for the exit message; the adapter and
+    its clock are untouched."""
+    import time
+
+    from bench.hosts.cheetah_server import MAX_ADVANCE_S
+
+    for request in ("sleep", "batch"):
+        with pytest.MonkeyPatch.context() as mp, cheetah_adapter(mp, 1, bitrate_khz=None) as (cb, lib, h):
+            t0, wall = cb.t, time.monotonic()
+            if request == "sleep":
+                lib.c_ch_sleep_ms(C.c_uint32(0xFFFFFFFF))
+            else:
+                lib.c_ch_spi_queue_clear(h)
+                for _ in range(int(MAX_ADVANCE_S / 2.0) + 2):  # the API's delays are ints: ≤ 2.1 s each
+                    assert lib.c_ch_spi_queue_delay_ns(h, 2_000_000_000) == 2_000_000_000
+                buf = (C.c_uint8 * 1)()
+                assert lib.c_ch_spi_batch_shift(h, 0, buf) < 0
+            assert time.monotonic() - wall < 10 and cb.t == t0
+            lib.c_ch_spi_queue_clear(h)
+            lib.c_ch_spi_queue_delay_ns(h, 1000)
+            assert lib.c_ch_spi_batch_shift(h, 0, (C.c_uint8 * 1)()) == -7  # CH_COMMUNICATION_ERROR from now on
+            assert any(f"more than {MAX_ADVANCE_S:g} s of virtual time" in e for e in cb.client_errors)
+
+
+def test_stop_returns_while_a_request_is_being_clocked():
+    """Ctrl-C or SIGTERM stops the adapter even while a client's request holds the bench (its thread ends with the
+    process): stop() never waits on that request's lock."""
+    import time
+
+    cb = CheetahBench(1).start()
+    cb._lock.acquire()  # as a batch being clocked holds it
+    try:
+        t0 = time.monotonic()
+        cb.stop()
+        assert time.monotonic() - t0 < 2
+    finally:
+        cb._lock.release()
