@@ -298,13 +298,35 @@ def _code_digest() -> str:
     return h.hexdigest()[:16]
 
 
+def _cached_rows(path: Path, tasks: list[TrialTask]) -> tuple[list[dict] | None, str]:
+    """A stage's rows from its cache file, or (None, why not): the file must hold one row per task, each naming its
+    task and carrying the three properties (a truncated or foreign file is run again, never trusted)."""
+    from dataclasses import asdict
+
+    try:
+        rows = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        return None, f"unreadable ({e})"
+    if not isinstance(rows, list) or len(rows) != len(tasks):
+        return None, f"not {len(tasks)} trial rows"
+    for row, task in zip(rows, tasks):
+        if not isinstance(row, dict) or any(row.get(k) != v for k, v in asdict(task).items()) or not all(
+                isinstance(row.get(p), (int, float)) for p in ("traction", "roughness", "fineness")):
+            return None, "a row that is not its task's trial"
+    return rows, ""
+
+
 def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=None, progress: bool = True,
-              client=None) -> list[dict]:
-    """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code."""
+              client=None, log=print) -> list[dict]:
+    """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code (a
+    cache file that does not hold them is said and replaced)."""
     key = hashlib.sha256((repr(tasks) + _code_digest()).encode()).hexdigest()[:16]
     path = None if cache_dir is None else cache_dir / f"{name}-{key}.json"
     if path is not None and path.exists():
-        return json.loads(path.read_text())
+        rows, why = _cached_rows(path, tasks)
+        if rows is not None:
+            return rows
+        log(f"note: the cached {name} stage {path} is {why}: its trials run again and replace it")
     rows = sweep(tasks, spec=spec, client=client, progress=progress) if tasks else []
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -404,7 +426,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                             spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale,
                             movement_ids=ids, stepper_noise_Pa=spec.stepper_noise_Pa)
         log(f"pilot: {len(tasks)} trials")
-        pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress)
+        pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress, log=log)
         model = ex.fit_model(table_from_rows(pilot_rows))
         exclude = excluded_movements(spec, ids)
         u = ex.pilot_uncertainty(model, exclude_movements=exclude)
@@ -428,7 +450,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         replace_at = spec.replace_at if spec.replace_skin else None
         tasks, history = schedule_skin(tasks, wear=spec.wear, replace_at=replace_at)
         log(f"training: {len(tasks)} trials on {history[-1]['skin'] if history else 1} skin(s)")
-        training_rows = run_stage("training", tasks, cache_dir, client=client, progress=progress)
+        training_rows = run_stage("training", tasks, cache_dir, client=client, progress=progress, log=log)
         train = ex.fit_model(table_from_rows(training_rows))
         wall["training"] = time.perf_counter() - t0
         # 3. validation: the session goes on with the same skin
@@ -443,7 +465,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         session, history = schedule_skin(tasks + val_tasks, wear=spec.wear, replace_at=replace_at)
         tasks = session[len(tasks):]
         log(f"validation: {len(tasks)} trials for {len(val_textures)} textures")
-        validation_rows = run_stage("validation", tasks, cache_dir, client=client, progress=progress)
+        validation_rows = run_stage("validation", tasks, cache_dir, client=client, progress=progress, log=log)
         val_table = table_from_rows(validation_rows)
         wall["validation"] = time.perf_counter() - t0
     finally:

@@ -71,6 +71,27 @@ def test_a_ctrl_c_while_the_stage_cache_is_written_leaves_no_temporary_file(tmp_
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("content", ['[{"x": 1}]', "[1, 2]", "NaN", '[{"texture": 902', "", "\udcff"])
+def test_a_stage_cache_entry_that_does_not_hold_the_stage_is_said_run_again_and_replaced(tmp_path, monkeypatch,
+                                                                                         content):
+    """Found by a hostile pass: a foreign, truncated or garbled entry was a KeyError/TypeError traceback, or an
+    error naming no file that never healed. It is said, its trials run again, and the entry holds them after."""
+    monkeypatch.setattr(E, "sweep", _in_process_sweep)
+    good = E.run_stage("pilot", _stage_tasks(), tmp_path)
+    (entry,) = tmp_path.iterdir()
+    entry.write_text(content, errors="surrogateescape")
+    said = []
+
+    def same_trials(rows):  # the wall time differs from run to run, nothing else
+        return [{k: v for k, v in r.items() if k != "wall_s"} for r in rows] == \
+            [{k: v for k, v in r.items() if k != "wall_s"} for r in good]
+
+    again = E.run_stage("pilot", _stage_tasks(), tmp_path, log=said.append)
+    assert same_trials(again) and len(said) == 1 and str(entry) in said[0] and "run again" in said[0]
+    assert json.loads(entry.read_text()) == again
+    assert E.run_stage("pilot", _stage_tasks(), tmp_path, log=said.append) == again and len(said) == 1
+
+
 def test_atomic_write_removes_its_temporary_file_on_ctrl_c(tmp_path):
     final = tmp_path / "trials.csv"
     with pytest.raises(KeyboardInterrupt):
