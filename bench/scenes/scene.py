@@ -806,7 +806,7 @@ def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: f
 
 def _unit_value(c: _Checker, table: dict, where: str):
     """``table["unit"]``: a unit seed (whole number), "nominal", or a serial number ("BT..."); None if invalid."""
-    from emulator.units import MAX_UNIT_SEED, NOMINAL, SERIAL_PREFIX, check_serial
+    from emulator.units import MAX_UNIT_SEED, NOMINAL, SERIAL_PREFIX, seed_of_serial
 
     v = table.get("unit", NOMINAL)
     if isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= MAX_UNIT_SEED:
@@ -815,7 +815,7 @@ def _unit_value(c: _Checker, table: dict, where: str):
         return v
     if isinstance(v, str) and v.startswith(SERIAL_PREFIX):
         try:
-            check_serial(v)
+            seed_of_serial(v)  # a valid serial, and a seed in range if it names one
             return v
         except ValueError as e:
             c.problems.append(f"{where}.unit = {_r(v)}: {_cut(str(e))}")
