@@ -143,7 +143,7 @@ def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
     if present and not force:
         raise BenchError(f"--out {out}: {' and '.join(map(str, present))} already there (an earlier recording?); "
                          f"give another --out, or --force to replace {'it' if len(present) == 1 else 'them'}")
-    if out in present and not _is_recording_npz(out):
+    if out in present and not out.is_symlink() and not _is_recording_npz(out):  # a link is replaced, not followed
         raise BenchError(f"--out {out}: already there and not a recording (an NPZ with codes and layout); --force "
                          f"replaces only an earlier recording: move it away, or give another --out")
     csv_path = _csv_beside(out)
@@ -232,7 +232,7 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
         if force:
             if csv and beside_taken and not _is_recording_csv(beside):
                 raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(beside))
-            if (out.exists() or out.is_symlink()) and not _is_recording_npz(out):
+            if out.exists() and not out.is_symlink() and not _is_recording_npz(out):
                 raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(out))
             if _is_recording_csv(beside):
                 beside.unlink()  # the replaced recording's CSV, or the one rewritten below

@@ -46,14 +46,33 @@ class FolderKind:
     what: str
     files: tuple[str, ...]
     subfolders: tuple[str, ...] = ()
+    #: file name -> how the command's own file of that name starts: a file there that starts otherwise (the user's
+    #: own notes named report.md, say) is not the command's, and --force refuses the folder instead of removing it
+    starts: tuple[tuple[str, bytes], ...] = ()
 
     def inner(self) -> "FolderKind":
         """The kind of one of the subfolders: the same files, no subfolders of its own."""
-        return FolderKind(self.what, self.files)
+        return FolderKind(self.what, self.files, starts=self.starts)
+
+    def owns(self, path: Path) -> bool:
+        """Whether the file at ``path`` (one of :attr:`files`) starts as this command's own does."""
+        prefix = dict(self.starts).get(path.name)
+        if prefix is None or path.is_symlink():  # a link is removed, never followed: its target is never touched
+            return True
+        try:
+            with open(path, "rb") as fh:
+                return fh.read(len(prefix)) == prefix
+        except OSError:
+            return False
 
 
 #: a scene run's folder (``biotac-bench run``): its files, and a several-sensor run's sensor<k>/ folders of them
-RUN = FolderKind("an earlier run's files", RUN_FILES, tuple(f"sensor{k}" for k in range(2, MAX_SENSORS + 1)))
+_PNG = b"\x89PNG\r\n\x1a\n"
+RUN = FolderKind("an earlier run's files", RUN_FILES, tuple(f"sensor{k}" for k in range(2, MAX_SENSORS + 1)),
+                 starts=(("record.json", b"{"), ("samples.h5", b"\x89HDF\r\n\x1a\n"), ("codes.npz", b"PK"),
+                         ("samples.csv", b"time_s,channel,code,status,value,unit\n"),
+                         ("report.md", b"# Scene report: "))
+                 + tuple((name, _PNG) for name in RUN_FILES if name.endswith(".png")))
 #: one sensor<k>/ folder of a several-sensor run: a run's files, no subfolders
 RUN_SENSOR = RUN.inner()
 
@@ -234,8 +253,13 @@ def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> 
         real_dir = e.is_dir(follow_symlinks=False)
         if e.name in kind.subfolders and real_dir:
             subfolders.append(e.name)
-        elif (e.name in kind.files or _is_temp(e.name, kind.files)) and not real_dir:
+        elif _is_temp(e.name, kind.files) and not real_dir:
             files.append(e.name)
+        elif e.name in kind.files and not real_dir:
+            if kind.owns(folder / e.name):
+                files.append(e.name)
+            else:
+                foreign.append(f"{e.name} (not as this command writes it)")
         else:
             foreign.append(e.name)
     return files, subfolders, foreign

@@ -153,6 +153,25 @@ def test_force_never_removes_files_that_are_not_a_runs_own(tmp_path, capsys):
     assert (out / "thesis.tex").read_text() == "precious" and (out / "record.json").read_text() == "{}"
 
 
+def test_force_never_removes_a_file_named_as_a_runs_that_the_run_did_not_write(tmp_path, capsys):
+    """Found by a hostile pass: --force matched by name only and removed the user's own report.md and samples.csv.
+    Each of a run's files is recognised by how it starts (the report's heading, the CSV's header, HDF5, NPZ and PNG
+    signatures, JSON); an earlier run's own files are still replaced."""
+    scene = str(_scene_file(tmp_path, 1.0))
+    for name, text in (("report.md", "my notes on the rig"), ("samples.csv", "a,b\n1,2\n"),
+                       ("traces.png", "not a picture")):
+        out = tmp_path / name.replace(".", "_")
+        out.mkdir()
+        (out / name).write_text(text)
+        assert cli.main(["run", scene, "--out", str(out), "--quiet", "--force"]) == 2
+        assert f"{name} (not as this command writes it)" in capsys.readouterr().err
+        assert (out / name).read_text() == text and [p.name for p in out.iterdir() if p.name != LOCK_NAME] == [name]
+    out = tmp_path / "earlier"
+    assert cli.main(["run", scene, "--out", str(out), "--quiet", "--csv"]) == 0
+    assert cli.main(["run", scene, "--out", str(out), "--quiet", "--force"]) == 0
+    check_consistent(out, "ok")
+
+
 @pytest.mark.unit
 def test_symlinks_in_the_out_folder_are_replaced_not_followed(tmp_path):
     out, outside = tmp_path / "out", tmp_path / "outside.txt"

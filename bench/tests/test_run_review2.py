@@ -28,7 +28,7 @@ def _earlier_several_sensor_run(out, sensors=(2, 3)) -> None:
     for folder in (out, *(out / f"sensor{k}" for k in sensors)):
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "record.json").write_text('{"status": "ok"}')
-        (folder / "codes.npz").write_text("earlier")
+        (folder / "codes.npz").write_bytes(b"PK earlier")  # starts as an NPZ (a zip) does
 
 
 # --- 1. --force checks the whole tree before it removes anything --------------------------------------------------
