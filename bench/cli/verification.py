@@ -45,6 +45,13 @@ def _cmd_claims(a) -> int:
     from emulator.units import unit
 
     groups = a.only or list(CLAIM_GROUPS)
+    if a.plots:  # checked before anything runs: the plot needs the vibration group, and a folder it can write
+        from bench.reporting.outdir import writable_folder
+
+        if "vibration" not in groups:
+            raise ValueError(f"--plots {a.plots}: the frequency-sensitivity plot needs the vibration claims; add "
+                             f"--only vibration")
+        writable_folder(a.plots, "--plots")
     unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
