@@ -12,9 +12,17 @@ from bench.paths import REPO
 _TRANSFER_KEYS = {"t_ps": int, "cs": int, "nbits": int, "mosi": str, "half_ps": int, "keep_cs": bool, "miso": str}
 
 
+#: a vector file's limits: the fastest clock (half period, ps: 100 MHz) and the latest instant (ps: 100 s)
+MIN_HALF_PS = 5_000
+MAX_T_PS = 10**14
+
+
 def vector_file_problem(path: str) -> str | None:
     """Why ``path`` is not a protocol vector file (fixtures/spi_vectors/*.json), or None if it is one."""
     import json
+
+    from emulator.spi.model import Faults
+    from emulator.spi.vectors import end_ps
 
     try:
         vec = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -53,8 +61,37 @@ def vector_file_problem(path: str) -> str | None:
             int(d["mosi"], 16), int(d["miso"], 16)
         except ValueError:
             return f"not a vector file (transfers[{k}]: mosi/miso must be hex)"
-        if d["half_ps"] <= 0 or d["nbits"] < 0 or not 0 <= d["cs"] <= 7 or d["t_ps"] < 0:
-            return f"not a vector file (transfers[{k}] out of range)"
+        if not (MIN_HALF_PS <= d["half_ps"] and 0 <= d["nbits"] <= 64 and 0 <= d["cs"] <= 7
+                and 0 <= d["t_ps"] <= MAX_T_PS):
+            return (f"not a vector file (transfers[{k}] out of range: half_ps ≥ {MIN_HALF_PS}, nbits 0..64, cs 0..7, "
+                    f"t_ps 0..{MAX_T_PS})")
+        if d["mosi"].strip().startswith("-") or int(d["mosi"], 16) >> d["nbits"]:
+            return f"not a vector file (transfers[{k}].mosi = {d['mosi']!r}: a hex number of at most its {d['nbits']} bits)"
+        if k and d["t_ps"] < end_ps(vec["transfers"][k - 1]):
+            return f"not a vector file (transfers[{k}] starts before transfers[{k - 1}] ends: t_ps must rise)"
+    if not vec["transfers"]:
+        return "not a vector file (no transfers)"
+    if len(set(sensors)) != len(sensors):
+        return "not a vector file (a sensor listed twice)"
+    for k, c in enumerate(vec["conversions"]):
+        if not (isinstance(c, dict) and set(c) == {"sensor", "channel", "t_ps", "code"}
+                and all(isinstance(v, int) and not isinstance(v, bool) for v in c.values())
+                and c["sensor"] in sensors and 0 <= c["channel"] <= 255 and 0 <= c["t_ps"] <= MAX_T_PS
+                and 0 <= c["code"] <= 4095):
+            return (f"not a vector file (conversions[{k}] = {c!r:.80}: sensor (one of sensors), channel, t_ps and "
+                    f"code 0..4095, whole numbers)")
+    for key, f in vec["faults"].items():
+        try:
+            if int(key) not in sensors or not isinstance(f, dict):
+                raise ValueError
+            Faults(**f)
+        except (ValueError, TypeError):
+            return f"not a vector file (faults[{key!r}] = {f!r:.80}: a sensor of sensors -> its faults' fields)"
+    resets = vec.get("resets", {})
+    if not isinstance(resets, dict) or not all(
+            k.isdigit() and int(k) < len(vec["transfers"]) and isinstance(v, list) and all(n in sensors for n in v)
+            for k, v in resets.items()):
+        return "not a vector file (resets: transfer index -> list of sensors reset before it)"
     return None
 
 

@@ -1,0 +1,78 @@
+"""`rtl vectors FILE`: a file that is not a protocol vector file is refused before the RTL is built, naming what is
+wrong — found by a hostile pass, these passed the check and then died in cocotb with a traceback, hung (t_ps 1e18),
+blamed the RTL for a mismatch (a conversion for an absent sensor, a negative MOSI) or passed vacuously (no
+transfers). Every shipped vector file passes."""
+
+import copy
+import json
+from pathlib import Path
+
+import pytest
+
+from bench.cli.rtl import vector_file_problem
+
+pytestmark = pytest.mark.unit
+
+VECTORS = Path(__file__).resolve().parents[2] / "fixtures" / "spi_vectors"
+BASE = json.loads((VECTORS / "fault_truncated_word.json").read_text())
+
+
+def _with(change):
+    v = copy.deepcopy(BASE)
+    change(v)
+    return v
+
+
+def _set(path, value):
+    def change(v):
+        *where, last = path
+        for k in where:
+            v = v[k]
+        v[last] = value
+    return change
+
+
+BAD = {
+    "conversion for an absent sensor": (_set(("conversions", 0, "sensor"), 9), "conversions[0]"),
+    "conversion code out of range": (_set(("conversions", 0, "code"), 99999), "conversions[0]"),
+    "conversion not an object": (_set(("conversions", 0), "x"), "conversions[0]"),
+    "faults not a sensor's": (_set(("faults",), {"1": "bogus"}), "faults['1']"),
+    "faults with an unknown field": (_set(("faults",), {"1": {"melted": True}}), "faults['1']"),
+    "resets not a table": (_set(("resets",), "x"), "resets"),
+    "a sensor listed twice": (_set(("sensors",), [1, 1]), "listed twice"),
+    "transfers going back in time": (_set(("transfers", 1, "t_ps"), 0), "t_ps must rise"),
+    "an instant a thousand years on": (_set(("transfers", 2, "t_ps"), 10**18), "out of range"),
+    "a million bits": (_set(("transfers", 0, "nbits"), 10**6), "out of range"),
+    "a clock of 500 GHz": (_set(("transfers", 0, "half_ps"), 1), "out of range"),
+    "negative MOSI": (_set(("transfers", 0, "mosi"), "-1"), "mosi = '-1'"),
+    "MOSI wider than its bits": (_set(("transfers", 0, "mosi"), "ffffffffff"), "at most its 16 bits"),
+    "no transfers": (_set(("transfers",), []), "no transfers"),
+}
+
+
+def test_every_shipped_vector_file_passes():
+    files = sorted(VECTORS.glob("*.json"))
+    assert len(files) >= 15
+    assert {f.name: vector_file_problem(str(f)) for f in files} == {f.name: None for f in files}
+
+
+@pytest.mark.parametrize("name", list(BAD))
+def test_a_malformed_vector_file_is_refused_naming_what(name, tmp_path):
+    change, words = BAD[name]
+    f = tmp_path / "v.json"
+    f.write_text(json.dumps(_with(change)))
+    problem = vector_file_problem(str(f))
+    assert problem is not None and problem.startswith("not a vector file") and words in problem, problem
+
+
+def test_the_command_refuses_it_in_one_line_before_building(tmp_path, capsys):
+    from bench.cli import main as cli
+
+    f = tmp_path / "v.json"
+    f.write_text(json.dumps(_with(_set(("transfers",), []))))
+    try:
+        status = cli.main(["rtl", "vectors", str(f)])
+    except SystemExit as e:
+        status = e.code
+    err = capsys.readouterr().err
+    assert status == 2 and "no transfers" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
