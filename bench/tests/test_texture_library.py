@@ -177,6 +177,9 @@ BROKEN = {
     "negative seed": (_edit("seed = 5", "seed = -1"), ["T5 'kraft paper'", "seed = -1", "0 to 2**63-1"]),
     "fractional seed": (_edit("seed = 5", "seed = 1.5"), ["T5 'kraft paper'", "seed = 1.5", "whole number"]),
     "empty source": (_edit('source = "test"', 'source = " "'), ["T5 'kraft paper'", "source = ' '", "non-empty"]),
+    "control character in a name": (_edit('name = "kraft paper"', 'name = "kraft\\u0007paper"'),
+                                     ["name = 'kraft\\x07paper'", "printable text"]),
+    "newline in a description": (GOOD + 'description = "two\\nlines"\n', ["description = 'two\\nlines'", "printable"]),
     "zero period": (GOOD + _edit("period_mm = 1.0", "period_mm = 0.0", PERIODIC),
                     ["T5 'kraft paper'", "periodic[0].period_mm = 0.0", "0.01 to 50 mm"]),
     "missing amplitude": (GOOD + _edit("amplitude_um = 20.0\n", "", PERIODIC),
@@ -320,3 +323,15 @@ def test_every_texture_has_the_literature_friction_fluctuation(lib):
     from emulator.texture import FRICTION_FLUCTUATION_RMS
 
     assert {t.friction_fluctuation_rms for t in lib.values()} == {FRICTION_FLUCTUATION_RMS}
+
+
+def test_a_json_library_with_a_lone_surrogate_in_a_name_is_refused_by_field(tmp_path):
+    """Found by a hostile pass: JSON allows "\\ud800", which passed validation and then failed as a 'utf-8' codec
+    error naming neither the file nor the texture."""
+    record = tomllib.loads(GOOD)["texture"][0] | {"name": "copy\ud800paper"}
+    f = tmp_path / "lib.json"
+    f.write_text(json.dumps([record]), encoding="utf-8")
+    with pytest.raises(TextureError) as e:
+        load_library(f)
+    assert str(f) in str(e.value) and any("name = 'copy\\ud800paper'" in p and "printable" in p
+                                          for p in e.value.problems), e.value.problems
