@@ -23,6 +23,9 @@ def _names(kind: str):
         bad = [n for n in names if n not in known]
         if bad:
             raise argparse.ArgumentTypeError(f"unknown {', '.join(bad)}; known: {', '.join(known)}")
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise argparse.ArgumentTypeError(f"{', '.join(twice)} listed twice (each case would run twice)")
         return names
 
     parse.__name__ = f"{kind} names"

@@ -135,7 +135,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                                       "(id = 6 × force step + velocity step)")
     s.add_argument("--trials", type=whole(1, 1000), default=6, help="repetitions per texture and movement, 1 to "
                                                                    "1000 (D's pilot: 6)")
-    s.add_argument("--seed", type=whole(0), default=0, help="the sweep's seed; each trial's seed derives from it")
+    s.add_argument("--seed", type=whole(0, 2**63 - 1), default=0,
+                   help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
     s.add_argument("--out", help="output folder (default: a fresh out/texture-sweep[-n]); refused if it holds "

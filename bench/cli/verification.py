@@ -165,7 +165,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                    help="run one group (repeatable; default: every group)")
     c.add_argument("--fidelity", default="default", choices=list(PROFILES),
                    help="fidelity profile of the claims' runs (biotac-bench profiles)")
-    c.add_argument("--seed", type=whole(0), default=2012, help="scene seed (with --seeds: the first of N)")
+    c.add_argument("--seed", type=whole(0, 2**63 - 1), default=2012, help="scene seed (with --seeds: the first of N)")
     c.add_argument("--seeds", type=whole(1, 1000), metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")

@@ -179,6 +179,7 @@ BROKEN = {
     "empty source": (_edit('source = "test"', 'source = " "'), ["T5 'kraft paper'", "source = ' '", "non-empty"]),
     "control character in a name": (_edit('name = "kraft paper"', 'name = "kraft\\u0007paper"'),
                                      ["name = 'kraft\\x07paper'", "printable text"]),
+    "a name like a number": (_edit('name = "kraft paper"', 'name = "T4"'), ["name = 'T4'", "looks like a texture number"]),
     "newline in a description": (GOOD + 'description = "two\\nlines"\n', ["description = 'two\\nlines'", "printable"]),
     "zero period": (GOOD + _edit("period_mm = 1.0", "period_mm = 0.0", PERIODIC),
                     ["T5 'kraft paper'", "periodic[0].period_mm = 0.0", "0.01 to 50 mm"]),
@@ -335,3 +336,12 @@ def test_a_json_library_with_a_lone_surrogate_in_a_name_is_refused_by_field(tmp_
         load_library(f)
     assert str(f) in str(e.value) and any("name = 'copy\\ud800paper'" in p and "printable" in p
                                           for p in e.value.problems), e.value.problems
+
+
+def test_a_json_library_with_a_key_given_twice_is_refused(tmp_path):
+    """JSON keeps the last of two equal keys silently (TOML refuses them): the library refuses them too."""
+    record = json.dumps(tomllib.loads(GOOD)["texture"][0])
+    f = tmp_path / "lib.json"
+    f.write_text("[" + record[:-1] + ', "hurst": 0.9}]', encoding="utf-8")
+    with pytest.raises(TextureError, match="key 'hurst' given twice"):
+        load_library(f)

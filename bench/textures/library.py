@@ -293,6 +293,9 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     if name is not None:
         if len(name) > MAX_NAME or name != name.strip():
             c.add(who, f"name = {name!r}: at most {MAX_NAME} characters, no leading or trailing spaces")
+        elif re.fullmatch(r"[Tt]?\d+", name):
+            c.add(who, f"name = {name!r}: looks like a texture number (\"T5\" and \"5\" look textures up by number), "
+                       f"so it would hide another texture; give it a name")
         elif name.casefold() in seen.names:
             c.add(who, f"name = {name!r}: already used by {seen.names[name.casefold()]}; names are unique")
         else:
@@ -347,6 +350,15 @@ def _ranges(numbers: list[int]) -> str:
 MAX_NESTING = 8  # arrays or tables deep; a library needs 4 (texture, periodic, harmonics)
 
 
+def _no_duplicate_keys(pairs: list) -> dict:
+    """A JSON object, refusing a key given twice (json would keep the last silently; TOML refuses it too)."""
+    keys = [k for k, _ in pairs]
+    twice = sorted({k for k in keys if keys.count(k) > 1})
+    if twice:
+        raise ValueError(f"key {twice[0]!r} given twice in one object")
+    return dict(pairs)
+
+
 def read_library_file(path: str | Path) -> dict:
     """The parsed library file, TOML (``{"texture": [...]}``) or JSON (``.json``: a list of textures as
     ``biotac-bench textures --json`` prints, one texture as ``--show N --json`` prints, or the TOML's object); an
@@ -356,14 +368,15 @@ def read_library_file(path: str | Path) -> dict:
     if Path(path).suffix.lower() != ".json":
         return tomlfile.parse(text, str(path), TextureError, MAX_NESTING, "a library needs 4 levels")
     try:
-        data = json.loads(text)
+        data = json.loads(text, object_pairs_hook=_no_duplicate_keys)
     except json.JSONDecodeError as e:
         raise TextureError(str(path), [f"JSON syntax error: {e.msg} (line {e.lineno}, column {e.colno})"]) from None
     except RecursionError:
         raise TextureError(str(path), [f"arrays or objects nested too deeply to read (a library needs 4 levels; "
                                        f"at most {MAX_NESTING} are allowed)"]) from None
-    except ValueError as e:  # e.g. an integer of more than 4300 digits
-        raise TextureError(str(path), [f"JSON value error: {e}"]) from None
+    except ValueError as e:  # a key given twice, or an integer of more than 4300 digits
+        why = "a whole number of more than 4300 digits" if "digits" in str(e) else str(e)
+        raise TextureError(str(path), [f"JSON value error: {why}"]) from None
     deep = tomlfile.too_deep(data, MAX_NESTING)
     if deep is not None:
         raise TextureError(str(path), [f"{deep}: nested more than {MAX_NESTING} arrays or objects deep (a library "
