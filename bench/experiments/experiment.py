@@ -285,16 +285,21 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
 # ----------------------------------------------------------------------------------------------- stages
 
 
+def digest_files() -> list[Path]:
+    """The files a stage's cache key digests: every module a trial runs through (the emulator, the rig, the
+    texture library and properties, the runner, the bench's shared modules) and the library file."""
+    packages = ("emulator", "bench/rigs", "bench/textures", "bench/running")
+    files = sorted(f for d in packages for f in (REPO / d).rglob("*.py") if "tests" not in f.relative_to(REPO).parts)
+    return files + sorted((REPO / "bench").glob("*.py")) + [REPO / "bench" / "experiments" / "trials.py", REPO / "bench" / "experiments" / "design.py",
+                    FIXTURES / "textures" / "library.toml"]
+
+
 def _code_digest() -> str:
     """A digest of everything a trial's outcome depends on besides its task: the model's and rig's sources and
     the texture library."""
     h = hashlib.sha256()
-    files = sorted((REPO / "emulator").glob("*.py")) + sorted((REPO / "emulator" / "spi").glob("*.py")) + [
-        REPO / "bench" / "rigs" / "texture_rig.py", REPO / "bench" / "textures" / "properties.py",
-        REPO / "bench" / "experiments" / "trials.py", REPO / "bench" / "running" / "sampler.py",
-        FIXTURES / "textures" / "library.toml"]
-    for f in files:
-        h.update(f.read_bytes())
+    for f in digest_files():
+        h.update(f.relative_to(REPO).as_posix().encode() + b"\0" + f.read_bytes())
     return h.hexdigest()[:16]
 
 

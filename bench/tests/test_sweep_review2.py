@@ -217,3 +217,24 @@ def test_a_symlinked_cache_inside_out_is_kept_by_force(tmp_path, monkeypatch, ca
     monkeypatch.setattr(E, "sweep", lambda *a, **k: pytest.fail("a cached stage ran trials again"))
     assert cli.main([*argv, "--force"]) == 0, capsys.readouterr().err
     assert (out / "cache").is_symlink() and any(elsewhere.iterdir())
+
+
+def test_the_stage_cache_key_digests_every_module_a_trial_runs_through():
+    """Found by a mutation pass: the key left out bench/textures/stage.py (the motor-current law behind traction)
+    and bench/textures/library.py (its unit conversions), so a warm cache replayed old trials after they changed.
+    Every module of this repository that a trial imports is digested (run in a fresh interpreter)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from bench.experiments.trials import run_trial_task, sweep_tasks; "
+            "from bench.rigs.texture_rig import movement_grid; "
+            "run_trial_task(sweep_tasks([902], [movement_grid()[7]], 1, 0, movement_ids=[7])[0]); "
+            "print('\\n'.join(m.__file__ for m in list(sys.modules.values()) if getattr(m, '__file__', None)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                         cwd=E.REPO, check=True).stdout.split()
+    used = {pathlib.Path(f).resolve() for f in out if pathlib.Path(f).resolve().is_relative_to(E.REPO / "bench")
+            or pathlib.Path(f).resolve().is_relative_to(E.REPO / "emulator")}
+    used = {f for f in used if f.name != "__init__.py" or f.stat().st_size > 0}
+    missing = sorted(str(f.relative_to(E.REPO)) for f in used - set(E.digest_files())
+                     if not f.is_relative_to(E.REPO / "bench" / "experiments") or f.name in ("trials.py", "design.py"))
+    assert not missing, missing
