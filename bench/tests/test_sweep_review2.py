@@ -12,6 +12,7 @@ import sys
 import threading
 import time
 
+import numpy as np
 import pytest
 
 from bench.campaigns import engine
@@ -238,3 +239,35 @@ def test_the_stage_cache_key_digests_every_module_a_trial_runs_through():
     missing = sorted(str(f.relative_to(E.REPO)) for f in used - set(E.digest_files())
                      if not f.is_relative_to(E.REPO / "bench" / "experiments") or f.name in ("trials.py", "design.py"))
     assert not missing, missing
+
+
+def test_validation_trials_are_new_trials_not_the_training_ones_again(monkeypatch):
+    """Found by a mutation pass: seeding validation trials with the "training" stage reused each training twin's
+    start position and noise (only the wear differed), which would inflate the accuracy and no test noticed. Every
+    validation trial's seed differs from every training trial's (the quick experiment's stages, trials faked
+    from their seeds so that only the bookkeeping runs)."""
+    from dataclasses import asdict
+
+    seen: dict[str, list] = {}
+
+    def fake_sweep(tasks, spec=None, client=None, progress=True):
+        rows = []
+        for t in tasks:
+            seen.setdefault(t.stage, []).append(t)
+            r = np.random.default_rng(t.seed)
+            rows.append(asdict(t) | {"traction": 0.3 + 0.01 * t.texture + 0.001 * r.standard_normal(),
+                                     "roughness": 5.0 + 0.02 * t.texture + 0.01 * r.standard_normal(),
+                                     "fineness": 3.0 + 0.01 * t.texture + 0.01 * r.standard_normal(),
+                                     "true_normal_N": t.force_N, "start_position_m": 0.0, "simulated_s": 1.0,
+                                     "wall_s": 0.0})
+        return rows
+
+    monkeypatch.setattr(E, "sweep", fake_sweep)
+    spec = E.load_experiment(E.REPO / "fixtures" / "experiments" / "quick.toml")
+    E.run_experiment(spec, cache_dir=None, progress=False, log=lambda m: None)
+    training, validation = seen["training"], seen["validation"]
+    assert training and validation
+    assert not {t.seed for t in training} & {t.seed for t in validation}
+    twins = {(t.texture, t.movement_id, t.trial) for t in training} & {(t.texture, t.movement_id, t.trial)
+                                                                       for t in validation}
+    assert twins  # the same texture, movement and repetition index in both stages: still a different trial
