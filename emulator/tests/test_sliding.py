@@ -286,3 +286,68 @@ def test_spatial_tables_are_the_line_load_convolutions_and_ridge_sums_of_the_sur
         for weight, shift in zip(wj[wj != 0], sj[wj != 0]):
             ridged += weight * crest_slope[pad + shift:pad + shift + n]
         assert np.array_equal(slope, smooth + gain * (ridged - smooth))
+
+
+# --- physics a mutation pass found only a saved-samples regression (or nothing) would catch ------------------------
+@pytest.mark.unit
+def test_the_viscous_friction_rise_reaches_the_sliding_force():
+    """Derived (µ(v) = Stribeck + µ_v·v, as Texture.friction_coefficient says and 56 library textures use): on a
+    smooth surface with µ_v = 2 s/m at 5 cm/s the steady tangential force is µ(v)·N within 2 %, 12 % above the same
+    surface without the viscous term (dropping µ_v in the sliding kernel survived every physics test)."""
+    import dataclasses
+
+    F, v = 1.0, 0.05
+    viscous = dataclasses.replace(SMOOTH, mu_per_velocity_s_per_m=2.0)
+    means = {}
+    for tex in (SMOOTH, viscous):  # (Texture is frozen: hashable)
+        slide = Slide(0.1, tex, F, v, 0.03, approach_s=0.1, hold_s=0.1, accel_s=0.005)
+        t, ft = _trace([slide], "tangential_force_N", slide.end_s, noise=NoiseSources.none())
+        steady = (t > slide.slide_start_s + 0.2) & (t < slide.slide_end_s - 0.01)
+        means[tex] = float(np.mean(ft[steady]))
+        assert means[tex] == pytest.approx(float(tex.friction_coefficient(v)) * F, rel=0.02)
+    assert means[viscous] > 1.1 * means[SMOOTH]
+
+
+@pytest.mark.unit
+def test_the_mean_friction_raises_the_fluid_pressure_by_the_coupling():
+    """Consistency (model.md: the tangential load's share of fluid pressure, signed; slides run along +x, so the
+    mean friction raises the pressure): the force reaching the fluid is the normal load plus tangential_coupling ×
+    the tangential force, to 1e-9 N, and that share is positive while sliding."""
+    p = SensorParams()
+    slide = Slide(0.1, SMOOTH, 1.0, 0.02, 0.01, approach_s=0.1, hold_s=0.1, accel_s=0.005)
+    s = Sensor(stimuli=[slide], channels_read=["PAC"], noise=NoiseSources.none(), seed=3,
+               record_signals=("tangential_force_N", "contact_force_N", "normal_force_N"))
+    t = np.arange(0.0, slide.end_s, 1 / 2200)
+    contact, normal, tang = (s.signal(k, t) for k in ("contact_force_N", "normal_force_N", "tangential_force_N"))
+    np.testing.assert_allclose(contact - normal, p.tangential_coupling * tang, atol=1e-9)
+    sliding = (t > slide.slide_start_s + 0.1) & (t < slide.slide_end_s)
+    assert p.tangential_coupling > 0 and np.mean((contact - normal)[sliding]) > 0
+
+
+@pytest.mark.unit
+def test_the_stage_feels_the_tangential_force_through_its_20_hz_low_pass():
+    """Derived (model.md: the stage's motor current is the tangential force low-passed at 20 Hz, a first-order
+    stage): over a slide on 60-grit-like sand, the transfer from the tangential force to the stage's force,
+    estimated from their cross-spectrum, is 1/√(1 + (f/20 Hz)²) within 15 % at 40–150 Hz."""
+    from scipy import signal as sps
+
+    slide = Slide(0.1, SAND, 0.5, 0.025, 0.05, approach_s=0.1, hold_s=0.1, accel_s=0.005)
+    s = Sensor(stimuli=[slide], channels_read=["PAC"], noise=NoiseSources.none(), seed=3,
+               record_signals=("tangential_force_N", "stage_force_N"))
+    fs = 2200.0
+    t = np.arange(slide.slide_start_s + 0.1, slide.slide_end_s - 0.02, 1 / fs)
+    tang, stage = s.signal("tangential_force_N", t), s.signal("stage_force_N", t)
+    f, pxy = sps.csd(tang - tang.mean(), stage - stage.mean(), fs, nperseg=512)
+    _, pxx = sps.welch(tang - tang.mean(), fs, nperseg=512)
+    band = (f >= 40) & (f <= 150)
+    gain = np.abs(pxy[band] / pxx[band])
+    np.testing.assert_allclose(gain, 1 / np.sqrt(1 + (f[band] / 20.0) ** 2), rtol=0.15)
+
+
+@pytest.mark.unit
+def test_a_slides_force_ramps_are_raised_cosines():
+    """Derived (Slide's docstring): a quarter of the way up the approach the nominal force is
+    F·(1 − cos(π/4))/2 = 0.146·F, not the 0.25·F of a linear ramp; halfway down the lift it is F/2."""
+    slide = Slide(0.1, SMOOTH, 2.0, 0.02, 0.01, approach_s=0.2, hold_s=0.1, lift_s=0.2)
+    assert slide.normal_force_N(0.1 + 0.05) == pytest.approx(2.0 * (1 - math.cos(math.pi / 4)) / 2, rel=1e-12)
+    assert slide.normal_force_N(slide.slide_end_s + 0.1) == pytest.approx(1.0, rel=1e-12)
