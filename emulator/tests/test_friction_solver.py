@@ -141,3 +141,22 @@ def test_where_the_friction_weakens_with_slip_the_step_keeps_the_bracketed_solve
     bound = friction._velocity_bound(state["x"], state["z"], 0.0, H, state["normal"], K_T, C_T, SIGMA0, SIGMA1,
                                      state["mu_s"], 0.0)
     assert friction._step_velocity(u_prev, *args) == friction._solve_bracketed(u_prev, *args, bound)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("n0", [0.05, 0.5, 2.0])
+def test_a_soft_texture_layer_stiffens_as_it_densifies(n0):
+    """Derived (model.md: a soft layer T thick compresses δ_t = T·(1 − exp(−N/(k_flat·T))), k_flat = 2·a·E*): its
+    stiffness in series with the skin is dN/dδ_t = k_flat·exp(N/(k_flat·T)), taken numerically from δ_t(N) here,
+    and the share left to the skin is k_tex / (k_n + k_tex) to 1e-6 (a mutation pass found a layer that never
+    densified in the sliding kernel went unnoticed by every physics test)."""
+    from emulator.friction import _texture_series
+    from emulator.sliding import TEXTURE_LAYER_M
+
+    r, modulus, kn, T = 2.5e-3 * n0 ** (1 / 3), 0.1e6 / (1 - 0.3**2), 2000.0, TEXTURE_LAYER_M  # a foam
+    k_flat = 2 * r * modulus
+    depth = lambda n: T * (1 - np.exp(-n / (k_flat * T)))  # noqa: E731
+    dn = 1e-6 * n0
+    k_tex = 2 * dn / (depth(n0 + dn) - depth(n0 - dn))
+    assert _texture_series(n0, r, kn, modulus, T) == pytest.approx(k_tex / (kn + k_tex), rel=1e-6)
+    assert k_tex > k_flat * (1 + 0.5 * n0 / (k_flat * T))  # stiffer than the undensified flat punch
