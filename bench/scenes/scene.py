@@ -617,8 +617,10 @@ def _faults(c: _Checker, table: dict, duration, n_electrodes: int = 19, where: s
     for key in ("electrode_open", "electrode_short"):
         if key in table:
             v = table[key]
-            if not isinstance(v, list) or not all(isinstance(n, int) and not isinstance(n, bool)
-                                                  and 1 <= n <= n_electrodes for n in v):
+            if isinstance(v, list) and len(v) > n_electrodes:  # (checked first: a huge list would take long)
+                c.problems.append(f"{where}.{key}: {len(v)} entries; at most the {n_electrodes} electrodes")
+            elif not isinstance(v, list) or not all(isinstance(n, int) and not isinstance(n, bool)
+                                                    and 1 <= n <= n_electrodes for n in v):
                 c.problems.append(f"{where}.{key} = {_r(v)}: a list of electrode numbers 1..{n_electrodes}{hint}")
             elif len(set(v)) < len(v):
                 twice = sorted({n for n in v if v.count(n) > 1})
