@@ -111,14 +111,13 @@ def test_an_experiment_sets_the_stepper_background_and_its_trials_carry_it():
     refused by name."""
     import dataclasses
 
-    from bench.experiments.design import ABLATIONS
-    from bench.experiments.experiment import ExperimentError, parse_experiment
+    from bench.experiments.experiment import ExperimentError, ablated, parse_experiment
     from bench.experiments.trials import run_trial_task, sweep_tasks
     from bench.rigs.texture_rig import movement_grid
 
     spec = parse_experiment({"experiment": {"name": "x"}, "rig": {"stepper_noise_Pa": 0.8}})
     assert spec.stepper_noise_Pa == 0.8
-    assert dataclasses.replace(spec, **ABLATIONS["stepper-noise"][1]).stepper_noise_Pa == 0.52
+    assert ablated(spec, "stepper-noise")[0].stepper_noise_Pa == 0.52
     tasks = sweep_tasks([46], [movement_grid()[7]], trials=1, movement_ids=[7], stepper_noise_Pa=spec.stepper_noise_Pa)
     assert [t.stepper_noise_Pa for t in tasks] == [0.8]
     quiet = run_trial_task(dataclasses.replace(tasks[0], stepper_noise_Pa=0.0))
