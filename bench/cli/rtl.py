@@ -66,7 +66,8 @@ def vector_file_problem(path: str) -> str | None:
             return (f"not a vector file (transfers[{k}] out of range: half_ps ≥ {MIN_HALF_PS}, nbits 0..64, cs 0..7, "
                     f"t_ps 0..{MAX_T_PS})")
         if d["mosi"].strip().startswith("-") or int(d["mosi"], 16) >> d["nbits"]:
-            return f"not a vector file (transfers[{k}].mosi = {d['mosi']!r}: a hex number of at most its {d['nbits']} bits)"
+            return (f"not a vector file (transfers[{k}].mosi = {d['mosi']!r}: a hex number of at most its "
+                    f"{d['nbits']} bits)")
         if k and d["t_ps"] < end_ps(vec["transfers"][k - 1]):
             return f"not a vector file (transfers[{k}] starts before transfers[{k - 1}] ends: t_ps must rise)"
     if not vec["transfers"]:

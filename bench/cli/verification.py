@@ -6,7 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import MAX_LOCAL_WORKERS, local_workers, number, sigterm_like_ctrl_c, strict_json, unit_choice, whole
+from bench.cli.args import (MAX_LOCAL_WORKERS, local_workers, number, sigterm_like_ctrl_c, strict_json, unit_choice,
+                            whole)
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
 

@@ -290,8 +290,9 @@ def digest_files() -> list[Path]:
     texture library and properties, the runner, the bench's shared modules) and the library file."""
     packages = ("emulator", "bench/rigs", "bench/textures", "bench/running")
     files = sorted(f for d in packages for f in (REPO / d).rglob("*.py") if "tests" not in f.relative_to(REPO).parts)
-    return files + sorted((REPO / "bench").glob("*.py")) + [REPO / "bench" / "experiments" / "trials.py", REPO / "bench" / "experiments" / "design.py",
-                    FIXTURES / "textures" / "library.toml"]
+    return files + sorted((REPO / "bench").glob("*.py")) + [
+        REPO / "bench" / "experiments" / "trials.py", REPO / "bench" / "experiments" / "design.py",
+        FIXTURES / "textures" / "library.toml"]
 
 
 def _code_digest() -> str:
