@@ -138,9 +138,10 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
     panels = [(k, lbl) for k, lbl, need in (("PAC_Pa", "PAC vibration (Pa)", ("PAC",)),
                                             ("PDC_kPa", "PDC pressure change (kPa)", ("PDC",)),
                                             ("TDC_C", "TDC temperature (°C)", ("TDC",)),
-                                            ("TAC_C_per_s", "TAC (°C/s)", ("TAC", "TDC")),
-                                            ("E_kohm", "electrode impedance (kΩ)", ("E1",)))
+                                            ("TAC_C_per_s", "TAC (°C/s)", ("TAC", "TDC")))
               if all(n in names for n in need)]
+    if any(f"E{n}" in names for n in range(1, 25)):  # whichever electrodes the frame samples (E1 or not)
+        panels.append(("E_kohm", "electrode impedance (kΩ)"))
 
     def traces(path: Path):
         size = (11, 3.2 * len(panels))

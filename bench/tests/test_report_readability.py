@@ -60,3 +60,17 @@ def test_a_channel_at_rest_is_drawn_as_a_band_not_a_barcode(taps, tmp_path):
     draw = dict(scene_plots(rec, {"PAC": 2048.0, "PDC": float(np.median(pdc[:50])), "TAC": 2048.0}))["traces.png"]
     draw(tmp_path / "traces.png")
     assert (tmp_path / "traces.png").stat().st_size > 10_000
+
+
+def test_a_frame_of_electrodes_without_e1_still_gets_its_traces(tmp_path):
+    """Found by a hostile pass: the traces' electrode panel needed E1 in the frame, so a frame sampling only E19
+    wrote no traces.png and said nothing. Any sampled electrode makes the panel."""
+    from bench.reporting.plots import scene_plots
+    from bench.reporting.report import baselines
+
+    scene = parse_scene_text('[scene]\nname = "p"\nduration_s = 0.5\n[host]\nsequence = ["E19", "PDC"]\n')
+    rec = run_scene(scene, progress=False)
+    plots = dict(scene_plots(rec, baselines(rec)))
+    assert "traces.png" in plots
+    plots["traces.png"](tmp_path / "traces.png")
+    assert (tmp_path / "traces.png").stat().st_size > 10_000
