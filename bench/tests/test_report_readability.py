@@ -68,7 +68,7 @@ def test_a_frame_of_electrodes_without_e1_still_gets_its_traces(tmp_path):
     from bench.reporting.plots import scene_plots
     from bench.reporting.report import baselines
 
-    scene = parse_scene_text('[scene]\nname = "p"\nduration_s = 0.5\n[host]\nsequence = ["E19", "PDC"]\n')
+    scene = parse_scene_text('[scene]\nname = "p"\nduration_s = 0.5\n[host]\nsequence = ["E19"]\n')
     rec = run_scene(scene, progress=False)
     plots = dict(scene_plots(rec, baselines(rec)))
     assert "traces.png" in plots
