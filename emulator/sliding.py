@@ -54,6 +54,9 @@ from emulator.skin import Skin
 from emulator.texture import Texture, friction_fluctuation, periodic_on_grid, random_profile
 
 POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0.5 for rubbers changes it by 20 %)
+#: a commanded motion's load is not known when its contact is built (the rig sends its commands as it goes): its
+#: patch-radius table reaches 2.5 × this (N; the rig's targets are at most 2 N)
+COMMANDED_FORCE_MAX_N = 5.0
 #: textures are layers on the rig's rigid backing: a soft one compresses at most this much (it densifies as it
 #: approaches its thickness), so a finger always reaches a force (model choice: the library has no thickness)
 TEXTURE_LAYER_M = 3e-3
@@ -616,7 +619,7 @@ class SlidingContact(Effect):
         for m in self.motions:
             skin = m.skin or Skin()
             gain = skin.trial_gain(rng)
-            force_max = getattr(m, "force_N", 5.0)
+            force_max = getattr(m, "force_N", COMMANDED_FORCE_MAX_N)
             radii = params.contact_radius_at_1N_m * np.cbrt(np.geomspace(0.02, max(2.5 * force_max, 0.1), n_radii))
             length = m.max_travel_m + 4 * radii.max() + 0.01
             c = {"motion": m, "gain": gain, "radii": radii, "skin": skin, "table_n": table_positions(length, dx_m),

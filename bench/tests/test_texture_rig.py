@@ -146,3 +146,24 @@ def test_high_power_movements_wear_the_skin_faster_and_wear_lowers_roughness():
     worn = properties(TextureRig(skin=Skin(ridge_height_m=0.0), wear=False)
                       .run_trial(SAND, Movement(0.5, 0.025), seed=5).recording)
     assert worn["roughness"] < fresh["roughness"]
+
+
+def test_the_patch_radius_table_covers_the_load_of_the_rigs_heaviest_movement(monkeypatch):
+    """Found by a mutation pass: the rig's commanded motions carry no force, and their contact's patch-radius
+    table is built up to 2.5 × COMMANDED_FORCE_MAX_N; a table stopping at 1.25 N made the patch stop growing there
+    (a = 2.5 mm·N^⅓ clipped) unnoticed. At 2 N @ 10 cm/s on the abrasive the table's largest radius exceeds the
+    patch at 1.5 × the trial's mean load (fluctuations included)."""
+    from emulator import sliding
+
+    contacts = []
+    built = sliding.SlidingContact.__init__
+
+    def keep(self, *a, **k):
+        built(self, *a, **k)
+        contacts.append(self)
+
+    monkeypatch.setattr(sliding.SlidingContact, "__init__", keep)
+    trial = TextureRig(wear=False).run_trial(SAND, Movement(2.0, 0.1), seed=4)
+    radii = contacts[-1]._contacts[0]["radii"]
+    a_1N = SensorParams().contact_radius_at_1N_m
+    assert radii.max() >= a_1N * np.cbrt(1.5 * trial.true_normal_N) and trial.true_normal_N > 1.8
