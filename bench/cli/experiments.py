@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from bench.cli.args import add_cluster_arguments, sigterm_like_ctrl_c, strict_json, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
@@ -202,6 +203,10 @@ def _cmd_explore(a) -> int:
     from bench.reporting.outdir import FolderKind, writable_folder
 
     spec = load_experiment(a.experiment)
+    if not a.no_cache and a.out is not None and Path(a.cache).resolve() == Path(a.out).resolve():
+        raise ValueError(f"--cache {a.cache} is --out: the results and the stage cache need folders of their own (the "
+                         f"cache's entries would make a later --force refuse the folder); the cache may sit inside "
+                         f"--out, e.g. --cache {Path(a.out) / 'cache'}")
     names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
     cache_kept = "" if a.no_cache else f" (the stage cache {a.cache} is kept: no trial runs again)"
     kind = FolderKind("the earlier results" + cache_kept, OUTPUT_FILES + ("ablations.md",), tuple(ABLATIONS))
