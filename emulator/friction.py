@@ -445,6 +445,13 @@ def _ridges_step(ridge_state, crest, shifts, shares, stiffness, pos, dx, limit_s
 
 
 @njit(cache=True, inline="always")
+def hertz_stiffness_per_cbrt_N(K):
+    """The skin's contact stiffness dN/dδ at load N, over N^(1/3) (N/m per N^(1/3)): N = K·δ^1.5 gives
+    1.5·K^(2/3)·N^(1/3)."""
+    return 1.5 * K ** (2.0 / 3.0)
+
+
+@njit(cache=True, inline="always")
 def _texture_series(n0, r, kn, modulus_eff, layer_m):
     """The share (1) of the skin's indentation a texture leaves to the skin at load ``n0`` (N), patch radius ``r``
     (m) and skin contact stiffness ``kn`` (N/m): a soft texture layer (``modulus_eff`` Pa, ``layer_m`` m thick) yields
@@ -480,7 +487,7 @@ def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffne
     slip = 0.5 * dx
     steps = int(travel_m / slip)
     settle = int(RIDGE_FRICTION_SETTLE * steps)
-    kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
+    kn_per_cbrt_n = hertz_stiffness_per_cbrt_N(K)
     for k in range(radii.size):
         r = radii[k]
         load = (r / radius_1N) ** 3
@@ -541,7 +548,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
     h = dt / substeps
     touching = 1 if state[5] > 0.5 else 0
     u_prev = state[6]
-    kn_per_cbrt_n = 1.5 * K ** (2.0 / 3.0)
+    kn_per_cbrt_n = hertz_stiffness_per_cbrt_N(K)
     n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
     mu_ridges = 0.0
     ridge_shares, ridge_stiffness = np.zeros(ridge_offsets.size), np.zeros(ridge_offsets.size)

@@ -160,3 +160,16 @@ def test_a_soft_texture_layer_stiffens_as_it_densifies(n0):
     k_tex = 2 * dn / (depth(n0 + dn) - depth(n0 - dn))
     assert _texture_series(n0, r, kn, modulus, T) == pytest.approx(k_tex / (kn + k_tex), rel=1e-6)
     assert k_tex > k_flat * (1 + 0.5 * n0 / (k_flat * T))  # stiffer than the undensified flat punch
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("load_N", [0.2, 1.0, 2.0])
+def test_the_kernels_contact_stiffness_is_the_hertz_law_s_slope(load_N):
+    """Derived (model.md: k_n = 1.5·K^(2/3)·N^(1/3), the slope of N = K·δ^1.5): the kernel's stiffness at a load
+    equals the numerical slope of the skin's own Hertz law there, to 1e-6 (a mutation pass found a wrong prefactor
+    was caught only by a saved-samples regression)."""
+    K = SensorParams().contact_stiffness_N_per_m1_5
+    depth = (load_N / K) ** (2 / 3)
+    h = 1e-6 * depth
+    slope = K * ((depth + h) ** 1.5 - (depth - h) ** 1.5) / (2 * h)
+    assert friction.hertz_stiffness_per_cbrt_N(K) * load_N ** (1 / 3) == pytest.approx(slope, rel=1e-6)
