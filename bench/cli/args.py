@@ -95,6 +95,11 @@ def add_cluster_arguments(parser) -> None:
     parser.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
 
 
+#: argparse type of every ``--seed``: 0 to 2**63 − 1 (what numpy's seeding and the trial seeds take)
+any_seed = whole(0, 2**63 - 1)
+any_seed.__name__ = "a seed"
+
+
 def existing_file(text: str) -> str:
     """argparse type: a readable regular file."""
     if "\0" in text:

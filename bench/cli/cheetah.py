@@ -6,7 +6,7 @@ import argparse
 import shlex
 import sys
 
-from bench.cli.args import number, one_line_errors, sigterm_raises, whole
+from bench.cli.args import any_seed, number, one_line_errors, sigterm_raises, whole
 from bench.running.signals import signals_deferred
 
 
@@ -87,7 +87,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="scene file, or a shipped scene's name, the sensors are built from (default: none, the "
                          "sensors at rest)")
     sv.add_argument("--sensors", type=whole(1, 5), default=3, help="emulated sensors, 1 to 5")
-    sv.add_argument("--seed", type=whole(0, 2**63 - 1),
+    sv.add_argument("--seed", type=any_seed,
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")
     sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds (s; default: "

@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench.cli.args import add_cluster_arguments, sigterm_like_ctrl_c, strict_json, whole
+from bench.cli.args import add_cluster_arguments, any_seed, sigterm_like_ctrl_c, strict_json, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from emulator.fidelity import PROFILES
 
@@ -136,7 +136,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                                       "(id = 6 × force step + velocity step)")
     s.add_argument("--trials", type=whole(1, 1000), default=6, help="repetitions per texture and movement, 1 to "
                                                                    "1000 (D's pilot: 6)")
-    s.add_argument("--seed", type=whole(0, 2**63 - 1), default=0,
+    s.add_argument("--seed", type=any_seed, default=0,
                    help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")

@@ -8,7 +8,8 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import Terminated, existing_file, number, one_line_errors, output_file, sigterm_raises, whole
+from bench.cli.args import (Terminated, any_seed, existing_file, number, one_line_errors, output_file, sigterm_raises,
+                            whole)
 from bench.running.signals import signals_deferred
 
 
@@ -350,7 +351,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="emulated sensors, 1 to 5 (default: the scene's count with --scene, else 1)")
     br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it (units, variants, each its own "
                                                            "stimuli; --sensors, if given, at least the scene's count)")
-    br.add_argument("--seed", type=whole(0, 2**63 - 1),
+    br.add_argument("--seed", type=any_seed,
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")
     br.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")

@@ -274,7 +274,7 @@ def _path(what: str):
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    from bench.cli.args import one_line_errors, whole
+    from bench.cli.args import any_seed, one_line_errors
 
     r = one_line_errors(sub.add_parser("run", help="run a scene and write samples, codes, record, report and plots",
                                        description=RUN_HELP, formatter_class=fmt))
@@ -290,7 +290,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                    help="samples.h5 compression (default gzip: level 1 with shuffle, readable everywhere)")
     r.add_argument("--fidelity", choices=list(PROFILES),
                    help="override the scene's profile (default: the scene's [scene] fidelity; biotac-bench profiles)")
-    r.add_argument("--seed", type=whole(0, 2**63 - 1),
+    r.add_argument("--seed", type=any_seed,
                    help="override the scene's seed, 0 to 2^63 - 1 (default: the scene's [scene] seed)")
     r.add_argument("--spi", choices=["software", "rtl"],
                    help="the sensor's SPI side: the software model or the RTL via the C++ harness (default: the "

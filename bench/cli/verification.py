@@ -6,8 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import (MAX_LOCAL_WORKERS, local_workers, number, sigterm_like_ctrl_c, strict_json, unit_choice,
-                            whole)
+from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, sigterm_like_ctrl_c, strict_json,
+                            unit_choice, whole)
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
 
@@ -166,7 +166,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                    help="run one group (repeatable; default: every group)")
     c.add_argument("--fidelity", default="default", choices=list(PROFILES),
                    help="fidelity profile of the claims' runs (biotac-bench profiles)")
-    c.add_argument("--seed", type=whole(0, 2**63 - 1), default=2012, help="scene seed (with --seeds: the first of N)")
+    c.add_argument("--seed", type=any_seed, default=2012, help="scene seed (with --seeds: the first of N)")
     c.add_argument("--seeds", type=whole(1, 1000), metavar="N",
                    help="run the claims for N seeds (seed, seed+1, ...) and report each claim's min/max and "
                         "how many seeds pass it")

@@ -187,8 +187,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             problems.append(f"{table}.{key}: texture(s) {listed_twice(v)} listed twice")
         return v
 
-    if "name" in t["experiment"] and folder_name_problem(t["experiment"]["name"], "experiment.name"):
-        problems.append(folder_name_problem(t["experiment"]["name"], "experiment.name"))
+    if "name" in t["experiment"] and (problem := folder_name_problem(t["experiment"]["name"], "experiment.name")):
+        problems.append(problem)
     else:
         spec.name = t["experiment"].get("name", spec.name)
     spec.seed = get("experiment", "seed", int, 0, 2**63 - 1, spec.seed)

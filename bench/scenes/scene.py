@@ -909,8 +909,8 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     name = meta.get("name")
     if "scene" in data and not isinstance(data["scene"], dict):
         pass  # the table's shape is the problem; its fields are not looked for
-    elif folder_name_problem(name, "scene.name"):
-        c.problems.append(folder_name_problem(name, "scene.name"))
+    elif problem := folder_name_problem(name, "scene.name"):
+        c.problems.append(problem)
     duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s",
                         required=isinstance(data.get("scene", {}), dict))
     seed = c.number(meta, "seed", "scene", 0, 2**63 - 1, "", default=0, integer=True)
