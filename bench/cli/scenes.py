@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from pathlib import Path
 
@@ -127,7 +128,6 @@ every problem with its field, value and allowed range.  Exit status 0 if every s
 
 def _cmd_run(a) -> int:
     from bench.reporting.outdir import OutFolder
-    from bench.reporting.report import sensor_serial
     from bench.reporting.session import run_to_folder
     from bench.scenes.scene import load_scene
 
@@ -136,12 +136,30 @@ def _cmd_run(a) -> int:
                  if v is not None}
     scene = load_scene(a.scene, overrides)  # validated completely, then the out folder checked: both before running
     folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
+    res = None
     try:
-        res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
-                            plots=not a.no_plots, progress=not a.quiet, compression=a.compression)
-    finally:
-        if folder is not None:
-            folder.close()
+        try:
+            res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
+                                plots=not a.no_plots, progress=not a.quiet, compression=a.compression)
+        finally:
+            if folder is not None:
+                folder.close()
+        _print_run(a, scene, res)
+    except KeyboardInterrupt:
+        if res is None:
+            raise
+        res.late_signal = "SIGINT"  # only the summary was cut short: the files were all written before it
+    if res.late_signal:
+        print(f"{res.late_signal} after the run's files were written: {res.folder}/ holds them all (record.json "
+              f"status \"{res.record['status']}\")", file=sys.stderr)
+        return 128 + signal.Signals[res.late_signal].value
+    return res.exit_code
+
+
+def _print_run(a, scene, res) -> None:
+    """The report and what was written where, and a line for an interrupted or failed run."""
+    from bench.reporting.report import sensor_serial
+
     out, record = res.folder, res.record
     if not a.quiet:
         print((out / "report.md").read_text())
@@ -160,7 +178,6 @@ def _cmd_run(a) -> int:
               f"{scene.duration_s:g} s: wrote what was recorded", file=sys.stderr)
     elif record["status"] != "ok":
         print(f"error: the run stopped at {record['simulated_s']:.3f} s: {record['error']}", file=sys.stderr)
-    return res.exit_code
 
 
 def _cmd_validate(a) -> int:

@@ -11,7 +11,7 @@
    record, written last, lists their status.
 
 Exit status follows the record: 0 ok, 1 failed, 128 + the signal's number when interrupted (130 SIGINT, 143
-SIGTERM).
+SIGTERM) — also when the signal came only after the record was written ("ok": the run is complete, and says so).
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ class RunResult:
     folder: Path
     recording: Recording
     sensor_records: dict[int, dict] = field(default_factory=dict)  # sensors 2..N: number -> its record.json
+    late_signal: str | None = None  # a signal that came after the record was written: the run is complete
 
 
 def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, npz: bool | None = None,
@@ -48,8 +49,8 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
         folder = OutFolder.open(out, force=force)
     else:
         folder = fresh_folder(Path(out_root) / scene.name, force=force)
-    try:
-        with StopSignals() as guard:
+    with StopSignals() as guard:  # held until the folder is closed: a signal after the record can't cut the tidy-up
+        try:
             names = read_channel_names(scene)
             h5 = folder.temp_path("samples.h5")
             store = SampleStore(h5, scene, names, compression)
@@ -76,14 +77,15 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
             record = write_outputs(rec, folder, csv=csv, plots=plots, npz=npz, samples_tmp=h5, guard=guard,
                                    sensors=sensor_records)
             code = {"ok": 0, "interrupted": guard.exit_code or 130}.get(record["status"], 1)
-        if h5 is not None and "samples.h5" in record["outputs"]:
-            from bench.reporting.store import StoredChannels
+            if h5 is not None and "samples.h5" in record["outputs"]:
+                from bench.reporting.store import StoredChannels
 
-            rec.channels = StoredChannels(folder.path / "samples.h5")
-        return RunResult(record, code, folder.path, rec, sensor_records)
-    finally:
-        folder.remove_temps()
-        folder.close()
+                rec.channels = StoredChannels(folder.path / "samples.h5")
+        finally:
+            folder.remove_temps()
+            folder.close()
+    late = guard.signal_name if guard.signum is not None and record["status"] == "ok" else None
+    return RunResult(record, guard.exit_code if late else code, folder.path, rec, sensor_records, late)
 
 
 def _write_sensor(sub: Recording, folder: OutFolder, k: int, **kw) -> dict:

@@ -233,3 +233,51 @@ def test_a_recordings_csv_names_the_channels_and_its_files_replace_symlinks(tmp_
     assert lines[0] == RECORDING_CSV_HEADER
     assert lines[1:4] == ["0,0,PAC,1,10,0", "0,1,E1,1,20,0", "0,2,E24,1,30,0"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["elsewhere.npz", "r.csv", "r.npz"]  # no temporary file
+
+
+# --- a signal after the record is written: the run is complete, and the exit says so -------------------------
+@pytest.mark.unit
+def test_a_signal_during_the_tidy_up_leaves_the_run_ok_and_exits_with_the_signal(tmp_path, monkeypatch):
+    """SIGINT while the folder's temporaries are removed (record.json already "ok"): no KeyboardInterrupt escapes
+    the guard, the lock is released, the record stays "ok", and the result carries the late signal (exit 130)."""
+    from bench.reporting.outdir import OutFolder
+
+    original = OutFolder.remove_temps
+
+    def signalled_tidy_up(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        original(self)
+
+    monkeypatch.setattr(OutFolder, "remove_temps", signalled_tidy_up)
+    sc = parse_scene({"scene": {"name": "w", "duration_s": 0.5}})
+    try:
+        res = run_to_folder(sc, tmp_path / "o", progress=False, plots=False)
+    except KeyboardInterrupt:
+        pytest.fail("the signal escaped the guard during the tidy-up")
+    assert (res.record["status"], res.late_signal, res.exit_code) == ("ok", "SIGINT", 130)
+    check_consistent(tmp_path / "o", "ok")
+    OutFolder.open(tmp_path / "o", force=True).close()  # the lock was released: the folder opens again
+
+
+@pytest.mark.unit
+def test_run_says_the_files_are_complete_when_ctrl_c_cuts_only_the_summary(tmp_path, monkeypatch, capsys):
+    """Ctrl-C while `run` prints report.md: exit 130 with a line saying the folder holds every file (status ok),
+    not a bare "interrupted" that would send the user to re-run a finished scene."""
+    from pathlib import Path
+
+    from bench.cli.main import main
+
+    original = Path.read_text
+
+    def interrupted_read(self, *a, **kw):
+        if self.name == "report.md":
+            raise KeyboardInterrupt
+        return original(self, *a, **kw)
+
+    monkeypatch.setattr(Path, "read_text", interrupted_read)
+    out = tmp_path / "o"
+    assert main(["run", "rest", "--out", str(out), "--no-plots"]) == 130
+    err = capsys.readouterr().err
+    assert f"SIGINT after the run's files were written: {out}/ holds them all (record.json status \"ok\")" in err
+    monkeypatch.setattr(Path, "read_text", original)
+    check_consistent(out, "ok")
