@@ -168,16 +168,18 @@ file being written is finished first.
 
 Writes into --out (default: a fresh out/explore/<name>[-n]): report.md (beside D's numbers), summary.json,
 accuracy.csv, accuracy_per_texture.csv, confusion.csv, pilot_uncertainty.csv, trials.csv/json,
-properties_at_optimal_movements.png, probability_evolution.png.  --ablation NAME runs a variant (smooth-skin,
-unreplaced-wear, fewer-trials, double-noise; or all) into --out/<name>/ and adds a comparison table to
---out/ablations.md.  An --out folder that holds anything is refused: to re-run into it (say, after changing the
-classifier settings), add --force — it replaces the earlier results and keeps the stage cache, so no trial runs
+properties_at_optimal_movements.png, probability_evolution.png.  --ablation NAME runs a variant into
+--out/<name>/ and adds a comparison table to --out/ablations.md:
+{ablations}
+  all: every one of them.
+An --out folder that holds anything is refused: to re-run into it (say, after changing the classifier settings),
+add --force — it replaces the earlier results and keeps the stage cache, so no trial runs
 again.
 
   biotac-bench explore fixtures/experiments/fishel2012.toml
   biotac-bench explore fixtures/experiments/quick.toml --ablation smooth-skin
   biotac-bench explore fixtures/experiments/quick.toml --out out/quick --force   # re-run, the trials from the cache
-"""
+""".replace("{ablations}", "\n".join(f"  {name}: {what}" for name, (what, _) in ABLATIONS.items()))
 
 
 def _entry_inside(path, folder) -> str | None:

@@ -268,3 +268,13 @@ def test_the_serial_fixtures_work_as_their_documentation_says(tmp_path):
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
                        capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert "3 passed" in r.stdout, r.stdout + r.stderr
+
+
+@unit
+def test_explore_help_describes_every_ablation_from_its_registry(capsys):
+    """The list came from a paragraph that fell behind (stepper-noise was missing); now from ABLATIONS."""
+    from bench.experiments.design import ABLATIONS
+
+    _, out, _ = invoke(["explore", "--help"], capsys)
+    for name, (what, _) in ABLATIONS.items():
+        assert re.search(rf"^  {name}: {re.escape(what)}$", out, re.M), name
