@@ -16,6 +16,8 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
+from bench.atomic import open_regular
+
 
 # --- help ------------------------------------------------------------
 
@@ -253,10 +255,13 @@ def replaceable_report(marker: bytes, what: str):
         p = Path(text)
         if p.exists():
             try:
-                with open(p, "rb") as fh:
-                    head = fh.read(4096)
+                fh = open_regular(p)
             except OSError as e:
                 raise argparse.ArgumentTypeError(f"{text}: cannot be read ({e.strerror})") from None
+            head = b""
+            if fh is not None:  # a link or a pipe put there since output_file() looked is not a report
+                with fh:
+                    head = fh.read(4096)
             if marker not in head:
                 raise argparse.ArgumentTypeError(f"{text}: already there and not {what}: give another path, or "
                                                  f"move it away (only an earlier report is replaced)")

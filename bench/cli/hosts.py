@@ -104,14 +104,10 @@ def _csv_beside(out: Path) -> Path:
 
 def _is_recording_csv(path: Path) -> bool:
     """Whether ``path`` is a regular file (not a symbolic link) whose first line is :data:`RECORDING_CSV_HEADER`."""
-    if path.is_symlink() or not path.is_file():
-        return False
-    try:
-        with open(path, "rb") as fh:
-            first = fh.readline(len(RECORDING_CSV_HEADER) + 3)
-    except OSError:
-        return False
-    return first.rstrip(b"\r\n") == RECORDING_CSV_HEADER.encode()
+    from bench.atomic import read_head
+
+    head = read_head(path, len(RECORDING_CSV_HEADER) + 2)
+    return head is not None and head.splitlines()[:1] == [RECORDING_CSV_HEADER.encode()]
 
 
 def _is_recording_npz(path: Path) -> bool:
@@ -119,10 +115,13 @@ def _is_recording_npz(path: Path) -> bool:
     layout arrays."""
     import zipfile
 
-    if path.is_symlink() or not path.is_file():
-        return False
+    from bench.atomic import open_regular
+
     try:
-        with zipfile.ZipFile(path) as z:
+        fh = open_regular(path)
+        if fh is None:
+            return False
+        with fh, zipfile.ZipFile(fh) as z:
             return {"codes.npy", "layout.npy"} <= set(z.namelist())
     except (OSError, zipfile.BadZipFile):
         return False

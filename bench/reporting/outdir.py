@@ -26,7 +26,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from bench.atomic import TEMP_SUFFIX, atomic_write, commit, temp_path  # noqa: F401 (re-exported)
+from bench.atomic import TEMP_SUFFIX, atomic_write, commit, read_head, temp_path  # noqa: F401 (re-exported)
 from bench.errors import BenchError
 from bench.scenes.limits import MAX_SENSORS
 
@@ -59,11 +59,7 @@ class FolderKind:
         prefix = dict(self.starts).get(path.name)
         if prefix is None or path.is_symlink():  # a link is removed, never followed: its target is never touched
             return True
-        try:
-            with open(path, "rb") as fh:
-                return fh.read(len(prefix)) == prefix
-        except OSError:
-            return False
+        return read_head(path, len(prefix)) == prefix  # a FIFO or device of that name is not the command's
 
 
 #: a scene run's folder (``biotac-bench run``): its files, and a several-sensor run's sensor<k>/ folders of them

@@ -281,3 +281,38 @@ def test_run_says_the_files_are_complete_when_ctrl_c_cuts_only_the_summary(tmp_p
     assert f"SIGINT after the run's files were written: {out}/ holds them all (record.json status \"ok\")" in err
     monkeypatch.setattr(Path, "read_text", original)
     check_consistent(out, "ok")
+
+
+# --- "is this file ours?" never blocks on a FIFO, never follows a link (bench.atomic.open_regular) ------------
+@pytest.mark.unit
+def test_open_regular_opens_only_a_regular_file_and_never_blocks(tmp_path):
+    from bench.atomic import open_regular, read_head
+
+    (tmp_path / "f").write_bytes(b"# Scene report: x")
+    os.mkfifo(tmp_path / "fifo")  # opened blocking, this waited for a writer for ever
+    (tmp_path / "link").symlink_to(tmp_path / "f")
+    (tmp_path / "dir").mkdir()
+    with open_regular(tmp_path / "f") as fh:
+        assert fh.read() == b"# Scene report: x"
+    assert [open_regular(tmp_path / n) for n in ("fifo", "link", "dir", "missing")] == [None] * 4
+    assert (read_head(tmp_path / "f", 8), read_head(tmp_path / "fifo", 8)) == (b"# Scene ", None)
+
+
+@pytest.mark.unit
+def test_run_force_refuses_a_fifo_named_as_a_runs_file_at_once(tmp_path):
+    """A FIFO named report.md in the folder hung `run --force` (it opened the pipe to read how it starts)."""
+    out = tmp_path / "o"
+    out.mkdir()
+    os.mkfifo(out / "report.md")
+    r = run_cli("run", "rest", "--out", out, "--force", "--quiet", "--no-plots", timeout=60)
+    assert r.returncode == 2 and "report.md (not as this command writes it)" in r.stderr, r.stderr
+    assert sorted(p.name for p in out.iterdir() if p.name != LOCK_NAME) == ["report.md"]
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("name", ["r.csv", "r.npz"])
+def test_record_force_refuses_a_fifo_at_out_or_beside_it_at_once(tmp_path, name):
+    os.mkfifo(tmp_path / name)
+    r = run_cli("record", "loop://", "--out", tmp_path / "r.npz", "--quiet", "--force", "--csv", timeout=60)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and str(tmp_path / name) in r.stderr, r.stderr
+    assert [p.name for p in tmp_path.iterdir()] == [name]
