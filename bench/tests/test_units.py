@@ -81,6 +81,46 @@ def test_a_unit_seed_reproduces_the_unit_bit_for_bit_and_units_differ():
     assert unit("BT-my-finger").params == unit("BT-my-finger").params != SensorParams()
 
 
+#: each drawn spread as the README documents it: field, "normal" (σ, clipped at 3σ) or "uniform" (± half-width),
+#: absolute (the field's nominal plus the draw) or relative (times 1 + the draw), and its size
+DOCUMENTED_SPREADS = {
+    "inflation_volume_mL": ("normal", "absolute", 0.03), "bridge_offset_V_per_V": ("normal", "absolute", 1.0e-3),
+    "bridge_sensitivity_V_per_V_Pa": ("normal", "relative", 0.0025),
+    "bridge_offset_drift_V_per_V_K": ("normal", "relative", 0.20), "bridge_span_drift_per_K": ("normal", "relative", 0.20),
+    "stage1_bias_V": ("normal", "absolute", 0.010), "stage2_bias_V": ("normal", "absolute", 0.010),
+    "thermistor_r25_ohm": ("uniform", "relative", 0.01), "thermistor_beta_K": ("uniform", "relative", 0.03),
+    "resonance_Hz": ("normal", "absolute", 5.0)}
+
+
+def test_the_population_of_units_has_the_documented_spreads_each_drawn_independently():
+    """Over 600 units, each drawn field's deviation from nominal: a normal spread has its σ (± 12 %, four standard
+    errors of an SD from 600 draws), is centred and clipped at 3σ; a uniform one fills ± its half-width (both ends
+    within 10 %) and is centred; no two fields share a draw (|r| < 0.17, four standard errors). The drifts keep the
+    nominal part's sign in every unit."""
+    n = 600
+    nominal = SensorParams()
+    units = [unit(s).params for s in range(n)]
+    deviations = {}
+    for name, (shape, how, size) in DOCUMENTED_SPREADS.items():
+        values, base = np.array([getattr(u, name) for u in units]), getattr(nominal, name)
+        d = (values - base) if how == "absolute" else (values / base - 1.0)
+        deviations[name] = d
+        if shape == "normal":
+            limit = SPAN_LIMIT if name == "bridge_sensitivity_V_per_V_Pa" else 3.0 * size
+            assert abs(d.std() / size - 1.0) < 0.12 and np.abs(d).max() <= limit * (1 + 1e-9), (name, d.std())
+            assert abs(d.mean()) < 4.0 * size / np.sqrt(n), (name, d.mean())
+        else:
+            assert d.min() < -0.9 * size and d.max() > 0.9 * size and np.abs(d).max() <= size, name
+            assert abs(d.mean()) < 4.0 * size / np.sqrt(3.0 * n), (name, d.mean())
+    r = np.corrcoef(np.array(list(deviations.values())))
+    names = list(deviations)
+    shared = [(names[i], names[j], round(r[i, j], 3)) for i in range(len(names)) for j in range(i)
+              if abs(r[i, j]) > 0.17]
+    assert not shared, shared
+    for name in ("bridge_offset_drift_V_per_V_K", "bridge_span_drift_per_K"):
+        assert all(np.sign(getattr(u, name)) == np.sign(getattr(nominal, name)) for u in units), name
+
+
 def test_resting_electrode_codes_differ_across_electrodes_and_units():
     nominal = resting_electrode_codes(SensorParams())
     assert len(set(nominal)) <= 2  # identical electrodes at rest (± one code of rounding)

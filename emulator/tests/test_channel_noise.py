@@ -164,3 +164,63 @@ def test_the_compiled_conversion_noise_is_numpys_formula_to_the_bit():
     np.testing.assert_array_equal(adc.sigma_V(v), np.sqrt(base))
     z = effect_rng(4, "adc_noise").standard_normal(v.size, dtype=np.float32)
     np.testing.assert_array_equal(adc.convert(v, channels=channels), quantize(v + sigma * z))
+
+
+def _lines(params=None) -> dict[str, float]:
+    return {x.source: x.pac_bits for x in budget(params)}
+
+
+def test_the_budget_prints_pa_on_the_published_pac_scale():
+    """The Pa column is PAC bits × D's 0.37 Pa per bit (Table 4-1, ± 2 %): the header's scale and every line's."""
+    from emulator.conversions import PAC_PA_PER_BIT
+    from emulator.noise_budget import format_budget
+
+    text = format_budget(budget())
+    scale = float(text.splitlines()[0].split("1 bit = ")[1].split(" Pa")[0])
+    assert scale == pytest.approx(PAC_PA_PER_BIT, rel=0.02)
+    total = next(line for line in text.splitlines() if line.startswith("total at the ADC output")).split()
+    assert float(total[6]) == pytest.approx(float(total[7]) * scale, abs=1e-3)  # Pa column = bits × scale
+
+
+def test_every_total_is_the_quadrature_sum_of_the_lines_it_lists():
+    """No source is dropped from, or added to, a channel's total: PAC's total is the intrinsic total, the hum lines and
+    the ADC's four lines in quadrature (the intrinsic total itself that of its three Table 5-1 sources); each quiet
+    channel's total is its own rows'."""
+    lines = _lines()
+    intrinsic = ("bridge Johnson noise", "amplifier voltage noise", "amplifier current noise × R")
+    assert lines["intrinsic total (Table 5-1)"] == pytest.approx(np.sqrt(sum(lines[k] ** 2 for k in intrinsic)), rel=1e-12)
+    pac = ["intrinsic total (Table 5-1)", "ADC quantization", "ADC input noise (every channel)",
+           "ADC reference noise at the resting code", "PAC path extra noise (stage 2 / ADC driver)", "SPI coupling"]
+    pac += [k for k in lines if k.startswith("mains hum")]
+    assert lines["total at the ADC output"] == pytest.approx(np.sqrt(sum(lines[k] ** 2 for k in pac)), rel=1e-12)
+    for name in QUIET:
+        rows = [v for k, v in lines.items() if k.startswith(f"{name}: ") and not k.endswith("total at the ADC output")]
+        assert len(rows) >= 4 and lines[f"{name}: total at the ADC output"] == pytest.approx(
+            np.sqrt(sum(v**2 for v in rows)), rel=1e-12), name
+
+
+def test_the_pdc_path_line_is_the_intrinsic_noise_over_the_stage1_band_times_its_gain():
+    """Derived: the Table 5-1 density over a 2nd-order Butterworth's noise bandwidth, (π/4)/sin(π/4) × its corner
+    (closed form, not the budget's numerical integral), times the stage-1 gain, in LSB."""
+    p = SensorParams()
+    density = np.sqrt(p.johnson_noise_V_per_rtHz**2 + p.amp_voltage_noise_V_per_rtHz**2
+                      + (p.amp_current_noise_A_per_rtHz * p.bridge_resistance_ohm) ** 2)
+    enbw = np.pi / 4 / np.sin(np.pi / 4) * p.stage1_lowpass_Hz
+    expected = density * np.sqrt(enbw) * p.stage1_gain / LSB
+    assert _lines(p)["PDC: intrinsic noise × stage-1 gain"] == pytest.approx(expected, rel=0.01)
+
+
+def test_the_thermistor_lines_are_what_the_running_thermal_network_measures():
+    """TDC and TAC carry the thermistor noise the network adds (a noisy run minus the same run without it, 600 s at
+    the network's 100 Hz): each within 10 % of its budget line — TAC's ×98 gain and high-pass included."""
+    from emulator import thermal
+
+    p = SensorParams()
+    t = np.arange(0.0, 600.0, 1.0 / thermal.THERMAL_RATE_HZ)
+    noisy = thermal.ThermalModel(p, thermal.ThermalEvents([]), seed=3).values_at(t)
+    quiet = thermal.ThermalModel(p, thermal.ThermalEvents([]), seed=3, noise=False).values_at(t)
+    settled = t > 20.0  # past the TAC high-pass's settling (0.45 Hz)
+    measured = (noisy - quiet)[settled].std(axis=0) / LSB
+    lines = _lines(p)
+    assert measured[1] == pytest.approx(lines["TDC: thermistor noise (thermal network running)"], rel=0.1)
+    assert measured[2] == pytest.approx(lines["TAC: thermistor noise (thermal network running)"], rel=0.1)

@@ -226,3 +226,36 @@ def test_the_compiled_interpolation_is_the_numpy_formula_to_the_bit():
     for bad in (-1e-3, np.nan, np.inf):
         with pytest.raises(ValueError, match="finite and ≥ 0"):
             s.analog([0, 0], [0.1, bad])
+
+
+def test_a_blocks_sample_times_start_at_its_first_grid_index():
+    """Block(n0, n, fs).times are (n0 + i)/fs: an effect driven by time (the core temperature, a leak) meets the
+    same instant at t = 0 in settle() and in the first processed sample."""
+    from emulator import thermal
+    from emulator.effects import Block
+    from emulator.transducer import CoreTemperature
+
+    fs = 4400.0
+    assert np.array_equal(Block(0, 3, fs).times, np.array([0.0, 1.0, 2.0]) / fs)
+    assert np.array_equal(Block(10, 2, fs).times, np.array([10.0, 11.0]) / fs)
+    events = thermal.ThermalEvents([], power_on_s=0.0)  # warming from ambient: the temperature moves every step
+    core = CoreTemperature(thermal.ThermalModel(SensorParams(), events, seed=0, noise=False))
+    assert core.process(Block(0, 1, fs), {})["bridge_temperature_C"][0] == core.settle({})["bridge_temperature_C"]
+
+
+@pytest.mark.parametrize("core_C", [25.0, 35.0, 45.0])
+def test_the_bridge_settles_where_it_runs_whatever_the_core_temperature(core_C):
+    """A bridge following the core temperature starts (settle) at the voltage its first processed sample has for the
+    same pressure and temperature: a sensor powered on cold has no start-up transient on PDC or PAC."""
+    from emulator.effects import Block
+    from emulator.transducer import Bridge
+
+    p = SensorParams()
+    for duct, fs in ((False, 8800.0), (True, 88000.0)):  # the duct resonance (18.7 kHz) needs the finer grid
+        bridge = Bridge(p, fs, "prewarped", duct, thermal=True)
+        pressure = 4000.0
+        start = bridge.settle({"fluid_pressure_Pa": pressure, "bridge_temperature_C": core_C})["stage1_input_V"]
+        first = bridge.process(Block(0, 4, fs), {"fluid_pressure_Pa": np.full(4, pressure),
+                                                 "bridge_temperature_C": np.full(4, core_C)})["stage1_input_V"]
+        assert first == pytest.approx(np.full(4, start), rel=1e-12, abs=1e-15)
+        assert start == pytest.approx(p.bridge_offset_at(core_C) + p.bridge_span_at(core_C) * pressure, rel=1e-12)

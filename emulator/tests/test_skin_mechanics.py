@@ -28,8 +28,16 @@ def test_creep_step_response_is_the_exact_exponential():
     after = t >= 0.5 + 1 / fs
     ramp_lp = lambda x: np.maximum(x, 0) - tau * (1 - np.exp(-np.maximum(x, 0) / tau))  # noqa: E731
     lp = 2.0 * fs * (ramp_lp(t - 0.5 + 1 / fs) - ramp_lp(t - 0.5))
-    assert np.allclose(y[after], r * 2.0 + (1 - r) * lp[after], atol=1e-12)
+    assert np.allclose(y[after], r * 2.0 + (1 - r) * lp[after], rtol=0, atol=1e-12)
     assert y[-1] == pytest.approx(2.0, rel=1e-3)  # fully crept
+
+
+def test_a_settled_creep_holds_its_preload_without_creeping():
+    """settle(x0) means loaded since ever: the same constant load then reads x0 at once and stays there (a rig that
+    starts pressed must not creep after t = 0)."""
+    c = Creep([0.05, 1.0], [0.2, 0.15])
+    c.settle(2.0)
+    assert np.array_equal(c.step(np.full(3000, 2.0), 1000.0), np.full(3000, 2.0))
 
 
 def test_creep_is_independent_of_block_size_and_carries_state():

@@ -262,6 +262,7 @@ def test_without_the_adapter_overheads_the_formula_would_run_fast(monkeypatch):
     (1, 1, 0, 0, True),  # mode 3: the host reads MISO one bit early
     (0, 0, 1, 0, True),  # LSB first
     (0, 0, 0, 1, True),  # SS0 active high
+    (0, 0, 0, 4, True),  # SS2 active high: sensor 1's select code 6 drives SS1 and SS2
 ])
 def test_spi_settings_the_sensors_do_not_use_garble_the_traffic(lib, polarity, phase, bitorder, ss_pol, garbled):
     lib, mp = lib
@@ -286,6 +287,22 @@ def test_an_invalid_configuration_is_refused(lib):
 
 
 # --- asynchronous batches start at submit ------------------------------------------------------------------------
+
+
+def test_a_delay_in_cycles_lasts_that_many_periods_of_the_bit_clock(lib):
+    """ch_spi_queue_delay_cycles(n) idles the bus n clock periods: at 1000 kHz, 1000 cycles last 1 ms, as
+    delay_ns(1 000 000) does; at 4000 kHz a quarter of that."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        buf = (C.c_uint8 * 1)()
+        for khz, expected_s in ((1000, 1e-3), (4000, 0.25e-3)):
+            assert lib.c_ch_spi_bitrate(h, khz) == khz
+            lib.c_ch_spi_queue_clear(h)
+            assert lib.c_ch_spi_queue_delay_cycles(h, 1000) == 1000
+            t0 = cb.t
+            lib.c_ch_spi_batch_shift(h, 0, buf)
+            assert cb.t - t0 == pytest.approx(expected_s, abs=2e-6), khz
 
 
 def test_an_async_batch_starts_when_submitted_not_when_collected(lib):

@@ -147,3 +147,26 @@ def test_replies_nobody_asked_for_are_counted_and_dropped():
     port.answer(CMD_STATUS, 7)
     st = drv.wait_for(Status, timeout_s=0.5)
     assert isinstance(st, Status) and st.command_errors == 7
+
+
+def test_to_physical_converts_each_channel_and_leaves_bad_slots_nan():
+    """The published conversions per sensor: PAC (code − 2048) × 0.37 Pa (D Table 4-1), electrodes named E1..E24 by
+    their channel (17..40), and a slot with an error word (status 2) or a parity error (1) reads NaN, not a number."""
+    import numpy as np
+
+    from emulator import conversions as conv
+
+    channels = np.array([0, 1, 3, 17, 35, 40, 0])
+    codes = np.array([[2100, 2048], [900, 905], [2500, 2501], [3000, 3001], [2900, 2901], [2800, 2801], [2000, 1990]],
+                     np.uint16)
+    status = np.zeros_like(codes, np.uint8)
+    status[6, 0], status[3, 1] = 2, 1
+    out = D.to_physical(DataFrame(7, 0b101, channels, codes, status))
+    assert set(out) == {1, 3}
+    first, third = out[1], out[3]
+    assert first["PAC_Pa"][0] == pytest.approx((2100 - 2048) * 0.37) and np.isnan(first["PAC_Pa"][1])
+    assert third["PAC_Pa"] == pytest.approx([0.0, (1990 - 2048) * 0.37])
+    assert set(first["electrodes_ohm"]) == {"E1", "E19", "E24"}
+    assert first["electrodes_ohm"]["E19"] == pytest.approx(conv.impedance_ohm(2900.0))
+    assert np.isnan(third["electrodes_ohm"]["E1"]) and not np.isnan(third["electrodes_ohm"]["E24"])
+    assert first["TDC_C"] == pytest.approx(conv.tdc_to_celsius(2500.0))
