@@ -4,12 +4,14 @@ by argparse with one line naming the flag and exit status 2, before anything run
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from pathlib import Path
 
 from bench.cli.args import (Terminated, any_seed, existing_file, number, one_line_errors, output_file, sigterm_raises,
                             whole)
+from bench.errors import BenchError
 from bench.running.signals import signals_deferred
 
 
@@ -130,8 +132,6 @@ def _is_recording_npz(path: Path) -> bool:
 def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
     """Before the port is opened: an earlier recording at ``out`` or a CSV beside it (which would no longer match
     the NPZ) is refused unless ``force``; a --out that the CSV would overwrite is refused always."""
-    from bench.errors import BenchError
-
     if csv and _csv_beside(out) == out:
         raise BenchError(f"--out {out}: the CSV is written beside the NPZ with the suffix .csv, i.e. over it; "
                          f"give the NPZ's name (e.g. {out.with_suffix('.npz')})")
@@ -153,15 +153,16 @@ def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
                          f"give another --out")
 
 
-def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True) -> list[Path]:
+def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True) -> tuple[list[Path], dict]:
     """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV: channels by name); returns the files
-    written.
+    written and {file: why} for a CSV that could not be (the NPZ holds every sample, so it is placed all the same).
 
     Atomic: every file is written whole under a temporary name first (:func:`bench.atomic.temp_path`), then put in
-    place by :func:`_place_recording` (replacing an earlier recording only with ``force``)."""
+    place by :func:`_place_recording` (replacing an earlier recording only with ``force``).  An NPZ that cannot be
+    written (a full disk) goes to the system's temporary folder instead, and :class:`RecordingNotWritten` says
+    where: a live stream cannot be recorded again."""
     import numpy as np
 
-    from bench.atomic import temp_path
     from emulator.channels import variant
 
     n = len(frames)
@@ -187,28 +188,65 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
                   channels=channels, codes=codes, status=status, layout=np.array(layout),
                   **{k: np.array(v) for k, v in meta.items()})
     out.parent.mkdir(parents=True, exist_ok=True)
-    written = [out] + ([_csv_beside(out)] if csv else [])
     name_of = variant("biotac-sp").channel_name  # every variant's channel indices, E1..E24
+
+    def write_npz(fh):
+        np.savez_compressed(fh, **arrays)
+
+    def write_csv(fh):
+        fh.write((RECORDING_CSV_HEADER + "\n").encode())
+        for f in frames:
+            fh.write("".join(f"{f.seq},{k},{name_of.get(int(ch), ch)},{s},{f.codes[k, j]},{f.status[k, j]}\n"
+                             for k, ch in enumerate(f.channels) for j, s in enumerate(f.sensors)).encode())
+
     temps: dict[Path, Path] = {}
     try:
-        for path in written:
-            temps[path] = temp_path(path)
-        with open(temps[out], "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        if csv:
-            with open(temps[_csv_beside(out)], "w") as fh:
-                fh.write(RECORDING_CSV_HEADER + "\n")
-                for f in frames:
-                    for k, ch in enumerate(f.channels):
-                        for j, s in enumerate(f.sensors):
-                            fh.write(f"{f.seq},{k},{name_of.get(int(ch), ch)},{s},{f.codes[k, j]},"
-                                     f"{f.status[k, j]}\n")
+        temps[out] = _written_temp(out, write_npz)
+    except OSError as e:  # a stream cannot be recorded again: the NPZ goes where there is room, and says so
+        raise RecordingNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
+                                  + _rescue(write_npz)) from None
+    not_written = {}
+    if csv:
+        try:
+            temps[_csv_beside(out)] = _written_temp(_csv_beside(out), write_csv)
+        except OSError as e:  # the NPZ holds every sample: it is placed, and the CSV's absence said
+            not_written[_csv_beside(out)] = e.strerror or str(e)
+    _place_recording(out, temps, _csv_beside(out) in temps, force)  # refused or failed: kept, and named
+    return list(temps), not_written
+
+
+class RecordingNotWritten(BenchError):
+    """The recording's NPZ could not be written at --out (a full disk, say): exit status 1, as a failed run."""
+
+
+def _written_temp(final: Path, write) -> Path:
+    """A temporary file beside ``final`` holding what ``write(fh)`` writes (binary), or, on any error, none."""
+    from bench.atomic import temp_path
+
+    tmp = temp_path(final)
+    try:
+        with open(tmp, "wb") as fh:
+            write(fh)
     except BaseException:
-        for tmp in temps.values():  # unfinished: nothing worth keeping
-            tmp.unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
-    _place_recording(out, temps, csv, force)
-    return written
+    return tmp
+
+
+def _rescue(write) -> str:
+    """Write a recording that could not go where it was asked into the system's temporary folder; the sentence that
+    says where it is (or that it could not be kept)."""
+    import tempfile
+
+    try:
+        fd, path = tempfile.mkstemp(prefix="biotac-recording-", suffix=".npz")
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+    except OSError as e:
+        with contextlib.suppress(OSError, UnboundLocalError):
+            os.unlink(path)
+        return f"nor in {tempfile.gettempdir()} ({e.strerror or e}): the recording is lost"
+    return f"it was saved as {path} instead"
 
 
 def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool) -> None:
@@ -224,7 +262,6 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
     import errno
 
     from bench.atomic import commit, commit_new
-    from bench.errors import BenchError
 
     beside = _csv_beside(out)
     beside_taken = beside.exists() or beside.is_symlink()
@@ -323,11 +360,18 @@ def _cmd_record(a) -> int:
         st = drv.parser.stats
         meta = {"end": end, "requested_s": a.seconds, "recorded_s": recorded_s, "dropped_frames": st.dropped_frames,
                 "crc_errors": st.crc_errors}
-        written = _save_recording(out, frames, meta, a.csv, force=a.force)
+        try:
+            written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force)
+        except RecordingNotWritten as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
     summary = (f"wrote {', '.join(map(str, written))}: {len(frames)} frames ({recorded_s:.2f} s of {a.seconds:g} s "
                f"asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes skipped "
                f"{st.bytes_skipped}")
     print(summary)
+    for path, why in not_written.items():
+        print(f"error: {path} not written ({why}); {out} holds every sample", file=sys.stderr)
+        status = max(status, 1)
     if end != "complete":
         print(f"warning: partial recording: {detail} after {recorded_s:.2f} s of the {a.seconds:g} s asked "
               f"(exit status {status})", file=sys.stderr)

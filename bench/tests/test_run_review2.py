@@ -225,7 +225,7 @@ def test_a_recordings_csv_names_the_channels_and_its_files_replace_symlinks(tmp_
     target.write_text("not to be touched")
     out = tmp_path / "r.npz"
     out.symlink_to(target)
-    written = _save_recording(out, _frames(), {"end": "complete"}, csv=True)
+    written, not_written = _save_recording(out, _frames(), {"end": "complete"}, csv=True)
     assert written == [out, tmp_path / "r.csv"]
     assert target.read_text() == "not to be touched" and not out.is_symlink()
     assert np.load(out)["channels"][0].tolist() == [0, 17, 40]
@@ -316,3 +316,55 @@ def test_record_force_refuses_a_fifo_at_out_or_beside_it_at_once(tmp_path, name)
     r = run_cli("record", "loop://", "--out", tmp_path / "r.npz", "--quiet", "--force", "--csv", timeout=60)
     assert r.returncode == 2 and "Traceback" not in r.stderr and str(tmp_path / name) in r.stderr, r.stderr
     assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+# --- a full disk while a recording is saved: nothing of the stream is lost -------------------------------------------
+@pytest.mark.unit
+def test_a_csv_that_does_not_fit_leaves_the_npz_placed_and_says_so(tmp_path, monkeypatch):
+    """ENOSPC while the CSV is written: the NPZ (every sample) is still put in place, the CSV is named as not
+    written with the reason, and no temporary file is left."""
+    import errno
+
+    from bench.cli import hosts
+
+    original = hosts._written_temp
+
+    def full_for_csv(final, write):
+        if final.suffix == ".csv":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return original(final, write)
+
+    monkeypatch.setattr(hosts, "_written_temp", full_for_csv)
+    written, not_written = hosts._save_recording(tmp_path / "r.npz", _frames(), {"end": "complete"}, csv=True)
+    assert written == [tmp_path / "r.npz"] and not_written == {tmp_path / "r.csv": os.strerror(errno.ENOSPC)}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.npz"]
+
+
+@pytest.mark.unit
+def test_an_npz_that_cannot_be_written_is_saved_in_the_temporary_folder_and_named(tmp_path, monkeypatch):
+    """ENOSPC at --out: the recording goes to the system's temporary folder, the error names that file (a live stream
+    cannot be recorded again), and nothing is left at --out."""
+    import errno
+    import tempfile
+
+    import numpy as np
+
+    from bench.cli import hosts
+
+    out_disk, spare = tmp_path / "full", tmp_path / "spare"
+    spare.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(spare))
+    original = hosts._written_temp
+
+    def full_disk(final, write):
+        if final.parent == out_disk:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return original(final, write)
+
+    monkeypatch.setattr(hosts, "_written_temp", full_disk)
+    with pytest.raises(hosts.RecordingNotWritten) as e:
+        hosts._save_recording(out_disk / "r.npz", _frames(), {"end": "complete"}, csv=True)
+    rescued = list(spare.iterdir())
+    assert len(rescued) == 1 and f"it was saved as {rescued[0]} instead" in str(e.value)
+    assert "No space left on device" in str(e.value) and list(out_disk.iterdir()) == []
+    assert np.load(rescued[0])["codes"].tolist() == [[[10], [20], [30]], [[11], [20], [30]]]
