@@ -2,7 +2,7 @@
 
 Each also inherits the builtin it is a kind of (``ValueError`` for bad input, ``RuntimeError`` for a part that
 failed), so callers that catch builtins keep working; the CLI turns any of them into a one-line message and exit
-status 2, never a traceback.
+status 2 (an error's own ``exit_status`` where it has one), never a traceback.
 """
 
 from __future__ import annotations
@@ -35,3 +35,10 @@ class BuildError(BenchError, RuntimeError):
 
 class FirmwareError(BenchError, RuntimeError):
     """The firmware misbehaved under co-simulation (a failing HAL call, a hang)."""
+
+
+class OutputNotWritten(BenchError, OSError):
+    """A command's results could not be written where asked (a full disk, say), after the work was done: the message
+    says what is missing and where anything saved went.  Exit status 1, as a failed run's."""
+
+    exit_status = 1

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from bench.cli.args import (Terminated, any_seed, existing_file, number, one_line_errors, output_file, sigterm_raises,
                             whole)
-from bench.errors import BenchError
+from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
 
 
@@ -159,7 +159,7 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
 
     Atomic: every file is written whole under a temporary name first (:func:`bench.atomic.temp_path`), then put in
     place by :func:`_place_recording` (replacing an earlier recording only with ``force``).  An NPZ that cannot be
-    written (a full disk) goes to the system's temporary folder instead, and :class:`RecordingNotWritten` says
+    written (a full disk) goes to the system's temporary folder instead, and :class:`~bench.errors.OutputNotWritten` says
     where: a live stream cannot be recorded again."""
     import numpy as np
 
@@ -203,7 +203,7 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
     try:
         temps[out] = _written_temp(out, write_npz)
     except OSError as e:  # a stream cannot be recorded again: the NPZ goes where there is room, and says so
-        raise RecordingNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
+        raise OutputNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
                                   + _rescue(write_npz)) from None
     not_written = {}
     if csv:
@@ -213,10 +213,6 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
             not_written[_csv_beside(out)] = e.strerror or str(e)
     _place_recording(out, temps, _csv_beside(out) in temps, force)  # refused or failed: kept, and named
     return list(temps), not_written
-
-
-class RecordingNotWritten(BenchError):
-    """The recording's NPZ could not be written at --out (a full disk, say): exit status 1, as a failed run."""
 
 
 def _written_temp(final: Path, write) -> Path:
@@ -360,11 +356,7 @@ def _cmd_record(a) -> int:
         st = drv.parser.stats
         meta = {"end": end, "requested_s": a.seconds, "recorded_s": recorded_s, "dropped_frames": st.dropped_frames,
                 "crc_errors": st.crc_errors}
-        try:
-            written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force)
-        except RecordingNotWritten as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 1
+        written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force)
     summary = (f"wrote {', '.join(map(str, written))}: {len(frames)} frames ({recorded_s:.2f} s of {a.seconds:g} s "
                f"asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes skipped "
                f"{st.bytes_skipped}")

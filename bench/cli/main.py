@@ -98,7 +98,7 @@ def main(argv=None) -> int:
         return 2
     except _bad_input_errors() as e:  # evaluated when an exception arrives here, after the command ran
         print(f"error: {e}", file=sys.stderr)
-        return 2
+        return getattr(e, "exit_status", 2)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.errors import OutputNotWritten
 from bench.reporting import exports, store
 from bench.reporting.outdir import OutFolder
 from bench.running.aggregate import IMPACT_WINDOW_S, RunSummary
@@ -275,12 +276,28 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
                 with contextlib.suppress(Exception):
                     store.set_status(folder.path / "samples.h5", record["status"], rec.simulated_s,
                                      record["error"])
-        folder.write_text("record.json", json.dumps(record, indent=2, default=_json_default))
+        try:
+            folder.write_text("record.json", json.dumps(record, indent=2, default=_json_default))
+        except OSError as e:
+            raise _record_not_written(folder, record, rec, e) from None
         return record
     finally:
         folder.remove_temps()
         if own:
             folder.close()
+
+
+def _record_not_written(folder: OutFolder, record: dict, rec: Recording, e: OSError) -> OutputNotWritten:
+    """record.json could not be written (the last file: a full disk, say): the files already in place are marked
+    failed where that still works, and the error says that the folder is incomplete without its record."""
+    _fail(record, f"writing record.json: {e.strerror or e}", "record.json")
+    with contextlib.suppress(Exception):
+        store.set_status(folder.path / "samples.h5", record["status"], rec.simulated_s, record["error"])
+    with contextlib.suppress(Exception):
+        folder.write_text("report.md", markdown_report(record))
+    return OutputNotWritten(f"{folder.path}/record.json could not be written ({e.strerror or e}): the run's other "
+                            f"files there are incomplete without it (status \"failed\" where it could still be "
+                            f"marked); make room and run again with --force")
 
 
 def _fail(record: dict, problem: str, missing: str | None = None) -> None:

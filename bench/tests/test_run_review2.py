@@ -350,6 +350,7 @@ def test_an_npz_that_cannot_be_written_is_saved_in_the_temporary_folder_and_name
     import numpy as np
 
     from bench.cli import hosts
+    from bench.errors import OutputNotWritten
 
     out_disk, spare = tmp_path / "full", tmp_path / "spare"
     spare.mkdir()
@@ -362,9 +363,38 @@ def test_an_npz_that_cannot_be_written_is_saved_in_the_temporary_folder_and_name
         return original(final, write)
 
     monkeypatch.setattr(hosts, "_written_temp", full_disk)
-    with pytest.raises(hosts.RecordingNotWritten) as e:
+    with pytest.raises(OutputNotWritten) as e:
         hosts._save_recording(out_disk / "r.npz", _frames(), {"end": "complete"}, csv=True)
     rescued = list(spare.iterdir())
     assert len(rescued) == 1 and f"it was saved as {rescued[0]} instead" in str(e.value)
     assert "No space left on device" in str(e.value) and list(out_disk.iterdir()) == []
     assert np.load(rescued[0])["codes"].tolist() == [[[10], [20], [30]], [[11], [20], [30]]]
+
+
+@pytest.mark.unit
+def test_a_run_whose_record_cannot_be_written_says_the_folder_is_incomplete(tmp_path, monkeypatch, capsys):
+    """ENOSPC on record.json (the last file written): exit 1 with one line naming record.json and the folder, and
+    report.md and samples.h5, already in place, no longer say "ok"."""
+    import errno
+
+    import h5py
+
+    from bench.cli.main import main
+    from bench.reporting.outdir import OutFolder
+
+    original = OutFolder.write_text
+
+    def full_for_the_record(self, name, text):
+        if name == "record.json":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return original(self, name, text)
+
+    monkeypatch.setattr(OutFolder, "write_text", full_for_the_record)
+    out = tmp_path / "o"
+    assert main(["run", "rest", "--out", str(out), "--no-plots", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert f"error: {out}/record.json could not be written (No space left on device)" in err, err
+    assert "Traceback" not in err and not (out / "record.json").exists()
+    assert "failed" in (out / "report.md").read_text()
+    with h5py.File(out / "samples.h5") as f:
+        assert f.attrs["status"] == "failed"
