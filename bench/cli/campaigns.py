@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -33,6 +34,20 @@ def _names(kind: str):
 
 
 def _cmd_campaign(a) -> int:
+    """The campaign, holding --junit's lock from start to end: two campaigns never write one report."""
+    from bench.reporting.outdir import lock_exclusively
+
+    report = Path(a.junit)
+    report.parent.mkdir(parents=True, exist_ok=True)  # (--junit's check found it can be made)
+    lock = lock_exclusively(report.parent / f".{report.name}.lock", f"--junit {a.junit}",
+                            lambda who: f"{who} is writing this report; wait for it to end or choose another --junit")
+    try:
+        return _run_campaign(a, report)
+    finally:
+        os.close(lock)  # (the empty lock file stays beside the report, as a run folder's does)
+
+
+def _run_campaign(a, report: Path) -> int:
     from bench.campaigns import faults as campaign
     from bench.campaigns.engine import ClusterSpec, signals_held
 
@@ -43,7 +58,7 @@ def _cmd_campaign(a) -> int:
     print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
     try:
         with signals_held():  # a signal meanwhile: the report is finished first, then the stop
-            campaign.write_junit(results, Path(a.junit))
+            campaign.write_junit(results, report)
     except OSError as e:
         print(f"error: --junit {a.junit}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
               f"holds the results", file=sys.stderr)

@@ -100,8 +100,6 @@ class OutFolder:
         fd = _lock(p, where, flag)
         folder = cls(p, fd, flag, kind)
         try:
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
             folder._probe_writable()
             folder._prepare(force, keep)
         except OSError as e:
@@ -214,14 +212,22 @@ class OutFolder:
 
 
 def _lock(folder: Path, where: str, flag: str) -> int:
-    """Take the exclusive, non-blocking ``flock`` on ``folder``'s :data:`LOCK_NAME` (created, never followed if it
-    is a symbolic link); returns its file descriptor, or raises :class:`OutDirError` naming ``where``."""
+    """Take the exclusive, non-blocking ``flock`` on ``folder``'s :data:`LOCK_NAME`; returns its file descriptor,
+    or raises :class:`OutDirError` naming ``where``."""
+    return lock_exclusively(folder / LOCK_NAME, where, lambda who: f"{who} is writing into this folder; wait for "
+                                                                   f"it to end or choose another {flag}")
+
+
+def lock_exclusively(lock_path: Path, where: str, busy) -> int:
+    """Take the exclusive, non-blocking ``flock`` on ``lock_path`` (created, never followed if it is a symbolic
+    link) and write this process's pid into it; returns its file descriptor (closing it releases the lock), or
+    raises :class:`OutDirError` naming ``where`` — ``busy(who)`` says what to do when another process holds it."""
     try:
-        fd = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
     except OSError as e:
         if e.errno == errno.ELOOP:
-            raise OutDirError(f"{where}: {LOCK_NAME} in it is a symbolic link; remove it") from None
-        raise OutDirError(f"{where}: the folder is not writable ({e.strerror or e})") from None
+            raise OutDirError(f"{where}: {lock_path.name} is a symbolic link; remove it") from None
+        raise OutDirError(f"{where}: {lock_path.parent} is not writable ({e.strerror or e})") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
@@ -231,11 +237,13 @@ def _lock(folder: Path, where: str, flag: str) -> int:
             holder = ""
         os.close(fd)
         who = f"another run (pid {holder})" if holder.isdigit() else "another run"
-        raise OutDirError(f"{where}: {who} is writing into this folder; wait for it to end or choose "
-                          f"another {flag}") from None
+        raise OutDirError(f"{where}: {busy(who)}") from None
     except OSError as e:
         os.close(fd)
-        raise OutDirError(f"{where}: cannot lock the folder ({e.strerror or e})") from None
+        raise OutDirError(f"{where}: cannot lock {lock_path} ({e.strerror or e})") from None
+    with contextlib.suppress(OSError):  # the pid only names the holder to a process refused (a full disk: unnamed)
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
     return fd
 
 

@@ -48,6 +48,31 @@ def test_campaign_refuses_a_junit_path_where_no_file_can_be_created_before_runni
     assert list(tmp_path.iterdir()) == []
 
 
+def test_two_campaigns_never_write_one_junit_report(monkeypatch, capsys, tmp_path):
+    """A second campaign naming the --junit report a first one is still running for is refused before it runs (the
+    later one silently replaced the earlier's cases); once the first has ended, the report can be written again."""
+    import os
+
+    from bench.campaigns import faults
+    from bench.reporting.outdir import lock_exclusively
+
+    report = tmp_path / "c.xml"
+    first = lock_exclusively(tmp_path / ".c.xml.lock", "first", lambda who: who)  # a campaign still running
+
+    def ran(*args, **kw):
+        raise AssertionError("the second campaign ran")
+
+    monkeypatch.setattr(faults, "run_campaign", ran)
+    status, out, err = invoke(["campaign", "--faults", "none", "--scenes", "rest", "--junit", str(report)], capsys)
+    assert status == 2 and out == "" and not report.exists()
+    assert f"--junit {report}: another run (pid {os.getpid()}) is writing this report" in err, err
+    os.close(first)
+    monkeypatch.setattr(faults, "run_campaign", lambda *a, **kw: [
+        {"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None, "seconds": 0.1}])
+    status, out, _ = invoke(["campaign", "--faults", "none", "--scenes", "rest", "--junit", str(report)], capsys)
+    assert status == 0 and "<testsuite" in report.read_text()
+
+
 def test_campaign_prints_its_summary_before_the_report_and_keeps_it_when_the_report_fails(monkeypatch, capsys,
                                                                                        tmp_path):
     from bench.campaigns import faults
