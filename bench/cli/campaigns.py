@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -35,16 +34,17 @@ def _names(kind: str):
 
 def _cmd_campaign(a) -> int:
     """The campaign, holding --junit's lock from start to end: two campaigns never write one report."""
-    from bench.reporting.outdir import lock_exclusively
+    from bench.reporting.outdir import lock_exclusively, release_and_remove
 
     report = Path(a.junit)
     report.parent.mkdir(parents=True, exist_ok=True)  # (--junit's check found it can be made)
-    lock = lock_exclusively(report.parent / f".{report.name}.lock", f"--junit {a.junit}",
+    lock_path = report.parent / f".{report.name}.lock"
+    lock = lock_exclusively(lock_path, f"--junit {a.junit}",
                             lambda who: f"{who} is writing this report; wait for it to end or choose another --junit")
     try:
         return _run_campaign(a, report)
     finally:
-        os.close(lock)  # (the empty lock file stays beside the report, as a run folder's does)
+        release_and_remove(lock, lock_path)
 
 
 def _run_campaign(a, report: Path) -> int:

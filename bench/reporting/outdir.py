@@ -241,10 +241,25 @@ def lock_exclusively(lock_path: Path, where: str, busy) -> int:
     except OSError as e:
         os.close(fd)
         raise OutDirError(f"{where}: cannot lock {lock_path} ({e.strerror or e})") from None
+    try:
+        same = os.path.samestat(os.fstat(fd), os.lstat(lock_path))
+    except OSError:
+        same = False
+    if not same:  # its holder removed it (release_and_remove) between our open and our lock: take the new one
+        os.close(fd)
+        return lock_exclusively(lock_path, where, busy)
     with contextlib.suppress(OSError):  # the pid only names the holder to a process refused (a full disk: unnamed)
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
     return fd
+
+
+def release_and_remove(fd: int, lock_path: Path) -> None:
+    """Remove the lock file taken with :func:`lock_exclusively` as ``fd``, then release it (a process that opened
+    the old file meanwhile finds it gone once it holds the lock, and takes a new one)."""
+    with contextlib.suppress(OSError):
+        os.unlink(lock_path)
+    os.close(fd)
 
 
 def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> tuple[list[str], list[str], list[str]]:

@@ -19,6 +19,12 @@ import threading
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+def heeded(signals) -> tuple:
+    """Those of ``signals`` this process is not told to ignore: a command started in the background of a script
+    inherits SIGINT ignored (as Python itself then leaves it), and no guard here may turn it into a stop."""
+    return tuple(s for s in signals if signal.getsignal(s) is not signal.SIG_IGN)
+
+
 class StopRequested(Exception):
     """Raised by :meth:`StopSignals.checkpoint` once a stop signal has arrived while the outputs are written;
     its argument is that signal's name."""
@@ -59,7 +65,7 @@ class StopSignals:
 
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
-            for s in self.signals:
+            for s in heeded(self.signals):
                 self._previous[s] = signal.signal(s, self._handler)
         return self
 
@@ -103,7 +109,7 @@ def signals_deferred():
         seen.append(signum)
 
     try:
-        old = {s: signal.signal(s, note) for s in (signal.SIGINT, signal.SIGTERM)}
+        old = {s: signal.signal(s, note) for s in heeded((signal.SIGINT, signal.SIGTERM))}
     except ValueError:
         yield seen
         return

@@ -71,6 +71,7 @@ def test_two_campaigns_never_write_one_junit_report(monkeypatch, capsys, tmp_pat
         {"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None, "seconds": 0.1}])
     status, out, _ = invoke(["campaign", "--faults", "none", "--scenes", "rest", "--junit", str(report)], capsys)
     assert status == 0 and "<testsuite" in report.read_text()
+    assert [p.name for p in tmp_path.iterdir()] == ["c.xml"]  # the lock file removed as the campaign ended
 
 
 def test_campaign_prints_its_summary_before_the_report_and_keeps_it_when_the_report_fails(monkeypatch, capsys,

@@ -416,6 +416,23 @@ def test_sigint_and_sigterm_mid_run_keep_a_consistent_record(tmp_path):
 
 
 @pytest.mark.stability
+def test_a_run_started_with_sigint_ignored_ignores_it_and_still_stops_on_sigterm(tmp_path):
+    """A command started in the background of a script inherits SIGINT ignored: the run must not turn that SIGINT
+    into a stop (nor swallow the SIGTERM after it): it goes on, and the SIGTERM stops it (exit 143)."""
+    scene = _scene_file(tmp_path, 36000.0, "ign")
+    out = tmp_path / "o"
+    p = _bench("run", scene, "--out", out, "--quiet", preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    _wait_for_streaming(out, p)
+    p.send_signal(signal.SIGINT)
+    time.sleep(1.0)
+    assert p.poll() is None  # still running
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 143 and "Traceback" not in err, err
+    assert check_consistent(out, "interrupted")["interrupted_by"] == "SIGTERM"
+
+
+@pytest.mark.stability
 def test_two_concurrent_runs_into_one_folder_never_mix(tmp_path):
     rounds = 10 if STRESS else 2
     scene = _scene_file(tmp_path, 20.0, "conc")
