@@ -12,7 +12,10 @@ import os
 import stat
 import tempfile
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from typing import BinaryIO
 
 #: suffix of the temporary files
 TEMP_SUFFIX = ".part"

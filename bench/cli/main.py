@@ -1,7 +1,8 @@
 """biotac-bench: run scenes against the emulated BioTac, check the published figures, measure costs.
 
-Each command group lives in its own module with an ``add_commands(sub, fmt)`` function; :data:`COMMAND_GROUPS`
-joins them into one parser, in the order ``--help`` lists them.
+Each command group lives in its own module with an ``add_commands(sub, fmt)`` function; :func:`command_groups`
+joins them into one parser, in the order ``--help`` lists them.  They are imported inside :func:`main` (numpy
+and the emulator take a tenth of a second): a Ctrl-C that early is "interrupted", not a traceback.
 """
 
 from __future__ import annotations
@@ -12,8 +13,6 @@ import select
 import signal
 import sys
 
-from bench.cli import campaigns, cheetah, experiments, hosts, rtl, scenes, textures, units, verification
-from bench.cli.args import HelpFormatter
 
 MAIN_HELP = """\
 An emulated BioTac fingertip — pressure (PDC, PAC), temperature (TDC, TAC) and 19 impedance electrodes at
@@ -32,8 +31,13 @@ Every subcommand has its own --help.  Exit status: 0 done, 1 a check failed, 2 b
 130 / 143 stopped by Ctrl-C / SIGTERM, 141 the reader of the output went away (`biotac-bench params | head`).
 """
 
-#: The command groups, in the order ``--help`` lists them.
-COMMAND_GROUPS = (scenes, units, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
+
+
+def command_groups() -> tuple:
+    """The command groups' modules, in the order ``--help`` lists them."""
+    from bench.cli import campaigns, cheetah, experiments, hosts, rtl, scenes, textures, units, verification
+
+    return (scenes, units, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
 
 #: What a bare value after these commands was probably meant to be (``biotac-bench units 17``)
 BARE_VALUE_HINTS = {"units": "a unit is chosen with --seed N or --serial BT... (biotac-bench units --seed 17)",
@@ -54,10 +58,12 @@ def _version() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from bench.cli.args import HelpFormatter
+
     p = argparse.ArgumentParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=HelpFormatter)
     p.add_argument("--version", action="version", version=f"biotac-bench {_version()}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for group in COMMAND_GROUPS:
+    for group in command_groups():
         group.add_commands(sub, HelpFormatter)
     return p
 

@@ -110,3 +110,24 @@ def test_a_numerical_error_is_still_reported_in_one_line_with_status_2(monkeypat
     monkeypatch.setattr(scenes, "_cmd_profiles", fails)
     assert cli_main.main(["profiles"]) == 2
     assert capsys.readouterr().err == "error: non-finite value nan at PAC (conversion #3)\n"
+
+
+def test_the_console_script_imports_nothing_heavy_before_main_runs():
+    """The `biotac-bench` script imports bench.cli.main, then calls main(): the command modules (numpy, the
+    emulator) load inside main, whose Ctrl-C handling covers them — a Ctrl-C in the first tenth of a second printed
+    a traceback through numpy's import."""
+    code = "import sys, bench.cli.main; print(json.dumps(sorted(m for m in ('numpy', 'emulator', 'bench.cli.args', 'tempfile') if m in sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", "import json; " + code], capture_output=True, text=True, cwd=REPO,
+                         timeout=60)
+    assert json.loads(out.stdout) == [], out.stderr
+
+
+def test_a_ctrl_c_while_the_commands_load_is_one_line(monkeypatch, capsys):
+    from bench.cli import main as cli_main
+
+    def loading():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_main, "command_groups", loading)
+    assert cli_main.main(["scenes"]) == 130
+    assert capsys.readouterr().err == "interrupted\n"
