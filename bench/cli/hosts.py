@@ -293,6 +293,8 @@ def _open_driver(port: str, baud: int):
     except (OSError, ValueError) as e:
         code = getattr(e, "errno", None)
         msg = os.strerror(code) if isinstance(code, int) else str(e)
+        if "exclusively lock" in str(e):
+            msg = "another program has it open (another record or host?); one host at a time"
         raise OSError(f"argument port: cannot open {port}: {msg}") from None
 
 
@@ -309,23 +311,25 @@ def _cmd_record(a) -> int:
     with sigterm_raises():
         try:
             drv = _open_driver(a.port, a.baud)
+            with contextlib.suppress(OSError, AttributeError):  # what an earlier host left unread (not a URL's)
+                drv.serial.reset_input_buffer()
             drv.start()
             if drv.wait_for(CMD_START, timeout_s=5) is None:
                 drv.close()
                 if drv.disconnected:
                     raise OSError(f"{a.port}: the port closed before the bridge answered START")
                 raise OSError(f"{a.port}: no answer to START within 5 s (is the bridge running?)")
+            drv.parser.count_afresh()  # the recording's CRC errors and drops are counted from its START on
             if not a.quiet:
                 print(f"recording {a.seconds:g} s from {a.port}", file=sys.stderr, flush=True)
             with tqdm(total=round(a.seconds, 3), unit="s", disable=a.quiet,
                       bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s") as bar:
-                dropped0 = drv.parser.stats.dropped_frames
                 for f in drv.frames(timeout_s=a.idle_timeout):
                     frames.append(f)
                     dt = len(f.channels) / SLOT_RATE_HZ
                     recorded_s += dt
                     # the stream's span: what arrived plus what was lost on the way (frames of the same length)
-                    span = recorded_s + (drv.parser.stats.dropped_frames - dropped0) * dt
+                    span = recorded_s + drv.parser.stats.dropped_frames * dt
                     bar.update(min(span, a.seconds) - bar.n)
                     if span >= a.seconds - 1e-9:
                         break

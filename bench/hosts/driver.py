@@ -228,6 +228,12 @@ class FrameParser:
     def __post_init__(self):
         self.sequence = SequenceTracker(self.stats)
 
+    def count_afresh(self) -> None:
+        """Start the statistics and the sequence tracking over from here (bytes already buffered are kept): what
+        came before — a stream an earlier host left running, cut off mid-frame — is not this session's."""
+        self.stats = ParserStats()
+        self.sequence = SequenceTracker(self.stats)
+
     def feed(self, data: bytes, now: float | None = None) -> list:
         """Parse ``data`` (arriving at ``now``, monotonic seconds; default: the clock now)."""
         now = time.monotonic() if now is None else now
@@ -334,8 +340,10 @@ class BridgeDriver:
         import serial
 
         if isinstance(port, str):
+            # exclusive: a second host on the same port (two `record`s) is refused at open, rather than each
+            # stealing the other's bytes and blaming the bridge
             self.serial = serial.serial_for_url(port, baudrate=baudrate, timeout=timeout, rtscts=False,
-                                                dsrdtr=False, do_not_open=False)
+                                                dsrdtr=False, do_not_open=False, exclusive=True)
         else:
             self.serial = port
         self.parser = FrameParser()

@@ -194,7 +194,10 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
                 status = "interrupted"
                 break
     except Exception as e:  # keep what was recorded; the caller reports the error
-        error, status = f"{type(e).__name__}: {e}", "failed"
+        if should_stop is not None and should_stop():
+            status = "interrupted"  # a part the same Ctrl-C reached (a first RTL build's compilers) fails as it ends
+        else:
+            error, status = f"{type(e).__name__}: {e}", "failed"
     finally:
         bar.close()
     try:

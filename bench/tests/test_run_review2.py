@@ -398,3 +398,26 @@ def test_a_run_whose_record_cannot_be_written_says_the_folder_is_incomplete(tmp_
     assert "failed" in (out / "report.md").read_text()
     with h5py.File(out / "samples.h5") as f:
         assert f.attrs["status"] == "failed"
+
+
+
+# --- a part the same Ctrl-C reached fails as it ends: the run was interrupted, not failed ---------------------------
+@pytest.mark.unit
+def test_a_build_killed_by_the_same_ctrl_c_is_an_interruption(tmp_path, monkeypatch, capsys):
+    """A first `run --spi rtl` compiles the RTL; Ctrl-C reaches the compilers too, which die, and the build raises.
+    The run is "interrupted" (exit 130, one line), not "failed" with the compilers' dying words."""
+    from bench.cli.main import main
+    from bench.errors import BuildError
+    from bench.running import runner
+
+    def build_dies_of_the_ctrl_c(scene, sensor):
+        os.kill(os.getpid(), signal.SIGINT)  # the terminal's Ctrl-C, to the whole process group
+        raise BuildError("RTL harness does not compile:\n%Error: Verilator threw signal 2\nmake: *** Interrupt")
+
+    monkeypatch.setattr(runner, "peripheral_for", build_dies_of_the_ctrl_c)
+    out = tmp_path / "o"
+    assert main(["run", "rest", "--out", str(out), "--quiet", "--no-plots"]) == 130
+    err = capsys.readouterr().err
+    assert "Verilator" not in err and "interrupted by SIGINT at 0.000 s" in err, err
+    record = check_consistent(out, "interrupted")
+    assert record["error"] is None

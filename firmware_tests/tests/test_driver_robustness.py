@@ -170,3 +170,40 @@ def test_to_physical_converts_each_channel_and_leaves_bad_slots_nan():
     assert first["electrodes_ohm"]["E19"] == pytest.approx(conv.impedance_ohm(2900.0))
     assert np.isnan(third["electrodes_ohm"]["E1"]) and not np.isnan(third["electrodes_ohm"]["E24"])
     assert first["TDC_C"] == pytest.approx(conv.tdc_to_celsius(2500.0))
+
+
+def test_counting_afresh_forgets_what_an_earlier_host_left_in_the_stream():
+    """`record` after a host that was killed mid-stream: the tail of an old frame and the frames the bridge lost while
+    nobody read are the earlier session's; counted afresh from the new START, a contiguous recording shows no CRC
+    error, no skipped byte and no drop."""
+    p = FrameParser()
+    stale = data_frame(10)
+    p.feed(stale[7:], now=0.0)  # cut off mid-frame
+    feed(p, [11, 12], t0=0.01)
+    assert p.stats.bytes_skipped > 0
+    half = data_frame(120)
+    p.feed(half[:9], now=0.1)  # bytes already buffered when the count starts over are kept
+    p.count_afresh()
+    got = [f.seq for f in p.feed(half[9:], now=0.11) if isinstance(f, DataFrame)] + feed(p, range(121, 130), t0=0.12)
+    assert got == list(range(120, 130))
+    assert (p.stats.crc_errors, p.stats.bytes_skipped, p.stats.dropped_frames, p.stats.frames) == (0, 0, 0, 10)
+
+
+def test_a_second_host_on_one_port_is_refused_at_open_naming_why():
+    """Two `record`s on one port each stole the other's bytes and blamed the bridge ("no answer to START"); the
+    driver opens a port exclusively, so the second is refused at once."""
+    import os
+    import pty
+
+    from bench.cli.hosts import _open_driver
+
+    master, slave = pty.openpty()
+    name = os.ttyname(slave)
+    first = _open_driver(name, 3_000_000)
+    try:
+        with pytest.raises(OSError, match="another program has it open"):
+            _open_driver(name, 3_000_000)
+    finally:
+        first.close()
+        os.close(master)
+        os.close(slave)
