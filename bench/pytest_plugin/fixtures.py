@@ -171,6 +171,17 @@ def _check_keywords(fixture: str, given: dict, allowed) -> None:
         _fail(f"{fixture}(): unknown keyword(s) {', '.join(unknown)}; it takes {', '.join(sorted(allowed))}")
 
 
+def _check_values(fixture: str, n_sensors=None, stimuli=None) -> None:
+    """Fail the test if ``n_sensors`` is not a whole number 1..5 or ``stimuli`` not a list of stimuli."""
+    __tracebackhide__ = True
+    if n_sensors is not None and (isinstance(n_sensors, bool) or not isinstance(n_sensors, int)
+                                  or not 1 <= n_sensors <= 5):
+        _fail(f"{fixture}(): n_sensors = {n_sensors!r}: a whole number from 1 to 5")
+    if stimuli is not None and not isinstance(stimuli, (list, tuple)):
+        _fail(f"{fixture}(): stimuli = {stimuli!r}: give a list of stimuli (emulator.stimuli), e.g. "
+              f"stimuli=[Tap(0.5, 1.0)]")
+
+
 def _refuse_beside(fixture: str, what: str, given: dict, refused) -> None:
     """Fail the test if any of ``refused`` was given beside ``what`` (scene or sensors), which already says it."""
     __tracebackhide__ = True
@@ -193,6 +204,7 @@ def biotac_sensor():
     def make(stimuli=None, channels=None, seed=None, unit=None, **kw):  # the first four by position too
         __tracebackhide__ = True
         _check_keywords("biotac_sensor", kw, allowed)
+        _check_values("biotac_sensor", stimuli=stimuli)
         kw.update(_given(stimuli=stimuli, channels=channels, seed=seed, unit=unit))
         scene = kw.pop("scene", None)
         try:
@@ -203,7 +215,7 @@ def biotac_sensor():
 
             scene = load_scene_like(scene)
             return SensorPort(sensors_from_scene(scene, scene.n_sensors, seed=kw.get("seed"))[1])
-        except (SceneError, ValueError) as e:
+        except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"biotac_sensor(): {e}")
 
     return make
@@ -218,19 +230,25 @@ def _benches(fixture: str, bench_class, scene_kw):
     own = set(inspect.signature(bench_class).parameters) - {"n_sensors", "stimuli", "seed", "sensors", "variant"}
     allowed = {"n_sensors", "stimuli", "seed", "sensors", "scene", *SENSOR_DESCRIPTION, *own}
     started = []
+    ended = []
 
     def make(n_sensors: int | None = None, stimuli=None, units=None, **kw):  # the first three by position too
         __tracebackhide__ = True
+        if ended:  # a bench started now would outlive every teardown
+            raise RuntimeError(f"{fixture}(): called after the test it was given to had ended; a factory fixture "
+                               f"serves its own test only")
         _check_keywords(fixture, kw, allowed)
+        _check_values(fixture, n_sensors, stimuli)
         kw.update(_given(stimuli=stimuli, units=units))
         try:
             bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
-        except (SceneError, ValueError) as e:
+        except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"{fixture}(): {e}")
         started.append(bench.start())
         return bench
 
     yield make
+    ended.append(True)
     for bench in started:
         bench.stop()
 

@@ -150,6 +150,27 @@ def test_too_few_for_the_scene(biotac_bridge):
 
 def test_typo(biotac_bridge):
     biotac_bridge(1, realtme=True)
+
+def test_n_sensors_as_a_word(biotac_bridge):
+    biotac_bridge(n_sensors="three")
+
+def test_too_many_sensors(biotac_cheetah):
+    biotac_cheetah(n_sensors=9)
+
+def test_one_stimulus_not_in_a_list(biotac_sensor):
+    from emulator.stimuli import Tap
+    biotac_sensor(stimuli=Tap(0.5, 1.0))
+
+def test_a_stimulus_by_name(biotac_bridge):
+    biotac_bridge(stimuli=["tap"])
+
+kept = []
+
+def test_keeps_the_factory(biotac_bridge):
+    kept.append(biotac_bridge)
+
+def test_uses_it_later():
+    kept[0](1)
 '''
 
 
@@ -158,7 +179,7 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
     bad.write_text('[scene]\nname = "bad"\nduration_s = 1.0\n[host]\nsequence = ["PAC", "QQQ"]\n')
     pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene))
     result = pytester.runpytest("-p", "no:cacheprovider")
-    result.assert_outcomes(failed=6)
+    result.assert_outcomes(failed=11, passed=1)
     out = result.stdout.str()
     result.stdout.fnmatch_lines([
         "*biotac_bridge(): variant given with sensors, which already describes the sensors*",
@@ -167,5 +188,10 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
         "*biotac_sensor(): unit given with scene*",
         "*the scene describes 2 sensors*not 1*",
         "*biotac_bridge(): unknown keyword(s) realtme; it takes*realtime*",
+        "*biotac_bridge(): n_sensors = 'three': a whole number from 1 to 5*",
+        "*biotac_cheetah(): n_sensors = 9: a whole number from 1 to 5*",
+        "*biotac_sensor(): stimuli = Tap(*): give a list of stimuli*",
+        "*biotac_bridge(): not a stimulus: 'tap'*",
+        "*biotac_bridge(): called after the test it was given to had ended*",
     ])
     assert "Traceback" not in out and "fixtures.py" not in out and "scene.py:" not in out, out
