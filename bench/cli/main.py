@@ -27,8 +27,9 @@ typical session:
   biotac-bench noise-budget           # where the 1.4 bits of PAC noise come from
   biotac-bench benchmark              # what each fidelity profile costs and how wrong it is
 
-Every subcommand has its own --help.  Exit status: 0 done, 1 a check failed, 2 bad input (one line on stderr),
-130 / 143 stopped by Ctrl-C / SIGTERM, 141 the reader of the output went away (`biotac-bench params | head`).
+Every subcommand has its own --help.  Exit status: 0 done, 1 a check failed (or results could not be written),
+2 bad input (one line on stderr), 130 / 143 stopped by Ctrl-C / SIGTERM (the servers, bridge and cheetah serve,
+whose normal end that is: 0), 141 the reader of the output went away (`biotac-bench params | head`).
 """
 
 
