@@ -3,15 +3,13 @@ the end either unless --force: the recording is refused in one line naming the p
 its temporary name beside --out, which the error names, so nothing is lost.  The placement replaces nothing by
 construction (bench.atomic.commit_new: hard links, all or none), not by a check before a rename."""
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
 from bench.atomic import TEMP_SUFFIX, commit_new
 from bench.cli import hosts
 from bench.cli.main import main
-from bench.hosts.driver import SLOT_RATE_HZ, DataFrame, ParserStats
+from bench.hosts.driver import SLOT_RATE_HZ, DataFrame, FrameParser
 
 pytestmark = pytest.mark.unit
 FRAMES = 20
@@ -24,7 +22,7 @@ class _Bridge:
 
     def __init__(self, meanwhile):
         self.meanwhile, self.disconnected = meanwhile, False
-        self.parser = SimpleNamespace(stats=ParserStats())
+        self.parser = FrameParser()
 
     def start(self):
         pass
