@@ -42,7 +42,9 @@ def test_impact_detection_report_for_the_sphere_scene(tmp_path):
     spheres = rec["impact_detection"]["spheres"]
     assert spheres["1 mm steel bearing"]["detected"] == 2
     assert spheres["0.25 mm solder ball"]["detected"] == 0
-    assert "| 1 mm steel bearing |" in (tmp_path / "report.md").read_text()
+    assert [(d["drops"], d["detection_rate"]) for d in spheres.values()] == [(2, 1.0), (2, 0.0)]
+    report = (tmp_path / "report.md").read_text()
+    assert "| 1 mm steel bearing |" in report and "| 100 % |" in report
 
 
 def test_a_run_that_fails_part_way_keeps_what_it_recorded(tmp_path, monkeypatch):

@@ -235,3 +235,17 @@ def test_windows_without_data_are_errors():
     flat = make_trial(None, bg_sigma=0.0)
     with pytest.raises(tp.RecordingError, match="constant"):
         tp.fineness(flat)
+
+
+def test_the_touchdown_transient_stays_out_of_the_background():
+    """D measures the background during the hold, after contact: a 30 ms ring at touchdown (6 cycles of 200 Hz,
+    zero mean) leaves the background power exactly as without it — the 50 ms guard covers the ring plus the FIR's
+    15 ms half-length — and the sliding power too."""
+    quiet = make_trial(bg_sigma=1.0, seed=4)
+    n = int(round(0.03 * FS))
+    ring_at = np.searchsorted(quiet.pac_t, CONTACT)
+    pac = quiet.pac.copy()
+    pac[ring_at:ring_at + n] += 40.0 * np.sin(2 * np.pi * 200.0 * np.arange(n) / FS)
+    rung = tp.TrialRecording(pac_t=quiet.pac_t, pac=pac, pdc_t=quiet.pdc_t, pdc=quiet.pdc, current_t=quiet.current_t,
+                             current_A=quiet.current_A, contact_s=CONTACT, slide_start_s=START, slide_end_s=END)
+    assert tp.band_powers(rung) == pytest.approx(tp.band_powers(quiet), rel=1e-9)

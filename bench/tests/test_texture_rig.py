@@ -167,3 +167,23 @@ def test_the_patch_radius_table_covers_the_load_of_the_rigs_heaviest_movement(mo
     radii = contacts[-1]._contacts[0]["radii"]
     a_1N = SensorParams().contact_radius_at_1N_m
     assert radii.max() >= a_1N * np.cbrt(1.5 * trial.true_normal_N) and trial.true_normal_N > 1.8
+
+
+def test_a_trial_wears_the_skin_by_the_distance_it_slid():
+    """The skin's record grows by the rig's sliding distance (5 cm), one trial, and µk·N·d of frictional work; the
+    ridges lose what the wear law gives a fresh skin for that force, distance, patch and speed."""
+    from emulator.skin import contact_patch_area_m2
+
+    rig = TextureRig()
+    m = Movement(1.26, 0.063)
+    trial = rig.run_trial(SAND, m, seed=3)
+    before, after = trial.skin_before, trial.skin_after
+    d = rig.settings.distance_m
+    assert after["sliding_distance_m"] - before["sliding_distance_m"] == pytest.approx(d, rel=1e-12)
+    assert after["trials"] - before["trials"] == 1
+    assert after["frictional_work_J"] - before["frictional_work_J"] == pytest.approx(
+        float(SAND.mu_kinetic) * m.force_N * d, rel=1e-12)
+    area = contact_patch_area_m2(m.force_N, rig.params.contact_radius_at_1N_m)
+    expected = Skin().height_lost(m.force_N, d, area, m.velocity_m_per_s)
+    assert before["ridge_height_m"] - after["ridge_height_m"] == pytest.approx(expected, rel=1e-9)
+    assert expected > 0

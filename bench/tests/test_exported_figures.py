@@ -1,0 +1,139 @@
+"""What a run hands its user, checked against independent figures (from a mutation hunt in the exports, the report,
+the slide recorder and the scene parser, where a wrong baseline, unit or window passed every earlier test):
+codes.npz's force column, the report's sliding table, a slide's properties recomputed from the exported codes, the
+recorder keeping only good samples, the HDF5 rate attribute, the resting σ without a quiet lead-in, and the scene's
+pressure calibrator in kPa and slides that overrun the scene."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bench.reporting.report import write_outputs
+from bench.running.runner import run_scene
+from bench.scenes.scene import SceneError, load_scene, parse_scene
+from bench.paths import SCENES_DIR
+
+pytestmark = pytest.mark.unit
+
+
+@pytest.fixture(scope="module")
+def press_run(tmp_path_factory):
+    """press_hold (1.5 N from 1.0 s, ramp 0.5 s, held 2 s), its codes.npz exported."""
+    out = tmp_path_factory.mktemp("press")
+    record = write_outputs(run_scene(load_scene(SCENES_DIR / "press_hold.toml"), progress=False), out, plots=False,
+                           npz=True)
+    return record, np.load(out / "codes.npz")
+
+
+def test_the_force_column_reads_zero_at_rest_and_the_press_while_pressed(press_run):
+    """codes.npz's PDC_force_N is PDC's rise over PDC's own resting code × D's 0.0115 N/bit: ~0 N before the press
+    (± 0.02 N), the pressed 1.5 N during the hold (± 15 %: D's linear range, R² ≈ 0.995), and the same offset as
+    PDC_kPa's (their ratio is that of the two published scales, sample by sample)."""
+    from emulator.conversions import FORCE_N_PER_PDC_BIT, PDC_KPA_PER_BIT
+
+    _, d = press_run
+    t, force, kpa = d["PDC_t"], d["PDC_force_N"], d["PDC_kPa"]
+    assert abs(np.median(force[t < 0.9])) < 0.02
+    assert np.median(force[(t > 1.7) & (t < 3.4)]) == pytest.approx(1.5, rel=0.15)
+    moved = np.abs(kpa) > 1e-9
+    assert np.allclose(force[moved] / kpa[moved], FORCE_N_PER_PDC_BIT / PDC_KPA_PER_BIT, rtol=1e-9)
+
+
+def test_the_hdf5_rate_attribute_is_each_channels_sample_rate(press_run, tmp_path):
+    """samples.h5's per-channel rate_Hz is what the samples' spacing says (PAC 2200 Hz, the others 100 Hz in the
+    default frame): MATLAB and pandas readers take it as the sampling rate."""
+    import h5py
+
+    out = tmp_path / "o"
+    sc = parse_scene({"scene": {"name": "r", "duration_s": 1.0}})
+    write_outputs(run_scene(sc, progress=False), out, plots=False)
+    with h5py.File(out / "samples.h5") as f:
+        for name in ("PAC", "PDC", "TDC", "E7"):
+            t = f[name]["t"][:]
+            assert f[name].attrs["rate_Hz"] == pytest.approx(1.0 / np.median(np.diff(t)), rel=1e-6), name
+        assert f["PAC"].attrs["rate_Hz"] == pytest.approx(2200.0) and f["PDC"].attrs["rate_Hz"] == pytest.approx(100.0)
+
+
+@pytest.fixture(scope="module")
+def slip_run(tmp_path_factory):
+    """slip_onset (3 mm grating, 1 N, 20 mm/s), with its report and codes.npz."""
+    out = tmp_path_factory.mktemp("slip")
+    scene = load_scene(SCENES_DIR / "slip_onset.toml")
+    record = write_outputs(run_scene(scene, progress=False), out, plots=False, npz=True)
+    return scene, record, out
+
+
+def test_the_report_prints_the_slides_velocity_in_cm_per_s(slip_run):
+    _, _, out = slip_run
+    row = next(line for line in (out / "report.md").read_text().splitlines() if line.startswith("| 0 |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[2:4] == ["1", "2"], row  # 1 N, 20 mm/s = 2 cm/s under "velocity (cm/s)"
+
+
+def test_a_slides_roughness_and_fineness_are_those_of_its_exported_codes(slip_run):
+    """Recomputed from codes.npz alone — the good PAC and PDC samples from 0.1 s before the slide to its end, contact
+    at start + approach (D's background is measured after contact, before sliding) — roughness and fineness equal
+    the run's row (the stage current matters only to traction)."""
+    from bench.textures.properties import TrialRecording, properties
+
+    scene, record, out = slip_run
+    s = scene.stimuli[0]
+    d = np.load(out / "codes.npz")
+    take = {}
+    for ch in ("PAC", "PDC"):
+        t, code, status = d[f"{ch}_t"], d[f"{ch}_code"], d[f"{ch}_status"]
+        sel = (t >= s.start_s - 0.1) & (t <= s.end_s) & (status == 0)
+        take[ch] = (t[sel], code[sel])
+    rec = TrialRecording(*take["PAC"], *take["PDC"], take["PAC"][0], np.zeros(take["PAC"][0].size),
+                         s.start_s + s.approach_s, s.slide_start_s, s.slide_end_s)
+    row = record["sliding"]["trials"][0]
+    again = properties(rec)
+    assert again["roughness"] == pytest.approx(row["roughness"], rel=1e-9, abs=1e-12)
+    assert again["fineness"] == pytest.approx(row["fineness"], rel=1e-9, abs=1e-12)
+
+
+def test_the_slide_recorder_keeps_only_good_samples(slip_run):
+    """An error word or a parity failure (status ≠ 0) inside a slide's window is not a PAC sample of the slide."""
+    from bench.running.slides import SlideRecorder
+
+    scene, _, _ = slip_run
+    s = scene.stimuli[0]
+    recorder = SlideRecorder(scene)
+    t = np.linspace(s.start_s, s.end_s, 5)
+    recorder.add({"PAC": (t, np.array([2048, 4095, 2050, 0, 2049]), np.array([0, 2, 0, 1, 0], np.uint8)),
+                  "PDC": (t, np.full(5, 800), np.zeros(5, np.uint8))})
+    kept_t, kept_code = recorder._parts[0]["PAC"][0]
+    assert kept_code.tolist() == [2048, 2050, 2049] and kept_t.tolist() == t[[0, 2, 4]].tolist()
+
+
+def test_the_resting_sigma_is_the_noise_without_a_quiet_lead_in():
+    """A drop at 30 ms leaves no quiet lead-in: PAC's resting σ then comes from the robust spread of the whole
+    record (1.4826 × MAD, a normal's σ), and still reads D's 1.4 ± 0.15 bits, as with a second of rest before."""
+    from bench.reporting.report import resting_stats
+
+    def sigma(at_s):
+        sc = parse_scene({"scene": {"name": "s", "duration_s": 2.0, "seed": 5},
+                          "stimulus": [{"kind": "sphere_drop", "sphere": "1 mm steel bearing", "at_s": [at_s]}]})
+        return resting_stats(run_scene(sc, progress=False), "PAC")[1]
+
+    early, late = sigma(0.03), sigma(1.5)
+    assert early == pytest.approx(1.4, abs=0.15) and early == pytest.approx(late, rel=0.1)
+
+
+def test_the_pressure_calibrators_offset_is_in_kpa():
+    """offset_kPa = 1 is 1000 Pa in the stimulus (read as Pa it was a thousandth of the asked step)."""
+    sc = parse_scene({"scene": {"name": "p", "duration_s": 2.0},
+                      "stimulus": [{"kind": "pressure", "start_s": 0.5, "duration_s": 1.0, "offset_kPa": 1.0}]})
+    assert sc.stimuli[0].offset_Pa == pytest.approx(1000.0)
+
+
+def test_a_slide_that_ends_after_the_scene_by_its_acceleration_is_refused():
+    """A slide lasts approach + hold + distance/velocity + the stage's acceleration + lift: a scene shorter by only
+    the acceleration is refused (its slide would be dropped from the results, silently)."""
+    slide = {"kind": "slide", "start_s": 0.2, "texture": "3 mm grating", "force_N": 1.0, "velocity_mm_per_s": 20,
+             "distance_mm": 20, "approach_s": 0.03, "hold_s": 0.2, "accel_s": 0.2}
+    end = parse_scene({"scene": {"name": "long", "duration_s": 30.0}, "stimulus": [slide]}).stimuli[0].end_s
+    parse_scene({"scene": {"name": "ok", "duration_s": end + 1e-3}, "stimulus": [slide]})
+    with pytest.raises(SceneError, match="after the end of the scene"):
+        parse_scene({"scene": {"name": "short", "duration_s": end - 0.1}, "stimulus": [slide]})
