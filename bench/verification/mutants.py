@@ -1194,6 +1194,14 @@ CATALOGUE += [
            "self.skin.wear(movement.force_N, s.distance_m,", "self.skin.wear(movement.force_N, 0.5 * s.distance_m,",
            ("bench/tests/test_texture_rig.py::test_a_trial_wears_the_skin_by_the_distance_it_slid",),
            "the rig wears the skin for half the distance it slid"),
+    Mutant("line-corruption-shadowed-by-drops", "faults", "bench/hosts/bridge.py",
+           "if r < self.drop_rate + self.corrupt_rate:", "if r < self.corrupt_rate:",
+           ("firmware_tests/tests/test_faults.py::test_the_lines_corruption_and_drop_rates_are_each_their_own",),
+           "with both line faults set, bytes are corrupted at corrupt_rate less drop_rate"),
+    Mutant("fluid-damping-grows-with-the-layer", "mechanics", "emulator/mechanics.py",
+           "damping = p.fluid_viscosity_Pa_s * p.skin_load_area_m2 / h", "damping = p.fluid_viscosity_Pa_s * p.skin_load_area_m2 * h",
+           ("emulator/tests/test_skin_mechanics.py::test_the_fluid_layer_thins_as_the_finger_empties_and_shears_harder",),
+           "the fluid layer's damping grows with its thickness (Couette shear falls with it)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -207,3 +207,18 @@ def test_bad_sphere_drop_is_refused_with_the_field_named():
         SphereDrop(0.0, 1e-6, height_m=0.0)
     with pytest.raises(ValueError, match="SphereDrop.restitution"):
         SphereDrop(0.0, 1e-6, restitution=1.5)
+
+
+def test_the_fluid_layer_thins_as_the_finger_empties_and_shears_harder():
+    """Derived: the layer under the loaded skin is V / A_wet thick; its moving mass grows with it and its Couette
+    damping μ·A/h falls with it — half the fluid, twice the damping, half the mass (at the nominal inflation the
+    resonance's 20 ms decay anchors them, so only other inflations show a wrong law)."""
+    from emulator.mechanics import FLUID_LAYER_MASS_SHARE, _fluid_mass_and_damping
+
+    p = SensorParams()
+    m_full, c_full, h_full = _fluid_mass_and_damping(p, 0.5)
+    m_half, c_half, h_half = _fluid_mass_and_damping(p, 0.25)
+    assert h_full == pytest.approx(0.5e-6 / p.fluid_wetted_area_m2, rel=1e-12) and h_half == pytest.approx(h_full / 2)
+    assert c_full == pytest.approx(p.fluid_viscosity_Pa_s * p.skin_load_area_m2 / h_full, rel=1e-12)
+    assert c_half / c_full == pytest.approx(2.0, rel=1e-12) and m_half / m_full == pytest.approx(0.5, rel=1e-12)
+    assert m_full == pytest.approx(FLUID_LAYER_MASS_SHARE * p.fluid_density_kg_per_m3 * p.skin_load_area_m2 * h_full)
