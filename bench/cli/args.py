@@ -248,11 +248,13 @@ def sigterm_like_ctrl_c(command):
 def replaceable_report(marker: bytes, what: str):
     """argparse type: an :func:`output_file` that, if a file is already there, holds ``marker`` in its first 4 KB
     (a report this command wrote, which it replaces as CI tools expect); any other file is refused, never
-    overwritten."""
+    overwritten (a symbolic link there is replaced by the report, its target never touched)."""
 
     def parse(text: str) -> str:
         text = output_file(text)
         p = Path(text)
+        if p.is_symlink():  # the report replaces the link itself (written aside, renamed): its target is untouched
+            return text
         if p.exists():
             try:
                 fh = open_regular(p)

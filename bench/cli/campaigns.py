@@ -40,7 +40,8 @@ def _cmd_campaign(a) -> int:
     report.parent.mkdir(parents=True, exist_ok=True)  # (--junit's check found it can be made)
     lock_path = report.parent / f".{report.name}.lock"
     lock = lock_exclusively(lock_path, f"--junit {a.junit}",
-                            lambda who: f"{who} is writing this report; wait for it to end or choose another --junit")
+                            lambda who: f"{who} is writing this report; wait for it to end or choose another --junit",
+                            holder_is="another campaign")
     try:
         return _run_campaign(a, report)
     finally:
@@ -62,7 +63,7 @@ def _run_campaign(a, report: Path) -> int:
     except OSError as e:
         print(f"error: --junit {a.junit}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
               f"holds the results", file=sys.stderr)
-        return 2
+        return 1  # the work was done, its report not written (as a run whose record.json could not be)
     print(f"JUnit XML: {a.junit}")
     return 0 if all(r["passed"] for r in results) else 1
 
@@ -80,9 +81,10 @@ driver (one case: about 150 frames), and checks that the firmware and driver rea
 and writes JUnit XML (each case's wall time as its time).  Each case is an independent task on Dask (a LocalCluster
 on this machine's cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the verdicts are the
 same for any number of workers.  An --junit path where no file can be created is refused before anything runs;
-the summary is printed before the report is written.  Exit status 1 if any case fails, 2 for bad arguments, no
-scheduler at the address or a report that could not be written after all; Ctrl-C stops the campaign (exit 130;
-SIGTERM: 143) and writes no report.
+the summary is printed before the report is written; a second campaign naming a report a first one is still
+running for is refused (a lock file beside the report, removed at the end).  Exit status 1 if any case fails or
+the report could not be written after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the
+campaign (exit 130; SIGTERM: 143) and writes no report.
 
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}

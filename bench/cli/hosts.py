@@ -187,7 +187,6 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
     arrays = dict(seq=np.array([f.seq for f in frames]), mask=np.array([f.sensor_mask for f in frames]),
                   channels=channels, codes=codes, status=status, layout=np.array(layout),
                   **{k: np.array(v) for k, v in meta.items()})
-    out.parent.mkdir(parents=True, exist_ok=True)
     name_of = variant("biotac-sp").channel_name  # every variant's channel indices, E1..E24
 
     def write_npz(fh):
@@ -201,6 +200,7 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
 
     temps: dict[Path, Path] = {}
     try:
+        out.parent.mkdir(parents=True, exist_ok=True)  # (a full disk may refuse even the folder)
         temps[out] = _written_temp(out, write_npz)
     except OSError as e:  # a stream cannot be recorded again: the NPZ goes where there is room, and says so
         raise OutputNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
@@ -234,8 +234,11 @@ def _rescue(write) -> str:
     says where it is (or that it could not be kept)."""
     import tempfile
 
+    from bench.atomic import umask
+
     try:
         fd, path = tempfile.mkstemp(prefix="biotac-recording-", suffix=".npz")
+        os.fchmod(fd, 0o666 & ~umask())  # as the file at --out would have been (mkstemp makes 0600)
         with os.fdopen(fd, "wb") as fh:
             write(fh)
     except OSError as e:
@@ -360,10 +363,17 @@ def _cmd_record(a) -> int:
         st = drv.parser.stats
         meta = {"end": end, "requested_s": a.seconds, "recorded_s": recorded_s, "dropped_frames": st.dropped_frames,
                 "crc_errors": st.crc_errors}
-        written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force)
-    summary = (f"wrote {', '.join(map(str, written))}: {len(frames)} frames ({recorded_s:.2f} s of {a.seconds:g} s "
-               f"asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes skipped "
-               f"{st.bytes_skipped}")
+        written, not_written, lost = [], {}, None
+        try:
+            written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force)
+        except OutputNotWritten as e:  # its message says where the NPZ went instead (or that it is lost)
+            lost = e
+    if lost:
+        print(f"error: {lost}", file=sys.stderr)
+        status = max(status, 1)  # (a recording a signal ended keeps 130 / 143)
+    summary = (f"wrote {', '.join(map(str, written)) or 'nothing at --out'}: {len(frames)} frames ({recorded_s:.2f} "
+               f"s of {a.seconds:g} s asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes "
+               f"skipped {st.bytes_skipped}")
     print(summary)
     for path, why in not_written.items():
         print(f"error: {path} not written ({why}); {out} holds every sample", file=sys.stderr)
@@ -417,10 +427,14 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "replaces it and removes its CSV if this recording writes none (a CSV there that is not a "
                     "recording's is refused even with --force). Without --force, a file that appears there "
                     "during the recording is not replaced either: the recording is then kept under its temporary "
-                    "name beside --out (.NAME.<random>.part, which the error gives; rename it to use it). Exit "
-                    "status: 0 complete; 1 the stream stopped, the bridge went away or the port failed before "
-                    "--seconds (a warning says so); 130 Ctrl-C; 143 SIGTERM; 2 bad arguments, nothing received, "
-                    "or --out taken during the recording.\n\n"
+                    "name beside --out (.NAME.<random>.part, which the error gives; rename it to use it). A full "
+                    "disk loses nothing received: a CSV that does not fit is named and the NPZ placed; an NPZ that "
+                    "cannot be written goes to the system's temporary folder, which the error names. The port is "
+                    "opened exclusively (another record, or any program locking it, is refused; CRC errors and "
+                    "drops count from this recording's START). Exit status: 0 complete; 1 the stream stopped, the "
+                    "bridge went away or the port failed before --seconds (a warning says so), or a file could "
+                    "not be written; 130 Ctrl-C; 143 SIGTERM; 2 bad arguments, nothing received, or --out taken "
+                    "during the recording.\n\n"
                     "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
                     "the set of sensors changes during the recording, codes[frame, slot, sensor - 1] with status "
                     "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt))

@@ -174,9 +174,17 @@ def _check_keywords(fixture: str, given: dict, allowed) -> None:
 def _check_values(fixture: str, n_sensors=None, stimuli=None) -> None:
     """Fail the test if ``n_sensors`` is not a whole number 1..5 or ``stimuli`` not a list of stimuli."""
     __tracebackhide__ = True
-    if n_sensors is not None and (isinstance(n_sensors, bool) or not isinstance(n_sensors, int)
-                                  or not 1 <= n_sensors <= 5):
-        _fail(f"{fixture}(): n_sensors = {n_sensors!r}: a whole number from 1 to 5")
+    import operator
+
+    from bench.scenes.limits import MAX_SENSORS
+
+    if n_sensors is not None:
+        try:
+            whole = None if isinstance(n_sensors, bool) else operator.index(n_sensors)  # numpy integers too
+        except TypeError:
+            whole = None
+        if whole is None or not 1 <= whole <= MAX_SENSORS:
+            _fail(f"{fixture}(): n_sensors = {n_sensors!r}: a whole number from 1 to {MAX_SENSORS}")
     if stimuli is not None and not isinstance(stimuli, (list, tuple)):
         _fail(f"{fixture}(): stimuli = {stimuli!r}: give a list of stimuli (emulator.stimuli), e.g. "
               f"stimuli=[Tap(0.5, 1.0)]")

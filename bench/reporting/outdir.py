@@ -218,10 +218,11 @@ def _lock(folder: Path, where: str, flag: str) -> int:
                                                                    f"it to end or choose another {flag}")
 
 
-def lock_exclusively(lock_path: Path, where: str, busy) -> int:
+def lock_exclusively(lock_path: Path, where: str, busy, holder_is: str = "another run") -> int:
     """Take the exclusive, non-blocking ``flock`` on ``lock_path`` (created, never followed if it is a symbolic
     link) and write this process's pid into it; returns its file descriptor (closing it releases the lock), or
-    raises :class:`OutDirError` naming ``where`` — ``busy(who)`` says what to do when another process holds it."""
+    raises :class:`OutDirError` naming ``where`` — ``busy(who)`` says what to do when another process holds it
+    (``who``: ``holder_is`` and its pid)."""
     try:
         fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
     except OSError as e:
@@ -236,7 +237,7 @@ def lock_exclusively(lock_path: Path, where: str, busy) -> int:
         except OSError:
             holder = ""
         os.close(fd)
-        who = f"another run (pid {holder})" if holder.isdigit() else "another run"
+        who = f"{holder_is} (pid {holder})" if holder.isdigit() else holder_is
         raise OutDirError(f"{where}: {busy(who)}") from None
     except OSError as e:
         os.close(fd)
@@ -247,7 +248,7 @@ def lock_exclusively(lock_path: Path, where: str, busy) -> int:
         same = False
     if not same:  # its holder removed it (release_and_remove) between our open and our lock: take the new one
         os.close(fd)
-        return lock_exclusively(lock_path, where, busy)
+        return lock_exclusively(lock_path, where, busy, holder_is)
     with contextlib.suppress(OSError):  # the pid only names the holder to a process refused (a full disk: unnamed)
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)

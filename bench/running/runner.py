@@ -5,7 +5,8 @@ data of bounded size), to any ``sinks`` (e.g. the HDF5 store that writes ``sampl
 when ``keep_samples`` is true, the default for runs up to :data:`KEEP_SAMPLES_MAX_S` — to memory, so that
 ``Recording.channels["PAC"].codes`` works as it always did.  A run keeps going until its end, an error (kept in
 ``Recording.error``, status ``"failed"``), or ``should_stop()`` turning true at a chunk boundary (status
-``"interrupted"``); whatever was recorded up to then is in the recording.
+``"interrupted"``; also when a native build that a stop signal reached fails, its error kept); whatever was
+recorded up to then is in the recording.
 
 A scene with several sensors (``[[sensors]]``, or a stimulus's ``sensor = k``) runs each sensor through its own
 SPI peripheral and host sampler (the scene's host sequence, independent noise: seed + k - 1): the recording is
@@ -21,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bench.errors import BuildError
 from bench.running.aggregate import RunSummary
 from bench.running.sampler import Sampler
 from bench.running.slides import SlideRecorder
@@ -156,7 +158,8 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
     ``keep_samples``: hold every sample in ``Recording.channels`` (default: only for scenes up to
     :data:`KEEP_SAMPLES_MAX_S`; longer ones keep the summary only).  ``sinks``: objects with ``add(parts)``
     receiving each chunk as channel name → (instants, codes, status).  An exception in the sampler or a sink
-    ends the run: the recording so far is returned with ``error`` set and status ``"failed"``.
+    ends the run: the recording so far is returned with ``error`` set and status ``"failed"`` (``"interrupted"``
+    for a :class:`~bench.errors.BuildError` after a stop signal: the compilers got the same Ctrl-C).
     """
     from tqdm import tqdm
 
@@ -194,10 +197,10 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
                 status = "interrupted"
                 break
     except Exception as e:  # keep what was recorded; the caller reports the error
-        if should_stop is not None and should_stop():
-            status = "interrupted"  # a part the same Ctrl-C reached (a first RTL build's compilers) fails as it ends
-        else:
-            error, status = f"{type(e).__name__}: {e}", "failed"
+        error = f"{type(e).__name__}: {e}"
+        # a build the same Ctrl-C reached (a first RTL build's compilers die of it) ended the run: interrupted, the
+        # build's last words kept in the error; any other failure is one, signal or not
+        status = "interrupted" if isinstance(e, BuildError) and should_stop is not None and should_stop() else "failed"
     finally:
         bar.close()
     try:

@@ -292,6 +292,17 @@ def test_open_regular_opens_only_a_regular_file_and_never_blocks(tmp_path):
     os.mkfifo(tmp_path / "fifo")  # opened blocking, this waited for a writer for ever
     (tmp_path / "link").symlink_to(tmp_path / "f")
     (tmp_path / "dir").mkdir()
+
+    def hung(signum, frame):
+        raise TimeoutError("open_regular blocked on the FIFO")
+
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(10)  # a blocking open would wait for a writer for ever: fail instead
+    try:
+        assert open_regular(tmp_path / "fifo") is None
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
     with open_regular(tmp_path / "f") as fh:
         assert fh.read() == b"# Scene report: x"
     assert [open_regular(tmp_path / n) for n in ("fifo", "link", "dir", "missing")] == [None] * 4
@@ -420,4 +431,41 @@ def test_a_build_killed_by_the_same_ctrl_c_is_an_interruption(tmp_path, monkeypa
     err = capsys.readouterr().err
     assert "Verilator" not in err and "interrupted by SIGINT at 0.000 s" in err, err
     record = check_consistent(out, "interrupted")
-    assert record["error"] is None
+    assert "does not compile" in record["error"]  # the build's last words are kept in the record
+
+
+@pytest.mark.unit
+def test_any_other_failure_after_a_signal_is_still_a_failure(tmp_path, monkeypatch, capsys):
+    """Only a build the signal reached is taken for the interruption: an I/O error after a Ctrl-C is a failure,
+    its error said."""
+    from bench.cli.main import main
+    from bench.running import runner
+
+    def fails_after_a_signal(scene, sensor):
+        os.kill(os.getpid(), signal.SIGINT)
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr(runner, "peripheral_for", fails_after_a_signal)
+    out = tmp_path / "o"
+    assert main(["run", "rest", "--out", str(out), "--quiet", "--no-plots"]) == 1
+    assert "Input/output error" in capsys.readouterr().err
+    assert "Input/output error" in check_consistent(out, "failed")["error"]
+
+
+@pytest.mark.unit
+def test_a_signal_inherited_as_ignored_is_not_re_raised_over_a_later_sigterm():
+    """A process started with SIGINT ignored gets INT, INT, TERM inside signals_held: SIGINT stays ignored (nothing
+    to note), and the SIGTERM is the one delivered after the block — the process ends by it, not with status 0."""
+    import subprocess
+    import sys
+
+    code = ("import os, signal, time\n"
+            "from bench.campaigns.engine import signals_held\n"
+            "with signals_held():\n"
+            "    for s in (signal.SIGINT, signal.SIGINT, signal.SIGTERM):\n"
+            "        os.kill(os.getpid(), s)\n"
+            "    time.sleep(0.2)\n"
+            "print('survived')\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
+                       preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    assert r.returncode == -signal.SIGTERM and "survived" not in r.stdout, (r.returncode, r.stdout, r.stderr)
