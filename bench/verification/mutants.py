@@ -1202,6 +1202,10 @@ CATALOGUE += [
            "damping = p.fluid_viscosity_Pa_s * p.skin_load_area_m2 / h", "damping = p.fluid_viscosity_Pa_s * p.skin_load_area_m2 * h",
            ("emulator/tests/test_skin_mechanics.py::test_the_fluid_layer_thins_as_the_finger_empties_and_shears_harder",),
            "the fluid layer's damping grows with its thickness (Couette shear falls with it)"),
+    Mutant("electrode-creep-not-settled", "electrodes", "emulator/electrodes.py",
+           "            cr.settle(c.resting_load_N())", "            pass",
+           ("emulator/tests/test_electrode_locality.py::test_a_contact_held_since_before_the_start_does_not_creep_after_it",),
+           "a contact loaded before t = 0 creeps the electrodes for a second after it"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
