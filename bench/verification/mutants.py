@@ -1206,6 +1206,14 @@ CATALOGUE += [
            "            cr.settle(c.resting_load_N())", "            pass",
            ("emulator/tests/test_electrode_locality.py::test_a_contact_held_since_before_the_start_does_not_creep_after_it",),
            "a contact loaded before t = 0 creeps the electrodes for a second after it"),
+    Mutant("bench-stimuli-to-every-sensor", "fingers", "bench/hosts/cosim.py",
+           "stimuli=stimuli if k == 1 else ()", "stimuli=stimuli",
+           ("firmware_tests/tests/test_driver_robustness.py::test_the_default_bench_sensors_each_have_their_own_noise_and_only_sensor_1_feels_the_stimuli",),
+           "a bench's stimuli reach every default sensor, not sensor 1 alone"),
+    Mutant("bench-sensors-share-a-seed", "fingers", "bench/hosts/cosim.py",
+           "seed=seed + k, variant=variant", "seed=seed, variant=variant",
+           ("firmware_tests/tests/test_driver_robustness.py::test_the_default_bench_sensors_each_have_their_own_noise_and_only_sensor_1_feels_the_stimuli",),
+           "a bench's default sensors share one noise seed (identical noise on every finger)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -207,3 +207,24 @@ def test_a_second_host_on_one_port_is_refused_at_open_naming_why():
         first.close()
         os.close(master)
         os.close(slave)
+
+
+def test_the_default_bench_sensors_each_have_their_own_noise_and_only_sensor_1_feels_the_stimuli():
+    """default_sensors(n, stimuli): sensor k draws from seed + k, and the stimuli are sensor 1's (the others rest) —
+    as FirmwareBench and CheetahBench document."""
+    import numpy as np
+
+    from bench.hosts.cosim import default_sensors
+    from emulator.channels import channel_index
+    from emulator.stimuli import Tap
+
+    sensors = default_sensors(2, stimuli=[Tap(0.2, 1.0)], seed=5)
+    t = np.arange(0.0, 0.6, 1 / 2200.0)
+    both = np.tile([channel_index("PAC"), channel_index("PDC")], t.size)
+    codes = {k: s.sample(both, np.repeat(t, 2)).astype(float) for k, s in sensors.items()}  # in time order
+    pac = {k: c[0::2] for k, c in codes.items()}
+    pdc = {k: c[1::2] for k, c in codes.items()}
+    at_tap = (t > 0.2) & (t < 0.3)
+    assert pdc[1][at_tap].max() - pdc[1][:200].mean() > 20 and np.ptp(pdc[2]) < 8  # only sensor 1 is tapped
+    rest = t < 0.15
+    assert abs(np.corrcoef(pac[1][rest], pac[2][rest])[0, 1]) < 0.2  # independent noise
