@@ -137,3 +137,24 @@ def test_a_slide_that_ends_after_the_scene_by_its_acceleration_is_refused():
     parse_scene({"scene": {"name": "ok", "duration_s": end + 1e-3}, "stimulus": [slide]})
     with pytest.raises(SceneError, match="after the end of the scene"):
         parse_scene({"scene": {"name": "short", "duration_s": end - 0.1}, "stimulus": [slide]})
+
+
+def test_the_streamed_spectrogram_is_scipys_column_for_column():
+    """The PAC spectrogram computed chunk by chunk (80 ms Tukey(0.25) windows, half overlap, no averaging for a short
+    run) equals scipy.signal.spectrogram of the whole record: every row, the Nyquist row too (one-sided density:
+    doubled except DC and Nyquist), and column times at the windows' centres after the first sample."""
+    from scipy.signal import spectrogram
+
+    from bench.running.aggregate import SpectrogramAccumulator
+
+    fs, t0 = 2200.0, 0.3
+    x = np.random.default_rng(3).normal(size=4400) + np.sin(2 * np.pi * 1100.0 * np.arange(4400) / fs)
+    t = t0 + np.arange(x.size) / fs
+    acc = SpectrogramAccumulator(duration_s=2.0, max_columns=10_000)
+    for a in range(0, x.size, 1000):
+        acc.add(t[a:a + 1000], x[a:a + 1000])
+    acc.finish()
+    freqs, times, sxx = acc.result()
+    f_ref, t_ref, s_ref = spectrogram(x, fs, window=("tukey", 0.25), nperseg=176, noverlap=88)
+    assert np.allclose(freqs, f_ref) and np.allclose(times, t0 + t_ref, rtol=0, atol=1e-9)
+    assert np.allclose(sxx, s_ref, rtol=1e-9, atol=0)

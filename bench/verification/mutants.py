@@ -1214,6 +1214,14 @@ CATALOGUE += [
            "seed=seed + k, variant=variant", "seed=seed, variant=variant",
            ("firmware_tests/tests/test_driver_robustness.py::test_the_default_bench_sensors_each_have_their_own_noise_and_only_sensor_1_feels_the_stimuli",),
            "a bench's default sensors share one noise seed (identical noise on every finger)"),
+    Mutant("spectrogram-nyquist-row-doubled", "outputs", "bench/running/aggregate.py",
+           "            p[:, 1:-1] *= 2", "            p[:, 1:] *= 2",
+           ("bench/tests/test_exported_figures.py::test_the_streamed_spectrogram_is_scipys_column_for_column",),
+           "the spectrogram's Nyquist row is doubled (3 dB high in spectrogram.png)"),
+    Mutant("spectrogram-columns-early", "outputs", "bench/running/aggregate.py",
+           "times = self.t0 + (self.nper / 2 + (self._segments", "times = self.t0 + ((self._segments",
+           ("bench/tests/test_exported_figures.py::test_the_streamed_spectrogram_is_scipys_column_for_column",),
+           "the spectrogram's columns sit at their windows' starts: events show 40 ms early"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
