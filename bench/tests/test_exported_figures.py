@@ -158,3 +158,27 @@ def test_the_streamed_spectrogram_is_scipys_column_for_column():
     f_ref, t_ref, s_ref = spectrogram(x, fs, window=("tukey", 0.25), nperseg=176, noverlap=88)
     assert np.allclose(freqs, f_ref) and np.allclose(times, t0 + t_ref, rtol=0, atol=1e-9)
     assert np.allclose(sxx, s_ref, rtol=1e-9, atol=0)
+
+
+def test_a_drop_is_counted_when_its_100_ms_window_fits_in_the_run():
+    """The impact table counts a drop whose 100 ms detection window ends inside the run (at 0.85 s of 1 s); only an
+    interrupted run leaves a drop out (the scene refuses a window that would run past its end)."""
+    from bench.reporting.report import impact_results
+
+    sc = parse_scene({"scene": {"name": "late", "duration_s": 1.0, "seed": 2}, "analysis": {"impact_detection": True},
+                      "stimulus": [{"kind": "sphere_drop", "sphere": "1 mm steel bearing", "at_s": [0.85]}]})
+    steel = impact_results(run_scene(sc, progress=False))["spheres"]["1 mm steel bearing"]
+    assert (steel["drops"], steel["detected"]) == (1, 1)
+
+
+def test_the_electrode_maps_resting_codes_are_the_first_twentieth_of_the_run():
+    """The electrode map compares each electrode with its resting code, the median of the samples in the first 5 % of
+    the run (before a touch at 30 %): the streamed early histogram holds exactly those samples."""
+    sc = parse_scene({"scene": {"name": "map", "duration_s": 4.0, "seed": 1},
+                      "stimulus": [{"kind": "touch", "electrode": "E7", "start_s": 1.2, "force_N": 1.0}]})
+    rec = run_scene(sc, progress=False, keep_samples=True)
+    for name in ("E1", "E7"):
+        ch = rec.channels[name]
+        early = ch.codes[ch.times < 0.05 * sc.duration_s]
+        hist = rec.summary.channels[name].early_hist
+        assert hist.sum() == early.size and np.array_equal(np.flatnonzero(hist), np.unique(early)), name

@@ -1222,6 +1222,14 @@ CATALOGUE += [
            "times = self.t0 + (self.nper / 2 + (self._segments", "times = self.t0 + ((self._segments",
            ("bench/tests/test_exported_figures.py::test_the_streamed_spectrogram_is_scipys_column_for_column",),
            "the spectrogram's columns sit at their windows' starts: events show 40 ms early"),
+    Mutant("late-drops-left-out", "outputs", "bench/reporting/report.py",
+           "if s.time_s + rule.window_s > rec.simulated_s:", "if s.time_s + rule.window_s >= rec.simulated_s - 0.1:",
+           ("bench/tests/test_exported_figures.py::test_a_drop_is_counted_when_its_100_ms_window_fits_in_the_run",),
+           "the impact table leaves out drops in the run's last 100 ms whose window still fits"),
+    Mutant("electrode-map-rest-from-half-the-run", "outputs", "bench/running/aggregate.py",
+           "self.early_end_s = 0.05 * self.duration_s", "self.early_end_s = 0.5 * self.duration_s",
+           ("bench/tests/test_exported_figures.py::test_the_electrode_maps_resting_codes_are_the_first_twentieth_of_the_run",),
+           "the electrode map's resting codes include pressed ones (the first half of the run, not the first 5 %)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
