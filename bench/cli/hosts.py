@@ -204,13 +204,16 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
         temps[out] = _written_temp(out, write_npz)
     except OSError as e:  # a stream cannot be recorded again: the NPZ goes where there is room, and says so
         raise OutputNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
-                                  + _rescue(write_npz)) from None
+                               + _rescue(write_npz)) from None
     not_written = {}
     if csv:
         try:
             temps[_csv_beside(out)] = _written_temp(_csv_beside(out), write_csv)
         except OSError as e:  # the NPZ holds every sample: it is placed, and the CSV's absence said
             not_written[_csv_beside(out)] = e.strerror or str(e)
+        except BaseException:  # anything else: no temporary file left behind unnamed
+            temps[out].unlink(missing_ok=True)
+            raise
     _place_recording(out, temps, _csv_beside(out) in temps, force)  # refused or failed: kept, and named
     return list(temps), not_written
 
