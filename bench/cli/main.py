@@ -33,12 +33,12 @@ whose normal end that is: 0), 141 the reader of the output went away (`biotac-be
 """
 
 
-
 def command_groups() -> tuple:
     """The command groups' modules, in the order ``--help`` lists them."""
     from bench.cli import campaigns, cheetah, experiments, hosts, rtl, scenes, textures, units, verification
 
     return (scenes, units, textures, experiments, verification, rtl, hosts, cheetah, campaigns)
+
 
 #: What a bare value after these commands was probably meant to be (``biotac-bench units 17``)
 BARE_VALUE_HINTS = {"units": "a unit is chosen with --seed N or --serial BT... (biotac-bench units --seed 17)",
