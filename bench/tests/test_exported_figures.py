@@ -182,3 +182,27 @@ def test_the_electrode_maps_resting_codes_are_the_first_twentieth_of_the_run():
         early = ch.codes[ch.times < 0.05 * sc.duration_s]
         hist = rec.summary.channels[name].early_hist
         assert hist.sum() == early.size and np.array_equal(np.flatnonzero(hist), np.unique(early)), name
+
+
+def test_tac_in_the_exports_uses_tdc_interpolated_at_each_tac_instant(tmp_path):
+    """TAC in °C/s needs the TDC code at each TAC instant: codes.npz and samples.csv (in any time blocks) both give
+    the published conversion with TDC linearly interpolated at the TAC sample times (TDC's codes jitter by its noise,
+    so TDC taken at its own instants, or a block's edge mishandled, reads differently)."""
+    import csv
+
+    from bench.reporting import exports
+    from emulator.conversions import tac_to_celsius_per_s
+
+    sc = parse_scene({"scene": {"name": "tac", "duration_s": 2.0, "seed": 8}})
+    write_outputs(run_scene(sc, progress=False), tmp_path / "a", plots=False, npz=True)
+    d = np.load(tmp_path / "a" / "codes.npz")
+    base = {"PAC": 2048.0, "PDC": 700.0, "TAC": float(np.median(d["TAC_code"]))}
+    tdc_at_tac = np.interp(d["TAC_t"], d["TDC_t"], d["TDC_code"].astype(float))
+    expected = tac_to_celsius_per_s(d["TAC_code"], tdc_at_tac, base["TAC"])
+    exports.export_npz(tmp_path / "a" / "samples.h5", tmp_path / "x.npz", base)
+    assert np.allclose(np.load(tmp_path / "x.npz")["TAC_C_per_s"], expected, rtol=1e-9, atol=1e-12)
+    for block_s in (60.0, 0.137):
+        exports.export_csv(tmp_path / "a" / "samples.h5", tmp_path / "x.csv", base, block_s=block_s)
+        with open(tmp_path / "x.csv") as fh:
+            values = np.array([float(r["value"]) for r in csv.DictReader(fh) if r["channel"] == "TAC"])
+        assert np.allclose(values, expected, rtol=1e-6, atol=1e-9), block_s

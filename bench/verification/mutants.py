@@ -1230,6 +1230,10 @@ CATALOGUE += [
            "self.early_end_s = 0.05 * self.duration_s", "self.early_end_s = 0.5 * self.duration_s",
            ("bench/tests/test_exported_figures.py::test_the_electrode_maps_resting_codes_are_the_first_twentieth_of_the_run",),
            "the electrode map's resting codes include pressed ones (the first half of the run, not the first 5 %)"),
+    Mutant("npz-tac-with-tdc-at-its-own-instants", "outputs", "bench/reporting/exports.py",
+           "                tdc = _interp(r.times, d.times, d.codes)", "                tdc = _interp(d.times, d.times, d.codes)[:r.times.size]",
+           ("bench/tests/test_exported_figures.py::test_tac_in_the_exports_uses_tdc_interpolated_at_each_tac_instant",),
+           "codes.npz converts TAC with TDC taken at TDC's instants, not interpolated at TAC's"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
