@@ -172,7 +172,7 @@ def _check_keywords(fixture: str, given: dict, allowed) -> None:
 
 
 def _check_values(fixture: str, n_sensors=None, stimuli=None) -> None:
-    """Fail the test if ``n_sensors`` is not a whole number 1..5 or ``stimuli`` not a list of stimuli."""
+    """Fail the test if ``n_sensors`` is not a whole number 1..MAX_SENSORS or ``stimuli`` not a list of stimuli."""
     __tracebackhide__ = True
     import operator
 
