@@ -75,6 +75,24 @@ def temp_path(final: Path) -> Path:
     return Path(tmp)
 
 
+def save_in_temp_folder(write, prefix: str, suffix: str) -> Path:
+    """Write a file that could not go where it was asked (a full disk) into the system's temporary folder instead,
+    through ``write(path)``, with the mode a new file gets from the umask (not mkstemp's 0600); its path.  Raises
+    :class:`OSError`, leaving no file, when it cannot be written there either."""
+    fd, name = tempfile.mkstemp(prefix=prefix, suffix=suffix)
+    path = Path(name)
+    try:
+        try:
+            os.fchmod(fd, 0o666 & ~umask())
+        finally:
+            os.close(fd)
+        write(path)
+    except BaseException:
+        path.unlink(missing_ok=True)
+        raise
+    return path
+
+
 def _fsync_file(path: Path) -> None:
     """Flush a finished temporary file's contents to disk (never through a symbolic link)."""
     fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)

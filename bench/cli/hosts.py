@@ -237,16 +237,15 @@ def _rescue(write) -> str:
     says where it is (or that it could not be kept)."""
     import tempfile
 
-    from bench.atomic import umask
+    from bench.atomic import save_in_temp_folder
+
+    def write_file(path: Path) -> None:
+        with open(path, "wb") as fh:
+            write(fh)
 
     try:
-        fd, path = tempfile.mkstemp(prefix="biotac-recording-", suffix=".npz")
-        os.fchmod(fd, 0o666 & ~umask())  # as the file at --out would have been (mkstemp makes 0600)
-        with os.fdopen(fd, "wb") as fh:
-            write(fh)
+        path = save_in_temp_folder(write_file, "biotac-recording-", ".npz")
     except OSError as e:
-        with contextlib.suppress(OSError, UnboundLocalError):
-            os.unlink(path)
         return f"nor in {tempfile.gettempdir()} ({e.strerror or e}): the recording is lost"
     return f"it was saved as {path} instead"
 

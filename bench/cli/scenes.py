@@ -177,7 +177,10 @@ def _print_run(a, scene, res) -> None:
         print(f"interrupted by {record.get('interrupted_by')} at {record['simulated_s']:.3f} s of "
               f"{scene.duration_s:g} s: wrote what was recorded", file=sys.stderr)
     elif record["status"] != "ok":
-        print(f"error: the run stopped at {record['simulated_s']:.3f} s: {record['error']}", file=sys.stderr)
+        simulated = record["simulated_s"]
+        when = (f"after all {scene.duration_s:g} s were simulated" if simulated >= scene.duration_s - 1e-9
+                else f"at {simulated:.3f} s of {scene.duration_s:g} s")
+        print(f"error: the run failed {when}: {record['error']}", file=sys.stderr)
 
 
 def _cmd_validate(a) -> int:

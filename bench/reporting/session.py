@@ -17,13 +17,15 @@ SIGTERM) — also when the signal came only after the record was written ("ok": 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bench.atomic import save_in_temp_folder
 from bench.reporting.outdir import RUN_SENSOR, OutFolder, fresh_folder
 from bench.reporting.report import write_outputs
-from bench.reporting.store import SampleStore
+from bench.reporting.store import SampleStore, os_reason, write_recording
 from bench.running.runner import Recording, read_channel_names, run_scene
 from bench.running.signals import StopSignals
 
@@ -61,14 +63,17 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
                 store.abort()
                 raise
             guard.begin_writing()  # a signal from now on stops exports and plots; one before it only the simulation
-            try:
-                store.close("running", rec.simulated_s, rec.error)
-            except Exception as e:
-                rec.status = "failed"
-                rec.error = "; ".join(([rec.error] if rec.error else []) + [f"writing samples.h5: {e}"])
-                with contextlib.suppress(OSError):
-                    os.unlink(h5)
-                h5 = None
+            if store.failed:
+                h5 = _keep_what_was_streamed(store, h5, rec, folder, compression)
+            else:
+                try:
+                    store.close("running", rec.simulated_s, rec.error)
+                except Exception as e:
+                    rec.status = "failed"
+                    rec.error = "; ".join(([rec.error] if rec.error else []) + [f"writing samples.h5: {os_reason(e)}"])
+                    with contextlib.suppress(OSError):
+                        os.unlink(h5)
+                    h5 = None
             if guard.signum is not None and rec.status == "ok":
                 rec.status = "interrupted"
             sensor_records = {k: _write_sensor(sub, folder, k, guard=guard, csv=csv, plots=plots, npz=npz,
@@ -86,6 +91,44 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
             folder.close()
     late = guard.signal_name if guard.signum is not None and record["status"] == "ok" else None
     return RunResult(record, guard.exit_code if late else code, folder.path, rec, sensor_records, late)
+
+
+def _keep_what_was_streamed(store: SampleStore, h5: Path, rec: Recording, folder: OutFolder,
+                            compression: str) -> Path | None:
+    """The stream into ``samples.h5`` failed (a full disk) and ended the run: read back every sample it took before
+    ``rec.simulated_s``, delete the broken file (which frees its space) and write those samples into a fresh one —
+    in the system's temporary folder when the out folder has no room for it.  Returns the fresh file in the out
+    folder, or None; ``rec.error`` says where the samples are, or that they are lost."""
+    at = f"writing samples.h5 at {rec.simulated_s:.3f} s: {store.failed}"
+    rec.status = "failed"
+    try:
+        kept = store.salvage(rec.simulated_s)
+    except Exception as e:
+        kept, lost = None, os_reason(e)
+    finally:
+        store.abort()
+        with contextlib.suppress(OSError):
+            os.unlink(h5)
+    recorded = f"the {rec.simulated_s:.3f} s recorded before it"
+    if kept is not None:
+        salvaged = dataclasses.replace(rec, channels=kept)
+        fresh = folder.temp_path("samples.h5")
+        try:
+            write_recording(fresh, salvaged, compression)
+            rec.error = f"{at}; samples.h5 holds {recorded}"
+            return fresh
+        except Exception:
+            with contextlib.suppress(OSError):
+                os.unlink(fresh)
+        try:
+            saved = save_in_temp_folder(lambda path: write_recording(path, salvaged, compression),
+                                        "biotac-samples-", ".h5")
+            rec.error = f"{at}; {recorded} were saved as {saved} (no room for them in {folder.path})"
+            return None
+        except Exception as e:
+            lost = os_reason(e)
+    rec.error = f"{at}; {recorded} could not be kept ({lost}): they are lost"
+    return None
 
 
 def _write_sensor(sub: Recording, folder: OutFolder, k: int, **kw) -> dict:

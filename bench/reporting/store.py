@@ -17,6 +17,7 @@ appended in whole chunks once :data:`FLUSH_SAMPLES` are buffered, so memory stay
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from collections.abc import Mapping
@@ -82,6 +83,7 @@ class SampleStore:
             self._ds[name] = dss
         self._buf: dict[str, list] = {n: [] for n in self.names}
         self._pending = 0
+        self.failed: str | None = None  # why a write failed (then the file is broken: salvage, then abort)
 
     def add(self, parts: dict) -> None:
         """``parts``: channel name → (instants, codes, status) of the next chunk."""
@@ -95,22 +97,46 @@ class SampleStore:
         """Append buffered samples: whole HDF5 chunks only (the rest stays buffered), or ``everything``.
 
         Writing whole chunks means no chunk is ever written twice and HDF5 needs no chunk cache, so the
-        library's memory stays flat however long the run."""
+        library's memory stays flat however long the run.  A channel's samples leave the buffer only once they
+        are written (see :meth:`_append`)."""
         for name, lst in self._buf.items():
             if not lst:
                 continue
             arrays = [np.concatenate(x) for x in zip(*lst)] if len(lst) > 1 else list(lst[0])
+            lst[:] = [tuple(arrays)]
             n = arrays[0].size if everything else (arrays[0].size // H5_CHUNK) * H5_CHUNK
-            lst.clear()
-            if n < arrays[0].size:
-                lst.append(tuple(a[n:].copy() for a in arrays))
             if n == 0:
                 continue
-            for d, a in zip(self._ds[name], arrays):
-                k = d.shape[0]
-                d.resize((k + n,))
-                d[k:] = a[:n]
+            self._append(name, [a[:n] for a in arrays])
+            lst[:] = [tuple(a[n:].copy() for a in arrays)] if n < arrays[0].size else []
         self._pending = sum(p[0].size for lst in self._buf.values() for p in lst)
+
+    def _append(self, name: str, arrays) -> None:
+        """Append one channel's (instants, codes, status) to its datasets: all three, or — when a write fails (a
+        full disk) — none, the datasets cut back to their length before it and :attr:`failed` set to the reason."""
+        datasets = self._ds[name]
+        k = datasets[0].shape[0]
+        try:
+            for d, a in zip(datasets, arrays):
+                d.resize((k + a.size,))
+                d[k:] = a
+        except Exception as e:
+            self.failed = os_reason(e)
+            for d in datasets:
+                with contextlib.suppress(Exception):
+                    d.resize((k,))
+            raise
+
+    def salvage(self, until_s: float) -> dict[str, ChannelRecord]:
+        """Every sample taken before ``until_s`` (s) that the store holds, written or still buffered, read back into
+        memory: after a write failed, so that a fresh file can hold them once the broken one is gone."""
+        kept = {}
+        for name in self.names:
+            parts = [tuple(d[:] for d in self._ds[name])] + self._buf[name]
+            t, code, status = (np.concatenate(x) for x in zip(*parts))
+            before = t < until_s
+            kept[name] = ChannelRecord(t[before], code[before], status[before])
+        return kept
 
     def close(self, status: str = "running", simulated_s: float = 0.0, error: str | None = None) -> None:
         """Write what is buffered, set the run's status attributes, flush and close the file."""
@@ -126,6 +152,12 @@ class SampleStore:
             self.f.close()
         except Exception:
             pass
+
+
+def os_reason(e: BaseException) -> str:
+    """An error in a few words: the system's text for an ``OSError``'s errno (HDF5's own message runs to several
+    lines of buffer addresses), else the error's message."""
+    return os.strerror(e.errno) if isinstance(e, OSError) and e.errno else str(e)
 
 
 def set_status(path: Path, status: str, simulated_s: float, error: str | None, **extra) -> None:

@@ -320,7 +320,7 @@ def test_a_nan_mid_run_writes_the_record_as_failed(tmp_path, monkeypatch, capsys
     record = check_consistent(out, "failed")
     assert "NumericalError" in record["error"] and "non-finite" in record["error"]
     assert 0 < record["simulated_s"] <= 5.5  # everything up to the chunk that failed is kept
-    assert "error: the run stopped" in capsys.readouterr().err
+    assert "error: the run failed at " in capsys.readouterr().err
 
 
 @pytest.mark.unit

@@ -1234,6 +1234,18 @@ CATALOGUE += [
            "                tdc = _interp(r.times, d.times, d.codes)", "                tdc = _interp(d.times, d.times, d.codes)[:r.times.size]",
            ("bench/tests/test_exported_figures.py::test_tac_in_the_exports_uses_tdc_interpolated_at_each_tac_instant",),
            "codes.npz converts TAC with TDC taken at TDC's instants, not interpolated at TAC's"),
+    Mutant("h5-failed-append-not-cut-back", "outputs", "bench/reporting/store.py",
+           "                    d.resize((k,))", "                    pass",
+           ("bench/tests/test_run_full_disk.py::test_a_disk_full_mid_stream_keeps_every_sample_taken_before_it",),
+           "a write that fails on a full disk leaves a channel's instants longer than its codes in the kept samples"),
+    Mutant("h5-buffer-dropped-before-written", "outputs", "bench/reporting/store.py",
+           "            lst[:] = [tuple(arrays)]\n", "            lst.clear()\n",
+           ("bench/tests/test_run_full_disk.py::test_a_disk_full_mid_stream_keeps_every_sample_taken_before_it",),
+           "samples leave the buffer before they are written: a full disk loses them"),
+    Mutant("h5-salvage-keeps-the-failed-chunk", "outputs", "bench/reporting/store.py",
+           "            before = t < until_s", "            before = t <= t",
+           ("bench/tests/test_run_full_disk.py::test_a_disk_full_mid_stream_keeps_every_sample_taken_before_it",),
+           "samples.h5 kept after a full disk holds samples past the instant the run stopped"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

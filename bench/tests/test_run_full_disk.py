@@ -1,0 +1,173 @@
+"""A disk that fills while `run` streams samples.h5: the run ends there, and every sample taken before it is kept —
+in a fresh samples.h5 in the out folder, else in the system's temporary folder (named in the error), else the error
+says they are lost; never a broken file, a bare HDF5 message or a traceback."""
+
+import errno
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+
+import h5py
+import numpy as np
+import pytest
+
+from bench.reporting import session, store
+from bench.reporting.session import run_to_folder
+from bench.running.runner import run_scene
+from bench.scenes.scene import parse_scene_text
+
+REST = """
+[scene]
+name = "rest-full-disk"
+duration_s = {duration}
+seed = 11
+"""
+
+
+def _scene(duration=6.0):
+    return parse_scene_text(REST.format(duration=duration), "rest-full-disk.toml")
+
+
+def _disk_fills_at_write(monkeypatch, n: int) -> None:
+    """The ``n``-th write into an HDF5 dataset (counting from 1) fails as a full disk does; the others succeed."""
+    original = h5py.Dataset.__setitem__
+    calls = [0]
+
+    def write(self, key, value):
+        calls[0] += 1
+        if calls[0] == n:
+            raise OSError(errno.ENOSPC, "Can't synchronously write data (file write failed: errno = 28, ...)")
+        return original(self, key, value)
+
+    monkeypatch.setattr(h5py.Dataset, "__setitem__", write)
+
+
+def _small_chunks(monkeypatch) -> None:
+    """Chunks of 256 samples, flushed every 1024 buffered: a 6 s scene writes many times, as an hour-long one does."""
+    monkeypatch.setattr(store, "H5_CHUNK", 256)
+    monkeypatch.setattr(store, "FLUSH_SAMPLES", 1024)
+
+
+def _expected_before(scene, until_s: float) -> dict:
+    """The same scene run in memory: each channel's samples taken before ``until_s`` (the run is deterministic)."""
+    rec = run_scene(scene, progress=False, keep_samples=True)
+    return {n: (r.times[r.times < until_s], r.codes[r.times < until_s], r.status[r.times < until_s])
+            for n, r in rec.channels.items()}
+
+
+def _assert_holds(path, expected) -> None:
+    with h5py.File(path, "r") as f:
+        assert sorted(f) == sorted(expected)
+        for name, (t, code, status) in expected.items():
+            assert np.array_equal(f[name]["t"][:], t), name
+            assert np.array_equal(f[name]["code"][:], code), name
+            assert np.array_equal(f[name]["status"][:], status), name
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("nth_write", [8, 40])  # the 8th: a channel's instants written, its codes not
+def test_a_disk_full_mid_stream_keeps_every_sample_taken_before_it(tmp_path, monkeypatch, nth_write):
+    """Prediction (from the run's determinism): samples.h5 holds, bit for bit, each channel's samples taken before
+    the instant the run stopped — those already written and those still buffered — and nothing after; its status
+    and the record say failed, naming the disk's error in a few words and the seconds kept."""
+    _small_chunks(monkeypatch)
+    scene = _scene()
+    _disk_fills_at_write(monkeypatch, nth_write)
+    res = run_to_folder(scene, tmp_path / "o", plots=False, progress=False, chunk_s=0.5)
+    stopped = res.record["simulated_s"]
+    assert res.exit_code == 1 and res.record["status"] == "failed"
+    assert 0 < stopped < scene.duration_s
+    error = res.record["error"]
+    assert error.startswith(f"writing samples.h5 at {stopped:.3f} s: No space left on device; samples.h5 holds "
+                            f"the {stopped:.3f} s recorded before it"), error
+    assert "errno = 28" not in error  # HDF5's own text (buffer addresses, times) is not repeated
+    assert "samples.h5" in res.record["outputs"] and "codes.npz" in res.record["outputs"]
+    monkeypatch.undo()
+    _assert_holds(tmp_path / "o" / "samples.h5", _expected_before(scene, stopped))
+    with h5py.File(tmp_path / "o" / "samples.h5") as f:
+        assert f.attrs["status"] == "failed" and f.attrs["simulated_s"] == stopped
+    assert not [p for p in (tmp_path / "o").iterdir() if p.name.endswith(".part")]
+
+
+@pytest.mark.unit
+def test_no_room_left_in_the_out_folder_saves_the_samples_in_the_temporary_folder(tmp_path, monkeypatch):
+    """The broken file's space is not enough for the fresh one: the samples go to the system's temporary folder,
+    with the umask's mode, and the error names the file; the out folder holds no samples.h5 and no temporary file."""
+    _small_chunks(monkeypatch)
+    scene = _scene()
+    out, tmp = tmp_path / "o", tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    _disk_fills_at_write(monkeypatch, 40)
+    written = session.write_recording
+
+    def no_room_in_out(path, rec, compression="gzip"):
+        if path.parent == out:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return written(path, rec, compression)
+
+    monkeypatch.setattr(session, "write_recording", no_room_in_out)
+    res = run_to_folder(scene, out, plots=False, progress=False, chunk_s=0.5)
+    stopped = res.record["simulated_s"]
+    saved = list(tmp.glob("biotac-samples-*.h5"))
+    assert len(saved) == 1
+    assert (f"the {stopped:.3f} s recorded before it were saved as {saved[0]} (no room for them in {out})"
+            in res.record["error"]), res.record["error"]
+    assert sorted(p.name for p in out.iterdir()) == [".biotac-bench.lock", "record.json", "report.md"]
+    assert oct(saved[0].stat().st_mode & 0o777) == oct(0o666 & ~_umask())
+    monkeypatch.undo()
+    _assert_holds(saved[0], _expected_before(scene, stopped))
+
+
+def _umask() -> int:
+    m = os.umask(0o022)
+    os.umask(m)
+    return m
+
+
+@pytest.mark.unit
+def test_a_file_size_limit_mid_stream_is_one_line_and_a_complete_record(tmp_path):
+    """The kernel refuses the write (RLIMIT_FSIZE, as a quota or a full disk would): exit 1, one error line with the
+    system's words, no traceback, no temporary file left, and a record that says what was lost and why.  Under a
+    limit every file obeys, the samples cannot be kept anywhere: the error says so rather than pretending."""
+    scene = tmp_path / "rest120.toml"
+    scene.write_text(REST.format(duration=120.0))
+    out = tmp_path / "o"
+    script = textwrap.dedent(f"""
+        import resource, signal, sys
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
+        from bench.cli.main import main
+        sys.exit(main(["run", {str(scene)!r}, "--out", {str(out)!r}, "--quiet", "--no-plots"]))
+    """)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "TMPDIR": str(tmp_path)})
+    assert r.returncode == 1, r.stderr
+    assert "Traceback" not in r.stderr and "errno =" not in r.stderr, r.stderr
+    errors = [line for line in r.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and "writing samples.h5 at " in errors[0] and "File too large" in errors[0], r.stderr
+    record = json.loads((out / "record.json").read_text())
+    assert record["status"] == "failed" and 0 < record["simulated_s"] < 120
+    assert "could not be kept (File too large): they are lost" in record["error"]
+    assert sorted(p.name for p in out.iterdir()) == [".biotac-bench.lock", "record.json", "report.md"]
+    assert not list(tmp_path.glob("biotac-samples-*"))  # the temporary folder's attempt left nothing either
+
+
+@pytest.mark.unit
+def test_a_run_simulated_to_its_end_whose_export_fails_says_so(tmp_path, monkeypatch, capsys):
+    """An output that cannot be written after the whole scene was simulated is not "the run stopped at": the line
+    says the run failed after all of it was simulated, and names the file."""
+    from bench.cli.main import main
+    from bench.reporting import exports
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(exports, "export_npz", full)
+    assert main(["run", "rest", "--out", str(tmp_path / "o"), "--quiet", "--no-plots"]) == 1
+    err = capsys.readouterr().err
+    assert "error: the run failed after all 10 s were simulated: writing codes.npz: OSError: [Errno 28] No space " \
+           "left on device" in err, err
