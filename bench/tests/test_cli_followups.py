@@ -74,6 +74,36 @@ def test_two_campaigns_never_write_one_junit_report(monkeypatch, capsys, tmp_pat
     assert [p.name for p in tmp_path.iterdir()] == ["c.xml"]  # the lock file removed as the campaign ended
 
 
+def test_a_lock_removed_by_its_holder_while_it_was_being_taken_is_taken_afresh(monkeypatch, tmp_path):
+    """The holder ends (removes the lock file, then releases it) between our open and our flock: the flock then
+    succeeds on the removed file, which locks nothing any other process can see.  The lock taken is a new file at
+    the path, and a third taker is refused by it."""
+    import fcntl
+    import os
+
+    from bench.reporting import outdir
+
+    path = tmp_path / ".c.xml.lock"
+    holder = outdir.lock_exclusively(path, "holder", lambda who: who)
+    real_flock = fcntl.flock
+    ends = [holder]
+
+    def holder_ends_first(fd, op):
+        if ends:
+            outdir.release_and_remove(ends.pop(), path)
+        return real_flock(fd, op)
+
+    monkeypatch.setattr(fcntl, "flock", holder_ends_first)
+    taken = outdir.lock_exclusively(path, "second", lambda who: who)
+    monkeypatch.undo()
+    try:
+        assert os.path.samestat(os.fstat(taken), os.lstat(path))
+        with pytest.raises(outdir.OutDirError, match=f"third: another run \\(pid {os.getpid()}\\)"):
+            outdir.lock_exclusively(path, "third", lambda who: who)
+    finally:
+        os.close(taken)
+
+
 def test_campaign_prints_its_summary_before_the_report_and_keeps_it_when_the_report_fails(monkeypatch, capsys,
                                                                                        tmp_path):
     from bench.campaigns import faults

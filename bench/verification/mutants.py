@@ -1246,6 +1246,10 @@ CATALOGUE += [
            "            before = t < until_s", "            before = t <= t",
            ("bench/tests/test_run_full_disk.py::test_a_disk_full_mid_stream_keeps_every_sample_taken_before_it",),
            "samples.h5 kept after a full disk holds samples past the instant the run stopped"),
+    Mutant("lock-on-a-removed-file-kept", "outputs", "bench/reporting/outdir.py",
+           "    if not same:  # its holder", "    if False:  # its holder",
+           ("bench/tests/test_cli_followups.py::test_a_lock_removed_by_its_holder_while_it_was_being_taken_is_taken_afresh",),
+           "a lock taken on a file its holder removed meanwhile locks nothing: two campaigns write one report"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
