@@ -54,8 +54,11 @@ def _cmd_bridge(a) -> int:
         try:
             fb = FirmwareBench(realtime=not a.fast, speed=a.speed, baudrate=a.baud, rx_buffer=a.rx_buffer,
                                **kw).start()
-        except KeyboardInterrupt:
-            return 130
+        except KeyboardInterrupt as e:  # the first start builds the firmware (and the RTL): seconds to minutes
+            name, status = ("SIGTERM", 143) if isinstance(e, Terminated) else ("SIGINT", 130)
+            print(f"{name} while the bridge was starting (building the firmware"
+                  f"{' and the RTL' if kw['spi'] == 'rtl' else ''}): no port was opened", file=sys.stderr)
+            return status
         try:
             print(f"bridge firmware running with {what}", flush=True)
             print(f"serial port: {fb.port}", flush=True)

@@ -140,3 +140,21 @@ def test_run_prints_and_records_the_serial_each_sensor_answers(tmp_path):
     report = (out / "report.md").read_text()
     assert "- sensor 1: biotac-sp, unit 17, serial `BTSP000000000017`" in report
     assert "`sensor2/`: ok, serial `BTSP000000000018`" in report and "serial `BTSP01EMU0000003`" in report
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("spi, signal_name, status", [("rtl", "SIGINT", 130), ("software", "SIGTERM", 143)])
+def test_a_bridge_stopped_while_it_builds_says_so(capsys, monkeypatch, spi, signal_name, status):
+    """A first `bridge --spi rtl` compiles for a minute; Ctrl-C (or SIGTERM) then ends it with a line saying what
+    was going on and that no port was opened — it used to exit 130 silently, and 130 for SIGTERM too."""
+    from bench.cli.args import Terminated
+    from bench.hosts import bridge
+
+    def building(*args, **kwargs):
+        raise Terminated() if signal_name == "SIGTERM" else KeyboardInterrupt()
+
+    monkeypatch.setattr(bridge.FirmwareBench, "__init__", building)
+    assert cli.main(["bridge", "--spi", spi, "--fast", "--seconds", "0.2"]) == status
+    out, err = capsys.readouterr()
+    assert out == "" and err.strip() == (f"{signal_name} while the bridge was starting (building the firmware"
+                                         f"{' and the RTL' if spi == 'rtl' else ''}): no port was opened"), err
