@@ -206,3 +206,24 @@ def test_tac_in_the_exports_uses_tdc_interpolated_at_each_tac_instant(tmp_path):
         with open(tmp_path / "x.csv") as fh:
             values = np.array([float(r["value"]) for r in csv.DictReader(fh) if r["channel"] == "TAC"])
         assert np.allclose(values, expected, rtol=1e-6, atol=1e-9), block_s
+
+
+def test_error_words_in_the_lead_in_never_reach_the_baseline():
+    """A lead-in where every 7th PAC word is an error word (status 2, code 0) or a parity error (status 1, code 4095):
+    the resting baseline and σ are those of the good words alone — the offsets every physical conversion subtracts
+    would otherwise move by hundreds of codes."""
+    from bench.running.aggregate import RunSummary
+
+    scene = load_scene(SCENES_DIR / "rest.toml")
+    rng = np.random.default_rng(3)
+    t = np.arange(0, 2.0, 1 / 2200)
+    code = np.round(2000 + 1.4 * rng.standard_normal(t.size)).astype(np.uint16)
+    status = np.zeros(t.size, np.uint8)
+    status[::7], status[3::7] = 2, 1
+    code[::7], code[3::7] = 0, 4095
+    summary = RunSummary(scene, ["PAC"])
+    summary.add_parts({"PAC": (t, code, status)})
+    good = (status == 0) & (t < 1.0)  # no stimulus: the lead-in is the first second
+    base, sigma = summary.resting_stats("PAC", 2.0)
+    assert base == pytest.approx(np.mean(code[good]), abs=1e-9)
+    assert sigma == pytest.approx(np.std(code[good].astype(float)), abs=1e-9)

@@ -1250,6 +1250,10 @@ CATALOGUE += [
            "    if not same:  # its holder", "    if False:  # its holder",
            ("bench/tests/test_cli_followups.py::test_a_lock_removed_by_its_holder_while_it_was_being_taken_is_taken_afresh",),
            "a lock taken on a file its holder removed meanwhile locks nothing: two campaigns write one report"),
+    Mutant("lead-in-keeps-error-words", "outputs", "bench/running/aggregate.py",
+           "                m = (tc < LEAD_IN_S) & (sc == 0)", "                m = (tc < LEAD_IN_S)",
+           ("bench/tests/test_exported_figures.py::test_error_words_in_the_lead_in_never_reach_the_baseline",),
+           "error words and parity errors in the resting lead-in move the baselines every conversion subtracts"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
