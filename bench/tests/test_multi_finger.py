@@ -164,3 +164,35 @@ def test_a_finger_can_be_a_biotac_sp_and_its_own_e22_feels_its_touch():
     e17 = channel_index("E17")
     a, b = sensors[1].sample(np.array([e17, e17]), np.array([0.1, 0.9]))
     assert abs(int(a) - int(b)) <= 3  # sensor 1 feels nothing
+
+
+
+ONE_SLIDE = """
+[scene]
+name = "slide"
+duration_s = 3.0
+seed = {seed}
+{sensors}
+[[stimulus]]
+kind = "slide"
+start_s = 0.3
+texture = "60-grit sandpaper"
+force_N = 0.5
+velocity_mm_per_s = 10
+distance_mm = 10
+sensor = {sensor}
+"""
+
+
+def _slide_start_m(seed: int, sensor: int) -> float:
+    """Where the one slide of a scene of ``seed`` starts on its texture, slid by finger ``sensor`` (1 or 2)."""
+    scene = parse_scene_text(ONE_SLIDE.format(seed=seed, sensor=sensor,
+                                              sensors="[[sensors]]\nindex = 2\n" if sensor == 2 else ""), "s.toml")
+    (slide,) = [s for s in scene.sensor_spec(sensor).stimuli if hasattr(s, "start_position_m")]
+    return slide.start_position_m
+
+
+def test_each_finger_draws_its_slides_start_positions_from_its_own_seed():
+    """Sensor k draws from seed + k − 1 (README): finger 2's slide starts where a one-finger scene of seed 8 starts,
+    not where finger 1's of seed 7 does — two fingers never slide over the same spot by accident."""
+    assert _slide_start_m(7, sensor=2) == _slide_start_m(8, sensor=1) != _slide_start_m(7, sensor=1)

@@ -1254,6 +1254,10 @@ CATALOGUE += [
            "                m = (tc < LEAD_IN_S) & (sc == 0)", "                m = (tc < LEAD_IN_S)",
            ("bench/tests/test_exported_figures.py::test_error_words_in_the_lead_in_never_reach_the_baseline",),
            "error words and parity errors in the resting lead-in move the baselines every conversion subtracts"),
+    Mutant("every-finger-slides-from-seed-1", "scenes", "bench/scenes/scene.py",
+           "own, int(seed) + k - 1, wear,", "own, int(seed), wear,",
+           ("bench/tests/test_multi_finger.py::test_each_finger_draws_its_slides_start_positions_from_its_own_seed",),
+           "every finger's slides start where finger 1's do: sensor k does not draw from seed + k - 1"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
