@@ -130,7 +130,7 @@ def test_roughness_floor_when_sliding_is_quieter_than_background():
         current_t=rec.current_t, current_A=rec.current_A, contact_s=CONTACT, slide_start_s=START,
         slide_end_s=END)
     r = tp.roughness(rec_loud_bg)
-    assert math.isfinite(r) and r == pytest.approx(math.log(tp.POWER_FLOOR))
+    assert math.isfinite(r) and r == pytest.approx(math.log(1e-3))  # the documented default floor, bits²
     assert tp.roughness(rec_loud_bg, power_floor=1e-6) == pytest.approx(math.log(1e-6))
 
 
