@@ -187,3 +187,18 @@ def test_a_trial_wears_the_skin_by_the_distance_it_slid():
     expected = Skin().height_lost(m.force_N, d, area, m.velocity_m_per_s)
     assert before["ridge_height_m"] - after["ridge_height_m"] == pytest.approx(expected, rel=1e-9)
     assert expected > 0
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_the_stage_starts_at_the_recorded_slide_start(seed):
+    """The rig commands the stage a latency early so that it moves at the slide start the recording names (the
+    properties' windows are cut from it): the stage's motor current (100 Hz readings) stays at its holding level
+    (± 4 σ of the hold) up to that instant and has risen by more than 5 σ 15–30 ms after it, as the stage drags
+    the texture against the skin's tangential stiffness."""
+    rec = TextureRig(wear=False).run_trial(SAND, Movement(0.5, 0.05), seed=seed).recording
+    t, current = rec.current_t - rec.slide_start_s, rec.current_A
+    hold = current[(t > -0.3) & (t < -0.05)]
+    before, after = current[(t >= -0.05) & (t < 0)], current[(t >= 0.015) & (t <= 0.03)]
+    assert before.size >= 4 and after.size >= 1
+    assert np.all(np.abs(before - hold.mean()) < 4 * hold.std())
+    assert np.all(after > hold.mean() + 5 * hold.std())

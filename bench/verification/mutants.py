@@ -1258,6 +1258,10 @@ CATALOGUE += [
            "own, int(seed) + k - 1, wear,", "own, int(seed), wear,",
            ("bench/tests/test_multi_finger.py::test_each_finger_draws_its_slides_start_positions_from_its_own_seed",),
            "every finger's slides start where finger 1's do: sensor k does not draw from seed + k - 1"),
+    Mutant("rig-stage-starts-a-latency-late", "sliding", "bench/rigs/texture_rig.py",
+           "motion.move_stage(slide_start - s.latency_s, v, acc)", "motion.move_stage(slide_start, v, acc)",
+           ("bench/tests/test_texture_rig.py::test_the_stage_starts_at_the_recorded_slide_start",),
+           "the stage moves a latency after the slide start the recording names: the properties' windows are shifted"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
