@@ -283,7 +283,23 @@ class SensorParams:
             raise ValueError(f"unknown sensor parameter(s): {', '.join(sorted(unknown))}")
         for name, value in changes.items():
             check_parameter(name, value, where=f"sensor.{name}")
-        return dataclasses.replace(self, **changes)
+        changed = dataclasses.replace(self, **changes)
+        problems = changed.inconsistencies()
+        if problems:
+            raise ValueError("; ".join(problems))
+        return changed
+
+    def inconsistencies(self, where: str = "sensor") -> list[str]:
+        """What no sensor can be though each value is within its own range (``where``: the table's name)."""
+        problems = []
+        if self.minimum_gap_mm >= self.resting_gap_mm:
+            problems.append(f"{where}.minimum_gap_mm = {self.minimum_gap_mm:g} mm must be below {where}.resting_gap_mm"
+                            f" = {self.resting_gap_mm:g} mm (the fluid left when the skin bottoms is less than at "
+                            f"rest)")
+        if self.electrode_gap_seed != int(self.electrode_gap_seed):
+            problems.append(f"{where}.electrode_gap_seed = {self.electrode_gap_seed!r}: must be a whole number "
+                            f"(0 to {2**31 - 1})")
+        return problems
 
 
 PARAMETER_FIELDS = {f.name: f for f in dataclasses.fields(SensorParams)}

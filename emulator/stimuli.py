@@ -501,6 +501,12 @@ class PressureCalibrator(CheckedFields):
     frequency_Hz: float = 0.0
     fade_s: float = 0.01
 
+    def __post_init__(self):
+        super().__post_init__()
+        if self.amplitude_Pa > 0 and self.frequency_Hz == 0:
+            raise ValueError(f"PressureCalibrator.amplitude_Pa = {self.amplitude_Pa!r} needs frequency_Hz > 0 (the "
+                             f"sinusoid's frequency: at 0 Hz it is zero); a steady pressure is offset_Pa")
+
     @property
     def end_s(self):
         return self.start_s + self.duration_s

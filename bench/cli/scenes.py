@@ -129,12 +129,14 @@ every problem with its field, value and allowed range.  Exit status 0 if every s
 def _cmd_run(a) -> int:
     from bench.reporting.outdir import OutFolder
     from bench.reporting.session import run_to_folder
+    from bench.running.runner import check_buildable
     from bench.scenes.scene import load_scene
 
     # the command line's values replace the file's before validation: the scene that runs is the one validated
     overrides = {k: v for k, v in (("scene.fidelity", a.fidelity), ("scene.seed", a.seed), ("host.spi", a.spi))
                  if v is not None}
     scene = load_scene(a.scene, overrides)  # validated completely, then the out folder checked: both before running
+    check_buildable(scene)
     folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
     res = None
     try:
@@ -184,12 +186,14 @@ def _print_run(a, scene, res) -> None:
 
 
 def _cmd_validate(a) -> int:
+    from bench.running.runner import check_buildable
     from bench.scenes.scene import SceneError, load_scene
 
     bad = 0
     for f in a.scenes:
         try:
             sc = load_scene(scene_file(f))
+            check_buildable(sc)
             more = (f", {sc.n_sensors} sensors ({sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))}"
                     f" stimuli in all)" if sc.n_sensors > 1 else "")
             n = len(sc.stimuli)

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bench.errors import BuildError
+from bench.errors import BuildError, SceneError
 from bench.running.aggregate import RunSummary
 from bench.running.sampler import Sampler
 from bench.running.slides import SlideRecorder
@@ -85,6 +85,20 @@ def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
                     variant=scene.variant)
     sensor.serial = None if scene.unit == "nominal" or not scene.serial else scene.serial
     return sensor
+
+
+def check_buildable(scene: Scene) -> None:
+    """Build every sensor of ``scene`` once (milliseconds), as a run would first: values each valid that no sensor
+    can have together raise :class:`~bench.errors.SceneError` naming the scene — before a run touches its out
+    folder, and in ``validate``, so that the two agree."""
+    problems = []
+    for k in range(1, scene.n_sensors + 1):
+        try:
+            build_sensor(scene.for_sensor(k))
+        except (ValueError, TypeError) as e:
+            problems.append(f"sensor {k}: {e}" if scene.n_sensors > 1 else str(e))
+    if problems:
+        raise SceneError(str(scene.source), problems)
 
 
 def peripheral_for(scene: Scene, sensor: Sensor):

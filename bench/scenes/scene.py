@@ -8,6 +8,7 @@ See ``fixtures/scenes/`` for examples and ``biotac-bench run --help`` for the fo
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -388,10 +389,14 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
         freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
         fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+        if amp is not None and freq is not None and amp > 0 and freq == 0:
+            c.problems.append(f"{w}: amplitude_Pa = {amp:g} needs frequency_Hz > 0 (the sinusoid's frequency: at 0 Hz "
+                              f"it is zero); a steady pressure is offset_kPa")
+            amp = None
         if None not in (dur, fade):
             given = None not in (offset, amp, freq)
             calibrators = [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) if given else
-                           PressureCalibrator(t, dur, fade=fade) for t in start]
+                           PressureCalibrator(t, dur, fade_s=fade) for t in start]
             out += _valid(given, _ending_in_scene(c, w, "pressure", calibrators, duration))
     elif kind == "touch":
         start = c.times(st, "start_s", w, duration)
@@ -860,7 +865,11 @@ def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _
             except (ValueError, TypeError, OverflowError) as e:
                 c.problems.append(_cut(str(e)))
     u = make_unit(which if which is not None else None)
-    params = u.params.replace(**changes)
+    try:
+        params = u.params.replace(**changes)
+    except ValueError:  # values each in range that no sensor can have together: said as problems, the unit's kept
+        c.problems += dataclasses.replace(u.params, **changes).inconsistencies(where)
+        params = u.params
     return _SensorTable(u.name, variant, params, u.serial, _sensor_faults(c, table, where, duration, variant), where)
 
 
@@ -1031,6 +1040,12 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
                 c.problems.append(f"pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity '{fidelity}' "
                                   f"({grid:.0f} Hz); use \"default\" or \"reference\"")
+        if profile(fidelity).duct_resonance:
+            for k, table in sorted(tables.items()):
+                duct = table.params.duct_resonance_Hz
+                if duct >= 0.45 * grid:
+                    c.problems.append(f"{table.where}.duct_resonance_Hz = {duct:g} Hz needs a grid above "
+                                      f"{duct / 0.45:.0f} Hz; fidelity '{fidelity}' has {grid:.0f} Hz")
     if c.problems:
         raise SceneError(source, c.problems)
     fresh_skin = copy.deepcopy(skin)
