@@ -1262,6 +1262,14 @@ CATALOGUE += [
            "motion.move_stage(slide_start - s.latency_s, v, acc)", "motion.move_stage(slide_start, v, acc)",
            ("bench/tests/test_texture_rig.py::test_the_stage_starts_at_the_recorded_slide_start",),
            "the stage moves a latency after the slide start the recording names: the properties' windows are shifted"),
+    Mutant("pressure-amplitude-without-frequency-accepted", "scenes", "bench/scenes/scene.py",
+           "if amp is not None and freq is not None and amp > 0 and freq == 0:", "if False:",
+           ("bench/tests/test_hostile_input.py",),
+           "a pressure stimulus with an amplitude and no frequency is not refused by name (it would do nothing)"),
+    Mutant("minimum-gap-above-resting-accepted", "scenes", "emulator/params.py",
+           "        if self.minimum_gap_mm >= self.resting_gap_mm:", "        if False:",
+           ("bench/tests/test_hostile_input.py", "bench/tests/test_scene_combinations.py"),
+           "a sensor whose skin bottoms further from the core than it rests is accepted: its electrodes respond backwards"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
