@@ -212,6 +212,12 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         else:
             spec.pilot_movements = mv
     spec.exclude_high_power = get("pilot", "exclude_high_power", bool, default=spec.exclude_high_power)
+    if spec.exclude_high_power and spec.pilot_movements is not None:
+        kept = [m for m in spec.pilot_movements if m not in excluded_movements(spec, spec.pilot_movements)]
+        if not kept:
+            problems.append(f"pilot.movements = {spec.pilot_movements!r}: every one is a high-power movement, which "
+                            f"pilot.exclude_high_power = true leaves out of the choice (their wear); list others too, "
+                            f"or set exclude_high_power = false")
     spec.training_textures = textures("training", "textures", None)
     spec.training_trials = get("training", "trials", int, 2, 100, spec.training_trials)
     spec.wear = get("training", "wear", bool, default=spec.wear)
@@ -257,7 +263,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
                             f"disjoint pairs for pair_choice = {spec.pair_choice!r}")
     spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
     strategies = t["exploration"].get("strategies", list(spec.strategies))
-    if not isinstance(strategies, list) or not strategies or any(s not in ex.STRATEGIES for s in strategies):
+    if not isinstance(strategies, list) or not strategies or any(not isinstance(s, str) or s not in ex.STRATEGIES
+                                                                  for s in strategies):
         problems.append(f"exploration.strategies = {strategies!r}: a list of {', '.join(ex.STRATEGIES)}")
     else:
         spec.strategies = tuple(strategies)

@@ -55,6 +55,11 @@ def test_shipped_experiment_files_validate():
      ["validation.n_pairs = 8", "only 1 disjoint pairs", "similar-description"]),
     ({"training": {"textures": [1, 2, 3, 4]}, "validation": {"n_pairs": 3, "pair_choice": "most-confused"}},
      ["validation.n_pairs = 3", "most-confused"]),
+    # a second hostile pass: a traceback, and a pilot whose every movement is excluded found only after it ran
+    ({"exploration": {"strategies": [["bayesian"]]}}, ["exploration.strategies = [['bayesian']]"]),
+    ({"exploration": {"strategies": [{"a": 1}]}}, ["exploration.strategies"]),
+    ({"pilot": {"movements": [35, 34, 29]}}, ["pilot.movements = [35, 34, 29]", "every one is a high-power movement",
+                                             "exclude_high_power = false"]),
 ])
 def test_bad_experiment_files_name_field_and_value(data, words):
     with pytest.raises(E.ExperimentError) as e:
