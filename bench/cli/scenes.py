@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from pathlib import Path
@@ -220,8 +221,9 @@ def shown_path(path: Path) -> str:
 
 
 def scene_file(text: str) -> str:
-    """A scene argument as a path: a file that exists as given; else the shipped scene of that name ("taps" or
-    "taps.toml", without a folder); else :class:`SceneError` with the shipped scenes that come close."""
+    """A scene argument as a path: a file that exists as given; else the shipped scene of that name ("taps", or
+    "taps.toml" with a note on stderr saying which file that is — never a path with a folder, "./taps.toml"
+    included); else :class:`SceneError` with the shipped scenes that come close."""
     import difflib
 
     from bench.errors import SceneError
@@ -231,7 +233,9 @@ def scene_file(text: str) -> str:
         return text  # a file, folder or device: the scene loader says what is wrong with it, if anything
     shipped = shipped_scenes()
     name = given.name.removesuffix(".toml")
-    if given.parent == Path(".") and name in shipped:
+    if "/" not in text and os.sep not in text and name in shipped:
+        if text != name:
+            print(f"note: no {text} here: the shipped scene {shipped[name]}", file=sys.stderr)
         return str(shipped[name])
     hint = "give a scene file, or a shipped scene's name (`biotac-bench scenes` lists them"
     near = difflib.get_close_matches(name, list(shipped), n=3, cutoff=0.6)

@@ -11,6 +11,7 @@ import subprocess
 import pytest
 
 from bench.cli import main as cli
+from bench.paths import SCENES_DIR
 from bench.tests.cli_runs import run_cli
 
 SP_SCENE = """
@@ -158,3 +159,17 @@ def test_a_bridge_stopped_while_it_builds_says_so(capsys, monkeypatch, spi, sign
     out, err = capsys.readouterr()
     assert out == "" and err.strip() == (f"{signal_name} while the bridge was starting (building the firmware"
                                          f"{' and the RTL' if spi == 'rtl' else ''}): no port was opened"), err
+
+
+@pytest.mark.unit
+def test_a_scene_path_with_a_folder_is_never_taken_for_a_shipped_scene(tmp_path, monkeypatch, capsys):
+    """`./rest.toml` that is not there is an error (it silently ran the shipped rest); `rest.toml` falls back to the
+    shipped scene with a note naming the file; `rest` does so quietly, as the help says."""
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["validate", "./rest.toml"]) == 1
+    err = capsys.readouterr().err
+    assert "./rest.toml" in err and "No such file or directory" in err and "close matches: rest" in err, err
+    assert cli.main(["validate", "rest.toml", "rest"]) == 0
+    out, err = capsys.readouterr()
+    assert out.count("ok (rest, 10.0 s") == 2
+    assert err.strip() == "note: no rest.toml here: the shipped scene " + str(SCENES_DIR / "rest.toml"), err
