@@ -30,6 +30,13 @@ def too_deep(data, limit: int) -> str | None:
     return None
 
 
+def unprintable(text: str, allowed: str = "") -> bool:
+    """Whether ``text`` holds a control character (other than those in ``allowed``, e.g. line breaks), a NUL or a lone
+    surrogate: text that is written into reports and terminals must not."""
+    return (not text.translate({ord(ch): None for ch in allowed}).isprintable()
+            or any(0xD800 <= ord(ch) <= 0xDFFF for ch in text))
+
+
 def read_text(path: str | Path, error, max_bytes: int, empty_hint: str, folder_hint: str = "") -> str:
     """The text of a TOML file, or ``error(source, [problem])`` naming the file and what is wrong with it:
     unreadable, not a regular file, larger than ``max_bytes``, empty (``empty_hint`` says what it needs), not

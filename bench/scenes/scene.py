@@ -928,6 +928,10 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     if not isinstance(description, str):
         c.problems.append(f"scene.description = {_r(description)}: must be a string")
         description = ""
+    elif tomlfile.unprintable(description, allowed="\n\t"):
+        c.problems.append(f"scene.description = {_r(description)}: must be printable text (line breaks and tabs "
+                          f"aside, no control characters: it is printed and written into report.md)")
+        description = ""
 
     sensor = c.table(data, "sensor", "sensor 1: unit, variant and parameters by name (biotac-bench params, "
                                      "biotac-bench units), its own faults in [sensor.faults]")

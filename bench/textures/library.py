@@ -178,7 +178,7 @@ class _Checker:
         if not isinstance(v, str) or (required and not v.strip()):
             self.add(who, f"{key} = {v!r}: must be {'non-empty ' if required else ''}text")
             return None
-        if not v.isprintable() or any(0xD800 <= ord(ch) <= 0xDFFF for ch in v):
+        if tomlfile.unprintable(v):
             self.add(who, f"{key} = {v!r:.80}: must be printable text (no control characters, NUL or lone "
                           f"surrogates: it is written into reports and tables)")
             return None
