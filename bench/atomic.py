@@ -156,8 +156,8 @@ def atomic_write(final):
     tmp = temp_path(final)
     try:
         yield tmp
+        commit(tmp, final)  # (a folder in the way fails here: the temporary file goes too)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
-    commit(tmp, final)

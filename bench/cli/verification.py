@@ -6,8 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, sigterm_like_ctrl_c, strict_json,
-                            unit_choice, whole)
+from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, replaceable_report,
+                            sigterm_like_ctrl_c, strict_json, unit_choice, whole)
+from bench.errors import OutputNotWritten
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
 
@@ -53,6 +54,12 @@ def _cmd_claims(a) -> int:
             raise ValueError(f"--plots {a.plots}: the frequency-sensitivity plot needs the vibration claims; add "
                              f"--only vibration")
         writable_folder(a.plots, "--plots")
+        from bench.reporting.plots import SENSITIVITY_PLOT
+
+        try:  # only a plot this command wrote is replaced
+            replaceable_report(b"\x89PNG", "a PNG plot")(str(Path(a.plots) / SENSITIVITY_PLOT))
+        except argparse.ArgumentTypeError as e:
+            raise ValueError(f"--plots {a.plots}: {e}") from None
     unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
@@ -87,9 +94,13 @@ def _cmd_claims(a) -> int:
     else:
         print(format_table(claims))
     if a.plots:
-        from bench.reporting.plots import sensitivity_plot
+        from bench.reporting.plots import SENSITIVITY_PLOT, sensitivity_plot
 
-        out = sensitivity_plot(claims, Path(a.plots))
+        try:
+            out = sensitivity_plot(claims, Path(a.plots))
+        except OSError as e:
+            raise OutputNotWritten(f"--plots {a.plots}: {SENSITIVITY_PLOT} could not be written ({e.strerror or e}); the "
+                                   f"claims above ran and are reported") from None
         print(f"wrote {out}", file=sys.stderr)
     return 0 if all(c.ok for c in claims) else 1
 

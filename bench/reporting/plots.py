@@ -273,6 +273,10 @@ def electrode_map(rec, path: Path) -> None:
         ax.set_aspect("equal")
 
 
+#: the file :func:`sensitivity_plot` writes into its folder (claims --plots)
+SENSITIVITY_PLOT = "frequency_sensitivity.png"
+
+
 def sensitivity_plot(claims, out_dir: Path) -> Path:
     """d_min versus frequency for the sensor, with the human threshold curve (D Fig. 5-4)."""
     from bench.verification.psychophysics import human_threshold_m
@@ -284,7 +288,7 @@ def sensitivity_plot(claims, out_dir: Path) -> Path:
     dm = np.array([d[x] for x in f])
     ff = np.geomspace(10, 900, 200)
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / "frequency_sensitivity.png"
+    path = out_dir / SENSITIVITY_PLOT
     with figure_file(path, figsize=(7, 4.5)) as (_, ax):
         ax.loglog(ff, human_threshold_m(ff) * 1e6, color="tab:green",
                   label="human threshold (Bolanowski et al. 1988, thenar)")

@@ -48,3 +48,43 @@ def test_figures_is_the_only_module_that_saves_a_figure():
     writers = sorted(str(p.relative_to(root)) for d in ("bench", "emulator") for p in (root / d).rglob("*.py")
                      if "tests" not in p.parts and ".savefig(" in p.read_text(encoding="utf-8"))
     assert writers == ["bench/reporting/figures.py"]
+
+
+def test_a_folder_in_a_files_way_leaves_no_temporary_file(tmp_path):
+    """atomic_write's rename onto a folder fails after the file was written: the error is raised and the temporary
+    .part goes too (it was left beside the folder)."""
+    from bench.atomic import atomic_write
+
+    (tmp_path / "x.png").mkdir()
+    with pytest.raises(IsADirectoryError):
+        with atomic_write(tmp_path / "x.png") as tmp:
+            tmp.write_bytes(b"\x89PNG...")
+    assert [p.name for p in tmp_path.iterdir()] == ["x.png"] and (tmp_path / "x.png").is_dir()
+
+
+@pytest.mark.parametrize("in_the_way", ["a file", "a folder"])
+def test_claims_plots_refuses_what_it_did_not_write_before_running(tmp_path, capsys, in_the_way):
+    """--plots DIR holding a frequency_sensitivity.png the command did not write (notes, a folder): exit 2 before
+    any claim runs, the thing untouched; an earlier plot is replaced."""
+    from bench.cli import main as cli
+
+    target = tmp_path / "frequency_sensitivity.png"
+    if in_the_way == "a file":
+        target.write_text("my notes")
+    else:
+        target.mkdir()
+    assert cli.main(["claims", "--only", "vibration", "--quick", "--plots", str(tmp_path)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and f"--plots {tmp_path}: {target}" in err and "Traceback" not in err, err
+    assert target.read_text() == "my notes" if in_the_way == "a file" else target.is_dir()
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]
+
+
+def test_claims_plots_replaces_its_own_earlier_plot(tmp_path, capsys):
+    from bench.cli import main as cli
+
+    target = tmp_path / "frequency_sensitivity.png"
+    target.write_bytes(b"\x89PNG earlier")
+    assert cli.main(["claims", "--only", "vibration", "--quick", "--plots", str(tmp_path)]) == 0
+    assert target.read_bytes()[:4] == b"\x89PNG" and len(target.read_bytes()) > 1000
+    assert f"wrote {target}" in capsys.readouterr().err
