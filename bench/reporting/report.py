@@ -149,7 +149,7 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
     if "PAC" in summary.channels:
         base, sigma = resting_stats(rec, "PAC")
         record["pac_resting"] = {"baseline_code": base, "sigma_bits": sigma}
-    if sc.impact_detection:
+    if sc.impact_detection and any(isinstance(s, SphereDrop) for s in sc.stimuli):  # (a finger with drops to judge)
         record["impact_detection"] = impact_results(rec)
     if getattr(rec, "slides", None) or getattr(sc, "skin_before", None):
         record["sliding"] = {"skin_before": sc.skin_before, "skin_after": sc.skin_after,

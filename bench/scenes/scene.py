@@ -142,7 +142,8 @@ class Scene:
                                    skin_before=sp.skin_before, skin_after=sp.skin_after,
                                    trial_skins=list(sp.trial_skins), faults=dict(sp.faults),
                                    common_faults=dict(sp.faults),
-                                   impact_detection=self.impact_detection and k == 1)
+                                   impact_detection=self.impact_detection
+                                   and any(isinstance(s, SphereDrop) for s in sp.stimuli))
 
     @property
     def channels(self) -> list[str]:
@@ -786,27 +787,27 @@ def _check_slides(c: _Checker, specs: list, sequence, slot_rate: float, variant:
 
 
 def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: float, stimuli,
-                            variant: str = "biotac") -> None:
-    """``impact_detection`` needs PAC at a rate the rule can use and sphere drops it can judge (sensor 1's, of
-    ``variant``)."""
+                            variant: str = "biotac", sensor: int | None = None) -> None:
+    """``impact_detection`` needs PAC at a rate the rule can use on each sensor with sphere drops (``stimuli``:
+    sensor ``sensor``'s, of ``variant``), and time after each drop for the rule's window."""
     min_points, window_s = IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S
+    on = f" (sensor {sensor})" if sensor is not None else ""
     seq = list(_frame(variant) if sequence == "default" else sequence)
     if "PAC" not in seq:
-        c.problems.append(f"analysis.impact_detection = true: the rule reads PAC, and host.sequence = {_r(sequence)} "
-                          f"does not read it; add \"PAC\" or switch impact detection off")
+        problem = (f"analysis.impact_detection = true: the rule reads PAC, and host.sequence = {_r(sequence)} "
+                   f"does not read it; add \"PAC\" or switch impact detection off")
+        if problem not in c.problems:
+            c.problems.append(problem)
         return
     pac_Hz = slot_rate * seq.count("PAC") / len(seq)
     need_Hz = (min_points + 1) / window_s
     if pac_Hz < need_Hz:
-        c.problems.append(f"analysis.impact_detection = true: PAC is read at {pac_Hz:.3g} Hz (host.slot_rate_Hz = "
+        c.problems.append(f"analysis.impact_detection = true{on}: PAC is read at {pac_Hz:.3g} Hz (host.slot_rate_Hz = "
                           f"{slot_rate:g}, {seq.count('PAC')} of {len(seq)} slots); the rule needs more than "
                           f"{min_points} samples within {window_s * 1e3:.0f} ms, so at least {need_Hz:g} Hz")
-    drops = [s for s in stimuli if isinstance(s, SphereDrop)]
-    if not drops:
-        c.problems.append("analysis.impact_detection = true: the scene has no sphere_drop to judge")
-    for s in drops:
+    for s in (x for x in stimuli if isinstance(x, SphereDrop)):
         if s.time_s + window_s > duration:
-            c.problems.append(f"analysis.impact_detection = true: the sphere drop at {s.time_s} s is judged over "
+            c.problems.append(f"analysis.impact_detection = true: the sphere drop at {s.time_s} s{on} is judged over "
                               f"{window_s * 1e3:.0f} ms after it, past the end of the scene (duration_s = "
                               f"{duration:g}); drop it earlier or lengthen the scene")
 
@@ -1031,7 +1032,13 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         for k, specs in slide_specs_of.items():
             _check_slides(c, specs, sequence, float(slot_rate), variant_of[k])
         if impact_detection:
-            _check_impact_detection(c, sequence, float(slot_rate), float(duration), stimuli, variant)
+            judged = {k: lst for k, lst in per_sensor.items() if any(isinstance(x, SphereDrop) for x in lst)}
+            if not judged:
+                c.problems.append("analysis.impact_detection = true: the scene has no sphere_drop to judge"
+                                  + (" on any sensor" if len(per_sensor) > 1 else ""))
+            for k, lst in sorted(judged.items()):
+                _check_impact_detection(c, sequence, float(slot_rate), float(duration), lst,
+                                        variant_of.get(k, variant), sensor=k if len(per_sensor) > 1 else None)
 
     if fidelity and duration:
         from emulator.fidelity import profile

@@ -196,3 +196,39 @@ def test_each_finger_draws_its_slides_start_positions_from_its_own_seed():
     """Sensor k draws from seed + k − 1 (README): finger 2's slide starts where a one-finger scene of seed 8 starts,
     not where finger 1's of seed 7 does — two fingers never slide over the same spot by accident."""
     assert _slide_start_m(7, sensor=2) == _slide_start_m(8, sensor=1) != _slide_start_m(7, sensor=1)
+
+
+DROPS_ON_FINGER_2 = """
+[scene]
+name = "drops-on-finger-2"
+duration_s = 2.0
+seed = 3
+[analysis]
+impact_detection = true
+[[sensors]]
+index = 2
+[[stimulus]]
+kind = "sphere_drop"
+sphere = "1 mm aluminum bearing"
+at_s = [0.5, 1.0]
+sensor = 2
+"""
+
+
+def test_impact_detection_judges_the_drops_of_every_finger(tmp_path):
+    """Drops only on finger 2 (the scene was refused: "no sphere_drop to judge"): finger 2's record and report carry
+    D's rule applied to its two drops of a 1 mm aluminum bearing from 7 cm — detected, as D Table 5-2 has it —
+    and finger 1, with nothing dropped on it, carries no detection table."""
+    import json
+
+    from bench.cli import main as cli
+
+    scene = tmp_path / "drops.toml"
+    scene.write_text(DROPS_ON_FINGER_2)
+    out = tmp_path / "o"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet", "--no-plots"]) == 0
+    first, second = (json.loads((out / sub / "record.json").read_text()) for sub in (".", "sensor2"))
+    assert "impact_detection" not in first
+    assert second["impact_detection"]["spheres"]["1 mm aluminum bearing"] | {"energy_uJ": None} == {
+        "mass_mg": pytest.approx(1.461, abs=1e-3), "energy_uJ": None, "drops": 2, "detected": 2, "detection_rate": 1.0}
+    assert "## Impact detection" in (out / "sensor2" / "report.md").read_text()
