@@ -993,6 +993,13 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                 c.problems.append(f"{b.where}: the slide starting at {b.start_s} s overlaps the one of {a.where} "
                                   f"(from {a.start_s} s to {a.end_s:.3f} s); one finger slides on one texture at a "
                                   f"time" + (f" (both on sensor {k})" if k != 1 else ""))
+        for press in (x for x in per_sensor.get(k, []) if isinstance(x, (Tap, Press))):
+            for a in ordered:
+                if press.start_s < a.end_s and a.start_s < press.end_s:
+                    c.problems.append(f"the {type(press).__name__.lower()} from {press.start_s:g} s to "
+                                      f"{press.end_s:.3f} s{f' on sensor {k}' if k != 1 else ''} falls during the "
+                                      f"slide of {a.where} ({a.start_s} s to {a.end_s:.3f} s): the slide sets the "
+                                      f"finger's normal force; give it another finger or another time")
         for r in (s for s in specs if isinstance(s, SkinReplacement)):
             for a in ordered:
                 if a.start_s < r.at_s < a.end_s:

@@ -1270,6 +1270,11 @@ CATALOGUE += [
            "        if self.minimum_gap_mm >= self.resting_gap_mm:", "        if False:",
            ("bench/tests/test_hostile_input.py", "bench/tests/test_scene_combinations.py"),
            "a sensor whose skin bottoms further from the core than it rests is accepted: its electrodes respond backwards"),
+    Mutant("impact-detection-on-finger-1-only", "scenes", "bench/scenes/scene.py",
+           "                                   and any(isinstance(s, SphereDrop) for s in sp.stimuli))",
+           "                                   and k == 1)",
+           ("bench/tests/test_multi_finger.py::test_impact_detection_judges_the_drops_of_every_finger",),
+           "D's detection rule is applied to sensor 1's drops only: another finger's drops go unjudged"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
