@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import re
 import signal
 import sys
 from dataclasses import dataclass
@@ -44,7 +45,11 @@ class ClusterSpec:
 
     @classmethod
     def from_env(cls, scheduler: str | None = None, workers: int | None = None) -> "ClusterSpec":
-        return cls(scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None, workers)
+        """``scheduler`` (checked), else ``DASK_SCHEDULER_ADDRESS`` (checked), else a LocalCluster of ``workers``."""
+        if scheduler:
+            return cls(check_address(scheduler, "--scheduler"), workers)
+        env = os.environ.get("DASK_SCHEDULER_ADDRESS")
+        return cls(check_address(env, "DASK_SCHEDULER_ADDRESS") if env else None, workers)
 
     def describe(self) -> str:
         return f"scheduler {self.scheduler}" if self.scheduler else f"LocalCluster, {self.n_workers} worker(s)"
@@ -52,6 +57,20 @@ class ClusterSpec:
     @property
     def n_workers(self) -> int:
         return self.workers or max(1, os.cpu_count() or 1)
+
+
+#: a scheduler address: [protocol://]host:port (a host name, an IPv4 address or a bracketed IPv6 one)
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(\d{1,5})$")
+
+
+def check_address(text: str, where: str) -> str:
+    """``text`` if it is a Dask scheduler's address (``tcp://HOST:PORT``, or ``HOST:PORT``), else ValueError naming
+    ``where`` (the flag or the environment variable) — instead of distributed's words about a port, later."""
+    m = _ADDRESS.match(text.strip())
+    if not m or not 0 < int(m.group(3)) < 65536:
+        raise ValueError(f"{where} {text!r}: not a scheduler address; give tcp://HOST:PORT (the scheduler prints its "
+                         f"own, e.g. tcp://10.0.0.5:8786)")
+    return text.strip()
 
 
 @contextlib.contextmanager

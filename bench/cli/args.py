@@ -94,7 +94,18 @@ def add_cluster_arguments(parser) -> None:
     """``--workers`` and ``--scheduler``, as every command that runs on Dask takes them."""
     parser.add_argument("--workers", type=local_workers,
                         help=f"LocalCluster worker processes, 1 to {MAX_LOCAL_WORKERS} (default: one per core)")
-    parser.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS)")
+    parser.add_argument("--scheduler", type=scheduler_address,
+                        help="address of an existing Dask scheduler, tcp://HOST:PORT (or DASK_SCHEDULER_ADDRESS)")
+
+
+def scheduler_address(text: str) -> str:
+    """argparse type of ``--scheduler``: a Dask scheduler's address (:func:`bench.campaigns.engine.check_address`)."""
+    from bench.campaigns.engine import check_address
+
+    try:
+        return check_address(text, "--scheduler")
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e).removeprefix("--scheduler ")) from None
 
 
 #: argparse type of every ``--seed``: 0 to 2**63 − 1 (what numpy's seeding and the trial seeds take)

@@ -9,7 +9,7 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import (Terminated, any_seed, existing_file, number, one_line_errors, output_file, sigterm_raises,
+from bench.cli.args import (Terminated, any_seed, number, one_line_errors, output_file, sigterm_raises,
                             whole)
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
@@ -390,6 +390,8 @@ def _cmd_record(a) -> int:
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
+    from bench.cli.scenes import scene_argument
+
     br = one_line_errors(sub.add_parser(
         "bridge", help="run the bridge firmware against emulated sensors on a serial port (pty)",
         description="Compiles and runs the reference bridge firmware (firmware_tests/firmware) against emulated "
@@ -403,7 +405,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "SIGTERM.", formatter_class=fmt))
     br.add_argument("--sensors", type=whole(1, 5), default=None,
                     help="emulated sensors, 1 to 5 (default: the scene's count with --scene, else 1)")
-    br.add_argument("--scene", type=existing_file, help="scene file: sensors built from it (units, variants, each its own "
+    br.add_argument("--scene", type=scene_argument, help="scene file or shipped scene name: sensors built from it (units, variants, each its own "
                                                            "stimuli; --sensors, if given, at least the scene's count)")
     br.add_argument("--seed", type=any_seed,
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, replaceable_report,
-                            sigterm_like_ctrl_c, strict_json, unit_choice, whole)
+                            scheduler_address, sigterm_like_ctrl_c, strict_json, unit_choice, whole)
 from bench.errors import OutputNotWritten
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.fidelity import PROFILES
@@ -184,7 +184,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     c.add_argument("--workers", type=local_workers, help=f"LocalCluster worker processes, 1 to {MAX_LOCAL_WORKERS} "
                    "(default: one per core); with "
                    "--seeds for every (seed, group) task, and for the exploration group's experiment")
-    c.add_argument("--scheduler", help="address of an existing Dask scheduler (or DASK_SCHEDULER_ADDRESS); used as "
+    c.add_argument("--scheduler", type=scheduler_address,
+                   help="address of an existing Dask scheduler, tcp://HOST:PORT (or DASK_SCHEDULER_ADDRESS); used as "
                    "--workers is")
     c.add_argument("--unit", type=unit_choice, default=None,
                    help="run the claims on this sensor unit: a unit seed, \"nominal\" (default) or a serial "

@@ -856,7 +856,7 @@ def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _
     changes = {}
     for k, v in table.items():
         if k in PARAMETER_FIELDS:
-            if isinstance(v, int) and not _real(v):
+            if isinstance(v, int) and not isinstance(v, bool) and not _real(v):  # (a bool: not a number)
                 unit_, (lo, hi) = PARAMETER_FIELDS[k].metadata["unit"], PARAMETER_FIELDS[k].metadata["range"]
                 c.problems.append(f"{where}.{k} = {_r(v)}: allowed range is {lo} to {hi} {unit_}")
                 continue

@@ -103,3 +103,19 @@ def test_a_local_cluster_does_not_fight_over_the_dashboard_port():
     finally:
         holder.close()
     assert not [w for w in caught if "8787" in str(w.message)]
+
+
+@pytest.mark.parametrize("address", ["garbage", "tcp://host", "tcp://host:0", "host:99999", "http://host:8786", ""])
+def test_a_scheduler_address_that_is_none_is_named_with_its_flag_or_variable(address, monkeypatch):
+    """Refused before any connection, naming --scheduler or DASK_SCHEDULER_ADDRESS (distributed said "missing port
+    number in address 'garbage'", naming neither); addresses as schedulers print them pass."""
+    from bench.campaigns.engine import check_address
+
+    with pytest.raises(ValueError, match="--scheduler .*not a scheduler address; give tcp://HOST:PORT"):
+        check_address(address, "--scheduler")
+    if address:
+        monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)
+        with pytest.raises(ValueError, match="DASK_SCHEDULER_ADDRESS .*not a scheduler address"):
+            ClusterSpec.from_env()
+    for good in ("tcp://10.0.0.5:8786", "10.0.0.5:8786", "tcp://[::1]:8786", "tls://sched.example.org:8786"):
+        assert check_address(good, "--scheduler") == good

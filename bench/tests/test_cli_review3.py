@@ -173,3 +173,8 @@ def test_a_scene_path_with_a_folder_is_never_taken_for_a_shipped_scene(tmp_path,
     out, err = capsys.readouterr()
     assert out.count("ok (rest, 10.0 s") == 2
     assert err.strip() == "note: no rest.toml here: the shipped scene " + str(SCENES_DIR / "rest.toml"), err
+
+
+def test_bridge_takes_a_shipped_scene_by_name_as_run_does(capsys):
+    assert cli.main(["bridge", "--scene", "taps", "--fast", "--seconds", "0.2"]) == 0
+    assert "built from scene 'taps'" in capsys.readouterr().out
