@@ -47,6 +47,9 @@ class ClusterSpec:
     def from_env(cls, scheduler: str | None = None, workers: int | None = None) -> "ClusterSpec":
         """``scheduler`` (checked), else ``DASK_SCHEDULER_ADDRESS`` (checked), else a LocalCluster of ``workers``."""
         if scheduler:
+            if workers is not None:
+                raise ValueError(f"--workers {workers} sizes the LocalCluster this command would start; an existing "
+                                 f"cluster (--scheduler {scheduler}) runs on its own workers: give one or the other")
             return cls(check_address(scheduler, "--scheduler"), workers)
         env = os.environ.get("DASK_SCHEDULER_ADDRESS")
         return cls(check_address(env, "DASK_SCHEDULER_ADDRESS") if env else None, workers)

@@ -198,12 +198,20 @@ def _entry_inside(path, folder) -> str | None:
     return None
 
 
+#: explore's stage cache unless --cache says otherwise
+DEFAULT_CACHE = "out/cache"
+
+
 def _cmd_explore(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.experiment import ablated, identified_among, load_experiment, run_experiment, summary
     from bench.reporting.experiment_report import OUTPUT_FILES, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, writable_folder
 
+    if a.no_cache and a.cache is not None:
+        raise ValueError(f"--cache {a.cache} with --no-cache: --no-cache runs every trial again and caches nothing; "
+                         f"give one or the other")
+    a.cache = a.cache or DEFAULT_CACHE
     spec = load_experiment(a.experiment)
     if not a.no_cache and a.out is not None and Path(a.cache).resolve() == Path(a.out).resolve():
         raise ValueError(f"--cache {a.cache} is --out: the results and the stage cache need folders of their own (the "
@@ -259,7 +267,7 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                                         "stage cache is kept, so no trial runs again")
     e.add_argument("--ablation", choices=list(ABLATIONS) + ["all"], help="also run a variant and compare")
     add_cluster_arguments(e)
-    e.add_argument("--cache", default="out/cache", help="where stage results are cached, kept across runs")
+    e.add_argument("--cache", help=f"where stage results are cached, kept across runs (default: {DEFAULT_CACHE})")
     e.add_argument("--no-cache", action="store_true", help="run every trial again")
     e.add_argument("--quiet", action="store_true", help="no progress bars")
     e.set_defaults(func=sigterm_like_ctrl_c(_cmd_explore))

@@ -93,6 +93,9 @@ def _table(textures) -> str:
 def _cmd_textures(a) -> int:
     from bench.textures.library import UnknownTextureError, load_library, texture, texture_record
 
+    if a.show is not None and a.group:
+        raise ValueError(f"--show {a.show} prints one texture and --group {a.group} filters the list: give one or the "
+                         f"other")
     lib = load_library(a.library)
     if a.show is not None:
         try:

@@ -224,6 +224,10 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.replace_skin = get("training", "replace_skin", bool, default=spec.replace_skin)
     spec.replace_at = get("training", "replace_at", float, 0.01, 1.0, spec.replace_at)
     pairs = t["validation"].get("pairs")
+    chosen_by = [k for k in ("n_pairs", "pair_choice") if k in t["validation"]]
+    if pairs is not None and chosen_by:
+        problems.append(f"validation.pairs is given, with validation.{' and '.join(chosen_by)}: those choose the pairs "
+                        f"when none are given; give one or the other")
     if pairs is not None:
         if not isinstance(pairs, list) or not all(isinstance(p, list) and len(p) == 2 and all(
                 isinstance(n, int) and not isinstance(n, bool) for n in p) for p in pairs):

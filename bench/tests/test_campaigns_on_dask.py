@@ -223,8 +223,16 @@ def test_the_exploration_group_runs_its_experiment_on_the_claims_cluster(extra, 
     monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
     monkeypatch.setattr(exploration, "run_experiment", reached)
     with pytest.raises(_ExperimentReached):
-        cli.main(["claims", "--only", "exploration", "--scheduler", "tcp://127.0.0.1:1", "--workers", "1", *extra])
-    assert [(c.scheduler, c.workers) for c in seen] == [("tcp://127.0.0.1:1", 1)]
+        cli.main(["claims", "--only", "exploration", "--scheduler", "tcp://127.0.0.1:1", *extra])
+    assert [(c.scheduler, c.workers) for c in seen] == [("tcp://127.0.0.1:1", None)]
+
+
+@pytest.mark.parametrize("command", [["campaign", "--faults", "none", "--scenes", "rest"],
+                                     ["claims", "--only", "exploration", "--seeds", "1"]])
+def test_workers_and_a_scheduler_together_are_refused_not_one_ignored(command, capsys):
+    assert cli.main([*command, "--scheduler", "tcp://127.0.0.1:1", "--workers", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--workers 2 sizes the LocalCluster" in err and "give one or the other" in err and "Traceback" not in err
 
 
 def dask_workers_of(proc, n: int, within_s: float = 60.0) -> list:

@@ -178,3 +178,17 @@ def test_a_scene_path_with_a_folder_is_never_taken_for_a_shipped_scene(tmp_path,
 def test_bridge_takes_a_shipped_scene_by_name_as_run_does(capsys):
     assert cli.main(["bridge", "--scene", "taps", "--fast", "--seconds", "0.2"]) == 0
     assert "built from scene 'taps'" in capsys.readouterr().out
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("argv, words", [
+    (["textures", "--group", "glass", "--show", "10"], "--show 10 prints one texture and --group glass filters"),
+    (["explore", "fishel2012", "--no-cache", "--cache", "elsewhere"], "--cache elsewhere with --no-cache"),
+])
+def test_options_one_of_which_would_be_ignored_are_refused(argv, words, capsys, tmp_path, monkeypatch):
+    """Each pair used to run with one option silently ignored (the group, the cache folder)."""
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and words in err and "give one or the other" in err and "Traceback" not in err, err
+    assert list(tmp_path.iterdir()) == []

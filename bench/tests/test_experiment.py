@@ -60,6 +60,8 @@ def test_shipped_experiment_files_validate():
     ({"exploration": {"strategies": [{"a": 1}]}}, ["exploration.strategies"]),
     ({"pilot": {"movements": [35, 34, 29]}}, ["pilot.movements = [35, 34, 29]", "every one is a high-power movement",
                                              "exclude_high_power = false"]),
+    ({"validation": {"pairs": [[2, 3]], "n_pairs": 4}}, ["validation.pairs is given, with validation.n_pairs"]),
+    ({"validation": {"pairs": [[2, 3]], "pair_choice": "most-confused"}}, ["with validation.pair_choice"]),
 ])
 def test_bad_experiment_files_name_field_and_value(data, words):
     with pytest.raises(E.ExperimentError) as e:
