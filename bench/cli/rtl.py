@@ -44,7 +44,8 @@ def vector_file_problem(path: str) -> str | None:
     if missing:
         return f"not a vector file (missing {', '.join(missing)})"
     sensors = vec["sensors"]
-    if not (isinstance(sensors, list) and sensors and all(isinstance(s, int) and 1 <= s <= 5 for s in sensors)):
+    if not (isinstance(sensors, list) and sensors
+            and all(isinstance(s, int) and not isinstance(s, bool) and 1 <= s <= 5 for s in sensors)):
         return "not a vector file (sensors must be a list of sensor numbers 1..5)"
     if not isinstance(vec["pull_up"], bool) or not isinstance(vec["faults"], dict):
         return "not a vector file (pull_up must be true/false, faults an object)"
@@ -65,9 +66,10 @@ def vector_file_problem(path: str) -> str | None:
                 and 0 <= d["t_ps"] <= MAX_T_PS):
             return (f"not a vector file (transfers[{k}] out of range: half_ps ≥ {MIN_HALF_PS}, nbits 0..64, cs 0..7, "
                     f"t_ps 0..{MAX_T_PS})")
-        if d["mosi"].strip().startswith("-") or int(d["mosi"], 16) >> d["nbits"]:
-            return (f"not a vector file (transfers[{k}].mosi = {d['mosi']!r}: a hex number of at most its "
-                    f"{d['nbits']} bits)")
+        for line in ("mosi", "miso"):
+            if d[line].strip().startswith("-") or int(d[line], 16) >> d["nbits"]:
+                return (f"not a vector file (transfers[{k}].{line} = {d[line]!r}: a hex number of at most its "
+                        f"{d['nbits']} bits)")
         if k and d["t_ps"] < end_ps(vec["transfers"][k - 1]):
             return f"not a vector file (transfers[{k}] starts before transfers[{k - 1}] ends: t_ps must rise)"
     if not vec["transfers"]:
@@ -90,7 +92,8 @@ def vector_file_problem(path: str) -> str | None:
             return f"not a vector file (faults[{key!r}] = {f!r:.80}: a sensor of sensors -> its faults' fields)"
     resets = vec.get("resets", {})
     if not isinstance(resets, dict) or not all(
-            k.isdigit() and int(k) < len(vec["transfers"]) and isinstance(v, list) and all(n in sensors for n in v)
+            k.isascii() and k.isdigit() and k == str(int(k)) and int(k) < len(vec["transfers"]) and isinstance(v, list)
+            and all(isinstance(n, int) and not isinstance(n, bool) and n in sensors for n in v)
             for k, v in resets.items()):
         return "not a vector file (resets: transfer index -> list of sensors reset before it)"
     return None

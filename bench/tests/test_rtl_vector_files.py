@@ -47,6 +47,11 @@ BAD = {
     "negative MOSI": (_set(("transfers", 0, "mosi"), "-1"), "mosi = '-1'"),
     "MOSI wider than its bits": (_set(("transfers", 0, "mosi"), "ffffffffff"), "at most its 16 bits"),
     "no transfers": (_set(("transfers",), []), "no transfers"),
+    # a second hostile pass: an int() traceback without the file, and values read as something else
+    "a reset key that is a superscript digit": (_set(("resets",), {"²": [1]}), "resets"),
+    "a reset key written twice as 0 and 00": (_set(("resets",), {"0": [1], "00": [1]}), "resets"),
+    "a sensor that is a boolean": (_set(("sensors",), [True]), "sensors must be a list of sensor numbers"),
+    "MISO wider than its bits": (_set(("transfers", 0, "miso"), "ffffffffff"), "miso = 'ffffffffff'"),
 }
 
 
