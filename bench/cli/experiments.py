@@ -78,14 +78,16 @@ def _texture_numbers(text: str) -> list[int]:
 
 def _open_out(path, default, force: bool, kind, keep=()):
     """The out folder, checked and locked: ``path`` (refused if it holds anything but ``keep``, unless ``force``)
-    or, without it, a fresh ``default[-n]`` (``default`` itself with ``force``) — as ``run`` does."""
+    or, without it, a fresh ``default[-n]`` (``default`` itself with ``force``) — as ``run`` does.  The earlier
+    results ``force`` replaces stay until ``clear_earlier()``, called as the new ones are written: a sweep or an
+    experiment that fails or is stopped first leaves them as they were."""
     from pathlib import Path
 
     from bench.reporting.outdir import OutFolder, fresh_folder
 
     if path is None:
-        return fresh_folder(Path(default), force=force, kind=kind)
-    return OutFolder.open(path, force=force, kind=kind, keep=keep)
+        return fresh_folder(Path(default), force=force, kind=kind, defer_clearing=True)
+    return OutFolder.open(path, force=force, kind=kind, keep=keep, defer_clearing=True)
 
 
 def _cmd_texture_sweep(a) -> int:
@@ -113,6 +115,7 @@ def _cmd_texture_sweep(a) -> int:
         rows = sweep(tasks, spec=spec, progress=not a.quiet)
         wall = time.perf_counter() - t0
         with signals_held():  # a signal meanwhile: every file finished first, then the stop
+            folder.clear_earlier()
             write_rows_csv(out / "trials.csv", rows)
             write_text(out / "trials.json", strict_json({"wall_s": wall, "workers": spec.describe(), "rows": rows},
                                                         indent=1))
@@ -142,8 +145,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
     s.add_argument("--out", help="output folder (default: a fresh out/texture-sweep[-n]); refused if it holds "
                                  "anything, unless --force")
-    s.add_argument("--force", action="store_true", help="replace an earlier sweep's files in --out (anything else "
-                                                        "there is still refused)")
+    s.add_argument("--force", action="store_true", help="replace an earlier sweep's files in --out as the new ones "
+                                                        "are written (anything else there is still refused)")
     add_cluster_arguments(s)
     s.add_argument("--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=sigterm_like_ctrl_c(_cmd_texture_sweep))
@@ -236,6 +239,7 @@ def _cmd_explore(a) -> int:
                                     log=lambda m: print(m, file=sys.stderr))
             where = out if label == "baseline" else out / label
             with signals_held():
+                folder.clear_earlier()  # (once: the baseline's results come first)
                 files = write_outputs(result, where)
             rows.append((label, what, summary(result), identified_among(result)))
             print(f"wrote {where}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
@@ -262,8 +266,9 @@ def add_explore_command(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     e.add_argument("experiment", help="experiment file (TOML), e.g. fixtures/experiments/fishel2012.toml")
     e.add_argument("--out", help="output folder (default: a fresh out/explore/<name>[-n]); refused if it holds "
                                  "anything, unless --force")
-    e.add_argument("--force", action="store_true", help="replace the earlier results in --out (its ablation "
-                                                        "folders too; anything else there is still refused); the "
+    e.add_argument("--force", action="store_true", help="replace the earlier results in --out as the new ones "
+                                                        "are written (its ablation folders too; anything else there "
+                                                        "is still refused); the "
                                                         "stage cache is kept, so no trial runs again")
     e.add_argument("--ablation", choices=list(ABLATIONS) + ["all"], help="also run a variant and compare")
     add_cluster_arguments(e)

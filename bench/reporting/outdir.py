@@ -88,20 +88,22 @@ class OutFolder:
 
     def __init__(self, path: Path, lock_fd: int, flag: str = "--out", kind: FolderKind = RUN):
         self.path, self._lock_fd, self.flag, self.kind = path, lock_fd, flag, kind
+        self._deferred_keep: tuple[str, ...] | None = None  # earlier results to remove at clear_earlier()
 
     # ---- opening
     @classmethod
     def open(cls, path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN,
-             keep: tuple[str, ...] = ()) -> "OutFolder":
+             keep: tuple[str, ...] = (), defer_clearing: bool = False) -> "OutFolder":
         """Check, create and lock ``path``; refuse it if it holds anything but ``keep`` (names of entries to leave
-        alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before."""
+        alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before — at once,
+        or, with ``defer_clearing``, only at :meth:`clear_earlier` (a long command that fails first keeps them)."""
         p = _make_folder(path, flag)
         where = f"{flag} {os.fspath(path)!r}"
         fd = _lock(p, where, flag)
         folder = cls(p, fd, flag, kind)
         try:
             folder._probe_writable()
-            folder._prepare(force, keep)
+            folder._prepare(force, keep, remove=not defer_clearing)
         except OSError as e:
             folder.close()
             raise OutDirError(f"{where}: {e.strerror or e}") from None
@@ -121,11 +123,18 @@ class OutFolder:
         os.close(fd)
         os.unlink(name)
 
-    def _prepare(self, force: bool, keep: tuple[str, ...] = ()) -> None:
+    def clear_earlier(self) -> None:
+        """Remove the earlier results that :meth:`open` with ``defer_clearing`` left in place (the tree checked
+        again), just before the new ones are written; nothing if there were none or they are already gone."""
+        if self._deferred_keep is not None:
+            keep, self._deferred_keep = self._deferred_keep, None
+            self._prepare(True, keep)
+
+    def _prepare(self, force: bool, keep: tuple[str, ...] = (), remove: bool = True) -> None:
         """Refuse a folder that is not empty unless ``force``; with it, check the whole tree first (every entry of
         the folder and of each of ``kind``'s subfolders, symbolic links not followed) and remove nothing unless
-        all of it is the command's own — then remove ``record.json`` first (never a stale "ok"), then the
-        subfolders, then the rest."""
+        all of it is the command's own — then (``remove``; else at :meth:`clear_earlier`) remove ``record.json``
+        first (never a stale "ok"), then the subfolders, then the rest."""
         entries = sorted(e.name for e in os.scandir(self.path) if e.name != LOCK_NAME and e.name not in keep)
         if not entries:
             return
@@ -142,6 +151,9 @@ class OutFolder:
         if foreign:
             raise OutDirError(f"{self._where()}: --force only replaces {self.kind.what}, and the folder also "
                               f"holds: {', '.join(foreign[:6])}" + (" …" if len(foreign) > 6 else ""))
+        if not remove:
+            self._deferred_keep = keep
+            return
         locks = []  # each subfolder locked (a writer still in one is refused) before anything is removed
         try:
             for name in subfolders:
@@ -285,7 +297,8 @@ def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> 
     return files, subfolders, foreign
 
 
-def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN) -> OutFolder:
+def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN,
+                 defer_clearing: bool = False) -> OutFolder:
     """The default out folder: ``base`` if it is absent or empty, else ``base-2``, ``base-3``, … — the first
     that is free and not locked by another run (with ``force``: ``base``, its earlier files replaced)."""
     last = None
@@ -294,7 +307,7 @@ def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: Fol
         if not force and p.is_dir() and any(e.name != LOCK_NAME for e in os.scandir(p)):
             continue
         try:
-            return OutFolder.open(p, force=force, flag=flag, kind=kind)
+            return OutFolder.open(p, force=force, flag=flag, kind=kind, defer_clearing=defer_clearing)
         except OutDirError as e:
             last = e
             if "is writing into this folder" in str(e) or "not empty" in str(e):

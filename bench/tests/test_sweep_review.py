@@ -187,6 +187,40 @@ def test_explore_protects_its_results_and_reruns_from_the_cache(tmp_path, monkey
     assert cli.main([*inner, "--force"]) == 0 and sorted(p.name for p in (out / "cache").iterdir()) == kept
 
 
+def test_force_keeps_the_earlier_results_until_the_new_ones_are_written(tmp_path, monkeypatch, no_cluster, capsys):
+    """explore and texture-sweep with --force: a run that fails before its results exist (an experiment refused
+    mid-way, a sweep whose cluster dies) leaves the earlier results as they were — they used to be removed when the
+    folder was opened, leaving only the lock."""
+    from bench.experiments.exploration import ExplorationError
+
+    exp, out = tmp_path / "tiny.toml", tmp_path / "res"
+    exp.write_text(TINY.format(max_moves=10))
+    explore = ["explore", str(exp), "--cache", str(tmp_path / "cache"), "--quiet", "--out", str(out)]
+    assert cli.main(explore) == 0
+    before = {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+
+    def refused(*args, **kwargs):
+        raise ExplorationError("every movement is excluded")
+
+    monkeypatch.setattr(E, "run_experiment", refused)
+    assert cli.main([*explore, "--force"]) == 2
+    assert "every movement is excluded" in capsys.readouterr().err
+    assert {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()} == before
+
+    monkeypatch.setattr(T, "sweep", _in_process_sweep)
+    sweep = ["texture-sweep", "--textures", "902", "--movements", "21", "--trials", "1", "--quiet", "--out",
+             str(tmp_path / "sweep")]
+    assert cli.main(sweep) == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "sweep").iterdir()}
+
+    def cluster_died(*args, **kwargs):
+        raise OSError("the cluster went away")
+
+    monkeypatch.setattr(T, "sweep", cluster_died)
+    assert cli.main([*sweep, "--force"]) != 0
+    assert {p.name: p.read_bytes() for p in (tmp_path / "sweep").iterdir()} == before
+
+
 def test_a_sweep_stopped_by_ctrl_c_ends_quietly_with_nothing_written(tmp_path):
     """SIGINT to the process group (a terminal's Ctrl-C; `timeout -s INT`) while the workers run: the main
     process says "interrupted" once and exits 130; no worker prints a traceback; the out folder holds no output;

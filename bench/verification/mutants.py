@@ -1275,6 +1275,16 @@ CATALOGUE += [
            "                                   and k == 1)",
            ("bench/tests/test_multi_finger.py::test_impact_detection_judges_the_drops_of_every_finger",),
            "D's detection rule is applied to sensor 1's drops only: another finger's drops go unjudged"),
+    Mutant("force-clears-at-open", "outputs", "bench/cli/experiments.py",
+           "    return OutFolder.open(path, force=force, kind=kind, keep=keep, defer_clearing=True)",
+           "    return OutFolder.open(path, force=force, kind=kind, keep=keep)",
+           ("bench/tests/test_sweep_review.py::test_force_keeps_the_earlier_results_until_the_new_ones_are_written",),
+           "explore/texture-sweep --force remove the earlier results before the new ones exist: a failure loses both"),
+    Mutant("force-never-clears-the-earlier-results", "outputs", "bench/cli/experiments.py",
+           "                folder.clear_earlier()  # (once: the baseline's results come first)",
+           "                pass",
+           ("bench/tests/test_sweep_review.py::test_explore_protects_its_results_and_reruns_from_the_cache",),
+           "explore --force leaves the earlier results (an ablation folder of the earlier run) beside the new ones"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
