@@ -1024,6 +1024,18 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                               f"heater_failed = true says the heaters never ran, so they cannot fail during the run; "
                               f"give one or the other")
     for k, lst in per_sensor.items():
+        thermal = sorted((x for x in lst if isinstance(x, Touch) and x.material is not None), key=lambda x: x.start_s)
+        for i, a in enumerate(thermal):
+            for b in thermal[i + 1:]:
+                same_place = (a.electrode == b.electrode if a.electrode or b.electrode
+                              else (a.x_mm, a.angle_deg) == (b.x_mm, b.angle_deg))
+                if (same_place and b.start_s < a.end_s
+                        and (a.material, a.object_temperature_C) != (b.material, b.object_temperature_C)):
+                    place = f"over {a.electrode}" if a.electrode else f"at x = {a.x_mm:g} mm, {a.angle_deg:g}°"
+                    c.problems.append(f"two objects touch {place} at once{f' on sensor {k}' if k != 1 else ''}: "
+                                      f"{a.material} at {a.object_temperature_C} °C from {a.start_s:g} s and "
+                                      f"{b.material} at {b.object_temperature_C} °C from {b.start_s:g} s "
+                                      f"(until {a.end_s:.3f} s); one place meets one object at a time")
         steps: dict[float, float] = {}
         for s in lst:
             if isinstance(s, AmbientStep):
