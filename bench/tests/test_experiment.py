@@ -99,6 +99,18 @@ def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkey
     s = E.summary(result)
     for key in ("pairs/bayesian", "pairs/cycle", "pairs/random", "identification/bayesian"):
         assert 0.0 <= s[key]["accuracy"] <= 1.0 and s[key]["simulations"] > 0
+    # what ran is what the file and D ask for (a mutation hunt found each of these unguarded)
+    assert (spec.pair_threshold, spec.identification_threshold) == (0.999, 0.99)  # D: 99.9 % pairs, 99 % 117-way
+    validated = len({n for p in result.pairs for n in p})
+    for strategy in spec.strategies:
+        pairs, ident = result.pair_results[strategy], result.identification_results[strategy]
+        assert {(r.strategy, r.threshold) for r in pairs} == {(strategy, 0.999)}
+        assert {(r.strategy, r.threshold) for r in ident} == {(strategy, 0.99)}
+        assert sum(len(r) for r in pairs) == len(result.pairs) * spec.pair_simulations  # half with each as truth
+        assert sum(len(r) for r in ident) == validated * (spec.identification_simulations // validated)
+    for r in result.pair_results["cycle"] + result.identification_results["cycle"]:  # the pilot's three picks
+        for step in range(min(3, int(r.n_moves.min()))):
+            assert set(r.movement[:, step]) == {result.best_movements[step]} and set(r.prop[:, step]) == {step}
     # a second run with other exploration settings reads every stage from the cache: no trial runs
     import bench.experiments.experiment as module
 

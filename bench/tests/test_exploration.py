@@ -373,3 +373,55 @@ def test_spread_check_sees_a_shift_of_the_validation_trials_and_nothing_else():
     shifted = ex.spread_check(draw(2, 0.0), draw(3, 3.0))
     assert shifted["roughness"]["ratio"] > 3.0
     assert shifted["traction"] == same["traction"] and shifted["fineness"] == same["fineness"]
+
+
+# --- from a mutation hunt: two trials per cell, the stopping rule, even medians, per-texture draws ------------------
+def _two_trial_table(a=5.0, b=6.0):
+    tab = ex.TrialTable(texture=[3, 3, 7, 7], movement=[0] * 4, prop=[0] * 4, trial=[0, 1, 0, 1],
+                        value=[1.0, 2.0, a, b])
+    return ex.TrialTable.concat([ex.TrialTable(tab.texture, tab.movement, tab.prop + p, tab.trial, tab.value)
+                                 for p in (0, 1, 2)])
+
+
+def test_two_trials_give_the_sample_sigma_not_the_floor():
+    """D's training had 5 trials; the fewer-trials ablation has 2: σ = |a − b|/√2, the n − 1 sample deviation."""
+    m = ex.fit_model(_two_trial_table(), sigma_floor=1e-9, sigma_floor_rel=0.0)
+    assert m.sigma[:, 0, 0] == pytest.approx([1 / math.sqrt(2)] * 2, rel=1e-12)
+
+
+def test_spread_check_with_two_training_trials_skips_leave_one_out_and_stays_finite():
+    train = _two_trial_table()
+    check = ex.spread_check(train, train, sigma_floor=1e-9, sigma_floor_rel=0.0)
+    assert check["all"]["n_training"] == 0 and math.isfinite(check["all"]["validation_median_abs_z"])
+
+
+def test_a_simulation_stops_exactly_when_a_candidate_passes_the_threshold():
+    """Two textures 1 σ apart in every cell: the posterior climbs over several movements, so some simulations pass
+    99 % before 99.9 %.  Each stops at the first step whose maximum exceeds the pair threshold (0.999), and not
+    before: every earlier step's maximum is at most 0.999; one stopped short of the move limit has converged."""
+    mu = np.zeros((2, 2, 3))
+    mu[1] += 1.0
+    train, valid = tables(mu, 1.0, n_train=30, n_valid=30, seed=3)
+    r = ex.simulate(ex.fit_model(train), valid, 1, candidates=[1, 2], n_sims=300, seed=5, max_moves=40)
+    assert r.threshold == 0.999
+    before = [r.posterior[s, : r.n_moves[s]].max() for s in range(len(r))]
+    after = np.array([r.posterior[s, r.n_moves[s]].max() for s in range(len(r))])
+    assert max(before) <= 0.999
+    assert np.all(r.converged[r.n_moves < 40]) and np.all(after[r.converged] > 0.999)
+    assert max(before) > 0.99  # some passed 99 % and went on: the case tells the two thresholds apart
+
+
+def test_median_moves_of_an_even_count_is_the_mean_of_the_middle_two():
+    train, valid = separated_case(T=5)
+    r = ex.simulate(ex.fit_model(train), valid, 1, n_sims=4, seed=0)
+    four = dataclasses.replace(r, n_moves=np.array([1, 2, 3, 4]), converged=np.array([True, True, True, False]))
+    assert ex.median_moves(dataclasses.replace(four, converged=np.ones(4, bool))) == 2.5
+    assert ex.median_moves(four, unconverged="exclude") == 2.0  # the unconverged 4 left out: 1, 2, 3
+    assert ex.median_moves(four, unconverged="limit") == 2.5
+    assert ex.median_moves(four) == 2.5  # counted as infinite: (2 + 3) / 2
+
+
+def test_each_true_texture_draws_its_own_random_numbers():
+    sims = np.arange(5)
+    assert not np.array_equal(ex.sim_uniforms(7, 3, sims, 10), ex.sim_uniforms(7, 4, sims, 10))
+    assert np.array_equal(ex.sim_uniforms(7, 3, sims, 10), ex.sim_uniforms(7, 3, sims, 10))
