@@ -28,6 +28,15 @@ def die_once(task):
     return value * 2
 
 
+def raise_once(task):
+    """Raises the first time it runs (a marker file remembers), then answers: a task that fails, not a worker."""
+    marker, value = task
+    if not Path(marker).exists():
+        Path(marker).write_text("raised")
+        raise RuntimeError("a transient failure")
+    return value * 2
+
+
 def test_results_are_identical_for_one_and_two_workers_and_in_task_order():
     tasks = [(trial_seed(7, "x", k), 1000) for k in range(12)]
     one = run_tasks(seeded_value, tasks, ClusterSpec(workers=1), progress=False)
@@ -119,3 +128,16 @@ def test_a_scheduler_address_that_is_none_is_named_with_its_flag_or_variable(add
             ClusterSpec.from_env()
     for good in ("tcp://10.0.0.5:8786", "10.0.0.5:8786", "tcp://[::1]:8786", "tls://sched.example.org:8786"):
         assert check_address(good, "--scheduler") == good
+
+
+def test_a_task_that_raises_once_is_retried_and_zero_workers_is_refused(tmp_path, monkeypatch):
+    """run_tasks' retries cover a task that raises (not only a dead worker); a LocalCluster of 0 workers is an error,
+    not "every core"; an explicit --scheduler wins over DASK_SCHEDULER_ADDRESS."""
+    marker = str(tmp_path / "raised")
+    assert run_tasks(raise_once, [(marker, 21)], ClusterSpec(workers=1), progress=False, retries=1) == [42]
+    assert Path(marker).read_text() == "raised"
+    with pytest.raises(CampaignError, match="workers"):
+        run_tasks(seeded_value, [(1, 1)], ClusterSpec(workers=0), progress=False)
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://10.0.0.9:8786")
+    assert ClusterSpec.from_env("tcp://10.0.0.5:8786").scheduler == "tcp://10.0.0.5:8786"
+    assert ClusterSpec.from_env().scheduler == "tcp://10.0.0.9:8786"

@@ -1317,6 +1317,14 @@ CATALOGUE += [
            'spawn_key=(int(true_texture), int(i))', 'spawn_key=(int(i),)',
            ("bench/tests/test_exploration.py::test_each_true_texture_draws_its_own_random_numbers",),
            "every true texture's simulations draw the same random numbers"),
+    Mutant("campaign-tasks-never-retried", "campaigns", "bench/campaigns/engine.py",
+           "retries=retries)", "retries=0)",
+           ("bench/tests/test_campaign_engine.py::test_a_task_that_raises_once_is_retried_and_zero_workers_is_refused",),
+           "a task that fails once (a transient error) fails the whole campaign"),
+    Mutant("campaign-zero-workers-means-all", "campaigns", "bench/campaigns/engine.py",
+           "spec.workers < 1:", "spec.workers < 0:",
+           ("bench/tests/test_campaign_engine.py::test_a_task_that_raises_once_is_retried_and_zero_workers_is_refused",),
+           "workers = 0 silently starts a LocalCluster of every core"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
