@@ -104,3 +104,59 @@ def test_a_reset_due_inside_a_held_window_waits_for_it_to_close():
 
     (plain, _), (with_reset, pending) = run(False), run(True)
     assert with_reset == plain and np.any(plain) and pending == [(pytest.approx(62e-6), 1)]
+
+
+# --- every clause of each check, on hand-made frames (a mutation hunt: only each check's first clause was tested) ---
+def _frames(*masks, bad=0, flag=1):
+    """Frames with these sensor masks; the first ``bad`` of them carry one sample of status ``flag``."""
+    import numpy as np
+    from types import SimpleNamespace
+
+    return [SimpleNamespace(sensor_mask=m, status=np.array([[flag if k < bad else 0], [0]])) for k, m in
+            enumerate(masks)]
+
+
+def _status(**counts):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(**{"losses": 1, "finds": 1, "parity_errors": 1, "error_words": 1, **counts})
+
+
+def _stats(**counts):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(**{"crc_errors": 0, "dropped_frames": 0, **counts})
+
+
+@pytest.mark.parametrize("check, frames, status, stats, words", [
+    ("_mask_returns", _frames(0b11, 0b01, 0b01), _status(), _stats(), "not lost and found again"),
+    ("_mask_returns", _frames(0b11, 0b01, 0b11), _status(losses=0), _stats(), "no loss/find"),
+    ("_mask_returns", _frames(0b11, 0b01, 0b11), _status(finds=0), _stats(), "no loss/find"),
+    ("_flags_parity", _frames(0b01, bad=1), _status(parity_errors=0), _stats(), "bad parity was not flagged"),
+    ("_survives_reset", _frames(0b01, 0b01, 0b01, bad=3, flag=2), _status(), _stats(), "3 bad samples"),
+    ("_survives_reset", _frames(0b01, 0b00, bad=1, flag=2), _status(), _stats(), "the reset sensor was dropped"),
+    ("_survives_reset", _frames(0b01, bad=1, flag=2), _status(error_words=0), _stats(), "no error word"),
+    ("_clean", _frames(0b01, bad=1), _status(), _stats(), "1 flagged samples"),
+    ("_clean", _frames(0b01), _status(), _stats(dropped_frames=2), "2 dropped frames"),
+])
+def test_every_clause_of_a_check_objects_on_its_own(check, frames, status, stats, words):
+    problem = getattr(campaign, check)(frames, status, stats)
+    assert problem is not None and words in problem, problem
+
+
+@pytest.mark.parametrize("check, frames", [("_mask_returns", _frames(0b11, 0b01, 0b11)),
+                                           ("_flags_parity", _frames(0b01, bad=1)),
+                                           ("_survives_reset", _frames(0b01, 0b01, bad=2, flag=2)),
+                                           ("_clean", _frames(0b01, 0b01))])
+def test_the_same_checks_pass_what_the_fault_should_look_like(check, frames):
+    assert getattr(campaign, check)(frames, _status(), _stats()) is None
+
+
+def test_the_junit_report_counts_its_failures(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    results = [{"fault": "none", "scene": s, "seed": 0, "expected": "-", "passed": s != "taps", "problem": "x",
+                "seconds": 0.5} for s in ("rest", "taps", "sphere_drops")]
+    campaign.write_junit(results, tmp_path / "c.xml")
+    suite = ET.parse(tmp_path / "c.xml").getroot()
+    assert suite.get("tests") == "3" and suite.get("failures") == "1" == str(len(suite.findall(".//failure")))
