@@ -271,3 +271,39 @@ def test_validation_trials_are_new_trials_not_the_training_ones_again(monkeypatc
     twins = {(t.texture, t.movement_id, t.trial) for t in training} & {(t.texture, t.movement_id, t.trial)
                                                                        for t in validation}
     assert twins  # the same texture, movement and repetition index in both stages: still a different trial
+
+
+def test_the_stage_cache_runs_again_when_the_code_changes_or_its_rows_are_not_its_tasks(tmp_path, monkeypatch):
+    """A mutation hunt: leaving the code digest out of the key, or trusting a cache file of the right length whose
+    rows belong to other tasks, passed every test.  Changed code (another digest) runs the stage again; a file
+    with other tasks' rows is said, run again and replaced."""
+    import json
+    from dataclasses import asdict
+
+    from bench.experiments.trials import sweep_tasks
+    from bench.rigs.texture_rig import movement_grid
+
+    ran = []
+
+    def fake_sweep(tasks, spec=None, client=None, progress=True):
+        ran.append(len(tasks))
+        return [asdict(t) | {"traction": 0.3, "roughness": 5.0, "fineness": 3.0} for t in tasks]
+
+    monkeypatch.setattr(E, "sweep", fake_sweep)
+    tasks = sweep_tasks([902], [movement_grid()[7]], 2, 0, movement_ids=[7])
+    said = []
+    E.run_stage("pilot", tasks, tmp_path, progress=False, log=said.append)
+    E.run_stage("pilot", tasks, tmp_path, progress=False, log=said.append)
+    assert ran == [2]  # the second read from the cache
+    monkeypatch.setattr(E, "_code_digest", lambda: "another model")
+    E.run_stage("pilot", tasks, tmp_path, progress=False, log=said.append)
+    assert ran == [2, 2]
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    E.run_stage("pilot", tasks, fresh, progress=False, log=said.append)
+    (cached,) = fresh.iterdir()
+    others = sweep_tasks([902], [movement_grid()[7]], 2, 99, movement_ids=[7])  # another seed: other trials
+    cached.write_text(json.dumps([asdict(t) | {"traction": 9.0, "roughness": 9.0, "fineness": 9.0} for t in others]))
+    rows = E.run_stage("pilot", tasks, fresh, progress=False, log=said.append)
+    assert ran == [2, 2, 2, 2] and [r["seed"] for r in rows] == [t.seed for t in tasks]
+    assert any("a row that is not its task's trial" in m for m in said), said

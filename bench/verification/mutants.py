@@ -1353,6 +1353,14 @@ CATALOGUE += [
            'failures=str(sum(not r["passed"] for r in results)),', 'failures=str(sum(r["passed"] for r in results)),',
            ("bench/tests/test_campaign_cases.py::test_the_junit_report_counts_its_failures",),
            "the JUnit report's failures attribute counts the passes"),
+    Mutant("stage-cache-key-without-the-code", "exploration", "bench/experiments/experiment.py",
+           "repr(tasks) + _code_digest()", "repr(tasks)",
+           ("bench/tests/test_sweep_review2.py::test_the_stage_cache_runs_again_when_the_code_changes_or_its_rows_are_not_its_tasks",),
+           "a warm stage cache replays old trials after the model's code changed"),
+    Mutant("stage-cache-trusts-other-tasks-rows", "exploration", "bench/experiments/experiment.py",
+           "any(row.get(k) != v for k, v in asdict(task).items()) or ", "",
+           ("bench/tests/test_sweep_review2.py::test_the_stage_cache_runs_again_when_the_code_changes_or_its_rows_are_not_its_tasks",),
+           "a cache file of the right length whose rows are other tasks' trials is trusted"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
