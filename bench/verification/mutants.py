@@ -1361,6 +1361,14 @@ CATALOGUE += [
            "any(row.get(k) != v for k, v in asdict(task).items()) or ", "",
            ("bench/tests/test_sweep_review2.py::test_the_stage_cache_runs_again_when_the_code_changes_or_its_rows_are_not_its_tasks",),
            "a cache file of the right length whose rows are other tasks' trials is trusted"),
+    Mutant("object-first-half-layer-whole", "thermal", "emulator/thermal.py",
+           "d[0] / (2 * mat.k * area)", "d[0] / (mat.k * area)",
+           ("emulator/tests/test_thermal_electrodes.py::test_a_touched_object_draws_heat_as_a_semi_infinite_body", "emulator/tests/test_thermal_electrodes.py::test_a_touched_objects_steady_heat_flow_is_the_contact_and_slab_in_series"),
+           "the touched object's first layer conducts from its far side: less heat drawn from the skin"),
+    Mutant("object-far-field-a-whole-layer-away", "thermal", "emulator/thermal.py",
+           "g_far[obj[-1]] = mat.k * area / (d[-1] / 2)", "g_far[obj[-1]] = mat.k * area / d[-1]",
+           ("emulator/tests/test_thermal_electrodes.py::test_a_touched_object_draws_heat_as_a_semi_infinite_body", "emulator/tests/test_thermal_electrodes.py::test_a_touched_objects_steady_heat_flow_is_the_contact_and_slab_in_series"),
+           "the object's far field sits a whole last layer beyond its centre: a slab too thick"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

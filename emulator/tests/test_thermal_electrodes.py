@@ -217,3 +217,47 @@ def test_an_electrode_at_rest_carries_about_half_an_lsb_of_noise():
     s = Sensor(channels_read=["E5"], seed=4)
     codes = s.sample(np.full(20000, channel_index("E5")), np.arange(20000) / 1000.0).astype(float)
     assert 0.3 <= codes.std() <= 0.7
+
+
+# --- the touched object's layers against heat conduction's closed forms (from a mutation hunt) --------------------
+def _object_flux_W(mat, t_s, area=1e-4, rise_K=10.0, contact_W_per_m2K=1e6):
+    """Heat flow (W) from a skin held ``rise_K`` above an object initially at the far field's temperature into the
+    object's layers, ``t_s`` after the touch (np.inf: the steady state), from the network's own matrices."""
+    from scipy.linalg import expm
+
+    from emulator.thermal import SKIN
+
+    net = ThermalNetwork(SensorParams().replace(contact_conductance_W_per_m2K=contact_W_per_m2K))
+    A, _ = net.matrices((mat, area))
+    obj = np.arange(4, A.shape[0])
+    a_oo, b = A[np.ix_(obj, obj)], A[obj, SKIN] * rise_K
+    x = (np.linalg.solve(a_oo, -b) if np.isinf(t_s)
+         else np.linalg.solve(a_oo, (expm(a_oo * t_s) - np.eye(obj.size)) @ b))
+    g_skin_to_first = A[obj[0], SKIN] * mat.rho * mat.c * area * net.layers[0]
+    return g_skin_to_first * (rise_K - x[0])
+
+
+@pytest.mark.parametrize("name", ["glass", "wood", "polystyrene foam", "granite", "aluminum", "steel"])
+def test_a_touched_object_draws_heat_as_a_semi_infinite_body(name):
+    """Prediction (Carslaw & Jaeger): a surface held ΔT above a semi-infinite body draws e·ΔT/√(πt) per m² (e the
+    effusivity √(kρc)).  The object's 10 geometric layers (50 µm growing ×1.8, 22 mm deep) give it within 5 % from
+    30 ms until the heat nears their far end: to 10 s for poor conductors, to 0.3 s for metals (α ≈ 1e-5–1e-4
+    m²/s reach 22 mm within seconds; beyond, the far field at ambient takes heat as a finite slab does)."""
+    mat = MATERIALS[name]
+    until = 0.3 if mat.k > 10 else 10.0
+    for t in (0.03, 0.1, 0.3, 1.0, 3.0, 10.0):
+        if t <= until:
+            exact = mat.effusivity * 10.0 / np.sqrt(np.pi * t) * 1e-4
+            assert _object_flux_W(mat, t) == pytest.approx(exact, rel=0.05), (name, t)
+
+
+@pytest.mark.parametrize("name", ["aluminum", "glass", "polystyrene foam"])
+def test_a_touched_objects_steady_heat_flow_is_the_contact_and_slab_in_series(name):
+    """Derived: in the steady state the heat crosses the contact conductance and the whole layered slab (thickness
+    L, the layers' sum, to the far field at ambient) in series: ΔT / (1/(h·A) + L/(k·A)), exactly — every link of
+    the chain (the contact, the first half-layer, the layers, the last half-layer to the far field) counts."""
+    mat, area = MATERIALS[name], 1e-4
+    slab_m = float(np.sum(ThermalNetwork(SensorParams()).layers))
+    for h in (3000.0, 1e6):
+        expected = 10.0 / (1 / (h * area) + slab_m / (mat.k * area))
+        assert _object_flux_W(mat, np.inf, area, contact_W_per_m2K=h) == pytest.approx(expected, rel=1e-9)
