@@ -1373,6 +1373,10 @@ CATALOGUE += [
            "    for k in range(1, 13):", "    for k in range(1, 9):",
            ("emulator/tests/test_thermal_live_contact.py::test_expm_by_products_equals_scipys_on_the_networks_own_matrices",),
            "the live contact's matrix exponential keeps 8 Taylor terms, not 12: its thermal steps drift"),
+    Mutant("force-log-phase-per-block", "sliding", "emulator/sliding.py",
+           "keep = slice(-(block.n0 + a) % self.log_every, None, self.log_every)", "keep = slice(0, None, self.log_every)",
+           ("emulator/tests/test_sliding.py::test_the_force_log_does_not_depend_on_block_size",),
+           "the 100 Hz force log restarts its phase at each block: its instants depend on how the run is cut"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -71,6 +71,23 @@ def test_results_do_not_depend_on_block_size():
 
 
 @pytest.mark.unit
+def test_the_force_log_does_not_depend_on_block_size():
+    """The 100 Hz force log (traction's and the report's source) holds the same instants and forces however the
+    run is cut into blocks (a mutation hunt: its phase restarting at each block passed every test)."""
+    slide = Slide(0.05, SAND, 0.5, 0.02, 0.005, approach_s=0.05, hold_s=0.05, lift_s=0.05)
+    t = np.arange(0.0, slide.end_s + 0.02, 1 / 2200)
+    logs = []
+    for block_s in (1.0, 7 / 8800, 0.0123):
+        s = Sensor(stimuli=[slide], channels_read=["PAC", "PDC"], block_s=block_s, seed=3)
+        s.analog_trace("PAC", t)
+        logs.append(next(e for e in s.graph.effects if e.name == "sliding_contact").force_log(0))
+    assert logs[0]["t"].size > 10 and np.allclose(np.diff(logs[0]["t"]), 0.01)
+    for other in logs[1:]:
+        for key, ref in logs[0].items():
+            assert np.array_equal(other[key], ref), key
+
+
+@pytest.mark.unit
 def test_worn_ridges_and_smooth_skin_give_the_same_forces():
     """A skin worn flat (ridge height 0) is a smooth skin: the ridge term vanishes."""
     worn = Skin(ridge_height_m=0.0)
