@@ -200,6 +200,8 @@ BROKEN = {
                        ["T4 'Kraft Paper'", "name = 'Kraft Paper'", "already used by T5 'kraft paper'"]),
     "duplicate seed": (GOOD + _edit("seed = 4", "seed = 5", SECOND),
                        ["T4 'newsprint'", "seed = 5", "already the seed of T5 'kraft paper'"]),
+    "friction falling with speed": (GOOD + "mu_per_velocity_s_per_m = -1.0\n",
+                                    ["T5 'kraft paper'", "mu_per_velocity_s_per_m = -1.0", "0 to 20 s/m"]),
     "unknown top-level key": ("version = 2\n" + GOOD, ["library", "unknown top-level key 'version'"]),
     "no textures": ("", ["library", "no [[texture]] tables"]),
 }
@@ -345,3 +347,12 @@ def test_a_json_library_with_a_key_given_twice_is_refused(tmp_path):
     f.write_text("[" + record[:-1] + ', "hurst": 0.9}]', encoding="utf-8")
     with pytest.raises(TextureError, match="key 'hurst' given twice"):
         load_library(f)
+
+
+def test_a_complete_library_needs_every_one_of_the_117(tmp_path):
+    """parse_library(complete=True), as the shipped library is read: T117 (the last) missing is named."""
+    data = tomllib.loads(LIBRARY_PATH.read_text(encoding="utf-8"))
+    data["texture"] = [t for t in data["texture"] if t.get("number") != 117]
+    with pytest.raises(TextureError) as e:
+        parse_library(data, complete=True)
+    assert any("textures 117 are missing" in p for p in e.value.problems), e.value.problems

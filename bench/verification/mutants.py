@@ -1377,6 +1377,15 @@ CATALOGUE += [
            "keep = slice(-(block.n0 + a) % self.log_every, None, self.log_every)", "keep = slice(0, None, self.log_every)",
            ("emulator/tests/test_sliding.py::test_the_force_log_does_not_depend_on_block_size",),
            "the 100 Hz force log restarts its phase at each block: its instants depend on how the run is cut"),
+    Mutant("library-friction-may-fall-with-speed", "sliding", "bench/textures/library.py",
+           '"s/m", 0.0, 20.0', '"s/m", -20.0, 20.0',
+           ("bench/tests/test_texture_library.py::test_broken_libraries_are_rejected_with_texture_field_and_value",),
+           "a texture whose friction falls with speed (a negative viscous coefficient) is accepted"),
+    Mutant("library-complete-without-t117", "sliding", "bench/textures/library.py",
+           "missing = [n for n in range(1, LIBRARY_SIZE + 1) if n not in seen.numbers]",
+           "missing = [n for n in range(1, LIBRARY_SIZE) if n not in seen.numbers]",
+           ("bench/tests/test_texture_library.py::test_a_complete_library_needs_every_one_of_the_117",),
+           "a 'complete' library missing T117 is accepted"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
