@@ -355,4 +355,4 @@ def test_a_complete_library_needs_every_one_of_the_117(tmp_path):
     data["texture"] = [t for t in data["texture"] if t.get("number") != 117]
     with pytest.raises(TextureError) as e:
         parse_library(data, complete=True)
-    assert any("textures 117 are missing" in p for p in e.value.problems), e.value.problems
+    assert any("textures T117 are missing" in p for p in e.value.problems), e.value.problems
