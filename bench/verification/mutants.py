@@ -1386,6 +1386,10 @@ CATALOGUE += [
            "missing = [n for n in range(1, LIBRARY_SIZE) if n not in seen.numbers]",
            ("bench/tests/test_texture_library.py::test_a_complete_library_needs_every_one_of_the_117",),
            "a 'complete' library missing T117 is accepted"),
+    Mutant("centroid-segments-share-one-mean", "sliding", "bench/textures/properties.py",
+           "seg.mean(axis=1, keepdims=True)", "seg.mean(axis=0, keepdims=True)",
+           ("bench/tests/test_texture_properties.py::test_each_segment_loses_its_own_mean_so_a_drifting_pac_keeps_its_centroid",),
+           "the centroid's segments are not each mean-removed: a drifting PAC drags fineness toward 0 Hz"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
