@@ -202,3 +202,14 @@ def test_the_stage_starts_at_the_recorded_slide_start(seed):
     assert before.size >= 4 and after.size >= 1
     assert np.all(np.abs(before - hold.mean()) < 4 * hold.std())
     assert np.all(after > hold.mean() + 5 * hold.std())
+
+
+def test_a_trial_row_reports_the_force_the_rig_reached_not_the_one_it_was_told():
+    """The trial table's true_normal_N is the emulator's mean load while sliding, which D's protocol leaves above
+    the target (the stepper stops only once a 100 ms batch shows the PDC change: it lowers on meanwhile) — not the
+    commanded force copied over (a mutation hunt: the table then showed perfect force control)."""
+    from bench.experiments.trials import run_trial_task, sweep_tasks
+
+    (task,) = sweep_tasks([902], [movement_grid()[7]], 1, 0, movement_ids=[7])
+    row = run_trial_task(task)
+    assert row["force_N"] == task.force_N and row["true_normal_N"] > 1.02 * task.force_N

@@ -1390,6 +1390,10 @@ CATALOGUE += [
            "seg.mean(axis=1, keepdims=True)", "seg.mean(axis=0, keepdims=True)",
            ("bench/tests/test_texture_properties.py::test_each_segment_loses_its_own_mean_so_a_drifting_pac_keeps_its_centroid",),
            "the centroid's segments are not each mean-removed: a drifting PAC drags fineness toward 0 Hz"),
+    Mutant("trial-row-copies-the-commanded-force", "sliding", "bench/experiments/trials.py",
+           "true_normal_N=trial.true_normal_N", "true_normal_N=task.force_N",
+           ("bench/tests/test_texture_rig.py::test_a_trial_row_reports_the_force_the_rig_reached_not_the_one_it_was_told",),
+           "the trial table's true normal force is the commanded one: force control looks perfect"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
