@@ -86,3 +86,17 @@ def test_nearest_neighbour_sigma_finds_the_closest_other_texture():
     out = nearest_neighbour_sigma(model, [10, 30])
     assert out[10] == (2.0, 20)
     assert out[30][1] in (10, 20) and abs(out[30][0] - 5.0) < 1e-12
+
+
+def test_most_confused_pairs_are_the_pairs_the_model_confuses_most():
+    """Four glass textures: T24 and T25 one mean apart by 0.01 σ, T26 and T27 by 0.5 σ, the two couples 5 σ apart.
+    "most-confused" pairs the first couple, then the second (a mutation hunt: a reversed sort picked the least
+    confused pairs, T24–T27 and T25–T26, and no test noticed)."""
+
+    from bench.experiments import exploration as ex
+    from bench.experiments.experiment import _pick_pairs
+
+    means = np.array([0.0, 0.01, 5.0, 5.5])[:, None, None] * np.ones((4, 3, 3))
+    model = ex.TextureModel(np.array([24, 25, 26, 27]), np.array([0, 1, 2]), means, np.ones((4, 3, 3)),
+                            np.full((4, 3, 3), 5))
+    assert _pick_pairs(model, np.array([0, 1, 2]), 2, "most-confused", seed=0) == [(24, 25), (26, 27)]

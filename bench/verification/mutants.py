@@ -1394,6 +1394,10 @@ CATALOGUE += [
            "true_normal_N=trial.true_normal_N", "true_normal_N=task.force_N",
            ("bench/tests/test_texture_rig.py::test_a_trial_row_reports_the_force_the_rig_reached_not_the_one_it_was_told",),
            "the trial table's true normal force is the commanded one: force control looks perfect"),
+    Mutant("most-confused-picks-the-least", "exploration", "bench/experiments/experiment.py",
+           "sorted(cands, reverse=True)", "sorted(cands)",
+           ("bench/tests/test_experiment_report_picks.py::test_most_confused_pairs_are_the_pairs_the_model_confuses_most",),
+           "pair_choice = \"most-confused\" picks the least confused pairs"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
