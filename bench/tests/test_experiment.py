@@ -335,3 +335,16 @@ def test_pair_separation_is_the_largest_mean_difference_over_the_pooled_sigma():
     model = E.ex.TextureModel(textures=np.array([4, 5]), movements=np.arange(3), mean=mean, sigma=sigma,
                               n_trials=np.full((2, 3, 3), 5))
     assert pair_separation_sigma(model, [(4, 5)]) == [[0.0, 3.0, 0.0]]
+
+
+def test_the_stepper_noise_ablation_is_the_sensors_own_resting_pac_noise_in_pascals():
+    """Derived (design.py's stated choice): 0.52 Pa RMS is PAC's 1.4-bit resting noise (SENSOR.md) at the PAC
+    path's Pa per bit (PDC's ÷ the stage-2 gain), within 2 %."""
+    from emulator.params import SensorParams
+    from emulator.units import derived
+
+    p = SensorParams()
+    pac_pa_per_bit = derived(p)["PDC_Pa_per_bit"] / p.stage2_gain
+    spec = E.parse_experiment({"experiment": {"name": "x"}}, "x.toml")
+    noisy, _ = E.ablated(spec, "stepper-noise")
+    assert noisy.stepper_noise_Pa == pytest.approx(1.4 * pac_pa_per_bit, rel=0.02)

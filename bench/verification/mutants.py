@@ -1398,6 +1398,10 @@ CATALOGUE += [
            "sorted(cands, reverse=True)", "sorted(cands)",
            ("bench/tests/test_experiment_report_picks.py::test_most_confused_pairs_are_the_pairs_the_model_confuses_most",),
            "pair_choice = \"most-confused\" picks the least confused pairs"),
+    Mutant("stepper-noise-a-tenth", "exploration", "bench/experiments/design.py",
+           'lambda spec: {"stepper_noise_Pa": 0.52}', 'lambda spec: {"stepper_noise_Pa": 0.052}',
+           ("bench/tests/test_experiment.py::test_the_stepper_noise_ablation_is_the_sensors_own_resting_pac_noise_in_pascals",),
+           "the stepper-noise ablation runs at a tenth of the sensor's own resting PAC noise"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
