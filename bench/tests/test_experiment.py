@@ -111,6 +111,15 @@ def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkey
     for r in result.pair_results["cycle"] + result.identification_results["cycle"]:  # the pilot's three picks
         for step in range(min(3, int(r.n_moves.min()))):
             assert set(r.movement[:, step]) == {result.best_movements[step]} and set(r.prop[:, step]) == {step}
+    # the pilot's U table: rows of movements the pilot did not run stay NaN
+    not_run = sorted(set(range(36)) - set(spec.pilot_movements))
+    assert np.isnan(result.pilot_uncertainty[not_run]).all()
+    assert np.isfinite(result.pilot_uncertainty[[m for m in spec.pilot_movements
+                                                 if m not in E.excluded_movements(spec, spec.pilot_movements)]]).all()
+    # validation goes on with the training session's skin (D: one session), not a fresh one
+    last, first = result.training_rows[-1], result.validation_rows[0]
+    assert first["skin_serial"] > last["skin_serial"] or (
+        first["skin_serial"] == last["skin_serial"] and first["ridge_height_m"] < last["ridge_height_m"])
     # a second run with other exploration settings reads every stage from the cache: no trial runs
     import bench.experiments.experiment as module
 

@@ -1402,6 +1402,16 @@ CATALOGUE += [
            'lambda spec: {"stepper_noise_Pa": 0.52}', 'lambda spec: {"stepper_noise_Pa": 0.052}',
            ("bench/tests/test_experiment.py::test_the_stepper_noise_ablation_is_the_sensors_own_resting_pac_noise_in_pascals",),
            "the stepper-noise ablation runs at a tenth of the sensor's own resting PAC noise"),
+    Mutant("pilot-u-on-the-wrong-rows", "exploration", "bench/experiments/experiment.py",
+           "u_full[model.movements] = u", "u_full[:len(u)] = u",
+           ("bench/tests/test_experiment.py::test_quick_experiment_runs_end_to_end_and_caches_its_stages",),
+           "the pilot's uncertainty table lands on the first rows, not the movements the pilot ran"),
+    Mutant("validation-on-a-fresh-skin", "exploration", "bench/experiments/experiment.py",
+           "        session, history = schedule_skin(tasks + val_tasks, wear=spec.wear, replace_at=replace_at)\n"
+           "        tasks = session[len(tasks):]",
+           "        tasks, history = schedule_skin(val_tasks, wear=spec.wear, replace_at=replace_at)",
+           ("bench/tests/test_experiment.py::test_quick_experiment_runs_end_to_end_and_caches_its_stages",),
+           "validation starts on a fresh skin instead of going on with the training session's worn one"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
