@@ -1412,6 +1412,10 @@ CATALOGUE += [
            "        tasks, history = schedule_skin(val_tasks, wear=spec.wear, replace_at=replace_at)",
            ("bench/tests/test_experiment.py::test_quick_experiment_runs_end_to_end_and_caches_its_stages",),
            "validation starts on a fresh skin instead of going on with the training session's worn one"),
+    Mutant("touch-on-a-chunk-start-arrives-late", "thermal", "emulator/thermal.py",
+           " and (c0 is None or c0 is self._touching)\n", "\n",
+           ("emulator/tests/test_thermal_electrodes.py::test_a_touch_on_a_whole_second_meets_its_object_at_once",),
+           "an object touched exactly at a thermal chunk's start meets the skin a whole second late"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
