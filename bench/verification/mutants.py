@@ -1416,6 +1416,10 @@ CATALOGUE += [
            " and (c0 is None or c0 is self._touching)\n", "\n",
            ("emulator/tests/test_thermal_electrodes.py::test_a_touch_on_a_whole_second_meets_its_object_at_once",),
            "an object touched exactly at a thermal chunk's start meets the skin a whole second late"),
+    Mutant("object-arrives-at-the-previous-temperature", "thermal", "emulator/thermal.py",
+           "            x[4:] = contact.temperature_C\n", "            pass\n",
+           ("emulator/tests/test_thermal_electrodes.py::test_the_first_response_to_a_touch_scales_with_the_objects_own_temperature",),
+           "a touched object's layers start at the previous temperature, not the object's own"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -277,3 +277,20 @@ def test_a_touch_on_a_whole_second_meets_its_object_at_once():
     for channel in ("TDC", "TAC"):
         on_the_second, just_after = trace(2.0, channel), trace(2.0 + 1e-6, channel)
         assert np.max(np.abs(on_the_second - just_after)) < 0.03 * np.ptp(just_after), channel
+
+
+def test_the_first_response_to_a_touch_scales_with_the_objects_own_temperature():
+    """Prediction (a linear network): the heat a touched object draws in its first half second — TAC's swing — is
+    proportional to its temperature less the skin's.  Aluminum at 15, 25 and 35 °C: equal 10 K steps give equal
+    steps of the swing (within 5 %), and the sign turns between 25 °C and 35 °C, across the skin's ~33 °C (a
+    mutation hunt: the object's layers starting at the previous temperature gave one swing for all three)."""
+    quiet = NoiseSources(**{k: False for k in NoiseSources.__dataclass_fields__})
+    t = np.arange(1.5, 2.6, 0.01)
+    swings = []
+    for celsius in (15.0, 25.0, 35.0):
+        touch = Touch(2.0, 1.0, 0.2, 5.0, electrode="E7", material="aluminum", object_temperature_C=celsius)
+        tac = Sensor(stimuli=[touch], channels_read=["TDC", "TAC"], seed=1, noise=quiet).analog_trace("TAC", t)
+        after = tac[(t > 2.0) & (t < 2.5)] - tac[t < 1.99].mean()
+        swings.append(after[np.argmax(np.abs(after))])
+    assert swings[0] < swings[1] < 0 < swings[2]
+    assert swings[1] - swings[0] == pytest.approx(swings[2] - swings[1], rel=0.05)
