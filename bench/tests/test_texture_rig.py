@@ -213,3 +213,25 @@ def test_a_trial_row_reports_the_force_the_rig_reached_not_the_one_it_was_told()
     (task,) = sweep_tasks([902], [movement_grid()[7]], 1, 0, movement_ids=[7])
     row = run_trial_task(task)
     assert row["force_N"] == task.force_N and row["true_normal_N"] > 1.02 * task.force_N
+
+
+def test_the_wear_table_agrees_with_a_skin_worn_trial_by_trial():
+    """wear.csv's trials to the first visible wear and loss per second, against a fresh Skin worn one trial at a time
+    until its worn fraction reaches the first visible wear, and against the trial's length at the rig (distance /
+    v): for the heaviest, the lightest and a middle movement of the grid."""
+    from bench.experiments.trials import TRIAL_DISTANCE_M, wear_per_movement
+    from emulator.skin import contact_patch_area_m2
+
+    grid = movement_grid()
+    ids = [0, 14, 35]
+    p = SensorParams()
+    for row, m in zip(wear_per_movement([grid[i] for i in ids], movement_ids=ids), (grid[i] for i in ids)):
+        skin, area, n = Skin(), contact_patch_area_m2(m.force_N, p.contact_radius_at_1N_m), 0
+        while skin.worn_fraction < skin.first_visible_wear_fraction:
+            skin.wear(m.force_N, TRIAL_DISTANCE_M, area, velocity_m_per_s=m.velocity_m_per_s)
+            n += 1
+        assert row["trials_to_visible_wear"] == n, (row["movement_id"], n)
+        one = Skin()
+        one.wear(m.force_N, TRIAL_DISTANCE_M, area, velocity_m_per_s=m.velocity_m_per_s)
+        lost = one.ridge_height_new_m - one.ridge_height_m
+        assert row["lost_per_second_m"] == pytest.approx(lost / (TRIAL_DISTANCE_M / m.velocity_m_per_s), rel=1e-9)

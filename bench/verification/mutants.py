@@ -1420,6 +1420,14 @@ CATALOGUE += [
            "            x[4:] = contact.temperature_C\n", "            pass\n",
            ("emulator/tests/test_thermal_electrodes.py::test_the_first_response_to_a_touch_scales_with_the_objects_own_temperature",),
            "a touched object's layers start at the previous temperature, not the object's own"),
+    Mutant("wear-table-trials-to-visible-one-short", "sliding", "bench/experiments/trials.py",
+           "int(np.ceil(visible_m / per_trial))", "int(np.floor(visible_m / per_trial))",
+           ("bench/tests/test_texture_rig.py::test_the_wear_table_agrees_with_a_skin_worn_trial_by_trial",),
+           "wear.csv says the first visible wear comes a trial sooner than the skin shows it"),
+    Mutant("wear-table-per-second-without-velocity", "sliding", "bench/experiments/trials.py",
+           '"lost_per_second_m": per_trial * m.velocity_m_per_s / distance_m', '"lost_per_second_m": per_trial / distance_m',
+           ("bench/tests/test_texture_rig.py::test_the_wear_table_agrees_with_a_skin_worn_trial_by_trial",),
+           "wear.csv's loss per second ignores how long a trial lasts at its velocity"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
