@@ -356,3 +356,17 @@ def test_a_complete_library_needs_every_one_of_the_117(tmp_path):
     with pytest.raises(TextureError) as e:
         parse_library(data, complete=True)
     assert any("textures T117 are missing" in p for p in e.value.problems), e.value.problems
+
+
+def test_an_edited_library_file_is_read_again_even_at_the_same_size(tmp_path):
+    """The library is cached by path, modification time and size: an edit that keeps the size (one digit changed)
+    is still seen — a cache keyed on the size alone returned the old textures."""
+    import os
+
+    f = tmp_path / "lib.toml"
+    f.write_text(GOOD, encoding="utf-8")
+    assert load_library(f)[5].hurst == 0.7
+    f.write_text(GOOD.replace("hurst = 0.7", "hurst = 0.8"), encoding="utf-8")
+    st = f.stat()
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))  # a later modification time, as any edit gets
+    assert load_library(f)[5].hurst == 0.8

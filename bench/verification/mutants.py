@@ -1428,6 +1428,10 @@ CATALOGUE += [
            '"lost_per_second_m": per_trial * m.velocity_m_per_s / distance_m', '"lost_per_second_m": per_trial / distance_m',
            ("bench/tests/test_texture_rig.py::test_the_wear_table_agrees_with_a_skin_worn_trial_by_trial",),
            "wear.csv's loss per second ignores how long a trial lasts at its velocity"),
+    Mutant("library-cache-keyed-on-size-alone", "sliding", "bench/textures/library.py",
+           "st.st_mtime_ns, st.st_size", "0, st.st_size",
+           ("bench/tests/test_texture_library.py::test_an_edited_library_file_is_read_again_even_at_the_same_size",),
+           "an edited library file of the same size returns the old textures from the cache"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
