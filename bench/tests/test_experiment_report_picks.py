@@ -100,3 +100,18 @@ def test_most_confused_pairs_are_the_pairs_the_model_confuses_most():
     model = ex.TextureModel(np.array([24, 25, 26, 27]), np.array([0, 1, 2]), means, np.ones((4, 3, 3)),
                             np.full((4, 3, 3), 5))
     assert _pick_pairs(model, np.array([0, 1, 2]), 2, "most-confused", seed=0) == [(24, 25), (26, 27)]
+
+
+def test_most_confused_reads_each_property_at_its_own_best_movement():
+    """Traction's best movement (0) cannot tell T24, T25 and T26 apart; roughness's and fineness's (1 and 2) cannot
+    tell T26 from T27.  Averaged over the properties, each at its own movement, T26–T27 is the most confused pair
+    (2 of 3 properties); read all at traction's movement, T24–T25 would be."""
+    from bench.experiments import exploration as ex
+    from bench.experiments.experiment import _pick_pairs
+
+    means = np.zeros((4, 3, 3))
+    means[:, 0, :] = np.array([0.0, 0.0, 0.0, 9.0])[:, None]  # movement 0: T24 = T25 = T26, T27 far
+    means[:, 1:, :] = np.array([0.0, 9.0, 20.0, 20.0])[:, None, None]  # movements 1, 2: T26 = T27
+    model = ex.TextureModel(np.array([24, 25, 26, 27]), np.array([0, 1, 2]), means, np.ones((4, 3, 3)),
+                            np.full((4, 3, 3), 5))
+    assert _pick_pairs(model, np.array([0, 1, 2]), 1, "most-confused", seed=0) == [(26, 27)]

@@ -1432,6 +1432,10 @@ CATALOGUE += [
            "st.st_mtime_ns, st.st_size", "0, st.st_size",
            ("bench/tests/test_texture_library.py::test_an_edited_library_file_is_read_again_even_at_the_same_size",),
            "an edited library file of the same size returns the old textures from the cache"),
+    Mutant("most-confused-at-tractions-movement", "exploration", "bench/experiments/experiment.py",
+           "conf[:, :, mi[p], p]", "conf[:, :, mi[0], p]",
+           ("bench/tests/test_experiment_report_picks.py::test_most_confused_reads_each_property_at_its_own_best_movement",),
+           "most-confused pairs read every property's confusion at traction's best movement"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
