@@ -307,3 +307,29 @@ def test_the_stage_cache_runs_again_when_the_code_changes_or_its_rows_are_not_it
     rows = E.run_stage("pilot", tasks, fresh, progress=False, log=said.append)
     assert ran == [2, 2, 2, 2] and [r["seed"] for r in rows] == [t.seed for t in tasks]
     assert any("a row that is not its task's trial" in m for m in said), said
+
+
+def test_validation_runs_the_validation_trials_it_is_asked_for(monkeypatch):
+    """quick.toml with 2 validation trials against 3 training ones (its own are both 3, which hid a validation stage
+    running training_trials): every validation texture × chosen movement gets exactly 2 (trials faked)."""
+    import dataclasses
+    from dataclasses import asdict
+
+    seen: dict[str, list] = {}
+
+    def fake_sweep(tasks, spec=None, client=None, progress=True):
+        for t in tasks:
+            seen.setdefault(t.stage, []).append(t)
+        return [asdict(t) | {"traction": 0.3 + 0.01 * t.texture, "roughness": 5.0 + 0.02 * t.texture + 0.001 * t.trial,
+                             "fineness": 3.0 + 0.01 * t.texture, "true_normal_N": t.force_N, "start_position_m": 0.0,
+                             "simulated_s": 1.0, "wall_s": 0.0} for t in tasks]
+
+    monkeypatch.setattr(E, "sweep", fake_sweep)
+    spec = E.load_experiment(E.REPO / "fixtures" / "experiments" / "quick.toml")
+    spec = dataclasses.replace(spec, validation_trials=2)
+    assert spec.training_trials == 3
+    E.run_experiment(spec, cache_dir=None, progress=False, log=lambda m: None)
+    per_cell: dict = {}
+    for t in seen["validation"]:
+        per_cell.setdefault((t.texture, t.movement_id), set()).add(t.trial)
+    assert per_cell and set(map(frozenset, per_cell.values())) == {frozenset({0, 1})}

@@ -1436,6 +1436,10 @@ CATALOGUE += [
            "conf[:, :, mi[p], p]", "conf[:, :, mi[0], p]",
            ("bench/tests/test_experiment_report_picks.py::test_most_confused_reads_each_property_at_its_own_best_movement",),
            "most-confused pairs read every property's confusion at traction's best movement"),
+    Mutant("validation-runs-training-trials", "exploration", "bench/experiments/experiment.py",
+           "for k in range(spec.validation_trials)]", "for k in range(spec.training_trials)]",
+           ("bench/tests/test_sweep_review2.py::test_validation_runs_the_validation_trials_it_is_asked_for",),
+           "the validation stage runs as many trials as training, not the validation trials asked for"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
