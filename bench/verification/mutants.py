@@ -1440,6 +1440,11 @@ CATALOGUE += [
            "for k in range(spec.validation_trials)]", "for k in range(spec.training_trials)]",
            ("bench/tests/test_sweep_review2.py::test_validation_runs_the_validation_trials_it_is_asked_for",),
            "the validation stage runs as many trials as training, not the validation trials asked for"),
+    Mutant("rig-load-blind-to-heights", "sliding", "emulator/friction.py",
+           "                if touching == 0 and touchdown_reference:  # touchdown",
+           "                if touchdown_reference:  # touchdown",
+           ("emulator/tests/test_sliding.py::test_a_position_held_finger_feels_the_heights_it_slides_over",),
+           "a position-held finger's load ignores the heights it slides over: the rig's normal force never fluctuates"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -368,3 +368,25 @@ def test_a_slides_force_ramps_are_raised_cosines():
     slide = Slide(0.1, SMOOTH, 2.0, 0.02, 0.01, approach_s=0.2, hold_s=0.1, lift_s=0.2)
     assert slide.normal_force_N(0.1 + 0.05) == pytest.approx(2.0 * (1 - math.cos(math.pi / 4)) / 2, rel=1e-12)
     assert slide.normal_force_N(slide.slide_end_s + 0.1) == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.unit
+def test_a_position_held_finger_feels_the_heights_it_slides_over():
+    """A rig holds the finger's depth (the stepper stopped), so the load follows the texture's height from the
+    touchdown spot: sliding over 60 µm RMS sand at a fixed depth the normal load fluctuates by over 10 % of its
+    holding value; over a smooth surface it stays put (to 1e-12 N).  (A mutation hunt: the reference re-taken at
+    every step held the load constant on any texture.)"""
+    t = np.arange(0.0, 1.5, 1 / 2200)
+    hold, sliding = (t > 0.32) & (t < 0.39), (t > 0.6) & (t < 1.5)
+    for texture, fluctuates in ((SAND, True), (SMOOTH, False)):
+        motion = CommandedMotion(texture, latency_s=0.0, start_s=0.0)
+        motion.move_finger(0.0, 3.6e-3)  # from 1 mm above, down to 80 µm deep at 0.3 s, then held
+        motion.move_finger(0.3, 0.0)
+        motion.move_stage(0.4, 0.02, accel_m_per_s2=1.0)
+        load = Sensor(stimuli=[motion], channels_read=["PDC"], record_signals=("normal_force_N",),
+                      seed=3).signal("normal_force_N", t)
+        assert load[hold].mean() > 0.005
+        if fluctuates:
+            assert load[sliding].std() > 0.1 * load[hold].mean()
+        else:
+            assert load[sliding].std() < 1e-12
