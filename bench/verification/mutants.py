@@ -1445,6 +1445,10 @@ CATALOGUE += [
            "                if touchdown_reference:  # touchdown",
            ("emulator/tests/test_sliding.py::test_a_position_held_finger_feels_the_heights_it_slides_over",),
            "a position-held finger's load ignores the heights it slides over: the rig's normal force never fluctuates"),
+    Mutant("depth-law-without-poisson", "sliding", "emulator/sliding.py",
+           "    k = 2.0 * radius * modulus / (1 - POISSON_RATIO**2)", "    k = 2.0 * radius * modulus",
+           ("emulator/tests/test_sliding.py::test_the_depth_law_uses_the_textures_plane_strain_modulus",),
+           "the rig's depth-to-load law uses E, not the kernel's E/(1 - nu^2): soft textures 9 % stiffer"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
