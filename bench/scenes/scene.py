@@ -1032,9 +1032,10 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                 if (same_place and b.start_s < a.end_s
                         and (a.material, a.object_temperature_C) != (b.material, b.object_temperature_C)):
                     place = f"over {a.electrode}" if a.electrode else f"at x = {a.x_mm:g} mm, {a.angle_deg:g}°"
+                    what = [f"{x.material} at " + ("room temperature" if x.object_temperature_C is None else
+                                                   f"{x.object_temperature_C} °C") for x in (a, b)]
                     c.problems.append(f"two objects touch {place} at once{f' on sensor {k}' if k != 1 else ''}: "
-                                      f"{a.material} at {a.object_temperature_C} °C from {a.start_s:g} s and "
-                                      f"{b.material} at {b.object_temperature_C} °C from {b.start_s:g} s "
+                                      f"{what[0]} from {a.start_s:g} s and {what[1]} from {b.start_s:g} s "
                                       f"(until {a.end_s:.3f} s); one place meets one object at a time")
         steps: dict[float, float] = {}
         for s in lst:
