@@ -405,8 +405,9 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "SIGTERM.", formatter_class=fmt))
     br.add_argument("--sensors", type=whole(1, 5), default=None,
                     help="emulated sensors, 1 to 5 (default: the scene's count with --scene, else 1)")
-    br.add_argument("--scene", type=scene_argument, help="scene file or shipped scene name: sensors built from it (units, variants, each its own "
-                                                           "stimuli; --sensors, if given, at least the scene's count)")
+    br.add_argument("--scene", type=scene_argument,
+                    help="scene file or shipped scene name: sensors built from it (units, variants, each its own "
+                         "stimuli; --sensors, if given, at least the scene's count)")
     br.add_argument("--seed", type=any_seed,
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")

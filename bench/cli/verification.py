@@ -99,8 +99,8 @@ def _cmd_claims(a) -> int:
         try:
             out = sensitivity_plot(claims, Path(a.plots))
         except OSError as e:
-            raise OutputNotWritten(f"--plots {a.plots}: {SENSITIVITY_PLOT} could not be written ({e.strerror or e}); the "
-                                   f"claims above ran and are reported") from None
+            raise OutputNotWritten(f"--plots {a.plots}: {SENSITIVITY_PLOT} could not be written "
+                                   f"({e.strerror or e}); the claims above ran and are reported") from None
         print(f"wrote {out}", file=sys.stderr)
     return 0 if all(c.ok for c in claims) else 1
 
