@@ -10,8 +10,7 @@ from emulator.electrodes import (Contact, electrode_gaps_mm, electrode_positions
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.stimuli import AmbientStep, PowerOn, Touch
-from emulator.thermal import (BEAD, CORE, MATERIALS, ThermalEvents, ThermalModel, ThermalNetwork, tdc_volts,
-                              thermistor_ohm)
+from emulator.thermal import CORE, MATERIALS, ThermalNetwork, tdc_volts, thermistor_ohm
 
 pytestmark = pytest.mark.unit
 QUIET = NoiseSources.none()
