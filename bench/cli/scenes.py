@@ -222,27 +222,30 @@ def shown_path(path: Path) -> str:
 
 def scene_file(text: str) -> str:
     """A scene argument as a path: a file that exists as given; else the shipped scene of that name ("taps", or
-    "taps.toml" with a note on stderr saying which file that is — never a path with a folder, "./taps.toml"
-    included); else :class:`SceneError` with the shipped scenes that come close."""
+    "taps.toml" or a folder of that name here with a note on stderr saying which file it is — never a path with a
+    folder, "./taps.toml" included); else :class:`SceneError` with the shipped scenes that come close."""
     import difflib
 
     from bench.errors import SceneError
 
     given = Path(text)
-    if given.exists() or given.is_symlink():
-        return text  # a file, folder or device: the scene loader says what is wrong with it, if anything
+    folder = given.is_dir()
+    if (given.exists() or given.is_symlink()) and not folder:
+        return text  # a file or device: the scene loader says what is wrong with it, if anything
     shipped = shipped_scenes()
     name = given.name.removesuffix(".toml")
     if "/" not in text and os.sep not in text and name in shipped:
-        if text != name:
-            print(f"note: no {text} here: the shipped scene {shipped[name]}", file=sys.stderr)
+        if text != name or folder:
+            here = f"{text} here is a folder" if folder else f"no {text} here"
+            print(f"note: {here}: the shipped scene {shipped[name]}", file=sys.stderr)
         return str(shipped[name])
     hint = "give a scene file, or a shipped scene's name (`biotac-bench scenes` lists them"
     near = difflib.get_close_matches(name, list(shipped), n=3, cutoff=0.6)
     hint += f"; close matches: {', '.join(near)})" if near else ")"
     if not given.is_absolute() and (REPO / given).is_file():
         hint = f"did you mean {REPO / given} (that path in the repository)?"
-    raise SceneError(text, [f"cannot read the file: No such file or directory; {hint}"])
+    why = "Is a directory" if folder else "No such file or directory"
+    raise SceneError(text, [f"cannot read the file: {why}; {hint}"])
 
 
 def scene_argument(text: str) -> str:

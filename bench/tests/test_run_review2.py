@@ -156,8 +156,8 @@ def test_a_sensor_folder_that_cannot_be_written_fails_the_run(tmp_path, monkeypa
     out = tmp_path / "o"
     original = outdir.OutFolder._prepare
 
-    def prepare(self, force, keep=()):
-        original(self, force, keep)
+    def prepare(self, force, keep=(), **kwargs):
+        original(self, force, keep, **kwargs)
         if self.path == out:  # after the out folder is checked: another writer takes sensor3/
             (out / "sensor3").mkdir()
             held.append(outdir._lock(out / "sensor3", "x", "--out"))

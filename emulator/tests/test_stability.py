@@ -159,7 +159,9 @@ float_params = {n: f for n, f in PARAMETER_FIELDS.items() if f.type in ("float",
 def test_any_parameters_in_their_ranges_give_finite_bounded_codes(data):
     name = data.draw(st.sampled_from(sorted(float_params)))
     lo, hi = PARAMETER_FIELDS[name].metadata["range"]
-    value = data.draw(st.floats(lo, hi, allow_nan=False))
+    # a seed is a whole number (a fraction is refused by name, emulator/params.py inconsistencies)
+    whole = name == "electrode_gap_seed"
+    value = data.draw(st.integers(int(lo), int(hi)) if whole else st.floats(lo, hi, allow_nan=False))
     p = SensorParams().replace(**{name: value})
     stim = [SphereDrop(0.02, 1e-6), Vibration(0.0, 0.2, 2e-6, 200.0), Press(0.05, 3.0, 0.05, 0.05),
             PressureCalibrator(0.0, 0.2, 1e3, 50.0, 100.0)]
