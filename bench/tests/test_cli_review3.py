@@ -192,3 +192,17 @@ def test_options_one_of_which_would_be_ignored_are_refused(argv, words, capsys, 
     out, err = capsys.readouterr()
     assert out == "" and words in err and "give one or the other" in err and "Traceback" not in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.unit
+def test_a_folder_named_like_a_shipped_scene_does_not_hide_it(tmp_path, monkeypatch, capsys):
+    """A folder "taps" in the working directory: `validate taps` runs the shipped scene, saying so (it failed with
+    "Is a directory"); a folder given as a path is one line naming it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "taps").mkdir()
+    assert cli.main(["validate", "taps"]) == 0
+    out, err = capsys.readouterr()
+    assert "ok (taps," in out
+    assert err.strip() == f"note: taps here is a folder: the shipped scene {SCENES_DIR / 'taps.toml'}"
+    assert cli.main(["validate", str(tmp_path / "taps")]) == 1
+    assert "Is a directory" in capsys.readouterr().err
