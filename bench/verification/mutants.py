@@ -1449,6 +1449,14 @@ CATALOGUE += [
            "    k = 2.0 * radius * modulus / (1 - POISSON_RATIO**2)", "    k = 2.0 * radius * modulus",
            ("emulator/tests/test_sliding.py::test_the_depth_law_uses_the_textures_plane_strain_modulus",),
            "the rig's depth-to-load law uses E, not the kernel's E/(1 - nu^2): soft textures 9 % stiffer"),
+    Mutant("ridge-release-counts-only-its-first-drop", "sliding", "emulator/friction.py",
+           "        return 0, extreme - force\n", "        return 0, 0.0\n",
+           ("emulator/tests/test_ridge_release.py::test_an_events_releases_add_up_to_its_peak_to_trough_drop",),
+           "a ridge release's released force is only its first drop, not the whole peak-to-trough"),
+    Mutant("rechord-keeps-a-stale-peak", "sliding", "emulator/friction.py",
+           "        ridge_state[1, j] *= stiffness / before", "        pass",
+           ("emulator/tests/test_ridge_release.py::test_a_shorter_chord_scales_the_counts_peak_a_longer_one_the_deflection",),
+           "a ridge whose chord shortens keeps its release count's old peak: spurious or missed release events"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -520,3 +520,34 @@ def test_a_ring_piece_run_again_starts_from_the_ridges_state_it_started_from(mon
     for name in straight:
         assert np.array_equal(retried[name], straight[name]), name
     assert np.array_equal(retried_contact.ridge_releases(0)["count"], straight_contact.ridge_releases(0)["count"])
+
+
+# --- the release count's bookkeeping, on hand-made force sequences (a mutation hunt: unguarded) -------------------
+def _releases(forces, threshold=0.1, direction=1.0):
+    """Events begun and force released by one ridge going through ``forces`` (N) in the slip's ``direction``."""
+    state = np.zeros((5, 1))
+    events, released = 0, 0.0
+    for before, after in zip(forces[:-1], forces[1:]):
+        n, r = friction._count_release(state, 0, before, after, direction, threshold)
+        events, released = events + n, released + r
+    return events, released
+
+
+def test_an_events_releases_add_up_to_its_peak_to_trough_drop():
+    """Loaded to 1 N, falling to 0.45 N with a wiggle smaller than the threshold on the way (0.5 → 0.55 → 0.45): one
+    event, and the force it released is the whole drop, 0.55 N (not only its first step)."""
+    events, released = _releases([0.0, 0.5, 1.0, 0.8, 0.5, 0.55, 0.45])
+    assert events == 1 and released == pytest.approx(0.55, abs=1e-12)
+    events, _ = _releases([0.0, 1.0, 0.8, 0.95, 0.7])  # re-loaded by more than the threshold: a second event
+    assert events == 2
+
+
+def test_a_shorter_chord_scales_the_counts_peak_a_longer_one_the_deflection():
+    """_rechord: a ridge's chord halved (stiffness 100 → 50 N/m) keeps the deflection, so its force and the count's
+    peak halve; doubled (50 → 100) keeps the force, so the deflection halves (no energy from nothing)."""
+    state = np.zeros((5, 1))
+    state[0, 0], state[1, 0], state[4, 0] = 1e-3, 2.0, 100.0
+    friction._rechord(state, 0, 50.0)
+    assert (state[0, 0], state[1, 0], state[4, 0]) == (1e-3, 1.0, 50.0)
+    friction._rechord(state, 0, 100.0)
+    assert (state[0, 0], state[1, 0], state[4, 0]) == (0.5e-3, 1.0, 100.0)
