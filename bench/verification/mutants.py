@@ -1457,6 +1457,10 @@ CATALOGUE += [
            "        ridge_state[1, j] *= stiffness / before", "        pass",
            ("emulator/tests/test_ridge_release.py::test_a_shorter_chord_scales_the_counts_peak_a_longer_one_the_deflection",),
            "a ridge whose chord shortens keeps its release count's old peak: spurious or missed release events"),
+    Mutant("live-patch-radius-floored", "thermal", "emulator/thermal.py",
+           "np.rint(radius / PATCH_RADIUS_STEP_M)", "np.floor(radius / PATCH_RADIUS_STEP_M)",
+           ("emulator/tests/test_thermal_live_contact.py::test_the_live_patch_radius_is_rounded_to_the_nearest_step",),
+           "the live contact's patch radius is rounded down, biasing every thermal patch small"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -312,3 +312,17 @@ def test_expm_by_products_equals_scipys_on_the_networks_own_matrices():
             ref = expm(A * dt)
             tol = 1e-13 * max(1.0, np.abs(A * dt).sum(axis=0).max()) * max(1.0, np.max(np.abs(ref)))
             assert np.max(np.abs(expm_products(A * dt) - ref)) <= tol
+
+
+def test_the_live_patch_radius_is_rounded_to_the_nearest_step():
+    """live_patch_area_m2 rounds the Hertz radius a₁·N^(1/3) to the nearest 50 µm (not down): loads whose radius lies
+    0.3 and 0.7 of a step above a whole number of steps give that number and the next (a floor biased every patch
+    small by up to a step)."""
+    from emulator.params import SensorParams
+    from emulator.thermal import PATCH_RADIUS_STEP_M, live_patch_area_m2
+
+    p = SensorParams()
+    for steps, frac, expected in ((40, 0.3, 40), (40, 0.7, 41), (80, 0.7, 81)):
+        load = ((steps + frac) * PATCH_RADIUS_STEP_M / p.contact_radius_at_1N_m) ** 3
+        area = float(live_patch_area_m2(np.array([load]), p)[0])
+        assert area == pytest.approx(np.pi * (expected * PATCH_RADIUS_STEP_M) ** 2, rel=1e-12), (steps, frac)
