@@ -1461,6 +1461,10 @@ CATALOGUE += [
            "np.rint(radius / PATCH_RADIUS_STEP_M)", "np.floor(radius / PATCH_RADIUS_STEP_M)",
            ("emulator/tests/test_thermal_live_contact.py::test_the_live_patch_radius_is_rounded_to_the_nearest_step",),
            "the live contact's patch radius is rounded down, biasing every thermal patch small"),
+    Mutant("slip-out-is-the-last-substeps", "sliding", "emulator/friction.py",
+           "        out_slip_velocity[n] = vr_sum / substeps", "        out_slip_velocity[n] = vr",
+           ("emulator/tests/test_friction_fluctuation.py::test_the_slip_velocity_out_is_each_grid_steps_mean_over_its_substeps",),
+           "the slip velocity reported per grid step is the last substep's, not the step's mean"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -161,3 +161,23 @@ def test_where_the_fluctuation_reaches_below_minus_one_friction_is_held_at_its_f
                          FLAT.mu_static, FLAT.mu_kinetic, FLAT.stribeck_velocity_m_per_s, 0.0, *out)
     expected = friction.MIN_FLUCTUATION_SCALE * FLAT.mu_kinetic * force
     assert out[1][-1] == pytest.approx(expected, rel=1e-3)
+
+
+@pytest.mark.unit
+def test_the_slip_velocity_out_is_each_grid_steps_mean_over_its_substeps():
+    """Through stick and slip (1 N, the stage from rest to 5 cm/s), with 4 substeps per grid step: the slip velocity
+    reported per step times the step is exactly how far the contact slid in it (its position's step) — the mean over
+    the substeps, not the last one's value (a mutation hunt)."""
+    from emulator import friction
+
+    p, n, dt = SensorParams(), 2000, 1 / GRID_HZ
+    normal, tangential, slip, position = (np.zeros(n) for _ in range(4))
+    heights = np.zeros((1, 100))
+    stage = np.minimum(np.arange(n) * dt * 2.0, 0.05)  # accelerating at 2 m/s², then 5 cm/s: the skin sticks, slips
+    friction.slide_block(np.full(n, 1.0), stage, dt, 4, heights, heights.copy(), np.array([2.5e-3]), np.zeros(100),
+                         10e-6, friction.new_state(), False, p.contact_stiffness_N_per_m1_5, p.contact_radius_at_1N_m,
+                         1e9, 3e-3, p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
+                         p.bristle_stiffness_per_N, p.bristle_damping_per_N, FLAT.mu_static, FLAT.mu_kinetic,
+                         FLAT.stribeck_velocity_m_per_s, 0.0, normal, tangential, slip, position)
+    assert np.ptp(slip) > 0.01  # it did stick and slip
+    np.testing.assert_allclose(np.diff(position), slip[1:] * dt, rtol=1e-9, atol=1e-15)
