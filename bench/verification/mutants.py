@@ -1465,6 +1465,15 @@ CATALOGUE += [
            "        out_slip_velocity[n] = vr_sum / substeps", "        out_slip_velocity[n] = vr",
            ("emulator/tests/test_friction_fluctuation.py::test_the_slip_velocity_out_is_each_grid_steps_mean_over_its_substeps",),
            "the slip velocity reported per grid step is the last substep's, not the step's mean"),
+    Mutant("surface-track-starts-at-minus-start", "sliding", "emulator/texture.py",
+           "np.roll(heights, -int(", "np.roll(heights, int(",
+           ("emulator/tests/test_texture_tracks.py::test_a_track_starting_further_on_is_the_same_surface_shifted_and_reads_between_samples_linearly",),
+           "surface_track starts at -start on the texture, not at start"),
+    Mutant("surface-track-reads-backwards", "sliding", "emulator/texture.py",
+           "return self.heights_m[i] * (1 - f) + self.heights_m[(i + 1) % n] * f",
+           "return self.heights_m[i] * f + self.heights_m[(i + 1) % n] * (1 - f)",
+           ("emulator/tests/test_texture_tracks.py::test_a_track_starting_further_on_is_the_same_surface_shifted_and_reads_between_samples_linearly",),
+           "SurfaceTrack.at interpolates between samples backwards"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -109,3 +109,19 @@ def test_an_oblique_component_is_met_less_often_along_the_track(angle_deg, along
     np.testing.assert_allclose(periodic_profile(one, x + period), periodic_profile(one, x), atol=1e-6 * c.amplitude_m)
     assert np.max(np.abs(periodic_profile(one, x + 0.5 * period) + periodic_profile(one, x))) < \
         1e-6 * c.amplitude_m  # half a track period: the opposite phase
+
+
+@pytest.mark.unit
+def test_a_track_starting_further_on_is_the_same_surface_shifted_and_reads_between_samples_linearly():
+    """surface_track(texture, dx, start): its first height is the whole surface's at ``start`` (not at −start), and
+    SurfaceTrack.at a quarter step past a sample is the linear value there (not read backwards)."""
+    from emulator.texture import surface_track
+
+    tex = Texture(950, "t", "test", 20e-6, 300e-6, 0.8, 0.6, 0.5, seed=4,
+                  periodic=(PeriodicComponent(1e-3, 10e-6),))
+    dx = 10e-6
+    whole = surface_track(tex, dx)
+    shifted = surface_track(tex, dx, start_m=250 * dx)
+    assert shifted.heights_m[0] == whole.heights_m[250] and shifted.heights_m[7] == whole.heights_m[257]
+    h = whole.heights_m
+    assert whole.at(10.25 * dx) == pytest.approx(0.75 * h[10] + 0.25 * h[11], rel=1e-12, abs=1e-18)
