@@ -866,10 +866,9 @@ def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _
             except (ValueError, TypeError, OverflowError) as e:
                 c.problems.append(_cut(str(e)))
     u = make_unit(which if which is not None else None)
-    try:
-        params = u.params.replace(**changes)
-    except ValueError:  # values each in range that no sensor can have together: said as problems, the unit's kept
-        c.problems += dataclasses.replace(u.params, **changes).inconsistencies(where)
+    params = dataclasses.replace(u.params, **changes)  # (each value checked above)
+    if inconsistent := params.inconsistencies(where):  # values each in range that no sensor can have together
+        c.problems += inconsistent
         params = u.params
     return _SensorTable(u.name, variant, params, u.serial, _sensor_faults(c, table, where, duration, variant), where)
 
