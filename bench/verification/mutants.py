@@ -1474,6 +1474,16 @@ CATALOGUE += [
            "return self.heights_m[i] * f + self.heights_m[(i + 1) % n] * (1 - f)",
            ("emulator/tests/test_texture_tracks.py::test_a_track_starting_further_on_is_the_same_surface_shifted_and_reads_between_samples_linearly",),
            "SurfaceTrack.at interpolates between samples backwards"),
+    Mutant("crest-table-margin-half-the-box", "sliding", "emulator/sliding.py",
+           "margin = max(1, int(round(skin.ridge_contact_width_m / dx_m))) + 2",
+           "margin = max(1, int(round(skin.ridge_contact_width_m / dx_m))) // 2",
+           ("emulator/tests/test_sliding.py::test_the_crest_table_reads_each_position_as_the_whole_surface_would",),
+           "the crest table's pieces are computed with half the box as margin: the gradient beside each seam reads "
+           "the box average's edge"),
+    Mutant("crest-table-wrap-one-position-late", "sliding", "emulator/sliding.py",
+           "(ahead, first + ahead - n_track, n - ahead)", "(ahead, first + ahead - n_track + 1, n - ahead)",
+           ("emulator/tests/test_sliding.py::test_the_crest_table_reads_each_position_as_the_whole_surface_would",),
+           "the crest table's wrapped indices read one position on from the ones just before the track's start"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

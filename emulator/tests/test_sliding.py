@@ -413,3 +413,26 @@ def test_the_depth_law_uses_the_textures_plane_strain_modulus():
     for depth in (0.2e-3, 0.8e-3, 2.0e-3):
         load = float(contact_force_from_depth(depth, p, foam))
         assert load == pytest.approx(brentq(lambda n: depth_of(n) - depth, 1e-9, 50.0), rel=0.005), depth
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("surface", [GRATING, SAND])
+def test_the_crest_table_reads_each_position_as_the_whole_surface_would(surface):
+    """Consistency (to 1e-12 of the largest slope: a periodic component's cosines start from another phase): the
+    ridge-resolved step's crest table, at every index, is the crest slope (the box
+    average of the contact width, np.gradient) of one wide stretch of surface around the whole track — index q
+    position q, the last ``reach`` indices the positions just before the start — so the margin each piece is computed
+    with reaches as far as the box and the gradient do, at both seams (the table's wrap and any first index).
+    A margin one sample short changes the values beside the seams."""
+    from emulator.sliding import _crest_slope, _surface_around, crest_table
+
+    skin, dx, start, n_track, reach = Skin(), 10e-6, 0.0123, 400, 37
+    wide = 200
+    h = _surface_around(surface, start, -reach, n_track + reach, wide, dx)
+    whole = _crest_slope(h, skin, dx)[wide:wide + n_track + reach]  # positions −reach … n_track − 1
+    expected = np.concatenate([whole[reach:n_track], whole[:reach]])
+    tol = 1e-12 * np.abs(expected).max()
+    np.testing.assert_allclose(crest_table(surface, skin, start, 0, n_track, n_track, reach, dx), expected, 0, tol)
+    for first, n in ((0, 150), (150, 213), (363, 37), (350, 50)):
+        np.testing.assert_allclose(crest_table(surface, skin, start, first, n, n_track, reach, dx),
+                                   expected[first:first + n], 0, tol, err_msg=f"{first}, {n}")
