@@ -7,6 +7,8 @@ negatives are in test_campaign_leak.py."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from bench.campaigns import faults as campaign
@@ -62,6 +64,38 @@ def test_a_fault_whose_actions_never_happen_fails_the_case():
     result = run_case(late, "rest", 0)
     assert not result["passed"] and "1 of the fault's scheduled actions never happened" in result["problem"]
 
+
+
+def test_a_fault_that_silences_the_stream_fails_the_case_saying_how_many_frames_came():
+    """Unplugging a bench's only sensor stops the firmware's frames: with a check that accepts anything, the case
+    still fails, naming the frames that arrived (fewer than half the 150 asked for) — a silenced stream is never a
+    pass."""
+    silenced = FaultCase("only sensor unplugged", "—", {}, [(0.1, lambda b: b.unplug(1))],
+                         lambda frames, status, stats: None)
+    result = run_case(silenced, "rest", 0)
+    assert not result["passed"] and re.fullmatch(r"only \d+ frames arrived", result["problem"]), result
+    assert int(result["problem"].split()[1]) < 75
+
+
+def test_a_code_past_12_bits_from_the_driver_fails_the_case(monkeypatch):
+    """A driver fault stood in for: the real driver's frames, one clean PAC code among them raised to 4096.  A case
+    on a healthy link then fails for out-of-range data; without the change it passes (test_the_default_campaign…)."""
+    import numpy as np
+
+    from bench.hosts.driver import BridgeDriver
+    from emulator.channels import PAC
+
+    real = BridgeDriver.frames
+
+    def frames(self, *args, **kwargs):
+        for k, frame in enumerate(real(self, *args, **kwargs)):
+            if k == 20:
+                frame.codes[np.flatnonzero(frame.channels == PAC)[0], 0] = 4096
+            yield frame
+
+    monkeypatch.setattr(BridgeDriver, "frames", frames)
+    result = run_case(campaign.FAULTS["none"], "rest", 0)
+    assert not result["passed"] and result["problem"] == "out-of-range data reached the caller", result
 
 def test_a_brownout_lands_whenever_it_is_due():
     """A reset due outside a frame's sequence (the firmware's once-a-second detection, a delay) acts at the next HAL
