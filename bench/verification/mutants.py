@@ -1504,6 +1504,10 @@ CATALOGUE += [
            "if len(good) < 4 * LEAK_CASE_FRAMES:", "if len(good) < LEAK_CASE_FRAMES:",
            ("bench/tests/test_campaign_leak.py::test_the_leak_check_refuses_a_run_without_enough_clean_pdc",),
            "the leak check compares medians of frames too close together to measure a leak by"),
+    Mutant("slides-share-one-motor-current-stream", "sliding", "bench/running/slides.py",
+           'f"slide[{k}].motor_current"', '"slide.motor_current"',
+           ("bench/tests/test_scene_slide.py::test_each_slide_reads_the_motor_current_through_its_own_noise",),
+           "every slide of a scene reads its motor current through the same noise"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
