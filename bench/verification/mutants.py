@@ -1508,6 +1508,10 @@ CATALOGUE += [
            'f"slide[{k}].motor_current"', '"slide.motor_current"',
            ("bench/tests/test_scene_slide.py::test_each_slide_reads_the_motor_current_through_its_own_noise",),
            "every slide of a scene reads its motor current through the same noise"),
+    Mutant("overrun-frames-miss-an-eaten-crc", "host", "bench/hosts/bridge.py",
+           "ranges[k][0] < end and", "ranges[k][0] < end - 2 and",
+           ("firmware_tests/tests/test_uart_overrun.py::test_a_frame_that_lost_only_its_crc_is_counted_lost",),
+           "overrun_frames() leaves out a frame the overrun took only the CRC of"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
