@@ -91,3 +91,26 @@ def test_roughness_is_band_limited_but_centroid_is_not():
     tone_power = 40.0**2 / 2
     assert p - bg < 0.01 * tone_power  # FIR gain < 0.01 beyond 750 Hz: the tone's power is attenuated > 40 dB
     assert tp.spectral_centroid(rec) > 950.0
+
+
+def test_the_centroids_spectrum_is_welchs_with_256_sample_hann_segments_at_half_overlap():
+    """Derived, against scipy.signal.welch: the averaged spectrum the centroid is taken of (README: "256 samples
+    (116 ms at 2.2 kS/s, 8.6 Hz bins), 50 % overlap, each segment mean-removed and Hann-tapered") is Welch's
+    estimate with those settings, up to Welch's constant scale and its doubling of the bins between DC and Nyquist
+    (to 1e-12); the centroid of a trial is the same spectrum's."""
+    from scipy import signal as sps
+
+    rng = np.random.default_rng(4)
+    x = 2048.0 + np.cumsum(rng.standard_normal(3001)) * 0.3 + 20 * np.sin(2 * np.pi * 140 * np.arange(3001) / FS)
+    f, p = tp.averaged_spectrum(x, FS)
+    fw, pw = sps.welch(x, FS, window="hann", nperseg=256, noverlap=128, detrend="constant", scaling="spectrum")
+    assert np.array_equal(f, fw) and f[1] == pytest.approx(FS / 256)
+    pw = pw / np.where((fw > 0) & (fw < FS / 2), 2.0, 1.0)
+    np.testing.assert_allclose(p / p.sum(), pw / pw.sum(), rtol=1e-12, atol=0)
+
+    rec = trial(lambda t, rng: 20 * np.sin(2 * np.pi * 140 * t) * sliding(t) + 5 * rng.standard_normal(t.size))
+    w = tp.measurement_window(rec)
+    fw, pw = sps.welch(rec.pac[(rec.pac_t >= w[0]) & (rec.pac_t <= w[1])], FS, window="hann", nperseg=256,
+                       noverlap=128, detrend="constant", scaling="spectrum")
+    pw = pw / np.where((fw > 0) & (fw < FS / 2), 2.0, 1.0)
+    assert tp.spectral_centroid(rec) == pytest.approx((pw * fw).sum() / pw.sum(), rel=1e-12)

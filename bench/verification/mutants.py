@@ -1512,6 +1512,15 @@ CATALOGUE += [
            "ranges[k][0] < end and", "ranges[k][0] < end - 2 and",
            ("firmware_tests/tests/test_uart_overrun.py::test_a_frame_that_lost_only_its_crc_is_counted_lost",),
            "overrun_frames() leaves out a frame the overrun took only the CRC of"),
+    Mutant("centroid-segments-512", "textures", "bench/textures/properties.py",
+           "CENTROID_WINDOW, CENTROID_OVERLAP = 256, 0.5", "CENTROID_WINDOW, CENTROID_OVERLAP = 512, 0.5",
+           ("bench/tests/test_properties_definitions.py::test_the_centroids_spectrum_is_welchs_with_256_sample_hann_segments_at_half_overlap",),
+           "the spectral centroid's segments are 512 samples, not the README's 256"),
+    Mutant("centroid-symmetric-hann", "textures", "bench/textures/properties.py",
+           "seg = (seg - seg.mean(axis=1, keepdims=True)) * _hann(n)",
+           "seg = (seg - seg.mean(axis=1, keepdims=True)) * np.hanning(n)",
+           ("bench/tests/test_properties_definitions.py::test_the_centroids_spectrum_is_welchs_with_256_sample_hann_segments_at_half_overlap",),
+           "the centroid's segments are tapered by the symmetric Hann window, not the periodic one"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
