@@ -286,15 +286,21 @@ def test_the_summary_is_bounded_whatever_the_duration():
 
 
 @pytest.mark.unit
-def test_csv_export_is_the_same_whatever_its_time_blocks(tmp_path):
+@pytest.mark.parametrize("stimuli, block_s", [([], 0.137), ([{"kind": "touch", "start_s": 0.3, "force_N": 1.0,
+                                                               "ramp_s": 0.05, "hold_s": 1.5, "electrode": "E17",
+                                                               "material": "aluminum"}], 0.0137)])
+def test_csv_export_is_the_same_whatever_its_time_blocks(tmp_path, stimuli, block_s):
+    """At rest, and while a touch on aluminum moves TDC (so the TDC a TAC sample is converted with — between the
+    TDC samples around it, the next one perhaps in the next block — matters), the CSV written in blocks of
+    ``block_s`` is the one written in one block, byte for byte."""
     from bench.reporting import exports
 
-    sc = parse_scene({"scene": {"name": "csv", "duration_s": 2.0}})
+    sc = parse_scene({"scene": {"name": "csv", "duration_s": 2.0}, "stimulus": stimuli})
     rec = run_scene(sc, progress=False)
     write_outputs(rec, tmp_path / "a", plots=False)
     base = {"PAC": 2048.0, "PDC": 700.0, "TAC": 2048.0}
     exports.export_csv(tmp_path / "a" / "samples.h5", tmp_path / "one.csv", base, block_s=60.0)
-    exports.export_csv(tmp_path / "a" / "samples.h5", tmp_path / "many.csv", base, block_s=0.137)
+    exports.export_csv(tmp_path / "a" / "samples.h5", tmp_path / "many.csv", base, block_s=block_s)
     one, many = (tmp_path / "one.csv").read_text(), (tmp_path / "many.csv").read_text()
     assert one == many and one.count("\n") == 1 + 2.0 * 4400
     assert ",TAC," in one and "degC/s" in one

@@ -1545,6 +1545,11 @@ CATALOGUE += [
            'return ((nz + 0.5) * width,', 'return ((nz + 1.0) * width,',
            ("bench/tests/test_run_summary.py",),
            "the traces plot's envelope is drawn half a bin late"),
+    Mutant("csv-tac-without-the-next-blocks-tdc", "outputs", "bench/reporting/exports.py",
+           'nxt = store.read_channel(h5, "TDC", tdc_seen + d.times.size, tdc_seen + d.times.size + 1)',
+           'nxt = store.read_channel(h5, "TDC", tdc_seen + d.times.size, tdc_seen + d.times.size)',
+           ("bench/tests/test_outputs.py::test_csv_export_is_the_same_whatever_its_time_blocks",),
+           "samples.csv converts a block's last TAC samples with the block's last TDC, not the one after them"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
