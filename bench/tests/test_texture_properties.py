@@ -251,6 +251,19 @@ def test_the_touchdown_transient_stays_out_of_the_background():
     assert tp.band_powers(rung) == pytest.approx(tp.band_powers(quiet), rel=1e-9)
 
 
+def test_the_stage_starting_stays_out_of_the_background():
+    """The background ends a guard before sliding starts: a 30 ms ring ending just as the stage starts (the slide's
+    first stick-slip, a stage a latency early) leaves the background power exactly as without it — the 50 ms guard
+    covers the ring plus the FIR's 15 ms half-length — so the sliding's own start never counts against it."""
+    quiet = make_trial(bg_sigma=1.0, seed=5)
+    n = int(round(0.03 * FS))
+    start_at = np.searchsorted(quiet.pac_t, START)
+    pac = quiet.pac.copy()
+    pac[start_at - n:start_at] += 40.0 * np.sin(2 * np.pi * 200.0 * np.arange(n) / FS)
+    rung = tp.TrialRecording(pac_t=quiet.pac_t, pac=pac, pdc_t=quiet.pdc_t, pdc=quiet.pdc, current_t=quiet.current_t,
+                             current_A=quiet.current_A, contact_s=CONTACT, slide_start_s=START, slide_end_s=END)
+    assert tp.band_powers(rung)[1] == pytest.approx(tp.band_powers(quiet)[1], rel=1e-9)
+
 def test_each_segment_loses_its_own_mean_so_a_drifting_pac_keeps_its_centroid():
     """PAC drifting by 300 codes over the slide (a slow pressure change) under a 200 Hz tone: each 256-sample
     segment's own mean is removed before the taper, so the drift's step from segment to segment does not pile up at

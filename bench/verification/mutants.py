@@ -1550,6 +1550,11 @@ CATALOGUE += [
            'nxt = store.read_channel(h5, "TDC", tdc_seen + d.times.size, tdc_seen + d.times.size)',
            ("bench/tests/test_outputs.py::test_csv_export_is_the_same_whatever_its_time_blocks",),
            "samples.csv converts a block's last TAC samples with the block's last TDC, not the one after them"),
+    Mutant("roughness-background-until-the-slide", "textures", "bench/textures/properties.py",
+           "t0, t1 = rec.contact_s + guard_s, rec.slide_start_s - guard_s",
+           "t0, t1 = rec.contact_s + guard_s, rec.slide_start_s",
+           ("bench/tests/test_texture_properties.py::test_the_stage_starting_stays_out_of_the_background",),
+           "the roughness background runs up to the slide's start: the stage starting inflates it"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
