@@ -139,6 +139,7 @@ def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkey
     assert "99.6" in report  # D's number stands beside ours
     identified = len({int(r.true_texture) for r in result.identification_results["bayesian"]})
     assert f"of {identified} identified textures" in report
+    _check_tables_against_the_result(tmp_path / "out", result, summary)
     # beyond D: every training texture identified; the report counts them all, not just the pairs' textures
     monkeypatch.undo()  # this one needs validation trials for every texture
     every = E.run_experiment(E.ExperimentSpec(**{**vars(spec), "identify_all_textures": True}),
@@ -357,3 +358,39 @@ def test_the_stepper_noise_ablation_is_the_sensors_own_resting_pac_noise_in_pasc
     spec = E.parse_experiment({"experiment": {"name": "x"}}, "x.toml")
     noisy, _ = E.ablated(spec, "stepper-noise")
     assert noisy.stepper_noise_Pa == pytest.approx(1.4 * pac_pa_per_bit, rel=0.02)
+
+
+def _csv(path):
+    import csv
+
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def _check_tables_against_the_result(out, result, summary):
+    """The written tables hold what the result holds, in the units their columns name (consistency: each was found
+    wrong-but-unnoticed by a mutation: validation rows dropped, fractions under accuracy_%, a U column of another
+    property, ridge loss in mm under µm, the replacement count one high, decisions outside the true set lost)."""
+    assert len(_csv(out / "trials.csv")) == len(json.loads((out / "trials.json").read_text())) == (
+        len(result.pilot_rows) + len(result.training_rows) + len(result.validation_rows))
+    s = E.summary(result)
+    for row in _csv(out / "accuracy.csv"):
+        assert float(row["accuracy_%"]) == pytest.approx(100 * s[f"{row['task']}/{row['strategy']}"]["accuracy"],
+                                                         abs=1e-4)
+    for row in _csv(out / "pilot_uncertainty.csv"):
+        m = int(row["movement_id"])
+        for k, prop in enumerate(("traction", "roughness", "fineness")):
+            want = result.pilot_uncertainty[m, k]
+            got = float(row[f"U_{prop}"]) if row[f"U_{prop}"] not in ("", "nan") else np.nan
+            assert got == pytest.approx(want, rel=1e-9, nan_ok=True), (m, prop)
+        assert float(row["ridge_lost_um_per_pilot_worth"]) == pytest.approx(result.wear[m]["ridge_lost_m"] * 1e6,
+                                                                            rel=1e-9)
+    assert summary["skin_replacements"] == max(h["skin"] for h in result.skin_history) - 1
+    confusion = _csv(out / "confusion.csv")
+    decided = {int(d) for r in result.identification_results["bayesian"] for d in r.decided}
+    assert decided <= {int(k) for k in confusion[0] if k != "true"}
+    per_truth = {}
+    for r in result.identification_results["bayesian"]:
+        per_truth[int(r.true_texture)] = per_truth.get(int(r.true_texture), 0) + len(r.decided)
+    assert {int(row["true"]): sum(int(v) for k, v in row.items() if k != "true") for row in confusion
+            if int(row["true"]) in per_truth} == per_truth

@@ -115,3 +115,13 @@ def test_most_confused_reads_each_property_at_its_own_best_movement():
     model = ex.TextureModel(np.array([24, 25, 26, 27]), np.array([0, 1, 2]), means, np.ones((4, 3, 3)),
                             np.full((4, 3, 3), 5))
     assert _pick_pairs(model, np.array([0, 1, 2]), 1, "most-confused", seed=0) == [(26, 27)]
+
+
+def test_the_skin_policy_says_never_replaced_when_replacement_is_off():
+    """summary.json's skin_wear states the replacement level only when the experiment replaces skins: with
+    replace_skin off it is null (the report then says "never replaced"), whatever replace_at holds."""
+    from bench.reporting.experiment_report import _skin_wear
+
+    on = _skin_wear(SimpleNamespace(wear=True, replace_skin=True, replace_at=0.2))
+    off = _skin_wear(SimpleNamespace(wear=True, replace_skin=False, replace_at=0.2))
+    assert (on["replace_at"], off["replace_at"]) == (0.2, None)
