@@ -195,3 +195,55 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
         "*biotac_bridge(): called after the test it was given to had ended*",
     ])
     assert "Traceback" not in out and "fixtures.py" not in out and "scene.py:" not in out, out
+
+
+# --- 4. what each keyword does reaches the sensors (a mutation hunt found these unguarded) -------------------------
+
+
+def test_a_sensor_answers_only_the_channels_it_was_given(biotac_sensor):
+    """``channels=["PDC"]``: PDC answers data; PAC, which the sensor no longer provides, an error word (parity
+    flag) — the whole frame is the default only."""
+    from emulator.channels import PAC, PDC
+
+    only_pdc = biotac_sensor(channels=["PDC"])
+    assert read_channel(only_pdc, PDC, t0=0.05)[1].all()
+    assert not read_channel(only_pdc, PAC, t0=0.1)[1].any()
+    whole = biotac_sensor()
+    assert read_channel(whole, PAC)[1].all() and whole.sensor.seed == 0  # the documented default seed
+
+
+def test_the_benches_sensors_feel_the_stimuli_on_sensor_1_only_and_draw_seed_plus_k():
+    """The factories' sensors (``unit_sensors``, what biotac_bridge and biotac_cheetah build): a 2 N, 0.2 s tap raises
+    sensor 1's PDC by tens of codes while sensor 2's stays within a few of its rest; sensor k's noise seed is
+    ``seed + k``."""
+    from bench.pytest_plugin.fixtures import unit_sensors
+    from emulator.channels import PDC
+    from emulator.spi.model import SensorPort
+    from emulator.stimuli import Tap
+
+    sensors = unit_sensors(2, stimuli=[Tap(0.2, 2.0, duration_s=0.2)], seed=1)
+    assert [sensors[k].seed for k in (1, 2)] == [2, 3]
+    rise = {}
+    for k, sensor in sensors.items():
+        port = SensorPort(sensor)
+        rest = read_channel(port, PDC, n=5, t0=0.05)[0].mean()
+        rise[k] = read_channel(port, PDC, n=5, t0=0.2 + 0.1)[0].mean() - rest
+    assert rise[1] > 50 and abs(rise[2]) < 5, rise
+
+
+def test_a_scenes_sensor_takes_the_seed_given_beside_it(biotac_sensor):
+    """``seed`` is the one keyword biotac_sensor takes beside ``scene``: it replaces the scene's seed (the same seed,
+    the same codes; another seed, other noise)."""
+    from emulator.channels import PAC
+
+    a, b, c = (biotac_sensor(scene="rest", seed=s) for s in (7, 7, 8))
+    assert a.sensor.seed == b.sensor.seed == 7 and c.sensor.seed == 8
+    codes = [read_channel(p, PAC, n=20)[0] for p in (a, b, c)]
+    assert np.array_equal(codes[0], codes[1]) and not np.array_equal(codes[0], codes[2])
+
+
+def test_a_scenes_bridge_takes_the_spi_given_beside_it(biotac_bridge):
+    """``spi="rtl"`` beside a scene runs the bridge's bus on the Verilog twin (the scene says software)."""
+    bench = biotac_bridge(scene="taps", spi="rtl")
+    assert bench.board.spi == "rtl" and type(bench.board.bus).__name__ == "RtlBus"
+    assert first_frame(bench.port).codes.shape == (44, 1)
