@@ -228,3 +228,56 @@ def test_the_default_bench_sensors_each_have_their_own_noise_and_only_sensor_1_f
     assert pdc[1][at_tap].max() - pdc[1][:200].mean() > 20 and np.ptp(pdc[2]) < 8  # only sensor 1 is tapped
     rest = t < 0.15
     assert abs(np.corrcoef(pac[1][rest], pac[2][rest])[0, 1]) < 0.2  # independent noise
+
+
+# --- a helper's mutation hunt found these unguarded ----------------------------------------------------------------
+
+
+def test_late_frames_in_the_middle_of_a_gap_keep_the_rest_of_it_open():
+    """0, then 6 (1–5 missing), then 3, 1 and 5 arrive late: each fills its own place in the gap, none is taken for
+    a duplicate, and the two never seen (2, 4) are the drops."""
+    p = FrameParser()
+    assert feed(p, [0, 6, 3, 1, 5]) == [0, 6, 3, 1, 5]
+    assert p.stats.dropped_frames == 2 and p.stats.duplicates == 0
+
+
+def test_frames_fed_one_byte_at_a_time_all_decode():
+    """A serial read may end anywhere in a frame — inside its 5-byte header too: fed one byte at a time, three
+    frames decode, in order, with nothing counted as bad."""
+    p = FrameParser()
+    got = []
+    for byte in b"".join(data_frame(s) for s in (7, 8, 9)):
+        got += [f.seq for f in p.feed(bytes([byte]), now=0.0) if isinstance(f, DataFrame)]
+    assert got == [7, 8, 9] and p.stats.crc_errors == 0 and p.stats.dropped_frames == 0
+
+
+def test_a_frame_of_five_sps_decodes_every_sensor():
+    """The largest frame the bridge sends: all five sensors (mask 0b11111), 64 slots — each slot a channel byte and
+    five words, 708 bytes of payload: codes (64, 5), sensors 1–5, sensor 5's own samples."""
+    words = [(100 * k + slot) & 0x0FFF for slot in range(64) for k in range(1, 6)]
+    payload = struct.pack("<HBB", 1, 0b11111, 64) + b"".join(
+        bytes([0]) + struct.pack("<5H", *words[5 * slot:5 * slot + 5]) for slot in range(64))
+    assert len(payload) == 708
+    frames = [f for f in FrameParser().feed(D.encode(D.T_DATA, payload), now=0.0) if isinstance(f, DataFrame)]
+    assert len(frames) == 1 and frames[0].codes.shape == (64, 5) and frames[0].sensors == [1, 2, 3, 4, 5]
+    assert list(frames[0].samples(5)["PAC"][:3]) == [500, 501, 502]
+
+
+@pytest.mark.firmware
+def test_frames_keep_coming_past_the_idle_timeout_while_they_arrive():
+    """``frames(timeout_s=…)`` ends after ``timeout_s`` *without* a frame, not after ``timeout_s`` in all (what
+    ``biotac-bench record``'s idle timeout relies on): paced in real time (100 frames/s), 150 frames (1.5 s) arrive
+    through a 0.5 s idle timeout (after 30 frames read with a long one: a cold numba cache compiles kernels while
+    the first frames are computed, a one-off stall longer than 0.2 s)."""
+    from bench.hosts.bridge import FirmwareBench
+
+    with FirmwareBench(1, realtime=True) as fb:
+        drv = BridgeDriver(fb.port)
+        try:
+            drv.start()
+            assert drv.wait_for(CMD_START, timeout_s=5) is not None
+            assert len(list(drv.frames(max_frames=30, timeout_s=10))) == 30  # streaming
+            got = list(drv.frames(max_frames=150, timeout_s=0.5))
+        finally:
+            drv.close()
+    assert len(got) == 150
