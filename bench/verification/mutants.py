@@ -1627,6 +1627,18 @@ CATALOGUE += [
            '                    self._gaps.insert(i + 1, [u + 1, b])\n', '',
            ('firmware_tests/tests/test_driver_robustness.py::test_late_frames_in_the_middle_of_a_gap_keep_the_rest_of_it_open',),
            "a late frame in a gap's middle closes the rest of it: later late frames are dropped as duplicates"),
+    Mutant('fastpath-busy-command-keeps-the-window', "spi", "emulator/spi/fastpath.py",
+           '        last_sampling_tick = tick\n        if busy:', '        if not busy:\n            last_sampling_tick = tick\n        if busy:',
+           ('emulator/tests/test_spi_model.py::test_the_vectorised_path_answers_the_protocols_corners_as_the_transfer_level_path',),
+           'a sampling command answered busy does not restart the conversion window on the fast path'),
+    Mutant('fastpath-read-consumes-nothing-across-batches', "spi", "emulator/spi/fastpath.py",
+           'elif before is not None and consumed:', 'elif False:',
+           ('emulator/tests/test_spi_model.py::test_the_vectorised_path_answers_the_protocols_corners_as_the_transfer_level_path',),
+           "a read in a batch of its own leaves the previous batch's result unconsumed: the same sample read twice"),
+    Mutant('fastpath-manual-resend-as-a-bad-command', "spi", "emulator/spi/fastpath.py",
+           '_SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE]] = True', '_SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_WRITE]] = True',
+           ('emulator/tests/test_spi_model.py::test_the_vectorised_path_answers_the_protocols_corners_as_the_transfer_level_path',),
+           '0x50 (manual resend) on the fast path answers a parity error instead of the last word'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
