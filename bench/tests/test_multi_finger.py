@@ -232,3 +232,28 @@ def test_impact_detection_judges_the_drops_of_every_finger(tmp_path):
     assert second["impact_detection"]["spheres"]["1 mm aluminum bearing"] | {"energy_uJ": None} == {
         "mass_mg": pytest.approx(1.461, abs=1e-3), "energy_uJ": None, "drops": 2, "detected": 2, "detection_rate": 1.0}
     assert "## Impact detection" in (out / "sensor2" / "report.md").read_text()
+
+
+@pytest.mark.unit
+def test_a_finger_that_stops_stops_the_run_and_the_record_says_which():
+    """Three fingers, a stop asked for while finger 2 runs (after finger 1's chunk boundaries): the run's status is
+    finger 2's ("interrupted"), and finger 3 never runs; asked while finger 1 runs, no other finger runs."""
+    from bench.running.runner import run_scene
+
+    scene = parse_scene_text('[scene]\nname = "three"\nduration_s = 3.0\n[[sensors]]\nindex = 2\n'
+                             '[[sensors]]\nindex = 3\n')
+    assert scene.n_sensors == 3
+    asked = []
+    whole = run_scene(scene, progress=False, should_stop=lambda: bool(asked.append(1)))
+    assert whole.status == "ok" and sorted(whole.sensors) == [2, 3]
+    per_finger = len(asked) // 3  # each finger asks at each of its chunk boundaries
+
+    def stop_after(n):
+        calls = []
+        return lambda: bool(calls.append(1)) or len(calls) > n
+
+    during_2 = run_scene(scene, progress=False, should_stop=stop_after(per_finger))
+    assert during_2.status == "interrupted" and during_2.sensors[2].status == "interrupted"
+    assert sorted(during_2.sensors) == [2]
+    during_1 = run_scene(scene, progress=False, should_stop=stop_after(0))
+    assert during_1.status == "interrupted" and during_1.sensors == {}

@@ -1639,6 +1639,18 @@ CATALOGUE += [
            '_SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_RESEND_MANUAL, CMD_WRITE]] = True', '_SPECIAL[[CMD_READ_PROPERTY, CMD_RESEND, CMD_WRITE]] = True',
            ('emulator/tests/test_spi_model.py::test_the_vectorised_path_answers_the_protocols_corners_as_the_transfer_level_path',),
            '0x50 (manual resend) on the fast path answers a parity error instead of the last word'),
+    Mutant('run-ok-after-finger-2-stopped', "outputs", "bench/running/runner.py",
+           '            rec.status = rec.sensors[k].status', '            pass',
+           ('bench/tests/test_multi_finger.py::test_a_finger_that_stops_stops_the_run_and_the_record_says_which',),
+           'a several-finger run whose finger 2 was stopped or failed reports status ok'),
+    Mutant('run-fingers-after-a-stop-still-run', "outputs", "bench/running/runner.py",
+           '        if rec.status != "ok":\n            break', '        if False:\n            break',
+           ('bench/tests/test_multi_finger.py::test_a_finger_that_stops_stops_the_run_and_the_record_says_which',),
+           'fingers after one that stopped or failed still run'),
+    Mutant('buildable-check-skips-the-last-finger', "outputs", "bench/running/runner.py",
+           '    for k in range(1, scene.n_sensors + 1):\n        try:', '    for k in range(1, scene.n_sensors):\n        try:',
+           ('bench/tests/test_scene_combinations.py::test_a_sensor_that_cannot_be_built_is_a_scene_error_before_anything_runs',),
+           'check_buildable never builds the last finger: a run into --force fails at 0 s instead'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
