@@ -320,9 +320,10 @@ class CheetahBench:
             sel = (t, cur)
 
         def emit_select(when: float, code: int):
-            nonlocal bus_open, bus_code
+            nonlocal bus_open, bus_code, t
             steps.append((when, code, 0, 0, code != 0))
             bus_open, bus_code = code != 0, code
+            t = max(t, when + 0.5 * T)  # the bus holds a select change for half an SCK period (Transfer.end_s)
 
         def flush(keep: bool):
             nonlocal pending, t, bus_open, bus_code

@@ -1651,6 +1651,10 @@ CATALOGUE += [
            '    for k in range(1, scene.n_sensors + 1):\n        try:', '    for k in range(1, scene.n_sensors):\n        try:',
            ('bench/tests/test_scene_combinations.py::test_a_sensor_that_cannot_be_built_is_a_scene_error_before_anything_runs',),
            'check_buildable never builds the last finger: a run into --force fails at 0 s instead'),
+    Mutant("cheetah-select-change-takes-no-time", "cheetah", "bench/hosts/cheetah_server.py",
+           "            t = max(t, when + 0.5 * T)  # the bus holds", "            pass  # the bus holds",
+           ("firmware_tests/tests/test_cheetah_device.py::test_a_select_asserted_before_the_bytes_is_held_for_half_a_clock_period",),
+           "a select asserted on its own takes no time in the adapter's plan: the next bytes overlap it and the client is dropped"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -22,6 +22,7 @@ from bench.hosts import cheetah_server as cs
 from bench.hosts.cheetah_server import CheetahBench, build_client, build_library, build_vendor_rate_client
 from bench.paths import REPO
 from bench.tests.host_benches import open_adapter, read_serial
+from emulator.spi import protocol as proto
 
 pytestmark = pytest.mark.firmware
 CH_COMMUNICATION_ERROR, CH_UNABLE_TO_OPEN, CH_SPI_ASYNC_PENDING = -7, -8, -104
@@ -330,3 +331,33 @@ def test_an_async_batch_starts_when_submitted_not_when_collected(lib):
         lib.c_ch_sleep_ms(100)
         lib.c_ch_spi_async_collect(h, 0, buf)
         assert cb.t == pytest.approx(t0 + 0.1 + 0.3, abs=1e-5)
+
+
+@pytest.mark.parametrize("split", ["across batches", "a short delay in one batch"])
+def test_a_select_asserted_before_the_bytes_is_held_for_half_a_clock_period(lib, split):
+    """A program that asserts the select in a batch of its own (or with a delay shorter than half an SCK period
+    before its bytes) then sends a sampling command and reads its answer: the bus holds a select change for half a
+    period, so the bytes start after it — the answer is PDC's data word, never a dropped client
+    (-7, "starts before the previous one ended", found by a helper's hunt)."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+
+        def shift(n, *ops):
+            buf = (C.c_uint8 * max(n, 1))()
+            lib.c_ch_spi_queue_clear(h)
+            for op, *args in ops:
+                getattr(lib, f"c_ch_spi_queue_{op}")(h, *args)
+            return lib.c_ch_spi_batch_shift(h, n, buf), bytes(buf)[:n]
+
+        if split == "across batches":
+            assert shift(0, ("ss", 1))[0] == 0
+            assert shift(2, ("byte", 1, 0x83), ("byte", 1, 0), ("ss", 0), ("delay_ns", 60000))[0] == 2
+        else:
+            assert shift(2, ("ss", 1), ("delay_ns", 50), ("byte", 1, 0x83), ("byte", 1, 0), ("ss", 0),
+                         ("delay_ns", 60000))[0] == 2
+        got, word = shift(2, ("ss", 1), ("byte", 2, 0), ("ss", 0))
+        assert got == 2 and cb.client_errors == []
+        value, ok = proto.decode_response(word[0] << 8 | word[1])
+        assert ok and not proto.is_error_word(word[0] << 8 | word[1]) and 100 < value < 4000  # PDC at rest
+        lib.c_ch_close(h)
