@@ -1655,6 +1655,10 @@ CATALOGUE += [
            "            t = max(t, when + 0.5 * T)  # the bus holds", "            pass  # the bus holds",
            ("firmware_tests/tests/test_cheetah_device.py::test_a_select_asserted_before_the_bytes_is_held_for_half_a_clock_period",),
            "a select asserted on its own takes no time in the adapter's plan: the next bytes overlap it and the client is dropped"),
+    Mutant("driver-sends-a-65-channel-pattern", "host", "bench/hosts/driver.py",
+           "        if len(payload) > MAX_PATTERN:", "        if len(payload) > MAX_PATTERN + 1:",
+           ("firmware_tests/tests/test_driver_robustness.py::test_a_pattern_longer_than_the_firmware_takes_is_refused_before_it_is_sent",),
+           "the driver sends a 65-channel PATTERN the firmware can never answer"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

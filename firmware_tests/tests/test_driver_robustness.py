@@ -281,3 +281,25 @@ def test_frames_keep_coming_past_the_idle_timeout_while_they_arrive():
         finally:
             drv.close()
     assert len(got) == 150
+
+
+
+@pytest.mark.firmware
+def test_a_pattern_longer_than_the_firmware_takes_is_refused_before_it_is_sent():
+    """The firmware's receive buffer holds a PATTERN of at most 64 channels; a longer frame is skipped as garbage
+    and never answered (the host would wait for an ACK that cannot come), so the driver refuses it, naming the
+    limit, and sends nothing (the firmware counts no command error); 64 channels are sent and answered."""
+    from bench.hosts.bridge import FirmwareBench
+
+    with FirmwareBench(1) as fb:
+        drv = BridgeDriver(fb.port)
+        try:
+            with pytest.raises(ValueError, match="65 channels: the bridge firmware takes at most 64"):
+                drv.set_pattern(range(65))
+            drv.set_pattern([0, 1, 3, 2] * 16)
+            assert drv.wait_for(CMD_PATTERN, timeout_s=5) == ("ack", CMD_PATTERN, 0)
+            drv.request_status()
+            status = drv.wait_for(Status, timeout_s=5)
+        finally:
+            drv.close()
+    assert status is not None and status.command_errors == 0
