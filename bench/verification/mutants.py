@@ -1659,6 +1659,12 @@ CATALOGUE += [
            "        if len(payload) > MAX_PATTERN:", "        if len(payload) > MAX_PATTERN + 1:",
            ("firmware_tests/tests/test_driver_robustness.py::test_a_pattern_longer_than_the_firmware_takes_is_refused_before_it_is_sent",),
            "the driver sends a 65-channel PATTERN the firmware can never answer"),
+    Mutant("reset-keeps-the-registers", "spi", "emulator/spi/model.py",
+           "        self.registers = [0] * WRITABLE_PARAMETERS\n        self.prepared: _Prepared | None = None",
+           "        self.registers = getattr(self, 'registers', [0] * WRITABLE_PARAMETERS)\n"
+           "        self.prepared: _Prepared | None = None",
+           ("emulator/tests/test_spi_model.py::test_a_reset_clears_the_written_registers_as_the_rtls_reset_does",),
+           "a sensor reset keeps the registers written before it (the RTL's reset clears them)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -231,7 +231,6 @@ class SensorPort:
         self.provided_lut = np.zeros(64, dtype=bool)
         self.provided_lut[list(self.provided)] = True
         self.conversion_s = sensor.params.adc_conversion_s
-        self.registers = [0] * WRITABLE_PARAMETERS
         self.reset()
         # counters a report can show
         self.incomplete = 0
@@ -239,10 +238,12 @@ class SensorPort:
         self.coupled_conversions = 0
 
     def reset(self) -> None:
-        """Power-on state: nothing prepared, nothing to resend (the ``reset`` fault calls this mid-stream).
+        """Power-on state: nothing prepared, nothing to resend, the writable registers 0 (as the RTL's reset clears
+        them; the ``reset`` fault calls this mid-stream).
 
         A conversion already started completes (the ADC is not reset); its result is never served.
         """
+        self.registers = [0] * WRITABLE_PARAMETERS
         self.prepared: _Prepared | None = None
         self.last_sent: int | None = None
         self.last_sampling_tick: int | None = None

@@ -428,3 +428,16 @@ def test_the_vectorised_path_answers_the_protocols_corners_as_the_transfer_level
     a, b, fast, slow = _fast_and_slow(batches)
     assert np.array_equal(a, b), (name, [hex(x) for x in a], [hex(x) for x in b])
     assert (fast.last_sent, fast.last_sampling_tick) == (slow.last_sent, slow.last_sampling_tick)
+
+
+def test_a_reset_clears_the_written_registers_as_the_rtls_reset_does():
+    """Consistency with biotac_spi.v, whose reset clears its four registers: a register written, then the sensor
+    reset (a brown-out), holds 0 again — and a write after the reset takes."""
+    b = bus()
+    b.transfer(cmd(0.0, 0x40, nnnnvvvp(2, 3)))
+    b.transfer(read(100e-6))
+    assert b.ports[1].registers == [0, 0, 3, 0]
+    b.ports[1].reset()
+    assert b.ports[1].registers == [0, 0, 0, 0]
+    b.transfer(cmd(1e-3, 0x40, nnnnvvvp(1, 5)))
+    assert value(b.transfer(read(1.1e-3))) == 1 * 8 + 5 and b.ports[1].registers == [0, 5, 0, 0]
