@@ -1665,6 +1665,10 @@ CATALOGUE += [
            "        self.prepared: _Prepared | None = None",
            ("emulator/tests/test_spi_model.py::test_a_reset_clears_the_written_registers_as_the_rtls_reset_does",),
            "a sensor reset keeps the registers written before it (the RTL's reset clears them)"),
+    Mutant("bridge-host-gone-for-good", "host", "bench/hosts/bridge.py",
+           "        else:\n            self._host_gone = False\n", "",
+           ("firmware_tests/tests/test_uart_overrun.py::test_unpaced_a_host_back_from_a_long_pause_is_waited_for_again",),
+           "unpaced, a host that once paused longer than HOST_GONE_S is never waited for again: it keeps losing bytes"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

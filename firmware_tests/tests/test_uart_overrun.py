@@ -117,3 +117,24 @@ def test_a_frame_that_lost_only_its_crc_is_counted_lost(lost_of_frame_8, lost):
         assert FirmwareBench.overrun_frames(SimpleNamespace(link=link)) == lost
     finally:
         link.close()
+
+
+def test_unpaced_a_host_back_from_a_long_pause_is_waited_for_again():
+    """A host gone for 1 s (longer than HOST_GONE_S) loses bytes; once it reads again and the buffer has drained,
+    the firmware waits for it as before: twenty 50 ms pauses (each shorter than HOST_GONE_S) lose nothing more."""
+    with FirmwareBench(1) as fb:
+        drv = BridgeDriver(fb.port)
+        drv.start()
+        assert drv.wait_for(CMD_START) is not None
+        list(drv.frames(max_frames=10, timeout_s=5))
+        time.sleep(1.0)  # gone
+        list(drv.frames(max_frames=100, timeout_s=5))  # back: reads on until the buffer has drained
+        lost_while_gone = fb.link.bytes_overrun
+        frames = []
+        for _ in range(20):
+            frames += list(drv.frames(max_frames=10, timeout_s=5))
+            time.sleep(0.05)
+        lost_after = fb.link.bytes_overrun
+        drv.close()
+    assert lost_while_gone > 0 and len(frames) == 200
+    assert lost_after == lost_while_gone
