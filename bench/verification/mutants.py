@@ -1669,6 +1669,11 @@ CATALOGUE += [
            "        else:\n            self._host_gone = False\n", "",
            ("firmware_tests/tests/test_uart_overrun.py::test_unpaced_a_host_back_from_a_long_pause_is_waited_for_again",),
            "unpaced, a host that once paused longer than HOST_GONE_S is never waited for again: it keeps losing bytes"),
+    Mutant("bridge-speed-inverted", "host", "bench/hosts/bridge.py",
+           "ahead = (self.board.t - virt0) / self.speed - (time.perf_counter() - wall0)",
+           "ahead = (self.board.t - virt0) * self.speed - (time.perf_counter() - wall0)",
+           ("firmware_tests/tests/test_faults.py::test_real_time_mode_runs_at_its_speed",),
+           "bridge --speed 4 runs at a quarter of real time, --speed 0.5 at twice"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

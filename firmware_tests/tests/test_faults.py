@@ -101,6 +101,24 @@ def test_real_time_mode_honours_the_baud_rate():
     assert len(frames) == 15 and rate < 57600 / 10 * 1.15
 
 
+@pytest.mark.parametrize("speed", [0.5, 4.0])
+def test_real_time_mode_runs_at_its_speed(speed):
+    """``--speed``: virtual time runs ``speed`` times the wall clock (4: a second of sensor in 0.25 s; 0.5: half
+    real time), measured over 0.6 wall s of streaming, within 25 %."""
+    import time
+
+    with FirmwareBench(1, realtime=True, speed=speed) as fb:
+        drv = BridgeDriver(fb.port)
+        drv.start()
+        assert drv.wait_for(CMD_START) is not None
+        list(drv.frames(max_frames=5, timeout_s=10))
+        t0, v0 = time.perf_counter(), fb.virtual_time
+        while time.perf_counter() - t0 < 0.6:
+            list(drv.frames(max_frames=5, timeout_s=2))
+        ratio = (fb.virtual_time - v0) / (time.perf_counter() - t0)
+        drv.close()
+    assert ratio == pytest.approx(speed, rel=0.25)
+
 def test_the_lines_corruption_and_drop_rates_are_each_their_own():
     """With both line faults set, each byte is dropped with probability drop_rate and corrupted (one bit flipped)
     with probability corrupt_rate — not corrupt_rate less drop_rate: 102 400 bytes at 1 % each give 1 % ± 0.2 %
