@@ -103,21 +103,27 @@ def test_real_time_mode_honours_the_baud_rate():
 
 @pytest.mark.parametrize("speed", [0.5, 4.0])
 def test_real_time_mode_runs_at_its_speed(speed):
-    """``--speed``: virtual time runs ``speed`` times the wall clock (4: a second of sensor in 0.25 s; 0.5: half
-    real time), measured over 0.6 wall s of streaming, within 25 %."""
+    """``--speed``: the host receives ``speed`` times the 100 frames per wall second of a one-sensor bus (4: 400
+    frames/s; 0.5: 50), counted over 1 wall s of streaming, within 20 % (after an unpaced bench has compiled the
+    sensor's kernels: a cold numba cache stalls the first frames, and the paced bench then catches up in a burst)."""
     import time
 
+    with FirmwareBench(1) as warm:
+        drv = BridgeDriver(warm.port)
+        drv.start()
+        assert len(list(drv.frames(max_frames=30, timeout_s=30))) == 30
+        drv.close()
     with FirmwareBench(1, realtime=True, speed=speed) as fb:
         drv = BridgeDriver(fb.port)
         drv.start()
         assert drv.wait_for(CMD_START) is not None
         list(drv.frames(max_frames=5, timeout_s=10))
-        t0, v0 = time.perf_counter(), fb.virtual_time
-        while time.perf_counter() - t0 < 0.6:
-            list(drv.frames(max_frames=5, timeout_s=2))
-        ratio = (fb.virtual_time - v0) / (time.perf_counter() - t0)
+        t0, n = time.perf_counter(), 0
+        while time.perf_counter() - t0 < 1.0:
+            n += len(list(drv.frames(max_frames=5, timeout_s=2)))
+        ratio = n / 100.0 / (time.perf_counter() - t0)
         drv.close()
-    assert ratio == pytest.approx(speed, rel=0.25)
+    assert ratio == pytest.approx(speed, rel=0.2)
 
 def test_the_lines_corruption_and_drop_rates_are_each_their_own():
     """With both line faults set, each byte is dropped with probability drop_rate and corrupted (one bit flipped)
