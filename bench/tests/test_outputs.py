@@ -57,6 +57,11 @@ def check_consistent(folder: Path, status: str | None = None) -> dict:
     h5 = folder / "samples.h5"
     attrs = store.read_attrs(h5)
     assert attrs["status"] == record["status"] and attrs["simulated_s"] == record["simulated_s"]
+    # the file describes its run as the record does: the sequence as JSON, the bus's rates, the stop's signal
+    assert json.loads(attrs["sequence"]) == record["host"]["sequence"]
+    assert (attrs["slot_rate_Hz"], attrs["spi_clock_Hz"]) == (record["host"]["slot_rate_Hz"],
+                                                              record["host"]["spi_clock_Hz"])
+    assert attrs.get("interrupted_by", "") == record.get("interrupted_by", "")
     sc = parse_scene({"scene": {"name": "x", "duration_s": 1.0}, "host": {"sequence": record["host"]["sequence"],
                                                                          "slot_rate_Hz": record["host"]["slot_rate_Hz"]}})
     slots = int(round(record["simulated_s"] * sc.slot_rate_Hz))

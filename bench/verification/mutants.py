@@ -1674,6 +1674,18 @@ CATALOGUE += [
            "ahead = (self.board.t - virt0) * self.speed - (time.perf_counter() - wall0)",
            ("firmware_tests/tests/test_faults.py::test_real_time_mode_runs_at_its_speed",),
            "bridge --speed 4 runs at a quarter of real time, --speed 0.5 at twice"),
+    Mutant('h5-sequence-not-json', "outputs", "bench/reporting/store.py",
+           '"sequence": json.dumps(seq)', '"sequence": str(seq)',
+           ('bench/tests/test_outputs.py', 'bench/tests/test_run_review.py', 'bench/tests/test_run_review2.py'),
+           "samples.h5's sequence attribute is Python's repr, not the JSON its docstring promises"),
+    Mutant('h5-spi-clock-is-the-slot-rate', "outputs", "bench/reporting/store.py",
+           '"spi_clock_Hz": float(scene.spi_clock_Hz)', '"spi_clock_Hz": float(scene.slot_rate_Hz)',
+           ('bench/tests/test_outputs.py', 'bench/tests/test_run_review.py', 'bench/tests/test_run_review2.py'),
+           "samples.h5's spi_clock_Hz holds the slot rate"),
+    Mutant('h5-status-extras-dropped', "outputs", "bench/reporting/store.py",
+           '        for k, v in extra.items():\n            f.attrs[k] = v', '        for k, v in extra.items():\n            pass',
+           ('bench/tests/test_outputs.py', 'bench/tests/test_run_review.py', 'bench/tests/test_run_review2.py'),
+           'samples.h5 never states the signal that interrupted its run'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
