@@ -60,3 +60,31 @@ def test_line_fits_report_r_squared():
     x = np.linspace(0, 1, 50)
     assert analysis.fit_line(x, 3 * x + 1).r_squared == pytest.approx(1.0)
     assert analysis.fit_proportional(x, 2 * x).slope == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_streaming_detection_is_the_sliding_windows_rising_edges_whatever_the_blocks(seed):
+    """Against a brute-force reference on the whole stream (the window of ``window_n`` samples ending at each
+    sample, an event where its count first exceeds ``min_points``): bursts of exceedances of every length, some
+    spanning exactly the window or one sample more, cut into random blocks (single samples too) — the same count
+    whatever the cuts, including events still in progress across a cut."""
+    rng = np.random.default_rng(seed)
+    rate, n = 2200.0, 20000
+    det = analysis.StreamingDetector(0.0, 1.0, rate)
+    w, k = det.window_n, det.rule.min_points
+    x = np.zeros(n)
+    for start in rng.choice(np.arange(0, n - 2 * w, 3 * w // 2), 8, replace=False):  # bursts a window apart
+        points = int(rng.integers(2, 9))
+        span = int(rng.choice([points, w - 1, w, w + 1, 2 * w]))
+        x[start + np.linspace(0, span, points).astype(int)] = rng.choice([-9.0, 9.0])
+    flags = (np.abs(x) > 4.0).astype(int)
+    c = np.concatenate([[0], np.cumsum(flags)])
+    counts = c[np.arange(1, n + 1)] - c[np.maximum(np.arange(n) - w + 1, 0)]
+    above = counts > k
+    expected = int(above[0]) + int(np.count_nonzero(above[1:] & ~above[:-1]))
+    assert expected >= 2  # the draw makes events (and bursts that fall short)
+    for cuts in (np.sort(rng.choice(np.arange(1, n), 40, replace=False)), np.arange(4990, 5010)):
+        parts = analysis.StreamingDetector(0.0, 1.0, rate)
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, n]):
+            parts.update(x[a:b])
+        assert parts.events == expected

@@ -1686,6 +1686,14 @@ CATALOGUE += [
            '        for k, v in extra.items():\n            f.attrs[k] = v', '        for k, v in extra.items():\n            pass',
            ('bench/tests/test_outputs.py', 'bench/tests/test_run_review.py', 'bench/tests/test_run_review2.py'),
            'samples.h5 never states the signal that interrupted its run'),
+    Mutant('detector-forgets-an-event-in-progress', "noise", "bench/verification/analysis.py",
+           'was_above = np.concatenate([[not self._armed], above[:-1]])', 'was_above = np.concatenate([[False], above[:-1]])',
+           ('bench/tests/test_analysis.py::test_streaming_detection_is_the_sliding_windows_rising_edges_whatever_the_blocks',),
+           "an event still in progress at a block's start is counted again"),
+    Mutant('detector-window-one-sample-wide', "noise", "bench/verification/analysis.py",
+           'lo = np.maximum(idx - self.window_n + 1, 0)', 'lo = np.maximum(idx - self.window_n, 0)',
+           ('bench/tests/test_analysis.py::test_streaming_detection_is_the_sliding_windows_rising_edges_whatever_the_blocks',),
+           "the streaming detector's window is one sample wider than window_s"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
