@@ -97,6 +97,7 @@ def test_a_code_past_12_bits_from_the_driver_fails_the_case(monkeypatch):
     result = run_case(campaign.FAULTS["none"], "rest", 0)
     assert not result["passed"] and result["problem"] == "out-of-range data reached the caller", result
 
+
 def test_a_brownout_lands_whenever_it_is_due():
     """A reset due outside a frame's sequence (the firmware's once-a-second detection, a delay) acts at the next HAL
     call, not at the next frame; inside a sequence it never splits a window held open on one sensor; a reset at no
@@ -114,6 +115,24 @@ def test_a_brownout_lands_whenever_it_is_due():
     board.delay_us(None, 200)  # past the instant: applied at this call
     assert resets == [pytest.approx(0.6e-3)] and not board.resets
 
+
+def test_events_and_resets_scheduled_out_of_order_each_act_at_their_own_time():
+    """A fault campaign's schedule need not be sorted: actions and resets given latest first act at their own
+    instants, earliest first, each within the HAL call (here 100 µs delays) that passes it."""
+    from bench.hosts.cosim import VirtualBoard, default_sensors
+
+    board = VirtualBoard(default_sensors(1))
+    acted, resets = [], []
+    board.bus.ports[1].reset = lambda: resets.append(board.t)
+    board.at(1.0e-3, lambda b: acted.append(("late", b.t)))
+    board.at(0.2e-3, lambda b: acted.append(("early", b.t)))
+    board.reset_at(1, 0.9e-3)
+    board.reset_at(1, 0.3e-3)
+    for _ in range(12):
+        board.delay_us(None, 100)
+    assert [name for name, _ in acted] == ["early", "late"]
+    for when, due in zip([t for _, t in acted] + resets, (0.2e-3, 1.0e-3, 0.3e-3, 0.9e-3)):
+        assert due - 1e-12 <= when <= due + 100e-6 + 1e-12  # within the HAL call (100 µs) that passes it
 
 def test_a_reset_due_inside_a_held_window_waits_for_it_to_close():
     """A sampling command, then a 32-bit read held over two words: a reset due between the two words acts after

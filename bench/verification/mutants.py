@@ -1694,6 +1694,14 @@ CATALOGUE += [
            'lo = np.maximum(idx - self.window_n + 1, 0)', 'lo = np.maximum(idx - self.window_n, 0)',
            ('bench/tests/test_analysis.py::test_streaming_detection_is_the_sliding_windows_rising_edges_whatever_the_blocks',),
            "the streaming detector's window is one sample wider than window_s"),
+    Mutant('board-events-unsorted', "faults", "bench/hosts/cosim.py",
+           '        self.events.sort(key=lambda e: e[0])', '        pass',
+           ('bench/tests/test_campaign_cases.py::test_events_and_resets_scheduled_out_of_order_each_act_at_their_own_time',),
+           'an action scheduled before an earlier one waits for it'),
+    Mutant('board-resets-unsorted', "faults", "bench/hosts/cosim.py",
+           '        self.resets.sort()', '        pass',
+           ('bench/tests/test_campaign_cases.py::test_events_and_resets_scheduled_out_of_order_each_act_at_their_own_time',),
+           'a reset scheduled before an earlier one waits for it'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
