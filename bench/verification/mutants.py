@@ -1702,6 +1702,18 @@ CATALOGUE += [
            '        self.resets.sort()', '        pass',
            ('bench/tests/test_campaign_cases.py::test_events_and_resets_scheduled_out_of_order_each_act_at_their_own_time',),
            'a reset scheduled before an earlier one waits for it'),
+    Mutant('firmware-unknown-command-unanswered', "firmware", "firmware_tests/firmware/bt_bridge.c",
+           'default: ack(b, type, 2); break;', 'default: break;',
+           ('firmware_tests/tests/test_firmware_end_to_end.py::test_host_commands_stop_and_change_the_pattern',),
+           "an unknown command gets no 'unknown' ACK: the host waits out its timeout"),
+    Mutant('firmware-refusals-not-counted', "firmware", "firmware_tests/firmware/bt_bridge.c",
+           'if (result) b->cmd_errors++;', '(void)result;',
+           ('firmware_tests/tests/test_firmware_end_to_end.py::test_host_commands_stop_and_change_the_pattern',),
+           "refused commands are not counted in STATUS's command errors"),
+    Mutant('firmware-power-on-sensors-found-again', "firmware", "firmware_tests/firmware/bt_bridge.c",
+           'b->finds = 0; /* sensors present', '/* sensors present',
+           ('firmware_tests/tests/test_firmware_end_to_end.py::test_host_commands_stop_and_change_the_pattern',),
+           'STATUS counts the sensors present at power-on as found again'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -83,10 +83,17 @@ def test_host_commands_stop_and_change_the_pattern():
         later = list(drv.frames(max_frames=20, timeout_s=5))
         drv.set_pattern([99])
         assert drv.wait_for(CMD_PATTERN) == ("ack", CMD_PATTERN, 3)  # refused: not a channel
+        drv.send(0x7E)  # no such command
+        assert drv.wait_for(0x7E) == ("ack", 0x7E, 2)  # bt_bridge.h: 2 unknown
+        drv.request_status()
+        status = drv.wait_for(Status)
         drv.stop()
         assert drv.wait_for(CMD_STOP) == ("ack", CMD_STOP, 0)
         drv.close()
     assert list(later[-1].channels) == [1, 0, 3]
+    # the refused pattern and the unknown command are the command errors; the sensor present at power-on was
+    # found, not found again
+    assert (status.command_errors, status.finds, status.losses) == (2, 0, 0)
 
 
 def test_firmware_that_does_not_compile_reports_the_compiler_and_caches_nothing(tmp_path):
