@@ -164,6 +164,24 @@ def test_one_stimulus_not_in_a_list(biotac_sensor):
 def test_a_stimulus_by_name(biotac_bridge):
     biotac_bridge(stimuli=["tap"])
 
+def test_cheetah_on_an_rtl_scene(biotac_cheetah):
+    biotac_cheetah(scene="{rtl}")
+
+def test_channels_beside_a_scene(biotac_sensor):
+    biotac_sensor(scene="taps", channels=["PDC"])
+
+def test_pattern_beside_a_scene(biotac_bridge):
+    biotac_bridge(scene="taps", pattern=[0, 1])
+
+def test_units_one_too_many(biotac_bridge):
+    biotac_bridge(2, units=[1, 2, 3])
+
+def test_no_sensors(biotac_bridge):
+    biotac_bridge(n_sensors=0)
+
+def test_n_sensors_true(biotac_bridge):
+    biotac_bridge(n_sensors=True)
+
 kept = []
 
 def test_keeps_the_factory(biotac_bridge):
@@ -177,9 +195,11 @@ def test_uses_it_later():
 def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_path, sp_scene):
     bad = tmp_path / "bad.toml"
     bad.write_text('[scene]\nname = "bad"\nduration_s = 1.0\n[host]\nsequence = ["PAC", "QQQ"]\n')
-    pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene))
+    rtl = tmp_path / "rtl.toml"
+    rtl.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
+    pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene, rtl=rtl))
     result = pytester.runpytest("-p", "no:cacheprovider")
-    result.assert_outcomes(failed=11, passed=1)
+    result.assert_outcomes(failed=17, passed=1)
     out = result.stdout.str()
     result.stdout.fnmatch_lines([
         "*biotac_bridge(): variant given with sensors, which already describes the sensors*",
@@ -192,6 +212,12 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
         "*biotac_cheetah(): n_sensors = 9: a whole number from 1 to 5*",
         "*biotac_sensor(): stimuli = Tap(*): give a list of stimuli*",
         "*biotac_bridge(): not a stimulus: 'tap'*",
+        "*biotac_cheetah(): */rtl.toml: 1 problem(s):*", "*the Cheetah adapter serves the software SPI model only*",
+        "*biotac_sensor(): channels given with scene*",
+        "*biotac_bridge(): pattern given with scene*",
+        "*biotac_bridge(): units = [[]1, 2, 3[]]: give one unit per sensor (2)*",
+        "*biotac_bridge(): n_sensors = 0: a whole number from 1 to 5*",
+        "*biotac_bridge(): n_sensors = True: a whole number from 1 to 5*",
         "*biotac_bridge(): called after the test it was given to had ended*",
     ])
     assert "Traceback" not in out and "fixtures.py" not in out and "scene.py:" not in out, out

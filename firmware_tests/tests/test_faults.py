@@ -43,6 +43,7 @@ def test_parity_errors_are_flagged_never_passed_as_data():
         drv, frames, status = run(fb, 50)
     assert all((f.status == 1).all() for f in frames[5:])
     assert status.parity_errors >= 44 * 40
+    assert all(int(f.codes.max()) <= 4095 for f in frames)  # the status bits never leak into a code
 
 
 def test_miso_stuck_high_looks_like_an_absent_sensor_and_is_dropped():
