@@ -257,3 +257,14 @@ def test_a_finger_that_stops_stops_the_run_and_the_record_says_which():
     assert sorted(during_2.sensors) == [2]
     during_1 = run_scene(scene, progress=False, should_stop=stop_after(0))
     assert during_1.status == "interrupted" and during_1.sensors == {}
+
+
+@pytest.mark.unit
+def test_a_stop_asked_after_the_last_chunk_leaves_the_run_complete():
+    """A stop that arrives once every sample is taken (here: asked at every chunk boundary of a one-chunk run)
+    changes nothing: the run is "ok" with all its seconds, not "interrupted"."""
+    from bench.running.runner import run_scene
+
+    scene = parse_scene_text('[scene]\nname = "one-chunk"\nduration_s = 1.0\n')
+    rec = run_scene(scene, progress=False, chunk_s=1.0, should_stop=lambda: True)
+    assert rec.status == "ok" and rec.simulated_s == pytest.approx(1.0)

@@ -1742,6 +1742,11 @@ CATALOGUE += [
            '(words & 0x0FFF).astype(np.uint16)', '(words & 0x1FFF).astype(np.uint16)',
            ('firmware_tests/tests/test_faults.py::test_parity_errors_are_flagged_never_passed_as_data',),
            "a parity-flagged slot's code carries the status bit (4096 and up)"),
+    Mutant("run-stop-after-the-end-interrupts", "outputs", "bench/running/runner.py",
+           "if should_stop is not None and should_stop() and done < total_slots:",
+           "if should_stop is not None and should_stop():",
+           ("bench/tests/test_multi_finger.py::test_a_stop_asked_after_the_last_chunk_leaves_the_run_complete",),
+           "a stop arriving after the last chunk marks a complete run interrupted"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
