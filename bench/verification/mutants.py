@@ -1747,6 +1747,11 @@ CATALOGUE += [
            "if should_stop is not None and should_stop():",
            ("bench/tests/test_multi_finger.py::test_a_stop_asked_after_the_last_chunk_leaves_the_run_complete",),
            "a stop arriving after the last chunk marks a complete run interrupted"),
+    Mutant("cosim-pattern-index-wraps-to-a-byte", "firmware", "bench/hosts/cosim.py",
+           "result = 3 if any(not 0 <= i <= 255 for i in idx) else (",
+           "result = 3 if any(not 0 <= i <= 1 << 16 for i in idx) else (",
+           ("firmware_tests/tests/test_firmware_end_to_end.py::test_a_refused_pattern_leaves_the_pattern_as_it_was",),
+           "CoSim.set_pattern hands the firmware index 273 (which cannot be a byte)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

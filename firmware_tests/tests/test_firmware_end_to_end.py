@@ -108,3 +108,25 @@ def test_firmware_that_does_not_compile_reports_the_compiler_and_caches_nothing(
         build_firmware(sources, out_dir=tmp_path / "out")
     assert not list((tmp_path / "out").rglob("*.so")), "a failed build must not leave a cached library"
     assert not list((tmp_path / "out").rglob("*.partial"))
+
+
+def test_a_refused_pattern_leaves_the_pattern_as_it_was():
+    """CoSim.set_pattern: an index that is not a byte (273, which a byte would wrap to E1) is refused before the
+    firmware sees it, like a channel the firmware does not sample: the pattern set before stays, frame after frame."""
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+    from bench.hosts.driver import DataFrame, FrameParser, encode
+
+    out = bytearray()
+    board = VirtualBoard(default_sensors(1), uart_out=out.extend)
+    try:
+        sim = CoSim(board)
+        sim.set_pattern([1, 0])
+        for refused in ([273], [99]):
+            with pytest.raises(ValueError, match="refused by the firmware: channels are PAC, PDC"):
+                sim.set_pattern(refused)
+        board.send_to_firmware(encode(CMD_START))
+        sim.run(0.05)
+    finally:
+        board.bus.close()
+    frames = [f for f in FrameParser().feed(bytes(out), now=0.0) if isinstance(f, DataFrame)]
+    assert frames and all(list(f.channels) == [1, 0] for f in frames)
