@@ -26,6 +26,8 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
+#: bt_set_pattern's result for a channel it does not sample (the ACK's "bad value", bt_bridge.h)
+BAD_VALUE = 3
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
@@ -217,8 +219,10 @@ class CoSim:
         UART): 1–64 channel indices (or names), each PAC, PDC, TAC, TDC or E1..E24 (E20..E24 exist on a BioTac
         SP only; a 19-electrode sensor answers them with error words)."""
         idx = [c if isinstance(c, int) else ch.channel_index(c) for c in channels]
-        result = 3 if any(not 0 <= i <= 255 for i in idx) else (  # not a byte: refused before the firmware sees it
-            self.lib.bt_set_pattern(self.state, bytes(idx), C.c_size_t(len(idx))) & 0xFF)
+        if any(not 0 <= i <= 255 for i in idx):  # not a byte: refused before the firmware sees it
+            result = BAD_VALUE
+        else:
+            result = self.lib.bt_set_pattern(self.state, bytes(idx), C.c_size_t(len(idx))) & 0xFF
         if result:
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
                              + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E24"))

@@ -1748,8 +1748,8 @@ CATALOGUE += [
            ("bench/tests/test_multi_finger.py::test_a_stop_asked_after_the_last_chunk_leaves_the_run_complete",),
            "a stop arriving after the last chunk marks a complete run interrupted"),
     Mutant("cosim-pattern-index-wraps-to-a-byte", "firmware", "bench/hosts/cosim.py",
-           "result = 3 if any(not 0 <= i <= 255 for i in idx) else (",
-           "result = 3 if any(not 0 <= i <= 1 << 16 for i in idx) else (",
+           "        if any(not 0 <= i <= 255 for i in idx):  # not a byte",
+           "        if any(not 0 <= i <= 1 << 16 for i in idx):  # not a byte",
            ("firmware_tests/tests/test_firmware_end_to_end.py::test_a_refused_pattern_leaves_the_pattern_as_it_was",),
            "CoSim.set_pattern hands the firmware index 273 (which cannot be a byte)"),
 ]
