@@ -17,12 +17,16 @@ static const uint8_t SP_FRAME[54] = {17, 0, 18, 0, 19, 0, 20, 0, 21, 0, 22, 0, 2
 #define DETECT_EVERY_FRAMES 100u  /* once a second while streaming */
 #define LOST_AFTER_FRAMES 2u
 
+/* CRC-16/CCITT-FALSE, one byte at a time (so a frame too long to keep can be checked as it passes). */
+static uint16_t crc16_byte(uint16_t crc, uint8_t byte) {
+    crc ^= (uint16_t)byte << 8;
+    for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021) : (uint16_t)(crc << 1);
+    return crc;
+}
+
 uint16_t bt_crc16(const uint8_t *data, size_t n) {
     uint16_t crc = 0xFFFF;
-    for (size_t i = 0; i < n; ++i) {
-        crc ^= (uint16_t)data[i] << 8;
-        for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021) : (uint16_t)(crc << 1);
-    }
+    for (size_t i = 0; i < n; ++i) crc = crc16_byte(crc, data[i]);
     return crc;
 }
 
@@ -43,10 +47,7 @@ static void send(bt_bridge *b, uint8_t type, const uint8_t *payload, uint16_t le
     /* CRC over type, length, payload: continue the CRC across the two pieces */
     uint8_t tmp[3] = {type, head[3], head[4]};
     crc = bt_crc16(tmp, 3);
-    for (uint16_t i = 0; i < len; ++i) {
-        crc ^= (uint16_t)payload[i] << 8;
-        for (int k = 0; k < 8; ++k) crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021) : (uint16_t)(crc << 1);
-    }
+    for (uint16_t i = 0; i < len; ++i) crc = crc16_byte(crc, payload[i]);
     uint8_t tail[2] = {(uint8_t)(crc & 0xFF), (uint8_t)(crc >> 8)};
     b->hal->uart_write(b->hal->ctx, head, 5);
     if (len) b->hal->uart_write(b->hal->ctx, payload, len);
@@ -163,15 +164,75 @@ static void handle_command(bt_bridge *b, uint8_t type, const uint8_t *p, uint16_
     }
 }
 
-/* Host commands arrive as frames; garbage is skipped byte by byte until a valid frame parses. */
+/* A byte the parser drops as garbage: a command error, unless an over-long frame is being followed (its own bytes
+ * are dropped too, and count only if it turns out not to be a frame). */
+static void count_dropped(bt_bridge *b) {
+    if (b->long_left) b->long_dropped++;
+    else b->cmd_errors++;
+}
+
+/* End following an over-long frame without answering it: the bytes dropped meanwhile were garbage after all. */
+static void abandon_long_frame(bt_bridge *b) {
+    b->cmd_errors += b->long_dropped;
+    b->long_left = 0;
+    b->long_dropped = 0;
+}
+
+/* A header announcing more payload than BT_MAX_PATTERN: follow the frame's bytes as they pass without keeping
+ * them, with a running CRC, so that a frame the firmware cannot hold is still answered (ACK 1, bad length). */
+static void follow_long_frame(bt_bridge *b, const uint8_t *header, uint16_t len) {
+    b->long_left = (uint32_t)len + 2;
+    b->long_crc = bt_crc16(header + 2, 3);
+    b->long_tail = 0;
+    b->long_type = header[2];
+    b->long_dropped = 0;
+}
+
+/* Take one byte of the over-long frame being followed; returns 1 when it was the frame's last byte and the CRC
+ * holds (the frame is answered, its bytes are not errors), else 0 (the byte is also parsed as usual). */
+static int long_frame_byte(bt_bridge *b, uint8_t byte) {
+    if (!b->long_left) return 0;
+    if (b->long_left > 2) b->long_crc = crc16_byte(b->long_crc, byte);
+    else b->long_tail |= (uint16_t)(byte << (b->long_left == 2 ? 0 : 8));
+    if (--b->long_left) return 0;
+    if (b->long_tail != b->long_crc) {
+        abandon_long_frame(b);
+        return 0;
+    }
+    b->long_dropped = 0;
+    ack(b, b->long_type, 1);
+    return 1;
+}
+
+/* Whether a complete frame whose CRC holds starts after the first byte of the receive buffer: the header at the
+ * start, still waiting for its bytes, is then garbage (a corrupted length) and must not hold up the frame behind. */
+static int valid_frame_behind(const bt_bridge *b) {
+    for (size_t j = 1; j + 7 <= b->rx_len; ++j) {
+        if (b->rx[j] != 0xAA || b->rx[j + 1] != 0x55) continue;
+        uint16_t len = (uint16_t)(b->rx[j + 3] | (b->rx[j + 4] << 8));
+        if (len > BT_MAX_PATTERN || j + 7 + len > b->rx_len) continue;
+        uint16_t crc = (uint16_t)(b->rx[j + 5 + len] | (b->rx[j + 6 + len] << 8));
+        if (crc == bt_crc16(b->rx + j + 2, 3 + (size_t)len)) return 1;
+    }
+    return 0;
+}
+
+/* Host commands arrive as frames; garbage is skipped byte by byte until a valid frame parses.  A header whose
+ * length is corrupted delays no command behind it: while a frame waits for its bytes, a complete valid frame
+ * behind its start wins (valid_frame_behind), and a frame longer than the receive buffer is followed as it passes
+ * (follow_long_frame) while the parser goes on looking for frames among its bytes. */
 static void serve_host(bt_bridge *b) {
     uint8_t buf[64];
     size_t n;
     while ((n = b->hal->uart_read(b->hal->ctx, buf, sizeof buf)) > 0) {
         for (size_t i = 0; i < n; ++i) {
+            if (long_frame_byte(b, buf[i])) { /* the bytes held so far were the long frame's */
+                b->rx_len = 0;
+                continue;
+            }
             if (b->rx_len >= sizeof b->rx) { /* cannot be a frame: drop the oldest byte */
                 memmove(b->rx, b->rx + 1, --b->rx_len);
-                b->cmd_errors++;
+                count_dropped(b);
             }
             b->rx[b->rx_len++] = buf[i];
             for (;;) {
@@ -179,16 +240,23 @@ static void serve_host(bt_bridge *b) {
                 if (b->rx_len >= 2 && b->rx[1] != 0x55) goto drop;
                 if (b->rx_len < 5) break;
                 uint16_t len = (uint16_t)(b->rx[3] | (b->rx[4] << 8));
-                if (len > BT_MAX_PATTERN) goto drop;
-                if (b->rx_len < (size_t)(5 + len + 2)) break;
+                if (len > BT_MAX_PATTERN) {
+                    if (!b->long_left) follow_long_frame(b, b->rx, len);
+                    goto drop;
+                }
+                if (b->rx_len < (size_t)(5 + len + 2)) {
+                    if (valid_frame_behind(b)) goto drop;
+                    break;
+                }
                 uint16_t crc = (uint16_t)(b->rx[5 + len] | (b->rx[6 + len] << 8));
                 if (crc != bt_crc16(b->rx + 2, 3 + len)) goto drop;
+                if (b->long_left) abandon_long_frame(b);
                 handle_command(b, b->rx[2], b->rx + 5, len);
                 b->rx_len = 0;
                 break;
             drop:
                 memmove(b->rx, b->rx + 1, --b->rx_len);
-                b->cmd_errors++;
+                count_dropped(b);
             }
         }
     }

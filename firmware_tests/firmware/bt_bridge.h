@@ -10,6 +10,9 @@
  *                                   (bit i: sensor i + 1's serial starts "BTSP", a 24-electrode BioTac SP)
  *                      0x12 ACK     command type u8, result u8 (0 ok, 1 bad length, 2 unknown, 3 bad value)
  *   host -> firmware   0x01 START, 0x02 STOP, 0x03 PATTERN (payload: 1..64 channel indices), 0x04 STATUS
+ *                      A frame with more than 64 payload bytes is answered ACK 1 (bad length) whatever its
+ *                      type, if its CRC holds; a valid frame inside it is served and ends it (a corrupted
+ *                      length delays no command).  Bytes skipped as garbage count as command errors.
  *
  * Default pattern: the 54-slot SP frame (E1,PAC,...,E24,PAC,PDC,PAC,TAC,PAC,TDC,PAC) when every sensor present
  * is a BioTac SP, else the 44-slot frame (E1..E19) every variant answers; re-chosen at each detection until
@@ -38,6 +41,12 @@ typedef struct {
     /* host command parser */
     uint8_t rx[4 + 2 + BT_MAX_PATTERN + 2];
     size_t rx_len;
+    /* an over-long frame being followed as it passes (longer than rx can hold) */
+    uint32_t long_left;       /* its bytes still to come (payload, then CRC); 0: none */
+    uint32_t long_dropped;    /* bytes the parser dropped meanwhile: errors unless the long frame's CRC holds */
+    uint16_t long_crc;        /* running CRC over type, length and the payload so far */
+    uint16_t long_tail;       /* the CRC bytes received */
+    uint8_t long_type;
 } bt_bridge;
 
 void bt_init(bt_bridge *b, const bt_hal *hal);

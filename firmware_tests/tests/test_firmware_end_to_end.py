@@ -96,6 +96,64 @@ def test_host_commands_stop_and_change_the_pattern():
     assert (status.command_errors, status.finds, status.losses) == (2, 0, 0)
 
 
+def replies_to(data: bytes, seconds: float = 0.02):
+    """Feed ``data`` to the firmware (one quiet sensor, virtual time) in 7-byte pieces, as a UART delivers
+    them, then ask for its status: returns every reply parsed (ACKs as ("ack", type, result), the Status last)."""
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+    from bench.hosts.driver import CMD_STATUS, FrameParser, encode
+
+    out = bytearray()
+    board = VirtualBoard(default_sensors(1), uart_out=out.extend)
+    try:
+        sim = CoSim(board)
+        for k in range(0, len(data), 7):
+            board.send_to_firmware(data[k:k + 7])
+            sim.run(0.001)
+        sim.run(seconds)
+        board.send_to_firmware(encode(CMD_STATUS))
+        sim.run(0.005)
+    finally:
+        board.bus.close()
+    return [f for f in FrameParser().feed(bytes(out), now=0.0) if not hasattr(f, "seq")]
+
+
+@pytest.mark.parametrize("n", [0, 65, 300, 5000])
+def test_a_pattern_of_a_length_the_firmware_cannot_take_is_answered_bad_length(n):
+    """bt_bridge.h: PATTERN takes 1..64 channels, ACK 1 "bad length" otherwise, also for a frame longer than its
+    receive buffer (followed as it passes, its CRC checked on the way): one command error, the default pattern
+    stays (the STATUS after it still answers, and reports the one error)."""
+    from bench.hosts.driver import encode
+
+    replies = replies_to(encode(CMD_PATTERN, bytes([1]) * n) + encode(CMD_START))
+    assert replies[:2] == [("ack", CMD_PATTERN, 1), ("ack", CMD_START, 0)]
+    assert isinstance(replies[2], Status) and replies[2].command_errors == 1 and replies[2].streaming
+
+
+def test_a_long_frame_with_a_bad_crc_is_garbage_and_answered_nothing():
+    """A 65-channel PATTERN whose CRC does not hold is no frame: no ACK; every one of its 72 bytes is skipped and
+    counted as a command error, and the START behind it is served."""
+    from bench.hosts.driver import encode
+
+    bad = bytearray(encode(CMD_PATTERN, bytes([1]) * 65))
+    bad[-1] ^= 0x40
+    replies = replies_to(bytes(bad) + encode(CMD_START))
+    assert replies[0] == ("ack", CMD_START, 0)
+    assert isinstance(replies[1], Status) and replies[1].command_errors == len(bad)
+
+
+@pytest.mark.parametrize("length", [64, 0xFFFF])
+def test_a_corrupted_length_delays_no_command_behind_it(length):
+    """A header announcing more bytes than come (a length corrupted on the line: the most a frame may hold, or
+    65 535) is not waited for: a START right behind it is answered at once, before the bytes it announced could
+    have arrived, and the stream starts; the five header bytes count as command errors."""
+    from bench.hosts.driver import SYNC, encode
+
+    header = SYNC + bytes([CMD_PATTERN, length & 0xFF, length >> 8])
+    replies = replies_to(header + encode(CMD_START), seconds=0.0)
+    assert replies[0] == ("ack", CMD_START, 0)
+    assert isinstance(replies[1], Status) and replies[1].streaming and replies[1].command_errors == 5
+
+
 def test_firmware_that_does_not_compile_reports_the_compiler_and_caches_nothing(tmp_path):
     """Users plug in their own firmware: a compile error names the file and line and leaves no library behind."""
     from bench.hosts.cosim import FIRMWARE_DIR, build_firmware
