@@ -25,8 +25,7 @@ SYNC = b"\xaa\x55"
 T_DATA, T_STATUS, T_ACK = 0x10, 0x11, 0x12
 CMD_START, CMD_STOP, CMD_PATTERN, CMD_STATUS = 0x01, 0x02, 0x03, 0x04
 MAX_PAYLOAD = 4 + 64 * (1 + 2 * 5)
-#: The most channels a PATTERN may hold (the firmware's BT_MAX_PATTERN): a longer command frame does not fit its
-#: receive buffer, so it is skipped as garbage and never answered.
+#: The most channels a PATTERN may hold (the firmware's BT_MAX_PATTERN): a longer one is answered ACK 1 (bad length).
 MAX_PATTERN = 64
 ACK_RESULTS = {0: "ok", 1: "bad length", 2: "unknown command", 3: "bad value"}
 SLOT_RATE_HZ = 4400.0  # the firmware's sampling slots: a frame of n slots lasts n / 4400 s
@@ -379,7 +378,7 @@ class BridgeDriver:
     def set_pattern(self, channels) -> int:
         """Send PATTERN (channel indices 0–255, at most :data:`MAX_PATTERN`); the firmware ACKs 0, or 1 for an empty
         pattern and 3 for an index it does not sample.  A longer pattern is refused here (ValueError), sending
-        nothing: the firmware could not answer it."""
+        nothing (the firmware would answer it ACK 1)."""
         payload = bytes(int(c) for c in channels)
         if len(payload) > MAX_PATTERN:
             raise ValueError(f"a pattern of {len(payload)} channels: the bridge firmware takes at most {MAX_PATTERN}")

@@ -1782,6 +1782,21 @@ CATALOGUE += [
            'if (word == 0x0000) absent_words[i]++;',
            ('firmware_tests/tests/test_faults.py::test_miso_stuck_high_looks_like_an_absent_sensor_and_is_dropped',),
            'MISO stuck high not counted as an idle line (the sensor dropped only at the next once-a-second search)'),
+    Mutant('driver-reply-horizon-ignored', 'host', 'bench/hosts/driver.py',
+           '        while waiting and now - waiting[0][1] > REPLY_HORIZON_S:  # lost: never answered\n            waiting.popleft()\n',
+           '',
+           ('firmware_tests/tests/test_driver_robustness.py::test_a_command_unanswered_past_the_horizon_is_lost_and_its_reply_goes_to_the_next',),
+           'a command never answered keeps the replies of every later command of its type'),
+    Mutant('driver-gap-at-nominal-rate', 'host', 'bench/hosts/driver.py',
+           'expected = max(0.0, now - self.top_t) * self.rate()',
+           'expected = max(0.0, now - self.top_t) * self._nominal_rate',
+           ('firmware_tests/tests/test_driver_robustness.py::test_a_long_gap_is_counted_at_the_measured_rate_not_the_nominal_one',),
+           'a long gap counted at the nominal frame rate instead of the measured one'),
+    Mutant('driver-nominal-rate-fixed-44-slots', 'host', 'bench/hosts/driver.py',
+           '            self._nominal_rate = SLOT_RATE_HZ / slots',
+           '            self._nominal_rate = SLOT_RATE_HZ / 44',
+           ('firmware_tests/tests/test_driver_robustness.py::test_before_a_measurement_a_gap_is_counted_at_the_frames_nominal_rate',),
+           "the nominal frame rate of the default 44-slot frame whatever the frame's slots"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -67,6 +67,29 @@ def test_gaps_longer_than_half_the_counter_are_counted_from_the_arrival_time(gap
     assert p.stats.dropped_frames == gap and p.stats.duplicates == 0
 
 
+@pytest.mark.parametrize("gap", [65_536, 70_000])
+def test_a_long_gap_is_counted_at_the_measured_rate_not_the_nominal_one(gap):
+    """A 44-slot stream arriving at 50 frames/s (a host or firmware slower than the nominal 4400/44 = 100): the
+    frames a long gap hid are counted from the measured 50/s; at the nominal rate the gap's time would say twice
+    as many went by, a whole counter wrap too many."""
+    p = FrameParser()
+    feed(p, range(200), rate=50.0)  # 4 s: the rate is measured
+    later = 199 + gap + 1
+    p.feed(data_frame(later), now=199 / 50.0 + (gap + 1) / 50.0)
+    assert p.stats.dropped_frames == gap
+
+
+def test_before_a_measurement_a_gap_is_counted_at_the_frames_nominal_rate():
+    """Until half a second of stream is measured, the rate is the nominal 4400 slots/s over the frame's slots: 22
+    slots make 200 frames/s, so 400 s of silence hid 80 000 frames (a 44-slot frame's 100/s would say 40 000)."""
+    p = FrameParser()
+    for k in range(3):
+        p.feed(data_frame(k, slots=22), now=k / 200.0)
+    gap = 80_000
+    p.feed(data_frame(2 + gap + 1, slots=22), now=2 / 200.0 + (gap + 1) / 200.0)
+    assert p.stats.dropped_frames == gap
+
+
 def test_a_late_frame_after_a_long_gap_is_still_recognised():
     p = FrameParser()
     feed(p, list(range(10)) + [15, 16, 12])
@@ -131,6 +154,25 @@ def test_a_stale_acknowledgement_is_not_returned_to_a_later_wait():
     port.answer(CMD_PATTERN, 0)
     assert drv.wait_for(CMD_PATTERN, timeout_s=0.5) == ("ack", CMD_PATTERN, 0)
     assert drv.wait_for(CMD_PATTERN, timeout_s=0.1) is None  # taken: never returned twice
+
+
+def test_a_command_unanswered_past_the_horizon_is_lost_and_its_reply_goes_to_the_next(monkeypatch):
+    """REPLY_HORIZON_S: a START never answered within the horizon is taken as lost, so the reply that comes after a
+    second START is that one's (wait_for returns it); within the horizon the same reply went to the first."""
+    monkeypatch.setattr(D, "REPLY_HORIZON_S", 0.05)
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    first = drv.start()
+    time.sleep(0.1)
+    second = drv.start()
+    port.answer(CMD_START)
+    assert drv.wait_for(CMD_START, timeout_s=0.5) == ("ack", CMD_START, 0)
+    assert drv.reply_to(first) is None and drv.unsolicited_replies == 0
+    third = drv.start()
+    drv.start()
+    port.answer(CMD_START)
+    drv.poll()
+    assert drv.reply_to(third) == ("ack", CMD_START, 0) and second != third
 
 
 def test_replies_nobody_asked_for_are_counted_and_dropped():
