@@ -1797,6 +1797,21 @@ CATALOGUE += [
            '            self._nominal_rate = SLOT_RATE_HZ / 44',
            ('firmware_tests/tests/test_driver_robustness.py::test_before_a_measurement_a_gap_is_counted_at_the_frames_nominal_rate',),
            "the nominal frame rate of the default 44-slot frame whatever the frame's slots"),
+    Mutant('graph-order-ignores-producers', 'model', 'emulator/effects.py',
+           '            if all(id(p) in placed for p in deps):',
+           '            if True:',
+           ('emulator/tests/test_effect_graph.py::test_producers_run_before_consumers_whatever_order_the_candidates_come_in',),
+           "effects run in the candidates' order, a consumer before its producer"),
+    Mutant('graph-unfed-passive-one-pass', 'model', 'emulator/effects.py',
+           '        kept = [e for e in kept if e not in unfed]',
+           '        return [e for e in kept if e not in unfed]',
+           ('emulator/tests/test_effect_graph.py::test_a_chain_of_passive_effects_fed_by_nothing_is_left_out_but_an_active_one_stays',),
+           'only the first passive effect of an unfed chain left out'),
+    Mutant('graph-cost-samples-last-block', 'model', 'emulator/effects.py',
+           '            cost.samples += block.n',
+           '            cost.samples = block.n',
+           ('emulator/tests/test_effect_graph.py::test_each_effect_counts_the_samples_it_processed',),
+           "an effect's cost counting the last block's samples only"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
