@@ -70,7 +70,7 @@ Keywords (every one optional)
                       sensor k ``seed + k - 1``)
         params, fidelity, noise, faults   for every sensor, as for ``biotac_sensor``
         sensors       your own ``{k: Sensor}`` instead (refused with units, variant, stimuli, params, fidelity,
-                      noise, faults or scene: they would be ignored)
+                      noise, faults or scene: they would be ignored; an n_sensors beside them must be their count)
         scene         the sensors of a scene (below); refused with sensors, stimuli, units, variant, params,
                       fidelity, noise, faults (the scene says them) and, on the bridge, pattern (its
                       host.sequence is the pattern)
@@ -274,6 +274,9 @@ def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw) -> dict:
     if "sensors" in kw:
         _refuse_beside(fixture, "sensors", kw, SENSOR_DESCRIPTION)
         sensors = kw.pop("sensors")
+        if n_sensors is not None and sensors and n_sensors != len(sensors):
+            _fail(f"{fixture}(): n_sensors = {n_sensors!r} given with {len(sensors)} sensors (numbered "
+                  f"{sorted(sensors)}); leave n_sensors out or make them agree")
         return {**kw, "n_sensors": len(sensors) if n_sensors is None else n_sensors, "sensors": sensors,
                 "seed": seed}
     units, variant, stimuli = kw.pop("units", None), kw.pop("variant", None), kw.pop("stimuli", ())

@@ -136,6 +136,9 @@ from bench.hosts.cosim import default_sensors
 def test_variant_beside_sensors(biotac_bridge):
     biotac_bridge(2, sensors=default_sensors(2), variant="biotac-sp")
 
+def test_n_sensors_against_sensors(biotac_bridge):
+    biotac_bridge(3, sensors=default_sensors(2))
+
 def test_bad_scene(biotac_bridge):
     biotac_bridge(scene="{bad}")
 
@@ -199,10 +202,11 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
     rtl.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
     pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene, rtl=rtl))
     result = pytester.runpytest("-p", "no:cacheprovider")
-    result.assert_outcomes(failed=17, passed=1)
+    result.assert_outcomes(failed=18, passed=1)
     out = result.stdout.str()
     result.stdout.fnmatch_lines([
         "*biotac_bridge(): variant given with sensors, which already describes the sensors*",
+        "*biotac_bridge(): n_sensors = 3 given with 2 sensors (numbered [[]1, 2[]]); leave n_sensors out*",
         "*biotac_bridge(): */bad.toml: 1 problem(s):*", "*host.sequence[[]1[]] = 'QQQ'*",
         "*biotac_cheetah(): tapz: 1 problem(s):*", "*close matches: taps*",
         "*biotac_sensor(): unit given with scene*",
@@ -266,6 +270,18 @@ def test_a_scenes_sensor_takes_the_seed_given_beside_it(biotac_sensor):
     assert a.sensor.seed == b.sensor.seed == 7 and c.sensor.seed == 8
     codes = [read_channel(p, PAC, n=20)[0] for p in (a, b, c)]
     assert np.array_equal(codes[0], codes[1]) and not np.array_equal(codes[0], codes[2])
+
+
+def test_a_scenes_cheetah_takes_the_seed_given_beside_it(biotac_cheetah):
+    """``seed`` beside a scene on the Cheetah factory replaces the scene's seed: sensor k draws ``seed + k - 1``
+    (as on the bridge), and without it the scene's own seed."""
+    from bench.cli.scenes import scene_file
+    from bench.scenes.scene import load_scene
+
+    given = biotac_cheetah(scene="taps", n_sensors=2, seed=7)
+    assert [given.bus.ports[k].sensor.seed for k in (1, 2)] == [7, 8]
+    own = biotac_cheetah(scene="taps", n_sensors=2)
+    assert [own.bus.ports[k].sensor.seed for k in (1, 2)] == [load_scene(scene_file("taps")).seed + k for k in (0, 1)]
 
 
 def test_a_scenes_bridge_takes_the_spi_given_beside_it(biotac_bridge):

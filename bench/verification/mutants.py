@@ -1812,6 +1812,16 @@ CATALOGUE += [
            '            cost.samples = block.n',
            ('emulator/tests/test_effect_graph.py::test_each_effect_counts_the_samples_it_processed',),
            "an effect's cost counting the last block's samples only"),
+    Mutant('plugin-n-sensors-against-sensors-taken', 'plugin', 'bench/pytest_plugin/fixtures.py',
+           '        if n_sensors is not None and sensors and n_sensors != len(sensors):',
+           '        if False:',
+           ('bench/tests/test_plugin_review3.py::test_misusing_a_factory_fails_the_test_with_one_clear_message',),
+           'biotac_bridge(3, sensors=<two sensors>) builds two without a word'),
+    Mutant('plugin-cheetah-scene-ignores-seed', 'plugin', 'bench/pytest_plugin/fixtures.py',
+           '"sensors": sensors_from_scene(scene, n_sensors, seed=seed),',
+           '"sensors": sensors_from_scene(scene, n_sensors, seed=None),',
+           ('bench/tests/test_plugin_review3.py::test_a_scenes_cheetah_takes_the_seed_given_beside_it',),
+           "the Cheetah factory's sensors keep the scene's seed when another is given beside it"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
