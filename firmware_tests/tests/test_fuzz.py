@@ -60,3 +60,33 @@ def test_firmware_command_parser_survives_100000_random_bytes():
     board.send_to_firmware(encode(CMD_START))
     sim.run(0.1, max_steps=1000)
     assert any(isinstance(i, DataFrame) for i in FrameParser().feed(bytes(out)))
+
+
+_COMMAND = st.one_of(
+    st.sampled_from([(0x01, b""), (0x02, b""), (0x04, b"")]),
+    st.lists(st.sampled_from([0, 1, 2, 3, *range(17, 36)]), min_size=1, max_size=64).map(lambda c: (0x03, bytes(c))),
+)
+_GARBAGE = st.one_of(
+    st.binary(max_size=40),
+    # a header whose length is wild (up to 65 535) or just within the buffer, cut short or left to the next bytes
+    st.tuples(st.integers(0, 255), st.one_of(st.integers(0, 64), st.integers(65, 0xFFFF)), st.binary(max_size=8))
+    .map(lambda h: b"\xaa\x55" + bytes([h[0], h[1] & 0xFF, h[1] >> 8]) + h[2]),
+)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(_GARBAGE, _COMMAND), min_size=1, max_size=6), st.integers(1, 80))
+def test_every_command_behind_any_garbage_is_answered_in_order(traffic, chunk):
+    """Commands with garbage before each (random bytes, or a header announcing any length, cut short), arriving in
+    pieces of ``chunk`` bytes: the firmware answers every command, in order, each as it must (ACK 0, or STATUS)."""
+    out = bytearray()
+    board = VirtualBoard(default_sensors(1), uart_out=out.extend)
+    sim = CoSim(board)
+    data = b"".join(garbage + encode(ctype, payload) for garbage, (ctype, payload) in traffic)
+    for k in range(0, len(data), chunk):
+        board.send_to_firmware(data[k:k + chunk])
+        sim.run(0.0005, max_steps=1000)
+    sim.run(0.002, max_steps=1000)
+    replies = [i for i in FrameParser().feed(bytes(out), now=0.0) if not isinstance(i, DataFrame)]
+    expected = [Status if ctype == CMD_STATUS else ("ack", ctype, 0) for _, (ctype, _) in traffic]
+    assert [Status if isinstance(r, Status) else r for r in replies] == expected
