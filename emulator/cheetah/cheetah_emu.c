@@ -12,7 +12,7 @@
  *  - one client per adapter: ch_find_devices reports the port ORed with CH_PORT_NOT_FREE while another program
  *    has it open, and ch_open then fails with CH_UNABLE_TO_OPEN (as a second open of a real adapter does);
  *  - a server that goes away yields CH_COMMUNICATION_ERROR from every call that needs it, never a signal:
- *    sockets are written with MSG_NOSIGNAL;
+ *    sockets are written with MSG_NOSIGNAL; ch_sleep_ms, which returns the milliseconds slept, then returns 0;
  *  - the socket must live in a private folder (owned by this user, mode 0700) and be served by this user
  *    (checked with SO_PEERCRED); there is no default path, so nothing is ever found at a shared location;
  *  - ch_spi_async_submit hands the batch to the adapter at once (it starts then, in the adapter's time);
@@ -212,6 +212,16 @@ static int push_op(Queue *q, u08 kind, u32 value) {
     return push(q, rec, 5);
 }
 
+/* A delay longer than one record holds (u32 ns, ~4.29 s) goes in as several records. */
+static int push_delay(Queue *q, unsigned long long ns) {
+    while (ns) {
+        u32 part = ns > UINT32_MAX ? UINT32_MAX : (u32)ns;
+        if (push_op(q, OP_DELAY_NS, part)) return -1;
+        ns -= part;
+    }
+    return 0;
+}
+
 static int valid(int handle) { return handle == 1 && dev.open; }
 
 /* A batch for the adapter: bit rate kHz u32, mode u08, ss polarity u08, then the op records. */
@@ -343,7 +353,7 @@ u32 c_ch_sleep_ms(u32 milliseconds) {
     if (dev.open) { /* the adapter's (virtual) time */
         u08 p[4];
         put32(p, milliseconds);
-        request(REQ_SLEEP, p, 4, 0, 0, 0);
+        if (request(REQ_SLEEP, p, 4, 0, 0, 0) != CH_OK) return 0; /* refused or gone: nothing slept */
     } else { /* no adapter: an ordinary sleep, as the vendor library does */
         struct timespec ts = {(time_t)(milliseconds / 1000), (long)(milliseconds % 1000) * 1000000L};
         while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {}
@@ -397,7 +407,7 @@ int c_ch_spi_queue_delay_ns(int handle, int nanoseconds) {
 int c_ch_spi_queue_delay_cycles(int handle, int cycles) {
     if (!valid(handle)) return CH_INVALID_HANDLE;
     if (cycles <= 0) return 0;
-    if (push_op(&dev.queue, OP_DELAY_NS, (u32)((long long)cycles * 1000000LL / dev.bitrate_khz)))
+    if (push_delay(&dev.queue, (unsigned long long)((long long)cycles * 1000000LL / dev.bitrate_khz)))
         return CH_COMMUNICATION_ERROR;
     return cycles;
 }

@@ -76,7 +76,8 @@ def test_a_request_past_an_hour_of_virtual_time_ends_the_connection_with_the_rea
         with pytest.MonkeyPatch.context() as mp, cheetah_adapter(mp, 1, bitrate_khz=None) as (cb, lib, h):
             t0, wall = cb.t, time.monotonic()
             if request == "sleep":
-                lib.c_ch_sleep_ms(C.c_uint32(0xFFFFFFFF))
+                lib.c_ch_sleep_ms.restype = C.c_uint32
+                assert lib.c_ch_sleep_ms(C.c_uint32(0xFFFFFFFF)) == 0  # the milliseconds slept: none
             else:
                 lib.c_ch_spi_queue_clear(h)
                 for _ in range(int(MAX_ADVANCE_S / 2.0) + 2):  # the API's delays are ints: ≤ 2.1 s each

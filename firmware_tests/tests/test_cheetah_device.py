@@ -361,3 +361,46 @@ def test_a_select_asserted_before_the_bytes_is_held_for_half_a_clock_period(lib,
         value, ok = proto.decode_response(word[0] << 8 | word[1])
         assert ok and not proto.is_error_word(word[0] << 8 | word[1]) and 100 < value < 4000  # PDC at rest
         lib.c_ch_close(h)
+
+
+# --- conformance with the Cheetah API (the vendor's cheetah.h and user manual) ----------------------------------
+
+
+def test_a_cycle_delay_past_a_u32_of_nanoseconds_lasts_every_cycle_it_returns(lib):
+    """ch_spi_queue_delay_cycles returns the cycles queued (cheetah.h): 500 000 cycles at 100 kHz are 5 s, which
+    the library once held as u32 nanoseconds and wrapped to 0.705 s while returning 500 000."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb, bitrate_khz=None)
+        khz = lib.c_ch_spi_bitrate(h, 100)  # the slowest the adapter runs at
+        lib.c_ch_spi_queue_clear(h)
+        assert lib.c_ch_spi_queue_delay_cycles(h, 500_000) == 500_000
+        t0 = cb.t
+        assert lib.c_ch_spi_batch_shift(h, 0, (C.c_uint8 * 1)()) == 0
+        assert cb.t - t0 == pytest.approx(500_000 / (khz * 1e3), abs=1e-6)
+
+
+SLEEP_AFTER_SERVER = ("import ctypes as C, signal, sys\n"
+                      "signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # as in a C program\n"
+                      "lib = C.CDLL(sys.argv[1])\n"
+                      "lib.c_ch_sleep_ms.restype = C.c_uint32\n"
+                      "assert lib.c_ch_open(0) == 1\n"
+                      "print('open', flush=True)\n"
+                      "sys.stdin.readline()\n"
+                      "print(lib.c_ch_sleep_ms(5), lib.c_ch_sleep_ms(5), lib.c_ch_spi_queue_byte(1, 1, 0),\n"
+                      "      lib.c_ch_spi_batch_shift(1, 0, None))\n")
+
+
+def test_sleep_once_the_server_is_gone_slept_nothing_and_raises_no_sigpipe():
+    """ch_sleep_ms returns the milliseconds slept (cheetah.h): with the adapter gone it slept none and says 0,
+    and the program, SIGPIPE at its default, lives on to get CH_COMMUNICATION_ERROR from the next shift."""
+    cb = CheetahBench(1).start()
+    try:
+        p = subprocess.Popen([sys.executable, "-c", SLEEP_AFTER_SERVER, str(cb.library)], stdin=subprocess.PIPE,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=cb.env)
+        assert p.stdout.readline() == "open\n"
+    finally:
+        cb.stop()
+    out, err = p.communicate("\n", timeout=60)
+    assert p.returncode == 0, (p.returncode, err)  # -13 would be SIGPIPE
+    assert out.split() == ["0", "0", "1", str(CH_COMMUNICATION_ERROR)]
