@@ -23,6 +23,7 @@ from bench.hosts.cheetah_server import CheetahBench, build_client, build_library
 from bench.paths import REPO
 from bench.tests.host_benches import open_adapter, read_serial
 from emulator.spi import protocol as proto
+from emulator.spi.model import PROP_SERIAL
 
 pytestmark = pytest.mark.firmware
 CH_COMMUNICATION_ERROR, CH_UNABLE_TO_OPEN, CH_SPI_ASYNC_PENDING = -7, -8, -104
@@ -380,6 +381,114 @@ def test_a_cycle_delay_past_a_u32_of_nanoseconds_lasts_every_cycle_it_returns(li
         assert cb.t - t0 == pytest.approx(500_000 / (khz * 1e3), abs=1e-6)
 
 
+def test_the_bit_rate_returned_is_the_one_the_bus_runs_at(lib):
+    """A request past the manual's top rate (40 MHz, 50 MHz overclocked) is answered with the rate the adapter
+    set, and delays in cycles then last periods of that rate, not of the one asked for; so for 1 kHz."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        for asked in (100_000, 1):
+            khz = lib.c_ch_spi_bitrate(h, asked)
+            assert 0 < khz <= 50_000
+            lib.c_ch_spi_queue_clear(h)
+            lib.c_ch_spi_queue_delay_cycles(h, 4000)
+            t0 = cb.t
+            lib.c_ch_spi_batch_shift(h, 0, (C.c_uint8 * 1)())
+            assert cb.t - t0 == pytest.approx(4000 / (khz * 1e3), rel=1e-6), asked
+
+
+def rev(b: int) -> int:
+    return int(f"{b:08b}"[::-1], 2)
+
+
+def test_lsb_first_shifts_every_byte_bit_0_first_both_ways(lib):
+    """CH_SPI_BITORDER_LSB (cheetah.h) is a setting the adapter takes: a host that reverses each byte's bits
+    itself talks to the MSB-first sensors exactly, and reads their answer reversed."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        assert lib.c_ch_spi_configure(h, 0, 0, 1, 0) == 0
+        buf = (C.c_uint8 * 20)()
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_ss(h, 1)
+        lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(rev(0x61), rev(PROP_SERIAL)))  # read the serial number
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, 60000)
+        lib.c_ch_spi_queue_ss(h, 1)
+        lib.c_ch_spi_queue_byte(h, 18, 0)
+        lib.c_ch_spi_queue_ss(h, 0)
+        assert lib.c_ch_spi_batch_shift(h, 20, buf) == 20
+    assert bytes(rev(b) for b in buf[2:]).startswith(b"BT0101EMU0000001")
+
+
+def test_target_power_query_returns_the_state_and_leaves_it(lib):
+    """CH_TARGET_POWER_QUERY (0x80, cheetah.h) asks for the target power state; ON (1) and OFF (0) set it."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        for flag in (1, 0):
+            assert lib.c_ch_target_power(h, flag) == flag
+            assert lib.c_ch_target_power(h, 0x80) == flag
+            assert lib.c_ch_target_power(h, 0x80) == flag
+
+
+def test_a_shift_writes_no_more_of_data_in_than_num_bytes(lib):
+    """A buffer shorter than the batch gets num_bytes bytes and nothing past them (the vendor's bindings cut
+    data_in to num_bytes the same way); the return counts what was written."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        buf = (C.c_uint8 * 8)(*[0xEE] * 8)
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_byte(h, 6, 0)  # nothing selected: the idle line
+        assert lib.c_ch_spi_batch_length(h) == 6
+        assert lib.c_ch_spi_batch_shift(h, 2, buf) == 2
+        assert bytes(buf[2:]) == b"\xee" * 6 and bytes(buf[:2]) != b"\xee\xee"
+        assert lib.c_ch_spi_batch_shift(h, 0, None) == 0
+
+
+def test_async_submissions_past_the_limit_are_refused_and_none_is_lost(lib):
+    """Past the adapter's limit of outstanding batches ch_spi_async_submit answers CH_SPI_ASYNC_MAX_REACHED
+    (-105) and sends nothing: every accepted batch is collected, then CH_SPI_ASYNC_EMPTY (-103)."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        h = open_adapter(lib, mp, cb)
+        lib.c_ch_spi_queue_clear(h)
+        lib.c_ch_spi_queue_byte(h, 2, 0)
+        codes = [lib.c_ch_spi_async_submit(h) for _ in range(200)]
+        accepted = codes.index(-105)
+        assert accepted > 0 and set(codes[:accepted]) == {0} and set(codes[accepted:]) == {-105}
+        buf = (C.c_uint8 * 2)()
+        assert [lib.c_ch_spi_async_collect(h, 2, buf) for _ in range(accepted)] == [2] * accepted
+        assert lib.c_ch_spi_async_collect(h, 2, buf) == -103
+        assert lib.c_ch_spi_async_submit(h) == 0 and lib.c_ch_spi_async_collect(h, 2, buf) == 2
+        assert cb.client_errors == []
+
+
+FIND_DEVICES = ("import ctypes as C, sys\n"
+                "lib = C.CDLL(sys.argv[1])\n"
+                "ports, ids = (C.c_uint16 * 2)(), (C.c_uint32 * 2)()\n"
+                "print(lib.c_ch_find_devices_ext(2, ports, 2, ids), ports[0], ids[0], lib.c_ch_find_devices(0, None))\n")
+
+
+def test_another_program_finds_the_adapter_marked_in_use_while_it_is_open(lib):
+    """cheetah.h: ports in use are ORed with CH_PORT_NOT_FREE (0x8000), and the count is of the devices found,
+    whatever the array's size — seen from a second program, which asks the adapter."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        def find():
+            r = subprocess.run([sys.executable, "-c", FIND_DEVICES, str(cb.library)], capture_output=True,
+                               text=True, env=cb.env, timeout=60)
+            assert r.returncode == 0, r.stderr
+            return r.stdout.split()
+
+        assert find() == ["1", "0", str(cs.UNIQUE_ID), "1"]
+        h = open_adapter(lib, mp, cb)
+        assert find() == ["1", str(0x8000), str(cs.UNIQUE_ID), "1"]
+        assert lib.c_ch_close(h) == 0
+        assert find() == ["1", "0", str(cs.UNIQUE_ID), "1"]
+
+
 SLEEP_AFTER_SERVER = ("import ctypes as C, signal, sys\n"
                       "signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # as in a C program\n"
                       "lib = C.CDLL(sys.argv[1])\n"
@@ -404,3 +513,25 @@ def test_sleep_once_the_server_is_gone_slept_nothing_and_raises_no_sigpipe():
     out, err = p.communicate("\n", timeout=60)
     assert p.returncode == 0, (p.returncode, err)  # -13 would be SIGPIPE
     assert out.split() == ["0", "0", "1", str(CH_COMMUNICATION_ERROR)]
+
+
+def test_a_select_change_between_bytes_ends_one_sensors_exchange_and_starts_the_next(lib):
+    """ch_spi_queue_ss sets every line at once (cheetah.h): moving from sensor 1's select to sensor 2's between
+    bytes of one batch deselects sensor 1 and sends the following bytes to sensor 2 — each reads its own serial."""
+    lib, mp = lib
+    with CheetahBench(2) as cb:
+        h = open_adapter(lib, mp, cb)
+        lib.c_ch_spi_queue_clear(h)
+        for sel in (1, 2):
+            lib.c_ch_spi_queue_ss(h, sel)
+            lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x61, PROP_SERIAL))
+        lib.c_ch_spi_queue_ss(h, 0)
+        lib.c_ch_spi_queue_delay_ns(h, 60000)
+        for sel in (1, 2):
+            lib.c_ch_spi_queue_ss(h, sel)
+            lib.c_ch_spi_queue_byte(h, 18, 0)
+        lib.c_ch_spi_queue_ss(h, 0)
+        buf = (C.c_uint8 * 40)()
+        assert lib.c_ch_spi_batch_shift(h, 40, buf) == 40
+        assert cb.client_errors == []
+    assert bytes(buf[4:22]).startswith(b"BT0101EMU0000001") and bytes(buf[22:]).startswith(b"BT0101EMU0000002")
