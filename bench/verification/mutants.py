@@ -1872,6 +1872,16 @@ CATALOGUE += [
            'pass',
            ('firmware_tests/tests/test_cheetah_device.py::test_a_select_change_between_bytes_ends_one_sensors_exchange_and_starts_the_next',),
            "a select change between a batch's bytes not ending the exchange"),
+    Mutant('cheetah-default-bitrate-4400', 'host', 'emulator/cheetah/cheetah_emu.c',
+           '    dev.bitrate_khz = 1000;',
+           '    dev.bitrate_khz = 4400;',
+           ('firmware_tests/tests/test_cheetah_device.py::test_the_bit_rate_returned_is_the_one_the_bus_runs_at',),
+           'the adapter opening at 4400 kHz instead of the documented 1000'),
+    Mutant('cheetah-async-limit-65', 'host', 'emulator/cheetah/cheetah_emu.c',
+           '#define MAX_ASYNC 64',
+           '#define MAX_ASYNC 65',
+           ('firmware_tests/tests/test_cheetah_device.py::test_async_submissions_past_the_limit_are_refused_and_none_is_lost',),
+           '65 asynchronous batches outstanding where the README says 64'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

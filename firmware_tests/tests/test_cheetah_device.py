@@ -383,13 +383,15 @@ def test_a_cycle_delay_past_a_u32_of_nanoseconds_lasts_every_cycle_it_returns(li
 
 def test_the_bit_rate_returned_is_the_one_the_bus_runs_at(lib):
     """A request past the manual's top rate (40 MHz, 50 MHz overclocked) is answered with the rate the adapter
-    set, and delays in cycles then last periods of that rate, not of the one asked for; so for 1 kHz."""
+    set, and delays in cycles then last periods of that rate, not of the one asked for; so for 1 kHz. Our choices
+    (README): 1000 kHz after open (asking 0 reports the rate), clamped to 100–40 000 kHz."""
     lib, mp = lib
     with CheetahBench(1) as cb:
-        h = open_adapter(lib, mp, cb)
-        for asked in (100_000, 1):
+        h = open_adapter(lib, mp, cb, bitrate_khz=None)
+        assert lib.c_ch_spi_bitrate(h, 0) == 1000
+        for asked, clamped in ((100_000, 40_000), (1, 100)):
             khz = lib.c_ch_spi_bitrate(h, asked)
-            assert 0 < khz <= 50_000
+            assert khz == clamped and lib.c_ch_spi_bitrate(h, 0) == clamped
             lib.c_ch_spi_queue_clear(h)
             lib.c_ch_spi_queue_delay_cycles(h, 4000)
             t0 = cb.t
@@ -448,8 +450,9 @@ def test_a_shift_writes_no_more_of_data_in_than_num_bytes(lib):
 
 
 def test_async_submissions_past_the_limit_are_refused_and_none_is_lost(lib):
-    """Past the adapter's limit of outstanding batches ch_spi_async_submit answers CH_SPI_ASYNC_MAX_REACHED
-    (-105) and sends nothing: every accepted batch is collected, then CH_SPI_ASYNC_EMPTY (-103)."""
+    """Past the adapter's limit of outstanding batches (64: our choice, README) ch_spi_async_submit answers
+    CH_SPI_ASYNC_MAX_REACHED (-105) and sends nothing: every accepted batch is collected, then CH_SPI_ASYNC_EMPTY
+    (-103)."""
     lib, mp = lib
     with CheetahBench(1) as cb:
         h = open_adapter(lib, mp, cb)
@@ -457,7 +460,7 @@ def test_async_submissions_past_the_limit_are_refused_and_none_is_lost(lib):
         lib.c_ch_spi_queue_byte(h, 2, 0)
         codes = [lib.c_ch_spi_async_submit(h) for _ in range(200)]
         accepted = codes.index(-105)
-        assert accepted > 0 and set(codes[:accepted]) == {0} and set(codes[accepted:]) == {-105}
+        assert accepted == 64 and set(codes[:accepted]) == {0} and set(codes[accepted:]) == {-105}
         buf = (C.c_uint8 * 2)()
         assert [lib.c_ch_spi_async_collect(h, 2, buf) for _ in range(accepted)] == [2] * accepted
         assert lib.c_ch_spi_async_collect(h, 2, buf) == -103
