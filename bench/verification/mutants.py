@@ -1882,6 +1882,11 @@ CATALOGUE += [
            '#define MAX_ASYNC 65',
            ('firmware_tests/tests/test_cheetah_device.py::test_async_submissions_past_the_limit_are_refused_and_none_is_lost',),
            '65 asynchronous batches outstanding where the README says 64'),
+    Mutant('client-slot-padding-without-overheads', 'host', 'firmware_tests/cheetah_client/biotac_client.c',
+           'ch.queue_delay_ns(h, 227273 - 50000 - ((2 + 2 * SENSORS) * 8 + 6 * 8) * 1000000 / 4400 - 4 * 750);',
+           'ch.queue_delay_ns(h, 227273 - 50000 - ((2 + 2 * SENSORS) * 8) * 1000000 / 4400);',
+           ('firmware_tests/tests/test_cheetah.py::test_the_example_client_samples_at_4400_slots_per_second',),
+           "the example client's slot padding leaving out the adapter's select and run overheads"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

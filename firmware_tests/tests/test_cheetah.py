@@ -40,6 +40,20 @@ def test_an_unmodified_client_detects_sensors_and_streams_frames():
     assert abs(float(stats["pac_mean"]) - 2048) < 1 and 1.2 < float(stats["pac_std"]) < 1.6
 
 
+def test_the_example_client_samples_at_4400_slots_per_second():
+    """biotac_client.c pads each slot to 1/4400 s with the adapter's overheads (README): 20 batches more (100 frames
+    of 44 slots) take the adapter's clock 1.000 s more, within 0.2 % (the difference of two runs cancels the
+    set-up and the batches in flight at exit)."""
+    elapsed = {}
+    for batches in (20, 40):
+        with CheetahBench(2) as cb:
+            r = subprocess.run([str(build_client(cb.library)), str(batches)], capture_output=True, text=True,
+                               env=cb.env, timeout=120)
+            assert r.returncode == 0, r.stderr
+            elapsed[batches] = cb.t
+    assert elapsed[40] - elapsed[20] == pytest.approx(100 * 44 / 4400, rel=2e-3)
+
+
 def test_queued_delays_and_sleep_advance_the_emulators_time_exactly(monkeypatch):
     with cheetah_adapter(monkeypatch, 1, bitrate_khz=None) as (cb, lib, h):
         t0 = cb.t
