@@ -298,12 +298,13 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
 
 def digest_files() -> list[Path]:
     """The files a stage's cache key digests: every module a trial runs through (the emulator, the rig, the
-    texture library and properties, the runner, the bench's shared modules) and the library file."""
+    texture library and properties, the runner, the bench's shared modules) and the data files it reads (the
+    texture library, the electrode positions)."""
     packages = ("emulator", "bench/rigs", "bench/textures", "bench/running")
     files = sorted(f for d in packages for f in (REPO / d).rglob("*.py") if "tests" not in f.relative_to(REPO).parts)
     return files + sorted((REPO / "bench").glob("*.py")) + [
         REPO / "bench" / "experiments" / "trials.py", REPO / "bench" / "experiments" / "design.py",
-        FIXTURES / "textures" / "library.toml"]
+        FIXTURES / "textures" / "library.toml", FIXTURES / "electrodes.csv"]
 
 
 def _code_digest() -> str:

@@ -222,17 +222,26 @@ def test_a_symlinked_cache_inside_out_is_kept_by_force(tmp_path, monkeypatch, ca
 
 def test_the_stage_cache_key_digests_every_module_a_trial_runs_through():
     """Found by a mutation pass: the key left out bench/textures/stage.py (the motor-current law behind traction)
-    and bench/textures/library.py (its unit conversions), so a warm cache replayed old trials after they changed.
-    Every module of this repository that a trial imports is digested (run in a fresh interpreter)."""
+    and bench/textures/library.py (its unit conversions), so a warm cache replayed old trials after they changed;
+    a later audit found fixtures/electrodes.csv, which every trial reads, left out too. Every module of this
+    repository that a trial imports, and every data file it opens, is digested (run in a fresh interpreter, the
+    files opened seen by an audit hook; the numba caches under __pycache__ are not inputs)."""
     import subprocess
     import sys
 
-    code = ("import sys; from bench.experiments.trials import run_trial_task, sweep_tasks; "
+    code = ("import sys; opened = []; "
+            "sys.addaudithook(lambda e, a: opened.append(a[0]) if e == 'open' and isinstance(a[0], str) else None); "
+            "from bench.experiments.trials import run_trial_task, sweep_tasks; "
             "from bench.rigs.texture_rig import movement_grid; "
             "run_trial_task(sweep_tasks([902], [movement_grid()[7]], 1, 0, movement_ids=[7])[0]); "
-            "print('\\n'.join(m.__file__ for m in list(sys.modules.values()) if getattr(m, '__file__', None)))")
+            "print('\\n'.join(m.__file__ for m in list(sys.modules.values()) if getattr(m, '__file__', None))); "
+            "print('\\n'.join(f for f in opened if '__pycache__' not in f and not f.endswith(('.py', '.pyc'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
                          cwd=E.REPO, check=True).stdout.split()
+    data = {pathlib.Path(f).resolve() for f in out if pathlib.Path(f).suffix not in (".py", ".pyc")}
+    data = {f for f in data if f.is_relative_to(E.REPO / "fixtures")}
+    assert E.FIXTURES / "textures" / "library.toml" in data  # the hook sees what a trial reads
+    assert not sorted(data - set(E.digest_files())), sorted(data - set(E.digest_files()))
     used = {pathlib.Path(f).resolve() for f in out if pathlib.Path(f).resolve().is_relative_to(E.REPO / "bench")
             or pathlib.Path(f).resolve().is_relative_to(E.REPO / "emulator")}
     used = {f for f in used if f.name != "__init__.py" or f.stat().st_size > 0}

@@ -1887,6 +1887,16 @@ CATALOGUE += [
            'ch.queue_delay_ns(h, 227273 - 50000 - ((2 + 2 * SENSORS) * 8) * 1000000 / 4400);',
            ('firmware_tests/tests/test_cheetah.py::test_the_example_client_samples_at_4400_slots_per_second',),
            "the example client's slot padding leaving out the adapter's select and run overheads"),
+    Mutant('stage-cache-without-electrodes', 'exploration', 'bench/experiments/experiment.py',
+           '        FIXTURES / "textures" / "library.toml", FIXTURES / "electrodes.csv"]',
+           '        FIXTURES / "textures" / "library.toml"]',
+           ('bench/tests/test_sweep_review2.py::test_the_stage_cache_key_digests_every_module_a_trial_runs_through',),
+           "the stage cache's key leaving out the electrode positions every trial reads"),
+    Mutant('stage-cache-without-library', 'exploration', 'bench/experiments/experiment.py',
+           '        FIXTURES / "textures" / "library.toml", FIXTURES / "electrodes.csv"]',
+           '        FIXTURES / "electrodes.csv"]',
+           ('bench/tests/test_sweep_review2.py::test_the_stage_cache_key_digests_every_module_a_trial_runs_through',),
+           "the stage cache's key leaving out the texture library"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
