@@ -192,6 +192,25 @@ def test_a_complete_recording_exits_0_and_says_so(tmp_path):
     assert str(data["end"]) == "complete" and len(data["seq"]) == 30
 
 
+def test_record_clears_what_an_earlier_host_left_unread_before_it_sends_start(tmp_path):
+    """README: what an earlier host left unread is cleared first. A port whose far end never answers but holds an
+    earlier host's unread ACK to START (a bridge hung since): record must not take that ACK for its own START's, and
+    says no answer came (exit 2, a bad port) instead of recording an empty stream from a dead bridge."""
+    import os
+
+    from bench.hosts.driver import T_ACK
+
+    master, slave = os.openpty()
+    try:
+        os.write(master, encode(T_ACK, bytes([CMD_START, 0])))
+        r = run_cli("record", os.ttyname(slave), "--out", tmp_path / "rec.npz", "--seconds", "0.3", "--quiet")
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert r.returncode == 2 and "no answer to START within 5 s" in r.stderr, r.stderr
+    assert not (tmp_path / "rec.npz").exists()
+
+
 def test_a_recording_across_a_sensor_loss_is_saved_by_sensor_number(tmp_path):
     """The set of sensors changes mid-recording (sensor 2 unplugged): the file indexes codes by sensor number."""
     from bench.cli.hosts import _save_recording
