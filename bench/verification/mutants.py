@@ -1927,6 +1927,16 @@ CATALOGUE += [
            'return self.workers or 1',
            ('bench/tests/test_cli_wiring.py::test_a_local_cluster_has_one_worker_per_core_by_default',),
            'a LocalCluster of one worker whatever the cores'),
+    Mutant('demo-runs-another-scene', 'outputs', 'scripts/demo',
+           'run fixtures/scenes/sphere_drops.toml',
+           'run fixtures/scenes/taps.toml',
+           ('bench/tests/test_readme_commands.py::test_command_1_runs_the_demo_end_to_end',),
+           'README command 1 running another scene than the sphere drops it promises'),
+    Mutant('ci-runs-a-subset', 'outputs', '.ci/run',
+           'exec ./scripts/test',
+           'exec ./scripts/test -m unit',
+           ('bench/tests/test_readme_commands.py::test_ci_runs_exactly_the_readmes_test_command',),
+           "CI running only the unit tests instead of the README's command"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -1,0 +1,46 @@
+"""The README's two commands and what stands behind them: command 1 (``./scripts/demo``) runs end to end and writes
+what the README lists; ``.ci/run`` runs command 2 (``./scripts/test``), which writes JUnit XML; tox's groups are
+the suite's registered markers.  (The set-up inside both scripts is a no-op once ``.venv`` matches the lock.)"""
+
+import json
+import re
+import subprocess
+import tomllib
+
+import pytest
+
+from bench.paths import REPO
+
+pytestmark = pytest.mark.unit
+
+
+def test_command_1_runs_the_demo_end_to_end(tmp_path):
+    """README: `./scripts/demo` runs the sphere-drop scene end to end: report.md, record.json, codes.npz, plots."""
+    out = tmp_path / "demo"
+    r = subprocess.run([str(REPO / "scripts" / "demo"), "--out", str(out), "--quiet"], capture_output=True,
+                       text=True, timeout=600, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert {"report.md", "record.json", "codes.npz", "traces.png", "spectrogram.png"} <= {p.name for p in out.iterdir()}
+    record = json.loads((out / "record.json").read_text())
+    assert record["status"] == "ok" and record["scene"]["source"] == "fixtures/scenes/sphere_drops.toml"
+    spheres = record["impact_detection"]["spheres"]
+    assert len(spheres) == 6 and all(s["drops"] == 10 for s in spheres.values())
+
+
+def test_ci_runs_exactly_the_readmes_test_command():
+    """`.ci/run` runs command 2, which is the README's second command, and that writes out/test-results.xml."""
+    readme = (REPO / "README.md").read_text()
+    commands = re.findall(r"^\./scripts/(\w+)\s+# (\d)\.", readme, flags=re.M)
+    assert commands == [("demo", "1"), ("test", "2")]
+    ci = [line for line in (REPO / ".ci" / "run").read_text().splitlines() if line and not line.startswith("#")]
+    assert ci[-1] == "exec ./scripts/test"
+    assert "-m pytest --junitxml=out/test-results.xml" in (REPO / "scripts" / "test").read_text()
+
+
+def test_tox_groups_are_the_registered_markers():
+    """tox.ini's groups select the markers pyproject registers (strict markers: a typo would select nothing)."""
+    registered = {m.split(":")[0] for m in
+                  tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]["markers"]}
+    groups = dict(re.findall(r"^\s+(\w+): pytest -m (\w+)", (REPO / "tox.ini").read_text(), flags=re.M))
+    assert groups and all(name == marker for name, marker in groups.items())
+    assert set(groups) | {"mutants"} == registered
