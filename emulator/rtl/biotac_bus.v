@@ -1,7 +1,8 @@
 // Five BioTac SPI peripherals sharing SCK, MOSI and MISO; the host's 3-bit select code picks one
 // (1, 2, 4, 5, 6 -> sensors 1..5), all (7) or none (0). MISO is the OR of the selected sensors'
 // outputs; with none selected it idles at pull_up, so an absent sensor reads 0x00 or 0xFF.  The SP parameter
-// makes chosen sensors BioTac SPs (E20..E24 answer data instead of "EX"; their own property ROM).
+// makes chosen sensors BioTac SPs (E20..E24 answer data instead of "EX"; their own property ROM).  ``provided``
+// tells each sensor which channels it was built to provide (the others answer "EX").
 `default_nettype none
 
 module biotac_bus #(
@@ -27,7 +28,8 @@ module biotac_bus #(
     input  wire [4:0]  flt_miso_stuck_val,
     input  wire [4:0]  flt_bad_parity,
     input  wire [4:0]  flt_slow,
-    output wire [59:0] user_registers   // 12 bits per sensor
+    output wire [59:0] user_registers,  // 12 bits per sensor
+    input  wire [319:0] provided        // 64 bits per sensor: bit c set where it provides channel c
 );
     localparam [14:0] ADDRESS = {3'b110, 3'b101, 3'b100, 3'b010, 3'b001};  // sensor 5 .. sensor 1
     wire [4:0] selected;
@@ -44,7 +46,7 @@ module biotac_bus #(
                 .flt_mosi_flip_en(flt_mosi_flip_en[i]), .flt_mosi_flip_bit(flt_mosi_flip_bit[12*i +: 12]),
                 .flt_miso_stuck_en(flt_miso_stuck_en[i]), .flt_miso_stuck_val(flt_miso_stuck_val[i]),
                 .flt_bad_parity(flt_bad_parity[i]), .flt_slow(flt_slow[i]),
-                .user_registers(user_registers[12*i +: 12]));
+                .user_registers(user_registers[12*i +: 12]), .provided(provided[64*i +: 64]));
         end
     endgenerate
     assign miso = (|selected) ? (|(miso_each & selected)) : pull_up;

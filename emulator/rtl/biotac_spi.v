@@ -5,6 +5,9 @@
 //   * chip-select fall: choose what MISO carries (prepared result, "E." if not ready, "E_" if none);
 //   * SCK rising edge: capture MOSI; SCK falling edge: next MISO bit (SPI mode 0, MSB first);
 //   * chip-select rise: act on the first 16 bits received (sample, read property, resend, write, errors).
+// A recognised channel the emulated sensor was not built to provide (the ``provided`` port, the model's
+// SensorPort.provided) answers "EX" and requests no conversion; it still restarts the 5-tick ADC-busy window,
+// and a busy ADC answers "E-" first, as in the model.
 // Delays are measured with a free-running 1 MHz timer (clk). The ADC code of a sampling command is
 // requested through sample_req/sample_channel and answered by the test bench on sample_code/sample_ack,
 // so the physics stays in the Python emulator. Faults enter through explicit ports.
@@ -32,7 +35,8 @@ module biotac_spi #(
     input  wire        flt_miso_stuck_val,
     input  wire        flt_bad_parity,
     input  wire        flt_slow,
-    output wire [11:0] user_registers  // parameters 0..3 as written (3 bits each), for the test bench
+    output wire [11:0] user_registers, // parameters 0..3 as written (3 bits each), for the test bench
+    input  wire [63:0] provided        // bit c set: the emulated sensor was built to provide channel c
 );
 `include "biotac_props.vh"
 
@@ -161,7 +165,8 @@ module biotac_spi #(
     // has no reset: a reset is not a request (toggling it asked the bench for a conversion nobody commanded), and
     // the ADC is not reset, so a conversion already started completes; its result is never served (as in
     // emulator/spi/model.py).
-    wire accept_sample = rx_count >= 12'd16 && b0[7] && (^b0) && is_sampled(channel) && !busy;
+    wire accept_sample = rx_count >= 12'd16 && provided[channel]
+                         && b0[7] && (^b0) && is_sampled(channel) && !busy;
     // (A command ending while the sensor is held in reset still starts the ADC, which is not reset; nothing serves
     // its result, as the reset branch below prepares nothing.)
     initial sample_req = 1'b0;
@@ -206,6 +211,8 @@ module biotac_spi #(
                         sampling_tick <= timer;
                         if (busy) begin
                             prepare_word(E_BUSY);
+                        end else if (!provided[channel]) begin
+                            prepare_word(E_CHANNEL);
                         end else begin
                             prep_valid <= 1'b1;
                             prep_consumed <= 1'b0;

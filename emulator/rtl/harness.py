@@ -33,6 +33,39 @@ class HarnessError(RuntimeError):
     pass
 
 
+#: The ``provided`` mask of a sensor that provides every channel it recognises (bit c: channel c).
+ALL_CHANNELS_MASK = 2**64 - 1
+
+
+def channel_mask(channels) -> int:
+    """The RTL's ``provided`` bits (bit c set: channel index c) of a set of channel indices."""
+    return sum(1 << int(c) for c in set(channels))
+
+
+def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int):
+    """The conversions the sensor behind ``port`` (a :class:`~emulator.spi.model.SensorPort`: its variant, provided
+    channels and conversion window) performs for 16-bit transfers to it — chip select falling at ``start`` and
+    rising at ``end`` (s), the bus clocking next at ``next_activity`` (s) — decided by the software model's own
+    routine (:func:`emulator.spi.fastpath._commands`): a sampling command of a recognised channel it provides,
+    not within CONVERSION_TICKS (5 µs) of the previous sampling command of a recognised channel (that one answers
+    "E-"; busy and unprovided commands restart the window too).  ``last_sampling_tick``: that previous command's
+    tick of the 1 MHz timer (``fastpath._NO_TICK``: none).  Returns (channels, instants s, whether the bus clocks
+    within the conversion, the last sampling tick afterwards)."""
+    from emulator.spi.fastpath import _TABLES, _commands
+
+    word_of_byte, recognized, channel_of = _TABLES[port.variant.name]
+    n = len(mosi)
+    first, prepared, acc_at, acc_channel = (np.empty(n, np.int64) for _ in range(4))
+    cmd_end, acc_time, acc_coupled = np.empty(n), np.empty(n), np.empty(n, bool)
+    _, _, last_tick, _, n_acc, deferred = _commands(
+        np.ascontiguousarray(mosi, np.uint16), np.ascontiguousarray(start, float), np.ascontiguousarray(end, float),
+        np.ascontiguousarray(next_activity, float), word_of_byte, recognized, channel_of, port.provided_lut,
+        int(last_sampling_tick), float(port.conversion_s), first, cmd_end, prepared, acc_at, acc_channel, acc_time,
+        acc_coupled)
+    n_acc += deferred >= 0  # the model converts a last command with no next activity known later; the RTL asks now
+    return acc_channel[:n_acc], acc_time[:n_acc], acc_coupled[:n_acc], int(last_tick)
+
+
 def _variant_of(sensor) -> str:
     from emulator import channels as ch
 
@@ -81,7 +114,10 @@ class Harness:
 
     @staticmethod
     def _header(vec: dict, n: int) -> bytes:
+        """The schedule's header: sensors present, MISO pull, faults, and the channels each sensor provides
+        (``vec["provided"]``: {sensor: channel indices}; a sensor not named there provides all it recognises)."""
         f = {int(k): v for k, v in vec.get("faults", {}).items()}
+        provided = {int(k): channel_mask(v) for k, v in vec.get("provided", {}).items()}
 
         def mask(pred):
             return sum(1 << (s - 1) for s, d in f.items() if pred(d))
@@ -89,12 +125,13 @@ class Harness:
         def bits(key):
             return [int(f.get(i, {}).get(key) or 0) for i in range(1, 6)]
 
-        return struct.pack("<8sBB6B5H5HQ", b"BTSPIV1\0", sum(1 << (s - 1) for s in vec["sensors"]),
+        return struct.pack("<8sBB6B5H5H5QQ", b"BTSPIV2\0", sum(1 << (s - 1) for s in vec["sensors"]),
                            int(vec["pull_up"]), mask(lambda d: d.get("miso_flip_bit") is not None),
                            mask(lambda d: d.get("mosi_flip_bit") is not None),
                            mask(lambda d: d.get("miso_stuck") is not None), mask(lambda d: d.get("miso_stuck") == 1),
                            mask(lambda d: d.get("bad_parity")), mask(lambda d: d.get("slow_response")),
-                           *bits("miso_flip_bit"), *bits("mosi_flip_bit"), n)
+                           *bits("miso_flip_bit"), *bits("mosi_flip_bit"),
+                           *(provided.get(i, ALL_CHANNELS_MASK) for i in range(1, 6)), n)
 
     def run(self, vec: dict, transfers: np.ndarray, codes: np.ndarray) -> dict:
         self.ensure_built()
@@ -156,12 +193,13 @@ class Harness:
 class HarnessPeripheral:
     """The RTL, run by the C++ harness, behind the same ``exchange(TransferBatch)`` as the software model.
 
-    For each batch the emulator computes the ADC codes of the sampling commands at the instants they
-    end (the sampler's traffic converts every recognised, provided channel), the harness plays the
-    batch against the RTL serving those codes, and the MISO words come back.  The RTL is reset at the
-    start of every batch and the batch is shifted to start just after that reset, so nothing but the
-    protocol state in flight at a batch boundary is lost: the host sampler's batches end on a completed
-    read, so none is.  Any request the RTL makes that the codes do not match is an error.
+    For each batch the emulator computes the ADC codes of the conversions the software model performs
+    (:func:`accepted_conversions`: not those answered "EX" or "E-") at the instants their commands end, the
+    harness plays the batch against the RTL, told the sensor's provided channels, serving those codes, and
+    the MISO words come back.  The RTL is reset at the start of every batch (its ADC-busy window with it)
+    and the batch is shifted to start just after that reset, so nothing but the protocol state in flight
+    at a batch boundary is lost: the host sampler's batches end on a completed read, so none is.  Any
+    request the RTL makes that the codes do not match, or a code it does not request, is an error.
     """
 
     def __init__(self, sensor, harness: Harness | None = None):
@@ -171,31 +209,28 @@ class HarnessPeripheral:
 
         self.sensor = sensor
         self.harness = harness or Harness(sp=sp_mask({1: _variant_of(sensor)}))
-        self._reference = SensorPort(sensor)  # only for its provided-channel table and conversion window
+        self._reference = SensorPort(sensor)  # only for its variant, provided channels and conversion window
         self.channels_read = sensor.channels_read
 
     def exchange(self, batch) -> np.ndarray:
-        from emulator.spi.fastpath import _TABLES
+        from emulator.spi.fastpath import _NO_TICK
 
-        _, recognized, channel_of = _TABLES[self._reference.variant.name]
         start = np.asarray(batch.start_s, float)
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
         end = start + 16.5 / clock
-        first = mosi >> 8
-        conv = np.flatnonzero(recognized[first] & self._reference.provided_lut[channel_of[first]])
-        channels = channel_of[first[conv]]
-        next_start = np.append(start, np.inf)[conv + 1]
-        coupled = next_start < end[conv] + self._reference.conversion_s
-        samples = self.sensor.sample(channels, end[conv], bus_active=coupled)
+        channels, instants, coupled, _ = accepted_conversions(self._reference, start, end, mosi,
+                                                              np.append(start[1:], np.inf), _NO_TICK)
+        samples = self.sensor.sample(channels, instants, bus_active=coupled)
         shift_us = int(np.floor(start[0] * 1e6)) - 1
         t_ps = np.round((start - shift_us * 1e-6) * 1e12).astype(np.int64)
         tr = np.zeros(start.size, TRANSFER)
         tr["t_ps"], tr["half_ps"] = t_ps, np.round(0.5e12 / clock).astype(np.int32)
         tr["nbits"], tr["cs"], tr["mosi"] = 16, 1, mosi
-        codes = np.zeros(conv.size, CODE)
+        codes = np.zeros(channels.size, CODE)
         codes["sensor"], codes["channel"], codes["code"] = 1, channels, samples
-        res = self.harness.run({"sensors": [1], "pull_up": False}, tr, codes)
+        res = self.harness.run({"sensors": [1], "pull_up": False, "provided": {1: self._reference.provided}}, tr,
+                               codes)
         if res["mismatched_requests"] or res["unrequested"]:
             raise HarnessError(f"the RTL requested other conversions than the emulator computed "
                                f"({res['mismatched_requests']} mismatched, {res['unrequested']} unrequested)")
@@ -207,12 +242,16 @@ class RtlBus:
 
     ``exchange_words`` and ``transfer`` play transfers against the Verilog (its state and time run on
     from call to call); ADC codes for the sampling commands are computed by the emulated sensors at the
-    instants the commands end, as the software bus does, and handed to the RTL with the batch.  Faults and
-    hot-plugging need the software bus: the set of sensors is fixed here.
+    instants the commands end, for the conversions the software bus performs (:func:`accepted_conversions`, each
+    sensor's ADC-busy window carried from call to call), and handed to the RTL with the batch; the RTL is told
+    which channels each sensor provides.  A conversion the RTL requests that was not computed, or one computed
+    that it does not request, is a :class:`HarnessError`.  Faults and hot-plugging need the software bus: the
+    set of sensors is fixed here.
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
         from emulator.rtl.build import sp_mask
+        from emulator.spi.fastpath import _NO_TICK
         from emulator.spi.model import SensorPort
 
         mask = sp_mask({n: _variant_of(s) for n, s in sensors.items()})
@@ -222,33 +261,33 @@ class RtlBus:
         self.harness.ensure_built()
         self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
         self.present = sum(1 << (n - 1) for n in sensors)
+        self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
         self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE)
-        self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False}, 0))
+        self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False,
+                                               "provided": {n: p.provided for n, p in self.ports.items()}}, 0))
         self.proc.stdin.flush()
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
 
     def _codes_for(self, start, end, cs, mosi, nbits):
-        """ADC codes of the sampling commands among these transfers, for every sensor they select."""
-        from emulator.spi.fastpath import _TABLES
+        """ADC codes of the conversions these transfers start (:func:`accepted_conversions`), sensor by sensor:
+        rows (sensor, channel, code)."""
         from emulator.spi.model import SELECT_ALL, SELECT_CODE
 
-        out = []
-        nxt = np.append(start[1:], np.inf)
-        for i in range(start.size):
-            if nbits[i] < 16:
-                continue
-            first = int(mosi[i]) >> (int(nbits[i]) - 8) & 0xFF
-            for n, port in self.ports.items():
-                _, recognized, channel_of = _TABLES[port.variant.name]
-                if not recognized[first]:
-                    continue
-                ch = int(channel_of[first])
-                if (cs[i] == SELECT_ALL or cs[i] == SELECT_CODE[n]) and port.provided_lut[ch]:
-                    coupled = nxt[i] < end[i] + port.conversion_s
-                    code = int(port.sensor.sample(np.array([ch]), np.array([end[i]]), np.array([coupled]))[0])
-                    out.append((n, ch, code))
-        return np.array(out, dtype=np.int64).reshape(-1, 3)
+        out = [np.zeros((0, 3), np.int64)]
+        next_activity = np.append(start[1:], np.inf)
+        # a command is the first 16 bits clocked (MOSI beyond its 64 bits is 0); shorter transfers command nothing
+        words = nbits >= 16
+        first16 = np.array([int(m) >> (int(b) - 16) & 0xFFFF if b >= 16 else 0 for m, b in zip(mosi, nbits)],
+                           dtype=np.uint16)
+        for n, port in self.ports.items():
+            to_it = words & ((cs == SELECT_ALL) | (cs == SELECT_CODE[n]))
+            channels, instants, coupled, self._last_sampling_tick[n] = accepted_conversions(
+                port, start[to_it], end[to_it], first16[to_it], next_activity[to_it], self._last_sampling_tick[n])
+            if channels.size:
+                codes = port.sensor.sample(channels, instants, bus_active=coupled)
+                out.append(np.column_stack([np.full(channels.size, n), channels, codes]).astype(np.int64))
+        return np.concatenate(out)
 
     def _play(self, start, cs, mosi, nbits, clock, keep):
         start = np.asarray(start, float)
@@ -268,8 +307,10 @@ class RtlBus:
         self.proc.stdin.flush()
         raw = np.frombuffer(self._read(8 * (start.size + 3)), dtype="<u8")
         self.evals = int(raw[start.size + 2])
-        if raw[start.size]:
-            raise HarnessError(f"the RTL requested conversions the emulator did not compute ({int(raw[start.size])})")
+        mismatched, unrequested = int(raw[start.size]), int(raw[start.size + 1])
+        if mismatched or unrequested:  # a code left over would be served to a later command of its channel
+            raise HarnessError(f"the RTL requested other conversions than the emulator computed "
+                               f"({mismatched} mismatched, {unrequested} unrequested)")
         return raw[:start.size]
 
     def _read(self, n: int) -> bytes:

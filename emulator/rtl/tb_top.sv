@@ -20,6 +20,7 @@ module tb_top #(
     reg  [4:0]  flt_miso_flip_en = 5'd0, flt_mosi_flip_en = 5'd0, flt_miso_stuck_en = 5'd0;
     reg  [4:0]  flt_miso_stuck_val = 5'd0, flt_bad_parity = 5'd0, flt_slow = 5'd0;
     reg  [59:0] flt_miso_flip_bit = 60'd0, flt_mosi_flip_bit = 60'd0;
+    reg  [319:0] provided = {320{1'b1}};  // every sensor provides every channel it recognises
 
     // transaction request (written by cocotb, then req_go toggled) and response
     reg  [2:0]  req_cs = 3'd0;
@@ -65,7 +66,8 @@ module tb_top #(
         .flt_miso_flip_en(flt_miso_flip_en), .flt_miso_flip_bit(flt_miso_flip_bit),
         .flt_mosi_flip_en(flt_mosi_flip_en), .flt_mosi_flip_bit(flt_mosi_flip_bit),
         .flt_miso_stuck_en(flt_miso_stuck_en), .flt_miso_stuck_val(flt_miso_stuck_val),
-        .flt_bad_parity(flt_bad_parity), .flt_slow(flt_slow), .user_registers(user_registers));
+        .flt_bad_parity(flt_bad_parity), .flt_slow(flt_slow), .user_registers(user_registers),
+        .provided(provided));
 
     // SPI master: chip select falls (or changes) now, k-th rising SCK edge at (k + 1/2) periods,
     // chip select rises (unless kept) half a period after the last falling edge.

@@ -29,10 +29,11 @@
 
 #pragma pack(push, 1)
 struct Header {
-    char magic[8];  // "BTSPIV1\0"
+    char magic[8];  // "BTSPIV2\0"
     uint8_t present, pull_up;
     uint8_t miso_flip_en, mosi_flip_en, stuck_en, stuck_val, bad_parity, slow;
     uint16_t miso_flip_bit[5], mosi_flip_bit[5];
+    uint64_t provided[5];  // per sensor, bit c set where it provides channel c (the others answer "EX")
     uint64_t n_transfers;
 };
 struct Transfer {
@@ -171,6 +172,10 @@ static void setup(Harness& H, const Header& h) {
     }
     top.flt_miso_flip_bit = mf;
     top.flt_mosi_flip_bit = sf;
+    for (int i = 0; i < 5; ++i) {  // 64 bits per sensor, as two 32-bit words of the wide port
+        top.provided[2 * i] = (uint32_t)h.provided[i];
+        top.provided[2 * i + 1] = (uint32_t)(h.provided[i] >> 32);
+    }
     top.rst_n = 0;
     H.eval();
     H.advance_to(100000);
@@ -217,7 +222,7 @@ static bool read_exact(void* buf, size_t n) { return std::fread(buf, 1, n, stdin
 
 static int stream_mode() {
     Header h;
-    if (!read_exact(&h, sizeof h) || std::string(h.magic, 7) != "BTSPIV1") {
+    if (!read_exact(&h, sizeof h) || std::string(h.magic, 7) != "BTSPIV2") {
         std::fprintf(stderr, "harness: malformed stream header\n");
         return 2;
     }
@@ -257,7 +262,7 @@ int main(int argc, char** argv) {
     if (sched.size() < sizeof(Header)) { std::fprintf(stderr, "harness: schedule too short\n"); return 2; }
     Header h;
     std::memcpy(&h, sched.data(), sizeof h);
-    if (std::string(h.magic, 7) != "BTSPIV1" || sched.size() != sizeof h + h.n_transfers * sizeof(Transfer)) {
+    if (std::string(h.magic, 7) != "BTSPIV2" || sched.size() != sizeof h + h.n_transfers * sizeof(Transfer)) {
         std::fprintf(stderr, "harness: malformed schedule file\n");
         return 2;
     }
