@@ -289,3 +289,34 @@ def test_a_scenes_bridge_takes_the_spi_given_beside_it(biotac_bridge):
     bench = biotac_bridge(scene="taps", spi="rtl")
     assert bench.board.spi == "rtl" and type(bench.board.bus).__name__ == "RtlBus"
     assert first_frame(bench.port).codes.shape == (44, 1)
+
+
+@pytest.mark.rtl
+def test_a_sensor_without_a_channel_streams_the_same_frames_over_the_rtl_bridge_as_over_the_software(biotac_bridge):
+    """Your own sensor built without E7 (``sensors=``) on a bridge with ``spi="rtl"``: the firmware's first two frames
+    are those it streams over the software SPI — E7's slot an error (the sensor answered "EX"), every other slot
+    data (the RTL bus used to stop the firmware with HarnessError)."""
+    from bench.hosts.driver import CMD_START
+    from bench.pytest_plugin.fixtures import one_sensor
+    from emulator.channels import DEFAULT_FRAME_NAMES, channel_index
+
+    frames = {}
+    for spi in ("software", "rtl"):
+        sensor = one_sensor(channels=[n for n in DEFAULT_FRAME_NAMES if n != "E7"], seed=2)
+        driver = BridgeDriver(biotac_bridge(sensors={1: sensor}, spi=spi).port)
+        frames[spi] = []
+        driver.on_frame(frames[spi].append)  # every frame, also those that came with the acknowledgement
+        try:
+            driver.start()
+            assert driver.wait_for(CMD_START, timeout_s=30) is not None
+            for _ in driver.frames(max_frames=2, timeout_s=60):
+                if len(frames[spi]) >= 2:
+                    break
+        finally:
+            driver.close()
+    e7 = frames["rtl"][0].channels == channel_index("E7")
+    assert e7.sum() == 1
+    for soft, rtl in zip(frames["software"][:2], frames["rtl"][:2], strict=True):
+        assert soft.seq == rtl.seq and np.array_equal(soft.channels, rtl.channels)
+        assert np.array_equal(soft.codes, rtl.codes) and np.array_equal(soft.status, rtl.status)
+        assert (rtl.status[e7] != 0).all() and (rtl.status[~e7] == 0).all()

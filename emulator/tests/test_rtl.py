@@ -173,3 +173,124 @@ def test_a_harness_is_rebuilt_when_its_rtl_changes(tmp_path, monkeypatch):
     monkeypatch.setattr(build, "SOURCES", [edited, *build.SOURCES[1:]])
     h.ensure_built()
     assert h.binary.stat().st_mtime_ns != built
+
+
+# --- the answers the RTL path used to refuse with HarnessError: channels not provided, a busy ADC, a reset ----------
+CLOCK_HZ = 10e6  # a 16-bit transfer lasts 1.65 µs: two sampling commands fit inside the 5 µs conversion window
+
+
+def _cmd(name: str) -> int:
+    """The 16-bit sampling command of channel ``name`` (second byte 0)."""
+    from emulator.channels import channel_index
+
+    return int(proto.sample_command(channel_index(name))) << 8
+
+
+def _schedule(*steps) -> tuple[np.ndarray, np.ndarray]:
+    """(start instants s, MOSI words) of ``(µs after 10 ms, MOSI word)`` steps."""
+    return np.array([0.01 + us * 1e-6 for us, _ in steps]), np.array([w for _, w in steps], np.uint16)
+
+
+def _words_over_every_route(harness, channels_of: dict, start, cs, mosi, split: int | None = None) -> dict:
+    """MISO words of 16-bit transfers (at ``start`` s, select codes ``cs``, ``mosi``, SCK :data:`CLOCK_HZ`) to
+    sensors ``n`` providing ``channels_of[n]`` (names), by route: the software bus transfer by transfer and
+    vectorized, the RTL streaming (RtlBus, the firmware co-simulation's) — these two given the transfers in two
+    calls, the second from transfer ``split`` on, if given; with sensor 1 alone (every transfer to it) also the
+    software port and the RTL batch by batch (HarnessPeripheral, a scene's)."""
+    from emulator.rtl.harness import HarnessPeripheral, RtlBus
+    from emulator.sensor import Sensor
+    from emulator.spi.model import Bus, SensorPort, Transfer
+    from emulator.spi.peripheral import TransferBatch
+
+    def sensors():
+        return {n: Sensor(channels_read=list(c), seed=n + 2) for n, c in channels_of.items()}
+
+    def bus():
+        return Bus({n: SensorPort(s, n) for n, s in sensors().items()})
+
+    cs = np.asarray(cs)
+    calls = (slice(None),) if split is None else (slice(None, split), slice(split, None))
+    rtl = RtlBus(sensors(), harness=harness)
+    try:
+        words = {"RTL streaming": np.concatenate([rtl.exchange_words(start[c], cs[c], mosi[c], CLOCK_HZ)
+                                                  for c in calls])}
+    finally:
+        rtl.close()
+    one_by_one = bus()
+    words["software transfer by transfer"] = np.array(
+        [one_by_one.transfer(Transfer(float(t), int(c), int(m), 16, CLOCK_HZ)) for t, c, m in zip(start, cs, mosi)],
+        np.uint16)
+    vectorized = bus()
+    words["software bus"] = np.concatenate([vectorized.exchange_words(start[c], cs[c], mosi[c], CLOCK_HZ)
+                                            for c in calls])
+    if list(channels_of) == [1]:
+        batch = TransferBatch(start, mosi, CLOCK_HZ)
+        words["software port"] = SensorPort(sensors()[1]).exchange(batch)
+        words["RTL per batch"] = HarnessPeripheral(sensors()[1], harness).exchange(batch)
+    return words
+
+
+def _assert_all_routes_agree(words: dict) -> np.ndarray:
+    """Every route's words equal the transfer-level software model's, word for word; returns those."""
+    reference = words["software transfer by transfer"]
+    for route, w in words.items():
+        assert np.array_equal(w, reference), (route, [hex(x) for x in w], [hex(x) for x in reference])
+    return reference
+
+
+def test_a_channel_the_sensor_does_not_provide_answers_ex_over_the_rtl_as_over_the_software_model(harness):
+    """A sensor built to provide PDC and E1 only: a channel its variant recognises but it lacks (PAC, TAC) answers
+    "EX" and converts nothing, yet restarts the 5 µs conversion window (PDC 2 µs after TAC answers "E-", also when
+    the two come in separate calls), word for word the same over the RTL (told the provided channels) as over the
+    software model; the RTL used to request the conversion the emulator did not compute (HarnessError)."""
+    start, mosi = _schedule((0, _cmd("PAC")), (60, 0), (200, _cmd("PDC")), (260, 0),
+                            (400, _cmd("TAC")), (402, _cmd("PDC")), (460, 0), (600, _cmd("E1")), (660, 0))
+    words = _assert_all_routes_agree(
+        _words_over_every_route(harness, {1: ["PDC", "E1"]}, start, np.full(start.size, SELECT_CODE[1]), mosi, split=5))
+    reads = words[mosi == 0]
+    err = proto.ERROR_WORDS
+    assert [reads[0], reads[2]] == [err["channel_not_recognized"], err["insufficient_sampling_delay"]]
+    assert proto.decode_response(reads[[1, 3]])[1].all() and not proto.is_error_word(reads[[1, 3]]).any()
+
+
+def test_a_sampling_command_inside_the_conversion_window_answers_busy_over_the_rtl_as_over_the_software_model(
+        harness):
+    """Two sampling commands 2 µs apart (within the 5 µs conversion window): the second answers "E-" and converts
+    nothing, another channel or the same; 7 µs apart both convert.  On a bus the window is each sensor's own: a
+    command to all, then one to sensor 2 alone, leaves sensor 1 its data.  Word for word the same over the RTL as
+    over the software model; the RTL path used to compute a code for the busy command (HarnessError, or a later
+    command served the stale code)."""
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.spi.model import SELECT_ALL
+
+    err = proto.ERROR_WORDS
+    start, mosi = _schedule((0, _cmd("PDC")), (2, _cmd("PAC")), (60, 0), (200, _cmd("PDC")), (202, _cmd("PDC")),
+                            (260, 0), (400, _cmd("PDC")), (407, _cmd("PAC")), (460, 0), (600, _cmd("PDC")), (660, 0))
+    words = _assert_all_routes_agree(_words_over_every_route(
+        harness, {1: DEFAULT_FRAME_NAMES}, start, np.full(start.size, SELECT_CODE[1]), mosi))
+    reads = words[mosi == 0]
+    assert list(reads[:2]) == [err["insufficient_sampling_delay"]] * 2
+    assert proto.decode_response(reads[2:])[1].all() and not proto.is_error_word(reads[2:]).any()
+
+    start, mosi = _schedule((0, _cmd("PDC")), (2, _cmd("PAC")), (60, 0), (80, 0))
+    cs = [SELECT_ALL, SELECT_CODE[2], SELECT_CODE[1], SELECT_CODE[2]]
+    words = _assert_all_routes_agree(
+        _words_over_every_route(harness, {1: DEFAULT_FRAME_NAMES, 2: DEFAULT_FRAME_NAMES}, start, cs, mosi))
+    assert proto.decode_response(words[2])[1] and words[3] == err["insufficient_sampling_delay"]
+
+
+def test_a_reset_clears_the_conversion_window_on_the_rtl_as_in_the_software_model(harness):
+    """A sampling command 1 µs after another answers "E-" — unless the sensor was reset in between: then it
+    converts and its read answers data.  The RTL (C++ harness) replays the software model's recording of both
+    word for word, requesting the same conversions."""
+    from emulator.spi.golden import Script
+
+    for reset in (False, True):
+        s = Script().sample(1, gap_ps=1_000_000).sample(0).read()
+        vec = V.record("a reset inside the conversion window", s.items, resets={1: [1]} if reset else None)
+        r = harness.play(vec)
+        expected = np.array([int(d["miso"], 16) for d in vec["transfers"]], dtype=np.uint64)
+        assert np.array_equal(r["miso"], expected), (reset, r["miso"], expected)
+        assert r["mismatched_requests"] == 0 and r["unrequested"] == 0, reset
+        busy = expected[-1] == proto.ERROR_WORDS["insufficient_sampling_delay"]
+        assert busy != reset and len(vec["conversions"]) == 1 + reset
