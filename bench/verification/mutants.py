@@ -1982,6 +1982,21 @@ CATALOGUE += [
            ".provided(64'hFFFFFFFFFFFFFFFF)",
            ('bench/tests/test_plugin_review3.py::test_a_sensor_without_a_channel_streams_the_same_frames_over_the_rtl_bridge_as_over_the_software',),
            'the bus giving every sensor every channel'),
+    Mutant('cheetah-serve-errors-not-printed', 'host', 'bench/cli/cheetah.py',
+           '    for why in cb.client_errors[:5]:\n        print(f"  {why}", file=sys.stderr)\n',
+           '',
+           ('firmware_tests/tests/test_cheetah_device.py::test_cheetah_serve_prints_the_line_to_export_serves_and_stops_cleanly',),
+           'cheetah serve not printing why client connections ended when it stops'),
+    Mutant('cheetah-request-limit-2-gib', 'host', 'bench/hosts/cheetah_server.py',
+           'MAX_REQUEST_BYTES = 1 << 20',
+           'MAX_REQUEST_BYTES = 1 << 31',
+           ('firmware_tests/tests/test_cheetah_device.py::test_a_request_of_1_mib_is_read_and_one_byte_more_refused',),
+           'requests of up to 2 GiB taken where the README says 1 MiB'),
+    Mutant('cheetah-request-limit-off-by-one', 'host', 'bench/hosts/cheetah_server.py',
+           '                if length > MAX_REQUEST_BYTES:',
+           '                if length >= MAX_REQUEST_BYTES:',
+           ('firmware_tests/tests/test_cheetah_device.py::test_a_request_of_1_mib_is_read_and_one_byte_more_refused',),
+           'a request of exactly 1 MiB refused'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -214,12 +214,43 @@ def test_cheetah_serve_prints_the_line_to_export_serves_and_stops_cleanly(sig, t
         assert r.returncode == 0, r.stderr
         stats = dict(zip(r.stdout.split()[-10::2], r.stdout.split()[-9::2]))
         assert float(stats["pac_std"]) < 0.3  # the scene's noise switches reached the sensors
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as bad:  # one request past the 1 MiB limit
+            bad.connect(path)
+            bad.sendall(bytes([cs.REQ_SHIFT]) + struct.pack("<I", cs.MAX_REQUEST_BYTES + 1))
+            bad.settimeout(10)
+            assert bad.recv(1) == b""  # the server ended that connection
         p.send_signal(sig)
         out, err = p.communicate(timeout=30)
     finally:
         p.kill()
     assert p.returncode == 0 and "stopped:" in err and "Traceback" not in err
+    # README: malformed requests end that connection, listed and printed when `cheetah serve` stops
+    assert "1 client connection(s) ended for malformed requests" in err
+    assert f"request of {cs.MAX_REQUEST_BYTES + 1} bytes" in err
     assert not Path(path).parent.exists()
+
+
+def test_a_request_of_1_mib_is_read_and_one_byte_more_refused():
+    """README: one request is at most 1 MiB: a 1 MiB shift (0xEE bytes here) from an opened adapter is read whole and
+    judged on its content (a bit rate of 0xEEEEEEEE kHz), one of 1 MiB + 1 bytes is refused for its length alone."""
+    assert cs.MAX_REQUEST_BYTES == 1 << 20
+    with CheetahBench(1) as cb:
+        for length in (cs.MAX_REQUEST_BYTES, cs.MAX_REQUEST_BYTES + 1):
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+                s.connect(cb.socket_path)
+                s.settimeout(10)
+                s.sendall(bytes([cs.REQ_HELLO]) + struct.pack("<I", 0))
+                assert s.recv(64)  # the adapter is this connection's
+                s.sendall(bytes([cs.REQ_SHIFT]) + struct.pack("<I", length))
+                if length == cs.MAX_REQUEST_BYTES:
+                    s.sendall(bytes([0xEE]) * length)
+                assert s.recv(1) == b""
+        deadline = time.monotonic() + 10
+        while len(cb.client_errors) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        errors = list(cb.client_errors)
+    assert len(errors) == 2 and f"bit rate {0xEEEEEEEE} kHz" in errors[0], errors
+    assert f"request of {cs.MAX_REQUEST_BYTES + 1} bytes" in errors[1]
 
 
 # --- timing: the vendor's own formula yields its rate ----------------------------------------------------------
