@@ -10,6 +10,7 @@ import tomllib
 import pytest
 
 from bench.paths import REPO
+from bench.tests.cli_runs import CLI
 
 pytestmark = pytest.mark.unit
 
@@ -44,3 +45,16 @@ def test_tox_groups_are_the_registered_markers():
     groups = dict(re.findall(r"^\s+(\w+): pytest -m (\w+)", (REPO / "tox.ini").read_text(), flags=re.M))
     assert groups and all(name == marker for name, marker in groups.items())
     assert set(groups) | {"mutants"} == registered
+
+
+def test_the_readmes_scene_error_is_what_a_run_prints(tmp_path):
+    """README, Scenes: the example of a scene refused with every problem named is the command's own output, word
+    for word (a scene with those two problems: a 99 999 Hz vibration and a channel QQQ), with exit status 2."""
+    readme = (REPO / "README.md").read_text()
+    example = re.search(r"```\n(error: bad\.toml: .*?)```", readme, flags=re.S).group(1)
+    (tmp_path / "bad.toml").write_text('[scene]\nname = "bad"\nduration_s = 1.0\n[host]\nsequence = ["PAC", "QQQ"]\n'
+                                       '[[stimulus]]\nkind = "vibration"\nfrequency_Hz = 99999\namplitude_um = 1.0\n'
+                                       'start_s = 0.1\nduration_s = 0.5\n')
+    r = subprocess.run([*CLI, "run", "bad.toml", "--out", "o"],
+                       capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert (r.returncode, r.stderr) == (2, example)
