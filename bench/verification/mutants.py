@@ -1997,6 +1997,16 @@ CATALOGUE += [
            '                if length >= MAX_REQUEST_BYTES:',
            ('firmware_tests/tests/test_cheetah_device.py::test_a_request_of_1_mib_is_read_and_one_byte_more_refused',),
            'a request of exactly 1 MiB refused'),
+    Mutant('run-memory-in-kib', 'outputs', 'bench/verification/benchmark.py',
+           '"peak_rss_MB": float(hwm.read_text()) / 1024.0,',
+           '"peak_rss_MB": float(hwm.read_text()),',
+           ('bench/tests/test_benchmark_memory.py::test_run_memory_measures_two_runs_with_every_output_and_their_ratio',),
+           "run_memory's peaks in kB reported as MB"),
+    Mutant('stream-hour-averages-every-channel', 'outputs', 'bench/verification/benchmark.py',
+           'pac = s.codes[s.channels == PAC]',
+           'pac = s.codes',
+           ('bench/tests/test_benchmark_memory.py::test_streaming_memory_is_measured_in_a_child_that_streams_the_asked_seconds',),
+           "the streaming benchmark's PAC figure taken over every channel"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
