@@ -286,6 +286,7 @@ def test_the_summary_is_bounded_whatever_the_duration():
         s.add(make_chunk({"PAC": (t, rng.integers(2040, 2056, t.size).astype(np.uint16), np.zeros(t.size, np.uint8))}))
     s.finish()
     f, tt, sxx = s.spectrogram.result()
+    assert SPECTROGRAM_COLUMNS == ENVELOPE_BINS == 1000  # README: 1000 envelope bins, at most 1000 columns
     assert sxx.shape[1] <= SPECTROGRAM_COLUMNS and s.env_n.shape == (1, ENVELOPE_BINS)
     assert s.channels["PAC"].samples == 36000 * 2200 and tt[-1] > 35900
 
