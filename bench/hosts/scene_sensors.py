@@ -113,7 +113,10 @@ def bench_sensors(n_sensors, sensors, stimuli, seed: int, variant: str) -> dict:
     """The emulated sensors a host bench serves: ``sensors`` (sensor number -> Sensor) if given, else ``n_sensors``
     default ones (:func:`bench.hosts.cosim.default_sensors`).  A count or numbers outside 1..MAX_SENSORS (what the
     bridge firmware and the Cheetah adapter address) are refused with a ValueError naming them."""
-    if sensors:
+    if sensors is not None:
+        if not sensors:
+            raise ValueError("sensors = {}: no sensors on the bus; give {number: Sensor} for 1 to "
+                             f"{MAX_SENSORS} sensors, or leave sensors out for n_sensors default ones")
         bad = [n for n in sensors if not _whole_1_to_max(n)]
         if bad:
             raise ValueError(f"sensors numbered {bad!r}: sensor numbers are 1 to {MAX_SENSORS}")

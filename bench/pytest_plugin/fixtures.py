@@ -274,7 +274,7 @@ def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw) -> dict:
     if "sensors" in kw:
         _refuse_beside(fixture, "sensors", kw, SENSOR_DESCRIPTION)
         sensors = kw.pop("sensors")
-        if n_sensors is not None and sensors and n_sensors != len(sensors):
+        if n_sensors is not None and n_sensors != len(sensors):
             _fail(f"{fixture}(): n_sensors = {n_sensors!r} given with {len(sensors)} sensors (numbered "
                   f"{sorted(sensors)}); leave n_sensors out or make them agree")
         return {**kw, "n_sensors": len(sensors) if n_sensors is None else n_sensors, "sensors": sensors,

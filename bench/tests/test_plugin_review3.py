@@ -139,6 +139,9 @@ def test_variant_beside_sensors(biotac_bridge):
 def test_n_sensors_against_sensors(biotac_bridge):
     biotac_bridge(3, sensors=default_sensors(2))
 
+def test_no_sensors_given(biotac_cheetah):
+    biotac_cheetah(sensors=dict())
+
 def test_bad_scene(biotac_bridge):
     biotac_bridge(scene="{bad}")
 
@@ -202,11 +205,12 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
     rtl.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
     pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene, rtl=rtl))
     result = pytester.runpytest("-p", "no:cacheprovider")
-    result.assert_outcomes(failed=18, passed=1)
+    result.assert_outcomes(failed=19, passed=1)
     out = result.stdout.str()
     result.stdout.fnmatch_lines([
         "*biotac_bridge(): variant given with sensors, which already describes the sensors*",
         "*biotac_bridge(): n_sensors = 3 given with 2 sensors (numbered [[]1, 2[]]); leave n_sensors out*",
+        "*biotac_cheetah(): sensors = {}: no sensors on the bus*",
         "*biotac_bridge(): */bad.toml: 1 problem(s):*", "*host.sequence[[]1[]] = 'QQQ'*",
         "*biotac_cheetah(): tapz: 1 problem(s):*", "*close matches: taps*",
         "*biotac_sensor(): unit given with scene*",

@@ -164,102 +164,127 @@ static void handle_command(bt_bridge *b, uint8_t type, const uint8_t *p, uint16_
     }
 }
 
-/* A byte the parser drops as garbage: a command error, unless an over-long frame is being followed (its own bytes
- * are dropped too, and count only if it turns out not to be a frame). */
+/* A byte the parser drops as garbage: a command error, unless over-long frames are being followed (their own
+ * bytes are dropped too, and count only if none turns out to be a frame). */
 static void count_dropped(bt_bridge *b) {
-    if (b->long_left) b->long_dropped++;
+    if (b->long_n) b->long_dropped++;
     else b->cmd_errors++;
 }
 
-/* End following an over-long frame without answering it: the bytes dropped meanwhile were garbage after all. */
-static void abandon_long_frame(bt_bridge *b) {
+/* Stop following every over-long frame without answering: the bytes dropped meanwhile were garbage after all. */
+static void abandon_long_frames(bt_bridge *b) {
     b->cmd_errors += b->long_dropped;
-    b->long_left = 0;
     b->long_dropped = 0;
+    b->long_n = 0;
 }
 
-/* A header announcing more payload than BT_MAX_PATTERN: follow the frame's bytes as they pass without keeping
- * them, with a running CRC, so that a frame the firmware cannot hold is still answered (ACK 1, bad length). */
-static void follow_long_frame(bt_bridge *b, const uint8_t *header, uint16_t len) {
-    b->long_left = (uint32_t)len + 2;
-    b->long_crc = bt_crc16(header + 2, 3);
-    b->long_tail = 0;
-    b->long_type = header[2];
-    b->long_dropped = 0;
+/* Take one byte of an over-long frame: 0 while it goes on, 1 at its last byte if its CRC holds, -1 if not. */
+static int long_frame_byte(bt_long_frame *f, uint8_t byte) {
+    if (f->left > 2) f->crc = crc16_byte(f->crc, byte);
+    else f->tail |= (uint16_t)(byte << (f->left == 2 ? 0 : 8));
+    if (--f->left) return 0;
+    return f->tail == f->crc ? 1 : -1;
 }
 
-/* Take one byte of the over-long frame being followed; returns 1 when it was the frame's last byte and the CRC
- * holds (the frame is answered, its bytes are not errors), else 0 (the byte is also parsed as usual). */
-static int long_frame_byte(bt_bridge *b, uint8_t byte) {
-    if (!b->long_left) return 0;
-    if (b->long_left > 2) b->long_crc = crc16_byte(b->long_crc, byte);
-    else b->long_tail |= (uint16_t)(byte << (b->long_left == 2 ? 0 : 8));
-    if (--b->long_left) return 0;
-    if (b->long_tail != b->long_crc) {
-        abandon_long_frame(b);
-        return 0;
-    }
-    b->long_dropped = 0;
-    ack(b, b->long_type, 1);
-    return 1;
+/* The header at rx[0] announces more payload than BT_MAX_PATTERN: follow that frame as its bytes pass, without
+ * keeping them, with a running CRC (from the bytes already received behind the header on), so that a frame the
+ * firmware cannot hold is still answered (ACK 1, bad length).  Up to BT_LONG_FOLLOWS at once: a stray header
+ * announcing a long frame does not hide a genuine one starting inside it. */
+static void follow_long_frame(bt_bridge *b, uint16_t len) {
+    if (b->long_n >= BT_LONG_FOLLOWS) return;
+    bt_long_frame *f = &b->longs[b->long_n++];
+    f->left = (uint32_t)len + 2;
+    f->crc = bt_crc16(b->rx + 2, 3);
+    f->tail = 0;
+    f->type = b->rx[2];
+    f->errors_before = b->long_dropped;
+    for (size_t i = 5; i < b->rx_len; ++i) /* at most 66 bytes: rx never holds a whole long frame (>= 72) */
+        (void)long_frame_byte(f, b->rx[i]);
 }
 
-/* Whether a complete frame whose CRC holds starts after the first byte of the receive buffer: the header at the
- * start, still waiting for its bytes, is then garbage (a corrupted length) and must not hold up the frame behind. */
-static int valid_frame_behind(const bt_bridge *b) {
+/* Whether a complete frame whose CRC holds ends with the newest byte of the receive buffer, behind its start: the
+ * header at the start, still waiting for its bytes, is then garbage (a corrupted length) and must not hold up the
+ * frame behind it.  (A valid frame ending earlier was found when its last byte came.) */
+static int valid_frame_ends_here(const bt_bridge *b) {
     for (size_t j = 1; j + 7 <= b->rx_len; ++j) {
         if (b->rx[j] != 0xAA || b->rx[j + 1] != 0x55) continue;
         uint16_t len = (uint16_t)(b->rx[j + 3] | (b->rx[j + 4] << 8));
-        if (len > BT_MAX_PATTERN || j + 7 + len > b->rx_len) continue;
+        if (len > BT_MAX_PATTERN || j + 7 + len != b->rx_len) continue;
         uint16_t crc = (uint16_t)(b->rx[j + 5 + len] | (b->rx[j + 6 + len] << 8));
         if (crc == bt_crc16(b->rx + j + 2, 3 + (size_t)len)) return 1;
     }
     return 0;
 }
 
+/* Parse one byte into the receive buffer; returns 1 if it completed a valid frame (which is served). */
+static int parse_byte(bt_bridge *b, uint8_t byte) {
+    if (b->rx_len >= sizeof b->rx) { /* cannot be a frame: drop the oldest byte */
+        memmove(b->rx, b->rx + 1, --b->rx_len);
+        count_dropped(b);
+    }
+    b->rx[b->rx_len++] = byte;
+    for (;;) {
+        if (b->rx_len >= 1 && b->rx[0] != 0xAA) goto drop;
+        if (b->rx_len >= 2 && b->rx[1] != 0x55) goto drop;
+        if (b->rx_len < 5) return 0;
+        uint16_t len = (uint16_t)(b->rx[3] | (b->rx[4] << 8));
+        if (len > BT_MAX_PATTERN) {
+            follow_long_frame(b, len);
+            goto drop;
+        }
+        if (b->rx_len < (size_t)(5 + len + 2)) {
+            if (valid_frame_ends_here(b)) goto drop;
+            return 0;
+        }
+        uint16_t crc = (uint16_t)(b->rx[5 + len] | (b->rx[6 + len] << 8));
+        if (crc != bt_crc16(b->rx + 2, 3 + len)) goto drop;
+        abandon_long_frames(b); /* a valid frame inside long ones ends them; their garbage was garbage */
+        handle_command(b, b->rx[2], b->rx + 5, len);
+        b->rx_len = 0;
+        return 1;
+    drop:
+        memmove(b->rx, b->rx + 1, --b->rx_len);
+        count_dropped(b);
+    }
+}
+
+/* One byte from the host: the over-long frames followed take it, then the parser; a valid frame it completes is
+ * served (and ends the long ones), else a long frame it ended with a good CRC is answered ACK 1 and its bytes
+ * held in rx are dropped with it. */
+static void serve_byte(bt_bridge *b, uint8_t byte) {
+    bt_long_frame ended = {0};
+    int answered = 0, following = b->long_n > 0;
+    for (uint8_t k = 0; k < b->long_n; ++k)
+        if (long_frame_byte(&b->longs[k], byte) > 0 && !answered) {
+            answered = 1;
+            ended = b->longs[k];
+        }
+    int served = parse_byte(b, byte); /* (frames this byte ended still hold what it drops as theirs) */
+    uint8_t kept = 0;
+    for (uint8_t k = 0; k < b->long_n; ++k)
+        if (b->longs[k].left) b->longs[kept++] = b->longs[k];
+    b->long_n = kept;
+    if (served) return;
+    if (answered) {
+        b->cmd_errors += ended.errors_before; /* garbage before it; its own bytes are no errors */
+        b->long_dropped = 0;
+        b->long_n = 0;
+        b->rx_len = 0;
+        ack(b, ended.type, 1);
+    } else if (following && !b->long_n) {
+        abandon_long_frames(b);
+    }
+}
+
 /* Host commands arrive as frames; garbage is skipped byte by byte until a valid frame parses.  A header whose
  * length is corrupted delays no command behind it: while a frame waits for its bytes, a complete valid frame
- * behind its start wins (valid_frame_behind), and a frame longer than the receive buffer is followed as it passes
- * (follow_long_frame) while the parser goes on looking for frames among its bytes. */
+ * behind its start wins, and frames longer than the receive buffer are followed as they pass (follow_long_frame)
+ * while the parser goes on looking for frames among their bytes; a valid frame among them is served and ends them. */
 static void serve_host(bt_bridge *b) {
     uint8_t buf[64];
     size_t n;
-    while ((n = b->hal->uart_read(b->hal->ctx, buf, sizeof buf)) > 0) {
-        for (size_t i = 0; i < n; ++i) {
-            if (long_frame_byte(b, buf[i])) { /* the bytes held so far were the long frame's */
-                b->rx_len = 0;
-                continue;
-            }
-            if (b->rx_len >= sizeof b->rx) { /* cannot be a frame: drop the oldest byte */
-                memmove(b->rx, b->rx + 1, --b->rx_len);
-                count_dropped(b);
-            }
-            b->rx[b->rx_len++] = buf[i];
-            for (;;) {
-                if (b->rx_len >= 1 && b->rx[0] != 0xAA) goto drop;
-                if (b->rx_len >= 2 && b->rx[1] != 0x55) goto drop;
-                if (b->rx_len < 5) break;
-                uint16_t len = (uint16_t)(b->rx[3] | (b->rx[4] << 8));
-                if (len > BT_MAX_PATTERN) {
-                    if (!b->long_left) follow_long_frame(b, b->rx, len);
-                    goto drop;
-                }
-                if (b->rx_len < (size_t)(5 + len + 2)) {
-                    if (valid_frame_behind(b)) goto drop;
-                    break;
-                }
-                uint16_t crc = (uint16_t)(b->rx[5 + len] | (b->rx[6 + len] << 8));
-                if (crc != bt_crc16(b->rx + 2, 3 + len)) goto drop;
-                if (b->long_left) abandon_long_frame(b);
-                handle_command(b, b->rx[2], b->rx + 5, len);
-                b->rx_len = 0;
-                break;
-            drop:
-                memmove(b->rx, b->rx + 1, --b->rx_len);
-                count_dropped(b);
-            }
-        }
-    }
+    while ((n = b->hal->uart_read(b->hal->ctx, buf, sizeof buf)) > 0)
+        for (size_t i = 0; i < n; ++i) serve_byte(b, buf[i]);
 }
 
 static void stream_frame(bt_bridge *b) {

@@ -25,6 +25,16 @@
 
 #define BT_MAX_SENSORS 5
 #define BT_MAX_PATTERN 64
+#define BT_LONG_FOLLOWS 4  /* over-long frames followed at once */
+
+/* A frame announcing more payload than BT_MAX_PATTERN, followed byte by byte as it passes. */
+typedef struct {
+    uint32_t left;            /* its bytes still to come (payload, then CRC) */
+    uint32_t errors_before;   /* command errors pending when it began (garbage before it) */
+    uint16_t crc;             /* running CRC over type, length and the payload so far */
+    uint16_t tail;            /* the CRC bytes received */
+    uint8_t type;
+} bt_long_frame;
 
 typedef struct {
     const bt_hal *hal;
@@ -41,12 +51,10 @@ typedef struct {
     /* host command parser */
     uint8_t rx[4 + 2 + BT_MAX_PATTERN + 2];
     size_t rx_len;
-    /* an over-long frame being followed as it passes (longer than rx can hold) */
-    uint32_t long_left;       /* its bytes still to come (payload, then CRC); 0: none */
-    uint32_t long_dropped;    /* bytes the parser dropped meanwhile: errors unless the long frame's CRC holds */
-    uint16_t long_crc;        /* running CRC over type, length and the payload so far */
-    uint16_t long_tail;       /* the CRC bytes received */
-    uint8_t long_type;
+    /* over-long frames being followed as they pass (longer than rx can hold) */
+    bt_long_frame longs[BT_LONG_FOLLOWS];
+    uint8_t long_n;           /* how many */
+    uint32_t long_dropped;    /* bytes the parser dropped meanwhile: errors unless one of them is answered */
 } bt_bridge;
 
 void bt_init(bt_bridge *b, const bt_hal *hal);

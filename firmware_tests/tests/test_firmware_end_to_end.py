@@ -129,6 +129,50 @@ def test_a_pattern_of_a_length_the_firmware_cannot_take_is_answered_bad_length(n
     assert isinstance(replies[2], Status) and replies[2].command_errors == 1 and replies[2].streaming
 
 
+def _too_long_pattern() -> bytes:
+    from bench.hosts.driver import encode
+
+    return encode(CMD_PATTERN, bytes([1]) * 65)
+
+
+@pytest.mark.parametrize("garbage", [
+    b"\xaa\x55",  # a stray sync: with the PATTERN's own, a header announcing 0x0355 bytes
+    b"\xaa\x55\x02\x0a\x00",  # a cut header waiting for 10 bytes: the PATTERN's header reaches the front late
+    b"\xaa\x55\x01\xff\xff",  # a header announcing 65 535 bytes
+    "first 20 bytes of the PATTERN",  # a host's retry after a send cut short
+], ids=["stray-sync", "cut-header", "huge-length", "retry"])
+def test_a_too_long_pattern_behind_garbage_is_still_answered_bad_length(garbage):
+    """bt_bridge.h: a frame of more than 64 payload bytes is answered ACK 1 if its CRC holds — also behind garbage
+    that starts a long frame of its own or holds it back (several are followed at once, each from the bytes
+    already received behind its header); the garbage is what counts as command errors, besides the ACK's one."""
+    from bench.hosts.driver import encode
+
+    long_pattern = _too_long_pattern()
+    garbage = long_pattern[:20] if isinstance(garbage, str) else garbage
+    replies = replies_to(garbage + long_pattern + encode(CMD_START))
+    assert replies[:2] == [("ack", CMD_PATTERN, 1), ("ack", CMD_START, 0)]
+    assert isinstance(replies[2], Status) and replies[2].command_errors == len(garbage) + 1
+
+
+def test_a_valid_frame_ending_a_long_frame_is_served_and_the_long_one_is_not():
+    """bt_bridge.h: a valid frame inside a long frame is served and ends it — even one whose last bytes are the
+    long frame's CRC (crafted: two filler bytes chosen so that the long frame's CRC is the START's)."""
+    import binascii
+
+    from bench.hosts.driver import SYNC, encode
+
+    start = encode(CMD_START)
+    body = bytes([0x09]) + (70).to_bytes(2, "little")
+    for filler in range(1 << 16):
+        payload = bytes(63) + filler.to_bytes(2, "big") + start[:5]
+        if binascii.crc_hqx(body + payload, 0xFFFF).to_bytes(2, "little") == start[5:]:
+            break
+    long_frame = SYNC + body + payload + start[5:]
+    assert long_frame.endswith(start) and len(long_frame) == 77
+    replies = replies_to(long_frame)
+    assert replies[0] == ("ack", CMD_START, 0) and isinstance(replies[1], Status) and len(replies) == 2
+
+
 def test_a_long_frame_with_a_bad_crc_is_garbage_and_answered_nothing():
     """A 65-channel PATTERN whose CRC does not hold is no frame: no ACK; every one of its 72 bytes is skipped and
     counted as a command error, and the START behind it is served."""

@@ -62,9 +62,11 @@ def test_firmware_command_parser_survives_100000_random_bytes():
     assert any(isinstance(i, DataFrame) for i in FrameParser().feed(bytes(out)))
 
 
+_CHANNEL = st.sampled_from([0, 1, 2, 3, *range(17, 36)])
 _COMMAND = st.one_of(
     st.sampled_from([(0x01, b""), (0x02, b""), (0x04, b"")]),
-    st.lists(st.sampled_from([0, 1, 2, 3, *range(17, 36)]), min_size=1, max_size=64).map(lambda c: (0x03, bytes(c))),
+    st.lists(_CHANNEL, min_size=1, max_size=64).map(lambda c: (0x03, bytes(c))),
+    st.lists(_CHANNEL, min_size=65, max_size=100).map(lambda c: (0x03, bytes(c))),  # too long: ACK 1
 )
 _GARBAGE = st.one_of(
     st.binary(max_size=40),
@@ -74,11 +76,12 @@ _GARBAGE = st.one_of(
 )
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(_GARBAGE, _COMMAND), min_size=1, max_size=6), st.integers(1, 80))
 def test_every_command_behind_any_garbage_is_answered_in_order(traffic, chunk):
     """Commands with garbage before each (random bytes, or a header announcing any length, cut short), arriving in
-    pieces of ``chunk`` bytes: the firmware answers every command, in order, each as it must (ACK 0, or STATUS)."""
+    pieces of ``chunk`` bytes: the firmware answers every command, in order, each as it must (ACK 0, ACK 1 for a
+    pattern too long, or STATUS)."""
     out = bytearray()
     board = VirtualBoard(default_sensors(1), uart_out=out.extend)
     sim = CoSim(board)
@@ -88,5 +91,6 @@ def test_every_command_behind_any_garbage_is_answered_in_order(traffic, chunk):
         sim.run(0.0005, max_steps=1000)
     sim.run(0.002, max_steps=1000)
     replies = [i for i in FrameParser().feed(bytes(out), now=0.0) if not isinstance(i, DataFrame)]
-    expected = [Status if ctype == CMD_STATUS else ("ack", ctype, 0) for _, (ctype, _) in traffic]
+    expected = [Status if ctype == CMD_STATUS else ("ack", ctype, int(len(payload) > 64))
+                for _, (ctype, payload) in traffic]
     assert [Status if isinstance(r, Status) else r for r in replies] == expected
