@@ -244,9 +244,13 @@ class RtlBus:
     from call to call); ADC codes for the sampling commands are computed by the emulated sensors at the
     instants the commands end, for the conversions the software bus performs (:func:`accepted_conversions`, each
     sensor's ADC-busy window carried from call to call), and handed to the RTL with the batch; the RTL is told
-    which channels each sensor provides.  A conversion the RTL requests that was not computed, or one computed
-    that it does not request, is a :class:`HarnessError`.  Faults and hot-plugging need the software bus: the
-    set of sensors is fixed here.
+    which channels each sensor provides.  A chip select held across transfers is one window, as on the software
+    bus (:meth:`_windows`).  A conversion the RTL requests that was not computed, or one computed that it does not
+    request, is a :class:`HarnessError`.  Faults and hot-plugging need the software bus: the set of sensors is
+    fixed here.  One difference remains: a call that ends on a sampling command has its code computed as if the
+    bus stayed quiet during the conversion (the RTL asks for it within the call), where the software bus judges
+    that coupling at the next call's first transfer; traffic that reads its results (every firmware's) never
+    ends a call there.
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
@@ -262,6 +266,7 @@ class RtlBus:
         self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
         self.present = sum(1 << (n - 1) for n in sensors)
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
+        self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
         self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE)
         self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False,
@@ -269,21 +274,51 @@ class RtlBus:
         self.proc.stdin.flush()
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
 
-    def _codes_for(self, start, end, cs, mosi, nbits):
-        """ADC codes of the conversions these transfers start (:func:`accepted_conversions`), sensor by sensor:
-        rows (sensor, channel, code)."""
+    def _windows(self, n: int, start, end, cs, mosi, nbits, keep):
+        """Sensor ``n``'s chip-select windows that close among these transfers, as the software bus sees them: a
+        window opens at the first transfer selecting the sensor and stays open while transfers hold chip select and
+        go on selecting it (one left open at the end of a call is carried into the next); it closes at the end of a
+        transfer that releases chip select, or at the start of one that selects other sensors.  Its command is the
+        first 16 bits clocked in it.  Returns (fall s, rise s, command — 0 with fewer than 16 bits —, the bus's next
+        activity s) arrays."""
         from emulator.spi.model import SELECT_ALL, SELECT_CODE
 
+        rows, window = [], self._open_window.get(n)
+        if window is None and not keep.any():  # every transfer its own window (the firmware's word traffic)
+            to_it = (cs == SELECT_ALL) | (cs == SELECT_CODE[n])
+            shift = np.clip(nbits - 16, 0, None).astype(np.uint64)
+            command = np.where(nbits >= 16, np.asarray(mosi, np.uint64) >> shift & np.uint64(0xFFFF), 0)
+            after = np.append(start[1:], np.inf)
+            return start[to_it], end[to_it], command[to_it].astype(np.uint16), after[to_it]
+        for i in range(start.size):
+            if cs[i] != SELECT_ALL and cs[i] != SELECT_CODE[n]:
+                if window is not None:  # the select code moved on with chip select held: this sensor's CS rises
+                    # (the software bus judges the conversion's coupling at the next transfer's start, as ever)
+                    rows.append((window[0], start[i], window[1] if window[2] >= 16 else 0,
+                                 start[i + 1] if i + 1 < start.size else np.inf))
+                    window = None
+                continue
+            if window is None:
+                window = [float(start[i]), 0, 0]  # fall, first bits, how many
+            take = min(16 - window[2], int(nbits[i]))
+            window[1] = (window[1] << take) | (int(mosi[i]) >> (int(nbits[i]) - take) & ((1 << take) - 1))
+            window[2] += take
+            if not keep[i]:
+                rows.append((window[0], end[i], window[1] if window[2] >= 16 else 0,
+                             start[i + 1] if i + 1 < start.size else np.inf))
+                window = None
+        self._open_window[n] = window
+        fall, rise, command, after = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 4
+        return fall.astype(float), rise.astype(float), command.astype(np.uint16), after.astype(float)
+
+    def _codes_for(self, start, end, cs, mosi, nbits, keep):
+        """ADC codes of the conversions these transfers start (:func:`accepted_conversions` of each sensor's
+        chip-select windows), sensor by sensor: rows (sensor, channel, code)."""
         out = [np.zeros((0, 3), np.int64)]
-        next_activity = np.append(start[1:], np.inf)
-        # a command is the first 16 bits clocked (MOSI beyond its 64 bits is 0); shorter transfers command nothing
-        words = nbits >= 16
-        first16 = np.array([int(m) >> (int(b) - 16) & 0xFFFF if b >= 16 else 0 for m, b in zip(mosi, nbits)],
-                           dtype=np.uint16)
         for n, port in self.ports.items():
-            to_it = words & ((cs == SELECT_ALL) | (cs == SELECT_CODE[n]))
+            fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep)
             channels, instants, coupled, self._last_sampling_tick[n] = accepted_conversions(
-                port, start[to_it], end[to_it], first16[to_it], next_activity[to_it], self._last_sampling_tick[n])
+                port, fall, rise, command, after, self._last_sampling_tick[n])
             if channels.size:
                 codes = port.sensor.sample(channels, instants, bus_active=coupled)
                 out.append(np.column_stack([np.full(channels.size, n), channels, codes]).astype(np.int64))
@@ -299,7 +334,7 @@ class RtlBus:
         tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
         tr["nbits"], tr["cs"], tr["keep_cs"] = nbits, cs, np.asarray(keep, bool)
         tr["mosi"] = np.asarray(mosi, dtype=np.uint64)
-        c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits)
+        c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits, np.broadcast_to(keep, start.shape))
         codes = np.zeros(len(c), CODE)
         if len(c):
             codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]

@@ -191,8 +191,9 @@ def _schedule(*steps) -> tuple[np.ndarray, np.ndarray]:
     return np.array([0.01 + us * 1e-6 for us, _ in steps]), np.array([w for _, w in steps], np.uint16)
 
 
-def _words_over_every_route(harness, channels_of: dict, start, cs, mosi, split: int | None = None) -> dict:
-    """MISO words of 16-bit transfers (at ``start`` s, select codes ``cs``, ``mosi``, SCK :data:`CLOCK_HZ`) to
+def _words_over_every_route(harness, channels_of: dict, start, cs, mosi, split: int | None = None,
+                            clock_hz: float = CLOCK_HZ) -> dict:
+    """MISO words of 16-bit transfers (at ``start`` s, select codes ``cs``, ``mosi``, SCK ``clock_hz``) to
     sensors ``n`` providing ``channels_of[n]`` (names), by route: the software bus transfer by transfer and
     vectorized, the RTL streaming (RtlBus, the firmware co-simulation's) — these two given the transfers in two
     calls, the second from transfer ``split`` on, if given; with sensor 1 alone (every transfer to it) also the
@@ -212,19 +213,19 @@ def _words_over_every_route(harness, channels_of: dict, start, cs, mosi, split: 
     calls = (slice(None),) if split is None else (slice(None, split), slice(split, None))
     rtl = RtlBus(sensors(), harness=harness)
     try:
-        words = {"RTL streaming": np.concatenate([rtl.exchange_words(start[c], cs[c], mosi[c], CLOCK_HZ)
+        words = {"RTL streaming": np.concatenate([rtl.exchange_words(start[c], cs[c], mosi[c], clock_hz)
                                                   for c in calls])}
     finally:
         rtl.close()
     one_by_one = bus()
     words["software transfer by transfer"] = np.array(
-        [one_by_one.transfer(Transfer(float(t), int(c), int(m), 16, CLOCK_HZ)) for t, c, m in zip(start, cs, mosi)],
+        [one_by_one.transfer(Transfer(float(t), int(c), int(m), 16, clock_hz)) for t, c, m in zip(start, cs, mosi)],
         np.uint16)
     vectorized = bus()
-    words["software bus"] = np.concatenate([vectorized.exchange_words(start[c], cs[c], mosi[c], CLOCK_HZ)
+    words["software bus"] = np.concatenate([vectorized.exchange_words(start[c], cs[c], mosi[c], clock_hz)
                                             for c in calls])
     if list(channels_of) == [1]:
-        batch = TransferBatch(start, mosi, CLOCK_HZ)
+        batch = TransferBatch(start, mosi, clock_hz)
         words["software port"] = SensorPort(sensors()[1]).exchange(batch)
         words["RTL per batch"] = HarnessPeripheral(sensors()[1], harness).exchange(batch)
     return words
@@ -294,3 +295,71 @@ def test_a_reset_clears_the_conversion_window_on_the_rtl_as_in_the_software_mode
         assert r["mismatched_requests"] == 0 and r["unrequested"] == 0, reset
         busy = expected[-1] == proto.ERROR_WORDS["insufficient_sampling_delay"]
         assert busy != reset and len(vec["conversions"]) == 1 + reset
+
+
+@pytest.mark.parametrize("clock_hz,first_s,second_s,channels", [
+    # E16 not provided, ending exactly 5 µs (10 613.0 µs) after E4: "EX", not "E-"
+    (10e6, 0.010606549999999996, 0.010611349999999995, ["E4"]),
+    # E16 provided: it converts (the RTL used to answer "E-", leaving the conversion unrequested: HarnessError)
+    (10e6, 0.010606549999999996, 0.010611349999999995, ["E4", "E16"]),
+    # 4.4 MHz: half periods rounded to whole picoseconds put the second command's end 12 ps early
+    (4.4e6, 0.0116755, 0.01168025, ["PDC", "PAC"]),
+], ids=["10MHz-EX", "10MHz-converts", "4.4MHz"])
+def test_a_command_ending_on_a_whole_microsecond_counts_the_tick_as_the_software_model_does(
+        harness, clock_hz, first_s, second_s, channels):
+    """The 5 µs window is counted in 1 MHz timer ticks; the software model counts an instant up to 1 ns before a
+    tick as that tick (model.ticks). A command whose end falls on a whole microsecond, exactly 5 ticks after the
+    previous one's, is outside the window over the C++ harness too: the same word, and the same conversions, as the
+    software model (found by an adversarial review: EX read as E-, or a HarnessError)."""
+    second = _cmd("E16") if clock_hz == 10e6 else _cmd("PAC")
+    start = np.array([first_s, second_s, second_s + 100e-6])
+    mosi = np.array([_cmd(channels[0]), second, 0], np.uint16)
+    words = _assert_all_routes_agree(_words_over_every_route(
+        harness, {1: channels}, start, np.full(start.size, SELECT_CODE[1]), mosi, clock_hz=clock_hz))
+    assert words[-1] != proto.ERROR_WORDS["insufficient_sampling_delay"]
+
+
+def _held_words(harness, channels_of: dict, calls, clock_hz: float = 1e6) -> dict:
+    """MISO words of 16-bit transfers ``(start s, select code, MOSI, keep chip select)``, given in ``calls`` (lists
+    of them), over the software bus transfer by transfer and over RtlBus call by call."""
+    from emulator.rtl.harness import RtlBus
+    from emulator.sensor import Sensor
+    from emulator.spi.model import Bus, SensorPort, Transfer
+
+    def sensors():
+        return {n: Sensor(channels_read=list(c), seed=n + 2) for n, c in channels_of.items()}
+
+    bus = Bus({n: SensorPort(s, n) for n, s in sensors().items()})
+    software = [bus.transfer(Transfer(t, c, m, 16, clock_hz, k)) for call in calls for t, c, m, k in call]
+    rtl = RtlBus(sensors(), harness=harness)
+    try:
+        words = [int(w) for call in calls for w in rtl.exchange_words(
+            np.array([x[0] for x in call]), np.array([x[1] for x in call]), np.array([x[2] for x in call], np.uint16),
+            clock_hz, np.array([x[3] for x in call]))]
+    finally:
+        rtl.close()
+    return {"software": [hex(w) for w in software], "RTL": [hex(w) for w in words]}
+
+
+@pytest.mark.parametrize("case", ["same sensor, a command next", "same sensor, a zero word next",
+                                  "into another sensor", "across calls"])
+def test_a_held_chip_select_is_one_window_over_the_rtl_as_over_the_software_model(harness, case):
+    """A sampling command with chip select held into the next word is one window: its command is the first 16
+    bits, acted on when chip select rises — at the end of the window, or when the select code moves on to another
+    sensor; a window left open at the end of a call goes on in the next.  The RTL path (your own firmware on
+    `spi="rtl"`) gives the software model's words, conversions and codes (it took each word as a window of its own:
+    a HarnessError, or a code converted at the wrong instant)."""
+    s1, s2, t0 = SELECT_CODE[1], SELECT_CODE[2], 0.01
+    channels = {1: ["PDC", "PAC"], 2: ["PDC"]}
+    calls = {
+        "same sensor, a command next": [[(t0, s1, _cmd("PDC"), True), (t0 + 17e-6, s1, _cmd("PAC"), False),
+                                         (t0 + 200e-6, s1, 0, False)]],
+        "same sensor, a zero word next": [[(t0, s1, _cmd("PDC"), True), (t0 + 17e-6, s1, 0, False),
+                                           (t0 + 200e-6, s1, 0, False)]],
+        "into another sensor": [[(t0, s1, _cmd("PDC"), True), (t0 + 17e-6, s2, _cmd("PDC"), False),
+                                 (t0 + 200e-6, s1, 0, False), (t0 + 300e-6, s2, 0, False)]],
+        "across calls": [[(t0, s1, _cmd("PDC"), True)], [(t0 + 17e-6, s1, 0, False)], [(t0 + 200e-6, s1, 0, False)]],
+    }[case]
+    words = _held_words(harness, channels, calls)
+    assert words["RTL"] == words["software"]
+    assert not proto.is_error_word(np.array([int(w, 16) for w in words["software"][-1:]])).any()

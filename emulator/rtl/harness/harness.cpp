@@ -15,6 +15,7 @@
 //   stdout: per batch, one uint64 MISO per transfer, then uint64 mismatched requests, unused codes and model
 //           evaluations so far; the harness exits when stdin ends
 #include <cstdint>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -53,6 +54,9 @@ struct CodeRecord {
 
 static const int64_t HALF_TIMER_PS = 500000;  // 1 MHz timer: rising edges at whole microseconds
 static const int64_t VALID_DELAY_PS = 45000;
+// An event up to 1 ns before a timer edge counts the edge as past, as the software model's ticks() does (it adds
+// 1e-3 of a tick): it absorbs the float instants' rounding and the half periods rounded to whole picoseconds.
+static const int64_t TICK_SLACK_PS = 1000;
 // The RTL uses its timer only as differences (timer - a tick captured at a chip-select edge) compared with at
 // most 100 ticks (the slow_response delay; the conversion time is 5). Once the bus has been idle this many ticks
 // every such difference is past 100 whatever happens next, so the rest of an idle stretch changes nothing but
@@ -107,8 +111,9 @@ struct Harness {
 
     // Run the timer up to time t (ps) with the bus's inputs unchanged (an idle stretch).
     void advance_to(int64_t t) {
-        if (next_timer_edge < t) {
-            int64_t edges = (t - next_timer_edge + HALF_TIMER_PS - 1) / HALF_TIMER_PS;  // edges before t
+        int64_t due = t + TICK_SLACK_PS;  // the timer edges that count as past at t
+        if (next_timer_edge < due) {
+            int64_t edges = (due - next_timer_edge + HALF_TIMER_PS - 1) / HALF_TIMER_PS;  // edges before due
             int64_t skipped = (edges - 2 * IDLE_TICKS_CLOCKED) / 2;  // whole ticks past the first clocked ones
             if (skipped > 0) {
                 clock_edges(2 * IDLE_TICKS_CLOCKED);
@@ -116,8 +121,8 @@ struct Harness {
                 skipped_ticks += (uint64_t)skipped;
             }
         }
-        while (next_timer_edge < t) clock_edges(1);
-        now = t;
+        while (next_timer_edge < due) clock_edges(1);
+        now = std::max(now, t);  // (an edge clocked within the slack keeps time from running backwards)
     }
     void clock_edges(int64_t n) {
         for (int64_t k = 0; k < n; ++k) {
