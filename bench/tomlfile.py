@@ -17,11 +17,12 @@ def _position(data: bytes, offset: int) -> str:
 
 
 def too_deep(data, limit: int) -> str | None:
-    """The first field nested more than ``limit`` arrays/tables deep, or None (an iterative walk: no recursion)."""
+    """The first array or table nested inside more than ``limit`` others (the file itself not counted), or None: a
+    value inside ``limit`` tables is fine (an iterative walk: no recursion)."""
     stack = [(data, "", 0)]
     while stack:
         v, where, depth = stack.pop()
-        if depth > limit:
+        if depth > limit and isinstance(v, (dict, list)):
             return where or "the file"
         if isinstance(v, dict):
             stack += [(x, f"{where}.{k}" if where else str(k), depth + 1) for k, x in v.items()]

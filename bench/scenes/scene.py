@@ -183,15 +183,16 @@ class _Checker:
                default=None, required=False, integer=False):
         if key not in table:
             if required:
-                self.problems.append(f"{where}.{key} is missing ({unit}, {lo} to {hi})")
+                self.problems.append(f"{where}.{key} is missing ({unit + ', ' if unit else ''}{lo} to {hi})")
             return default
         v = table[key]
         kind = "a whole number" if integer else "a number"
         if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
-            self.problems.append(f"{where}.{key} = {_r(v)}: must be {kind} in {unit} ({lo} to {hi})")
+            self.problems.append(f"{where}.{key} = {_r(v)}: must be {kind}{' in ' + unit if unit else ''} "
+                                 f"({lo} to {hi})")
             return default
         if not _real(v) or not lo <= v <= hi:
-            self.problems.append(f"{where}.{key} = {_r(v)}: allowed range is {lo} to {hi} {unit}")
+            self.problems.append(f"{where}.{key} = {_r(v)}: allowed range is {lo} to {hi}{' ' + unit if unit else ''}")
             return default
         return v
 

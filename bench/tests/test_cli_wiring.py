@@ -3,6 +3,7 @@ line runs in process with the heavy step replaced by a recorder that stops the c
 what the flag handed on, in well under a second."""
 
 import os
+import re
 
 import pytest
 
@@ -75,3 +76,56 @@ def test_a_local_cluster_has_one_worker_per_core_by_default(monkeypatch):
     assert engine.ClusterSpec.from_env().n_workers == 3
     assert engine.ClusterSpec.from_env(workers=1).n_workers == 1
     assert engine.ClusterSpec.from_env().describe() == "LocalCluster, 3 worker(s)"
+
+
+def test_claims_fidelity_seed_and_quick_reach_the_bench(monkeypatch):
+    """README: `claims --fidelity reference --seed 7 --quick --only …` runs the claims on that profile and seed
+    (docs/model.md's sliding claims at the reference profile are run this way)."""
+    import bench.verification.claims as claims
+
+    monkeypatch.setattr(claims, "Bench", recorder)
+    kw = handed(["claims", "--fidelity", "reference", "--seed", "7", "--quick", "--only", "noise"])
+    assert (kw["fidelity"], kw["seed"], kw["quick"]) == ("reference", 7, True)
+    kw = handed(["claims", "--only", "noise"])
+    assert (kw["fidelity"], kw["quick"]) == ("default", False)
+
+
+def test_noise_budget_json_has_the_documented_fields(capsys):
+    """`noise-budget --json`: one object per line of the budget with source, channel, rti_uV, pac_bits and note;
+    every channel of the table is there (PAC, PDC, TAC, TDC and the electrodes)."""
+    import json
+
+    assert main(["noise-budget", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert rows and all(set(r) >= {"source", "channel", "rti_uV", "pac_bits", "note"} for r in rows)
+    channels = {r["channel"] for r in rows}
+    assert {"PAC", "PDC", "TAC", "TDC"} <= channels and any(c.startswith("E") for c in channels)
+
+
+def test_units_compare_prints_each_parameters_difference_from_nominal(capsys):
+    """`units --seed 17 --compare`: beside each value the nominal one and the difference (in % where the nominal is
+    not zero); with --json the nominal values under "nominal"."""
+    import json
+
+    assert main(["units", "--seed", "17", "--compare"]) == 0
+    lines = [line.split() for line in capsys.readouterr().out.splitlines()[2:]]
+    row = next(r for r in lines if r[0] == "resonance_Hz")
+    value, nominal, diff = float(row[1]), float(row[2]), float(row[3])
+    assert value != nominal and diff == pytest.approx(100 * (value - nominal) / nominal, abs=0.006)
+    assert main(["units", "--seed", "17", "--compare", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["nominal"]["resonance_Hz"] == pytest.approx(nominal, rel=1e-5)
+    assert doc["parameters"]["resonance_Hz"] == pytest.approx(value, rel=1e-5)
+
+
+def test_params_lists_each_parameter_with_its_unit_range_and_source(capsys):
+    """`params` (README): every sensor parameter with its unit, range and source."""
+    from emulator.params import PARAMETER_FIELDS
+
+    assert main(["params"]) == 0
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line.strip()}
+    for name, f in PARAMETER_FIELDS.items():
+        meta = f.metadata
+        assert f" {meta['unit']} " in lines[name] and f"({meta['source']})" in lines[name], name
+        lo, hi = re.search(r"\[(\S+), (\S+)\]", lines[name]).groups()
+        assert (float(lo), float(hi)) == tuple(map(float, meta["range"])), name

@@ -40,6 +40,27 @@ def test_the_force_column_reads_zero_at_rest_and_the_press_while_pressed(press_r
     assert np.allclose(force[moved] / kpa[moved], FORCE_N_PER_PDC_BIT / PDC_KPA_PER_BIT, rtol=1e-9)
 
 
+def test_the_other_physical_columns_are_the_published_conversions_of_the_codes(press_run):
+    """codes.npz (README): PAC_Pa is PAC's code over its resting lead-in × 0.37 Pa/bit (D Table 4-1: ~0 Pa before
+    the press, within a bit), TDC_C the thermistor curve of D eq. 4.4 (a skin between 20 and 45 °C), E<n>_ohm
+    D eq. 4.1's impedance of each of the 19 electrodes' codes — sample for sample."""
+    from emulator import conversions as conv
+
+    _, d = press_run
+    t, pa, code = d["PAC_t"], d["PAC_Pa"], d["PAC_code"].astype(float)
+    assert abs(np.median(pa[t < 0.9])) < conv.PAC_PA_PER_BIT
+    assert np.allclose(np.diff(pa), np.diff(code) * conv.PAC_PA_PER_BIT)
+    rest = np.median(code[t < 0.9])
+    assert np.allclose(pa, (code - rest) * conv.PAC_PA_PER_BIT, atol=conv.PAC_PA_PER_BIT)
+    assert np.array_equal(d["TDC_C"], conv.tdc_to_celsius(d["TDC_code"]))
+    assert 20 < np.median(d["TDC_C"]) < 45
+    electrodes = sorted({k.split("_")[0] for k in d.files if k.startswith("E") and k.endswith("_ohm")},
+                        key=lambda e: int(e[1:]))
+    assert electrodes == [f"E{n}" for n in range(1, 20)]
+    for e in electrodes:
+        assert np.array_equal(d[f"{e}_ohm"], conv.impedance_ohm(d[f"{e}_code"])), e
+
+
 def test_the_hdf5_rate_attribute_is_each_channels_sample_rate(press_run, tmp_path):
     """samples.h5's per-channel rate_Hz is what the samples' spacing says (PAC 2200 Hz, the others 100 Hz in the
     default frame): MATLAB and pandas readers take it as the sampling rate."""

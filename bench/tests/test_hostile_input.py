@@ -212,3 +212,27 @@ def test_command_line_overrides_are_validated_run_and_recorded(tmp_path, capsys)
     assert record["faults"] == {"electrode_open": [3], "electrode_short": [4], "mux_stuck": 5, "thermistor": "short",
                                 "heater_failed": True}
     assert record["host"]["spi"] == "software"
+
+
+@pytest.mark.parametrize("levels, refused", [(16, False), (17, True)])
+def test_a_scene_may_nest_16_tables_deep_and_no_more(tmp_path, levels, refused):
+    """README: a scene file is nested at most 16 levels: a key inside 16 tables is read (and then refused only as
+    an unknown table), one inside 17 is refused for its depth, naming the field."""
+    f = tmp_path / "deep.toml"
+    path = ".".join(f"t{i}" for i in range(1, levels + 1))
+    f.write_text(f'[scene]\nname = "deep"\nduration_s = 1.0\n[{path}]\nk = 1\n')
+    with pytest.raises(SceneError) as e:
+        load_scene(f)
+    problems = "\n".join(e.value.problems)
+    assert ("nested more than 16 arrays or tables deep" in problems) == refused, problems
+    assert (f"{path}: nested" in problems) if refused else "unknown field 't1'" in problems
+
+
+def test_a_field_without_a_unit_is_named_without_an_empty_one():
+    """A number without a unit (the seed) is refused in plain words: no "in  (", no ", 0 to" left from an empty
+    unit."""
+    with pytest.raises(SceneError) as e:
+        from bench.scenes.scene import parse_scene
+
+        parse_scene({"scene": {"name": "x", "duration_s": 1.0, "seed": "a"}})
+    assert e.value.problems == ["scene.seed = 'a': must be a whole number (0 to 9223372036854775807)"]

@@ -51,6 +51,23 @@ def test_a_skin_replacement_restores_the_ridges_and_wear_can_be_switched_off():
     assert smooth.stimuli[0].skin.ridge_factor == 0.0
 
 
+def test_the_skin_tables_ridge_height_and_wear_coefficient_reach_the_skin_that_slides():
+    """README: `[skin] ridge_height_um` starts the session on a worn skin and `wear_coefficient` sets Archard's k:
+    the first trial slides on ridges of the height given, and a tenfold k wears tenfold as much over the same
+    trials (the worn depth, Archard: ∝ k·N·distance)."""
+    from emulator.skin import Skin
+
+    worn = _scene(_slide(), skin={"ridge_height_um": 120})
+    assert worn.skin_before["ridge_height_m"] == pytest.approx(120e-6) == worn.stimuli[0].skin.ridge_height_m
+    k = Skin().wear_coefficient
+    lost = {}
+    for factor in (1, 10):
+        sc = _scene(_slide(start_s=[0.5, 3.0], force_N=1.26, velocity_mm_per_s=63.1, distance_mm=50),
+                    skin={"wear_coefficient": k * factor})
+        lost[factor] = sc.skin_before["ridge_height_m"] - sc.skin_after["ridge_height_m"]
+    assert lost[10] == pytest.approx(10 * lost[1], rel=0.05) and lost[1] > 0
+
+
 @pytest.mark.parametrize("stimulus, words", [
     (_slide(texture="no such cloth"), ["stimulus[0].texture", "no such cloth"]),
     ({k: v for k, v in _slide().items() if k != "texture"}, ["stimulus[0].texture is missing"]),

@@ -131,6 +131,9 @@ def test_resting_electrode_codes_differ_across_electrodes_and_units():
     # the spread is sized so resting codes cover roughly 1900–3200 (2nd–98th percentile over units)
     lo, hi = np.percentile(codes, [2, 98])
     assert 1700 < lo < 2300 and 3000 < hi < 3300, (lo, hi, ELECTRODE_GAP_SPREAD_MM)
+    # docs/model.md states them for units 0–19: 1900–3152 (a read-back of the spread, to the code)
+    first_twenty = np.array([resting_electrode_codes(unit(s).params) for s in range(20)])
+    assert np.percentile(first_twenty, [2, 98]) == pytest.approx([1900, 3152], abs=1)
 
 
 def test_units_move_resting_pdc_within_the_adc_and_keep_the_scales():

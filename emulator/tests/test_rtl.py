@@ -141,9 +141,14 @@ def test_a_scene_yields_identical_codes_over_software_and_rtl(tmp_path):
         other = results["rtl"].channels[name]
         assert np.array_equal(r.codes, other.codes), name
         assert np.array_equal(r.status, other.status) and not r.status.any(), name
-    from bench.reporting.report import build_record, markdown_report
+    from bench.reporting.report import build_record, markdown_report, write_outputs
+    from bench.reporting.store import read_attrs
 
-    assert "SPI side: the Verilog RTL" in markdown_report(build_record(results["rtl"], []))  # the report says which
+    record = build_record(results["rtl"], [])
+    assert record["host"]["spi"] == "rtl"
+    assert "SPI side: the Verilog RTL" in markdown_report(record)  # the report says which
+    write_outputs(results["rtl"], tmp_path, plots=False)  # README: samples.h5's root names the SPI side too
+    assert read_attrs(tmp_path / "samples.h5")["spi"] == "rtl"
 
 
 def test_waveforms_on_request(tmp_path):
