@@ -248,3 +248,32 @@ def test_error_words_in_the_lead_in_never_reach_the_baseline():
     base, sigma = summary.resting_stats("PAC", 2.0)
     assert base == pytest.approx(np.mean(code[good]), abs=1e-9)
     assert sigma == pytest.approx(np.std(code[good].astype(float)), abs=1e-9)
+
+
+def test_samples_csv_names_each_channels_unit_and_samples_h5_each_datasets(tmp_path):
+    """samples.csv (long format: time_s, channel, code, status, value, unit): PAC in Pa, PDC in kPa, TDC in degC,
+    TAC in degC/s, the electrodes in ohm, each value the published conversion (an electrode's D eq. 4.1, never
+    empty); samples.h5 (README): `units` on each dataset — t in s, code an ADC code."""
+    import csv
+
+    import h5py
+
+    from bench.scenes.scene import parse_scene
+    from emulator import conversions as conv
+
+    scene = parse_scene({"scene": {"name": "units", "duration_s": 0.5, "seed": 2}})
+    write_outputs(run_scene(scene, progress=False), tmp_path, plots=False, csv=True)
+    with open(tmp_path / "samples.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    units = {}
+    for r in rows:
+        units.setdefault(r["channel"], set()).add(r["unit"])
+    expected = {"PAC": "Pa", "PDC": "kPa", "TDC": "degC", "TAC": "degC/s", **{f"E{n}": "ohm" for n in range(1, 20)}}
+    assert units == {k: {v} for k, v in expected.items()}
+    e7 = [r for r in rows if r["channel"] == "E7"]
+    assert e7 and all(float(r["value"]) == pytest.approx(float(conv.impedance_ohm(int(r["code"]))), rel=1e-6)
+                      for r in e7)
+    with h5py.File(tmp_path / "samples.h5", "r") as f:
+        for name in ("PAC", "E7"):
+            units = {field: f[name][field].attrs["units"] for field in ("t", "code", "status")}
+            assert units == {"t": "s", "code": "ADC code", "status": ""}, name

@@ -2107,6 +2107,21 @@ CATALOGUE += [
            '        if depth > limit + 1 and isinstance(v, (dict, list)):',
            ('bench/tests/test_hostile_input.py::test_a_scene_may_nest_16_tables_deep_and_no_more',),
            'a scene nested 17 tables deep taken'),
+    Mutant('sp-versions-of-the-biotac', 'protocol', 'emulator/spi/model.py',
+           'VERSIONS = {"biotac": (b"20", b"0206"), "biotac-sp": (b"SP", b"0300")}',
+           'VERSIONS = {"biotac": (b"20", b"0206"), "biotac-sp": (b"20", b"0206")}',
+           ('emulator/tests/test_variant_sp.py::test_sp_properties_serial_and_54_command_pattern',),
+           "a BioTac SP answering the BioTac's flex and firmware versions"),
+    Mutant('csv-pdc-unit-pa', 'outputs', 'bench/reporting/exports.py',
+           '"PDC": ("PDC_kPa", "kPa")',
+           '"PDC": ("PDC_kPa", "Pa")',
+           ('bench/tests/test_exported_figures.py::test_samples_csv_names_each_channels_unit_and_samples_h5_each_datasets',),
+           "samples.csv labelling PDC's kPa values Pa"),
+    Mutant('h5-code-without-units', 'outputs', 'bench/reporting/store.py',
+           '("code", np.uint16, "ADC code", "12-bit ADC code, 0..4095")',
+           '("code", np.uint16, "", "12-bit ADC code, 0..4095")',
+           ('bench/tests/test_exported_figures.py::test_samples_csv_names_each_channels_unit_and_samples_h5_each_datasets',),
+           "samples.h5's code datasets without their units"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

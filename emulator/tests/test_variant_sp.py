@@ -13,8 +13,8 @@ from emulator import channels as ch
 from emulator.electrodes import electrode_positions_mm
 from emulator.sensor import Sensor
 from emulator.spi import protocol as proto
-from emulator.spi.model import (PROP_PATTERN, PROP_SERIAL, SELECT_CODE, Bus, SensorPort, Transfer,
-                                default_properties)
+from emulator.spi.model import (PROP_FIRMWARE, PROP_FLEX, PROP_PATTERN, PROP_SERIAL, SELECT_CODE, Bus, SensorPort,
+                                Transfer, default_properties)
 from emulator.spi.peripheral import TransferBatch
 from emulator.stimuli import Touch
 
@@ -147,6 +147,9 @@ def test_sp_properties_serial_and_54_command_pattern():
     assert len(props[PROP_PATTERN][0]) == 54 and E20_E24_COMMANDS[0] in props[PROP_PATTERN][0]
     default = default_properties(1)
     assert default[PROP_SERIAL][0] == b"BT0101EMU0000001" and len(default[PROP_PATTERN][0]) == 44
+    # docs/model.md's variant table: flex / firmware version "20" / "0206" and, for the SP, "SP" / "0300"
+    assert (default[PROP_FLEX][0], default[PROP_FIRMWARE][0]) == (b"20", b"0206")
+    assert (props[PROP_FLEX][0], props[PROP_FIRMWARE][0]) == (b"SP", b"0300")
     assert default_properties(1, serial="BT0101UNIT000042")[PROP_SERIAL][0] == b"BT0101UNIT000042"
     for bad in ("XX0101UNIT000042", "BT0101UNIT0000420", "BT 01", ""):
         with pytest.raises(ValueError, match="serial"):
