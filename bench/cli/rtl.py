@@ -141,10 +141,13 @@ def _cmd_rtl(a) -> int:
         bad = 0
         for f in a.files:
             vec, res = V.load(f), results[str(Path(f).resolve())]
-            diff = sum(d["miso"] != m for d, m in zip(vec["transfers"], res["miso"]))
-            bad += diff + len(res["mismatched_requests"])
+            # words compared as numbers (a file may spell them in either case, or zero-padded)
+            diff = sum(int(d["miso"], 16) != int(m, 16) for d, m in zip(vec["transfers"], res["miso"]))
+            unrequested = sum(res["unrequested"].values())  # recorded conversions the RTL never asked for
+            bad += diff + len(res["mismatched_requests"]) + unrequested
             print(f"{f}: {len(vec['transfers'])} transfers, {diff} differ from the reference"
-                  + (f", {len(res['mismatched_requests'])} ADC requests differ" if res["mismatched_requests"] else ""))
+                  + (f", {len(res['mismatched_requests'])} ADC requests differ" if res["mismatched_requests"] else "")
+                  + (f", {unrequested} recorded conversions never requested" if unrequested else ""))
         if a.waves:
             print("waveforms: " + ", ".join(str(p) for p in rtl.wave_files()))
         return 1 if bad else 0

@@ -254,3 +254,29 @@ def test_rtl_vectors_with_waves_replays_the_file_and_writes_a_waveform(capsys):
     for wave in files:
         assert wave.suffix in (".fst", ".vcd") and wave.stat().st_size > 1000
         assert wave.stat().st_mtime_ns >= started_ns - 2_000_000_000  # written by this run, not left from before
+
+
+@pytest.mark.rtl
+def test_rtl_vectors_fails_on_a_word_or_an_unrequested_conversion_and_reads_words_as_numbers(tmp_path, capsys):
+    """`rtl vectors` compares every MISO word and ADC request with the file and exits 1 if any differ: a word
+    changed, or a recorded conversion the RTL never asks for (it was not counted: exit 0); a word merely spelled
+    upper-case or zero-padded is the same word (it was compared as text: exit 1)."""
+    import json
+
+    vec = json.loads((FIXTURES / "spi_vectors" / "fault_truncated_word.json").read_text())
+    spelled = json.loads(json.dumps(vec))
+    spelled["transfers"][-1]["miso"] = "0x" + vec["transfers"][-1]["miso"].upper().zfill(4)
+    changed = json.loads(json.dumps(vec))
+    changed["transfers"][-1]["miso"] = f"{int(vec['transfers'][-1]['miso'], 16) ^ 0x0100:x}"
+    extra = json.loads(json.dumps(vec))
+    extra["conversions"].append({**vec["conversions"][-1], "t_ps": vec["conversions"][-1]["t_ps"] + 500_000_000})
+    files = {}
+    for name, v in (("spelled", spelled), ("changed", changed), ("extra", extra)):
+        files[name] = tmp_path / f"{name}.json"
+        files[name].write_text(json.dumps(v))
+    assert cli.main(["rtl", "vectors", str(files["spelled"])]) == 0, capsys.readouterr()
+    assert "spelled.json: 3 transfers, 0 differ from the reference" in capsys.readouterr().out
+    assert cli.main(["rtl", "vectors", str(files["changed"]), str(files["extra"])]) == 1
+    said = capsys.readouterr().out
+    assert "changed.json: 3 transfers, 1 differ from the reference" in said, said
+    assert "extra.json: 3 transfers, 0 differ from the reference, 1 recorded conversions never requested" in said

@@ -368,3 +368,15 @@ def test_a_held_chip_select_is_one_window_over_the_rtl_as_over_the_software_mode
     words = _held_words(harness, channels, calls)
     assert words["RTL"] == words["software"]
     assert not proto.is_error_word(np.array([int(w, 16) for w in words["software"][-1:]])).any()
+
+
+def test_a_busy_command_restarts_the_conversion_window_on_the_rtl_as_in_the_software_model(harness):
+    """PDC at 0 µs, PAC at 2 µs (busy: "E-"), PDC at 6 µs: 6 µs after the first but 4 after the busy one, which
+    restarted the 5 µs window — so it answers "E-" too, over the RTL as over the software model (no golden vector
+    pinned this)."""
+    from emulator.channels import DEFAULT_FRAME_NAMES
+
+    start, mosi = _schedule((0, _cmd("PDC")), (2, _cmd("PAC")), (6, _cmd("PDC")), (60, 0))
+    words = _assert_all_routes_agree(_words_over_every_route(
+        harness, {1: DEFAULT_FRAME_NAMES}, start, np.full(start.size, SELECT_CODE[1]), mosi))
+    assert words[-1] == proto.ERROR_WORDS["insufficient_sampling_delay"]  # the read after the third command
