@@ -2152,6 +2152,16 @@ CATALOGUE += [
            '                        if (!busy) sampling_tick <= timer;\n                        if (busy) begin',
            ('emulator/tests/test_rtl.py::test_a_busy_command_restarts_the_conversion_window_on_the_rtl_as_in_the_software_model',),
            "a busy sampling command not restarting the RTL's 5 µs window"),
+    Mutant('harness-request-counts-dropped', 'rtl', 'emulator/rtl/harness.py',
+           '"mismatched_requests": int(raw[n]), "unrequested": int(raw[n + 1])',
+           '"mismatched_requests": 0, "unrequested": 0',
+           ('emulator/tests/test_rtl.py::test_the_cpp_harness_reports_conversions_that_differ_from_the_recording',),
+           "the harness's request checks never reported"),
+    Mutant('harness-cpp-mismatch-uncounted', 'rtl', 'emulator/rtl/harness/harness.cpp',
+           '                ++mismatches;\n',
+           '',
+           ('emulator/tests/test_rtl.py::test_the_cpp_harness_reports_conversions_that_differ_from_the_recording',),
+           'the C++ harness serving a code for another channel without counting it'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

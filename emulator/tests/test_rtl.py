@@ -380,3 +380,20 @@ def test_a_busy_command_restarts_the_conversion_window_on_the_rtl_as_in_the_soft
     words = _assert_all_routes_agree(_words_over_every_route(
         harness, {1: DEFAULT_FRAME_NAMES}, start, np.full(start.size, SELECT_CODE[1]), mosi))
     assert words[-1] == proto.ERROR_WORDS["insufficient_sampling_delay"]  # the read after the third command
+
+
+def test_the_cpp_harness_reports_conversions_that_differ_from_the_recording(harness):
+    """The harness checks the RTL's ADC requests against the codes it was handed: a recorded conversion of another
+    channel is a mismatched request, one the RTL never asks for is counted unrequested — what makes HarnessError
+    mean "RTL and model disagree" (a golden vector, altered)."""
+    import json
+
+    vec = V.load(REPO / "fixtures" / "spi_vectors" / "sampling_and_errors.json")
+    assert harness.play(vec)["mismatched_requests"] == 0
+    other = json.loads(json.dumps(vec))
+    other["conversions"][0]["channel"] ^= 1
+    assert harness.play(other)["mismatched_requests"] >= 1
+    extra = json.loads(json.dumps(vec))
+    extra["conversions"].append({**vec["conversions"][-1], "t_ps": vec["conversions"][-1]["t_ps"] + 500_000_000})
+    r = harness.play(extra)
+    assert r["unrequested"] == 1 and r["mismatched_requests"] == 0
