@@ -2162,6 +2162,11 @@ CATALOGUE += [
            '',
            ('emulator/tests/test_rtl.py::test_the_cpp_harness_reports_conversions_that_differ_from_the_recording',),
            'the C++ harness serving a code for another channel without counting it'),
+    Mutant('harness-peripheral-never-coupled', 'rtl', 'emulator/rtl/harness.py',
+           'np.append(start[1:], np.inf), _NO_TICK)',
+           'np.full(start.size, np.inf), _NO_TICK)',
+           ('emulator/tests/test_rtl.py::test_a_conversion_with_the_bus_clocking_reads_the_same_code_over_every_route',),
+           'the per-batch RTL path computing every conversion as if the bus were quiet'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -397,3 +397,16 @@ def test_the_cpp_harness_reports_conversions_that_differ_from_the_recording(harn
     extra["conversions"].append({**vec["conversions"][-1], "t_ps": vec["conversions"][-1]["t_ps"] + 500_000_000})
     r = harness.play(extra)
     assert r["unrequested"] == 1 and r["mismatched_requests"] == 0
+
+
+def test_a_conversion_with_the_bus_clocking_reads_the_same_code_over_every_route(harness):
+    """SPI activity during a conversion couples into it (the software model's bus_active): a PDC command, a word
+    clocked 2 µs later (inside the 5 µs conversion), then the read — every route, the RTL batch by batch and
+    streaming included, gives the software model's word, and it is not the quiet conversion's."""
+    start, mosi = _schedule((0, _cmd("PDC")), (2, 0), (60, 0))
+    coupled = _assert_all_routes_agree(_words_over_every_route(
+        harness, {1: ["PDC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi))
+    start, mosi = _schedule((0, _cmd("PDC")), (60, 0))
+    quiet = _assert_all_routes_agree(_words_over_every_route(
+        harness, {1: ["PDC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi))
+    assert coupled[-1] != quiet[-1]
