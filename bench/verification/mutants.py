@@ -2167,6 +2167,16 @@ CATALOGUE += [
            'np.full(start.size, np.inf), _NO_TICK)',
            ('emulator/tests/test_rtl.py::test_a_conversion_with_the_bus_clocking_reads_the_same_code_over_every_route',),
            'the per-batch RTL path computing every conversion as if the bus were quiet'),
+    Mutant('harness-stream-reads-too-early', 'rtl', 'emulator/rtl/harness.py',
+           't_cmd + 33 * half_ps + 50_000_000',
+           't_cmd + 33 * half_ps + 1_000_000',
+           ('emulator/tests/test_rtl.py::test_streaming_frames_through_the_harness_reads_back_every_code',),
+           'rtl stream reading each result 1 µs after its command (every word an error word)'),
+    Mutant('cli-rtl-stream-seconds-ignored', 'rtl', 'bench/cli/rtl.py',
+           'seconds = 1.0 if a.seconds is None else a.seconds',
+           'seconds = 1.0',
+           ('emulator/tests/test_rtl.py::test_streaming_frames_through_the_harness_reads_back_every_code',),
+           'rtl stream --seconds ignored'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -410,3 +410,17 @@ def test_a_conversion_with_the_bus_clocking_reads_the_same_code_over_every_route
     quiet = _assert_all_routes_agree(_words_over_every_route(
         harness, {1: ["PDC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi))
     assert coupled[-1] != quiet[-1]
+
+
+def test_streaming_frames_through_the_harness_reads_back_every_code(harness, capsys):
+    """`rtl stream` (and the benchmark's RTL row) plays the default frame through the C++ harness: every read answers
+    the code the emulator computed for its command, none an error word; `--seconds` sets how long."""
+    from bench.cli import main as cli
+
+    res = harness.stream_frames(0.02)
+    assert res["words"].size == res["samples"].size == 88  # 0.02 s of 4.4 kHz slots
+    codes, ok = proto.decode_response(res["words"])
+    assert ok.all() and np.array_equal(codes, res["samples"])
+    assert res["mismatched_requests"] == 0 and res["unrequested"] == 0
+    assert cli.main(["rtl", "stream", "--seconds", "0.01"]) == 0
+    assert "streamed 0.01 s of the default frame through the RTL" in capsys.readouterr().out
