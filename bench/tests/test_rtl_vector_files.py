@@ -52,6 +52,10 @@ BAD = {
     "a reset key written twice as 0 and 00": (_set(("resets",), {"0": [1], "00": [1]}), "resets"),
     "a sensor that is a boolean": (_set(("sensors",), [True]), "sensors must be a list of sensor numbers"),
     "MISO wider than its bits": (_set(("transfers", 0, "miso"), "ffffffffff"), "miso = 'ffffffffff'"),
+    # from a mutation hunt: refusals nothing exercised
+    "a select code past the 3 bits": (_set(("transfers", 0, "cs"), 8), "transfers[0]"),
+    "a reset of an absent sensor": (_set(("resets",), {"0": [3]}), "resets"),
+    "pull_up that is not a boolean": (_set(("pull_up",), 1), "pull_up"),
 }
 
 

@@ -2177,6 +2177,21 @@ CATALOGUE += [
            'seconds = 1.0',
            ('emulator/tests/test_rtl.py::test_streaming_frames_through_the_harness_reads_back_every_code',),
            'rtl stream --seconds ignored'),
+    Mutant('vector-file-cs-unchecked', 'rtl', 'bench/cli/rtl.py',
+           'and 0 <= d["cs"] <= 7',
+           '',
+           ('bench/tests/test_rtl_vector_files.py::test_a_malformed_vector_file_is_refused_naming_what',),
+           "a vector file's select code 8 taken (the RTL's select is 3 bits)"),
+    Mutant('vector-file-reset-absent-sensor', 'rtl', 'bench/cli/rtl.py',
+           'and n in sensors for n in v)',
+           'for n in v)',
+           ('bench/tests/test_rtl_vector_files.py::test_a_malformed_vector_file_is_refused_naming_what',),
+           'a vector file resetting a sensor it does not list'),
+    Mutant('vector-file-pull-up-any', 'rtl', 'bench/cli/rtl.py',
+           'if not isinstance(vec["pull_up"], bool) or not isinstance(vec["faults"], dict):',
+           'if not isinstance(vec["faults"], dict):',
+           ('bench/tests/test_rtl_vector_files.py::test_a_malformed_vector_file_is_refused_naming_what',),
+           "a vector file's pull_up that is not a boolean taken"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
