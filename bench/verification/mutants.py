@@ -2192,6 +2192,11 @@ CATALOGUE += [
            'if not isinstance(vec["faults"], dict):',
            ('bench/tests/test_rtl_vector_files.py::test_a_malformed_vector_file_is_refused_naming_what',),
            "a vector file's pull_up that is not a boolean taken"),
+    Mutant('rtlbus-long-transfer-last-16-bits', 'rtl', 'emulator/rtl/harness.py',
+           'np.asarray(mosi, np.uint64) >> shift & np.uint64(0xFFFF)',
+           'np.asarray(mosi, np.uint64) & np.uint64(0xFFFF)',
+           ('emulator/tests/test_rtl.py::test_a_transfer_longer_than_16_bits_commands_with_its_first_16_over_the_rtl_as_over_the_software',),
+           "RtlBus taking a long transfer's last 16 bits for its command"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

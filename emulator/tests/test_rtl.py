@@ -424,3 +424,24 @@ def test_streaming_frames_through_the_harness_reads_back_every_code(harness, cap
     assert res["mismatched_requests"] == 0 and res["unrequested"] == 0
     assert cli.main(["rtl", "stream", "--seconds", "0.01"]) == 0
     assert "streamed 0.01 s of the default frame through the RTL" in capsys.readouterr().out
+
+
+def test_a_transfer_longer_than_16_bits_commands_with_its_first_16_over_the_rtl_as_over_the_software(harness):
+    """A 24-bit transfer whose first 16 bits are a sampling command (8 more clocked after it), then a read: the
+    command is the first 16 bits clocked, the same conversion and word over RtlBus as over the software bus."""
+    from emulator.rtl.harness import RtlBus
+    from emulator.sensor import Sensor
+    from emulator.spi.model import Bus, SensorPort, Transfer
+
+    def sensors():
+        return {1: Sensor(channels_read=["PDC", "PAC"], seed=3)}
+
+    steps = [Transfer(0.01, SELECT_CODE[1], _cmd("PDC") << 8 | 0x5A, 24, 1e6), Transfer(0.0102, SELECT_CODE[1], 0)]
+    bus = Bus({n: SensorPort(s, n) for n, s in sensors().items()})
+    software = [bus.transfer(t) for t in steps]
+    rtl = RtlBus(sensors(), harness=harness)
+    try:
+        words = [rtl.transfer(t) for t in steps]
+    finally:
+        rtl.close()
+    assert words == software and proto.decode_response(np.array(software[-1:], np.uint16))[1].all()
