@@ -2197,6 +2197,16 @@ CATALOGUE += [
            'np.asarray(mosi, np.uint64) & np.uint64(0xFFFF)',
            ('emulator/tests/test_rtl.py::test_a_transfer_longer_than_16_bits_commands_with_its_first_16_over_the_rtl_as_over_the_software',),
            "RtlBus taking a long transfer's last 16 bits for its command"),
+    Mutant('golden-busy-gap-10us', 'protocol', 'emulator/spi/golden.py',
+           's.sample(0, gap_ps=1 * US).sample(1).read()  # ADC busy',
+           's.sample(0, gap_ps=10 * US).sample(1).read()  # ADC busy',
+           ('emulator/tests/test_spi_vectors.py::test_the_generator_still_makes_the_shipped_golden_set_but_for_its_adc_codes',),
+           "the golden generator's busy case no longer busy (the fixtures would drift from it unseen)"),
+    Mutant('random-traffic-never-holds-cs', 'protocol', 'emulator/spi/vectors.py',
+           'keep = bool(rng.random() < 0.1)',
+           'keep = False',
+           ('emulator/tests/test_spi_vectors.py::test_the_generator_still_makes_the_shipped_golden_set_but_for_its_adc_codes',),
+           'the random traffic quietly never holding chip select'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

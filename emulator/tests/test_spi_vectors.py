@@ -44,3 +44,25 @@ def test_a_replay_refuses_conversions_that_differ_from_the_recording(edit, words
     edit(vec["conversions"])
     with pytest.raises(AssertionError, match=words):
         V.replay(vec)
+
+
+def test_the_generator_still_makes_the_shipped_golden_set_but_for_its_adc_codes():
+    """`python -m emulator.spi.golden` regenerates fixtures/spi_vectors/: the same files with the same transfers
+    (instants, selects, bits, MOSI, clocks, held selects), the same error words (of one sensor), faults, resets and
+    conversions (sensor, channel, instant) — only the ADC codes and the data words carrying them may differ, as the sensor
+    model evolves. A traffic script that drifted from the fixtures would otherwise go unnoticed."""
+    from emulator.spi import golden as G
+
+    made = G.all_vectors()
+    assert set(made) == {p.stem for p in GOLDEN}
+    for path in GOLDEN:
+        old, new = V.load(path), made[path.stem]
+        assert [{k: v for k, v in d.items() if k != "miso"} for d in new["transfers"]] == \
+               [{k: v for k, v in d.items() if k != "miso"} for d in old["transfers"]], path.stem
+        errors = [(i, d["miso"]) for i, d in enumerate(old["transfers"])  # (to all sensors: ORed with data)
+                  if int(d["miso"], 16) >> 8 == 0xA5 and d["nbits"] == 16 and d["cs"] != 7]
+        assert all(new["transfers"][i]["miso"] == w for i, w in errors), path.stem
+        assert [{k: c[k] for k in ("sensor", "channel", "t_ps")} for c in new["conversions"]] == \
+               [{k: c[k] for k in ("sensor", "channel", "t_ps")} for c in old["conversions"]], path.stem
+        assert (new["faults"], new.get("resets", {}), new["sensors"], new["pull_up"]) == \
+               (old["faults"], old.get("resets", {}), old["sensors"], old["pull_up"]), path.stem
