@@ -2207,6 +2207,16 @@ CATALOGUE += [
            'keep = False',
            ('emulator/tests/test_spi_vectors.py::test_the_generator_still_makes_the_shipped_golden_set_but_for_its_adc_codes',),
            'the random traffic quietly never holding chip select'),
+    Mutant('cocotb-stuck-value-on-sensor-1', 'rtl', 'emulator/rtl/cocotb_bench.py',
+           'en["stuck_val"] |= f["miso_stuck"] << i',
+           'en["stuck_val"] |= f["miso_stuck"]',
+           ('emulator/tests/test_rtl.py::test_rtl_reproduces_every_golden_vector',),
+           "the cocotb bench putting sensor 2's MISO stuck value on sensor 1"),
+    Mutant('cocotb-mosi-flip-on-sensor-1', 'rtl', 'emulator/rtl/cocotb_bench.py',
+           'mosi_bits |= f["mosi_flip_bit"] << (12 * i)',
+           'mosi_bits |= f["mosi_flip_bit"]',
+           ('emulator/tests/test_rtl.py::test_rtl_reproduces_every_golden_vector',),
+           "the cocotb bench putting sensor 3's MOSI flip on sensor 1's bits"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -82,14 +82,20 @@ def resend_and_write() -> dict:
     return record("resend (both spellings) and parameter writes", s.items)
 
 
-def five_sensors(present=(1, 2, 3, 4, 5), pull_up=False, name="five sensors") -> dict:
+def _broadcast_then_each() -> list[dict]:
+    """Four sampling commands to all sensors, each followed by a read of every sensor in turn."""
     s = Script()
     for channel in (0, 1, 0, 17):
         s.sample(channel, cs=SELECT_ALL, gap_ps=50 * US)
         for n in range(1, 6):  # back to back, the select code switching with chip select held
             s.add(SELECT_CODE[n], 0, 16, gap_ps=0, keep_cs=True)
         s.release()
-    return record(f"{name}: broadcast sampling, per-sensor reads", s.items, sensors=present, pull_up=pull_up)
+    return s.items
+
+
+def five_sensors(present=(1, 2, 3, 4, 5), pull_up=False, name="five sensors", faults=None) -> dict:
+    return record(f"{name}: broadcast sampling, per-sensor reads", _broadcast_then_each(), sensors=present,
+                  pull_up=pull_up, faults=faults)
 
 
 def with_fault(name: str, faults: dict, builder=None) -> dict:
@@ -115,6 +121,10 @@ def fault_vectors() -> dict[str, dict]:
     out["clock_above_limit"] = record("fault: SCK above 10 MHz", s.items)
     out["sensor_absent"] = five_sensors((1, 2, 4), name="sensors 3 and 5 absent (MISO pulled down)")
     out["sensor_absent_pull_up"] = five_sensors((1, 2, 4), pull_up=True, name="sensors 3 and 5 absent (pull-up)")
+    # faults on sensors other than the first: each bench must route a sensor's fault to that sensor alone
+    out["other_sensors"] = five_sensors(
+        name="fault: MISO stuck high on sensor 2, MOSI bit 4 inverted on sensor 3",
+        faults={2: Faults(miso_stuck=1), 3: Faults(mosi_flip_bit=4)})
     # a reset between command and read (the pending result is gone), then one between a served read and a resend
     # command (the resend buffer is gone too)
     s = Script().sample(1).sample(0).read().sample(1).read().add(S1, 0x2000).read()
