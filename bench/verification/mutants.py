@@ -2217,6 +2217,21 @@ CATALOGUE += [
            'mosi_bits |= f["mosi_flip_bit"]',
            ('emulator/tests/test_rtl.py::test_rtl_reproduces_every_golden_vector',),
            "the cocotb bench putting sensor 3's MOSI flip on sensor 1's bits"),
+    Mutant('rtl-lint-sp-not-linted', 'rtl', 'emulator/rtl/build.py',
+           'f"-GSP=5\'d{int(sp)}", *map(str, SOURCES)]',
+           'f"-GSP=5\'d0", *map(str, SOURCES)]',
+           ('emulator/tests/test_variant_sp.py::test_rtl_lint_clean_with_sp_sensors',),
+           'the SP lint run linting the BioTac-only configuration'),
+    Mutant('rtlbus-sp-mask-unchecked', 'rtl', 'emulator/rtl/harness.py',
+           '        if self.harness.sp != mask:',
+           '        if False:',
+           ('emulator/tests/test_variant_sp.py::test_an_rtl_bus_refuses_a_harness_built_for_other_variants',),
+           'an SP sensor accepted on a BioTac-only harness'),
+    Mutant('cli-rtl-waves-note-silent', 'rtl', 'bench/cli/rtl.py',
+           'if a.waves and rtl.wave_format != "fst":',
+           'if False:',
+           ('bench/tests/test_documented_cli.py::test_rtl_vectors_with_waves_replays_the_file_and_writes_a_waveform',),
+           'rtl vectors --waves writing VCD without saying why'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -187,6 +187,16 @@ def test_rtl_lint_clean_with_sp_sensors(tmp_path):
 
     r = build.lint(tmp_path, sp=0b11111)
     assert r.returncode == 0, r.stderr
+    assert "-GSP=5'd31" in r.args  # the SP configuration is what was linted
+
+
+def test_an_rtl_bus_refuses_a_harness_built_for_other_variants():
+    """The harness is compiled for an SP mask: sensors needing another (an SP as sensor 1 on a BioTac-only
+    harness) are refused, naming both masks, before anything is built or run."""
+    from emulator.rtl.harness import Harness, RtlBus
+
+    with pytest.raises(ValueError, match="built for SP mask 0, the sensors need 1"):
+        RtlBus({1: Sensor(channels_read=["PAC"], variant="biotac-sp")}, harness=Harness(sp=0))
 
 
 @pytest.mark.rtl
