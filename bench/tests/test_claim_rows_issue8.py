@@ -88,6 +88,9 @@ def test_stick_phase_from_a_force_log():
         stick_phase(t, np.zeros_like(t), slip)
     with pytest.raises(ValueError, match="slips at the stage's first move"):
         stick_phase(t, stage, stage)
+    # the onset is the first instant the slip *reaches* half the stage's velocity (exactly half counts)
+    half = stick_phase(np.arange(6) * 0.01, np.array([0, 1, 1, 1, 1, 1.0]), np.array([0, 0, 0.2, 0.5, 0.9, 1]))
+    assert (half.stage_start_s, half.last_stuck_s, half.slip_onset_s) == pytest.approx((0.01, 0.02, 0.03))
 
 
 def test_the_causal_band_pass_leaks_nothing_backward_and_keeps_its_band():

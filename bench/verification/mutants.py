@@ -2232,6 +2232,11 @@ CATALOGUE += [
            'if False:',
            ('bench/tests/test_documented_cli.py::test_rtl_vectors_with_waves_replays_the_file_and_writes_a_waveform',),
            'rtl vectors --waves writing VCD without saying why'),
+    Mutant('slip-onset-strictly-above-half', 'sliding', 'bench/verification/analysis.py',
+           'slipping = moving & (slip >= slipping_fraction * v)',
+           'slipping = moving & (slip > slipping_fraction * v)',
+           ('bench/tests/test_claim_rows_issue8.py::test_stick_phase_from_a_force_log',),
+           "slip onset only once the slip passes half the stage's velocity (reaching it not counted)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
