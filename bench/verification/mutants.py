@@ -2237,6 +2237,11 @@ CATALOGUE += [
            'slipping = moving & (slip > slipping_fraction * v)',
            ('bench/tests/test_claim_rows_issue8.py::test_stick_phase_from_a_force_log',),
            "slip onset only once the slip passes half the stage's velocity (reaching it not counted)"),
+    Mutant('harness-deferred-conversion-dropped', 'rtl', 'emulator/rtl/harness.py',
+           '    n_acc += deferred >= 0',
+           '    n_acc += 0',
+           ('emulator/tests/test_rtl.py::test_a_call_that_ends_on_a_sampling_command_converts_it_over_the_rtl_as_over_the_software',),
+           "RtlBus computing no code for a call's last sampling command (HarnessError)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

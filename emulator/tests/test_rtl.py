@@ -445,3 +445,13 @@ def test_a_transfer_longer_than_16_bits_commands_with_its_first_16_over_the_rtl_
     finally:
         rtl.close()
     assert words == software and proto.decode_response(np.array(software[-1:], np.uint16))[1].all()
+
+
+def test_a_call_that_ends_on_a_sampling_command_converts_it_over_the_rtl_as_over_the_software(harness):
+    """A host that sends a sampling command in one call and reads its result in the next (50 µs later, the bus
+    quiet in between): the RTL asks for the conversion within the first call and gets the software model's code."""
+    start, mosi = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")), (260, 0))
+    for split in (1, 3):
+        words = _assert_all_routes_agree(_words_over_every_route(
+            harness, {1: ["PDC", "PAC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi, split=split))
+        assert proto.decode_response(words[[1, 3]])[1].all()
