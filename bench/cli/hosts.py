@@ -327,7 +327,7 @@ def _cmd_record(a) -> int:
                 if drv.disconnected:
                     raise OSError(f"{a.port}: the port closed before the bridge answered START")
                 raise OSError(f"{a.port}: no answer to START within 5 s (is the bridge running?)")
-            drv.parser.count_afresh()  # the recording's CRC errors and drops are counted from its START on
+            drv.count_afresh()  # the recording's frames, CRC errors and drops are counted from its START on
             if not a.quiet:
                 print(f"recording {a.seconds:g} s from {a.port}", file=sys.stderr, flush=True)
             with tqdm(total=round(a.seconds, 3), unit="s", disable=a.quiet,

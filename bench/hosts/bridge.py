@@ -15,7 +15,8 @@ behaves like a UART without flow control: bytes arrive at the baud rate, and a h
 loses what does not fit (an overrun) while the firmware streams on; ``overrun_frames()`` lists the frames that
 lost bytes.  Unpaced (``realtime=False``, the default for tests), virtual time has no relation to the host's
 clock, so the firmware waits for a host that is reading (back-pressure: nothing is lost however slow the host);
-a host that has not read for :data:`HOST_GONE_S` is taken as gone, and bytes overrun as in real time.
+a host that has not read for :data:`HOST_GONE_S` (``host_gone_s=``: raise it for a host that may stall longer,
+e.g. on a loaded CI machine) is taken as gone, and bytes overrun as in real time.
 
 Virtual time, and so every stimulus and scheduled fault, counts from power-on (t = 0, when the bench starts).
 Unpaced, it stands still at the end of the firmware's start-up until the host sends its first byte (usually
@@ -47,16 +48,19 @@ class FirmwareBench:
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
                  step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software",
                  rx_buffer: int = RX_BUFFER_BYTES, keep_arrivals: bool = False, pattern=None,
-                 variant: str = "biotac"):
+                 variant: str = "biotac", host_gone_s: float = HOST_GONE_S):
         if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
         if not (isinstance(baudrate, int) and baudrate > 0):
             raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
+        if not (isinstance(host_gone_s, (int, float)) and math.isfinite(host_gone_s) and host_gone_s > 0):
+            raise ValueError(f"host_gone_s = {host_gone_s!r}: must be a number > 0 (wall seconds)")
         sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)
         self.link = PtyLink(baudrate, rx_buffer=rx_buffer, keep_arrivals=keep_arrivals)
         self.baudrate = baudrate
         self._line_free_at = 0.0  # wall time when the paced UART has sent everything so far
-        self._host_gone = False  # unpaced: the buffer stayed full for HOST_GONE_S (no more waiting until it drains)
+        self.host_gone_s = host_gone_s
+        self._host_gone = False  # unpaced: the buffer stayed full for host_gone_s (no more waiting until it drains)
         self.port = self.link.path
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
@@ -95,7 +99,7 @@ class FirmwareBench:
         # all kept, also when the pty's fill count, lagging the kernel, finds less room once delivering
         if self.link.room() < len(data):
             if not self._host_gone:
-                self._host_gone = not self.link.wait_for_room(len(data), HOST_GONE_S, self._stop)
+                self._host_gone = not self.link.wait_for_room(len(data), self.host_gone_s, self._stop)
         else:
             self._host_gone = False
         self.link.deliver(data, keep_all=not self._host_gone)

@@ -32,6 +32,9 @@ SLOT_RATE_HZ = 4400.0  # the firmware's sampling slots: a frame of n slots lasts
 #: A command whose reply has not come within this many seconds is taken as lost (its reply, if it ever comes,
 #: is then matched to a later command of the same type, or counted as unsolicited).
 REPLY_HORIZON_S = 5.0
+#: Data frames read but not yet taken by :meth:`BridgeDriver.frames` are kept, oldest first, up to this many (60 s
+#: of 44-slot frames); beyond it the oldest are discarded and counted in ``BridgeDriver.backlog_discarded``.
+BACKLOG_FRAMES = 6000
 
 
 def _crc16_bitwise(data: bytes) -> int:
@@ -336,6 +339,10 @@ class BridgeDriver:
     command of its type still waiting (commands unanswered for :data:`REPLY_HORIZON_S` are taken as lost),
     and :meth:`wait_for` returns the reply to the *latest* command of that type — never a stale reply to an
     earlier one.  Replies nobody asked for are counted in ``unsolicited_replies`` and dropped.
+
+    Every data frame read, whoever read it (:meth:`frames`, :meth:`wait_for`, :meth:`poll`), goes to the callbacks
+    at once and waits in a backlog until :meth:`frames` yields it: each frame is yielded once, in order, also
+    across calls that stop at ``max_frames`` and across waits for a reply (:data:`BACKLOG_FRAMES` at most).
     """
 
     def __init__(self, port, baudrate: int = 3_000_000, timeout: float = 0.05):
@@ -356,6 +363,8 @@ class BridgeDriver:
         self._waiting: dict[int, deque] = {}  # command type -> deque of (number, time sent), oldest first
         self._latest: dict[int, int] = {}  # command type -> number of the latest command of that type
         self._answers: dict[int, object] = {}  # command number -> its reply
+        self._backlog: deque = deque()  # data frames read, not yet yielded by frames(), oldest first
+        self.backlog_discarded = 0  # frames dropped from a full backlog (nobody took them with frames())
 
     def close(self) -> None:
         self.serial.close()
@@ -405,8 +414,15 @@ class BridgeDriver:
             for k in sorted(self._answers)[:-256]:
                 del self._answers[k]
 
+    def count_afresh(self) -> None:
+        """From here on: the parser's statistics and sequence tracking start over, and the frames read so far but
+        not yet taken by :meth:`frames` are forgotten (what an earlier session left streaming is not this one's)."""
+        self.parser.count_afresh()
+        self._backlog.clear()
+
     def poll(self) -> list:
-        """Read what has arrived; returns the decoded items (frames, statuses, acks)."""
+        """Read what has arrived; returns the decoded items (frames, statuses, acks).  Low level: the data frames
+        among them also wait in the backlog for :meth:`frames` (use one or the other to take frames)."""
         try:
             data = self.serial.read(max(1, self.serial.in_waiting or 1))
         except OSError:  # EIO: the other side of the pty went away (pyserial's SerialException is an OSError)
@@ -417,6 +433,10 @@ class BridgeDriver:
             if isinstance(item, DataFrame):
                 for cb in self.callbacks:
                     cb(item)
+                if len(self._backlog) >= BACKLOG_FRAMES:
+                    self._backlog.popleft()
+                    self.backlog_discarded += 1
+                self._backlog.append(item)
             else:
                 self._file_reply(item)
         return items
@@ -442,18 +462,16 @@ class BridgeDriver:
             self.poll()
 
     def frames(self, max_frames: int | None = None, timeout_s: float = 5.0):
-        """Yield data frames; stops after ``max_frames`` or when nothing arrives for ``timeout_s``."""
+        """Yield data frames, each once and in order (those read earlier first, see the class); stops after
+        ``max_frames`` or when nothing arrives for ``timeout_s``."""
         got = 0
         idle_since = time.monotonic()
         while max_frames is None or got < max_frames:
-            items = self.poll()
-            if items:
+            if self._backlog:
+                got += 1
+                yield self._backlog.popleft()
+                continue
+            if self.poll():
                 idle_since = time.monotonic()
-            for item in items:
-                if isinstance(item, DataFrame):
-                    got += 1
-                    yield item
-                    if max_frames is not None and got >= max_frames:
-                        return
-            if self.disconnected or time.monotonic() - idle_since > timeout_s:
+            elif self.disconnected or time.monotonic() - idle_since > timeout_s:
                 return

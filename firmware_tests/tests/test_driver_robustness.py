@@ -345,3 +345,51 @@ def test_a_pattern_longer_than_the_firmware_takes_is_refused_before_it_is_sent()
         finally:
             drv.close()
     assert status is not None and status.command_errors == 0
+
+
+def test_frames_yields_every_frame_once_in_order_across_calls_and_waits_for_replies():
+    """Frames that arrive in one read beyond ``max_frames``, and frames read while waiting for an ACK, are yielded
+    by the next ``frames()`` call, in order: nothing between two calls is lost without a count (they used to be,
+    silently: the parser had counted them, so no drop showed)."""
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    port.rx += b"".join(data_frame(s) for s in range(5))
+    port.in_waiting = len(port.rx)
+    assert [f.seq for f in drv.frames(max_frames=2, timeout_s=0.1)] == [0, 1]  # 0-4 arrived in one read
+    drv.set_pattern([0, 1])
+    port.rx += data_frame(5)
+    port.answer(CMD_PATTERN)
+    port.rx += data_frame(6)
+    port.in_waiting = len(port.rx)
+    assert drv.wait_for(CMD_PATTERN, timeout_s=0.5) == ("ack", CMD_PATTERN, 0)
+    assert [f.seq for f in drv.frames(timeout_s=0.1)] == [2, 3, 4, 5, 6]
+    assert drv.parser.stats.frames == 7 and drv.parser.stats.dropped_frames == 0 and drv.backlog_discarded == 0
+
+
+def test_a_backlog_nobody_takes_is_bounded_and_counts_what_it_discards(monkeypatch):
+    """A program that only uses callbacks never calls ``frames()``: the backlog keeps the newest
+    ``BACKLOG_FRAMES`` and counts the rest, rather than growing for ever; the callbacks saw every frame."""
+    monkeypatch.setattr(D, "BACKLOG_FRAMES", 3)
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    seen = []
+    drv.on_frame(lambda f: seen.append(f.seq))
+    port.rx += b"".join(data_frame(s) for s in range(8))
+    port.in_waiting = len(port.rx)
+    drv.poll()
+    assert seen == list(range(8)) and drv.backlog_discarded == 5
+    assert [f.seq for f in drv.frames(timeout_s=0.05)] == [5, 6, 7]
+
+
+def test_count_afresh_forgets_the_frames_not_yet_taken_with_the_old_counts():
+    """What ``record`` does after START's ACK: frames of an earlier session still waiting are not this one's."""
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    port.rx += b"".join(data_frame(s) for s in (40, 41))
+    port.in_waiting = len(port.rx)
+    drv.poll()
+    drv.count_afresh()
+    port.rx += data_frame(0)
+    port.in_waiting = len(port.rx)
+    assert [f.seq for f in drv.frames(timeout_s=0.05)] == [0]
+    assert drv.parser.stats.frames == 1

@@ -65,18 +65,21 @@ def test_a_host_that_stops_reading_for_6_s_loses_what_a_real_uart_would_and_the_
 
 
 def test_unpaced_the_firmware_waits_for_a_slow_host_and_loses_nothing():
-    """Unpaced (the tests' default) virtual time waits while the buffer is full and the host still reads."""
-    with FirmwareBench(1) as fb:
+    """Unpaced (the tests' default) virtual time waits while the buffer is full and the host still reads.  The
+    pauses are 50 ms; ``host_gone_s`` is raised to 2 s so that a loaded machine stalling this process for a few
+    hundred ms does not make the host look gone."""
+    with FirmwareBench(1, host_gone_s=2.0) as fb:
         drv = BridgeDriver(fb.port)
         drv.start()
         assert drv.wait_for(CMD_START) is not None
         frames = []
         for _ in range(20):
             frames += list(drv.frames(max_frames=10, timeout_s=5))
-            time.sleep(0.05)  # a slow host: 20 × 50 ms pauses, each shorter than HOST_GONE_S
+            time.sleep(0.05)  # a slow host: 20 × 50 ms pauses, each shorter than host_gone_s
         overrun = fb.link.bytes_overrun
         drv.close()
     assert len(frames) == 200 and drv.parser.stats.dropped_frames == 0 and overrun == 0
+    assert [f.seq for f in frames] == list(range(frames[0].seq, frames[0].seq + 200))  # none skipped between reads
 
 
 def test_unpaced_a_host_gone_for_longer_than_host_gone_s_loses_bytes_and_the_firmware_runs_on():
@@ -115,14 +118,15 @@ def test_a_frame_that_lost_only_its_crc_is_counted_lost(lost_of_frame_8, lost):
 
 
 def test_unpaced_a_host_back_from_a_long_pause_is_waited_for_again():
-    """A host gone for 1 s (longer than HOST_GONE_S) loses bytes; once it reads again and the buffer has drained,
-    the firmware waits for it as before: twenty 50 ms pauses (each shorter than HOST_GONE_S) lose nothing more."""
-    with FirmwareBench(1) as fb:
+    """A host gone for 1.5 s (longer than ``host_gone_s``, 0.5 s here) loses bytes; once it reads again and the
+    buffer has drained, the firmware waits for it as before: twenty 50 ms pauses (each a tenth of ``host_gone_s``,
+    margin for a loaded machine) lose nothing more."""
+    with FirmwareBench(1, host_gone_s=0.5) as fb:
         drv = BridgeDriver(fb.port)
         drv.start()
         assert drv.wait_for(CMD_START) is not None
         list(drv.frames(max_frames=10, timeout_s=5))
-        time.sleep(1.0)  # gone
+        time.sleep(1.5)  # gone
         list(drv.frames(max_frames=100, timeout_s=5))  # back: reads on until the buffer has drained
         lost_while_gone = fb.link.bytes_overrun
         frames = []
@@ -132,4 +136,26 @@ def test_unpaced_a_host_back_from_a_long_pause_is_waited_for_again():
         lost_after = fb.link.bytes_overrun
         drv.close()
     assert lost_while_gone > 0 and len(frames) == 200
+    assert [f.seq for f in frames] == list(range(frames[0].seq, frames[0].seq + 200))
     assert lost_after == lost_while_gone
+
+
+def test_unpaced_a_raised_host_gone_s_waits_through_a_pause_that_the_default_calls_gone():
+    """``host_gone_s`` is honoured: a host that stops reading for 1 s, which the default 0.2 s takes as gone (the
+    test above: bytes overrun), loses nothing when the bench is told to wait 5 s."""
+    with FirmwareBench(1, host_gone_s=5.0) as fb:
+        drv = BridgeDriver(fb.port)
+        drv.start()
+        assert drv.wait_for(CMD_START) is not None
+        first = list(drv.frames(max_frames=10, timeout_s=5))
+        time.sleep(1.0)
+        more = list(drv.frames(max_frames=50, timeout_s=5))
+        drv.close()
+    assert fb.link.bytes_overrun == 0 and drv.parser.stats.dropped_frames == 0
+    assert [f.seq for f in first + more] == list(range(first[0].seq, first[0].seq + 60))
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), "1"])
+def test_an_impossible_host_gone_s_is_refused_before_anything_starts(bad):
+    with pytest.raises(ValueError, match=r"host_gone_s = .*must be a number > 0 \(wall seconds\)"):
+        FirmwareBench(1, host_gone_s=bad)
