@@ -190,6 +190,20 @@ def test_rtl_lint_clean_with_sp_sensors(tmp_path):
     assert "-GSP=5'd31" in r.args  # the SP configuration is what was linted
 
 
+def test_each_sp_mask_builds_its_own_harness_and_a_shared_folder_rebuilds_for_another_mask(tmp_path):
+    """The SP mask is a Verilog parameter compiled into the binary: by default each mask gets its own folder (so a
+    bus of BioTacs and one with an SP do not rebuild each other's harness), and a folder the caller shares between
+    masks is rebuilt when the mask changes (the mask is part of the build's digest), never run with the wrong one."""
+    from emulator.rtl.harness import DEFAULT_DIR, Harness
+
+    folders = {sp: Harness(sp=sp).build_dir for sp in (0, 0b00010, 0b11111)}
+    assert folders[0] == DEFAULT_DIR.resolve() and len(set(folders.values())) == 3
+    shared = [Harness(build_dir=tmp_path, sp=sp) for sp in (0, 0b00010)]
+    assert {h.build_dir for h in shared} == {tmp_path.resolve()}
+    assert shared[0]._sources_digest() != shared[1]._sources_digest()
+    assert shared[1]._sources_digest() == Harness(build_dir=tmp_path / "other", sp=0b00010)._sources_digest()
+
+
 def test_an_rtl_bus_refuses_a_harness_built_for_other_variants():
     """The harness is compiled for an SP mask: sensors needing another (an SP as sensor 1 on a BioTac-only
     harness) are refused, naming both masks, before anything is built or run."""
