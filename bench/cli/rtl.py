@@ -90,6 +90,22 @@ def vector_file_problem(path: str) -> str | None:
             Faults(**f)
         except (ValueError, TypeError):
             return f"not a vector file (faults[{key!r}] = {f!r:.80}: a sensor of sensors -> its faults' fields)"
+    from emulator import channels as ch
+
+    variants = vec.get("variants", {})
+    if not (isinstance(variants, dict) and all(
+            k.isascii() and k.isdigit() and int(k) in sensors and v in ch.VARIANTS for k, v in variants.items())):
+        return f"not a vector file (variants: a sensor of sensors -> one of {', '.join(ch.VARIANTS)})"
+    provided = vec.get("provided", {})
+    if not isinstance(provided, dict):
+        return "not a vector file (provided: a sensor of sensors -> the channel indices it provides)"
+    for key, chans in provided.items():
+        recognised = (ch.variant(variants.get(key, ch.DEFAULT_VARIANT)).sampled_channels
+                      if key.isascii() and key.isdigit() and int(key) in sensors else None)
+        if not (recognised and isinstance(chans, list) and all(
+                isinstance(c, int) and not isinstance(c, bool) and c in recognised for c in chans)):
+            return (f"not a vector file (provided[{key!r}] = {chans!r:.80}: a sensor of sensors -> channel indices "
+                    f"its variant recognises)")
     resets = vec.get("resets", {})
     if not isinstance(resets, dict) or not all(
             k.isascii() and k.isdigit() and k == str(int(k)) and int(k) < len(vec["transfers"]) and isinstance(v, list)
@@ -120,7 +136,7 @@ def _cmd_rtl(a) -> int:
             print("lint clean: verilator --lint-only -Wall")
         return r.returncode
     if a.action == "vectors":
-        from emulator.rtl.runner import Rtl
+        from emulator.rtl.runner import Rtl, build_dir_for
         from emulator.spi import vectors as V
 
         if not a.files:
@@ -132,12 +148,18 @@ def _cmd_rtl(a) -> int:
             if problem:
                 print(f"biotac-bench rtl: error: argument files: {f}: {problem}", file=sys.stderr)
                 return 2
-        rtl = Rtl(REPO / "out" / ("rtl_build_waves" if a.waves else "rtl_build"), waves=a.waves)
-        if a.waves and rtl.wave_format != "fst":
-            print("note: FST needs the lz4 headers (Debian: apt-get install liblz4-dev); writing VCD instead",
-                  file=sys.stderr)
-        rtl.build()
-        results = rtl.run_vectors([Path(f).resolve() for f in a.files])
+        by_mask: dict[int, list[str]] = {}  # one build per SP mask (the sensors' variants are an RTL parameter)
+        for f in a.files:
+            by_mask.setdefault(build.sp_mask(V.variants_of(V.load(f))), []).append(f)
+        results, rtls = {}, []
+        for sp, files in sorted(by_mask.items()):
+            rtl = Rtl(build_dir_for(sp, a.waves), waves=a.waves, sp=sp)
+            if a.waves and rtl.wave_format != "fst" and not rtls:
+                print("note: FST needs the lz4 headers (Debian: apt-get install liblz4-dev); writing VCD instead",
+                      file=sys.stderr)
+            rtl.build()
+            results.update(rtl.run_vectors([Path(f).resolve() for f in files]))
+            rtls.append(rtl)
         bad = 0
         for f in a.files:
             vec, res = V.load(f), results[str(Path(f).resolve())]
@@ -149,7 +171,7 @@ def _cmd_rtl(a) -> int:
                   + (f", {len(res['mismatched_requests'])} ADC requests differ" if res["mismatched_requests"] else "")
                   + (f", {unrequested} recorded conversions never requested" if unrequested else ""))
         if a.waves:
-            print("waveforms: " + ", ".join(str(p) for p in rtl.wave_files()))
+            print("waveforms: " + ", ".join(str(p) for r in rtls for p in r.wave_files()))
         return 1 if bad else 0
     from emulator.rtl.harness import Harness
 
@@ -171,7 +193,9 @@ The Verilog twin of the sensor's SPI side (the same RTL `run --spi rtl` uses), b
 --waves (with vectors) also dumps the simulation's waveform into out/rtl_build_waves/: FST when the C++ compiler
 finds the lz4 headers (lz4.h; Debian: apt-get install liblz4-dev), otherwise VCD (the same signals, a larger
 file); a note says when it falls back, and the command prints the waveform files it wrote.  The first use
-compiles the RTL with Verilator (into out/); later runs reuse the build.
+compiles the RTL with Verilator (into out/); later runs reuse the build.  A file whose sensors include a
+BioTac SP (its "variants") runs on an RTL built for that mix of variants, in a folder of its own
+(out/rtl_build_sp<mask>/, out/rtl_build_waves_sp<mask>/ with --waves; bit n-1 of the mask: sensor n is an SP).
 
   biotac-bench rtl lint
   biotac-bench rtl vectors fixtures/spi_vectors/properties.json --waves

@@ -282,3 +282,17 @@ def test_rtl_vectors_fails_on_a_word_or_an_unrequested_conversion_and_reads_word
     said = capsys.readouterr().out
     assert "changed.json: 3 transfers, 1 differ from the reference" in said, said
     assert "extra.json: 3 transfers, 0 differ from the reference, 1 recorded conversions never requested" in said
+
+
+@pytest.mark.rtl
+def test_rtl_vectors_runs_a_file_with_a_biotac_sp_on_an_rtl_built_for_it(capsys):
+    """Files for different mixes of variants in one command: each runs on an RTL built for its SP mask (the
+    BioTac-only file on the default build, the SP beside a partial BioTac on out/rtl_build_sp1/), and each is
+    reported; exit 0 as both match."""
+    sp_file, plain = (FIXTURES / "spi_vectors" / f"{n}.json" for n in ("variants_and_provided", "properties"))
+    assert cli.main(["rtl", "vectors", str(sp_file), str(plain)]) == 0
+    said = capsys.readouterr().out
+    n_sp = len(json.loads(sp_file.read_text())["transfers"])
+    assert f"variants_and_provided.json: {n_sp} transfers, 0 differ from the reference" in said, said
+    assert "properties.json: 88 transfers, 0 differ from the reference" in said, said
+    assert (REPO / "out" / "rtl_build_sp1" / "sp_mask.txt").read_text() == "1"

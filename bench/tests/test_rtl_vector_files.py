@@ -56,7 +56,21 @@ BAD = {
     "a select code past the 3 bits": (_set(("transfers", 0, "cs"), 8), "transfers[0]"),
     "a reset of an absent sensor": (_set(("resets",), {"0": [3]}), "resets"),
     "pull_up that is not a boolean": (_set(("pull_up",), 1), "pull_up"),
+    # the sensors' variants and provided channels (the SP beside a partial BioTac)
+    "a variant nobody makes": (_set(("variants",), {"1": "biotac-xl"}), "variants: a sensor of sensors"),
+    "a variant for an absent sensor": (_set(("variants",), {"3": "biotac-sp"}), "variants: a sensor of sensors"),
+    "provided channels that are names": (_set(("provided",), {"1": ["PAC"]}), "provided['1']"),
+    "a provided channel its variant lacks": (_set(("provided",), {"1": [36]}), "its variant recognises"),
+    "provided channels of an absent sensor": (_set(("provided",), {"4": [0]}), "provided['4']"),
+    "provided not a table": (_set(("provided",), [0, 1]), "provided: a sensor of sensors"),
 }
+
+
+def test_an_sp_sensor_may_provide_the_channels_only_an_sp_has(tmp_path):
+    """E20 (36) is refused for a BioTac (above) and accepted for a sensor the file makes an SP."""
+    f = tmp_path / "v.json"
+    f.write_text(json.dumps(_with(lambda v: v.update(variants={"1": "biotac-sp"}, provided={"1": [0, 36]}))))
+    assert vector_file_problem(str(f)) is None
 
 
 def test_every_shipped_vector_file_passes():

@@ -18,6 +18,7 @@ from cocotb.triggers import Timer
 from cocotb.utils import get_sim_time
 
 from emulator.spi.model import Transfer
+from emulator.spi.vectors import rtl_provided_masks
 
 PS = 1e-12
 
@@ -144,6 +145,7 @@ async def vectors(dut):
         await Timer(offset[0] - get_sim_time("ps") - 500_000, unit="ps")
         await reset(dut, sum(1 << (s - 1) for s in vec["sensors"]), vec["pull_up"])
         set_faults(dut, vec["faults"])
+        dut.provided.value = sum(m << (64 * i) for i, m in enumerate(rtl_provided_masks(vec)))
         queues.clear()
         queues.update({s: [c for c in vec["conversions"] if c["sensor"] == s] for s in vec["sensors"]})
         mismatched.clear()

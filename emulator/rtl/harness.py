@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from emulator.rtl import build
+from emulator.spi.vectors import rtl_provided_masks, variants_of
 
 HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_harness"
@@ -31,15 +32,6 @@ CLOSE_TIMEOUT_S = 5.0
 
 class HarnessError(RuntimeError):
     pass
-
-
-#: The ``provided`` mask of a sensor that provides every channel it recognises (bit c: channel c).
-ALL_CHANNELS_MASK = 2**64 - 1
-
-
-def channel_mask(channels) -> int:
-    """The RTL's ``provided`` bits (bit c set: channel index c) of a set of channel indices."""
-    return sum(1 << int(c) for c in set(channels))
 
 
 def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int):
@@ -117,7 +109,6 @@ class Harness:
         """The schedule's header: sensors present, MISO pull, faults, and the channels each sensor provides
         (``vec["provided"]``: {sensor: channel indices}; a sensor not named there provides all it recognises)."""
         f = {int(k): v for k, v in vec.get("faults", {}).items()}
-        provided = {int(k): channel_mask(v) for k, v in vec.get("provided", {}).items()}
 
         def mask(pred):
             return sum(1 << (s - 1) for s, d in f.items() if pred(d))
@@ -131,7 +122,7 @@ class Harness:
                            mask(lambda d: d.get("miso_stuck") is not None), mask(lambda d: d.get("miso_stuck") == 1),
                            mask(lambda d: d.get("bad_parity")), mask(lambda d: d.get("slow_response")),
                            *bits("miso_flip_bit"), *bits("mosi_flip_bit"),
-                           *(provided.get(i, ALL_CHANNELS_MASK) for i in range(1, 6)), n)
+                           *rtl_provided_masks(vec), n)
 
     def run(self, vec: dict, transfers: np.ndarray, codes: np.ndarray) -> dict:
         self.ensure_built()
@@ -151,7 +142,12 @@ class Harness:
                 "evals": int(raw[n + 2]), "wall_s": wall}
 
     def play(self, vec: dict) -> dict:
-        """Replay a vector dict (see emulator.spi.vectors); returns MISO per transfer and request checks."""
+        """Replay a vector dict (see emulator.spi.vectors); returns MISO per transfer and request checks.  Its
+        sensors' variants must be this harness's SP mask (ValueError naming both)."""
+        need = build.sp_mask(variants_of(vec))
+        if need != self.sp:
+            raise ValueError(f"the vectors' BioTac SP sensors need a harness built for SP mask {need}; this one is "
+                             f"built for {self.sp} (Harness(sp={need}))")
         resets = {int(k): v for k, v in vec.get("resets", {}).items()}
         tr = np.zeros(len(vec["transfers"]), TRANSFER)
         for i, d in enumerate(vec["transfers"]):

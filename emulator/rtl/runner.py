@@ -12,6 +12,12 @@ from emulator.rtl import build
 DEFAULT_BUILD_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_build"
 
 
+def build_dir_for(sp: int = 0, waves: bool = False) -> Path:
+    """The default build folder of an SP mask, with or without waveform tracing (one build each)."""
+    name = DEFAULT_BUILD_DIR.name + ("_waves" if waves else "") + (f"_sp{sp}" if sp else "")
+    return DEFAULT_BUILD_DIR.with_name(name)
+
+
 class Rtl:
     """A built simulator of tb_top; ``run_vectors`` and ``stream_frames`` run cocotb tests in it.
 
@@ -22,8 +28,8 @@ class Rtl:
         if not (isinstance(sp, int) and 0 <= sp <= 31):
             raise ValueError(f"sp = {sp!r}: a 5-bit mask of BioTac SP sensors (0..31)")
         self.sp = sp
-        if build_dir is None:  # one build per mask: the parameter does not make the runner rebuild
-            build_dir = DEFAULT_BUILD_DIR if sp == 0 else DEFAULT_BUILD_DIR.with_name(f"rtl_build_sp{sp}")
+        if build_dir is None:  # one build per mask (a folder shared between masks is rebuilt at each change)
+            build_dir = build_dir_for(sp, waves)
         self.build_dir = Path(build_dir).resolve()
         self.waves = waves
         #: FST when the lz4 headers are there; otherwise cocotb's VCD (same signals, larger file)
@@ -39,9 +45,14 @@ class Rtl:
         args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
                 "-Wno-style", f"-GSP=5'd{self.sp}"]
         args += ["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else []
+        # the runner rebuilds when a source changes, not when a parameter does: a folder last built for another
+        # SP mask (or by a version that kept no stamp) is built afresh
+        stamp = self.build_dir / "sp_mask.txt"
+        other_mask = not (stamp.exists() and stamp.read_text() == str(self.sp))
         self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
                           build_dir=str(self.build_dir), build_args=args, waves=self.waves,
-                          timescale=("1ps", "1ps"), always=False, log_file=str(self.build_dir / "build.log"))
+                          timescale=("1ps", "1ps"), always=other_mask, log_file=str(self.build_dir / "build.log"))
+        stamp.write_text(str(self.sp))
 
     def _run(self, testcase: str, env: dict) -> dict:
         with tempfile.TemporaryDirectory() as tmp:
@@ -69,8 +80,16 @@ class Rtl:
         return sorted([*self.build_dir.glob("*.fst"), *self.build_dir.glob("*.vcd")])
 
     def run_vectors(self, paths) -> dict:
-        """Replay vector files in one simulation; returns {path: {"miso": [...], ...}}."""
+        """Replay vector files in one simulation; returns {path: {"miso": [...], ...}}.  Each file's sensor
+        variants must be this build's SP mask (ValueError naming the file and both masks)."""
+        from emulator.spi import vectors as V
+
         paths = [str(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+        for p in paths:
+            need = build.sp_mask(V.variants_of(V.load(p)))
+            if need != self.sp:
+                raise ValueError(f"{p}: its BioTac SP sensors need an RTL built for SP mask {need}; this one is "
+                                 f"built for {self.sp} (Rtl(sp={need}))")
         return self._run("vectors", {"BIOTAC_VECTORS": os.pathsep.join(paths)})
 
     def stream_frames(self, seconds: float, seed: int = 1) -> dict:

@@ -93,6 +93,28 @@ def _broadcast_then_each() -> list[dict]:
     return s.items
 
 
+def variants_and_provided() -> dict:
+    """A BioTac SP (sensor 1) beside a BioTac that provides only some channels (sensor 2): the SP answers
+    E20..E24 (0xC8..0xD0) and its own serial; the BioTac answers "EX" for E20 (not a channel it has) and for E2 and
+    TAC (channels it has but was not built to provide), data for the rest; a broadcast E20 converts on the SP only."""
+    s, s2 = Script(), SELECT_CODE[2]
+    for name in ("E20", "E21", "E22", "E23", "E24", "PAC"):
+        s.sample(channel_index(name, "biotac-sp"), cs=S1).read(cs=S1)
+    for name in ("E20", "E2", "TAC", "PAC", "E1"):
+        s.sample(channel_index(name, "biotac-sp"), cs=s2).read(cs=s2)
+    s.sample(channel_index("E20", "biotac-sp"), cs=SELECT_ALL, gap_ps=50 * US)
+    for n in (1, 2):
+        s.add(SELECT_CODE[n], 0, 16, gap_ps=0, keep_cs=True)
+    s.release()
+    for cs in (S1, s2):  # the serial numbers, byte by byte: 16 characters, the NUL, and 0xFF past it
+        s.add(cs, 0x6115)
+        for _ in range(18):
+            s.add(cs, 0, 8, gap_ps=10 * US, keep_cs=True)
+        s.release()
+    return record("a BioTac SP beside a BioTac providing PAC, PDC, TDC and E1 only", s.items, sensors=(1, 2),
+                  variants={1: "biotac-sp"}, provided={2: ["PAC", "PDC", "TDC", "E1"]})
+
+
 def five_sensors(present=(1, 2, 3, 4, 5), pull_up=False, name="five sensors", faults=None) -> dict:
     return record(f"{name}: broadcast sampling, per-sensor reads", _broadcast_then_each(), sensors=present,
                   pull_up=pull_up, faults=faults)
@@ -135,7 +157,8 @@ def fault_vectors() -> dict[str, dict]:
 
 def all_vectors() -> dict[str, dict]:
     out = {"sampling_and_errors": sampling_and_errors(), "properties": properties(),
-           "resend_and_write": resend_and_write(), "five_sensors": five_sensors()}
+           "resend_and_write": resend_and_write(), "five_sensors": five_sensors(),
+           "variants_and_provided": variants_and_provided()}
     out.update({f"fault_{k}": v for k, v in fault_vectors().items()})
     out["random"] = record("random traffic on three sensors", random_traffic(np.random.default_rng(2012), 1500,
                                                                             fast_clocks=True), sensors=(1, 2, 3))

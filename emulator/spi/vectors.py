@@ -1,6 +1,8 @@
 """Protocol vectors: transfers in, MISO and ADC conversions out — the contract both implementations meet.
 
-A vector file (JSON) holds the bus set-up (sensors present, MISO pull, faults), every transfer (start,
+A vector file (JSON) holds the bus set-up (sensors present, MISO pull, faults; optionally ``variants``,
+{sensor: "biotac-sp"} where a sensor is not the default BioTac, and ``provided``, {sensor: channel indices} where
+a sensor provides fewer channels than its variant recognises — the others answer "EX"), every transfer (start,
 select code, bits, MOSI, SCK half period, chip select kept) with the MISO the host must receive, and
 every conversion the sensors perform (sensor, channel, instant, code) in order.  Replaying feeds the
 recorded codes back, so vectors test the protocol, not the physics.
@@ -18,34 +20,53 @@ from pathlib import Path
 
 import numpy as np
 
-from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator import channels as ch
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources, Sensor
 from emulator.spi.model import SELECT_ALL, SELECT_CODE, SELECT_NONE, Bus, Faults, SensorPort, Transfer
 
 PS = 1e-12
-ALL_CHANNELS = tuple(DEFAULT_FRAME_NAMES)
+
+
+def variants_of(vectors: dict) -> dict[int, str]:
+    """{sensor: variant name} of a vector dict (every sensor the default BioTac unless ``variants`` says)."""
+    named = {int(k): v for k, v in vectors.get("variants", {}).items()}
+    return {int(n): named.get(int(n), ch.DEFAULT_VARIANT) for n in vectors["sensors"]}
+
+
+def provided_of(vectors: dict) -> dict[int, list[int]]:
+    """{sensor: channel indices it provides}: its variant's channels unless ``provided`` names fewer."""
+    named = {int(k): [int(c) for c in v] for k, v in vectors.get("provided", {}).items()}
+    return {n: named.get(n, sorted(ch.variant(v).sampled_channels)) for n, v in variants_of(vectors).items()}
+
+
+def rtl_provided_masks(vectors: dict) -> list[int]:
+    """The RTL's ``provided`` port for sensors 1..5 (bit c set: channel index c): the channels ``provided`` names,
+    or all 64 bits (every channel the sensor's variant recognises) for a sensor it does not name."""
+    named = {int(k): sum(1 << int(c) for c in set(v)) for k, v in vectors.get("provided", {}).items()}
+    return [named.get(n, 2**64 - 1) for n in range(1, 6)]
 
 
 class ScriptedCodes:
-    """A code source that replays recorded conversions in order and checks each request matches."""
+    """A code source that replays recorded conversions in order and checks each request matches; ``variant`` and
+    ``channels_read`` (indices) are the recorded sensor's."""
 
-    def __init__(self, conversions: list[dict], sensor_index: int, params: SensorParams | None = None):
+    def __init__(self, conversions: list[dict], sensor_index: int, params: SensorParams | None = None,
+                 variant: str = ch.DEFAULT_VARIANT, channels_read=None):
         self.queue = [c for c in conversions if c["sensor"] == sensor_index]
         self.params = params or SensorParams()
-        from emulator.channels import SAMPLED_CHANNELS
-
-        self.channels_read = sorted(SAMPLED_CHANNELS)
+        self.variant = variant
+        self.channels_read = sorted(ch.variant(variant).sampled_channels if channels_read is None else channels_read)
         self.served = 0
 
     def sample(self, channels, times, bus_active=None):
         out = []
-        for ch, t in zip(np.atleast_1d(channels), np.atleast_1d(times)):
+        for channel, t in zip(np.atleast_1d(channels), np.atleast_1d(times)):
             if self.served >= len(self.queue):
-                raise AssertionError(f"unexpected conversion of channel {int(ch)} at {t:.9f} s")
+                raise AssertionError(f"unexpected conversion of channel {int(channel)} at {t:.9f} s")
             want = self.queue[self.served]
-            if int(ch) != want["channel"] or abs(t - want["t_ps"] * PS) > 1e-9:
-                raise AssertionError(f"conversion #{self.served}: got channel {int(ch)} at {t:.9f} s, "
+            if int(channel) != want["channel"] or abs(t - want["t_ps"] * PS) > 1e-9:
+                raise AssertionError(f"conversion #{self.served}: got channel {int(channel)} at {t:.9f} s, "
                                      f"recorded channel {want['channel']} at {want['t_ps'] * PS:.9f} s")
             out.append(want["code"])
             self.served += 1
@@ -57,12 +78,13 @@ class _Recorder:
 
     def __init__(self, sensor, index, log):
         self.sensor, self.index, self.log = sensor, index, log
-        self.channels_read, self.params = sensor.channels_read, sensor.params
+        self.channels_read, self.params, self.variant = sensor.channels_read, sensor.params, sensor.variant
 
     def sample(self, channels, times, bus_active=None):
         codes = self.sensor.sample(channels, times, bus_active)
-        for ch, t, c in zip(channels, times, codes):
-            self.log.append({"sensor": self.index, "channel": int(ch), "t_ps": int(round(t / PS)), "code": int(c)})
+        for channel, t, c in zip(channels, times, codes):
+            self.log.append({"sensor": self.index, "channel": int(channel), "t_ps": int(round(t / PS)),
+                             "code": int(c)})
         return codes
 
 
@@ -76,16 +98,23 @@ def _faults_from(d: dict) -> dict[int, Faults]:
 
 
 def record(description: str, transfers: list[dict], sensors=(1,), pull_up=False, faults=None, seed=1,
-           resets: dict | None = None) -> dict:
+           resets: dict | None = None, variants: dict | None = None, provided: dict | None = None) -> dict:
     """Run ``transfers`` (dicts with t_ps, cs, nbits, mosi hex, half_ps, keep_cs) through the reference model.
 
-    ``resets`` maps a transfer index to the sensors reset just before it (the reset fault).
+    ``resets`` maps a transfer index to the sensors reset just before it (the reset fault); ``variants`` {sensor:
+    variant name} makes sensors BioTac SPs; ``provided`` {sensor: channel names} builds a sensor that provides
+    only those (the rest of its variant's channels answer "EX").
     """
-    faults = faults or {}
+    faults, variants, provided = faults or {}, dict(variants or {}), dict(provided or {})
+    unknown = sorted((set(variants) | set(provided)) - set(sensors))
+    if unknown:
+        raise ValueError(f"variants/provided name sensors {unknown} not among the sensors {list(sensors)}")
     log: list[dict] = []
     ports = {}
     for i in sensors:
-        real = Sensor(channels_read=ALL_CHANNELS, seed=seed + i, noise=NoiseSources())
+        v = ch.variant(variants.get(i, ch.DEFAULT_VARIANT))
+        names = provided.get(i, [v.channel_name[c] for c in sorted(v.sampled_channels)])
+        real = Sensor(channels_read=list(names), seed=seed + i, noise=NoiseSources(), variant=v.name)
         ports[i] = SensorPort(_Recorder(real, i, log), i, faults.get(i))
     bus = Bus(ports, pull_up=pull_up)
     out = []
@@ -95,16 +124,23 @@ def record(description: str, transfers: list[dict], sensors=(1,), pull_up=False,
         miso = bus.transfer(transfer_from(d))
         out.append({**d, "miso": f"{miso:x}"})
     bus.flush()
+    extra = {}
+    if any(v != ch.DEFAULT_VARIANT for v in variants.values()):
+        extra["variants"] = {str(k): v for k, v in sorted(variants.items()) if v != ch.DEFAULT_VARIANT}
+    if provided:
+        extra["provided"] = {str(k): sorted(ports[k].provided) for k in sorted(provided)}
     return {"description": description, "sensors": list(sensors), "pull_up": pull_up,
             "faults": {str(k): asdict(v) for k, v in faults.items()},
-            "resets": {str(k): v for k, v in (resets or {}).items()},
+            "resets": {str(k): v for k, v in (resets or {}).items()}, **extra,
             "transfers": out, "conversions": log}
 
 
 def replay(vectors: dict) -> list[int]:
     """MISO of every transfer when the reference model replays ``vectors`` with the recorded codes."""
     faults = _faults_from(vectors["faults"])
-    ports = {i: SensorPort(ScriptedCodes(vectors["conversions"], i), i, faults.get(i)) for i in vectors["sensors"]}
+    variants, provided = variants_of(vectors), provided_of(vectors)
+    ports = {i: SensorPort(ScriptedCodes(vectors["conversions"], i, variant=variants[i], channels_read=provided[i]),
+                           i, faults.get(i)) for i in vectors["sensors"]}
     bus = Bus(ports, pull_up=vectors["pull_up"])
     resets = {int(k): v for k, v in vectors.get("resets", {}).items()}
     out = []

@@ -41,10 +41,30 @@ def test_rtl_is_lint_clean_with_Wall(tmp_path):
     assert r.returncode == 0, r.stderr
 
 
+def _sp_mask(path) -> int:
+    return build.sp_mask(V.variants_of(V.load(path)))
+
+
 def test_rtl_reproduces_every_golden_vector(rtl):
-    results = rtl.run_vectors(GOLDEN)
-    for path in GOLDEN:
-        _compare(V.load(path), results[str(path)], path.name)
+    """Every golden file, each on an RTL built for its sensors' variants (one holds a BioTac SP as sensor 1)."""
+    from emulator.rtl.runner import Rtl, build_dir_for
+
+    masks = sorted({_sp_mask(p) for p in GOLDEN})
+    assert masks == [0, 1]
+    for sp in masks:
+        paths = [p for p in GOLDEN if _sp_mask(p) == sp]
+        sim = rtl if sp == 0 else Rtl(build_dir_for(sp), sp=sp)
+        sim.build()
+        results = sim.run_vectors(paths)
+        for path in paths:
+            _compare(V.load(path), results[str(path)], path.name)
+
+
+def test_an_rtl_refuses_vectors_for_another_mix_of_variants(rtl):
+    """A file with an SP on an RTL built for BioTacs only is refused before anything runs, naming both masks."""
+    path = next(p for p in GOLDEN if p.stem == "variants_and_provided")
+    with pytest.raises(ValueError, match=r"need an RTL built for SP mask 1; this one is built for 0"):
+        rtl.run_vectors([path])
 
 
 def test_rtl_matches_the_software_model_on_thousands_of_random_transactions(rtl, tmp_path):
@@ -117,9 +137,14 @@ def harness():
 
 
 def test_cpp_harness_reproduces_every_golden_vector(harness):
+    from emulator.rtl.harness import Harness
+
+    with pytest.raises(ValueError, match=r"need a harness built for SP mask 1; this one is built for 0"):
+        harness.play(V.load(next(p for p in GOLDEN if _sp_mask(p))))
+    sp_harness = Harness(sp=1)
     for path in GOLDEN:
         vec = V.load(path)
-        r = harness.play(vec)
+        r = (sp_harness if _sp_mask(path) else harness).play(vec)
         expected = np.array([int(d["miso"], 16) for d in vec["transfers"]], dtype=np.uint64)
         bad = np.flatnonzero(expected != r["miso"])
         assert not bad.size, f"{path.name}: transfers {bad[:5]} differ"

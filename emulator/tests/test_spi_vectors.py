@@ -66,3 +66,24 @@ def test_the_generator_still_makes_the_shipped_golden_set_but_for_its_adc_codes(
                [{k: c[k] for k in ("sensor", "channel", "t_ps")} for c in old["conversions"]], path.stem
         assert (new["faults"], new.get("resets", {}), new["sensors"], new["pull_up"]) == \
                (old["faults"], old.get("resets", {}), old["sensors"], old["pull_up"]), path.stem
+        assert (new.get("variants"), new.get("provided")) == (old.get("variants"), old.get("provided")), path.stem
+
+
+def test_a_vector_file_carries_the_sensors_variants_and_provided_channels():
+    """An SP beside a partial BioTac: the file says which sensor is an SP and what the other provides, and a
+    replay honours both — E20..E24 answer data from the SP, and a replay that forgot either (every sensor a BioTac,
+    or providing all its channels) differs from the recorded words."""
+    vec = V.load(next(p for p in GOLDEN if p.stem == "variants_and_provided"))
+    assert vec["variants"] == {"1": "biotac-sp"} and vec["provided"] == {"2": [0, 1, 3, 17]}
+    assert {c["channel"] for c in vec["conversions"] if c["sensor"] == 1} >= {36, 37, 38, 39, 40}
+    words = [int(d["miso"], 16) for d in vec["transfers"]]
+    assert V.replay(vec) == words
+    for forgotten in ("variants", "provided"):
+        other = {k: v for k, v in vec.items() if k != forgotten}
+        with pytest.raises(AssertionError):  # conversions the recording has not, or never asked for
+            assert V.replay(other) == words
+
+
+def test_record_refuses_variants_or_provided_channels_for_sensors_not_on_the_bus():
+    with pytest.raises(ValueError, match=r"name sensors \[3\] not among the sensors \[1, 2\]"):
+        V.record("x", [V.tr(1_000_005, 1, 0x8300)], sensors=(1, 2), variants={3: "biotac-sp"})

@@ -276,3 +276,17 @@ def test_cocotb_frame_stream_of_an_sp_equals_the_software_model():
     words = port.exchange(TransferBatch(start, mosi, 1 / (2 * half)))[1::2]
     assert n >= 108 and np.array_equal(np.array(out["words"]), words)
     assert proto.decode_response(words)[1].all()
+
+
+def test_a_cocotb_build_folder_shared_between_sp_masks_is_rebuilt_when_the_mask_changes(tmp_path, monkeypatch):
+    """cocotb's runner rebuilds when a source changes, not when a Verilog parameter does: the folder keeps the mask
+    it was built for, and a build for another mask (or into a folder without that record) is forced."""
+    from emulator.rtl.runner import Rtl
+
+    forced = []
+    for sp in (1, 1, 0, 0, 1):
+        rtl = Rtl(tmp_path, sp=sp)
+        monkeypatch.setattr(rtl.runner, "build", lambda **kw: forced.append(kw["always"]))
+        rtl.build()
+    assert forced == [True, False, True, False, True]
+    assert (tmp_path / "sp_mask.txt").read_text() == "1"
