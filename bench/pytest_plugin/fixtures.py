@@ -81,6 +81,9 @@ Keywords (every one optional)
         pattern       the firmware's sampling pattern: channel indices (default: the variant's default frame)
         baudrate      the UART's (default 3000000); rx_buffer: the host's receive buffer (bytes, default 4096)
         keep_arrivals keep every byte's arrival (``bench.overrun_frames()``)
+        host_gone_s   unpaced, how long (wall s, default 0.2) your program may leave the receive buffer full
+                      before it is taken as gone and bytes overrun: raise it for a test that pauses on purpose,
+                      or on a loaded CI machine
         pull_up       MISO pulled up when no sensor drives it (default False)
         corrupt_rate, drop_rate   line faults: the probability that each byte is corrupted / dropped
         step_s        the firmware's virtual-time step (s, default 0.01)
