@@ -102,6 +102,43 @@ def test_atomic_write_removes_its_temporary_file_on_ctrl_c(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_atomic_write_flushes_the_data_before_the_rename_and_the_folder_after_it(tmp_path, monkeypatch):
+    """Whole or not at all also across a power cut (bench.atomic.commit): the temporary file's data is flushed
+    (fsync) before the rename gives it the final name — else the name can survive a crash pointing at an empty or
+    partial file — and the folder is flushed after it, so the new name itself is on disk."""
+    events = []
+    fsync, replace = os.fsync, os.replace
+
+    def flush(fd):
+        events.append(("fsync", os.fstat(fd).st_ino))
+        fsync(fd)
+
+    def rename(src, dst):
+        events.append(("rename", os.lstat(src).st_ino))
+        replace(src, dst)
+
+    monkeypatch.setattr(os, "fsync", flush)
+    monkeypatch.setattr(os, "replace", rename)
+    final = tmp_path / "trials.csv"
+    with atomic_write(final) as tmp:
+        tmp.write_text("a whole table\n")
+    monkeypatch.undo()
+    written, folder = final.stat().st_ino, tmp_path.stat().st_ino
+    assert events == [("fsync", written), ("rename", written), ("fsync", folder)]
+
+
+def test_atomic_write_gives_the_file_the_mode_an_ordinary_open_would(tmp_path, monkeypatch):
+    """The temporary file is made by mkstemp (mode 0600); the file placed has the mode any file the user writes
+    gets (0666 less the umask: 0644 under umask 022), not one private to its owner (bench.atomic.temp_path)."""
+    import bench.atomic as atomic
+
+    monkeypatch.setattr(atomic, "_UMASK", [0o022])  # the umask as the process read it once
+    final = tmp_path / "trials.csv"
+    with atomic_write(final) as tmp:
+        tmp.write_text("a whole table\n")
+    assert oct(final.stat().st_mode & 0o777) == oct(0o644)
+
+
 def _signal_at_the_first_csv(monkeypatch, signum):
     write_rows_csv = experiment_report.write_rows_csv
 
