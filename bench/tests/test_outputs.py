@@ -222,6 +222,17 @@ def test_without_out_each_run_gets_a_fresh_folder(tmp_path):
 
 
 @pytest.mark.unit
+def test_a_default_folder_that_another_run_holds_is_passed_over(tmp_path):
+    """Without --out, a run whose default folder is still empty but locked by another run (which has not written a
+    file yet) takes the next free one, ``<name>-2``: neither refused nor writing into the other run's folder."""
+    from bench.reporting.outdir import fresh_folder
+
+    with OutFolder.open(tmp_path / "fresh"):
+        with fresh_folder(tmp_path / "fresh") as second:
+            assert second.path == tmp_path / "fresh-2"
+
+
+@pytest.mark.unit
 def test_a_scene_name_that_is_a_path_is_rejected(tmp_path, capsys):
     f = tmp_path / "evil.toml"
     f.write_text('[scene]\nname = "../../x"\nduration_s = 1.0\n')

@@ -81,6 +81,33 @@ def test_force_replaces_every_sensor_folder_of_an_earlier_run(tmp_path):
     assert [p.name for p in out.iterdir()] == [LOCK_NAME]
 
 
+@pytest.mark.unit
+def test_force_removes_each_folders_record_before_its_other_files(tmp_path, monkeypatch):
+    """--force cut short (a signal, a file that cannot be removed) never leaves a record saying "ok" beside an
+    earlier run's files half removed: the top-level record.json goes before anything, and in each sensor<k>/
+    folder its record.json goes before that folder's other files (the module's docstring)."""
+    out = tmp_path / "o"
+    _earlier_several_sensor_run(out, sensors=(2, 3))  # codes.npz sorts before record.json in every folder
+    removed = []
+    unlink = os.unlink
+
+    def note(path, *a, **k):
+        rel = os.path.relpath(path, out)
+        if not os.path.basename(rel).startswith("."):  # the write probe and the sensor folders' locks aside
+            removed.append(rel)
+        return unlink(path, *a, **k)
+
+    monkeypatch.setattr(os, "unlink", note)
+    OutFolder.open(out, force=True).close()
+    monkeypatch.undo()
+    assert [p.name for p in out.iterdir()] == [LOCK_NAME]
+    assert sorted(removed) == sorted(["record.json", "codes.npz"] + [f"sensor{k}/{n}" for k in (2, 3)
+                                                                      for n in ("record.json", "codes.npz")])
+    assert removed[0] == "record.json"
+    for k in (2, 3):
+        assert [r for r in removed if r.startswith(f"sensor{k}/")][0] == f"sensor{k}/record.json", removed
+
+
 # --- 2. a second signal before the chunk ends -----------------------------------------------------------------
 @pytest.mark.unit
 def test_two_signals_before_the_chunk_ends_stop_the_exports_and_plots(tmp_path, monkeypatch, capfd):
