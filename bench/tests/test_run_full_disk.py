@@ -171,3 +171,22 @@ def test_a_run_simulated_to_its_end_whose_export_fails_says_so(tmp_path, monkeyp
     err = capsys.readouterr().err
     assert "error: the run failed after all 10 s were simulated: writing codes.npz: OSError: [Errno 28] No space " \
            "left on device" in err, err
+
+
+@pytest.mark.unit
+def test_a_disk_full_as_samples_h5_is_created_leaves_no_temporary_file(tmp_path, monkeypatch):
+    """The disk is full already when samples.h5 is created (its temporary file made, HDF5's header not written):
+    the error reaches the caller, naming the disk's error, and the out folder keeps no half-written temporary
+    file — nothing but its lock, which is released."""
+    from bench.reporting.outdir import OutFolder
+
+    def full(path, *args, **kwargs):
+        path.write_bytes(b"\x89HDF\r\n\x1a\n half a header")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+    monkeypatch.setattr(session, "SampleStore", full)
+    out = tmp_path / "o"
+    with pytest.raises(OSError, match="No space left on device"):
+        run_to_folder(_scene(0.5), out, plots=False, progress=False)
+    assert sorted(p.name for p in out.iterdir()) == [".biotac-bench.lock"]
+    OutFolder.open(out).close()  # not locked any more, and empty
