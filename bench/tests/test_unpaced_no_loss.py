@@ -129,3 +129,17 @@ def test_paced_a_host_that_stops_reading_still_loses_what_does_not_fit():
         lost = fb.overrun_frames()
     assert fb.link.bytes_overrun > 5000 and len(lost) > 30
     assert parser.stats.dropped_frames == len([s for s in lost if s <= parser.stats.last_seq])
+
+
+def test_a_sender_with_more_than_the_buffer_waits_only_until_the_buffer_is_empty():
+    """More bytes than the receive buffer holds can never all find room: ``wait_for_room`` then waits for the
+    buffer to be empty (all the room there is) and says so, rather than waiting out ``give_up_s`` and reporting no
+    room — which the unpaced bench would take for a host that is gone, and drop bytes."""
+    link = PtyLink(rx_buffer=RX_BUFFER_BYTES)
+    try:
+        t0 = time.monotonic()
+        assert link.wait_for_room(3 * RX_BUFFER_BYTES, give_up_s=5.0)
+        assert time.monotonic() - t0 < 1.0
+    finally:
+        link.close()
+
