@@ -211,6 +211,19 @@ def test_the_lock_refuses_a_second_writer_at_once(tmp_path):
 
 
 @pytest.mark.unit
+def test_the_lock_names_its_holder_after_a_longer_pid_held_it(tmp_path):
+    """The lock file stays after a run, holding that run's pid (the module's docstring); the next run's pid
+    replaces it whole, so a second writer is refused naming the run that holds the folder now, not a mix of both."""
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / LOCK_NAME).write_text("4194304999\n")  # an earlier holder's, longer than any pid of this run
+    with OutFolder.open(out):
+        assert (out / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+        with pytest.raises(OutDirError, match=rf"another run \(pid {os.getpid()}\) is writing into this folder"):
+            OutFolder.open(out, force=True)
+
+
+@pytest.mark.unit
 def test_without_out_each_run_gets_a_fresh_folder(tmp_path):
     from bench.reporting.session import run_to_folder
 
