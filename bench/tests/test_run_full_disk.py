@@ -190,3 +190,24 @@ def test_a_disk_full_as_samples_h5_is_created_leaves_no_temporary_file(tmp_path,
         run_to_folder(_scene(0.5), out, plots=False, progress=False)
     assert sorted(p.name for p in out.iterdir()) == [".biotac-bench.lock"]
     OutFolder.open(out).close()  # not locked any more, and empty
+
+
+@pytest.mark.unit
+def test_the_broken_samples_file_is_deleted_before_the_samples_are_written_again(tmp_path, monkeypatch):
+    """On a full disk the broken file's space is what the fresh samples.h5 needs (session: "delete the broken file
+    (which frees its space) and write those samples into a fresh one"): when the fresh file is written, the broken
+    one is gone from the out folder."""
+    _small_chunks(monkeypatch)
+    out = tmp_path / "o"
+    _disk_fills_at_write(monkeypatch, 40)
+    written = session.write_recording
+    beside = []
+
+    def note_what_is_beside(path, rec, compression="gzip"):
+        beside.append(sorted(p.name for p in out.iterdir() if p.name.startswith(".samples.h5.") and p != path))
+        return written(path, rec, compression)
+
+    monkeypatch.setattr(session, "write_recording", note_what_is_beside)
+    res = run_to_folder(_scene(), out, plots=False, progress=False, chunk_s=0.5)
+    assert res.record["status"] == "failed" and "samples.h5 holds" in res.record["error"], res.record["error"]
+    assert beside == [[]]
