@@ -56,7 +56,6 @@ class PtyLink:
         os.set_blocking(self.master, False)
         self.path = os.ttyname(self._slave)
         self.rx_buffer = rx_buffer
-        self.disconnected = False
         self.closed = False
         self.bytes_out = 0  # handed to the pty (the host can read them)
         self.bytes_in = 0  # arrived from the line (kept or not): offsets in ``overruns`` count these
@@ -131,8 +130,7 @@ class PtyLink:
         except BlockingIOError:
             return 0
         except OSError as e:
-            if e.errno in (errno.EIO, errno.EBADF):
-                self.disconnected = True
+            if e.errno in (errno.EIO, errno.EBADF):  # the pty is going away (the link is closing)
                 return 0
             raise
         self.bytes_out += n
@@ -165,8 +163,7 @@ class PtyLink:
             except BlockingIOError:
                 break
             except OSError as e:
-                if e.errno == errno.EIO:
-                    self.disconnected = True
+                if e.errno == errno.EIO:  # the pty is going away (the link is closing)
                     break
                 raise
             if not chunk:

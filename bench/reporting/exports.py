@@ -47,22 +47,6 @@ def physical(name: str, codes: np.ndarray, baselines: dict, tac_tdc: np.ndarray 
     return {}
 
 
-def physical_units(channels, baselines: dict) -> dict[str, np.ndarray]:
-    """Every physical-unit array of in-memory channels (name → ChannelRecord)."""
-    out = {}
-    for name in ("PAC", "PDC", "TDC", "TAC"):
-        if name in channels:
-            r = channels[name]
-            tdc = None
-            if name == "TAC" and "TDC" in channels:
-                tdc = _interp(r.times, channels["TDC"].times, channels["TDC"].codes)
-            out.update(physical(name, r.codes, baselines, tdc))
-    for name, r in channels.items():
-        if name.startswith("E"):
-            out.update(physical(name, r.codes, baselines))
-    return out
-
-
 def _npz_entry(zf: zipfile.ZipFile, key: str, array: np.ndarray) -> None:
     with zf.open(key + ".npy", "w", force_zip64=True) as fh:  # as np.savez_compressed writes each array
         np.lib.format.write_array(fh, np.asanyarray(array), allow_pickle=False)

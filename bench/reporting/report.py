@@ -52,11 +52,6 @@ def baselines(rec: Recording) -> dict[str, float]:
     return {n: resting_stats(rec, n)[0] for n in ("PAC", "PDC", "TAC") if n in names}
 
 
-def physical_units(rec: Recording) -> dict[str, np.ndarray]:
-    """Published conversions of the in-memory channels, with offsets taken from the resting lead-in."""
-    return exports.physical_units(rec.channels, baselines(rec))
-
-
 def impact_results(rec: Recording) -> dict:
     """The dissertation's impact detection applied to every sphere drop of the scene."""
     names = rec.channel_names or list(rec.channels)
