@@ -194,6 +194,16 @@ def test_a_1_N_press_raises_PDC_by_87_bits():
     assert 1.0 < (w[1] - w[0]) / (v[1] - v[0]) < 1.15
 
 
+
+def test_the_published_pdc_force_conversion_reads_a_1_N_press_as_1_N():
+    """SENSOR.md §1: 11.5 mN per PDC bit below 2 N.  The host's conversion (conversions.pdc_to_force_n, the
+    figures' PDC_force_N column) is that slope, and applied to the codes of a 1 N press on D's ~0.5 N/s loading ramp
+    it reads 1 N within the claim's 5 %."""
+    assert float(conv.pdc_to_force_n(1000 + 87, 1000)) == pytest.approx(87 * 0.0115, rel=1e-12)
+    s = Sensor(stimuli=[Press(0.1, 2.0, ramp_s=4.0, hold_s=0.2)], channels_read=["PDC"], noise=QUIET)
+    codes = s.analog([1, 1], [0.05, 2.1]) / LSB  # rest, then 1 N on the loading ramp
+    assert float(conv.pdc_to_force_n(codes[1], codes[0])) == pytest.approx(1.0, rel=0.05)
+
 # --- impacts (SENSOR.md §1 and §7) --------------------------------------------------------------------------------
 def test_the_impact_impulse_is_m_v_1_plus_e():
     """A sphere dropped from 7 cm falls through air and hits just under √(2gh) (the 1 mm steel bearing 0.6 %

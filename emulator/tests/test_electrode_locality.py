@@ -233,3 +233,53 @@ def test_a_contact_held_since_before_the_start_does_not_creep_after_it():
     early, late = (m.targets(np.arange(1, 20), np.full(19, t)) for t in (0.05, 3.0))
     assert np.max(np.abs(early - late)) < 1e-6
     assert np.ptp(early) > 1e-3  # the contact does move the pressed electrodes
+
+
+# --- from a mutation hunt on emulator/electrodes.py --------------------------------------------------------------
+def test_resting_gaps_drawn_below_the_clearance_stop_at_twice_the_bottoming_gap():
+    """Documented (resting_gaps_mm): a drawn gap is clipped to at least 2·g_min, a resting skin staying clear of where
+    it bottoms.  At the largest spread allowed (1 mm, ±2 mm truncation around 1.5 mm) some of 400 draws fall below
+    2·g_min = 0.2 mm: they read exactly 0.2 mm, and every gap above it is the unclipped draw within ±2 spreads."""
+    from emulator.electrodes import resting_gaps_mm
+
+    p = SensorParams().replace(electrode_gap_spread_mm=1.0, electrode_gap_seed=7)
+    g = resting_gaps_mm(p, 400)
+    clear = 2 * p.minimum_gap_mm
+    assert g.min() == pytest.approx(clear, rel=1e-12)
+    assert 5 <= int((g == g.min()).sum()) < 100  # several clipped, most not
+    assert np.all(np.abs(g[g > clear] - p.resting_gap_mm) <= 2.0 + 1e-12)
+
+
+def test_the_free_skin_grid_tiles_the_untethered_cylinder_and_tip():
+    """The free skin (free_skin_grid) is the cylinder x ∈ [−20, 0] mm and the hemispherical tip (r = 5 mm) within
+    ±θ of the ventral midline: its areas sum to 20·r·2θ + r²·2θ (the tip's ∫ sin φ dφ over [0, π/2] is 1), and every
+    point lies on the core."""
+    from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM, free_skin_grid
+
+    r = CORE_RADIUS_MM
+    for half_deg in (60.0, 120.0):
+        pts, area = free_skin_grid(half_deg)
+        two_theta = 2 * np.radians(half_deg)
+        cyl = pts[:, 0] <= 0.0
+        assert area[cyl].sum() == pytest.approx(-SKIN_BASE_X_MM * r * two_theta, rel=1e-9)
+        assert area[~cyl].sum() == pytest.approx(r * r * two_theta, rel=2e-3)  # midpoint rule over φ
+        assert np.allclose(np.hypot(pts[cyl, 1], pts[cyl, 2]), r)
+        assert np.allclose(np.linalg.norm(pts[~cyl], axis=1), r)
+        assert np.all(np.abs(np.arctan2(pts[:, 1], -pts[:, 2])) <= np.radians(half_deg) + 1e-9)
+
+
+def test_a_held_press_settles_on_the_static_gap_law_rim_bulge_included():
+    """Consistency of two paths: once its creep and the 100 Hz filter have settled, the model's pattern under a held
+    force is :func:`electrode_volts` of :func:`electrode_gaps_mm` for that force (each working out its own rim bulge
+    κ at the footprint width w = √(r_indenter² + spread²)), on the dimple and on the ring alike."""
+    from emulator.electrodes import electrode_gaps_mm, electrode_volts
+
+    p = SensorParams()
+    pos = electrode_positions_mm()
+    for k, radius in ((6, 2.0), (12, 4.0)):
+        press = Contact(surface_point_over_mm(pos[k]), radius, lambda t: np.full(np.shape(t), 1.5), start_s=0.2)
+        model = ElectrodeModel(p, [press]).targets(np.arange(1, 20), np.full(19, 6.0))
+        static = electrode_volts(p, electrode_gaps_mm(p, [press], np.array([6.0]), pos))[0]
+        rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm))[0]
+        assert np.any(static > rest + 1e-3)  # the ring does raise some electrodes
+        assert np.max(np.abs(model - static)) < 1e-9

@@ -38,6 +38,28 @@ def test_reference_profile_adds_second_order_effects():
     assert ref.graph.effects[[e.name for e in ref.graph.effects].index("bridge")].duct is not None
 
 
+
+@pytest.mark.parametrize("name", ["fast", "default", "reference"])
+def test_each_fidelity_profile_is_what_its_description_says(name):
+    """A profile's description (printed by scripts/benchmark, read by whoever picks one) states its grid, electrode
+    rate, texture resolution, friction substeps and patch radii: the fields are those numbers.  The electrode rate
+    stays above twice the channels' 100 Hz bandwidth (emulator/electrodes.py: 250 Hz to 2 kHz)."""
+    import re
+
+    from emulator.fidelity import profile
+
+    f = profile(name)
+    d = f.description
+    num = lambda pattern: float(re.search(pattern, d).group(1))  # noqa: E731
+    assert f.grid_Hz == pytest.approx(1e3 * num(r"([\d.]+) kHz grid"))
+    rate = re.search(r"electrodes at ([\d.]+) (k?)Hz", d)
+    assert f.electrode_rate_Hz == pytest.approx(float(rate.group(1)) * (1e3 if rate.group(2) else 1.0))
+    assert f.sliding_dx_m == pytest.approx(1e-6 * num(r"textures at ([\d.]+) µm"))
+    assert f.friction_substeps == (int(num(r"friction oversampled ×(\d+)")) if "oversampled" in d else 1)
+    assert "friction on the grid" in d or f.friction_substeps > 1
+    assert f.patch_radii == int(num(r"(\d+) patch radii"))
+    assert f.electrode_rate_Hz > 2 * SensorParams().electrode_bandwidth_Hz
+
 def test_adc_noise_stream_is_independent_of_the_grid_noise():
     t = np.arange(2200) / 2200.0
     a = Sensor(channels_read=["PAC"], seed=9, noise=NoiseSources(johnson=False, amplifier=False, mains_hum=False))

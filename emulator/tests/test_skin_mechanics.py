@@ -32,6 +32,25 @@ def test_creep_step_response_is_the_exact_exponential():
     assert y[-1] == pytest.approx(2.0, rel=1e-3)  # fully crept
 
 
+
+def test_a_prony_series_step_response_pairs_each_weight_with_its_own_time():
+    """c(t) = 1 − Σ w_i·exp(−t/τ_i) (module docstring): a two-term series with unequal weights creeps by w₁ over τ₁
+    and by w₂ over τ₂, each term the exact first-order-hold curve of the one-term test (a weight paired with the
+    other term's time creeps visibly differently)."""
+    fs, taus, weights = 1000.0, (0.05, 1.0), (0.3, 0.1)
+    t = np.arange(8000) / fs
+    f = np.where(t >= 0.5, 2.0, 0.0)
+    y = Creep(taus, weights).step(f, fs)
+    after = t >= 0.5 + 1 / fs
+    expected = np.full(t.size, 2.0 * (1 - sum(weights)))
+    for tau, w in zip(taus, weights):
+        ramp_lp = lambda x: np.maximum(x, 0) - tau * (1 - np.exp(-np.maximum(x, 0) / tau))  # noqa: E731
+        expected += w * 2.0 * fs * (ramp_lp(t - 0.5 + 1 / fs) - ramp_lp(t - 0.5))
+    assert np.allclose(y[after], expected[after], rtol=0, atol=1e-12)
+    # 0.25 s after the step the fast term (w = 0.3) has crept, the slow one (w = 0.1) barely: c ≈ 0.6 + 0.3 + 0.022
+    assert y[int(0.75 * fs)] / 2.0 == pytest.approx(0.6 + 0.3 * (1 - np.exp(-5.0)) + 0.1 * (1 - np.exp(-0.25)),
+                                                     abs=2e-3)
+
 def test_a_settled_creep_holds_its_preload_without_creeping():
     """settle(x0) means loaded since ever: the same constant load then reads x0 at once and stays there (a rig that
     starts pressed must not creep after t = 0)."""

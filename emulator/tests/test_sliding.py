@@ -244,6 +244,28 @@ def test_first_visible_wear_is_a_flat_of_0_1_mm_on_the_rounded_crest():
     assert s.first_visible_wear_fraction == pytest.approx(0.0318, abs=1e-4)
 
 
+
+@pytest.mark.unit
+def test_a_skin_keeps_count_of_its_trials_distance_and_frictional_work_across_trials():
+    """A skin persists across the trials of a session (module docstring): its record (Skin.state, the run report's
+    "m slid") adds up every trial's sliding distance and frictional work μ·N·d, and its history lists the ridge height
+    after each trial, the ridges never worn below flat (the last trial takes only what is left)."""
+    area = np.pi * (2.5e-3) ** 2
+    s = Skin()
+    trials = [(1.0, 0.05, 0.5, 0.01), (2.0, 0.03, 0.8, 0.02), (0.5, 0.10, 0.3, 0.01)]  # N, m, μ, m/s
+    for n, d, mu, v in trials:
+        s.wear(n, d, area, mu, velocity_m_per_s=v)
+    state = s.state()
+    assert state["trials"] == 3
+    assert state["sliding_distance_m"] == pytest.approx(0.05 + 0.03 + 0.10, rel=1e-12)
+    work = 0.5 * 1.0 * 0.05 + 0.8 * 2.0 * 0.03 + 0.3 * 0.5 * 0.10  # Σ μ·N·d
+    assert state["frictional_work_J"] == pytest.approx(work, rel=1e-12)
+    heights = [h for _, _, h in s.history()]
+    assert len(heights) == 3 and heights[0] < s.ridge_height_new_m and heights == sorted(heights, reverse=True)
+    # a punishing trial wears the rest of the ridge, and no more
+    left = s.ridge_height_m
+    assert s.wear(5.0, 1.0, area, velocity_m_per_s=1.0) == left and s.ridge_height_m == 0.0 and s.ridge_factor == 0.0
+
 @pytest.mark.unit
 def test_wear_needs_a_sliding_speed_and_a_fresh_skin_restores_the_ridges():
     area = np.pi * (2.5e-3) ** 2

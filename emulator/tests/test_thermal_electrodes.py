@@ -34,6 +34,15 @@ def test_thermistor_is_470k_at_25C_and_the_divider_matches_the_published_convers
         assert float(conv.tdc_to_celsius(x * 4095)) == pytest.approx(t, abs=1e-3)  # the formula's constants are rounded
 
 
+
+def test_celsius_to_tdc_inverts_the_published_conversion_exactly():
+    """conversions.celsius_to_tdc is the inverse of D eq. 4.4 (x = TDC/4095, T = 4025/ln((155183 − 46555x)/x) −
+    273.15), solved for the code: every code maps back to itself (the TAC conversion takes its slope from it)."""
+    codes = np.array([200.0, 1000.0, 2047.5, 3000.0, 3900.0])
+    assert np.allclose(conv.celsius_to_tdc(conv.tdc_to_celsius(codes)), codes, rtol=1e-12, atol=0)
+    temps = np.array([5.0, 25.0, 35.0, 60.0])
+    assert np.allclose(conv.tdc_to_celsius(conv.celsius_to_tdc(temps)), temps, rtol=0, atol=1e-9)
+
 def test_heater_holds_the_core_10K_above_ambient_and_warms_up_over_minutes():
     s = Sensor(stimuli=[PowerOn(0.0)], channels_read=["TDC"], noise=QUIET)
     t = np.array([0.0, 60.0, 300.0, 1200.0, 3600.0])
