@@ -480,6 +480,17 @@ class ElectrodeModel:
                        for c in contacts]
         self.footprints = [Footprint(p, c, self.positions, k) for c, k in zip(contacts, self.kappas)]
         self._open, self._short = _fault_indices(self.faults)
+        # a contact loaded before t = 0 has been forever (its creep is settled above): the electrodes, their filter
+        # and the hold node start on its pattern, not at rest (no start-up transient, as for the bridge)
+        held = [(c, cr.last, fp) for c, cr, fp in zip(contacts, self.creeps, self.footprints) if cr.last > 0.0]
+        if held:
+            terms = [(indentation_fraction(p, np.array([f0])), fp.ring_amp,
+                      *fp.shapes(np.array([0.0 if c.forces is not None else c.tangential_per_normal * f0])))
+                     for c, f0, fp in held]
+            start = _contact_volts(p, self.rest_gaps_mm, terms, 1, self._open, self._short)[0]
+            self.zi = filters.sosfilt_zi(sos[:1])[0, :taps - 1, None] * start[None, :]
+            self._hist = [start[None, :].copy()]
+            self.mux_node = float(start[0])
 
     def _advance_chunk(self, n: int | None = None):
         """Advance ``n`` samples (default: a whole chunk); results do not depend on how the time is cut.

@@ -283,3 +283,23 @@ def test_a_held_press_settles_on_the_static_gap_law_rim_bulge_included():
         rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm))[0]
         assert np.any(static > rest + 1e-3)  # the ring does raise some electrodes
         assert np.max(np.abs(model - static)) < 1e-9
+
+
+def test_a_contact_held_since_before_the_start_reads_its_pattern_from_the_first_instant():
+    """A contact loaded before t = 0 has been forever (Contact.resting_load_N): the 100 Hz electrode filter has
+    settled on its pattern too, so the first conversions (E1..E19 within the first 9 ms of a frame) read the static
+    pattern of :func:`electrode_gaps_mm`, not the unpressed rest easing toward it over ~5 ms (tens of codes).
+    Sheared too: the held shear moves the pattern before t = 0 as after."""
+    from emulator.electrodes import electrode_gaps_mm, electrode_volts
+
+    p = SensorParams()
+    pos = electrode_positions_mm()
+    for ratio in (0.0, 0.5):
+        held = Contact(surface_point_over_mm(pos[6]), 2.0, lambda t: np.full(np.shape(t), 1.0), ratio)
+        static = electrode_volts(p, electrode_gaps_mm(p, [held], np.array([0.0]), pos))[0]
+        m = ElectrodeModel(p, [held])
+        for t in (0.0, 0.001, 0.002, 0.005, 0.05):
+            assert np.max(np.abs(m.targets(np.arange(1, 20), np.full(19, t)) - static)) < 1e-9
+        first = ElectrodeModel(p, [held]).sample(np.array([7]), np.array([0.0]))[0]  # the hold node held E1
+        assert first == pytest.approx(
+            (1 - m.mux_keep) * static[6] + m.mux_keep * (static[0] + p.mux_injection_V), rel=1e-12)
