@@ -128,15 +128,25 @@ class Contact:
     forces: object = None
 
     def state(self, t: np.ndarray):
-        """(normal, tangential) force (N) at instants ``t`` (s)."""
+        """(normal, tangential) force (N) at instants ``t`` (s); none outside [start_s, end_s], whatever the
+        profile gives there (so the result does not depend on how the model cuts time)."""
+        t = np.asarray(t, float)
         if self.forces is not None:
             normal, tangential = self.forces(t)
-            return np.maximum(normal, 0.0), tangential
-        f = np.maximum(np.asarray(self.normal_N(t), float), 0.0)
-        return f, self.tangential_per_normal * f
+            normal, tangential = np.maximum(normal, 0.0), np.asarray(tangential, float)
+        else:
+            normal = np.maximum(np.asarray(self.normal_N(t), float), 0.0)
+            tangential = self.tangential_per_normal * normal
+        if np.isfinite(self.start_s) or np.isfinite(self.end_s):
+            inside = (t >= self.start_s) & (t <= self.end_s)
+            normal, tangential = np.where(inside, normal, 0.0), np.where(inside, tangential, 0.0)
+        return normal, tangential
 
     def resting_load_N(self) -> float:
-        """The normal force (N) held before t = 0 (a contact loaded at t = 0 has been forever)."""
+        """The normal force (N) held before t = 0 (a contact loaded at t = 0 has been forever); none for a contact
+        whose window does not hold t = 0."""
+        if not self.start_s <= 0.0 <= self.end_s:
+            return 0.0
         return float(np.maximum(np.asarray(self.normal_N(np.array([0.0])), float), 0.0)[0])
 
 

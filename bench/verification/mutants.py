@@ -2427,6 +2427,16 @@ CATALOGUE += [
            'self.sliding_distance_m = distance_m',
            ('emulator/tests/test_sliding.py::test_a_skin_keeps_count_of_its_trials_distance_and_frictional_work_across_trials',),
            "a skin's sliding distance keeps only the last trial's instead of the total"),
+    Mutant('contact-window-ignored', 'electrodes', 'emulator/electrodes.py',
+           '            normal, tangential = np.where(inside, normal, 0.0), np.where(inside, tangential, 0.0)\n',
+           '',
+           ('emulator/tests/test_electrode_locality.py::test_a_contact_presses_only_within_its_window_whatever_its_profile_gives_outside',),
+           "a contact pressing outside its [start_s, end_s] window wherever its profile is not zero (the output depends on the model's chunks)"),
+    Mutant('contact-resting-load-outside-window', 'electrodes', 'emulator/electrodes.py',
+           '        if not self.start_s <= 0.0 <= self.end_s:\n            return 0.0\n',
+           '',
+           ('emulator/tests/test_electrode_locality.py::test_a_contact_presses_only_within_its_window_whatever_its_profile_gives_outside',),
+           'a contact whose window starts after t = 0 taken as pressed since before the start'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -277,7 +277,7 @@ def test_a_held_press_settles_on_the_static_gap_law_rim_bulge_included():
     p = SensorParams()
     pos = electrode_positions_mm()
     for k, radius in ((6, 2.0), (12, 4.0)):
-        press = Contact(surface_point_over_mm(pos[k]), radius, lambda t: np.full(np.shape(t), 1.5), start_s=0.2)
+        press = Contact(surface_point_over_mm(pos[k]), radius, lambda t: np.full(np.shape(t), 1.5))  # held forever
         model = ElectrodeModel(p, [press]).targets(np.arange(1, 20), np.full(19, 6.0))
         static = electrode_volts(p, electrode_gaps_mm(p, [press], np.array([6.0]), pos))[0]
         rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm))[0]
@@ -303,3 +303,22 @@ def test_a_contact_held_since_before_the_start_reads_its_pattern_from_the_first_
         first = ElectrodeModel(p, [held]).sample(np.array([7]), np.array([0.0]))[0]  # the hold node held E1
         assert first == pytest.approx(
             (1 - m.mux_keep) * static[6] + m.mux_keep * (static[0] + p.mux_injection_V), rel=1e-12)
+
+
+def test_a_contact_presses_only_within_its_window_whatever_its_profile_gives_outside():
+    """``Contact(start_s, end_s)``: no force outside the window (the class says so), also when the force profile is
+    not zero there — a user's constant press from 0.5 s to 1 s.  It used to press for the whole 1 s chunk the model
+    computes at once (already at 0.01 s), and from before t = 0 (its resting load), so where the chunks fell
+    decided the output."""
+    from emulator.electrodes import electrode_volts
+
+    p = SensorParams()
+    pos = electrode_positions_mm()
+    press = Contact(surface_point_over_mm(pos[6]), 2.0, lambda t: np.full(np.shape(t), 1.0), start_s=0.5, end_s=1.0)
+    t = np.array([-1.0, 0.0, 0.49, 0.5, 1.0, 1.01])
+    assert press.state(t)[0].tolist() == [0.0, 0.0, 0.0, 1.0, 1.0, 0.0] and press.resting_load_N() == 0.0
+    rest = electrode_volts(p, np.full((1, 19), p.resting_gap_mm))[0]
+    m = ElectrodeModel(p, [press])
+    for when in (0.01, 0.3, 0.49):
+        assert np.max(np.abs(m.targets(np.arange(1, 20), np.full(19, when)) - rest)) < 1e-12, when
+    assert np.max(np.abs(m.targets(np.arange(1, 20), np.full(19, 0.9)) - rest)) > 1e-3  # pressed within it
