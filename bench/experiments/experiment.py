@@ -229,9 +229,10 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         problems.append(f"validation.pairs is given, with validation.{' and '.join(chosen_by)}: those choose the pairs "
                         f"when none are given; give one or the other")
     if pairs is not None:
-        if not isinstance(pairs, list) or not all(isinstance(p, list) and len(p) == 2 and all(
+        if not isinstance(pairs, list) or not pairs or not all(isinstance(p, list) and len(p) == 2 and all(
                 isinstance(n, int) and not isinstance(n, bool) for n in p) for p in pairs):
-            problems.append(f"validation.pairs = {pairs!r}: a list of [a, b] texture-number pairs")
+            problems.append(f"validation.pairs = {pairs!r}: a list of at least one [a, b] texture-number pair "
+                            f"(leave pairs out to have n_pairs chosen by pair_choice)")
         else:
             spec.pairs = [tuple(p) for p in pairs]
             bad = [n for p in pairs for n in p if n not in lib]

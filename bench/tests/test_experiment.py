@@ -394,3 +394,14 @@ def _check_tables_against_the_result(out, result, summary):
         per_truth[int(r.true_texture)] = per_truth.get(int(r.true_texture), 0) + len(r.decided)
     assert {int(row["true"]): sum(int(v) for k, v in row.items() if k != "true") for row in confusion
             if int(row["true"]) in per_truth} == per_truth
+
+
+def test_an_empty_pairs_list_is_refused_before_any_trial_not_replaced_by_chosen_pairs():
+    # `pairs = []` had passed validation and then meant "choose n_pairs = 8 pairs" (spec.pairs or _pick_pairs): the
+    # experiment ran its pilot and training, then failed naming an n_pairs the file never gave, or silently
+    # validated 8 pairs the file did not ask for
+    text = '[experiment]\nname = "a"\n[validation]\npairs = []\n'
+    import tomllib
+
+    with pytest.raises(E.ExperimentError, match=r"validation.pairs = \[\]: a list of at least one"):
+        E.parse_experiment(tomllib.loads(text), "x.toml")
