@@ -369,6 +369,8 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)
         amp = c.number(st, "amplitude_um", w, 0.0, 1000.0, "µm", required=True)
         fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+        if "fade_s" not in st and dur is not None:  # the default fade fits a short stimulus: it reaches its amplitude
+            fade = min(fade, dur / 2)
         if "frequency_Hz" in st:
             f0 = c.number(st, "frequency_Hz", w, 1.0, 3000.0, "Hz")
             f1 = None
@@ -377,7 +379,7 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         else:
             f0 = c.number(st, "f_start_Hz", w, 1.0, 3000.0, "Hz", required=True)
             f1 = c.number(st, "f_stop_Hz", w, 1.0, 3000.0, "Hz", required=True)
-        if None not in (dur, fade):
+        if None not in (dur, fade) and _fade_fits(c, st, w, dur, fade):
             given = None not in (amp, f0) and (f1 is not None or "frequency_Hz" in st)
             what = "vibration" if not given or f1 is None else f"vibration (a {f0:g} → {f1:g} Hz sweep)"
             vibrations = [Vibration(t, dur, amp * 1e-6, f0, f1, fade) if given else Vibration(t, dur, 0.0, 1.0,
@@ -391,11 +393,13 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         amp = c.number(st, "amplitude_Pa", w, 0.0, 1e5, "Pa", default=0.0)
         freq = c.number(st, "frequency_Hz", w, 0.0, 3000.0, "Hz", default=0.0)
         fade = c.number(st, "fade_s", w, 0.0, 10.0, "s", default=0.01)
+        if "fade_s" not in st and dur is not None:  # the default fade fits a short stimulus: it reaches its amplitude
+            fade = min(fade, dur / 2)
         if amp is not None and freq is not None and amp > 0 and freq == 0:
             c.problems.append(f"{w}: amplitude_Pa = {amp:g} needs frequency_Hz > 0 (the sinusoid's frequency: at 0 Hz "
                               f"it is zero); a steady pressure is offset_kPa")
             amp = None
-        if None not in (dur, fade):
+        if None not in (dur, fade) and _fade_fits(c, st, w, dur, fade):
             given = None not in (offset, amp, freq)
             calibrators = [PressureCalibrator(t, dur, offset * 1e3, amp, freq, fade) if given else
                            PressureCalibrator(t, dur, fade_s=fade) for t in start]
@@ -507,6 +511,16 @@ def _valid(given: bool, stimuli: list) -> list:
     checked (with placeholder values), so that every problem of a [[stimulus]] is reported at once."""
     return stimuli if given else []
 
+
+def _fade_fits(c, st: dict, w: str, dur, fade) -> bool:
+    """A fade-in and a fade-out of ``fade`` s each must fit in the stimulus's ``dur`` s: a longer fade never lets the
+    stimulus reach its amplitude (a 5 s fade on a 0.5 s vibration reached 0.6 % of it), so a given one is refused
+    (the default 0.01 s is shortened to ``dur`` / 2 by the caller)."""
+    if dur is not None and fade is not None and fade > dur / 2 and "fade_s" in st:
+        c.problems.append(f"{w}.fade_s = {fade:g}: the fade-in and fade-out must fit in duration_s = {dur:g} s "
+                          f"(fade_s at most {dur / 2:g} s), or the stimulus never reaches its amplitude")
+        return False
+    return True
 
 def _ending_in_scene(c: _Checker, w: str, what: str, stimuli: list, duration) -> list:
     """The ``stimuli`` (each with ``start_s`` and ``end_s`` in s) that end by the scene's end (``duration`` in s);

@@ -137,3 +137,26 @@ def test_touch_thermal_kinds_and_faults_are_validated():
     for needle in ("stimulus[0].electrode = 'E42'", "stimulus[0].material = 'cheese'", "faults.electrode_open",
                    "faults.thermistor = 'melted'", "unknown field 'fan'"):
         assert needle in text
+
+
+@pytest.mark.parametrize("stimulus", [
+    {"kind": "vibration", "start_s": 0.1, "duration_s": 0.5, "amplitude_um": 1.0, "frequency_Hz": 100.0},
+    {"kind": "pressure", "start_s": 0.1, "duration_s": 0.5, "offset_kPa": 1.0},
+])
+def test_a_fade_longer_than_half_the_stimulus_is_refused_not_a_silently_smaller_stimulus(stimulus):
+    # a 5 s fade on a 0.5 s vibration had been accepted: the stimulus reached 0.6 % of its amplitude
+    (msg,) = problems({**MINIMAL, "stimulus": [{**stimulus, "fade_s": 5.0}]})
+    assert "stimulus[0].fade_s = 5" in msg and "at most 0.25 s" in msg
+    parse_scene({**MINIMAL, "stimulus": [{**stimulus, "fade_s": 0.25}]})  # exactly half: the peak is reached
+
+
+def test_the_default_fade_of_a_short_stimulus_fits_it_so_the_stimulus_reaches_its_amplitude():
+    import numpy as np
+
+    from emulator.stimuli import fade_window
+
+    sc = parse_scene({**MINIMAL, "stimulus": [{"kind": "vibration", "start_s": 0.1, "duration_s": 0.004,
+                                               "amplitude_um": 1.0, "frequency_Hz": 100.0}]})
+    (v,) = sc.stimuli
+    assert v.fade_s == 0.002  # the default 0.01 s, shortened to half the stimulus
+    assert fade_window(np.array([0.002]), v.duration_s, v.fade_s)[0] == pytest.approx(1.0)
