@@ -55,6 +55,17 @@ class FirmwareBench:
             raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
         if not (isinstance(host_gone_s, (int, float)) and math.isfinite(host_gone_s) and host_gone_s > 0):
             raise ValueError(f"host_gone_s = {host_gone_s!r}: must be a number > 0 (wall seconds)")
+        # a zero, negative or NaN step never advanced the firmware (the host read nothing, without a word), and a
+        # rate outside 0..1 corrupted every byte or none: refused before anything is built
+        if not (isinstance(step_s, (int, float)) and not isinstance(step_s, bool) and math.isfinite(step_s)
+                and step_s > 0):
+            raise ValueError(f"step_s = {step_s!r}: must be a number > 0 (the firmware's virtual-time step, s)")
+        for name, rate in (("corrupt_rate", corrupt_rate), ("drop_rate", drop_rate)):
+            if not (isinstance(rate, (int, float)) and not isinstance(rate, bool) and 0 <= rate <= 1):
+                raise ValueError(f"{name} = {rate!r}: must be a probability per byte, 0 to 1")
+        if corrupt_rate + drop_rate > 1:
+            raise ValueError(f"corrupt_rate + drop_rate = {corrupt_rate + drop_rate:g}: together at most 1 (each byte "
+                             f"is dropped, corrupted or sent as it is)")
         sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)
         self.link = PtyLink(baudrate, rx_buffer=rx_buffer, keep_arrivals=keep_arrivals)
         self.baudrate = baudrate
