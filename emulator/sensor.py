@@ -142,6 +142,14 @@ class Sensor:
                  block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None, record_signals=(),
                  variant: str = ch.DEFAULT_VARIANT):
         self.variant = ch.variant(variant)  # ValueError naming the allowed variants
+        if params is not None and not isinstance(params, SensorParams):
+            raise TypeError(f"params = {params!r}: give a SensorParams, e.g. SensorParams().replace("
+                            f"inflation_volume_mL=0.6) (emulator.params)")
+        if not (isinstance(block_s, (int, float)) and not isinstance(block_s, bool) and np.isfinite(block_s)
+                and block_s > 0):
+            raise ValueError(f"block_s = {block_s!r}: must be a finite number > 0 (the physics block, s)")
+        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
+            raise ValueError(f"seed = {seed!r}: must be a whole number ≥ 0")
         self.params = params or SensorParams()
         self.faults = dict(faults or {})
         unknown_faults = set(self.faults) - set(FAULT_NAMES)

@@ -139,3 +139,16 @@ def test_nan_checks_cover_every_numeric_field():
         hints = typing.get_type_hints(cls)
         numeric = {f.name for f in dataclasses.fields(cls) if hints[f.name] in (float, float | None)}
         assert numeric <= set(cls.LIMITS), f"{cls.__name__}: unchecked {sorted(numeric - set(cls.LIMITS))}"
+
+
+@pytest.mark.parametrize("kw, needle", [
+    (dict(block_s=float("nan")), "block_s = nan: must be a finite number > 0"),  # had been "cannot convert float NaN"
+    (dict(block_s=0), "block_s = 0"),
+    (dict(seed=-5), "seed = -5: must be a whole number ≥ 0"),  # had been numpy's "expected non-negative integer"
+    (dict(params={"inflation_volume_mL": 0.6}), "give a SensorParams"),  # had been "unhashable type: 'dict'"
+])
+def test_sensor_arguments_are_refused_naming_the_argument(kw, needle):
+    from emulator.sensor import Sensor
+
+    with pytest.raises((ValueError, TypeError), match=needle):
+        Sensor(**kw)
