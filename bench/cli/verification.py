@@ -202,9 +202,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     b.add_argument("--hour", action="store_true",
                    help="stream a full simulated hour for the memory check (default: 600 simulated s)")
     b.add_argument("--no-rtl", action="store_true", help="skip the RTL measurements (no Verilator build)")
-    b.add_argument("--textures", action="store_true",
-                   help="only the sliding, texture-rig, Dask-scaling and exploration benchmarks")
-    b.add_argument("--effects", action="store_true",
-                   help="only the per-effect cost table: the default full frame with and without each of issue "
-                        "10's effects (--seconds per run; about 10 s at 60)")
+    only = b.add_mutually_exclusive_group()  # both had run --textures alone, --effects silently dropped
+    only.add_argument("--textures", action="store_true",
+                      help="only the sliding, texture-rig, Dask-scaling and exploration benchmarks")
+    only.add_argument("--effects", action="store_true",
+                      help="only the per-effect cost table: the default full frame with and without each of issue "
+                           "10's effects (--seconds per run; about 10 s at 60)")
     b.set_defaults(func=_cmd_benchmark)

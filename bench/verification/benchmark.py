@@ -626,9 +626,15 @@ def _fmt(v, spec):
 def main(args) -> int:
     say = (lambda m: print(m, file=sys.stderr)) if not args.json else (lambda m: None)
     if getattr(args, "textures", False):
-        from bench.verification.benchmark_textures import report
+        from bench.verification.benchmark_textures import report, results
 
-        print(report(say))
+        measured = results(say)
+        if args.json:  # --json had been ignored here: the table came out where JSON was asked for
+            from bench.cli.args import strict_json
+
+            print(strict_json(measured, indent=2))
+        else:
+            print(report(measured=measured))
         return 0
     if getattr(args, "effects", False):
         costs = effect_costs(args.seconds, say=say)

@@ -111,17 +111,26 @@ def exploration_speed() -> float:
         return float(bench_exploration.main([]))
 
 
-def report(say=lambda m: None) -> str:
+def results(say=lambda m: None) -> dict:
+    """The sliding, rig, Dask-scaling and exploration measurements, as data (``benchmark --textures --json``)."""
+    out = {"sliding": sliding_fidelity(say=say), "dask_scaling": dask_scaling(say=say)}
+    say("… exploration steps")
+    out["exploration_steps_per_s"] = exploration_speed()
+    return out
+
+
+def report(say=lambda m: None, measured: dict | None = None) -> str:
+    r_all = measured if measured is not None else results(say)
     lines = ["Sliding: a 5 cm slide at 0.5 N, 2.5 cm/s — error against the reference profile (noise-free PAC) and "
              f"the cost of a rig trial (lower, hold, slide, lift; full 44-slot frame, noise on; best of {TRIAL_REPEATS} "
              "runs):",
              f"  {'texture':20s} {'profile':10s} {'PAC RMS err (bits)':>19s} {'spectral err (dB)':>18s} "
              f"{'trial sim s':>12s} {'trial wall s':>13s} {'× real time':>12s}"]
-    for r in sliding_fidelity(say=say):
+    for r in r_all["sliding"]:
         lines.append(f"  {r['texture']:20s} {r['profile']:10s} {r['pac_rms_error_bits']:19.3f} "
                      f"{r['spectral_error_dB']:18.3f} {r['trial_simulated_s']:12.2f} {r['trial_wall_s']:13.3f} "
                      f"{r['realtime_factor']:12.0f}")
-    d = dask_scaling(say=say)
+    d = r_all["dask_scaling"]
     lines += [f"\nCampaign engine (Dask LocalCluster), {d['trials']} rig trials "
               f"(best of {SCALING_ROUNDS} alternating runs each):",
               f"  1 worker: {d['workers_1']['wall_s']:.2f} s; 2 workers: {d['workers_2']['wall_s']:.2f} s; "
@@ -130,7 +139,6 @@ def report(say=lambda m: None) -> str:
               f"{d['workers_1']['overhead_per_task_s'] * 1e3:.1f} ms (1 worker); mean trial {d['mean_task_s']:.3f} s",
               f"  estimate (not measured): 64 workers ≈ {d['estimate_64_workers_trials_per_s']:.0f} trials/s, so the "
               f"experiment's ~4000 trials in ≈ {4000 / d['estimate_64_workers_trials_per_s']:.0f} s"]
-    say("… exploration steps")
     lines.append(f"\nBayesian exploration over 117 textures × 36 movements × 3 properties: "
-                 f"{exploration_speed():,.0f} steps/s")
+                 f"{r_all['exploration_steps_per_s']:,.0f} steps/s")
     return "\n".join(lines)
