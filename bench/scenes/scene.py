@@ -1080,8 +1080,11 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         grid = profile(fidelity).grid_Hz
         for i, s in enumerate(x for lst in per_sensor.values() for x in lst):
             if isinstance(s, Vibration) and max(s.f_start_Hz, s.f_stop_Hz or 0) >= 0.45 * grid:
-                c.problems.append(f"vibration at {max(s.f_start_Hz, s.f_stop_Hz or 0):.0f} Hz needs a finer grid than "
-                                  f"fidelity '{fidelity}' ({grid:.0f} Hz); use \"reference\"")
+                top = max(s.f_start_Hz, s.f_stop_Hz or 0)
+                # the profiles whose grid computes it (the advice had been "reference" alone, where "default" does)
+                fits = " or ".join(f'"{n}"' for n, f in PROFILES.items() if top < 0.45 * f.grid_Hz)
+                c.problems.append(f"vibration at {top:.0f} Hz needs a finer grid than "
+                                  f"fidelity '{fidelity}' ({grid:.0f} Hz); use {fits}")
             elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
                 c.problems.append(f"pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity '{fidelity}' "
                                   f"({grid:.0f} Hz); use \"default\" or \"reference\"")

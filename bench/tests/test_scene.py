@@ -160,3 +160,11 @@ def test_the_default_fade_of_a_short_stimulus_fits_it_so_the_stimulus_reaches_it
     (v,) = sc.stimuli
     assert v.fade_s == 0.002  # the default 0.01 s, shortened to half the stimulus
     assert fade_window(np.array([0.002]), v.duration_s, v.fade_s)[0] == pytest.approx(1.0)
+
+
+def test_a_vibration_too_fast_for_fast_is_advised_the_default_profile_too():
+    # 2500 Hz fits the default profile's 8.8 kHz grid: the advice had named only "reference" (8x slower)
+    (msg,) = problems({"scene": {"name": "t", "duration_s": 1.0, "fidelity": "fast"},
+                       "stimulus": [{"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1,
+                                     "frequency_Hz": 2500.0}]})
+    assert msg.endswith('use "default" or "reference"')
