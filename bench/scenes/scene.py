@@ -148,12 +148,14 @@ class Scene:
     @property
     def channels(self) -> list[str]:
         """The channels sensor 1 answers: its variant's default frame (a BioTac SP's has E20..E24), or the host
-        sequence's channels."""
+        sequence's channels that its variant has — a 19-electrode sensor on a bus with a BioTac SP is asked for
+        E20..E24 too and answers them with error words (0xA558); those had ended `run` and `validate` in a
+        KeyError traceback."""
         from emulator.channels import variant
 
         v = variant(self.variant)
         seq = v.frame_names if self.sequence == "default" else self.sequence
-        return sorted(set(seq), key=lambda n: v.channel_index[n])
+        return sorted((n for n in set(seq) if n in v.channel_index), key=lambda n: v.channel_index[n])
 
 
 @dataclass

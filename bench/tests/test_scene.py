@@ -168,3 +168,19 @@ def test_a_vibration_too_fast_for_fast_is_advised_the_default_profile_too():
                        "stimulus": [{"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1,
                                      "frequency_Hz": 2500.0}]})
     assert msg.endswith('use "default" or "reference"')
+
+
+def test_a_mixed_bus_reading_e20_to_e24_runs_sensor_1_answering_error_words(tmp_path):
+    # sensor 1 a BioTac, sensor 2 a BioTac SP, the host reading E24: validate and run had ended in a KeyError
+    # traceback (Scene.channels looked E24 up in sensor 1's channel map); the README has the 19-electrode sensor
+    # answer E20..E24 with error words, and the bridge's refusal sends such scenes to `run`
+    from bench.running.runner import check_buildable, run_scene
+
+    sc = parse_scene({"scene": {"name": "t", "duration_s": 0.05}, "sensors": [{"index": 2, "variant": "biotac-sp"}],
+                      "host": {"sequence": ["E24", "PDC"]}})
+    assert sc.channels == ["PDC"]
+    check_buildable(sc)
+    rec = run_scene(sc, progress=False)
+    assert rec.status == "ok", rec.error
+    assert (rec.channels["E24"].status != 0).all() and (rec.channels["PDC"].status == 0).all()
+    assert (rec.sensors[2].channels["E24"].status == 0).all()
