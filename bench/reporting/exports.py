@@ -29,9 +29,25 @@ def _interp(t: np.ndarray, tp: np.ndarray, xp: np.ndarray) -> np.ndarray:
     return np.interp(t, tp, np.asarray(xp, float))
 
 
-def physical(name: str, codes: np.ndarray, baselines: dict, tac_tdc: np.ndarray | None = None) -> dict:
+def physical(name: str, codes: np.ndarray, baselines: dict, tac_tdc: np.ndarray | None = None,
+             status: np.ndarray | None = None) -> dict:
     """Physical-unit arrays of one channel's codes: PAC_Pa; PDC_kPa, PDC_force_N; TDC_C; TAC_C_per_s (needs the
-    TDC code at each TAC instant); E<n>_ohm."""
+    TDC code at each TAC instant); E<n>_ohm.  A sample the host rejected (``status`` ≠ 0: a parity error or an
+    error word) is no measurement: its value is NaN (an error word had read as, e.g., 5540.8 ohm)."""
+    out = _physical(name, codes, baselines, tac_tdc)
+    if status is not None and np.any(status):
+        bad = np.asarray(status) != 0
+        out = {k: np.where(bad, np.nan, np.asarray(v, float)) for k, v in out.items()}
+    return out
+
+
+def _good(r):
+    """Instants and codes of a channel's samples the host accepted (status 0)."""
+    ok = np.asarray(r.status) == 0
+    return r.times[ok], r.codes[ok]
+
+
+def _physical(name: str, codes: np.ndarray, baselines: dict, tac_tdc: np.ndarray | None = None) -> dict:
     if name == "PAC":
         return {"PAC_Pa": conv.pac_to_pa(codes, baselines["PAC"])}
     if name == "PDC":
@@ -73,9 +89,9 @@ def export_npz(h5: Path, dest: Path, baselines: dict, checkpoint=lambda: None) -
                 if "TDC" not in names:
                     continue
                 d = store.read_channel(h5, "TDC")
-                tdc = _interp(r.times, d.times, d.codes)
+                tdc = _interp(r.times, *_good(d))
                 del d
-            for key, a in physical(name, r.codes, baselines, tdc).items():
+            for key, a in physical(name, r.codes, baselines, tdc, r.status).items():
                 _npz_entry(zf, key, a)
 
 
@@ -96,21 +112,30 @@ def export_csv(h5: Path, dest: Path, baselines: dict, checkpoint=lambda: None, b
                 tdc = None
                 if name == "TAC" and "TDC" in block:
                     d = block["TDC"]
+                    dt, dc = _good(d)  # TDC's accepted samples only: an error word is no temperature
                     # TDC around the block: the last sample before it, the block's, and the first after it
-                    t_ref = np.concatenate([tdc_prev[0], d.times]) if tdc_prev is not None else d.times
-                    c_ref = np.concatenate([tdc_prev[1], d.codes.astype(float)]) if tdc_prev is not None \
-                        else d.codes.astype(float)
-                    nxt = store.read_channel(h5, "TDC", tdc_seen + d.times.size, tdc_seen + d.times.size + 1)
-                    t_ref, c_ref = np.append(t_ref, nxt.times), np.append(c_ref, nxt.codes.astype(float))
+                    t_ref = np.concatenate([tdc_prev[0], dt]) if tdc_prev is not None else dt
+                    c_ref = np.concatenate([tdc_prev[1], dc.astype(float)]) if tdc_prev is not None \
+                        else dc.astype(float)
+                    at = tdc_seen + d.times.size
+                    while True:  # the first accepted TDC sample after the block (if any)
+                        nxt = store.read_channel(h5, "TDC", at, at + 64)
+                        nt, nc = _good(nxt)
+                        if nt.size or nxt.times.size < 64:
+                            break
+                        at += 64
+                    t_ref, c_ref = np.append(t_ref, nt[:1]), np.append(c_ref, nc[:1].astype(float))
                     tdc = _interp(r.times, t_ref, c_ref)
-                value = physical(name, r.codes, baselines, tdc).get(key)
+                value = physical(name, r.codes, baselines, tdc, r.status).get(key)
                 if value is None:
                     value = np.full(r.codes.size, np.nan)
                 cols.append((r.times, np.full(r.codes.size, name, dtype=object), r.codes, r.status, value,
                              np.full(r.codes.size, unit, dtype=object)))
             if "TDC" in block and block["TDC"].times.size:
                 d = block["TDC"]
-                tdc_prev = (d.times[-1:], d.codes[-1:].astype(float))
+                dt, dc = _good(d)
+                if dt.size:
+                    tdc_prev = (dt[-1:], dc[-1:].astype(float))
                 tdc_seen += d.times.size
             if not cols:
                 continue

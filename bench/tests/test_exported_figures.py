@@ -302,3 +302,36 @@ def test_samples_csv_holds_every_sample_of_samples_h5_in_time_order(tmp_path):
         assert np.allclose([float(row["time_s"]) for row in mine], r.times, rtol=0, atol=1e-7), name
         assert [int(row["code"]) for row in mine] == r.codes.tolist(), name
         assert [int(row["status"]) for row in mine] == r.status.tolist(), name
+
+
+def test_a_rejected_sample_has_no_physical_value_and_a_rejected_tdc_word_no_say_in_tac(tmp_path):
+    """codes.npz and samples.csv: a sample the host rejected (status 1 parity error, 2 error word) is no
+    measurement, its physical value NaN (an error word had been converted like a code: 5540.8 ohm for E24 on a
+    19-electrode sensor), and TAC's TDC reference at each instant interpolates between accepted TDC words only."""
+    import csv
+
+    import h5py
+
+    from bench.reporting import exports
+    from emulator import conversions as conv
+
+    h5 = tmp_path / "samples.h5"
+    channels = {"TDC": ([0.0, 1.0, 2.0], [1200, 4000, 1210], [0, 2, 0]), "TAC": ([1.0], [2050], [0]),
+                "E24": ([0.0, 1.0], [2900, 2635], [0, 2]), "PAC": ([0.5, 1.5], [2048, 2100], [1, 0])}
+    with h5py.File(h5, "w") as f:  # the store's layout: /<CH>/t, code, status
+        for name, (t, code, status) in channels.items():
+            g = f.create_group(name)
+            g["t"], g["code"], g["status"] = np.array(t), np.array(code, np.uint16), np.array(status, np.uint8)
+    base = {"PAC": 2048.0, "PDC": 735.0, "TAC": 2048.0}
+    exports.export_npz(h5, tmp_path / "codes.npz", base)
+    exports.export_csv(h5, tmp_path / "samples.csv", base)
+    tac_want = conv.tac_to_celsius_per_s(np.array([2050]), np.array([1205.0]), 2048.0)[0]  # TDC between good words
+    with np.load(tmp_path / "codes.npz") as z:
+        assert z["E24_ohm"][0] == conv.impedance_ohm(np.array([2900]))[0] and np.isnan(z["E24_ohm"][1])
+        assert np.isnan(z["TDC_C"][1]) and not np.isnan(z["TDC_C"][[0, 2]]).any()
+        assert np.isnan(z["PAC_Pa"][0]) and z["PAC_Pa"][1] == pytest.approx(conv.pac_to_pa(np.array([2100]), 2048.0)[0])
+        assert z["TAC_C_per_s"][0] == pytest.approx(tac_want)
+    with open(tmp_path / "samples.csv", newline="") as fh:
+        rows = {(r["channel"], r["time_s"][:3]): r["value"] for r in csv.DictReader(fh)}
+    assert np.isnan(float(rows[("E24", "1.0")]))
+    assert float(rows[("TAC", "1.0")]) == pytest.approx(tac_want, rel=1e-5)  # the CSV prints 6 digits
