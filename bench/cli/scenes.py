@@ -50,7 +50,8 @@ scene file (TOML):
      press        start_s, force_N, ramp_s (0.5), hold_s (1.0)
      sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07; falls through air)
      vibration    start_s, duration_s, amplitude_um, frequency_Hz  | f_start_Hz + f_stop_Hz (log sweep), fade_s
-     pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz  (calibrator on the liquid)
+                  (0.01, at most duration_s / 2: a raised-cosine fade-in and fade-out)
+     pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz, fade_s  (calibrator on the liquid)
      touch        start_s, force_N, ramp_s, hold_s; where: electrode ("E17") or x_mm + angle_deg;
                   indenter_radius_mm (3), tangential_N, shear_angle_deg; material ("aluminum", "glass",
                   "wood", "polystyrene foam", ...) and object_temperature_C for thermal contact

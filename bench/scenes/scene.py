@@ -524,6 +524,7 @@ def _fade_fits(c, st: dict, w: str, dur, fade) -> bool:
         return False
     return True
 
+
 def _ending_in_scene(c: _Checker, w: str, what: str, stimuli: list, duration) -> list:
     """The ``stimuli`` (each with ``start_s`` and ``end_s`` in s) that end by the scene's end (``duration`` in s);
     a problem naming ``w``, ``what``, the start, the end and duration_s for each that ends after it, which the
