@@ -45,6 +45,7 @@ How it behaves like the device
 from __future__ import annotations
 
 import os
+import select
 import shutil
 import socket
 import stat
@@ -129,6 +130,7 @@ class _Client:
     def __init__(self, conn: socket.socket):
         self.conn = conn
         self.owner = False
+        self.gone = False  # the program closed its end (exited): what it left unread here is not served
         self.results: deque[tuple[bytes, float]] = deque()  # submitted batches: (MISO, end time)
         self.thread: threading.Thread | None = None
 
@@ -185,6 +187,20 @@ class CheetahBench:
     def in_use(self) -> bool:
         return self._owner is not None
 
+    def _release_if_closed(self) -> None:
+        """Free the adapter if its owner has closed its end of the connection, whatever it left unread here (call
+        with the lock held): a real Cheetah is free once the program that opened it exits, its pending
+        asynchronous batches dropped, while this server would otherwise clock every batch still queued before
+        it saw the end, and refuse the next program meanwhile."""
+        owner = self._owner
+        if owner is None:
+            return
+        poller = select.poll()
+        hangup = select.POLLHUP | getattr(select, "POLLRDHUP", 0)
+        poller.register(owner.conn, hangup)
+        if any(events & hangup for _, events in poller.poll(0)):
+            owner.gone, owner.owner, self._owner = True, False, None
+
     # --- serving ------------------------------------------------------------------------
     def _serve(self):
         while not self._stop.is_set():
@@ -203,7 +219,7 @@ class CheetahBench:
     def _client(self, c: _Client):
         conn = c.conn
         try:
-            while not self._stop.is_set():
+            while not self._stop.is_set() and not c.gone:
                 head = self._recv(conn, 5)
                 if head is None:
                     return
@@ -237,6 +253,10 @@ class CheetahBench:
 
     def _handle(self, c: _Client, kind: int, payload: bytes) -> bytes | None:
         with self._lock:
+            if c.gone:  # its program has exited and another may hold the adapter now: nothing more is done for it
+                return None
+            if kind in (REQ_QUERY, REQ_HELLO) and self._owner is not c:
+                self._release_if_closed()
             if kind == REQ_QUERY:
                 return bytes([self._owner is not None]) + struct.pack("<I", UNIQUE_ID)
             if kind == REQ_HELLO:

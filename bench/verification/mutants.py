@@ -2437,6 +2437,21 @@ CATALOGUE += [
            '',
            ('emulator/tests/test_electrode_locality.py::test_a_contact_presses_only_within_its_window_whatever_its_profile_gives_outside',),
            'a contact whose window starts after t = 0 taken as pressed since before the start'),
+    Mutant('cheetah-exited-owner-holds-adapter', 'host', 'bench/hosts/cheetah_server.py',
+           '            if kind in (REQ_QUERY, REQ_HELLO) and self._owner is not c:\n                self._release_if_closed()\n',
+           '',
+           ('firmware_tests/tests/test_cheetah_device.py::test_a_program_that_exits_with_batches_pending_frees_the_adapter_at_once',),
+           'the adapter held by a program that has exited until the server has clocked every batch it left (the next program refused, -8)'),
+    Mutant('cheetah-gone-client-served-on', 'host', 'bench/hosts/cheetah_server.py',
+           '            if c.gone:  # its program has exited and another may hold the adapter now: nothing more is done for it\n                return None\n',
+           '',
+           ('firmware_tests/tests/test_cheetah_device.py::test_a_program_that_exits_with_batches_pending_frees_the_adapter_at_once',),
+           "a released program's queued requests still handled after another took the adapter"),
+    Mutant('client-batches-atoi', 'cheetah', 'firmware_tests/cheetah_client/biotac_client.c',
+           'if (end == argv[1] || *end || n < 1 || n > 1000000) {',
+           'if (0) {',
+           ('firmware_tests/tests/test_cheetah.py::test_the_example_client_refuses_a_batch_count_that_is_not_a_whole_number_from_1',),
+           'the example client reading "-1" or "ten" as a batch count'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

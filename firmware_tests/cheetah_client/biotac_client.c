@@ -76,7 +76,16 @@ static void *load(const char *argv0) {
 static int odd(u08 b) { int n = 0; while (b) { n += b & 1; b >>= 1; } return n & 1; }
 
 int main(int argc, char **argv) {
-    int batches = argc > 1 ? atoi(argv[1]) : 20;
+    int batches = 20;
+    if (argc > 1) {  /* a whole number of batches, 1 or more: "-1" or "ten" is refused, not read as 0 or -1 */
+        char *end;
+        long n = strtol(argv[1], &end, 10);
+        if (end == argv[1] || *end || n < 1 || n > 1000000) {
+            fprintf(stderr, "batches: a whole number from 1 to 1000000, not %s\n", argv[1]);
+            return 1;
+        }
+        batches = (int)n;
+    }
     int sp = argc > 2 && strcmp(argv[2], "sp") == 0;
     if (argc > 2 && !sp && strcmp(argv[2], "44") != 0) { fprintf(stderr, "frame: 44 or sp, not %s\n", argv[2]); return 1; }
     const u08 *FRAME_CMDS_USED = sp ? SP_FRAME_CMDS : FRAME_CMDS;

@@ -118,3 +118,12 @@ def test_stop_returns_while_a_request_is_being_clocked():
         assert time.monotonic() - t0 < 2
     finally:
         cb._lock.release()
+
+
+@pytest.mark.parametrize("bad", ["0", "-1", "ten", "3x", ""])
+def test_the_example_client_refuses_a_batch_count_that_is_not_a_whole_number_from_1(bad):
+    """``biotac_client -1`` printed "frames -5" and ``biotac_client ten`` ran no batch (atoi): now refused, naming
+    the argument, before it looks for the adapter."""
+    exe = build_client(build_library())
+    r = subprocess.run([str(exe), bad], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 1 and r.stderr == f"batches: a whole number from 1 to 1000000, not {bad}\n", r.stderr

@@ -569,3 +569,35 @@ def test_a_select_change_between_bytes_ends_one_sensors_exchange_and_starts_the_
         assert lib.c_ch_spi_batch_shift(h, 40, buf) == 40
         assert cb.client_errors == []
     assert bytes(buf[4:22]).startswith(b"BT0101EMU0000001") and bytes(buf[22:]).startswith(b"BT0101EMU0000002")
+
+
+SUBMIT_AND_EXIT = ("import ctypes as C, sys\n"
+                   "lib = C.CDLL(sys.argv[1])\n"
+                   "h = lib.c_ch_open(0)\n"
+                   "assert h == 1, h\n"
+                   "lib.c_ch_spi_queue_clear(h)\n"
+                   "for _ in range(150):  # 10 min of virtual time before each sample: the server simulates it all\n"
+                   "    lib.c_ch_spi_queue_delay_ns(h, 4_000_000_000)\n"
+                   "lib.c_ch_spi_queue_ss(h, 1)\n"
+                   "lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x80, 0))\n"
+                   "lib.c_ch_spi_queue_ss(h, 0)\n"
+                   "assert [lib.c_ch_spi_async_submit(h) for _ in range(64)] == [0] * 64\n"
+                   "print('submitted', flush=True)\n")  # and exits: no collect, no close
+
+
+def test_a_program_that_exits_with_batches_pending_frees_the_adapter_at_once(lib):
+    """A real Cheetah is free as soon as the program that opened it exits, its pending asynchronous batches
+    dropped.  A program that submits 64 batches of 10 min of virtual time each and exits: the next program opens
+    the adapter at once (it was refused, −8, until the server had clocked every batch left — ten hours of virtual
+    time here, seconds of wall time), and the batches nobody will collect are not clocked."""
+    lib, mp = lib
+    with CheetahBench(1) as cb:
+        r = subprocess.run([sys.executable, "-c", SUBMIT_AND_EXIT, str(cb.library)], capture_output=True, text=True,
+                           env=cb.env, timeout=60)
+        assert r.returncode == 0 and r.stdout == "submitted\n", r.stderr
+        h = open_adapter(lib, mp, cb)  # asserts the handle: not CH_UNABLE_TO_OPEN
+        clocked = cb.batches  # (on an idle machine a few: the server clocks ~100 batches/s)
+        time.sleep(0.2)
+        # the dead program's batches are no longer clocked, and the new owner is served as usual
+        assert len(sample_words(lib, h)) == 3 and cb.batches == clocked + 3
+        assert cb.client_errors == []
