@@ -200,7 +200,9 @@ class Sensor:
                 self._node_of_channel[c] = KIND_ELECTRODE
         self._chunks: dict[str, list[np.ndarray]] = {n: [] for n in self._kept}
         self._slow_cost = {"thermal": 0.0, "electrodes": 0.0}  # wall time of the slow models, s
-        self._buf_n0 = int(np.ceil(start_s * self.fs))  # grid index of the first retained sample
+        # grid index of the first retained sample: the one at or before the start, so that the start instant itself
+        # can be interpolated (ceil refused it whenever start_s·fs is not an integer, e.g. 0.07 s·8800 Hz in floats)
+        self._buf_n0 = int(np.floor(start_s * self.fs))
         self._computed = self._buf_n0  # next grid index to compute
         self._last_plan = None  # (channels, plan) of the last analog() call (see _plan)
 

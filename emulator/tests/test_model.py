@@ -281,3 +281,92 @@ def test_the_bridge_settles_where_it_runs_whatever_the_core_temperature(core_C):
                                                  "bridge_temperature_C": np.full(4, core_C)})["stage1_input_V"]
         assert first == pytest.approx(np.full(4, start), rel=1e-12, abs=1e-15)
         assert start == pytest.approx(p.bridge_offset_at(core_C) + p.bridge_span_at(core_C) * pressure, rel=1e-12)
+
+
+def test_a_sensor_started_between_grid_samples_can_be_read_at_its_start():
+    # the start instant exists ("earlier instants do not exist"): read there, a sensor settled at rest reads what one
+    # started at 0 reads at that instant.  0.07 s·8800 Hz is 616.0000000000001 in floating point and 1e-4 s lies
+    # between grid samples; 1 % of an LSB allows for nothing but rounding (noise is off)
+    for start in (0.07, 1e-4, 1.12):
+        late = Sensor(channels_read=["PDC"], noise=NoiseSources.none(), start_s=start)
+        early = Sensor(channels_read=["PDC"], noise=NoiseSources.none())
+        assert late.analog([1], [start])[0] == pytest.approx(early.analog([1], [start])[0], abs=0.01 * ADC_LSB_V)
+
+
+def test_a_tap_is_a_raised_cosine_pulse_peaking_at_its_middle():
+    # raised cosine F = peak·(1 − cos(2π·x/T))/2: 0, peak/2, peak, peak/2, 0 at x = 0, T/4, T/2, 3T/4, T; 1 µN
+    # covers the central difference (h = 1e-7 s) of the closed-form cumulative
+    tap = Tap(0.1, 1.5, 0.04)
+    x = np.array([0.0, 0.25, 0.5, 0.75, 1.0]) * 0.04
+    assert tap.force(0.1 + x) == pytest.approx([0.0, 0.75, 1.5, 0.75, 0.0], abs=1e-6)
+
+
+def test_a_press_lasts_both_ramps_and_a_touch_has_the_force_of_its_cumulative():
+    from emulator.effects import Block
+    from emulator.stimuli import ContactForce, Touch
+
+    # ramp r up, hold h, ramp r down: the press lasts 2r + h and delivers F·(r + h) (the ramps' triangles add to F·r);
+    # the grid's interval means add to the exact impulse (to rounding)
+    press = Press(0.1, 2.0, 0.3, 0.5)
+    assert press.end_s == pytest.approx(0.1 + 2 * 0.3 + 0.5)
+    fs = 8800.0
+    force = ContactForce([press]).process(Block(0, int(2.0 * fs), fs), {})["contact_force_N"]
+    assert force.sum() / fs == pytest.approx(2.0 * (0.3 + 0.5), rel=1e-9)
+    # a Touch's piecewise-linear force (what its electrodes feel) is the derivative of the cumulative it shares with
+    # Press (what the fluid feels); 1 µN covers the central difference
+    touch = Touch(0.1, 2.0, 0.3, 0.5)
+    t = np.linspace(0.0, 2.0, 2001)
+    assert touch.force(t) == pytest.approx(Press.force(touch, t), abs=1e-6)
+
+
+def test_a_sweeps_measured_frequency_follows_the_logarithmic_law_and_frequency_at():
+    # log sweep: f(τ) = f0·(f1/f0)^(τ/T).  Measured as 1/period between upward zero crossings at the period's middle
+    # (for a log sweep that reads f within (k·P)²/24, k = ln(f1/f0)/T: under 0.05 % above 50 Hz); 1 % tolerance
+    v = Vibration(0.0, 1.0, 1e-6, 10.0, 900.0, fade_s=0.0)
+    fs = 1e6
+    t = np.arange(int(fs)) / fs
+    y = v.value(t)
+    up = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
+    crossings = t[up] - y[up] / (y[up + 1] - y[up]) / fs  # linear interpolation of each crossing
+    mid, measured = 0.5 * (crossings[1:] + crossings[:-1]), 1.0 / np.diff(crossings)
+    keep = measured > 50.0
+    assert keep.sum() > 100
+    assert measured[keep] == pytest.approx(10.0 * 90.0 ** mid[keep], rel=0.01)
+    assert measured[keep] == pytest.approx(v.frequency_at(mid[keep]), rel=0.01)
+
+
+def test_stimuli_fade_in_with_a_raised_cosine_and_keep_their_shape_wherever_they_start():
+    # raised-cosine fade of length f: (1 − cos(π·τ/f))/2 = sin²(π·τ/(2f)): sin²(π/8) ≈ 0.146 a quarter in, 1/2 halfway
+    q = np.sin(np.pi / 8) ** 2
+    for start in (0.0, 0.0123):
+        cal = PressureCalibrator(start, 1.0, offset_Pa=100.0, fade_s=0.02)
+        assert cal.value(start + np.array([0.005, 0.01, 0.5, 0.995])) == pytest.approx(100.0 * np.array([q, 0.5, 1, q]),
+                                                                                         rel=1e-9)
+        # a tone counts its phase from its own start: the same waveform whenever it starts (1e-9 of the amplitude:
+        # rounding of start + τ − start)
+        tau = np.linspace(0.0, 1.0, 1001)
+        tone = Vibration(start, 1.0, 1e-6, 100.0, fade_s=0.02).value(start + tau)
+        assert tone == pytest.approx(Vibration(0.0, 1.0, 1e-6, 100.0, fade_s=0.02).value(tau), abs=1e-15)
+    # without a fade a tone is cut at its end: nothing after it
+    abrupt = Vibration(0.0, 0.5, 1e-6, 100.0, fade_s=0.0)
+    assert np.all(abrupt.value(np.array([0.5025, 0.6025, 1.0025])) == 0.0)
+    assert abrupt.value(np.array([0.4975]))[0] == pytest.approx(-1e-6, rel=1e-9)  # sin(2π·100·0.4975) = −1
+
+
+def test_the_reference_profiles_second_stage_noise_is_its_own_density_through_the_stage2_gain():
+    from dataclasses import replace
+
+    # first stage noiseless: PAC carries the second stage's input noise alone, white to fs/2 (per-sample RMS
+    # density·√(fs/2)), through the 10 Hz high-pass (passes ≈ 99.96 % of that band's power) and the gain 99.1;
+    # 21 000 samples (after 0.1 s) estimate an RMS within 0.5 % (1σ): 3 % tolerance
+    p = replace(SensorParams(), amp_voltage_noise_V_per_rtHz=0.0, amp_current_noise_A_per_rtHz=0.0,
+                stage2_voltage_noise_V_per_rtHz=1e-7)
+    only_grid = NoiseSources(johnson=False, mains_hum=False, adc=False, spi_coupling=False, thermistor=False)
+    s = Sensor(p, channels_read=["PAC"], fidelity="reference", noise=only_grid, seed=3)
+    t = np.arange(28000) / s.fs  # at the grid samples (halfway between, interpolation would average two draws)
+    pac = s.analog(np.zeros(t.size, int), t)
+    expected = 1e-7 * np.sqrt(s.fs / 2) * p.stage2_gain
+    assert pac[t > 0.1].std() == pytest.approx(expected, rel=0.03)  # (after the high-pass has settled)
+    # the amplifier switch turns the second stage's noise off with the first's: PAC then sits at its bias
+    quiet = Sensor(p, channels_read=["PAC"], fidelity="reference", noise=NoiseSources.none())
+    assert np.all(quiet.analog(np.zeros(t.size, int), t) == pytest.approx(p.stage2_bias_V, abs=1e-9))
