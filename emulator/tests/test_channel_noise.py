@@ -224,3 +224,39 @@ def test_the_thermistor_lines_are_what_the_running_thermal_network_measures():
     lines = _lines(p)
     assert measured[1] == pytest.approx(lines["TDC: thermistor noise (thermal network running)"], rel=0.1)
     assert measured[2] == pytest.approx(lines["TAC: thermistor noise (thermal network running)"], rel=0.1)
+
+
+def test_spi_coupling_draws_from_the_scene_seed_and_follows_its_own_switch():
+    p = SensorParams()
+    v = np.full(4000, 1.65)
+    busy = np.ones(v.size, bool)
+    # coupling alone (conversion noise off): σ = spi_coupling_rms_V, plus rounding's 1/12 LSB²; 4000 draws estimate
+    # an RMS within 1.1 % (1σ): 5 % tolerance
+    alone = Adc(p, 1, noise=False).convert(v, bus_active=busy).astype(float)
+    assert alone.std() == pytest.approx(np.sqrt((p.spi_coupling_rms_V / LSB) ** 2 + 1 / 12), rel=0.05)
+    # the scene seed keys the disturbance: the same seed repeats it, another seed draws another one
+    assert np.array_equal(Adc(p, 1, noise=False).convert(v, bus_active=busy), alone)
+    assert not np.array_equal(Adc(p, 2, noise=False).convert(v, bus_active=busy), alone)
+    # its switch turns the coupling off and leaves the conversion noise: a busy bus then changes no code
+    off = Adc(p, 1, spi_coupling=False)
+    assert np.array_equal(off.convert(v, bus_active=busy), Adc(p, 1, spi_coupling=False).convert(v))
+
+
+def test_amplifier_voltage_and_current_noise_add_in_quadrature():
+    from dataclasses import replace
+
+    # independent sources add in power: with i·R equal to the voltage noise the first stage's input noise is √2 times
+    # the voltage noise alone.  The same seed draws the same samples and PDC is a linear filter of them, so PDC's
+    # deviation from rest scales by √2 exactly (1e-6 allows for rounding)
+    base = SensorParams()
+    v_only = replace(base, amp_current_noise_A_per_rtHz=0.0)
+    both = replace(base, amp_current_noise_A_per_rtHz=base.amp_voltage_noise_V_per_rtHz / base.bridge_resistance_ohm)
+    amp_only = NoiseSources(johnson=False, mains_hum=False, adc=False, spi_coupling=False, thermistor=False)
+    t = np.arange(4400) / 4400.0
+    pdc = np.full(t.size, ch.PDC)
+
+    def deviation(p):
+        noisy = Sensor(p, channels_read=["PDC"], noise=amp_only, seed=5).analog(pdc, t)
+        return noisy - Sensor(p, channels_read=["PDC"], noise=NoiseSources.none()).analog(pdc, t)
+
+    assert deviation(both).std() / deviation(v_only).std() == pytest.approx(np.sqrt(2), rel=1e-6)

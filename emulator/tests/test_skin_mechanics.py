@@ -221,6 +221,32 @@ def test_faster_impacts_are_shorter_and_richer_in_high_frequencies():
     assert spectrum_share_above(fast, 2000.0) > spectrum_share_above(slow, 2000.0)
 
 
+def test_the_impact_force_follows_hertz_sin_to_the_3_2_and_peaks_at_the_stated_peak():
+    # Hertz: F ∝ δ^(3/2) with δ ≈ δ_max·sin(π·t/t_c), so F/F_peak = sin(π·t/t_c)^(3/2) (0.595 at t_c/4, not the 0.707 of
+    # a half-sine).  The cumulative is a 4096-point table: its secant slope is within |F'|/8192 of F, under 0.2 % at
+    # t ≥ 0.1·t_c: 0.5 % tolerance
+    x = np.array([0.1, 0.25, 0.5, 0.75, 0.9])
+    hertz = SphereDrop(0.01, 4e-6, 0.07, radius_m=0.5e-3, air_density_kg_per_m3=0.0)
+    tc = hertz.contact_duration_s
+    assert hertz.force(0.01 + x * tc) / hertz.peak_force_N == pytest.approx(np.sin(np.pi * x) ** 1.5, rel=5e-3)
+    # the legacy pulse of a given duration is a half-sine whose area is the impulse: F = peak·sin(π·t/t_c) (closed
+    # form: 1e-6 covers the central difference)
+    legacy = SphereDrop(0.01, 4e-6, 0.07, contact_s=1e-3, air_density_kg_per_m3=0.0)
+    assert legacy.force(0.01 + x * 1e-3) / legacy.peak_force_N == pytest.approx(np.sin(np.pi * x), rel=1e-6)
+    assert legacy.cumulative(np.array([0.02]))[0] == pytest.approx(legacy.impulse_Ns, rel=1e-12)
+
+
+def test_a_drop_on_a_sensor_lands_on_the_skins_plane_strain_modulus():
+    from dataclasses import replace
+
+    from emulator.stimuli import sphere_drop_on
+
+    # Hertz: t_c ∝ E*^(−2/5) with the plane-strain modulus E* = E/(1 − ν²): an incompressible skin (ν = 0.5) is stiffer
+    # in contact than one of ν = 0 by 1/(1 − 0.25) and its impacts are shorter by 0.75^(2/5) (closed form: 1e-9)
+    drops = [sphere_drop_on(replace(SensorParams(), skin_poisson_ratio=nu), 0.0, 4e-6) for nu in (0.0, 0.5)]
+    assert drops[1].contact_duration_s / drops[0].contact_duration_s == pytest.approx(0.75 ** 0.4, rel=1e-9)
+
+
 def test_bad_sphere_drop_is_refused_with_the_field_named():
     with pytest.raises(ValueError, match="SphereDrop.height_m"):
         SphereDrop(0.0, 1e-6, height_m=0.0)
