@@ -370,3 +370,12 @@ def test_the_reference_profiles_second_stage_noise_is_its_own_density_through_th
     # the amplifier switch turns the second stage's noise off with the first's: PAC then sits at its bias
     quiet = Sensor(p, channels_read=["PAC"], fidelity="reference", noise=NoiseSources.none())
     assert np.all(quiet.analog(np.zeros(t.size, int), t) == pytest.approx(p.stage2_bias_V, abs=1e-9))
+
+
+def test_a_sweep_reaching_beyond_the_grids_band_is_refused_whichever_way_it_goes():
+    # a sweep's top frequency is at one of its ends: 5 kHz is past the default grid's Nyquist frequency (8800 Hz / 2)
+    # and would alias, whether the sweep starts or ends there; a sweep within the band is built
+    for f_start, f_stop in ((100.0, 5000.0), (5000.0, 100.0)):
+        with pytest.raises(ValueError, match="finer grid"):
+            Sensor(stimuli=[Vibration(0.0, 1.0, 1e-6, f_start, f_stop)], channels_read=["PAC"])
+    Sensor(stimuli=[Vibration(0.0, 1.0, 1e-6, 100.0, 1000.0)], channels_read=["PAC"])

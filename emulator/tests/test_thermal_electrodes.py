@@ -167,6 +167,29 @@ def test_shear_skews_the_pattern_toward_its_direction():
     assert centre_x(sheared) - centre_x(base) > 0.5
 
 
+def test_a_touchs_contact_carries_its_tangential_force_along_the_core_surface():
+    # tangential_N is the tangential force at full normal force: held at 2 N with 0.5 N of shear, the contact's forces
+    # are (2, 0.5) N.  A shear at 90° points toward +angle around the finger: the unit tangent of the surface's circle
+    # at the touch, ∂P/∂angle of surface_point_mm normalised (a central difference of a circle: 1e-9)
+    for angle in (0.0, 30.0, -60.0):
+        touch = Touch(0.1, 2.0, 0.2, 1.0, x_mm=-5.0, angle_deg=angle, tangential_N=0.5, shear_angle_deg=90.0)
+        contact = Sensor(stimuli=[touch], channels_read=["E1"], noise=QUIET).electrodes.contacts[0]
+        normal, tangential = contact.state(np.array([0.8]))
+        assert (float(normal[0]), float(tangential[0])) == pytest.approx((2.0, 0.5), rel=1e-9)
+        around = surface_point_mm(-5.0, angle + 1e-4) - surface_point_mm(-5.0, angle - 1e-4)
+        assert np.array(contact.shear_direction) == pytest.approx(around / np.linalg.norm(around), abs=1e-9)
+
+
+def test_ambient_steps_act_in_time_order_whatever_order_they_are_given_in():
+    # a scene lists its stimuli in any order: the room is at 15 °C from 5 s and at 30 °C from 60 s either way
+    t = np.arange(0.0, 200.0, 1.0)
+    steps = [AmbientStep(5.0, 15.0), AmbientStep(60.0, 30.0)]
+    given, reversed_ = (tdc_celsius(Sensor(stimuli=s, channels_read=["TDC"], noise=QUIET), t)
+                        for s in (steps, steps[::-1]))
+    assert np.array_equal(reversed_, given)
+    assert given[59] < given[5] and given[-1] > given[60]  # the core cools toward 25 °C, then warms toward 40 °C
+
+
 def test_forces_that_bottom_the_skin_stay_bounded():
     p = SensorParams()
     pos = electrode_positions_mm()
