@@ -148,7 +148,8 @@ class Sensor:
         if not (isinstance(block_s, (int, float)) and not isinstance(block_s, bool) and np.isfinite(block_s)
                 and block_s > 0):
             raise ValueError(f"block_s = {block_s!r}: must be a finite number > 0 (the physics block, s)")
-        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
+        if not (isinstance(seed, (int, np.integer, float, np.floating)) and not isinstance(seed, bool)
+                and np.isfinite(seed) and float(seed).is_integer() and seed >= 0):  # 3262.0 is a whole number
             raise ValueError(f"seed = {seed!r}: must be a whole number ≥ 0")
         self.params = params or SensorParams()
         self.faults = dict(faults or {})

@@ -58,3 +58,13 @@ def test_the_readmes_scene_error_is_what_a_run_prints(tmp_path):
     r = subprocess.run([*CLI, "run", "bad.toml", "--out", "o"],
                        capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert (r.returncode, r.stderr) == (2, example)
+
+
+def test_scripts_claims_writes_a_relative_plots_folder_where_the_user_is(tmp_path):
+    """``scripts/claims --plots DIR`` from any folder: DIR is relative to where the user runs it (the script used to
+    change to the repository first, so the plot landed in the checkout)."""
+    r = subprocess.run([str(REPO / "scripts" / "claims"), "--only", "vibration", "--quick", "--plots", "mine"],
+                       cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "mine" / "frequency_sensitivity.png").stat().st_size > 1000
+    assert not (REPO / "mine").exists()

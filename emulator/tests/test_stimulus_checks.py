@@ -145,6 +145,7 @@ def test_nan_checks_cover_every_numeric_field():
     (dict(block_s=float("nan")), "block_s = nan: must be a finite number > 0"),  # had been "cannot convert float NaN"
     (dict(block_s=0), "block_s = 0"),
     (dict(seed=-5), "seed = -5: must be a whole number ≥ 0"),  # had been numpy's "expected non-negative integer"
+    (dict(seed=2.5), "seed = 2.5: must be a whole number ≥ 0"),  # (3262.0 is one: the claims pass such seeds)
     (dict(params={"inflation_volume_mL": 0.6}), "give a SensorParams"),  # had been "unhashable type: 'dict'"
 ])
 def test_sensor_arguments_are_refused_naming_the_argument(kw, needle):
@@ -152,3 +153,16 @@ def test_sensor_arguments_are_refused_naming_the_argument(kw, needle):
 
     with pytest.raises((ValueError, TypeError), match=needle):
         Sensor(**kw)
+
+
+def test_a_whole_seed_written_as_a_float_is_the_same_seed():
+    """``Sensor(seed=3262.0)`` is seed 3262 (the claims' vibration sweep passes 1000 + a frequency in Hz): the
+    argument check refused it for a while, stopping `claims --only vibration`."""
+    import numpy as np
+
+    from emulator.sensor import Sensor
+    from emulator.stimuli import Tap
+
+    a, b = (Sensor(stimuli=[Tap(0.01, 1.0)], seed=s) for s in (3262, 3262.0))
+    t = np.arange(200) / 4400.0
+    assert b.seed == 3262 and np.array_equal(a.sample(np.zeros(200, int), t), b.sample(np.zeros(200, int), t))

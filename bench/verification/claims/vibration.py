@@ -94,7 +94,7 @@ def sensitivity_curve(b: Bench, drive_m: float = 1e-6, background: float | None 
     out = {}
     for f in frequencies_Hz:
         rec = b.acquire([Vibration(0.0, 2.0, drive_m, float(f), fade_s=0.0)], 2.0, sequence=("PAC",),
-                        slot_rate_Hz=2200.0, seed_offset=1000 + f)
+                        slot_rate_Hz=2200.0, seed_offset=1000 + int(f))
         p = analysis.band_power_2hz(rec["PAC"][1][2200:4400], 2200.0, float(f))
         out[float(f)] = analysis.minimum_detectable_amplitude(drive_m, p, noise_band_bits2=background)
     return out
