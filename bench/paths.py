@@ -13,9 +13,11 @@ OUT = REPO / "out"
 def folder_name_problem(name, field: str) -> str | None:
     """Why ``name`` (the value of ``field``, e.g. "scene.name") cannot name a default out folder, or None: it must be
     1 to 100 ASCII letters, digits, '-', '_' or '.', and not '.' or '..' — a name, never a path."""
+    if name is None:
+        return f"{field} is missing: a name of 1 to 100 ASCII letters, digits, '-', '_' or '.'"
     if not isinstance(name, str) or not name:
         return f"{field} = {name!r:.80}: must be a non-empty string"
     if len(name) > 100 or name in (".", "..") or not all(ch.isascii() and (ch.isalnum() or ch in "-_.") for ch in name):
         return (f"{field} = {name!r:.80}: must be a name, not a path (it names the default out folder): 1 to 100 "
-                f"letters, digits, '-', '_' or '.', and not '.' or '..'")
+                f"ASCII letters, digits, '-', '_' or '.', and not '.' or '..'")
     return None

@@ -50,9 +50,12 @@ IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S = 3, 0.1
 
 
 def _r(v, limit: int = 80) -> str:
-    """``repr(v)`` for messages, shortened when long (a hostile file can hold a 1 MB string)."""
+    """``repr(v)`` for messages, shortened when long (a hostile file can hold a 1 MB string); a TOML date or time
+    as the file spells it (not ``datetime.datetime(...)``)."""
+    import datetime
+
     try:
-        text = repr(v)
+        text = v.isoformat() if isinstance(v, (datetime.datetime, datetime.date, datetime.time)) else repr(v)
     except (RecursionError, ValueError):
         text = f"<{type(v).__name__}>"
     return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"

@@ -184,3 +184,14 @@ def test_a_mixed_bus_reading_e20_to_e24_runs_sensor_1_answering_error_words(tmp_
     assert rec.status == "ok", rec.error
     assert (rec.channels["E24"].status != 0).all() and (rec.channels["PDC"].status == 0).all()
     assert (rec.sensors[2].channels["E24"].status == 0).all()
+
+
+def test_a_toml_date_or_a_missing_name_is_named_as_the_file_spells_it():
+    """A TOML date-time where a number belongs is quoted as the file writes it, not as Python's
+    ``datetime.datetime(1979, 5, 27, ...)``; a scene without a name says the name is missing (not ``= None``)."""
+    import datetime
+
+    msgs = problems({"scene": {"duration_s": datetime.datetime(1979, 5, 27, 7, 32, tzinfo=datetime.timezone.utc)}})
+    text = "\n".join(msgs)
+    assert "scene.duration_s = 1979-05-27T07:32:00+00:00: must be a number" in text and "datetime." not in text
+    assert "scene.name is missing: a name of 1 to 100 ASCII letters" in text
