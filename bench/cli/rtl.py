@@ -83,9 +83,13 @@ def vector_file_problem(path: str) -> str | None:
                 and 0 <= c["code"] <= 4095):
             return (f"not a vector file (conversions[{k}] = {c!r:.80}: sensor (one of sensors), channel, t_ps and "
                     f"code 0..4095, whole numbers)")
+
+    def sensor_key(k) -> bool:  # "1", not "01" or "+1": a sensor written two ways would be two entries for one
+        return k.isascii() and k.isdigit() and k == str(int(k)) and int(k) in sensors
+
     for key, f in vec["faults"].items():
         try:
-            if int(key) not in sensors or not isinstance(f, dict):
+            if not sensor_key(key) or not isinstance(f, dict):
                 raise ValueError
             Faults(**f)
         except (ValueError, TypeError):
@@ -94,14 +98,14 @@ def vector_file_problem(path: str) -> str | None:
 
     variants = vec.get("variants", {})
     if not (isinstance(variants, dict) and all(
-            k.isascii() and k.isdigit() and int(k) in sensors and v in ch.VARIANTS for k, v in variants.items())):
+            sensor_key(k) and int(k) in sensors and v in ch.VARIANTS for k, v in variants.items())):
         return f"not a vector file (variants: a sensor of sensors -> one of {', '.join(ch.VARIANTS)})"
     provided = vec.get("provided", {})
     if not isinstance(provided, dict):
         return "not a vector file (provided: a sensor of sensors -> the channel indices it provides)"
     for key, chans in provided.items():
         recognised = (ch.variant(variants.get(key, ch.DEFAULT_VARIANT)).sampled_channels
-                      if key.isascii() and key.isdigit() and int(key) in sensors else None)
+                      if sensor_key(key) else None)
         if not (recognised and isinstance(chans, list) and all(
                 isinstance(c, int) and not isinstance(c, bool) and c in recognised for c in chans)):
             return (f"not a vector file (provided[{key!r}] = {chans!r:.80}: a sensor of sensors -> channel indices "

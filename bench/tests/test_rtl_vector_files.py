@@ -63,6 +63,12 @@ BAD = {
     "a provided channel its variant lacks": (_set(("provided",), {"1": [36]}), "its variant recognises"),
     "provided channels of an absent sensor": (_set(("provided",), {"4": [0]}), "provided['4']"),
     "provided not a table": (_set(("provided",), [0, 1]), "provided: a sensor of sensors"),
+    # a sensor written two ways ("1" and "01"): the check looked the variant up by the text, the tools by the number
+    # (variants {"1": SP, "01": BioTac} passed and ran sensor 1 as a BioTac on an SP-less build)
+    "a sensor's variant given as 1 and as 01": (_set(("variants",), {"1": "biotac-sp", "01": "biotac"}),
+                                                "variants: a sensor of sensors"),
+    "a provided key 01": (_set(("provided",), {"01": [0]}), "provided['01']"),
+    "a faults key 01": (_set(("faults",), {"01": {}}), "faults['01']"),
 }
 
 
