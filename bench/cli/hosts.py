@@ -321,13 +321,13 @@ def _cmd_record(a) -> int:
             drv = _open_driver(a.port, a.baud)
             with contextlib.suppress(OSError, AttributeError):  # what an earlier host left unread (not a URL's)
                 drv.serial.reset_input_buffer()
-            drv.start()
+            started = drv.start()
             if drv.wait_for(CMD_START, timeout_s=5) is None:
                 drv.close()
                 if drv.disconnected:
                     raise OSError(f"{a.port}: the port closed before the bridge answered START")
                 raise OSError(f"{a.port}: no answer to START within 5 s (is the bridge running?)")
-            drv.count_afresh()  # the recording's frames, CRC errors and drops are counted from its START on
+            drv.count_afresh(after_reply_to=started)  # the recording's frames, CRC errors and drops: from its START on
             if not a.quiet:
                 print(f"recording {a.seconds:g} s from {a.port}", file=sys.stderr, flush=True)
             with tqdm(total=round(a.seconds, 3), unit="s", disable=a.quiet,

@@ -365,6 +365,8 @@ class BridgeDriver:
         self._answers: dict[int, object] = {}  # command number -> its reply
         self._backlog: deque = deque()  # data frames read, not yet yielded by frames(), oldest first
         self.backlog_discarded = 0  # frames dropped from a full backlog (nobody took them with frames())
+        self._frames_read = 0  # data frames read so far (the backlog holds the last of them)
+        self._reply_marks: dict[int, int] = {}  # command number -> data frames read before its reply
 
     def close(self) -> None:
         self.serial.close()
@@ -410,15 +412,30 @@ class BridgeDriver:
             return
         number, _ = waiting.popleft()
         self._answers[number] = item
+        self._reply_marks[number] = self._frames_read
         if len(self._answers) > 256:  # replies nobody collected: keep the newest
             for k in sorted(self._answers)[:-256]:
                 del self._answers[k]
+        for k in sorted(self._reply_marks)[:-256]:
+            del self._reply_marks[k]
 
-    def count_afresh(self) -> None:
+    def count_afresh(self, after_reply_to: int | None = None) -> None:
         """From here on: the parser's statistics and sequence tracking start over, and the frames read so far but
-        not yet taken by :meth:`frames` are forgotten (what an earlier session left streaming is not this one's)."""
+        not yet taken by :meth:`frames` are forgotten (what an earlier session left streaming is not this one's).
+
+        ``after_reply_to``: a command's number (``drv.start()``'s): the frames read *after* its reply are this
+        session's and are kept for :meth:`frames`, counted afresh (a slow host reads START's ACK together with the
+        first frames behind it; they had been forgotten, uncounted, and the recording started late)."""
+        mark = self._reply_marks.get(after_reply_to) if after_reply_to is not None else None
+        first = self._frames_read - len(self._backlog)  # read number of the oldest frame in the backlog
+        keep = list(self._backlog)[max(0, mark - first):] if mark is not None else []
         self.parser.count_afresh()
         self._backlog.clear()
+        now = time.monotonic()
+        for f in keep:  # counted again from the start of the new count, in the order they came
+            self.parser.sequence.accept(f.seq, now, len(f.channels))
+            self.parser.stats.frames += 1
+            self._backlog.append(f)
 
     def poll(self) -> list:
         """Read what has arrived; returns the decoded items (frames, statuses, acks).  Low level: the data frames
@@ -437,6 +454,7 @@ class BridgeDriver:
                     self._backlog.popleft()
                     self.backlog_discarded += 1
                 self._backlog.append(item)
+                self._frames_read += 1
             else:
                 self._file_reply(item)
         return items

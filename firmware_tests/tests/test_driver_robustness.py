@@ -393,3 +393,22 @@ def test_count_afresh_forgets_the_frames_not_yet_taken_with_the_old_counts():
     port.in_waiting = len(port.rx)
     assert [f.seq for f in drv.frames(timeout_s=0.05)] == [0]
     assert drv.parser.stats.frames == 1
+
+
+def test_count_afresh_after_starts_reply_keeps_the_frames_behind_the_ack_and_counts_from_them():
+    """``record``: a slow host reads START's ACK together with the frames that follow it; those are the recording's
+    first frames (they had been forgotten with the earlier session's, uncounted: the recording started late).  The
+    frames before the ACK are still forgotten, and a gap after the kept frames is counted as a drop."""
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    n = drv.start()
+    port.rx += b"".join(data_frame(s) for s in (65534, 65535))  # an earlier session's stream, still arriving
+    port.answer(CMD_START)
+    port.rx += b"".join(data_frame(s) for s in (0, 1, 2))
+    port.in_waiting = len(port.rx)
+    assert drv.wait_for(CMD_START, timeout_s=0.5) == ("ack", CMD_START, 0)
+    drv.count_afresh(after_reply_to=n)
+    port.rx += data_frame(4)  # frame 3 lost on the line
+    port.in_waiting = len(port.rx)
+    assert [f.seq for f in drv.frames(timeout_s=0.05)] == [0, 1, 2, 4]
+    assert drv.parser.stats.frames == 4 and drv.parser.stats.dropped_frames == 1
