@@ -415,6 +415,9 @@ class Sensor:
         i, frac, i_min, i_max = _grid_positions(times.reshape(-1), self.fs)
         if i_min < 0:
             raise ValueError("sample instants must be finite and ≥ 0 s")
+        if times.min() < self._start_s - 1e-9:  # (the grid sample before the start is kept only to interpolate)
+            raise ValueError(f"instant {times.min():.6f} s is before the sensor's start (start_s = {self._start_s:g} "
+                             f"s): earlier instants do not exist")
         nodes, thermal, electrodes = self._plan(channels)
         if i_min < self._buf_n0:
             raise ValueError(f"instant {times.min():.6f} s is older than the retained history "

@@ -53,7 +53,8 @@ class FirmwareBench:
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
         if not (isinstance(baudrate, int) and baudrate > 0):
             raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
-        if not (isinstance(host_gone_s, (int, float)) and math.isfinite(host_gone_s) and host_gone_s > 0):
+        if not (isinstance(host_gone_s, (int, float)) and not isinstance(host_gone_s, bool)
+                and math.isfinite(host_gone_s) and host_gone_s > 0):
             raise ValueError(f"host_gone_s = {host_gone_s!r}: must be a number > 0 (wall seconds)")
         # a zero, negative or NaN step never advanced the firmware (the host read nothing, without a word), and a
         # rate outside 0..1 corrupted every byte or none: refused before anything is built

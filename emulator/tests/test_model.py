@@ -291,6 +291,8 @@ def test_a_sensor_started_between_grid_samples_can_be_read_at_its_start():
         late = Sensor(channels_read=["PDC"], noise=NoiseSources.none(), start_s=start)
         early = Sensor(channels_read=["PDC"], noise=NoiseSources.none())
         assert late.analog([1], [start])[0] == pytest.approx(early.analog([1], [start])[0], abs=0.01 * ADC_LSB_V)
+        with pytest.raises(ValueError, match=r"before the sensor's start .* earlier instants do not exist"):
+            late.analog([1], [start - 1e-6])  # the grid sample kept before the start is not an instant of it
 
 
 def test_a_tap_is_a_raised_cosine_pulse_peaking_at_its_middle():

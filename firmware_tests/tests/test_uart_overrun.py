@@ -155,7 +155,7 @@ def test_unpaced_a_raised_host_gone_s_waits_through_a_pause_that_the_default_cal
     assert [f.seq for f in first + more] == list(range(first[0].seq, first[0].seq + 60))
 
 
-@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), "1"])
+@pytest.mark.parametrize("bad", [0, -1.0, float("nan"), float("inf"), "1", True])
 def test_an_impossible_host_gone_s_is_refused_before_anything_starts(bad):
     with pytest.raises(ValueError, match=r"host_gone_s = .*must be a number > 0 \(wall seconds\)"):
         FirmwareBench(1, host_gone_s=bad)
