@@ -309,3 +309,34 @@ def test_a_campaign_with_nothing_to_run_is_refused_not_passed():
             campaign.run_campaign(faults, scenes, seeds)
     with pytest.raises(ValueError, match="unknown fault or scene: meteor"):
         campaign.run_campaign(["meteor"], ["rest"], [0])
+
+
+def test_a_slow_hosts_recording_starts_with_the_first_frame_after_start(tmp_path, monkeypatch):
+    """A host slow to read START's ACK (here: until three frames wait behind it in the receive buffer; the bench
+    unpaced, so nothing overruns however long the first run's compilation takes) records from the first frame on —
+    seq 0, none missing.  Those frames arrive with the ACK; ``record`` forgot them, uncounted, as if an earlier
+    session's, and started late without a word."""
+    from bench.cli import main as cli
+
+    slow = BridgeDriver.wait_for
+
+    def wait_for_slowly(self, *args, **kwargs):
+        deadline = time.monotonic() + 60
+        while self.serial.in_waiting < 9 + 3 * 143 and time.monotonic() < deadline:  # the ACK, 3 frames
+            time.sleep(0.005)
+        waiting.append(self.serial.in_waiting)
+        return slow(self, *args, **kwargs)
+
+    with FirmwareBench(1) as warm:  # the sensor model compiled first (cold caches take seconds, and a reply later
+        drv = BridgeDriver(warm.port)  # than the driver's 5 s horizon is taken as lost)
+        drv.start()
+        assert next(drv.frames(max_frames=1, timeout_s=120)).seq == 0
+        drv.close()
+    waiting = []
+    monkeypatch.setattr(BridgeDriver, "wait_for", wait_for_slowly)
+    out = tmp_path / "rec.npz"
+    with FirmwareBench(1) as fb:
+        assert cli.main(["record", fb.port, "--out", str(out), "--seconds", "0.5", "--quiet"]) == 0
+    data = np.load(out)
+    assert waiting[0] >= 9 + 3 * 143  # the ACK and frames behind it were waiting
+    assert data["seq"].tolist() == list(range(50)) and int(data["dropped_frames"]) == 0
