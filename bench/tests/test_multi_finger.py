@@ -268,3 +268,36 @@ def test_a_stop_asked_after_the_last_chunk_leaves_the_run_complete():
     scene = parse_scene_text('[scene]\nname = "one-chunk"\nduration_s = 1.0\n')
     rec = run_scene(scene, progress=False, chunk_s=1.0, should_stop=lambda: True)
     assert rec.status == "ok" and rec.simulated_s == pytest.approx(1.0)
+
+
+def test_a_failed_fingers_error_names_the_finger(monkeypatch):
+    """Finger 2 of three fails: the run fails with finger 2's error prefixed "sensor 2: " (run_scene's contract: the
+    recording is finger 1's, so its error must say which finger failed), and finger 3 never runs."""
+    from bench.running import runner
+
+    real, calls = runner.run_one_sensor, []
+
+    def second_fails(scene, *args, **kw):
+        rec = real(scene, *args, **kw)
+        calls.append(scene)
+        if len(calls) == 2:
+            rec.error, rec.status = "RuntimeError: the bus fell off", "failed"
+        return rec
+
+    monkeypatch.setattr(runner, "run_one_sensor", second_fails)
+    scene = parse_scene_text('[scene]\nname = "three"\nduration_s = 0.3\n[[sensors]]\nindex = 2\n'
+                             '[[sensors]]\nindex = 3\n')
+    rec = runner.run_scene(scene, progress=False)
+    assert rec.status == "failed" and rec.error == "sensor 2: RuntimeError: the bus fell off"
+    assert len(calls) == 2
+
+
+def test_a_stopped_run_records_the_time_it_reached_not_the_scenes():
+    """A stop asked at the first chunk boundary (chunks of 1 simulated s, run_scene's default) of a 3 s scene: the
+    recording's simulated_s is the 1.0 s reached (to one slot, 1/4400 s), status "interrupted"."""
+    from bench.running.runner import run_scene
+
+    scene = parse_scene_text('[scene]\nname = "short"\nduration_s = 3.0\n')
+    rec = run_scene(scene, progress=False, should_stop=lambda: True)
+    assert rec.status == "interrupted"
+    assert rec.simulated_s == pytest.approx(1.0, abs=1 / scene.slot_rate_Hz)

@@ -377,6 +377,25 @@ def test_an_error_while_writing_writes_the_record_as_failed(tmp_path, monkeypatc
 
 
 @pytest.mark.unit
+def test_a_report_that_cannot_be_written_is_not_listed_as_an_output(tmp_path, monkeypatch):
+    """report.md fails to write (a full disk, say): record.json says "failed", names report.md in its error and does
+    not list it among its outputs — every file the record lists is there (check_consistent), as the README promises
+    of a present record.json."""
+    real = OutFolder.write_text
+
+    def no_report(self, name, text):
+        if name == "report.md":
+            raise OSError(28, "No space left on device")
+        return real(self, name, text)
+
+    monkeypatch.setattr(OutFolder, "write_text", no_report)
+    out = tmp_path / "o"
+    assert cli.main(["run", str(_scene_file(tmp_path, 0.5)), "--out", str(out), "--quiet", "--no-plots"]) == 1
+    record = check_consistent(out, "failed")
+    assert "writing report.md: OSError" in record["error"] and "report.md" not in record["outputs"]
+
+
+@pytest.mark.unit
 def test_a_record_that_cannot_be_built_is_still_written(tmp_path, monkeypatch):
     from bench.reporting import report
 

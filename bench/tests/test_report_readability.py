@@ -74,3 +74,132 @@ def test_a_frame_of_electrodes_without_e1_still_gets_its_traces(tmp_path):
     assert "traces.png" in plots
     plots["traces.png"](tmp_path / "traces.png")
     assert (tmp_path / "traces.png").stat().st_size > 10_000
+
+
+def _md_table(report: str, header_start: str) -> list[dict[str, str]]:
+    """The rows of the Markdown table whose header line starts with ``header_start``, as header → cell text."""
+    lines = report.splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith(header_start))
+    head = [c.strip() for c in lines[i].strip("|").split("|")]
+    rows = []
+    for line in lines[i + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append(dict(zip(head, (c.strip() for c in line.strip("|").split("|")))))
+    return rows
+
+
+def test_the_channel_tables_columns_are_the_codes_own_min_max_rails_and_bad_words(taps):
+    """report.md's channel table, cell by cell under its header (min, max, at rails, bad), against the figures
+    recomputed from the samples the host read: min/max and rail counts over the good samples (the README: bad words
+    are left out), bad = samples with status ≠ 0. Exact (integers)."""
+    rec, record = taps
+    rows = {r["channel"]: r for r in _md_table(markdown_report(record), "| channel |")}
+    for name in ("PAC", "PDC", "TDC"):
+        ch = rec.channels[name]
+        good = ch.codes[ch.status == 0]
+        want = {"min": str(int(good.min())), "max": str(int(good.max())),
+                "at rails": str(int(np.count_nonzero((good == 0) | (good == 4095)))),
+                "bad": str(int(np.count_nonzero(ch.status != 0))), "samples": str(ch.codes.size)}
+        assert {k: rows[name][k] for k in want} == want, name
+    assert rows["PAC"]["min"] == "0" and rows["PAC"]["max"] == "4095"  # the 1 N tap rails PAC both ways
+
+
+def test_an_interrupted_runs_report_names_the_signal(taps):
+    """A run stopped by a signal says so in report.md's status line with the signal's name (record.json's
+    ``interrupted_by``), as the README's Ctrl-C section describes: "interrupted by SIGINT"."""
+    _, record = taps
+    report = markdown_report({**record, "status": "interrupted", "interrupted_by": "SIGINT"})
+    assert "- status: **interrupted by SIGINT**" in report
+    assert "- status: **ok**" in markdown_report(record)
+
+
+def test_the_impact_tables_energy_is_d_table_5_2s_in_microjoules():
+    """The impact table's "energy (µJ)" of a 1 mm steel bearing dropped from 7 cm is D Table 5-2's 2.805 µJ
+    (m·g·h = 4.089 mg · 9.807 m/s² · 0.07 m); printed to 3 decimals, so within 0.002 µJ."""
+    sc = parse_scene_text('[scene]\nname = "drop"\nduration_s = 0.6\nseed = 1\n[analysis]\nimpact_detection = true\n'
+                          '[[stimulus]]\nkind = "sphere_drop"\nsphere = "1 mm steel bearing"\nat_s = 0.3\n')
+    report = markdown_report(build_record(run_scene(sc, progress=False), []))
+    row = _md_table(report, "| sphere |")[0]
+    assert row["sphere"] == "1 mm steel bearing"
+    assert float(row["energy (µJ)"]) == pytest.approx(2.805, abs=0.002)
+
+
+def test_the_effects_table_gives_milliseconds_per_simulated_second(taps):
+    """"ms per simulated s" is the record's seconds_per_simulated_s × 1000 (printed to 3 decimals, so within
+    0.0005 ms); the effects of a 6 s run cost well under a simulated second each, so each cell is below 1000."""
+    _, record = taps
+    rows = {r["effect"]: r for r in _md_table(markdown_report(record), "| effect |")}
+    assert rows and set(rows) == {e["name"] for e in record["effects"]}
+    for e in record["effects"]:
+        ms = float(rows[e["name"]]["ms per simulated s"])
+        assert ms == pytest.approx(1e3 * e["seconds_per_simulated_s"], abs=5e-4) and ms < 1000, e["name"]
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The figures the scene plots draw, kept (file name → (figure, axes)) after they are saved and closed."""
+    import contextlib
+    from pathlib import Path
+
+    from bench.reporting import plots
+
+    kept, real = {}, plots.figure_file
+
+    @contextlib.contextmanager
+    def keeping(path, *args, **kw):
+        with real(path, *args, **kw) as (fig, axes):
+            kept[Path(path).name] = (fig, axes)
+            yield fig, axes
+
+    monkeypatch.setattr(plots, "figure_file", keeping)
+    return kept
+
+
+def test_the_traces_mark_each_tap_where_it_starts(taps, tmp_path, drawn):
+    """traces.png's stimulus markers: each tap of taps.toml is a vertical line at its ``at_s`` (1, 2, 3, 4, 5 s, the
+    scene file's), in every panel — not at the pulse's end 30–50 ms later. Exact to 1e-9 s."""
+    from bench.reporting.plots import scene_plots
+    from bench.reporting.report import baselines
+
+    rec, _ = taps
+    dict(scene_plots(rec, baselines(rec)))["traces.png"](tmp_path / "traces.png")
+    _, axes = drawn["traces.png"]
+    for ax in axes[:, 0]:
+        xs = sorted(float(line.get_xdata()[0]) for line in ax.get_lines()
+                    if list(line.get_ydata()) == [0, 1] and len(set(line.get_xdata())) == 1)
+        assert xs == pytest.approx([1.0, 2.0, 3.0, 4.0, 5.0], abs=1e-9), ax.get_ylabel()
+
+
+def test_the_spectrogram_is_drawn_in_db_re_one_pa_squared_per_hz(taps, tmp_path, drawn):
+    """spectrogram.png's colours are 10·log10 of the PAC PSD in Pa²/Hz (its colour bar's label): the streamed
+    spectrogram's codes²/Hz times (0.37 Pa/bit)² — D Table 4-1's PAC scale, the spec's — in decibels (power: 10, not
+    20). To 1e-9 dB."""
+    from bench.reporting.plots import scene_plots
+    from bench.reporting.report import baselines
+
+    rec, _ = taps
+    dict(scene_plots(rec, baselines(rec)))["spectrogram.png"](tmp_path / "spectrogram.png")
+    _, ax = drawn["spectrogram.png"]
+    f, t, sxx = rec.summary.spectrogram.result()
+    shown = np.asarray(ax.images[0].get_array(), float)
+    want = 10 * np.log10(np.maximum(sxx * 0.37 ** 2, 1e-12))
+    assert shown.shape == want.shape and np.allclose(shown, want, rtol=0, atol=1e-9)
+    assert ax.get_ylabel() == "frequency (Hz)" and ax.get_xlabel() == "time (s)"
+
+
+def test_the_electrode_maps_cross_sits_on_the_touched_electrode(tmp_path, drawn):
+    """electrode_map.png marks a touch given by electrode (E7) with a red × on that electrode's own disc: the ×
+    sits where the map writes "E7" (to 1e-9 mm), not on a neighbour."""
+    from bench.reporting.plots import scene_plots
+    from bench.reporting.report import baselines
+
+    sc = parse_scene_text('[scene]\nname = "map"\nduration_s = 3.0\nseed = 1\n[[stimulus]]\nkind = "touch"\n'
+                          'electrode = "E7"\nstart_s = 0.4\nforce_N = 1.0\n')
+    rec = run_scene(sc, progress=False)
+    dict(scene_plots(rec, baselines(rec)))["electrode_map.png"](tmp_path / "electrode_map.png")
+    _, ax = drawn["electrode_map.png"]
+    crosses = [line for line in ax.get_lines() if line.get_marker() == "x"]
+    label = next(a for a in ax.texts if a.get_text() == "E7")
+    assert len(crosses) == 1
+    assert (float(crosses[0].get_xdata()[0]), float(crosses[0].get_ydata()[0])) == pytest.approx(label.xy, abs=1e-9)

@@ -153,3 +153,108 @@ def test_each_slide_reads_the_motor_current_through_its_own_noise():
     assert n > 100 and all(np.std(x) == pytest.approx(1, abs=0.25) for x in first)
     assert abs(np.corrcoef(first[0][:n], first[1][:n])[0, 1]) < 0.3
     assert all(np.array_equal(a, b) for a, b in zip(first, again))
+
+
+@pytest.fixture(scope="module")
+def two_slides():
+    """Two 20 mm slides at 20 mm/s, 1 N, on a skin whose ridges start at 150 µm (``[skin] ridge_height_um``) and
+    wear; run with its record."""
+    from bench.reporting.report import build_record
+    from bench.running.runner import run_scene
+
+    sc = _scene(_slide(start_s=[0.3, 2.6], force_N=1.0), skin={"ridge_height_um": 150}, duration=5.0)
+    rec = run_scene(sc, progress=False)
+    assert rec.status == "ok" and len(rec.slides) == 2, rec.error
+    return sc, rec, build_record(rec, [])
+
+
+def test_each_trials_ridge_height_is_its_own_skins_as_it_wears(two_slides):
+    """One skin that wears from trial to trial (the README): each trial row's ridge height is the skin it met —
+    150 µm for the first (the [skin] table's, within 1 %), less for the second (the first trial wore it)."""
+    _, rec, _ = two_slides
+    first, second = (r["ridge_height_m"] for r in rec.slides)
+    assert first == pytest.approx(150e-6, rel=0.01)
+    assert second < first
+
+
+def test_the_reports_skin_line_gives_the_worn_skin_after_the_trials(two_slides):
+    """report.md's "Skin before … after …" line: after = the skin the two trials left (2 trials on it, 2 × 20 mm =
+    0.04 m slid, ridges no higher than before); before = the fresh one. Distances to the printed 0.01 m."""
+    import re
+
+    from bench.reporting.report import markdown_report
+
+    _, _, record = two_slides
+    text = markdown_report(record)
+    m = re.search(r"Skin before: serial (\d+), ridge height ([\d.]+) µm; after: serial (\d+), ridge height ([\d.]+) "
+                  r"µm \((\d+) trials? on it, ([\d.]+) m slid\)", text)
+    assert m, text
+    assert float(m[2]) == pytest.approx(150.0, abs=0.05) and float(m[4]) <= float(m[2])  # (0.1 µm printed)
+    assert int(m[5]) == 2 and float(m[6]) == pytest.approx(0.04, abs=0.005)
+
+
+def test_the_sliding_table_prints_the_true_normal_force_and_the_ridge_height_in_um(two_slides):
+    """report.md's sliding table under its header: "true normal force (N)" is the force measured on the skin
+    while sliding (the record's true_normal_N, not the commanded 1 N echoed; to the printed 1e-3 N), and
+    "ridge height (µm)" the skin's in micrometres (≈ 150 µm, the [skin] table's, within 1 %)."""
+    from bench.reporting.report import markdown_report
+
+    _, _, record = two_slides
+    lines = markdown_report(record).splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("| trial |"))
+    head = [c.strip() for c in lines[i].strip("|").split("|")]
+    for trial, line in zip(record["sliding"]["trials"], lines[i + 2:i + 4]):
+        row = dict(zip(head, (c.strip() for c in line.strip("|").split("|"))))
+        assert float(row["true normal force (N)"]) == pytest.approx(trial["true_normal_N"], abs=6e-4)
+        assert row["true normal force (N)"] != f"{trial['force_N']:.3f}"  # measured, not the command
+        assert float(row["ridge height (µm)"]) == pytest.approx(150.0, rel=0.01)
+
+
+def test_the_sliding_plots_give_slip_in_cm_per_s_and_ridges_in_um(two_slides, tmp_path, monkeypatch):
+    """forces.png's slip panel is in cm/s: while the stage runs at 20 mm/s (between the slides' accelerations) the
+    finger slips at about 2 cm/s (median within 25 %); properties.png's ridge panel is in µm (≈ 150, within 1 %)."""
+    import contextlib
+
+    import numpy as np
+
+    from bench.reporting import plots
+    from bench.reporting.report import baselines
+
+    kept, real = {}, plots.figure_file
+
+    @contextlib.contextmanager
+    def keeping(path, *args, **kw):
+        with real(path, *args, **kw) as (fig, axes):
+            kept[path.name] = axes
+            yield fig, axes
+
+    monkeypatch.setattr(plots, "figure_file", keeping)
+    sc, rec, _ = two_slides
+    drawn = dict(plots.scene_plots(rec, baselines(rec)))
+    for name in ("forces.png", "properties.png"):
+        drawn[name](tmp_path / name)
+    slip = kept["forces.png"][1].get_lines()[0]
+    t, v = np.asarray(slip.get_xdata()), np.asarray(slip.get_ydata())
+    slides = [s for s in sc.stimuli if isinstance(s, Slide)]
+    steady = np.zeros(t.size, bool)
+    for s in slides:
+        steady |= (t > s.slide_start_s + s.accel_s + 0.1) & (t < s.slide_end_s - s.accel_s)
+    assert kept["forces.png"][1].get_ylabel() == "slip velocity (cm/s)"
+    assert np.median(v[steady]) == pytest.approx(2.0, rel=0.25)
+    ridge = kept["properties.png"][3].get_lines()[0].get_ydata()
+    assert list(ridge) == pytest.approx([150.0, 150.0], rel=0.01)
+
+
+def test_a_slide_the_run_stopped_in_has_no_row():
+    """A run stopped at 2 s (its second chunk boundary), inside a slide that slides from 1.1 s to 2.15 s: the slide
+    has no row (a row per slide the run reached, SlideRecorder.finish; half a slide's roughness and fineness would
+    pass for a whole trial's), status "interrupted"."""
+    from bench.running.runner import run_scene
+
+    sc = _scene(_slide(start_s=0.3), duration=3.0)
+    s = next(x for x in sc.stimuli if isinstance(x, Slide))
+    assert s.slide_start_s < 2.0 < s.slide_end_s
+    asked = []
+    rec = run_scene(sc, progress=False, should_stop=lambda: bool(asked.append(1)) or len(asked) >= 2)
+    assert rec.status == "interrupted" and rec.error is None and rec.simulated_s == pytest.approx(2.0, abs=1e-3)
+    assert rec.slides == []
