@@ -370,7 +370,8 @@ def _csv(path):
 def _check_tables_against_the_result(out, result, summary):
     """The written tables hold what the result holds, in the units their columns name (consistency: each was found
     wrong-but-unnoticed by a mutation: validation rows dropped, fractions under accuracy_%, a U column of another
-    property, ridge loss in mm under µm, the replacement count one high, decisions outside the true set lost)."""
+    property, ridge loss in mm under µm, the replacement count one high, decisions outside the true set lost, and in
+    report.md fractions printed as percent or the validation-spread columns swapped)."""
     assert len(_csv(out / "trials.csv")) == len(json.loads((out / "trials.json").read_text())) == (
         len(result.pilot_rows) + len(result.training_rows) + len(result.validation_rows))
     s = E.summary(result)
@@ -394,6 +395,21 @@ def _check_tables_against_the_result(out, result, summary):
         per_truth[int(r.true_texture)] = per_truth.get(int(r.true_texture), 0) + len(r.decided)
     assert {int(row["true"]): sum(int(v) for k, v in row.items() if k != "true") for row in confusion
             if int(row["true"]) in per_truth} == per_truth
+    # report.md's accuracy table is in percent (its "%" cells, to the printed 0.1 %), and its validation-spread
+    # table's columns are under their headers (validation, then leave-one-out; to the printed 0.01)
+    lines = (out / "report.md").read_text().splitlines()
+    for line in lines[lines.index("| task | strategy | accuracy | median movements | dissertation |") + 2:]:
+        if not line.startswith("|"):
+            break
+        task, strategy, accuracy = (c.strip() for c in line.strip("|").split("|")[:3])
+        assert float(accuracy.rstrip(" %")) == pytest.approx(100 * s[f"{task}/{strategy}"]["accuracy"], abs=0.051)
+    if summary["spread_check"]:
+        i = lines.index("| property | validation | leave-one-out | ratio |")
+        for line, (prop, v) in zip(lines[i + 2:], summary["spread_check"].items()):
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            assert cells[0] == prop
+            assert [float(x) for x in cells[1:3]] == pytest.approx(
+                [v["validation_median_abs_z"], v["leave_one_out_median_abs_z"]], abs=0.0051)
 
 
 def test_an_empty_pairs_list_is_refused_before_any_trial_not_replaced_by_chosen_pairs():
