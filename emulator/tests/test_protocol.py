@@ -16,6 +16,16 @@ def test_sampling_command_bytes_match_the_published_examples(channel, byte):
     assert int(proto.sample_command(channel)) == byte
 
 
+
+def test_a_channel_index_past_63_is_refused_not_wrapped_onto_PAC():
+    """SENSOR.md §6: the channel is a 6-bit field (0..63); index 64 would wrap to channel 0 (PAC, 0x80), so it is
+    refused with ValueError."""
+    with pytest.raises(ValueError, match="0..63"):
+        proto.sample_command(64)
+    with pytest.raises(ValueError, match="0..63"):
+        proto.sample_command([1, 64])
+    assert int(proto.sample_command(63)) == 0xFE  # 1 111111 0: seven ones already, parity bit 0
+
 def test_every_sampling_command_has_odd_parity():
     cmds = proto.sample_command(np.arange(64))
     assert np.all(proto.ODD_PARITY_OK[cmds])
@@ -129,6 +139,34 @@ def test_overlapping_or_backward_transfers_are_refused():
     per, _ = _peripheral()
     with pytest.raises(ValueError, match="time order"):
         per.exchange(TransferBatch(np.array([0.0, 1e-6]), np.array([0x8000, 0], np.uint16), 4.4e6))
+
+
+
+def test_a_clock_just_below_500_kHz_is_refused_and_500_kHz_itself_accepted():
+    """SENSOR.md §6: the clock range is 500 kHz–10 MHz, so 450 kHz is refused with the transfer named, and 500 kHz
+    (the range's edge) is served."""
+    per, _ = _peripheral()
+    with pytest.raises(ValueError, match="transfer #0: SCK 450000 Hz"):
+        per.exchange(TransferBatch(np.array([0.0]), np.array([0x8000], np.uint16), 450e3))
+    per.exchange(TransferBatch(np.array([0.0]), np.array([0x8000], np.uint16), 500e3))
+
+
+def test_transfers_overlapping_by_100_ns_are_refused_and_back_to_back_ones_accepted():
+    """The timing tolerance is 1 ns (protocol.TIME_TOLERANCE_S: far below any SPI timing): a transfer starting 100 ns
+    before the previous one releases chip select is refused, by a lone sensor and by the bus, while one starting
+    exactly at the release is accepted."""
+    from emulator.spi.model import Bus, SensorPort, Transfer
+
+    end = 16.5 / 4.4e6
+    per, _ = _peripheral()
+    with pytest.raises(ValueError, match="time order"):
+        per.exchange(TransferBatch(np.array([0.0, end - 100e-9]), np.array([0x8000, 0], np.uint16), 4.4e6))
+    _peripheral()[0].exchange(TransferBatch(np.array([0.0, end]), np.array([0x8000, 0], np.uint16), 4.4e6))
+    bus = Bus({1: SensorPort(Sensor(channels_read=["PAC"], seed=1, noise=NoiseSources.none()))})
+    bus.transfer(Transfer(0.0, mosi=0x8000))
+    with pytest.raises(ValueError, match="before the previous one ended"):
+        bus.transfer(Transfer(end - 100e-9))
+    bus.transfer(Transfer(end))
 
 
 def test_a_channel_the_sensor_was_not_built_for_answers_EX_and_is_counted():

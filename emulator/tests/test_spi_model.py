@@ -441,3 +441,136 @@ def test_a_reset_clears_the_written_registers_as_the_rtls_reset_does():
     assert b.ports[1].registers == [0, 0, 0, 0]
     b.transfer(cmd(1e-3, 0x40, nnnnvvvp(1, 5)))
     assert value(b.transfer(read(1.1e-3))) == 1 * 8 + 5 and b.ports[1].registers == [0, 5, 0, 0]
+
+
+# --- corners of the word path and the bus a second mutation hunt found unguarded --------------------------------
+WORD_S = 16.5 / 4.4e6  # one 16-bit transfer at the default clock, chip select fall to rise
+
+
+def test_clocking_for_another_sensor_during_a_conversion_couples_into_it_on_both_paths():
+    """Model docstring (emulator/spi/model.py): a conversion is disturbed if *the bus* clocks again within
+    ``adc_conversion_s`` (5 µs) — SCK and MOSI are shared, so a transfer addressed to sensor 2 1 µs after sensor 1's
+    sampling command disturbs sensor 1's conversion; sensor 2's own (nothing clocks within 5 µs after it) is
+    clean.  Exact counts, on the word path (``Bus.exchange_words``) as on the transfer-level path, and the same
+    words."""
+    t0 = 1e-3
+    start = np.array([t0, t0 + WORD_S + 1e-6, t0 + 200e-6, t0 + 300e-6])
+    cs = np.array([SELECT_CODE[1], SELECT_CODE[2], SELECT_CODE[1], SELECT_CODE[2]])
+    mosi = np.array([0x8300, 0x8300, 0, 0], np.uint16)
+    fast, slow = bus(2), bus(2)
+    words = fast.exchange_words(start, cs, mosi, 4.4e6)
+    ref = [slow.transfer(Transfer(float(s), int(c), int(m), 16)) for s, c, m in zip(start, cs, mosi)]
+    for b in (fast, slow):
+        assert (b.ports[1].coupled_conversions, b.ports[2].coupled_conversions) == (1, 0)
+    assert words.tolist() == ref
+
+
+def test_an_absent_sensor_reads_back_the_pull_up_on_the_word_path_too():
+    """Bus docstring: with nobody driving MISO the line idles at the pull level, so a read addressed to an absent
+    sensor returns 0xFFFF with a pull-up — through ``exchange_words`` as through ``transfer``."""
+    b = Bus({1: port(1)}, pull_up=True)
+    words = b.exchange_words(np.array([0.0, 100e-6]), np.array([SELECT_ALL, SELECT_CODE[3]]),
+                             np.array([0x8300, 0], np.uint16), 4.4e6)
+    assert words[1] == 0xFFFF
+
+
+def test_chip_select_held_on_one_sensor_makes_one_window_on_the_word_path_too():
+    """Model docstring: ``keep_cs`` continues the same window, and MOSI acts when chip select rises.  A sampling
+    command with chip select held into a read is one 32-bit window: MISO is what was chosen at its fall (``E_``,
+    nothing prepared) then zeros; the second half is not a read of its own (no ``E.``).  Exact words, the same
+    through ``exchange_words`` and ``transfer``, and when ``transfer`` opens the window and ``exchange_words``
+    continues it."""
+    start = np.array([0.0, WORD_S, 200e-6])
+    cs = np.full(3, SELECT_CODE[1])
+    mosi = np.array([0x8300, 0, 0], np.uint16)
+    keep = np.array([True, False, False])
+    fast, slow = bus(), bus()
+    words = fast.exchange_words(start, cs, mosi, 4.4e6, keep)
+    ref = [slow.transfer(Transfer(float(s), int(c), int(m), 16, keep_cs=bool(k)))
+           for s, c, m, k in zip(start, cs, mosi, keep)]
+    assert words.tolist() == ref
+    assert words[0] == E["nothing_to_resend"] and words[1] == 0x0000 and value(words[2]) == RESTING_PDC
+    # the same window opened by ``transfer`` (chip select held) and continued by ``exchange_words``
+    b = bus()
+    b.transfer(Transfer(0.0, SELECT_CODE[1], 0x8300, 16, keep_cs=True))
+    assert b.exchange_words(start[1:], cs[1:], mosi[1:], 4.4e6).tolist() == words[1:].tolist()
+
+
+def test_a_clock_past_10_MHz_on_the_word_path_is_counted_and_sampled_late():
+    """docs/faults.md (as the transfer-level test above): every transfer above 10 MHz is counted out of spec and at
+    20 MHz (25 ns half period < 45 ns) the host samples each bit one bit late: the word read is the good one shifted
+    right by one.  ``exchange_words`` must not take its in-spec shortcut for such traffic."""
+    b = bus()
+    words = b.exchange_words(np.array([0.0, 100e-6]), np.full(2, SELECT_CODE[1]),
+                             np.array([0x8300, 0], np.uint16), 20e6)
+    assert b.out_of_spec_transfers == 2
+    assert words[1] == int(proto.encode_response(RESTING_PDC)) >> 1
+
+
+def test_word_traffic_must_stay_in_time_order_across_batches_and_within_one():
+    """Model docstring: transfers are in time order and never overlap; a host that sends a batch starting before
+    the previous batch ended, or two transfers of one batch overlapping, is refused (ValueError) — on the bus's word
+    path and on a lone sensor's ``exchange``, not silently evaluated."""
+    b = bus()
+    b.exchange_words(np.array([0.0, 100e-6]), np.full(2, SELECT_CODE[1]), np.array([0x8300, 0], np.uint16), 4.4e6)
+    with pytest.raises(ValueError):  # starts 50 µs before the previous batch's last transfer ended
+        b.exchange_words(np.array([50e-6]), np.array([SELECT_CODE[1]]), np.array([0x8300], np.uint16), 4.4e6)
+    with pytest.raises(ValueError):  # the second starts 1 µs into the first (3.75 µs long)
+        bus().exchange_words(np.array([0.0, 1e-6]), np.full(2, SELECT_CODE[1]), np.array([0x8300, 0], np.uint16),
+                             4.4e6)
+    p = port()
+    p.exchange(TransferBatch(np.array([0.0, 100e-6]), np.array([0x8300, 0], np.uint16), 4.4e6))
+    with pytest.raises(ValueError, match="time order"):
+        p.exchange(TransferBatch(np.array([50e-6, 200e-6]), np.array([0x8300, 0], np.uint16), 4.4e6))
+
+
+def test_a_word_read_after_a_property_command_gets_the_propertys_first_two_bytes():
+    """Model docstring: a property is its bytes followed by 0xFF, and what MISO carries is chosen at chip-select
+    fall for every transfer; a 16-bit read 100 µs after the serial-number command (0x61 0x15) therefore carries its
+    first two characters, "BT" = 0x4254 — also when the command and the read come in separate ``exchange``
+    batches (the read must not take the word-only fast path)."""
+    fast, slow = port(), port()
+    got = [fast.exchange(TransferBatch(np.array([s]), np.array([w], np.uint16), 4.4e6))[0]
+           for s, w in ((0.0, 0x6115), (100e-6, 0))]
+    slow_bus = Bus({1: slow})
+    ref = [slow_bus.transfer(Transfer(s, SELECT_CODE[1], w, 16)) for s, w in ((0.0, 0x6115), (100e-6, 0))]
+    assert got[1] == 0x4254 and got == ref
+
+
+def test_a_sensor_numbered_3_answers_traffic_that_takes_the_transfer_level_path():
+    """A lone sensor's ``exchange`` sends anything but plain words (here a resend, 0x20) transfer by transfer on a bus
+    of its own, addressed with *its* select code (sensor 3: 0b100, SENSOR.md §6): the data word read, then the same
+    word resent (P: resend repeats the last word read)."""
+    p = port(3)
+    assert p.index == 3
+    start = np.array([0.0, 100e-6, 300e-6, 400e-6])
+    words = p.exchange(TransferBatch(start, np.array([0x8300, 0, 0x2000, 0], np.uint16), 4.4e6))
+    assert value(words[1]) == RESTING_PDC and words[3] == words[1]
+
+
+def test_slow_response_still_refuses_a_read_just_before_100_us():
+    """docs/faults.md: with ``slow_response`` results take 100 µs instead of 50: the command ends at 3.75 µs (tick 3),
+    so a read at 99 µs (tick 99, 96 ticks later) is still refused with ``E.``; at 104 µs (101 ticks) it is answered."""
+    b = bus(faults=Faults(slow_response=True))
+    b.transfer(cmd(0.0, 0x83))
+    assert b.transfer(read(99e-6)) == E["insufficient_delay"]
+    assert value(b.transfer(read(104e-6))) == RESTING_PDC
+
+
+def test_a_channel_the_sensor_was_not_built_for_is_counted_on_the_transfer_level_path_too():
+    """Model docstring: a channel the sensor does not provide answers ``EX`` and is counted
+    (``unprovided_requests``), whichever path evaluates the command: here one E1 command through ``Bus.transfer``
+    to a sensor built for PAC and PDC only.  Exact count."""
+    b = Bus({1: SensorPort(Sensor(channels_read=["PAC", "PDC"], seed=1, noise=NoiseSources.none()), 1)})
+    b.transfer(cmd(0.0, int(proto.sample_command(17))))
+    assert b.transfer(read(100e-6)) == E["channel_not_recognized"]
+    assert b.ports[1].unprovided_requests == 1
+
+
+@pytest.mark.parametrize("nbits", [1, 7, 9, 15])
+def test_any_transfer_of_1_to_15_bits_is_counted_incomplete(nbits):
+    """Model docstring: fewer than 16 bits of a command are ignored and counted in ``incomplete`` — a single clock
+    edge as well as 15 (a read, first byte 0, of 8 or more bits is not a command)."""
+    b = bus()
+    b.transfer(Transfer(0.0, SELECT_CODE[1], (1 << nbits) - 1, nbits))
+    assert b.ports[1].incomplete == 1
