@@ -151,7 +151,7 @@ def test_a_1N_press_changes_mostly_the_nearest_electrodes_and_little_beyond_10_m
     share4 = np.array([d[i, order[i, :4]].sum() / d[i].sum() for i in range(19)])
     assert np.median(share4) > 0.7 and share4.min() > 0.6
     assert np.all(np.argmax(d, axis=1) == np.arange(19))  # the pressed electrode moves most
-    assert d[i := 16, 16] > 300  # ~380 codes under a 1 N, 3 mm contact
+    assert d[16, 16] > 300  # ~380 codes under a 1 N, 3 mm contact (E17 pressed)
     assert d[dist > 10.0].max() < 10.0  # a uniform bulge would move every far electrode by ~20-30 codes
     # a spread pattern (wider indenter) reaches further but still stays local
     wide, _ = _press_changes(SensorParams(), radius_mm=5.0)
