@@ -481,15 +481,14 @@ class BridgeDriver:
 
     def frames(self, max_frames: int | None = None, timeout_s: float = 5.0):
         """Yield data frames, each once and in order (those read earlier first, see the class); stops after
-        ``max_frames`` or when nothing arrives for ``timeout_s``."""
+        ``max_frames`` or when no frame arrives for ``timeout_s`` (the time your loop spends on a frame not counted)."""
         got = 0
         idle_since = time.monotonic()
         while max_frames is None or got < max_frames:
             if self._backlog:
                 got += 1
                 yield self._backlog.popleft()
+                idle_since = time.monotonic()  # the caller had the frame: the wait starts again
                 continue
-            if self.poll():
-                idle_since = time.monotonic()
-            elif self.disconnected or time.monotonic() - idle_since > timeout_s:
+            if not self.poll() and (self.disconnected or time.monotonic() - idle_since > timeout_s):
                 return

@@ -412,3 +412,36 @@ def test_count_afresh_after_starts_reply_keeps_the_frames_behind_the_ack_and_cou
     port.in_waiting = len(port.rx)
     assert [f.seq for f in drv.frames(timeout_s=0.05)] == [0, 1, 2, 4]
     assert drv.parser.stats.frames == 4 and drv.parser.stats.dropped_frames == 1
+
+
+def test_the_idle_timeout_does_not_count_the_time_a_loop_spends_on_its_frames():
+    """``frames(timeout_s=0.2)`` over three frames read at once, each taking the loop 0.25 s: the next frame, which
+    the port has only at the third read after the loop is done with them, is still yielded — the wait for it starts
+    when the loop asks again (it ended at once: the loop's own 0.75 s had been counted as the stream's silence)."""
+
+    class LatePort(FakeFirmware):
+        empty_reads_left = None  # armed: reads that find nothing before frame 3 is there
+
+        def read(self, n):
+            if self.empty_reads_left is not None:
+                if self.empty_reads_left == 0:
+                    self.empty_reads_left = None
+                    self.rx += data_frame(3)
+                    self.in_waiting = len(self.rx)
+                else:
+                    self.empty_reads_left -= 1
+                    return b""
+            return super().read(n)
+
+    port = LatePort()
+    drv = BridgeDriver(port)
+    port.rx += b"".join(data_frame(s) for s in range(3))
+    port.in_waiting = len(port.rx)
+    got = []
+    for f in drv.frames(timeout_s=0.2):
+        got.append(f.seq)
+        if f.seq < 3:
+            time.sleep(0.25)  # the loop's own work on the frame
+        if f.seq == 2:
+            port.empty_reads_left = 2
+    assert got == [0, 1, 2, 3]
