@@ -81,7 +81,9 @@ def fluid_load_share(p: SensorParams, volume_mL):
     finger (0 mL) has no fluid stiffness: the core carries everything."""
     kf = _stiffness(p, np.maximum(volume_mL, 0.0))[0]
     ks = p.skin_direct_stiffness_N_per_m
-    return kf / (kf + ks) if ks > 0.0 else np.ones_like(kf)
+    if ks > 0.0:
+        return kf / (kf + ks)
+    return np.where(kf > 0.0, 1.0, 0.0)  # no skin stiffness: the fluid carries all it can, an empty finger nothing
 
 
 def _fluid_mass_and_damping(p: SensorParams, volume_mL: float):

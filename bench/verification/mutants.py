@@ -2865,6 +2865,11 @@ CATALOGUE += [
             'firmware_tests/tests/test_driver_robustness.py::test_frames_keep_coming_past_the_idle_timeout_while_they_arrive'),
            "frames(timeout_s) never restarting its wait: it ends timeout_s after it starts even while frames keep "
            "arriving, and counts the loop's own time as the stream's silence"),
+    Mutant('empty-finger-fluid-carries-all', 'mechanics', 'emulator/mechanics.py',
+           '    return np.where(kf > 0.0, 1.0, 0.0)  # no skin stiffness: the fluid carries all it can, an empty finger nothing',
+           '    return np.ones_like(kf)',
+           ('emulator/tests/test_skin_mechanics.py::test_the_fluids_share_of_a_held_force_is_its_stiffness_share_and_nothing_in_an_empty_finger',),
+           'with no skin stiffness an empty finger (0 mL) taken as the fluid carrying the whole force'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -309,3 +309,16 @@ def test_the_fluid_layer_thins_as_the_finger_empties_and_shears_harder():
     assert c_full == pytest.approx(p.fluid_viscosity_Pa_s * p.skin_load_area_m2 / h_full, rel=1e-12)
     assert c_half / c_full == pytest.approx(2.0, rel=1e-12) and m_half / m_full == pytest.approx(0.5, rel=1e-12)
     assert m_full == pytest.approx(FLUID_LAYER_MASS_SHARE * p.fluid_density_kg_per_m3 * p.skin_load_area_m2 * h_full)
+
+
+def test_the_fluids_share_of_a_held_force_is_its_stiffness_share_and_nothing_in_an_empty_finger():
+    """φ = k_f/(k_f + k_s) (fluid_load_share's docstring): between 0 and 1, rising with inflation; an empty finger
+    (0 mL, no fluid stiffness) carries nothing on the fluid, also when the skin has no stiffness of its own (0/0: it
+    had answered 1, the fluid carrying everything)."""
+    from emulator.mechanics import fluid_load_share
+
+    p = SensorParams()
+    shares = fluid_load_share(p, np.array([0.0, 0.2, 0.6, 1.0]))
+    assert shares[0] == 0.0 and np.all(np.diff(shares) > 0) and shares[-1] < 1.0
+    bare = p.replace(skin_direct_stiffness_N_per_m=0.0)
+    assert fluid_load_share(bare, np.array([0.0, 0.6])).tolist() == [0.0, 1.0]
