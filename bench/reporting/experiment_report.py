@@ -100,11 +100,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     write_rows_csv(out / "accuracy_per_texture.csv", per_tex)
     names += ["accuracy.csv", "accuracy_per_texture.csv"]
     if "bayesian" in result.identification_results:
-        labels = np.array(sorted({int(r.true_texture) for r in result.identification_results["bayesian"]}
-                                 | {int(d) for r in result.identification_results["bayesian"] for d in r.decided}))
-        lab, cm = ex.confusion_matrix(result.identification_results["bayesian"], labels=labels)
-        write_rows_csv(out / "confusion.csv", [{"true": int(t), **{str(int(d)): int(cm[i, j]) for j, d in enumerate(lab)}}
-                                     for i, t in enumerate(lab)])
+        write_rows_csv(out / "confusion.csv", confusion_rows(result.identification_results["bayesian"]))
         names.append("confusion.csv")
     record = {"spec": {k: v for k, v in vars(result.spec).items()}, "best_movements":
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
@@ -138,6 +134,14 @@ PAIR_TEXT = {
     "most-confused": "The disjoint pairs within a texture group that the training model confuses most at the three "
                      "optimal movements (a harder test than D's, whose pairs were chosen by people):",
 }
+
+
+def confusion_rows(results) -> list[dict]:
+    """confusion.csv: a row per true texture (``true``) with a column per texture decided (the simulations that
+    decided it), over every texture that is either."""
+    labels = np.array(sorted({int(r.true_texture) for r in results} | {int(d) for r in results for d in r.decided}))
+    lab, cm = ex.confusion_matrix(results, labels=labels)
+    return [{"true": int(t), **{str(int(d)): int(cm[i, j]) for j, d in enumerate(lab)}} for i, t in enumerate(lab)]
 
 
 def _pair_separation(result: ExperimentResult) -> list[list[float]] | None:

@@ -425,3 +425,20 @@ def test_each_true_texture_draws_its_own_random_numbers():
     sims = np.arange(5)
     assert not np.array_equal(ex.sim_uniforms(7, 3, sims, 10), ex.sim_uniforms(7, 4, sims, 10))
     assert np.array_equal(ex.sim_uniforms(7, 3, sims, 10), ex.sim_uniforms(7, 3, sims, 10))
+
+
+def test_confusion_csv_has_a_row_per_true_texture_and_a_column_per_decision():
+    """confusion.csv (experiment_report.confusion_rows): texture 1's four simulations decided 2, 2, 1 and 3, texture
+    2's all 2 — the rows are the true textures, the columns the decisions (texture 3, decided but never true, gets a
+    row of zeros): a transposed matrix would put texture 1's confusions in the column of 1."""
+    from bench.reporting.experiment_report import confusion_rows
+
+    train, valid = separated_case(T=5)
+    model = ex.fit_model(train)
+    one, two = (ex.simulate(model, valid, t, n_sims=4, seed=0) for t in (1, 2))
+    decided = np.array([2, 2, 1, 3])
+    one = dataclasses.replace(one, decided=decided, correct=decided == 1)
+    assert two.decided.tolist() == [2, 2, 2, 2]
+    assert confusion_rows([one, two]) == [{"true": 1, "1": 1, "2": 2, "3": 1},
+                                          {"true": 2, "1": 0, "2": 4, "3": 0},
+                                          {"true": 3, "1": 0, "2": 0, "3": 0}]

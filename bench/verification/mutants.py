@@ -2870,6 +2870,11 @@ CATALOGUE += [
            '    return np.ones_like(kf)',
            ('emulator/tests/test_skin_mechanics.py::test_the_fluids_share_of_a_held_force_is_its_stiffness_share_and_nothing_in_an_empty_finger',),
            'with no skin stiffness an empty finger (0 mL) taken as the fluid carrying the whole force'),
+    Mutant('confusion-csv-transposed', 'experiment', 'bench/reporting/experiment_report.py',
+           '**{str(int(d)): int(cm[i, j]) for j, d in enumerate(lab)}}',
+           '**{str(int(d)): int(cm[j, i]) for j, d in enumerate(lab)}}',
+           ('bench/tests/test_exploration.py::test_confusion_csv_has_a_row_per_true_texture_and_a_column_per_decision',),
+           "confusion.csv transposed: a true texture's confusions written down its column"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
