@@ -136,6 +136,16 @@ PAIR_TEXT = {
 }
 
 
+def posterior_lines(r, most: int = 5) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """The probability-evolution plot of simulation ``r``'s first run: (label "T<n>", movements made 0..n, P(texture)
+    after each) for the ``most`` textures that were ever likeliest — from the prior (0 movements) through the
+    posterior after its last movement."""
+    h = r.posterior[0]
+    steps = int(r.n_moves[0]) + 1
+    top = np.argsort(-np.nanmax(h[:steps], axis=0))[:most]
+    return [(f"T{int(r.candidates[k])}", np.arange(steps), h[:steps, k]) for k in top]
+
+
 def confusion_rows(results) -> list[dict]:
     """confusion.csv: a row per true texture (``true``) with a column per texture decided (the simulations that
     decided it), over every texture that is either."""
@@ -178,11 +188,8 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
             fig.suptitle("Bayesian exploration (117-way): the posterior of the five likeliest textures after each "
                          "movement, first simulations", fontsize=10)
             for ax, r in zip(axes[0], rs):
-                h = r.posterior[0]
-                steps = int(r.n_moves[0]) + 1
-                top = np.argsort(-np.nanmax(h[:steps], axis=0))[:5]
-                for k in top:
-                    ax.plot(range(steps), h[:steps, k], marker=".", label=f"T{int(r.candidates[k])}")
+                for label, moves, probability in posterior_lines(r):
+                    ax.plot(moves, probability, marker=".", label=label)
                 ax.set_title(f"true T{int(r.true_texture)} ({lib[int(r.true_texture)].name})", fontsize=9)
                 ax.set_xlabel("movements made")
                 ax.xaxis.set_major_locator(MaxNLocator(integer=True))

@@ -442,3 +442,21 @@ def test_confusion_csv_has_a_row_per_true_texture_and_a_column_per_decision():
     assert confusion_rows([one, two]) == [{"true": 1, "1": 1, "2": 2, "3": 1},
                                           {"true": 2, "1": 0, "2": 4, "3": 0},
                                           {"true": 3, "1": 0, "2": 0, "3": 0}]
+
+
+def test_the_probability_evolution_plots_the_prior_and_every_posterior_of_a_simulation():
+    """probability_evolution.png (experiment_report.posterior_lines, like D Fig. 6-10): for the first simulation,
+    points at 0 … n movements — the equal prior, then the posterior after each movement, the last one the decision's
+    (above the threshold for the true texture) — for the five likeliest textures."""
+    from bench.reporting.experiment_report import posterior_lines
+
+    train, valid = separated_case(T=8)
+    model = ex.fit_model(train)
+    r = ex.simulate(model, valid, 3, n_sims=2, seed=0)
+    n = int(r.n_moves[0])
+    lines = posterior_lines(r)
+    assert n >= 1 and len(lines) == 5
+    for label, moves, probability in lines:
+        assert moves.tolist() == list(range(n + 1)) and probability[0] == pytest.approx(1 / 8)
+    final = {label: probability[-1] for label, _, probability in lines}
+    assert final["T3"] > r.threshold and r.decided[0] == 3

@@ -2875,6 +2875,11 @@ CATALOGUE += [
            '**{str(int(d)): int(cm[j, i]) for j, d in enumerate(lab)}}',
            ('bench/tests/test_exploration.py::test_confusion_csv_has_a_row_per_true_texture_and_a_column_per_decision',),
            "confusion.csv transposed: a true texture's confusions written down its column"),
+    Mutant('probability-evolution-one-step-short', 'experiment', 'bench/reporting/experiment_report.py',
+           '    steps = int(r.n_moves[0]) + 1\n',
+           '    steps = int(r.n_moves[0])\n',
+           ('bench/tests/test_exploration.py::test_the_probability_evolution_plots_the_prior_and_every_posterior_of_a_simulation',),
+           "probability_evolution.png leaving out the posterior after the last movement (the decision's)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
