@@ -315,9 +315,6 @@ class Touch(Press):
         down = np.clip((x - r - h) / r, 0, 1)
         return F * np.where(x < 0, 0.0, up - down)
 
-    def tangential(self, t):
-        return self.tangential_N * (self.force(t) / self.force_N if self.force_N else 0.0)
-
 
 @dataclass
 class PowerOn(CheckedFields):

@@ -2880,6 +2880,16 @@ CATALOGUE += [
            '    steps = int(r.n_moves[0])\n',
            ('bench/tests/test_exploration.py::test_the_probability_evolution_plots_the_prior_and_every_posterior_of_a_simulation',),
            "probability_evolution.png leaving out the posterior after the last movement (the decision's)"),
+    Mutant('touch-thermal-area-radius-unsquared', 'thermal', 'emulator/sensor.py',
+           'np.pi * (s.indenter_radius_mm * 1e-3) ** 2',
+           'np.pi * (s.indenter_radius_mm * 1e-3)',
+           ('emulator/tests/test_thermal_live_contact.py::test_a_touch_and_a_slide_warm_the_object_over_their_contact_areas',),
+           "a touch's thermal contact area π·r instead of π·r²"),
+    Mutant('slide-thermal-area-at-1N', 'thermal', 'emulator/sensor.py',
+           'contact_patch_area_m2(s.force_N, p.contact_radius_at_1N_m)',
+           'contact_patch_area_m2(1.0, p.contact_radius_at_1N_m)',
+           ('emulator/tests/test_thermal_live_contact.py::test_a_touch_and_a_slide_warm_the_object_over_their_contact_areas',),
+           "a slide's thermal contact over the patch of 1 N whatever its force"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -326,3 +326,20 @@ def test_the_live_patch_radius_is_rounded_to_the_nearest_step():
         load = ((steps + frac) * PATCH_RADIUS_STEP_M / p.contact_radius_at_1N_m) ** 3
         area = float(live_patch_area_m2(np.array([load]), p)[0])
         assert area == pytest.approx(np.pi * (expected * PATCH_RADIUS_STEP_M) ** 2, rel=1e-12), (steps, frac)
+
+
+def test_a_touch_and_a_slide_warm_the_object_over_their_contact_areas():
+    """The thermal contact of a touch is its indenter's disc, π r² (a 3 mm indenter: 28.3 mm²), and a slide's the
+    skin's patch under its force, π (a_1N·F^(1/3))² (skin.contact_patch_area_m2) — not the slide's at 1 N, nor a
+    radius left unsquared; the thermal model sees exactly these (derived, D's thermal contact over the area touched)."""
+    from emulator.sliding import Slide
+    from emulator.stimuli import Touch
+
+    p = SensorParams()
+    smooth = Texture(903, "smooth", "test", rms_height_m=0.0, correlation_length_m=100e-6, hurst=0.8, mu_static=1.0,
+                     mu_kinetic=0.9, material="aluminum")
+    s = Sensor(p, [Touch(0.1, 1.0, material="glass", indenter_radius_mm=3.0), Slide(4.0, smooth, 2.0, 0.01, 0.01)],
+               channels_read=["TDC"])
+    touch, slide = s.thermal.events.contacts
+    assert touch.area_m2 == pytest.approx(np.pi * 3e-3 ** 2, rel=1e-12)
+    assert slide.area_m2 == pytest.approx(np.pi * (p.contact_radius_at_1N_m * 2.0 ** (1 / 3)) ** 2, rel=1e-12)
