@@ -2890,6 +2890,11 @@ CATALOGUE += [
            'contact_patch_area_m2(1.0, p.contact_radius_at_1N_m)',
            ('emulator/tests/test_thermal_live_contact.py::test_a_touch_and_a_slide_warm_the_object_over_their_contact_areas',),
            "a slide's thermal contact over the patch of 1 N whatever its force"),
+    Mutant('effects-cost-not-per-simulated-second', 'outputs', 'emulator/sensor.py',
+           '            d["seconds_per_simulated_s"] = cost.seconds / sim_s\n',
+           '            d["seconds_per_simulated_s"] = cost.seconds\n',
+           ('emulator/tests/test_model.py::test_the_effects_report_gives_each_effects_cost_per_simulated_second',),
+           "the effects table's cost per simulated second holding the total wall seconds"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -381,3 +381,16 @@ def test_a_sweep_reaching_beyond_the_grids_band_is_refused_whichever_way_it_goes
         with pytest.raises(ValueError, match="finer grid"):
             Sensor(stimuli=[Vibration(0.0, 1.0, 1e-6, f_start, f_stop)], channels_read=["PAC"])
     Sensor(stimuli=[Vibration(0.0, 1.0, 1e-6, 100.0, 1000.0)], channels_read=["PAC"])
+
+
+def test_the_effects_report_gives_each_effects_cost_per_simulated_second():
+    """record.json's effects table (Sensor.effects_report): each row's ``seconds_per_simulated_s`` is its wall
+    seconds over the seconds simulated (2 s here), the graph's effects and the slow models (electrodes) alike."""
+    s = Sensor(stimuli=[Tap(0.5, 1.0)], channels_read=["PAC", "E1"])
+    t = np.arange(8800) / 4400.0
+    s.sample(np.where(np.arange(t.size) % 2, 0, 17), t)
+    rows = s.effects_report()
+    assert s.simulated_s == pytest.approx(2.0, abs=0.01)
+    assert {"electrodes"} < {r["name"] for r in rows} and any(r["seconds"] > 0 for r in rows)
+    for r in rows:
+        assert r["seconds_per_simulated_s"] == pytest.approx(r["seconds"] / s.simulated_s, rel=1e-12), r["name"]
