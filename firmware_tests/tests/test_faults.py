@@ -110,11 +110,12 @@ def test_real_time_mode_honours_the_baud_rate():
     assert len(frames) == 15 and rate < 57600 / 10 * 1.15
 
 
-@pytest.mark.parametrize("speed", [0.5, 4.0])
+@pytest.mark.parametrize("speed", [0.5, 2.0])
 def test_real_time_mode_runs_at_its_speed(speed):
-    """``--speed``: the host receives ``speed`` times the 100 frames per wall second of a one-sensor bus (4: 400
+    """``--speed``: the host receives ``speed`` times the 100 frames per wall second of a one-sensor bus (2: 200
     frames/s; 0.5: 50), counted over 1 wall s of streaming, within 20 % (after an unpaced bench has compiled the
-    sensor's kernels: a cold numba cache stalls the first frames, and the paced bench then catches up in a burst)."""
+    sensor's kernels: a cold numba cache stalls the first frames, and the paced bench then catches up in a burst).
+    2, not 4: at 4 a loaded machine could fall short of the pace itself (the bench runs ~29× real time idle)."""
     import time
 
     with FirmwareBench(1) as warm:
