@@ -98,7 +98,7 @@ def vector_file_problem(path: str) -> str | None:
 
     variants = vec.get("variants", {})
     if not (isinstance(variants, dict) and all(
-            sensor_key(k) and int(k) in sensors and v in ch.VARIANTS for k, v in variants.items())):
+            sensor_key(k) and v in ch.VARIANTS for k, v in variants.items())):
         return f"not a vector file (variants: a sensor of sensors -> one of {', '.join(ch.VARIANTS)})"
     provided = vec.get("provided", {})
     if not isinstance(provided, dict):
