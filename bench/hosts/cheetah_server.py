@@ -189,9 +189,9 @@ class CheetahBench:
 
     def _release_if_closed(self) -> None:
         """Free the adapter if its owner has closed its end of the connection, whatever it left unread here (call
-        with the lock held): a real Cheetah is free once the program that opened it exits, its pending
-        asynchronous batches dropped, while this server would otherwise clock every batch still queued before
-        it saw the end, and refuse the next program meanwhile."""
+        with the lock held, before each request): a real Cheetah is free once the program that opened it exits,
+        its pending asynchronous batches dropped, while this server would otherwise clock every batch still
+        queued before it saw the end, and refuse the next program meanwhile."""
         owner = self._owner
         if owner is None:
             return
@@ -253,10 +253,9 @@ class CheetahBench:
 
     def _handle(self, c: _Client, kind: int, payload: bytes) -> bytes | None:
         with self._lock:
+            self._release_if_closed()  # first: whoever asks, an exited program's adapter is free at once
             if c.gone:  # its program has exited and another may hold the adapter now: nothing more is done for it
                 return None
-            if kind in (REQ_QUERY, REQ_HELLO) and self._owner is not c:
-                self._release_if_closed()
             if kind == REQ_QUERY:
                 return bytes([self._owner is not None]) + struct.pack("<I", UNIQUE_ID)
             if kind == REQ_HELLO:

@@ -575,8 +575,10 @@ SUBMIT_AND_EXIT = ("import ctypes as C, sys\n"
                    "lib = C.CDLL(sys.argv[1])\n"
                    "h = lib.c_ch_open(0)\n"
                    "assert h == 1, h\n"
+                   "print('opened', flush=True)\n"
+                   "sys.stdin.readline()\n"
                    "lib.c_ch_spi_queue_clear(h)\n"
-                   "for _ in range(150):  # 10 min of virtual time before each sample: the server simulates it all\n"
+                   "for _ in range(150):  # 10 min of virtual time before each sample\n"
                    "    lib.c_ch_spi_queue_delay_ns(h, 4_000_000_000)\n"
                    "lib.c_ch_spi_queue_ss(h, 1)\n"
                    "lib.c_ch_spi_queue_array(h, 2, (C.c_uint8 * 2)(0x80, 0))\n"
@@ -587,17 +589,28 @@ SUBMIT_AND_EXIT = ("import ctypes as C, sys\n"
 
 def test_a_program_that_exits_with_batches_pending_frees_the_adapter_at_once(lib):
     """A real Cheetah is free as soon as the program that opened it exits, its pending asynchronous batches
-    dropped.  A program that submits 64 batches of 10 min of virtual time each and exits: the next program opens
-    the adapter at once (it was refused, −8, until the server had clocked every batch left — ten hours of virtual
-    time here, seconds of wall time), and the batches nobody will collect are not clocked."""
+    dropped.  A program opens the adapter, submits 64 batches of 10 min of virtual time each while the server is
+    busy (its lock held, as while clocking a batch) and exits: none of them is clocked afterwards, and the next
+    program opens the adapter at once.  (Before, the server clocked every batch left — ten hours of virtual time,
+    seconds of wall time — and refused the next program, −8, meanwhile.)  Deterministic: the batches are all
+    waiting when the server looks at the first of them."""
     lib, mp = lib
     with CheetahBench(1) as cb:
-        r = subprocess.run([sys.executable, "-c", SUBMIT_AND_EXIT, str(cb.library)], capture_output=True, text=True,
-                           env=cb.env, timeout=60)
-        assert r.returncode == 0 and r.stdout == "submitted\n", r.stderr
+        prog = subprocess.Popen([sys.executable, "-c", SUBMIT_AND_EXIT, str(cb.library)], stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=cb.env)
+        try:
+            assert prog.stdout.readline() == "opened\n", prog.stderr.read()
+            with cb._lock:  # the program's batches wait in the socket until it has exited
+                out, err = prog.communicate("go\n", timeout=60)
+        finally:
+            if prog.poll() is None:
+                prog.kill()
+        assert prog.returncode == 0 and out == "submitted\n", err
+        deadline = time.monotonic() + 10
+        while cb._clients and time.monotonic() < deadline:  # the server ends the exited program's connection
+            time.sleep(0.01)
+        # at its first batch after the exit: the adapter is free and none of its 64 batches was clocked
+        assert not cb._clients and not cb.in_use and cb.batches == 0 and cb.client_errors == []
         h = open_adapter(lib, mp, cb)  # asserts the handle: not CH_UNABLE_TO_OPEN
-        clocked = cb.batches  # (on an idle machine a few: the server clocks ~100 batches/s)
-        time.sleep(0.2)
-        # the dead program's batches are no longer clocked, and the new owner is served as usual
-        assert len(sample_words(lib, h)) == 3 and cb.batches == clocked + 3
+        assert len(sample_words(lib, h)) == 3 and cb.batches == 3  # the next program is served as usual
         assert cb.client_errors == []
