@@ -95,6 +95,14 @@ def movement_grid() -> list[Movement]:
     return [Movement(0.2 * 10 ** ((j - 1) / 5), 0.01 * 10 ** ((i - 1) / 5)) for j in range(1, 7) for i in range(1, 7)]
 
 
+#: settings that must be > 0, and why (a zero had passed the ≥ 0 check and ended in a bare ZeroDivisionError)
+_RIG_POSITIVE = {"lower_rate_m_per_s": "the finger lowers at this rate until the target",
+                 "stage_accel_m_per_s2": "the stage ramps to the velocity and back at it",
+                 "lift_rate_m_per_s": "the finger lifts off at this rate",
+                 "chunk_s": "the run is read in chunks of this length",
+                 "speculation_s": "the longest window read while lowering"}
+
+
 @dataclass
 class RigSettings:
     """The rig's mechanics and timing (SI units)."""
@@ -132,6 +140,12 @@ class RigSettings:
             if isinstance(value, (int, float)) and not isinstance(value, bool) and not (math.isfinite(value)
                                                                                           and value >= 0):
                 raise ValueError(f"rig.{name} = {value!r}: must be a finite number ≥ 0")
+        for name, what in _RIG_POSITIVE.items():  # each divides the trial's timing: 0 would never end or divide by 0
+            if getattr(self, name) <= 0:
+                raise ValueError(f"rig.{name} = {getattr(self, name)!r}: must be > 0 ({what})")
+        if not (isinstance(self.pdc_average_frames, int) and self.pdc_average_frames >= 1):
+            raise ValueError(f"rig.pdc_average_frames = {self.pdc_average_frames!r}: a whole number of frames ≥ 1 "
+                             f"(1: each frame's own reading)")
         if self.stepper_noise_log_spread > 3.0:
             raise ValueError(f"rig.stepper_noise_log_spread = {self.stepper_noise_log_spread!r}: at most 3 (a factor "
                              f"of e^3 ≈ 20 either way for one standard deviation)")

@@ -86,3 +86,12 @@ def test_the_lowering_starts_when_the_baselines_last_batch_arrives():
 def test_a_batch_that_is_not_a_whole_number_of_frames_is_refused_by_name(batch_s):
     with pytest.raises(ValueError, match=r"rig\.batch_s .*whole number of frames"):
         TextureRig(wear=False, settings=RigSettings(batch_s=batch_s)).run_trial(GRATING, Movement(0.5, 0.04), seed=1)
+
+
+@pytest.mark.parametrize("name", ["lower_rate_m_per_s", "stage_accel_m_per_s2", "lift_rate_m_per_s", "chunk_s",
+                                  "speculation_s", "pdc_average_frames"])
+def test_a_zero_rate_or_length_that_the_trial_divides_by_is_refused_by_name(name):
+    """Each of these divides the trial's timing: 0 passed the settings' ≥ 0 check and ended in a bare
+    ZeroDivisionError (or a run that never ends); it is refused when the settings are made, naming the setting."""
+    with pytest.raises(ValueError, match=rf"rig\.{name} = 0(\.0)?: .*(> 0|≥ 1)"):
+        RigSettings(**{name: 0})
