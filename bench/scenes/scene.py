@@ -1084,16 +1084,21 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         from emulator.fidelity import profile
 
         grid = profile(fidelity).grid_Hz
-        for i, s in enumerate(x for lst in per_sensor.values() for x in lst):
+        for k, s in ((k, x) for k, lst in per_sensor.items() for x in lst):
+            if not isinstance(s, (Vibration, PressureCalibrator)):
+                continue
+            # which one: its start (and finger), as the other checks across stimuli name it (two identical lines
+            # had said nothing of which vibration or pressure stimulus was meant)
+            which = f"the stimulus starting at {s.start_s:g} s{f' on sensor {k}' if k != 1 else ''}: "
             if isinstance(s, Vibration) and max(s.f_start_Hz, s.f_stop_Hz or 0) >= 0.45 * grid:
                 top = max(s.f_start_Hz, s.f_stop_Hz or 0)
                 # the profiles whose grid computes it (the advice had been "reference" alone, where "default" does)
                 fits = " or ".join(f'"{n}"' for n, f in PROFILES.items() if top < 0.45 * f.grid_Hz)
-                c.problems.append(f"vibration at {top:.0f} Hz needs a finer grid than "
+                c.problems.append(f"{which}vibration at {top:.0f} Hz needs a finer grid than "
                                   f"fidelity '{fidelity}' ({grid:.0f} Hz); use {fits}")
             elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
-                c.problems.append(f"pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity '{fidelity}' "
-                                  f"({grid:.0f} Hz); use \"default\" or \"reference\"")
+                c.problems.append(f"{which}pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity "
+                                  f"'{fidelity}' ({grid:.0f} Hz); use \"default\" or \"reference\"")
         if profile(fidelity).duct_resonance:
             for k, table in sorted(tables.items()):
                 duct = table.params.duct_resonance_Hz

@@ -85,6 +85,20 @@ def test_vibration_too_fast_for_the_fidelity_grid_is_refused_with_advice():
     assert any("finer grid" in m and "reference" in m for m in msgs)
 
 
+def test_each_stimulus_too_fast_for_the_grid_is_named_by_its_start_and_finger():
+    """Two vibrations and a pressure too fast for 'fast' (on two fingers): each problem says which one (they had
+    been identical lines, naming no stimulus)."""
+    msgs = problems({"scene": {"name": "t", "duration_s": 1.0, "fidelity": "fast"},
+                     "stimulus": [{"kind": "vibration", "start_s": [0.1, 0.6], "duration_s": 0.2, "amplitude_um": 1,
+                                   "frequency_Hz": 2500.0},
+                                  {"kind": "pressure", "start_s": 0.25, "duration_s": 0.5, "amplitude_Pa": 10.0,
+                                   "frequency_Hz": 3000.0, "sensor": 2}]})
+    assert len(msgs) == len(set(msgs)) == 3
+    assert any("vibration at 2500 Hz" in m and m.startswith("the stimulus starting at 0.1 s: ") for m in msgs)
+    assert any("vibration at 2500 Hz" in m and m.startswith("the stimulus starting at 0.6 s: ") for m in msgs)
+    assert any("pressure at 3000 Hz" in m and m.startswith("the stimulus starting at 0.25 s on sensor 2: ") for m in msgs)
+
+
 def test_bad_types_are_reported_not_crashed_on():
     msgs = problems({"scene": {"name": "t", "duration_s": "long", "seed": 1.5},
                      "stimulus": {"kind": "tap"}})
