@@ -328,6 +328,11 @@ def _json_default(o):
     return str(o)
 
 
+def _or_dash(x, fmt: str) -> str:
+    """``x`` in ``fmt``, or "—" for a value that is undefined (None: a sliding trial's property, record.json says why)."""
+    return "—" if x is None else format(x, fmt)
+
+
 def markdown_report(record: dict) -> str:
     sc = record["scene"]
     lines = [f"# Scene report: {sc['name']}", ""]
@@ -365,8 +370,8 @@ def markdown_report(record: dict) -> str:
         for r in sliding["trials"]:
             lines.append(f"| {r['trial']} | T{r['texture']} {r['texture_name']} | {r['force_N']:g} | "
                          f"{100 * r['velocity_m_per_s']:g} | {1e6 * (r['ridge_height_m'] or 0):.1f} | "
-                         f"{r['true_normal_N']:.3f} | {r['traction']:.3f} | {r['roughness']:.2f} | "
-                         f"{r['fineness']:.2f} |")
+                         f"{r['true_normal_N']:.3f} | {r['traction']:.3f} | {_or_dash(r['roughness'], '.2f')} | "
+                         f"{_or_dash(r['fineness'], '.2f')} |")
         b, a = sliding["skin_before"], sliding["skin_after"]
         lines += ["", f"Skin before: serial {b['serial']}, ridge height {1e6 * b['ridge_height_m']:.1f} µm; after: "
                       f"serial {a['serial']}, ridge height {1e6 * a['ridge_height_m']:.1f} µm "

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from bench.textures.stage import StageMotor
-from bench.textures.properties import TrialRecording, properties
+from bench.textures.properties import (RecordingError, TrialRecording, fineness, measurement_window, roughness,
+                                       traction)
 from emulator.effects import effect_rng
 from emulator.sliding import Slide
 
@@ -55,13 +56,26 @@ class SlideRecorder:
                                  s.start_s + s.approach_s, s.slide_start_s, s.slide_end_s, texture=s.texture.number,
                                  force_N=s.force_N, velocity_m_s=s.velocity_m_per_s, trial=k, seed=self.scene.seed)
             sliding = (log["t"] > s.slide_start_s + s.accel_s) & (log["t"] < s.slide_end_s - s.accel_s)
+            if not sliding.any():  # no cruise (the ramps meet, distance = velocity × accel_s): the forces' mean over
+                # the window the properties are measured in, which validation keeps ≥ 2 log samples long (the
+                # cruise's empty mean had gone into record.json as NaN)
+                first, last = measurement_window(rec)
+                sliding = (log["t"] >= first) & (log["t"] <= last)
             skin = self.scene.trial_skins[k] if k < len(self.scene.trial_skins) else {}
             row = {"trial": k, "start_s": s.start_s, "texture": s.texture.number, "texture_name": s.texture.name,
                    "force_N": s.force_N, "velocity_m_per_s": s.velocity_m_per_s, "distance_m": s.distance_m,
                    "skin_serial": skin.get("serial"), "ridge_height_m": skin.get("ridge_height_m"),
                    "true_normal_N": float(np.mean(log["normal_N"][sliding])) if sliding.any() else float("nan"),
                    "mean_tangential_N": float(np.mean(log["tangential_N"][sliding])) if sliding.any() else float("nan")}
-            row.update(properties(rec))
+            row["traction"] = traction(rec)  # (validation keeps ≥ 2 force-log samples in its window)
+            for name, measure in (("roughness", roughness), ("fineness", fineness)):
+                try:
+                    row[name] = measure(rec)
+                except RecordingError as e:  # undefined for this trial's codes alone (a PAC constant over the
+                    # window, as with every noise source off, has no spectral centroid): null, and why; the run and
+                    # the other trials' rows stand (it had failed the whole run after simulating it)
+                    row[name] = None
+                    row.setdefault("undefined", {})[name] = str(e)
             rows.append(row)
         return rows
 

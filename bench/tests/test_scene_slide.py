@@ -258,3 +258,48 @@ def test_a_slide_the_run_stopped_in_has_no_row():
     rec = run_scene(sc, progress=False, should_stop=lambda: bool(asked.append(1)) or len(asked) >= 2)
     assert rec.status == "interrupted" and rec.error is None and rec.simulated_s == pytest.approx(2.0, abs=1e-3)
     assert rec.slides == []
+
+
+def test_a_slide_whose_ramps_meet_records_finite_true_forces():
+    """distance = velocity × accel_s (allowed: the ramps meet, no cruise): the trial's true normal and mean
+    tangential force are means over the properties' measurement window, finite (the cruise's empty mean had gone
+    into record.json as NaN)."""
+    import json
+    import math
+
+    from bench.reporting.report import _json_default, build_record
+    from bench.running.runner import run_scene
+
+    sc = _scene(_slide(start_s=0.1, force_N=1.0, velocity_mm_per_s=10, distance_mm=1, accel_s=0.1, hold_s=0.5,
+                       texture="T30"), duration=1.4)
+    rec = run_scene(sc, progress=False)
+    assert rec.status == "ok", rec.error
+    (row,) = rec.slides
+    assert math.isfinite(row["true_normal_N"]) and row["true_normal_N"] == pytest.approx(1.0, rel=0.05)
+    assert math.isfinite(row["mean_tangential_N"]) and row["mean_tangential_N"] > 0
+    json.dumps(build_record(rec, []), allow_nan=False, default=_json_default)  # strict JSON: no NaN anywhere
+
+
+def test_a_property_undefined_for_a_trials_codes_is_null_and_the_run_stands(tmp_path):
+    """Every noise source off, a 0.01 N slide at 0.1 mm/s on polished aluminum with a smooth skin: PAC reads one
+    constant code over the measurement window, so the fineness (a spectral centroid) is undefined. That trial's
+    fineness is null with the reason, its traction and roughness are numbers, and the run ends "ok" (it had
+    failed after simulating the whole scene, every trial's row lost)."""
+    import json
+
+    from bench.cli import main as cli
+
+    scene = tmp_path / "quiet.toml"
+    scene.write_text('[scene]\nname = "quiet"\nduration_s = 4.0\n[host]\nsequence = ["PAC", "PDC"]\n'
+                     '[noise]\njohnson = false\namplifier = false\nmains_hum = false\nadc = false\n'
+                     'spi_coupling = false\nthermistor = false\n[skin]\nfingerprints = false\n'
+                     '[[stimulus]]\nkind = "slide"\nstart_s = 0.1\ntexture = "T46"\nforce_N = 0.01\n'
+                     'velocity_mm_per_s = 0.1\ndistance_mm = 0.3\nhold_s = 0.11\n')
+    out = tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet", "--no-plots"]) == 0
+    record = json.loads((out / "record.json").read_text())
+    assert record["status"] == "ok"
+    (row,) = record["sliding"]["trials"]
+    assert row["fineness"] is None and "constant" in row["undefined"]["fineness"]
+    assert isinstance(row["traction"], float) and isinstance(row["roughness"], float)
+    assert "| — |" in (out / "report.md").read_text()
