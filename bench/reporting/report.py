@@ -329,7 +329,8 @@ def _json_default(o):
 
 
 def _or_dash(x, fmt: str) -> str:
-    """``x`` in ``fmt``, or "—" for a value that is undefined (None: a sliding trial's property, record.json says why)."""
+    """``x`` in ``fmt``, or "—" for a value that is undefined (None: a sliding trial's property; record.json says
+    why)."""
     return "—" if x is None else format(x, fmt)
 
 
