@@ -167,7 +167,7 @@ def test_a_rigs_finger_presses_the_electrodes_under_the_pad_as_the_commands_come
 
 @pytest.mark.stability
 def test_stiff_bristles_extreme_roughness_and_perfectly_smooth_surfaces_stay_finite():
-    stiff = SensorParams().replace(bristle_stiffness_per_N=1e9, skin_tangential_damping_N_s_per_m=0.0)
+    stiff = SensorParams().replace(bristle_stiffness_per_N=1e9, skin_tangential_damping_N_s_per_m=1.0)  # the least
     rough = Texture(904, "extreme", "test", rms_height_m=500e-6, correlation_length_m=50e-6, hurst=0.2,
                     mu_static=1.5, mu_kinetic=0.2, stribeck_velocity_m_per_s=1e-4, modulus_Pa=1e10, seed=1)
     for params, texture in ((stiff, SAND), (None, rough), (stiff, SMOOTH), (None, SMOOTH)):
@@ -458,3 +458,62 @@ def test_the_crest_table_reads_each_position_as_the_whole_surface_would(surface)
     for first, n in ((0, 150), (150, 213), (363, 37), (350, 50)):
         np.testing.assert_allclose(crest_table(surface, skin, start, first, n, n_track, reach, dx),
                                    expected[first:first + n], 0, tol, err_msg=f"{first}, {n}")
+
+
+#: the stiffest bristles and skin the parameter ranges allow (the dampings nominal)
+STIFFEST = SensorParams().replace(bristle_stiffness_per_N=1e9, skin_tangential_stiffness_N_per_m=1e6)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("fidelity, blocks", [("fast", (1, 7, 54)), ("reference", (7, 866))])
+def test_the_hardest_allowed_slide_is_finite_and_the_same_in_any_blocks(fidelity, blocks):
+    """The corner of the scene limits (20 N, 0.5 m/s, 1 ms stage ramps, 5 ms touch-down and lift) with the stiffest
+    bristles and skin the parameter ranges allow — the stiffest LuGre step there is: every force finite and
+    bounded (the load within its texture's heights, the tangential force within the load's friction and slope),
+    and blocks of a few grid samples give the PAC trace and the tangential force of one 2 s block to the bit (a
+    stage ramp, a touch-down and a lift inside blocks)."""
+    slide = Slide(0.02, SAND, 20.0, 0.5, 0.1, approach_s=0.005, hold_s=0.11, accel_s=0.001, lift_s=0.005)
+    t_end = slide.end_s + 0.01
+
+    def run(block_s):
+        def sensor():
+            return Sensor(params=STIFFEST, stimuli=[slide], channels_read=["PAC", "PDC"], block_s=block_s,
+                          fidelity=fidelity, seed=3, record_signals=("tangential_force_N", "normal_force_N"))
+
+        s = sensor()
+        grid = np.arange(int(t_end * s.fs)) / s.fs
+        ft, fn = s.signal("tangential_force_N", grid), s.signal("normal_force_N", grid)
+        return sensor().analog_trace("PAC", np.arange(0.0, t_end, 1 / 2200)), ft, fn, s.fs
+
+    pac, ft, fn, fs = run(2.0)
+    assert np.all(np.isfinite(ft)) and np.all(np.isfinite(fn)) and np.all(np.isfinite(pac))
+    assert fn.max() < 2 * slide.force_N and np.abs(ft).max() < 3 * fn.max()
+    for n in blocks:
+        got = run(n / fs)
+        assert np.array_equal(got[0], pac) and np.array_equal(got[1], ft), (fidelity, n)
+
+
+@pytest.mark.unit
+def test_the_least_skin_damping_allowed_gives_one_mean_friction_on_every_grid():
+    """The skin is massless: with no tangential damping its velocity is undetermined while it slides steadily (the
+    LuGre friction then does not depend on it) and its slips shrink to one grid step — a 20 N, 0.5 m/s slide on a
+    smooth surface had a mean friction of 16.0 N on the default grid and 4.6 N on the reference one. The range
+    starts where the grids agree: 0 is refused by name, and at the least damping allowed the two profiles' mean
+    friction (µ·N = 16 N) agree within 2 %."""
+    from emulator.params import PARAMETER_FIELDS
+
+    with pytest.raises(ValueError, match=r"skin_tangential_damping_N_s_per_m = 0\.0 .*allowed range"):
+        SensorParams().replace(skin_tangential_damping_N_s_per_m=0.0)
+    least = PARAMETER_FIELDS["skin_tangential_damping_N_s_per_m"].metadata["range"][0]
+    p = SensorParams().replace(skin_tangential_damping_N_s_per_m=least)
+    slide = Slide(0.02, SMOOTH, 20.0, 0.5, 0.1, approach_s=0.005, hold_s=0.11, accel_s=0.001, lift_s=0.005,
+                  skin=Skin(fingerprints=False))
+    means = []
+    for fidelity in ("default", "reference"):
+        s = Sensor(params=p, stimuli=[slide], channels_read=["PAC"], fidelity=fidelity, seed=3,
+                   record_signals=("tangential_force_N",))
+        t = np.arange(int((slide.end_s + 0.01) * s.fs)) / s.fs
+        ft = s.signal("tangential_force_N", t)
+        means.append(ft[(t > slide.slide_start_s + 0.04) & (t < slide.slide_end_s - 0.01)].mean())
+    assert means[0] == pytest.approx(16.0, rel=0.05)
+    assert means[1] == pytest.approx(means[0], rel=0.02)
