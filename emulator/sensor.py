@@ -40,6 +40,19 @@ FAULT_NAMES = ("electrode_open", "electrode_short", "mux_stuck", "thermistor", "
                "fluid_leak_start_s")
 
 
+def _check_fault_values(faults: dict) -> None:
+    """Refuse fault values that would be silently misread (a scene's [faults] is checked the same way when
+    loaded): the thermistor's kind, the heater's flag and the electrode lists; electrode numbers and the leak are
+    checked by their models."""
+    if faults.get("thermistor") not in (None, "open", "short"):
+        raise ValueError(f"faults.thermistor = {faults['thermistor']!r}: must be \"open\" or \"short\"")
+    if not isinstance(faults.get("heater_failed", False), (bool, np.bool_)):
+        raise ValueError(f"faults.heater_failed = {faults['heater_failed']!r}: must be True or False")
+    for key in ("electrode_open", "electrode_short"):
+        if key in faults and not isinstance(faults[key], (list, tuple, np.ndarray)):
+            raise ValueError(f"faults.{key} = {faults[key]!r}: must be a list of electrode numbers, e.g. [3]")
+
+
 @dataclass(frozen=True)
 class NoiseSources:
     """Switches for every noise source (all on = the real sensor at rest)."""
@@ -156,6 +169,7 @@ class Sensor:
         unknown_faults = set(self.faults) - set(FAULT_NAMES)
         if unknown_faults:
             raise ValueError(f"unknown sensor fault(s): {', '.join(sorted(unknown_faults))}; known: {', '.join(FAULT_NAMES)}")
+        _check_fault_values(self.faults)
         self.leak = self._fluid_leak()
         if not (np.isfinite(start_s) and start_s >= 0):
             raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")

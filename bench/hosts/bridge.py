@@ -51,6 +51,9 @@ class FirmwareBench:
                  variant: str = "biotac", host_gone_s: float = HOST_GONE_S):
         if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
+        for name, flag in (("realtime", realtime), ("pull_up", pull_up), ("keep_arrivals", keep_arrivals)):
+            if not isinstance(flag, bool):  # "no" is truthy: it would have turned the flag on
+                raise ValueError(f"{name} = {flag!r}: must be True or False")
         if not (isinstance(baudrate, int) and baudrate > 0):
             raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
         if not (isinstance(host_gone_s, (int, float)) and not isinstance(host_gone_s, bool)

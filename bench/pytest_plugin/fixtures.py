@@ -174,9 +174,12 @@ def _check_keywords(fixture: str, given: dict, allowed) -> None:
         _fail(f"{fixture}(): unknown keyword(s) {', '.join(unknown)}; it takes {', '.join(sorted(allowed))}")
 
 
-def _check_values(fixture: str, n_sensors=None, stimuli=None) -> None:
-    """Fail the test if ``n_sensors`` is not a whole number 1..MAX_SENSORS or ``stimuli`` not a list of stimuli."""
+def _check_values(fixture: str, n_sensors=None, stimuli=None, seed=None) -> None:
+    """Fail the test if ``n_sensors`` is not a whole number 1..MAX_SENSORS, ``stimuli`` not a list of stimuli or
+    ``seed`` not a whole number ≥ 0."""
     __tracebackhide__ = True
+    import math
+    import numbers
     import operator
 
     from bench.scenes.limits import MAX_SENSORS
@@ -188,6 +191,9 @@ def _check_values(fixture: str, n_sensors=None, stimuli=None) -> None:
             whole = None
         if whole is None or not 1 <= whole <= MAX_SENSORS:
             _fail(f"{fixture}(): n_sensors = {n_sensors!r}: a whole number from 1 to {MAX_SENSORS}")
+    if seed is not None and not (isinstance(seed, numbers.Real) and not isinstance(seed, bool)  # numpy's too
+                                 and math.isfinite(seed) and float(seed).is_integer() and seed >= 0):
+        _fail(f"{fixture}(): seed = {seed!r}: a whole number ≥ 0")
     if stimuli is not None and not isinstance(stimuli, (list, tuple)):
         _fail(f"{fixture}(): stimuli = {stimuli!r}: give a list of stimuli (emulator.stimuli), e.g. "
               f"stimuli=[Tap(0.5, 1.0)]")
@@ -215,8 +221,8 @@ def biotac_sensor():
     def make(stimuli=None, channels=None, seed=None, unit=None, **kw):  # the first four by position too
         __tracebackhide__ = True
         _check_keywords("biotac_sensor", kw, allowed)
-        _check_values("biotac_sensor", stimuli=stimuli)
-        kw.update(_given(stimuli=stimuli, channels=channels, seed=seed, unit=unit))
+        _check_values("biotac_sensor", stimuli=stimuli, seed=seed)
+        kw.update(_given(stimuli=stimuli, channels=channels, seed=None if seed is None else int(seed), unit=unit))
         scene = kw.pop("scene", None)
         try:
             if scene is None:
@@ -249,8 +255,8 @@ def _benches(fixture: str, bench_class, scene_kw):
             raise RuntimeError(f"{fixture}(): called after the test it was given to had ended; a factory fixture "
                                f"serves its own test only")
         _check_keywords(fixture, kw, allowed)
-        _check_values(fixture, n_sensors, stimuli)
-        kw.update(_given(stimuli=stimuli, units=units))
+        _check_values(fixture, n_sensors, stimuli, kw.get("seed"))
+        kw.update(_given(stimuli=stimuli, units=units, seed=None if kw.get("seed") is None else int(kw["seed"])))
         try:
             bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
         except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
