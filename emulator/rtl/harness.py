@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from emulator.rtl import build
+from emulator.spi.model import SensorPort
 from emulator.spi.vectors import rtl_provided_masks, variants_of
 
 HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
@@ -233,6 +234,23 @@ class HarnessPeripheral:
         return res["miso"].astype(np.uint16)
 
 
+class _RtlPort(SensorPort):
+    """A sensor's port as :class:`RtlBus` keeps it (provided channels, conversion window): SPI faults cannot be set
+    on it — the RTL's fault ports are fixed while the harness streams — so setting one is refused by name rather
+    than changing nothing the host could see."""
+
+    @property
+    def faults(self):
+        return self._faults
+
+    @faults.setter
+    def faults(self, faults) -> None:
+        if faults.any:
+            raise ValueError(f"sensor {self.index}: SPI faults ({faults!r}) need the software SPI bus (spi="
+                             f"'software'); the RTL bus's fault ports are fixed while it streams")
+        self._faults = faults
+
+
 class RtlBus:
     """The RTL of five sensors' SPI side, in a persistent C++ harness, with the calls of :class:`Bus`.
 
@@ -252,14 +270,13 @@ class RtlBus:
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
         from emulator.rtl.build import sp_mask
         from emulator.spi.fastpath import _NO_TICK
-        from emulator.spi.model import SensorPort
 
         mask = sp_mask({n: _variant_of(s) for n, s in sensors.items()})
         self.harness = harness or Harness(sp=mask)
         if self.harness.sp != mask:
             raise ValueError(f"the harness was built for SP mask {self.harness.sp}, the sensors need {mask}")
         self.harness.ensure_built()
-        self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
+        self.ports = {n: _RtlPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
         self.present = sum(1 << (n - 1) for n in sensors)
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
