@@ -28,6 +28,7 @@ scripted at 0.5 s comes ≈ 0.5 s into the stream, and the same host commands gi
 from __future__ import annotations
 
 import math
+import numbers
 import queue
 import random
 import threading
@@ -41,6 +42,12 @@ from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
 HOST_GONE_S = 0.2
 #: Unpaced, before the host's first byte: how often (wall s) the bench looks for it (virtual time stands still).
 HOST_POLL_S = 0.002
+
+
+def _check_action(what: str, action) -> None:
+    if not callable(action):
+        raise ValueError(f"{what}: action = {action!r}: give a callable taking the board, e.g. "
+                         f"lambda board: board.unplug(2)")
 
 
 class FirmwareBench:
@@ -166,11 +173,17 @@ class FirmwareBench:
                 self.board.at(when, action)
 
     def at(self, t_s: float, action) -> None:
-        """Apply ``action(board)`` when virtual time reaches ``t_s`` (never blocks the caller)."""
-        self._requests.put((t_s, action))
+        """Apply ``action(board)`` when virtual time reaches ``t_s`` (never blocks the caller).  A ``t_s`` that is
+        not a finite number ≥ 0 (NaN was never reached: the fault silently never happened) or an ``action`` that is
+        not callable is refused here, in the caller's thread."""
+        if not (isinstance(t_s, numbers.Real) and not isinstance(t_s, bool) and math.isfinite(t_s) and t_s >= 0):
+            raise ValueError(f"at: t_s = {t_s!r}: must be a finite virtual time ≥ 0 s (e.g. bench.virtual_time + 0.5)")
+        _check_action("at", action)
+        self._requests.put((float(t_s), action))
 
     def now(self, action) -> None:
         """Apply ``action(board)`` before the firmware's next step (never blocks the caller)."""
+        _check_action("now", action)
         self._requests.put((None, action))
 
     @property

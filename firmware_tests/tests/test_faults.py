@@ -152,3 +152,23 @@ def test_the_lines_corruption_and_drop_rates_are_each_their_own():
     assert line.bytes_dropped / n == pytest.approx(0.01, abs=0.002)
     assert line.bytes_corrupted / n == pytest.approx(0.01, abs=0.002)
     assert len(arrived[0]) == n - line.bytes_dropped
+
+
+@pytest.mark.parametrize("t_s, action, message", [
+    (float("nan"), lambda b: None, "at: t_s = nan: must be a finite virtual time"),
+    (float("inf"), lambda b: None, "at: t_s = inf"),
+    (-1.0, lambda b: None, "at: t_s = -1.0"),
+    ("0.5", lambda b: None, "at: t_s = '0.5'"),
+    (0.5, Faults(miso_stuck=1), "at: action = Faults(miso_flip_bit=None"),
+])
+def test_a_fault_scheduled_at_no_instant_or_without_an_action_is_refused_at_once(t_s, action, message):
+    """A fault scheduled at NaN was never reached (the test ran fault-free and could pass); a string time or a
+    Faults given in place of an action failed later in the bench's thread.  Both are refused where they are given."""
+    fb = FirmwareBench(1)
+    with pytest.raises(ValueError) as e:
+        fb.at(t_s, action)
+    assert message in str(e.value)
+    with pytest.raises(ValueError, match="now: action = 3"):
+        fb.now(3)
+    fb.at(0.25, lambda b: None)  # a finite instant and a callable: taken
+    fb.link.close()
