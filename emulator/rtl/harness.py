@@ -9,6 +9,7 @@ the schedule.  The sensors' variants are a Verilog parameter (``SP``), so a harn
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import struct
 import subprocess
@@ -85,12 +86,18 @@ class Harness:
         return h.hexdigest()
 
     def ensure_built(self) -> Path:
-        """The binary, rebuilt when any of its sources changed since it was built (never a stale RTL)."""
+        """The binary, rebuilt when any of its sources changed since it was built (never a stale RTL).  Checked and
+        built under an exclusive lock on ``build.lock`` in the build folder: two processes that need it at once (two
+        CI jobs on one checkout, pytest-xdist) build it once, where both had run Verilator into one folder and one
+        of them failed."""
         stamp = self.build_dir / "sources.sha256"
         digest = self._sources_digest()
-        if not (self.binary.exists() and stamp.exists() and stamp.read_text() == digest):
-            self.build()
-            stamp.write_text(digest)
+        self.build_dir.mkdir(parents=True, exist_ok=True)
+        with open(self.build_dir / "build.lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+            if not (self.binary.exists() and stamp.exists() and stamp.read_text() == digest):
+                self.build()
+                stamp.write_text(digest)
         return self.binary
 
     def build(self) -> Path:

@@ -205,6 +205,33 @@ def test_a_harness_is_rebuilt_when_its_rtl_changes(tmp_path, monkeypatch):
     assert h.binary.stat().st_mtime_ns != built
 
 
+def test_two_users_that_need_the_harness_at_once_build_it_once(tmp_path, monkeypatch):
+    """Two processes (two CI jobs on one checkout, pytest-xdist) that found no harness at once both ran Verilator
+    into one build folder, and one of them failed.  The check and the build are under a lock: the second waits and
+    finds the first one's binary (flock excludes two open files of one process too, so threads show it)."""
+    import threading
+    import time
+
+    from emulator.rtl import harness as H
+
+    builds = []
+
+    def slow_build(self):
+        builds.append(threading.get_ident())
+        time.sleep(0.5)
+        self.binary.parent.mkdir(parents=True, exist_ok=True)
+        self.binary.write_text("built")
+        return self.binary
+
+    monkeypatch.setattr(H.Harness, "build", slow_build)
+    users = [threading.Thread(target=H.Harness(tmp_path / "h").ensure_built) for _ in range(2)]
+    for u in users:
+        u.start()
+    for u in users:
+        u.join()
+    assert len(builds) == 1, builds
+
+
 # --- the answers the RTL path used to refuse with HarnessError: channels not provided, a busy ADC, a reset ----------
 CLOCK_HZ = 10e6  # a 16-bit transfer lasts 1.65 µs: two sampling commands fit inside the 5 µs conversion window
 
