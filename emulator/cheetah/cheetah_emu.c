@@ -91,17 +91,26 @@ static Device dev; /* one emulated adapter, port 0, handle 1 */
 static void complain(const char *path, const char *why) {
     static int said = 0;
     if (said++) return;
-    fprintf(stderr, "cheetah.so (BioTac emulator): not using BIOTAC_CHEETAH_SOCKET=%s: %s\n", path, why);
+    if (path)
+        fprintf(stderr, "cheetah.so (BioTac emulator): not using BIOTAC_CHEETAH_SOCKET=%s: %s\n", path, why);
+    else
+        fprintf(stderr, "cheetah.so (BioTac emulator): BIOTAC_CHEETAH_SOCKET %s\n", why);
 }
 
 static const char *socket_path(void) {
     const char *p = getenv("BIOTAC_CHEETAH_SOCKET");
-    if (!p || !*p) return NULL; /* no default: never look at a shared location */
+    if (!p || !*p) { /* no default: never look at a shared location */
+        complain(NULL, "is not set: start `biotac-bench cheetah serve` and export the line it prints");
+        return NULL;
+    }
     if (strlen(p) >= sizeof(((struct sockaddr_un *)0)->sun_path)) { complain(p, "path too long"); return NULL; }
     char copy[PATH_MAX];
     snprintf(copy, sizeof copy, "%s", p);
     struct stat st;
-    if (stat(dirname(copy), &st) != 0) return NULL; /* nothing served there (yet) */
+    if (stat(dirname(copy), &st) != 0) { /* nothing served there (yet), or a server that has stopped */
+        complain(p, "nothing is served there (is `biotac-bench cheetah serve` running?)");
+        return NULL;
+    }
     if (!S_ISDIR(st.st_mode) || st.st_uid != getuid() || (st.st_mode & 077)) {
         complain(p, "its folder must be yours and private (mode 0700)");
         return NULL;
@@ -118,7 +127,11 @@ static int connect_server(void) {
     memset(&addr, 0, sizeof addr);
     addr.sun_family = AF_UNIX;
     strncpy(addr.sun_path, path, sizeof addr.sun_path - 1);
-    if (connect(fd, (struct sockaddr *)&addr, sizeof addr) < 0) { close(fd); return -1; }
+    if (connect(fd, (struct sockaddr *)&addr, sizeof addr) < 0) {
+        complain(path, "nothing is served there (is `biotac-bench cheetah serve` running?)");
+        close(fd);
+        return -1;
+    }
     struct ucred cred;
     socklen_t len = sizeof cred;
     if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) != 0 || cred.uid != getuid()) {

@@ -77,6 +77,24 @@ def test_without_the_emulator_the_client_finds_no_adapter(tmp_path):
     assert r.returncode == 4 and "no Cheetah adapter found" in r.stderr
 
 
+def test_a_program_that_finds_no_adapter_is_told_why(tmp_path):
+    """The library said nothing when BIOTAC_CHEETAH_SOCKET was unset or named a server that had stopped: the
+    program only reported that it found no adapter.  It says why, once, on stderr."""
+    exe = build_client(build_library())
+    gone = tmp_path / "stopped"  # a server's private folder, removed when it stopped
+    for env, said in (({}, "cheetah.so (BioTac emulator): BIOTAC_CHEETAH_SOCKET is not set: start `biotac-bench "
+                            "cheetah serve` and export the line it prints\n"),
+                      ({"BIOTAC_CHEETAH_SOCKET": str(tmp_path / "nothing.sock")},
+                       f"not using BIOTAC_CHEETAH_SOCKET={tmp_path / 'nothing.sock'}: nothing is served there (is "
+                       f"`biotac-bench cheetah serve` running?)\n"),
+                      ({"BIOTAC_CHEETAH_SOCKET": str(gone / "cheetah.sock")},
+                       f"not using BIOTAC_CHEETAH_SOCKET={gone / 'cheetah.sock'}: nothing is served there")):
+        r = subprocess.run([str(exe), "1"], capture_output=True, text=True, env={**env, "PATH": "/usr/bin:/bin"},
+                           timeout=30)
+        assert r.returncode == 4 and "no Cheetah adapter found" in r.stderr, r.stderr
+        assert said in r.stderr and r.stderr.count("cheetah.so (BioTac emulator)") == 1, r.stderr
+
+
 def test_a_request_past_an_hour_of_virtual_time_ends_the_connection_with_the_reason():
     """The sensors are simulated through every virtual second a program sleeps or queues, so one request may
     advance at most MAX_ADVANCE_S (3600 s): a 49-day ch_sleep_ms (it held the adapter, and Ctrl-C, for an hour) or a
