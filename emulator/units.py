@@ -56,6 +56,9 @@ NOMINAL = "nominal"
 SERIAL_PREFIX = "BT"  # the host recognises a BioTac by this prefix
 NOMINAL_SERIAL = "BTNOMINAL0000000"
 _SEED_SERIAL = re.compile(r"^BTU(\d{13})$")
+#: the form a BioTac SP reports a unit's serial in (emulator.spi.model.variant_serial): "BTSP" + the seed's last 12
+#: digits, which hold every seed up to MAX_UNIT_SEED
+_SP_SEED_SERIAL = re.compile(r"^BTSP(\d{12})$")
 MAX_UNIT_SEED = 2**31 - 1
 MAX_SERIAL_LENGTH = 16  # what the sensor's serial property holds (emulator/spi/model.py)
 
@@ -123,12 +126,13 @@ def draw_params(seed: int, base: SensorParams | None = None) -> SensorParams:
 
 
 def seed_of_serial(serial: str) -> int | None:
-    """The unit seed a serial number stands for: ``BTU`` + 13 digits is that seed, the nominal serial is None,
-    any other serial starting with "BT" seeds the draw through a hash of its text."""
+    """The unit seed a serial number stands for: ``BTU`` + 13 digits is that seed, and so is ``BTSP`` + 12 digits
+    (the serial a BioTac SP of that unit answers, so a serial read from an SP gives back its unit); the nominal
+    serial is None; any other serial starting with "BT" seeds the draw through a hash of its text."""
     check_serial(serial)
     if serial == NOMINAL_SERIAL:
         return None
-    m = _SEED_SERIAL.match(serial)
+    m = _SEED_SERIAL.match(serial) or _SP_SEED_SERIAL.match(serial)
     if m:
         seed = int(m.group(1))
         if seed > MAX_UNIT_SEED:

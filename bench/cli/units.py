@@ -75,7 +75,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     which = u.add_mutually_exclusive_group()
     which.add_argument("--seed", type=whole(0, MAX_UNIT_SEED), help=f"unit seed (0 to {MAX_UNIT_SEED}); default: "
                                                                     "the nominal unit")
-    which.add_argument("--serial", type=unit_serial, help="serial number (\"BT...\"): BTU + 13 digits is that seed; "
+    which.add_argument("--serial", type=unit_serial, help="serial number (\"BT...\"): BTU + 13 digits is that seed, and so "
+                                                      "is BTSP + 12 digits (what a BioTac SP of that unit answers); "
                                                       "any other serial seeds the draw from its text")
     u.add_argument("--compare", action="store_true", help="show the nominal unit and the difference beside it")
     u.add_argument("--json", action="store_true", help="print JSON")

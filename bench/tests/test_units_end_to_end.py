@@ -26,6 +26,25 @@ def test_an_sp_units_serial_starts_btsp_and_others_are_unchanged():
     assert variant_serial("BTX", "biotac-sp") == "BTSPX"
 
 
+def test_the_serial_an_sp_answers_gives_back_its_unit():
+    """An SP of unit 17 answers BTSP000000000017 (record.json, the firmware's detection): that serial, given back as
+    a unit to reproduce the sensor, was hashed into another unit.  It is unit 17 again; other BTSP serials (the
+    nominal SP's default) still seed the draw from their text."""
+    from emulator.units import unit
+
+    for seed in (0, 5, 17, 2147483647):
+        answered = variant_serial(serial_for(seed), "biotac-sp")
+        assert unit(answered).seed == seed and unit(answered).params == unit(seed).params, answered
+    assert unit("BTSP01EMU0000001").seed not in (None, 1)
+    with pytest.raises(ValueError, match="above"):
+        unit("BTSP999999999999")
+    sc = parse_scene_text('[scene]\nname = "again"\nduration_s = 0.2\n[sensor]\nvariant = "biotac-sp"\n'
+                          'unit = "BTSP000000000017"\n')
+    from bench.hosts.scene_sensors import sensors_from_scene
+
+    assert sensors_from_scene(sc, 1)[1].params == unit(17).params
+
+
 @pytest.mark.firmware  # builds the Cheetah library
 def test_each_unit_in_a_scene_reports_its_own_serial_through_the_cheetah_path(monkeypatch):
     from bench.hosts.scene_sensors import sensors_from_scene
