@@ -9,6 +9,7 @@ the schedule.  The sensors' variants are a Verilog parameter (``SP``), so a harn
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import hashlib
 import struct
@@ -92,15 +93,26 @@ class Harness:
         of them failed."""
         stamp = self.build_dir / "sources.sha256"
         digest = self._sources_digest()
-        self.build_dir.mkdir(parents=True, exist_ok=True)
-        with open(self.build_dir / "build.lock", "a") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        with self._build_lock():
             if not (self.binary.exists() and stamp.exists() and stamp.read_text() == digest):
-                self.build()
+                self._build()
                 stamp.write_text(digest)
         return self.binary
 
+    @contextlib.contextmanager
+    def _build_lock(self):
+        """Hold an exclusive lock on the build folder's ``build.lock`` (one build at a time, across processes)."""
+        self.build_dir.mkdir(parents=True, exist_ok=True)
+        with open(self.build_dir / "build.lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+            yield
+
     def build(self) -> Path:
+        """Build the binary now (under the build lock), whether or not its sources changed."""
+        with self._build_lock():
+            return self._build()
+
+    def _build(self) -> Path:
         gen = self.build_dir / "generated"
         build.generate_props(gen)
         cmd = ["verilator", "--cc", "--exe", "--build", "-O3", "-j", "2", *build.CXX20, f"-I{gen}",

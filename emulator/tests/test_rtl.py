@@ -223,13 +223,22 @@ def test_two_users_that_need_the_harness_at_once_build_it_once(tmp_path, monkeyp
         self.binary.write_text("built")
         return self.binary
 
-    monkeypatch.setattr(H.Harness, "build", slow_build)
+    monkeypatch.setattr(H.Harness, "_build", slow_build)
     users = [threading.Thread(target=H.Harness(tmp_path / "h").ensure_built) for _ in range(2)]
     for u in users:
         u.start()
     for u in users:
         u.join()
     assert len(builds) == 1, builds
+    # a forced build (the benchmark's, the suite's fixture) waits for one under way instead of building beside it
+    h = H.Harness(tmp_path / "h")
+    with h._build_lock():
+        forced = threading.Thread(target=h.build)
+        forced.start()
+        forced.join(timeout=0.3)
+        assert forced.is_alive() and len(builds) == 1
+    forced.join()
+    assert len(builds) == 2
 
 
 # --- the answers the RTL path used to refuse with HarnessError: channels not provided, a busy ADC, a reset ----------
