@@ -307,6 +307,12 @@ class Touch(Press):
     material: str | None = None
     object_temperature_C: float | None = None
 
+    def __post_init__(self):
+        super().__post_init__()
+        if self.object_temperature_C is not None and self.material is None:  # a scene refuses it too
+            raise ValueError(f"Touch.object_temperature_C = {self.object_temperature_C!r} needs a material (e.g. "
+                             f"material=\"aluminum\"): without one the touch exchanges no heat")
+
     def force(self, t):
         """Normal force in N (piecewise linear: ramp, hold, ramp down)."""
         F, r, h = self.force_N, self.ramp_s, self.hold_s

@@ -436,6 +436,8 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         if "object_temperature_C" in st and "material" not in st:
             c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
                               f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
+        if mat is None:  # none given, or not a material (each a problem already): a Touch refuses the temperature
+            vals["object_temperature_C"] = None
         if None not in (vals["ramp_s"], vals["hold_s"]):
             given = None not in [v for k, v in vals.items() if k != "object_temperature_C"]
             span = {k: vals[k] for k in ("ramp_s", "hold_s")}

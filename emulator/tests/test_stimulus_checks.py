@@ -61,6 +61,14 @@ def test_the_message_shows_the_value():
         Tap(0.1, -3.0)
 
 
+def test_a_touch_with_an_object_temperature_but_no_material_is_refused():
+    """A scene refuses it; in Python (the plugin's ``stimuli=``) the touch was made and exchanged no heat: a cold
+    contact that never cooled the finger."""
+    with pytest.raises(ValueError, match=r"Touch\.object_temperature_C = 5\.0 needs a material"):
+        Touch(0.1, 1.0, object_temperature_C=5.0)
+    assert Touch(0.1, 1.0, material="glass", object_temperature_C=5.0).material == "glass"
+
+
 def test_good_stimuli_are_still_made():
     """Boundary values that are physical (zero force, zero hold, no fade, restitution 1, an optional left out)."""
     made = [Tap(0.0, 0.0), Press(0.0, 0.0, 1e-3, 0.0), Touch(0.3, 1.0, 0.2, 0.6, electrode="E17"),
