@@ -387,10 +387,20 @@ class BridgeDriver:
         return self.send(CMD_STOP)
 
     def set_pattern(self, channels) -> int:
-        """Send PATTERN (channel indices 0–255, at most :data:`MAX_PATTERN`); the firmware ACKs 0, or 1 for an empty
-        pattern and 3 for an index it does not sample.  A longer pattern is refused here (ValueError), sending
-        nothing (the firmware would answer it ACK 1)."""
-        payload = bytes(int(c) for c in channels)
+        """Send PATTERN (channel indices 0–255 or names such as "PAC", "E7"; at most :data:`MAX_PATTERN`); the
+        firmware ACKs 0, or 1 for an empty pattern and 3 for an index it does not sample.  A longer pattern is
+        refused here (ValueError), sending nothing (the firmware would answer it ACK 1), and so is an entry that is
+        neither a whole index 0–255 nor a channel name (0.5 or True had been sent as channel 0 or 1)."""
+        from emulator.channels import channel_index
+
+        indices = []
+        for k, c in enumerate(channels):
+            if isinstance(c, str):
+                c = channel_index(c)  # ValueError naming the known channels
+            elif isinstance(c, (bool, np.bool_)) or not isinstance(c, (int, np.integer)) or not 0 <= c <= 255:
+                raise ValueError(f"pattern[{k}] = {c!r}: a channel index 0 to 255 or a channel name (\"PAC\", \"E7\")")
+            indices.append(int(c))
+        payload = bytes(indices)
         if len(payload) > MAX_PATTERN:
             raise ValueError(f"a pattern of {len(payload)} channels: the bridge firmware takes at most {MAX_PATTERN}")
         return self.send(CMD_PATTERN, payload)

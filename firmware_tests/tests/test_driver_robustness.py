@@ -2,9 +2,11 @@
 order, repeat, wrap around 16 bits or jump by more than 65 536; replies matched to the command that asked; the
 CRC through the standard library's table-driven crc_hqx (the same polynomial as the firmware's CRC-16)."""
 
+import re
 import struct
 import time
 
+import numpy as np
 import pytest
 
 from bench.hosts import driver as D
@@ -327,6 +329,27 @@ def test_frames_keep_coming_past_the_idle_timeout_while_they_arrive():
 
 
 @pytest.mark.firmware
+@pytest.mark.parametrize("bad", [0.5, True, -1, 256, None])
+def test_a_pattern_entry_that_is_no_channel_is_refused_before_anything_is_sent(bad):
+    """0.5 and True had gone out as channels 0 and 1 (a silently different pattern); -1 and 256 failed with "bytes
+    must be in range(0, 256)", naming neither the pattern nor the entry.  Each is refused naming its position."""
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    with pytest.raises(ValueError, match=rf"pattern\[1\] = {re.escape(repr(bad))}: a channel index 0 to 255 or a "
+                                         rf"channel name"):
+        drv.set_pattern([1, bad])
+    assert port.commands == []
+
+
+def test_a_pattern_may_name_its_channels():
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    drv.set_pattern(["PDC", "e7", np.int64(1), 0])
+    assert port.commands == [("cmd", CMD_PATTERN, bytes([1, 23, 1, 0]))]
+    with pytest.raises(ValueError, match="unknown channel 'XYZ'"):
+        drv.set_pattern(["XYZ"])
+
+
 def test_a_pattern_longer_than_the_firmware_takes_is_refused_before_it_is_sent():
     """The firmware's receive buffer holds a PATTERN of at most 64 channels; a longer frame is skipped as garbage
     and never answered (the host would wait for an ACK that cannot come), so the driver refuses it, naming the
