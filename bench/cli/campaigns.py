@@ -55,7 +55,16 @@ def _run_campaign(a, report: Path) -> int:
     spec = ClusterSpec.from_env(a.scheduler, a.workers)
     print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
           f"{a.seeds} seed(s)) on {spec.describe()}", file=sys.stderr)
-    results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet)
+    try:
+        results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet)
+    except KeyboardInterrupt:  # (SIGTERM too) the report says so: an earlier campaign's report left here would pass
+        with signals_held():
+            try:
+                campaign.write_interrupted_junit(len(a.faults) * len(a.scenes) * a.seeds, report)
+            except OSError as e:
+                print(f"error: --junit {a.junit}: the interrupted campaign's report could not be written "
+                      f"({e.strerror or e})", file=sys.stderr)
+        raise
     print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
     try:
         with signals_held():  # a signal meanwhile: the report is finished first, then the stop

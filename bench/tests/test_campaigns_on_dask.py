@@ -261,8 +261,17 @@ CAMPAIGN_ON_2 = ["campaign", "--seeds", "5", "--workers", "2", "--junit", "c.xml
 def test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no_report(tmp_path, argv, signum,
                                                                                        status, said):
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM (to the main process, as `timeout`
-    sends it) while the tasks run on 2 workers: one line, 130 / 143, the cluster closed, no JUnit file."""
+    sends it) while the tasks run on 2 workers: one line, 130 / 143, the cluster closed, no results; a campaign's
+    --junit then holds one error saying it was stopped (an earlier campaign's passing report left there would be
+    published as this one's by a CI step that publishes reports whatever the exit status)."""
     import psutil
+    import xml.etree.ElementTree as ET
+
+    earlier = ('<?xml version="1.0" encoding="utf-8"?>\n<testsuite name="biotac-fault-campaign" tests="1" '
+               'failures="0" time="1.0"><testcase classname="campaign.none" name="rest[seed=0]" time="1.0" />'
+               '</testsuite>')
+    if "--junit" in argv:
+        (tmp_path / "c.xml").write_text(earlier)
 
     env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     proc = subprocess.Popen([sys.executable, "-m", "bench.cli", *argv], cwd=tmp_path, env=env,
@@ -280,7 +289,14 @@ def test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == status, stderr
     assert "Traceback" not in stderr and stderr.strip().splitlines()[-1] == said, stderr
-    assert stdout == "" and not list(tmp_path.iterdir())  # no report, no temporary file
+    if "--junit" in argv:
+        suite = ET.parse(tmp_path / "c.xml").getroot()
+        assert (suite.get("tests"), suite.get("errors"), suite.get("failures")) == ("1", "1", "0")
+        error = suite.find("testcase/error")
+        # (36 default cases × 5 seeds)
+        assert error is not None and "stopped before its 180 case(s) finished" in error.get("message")
+        (tmp_path / "c.xml").unlink()
+    assert stdout == "" and not list(tmp_path.iterdir())  # no other file, no temporary one
     assert not psutil.wait_procs(workers, timeout=10)[1]  # no worker left
 
 
