@@ -181,6 +181,11 @@ def unit_choice(text: str):
     return which
 
 
+def stimuli_count(n: int) -> str:
+    """"1 stimulus", "3 stimuli": how the commands count a sensor's stimuli."""
+    return f"{n} {'stimulus' if n == 1 else 'stimuli'}"
+
+
 def one_line_errors(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Usage errors of this subcommand as one line (``biotac-bench CMD: error: argument --flag: ...``), status 2."""
 

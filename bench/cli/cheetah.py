@@ -6,7 +6,7 @@ import argparse
 import shlex
 import sys
 
-from bench.cli.args import any_seed, number, one_line_errors, sigterm_raises, whole
+from bench.cli.args import any_seed, number, one_line_errors, sigterm_raises, stimuli_count, whole
 from bench.running.signals import signals_deferred
 
 
@@ -28,7 +28,7 @@ def _cmd_serve(a) -> int:
                                             "SPI model only"])
         kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
         what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' ("
-                + "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
+                + "; ".join(f"sensor {k} feels {stimuli_count(len(scene.sensor_spec(k).stimuli))}"
                             for k in range(1, scene.n_sensors + 1)) + ")")
         if scene.sequence != "default" or scene.slot_rate_Hz != 4400.0:
             print("note: the scene's [host] section is not used: your program is the host and chooses what to "

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from bench.cli.args import (Terminated, any_seed, number, one_line_errors, output_file, sigterm_raises,
-                            whole)
+                            stimuli_count, whole)
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
 
@@ -43,7 +43,7 @@ def _cmd_bridge(a) -> int:
         kw = bridge_scene_kw(scene, a.sensors, a.seed, a.spi)
         faults = "; ".join(f"sensor {k}: " + (", ".join(f"{n}={v}" for n, v in scene.sensor_spec(k).faults.items())
                                               or "none") for k in range(1, kw["n_sensors"] + 1))
-        feels = "; ".join(f"sensor {k} feels {len(scene.sensor_spec(k).stimuli)} stimuli"
+        feels = "; ".join(f"sensor {k} feels {stimuli_count(len(scene.sensor_spec(k).stimuli))}"
                           for k in range(1, scene.n_sensors + 1))
         what = (f"{kw['n_sensors']} emulated sensor(s) built from scene '{scene.name}' (units, parameters, noise, "
                 f"fidelity {scene.fidelity}, seed {kw['seed']}; {feels}; faults — {faults})")

@@ -8,6 +8,7 @@ import signal
 import sys
 from pathlib import Path
 
+from bench.cli.args import stimuli_count
 from bench.paths import REPO, SCENES_DIR
 from emulator.fidelity import PROFILES
 
@@ -171,7 +172,7 @@ def _print_run(a, scene, res) -> None:
     for k, sub_record in sorted(res.sensor_records.items()):
         spec = scene.sensor_spec(k)
         print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} (unit "
-              f"{spec.unit}, serial {sensor_serial(spec, k)}, {len(spec.stimuli)} stimuli"
+              f"{spec.unit}, serial {sensor_serial(spec, k)}, {stimuli_count(len(spec.stimuli))}"
               + "".join(f", {n} = {v}" for n, v in spec.faults.items()) + ")")
         for name, why in sub_record.get("skipped_outputs", {}).items():
             print(f"note: sensor{k}/{name} {why}", file=sys.stderr)
@@ -199,7 +200,7 @@ def _cmd_validate(a) -> int:
             more = (f", {sc.n_sensors} sensors ({sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))}"
                     f" stimuli in all)" if sc.n_sensors > 1 else "")
             n = len(sc.stimuli)
-            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {n} {'stimulus' if n == 1 else 'stimuli'}, fidelity "
+            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {stimuli_count(n)}, fidelity "
                   f"{sc.fidelity}{more})")
         except SceneError as e:
             print(e, file=sys.stderr)
