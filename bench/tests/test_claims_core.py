@@ -96,3 +96,116 @@ def test_a_documented_deviation_is_reported_across_seeds_not_hidden():
     assert r.passed == [False, False, True] and r.failed_seeds == [2014]  # it passed for 2014: recheck it
     assert "(documented deviation) passes for seed 2014: recheck it" in format_spread_table(rows)
 
+
+
+# --- the judge itself: bounds, statuses, counts, exit status (a broken judge would let every row pass) --------------
+
+
+def _row(measured, low=1.0, high=2.0, deviation=""):
+    return Claim("r", "1–2", measured, low, high, "u", "test", kind="prediction", deviation=deviation)
+
+
+def test_the_accepted_range_is_inclusive_at_both_ends_and_nothing_outside_passes():
+    assert _row(1.0).passed and _row(2.0).passed and _row(1.5).passed  # "[1, 2]" as the table prints it
+    for outside in (0.999999, 2.000001, -1.0, 3.0):
+        assert not _row(outside).passed, outside
+    assert _row(2.0, high=2.0, low=2.0).passed  # a range of one value ("[19, 19]") accepts that value
+    # no measurement is not a measurement inside the range, even against an unbounded side
+    for unmeasurable in (float("nan"), float("inf"), float("-inf")):
+        assert not _row(unmeasurable, -float("inf"), float("inf")).passed, unmeasurable
+
+
+def test_each_status_says_what_happened_and_a_deviation_must_still_fail():
+    cases = {  # (measured, deviation) -> (result, ok)
+        (1.5, ""): ("PASS", True),
+        (5.0, ""): ("FAIL", False),
+        (5.0, "the model lacks it"): ("DEVIATES", True),
+        (1.5, "the model lacks it"): ("PASS (deviation documented: recheck)", False),
+    }
+    for (measured, deviation), (result, ok) in cases.items():
+        c = _row(measured, deviation=deviation)
+        assert (c.result, c.ok) == (result, ok), (measured, deviation)
+        d = c.as_dict()  # what --json prints per row
+        assert (d["result"], d["ok"], d["passed"]) == (result, ok, 1.0 <= measured <= 2.0)
+
+
+def test_the_table_counts_passes_failures_and_deviations_apart():
+    rows = [_row(1.5), _row(1.2), _row(5.0), _row(5.0, deviation="not reproduced: A"),
+            _row(0.0, deviation="not reproduced: C"),
+            _row(1.5, deviation="not reproduced: B")]  # 2 pass, 1 fails, 2 deviate, 1 deviation passes
+    lines = format_table(rows).splitlines()
+    # failed: the row that fails and the deviation that passes (neither is what the table promises)
+    assert "2 passed, 2 failed, 2 known deviations from the dissertation" in lines
+    assert [ln for ln in lines if ln.startswith("  deviation:")] == ["  deviation: r: not reproduced: A",
+                                                                    "  deviation: r: not reproduced: C"]
+    assert [ln.split()[-1] for ln in lines[1:7]] == ["PASS", "PASS", "FAIL", "DEVIATES", "DEVIATES", "recheck)"]
+
+
+def test_the_claims_command_exits_1_on_a_failure_or_a_passing_deviation_and_0_otherwise(monkeypatch, capsys):
+    cases = [((1.5, ""), 0), ((5.0, ""), 1), ((float("nan"), ""), 1), ((5.0, "the model lacks it"), 0),
+             ((1.5, "the model lacks it"), 1)]
+    for (measured, deviation), status in cases:
+        rows = [_row(1.5), _row(measured, deviation=deviation)]
+        monkeypatch.setattr(claims, "run_claims", lambda bench, groups, progress=None, rows=rows: rows)
+        for extra in ([], ["--json"]):
+            assert cli.main(["claims", "--only", "scales", *extra]) == status, (measured, deviation, extra)
+        capsys.readouterr()
+
+
+def test_a_spread_reports_the_least_and_greatest_value_whatever_the_seed_order():
+    from bench.verification.claims import Spread
+
+    r = Spread("r", "prediction", "test", "1–2", "u", 1.0, 2.0, [7, 8, 9], [1.5, 0.5, 2.5], [True, False, False])
+    assert (r.min, r.max) == (0.5, 2.5) and r.failed_seeds == [8, 9]
+    d = r.as_dict()  # what --seeds --json prints
+    assert (d["min"], d["max"], d["failed_seeds"]) == (0.5, 2.5, [8, 9])
+    # without per-seed ok (older rows): a deviation holds where it fails, and passing is what needs a recheck
+    dev = Spread("d", "prediction", "test", "1–2", "u", 1.0, 2.0, [7, 8], [5.0, 1.5], [False, True],
+                 deviation="the model lacks it")
+    assert dev.failed_seeds == [8]
+
+
+def test_the_seeds_table_counts_passes_per_seed_and_deviations_that_held_apart():
+    @claim_group("test-seed-mix")
+    def mix(bench):
+        s = float(bench.seed)
+        return [Claim("always", "any", s, 0.0, 1e9, "seed", "test", kind="consistency", note="a test"),
+                Claim("deviates", "< 0", s, -1e9, 0.0, "seed", "test", kind="prediction", deviation="lacks it"),
+                Claim("deviates, then passes", "> 2013.5", s, 2013.5, 1e9, "seed", "test", kind="prediction",
+                      deviation="lacks it")]
+
+    try:
+        rows = run_claims_over_seeds(lambda s: Bench(seed=s), [2014, 2012, 2013], ["test-seed-mix"])
+    finally:
+        del CLAIM_GROUPS["test-seed-mix"]
+    assert [r.seeds for r in rows] == [[2014, 2012, 2013]] * 3
+    assert (rows[0].min, rows[0].max) == (2012.0, 2014.0)
+    lines = format_spread_table(rows).splitlines()
+    assert lines[1].endswith(" 3/3") and lines[2].endswith(" 0/3 (documented deviation)")
+    assert lines[3].endswith(" 1/3 (documented deviation) passes for seed 2014: recheck it")
+    assert lines[-1] == "1 of 3 claims pass for every seed, 1 deviate as documented for every seed (2014, 2012, 2013)"
+
+
+def test_claims_seeds_runs_each_seed_on_the_unit_asked_for_and_exits_on_what_held(capsys):
+    from emulator.units import unit
+
+    strict = []  # once set: a row that fails for seed 2013 only
+
+    @claim_group("test-unit-volume")
+    def volume(bench):
+        v = bench.params.inflation_volume_mL
+        high = 2012.5 if strict else 1e9
+        return [Claim("volume", "any", v, v - 1e-12, v + 1e-12, "mL", "test", kind="consistency", note="a test"),
+                Claim("deviates", "never", v, -2.0, -1.0, "mL", "test", kind="prediction", deviation="lacks it"),
+                Claim("seed", "any", float(bench.seed), 0.0, high, "seed", "test", kind="consistency", note="a test")]
+
+    try:
+        assert cli.main(["claims", "--only", "test-unit-volume", "--seeds", "2", "--unit", "17", "--json"]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        assert doc[0]["measured"] == [unit(17).params.inflation_volume_mL] * 2 and doc[0]["seeds"] == [2012, 2013]
+        assert unit(17).params.inflation_volume_mL != Bench().params.inflation_volume_mL
+        strict.append(True)
+        assert cli.main(["claims", "--only", "test-unit-volume", "--seeds", "2", "--json"]) == 1
+        assert json.loads(capsys.readouterr().out)[2]["failed_seeds"] == [2013]
+    finally:
+        del CLAIM_GROUPS["test-unit-volume"]
