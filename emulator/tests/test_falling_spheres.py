@@ -22,6 +22,22 @@ def test_the_drag_coefficient_follows_the_measured_sphere_curve(re, cd):
 
 
 @pytest.mark.unit
+def test_the_drag_coefficient_is_flat_in_newton_s_regime_and_falls_in_the_drag_crisis():
+    """Consistency with the standard smooth-sphere curve above Re = 10⁴ (Schlichting's and Achenbach's data, as
+    textbooks plot them): Newton's regime, 10⁴ to 2·10⁵, lies at 0.39–0.5 and nearly flat; the boundary layer turns
+    turbulent between 2·10⁵ and 4·10⁵ (the drag crisis), where C_D falls to about a fifth, its least near 4·10⁵,
+    then rises slowly again (0.1–0.2 at 10⁶)."""
+    newton = {re: sphere_drag_coefficient(re) for re in (1e4, 3e4, 1e5, 2e5)}
+    for re, cd in newton.items():
+        assert 0.37 <= cd <= 0.5, (re, cd)
+    assert max(newton.values()) / min(newton.values()) < 1.15  # flat: no premature crisis, no hump
+    crisis = sphere_drag_coefficient(4e5)
+    assert 0.05 <= crisis <= 0.12 and crisis < newton[1e5] / 3
+    assert 0.1 <= sphere_drag_coefficient(3e5) <= 0.4  # on its way down at 3·10⁵ (the data scatter most here)
+    assert crisis < sphere_drag_coefficient(1e6) <= 0.2  # the supercritical rise
+
+
+@pytest.mark.unit
 def test_in_vacuum_a_drop_lands_at_root_2gh():
     """Derived: with no air, v = √(2·g·h) exactly, for any sphere."""
     for h in (1e-4, 0.07, 10.0):
