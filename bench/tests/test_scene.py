@@ -99,6 +99,48 @@ def test_each_stimulus_too_fast_for_the_grid_is_named_by_its_start_and_finger():
     assert any("pressure at 3000 Hz" in m and m.startswith("the stimulus starting at 0.25 s on sensor 2: ") for m in msgs)
 
 
+def _grid_problems(fidelity, stimulus):
+    """The problems of a one-stimulus scene at ``fidelity`` ([] if the scene is accepted)."""
+    try:
+        parse_scene({"scene": {"name": "t", "duration_s": 1.0, "fidelity": fidelity}, "stimulus": [stimulus]},
+                    source="s.toml")
+    except SceneError as e:
+        return list(e.problems)
+    return []
+
+
+def _vibration(f_Hz, other_end_Hz=None):
+    v = {"kind": "vibration", "start_s": 0.0, "duration_s": 0.5, "amplitude_um": 1}
+    return {**v, "frequency_Hz": f_Hz} if other_end_Hz is None else {**v, "f_start_Hz": other_end_Hz, "f_stop_Hz": f_Hz}
+
+
+def _calibrator(f_Hz):
+    return {"kind": "pressure", "start_s": 0.0, "duration_s": 0.5, "offset_kPa": 0.0, "amplitude_Pa": 10.0,
+            "frequency_Hz": f_Hz}
+
+
+@pytest.mark.parametrize("make", [_vibration, lambda f: _vibration(f, other_end_Hz=10.0),
+                                  lambda f: {**_vibration(10.0, f), "f_start_Hz": f, "f_stop_Hz": 10.0}, _calibrator],
+                         ids=["vibration", "sweep up", "sweep down", "calibrator"])
+def test_the_fast_grid_refuses_a_frequency_from_0_45_of_its_rate_and_names_the_profiles_that_fit(make):
+    """The fast profile's 4400 Hz grid computes up to 0.45 of its rate, 1980 Hz (scenes allow up to 3000 Hz, which
+    the default 8800 Hz grid computes): just below is accepted, at and above refused, naming the profiles to use."""
+    from emulator.fidelity import profile
+
+    assert profile("fast").grid_Hz == 4400.0
+    assert _grid_problems("fast", make(1979.99)) == []
+    assert _grid_problems("default", make(3000.0)) == []  # the highest a scene allows, on the default grid
+    for f in (1980.0, 2000.0, 3000.0):
+        (msg,) = _grid_problems("fast", make(f))
+        assert "needs a finer grid than fidelity 'fast' (4400 Hz)" in msg, msg
+        assert msg.endswith('use "default" or "reference"'), msg  # the profiles that compute it, not the one refused
+
+
+def test_a_calibrator_that_holds_a_steady_pressure_needs_no_grid():
+    steady = {"kind": "pressure", "start_s": 0.0, "duration_s": 0.5, "offset_kPa": 2.0, "frequency_Hz": 2500.0}
+    assert _grid_problems("fast", steady) == []
+
+
 def test_bad_types_are_reported_not_crashed_on():
     msgs = problems({"scene": {"name": "t", "duration_s": "long", "seed": 1.5},
                      "stimulus": {"kind": "tap"}})
