@@ -213,3 +213,54 @@ def test_the_junit_report_counts_its_failures(tmp_path):
     campaign.write_junit(results, tmp_path / "c.xml")
     suite = ET.parse(tmp_path / "c.xml").getroot()
     assert suite.get("tests") == "3" and suite.get("failures") == "1" == str(len(suite.findall(".//failure")))
+
+
+# --- the other checks' clauses, the summary table and the task list (a second mutation hunt) ---------------------
+@pytest.mark.parametrize("check, frames, stats, words", [
+    ("_clean", _frames(0b01), _stats(crc_errors=1), "1 CRC errors"),
+    ("_resyncs", _frames(0b01), _stats(), "corruption went unnoticed"),
+    ("_drops_sensor", _frames(0b11, 0b11), _stats(), "the stuck sensor is still streamed"),
+    ("_drops_sensor", _frames(0b11, 0b01, 0b11), _stats(), "the stuck sensor is still streamed"),  # back again
+])
+def test_more_clauses_object_on_their_own(check, frames, stats, words):
+    problem = getattr(campaign, check)(frames, _status(), stats)
+    assert problem is not None and words in problem, problem
+
+
+@pytest.mark.parametrize("check, frames, stats", [
+    ("_resyncs", _frames(0b01), _stats(crc_errors=1)),  # either sign of a noticed corruption is enough
+    ("_resyncs", _frames(0b01), _stats(dropped_frames=1)),
+    ("_drops_sensor", _frames(0b11, 0b11, 0b01), _stats()),  # streamed until it stuck, then dropped
+])
+def test_those_checks_pass_what_the_fault_should_look_like(check, frames, stats):
+    assert getattr(campaign, check)(frames, _status(), stats) is None
+
+
+def test_the_summary_says_pass_or_fail_per_case_and_counts_them():
+    results = [{"fault": "none", "scene": s, "seed": 3, "expected": "a healthy link", "passed": s != "taps",
+                "problem": "2 bad samples" if s == "taps" else None, "seconds": 0.1} for s in ("rest", "taps", "press")]
+    lines = campaign.summary(results).splitlines()
+    assert lines[1].split()[3:] == ["PASS", "a", "healthy", "link"]
+    assert lines[2].split()[3:] == ["FAIL", "2", "bad", "samples"]  # a failure shows its problem, not the hope
+    assert lines[-1] == "2 passed, 1 failed"
+
+
+def test_the_junit_failure_carries_the_problem_and_what_was_expected(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    results = [{"fault": "parity_errors", "scene": "rest", "seed": 0, "expected": "flagged", "passed": False,
+                "problem": "bad parity was not flagged", "seconds": 0.5}]
+    campaign.write_junit(results, tmp_path / "c.xml")
+    (failure,) = ET.parse(tmp_path / "c.xml").getroot().findall(".//failure")
+    assert failure.get("message") == "bad parity was not flagged" and failure.text == "expected: flagged"
+
+
+def test_the_task_list_is_every_fault_scene_and_seed_and_refuses_an_empty_or_unknown_name():
+    tasks = campaign.campaign_tasks(["none", "cs_glitch"], ["rest", "taps"], [5, 6])
+    assert [(t.fault, t.scene, t.seed) for t in tasks] == [
+        (f, s, seed) for f in ("none", "cs_glitch") for s in ("rest", "taps") for seed in (5, 6)]
+    for empty in (([], ["rest"], [0]), (["none"], [], [0]), (["none"], ["rest"], [])):
+        with pytest.raises(ValueError, match="vacuously"):
+            campaign.campaign_tasks(*empty)
+    with pytest.raises(ValueError, match="unknown fault or scene: nope, nowhere"):
+        campaign.campaign_tasks(["none", "nope"], ["rest", "nowhere"], [0])
