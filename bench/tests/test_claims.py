@@ -68,3 +68,65 @@ def test_every_claim_is_labelled_and_no_read_back_poses_as_a_prediction():
     assert all(c.note for c in claims.values() if c.kind == "consistency"), "say why a row is only a consistency check"
     wrong = {n: (claims[n].kind, k) for n, k in EXPECTED_KINDS.items() if claims[n].kind != k}
     assert not wrong, wrong
+
+
+@pytest.mark.parametrize("group", list(CLAIM_GROUPS))
+def test_each_row_accepts_the_range_its_expected_text_states(group):
+    """A row's accepted [low, high] is what its "expected" column says ("0.6 bits ± 10 %" → [0.54, 0.66]; "≥ 95 %"
+    accepts nothing below 95): a range widened by mistake would let a wrong figure pass while the table still
+    printed the published tolerance."""
+    from bench.tests.test_claims_core import disagreement
+
+    wrong = [f"{c.name}: {d}" for c in _claims(group) if (d := disagreement(c.expected, c.low, c.high))]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_most_rows_state_their_range_in_numbers():
+    """The check above reads 74 of the 94 rows (the rest state an ordering or a rank): it must not go vacuous."""
+    from bench.tests.test_claims_core import stated_range
+
+    rows = [c for group in CLAIM_GROUPS for c in _claims(group)]
+    assert sum(stated_range(c.expected) is not None for c in rows) >= 0.75 * len(rows)
+
+
+def _row(group, name):
+    (c,) = [c for c in _claims(group) if c.name == name]
+    return c
+
+
+def test_rows_over_several_parts_report_the_worst_part():
+    """A row that stands for several measurements (channels, lines, volumes, frequencies, spheres, materials) is
+    judged on the worst of them, recomputed here from the parts the row lists in its details: a row that reported
+    the best part, or the first, would pass while one part fails."""
+    import statistics
+
+    e = _row("noise", "electrode noise at rest (E1..E19, farthest from 0.5)")
+    per = e.details["per_channel_LSB"]
+    assert len(per) == 19 and e.measured == max(per.values(), key=lambda s: abs(s - 0.5))
+    assert e.details["worst"] == max(per, key=lambda n: abs(per[n] - 0.5))
+    mains = _row("noise", "mains harmonics (2nd, 3rd) visible in PAC at rest")
+    assert len(mains.details["excess_dB"]) == 2 and mains.measured == min(mains.details["excess_dB"].values())
+    band = _row("noise", "largest 2 Hz band of a 1 s PAC spectrum at rest")  # the typical second, not the best
+    assert len(band.details["per_second"]) >= 5
+    assert band.measured == pytest.approx(statistics.median(band.details["per_second"]), rel=1e-12)
+    lowest = _row("impact", "impact ringing over 0.3–0.7 mL: lowest")
+    highest = _row("impact", "impact ringing over 0.3–0.7 mL: highest")
+    f = lowest.details["frequency_Hz"]
+    assert len(f) == 5 and (lowest.measured, highest.measured) == (min(f.values()), max(f.values()))
+    human = _row("vibration", "sensor beats human threshold at every frequency")
+    r = human.details["ratio_by_frequency"]
+    assert len(r) >= 10 and human.measured == min(r.values()) and human.details["worst_Hz"] == min(r, key=r.get)
+    d_min = _row("vibration", "d_min near the 330 Hz resonance")
+    assert d_min.measured == pytest.approx(1e9 * min(d_min.details["peak_search_d_min_m"].values()), rel=1e-12)
+    for group, name, key in (("thermal", "TDC drop after 10 s: Al > glass > wood > foam", "drop_K"),
+                             ("thermal", "TAC transient: Al > glass > wood > foam", "peak_cooling_C_per_s")):
+        c = _row(group, name)
+        v = [c.details[key][m] for m in ("aluminum", "glass", "wood", "polystyrene foam")]
+        assert len(v) == 4 and c.measured == float(all(a > b for a, b in zip(v, v[1:]))), name
+    for c in _claims("detection"):
+        if c.name.startswith("detected: "):
+            assert c.measured == pytest.approx(100.0 * c.details["detected"] / c.details["drops"]), c.name
+    share = _row("electrodes", "a 1 N contact's change stays in the nearest 4 electrodes")
+    assert share.measured == pytest.approx(statistics.median(share.details["share_per_electrode"]), rel=1e-12)
+    locate = _row("electrodes", "a contact's electrode pattern locates it")
+    assert locate.measured == pytest.approx(statistics.median(locate.details["errors_mm"]), rel=1e-12)

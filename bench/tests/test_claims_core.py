@@ -3,6 +3,8 @@ choices, the table and JSON show each row's kind and source, and a multi-seed ru
 the seeds it fails for."""
 
 import json
+import math
+import re
 
 import pytest
 
@@ -209,3 +211,115 @@ def test_claims_seeds_runs_each_seed_on_the_unit_asked_for_and_exits_on_what_hel
         assert json.loads(capsys.readouterr().out)[2]["failed_seeds"] == [2013]
     finally:
         del CLAIM_GROUPS["test-unit-volume"]
+
+
+# --- what a row's "expected" text says against the range it accepts (a widened range would pass silently) ----------
+_NUM = r"[-−]?\d+(?:\.\d+)?"
+
+
+def _f(s):
+    return float(s.replace("−", "-"))
+
+
+def stated_range(expected: str):
+    """What a claim's ``expected`` text says the accepted range is: ("exact", a, b), ("at least", a, None),
+    ("at most", None, b), or None when the text states no number range (an ordering, a rank)."""
+    bare = re.sub(r"\([^)]*\)", "", expected).strip()  # parentheticals: context (D's own figure), tried last
+    for text in (bare, expected):
+        if m := re.search(rf"\[({_NUM}),\s*({_NUM})\]", text):
+            return "exact", _f(m[1]), _f(m[2])
+        if m := re.search(rf"within ± ({_NUM})\s*%", text):
+            return "exact", 0.0, _f(m[1])
+        if ms := re.findall(rf"({_NUM})[^\d±]*±\s*({_NUM})\s*%", text):
+            x, y = map(_f, ms[-1])
+            return "exact", x * (1 - y / 100), x * (1 + y / 100)
+        if m := re.search(rf"({_NUM})[^\d±(]*\(?±\s*({_NUM})", text):
+            x, y = _f(m[1]), _f(m[2])
+            return "exact", x - y, x + y
+        if m := re.search(rf"within ({_NUM})\s*%", text):
+            return "exact", 0.0, _f(m[1])
+        if m := re.search(rf"({_NUM})\s*(?:–|\.\.)\s*({_NUM})", text):
+            return "exact", _f(m[1]), _f(m[2])
+        if m := re.search(rf"(≥|>|≤|<)\s*({_NUM})", text):
+            at_least = m[1] in "≥>"
+            if text.lstrip().startswith("no "):  # "no peak ≥ 10 dB": at most 10
+                at_least = not at_least
+            return ("at least", _f(m[2]), None) if at_least else ("at most", None, _f(m[2]))
+        if m := re.fullmatch(rf"({_NUM}) of \1", text):  # "19 of 19"
+            return "exact", _f(m[1]), _f(m[1])
+        if m := re.fullmatch(rf"({_NUM})", text):
+            return "exact", _f(m[1]), _f(m[1])
+    return None
+
+
+def disagreement(expected, low, high, rel=0.002):
+    """Why the accepted [low, high] is not what ``expected`` says (None if it is): an accepted range wider than the
+    text, on either side, lets a wrong figure pass."""
+    stated = stated_range(expected)
+    if stated is None:
+        return None
+    kind, a, b = stated
+    low = -math.inf if low is None else low
+    high = math.inf if high is None else high
+    # "≥ 70 %" of a sum may be accepted as a fraction (0.7): only where the accepted range is one of fractions
+    as_fraction = "%" in expected and 0 <= low and high <= 1 and max(abs(a or 0), abs(b or 0)) > 1
+    scales = [0.01] if as_fraction else [1.0]
+
+    def close(u, v, ref):
+        return abs(u - v) <= rel * max(abs(ref), 1e-12)
+
+    for s in scales:
+        if kind == "exact":
+            ref = max(abs(a * s), abs(b * s), abs(b * s - a * s))
+            if close(low, a * s, ref) and close(high, b * s, ref):
+                return None
+        elif kind == "at least" and low >= a * s - rel * max(abs(a * s), 1e-12):
+            return None
+        elif kind == "at most" and high <= b * s + rel * max(abs(b * s), 1e-12):
+            return None
+    return f"{expected!r} says {kind} {a}..{b}; accepted [{low:.4g}, {high:.4g}]"
+
+
+@pytest.mark.parametrize("expected, low, high, stated", [
+    ("1.4 ± 0.1 bits RMS", 1.3, 1.5, ("exact", 1.3, 1.5)),
+    ("0.6 bits ± 10 %", 0.54, 0.66, ("exact", 0.54, 0.66)),
+    ("±0.76 kPa ± 2 %", 0.7448, 0.7752, ("exact", 0.7448, 0.7752)),
+    ("87 bits (11.5 mN/bit) ± 5 %", 82.61, 91.3, ("exact", 82.65, 91.35)),
+    ("v/3 mm = 33.3 Hz ± 5 %", 31.67, 35.0, ("exact", 31.635, 34.965)),
+    ("about 10 °C (± 1 K)", 9.0, 11.0, ("exact", 9.0, 11.0)),
+    ("0.3–0.7 LSB RMS", 0.3, 0.7, ("exact", 0.3, 0.7)),
+    ("90–99 % (D: 95.4 %)", 90.0, 99.0, ("exact", 90.0, 99.0)),
+    ("inside 0..4095", 0.0, 4095.0, ("exact", 0.0, 4095.0)),
+    ("R² in [0.99, 0.998]", 0.99, 0.998, ("exact", 0.99, 0.998)),
+    ("within ± 10 %", 0.0, 10.0, ("exact", 0.0, 10.0)),
+    ("19 of 19", 19.0, 19.0, ("exact", 19.0, 19.0)),
+    ("3 (replaced two times)", 3, 3, ("exact", 3.0, 3.0)),
+    ("≥ 95 %", 95.0, 100.0, ("at least", 95.0, None)),
+    ("≥ 70% of Σ|Δcode| (common-rest; median over E1..E19)", 0.7, 0.95, ("at least", 70.0, None)),
+    ("≈ 74 °C (≥ 70 °C)", 70.0, 80.0, ("at least", 70.0, None)),
+    ("U falls with force: ρ ≤ −0.33", -1.0, -0.33, ("at most", None, -0.33)),
+    ("median error < 2 mm (half the ~4 mm spacing)", 0.0, 2.0, ("at most", None, 2.0)),
+    ("no peak ≥ 10 dB over the spectrum's running median", None, 10.0, ("at most", None, 10.0)),
+    ("strictly ordered", 1.0, 1.0, None),
+])
+def test_the_expected_text_is_read_as_the_range_it_states(expected, low, high, stated):
+    got = stated_range(expected)
+    assert (got is None) == (stated is None)
+    if stated:
+        assert got[0] == stated[0] and all(u == v or u == pytest.approx(v) for u, v in zip(got[1:], stated[1:]))
+        assert disagreement(expected, low, high) is None
+
+
+@pytest.mark.parametrize("expected, low, high", [
+    ("0.6 bits ± 10 %", 0.5, 0.66),  # a tolerance widened on one side
+    ("0.6 bits ± 10 %", 0.54, 0.7),
+    ("330 ± 30 Hz", 250.0, 360.0),
+    ("0.3–0.7 LSB RMS", 0.3, 0.8),
+    ("≥ 95 %", 90.0, 100.0),
+    ("≤ 5 %", 0.0, 10.0),
+    ("each line ≥ 3 dB above the local floor", 0.0, None),
+    ("no peak ≥ 10 dB over the spectrum's running median", None, 20.0),
+    ("R² in [0.99, 0.998]", 0.98, 0.998),
+])
+def test_an_accepted_range_wider_than_its_text_is_named(expected, low, high):
+    assert disagreement(expected, low, high) is not None
