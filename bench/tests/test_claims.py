@@ -130,3 +130,30 @@ def test_rows_over_several_parts_report_the_worst_part():
     assert share.measured == pytest.approx(statistics.median(share.details["share_per_electrode"]), rel=1e-12)
     locate = _row("electrodes", "a contact's electrode pattern locates it")
     assert locate.measured == pytest.approx(statistics.median(locate.details["errors_mm"]), rel=1e-12)
+
+
+def test_sliding_rows_over_several_parts_report_the_worst_part_and_the_line_detector_sees_a_line():
+    """As above for the sliding rows; and the smooth-surface row's line detector, which passes when it finds
+    nothing, finds the 3 mm grating's line (its positive control, in the detail): a blind detector would pass."""
+    import statistics
+
+    force = _row("rig", "force control through PDC: each target's mean true force vs target")
+    per_target = force.details["mean_error_%_per_target"]
+    assert len(per_target) == 4 and force.measured == max(abs(e) for e in per_target.values())
+    for target, mean in per_target.items():
+        trials = [e for k, e in force.details["per_trial_%"].items() if float(k.split()[1]) == target]
+        assert len(trials) == 12 and mean == pytest.approx(statistics.mean(trials), abs=0.01), target
+    smooth = _row("texture-properties", "smooth surfaces (polished aluminum, glass): no spectral lines while sliding")
+    lines = smooth.details["max_peak_over_median_dB"]
+    assert smooth.measured == max(lines[46], lines[24])
+    assert lines[902] >= smooth.high + 6.0  # the grating's line stands well over the threshold the smooth ones meet
+    rises = _row("texture-properties", "centroid rises with velocity at 0.2 N: velcro, foam, rayon, burlap")
+    assert len(rises.details["rise_ln_Hz"]) == 4 and rises.measured == sum(r > 0 for r in rises.details["rise_ln_Hz"])
+    for name in ("faster sliding raises vibration power (5 textures, 0.5 N, 1 → 6.3 cm/s)",
+                 "more force damps vibration power (5 textures, 0.2 → 1.26 N at 2.5 cm/s)"):
+        c = _row("texture-properties", name)
+        assert len(c.details["change_ln"]) == 5
+        assert c.measured == pytest.approx(statistics.mean(c.details["change_ln"]), rel=1e-12), name
+    ridges = _row("sliding", "ridge-resolved (reference): release events while slipping over 60-grit at 0.5 N, 1 cm/s")
+    events = ridges.details["events_per_s"]
+    assert ridges.measured == events["ridged"] and events["smooth"] == 0.0  # "a smooth skin: none"
