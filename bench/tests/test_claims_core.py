@@ -157,8 +157,8 @@ def test_the_claims_command_exits_1_on_a_failure_or_a_passing_deviation_and_0_ot
 def test_a_spread_reports_the_least_and_greatest_value_whatever_the_seed_order():
     from bench.verification.claims import Spread
 
-    r = Spread("r", "prediction", "test", "1–2", "u", 1.0, 2.0, [7, 8, 9], [1.5, 0.5, 2.5], [True, False, False])
-    assert (r.min, r.max) == (0.5, 2.5) and r.failed_seeds == [8, 9]
+    r = Spread("r", "prediction", "test", "1–2", "u", 1.0, 2.0, [7, 8, 9], [1.5, 2.5, 0.5], [True, False, False])
+    assert (r.min, r.max) == (0.5, 2.5) and r.failed_seeds == [8, 9]  # neither the first nor the last seed's
     d = r.as_dict()  # what --seeds --json prints
     assert (d["min"], d["max"], d["failed_seeds"]) == (0.5, 2.5, [8, 9])
     # without per-seed ok (older rows): a deviation holds where it fails, and passing is what needs a recheck
