@@ -100,6 +100,15 @@ def test_open_and_shorted_faults_read_at_the_rails(fault, channel, check):
     assert check(code), code
 
 
+def test_a_broken_thermistor_with_the_adcs_noise_reads_as_docs_faults_md_says():
+    """docs/faults.md: open reads 0 to 2, mostly 0 (the ADC's noise at the bottom rail), shorted 4095."""
+    t = 0.1 + np.arange(2000) * 1e-3
+    open_ = Sensor(channels_read=["TDC"], faults={"thermistor": "open"}, seed=3).sample([channel_index("TDC")] * 2000, t)
+    short = Sensor(channels_read=["TDC"], faults={"thermistor": "short"}, seed=3).sample([channel_index("TDC")] * 2000, t)
+    assert open_.max() <= 2 and np.mean(open_ == 0) > 0.8, np.unique(open_, return_counts=True)
+    assert (short == 4095).all(), np.unique(short)
+
+
 @pytest.mark.parametrize("fault, after_itself, after_another", [
     ({"electrode_short": [7]}, (4095, 4095), (4080, 4094)), ({"electrode_open": [7]}, (0, 0), (5, 40))])
 def test_a_faulted_electrode_sits_on_the_rail_only_when_read_after_itself(fault, after_itself, after_another):
