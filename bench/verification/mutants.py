@@ -2985,9 +2985,9 @@ CATALOGUE += [
            '        if False:\n',
            ('firmware_tests/tests/test_firmware_rtl.py::test_spi_faults_on_the_rtl_bus_are_refused_not_ignored',),
            "an SPI fault set on a bridge over the RTL (bench.at(..., setattr(board.bus.ports[k], 'faults', Faults(...)))) taken and ignored: the host sees clean frames"),
-    Mutant('rtl-harness-build-unlocked', 'rtl', 'emulator/rtl/harness.py',
-           '            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes\n',
-           '            pass\n',
+    Mutant('rtl-harness-build-unlocked', 'rtl', 'emulator/rtl/build.py',
+           '        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes\n',
+           '        pass\n',
            ('emulator/tests/test_rtl.py::test_two_users_that_need_the_harness_at_once_build_it_once',),
            'two processes needing the C++ harness at once both running Verilator into one folder (one fails)'),
     Mutant('rtl-harness-forced-build-unlocked', 'rtl', 'emulator/rtl/harness.py',
@@ -3330,6 +3330,11 @@ CATALOGUE += [
            '                pass\n',
            ('bench/tests/test_campaigns_on_dask.py::test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no_report',),
            "an interrupted campaign leaving an earlier campaign's passing JUnit report at --junit (a CI step publishing it shows a pass)"),
+    Mutant('rtl-cocotb-build-unlocked', 'rtl', 'emulator/rtl/runner.py',
+           '        with build.folder_lock(self.build_dir):\n            gen',
+           '        if True:\n            gen',
+           ('emulator/tests/test_rtl.py::test_two_processes_building_one_cocotb_folder_take_turns',),
+           'two `rtl vectors` at once running Verilator into one cocotb build folder together'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

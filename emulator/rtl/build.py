@@ -6,6 +6,8 @@ software model serve the same bytes.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
 import subprocess
 from pathlib import Path
@@ -22,6 +24,16 @@ SENSORS = 5
 MAKE_FIX = "CFG_CXXFLAGS_PCH_I=-include"
 #: Verilator's --timing needs C++20 coroutines.
 CXX20 = ["-CFLAGS", "-std=c++20"]
+
+
+@contextlib.contextmanager
+def folder_lock(folder: Path):
+    """Hold an exclusive lock on ``folder``'s ``build.lock`` (one Verilator build in it at a time, across processes:
+    two CI jobs on one checkout, pytest-xdist)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "build.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        yield
 
 
 def verilator_root() -> Path:

@@ -9,8 +9,6 @@ the schedule.  The sensors' variants are a Verilog parameter (``SP``), so a harn
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import hashlib
 import struct
 import subprocess
@@ -99,13 +97,9 @@ class Harness:
                 stamp.write_text(digest)
         return self.binary
 
-    @contextlib.contextmanager
     def _build_lock(self):
-        """Hold an exclusive lock on the build folder's ``build.lock`` (one build at a time, across processes)."""
-        self.build_dir.mkdir(parents=True, exist_ok=True)
-        with open(self.build_dir / "build.lock", "a") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
-            yield
+        """The build folder's lock (one build at a time, across processes)."""
+        return build.folder_lock(self.build_dir)
 
     def build(self) -> Path:
         """Build the binary now (under the build lock), whether or not its sources changed."""

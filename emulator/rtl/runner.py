@@ -40,19 +40,22 @@ class Rtl:
         self.runner = get_runner("verilator")
 
     def build(self) -> None:
-        gen = self.build_dir / "generated"
-        build.generate_props(gen)
-        args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
-                "-Wno-style", f"-GSP=5'd{self.sp}"]
-        args += ["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else []
-        # the runner rebuilds when a source changes, not when a parameter does: a folder last built for another
-        # SP mask (or by a version that kept no stamp) is built afresh
-        stamp = self.build_dir / "sp_mask.txt"
-        other_mask = not (stamp.exists() and stamp.read_text() == str(self.sp))
-        self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
-                          build_dir=str(self.build_dir), build_args=args, waves=self.waves,
-                          timescale=("1ps", "1ps"), always=other_mask, log_file=str(self.build_dir / "build.log"))
-        stamp.write_text(str(self.sp))
+        """Build (or bring up to date) the simulator in its folder, under the folder's lock: two processes building
+        one folder at once (two CI jobs on one checkout) take turns instead of running Verilator into it together."""
+        with build.folder_lock(self.build_dir):
+            gen = self.build_dir / "generated"
+            build.generate_props(gen)
+            args = ["--timing", "--no-sched-zero-delay", "-O3", *build.CXX20, f"-I{gen}", "-Wno-fatal", "-Wno-lint",
+                    "-Wno-style", f"-GSP=5'd{self.sp}"]
+            args += ["--trace-fst", "--trace-structs"] if self.wave_format == "fst" else []
+            # the runner rebuilds when a source changes, not when a parameter does: a folder last built for another
+            # SP mask (or by a version that kept no stamp) is built afresh
+            stamp = self.build_dir / "sp_mask.txt"
+            other_mask = not (stamp.exists() and stamp.read_text() == str(self.sp))
+            self.runner.build(sources=[*build.SOURCES, build.TB_TOP], hdl_toplevel="tb_top",
+                              build_dir=str(self.build_dir), build_args=args, waves=self.waves, timescale=("1ps", "1ps"),
+                              always=other_mask, log_file=str(self.build_dir / "build.log"))
+            stamp.write_text(str(self.sp))
 
     def _run(self, testcase: str, env: dict) -> dict:
         with tempfile.TemporaryDirectory() as tmp:

@@ -241,6 +241,36 @@ def test_two_users_that_need_the_harness_at_once_build_it_once(tmp_path, monkeyp
     assert len(builds) == 2
 
 
+def test_two_processes_building_one_cocotb_folder_take_turns(tmp_path, monkeypatch):
+    """`rtl vectors` builds the cocotb simulator in out/rtl_build*: two at once (two CI jobs on one checkout) ran
+    Verilator into one folder together.  The build is under the folder's lock: the second starts when the first
+    has ended, and finds the first one's SP-mask stamp."""
+    import threading
+    import time
+
+    from emulator.rtl.runner import Rtl
+
+    spans, stamps = [], []
+
+    def slow_build(**kw):
+        start = time.monotonic()
+        stamps.append(kw["always"])
+        time.sleep(0.4)
+        spans.append((start, time.monotonic()))
+
+    users = [Rtl(build_dir=tmp_path / "b") for _ in range(2)]
+    for u in users:
+        monkeypatch.setattr(u.runner, "build", slow_build)
+    threads = [threading.Thread(target=u.build) for u in users]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    (a0, a1), (b0, b1) = sorted(spans)
+    assert a1 <= b0, spans  # one after the other
+    assert stamps == [True, False]  # the second found the first's stamp: no forced rebuild
+
+
 # --- the answers the RTL path used to refuse with HarnessError: channels not provided, a busy ADC, a reset ----------
 CLOCK_HZ = 10e6  # a 16-bit transfer lasts 1.65 µs: two sampling commands fit inside the 5 µs conversion window
 
