@@ -15,6 +15,29 @@ from dataclasses import dataclass, field
 BOLTZMANN_J_PER_K = 1.380649e-23
 ZERO_CELSIUS_K = 273.15
 
+#: the LuGre bristle damping σ1 (s/m) a sensor can have, per N·s/m of the skin's tangential damping c_t: at the
+#: scene limit of 20 N the bristles' damping N·σ1 stays within 200 times the skin's (measured, SensorParams'
+#: bristle_damping_per_N comment: at nominal σ0 a 20 N, 0.5 m/s slide's mean friction on the fast, default and
+#: reference grids agrees within 1.0 % at N·σ1/c_t = 200 — σ1 = 30 with c_t = 3, σ1 = 10 with c_t = 1, 0.4 % —
+#: and 2.0, 3.0 and 4.0 % at 267, 333 and 400 — σ1 = 40 and 50 with c_t = 3, 20 with c_t = 1; at 200 with c_t =
+#: 10, 30, 300 and 1e4 — σ0 = 1e5, 1e6, 1e7 and 1e9 — 1.1, 0.3, 0.0 and 0.1 %; the textures had µv = 0, which a
+#: texture's viscous rise only helps).  A massless skin moves at force / c_t, so each spike of the damping term
+#: moves the slip, which the damping term feeds on in turn (derived here: the step's residual loses its monotony
+#: once N·σ1 times the relative fall of µ the bristles meet exceeds c_t + N·µv — LuGre's passivity condition,
+#: see bristle_damping_per_N, with c_t/N added to the viscous term)
+BRISTLE_DAMPING_PER_SKIN_DAMPING_PER_N = 10.0
+
+#: below this bristle stiffness (1/m) the bristle damping allowed per skin damping falls in proportion: softer
+#: bristles relax over a longer slip (µ/σ0), across larger falls of the friction's fluctuation (measured with
+#: N·σ1/c_t = 67, σ1 = 10 and c_t = 3: σ0 = 1e5, 3.3e4, 1e4, 1e3 and 1e2 gave grids 0.3, 0.5, 3.3, 21 and 19 %
+#: apart; with σ0 = 1e4, σ1 = 3: 0.4 %; σ0 = 3.3e4, σ1 = 10, c_t = 1: 5.2 %)
+BRISTLE_DAMPING_FULL_STIFFNESS_PER_M = 1e5
+
+#: the bristles' damping time σ1/σ0 (s) a sensor can have, whatever the skin's damping (measured: 1 ms with
+#: σ0 = 1e4, c_t = 100 and σ0 = 1e5, c_t = 10 gave grids 0.0 and 1.1 % apart, and with c_t = 1e4 and σ0 = 3e4,
+#: 1e3 and 1e2, 0.1, 0.0 and 0.1 %; σ0 = 1e5, σ1 = 1e5, c_t = 1e4 — 1 s — 25 %)
+BRISTLE_DAMPING_TIME_MAX_S = 1e-3
+
 
 def _p(default, unit, lo, hi, source, doc):
     return field(default=default, metadata={"unit": unit, "range": (lo, hi), "source": source, "doc": doc})
@@ -59,8 +82,22 @@ class SensorParams:
         3.0, "N·s/m", 1.0, 1e4, "model", "tangential damping of the skin (2 ms with the stiffness)")
     bristle_stiffness_per_N: float = _p(
         1e5, "1/m", 1e2, 1e9, "model", "LuGre bristle stiffness per N of load (micro-slip ~ µ/σ0 ≈ 10 µm)")
+    # (at most 30 s/m, and less with less skin damping or softer bristles: see bristle_damping_limit_s_per_m.
+    # Criterion: a 20 N, 0.5 m/s slide — the scene limits' corner — keeps its mean friction within µk·N·0.9 …
+    # µs·N·1.1, opposing the slip, and the same within 2 % on the fast, default and reference grids.  The damping
+    # term N·σ1·dz/dt is a one-step spike wherever the bristles relax within a step, and through the massless skin
+    # (velocity = force / c_t) it moves the slip: measured at nominal σ0 and c_t (means fast / default / reference,
+    # N; smooth µ 1.0/0.8 and a 3 mm grating µ 0.6/0.45): σ1 = 10: 16.07/16.08/16.12 and 9.02/9.03/9.05; 30:
+    # 16.08/16.08/16.11 and 9.03/9.04/8.95 (1.0 % apart); 50: 3.0 %; 100: 10 % (8.10 on the reference); 1e3: peaks
+    # 57/123/2027 N; 1e4: the grating's mean 0.7 N on the fast grid; 1e5: 88 N on smooth, −39 and −45 N on the
+    # grating (fast, default).  The passivity condition of LuGre with a constant σ1 — Barabanov & Ortega, IEEE TAC
+    # 45(4) 2000; Åström & Canudas-de-Wit, IEEE CSM 28(6) 2008 — in this model's per-newton units reads
+    # σ1 ≤ µv·µk/(µs − µk) (σ0 drops out; the skin's c_t/N would add to µv): 0 for 63 of the library's 119 textures
+    # (µv = 0) and at most 4.0 s/m (float glass), below the nominal 10 for every texture, so the range cannot
+    # enforce it without changing the nominal; a slide's mean friction, what the criterion above checks, is where
+    # its breach shows)
     bristle_damping_per_N: float = _p(
-        10.0, "s/m", 0.0, 1e5, "model", "LuGre bristle damping per N of load")
+        10.0, "s/m", 0.0, 30.0, "model", "LuGre bristle damping per N of load")
     tangential_coupling: float = _p(
         0.5, "1", 0.0, 2.0, "model",
         "fluid pressure from tangential force as a fraction of the pressure from the same normal force")
@@ -231,6 +268,16 @@ class SensorParams:
         return skin_fluid(self).resonance_Hz
 
     @property
+    def bristle_damping_limit_s_per_m(self) -> float:
+        """The most LuGre bristle damping σ1 (s/m) this sensor's bristle stiffness σ0 and skin damping c_t allow:
+        :data:`BRISTLE_DAMPING_PER_SKIN_DAMPING_PER_N` × c_t × min(1, σ0 /
+        :data:`BRISTLE_DAMPING_FULL_STIFFNESS_PER_M`), and σ0 × :data:`BRISTLE_DAMPING_TIME_MAX_S` (30 s/m at the
+        nominal values, the range's top)."""
+        s0, ct = self.bristle_stiffness_per_N, self.skin_tangential_damping_N_s_per_m
+        return min(BRISTLE_DAMPING_PER_SKIN_DAMPING_PER_N * ct * min(1.0, s0 / BRISTLE_DAMPING_FULL_STIFFNESS_PER_M),
+                   BRISTLE_DAMPING_TIME_MAX_S * s0)
+
+    @property
     def resting_pressure_Pa(self) -> float:
         """Resting (DC) fluid pressure from the inflation volume."""
         return self.resting_pressure_at(self.inflation_volume_mL)
@@ -300,6 +347,16 @@ class SensorParams:
             problems.append(f"{where}.minimum_gap_mm = {self.minimum_gap_mm:g} mm must be below {where}.resting_gap_mm"
                             f" = {self.resting_gap_mm:g} mm (the fluid left when the skin bottoms is less than at "
                             f"rest)")
+        limit = self.bristle_damping_limit_s_per_m
+        if self.bristle_damping_per_N > limit * (1.0 + 1e-12):
+            problems.append(
+                f"{where}.bristle_damping_per_N = {self.bristle_damping_per_N:g} s/m is more than the bristle "
+                f"stiffness and skin damping allow: at most {limit:.4g} s/m with {where}.bristle_stiffness_per_N = "
+                f"{self.bristle_stiffness_per_N:g} 1/m and {where}.skin_tangential_damping_N_s_per_m = "
+                f"{self.skin_tangential_damping_N_s_per_m:g} N·s/m ({BRISTLE_DAMPING_PER_SKIN_DAMPING_PER_N:g}/N × "
+                f"the skin damping × min(1, σ0 / {BRISTLE_DAMPING_FULL_STIFFNESS_PER_M:g} 1/m), and σ1/σ0 at most "
+                f"{BRISTLE_DAMPING_TIME_MAX_S * 1e3:g} ms; beyond, a slide's mean friction depends on the "
+                f"simulation grid)")
         if self.electrode_gap_seed != int(self.electrode_gap_seed):
             problems.append(f"{where}.electrode_gap_seed = {self.electrode_gap_seed!r}: must be a whole number "
                             f"(0 to {2**31 - 1})")

@@ -517,3 +517,66 @@ def test_the_least_skin_damping_allowed_gives_one_mean_friction_on_every_grid():
         means.append(ft[(t > slide.slide_start_s + 0.04) & (t < slide.slide_end_s - 0.01)].mean())
     assert means[0] == pytest.approx(16.0, rel=0.05)
     assert means[1] == pytest.approx(means[0], rel=0.02)
+
+
+@pytest.mark.unit
+def test_bristle_damping_beyond_what_the_skin_damping_and_bristle_stiffness_allow_is_refused_by_name():
+    """σ1 (bristle_damping_per_N) tops out at 30 s/m, which the nominal bristle stiffness and skin damping allow;
+    less skin damping or softer bristles allow less (10/N × c_t × min(1, σ0 / 1e5 1/m), and σ1/σ0 ≤ 1 ms), and
+    a sensor past that is refused with a message naming the parameters; at each limit it is accepted."""
+    from dataclasses import replace
+
+    from emulator.params import PARAMETER_FIELDS
+
+    top = PARAMETER_FIELDS["bristle_damping_per_N"].metadata["range"][1]
+    assert top == 30.0 == SensorParams().bristle_damping_limit_s_per_m
+    assert SensorParams().replace(bristle_damping_per_N=top).bristle_damping_per_N == top
+    with pytest.raises(ValueError, match=r"bristle_damping_per_N = 30\.5 s/m: allowed range is 0\.0 to 30\.0 s/m"):
+        SensorParams().replace(bristle_damping_per_N=30.5)
+    # the least skin damping allowed: 10 s/m, the nominal σ1
+    assert SensorParams().replace(skin_tangential_damping_N_s_per_m=1.0).bristle_damping_per_N == 10.0
+    with pytest.raises(ValueError, match=r"sensor\.bristle_damping_per_N = 10\.5 s/m is more than .* at most 10 s/m "
+                                         r"with sensor\.bristle_stiffness_per_N = 100000 1/m and "
+                                         r"sensor\.skin_tangential_damping_N_s_per_m = 1 N·s/m"):
+        SensorParams().replace(skin_tangential_damping_N_s_per_m=1.0, bristle_damping_per_N=10.5)
+    # softer bristles: 9 s/m at 3e4 1/m; the nominal σ1 with 1e4 1/m is refused (3 s/m)
+    assert SensorParams().replace(bristle_stiffness_per_N=3e4, bristle_damping_per_N=9.0).bristle_damping_per_N == 9.0
+    with pytest.raises(ValueError, match=r"bristle_damping_per_N = 10 s/m .* at most 3 s/m with "
+                                         r"sensor\.bristle_stiffness_per_N = 10000 1/m"):
+        SensorParams().replace(bristle_stiffness_per_N=1e4)
+    # the damping time σ1/σ0 ≤ 1 ms, however much skin damping
+    stiff_skin = dict(skin_tangential_damping_N_s_per_m=1e4, bristle_stiffness_per_N=1e3)
+    assert SensorParams().replace(**stiff_skin, bristle_damping_per_N=1.0).bristle_damping_per_N == 1.0
+    with pytest.raises(ValueError, match=r"bristle_damping_per_N = 1\.5 s/m .* at most 1 s/m .*1 ms"):
+        SensorParams().replace(**stiff_skin, bristle_damping_per_N=1.5)
+    # a scene's table is named in the problem
+    bad = replace(SensorParams(), skin_tangential_damping_N_s_per_m=1.0, bristle_damping_per_N=30.0)
+    (problem,) = bad.inconsistencies("sensors.left")
+    assert "sensors.left.bristle_damping_per_N = 30" in problem
+    assert "sensors.left.skin_tangential_damping_N_s_per_m = 1 " in problem
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("texture", [SMOOTH, GRATING], ids=["smooth", "grating"])
+def test_at_the_most_bristle_damping_allowed_a_hard_slide_keeps_its_friction_on_every_grid(texture):
+    """The largest bristle damping σ1 the range allows (30 s/m, nominal σ0 and skin damping): a 20 N, 0.5 m/s
+    slide's mean friction opposes the slip, lies within 0.9·µk·N … 1.1·µs·N, and agrees within 2 % on the fast,
+    default and reference grids (measured 0.2 % smooth, 1.0 % grating; 3.0 % at 50 s/m, 10 % at 100 s/m, and at
+    the former top of 1e5 s/m 88 N on a smooth surface of µs·N = 20 N and −39 to −45 N on the grating); the
+    damping term's one-step spikes stay below twice µs·N."""
+    from emulator.params import PARAMETER_FIELDS
+
+    top = PARAMETER_FIELDS["bristle_damping_per_N"].metadata["range"][1]
+    p = SensorParams().replace(bristle_damping_per_N=top)
+    slide = Slide(0.02, texture, 20.0, 0.5, 0.1, approach_s=0.005, hold_s=0.11, accel_s=0.001, lift_s=0.005)
+    means = {}
+    for fidelity in ("fast", "default", "reference"):
+        s = Sensor(params=p, stimuli=[slide], channels_read=["PAC"], fidelity=fidelity, seed=3,
+                   record_signals=("tangential_force_N",))
+        t = np.arange(int((slide.end_s + 0.01) * s.fs)) / s.fs
+        ft = s.signal("tangential_force_N", t)
+        means[fidelity] = ft[(t > slide.slide_start_s + 0.04) & (t < slide.slide_end_s - 0.01)].mean()
+        assert np.abs(ft).max() < 2 * texture.mu_static * slide.force_N, fidelity
+    for fidelity, mean in means.items():
+        assert 0.9 * texture.mu_kinetic * slide.force_N < mean < 1.1 * texture.mu_static * slide.force_N, means
+    assert max(means.values()) - min(means.values()) < 0.02 * min(means.values()), means

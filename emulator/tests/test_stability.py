@@ -162,7 +162,11 @@ def test_any_parameters_in_their_ranges_give_finite_bounded_codes(data):
     # a seed is a whole number (a fraction is refused by name, emulator/params.py inconsistencies)
     whole = name == "electrode_gap_seed"
     value = data.draw(st.integers(int(lo), int(hi)) if whole else st.floats(lo, hi, allow_nan=False))
-    p = SensorParams().replace(**{name: value})
+    changes = {name: value}
+    if name == "bristle_stiffness_per_N":  # softer bristles allow less bristle damping (emulator/params.py)
+        allowed = replace(SensorParams(), **changes).bristle_damping_limit_s_per_m
+        changes["bristle_damping_per_N"] = min(SensorParams().bristle_damping_per_N, allowed)
+    p = SensorParams().replace(**changes)
     stim = [SphereDrop(0.02, 1e-6), Vibration(0.0, 0.2, 2e-6, 200.0), Press(0.05, 3.0, 0.05, 0.05),
             PressureCalibrator(0.0, 0.2, 1e3, 50.0, 100.0)]
     s = Sensor(p, stimuli=stim, channels_read=["PAC", "PDC"], seed=1)
