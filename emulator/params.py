@@ -90,9 +90,9 @@ class SensorParams:
     # N; smooth µ 1.0/0.8 and a 3 mm grating µ 0.6/0.45): σ1 = 10: 16.07/16.08/16.12 and 9.02/9.03/9.05; 30:
     # 16.08/16.08/16.11 and 9.03/9.04/8.95 (1.0 % apart); 50: 3.0 %; 100: 10 % (8.10 on the reference); 1e3: peaks
     # 57/123/2027 N; 1e4: the grating's mean 0.7 N on the fast grid; 1e5: 88 N on smooth, −39 and −45 N on the
-    # grating (fast, default).  The passivity condition of LuGre with a constant σ1 — Barabanov & Ortega, IEEE TAC
-    # 45(4) 2000; Åström & Canudas-de-Wit, IEEE CSM 28(6) 2008 — in this model's per-newton units reads
-    # σ1 ≤ µv·µk/(µs − µk) (σ0 drops out; the skin's c_t/N would add to µv): 0 for 63 of the library's 119 textures
+    # grating (fast, default).  The passivity condition of LuGre with a constant σ1 (the subject of Barabanov &
+    # Ortega, IEEE TAC 45(4) 2000; derived here in this model's per-newton units, not checked against the paper's
+    # own statement) reads σ1 ≤ µv·µk/(µs − µk) (σ0 drops out; the skin's c_t/N would add to µv): 0 for 63 of the library's 119 textures
     # (µv = 0) and at most 4.0 s/m (float glass), below the nominal 10 for every texture, so the range cannot
     # enforce it without changing the nominal; a slide's mean friction, what the criterion above checks, is where
     # its breach shows)
