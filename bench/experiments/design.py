@@ -11,7 +11,7 @@ PILOT_WORTH_TRIALS = 10 * 6
 #: experiment (so "doubled" doubles whatever the experiment file set)
 ABLATIONS = {
     "smooth-skin": ("a skin without fingerprints", lambda spec: {"fingerprints": False}),
-    "unreplaced-wear": ("skin wear on, never replaced", lambda spec: {"replace_skin": False}),
+    "unreplaced-wear": ("skin wear on, never replaced", lambda spec: {"wear": True, "replace_skin": False}),
     "fewer-trials": ("2 training trials", lambda spec: {"training_trials": 2}),
     "double-noise": ("every sensor noise source doubled", lambda spec: {"noise_scale": 2.0 * spec.noise_scale}),
     # D ch. 6's stepper "background noise that was not consistent from trial to trial", at a level chosen before

@@ -116,8 +116,9 @@ def ablated(spec: ExperimentSpec, name: str) -> tuple[ExperimentSpec, str]:
     variant that changes nothing says so, rather than passing the baseline off as the variant)."""
     what, change = ABLATIONS[name]
     fields = change(spec)
-    diffs = ", ".join(f"{k} {getattr(spec, k)!r} → {v!r}" for k, v in fields.items())
     same = all(getattr(spec, k) == v for k, v in fields.items())
+    diffs = ", ".join(f"{k} {getattr(spec, k)!r} → {v!r}" for k, v in fields.items()
+                      if same or getattr(spec, k) != v)  # the fields it changes (all of them when none)
     return replace(spec, **fields), f"{what}: {diffs}" + (" (the same as the baseline)" if same else "")
 
 
@@ -271,6 +272,10 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     if not isinstance(strategies, list) or not strategies or any(not isinstance(s, str) or s not in ex.STRATEGIES
                                                                   for s in strategies):
         problems.append(f"exploration.strategies = {strategies!r}: a list of {', '.join(ex.STRATEGIES)}")
+    elif "bayesian" not in strategies or listed_twice(strategies):
+        problems.append(f"exploration.strategies = {strategies!r}: \"bayesian\" and, to compare with it, any of "
+                        f"{', '.join(s for s in ex.STRATEGIES if s != 'bayesian')}, each once (the experiment, its "
+                        f"report and the ablations measure Bayesian exploration)")
     else:
         spec.strategies = tuple(strategies)
     spec.pair_threshold = get("exploration", "pair_threshold", float, 0.5, 0.999999, spec.pair_threshold)
@@ -529,20 +534,21 @@ def summary(result: ExperimentResult) -> dict:
     return out
 
 
-def beats_baselines(result: ExperimentResult, strict: bool = False) -> int:
+def beats_baselines(result: ExperimentResult, strict: bool = False) -> int | None:
     """Validation textures on which Bayesian exploration is at least as accurate as cycling and as random choice,
     and converges in no more movements (medians).  ``strict``: and, against each baseline, strictly better in at
-    least one of the two (a tie — say 100 % in the same median number of movements — does not count)."""
+    least one of the two (a tie — say 100 % in the same median number of movements — does not count).  None when
+    the experiment ran no baseline to compare with."""
     s = summary(result)
     bay = s["identification/bayesian"]
+    baselines = [f"identification/{other}" for other in ("cycle", "random") if f"identification/{other}" in s]
+    if not baselines:
+        return None
     count = 0
     for tex, acc in bay["per_texture_accuracy"].items():
         moves = bay["per_texture_median_moves"][tex]
         ok = True
-        for other in ("cycle", "random"):
-            key = f"identification/{other}"
-            if key not in s:
-                continue
+        for key in baselines:
             acc_b, moves_b = s[key]["per_texture_accuracy"][tex], s[key]["per_texture_median_moves"][tex]
             if acc < acc_b or moves > moves_b or (strict and acc == acc_b and moves == moves_b):
                 ok = False

@@ -5,7 +5,6 @@ name and renamed into place (:func:`bench.atomic.atomic_write`)."""
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_bas
                                           excluded_movements, movement_label, summary, table_from_rows)
 from bench.experiments.pairs import pair_separation_sigma
 from bench.atomic import atomic_write
+from bench.cli.args import strict_json
 from bench.reporting.figures import figure_file
 
 #: every file :func:`write_outputs` may write (what ``explore --force`` may replace)
@@ -77,7 +77,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     names = []
     rows = result.pilot_rows + result.training_rows + result.validation_rows
     write_rows_csv(out / "trials.csv", rows)
-    write_text(out / "trials.json", json.dumps(rows))
+    write_text(out / "trials.json", strict_json(rows))
     names += ["trials.csv", "trials.json"]
     status = pilot_status(result)
     u = [{"movement_id": m, "movement": movement_label(m), "status": status[m],
@@ -114,7 +114,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
                                               table_from_rows(result.validation_rows))
               if result.validation_rows else None,
               "wall_s": result.wall_s, "dissertation": D_FIGURES}
-    write_text(out / "summary.json", json.dumps(record, indent=2, default=str))
+    write_text(out / "summary.json", strict_json(record, indent=2))  # standard JSON: a NaN (say, no spread) is null
     names.append("summary.json")
     names += _plots(result, out, lib)
     write_text(out / "report.md", markdown(result, record, lib))
@@ -239,12 +239,18 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                    if task == "pairs" else f"{d['117-way accuracy %']} %, median {d['117-way median moves']}")
         lines.append(f"| {task} | {strat} | {100 * v['accuracy']:.1f} % | {v['median_moves']:g} | {ref} |")
     n_val = len({int(r.true_texture) for r in result.identification_results.get("bayesian", ())})  # identified
-    lines += ["", f"In identification, Bayesian exploration is at least as accurate as cycling and random choice and "
-                  f"converges in no "
-                  f"more movements on {record['bayesian_beats_baselines_on']} of {n_val} identified textures; it is "
-                  f"strictly better than both (better in accuracy or in movements, no worse in the other) on "
-                  f"{record['bayesian_strictly_beats_baselines_on']} of them — the rest tie.", "",
-              "## Pairs of similar textures", "",
+    baselines = [words for name, words in (("cycle", "cycling"), ("random", "random choice"))
+                 if name in result.identification_results]
+    if not baselines:
+        lines += ["", "No baseline strategy (cycle, random) was run: Bayesian exploration is compared with none."]
+    else:
+        lines += ["", f"In identification, Bayesian exploration is at least as accurate as {' and '.join(baselines)} "
+                      f"and converges in no more movements on {record['bayesian_beats_baselines_on']} of {n_val} "
+                      f"identified textures; it is "
+                      f"strictly better than {'both' if len(baselines) == 2 else 'it'} (better in accuracy or in "
+                      f"movements, no worse in the other) on "
+                      f"{record['bayesian_strictly_beats_baselines_on']} of them — the rest tie."]
+    lines += ["", "## Pairs of similar textures", "",
               "The pairs as the experiment file lists them:" if result.spec.pairs
               else PAIR_TEXT[result.spec.pair_choice],
               "", "Beside each pair, as a diagnostic only (the choice does not use it): how far apart its two "
