@@ -118,9 +118,28 @@ def connect(spec: ClusterSpec):
         raise CampaignError(f"--workers = {spec.workers}: must be at least 1")
     if spec.scheduler:
         try:
-            return Client(spec.scheduler, timeout="5s")
+            client = Client(spec.scheduler, timeout="5s")
         except (OSError, TimeoutError) as e:
             raise CampaignError(f"no Dask scheduler answers at {spec.scheduler}: {e}") from None
+        except Exception as e:  # a protocol this client cannot speak as configured (tls:// without certificates, ucx)
+            raise CampaignError(f"cannot connect to the Dask scheduler at {spec.scheduler}: {type(e).__name__}: {e} "
+                                f"(tcp://HOST:PORT needs no configuration; tls:// needs the cluster's certificates in "
+                                f"Dask's configuration, distributed.comm.tls)") from None
+        try:  # a worker that cannot even run the check (an older bench.campaigns.engine, say) runs other code too
+            stale = {w: files if isinstance(files, list) else [f"{type(files).__name__}: {files}"]
+                     for w, files in client.run(stale_sources, on_error="return").items()
+                     if not isinstance(files, list) or files}
+        except BaseException:
+            client.close()
+            raise
+        if stale:
+            client.close()
+            worker, files = next(iter(stale.items()))
+            raise CampaignError(f"{len(stale)} worker(s) of the Dask scheduler at {spec.scheduler} hold modules of "
+                                f"this project whose files changed after the worker started (e.g. {worker}: "
+                                f"{', '.join(files[:3])}{', …' if len(files) > 3 else ''}), so they may run the old "
+                                f"code; restart the workers (dask worker ...) and run again") from None
+        return client
     # no dashboard; the scheduler's small HTTP server takes any free port (not 8787, which another campaign or
     # notebook on this machine may hold: that only made distributed warn)
     cluster = client = None
@@ -135,6 +154,30 @@ def connect(spec: ClusterSpec):
         raise
     client._owned_cluster = cluster  # closed with the client
     return client
+
+
+#: the project's packages, whose modules a worker must run as they are on disk
+PROJECT_PACKAGES = ("bench", "emulator")
+
+
+def stale_sources() -> list[str]:
+    """The project's modules this process loaded whose source file changed after the process started (run on each
+    worker of an existing cluster: a long-lived worker keeps running the code it imported, so its results — and the
+    stage cache that stores them under the new code's digest — would silently come from the old code)."""
+    import psutil
+
+    started = psutil.Process().create_time()
+    out = []
+    for name, module in list(sys.modules.items()):
+        path = getattr(module, "__file__", None)
+        if name.split(".")[0] not in PROJECT_PACKAGES or not path:
+            continue
+        try:
+            if os.stat(path).st_mtime > started:
+                out.append(path)
+        except OSError:
+            continue  # deleted or moved: no longer the code this process will see either
+    return sorted(out)
 
 
 def _close_parts(*parts) -> None:

@@ -141,3 +141,44 @@ def test_a_task_that_raises_once_is_retried_and_zero_workers_is_refused(tmp_path
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://10.0.0.9:8786")
     assert ClusterSpec.from_env("tcp://10.0.0.5:8786").scheduler == "tcp://10.0.0.5:8786"
     assert ClusterSpec.from_env().scheduler == "tcp://10.0.0.9:8786"
+
+
+@pytest.mark.parametrize("address", ["tls://127.0.0.1:9", "ucx://127.0.0.1:9"])
+def test_a_scheduler_address_this_client_cannot_speak_to_is_one_error_naming_it(address):
+    """tls:// (accepted as an address) without the cluster's certificates in Dask's configuration, and ucx:// without
+    ucx-py, ended in distributed's TypeError traceback instead of an error naming the scheduler."""
+    with pytest.raises(CampaignError, match=f"cannot connect to the Dask scheduler at {address}: .*tls://"):
+        run_tasks(seeded_value, [(1, 1)], ClusterSpec(scheduler=address), progress=False)
+
+
+def hold_a_project_module_from(path):
+    """On a worker: a module of this project (by name) loaded from ``path``, as an import would leave it."""
+    import sys
+    import types
+
+    module = types.ModuleType("bench._probe_module")
+    module.__file__ = path
+    sys.modules[module.__name__] = module
+
+
+def test_workers_holding_project_modules_changed_since_they_started_are_refused(tmp_path):
+    """A long-lived worker of an existing cluster runs the code it imported: after an edit (or a git pull) its trials
+    came from the old code and were cached under the new code's digest, silently.  Fresh workers pass."""
+    import time
+
+    from distributed import Client, LocalCluster
+
+    from bench.campaigns.engine import close, connect
+
+    probe = tmp_path / "probe.py"
+    probe.write_text("")
+    os.utime(probe, (time.time() - 60,) * 2)  # written well before the worker starts (its start time is to ~1 s)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        close(connect(ClusterSpec(scheduler=cluster.scheduler_address)))
+        with Client(cluster) as client:
+            client.run(hold_a_project_module_from, str(probe))
+        close(connect(ClusterSpec(scheduler=cluster.scheduler_address)))  # loaded, unchanged since
+        os.utime(probe, (time.time() + 5,) * 2)  # edited after the worker started
+        with pytest.raises(CampaignError, match=r"1 worker\(s\) of the Dask scheduler at .* hold modules of this "
+                                                r"project whose files changed .*probe\.py.*restart the workers"):
+            connect(ClusterSpec(scheduler=cluster.scheduler_address))
