@@ -619,6 +619,10 @@ def _skin(c: _Checker, table) -> tuple[Skin, bool]:
     k = c.number(table, "wear_coefficient", "skin", 0.0, 1.0, "", default=Skin().wear_coefficient)
     wear = c.boolean(table, "wear", "skin", True)
     given = "ridge_height_um" in table and height is not None
+    if given and fingerprints is False:
+        c.problems.append(f"skin.ridge_height_um = {_r(table['ridge_height_um'])} with skin.fingerprints = false: a "
+                          f"skin without fingerprints has no ridges (the height would be reported, not felt); give one "
+                          f"or the other")
     return Skin(fingerprints=fingerprints, ridge_height_m=height * 1e-6 if given else Skin().ridge_height_new_m,
                 wear_coefficient=k if k is not None else Skin().wear_coefficient), wear
 

@@ -90,6 +90,14 @@ def test_overlapping_slides_and_replacements_during_a_slide_are_rejected():
     assert "skin = " in _problems(_slide(), skin=[1])
 
 
+def test_a_ridge_height_on_a_skin_without_fingerprints_is_a_contradiction():
+    """It was taken silently: the ridges had no effect, while the report and record.json gave the skin that height."""
+    text = _problems(_slide(), skin={"fingerprints": False, "ridge_height_um": 100})
+    assert "skin.ridge_height_um = 100 with skin.fingerprints = false" in text
+    assert not _scene(_slide(), skin={"fingerprints": False}).skin_before["fingerprints"]
+    assert _scene(_slide(), skin={"fingerprints": True, "ridge_height_um": 100}).skin_before["ridge_height_m"] > 0
+
+
 def test_run_help_teaches_sliding(capsys):
     from bench.cli import main as cli
 
