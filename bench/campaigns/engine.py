@@ -139,6 +139,9 @@ def connect(spec: ClusterSpec):
                                 f"this project whose files changed after the worker started (e.g. {worker}: "
                                 f"{', '.join(files[:3])}{', …' if len(files) > 3 else ''}), so they may run the old "
                                 f"code; restart the workers (dask worker ...) and run again") from None
+        if not client.scheduler_info().get("workers"):  # the tasks would wait, the progress bar at 0, saying nothing
+            print(f"note: the Dask scheduler at {spec.scheduler} has no workers yet: the tasks wait until one joins "
+                  f"(dask worker {spec.scheduler})", file=sys.stderr, flush=True)
         return client
     # no dashboard; the scheduler's small HTTP server takes any free port (not 8787, which another campaign or
     # notebook on this machine may hold: that only made distributed warn)
@@ -160,13 +163,29 @@ def connect(spec: ClusterSpec):
 PROJECT_PACKAGES = ("bench", "emulator")
 
 
+def _process_start_time() -> float:
+    """When this process started (epoch s), to the clock tick: from its start in ticks after boot (Linux); psutil's
+    figure elsewhere, whose boot time is whole seconds (a file written in the second before the start could count
+    as changed after it)."""
+    import time
+
+    try:
+        with open("/proc/self/stat") as fh:
+            ticks = int(fh.read().rsplit(")", 1)[1].split()[19])  # field 22, starttime (fields 3.. follow the name)
+        return time.time() - (time.clock_gettime(time.CLOCK_BOOTTIME) - ticks / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError, AttributeError):
+        import psutil
+
+        return psutil.Process().create_time()
+
+
 def stale_sources() -> list[str]:
     """The project's modules this process loaded whose source file changed after the process started (run on each
     worker of an existing cluster: a long-lived worker keeps running the code it imported, so its results — and the
     stage cache that stores them under the new code's digest — would silently come from the old code)."""
-    import psutil
-
-    started = psutil.Process().create_time()
+    # (a file written just before the start — by a script that then starts the worker — is not counted: the start
+    # is known to a clock tick, and a worker imports nothing of the project in its first tenth of a second)
+    started = _process_start_time() + 0.1
     out = []
     for name, module in list(sys.modules.items()):
         path = getattr(module, "__file__", None)

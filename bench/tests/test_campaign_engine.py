@@ -182,3 +182,19 @@ def test_workers_holding_project_modules_changed_since_they_started_are_refused(
         with pytest.raises(CampaignError, match=r"1 worker\(s\) of the Dask scheduler at .* hold modules of this "
                                                 r"project whose files changed .*probe\.py.*restart the workers"):
             connect(ClusterSpec(scheduler=cluster.scheduler_address))
+
+
+def test_a_scheduler_without_workers_is_said_so_rather_than_a_silent_wait(capsys):
+    """The tasks wait for a worker to join (a cluster may grow); that wait had looked like a hang, the bar at 0."""
+    from distributed import LocalCluster
+
+    from bench.campaigns.engine import close, connect
+
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        close(connect(ClusterSpec(scheduler=cluster.scheduler_address)))
+        err = capsys.readouterr().err
+        assert f"note: the Dask scheduler at {cluster.scheduler_address} has no workers yet" in err
+        cluster.scale(1)
+        cluster.wait_for_workers(1)
+        close(connect(ClusterSpec(scheduler=cluster.scheduler_address)))
+        assert "no workers" not in capsys.readouterr().err
