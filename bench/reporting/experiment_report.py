@@ -11,7 +11,8 @@ import numpy as np
 
 from bench.experiments import exploration as ex
 from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_baselines, d_best_movement_ids,
-                                          excluded_movements, movement_label, summary, table_from_rows)
+                                          excluded_movements, identified_among, movement_label, summary,
+                                          table_from_rows)
 from bench.experiments.pairs import pair_separation_sigma
 from bench.atomic import atomic_write
 from bench.cli.args import strict_json
@@ -185,8 +186,8 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
 
         with figure_file(out / "probability_evolution.png", 1, len(rs), figsize=(4 * len(rs), 3.8),
                          squeeze=False) as (fig, axes):
-            fig.suptitle("Bayesian exploration (117-way): the posterior of the five likeliest textures after each "
-                         "movement, first simulations", fontsize=10)
+            fig.suptitle(f"Bayesian exploration ({identified_among(result)}-way): the posterior of the five likeliest "
+                         f"textures after each movement, first simulations", fontsize=10)
             for ax, r in zip(axes[0], rs):
                 for label, moves, probability in posterior_lines(r):
                     ax.plot(moves, probability, marker=".", label=label)

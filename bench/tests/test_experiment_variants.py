@@ -89,3 +89,22 @@ def test_unreplaced_wear_turns_wear_on_in_a_file_that_has_it_off():
     assert "wear False → True" in what and "same as the baseline" not in what
     default, what = E.ablated(E.parse_experiment({"experiment": {"name": "x"}}, "x.toml"), "unreplaced-wear")
     assert what == "skin wear on, never replaced: replace_skin True → False"  # only what changes is listed
+
+
+def test_the_probability_evolution_plot_says_how_many_textures_it_chooses_among(no_rig, tmp_path, monkeypatch):
+    """Its title said "117-way" whatever the experiment's training textures (here 5)."""
+    from contextlib import contextmanager
+
+    from bench.reporting import experiment_report
+
+    titles, figure_file = {}, experiment_report.figure_file
+
+    @contextmanager
+    def noting_titles(path, *args, **kw):
+        with figure_file(path, *args, **kw) as (fig, axes):
+            yield fig, axes
+            titles[path.name] = fig._suptitle.get_text() if fig._suptitle else ""
+
+    monkeypatch.setattr(experiment_report, "figure_file", noting_titles)
+    write_outputs(E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None), tmp_path)
+    assert titles["probability_evolution.png"].startswith("Bayesian exploration (5-way)")
