@@ -224,6 +224,10 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.wear = get("training", "wear", bool, default=spec.wear)
     spec.replace_skin = get("training", "replace_skin", bool, default=spec.replace_skin)
     spec.replace_at = get("training", "replace_at", float, 0.01, 1.0, spec.replace_at)
+    if "replace_at" in t["training"] and (spec.wear is False or spec.replace_skin is False):
+        off = "training.wear = false" if spec.wear is False else "training.replace_skin = false"
+        problems.append(f"training.replace_at = {t['training']['replace_at']!r} with {off}: no skin is replaced then, "
+                        f"so replace_at would be ignored; give one or the other")
     pairs = t["validation"].get("pairs")
     chosen_by = [k for k in ("n_pairs", "pair_choice") if k in t["validation"]]
     if pairs is not None and chosen_by:

@@ -108,3 +108,13 @@ def test_the_probability_evolution_plot_says_how_many_textures_it_chooses_among(
     monkeypatch.setattr(experiment_report, "figure_file", noting_titles)
     write_outputs(E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None), tmp_path)
     assert titles["probability_evolution.png"].startswith("Bayesian exploration (5-way)")
+
+
+@pytest.mark.parametrize("training, off", [({"replace_skin": False}, "training.replace_skin = false"),
+                                           ({"wear": False}, "training.wear = false")])
+def test_replace_at_with_no_replacement_is_a_contradiction(training, off):
+    """The replacement level was ignored silently when no skin is ever replaced."""
+    with pytest.raises(E.ExperimentError) as e:
+        E.parse_experiment({"experiment": {"name": "x"}, "training": {"replace_at": 0.1, **training}}, "x.toml")
+    assert f"training.replace_at = 0.1 with {off}" in str(e.value)
+    assert E.parse_experiment({"experiment": {"name": "x"}, "training": training}, "x.toml")  # alone: fine
