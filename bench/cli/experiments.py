@@ -164,6 +164,10 @@ library's descriptions: same group, thermal material and compliance, nearest in 
 "random-within-group" (drawn from the seed), "most-confused" (the training model's hardest), or
 pairs = [[a, b], ...].
 
+The textures come from the shipped library, or from one of your own: [experiment] library = "my_textures.toml"
+(relative to the experiment file; the format of fixtures/textures/library.toml, or .json as `biotac-bench textures
+--json` prints; "all" is then its textures numbered 1..117; the workers must be able to read the file).
+
 Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
 stage's trials are cached in --cache (out/cache) by content hash, so changing the classifier settings re-runs no
 sliding.  Ctrl-C stops the experiment (exit 130; SIGTERM: 143); the stages already finished stay cached, and a

@@ -101,6 +101,7 @@ class ExperimentSpec:
     fingerprints: bool = True
     noise_scale: float = 1.0
     stepper_noise_Pa: float = 0.0  # the rig's stepper background ([rig] stepper_noise_Pa; RigSettings)
+    library: str | None = None  # a texture library file of one's own ([experiment] library; None: the shipped one)
     source: str = "<experiment>"
 
     def key(self) -> str:
@@ -131,11 +132,12 @@ def load_experiment(path: str | Path) -> ExperimentSpec:
 
 
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
+    from bench.errors import TextureError
     from bench.textures.library import load_library
     from emulator.fidelity import PROFILES
 
     problems: list[str] = []
-    known = {"experiment": {"name", "seed", "fidelity"},
+    known = {"experiment": {"name", "seed", "fidelity", "library"},
              "pilot": {"textures", "trials", "movements", "exclude_high_power"},
              "training": {"textures", "trials", "wear", "replace_skin", "replace_at"},
              "validation": {"pairs", "n_pairs", "trials", "pair_choice"},
@@ -153,9 +155,21 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             problems += [f"{k}: unknown field {f!r}; known: {', '.join(sorted(known[k]))}" for f in v if f not in known[k]]
     if problems:
         raise ExperimentError(source, problems)
-    lib = load_library()
     spec = ExperimentSpec(source=source)
     t = {k: data.get(k, {}) for k in known}
+    if "library" in t["experiment"]:  # a texture library of the user's own, relative to the experiment file
+        v = t["experiment"]["library"]
+        if not isinstance(v, str) or not v.strip() or "\0" in v:
+            raise ExperimentError(source, [f"experiment.library = {v!r}: the path of a texture library file (TOML, "
+                                           f"or .json as `biotac-bench textures --json` prints)"])
+        spec.library = str((Path(source).parent / v).resolve())  # ("<experiment>": relative to the working folder)
+    try:
+        lib = load_library(spec.library)
+    except TextureError as e:
+        if spec.library is None:
+            raise
+        raise ExperimentError(source, [f"experiment.library = {t['experiment']['library']!r} ({spec.library}): {p}"
+                                       for p in e.problems]) from None
 
     def get(table, key, kind, lo=None, hi=None, default=None):
         if key not in t[table]:
@@ -348,7 +362,9 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
               client=None, log=print) -> list[dict]:
     """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code (a
     cache file that does not hold them is said and replaced)."""
-    key = hashlib.sha256((repr(tasks) + _code_digest()).encode()).hexdigest()[:16]
+    libraries = "".join(hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in sorted({t.library for t in tasks
+                                                                                         if t.library}))
+    key = hashlib.sha256((repr(tasks) + _code_digest() + libraries).encode()).hexdigest()[:16]
     path = None if cache_dir is None else cache_dir / f"{name}-{key}.json"
     if path is not None and path.exists():
         rows, why = _cached_rows(path, tasks)
@@ -398,14 +414,14 @@ class ExperimentResult:
 
 
 def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: str, seed: int,
-                source: str = "<experiment>") -> list[tuple[int, int]]:
+                source: str = "<experiment>", library: str | None = None) -> list[tuple[int, int]]:
     """``n_pairs`` disjoint pairs of textures of one library group: nearest in description
     (``similar-description``, :mod:`bench.experiments.pairs`), drawn at random (``random-within-group``), or those
     with the highest mean confusion at the best movements (``most-confused``). ExperimentError if the training
     textures hold fewer such pairs."""
     from bench.textures.library import load_library
 
-    lib = load_library()
+    lib = load_library(library)
     if choice == "similar-description":
         pairs = similar_description_pairs(model.textures, n_pairs, lib)
         if len(pairs) < n_pairs:
@@ -443,7 +459,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     from bench.textures.library import load_library
 
     wall = {}
-    lib = load_library()
+    lib = load_library(spec.library)
     grid = movement_grid()
     client = connect(cluster or ClusterSpec.from_env())
     try:
@@ -452,7 +468,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         ids = spec.pilot_movements if spec.pilot_movements is not None else list(range(len(grid)))
         tasks = sweep_tasks(spec.pilot_textures, [grid[i] for i in ids], spec.pilot_trials, spec.seed,
                             spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale,
-                            movement_ids=ids, stepper_noise_Pa=spec.stepper_noise_Pa)
+                            movement_ids=ids, stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "")
         log(f"pilot: {len(tasks)} trials")
         pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress, log=log)
         model = ex.fit_model(table_from_rows(pilot_rows))
@@ -472,7 +488,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                     tasks.append(TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                            trial_seed(spec.seed, "training", tex, int(m), k), int(m), spec.fidelity,
                                            spec.fingerprints, stage="training", noise_scale=spec.noise_scale,
-                                           stepper_noise_Pa=spec.stepper_noise_Pa))
+                                           stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or ""))
         # the same movement may be best for two properties: run it once
         tasks = list({(t.texture, t.movement_id, t.trial): t for t in tasks}.values())
         replace_at = spec.replace_at if spec.replace_skin else None
@@ -483,12 +499,13 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         wall["training"] = time.perf_counter() - t0
         # 3. validation: the session goes on with the same skin
         t0 = time.perf_counter()
-        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs, spec.pair_choice, spec.seed, spec.source)
+        pairs = spec.pairs or _pick_pairs(train, best, spec.n_pairs, spec.pair_choice, spec.seed, spec.source,
+                                          spec.library)
         val_textures = sorted({n for p in pairs for n in p} | (set(textures) if spec.identify_all_textures else set()))
         val_tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,
                                spec.fingerprints, stage="validation", noise_scale=spec.noise_scale,
-                               stepper_noise_Pa=spec.stepper_noise_Pa)
+                               stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "")
                      for tex in val_textures for m in sorted(set(best.tolist())) for k in range(spec.validation_trials)]
         session, history = schedule_skin(tasks + val_tasks, wear=spec.wear, replace_at=replace_at)
         tasks = session[len(tasks):]

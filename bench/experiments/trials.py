@@ -54,6 +54,7 @@ class TrialTask:
     noise_scale: float = 1.0  # 2.0: every noise source doubled (an ablation)
     stepper_noise_Pa: float = 0.0  # the rig's stepper background, median RMS in the PAC band (RigSettings)
     stage: str = ""  # which stage of an experiment the trial belongs to (pilot, training, validation)
+    library: str = ""  # the texture library file the texture comes from ("": the shipped one)
 
     def movement(self) -> Movement:
         return Movement(self.force_N, self.velocity_m_per_s)
@@ -90,7 +91,8 @@ def run_trial_task(task: TrialTask) -> dict:
     skin = Skin(fingerprints=task.fingerprints, ridge_height_m=task.ridge_height_m, serial=task.skin_serial)
     rig = TextureRig(skin=skin, params=_params(task.noise_scale), fidelity=task.fidelity, noise=NoiseSources(),
                      settings=RigSettings(stepper_noise_Pa=task.stepper_noise_Pa), wear=False)
-    trial = rig.run_trial(texture(task.texture), task.movement(), seed=task.seed, trial=task.trial)
+    trial = rig.run_trial(texture(task.texture, task.library or None), task.movement(), seed=task.seed,
+                          trial=task.trial)
     row = asdict(task)
     row.update(properties(trial.recording))
     row.update(true_normal_N=trial.true_normal_N, start_position_m=trial.start_position_m,
@@ -140,7 +142,7 @@ def _movement_ids(movements: list[Movement], movement_ids) -> list[int]:
 def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int = 6, seed: int = 0,
                 fidelity: str = "default", fingerprints: bool = True, stage: str = "sweep",
                 noise_scale: float = 1.0, movement_ids: list[int] | None = None,
-                stepper_noise_Pa: float = 0.0) -> list[TrialTask]:
+                stepper_noise_Pa: float = 0.0, library: str = "") -> list[TrialTask]:
     """Tasks for every texture × movement × repetition, each on a fresh skin (wear is shown apart, by
     :func:`wear_per_movement`).  ``movement_ids`` name the movements (grid ids; default their positions, which are
     the grid ids for the whole grid); a trial's seed comes from its identity (``seed``, ``stage``, texture,
@@ -157,7 +159,7 @@ def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int =
             for k in range(trials):
                 out.append(TrialTask(tex, m.force_N, m.velocity_m_per_s, k, trial_seed(seed, stage, tex, m_id, k),
                                      m_id, fidelity, fingerprints, stage=stage, noise_scale=noise_scale,
-                                     stepper_noise_Pa=stepper_noise_Pa))
+                                     stepper_noise_Pa=stepper_noise_Pa, library=library))
     return out
 
 

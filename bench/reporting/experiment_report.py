@@ -74,7 +74,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     from bench.textures.library import load_library
 
     out.mkdir(parents=True, exist_ok=True)
-    lib = load_library()
+    lib = load_library(result.spec.library)
     names = []
     rows = result.pilot_rows + result.training_rows + result.validation_rows
     write_rows_csv(out / "trials.csv", rows)

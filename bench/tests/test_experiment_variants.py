@@ -118,3 +118,107 @@ def test_replace_at_with_no_replacement_is_a_contradiction(training, off):
         E.parse_experiment({"experiment": {"name": "x"}, "training": {"replace_at": 0.1, **training}}, "x.toml")
     assert f"training.replace_at = 0.1 with {off}" in str(e.value)
     assert E.parse_experiment({"experiment": {"name": "x"}, "training": training}, "x.toml")  # alone: fine
+
+
+MY_LIBRARY = """
+[[texture]]
+number = 5
+name = "my paper"
+group = "paper-like"
+rms_height_um = 3.0
+correlation_length_um = 80.0
+hurst = 0.7
+mu_static = 0.6
+mu_kinetic = 0.5
+modulus_MPa = 30.0
+material = "paper"
+seed = {seed}
+source = "mine"
+""" + "".join(f"""
+[[texture]]
+number = {n}
+name = "{name}"
+group = "{group}"
+rms_height_um = {rms}
+correlation_length_um = 300.0
+hurst = 0.7
+mu_static = 0.55
+mu_kinetic = 0.47
+modulus_MPa = 0.5
+material = "cotton fabric"
+seed = {n}
+source = "mine"
+""" for n, name, group, rms in ((6, "my rough paper", "paper-like", 6.0), (74, "my cotton", "cottons and silks", 20.0),
+                                (75, "my coarse cotton", "cottons and silks", 40.0),
+                                (950, "my test felt", "test surfaces", 80.0)))
+
+
+def _my_experiment(tmp_path, seed=5):
+    (tmp_path / "lib").mkdir(exist_ok=True)
+    (tmp_path / "lib" / "mine.toml").write_text(MY_LIBRARY.format(seed=seed))
+    experiment = tmp_path / "mine.toml"
+    experiment.write_text('[experiment]\nname = "mine"\nlibrary = "lib/mine.toml"\n'
+                          '[pilot]\ntextures = [5, 74, 950]\ntrials = 2\nmovements = [0, 7, 14]\n'
+                          '[training]\ntextures = "all"\ntrials = 2\n'
+                          '[validation]\nn_pairs = 2\npair_choice = "random-within-group"\ntrials = 2\n'
+                          '[exploration]\npair_simulations = 20\nidentification_simulations = 20\n')
+    return E.load_experiment(experiment)
+
+
+def test_an_experiment_on_a_texture_library_of_ones_own(no_rig, tmp_path):
+    """[experiment] library (relative to the experiment file): its textures are the experiment's — validated, slid
+    by the trials, paired, named in the outputs.  There was no way to run the experiment on one's own library."""
+    spec = _my_experiment(tmp_path)
+    assert spec.library == str((tmp_path / "lib" / "mine.toml").resolve())
+    result = E.run_experiment(spec, cache_dir=None, progress=False, log=lambda m: None)
+    assert {r["texture"] for r in result.pilot_rows} == {5, 74, 950}  # T950: only in this library
+    assert {r["texture"] for r in result.training_rows} == {5, 6, 74, 75}  # "all": the library's 1..117
+    assert {r["library"] for r in result.pilot_rows + result.training_rows + result.validation_rows} == {spec.library}
+    assert sorted(map(sorted, result.pairs)) == [[5, 6], [74, 75]]
+    write_outputs(result, tmp_path / "out")
+    assert "my coarse cotton" in (tmp_path / "out" / "report.md").read_text()
+
+
+def test_a_trial_slides_the_texture_of_its_own_library(monkeypatch):
+    from bench.experiments import trials
+    from bench.textures import library
+
+    asked = []
+
+    def texture(number, path=None):
+        asked.append((number, path))
+        raise RuntimeError("enough")
+
+    monkeypatch.setattr(library, "texture", texture)
+    for lib in ("/somewhere/mine.toml", ""):
+        with pytest.raises(RuntimeError, match="enough"):
+            trials.run_trial_task(trials.TrialTask(5, 0.5, 0.025, 0, 1, library=lib))
+    assert asked == [(5, "/somewhere/mine.toml"), (5, None)]
+
+
+def test_a_stage_is_run_again_when_its_library_file_changes(tmp_path, monkeypatch):
+    ran = []
+    monkeypatch.setattr(E, "sweep", lambda tasks, **kw: ran.append(len(tasks)) or _synthetic_sweep(tasks))
+    spec = _my_experiment(tmp_path)
+    tasks = [E.TrialTask(5, 0.5, 0.025, k, k, 14, library=spec.library) for k in range(2)]
+    for _ in range(2):
+        E.run_stage("pilot", tasks, tmp_path / "cache", progress=False, log=lambda m: None)
+    assert ran == [2]  # the second from the cache
+    _my_experiment(tmp_path, seed=55)  # the same path, another surface for T5
+    E.run_stage("pilot", tasks, tmp_path / "cache", progress=False, log=lambda m: None)
+    assert ran == [2, 2]
+
+
+def test_a_library_of_ones_own_that_is_broken_or_missing_is_named_with_the_field(tmp_path):
+    experiment = tmp_path / "x.toml"
+    for value, words in (('"nothere.toml"', "cannot read the file"), ("3", "the path of a texture library file")):
+        experiment.write_text(f'[experiment]\nname = "x"\nlibrary = {value}\n')
+        with pytest.raises(E.ExperimentError) as e:
+            E.load_experiment(experiment)
+        assert f"experiment.library = {value.strip(chr(34)) if value != '3' else 3!r}" in str(e.value)
+        assert words in str(e.value)
+    (tmp_path / "bad.toml").write_text(MY_LIBRARY.format(seed=5).replace("hurst = 0.7", "hurst = 7", 1))
+    experiment.write_text('[experiment]\nname = "x"\nlibrary = "bad.toml"\n')
+    with pytest.raises(E.ExperimentError, match=r"experiment.library = 'bad.toml' \(.*bad.toml\): T5 'my paper': "
+                                                r"hurst = 7: allowed range is 0.1 to 1"):
+        E.load_experiment(experiment)
