@@ -15,7 +15,8 @@ friction against the silicone skin, the texture's Young's modulus, thermal mater
 
 The file is validated completely before anything is listed; every problem names the texture, the field, the
 value and what is allowed.  --json prints the textures in the file's own fields and units; saved as a .json
-file, that list is a library --library reads back (edit it to try your own surfaces).
+file, that list is a library --library reads back; edit it to try your own surfaces in the texture experiment
+([experiment] library = "FILE" in an experiment file; scenes and texture-sweep use the shipped library).
 
 examples:
   biotac-bench textures                      # all of them
