@@ -245,12 +245,13 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
     if not baselines:
         lines += ["", "No baseline strategy (cycle, random) was run: Bayesian exploration is compared with none."]
     else:
+        good, strict = record["bayesian_beats_baselines_on"], record["bayesian_strictly_beats_baselines_on"]
         lines += ["", f"In identification, Bayesian exploration is at least as accurate as {' and '.join(baselines)} "
-                      f"and converges in no more movements on {record['bayesian_beats_baselines_on']} of {n_val} "
-                      f"identified textures; it is "
-                      f"strictly better than {'both' if len(baselines) == 2 else 'it'} (better in accuracy or in "
-                      f"movements, no worse in the other) on "
-                      f"{record['bayesian_strictly_beats_baselines_on']} of them — the rest tie."]
+                      f"and converges in no more movements on {good} of {n_val} identified textures; it is strictly "
+                      f"better than {'both' if len(baselines) == 2 else 'it'} (better in accuracy or in movements, no "
+                      f"worse in the other) on {strict} of them, and ties with "
+                      f"{'one of them' if len(baselines) == 2 else 'it'} on the other {good - strict}; on "
+                      f"{n_val - good} it is less accurate or slower than {'one of them' if len(baselines) == 2 else 'it'}."]
     lines += ["", "## Pairs of similar textures", "",
               "The pairs as the experiment file lists them:" if result.spec.pairs
               else PAIR_TEXT[result.spec.pair_choice],

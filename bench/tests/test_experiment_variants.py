@@ -2,6 +2,7 @@
 the outputs they leave (trials replaced by synthetic rows, so each test takes a second)."""
 
 import json
+import re
 from dataclasses import asdict
 
 import numpy as np
@@ -68,7 +69,17 @@ def test_the_comparison_names_only_the_baselines_that_ran(no_rig, tmp_path):
     write_outputs(result, tmp_path)
     report = (tmp_path / "report.md").read_text()
     assert "at least as accurate as random choice and" in report and "cycling" not in report
-    assert isinstance(_strict((tmp_path / "summary.json").read_text())["bayesian_beats_baselines_on"], int)
+    summary = _strict((tmp_path / "summary.json").read_text())
+    good, strict = summary["bayesian_beats_baselines_on"], summary["bayesian_strictly_beats_baselines_on"]
+    assert isinstance(good, int) and isinstance(strict, int)
+    # the sentence accounts for every identified texture: strictly better, tied, or worse — "the rest tie" had read
+    # as if no texture were worse
+    m = re.search(r"no more movements on (\d+) of (\d+) identified textures; it is strictly better than it .*? on "
+                  r"(\d+) of them, and ties with it on the other (\d+); on (\d+) it is less accurate or slower than "
+                  r"it\.", report)
+    assert m, report
+    g, n, s_, tied, worse = map(int, m.groups())
+    assert (g, s_, tied) == (good, strict, good - strict) and s_ + tied + worse == n
 
 
 @pytest.mark.parametrize("strategies", [["cycle", "random"], ["random"], ["bayesian", "bayesian"]])
