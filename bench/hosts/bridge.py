@@ -34,6 +34,8 @@ import random
 import threading
 import time
 
+import numpy as np
+
 from bench.hosts.cosim import CoSim, VirtualBoard
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
@@ -59,8 +61,9 @@ class FirmwareBench:
         if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
         for name, flag in (("realtime", realtime), ("pull_up", pull_up), ("keep_arrivals", keep_arrivals)):
-            if not isinstance(flag, bool):  # "no" is truthy: it would have turned the flag on
+            if not isinstance(flag, (bool, np.bool_)):  # "no" is truthy: it would have turned the flag on
                 raise ValueError(f"{name} = {flag!r}: must be True or False")
+        realtime, pull_up, keep_arrivals = bool(realtime), bool(pull_up), bool(keep_arrivals)  # (numpy's too)
         if not (isinstance(baudrate, int) and baudrate > 0):
             raise ValueError(f"baudrate = {baudrate!r}: must be a whole number > 0")
         if not (isinstance(host_gone_s, (int, float)) and not isinstance(host_gone_s, bool)

@@ -144,8 +144,9 @@ class CheetahBench:
 
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False,
                  variant: str = "biotac"):
-        if not isinstance(trace, bool):
+        if not isinstance(trace, (bool, np.bool_)):
             raise ValueError(f"trace = {trace!r}: must be True or False")
+        trace = bool(trace)
         sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)  # variant: "biotac" or "biotac-sp"
         self.library = build_library()
         self.lib_dir = self.library.parent

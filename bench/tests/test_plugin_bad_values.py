@@ -84,3 +84,13 @@ def test_bad_values_fail_the_users_test_naming_the_keyword(pytester):
     ])
     out = result.stdout.str()
     assert "Traceback" not in out and "FirmwareError" not in out and "AttributeError" not in out, out
+
+
+def test_numpy_bools_are_still_flags(biotac_bridge, biotac_cheetah):
+    """A flag from numpy (a parametrized array's element, a comparison's result) is True or False: the flag checks
+    took only Python's bool and refused np.True_ and np.False_, which had worked."""
+    import numpy as np
+
+    bench = biotac_bridge(pull_up=np.False_, realtime=np.False_, keep_arrivals=np.True_)
+    assert bench.realtime is False
+    assert biotac_cheetah(trace=np.True_).trace is not None
