@@ -54,6 +54,7 @@ from __future__ import annotations
 import copy
 import copyreg
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -141,11 +142,14 @@ class RigSettings:
                                                                                           and value >= 0):
                 raise ValueError(f"rig.{name} = {value!r}: must be a finite number ≥ 0")
         for name, what in _RIG_POSITIVE.items():  # each divides the trial's timing: 0 would never end or divide by 0
-            if getattr(self, name) <= 0:
-                raise ValueError(f"rig.{name} = {getattr(self, name)!r}: must be > 0 ({what})")
-        if not (isinstance(self.pdc_average_frames, int) and self.pdc_average_frames >= 1):
+            value = getattr(self, name)
+            if not (isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and value > 0):
+                raise ValueError(f"rig.{name} = {value!r}: must be a number > 0 ({what})")
+        frames = self.pdc_average_frames
+        if not (isinstance(frames, numbers.Integral) and not isinstance(frames, (bool, np.bool_)) and frames >= 1):
             raise ValueError(f"rig.pdc_average_frames = {self.pdc_average_frames!r}: a whole number of frames ≥ 1 "
                              f"(1: each frame's own reading)")
+        self.pdc_average_frames = int(frames)  # (numpy's integers too)
         if self.stepper_noise_log_spread > 3.0:
             raise ValueError(f"rig.stepper_noise_log_spread = {self.stepper_noise_log_spread!r}: at most 3 (a factor "
                              f"of e^3 ≈ 20 either way for one standard deviation)")

@@ -95,3 +95,16 @@ def test_a_zero_rate_or_length_that_the_trial_divides_by_is_refused_by_name(name
     ZeroDivisionError (or a run that never ends); it is refused when the settings are made, naming the setting."""
     with pytest.raises(ValueError, match=rf"rig\.{name} = 0(\.0)?: .*(> 0|≥ 1)"):
         RigSettings(**{name: 0})
+
+
+def test_numpy_numbers_are_settings_and_a_word_is_refused_by_name():
+    """pdc_average_frames from numpy (np.int64(4)) is a whole number of frames (it was refused: only Python's int
+    passed); a word for a rate is refused naming the setting (it was a bare TypeError from '<=')."""
+    import numpy as np
+
+    s = RigSettings(pdc_average_frames=np.int64(4), chunk_s=np.float64(0.25))
+    assert s.pdc_average_frames == 4 and type(s.pdc_average_frames) is int
+    with pytest.raises(ValueError, match=r"rig\.chunk_s = 'x': must be a number > 0"):
+        RigSettings(chunk_s="x")
+    with pytest.raises(ValueError, match=r"rig\.pdc_average_frames = True: a whole number"):
+        RigSettings(pdc_average_frames=True)
