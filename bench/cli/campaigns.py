@@ -93,7 +93,7 @@ same for any number of workers.  An --junit path where no file can be created is
 the summary is printed before the report is written; a second campaign naming a report a first one is still
 running for is refused (a lock file beside the report, removed at the end).  Exit status 1 if any case fails or
 the report could not be written after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the
-campaign (exit 130; SIGTERM: 143) and writes no report.
+campaign (exit 130; SIGTERM: 143) and its --junit report holds one error saying it was stopped, no case's result.
 
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}

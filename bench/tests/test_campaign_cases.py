@@ -264,3 +264,13 @@ def test_the_task_list_is_every_fault_scene_and_seed_and_refuses_an_empty_or_unk
             campaign.campaign_tasks(*empty)
     with pytest.raises(ValueError, match="unknown fault or scene: nope, nowhere"):
         campaign.campaign_tasks(["none", "nope"], ["rest", "nowhere"], [0])
+
+
+def test_the_campaign_help_says_what_a_stopped_campaign_leaves_in_its_report():
+    """A campaign stopped by Ctrl-C or SIGTERM writes a --junit report with one error (so that a CI step publishing
+    reports shows the stop); --help still said it "writes no report"."""
+    from bench.cli.campaigns import CAMPAIGN_HELP
+
+    text = " ".join(CAMPAIGN_HELP.split())
+    assert "writes no report" not in text
+    assert "report holds one error saying it was stopped" in text
