@@ -29,7 +29,14 @@ import sys
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
-from bench.errors import BenchError
+import time as _time
+
+#: when this module was imported, and the modules loaded before it (see :func:`stale_sources`): taken before this
+#: module imports any of the project's own
+_IMPORTED_AT = _time.time()
+_LOADED_BEFORE = frozenset(sys.modules) - {__name__}
+
+from bench.errors import BenchError  # noqa: E402 (after the snapshot above)
 
 
 class CampaignError(BenchError, RuntimeError):
@@ -186,17 +193,31 @@ def stale_sources() -> list[str]:
     # (a file written just before the start — by a script that then starts the worker — is not counted: the start
     # is known to a clock tick, and a worker imports nothing of the project in its first tenth of a second)
     started = _process_start_time() + 0.1
+    # each module is compared with the earliest instant it can have been loaded at: the start for those loaded
+    # before this module; for the others, this module's import or the check before the one that first listed them
+    # (a fresh worker imports this module, and what it imports, to run this check: comparing those with the
+    # process's start refused a worker that had loaded them after an edit, i.e. the new code)
+    now = _time.time()
     out = []
     for name, module in list(sys.modules.items()):
         path = getattr(module, "__file__", None)
         if name.split(".")[0] not in PROJECT_PACKAGES or not path:
             continue
+        if name not in _LOADED_BEFORE:
+            _FIRST_LISTED.setdefault(name, _CHECKED_AT.get("last", _IMPORTED_AT))
+        loaded_after = max(started, _FIRST_LISTED.get(name, started))
         try:
-            if os.stat(path).st_mtime > started:
+            if os.stat(path).st_mtime > loaded_after:
                 out.append(path)
         except OSError:
             continue  # deleted or moved: no longer the code this process will see either
+    _CHECKED_AT["last"] = now
     return sorted(out)
+
+
+#: the earliest instant each module loaded after this one can have been loaded at, and the last check's instant
+_FIRST_LISTED: dict[str, float] = {}
+_CHECKED_AT: dict[str, float] = {}
 
 
 def _close_parts(*parts) -> None:

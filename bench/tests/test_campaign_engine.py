@@ -198,3 +198,26 @@ def test_a_scheduler_without_workers_is_said_so_rather_than_a_silent_wait(capsys
         cluster.wait_for_workers(1)
         close(connect(ClusterSpec(scheduler=cluster.scheduler_address)))
         assert "no workers" not in capsys.readouterr().err
+
+
+def test_a_worker_that_loaded_a_project_module_after_its_edit_is_not_refused(tmp_path):
+    """A file edited after the worker started but before the worker first loaded it (a fresh worker loads the check's
+    own module, and what a campaign needs, only when asked) holds the new code: such a worker had been refused as
+    stale (the edit compared with the worker's start, not with when the worker can have loaded the file)."""
+    import time
+
+    from distributed import Client, LocalCluster
+
+    from bench.campaigns.engine import close, connect
+
+    probe = tmp_path / "probe.py"
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        time.sleep(0.5)  # the worker started well before the edit
+        probe.write_text("")  # the edit
+        time.sleep(0.1)
+        with Client(cluster) as client:
+            client.run(hold_a_project_module_from, str(probe))  # loaded after the edit (and the check's module too)
+        close(connect(ClusterSpec(scheduler=cluster.scheduler_address)))
+        os.utime(probe, (time.time() + 5,) * 2)  # edited again after that: stale now
+        with pytest.raises(CampaignError, match=r"probe\.py.*restart the workers"):
+            connect(ClusterSpec(scheduler=cluster.scheduler_address))
