@@ -287,13 +287,13 @@ def write_junit(results: list[dict], path: Path) -> None:
         ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
 
 
-def write_interrupted_junit(n_cases: int, path: Path) -> None:
-    """A JUnit report for a campaign stopped before its results came (Ctrl-C, SIGTERM): one error, so that a CI step
-    that publishes the report whatever the exit status shows the stop, not an earlier campaign's report."""
+def write_unfinished_junit(path: Path, why: str) -> None:
+    """A JUnit report for a campaign that gave no results (stopped by Ctrl-C or SIGTERM, or unable to run): one
+    error saying ``why``, so that a CI step that publishes the report whatever the exit status shows it, not an
+    earlier campaign's report left at the path."""
     suite = ET.Element("testsuite", name="biotac-fault-campaign", tests="1", failures="0", errors="1", time="0")
-    case = ET.SubElement(suite, "testcase", classname="campaign", name="interrupted", time="0")
-    ET.SubElement(case, "error", message=f"the campaign was stopped before its {n_cases} case(s) finished; "
-                                         f"no case's result is reported")
+    case = ET.SubElement(suite, "testcase", classname="campaign", name="unfinished", time="0")
+    ET.SubElement(case, "error", message=why)
     with atomic_write(path) as tmp:
         ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
 

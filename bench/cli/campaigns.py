@@ -51,19 +51,24 @@ def _cmd_campaign(a) -> int:
 def _run_campaign(a, report: Path) -> int:
     from bench.campaigns import faults as campaign
     from bench.campaigns.engine import ClusterSpec, signals_held
+    from bench.errors import BenchError
 
     spec = ClusterSpec.from_env(a.scheduler, a.workers)
     print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
           f"{a.seeds} seed(s)) on {spec.describe()}", file=sys.stderr)
+    n_cases = len(a.faults) * len(a.scenes) * a.seeds
     try:
         results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet)
-    except KeyboardInterrupt:  # (SIGTERM too) the report says so: an earlier campaign's report left here would pass
+    except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
+        # report says so: an earlier campaign's passing report left at --junit would be published as this one's
+        why = (f"the campaign was stopped before its {n_cases} case(s) finished" if isinstance(e, KeyboardInterrupt)
+               else f"the campaign could not run: {e}")
         with signals_held():
             try:
-                campaign.write_interrupted_junit(len(a.faults) * len(a.scenes) * a.seeds, report)
-            except OSError as e:
-                print(f"error: --junit {a.junit}: the interrupted campaign's report could not be written "
-                      f"({e.strerror or e})", file=sys.stderr)
+                campaign.write_unfinished_junit(report, f"{why}; no case's result is reported")
+            except OSError as oe:
+                print(f"error: --junit {a.junit}: the report saying so could not be written ({oe.strerror or oe})",
+                      file=sys.stderr)
         raise
     print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
     try:
@@ -93,7 +98,8 @@ same for any number of workers.  An --junit path where no file can be created is
 the summary is printed before the report is written; a second campaign naming a report a first one is still
 running for is refused (a lock file beside the report, removed at the end).  Exit status 1 if any case fails or
 the report could not be written after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the
-campaign (exit 130; SIGTERM: 143) and its --junit report holds one error saying it was stopped, no case's result.
+campaign (exit 130; SIGTERM: 143) and its --junit report holds one error saying it was stopped, no case's result;
+a campaign that could not run (no scheduler at the address) leaves one error saying why.
 
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}

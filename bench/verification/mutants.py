@@ -3311,7 +3311,7 @@ CATALOGUE += [
            ('bench/tests/test_campaign_cases.py::test_more_clauses_object_on_their_own',),
            'a stuck sensor dropped once and streamed again passes'),
     Mutant('campaign-interrupted-keeps-earlier-report', 'campaigns', 'bench/cli/campaigns.py',
-           '                campaign.write_interrupted_junit(len(a.faults) * len(a.scenes) * a.seeds, report)\n',
+           '                campaign.write_unfinished_junit(report, f"{why}; no case\'s result is reported")\n',
            '                pass\n',
            ('bench/tests/test_campaigns_on_dask.py::test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no_report',),
            "an interrupted campaign leaving an earlier campaign's passing JUnit report at --junit (a CI step publishing it shows a pass)"),
@@ -3471,10 +3471,15 @@ CATALOGUE += [
            ('bench/tests/test_campaign_engine.py::test_a_worker_that_loaded_a_project_module_after_its_edit_is_not_refused',),
            "a fresh worker that loaded the project's modules after an edit (the new code) is refused as stale"),
     Mutant('campaign-help-says-no-report', 'campaigns', 'bench/cli/campaigns.py',
-           "and its --junit report holds one error saying it was stopped, no case's result.",
+           "and its --junit report holds one error saying it was stopped, no case's result;",
            'and writes no report.',
            ('bench/tests/test_campaign_cases.py::test_the_campaign_help_says_what_a_stopped_campaign_leaves_in_its_report',),
            'campaign --help says a stopped campaign writes no report, where its --junit holds one error saying so'),
+    Mutant('campaign-unrunnable-keeps-earlier-report', 'campaigns', 'bench/cli/campaigns.py',
+           '    except (KeyboardInterrupt, BenchError) as e:',
+           '    except KeyboardInterrupt as e:',
+           ('bench/tests/test_campaigns_on_dask.py::test_no_scheduler_at_the_address_is_one_line_and_exit_2_within_seconds',),
+           "a campaign that could not run (no scheduler at the address) leaving an earlier campaign's passing JUnit report at --junit"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
