@@ -2946,7 +2946,7 @@ CATALOGUE += [
            ('bench/tests/test_plugin_bad_values.py::test_bad_values_fail_the_users_test_naming_the_keyword',),
            'biotac_bridge(seed=\'a\') failing with \'can only concatenate str (not "int") to str\''),
     Mutant('bench-sensors-not-checked-as-sensors', 'plugin', 'bench/hosts/scene_sensors.py',
-           '        odd = {n: s for n, s in sensors.items() if not isinstance(s, Sensor)}\n',
+           '        odd = {n: s for n, s in sensors.items() if not (isinstance(s, Sensor) or callable(getattr(s, "sample", None)))}\n',
            '        odd = {}\n',
            ('bench/tests/test_plugin_bad_values.py::test_bad_values_fail_the_users_test_naming_the_keyword',),
            'biotac_bridge(sensors={1: 3}) an AttributeError traceback'),
@@ -3480,6 +3480,11 @@ CATALOGUE += [
            '    except KeyboardInterrupt as e:',
            ('bench/tests/test_campaigns_on_dask.py::test_no_scheduler_at_the_address_is_one_line_and_exit_2_within_seconds',),
            "a campaign that could not run (no scheduler at the address) leaving an earlier campaign's passing JUnit report at --junit"),
+    Mutant('bench-sensors-wrapper-refused', 'plugin', 'bench/hosts/scene_sensors.py',
+           'if not (isinstance(s, Sensor) or callable(getattr(s, "sample", None)))}',
+           'if not isinstance(s, Sensor)}',
+           ('firmware_tests/tests/test_variant_sp.py::test_a_vendor_style_cheetah_client_gets_sp_data_and_clear_errors_from_a_19_electrode_sensor',),
+           "a bench refusing a wrapper that samples like a Sensor (a test's recording proxy), which it served before the sensor check"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
