@@ -404,6 +404,20 @@ def test_a_backlog_nobody_takes_is_bounded_and_counts_what_it_discards(monkeypat
     assert [f.seq for f in drv.frames(timeout_s=0.05)] == [5, 6, 7]
 
 
+def test_the_backlog_holds_sixty_seconds_of_frames_as_documented():
+    """README: the iterator's backlog keeps at most 6000 frames — 60 s of the default frame at 100 frames/s — and
+    counts what a program that never iterates lets it discard. 6100 frames read at once: the oldest 100 go."""
+    documented = 60 * 100  # 60 s × 100 frames/s (44 slots at 4.4 kHz), stated independently of the driver
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    port.rx += b"".join(data_frame(s) for s in range(documented + 100))
+    port.in_waiting = len(port.rx)
+    drv.poll()
+    assert drv.backlog_discarded == 100
+    first = next(iter(drv.frames(max_frames=1, timeout_s=0.05)))
+    assert first.seq == 100
+
+
 def test_count_afresh_forgets_the_frames_not_yet_taken_with_the_old_counts():
     """What ``record`` does after START's ACK: frames of an earlier session still waiting are not this one's."""
     port = FakeFirmware()
