@@ -50,6 +50,19 @@ def test_bridge_fast_and_rx_buffer_reach_the_bench(monkeypatch, flags, realtime,
     assert (kw["realtime"], kw["rx_buffer"]) == (realtime, rx_buffer)
 
 
+@pytest.mark.parametrize("flags,baud", [([], 3_000_000), (["--baud", "57600"], 57600)])
+def test_bridge_and_record_baud_reaches_the_line(monkeypatch, tmp_path, flags, baud):
+    """README: the bridge's UART runs at `--baud`, 3 Mbaud by default (so a 14.3 kB/s stream never fills the line);
+    `record` opens its port at the same rate unless told otherwise."""
+    import bench.hosts.bridge as bridge
+    import bench.hosts.driver as driver
+
+    monkeypatch.setattr(bridge, "FirmwareBench", recorder)
+    assert handed(["bridge", "--seconds", "1", *flags])["baudrate"] == baud
+    monkeypatch.setattr(driver, "BridgeDriver", recorder)
+    assert handed(["record", "loop://", "--seconds", "1", "--out", tmp_path / "r.npz", *flags])["baudrate"] == baud
+
+
 def test_explore_ablation_all_runs_every_ablation(monkeypatch, tmp_path):
     """README: `--ablation all` runs each variant beside the baseline (and, with `--no-cache`, caches nothing)."""
     import bench.experiments.experiment as E
