@@ -246,6 +246,22 @@ def test_a_default_folder_that_another_run_holds_is_passed_over(tmp_path):
 
 
 @pytest.mark.unit
+def test_the_default_folders_count_on_past_two(tmp_path):
+    """README: without --out, `out/<scene name>`, then `-2`, `-3`, …: with the first two holding earlier runs' files,
+    the third run gets `<name>-3` (and a fourth `<name>-4`), not a refusal or one of the earlier folders."""
+    from bench.reporting.outdir import fresh_folder
+
+    for name in ("fresh", "fresh-2"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "record.json").write_text("{}")
+    with fresh_folder(tmp_path / "fresh") as third:
+        assert third.path == tmp_path / "fresh-3"
+        (third.path / "record.json").write_text("{}")
+    with fresh_folder(tmp_path / "fresh") as fourth:
+        assert fourth.path == tmp_path / "fresh-4"
+
+
+@pytest.mark.unit
 def test_a_scene_name_that_is_a_path_is_rejected(tmp_path, capsys):
     f = tmp_path / "evil.toml"
     f.write_text('[scene]\nname = "../../x"\nduration_s = 1.0\n')
