@@ -181,6 +181,29 @@ def test_the_streamed_spectrogram_is_scipys_column_for_column():
     assert np.allclose(sxx, s_ref, rtol=1e-9, atol=0)
 
 
+def test_a_long_runs_spectrogram_averages_consecutive_windows_into_at_most_the_column_limit():
+    """README: the PAC spectrogram is averaged to at most 1000 columns. With a limit of 10 columns, 4 s at 2200 Hz
+    (99 windows of 80 ms, half overlap) gives 10 columns, each the mean — not the sum — of 10 consecutive windows
+    of scipy's spectrogram of the whole record (the last of the remaining 9), at the mean of their instants."""
+    from scipy.signal import spectrogram
+
+    from bench.running.aggregate import SpectrogramAccumulator
+
+    fs = 2200.0
+    x = np.random.default_rng(5).normal(size=8800)
+    t = np.arange(x.size) / fs
+    acc = SpectrogramAccumulator(duration_s=4.0, max_columns=10)
+    for a in range(0, x.size, 1000):
+        acc.add(t[a:a + 1000], x[a:a + 1000])
+    acc.finish()
+    _, times, sxx = acc.result()
+    _, t_ref, s_ref = spectrogram(x, fs, window=("tukey", 0.25), nperseg=176, noverlap=88)
+    assert s_ref.shape[1] == 99 and sxx.shape[1] == 10
+    groups = [slice(10 * i, min(10 * i + 10, 99)) for i in range(10)]
+    assert np.allclose(sxx, np.stack([s_ref[:, g].mean(axis=1) for g in groups], axis=1), rtol=1e-9, atol=0)
+    assert np.allclose(times, [t_ref[g].mean() for g in groups], rtol=0, atol=1e-9)
+
+
 def test_a_drop_is_counted_when_its_100_ms_window_fits_in_the_run():
     """The impact table counts a drop whose 100 ms detection window ends inside the run (at 0.85 s of 1 s); only an
     interrupted run leaves a drop out (the scene refuses a window that would run past its end)."""
