@@ -315,6 +315,22 @@ def test_long_runs_keep_no_samples_in_memory_and_say_why_exports_were_skipped(tm
 
 
 @pytest.mark.unit
+@pytest.mark.parametrize("duration_s, exported", [(600.0, True), (601.0, False)])
+def test_exports_and_samples_in_memory_stop_past_600_simulated_s(tmp_path, duration_s, exported):
+    """README: the exports are written for runs up to 600 simulated s, and `run_scene` keeps every sample in
+    `Recording.channels` for scenes up to 600 s; a longer run keeps only samples.h5 and says so. Checked on each side
+    of the limit (PDC alone at 100 slots/s keeps it fast)."""
+    from bench.reporting.session import run_to_folder
+
+    sc = parse_scene({"scene": {"name": "edge", "duration_s": duration_s},
+                      "host": {"sequence": ["PDC"], "slot_rate_Hz": 100.0}})
+    assert bool(run_scene(sc, progress=False).channels) is exported
+    res = run_to_folder(sc, tmp_path / "o", plots=False, progress=False)
+    assert ("codes.npz" in res.record["outputs"]) is exported
+    assert ("codes.npz" in res.record.get("skipped_outputs", {})) is not exported
+
+
+@pytest.mark.unit
 def test_the_summary_is_bounded_whatever_the_duration():
     """Feeding ten hours of a full frame's worth of chunks keeps plot data at a fixed size."""
     sc = parse_scene({"scene": {"name": "s", "duration_s": 36000.0}, "host": {"sequence": ["PAC"],
