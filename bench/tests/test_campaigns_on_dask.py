@@ -209,6 +209,21 @@ def test_no_workers_is_a_usage_error(argv, capsys):
     assert stop.value.code == 2 and "--workers: 0: must be 1 to " in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("command", [["campaign"], ["claims", "--seeds", "1"],
+                                     ["texture-sweep", "--textures", "902"], ["explore", "fixtures/experiments/quick.toml"]])
+def test_more_than_four_workers_per_core_is_a_usage_error_naming_the_limit(command, capsys):
+    """README: `--workers` is 1 to 4 per core of the machine for every Dask command (a thousand ran it out of memory);
+    one more than 4 per core is refused before anything runs, saying how to get a bigger cluster."""
+    from bench.cli.main import build_parser
+
+    most = 4 * (os.cpu_count() or 1)
+    assert build_parser().parse_args([*command, "--workers", str(most)]).workers == most  # parsed only: nothing runs
+    with pytest.raises(SystemExit) as stop:
+        build_parser().parse_args([*command, "--workers", str(most + 1)])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and f"--workers: {most + 1}: must be 1 to {most}" in err and "--scheduler" in err
+
+
 def test_workers_and_scheduler_without_seeds_are_refused_for_claims(capsys):
     assert cli.main(["claims", "--only", "scales", "--workers", "2"]) == 2
     assert capsys.readouterr().err.strip() == ("error: --workers and --scheduler go with --seeds or a group that "
