@@ -182,6 +182,17 @@ def test_the_budget_prints_pa_on_the_published_pac_scale():
     assert float(total[6]) == pytest.approx(float(total[7]) * scale, abs=1e-3)  # Pa column = bits × scale
 
 
+def test_the_adc_input_noise_is_a_12_bit_enob_of_11_1_less_quantization():
+    """README (noise budget): the ADC's 0.45 LSB comes from a 12-bit ENOB of 11.1 less quantization. An ENOB of N bits
+    on a 12-bit converter means a total noise of 2^(12 − N)/√12 LSB RMS (quantization included); what remains once
+    the 1/√12 LSB of quantization is taken out is the input noise the budget's "ADC input noise" line must show."""
+    total = 2 ** (12 - 11.1) / np.sqrt(12)
+    expected = np.sqrt(total**2 - 1 / 12)  # 0.455 LSB
+    lines = _lines()
+    assert lines["ADC input noise (every channel)"] == pytest.approx(expected, abs=0.01)
+    assert lines["ADC quantization"] == pytest.approx(1 / np.sqrt(12), rel=1e-9)
+
+
 def test_every_total_is_the_quadrature_sum_of_the_lines_it_lists():
     """No source is dropped from, or added to, a channel's total: PAC's total is the intrinsic total, the hum lines and
     the ADC's four lines in quadrature (the intrinsic total itself that of its three Table 5-1 sources); each quiet
