@@ -193,6 +193,18 @@ def test_the_adc_input_noise_is_a_12_bit_enob_of_11_1_less_quantization():
     assert lines["ADC quantization"] == pytest.approx(1 / np.sqrt(12), rel=1e-9)
 
 
+def test_the_hum_harmonics_and_reference_noise_lines_are_the_documented_fractions():
+    """README (noise budget): the 2nd harmonic of the hum is 0.04 × the fundamental (2 × IEC 61000-2-2's 2 %), the 3rd
+    0.15 × (3 × its 5 %) — the induced hum grows with frequency — and the reference noise is 20 ppm of PAC's resting
+    code 2048. Compared as referred-to-input amplitudes (a hum line is narrow, so the band does not change it)."""
+    rti = {x.source: x.rti_uV for x in budget()}
+    bits = _lines()
+    fundamental = rti["mains hum (60 Hz)"]
+    assert rti["mains hum, 2nd harmonic (120 Hz)"] == pytest.approx(2 * 0.02 * fundamental, rel=1e-9)
+    assert rti["mains hum, 3rd harmonic (180 Hz)"] == pytest.approx(3 * 0.05 * fundamental, rel=1e-9)
+    assert bits["ADC reference noise at the resting code"] == pytest.approx(20e-6 * 2048, rel=0.01)
+
+
 def test_every_total_is_the_quadrature_sum_of_the_lines_it_lists():
     """No source is dropped from, or added to, a channel's total: PAC's total is the intrinsic total, the hum lines and
     the ADC's four lines in quadrature (the intrinsic total itself that of its three Table 5-1 sources); each quiet
