@@ -158,6 +158,27 @@ def test_force_never_removes_files_that_are_not_a_runs_own(tmp_path, capsys):
     assert (out / "thesis.tex").read_text() == "precious" and (out / "record.json").read_text() == "{}"
 
 
+@pytest.mark.unit
+@pytest.mark.parametrize("name, own", [("samples.h5", b"\x89HDF\r\n\x1a\n rest of an HDF5 file"),
+                                       ("codes.npz", b"PK\x03\x04 rest of a zip"),
+                                       ("record.json", b'{"status": "ok"}')])
+def test_force_tells_the_binary_and_json_outputs_from_a_users_files_of_that_name(tmp_path, name, own):
+    """README: --force recognises a run's file by how it starts — the HDF5, NPZ (zip) and JSON signatures as well as
+    the report's and CSV's: a user's file of that name starting otherwise is refused and kept, one that starts as a
+    run's is removed."""
+    theirs = tmp_path / "theirs"
+    theirs.mkdir()
+    (theirs / name).write_bytes(b"my own data, not a run's")
+    with pytest.raises(OutDirError, match=rf"{name} \(not as this command writes it\)"):
+        OutFolder.open(theirs, force=True)
+    assert (theirs / name).read_bytes() == b"my own data, not a run's"
+    earlier = tmp_path / "earlier"
+    earlier.mkdir()
+    (earlier / name).write_bytes(own)
+    OutFolder.open(earlier, force=True).close()
+    assert not (earlier / name).exists()
+
+
 def test_force_never_removes_a_file_named_as_a_runs_that_the_run_did_not_write(tmp_path, capsys):
     """Found by a hostile pass: --force matched by name only and removed the user's own report.md and samples.csv.
     Each of a run's files is recognised by how it starts (the report's heading, the CSV's header, HDF5, NPZ and PNG
