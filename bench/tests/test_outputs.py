@@ -245,6 +245,33 @@ def test_the_lock_names_its_holder_after_a_longer_pid_held_it(tmp_path):
 
 
 @pytest.mark.unit
+def test_the_files_are_put_in_place_in_the_documented_order(tmp_path, monkeypatch):
+    """README: every file is written under a temporary name and renamed into place in the order exports, plots,
+    samples.h5, report.md, record.json — so a record.json means every file it lists is complete."""
+    import bench.atomic as atomic
+    from bench.reporting.session import run_to_folder
+
+    placed = []
+    real = atomic.commit
+    import bench.reporting.outdir as outdir
+
+    def spy(tmp, final):
+        if not Path(final).name.startswith("."):  # a plot saved under its temporary name first
+            placed.append(Path(final).name)
+        return real(tmp, final)
+
+    monkeypatch.setattr(atomic, "commit", spy)
+    monkeypatch.setattr(outdir, "commit", spy)
+    sc = parse_scene({"scene": {"name": "order", "duration_s": 2.5},
+                      "stimulus": [{"kind": "touch", "electrode": "E7", "start_s": 0.2, "force_N": 1.0}]})
+    res = run_to_folder(sc, tmp_path / "o", csv=True, progress=False)
+    assert res.exit_code == 0 and sorted(placed) == sorted(res.record["outputs"]), placed
+    plots = [n for n in placed if n.endswith(".png")]
+    assert "electrode_map.png" in plots
+    assert placed == ["codes.npz", "samples.csv", *plots, "samples.h5", "report.md", "record.json"], placed
+
+
+@pytest.mark.unit
 def test_without_out_each_run_gets_a_fresh_folder(tmp_path):
     from bench.reporting.session import run_to_folder
 
