@@ -272,6 +272,27 @@ def test_the_files_are_put_in_place_in_the_documented_order(tmp_path, monkeypatc
 
 
 @pytest.mark.unit
+def test_a_signal_stops_the_run_at_the_end_of_its_4_s_chunk(tmp_path, monkeypatch):
+    """README: SIGTERM stops the run at the next chunk (4 simulated s) and writes what was recorded, status
+    "interrupted", exit status 143. The signal arrives while the first chunk is stored: exactly 4 s are kept."""
+    from bench.reporting.session import run_to_folder
+
+    real_add, sent = store.SampleStore.add, []
+
+    def add(self, parts):
+        if not sent:
+            sent.append(os.kill(os.getpid(), signal.SIGTERM))
+        return real_add(self, parts)
+
+    monkeypatch.setattr(store.SampleStore, "add", add)
+    sc = parse_scene({"scene": {"name": "chunks", "duration_s": 12.0}, "host": {"sequence": ["PAC"],
+                                                                               "slot_rate_Hz": 2200.0}})
+    res = run_to_folder(sc, tmp_path / "o", plots=False, progress=False)
+    assert (res.exit_code, res.record["status"], res.record["simulated_s"]) == (143, "interrupted", 4.0)
+    assert res.record["channels"]["PAC"]["samples"] == 4 * 2200
+
+
+@pytest.mark.unit
 def test_without_out_each_run_gets_a_fresh_folder(tmp_path):
     from bench.reporting.session import run_to_folder
 
