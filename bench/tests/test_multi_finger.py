@@ -46,6 +46,16 @@ def test_the_grasp_scene_gives_each_finger_its_unit_and_its_stimuli():
     assert sc.for_sensor(3).stimuli[0].start_s == ONSET_S[3] and sc.for_sensor(3).seed == sc.seed + 2
 
 
+def test_the_grasp_scene_is_the_hand_the_readme_describes():
+    """README: thumb (unit 17) at 0.5 s with 2 N, index (unit 18) at 0.9 s with 1.2 N, the middle finger lands at
+    1.3 s (0.8 N) and slips 8 mm."""
+    sc = load_scene(GRASP)
+    thumb, index, middle = (sc.for_sensor(k).stimuli[0] for k in (1, 2, 3))
+    assert (thumb.start_s, thumb.force_N) == (0.5, 2.0) and (index.start_s, index.force_N) == (0.9, 1.2)
+    assert middle.start_s + middle.approach_s == pytest.approx(1.3) and middle.force_N == 0.8
+    assert middle.distance_m == pytest.approx(0.008)
+
+
 def test_stimuli_of_sensor_2_do_not_reach_sensor_1():
     sc = parse_scene_text('[scene]\nname = "s"\nduration_s = 1.0\n[[stimulus]]\nkind = "tap"\nat_s = 0.5\n'
                           'peak_N = 1.0\nsensor = 2\n')
