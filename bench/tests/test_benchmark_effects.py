@@ -75,3 +75,29 @@ def test_effects_only_json(capsys):
     rows = doc["effect_costs"]["rows"]
     assert [r["effect"] for r in rows] == [row[0] for row in benchmark.EFFECT_ROWS]
     assert isinstance(doc["effect_costs"]["full_frame"]["met"], bool)
+
+
+REST_SCENE = '[scene]\nname = "tiny-rest"\nduration_s = 0.5\nseed = 4\n[host]\nsequence = ["PAC"]\nslot_rate_Hz = 2200.0\n'
+TAP_SCENE = REST_SCENE.replace("tiny-rest", "tiny-tap") + '[[stimulus]]\nkind = "tap"\nat_s = 0.2\npeak_N = 1.0\n'
+
+
+def test_the_fidelity_table_compares_noise_free_pac_and_gives_the_other_seeds_floor(tmp_path, monkeypatch):
+    """README (what accuracy costs): PAC RMS error compares noise-free analog PAC with the reference profile's — so at
+    rest every profile agrees exactly, and a tap shows the coarser profiles' error; the spectral error compares noisy
+    runs, and the "reference (other seed)" row, reference against itself with another seed's noise, is its floor
+    (above zero: other noise). Two half-second scenes in a folder of their own."""
+    from bench.verification import benchmark
+
+    (tmp_path / "rest.toml").write_text(REST_SCENE)
+    (tmp_path / "tap.toml").write_text(TAP_SCENE)
+    monkeypatch.setattr(benchmark, "SCENES_DIR", tmp_path)
+    rows = {(r["scene"], r["profile"]): r for r in benchmark.fidelity_table(progress=lambda m: None)}
+    for scene in ("tiny-rest", "tiny-tap"):
+        assert [p for s, p in rows if s == scene] == ["fast", "default", "reference", "reference (other seed)"]
+        assert (rows[scene, "reference"]["pac_rms_error_bits"], rows[scene, "reference"]["spectral_error_dB"]) == (0, 0)
+        floor = rows[scene, "reference (other seed)"]
+        assert floor["pac_rms_error_bits"] is None and floor["spectral_error_dB"] > 0.1
+    for profile in ("fast", "default"):
+        assert rows["tiny-rest", profile]["pac_rms_error_bits"] < 1e-6
+        assert rows["tiny-tap", profile]["pac_rms_error_bits"] > 0.1
+
