@@ -95,6 +95,18 @@ def test_a_program_that_finds_no_adapter_is_told_why(tmp_path):
         assert said in r.stderr and r.stderr.count("cheetah.so (BioTac emulator)") == 1, r.stderr
 
 
+def test_a_batch_of_just_over_an_hour_of_delays_is_refused():
+    """README: one request may advance virtual time by at most an hour. A batch whose queued delays add up to 3602 s
+    (an hour and two seconds, stated here rather than read from the server) ends the connection, the clock untouched."""
+    with pytest.MonkeyPatch.context() as mp, cheetah_adapter(mp, 1, bitrate_khz=None) as (cb, lib, h):
+        t0 = cb.t
+        lib.c_ch_spi_queue_clear(h)
+        for _ in range(1801):
+            assert lib.c_ch_spi_queue_delay_ns(h, 2_000_000_000) == 2_000_000_000
+        assert lib.c_ch_spi_batch_shift(h, 0, (C.c_uint8 * 1)()) < 0 and cb.t == t0
+        assert any("of virtual time" in e for e in cb.client_errors), cb.client_errors
+
+
 def test_a_request_past_an_hour_of_virtual_time_ends_the_connection_with_the_reason():
     """The sensors are simulated through every virtual second a program sleeps or queues, so one request may
     advance at most MAX_ADVANCE_S (3600 s): a 49-day ch_sleep_ms (it held the adapter, and Ctrl-C, for an hour) or a
