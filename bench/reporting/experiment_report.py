@@ -5,6 +5,7 @@ name and renamed into place (:func:`bench.atomic.atomic_write`)."""
 from __future__ import annotations
 
 import csv
+import math
 from pathlib import Path
 
 import numpy as np
@@ -213,6 +214,11 @@ def _skin_wear(spec) -> dict:
             "calibrated": "k: D's training session (3 skins); β: D's pilot boundary (level 8 visible, ≤ 7 not)"}
 
 
+def _z(x) -> str:
+    """A spread-check figure, or "—" where it is undefined (NaN or None)."""
+    return "—" if x is None or not math.isfinite(x) else f"{x:.2f}"
+
+
 def markdown(result: ExperimentResult, record: dict, lib) -> str:
     s = record["summary"]
     d = D_FIGURES
@@ -269,8 +275,11 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                   "A ratio near 1: validation scatters as training does; well above 1: the validation trials are "
                   "shifted (e.g. another skin state).", "",
                   "| property | validation | leave-one-out | ratio |", "|---|---|---|---|"]
-        lines += [f"| {k} | {v['validation_median_abs_z']:.2f} | {v['leave_one_out_median_abs_z']:.2f} | "
-                  f"{v['ratio']:.2f} |" for k, v in record["spread_check"].items()]
+        lines += [f"| {k} | {_z(v['validation_median_abs_z'])} | {_z(v['leave_one_out_median_abs_z'])} | "
+                  f"{_z(v['ratio'])} |" for k, v in record["spread_check"].items()]
+        if any(_z(x) == "—" for v in record["spread_check"].values() for x in v.values()):
+            lines += ["", "— : undefined (with 2 training trials per texture and movement, each trial's leave-one-out "
+                          "normal rests on one trial: no spread)."]
     w = record["skin_wear"]
     visible = f"{100 * w['first_visible_wear_fraction']:.1f} %"
     policy = ("skin wear off" if not w["wear"] else "never replaced" if w["replace_at"] is None else

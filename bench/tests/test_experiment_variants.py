@@ -61,6 +61,9 @@ def test_bayesian_alone_is_compared_with_no_baseline_and_summary_json_is_standar
     assert summary["spread_check"]["all"]["ratio"] is None  # undefined, said as null
     report = (tmp_path / "report.md").read_text()
     assert "No baseline strategy (cycle, random) was run" in report and "cycling" not in report
+    spread = report[report.index("| property | validation | leave-one-out | ratio |"):].split("\n\n")[0]
+    assert "nan" not in spread.lower() and "| — |" in spread, spread  # undefined, said so, not "nan"
+    assert "— : undefined" in report
 
 
 def test_the_comparison_names_only_the_baselines_that_ran(no_rig, tmp_path):

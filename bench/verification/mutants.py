@@ -3605,6 +3605,11 @@ CATALOGUE += [
            'MAX_ADVANCE_S = 3700.0',
            ('firmware_tests/tests/test_cheetah.py::test_a_batch_of_just_over_an_hour_of_delays_is_refused',),
            'one Cheetah request may advance virtual time by more than an hour'),
+    Mutant('explore-spread-table-prints-nan', 'outputs', 'bench/reporting/experiment_report.py',
+           '    return "—" if x is None or not math.isfinite(x) else f"{x:.2f}"',
+           '    return f"{x:.2f}"',
+           ('bench/tests/test_experiment_variants.py::test_bayesian_alone_is_compared_with_no_baseline_and_summary_json_is_standard',),
+           "report.md's spread-check table prints nan where the leave-one-out spread is undefined (2 training trials)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
