@@ -80,7 +80,14 @@ def test_host_commands_stop_and_change_the_pattern():
         drv, frames = stream(fb, 5)
         drv.set_pattern([1, 0, 3])
         assert drv.wait_for(CMD_PATTERN) == ("ack", CMD_PATTERN, 0)
-        later = list(drv.frames(max_frames=20, timeout_s=5))
+        # frames come in order, each once: those read while waiting for the ACK (the old pattern, however many a
+        # slow host let pile up) first, then the new pattern's — take frames until 20 of the new pattern have come
+        later, new = [], 0
+        for f in drv.frames(max_frames=2000, timeout_s=5):
+            later.append(f)
+            new += list(f.channels) == [1, 0, 3]
+            if new == 20:
+                break
         drv.set_pattern([99])
         assert drv.wait_for(CMD_PATTERN) == ("ack", CMD_PATTERN, 3)  # refused: not a channel
         drv.send(0x7E)  # no such command
@@ -90,7 +97,9 @@ def test_host_commands_stop_and_change_the_pattern():
         drv.stop()
         assert drv.wait_for(CMD_STOP) == ("ack", CMD_STOP, 0)
         drv.close()
-    assert list(later[-1].channels) == [1, 0, 3]
+    first_new = next(k for k, f in enumerate(later) if list(f.channels) == [1, 0, 3])
+    assert all(list(f.channels) == [1, 0, 3] for f in later[first_new:]) and len(later) - first_new == 20
+    assert all(len(f.channels) == 44 for f in later[:first_new])  # the default frame until the change, not after
     # the refused pattern and the unknown command are the command errors; the sensor present at power-on was
     # found, not found again
     assert (status.command_errors, status.finds, status.losses) == (2, 0, 0)
