@@ -225,6 +225,7 @@ def _cmd_explore(a) -> int:
                          f"cache's entries would make a later --force refuse the folder); the cache may sit inside "
                          f"--out, e.g. --cache {Path(a.out) / 'cache'}")
     names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
+    variants = [("baseline", spec, "as specified")] + [(n, *ablated(spec, n)) for n in names]  # (checked first)
     cache_kept = "" if a.no_cache else f" (the stage cache {a.cache} is kept: no trial runs again)"
     kind = FolderKind("the earlier results" + cache_kept, OUTPUT_FILES + ("ablations.md",), tuple(ABLATIONS))
     keep = () if a.no_cache or a.out is None else tuple(filter(None, [_entry_inside(a.cache, a.out)]))
@@ -234,7 +235,6 @@ def _cmd_explore(a) -> int:
         out = folder.path
         cache = None if a.no_cache else writable_folder(a.cache, "--cache")
         cluster = ClusterSpec.from_env(a.scheduler, a.workers)
-        variants = [("baseline", spec, "as specified")] + [(n, *ablated(spec, n)) for n in names]
         rows = []
         for label, sp, what in variants:
             t0 = time.perf_counter()

@@ -13,7 +13,8 @@
   at all; an error or a signal while writing removes the temporary file.
 
 The lock file stays in the folder after the run (removing it would let two runs lock two different files of
-the same name); it holds the pid of the run that last locked it.
+the same name); it holds the pid of the run that last locked it. A folder the command made and left holding nothing
+but its lock (refused or failed before writing) is removed at close, lock and all (:func:`release_and_remove`).
 """
 
 from __future__ import annotations
@@ -89,6 +90,7 @@ class OutFolder:
     def __init__(self, path: Path, lock_fd: int, flag: str = "--out", kind: FolderKind = RUN):
         self.path, self._lock_fd, self.flag, self.kind = path, lock_fd, flag, kind
         self._deferred_keep: tuple[str, ...] | None = None  # earlier results to remove at clear_earlier()
+        self._created = False  # made by this open (removed at close if it then holds nothing but the lock)
 
     # ---- opening
     @classmethod
@@ -97,10 +99,15 @@ class OutFolder:
         """Check, create and lock ``path``; refuse it if it holds anything but ``keep`` (names of entries to leave
         alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before — at once,
         or, with ``defer_clearing``, only at :meth:`clear_earlier` (a long command that fails first keeps them)."""
+        try:
+            existed = Path(os.fspath(path)).is_dir()
+        except (OSError, ValueError):
+            existed = False
         p = _make_folder(path, flag)
         where = f"{flag} {os.fspath(path)!r}"
         fd = _lock(p, where, flag)
         folder = cls(p, fd, flag, kind)
+        folder._created = not existed
         try:
             folder._probe_writable()
             folder._prepare(force, keep, remove=not defer_clearing)
@@ -211,10 +218,22 @@ class OutFolder:
 
     # ---- closing
     def close(self) -> None:
-        if self._lock_fd is not None:
+        """Release the lock. A folder this command made that holds nothing but its lock (the command was refused
+        or failed before writing anything) is removed, so a refused command leaves no folder behind."""
+        if self._lock_fd is None:
+            return
+        fd, self._lock_fd = self._lock_fd, None
+        try:
+            only_lock = self._created and [e.name for e in os.scandir(self.path)] == [LOCK_NAME]
+        except OSError:
+            only_lock = False
+        if only_lock:
+            release_and_remove(fd, self.path / LOCK_NAME)
             with contextlib.suppress(OSError):
-                os.close(self._lock_fd)  # releases the flock
-            self._lock_fd = None
+                os.rmdir(self.path)  # (not empty if another command has meanwhile locked it: it stays)
+        else:
+            with contextlib.suppress(OSError):
+                os.close(fd)  # releases the flock
 
     def __enter__(self):
         return self

@@ -608,3 +608,19 @@ def test_two_concurrent_runs_into_one_folder_never_mix(tmp_path):
         winner_seed = 1 if a.returncode == 0 else 2
         assert record["scene"]["seed"] == winner_seed and store.read_attrs(out / "samples.h5")["seed"] == winner_seed
     print(f"{rounds} concurrent pairs: one ran, the other was refused ({refusals})")
+
+
+def test_a_folder_the_command_made_and_left_empty_is_removed_at_close_and_no_other(tmp_path):
+    """A refused or failed command leaves no folder behind: the folder it made and left holding nothing but its
+    lock is removed at close (lock and all); a folder that existed before keeps its lock, and a folder holding
+    anything else stays."""
+    from bench.reporting.outdir import LOCK_NAME, OutFolder
+
+    OutFolder.open(tmp_path / "made" / "deep").close()
+    assert not (tmp_path / "made" / "deep").exists() and (tmp_path / "made").is_dir()
+    (tmp_path / "mine").mkdir()
+    OutFolder.open(tmp_path / "mine").close()
+    assert [p.name for p in (tmp_path / "mine").iterdir()] == [LOCK_NAME]
+    with OutFolder.open(tmp_path / "written") as folder:
+        folder.write_text("report.md", "# r\n")
+    assert sorted(p.name for p in (tmp_path / "written").iterdir()) == [LOCK_NAME, "report.md"]
