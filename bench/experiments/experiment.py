@@ -38,7 +38,8 @@ from bench.experiments import design
 from bench.experiments import exploration as ex
 from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
 from bench.experiments.trials import (
-    FIRST_VISIBLE_WEAR, TrialTask, listed_twice, schedule_skin, sweep, sweep_tasks, trial_seed, wear_per_movement,
+    FIRST_VISIBLE_WEAR, TrialTask, listed_twice, noise_scale_problem, schedule_skin, sweep, sweep_tasks, trial_seed,
+    wear_per_movement,
 )
 from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
 from bench.atomic import atomic_write
@@ -120,6 +121,10 @@ def ablated(spec: ExperimentSpec, name: str) -> tuple[ExperimentSpec, str]:
     same = all(getattr(spec, k) == v for k, v in fields.items())
     diffs = ", ".join(f"{k} {getattr(spec, k)!r} → {v!r}" for k, v in fields.items()
                       if same or getattr(spec, k) != v)  # the fields it changes (all of them when none)
+    problem = noise_scale_problem(fields["noise_scale"]) if "noise_scale" in fields else None
+    if problem:
+        raise ExperimentError(f"--ablation {name}", [f"sensor.noise_scale {spec.noise_scale!r} → "
+                                                     f"{fields['noise_scale']!r}: {problem}"])
     return replace(spec, **fields), f"{what}: {diffs}" + (" (the same as the baseline)" if same else "")
 
 
@@ -309,6 +314,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
     spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
+    if noise_scale_problem(spec.noise_scale):
+        problems.append(f"sensor.noise_scale = {spec.noise_scale!r}: {noise_scale_problem(spec.noise_scale)}")
     spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)
     if "name" not in t["experiment"]:
         problems.append("[experiment] table with a name is missing (e.g. name = \"my-variant\")")
@@ -352,8 +359,10 @@ def _cached_rows(path: Path, tasks: list[TrialTask]) -> tuple[list[dict] | None,
     if not isinstance(rows, list) or len(rows) != len(tasks):
         return None, f"not {len(tasks)} trial rows"
     for row, task in zip(rows, tasks):
+        undefined = row.get("undefined", {}) if isinstance(row, dict) else {}
         if not isinstance(row, dict) or any(row.get(k) != v for k, v in asdict(task).items()) or not all(
-                isinstance(row.get(p), (int, float)) for p in ("traction", "roughness", "fineness")):
+                isinstance(row.get(p), (int, float)) or (row.get(p) is None and isinstance(undefined, dict)
+                                                         and p in undefined) for p in ex.PROPERTIES):
             return None, "a row that is not its task's trial"
     return rows, ""
 
@@ -380,7 +389,19 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
 
 
 def table_from_rows(rows: list[dict], movement_ids: dict | None = None) -> ex.TrialTable:
-    """A long-format :class:`~bench.experiments.exploration.TrialTable` from trial rows."""
+    """A long-format :class:`~bench.experiments.exploration.TrialTable` from trial rows.
+
+    Every property of every trial must have a value: a trial whose codes leave one undefined (null, with the
+    reason, e.g. a PAC constant over the window with every noise source off) is refused with the trials named —
+    leaving it out would bias its texture's normal, and the exploration has no use for a missing value."""
+    undefined = [r for r in rows if r.get("undefined")]
+    if undefined:
+        raise ExperimentError(f"{undefined[0].get('stage') or 'the'} trials", [
+            f"{len(undefined)} of {len(rows)} trials leave a property undefined, which the per-texture normals "
+            f"cannot take (a stage cache keeps the trials; with every noise source off, noise_scale = 0, a quiet "
+            f"slide's PAC can be one code); e.g. " + "; ".join(
+                f"T{r['texture']} movement {r['movement_id']} trial {r['trial']}: "
+                + ", ".join(f"{p} ({why})" for p, why in r["undefined"].items()) for r in undefined[:3])])
     n = len(rows)
     texture = np.repeat([r["texture"] for r in rows], 3)
     movement = np.repeat([r["movement_id"] for r in rows], 3)

@@ -14,6 +14,7 @@ trials (the pilot's 36 movements × textures × repetitions) and returns a table
 from __future__ import annotations
 
 import hashlib
+import math
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -74,10 +75,30 @@ NOISE_AMPLITUDES = ("adc_noise_rms_bits", "adc_reference_noise_ppm", "pac_path_n
                     "mains_amplitude_V", "spi_coupling_rms_V", "tdc_noise_V")
 
 
+def noise_scale_problem(noise_scale: float) -> str | None:
+    """Why the sensor cannot take ``noise_scale`` (None when it can): 0 turns every noise source off; any other
+    scale must leave each scaled parameter inside its documented range (the bridge's Johnson noise scales through
+    its resistance, ×k², so k ≥ √(R_min / R)). ``noise_scale`` is a scale factor (dimensionless)."""
+    try:
+        _params(noise_scale)
+    except ValueError as e:
+        lo, hi = SensorParams.__dataclass_fields__["bridge_resistance_ohm"].metadata["range"]
+        r = SensorParams().bridge_resistance_ohm
+        return (f"{e} — give 0 (every noise source off) or {math.sqrt(lo / r):.3g}…{math.sqrt(hi / r):.3g} "
+                f"(the bridge's Johnson noise scales through its resistance, ×k²)")
+    return None
+
+
+def noise_sources(noise_scale: float) -> NoiseSources:
+    """The noise sources a trial at ``noise_scale`` runs with: none at 0 (quantization remains), else all."""
+    return NoiseSources.none() if noise_scale == 0 else NoiseSources()
+
+
 def _params(noise_scale: float) -> SensorParams:
-    """Nominal parameters with every noise source scaled by ``noise_scale`` in amplitude."""
+    """Nominal parameters with every noise source scaled by ``noise_scale`` in amplitude (0: nominal, the
+    sources being switched off by :func:`noise_sources`)."""
     p = SensorParams()
-    if noise_scale == 1.0:
+    if noise_scale in (0.0, 1.0):
         return p
     scaled = {name: getattr(p, name) * noise_scale for name in NOISE_AMPLITUDES}
     scaled["amp_current_noise_A_per_rtHz"] /= noise_scale ** 2  # i·R: ×k overall with R ×k²
@@ -89,7 +110,8 @@ def run_trial_task(task: TrialTask) -> dict:
     from bench.textures.library import texture
 
     skin = Skin(fingerprints=task.fingerprints, ridge_height_m=task.ridge_height_m, serial=task.skin_serial)
-    rig = TextureRig(skin=skin, params=_params(task.noise_scale), fidelity=task.fidelity, noise=NoiseSources(),
+    rig = TextureRig(skin=skin, params=_params(task.noise_scale), fidelity=task.fidelity,
+                     noise=noise_sources(task.noise_scale),
                      settings=RigSettings(stepper_noise_Pa=task.stepper_noise_Pa), wear=False)
     trial = rig.run_trial(texture(task.texture, task.library or None), task.movement(), seed=task.seed,
                           trial=task.trial)

@@ -11,8 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from bench.textures.stage import StageMotor
-from bench.textures.properties import (RecordingError, TrialRecording, fineness, measurement_window, roughness,
-                                       traction)
+from bench.textures.properties import TrialRecording, measurement_window, properties
 from emulator.effects import effect_rng
 from emulator.sliding import Slide
 
@@ -67,15 +66,9 @@ class SlideRecorder:
                    "skin_serial": skin.get("serial"), "ridge_height_m": skin.get("ridge_height_m"),
                    "true_normal_N": float(np.mean(log["normal_N"][sliding])) if sliding.any() else float("nan"),
                    "mean_tangential_N": float(np.mean(log["tangential_N"][sliding])) if sliding.any() else float("nan")}
-            row["traction"] = traction(rec)  # (validation keeps ≥ 2 force-log samples in its window)
-            for name, measure in (("roughness", roughness), ("fineness", fineness)):
-                try:
-                    row[name] = measure(rec)
-                except RecordingError as e:  # undefined for this trial's codes alone (a PAC constant over the
-                    # window, as with every noise source off, has no spectral centroid): null, and why; the run and
-                    # the other trials' rows stand (it had failed the whole run after simulating it)
-                    row[name] = None
-                    row.setdefault("undefined", {})[name] = str(e)
+            # a property this trial's codes leave undefined (a PAC constant over the window, as with every noise
+            # source off, has no spectral centroid) is null, and why: the run and the other slides' rows stand
+            row.update(properties(rec))
             rows.append(row)
         return rows
 

@@ -421,3 +421,49 @@ def test_an_empty_pairs_list_is_refused_before_any_trial_not_replaced_by_chosen_
 
     with pytest.raises(E.ExperimentError, match=r"validation.pairs = \[\]: a list of at least one"):
         E.parse_experiment(tomllib.loads(text), "x.toml")
+
+
+def test_noise_scale_takes_zero_for_a_noise_free_sensor_and_refuses_what_the_sensor_cannot_express(tmp_path, capsys):
+    """[sensor] noise_scale = 0 runs the trials with every noise source off (it divided by zero in every trial);
+    a scale the sensor's parameter ranges cannot express (0.1: the bridge's Johnson noise scales through its
+    resistance, ×k², below its 100 Ω floor) is refused by the file's validation, and a double-noise ablation
+    past the range (10 → 20) before anything runs or any folder is made (it had failed in every trial)."""
+    from bench.experiments.trials import TrialTask, noise_sources, run_trial_task
+    from emulator.sensor import NoiseSources
+
+    assert E.parse_experiment({"experiment": {"name": "x"}, "sensor": {"noise_scale": 0}}, "x.toml").noise_scale == 0
+    with pytest.raises(E.ExperimentError, match=r"sensor.noise_scale = 0.1: .*bridge_resistance_ohm.*0 \(every noise"):
+        E.parse_experiment({"experiment": {"name": "x"}, "sensor": {"noise_scale": 0.1}}, "x.toml")
+    assert noise_sources(0.0) == NoiseSources.none() and noise_sources(0.5) == NoiseSources()
+    row = run_trial_task(TrialTask(texture=30, force_N=0.5, velocity_m_per_s=0.025, trial=0, seed=3,
+                                   fidelity="fast", noise_scale=0.0))
+    assert all(np.isfinite(row[p]) for p in ("traction", "roughness", "fineness")) and "undefined" not in row
+    loud = tmp_path / "loud.toml"
+    loud.write_text('[experiment]\nname = "loud"\n[sensor]\nnoise_scale = 10.0\n')
+    out = tmp_path / "out"
+    assert cli.main(["explore", str(loud), "--ablation", "double-noise", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "--ablation double-noise" in err and "10.0 → 20.0" in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_a_trial_with_an_undefined_property_is_kept_in_the_cache_and_refused_by_name_from_the_normals(tmp_path):
+    """A trial row whose codes left a property undefined (null, with the reason) is a trial's result: the stage
+    cache keeps it (a null without a reason is not one), and the trial table refuses it by texture, movement and
+    trial rather than fit a normal without it or with a NaN."""
+    task = E.TrialTask(texture=46, force_N=0.2, velocity_m_per_s=0.01, trial=1, seed=5, movement_id=0,
+                       stage="pilot")
+    from dataclasses import asdict
+    row = dict(asdict(task), traction=0.1, roughness=-6.9, fineness=None,
+               undefined={"fineness": "PAC is constant over the measurement window"})
+    path = tmp_path / "pilot.json"
+    path.write_text(json.dumps([row]))
+    assert E._cached_rows(path, [task]) == ([row], "")
+    path.write_text(json.dumps([dict(row, undefined={})]))
+    assert E._cached_rows(path, [task])[0] is None
+    good = dict(row, fineness=5.5, trial=0)
+    good.pop("undefined")
+    with pytest.raises(E.ExperimentError, match=r"(?s)pilot trials.*1 of 2 trials.*T46 movement 0 trial 1: fineness "
+                                                r"\(PAC is constant"):
+        E.table_from_rows([good, row])
+    assert len(E.table_from_rows([good])) == 3

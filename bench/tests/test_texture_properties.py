@@ -237,6 +237,28 @@ def test_windows_without_data_are_errors():
         tp.fineness(flat)
 
 
+def test_properties_records_what_the_codes_leave_undefined_and_raises_on_a_malformed_recording():
+    """properties() is the one place that says a property is undefined: a PAC constant over the slide has no
+    spectral centroid (fineness None, with the reason), while its roughness is the power floor and its traction a
+    mean — numbers; a stage current with no sample in the window leaves traction undefined. A recording whose
+    windows do not fit (a hold too short for the background window) is still an error, not a null."""
+    flat = tp.properties(make_trial(None, bg_sigma=0.0))
+    assert flat["fineness"] is None and "constant" in flat["undefined"]["fineness"]
+    assert flat["roughness"] == pytest.approx(math.log(tp.POWER_FLOOR)) and flat["traction"] == pytest.approx(0.05)
+    assert set(flat["undefined"]) == {"fineness"}
+    rec = make_trial(None, bg_sigma=1.0)
+    sparse = tp.properties(tp.TrialRecording(pac_t=rec.pac_t, pac=rec.pac, pdc_t=rec.pdc_t, pdc=rec.pdc,
+                                             current_t=np.array([0.0, 3.9]), current_A=np.array([0.1, 0.1]),
+                                             contact_s=CONTACT, slide_start_s=START, slide_end_s=END))
+    assert sparse["traction"] is None and set(sparse["undefined"]) == {"traction"}
+    assert "undefined" not in tp.properties(rec)
+    short_hold = tp.TrialRecording(pac_t=rec.pac_t, pac=rec.pac, pdc_t=rec.pdc_t, pdc=rec.pdc,
+                                   current_t=rec.current_t, current_A=rec.current_A,
+                                   contact_s=START - 0.05, slide_start_s=START, slide_end_s=END)
+    with pytest.raises(tp.RecordingError, match="too short for a background window"):
+        tp.properties(short_hold)
+
+
 def test_the_touchdown_transient_stays_out_of_the_background():
     """D measures the background during the hold, after contact: a 30 ms ring at touchdown (6 cycles of 200 Hz,
     zero mean) leaves the background power exactly as without it — the 50 ms guard covers the ring plus the FIR's

@@ -78,6 +78,12 @@ class RecordingError(BenchError, ValueError):
     """A trial recording is malformed (missing or bad array, inconsistent phases, windows without data)."""
 
 
+class UndefinedProperty(RecordingError):
+    """A property that this trial's codes leave without a value, the recording itself being sound: no valid sample
+    in a window (the host rejected every word there), or a PAC constant over the measurement window (no spectral
+    centroid). :func:`properties` records it as None with this reason."""
+
+
 def _series(name: str, t: Any, x: Any) -> tuple[np.ndarray, np.ndarray]:
     """Validate one (instants, values) pair: 1-D, same length, non-empty, finite, instants strictly increasing."""
     try:
@@ -283,7 +289,7 @@ def traction(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEAS
     w = measurement_window(rec, lead, tail)
     sel = _in(rec.current_t, w)
     if not sel.any():
-        raise RecordingError(f"stage current: no samples in the measurement window {w[0]:.4g}…{w[1]:.4g} s")
+        raise UndefinedProperty(f"stage current: no samples in the measurement window {w[0]:.4g}…{w[1]:.4g} s")
     return float(rec.current_A[sel].mean())
 
 
@@ -302,7 +308,7 @@ def band_powers(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = M
     for name, w in windows:
         inside = np.flatnonzero(_in(rec.pac_t, w))  # (instants increase: one run of samples)
         if not inside.size:
-            raise RecordingError(f"PAC: no samples in the {name} window {w[0]:.4g}…{w[1]:.4g} s")
+            raise UndefinedProperty(f"PAC: no samples in the {name} window {w[0]:.4g}…{w[1]:.4g} s")
         out.append(float(np.mean(_centred_convolution(x, h, int(inside[0]), int(inside[-1]) + 1) ** 2)))
     return out[0], out[1]
 
@@ -325,7 +331,7 @@ def averaged_spectrum(x: np.ndarray, fs_hz: float, window: int = CENTROID_WINDOW
     x = np.asarray(x, dtype=np.float64)
     n = min(int(window), x.size)
     if n < 2:
-        raise RecordingError(f"PAC: {x.size} sample(s) in the measurement window; need at least 2")
+        raise UndefinedProperty(f"PAC: {x.size} sample(s) in the measurement window; need at least 2")
     step = max(1, int(round(n * (1.0 - overlap))))
     seg = np.lib.stride_tricks.sliding_window_view(x, n)[::step]
     seg = (seg - seg.mean(axis=1, keepdims=True)) * _hann(n)  # periodic Hann
@@ -348,7 +354,7 @@ def spectral_centroid(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: flo
     f, p = averaged_spectrum(rec.pac[_in(rec.pac_t, w)], rec.pac_rate_hz, window, overlap)
     total = p.sum()
     if not total > 0:
-        raise RecordingError(f"PAC is constant over the measurement window {w[0]:.4g}…{w[1]:.4g} s: "
+        raise UndefinedProperty(f"PAC is constant over the measurement window {w[0]:.4g}…{w[1]:.4g} s: "
                              "spectral centroid undefined")
     return float((p * f).sum() / total)
 
@@ -361,8 +367,20 @@ def fineness(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEAS
 
 def properties(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
                guard_s: float = BACKGROUND_GUARD_S, power_floor: float = POWER_FLOOR,
-               window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> dict[str, float]:
-    """All three properties of one trial: ``{"traction": A, "roughness": ln bits², "fineness": ln Hz}``."""
-    return {"traction": traction(rec, lead, tail),
-            "roughness": roughness(rec, lead, tail, guard_s, power_floor),
-            "fineness": fineness(rec, lead, tail, window, overlap)}
+               window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> dict:
+    """All three properties of one trial: ``{"traction": A, "roughness": ln bits², "fineness": ln Hz}``.
+
+    A property this trial's codes leave undefined (:class:`UndefinedProperty`) is None, and the dict then holds
+    ``"undefined": {name: why}``; a malformed recording or window still raises :class:`RecordingError`."""
+    measures = {"traction": lambda: traction(rec, lead, tail),
+                "roughness": lambda: roughness(rec, lead, tail, guard_s, power_floor),
+                "fineness": lambda: fineness(rec, lead, tail, window, overlap)}
+    out, undefined = {}, {}
+    for name, measure in measures.items():
+        try:
+            out[name] = measure()
+        except UndefinedProperty as e:
+            out[name], undefined[name] = None, str(e)
+    if undefined:
+        out["undefined"] = undefined
+    return out
