@@ -336,7 +336,7 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         name, radius, ok = None, None, True
         if "mass_mg" in st:
             mass_mg = c.number(st, "mass_mg", w, 1e-4, 1e4, "mg")
-            mass = None if mass_mg is None else mass_mg * 1e-6
+            mass = None if mass_mg is None else mass_mg / 1e6
             if "diameter_mm" in st and "material" in st:
                 c.problems.append(f"{w}: give diameter_mm or material for a mass_mg drop, not both (the material's "
                                   f"density and the mass give the diameter)")
@@ -345,7 +345,7 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
                 d_mm = c.number(st, "diameter_mm", w, SPHERE_DIAMETER_MM[0], SPHERE_DIAMETER_MM[1], "mm")
                 ok = d_mm is not None
                 if ok and mass is not None:
-                    radius = d_mm * 0.5e-3
+                    radius = d_mm / 2e3
                     rho = mass / (4.0 / 3.0 * math.pi * radius**3)
                     lo, hi = SPHERE_DENSITY_KG_PER_M3
                     if not lo <= rho <= hi:
@@ -387,7 +387,7 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         if None not in (dur, fade) and _fade_fits(c, st, w, dur, fade):
             given = None not in (amp, f0) and (f1 is not None or "frequency_Hz" in st)
             what = "vibration" if not given or f1 is None else f"vibration (a {f0:g} → {f1:g} Hz sweep)"
-            vibrations = [Vibration(t, dur, amp * 1e-6, f0, f1, fade) if given else Vibration(t, dur, 0.0, 1.0,
+            vibrations = [Vibration(t, dur, amp / 1e6, f0, f1, fade) if given else Vibration(t, dur, 0.0, 1.0,
                                                                                             fade_s=fade)
                           for t in start]
             out += _valid(given, _ending_in_scene(c, w, what, vibrations, duration))
@@ -496,13 +496,13 @@ def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
     timing = ("velocity_mm_per_s", "distance_mm", "approach_s", "hold_s", "accel_s", "lift_s")
     if None in [vals[k] for k in timing]:
         return []
-    v, d, a = vals["velocity_mm_per_s"] * 1e-3, vals["distance_mm"] * 1e-3, vals["accel_s"]
+    v, d, a = vals["velocity_mm_per_s"] / 1e3, vals["distance_mm"] / 1e3, vals["accel_s"]
     if d < v * a:
         c.problems.append(f"{w}.distance_mm = {vals['distance_mm']!r}: shorter than the stage's acceleration and "
                           f"braking at this velocity ({v * a * 1e3:.3g} mm); lower accel_s or slide farther")
         return []
     # its span is checked whatever its texture and force (a bad one is a problem of its own)
-    start_m = None if vals["start_position_mm"] is None else vals["start_position_mm"] * 1e-3
+    start_m = None if vals["start_position_mm"] is None else vals["start_position_mm"] / 1e3
     force = 0.0 if vals["force_N"] is None else vals["force_N"]
     slides = [SlideSpec(t, tex, force, v, d, vals["approach_s"], vals["hold_s"], a, vals["lift_s"], start_m, where=w)
               for t in starts]
@@ -623,7 +623,7 @@ def _skin(c: _Checker, table) -> tuple[Skin, bool]:
         c.problems.append(f"skin.ridge_height_um = {_r(table['ridge_height_um'])} with skin.fingerprints = false: a "
                           f"skin without fingerprints has no ridges (the height would be reported, not felt); give one "
                           f"or the other")
-    return Skin(fingerprints=fingerprints, ridge_height_m=height * 1e-6 if given else Skin().ridge_height_new_m,
+    return Skin(fingerprints=fingerprints, ridge_height_m=height / 1e6 if given else Skin().ridge_height_new_m,
                 wear_coefficient=k if k is not None else Skin().wear_coefficient), wear
 
 

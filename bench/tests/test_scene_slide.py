@@ -311,3 +311,13 @@ def test_a_property_undefined_for_a_trials_codes_is_null_and_the_run_stands(tmp_
     assert row["fineness"] is None and "constant" in row["undefined"]["fineness"]
     assert isinstance(row["traction"], float) and isinstance(row["roughness"], float)
     assert "| — |" in (out / "report.md").read_text()
+
+
+def test_scene_values_in_mm_and_um_become_the_nearest_si_value():
+    """A scene's millimetres and micrometres are converted by dividing by the exact 1e3 and 1e6, so 100 µm is the
+    double nearest 1e-4 m (as record.json then shows it), not 100 × 1e-6 = 9.999999999999999e-05."""
+    sc = _scene(_slide(velocity_mm_per_s=3, distance_mm=30, start_position_mm=7), skin={"ridge_height_um": 100})
+    assert repr(sc.skin_before["ridge_height_m"]) == "0.0001"
+    (slide,) = sc.stimuli
+    assert (repr(slide.velocity_m_per_s), repr(slide.distance_m), repr(slide.start_position_m)) == \
+        ("0.003", "0.03", "0.007")
