@@ -316,8 +316,8 @@ def test_a_property_undefined_for_a_trials_codes_is_null_and_the_run_stands(tmp_
 def test_scene_values_in_mm_and_um_become_the_nearest_si_value():
     """A scene's millimetres and micrometres are converted by dividing by the exact 1e3 and 1e6, so 100 µm is the
     double nearest 1e-4 m (as record.json then shows it), not 100 × 1e-6 = 9.999999999999999e-05."""
-    sc = _scene(_slide(velocity_mm_per_s=3, distance_mm=30, start_position_mm=7), skin={"ridge_height_um": 100})
-    assert repr(sc.skin_before["ridge_height_m"]) == "0.0001"
+    sc = _scene(_slide(velocity_mm_per_s=9, distance_mm=13, start_position_mm=9), skin={"ridge_height_um": 100})
+    assert repr(sc.skin_before["ridge_height_m"]) == "0.0001"  # (100 × 1e-6 = 9.999999999999999e-05)
     (slide,) = sc.stimuli
     assert (repr(slide.velocity_m_per_s), repr(slide.distance_m), repr(slide.start_position_m)) == \
-        ("0.003", "0.03", "0.007")
+        ("0.009", "0.013", "0.009")  # (9 × 1e-3 = 0.009000000000000001, 13 × 1e-3 = 0.013000000000000001)
