@@ -439,7 +439,7 @@ def test_noise_scale_takes_zero_for_a_noise_free_sensor_and_refuses_what_the_sen
                                    fidelity="fast", noise_scale=0.0))
     assert all(np.isfinite(row[p]) for p in ("traction", "roughness", "fineness")) and "undefined" not in row
     loud = tmp_path / "loud.toml"
-    loud.write_text('[experiment]\nname = "loud"\n[sensor]\nnoise_scale = 10.0\n')
+    loud.write_text(QUICK.read_text().replace("[exploration]", "[sensor]\nnoise_scale = 10.0\n\n[exploration]"))
     out = tmp_path / "out"
     assert cli.main(["explore", str(loud), "--ablation", "double-noise", "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
