@@ -20,6 +20,20 @@ def test_the_catalogue_matches_the_tree_and_covers_every_area():
 
 
 @pytest.mark.unit
+def test_the_readme_states_the_catalogues_size_and_names_are_unique():
+    """README, Mutation catalogue: "holds N deliberate faults" is the catalogue's size (a count left stale after
+    adding mutants is caught here), and no two mutants share a name (``--only NAME`` picks one)."""
+    import re
+
+    from bench.paths import REPO
+
+    stated = re.findall(r"holds\s+(\d+) deliberate faults", (REPO / "README.md").read_text())
+    assert stated == [str(len(mu.CATALOGUE))]
+    names = [m.name for m in mu.CATALOGUE]
+    assert len(set(names)) == len(names)
+
+
+@pytest.mark.unit
 def test_the_catalogue_check_names_a_test_that_no_longer_exists():
     import dataclasses
 
