@@ -73,6 +73,10 @@ from emulator.spi.peripheral import SoftwarePeripheral
 from emulator.texture import Texture
 
 FORCE_PER_PDC_BIT_N = 0.0115  # the rig's calibration: the published 11.5 mN per PDC bit (D ch. 4)
+#: the smallest target PDC change (counts) the rig takes: 4 × the PDC's ~0.5 count RMS reading noise (noise budget).
+#: Below it the stop rule fires on noise, with the finger still in the air (a 0.01 N target, 0.87 counts, stopped in
+#: the air in 1 of 4 trials on foam); D's forces are 0.2–2 N (17–174 counts)
+MIN_TARGET_COUNTS = 2.0
 
 
 @dataclass(frozen=True)
@@ -198,6 +202,11 @@ class TextureRig:
         s = self.settings
         if not (movement.force_N > 0 and movement.velocity_m_per_s > 0):
             raise ValueError(f"movement {movement}: force and velocity must be positive")
+        if movement.force_N / FORCE_PER_PDC_BIT_N < MIN_TARGET_COUNTS:
+            raise ValueError(f"movement {movement}: a {movement.force_N:g} N target is a PDC change of "
+                             f"{movement.force_N / FORCE_PER_PDC_BIT_N:.2f} counts, within the PDC's reading noise "
+                             f"(~0.5 count RMS), so the stepper could stop in the air; the rig needs at least "
+                             f"{MIN_TARGET_COUNTS:g} counts ({MIN_TARGET_COUNTS * FORCE_PER_PDC_BIT_N:g} N)")
         first, last = self.start_range_m(movement)
         start_position = float(effect_rng(seed, "rig.start_position").uniform(first, last))
         run, reached, lowering, to_stop = lower(texture, movement, seed, start_position)

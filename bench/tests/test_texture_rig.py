@@ -235,3 +235,17 @@ def test_the_wear_table_agrees_with_a_skin_worn_trial_by_trial():
         one.wear(m.force_N, TRIAL_DISTANCE_M, area, velocity_m_per_s=m.velocity_m_per_s)
         lost = one.ridge_height_new_m - one.ridge_height_m
         assert row["lost_per_second_m"] == pytest.approx(lost / (TRIAL_DISTANCE_M / m.velocity_m_per_s), rel=1e-9)
+
+
+def test_a_target_within_the_pdc_noise_is_refused_before_the_finger_moves():
+    """A force target under MIN_TARGET_COUNTS PDC counts (4 × the ~0.5 count RMS reading noise) is refused by
+    name: 0.01 N is 0.87 counts, and the stop rule fired on noise with the finger in the air in one of four trials;
+    the smallest target it takes (0.023 N) runs and touches."""
+    from bench.rigs.texture_rig import FORCE_PER_PDC_BIT_N, MIN_TARGET_COUNTS
+    from bench.textures.library import texture
+
+    with pytest.raises(ValueError, match=r"0.01 N target is a PDC change of 0.87 counts.*at least 2 counts"):
+        TextureRig(wear=False).run_trial(texture(30), Movement(0.01, 0.01), seed=3)
+    lightest = MIN_TARGET_COUNTS * FORCE_PER_PDC_BIT_N
+    trial = TextureRig(wear=False).run_trial(texture(30), Movement(lightest, 0.01), seed=3)
+    assert trial.true_normal_N > 0.5 * lightest

@@ -3672,6 +3672,11 @@ CATALOGUE += [
            'vals["velocity_mm_per_s"] * 1e-3, vals["distance_mm"] * 1e-3',
            ('bench/tests/test_scene_slide.py::test_scene_values_in_mm_and_um_become_the_nearest_si_value',),
            "a slide's mm and mm/s are converted as × 1e-3 (3 mm/s is 0.003 m/s plus a rounding error)"),
+    Mutant('rig-takes-a-target-within-the-noise', 'textures', 'bench/rigs/texture_rig.py',
+           '        if movement.force_N / FORCE_PER_PDC_BIT_N < MIN_TARGET_COUNTS:\n',
+           '        if False:\n',
+           ('bench/tests/test_texture_rig.py::test_a_target_within_the_pdc_noise_is_refused_before_the_finger_moves',),
+           "the rig takes a force target within the PDC's noise (it may stop in the air)"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
