@@ -49,8 +49,19 @@ def _check_fault_values(faults: dict) -> None:
     if not isinstance(faults.get("heater_failed", False), (bool, np.bool_)):
         raise ValueError(f"faults.heater_failed = {faults['heater_failed']!r}: must be True or False")
     for key in ("electrode_open", "electrode_short"):
-        if key in faults and not isinstance(faults[key], (list, tuple, np.ndarray)):
+        if key in faults and not isinstance(faults[key], (list, tuple, set, frozenset, np.ndarray)):
             raise ValueError(f"faults.{key} = {faults[key]!r}: must be a list of electrode numbers, e.g. [3]")
+
+
+def _as_lists(faults: dict) -> dict:
+    """``faults`` with a set of electrode numbers given as a list, in order (each electrode's fault is its own, so
+    a set says as much as a list; a list is what records and scenes hold)."""
+    def listed(v):
+        try:
+            return sorted(v, key=float)
+        except (TypeError, ValueError):
+            return list(v)  # (a value that is no number is named by the electrode model's check)
+    return {k: listed(v) if isinstance(v, (set, frozenset)) else v for k, v in faults.items()}
 
 
 @dataclass(frozen=True)
@@ -170,6 +181,7 @@ class Sensor:
         if unknown_faults:
             raise ValueError(f"unknown sensor fault(s): {', '.join(sorted(unknown_faults))}; known: {', '.join(FAULT_NAMES)}")
         _check_fault_values(self.faults)
+        self.faults = _as_lists(self.faults)
         self.leak = self._fluid_leak()
         if not (np.isfinite(start_s) and start_s >= 0):
             raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")

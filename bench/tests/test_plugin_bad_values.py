@@ -34,6 +34,24 @@ def test_the_sensor_faults_a_scene_can_give_are_still_taken():
         Sensor(faults=faults, channels_read=["PDC", "TDC", "E1"])
 
 
+def test_a_set_of_electrode_numbers_opens_the_same_electrodes_as_a_list():
+    """A Python caller may give the open or shorted electrodes as a set ({7, 3}): the sensor reads exactly as with
+    the list [3, 7] (E3 and E7 near 0, E1 untouched), and keeps them as that list (what records and scenes hold)."""
+    import numpy as np
+
+    from emulator import channels as ch
+
+    t = np.arange(1, 40) * 1e-3
+    read = []
+    for opened in ({7, 3}, [3, 7]):
+        s = Sensor(faults={"electrode_open": opened}, channels_read=["E1", "E3", "E7"], seed=4)
+        read.append(s.sample([ch.channel_index(e) for e in ("E1", "E3", "E7")] * 13, t))
+        assert s.faults["electrode_open"] == [3, 7]
+    assert np.array_equal(read[0], read[1])
+    e1, e3, e7 = read[0][0::3], read[0][1::3], read[0][2::3]
+    assert e3.max() < 40 and e7.max() < 40 and e1.min() > 1000
+
+
 MISUSE = '''
 def test_thermistor(biotac_sensor):
     biotac_sensor(faults={"thermistor": "melted"})

@@ -3677,6 +3677,16 @@ CATALOGUE += [
            '        if False:\n',
            ('bench/tests/test_texture_rig.py::test_a_target_within_the_pdc_noise_is_refused_before_the_finger_moves',),
            "the rig takes a force target within the PDC's noise (it may stop in the air)"),
+    Mutant('fault-electrode-set-refused', 'plugin', 'emulator/sensor.py',
+           'isinstance(faults[key], (list, tuple, set, frozenset, np.ndarray))',
+           'isinstance(faults[key], (list, tuple, np.ndarray))',
+           ('bench/tests/test_plugin_bad_values.py::test_a_set_of_electrode_numbers_opens_the_same_electrodes_as_a_list',),
+           'a set of open electrodes is refused'),
+    Mutant('fault-electrode-set-kept-as-set', 'plugin', 'emulator/sensor.py',
+           '        self.faults = _as_lists(self.faults)\n',
+           '',
+           ('bench/tests/test_plugin_bad_values.py::test_a_set_of_electrode_numbers_opens_the_same_electrodes_as_a_list',),
+           'a set of electrode numbers is kept as a set (records cannot hold it)'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
