@@ -2938,7 +2938,7 @@ CATALOGUE += [
            ('bench/tests/test_plugin_bad_values.py::test_a_sensor_refuses_fault_values_it_would_misread',),
            "a Sensor taking heater_failed='no' (truthy: the heater dies)"),
     Mutant('sensor-fault-electrode-list-unchecked', 'faults', 'emulator/sensor.py',
-           '        if key in faults and not isinstance(faults[key], (list, tuple, np.ndarray)):\n',
+           '        if key in faults and not isinstance(faults[key], (list, tuple, set, frozenset, np.ndarray)):\n',
            '        if False:\n',
            ('bench/tests/test_plugin_bad_values.py::test_a_sensor_refuses_fault_values_it_would_misread',),
            "electrode_open=3 (not a list) ending in 'int object is not iterable'"),
