@@ -138,7 +138,7 @@ def load_experiment(path: str | Path) -> ExperimentSpec:
 
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
-    from bench.textures.library import load_library
+    from bench.textures.library import library_path, load_library, named_problems
     from emulator.fidelity import PROFILES
 
     problems: list[str] = []
@@ -163,18 +163,17 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec = ExperimentSpec(source=source)
     t = {k: data.get(k, {}) for k in known}
     if "library" in t["experiment"]:  # a texture library of the user's own, relative to the experiment file
-        v = t["experiment"]["library"]
-        if not isinstance(v, str) or not v.strip() or "\0" in v:
-            raise ExperimentError(source, [f"experiment.library = {v!r}: the path of a texture library file (TOML, "
-                                           f"or .json as `biotac-bench textures --json` prints)"])
-        spec.library = str((Path(source).parent / v).resolve())  # ("<experiment>": relative to the working folder)
+        try:  # (the rules every file that names a library follows: bench.textures.library.library_path)
+            spec.library = library_path(t["experiment"]["library"], "experiment.library", source)
+        except TextureError as e:
+            raise ExperimentError(source, e.problems) from None
     try:
         lib = load_library(spec.library)
     except TextureError as e:
         if spec.library is None:
             raise
-        raise ExperimentError(source, [f"experiment.library = {t['experiment']['library']!r} ({spec.library}): {p}"
-                                       for p in e.problems]) from None
+        raise ExperimentError(source, named_problems("experiment.library", t["experiment"]["library"], spec.library,
+                                                     e)) from None
 
     def get(table, key, kind, lo=None, hi=None, default=None):
         if key not in t[table]:

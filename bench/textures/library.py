@@ -38,11 +38,14 @@ from __future__ import annotations
 
 import difflib
 import functools
+import hashlib
 import json
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 
 from bench import tomlfile
 from bench.errors import TextureError
@@ -364,7 +367,12 @@ def read_library_file(path: str | Path) -> dict:
     ``biotac-bench textures --json`` prints, one texture as ``--show N --json`` prints, or the TOML's object); an
     unreadable or oversized file, a device or pipe, non-UTF-8 bytes, syntax errors and absurd nesting raise
     :class:`TextureError` naming the file (:mod:`bench.tomlfile`)."""
-    text = tomlfile.read_text(path, TextureError, MAX_LIBRARY_BYTES, "no [[texture]] tables: the library is empty")
+    return _parse_text(_library_text(path), str(path))
+
+
+def _parse_text(text: str, path: str) -> dict:
+    """The parsed library of ``text`` (the file ``path``'s: its suffix says TOML or JSON); see
+    :func:`read_library_file`."""
     if Path(path).suffix.lower() != ".json":
         return tomlfile.parse(text, str(path), TextureError, MAX_NESTING, "a library needs 4 levels")
     try:
@@ -386,9 +394,47 @@ def read_library_file(path: str | Path) -> dict:
     return {"texture": data} if isinstance(data, list) else data
 
 
+def _library_text(path: str | Path) -> str:
+    return tomlfile.read_text(path, TextureError, MAX_LIBRARY_BYTES, "no [[texture]] tables: the library is empty")
+
+
 @functools.lru_cache(maxsize=8)
-def _load_cached(path: str, mtime_ns: int, size: int, complete: bool) -> dict[int, Texture]:
-    return parse_library(read_library_file(path), source=path, complete=complete)
+def _load_cached(path: str, text: str, complete: bool) -> dict[int, Texture]:
+    """The textures of ``text`` (the file ``path``'s): keyed on the content itself, so an edit is always seen."""
+    return parse_library(_parse_text(text, path), source=path, complete=complete)
+
+
+@dataclass(frozen=True, eq=False)
+class LibraryFile:
+    """A texture library file as read: ``path`` (as given; absolute when a scene, an experiment or a command names
+    it), ``sha256`` (hex digest of its text as read: UTF-8, a leading byte-order mark left out), ``textures`` by
+    number in SI units, and whether it is the shipped ``fixtures/textures/library.toml``."""
+
+    path: str
+    sha256: str
+    textures: dict
+    shipped: bool
+
+    def texture(self, number_or_name: int | str) -> Texture:
+        """One texture by number or name, as :func:`texture` looks it up (:class:`UnknownTextureError` if absent)."""
+        return _lookup(self.textures, self.path, number_or_name)
+
+    def record(self) -> dict:
+        """What outputs state about the library: its path, content hash and whether it is the shipped one."""
+        return {"path": self.path, "sha256": self.sha256, "shipped": self.shipped}
+
+
+def read_library(path: str | Path | None = None, complete: bool | None = None) -> LibraryFile:
+    """The library file ``path`` (default: the shipped one) read and validated completely: its textures and the
+    hash of the text they came from (one reading: the hash is of what was parsed).  ``complete`` as for
+    :func:`load_library`; a file that cannot be read or is invalid raises :class:`TextureError` naming it."""
+    p = Path(path) if path is not None else LIBRARY_PATH
+    if complete is None:
+        complete = path is None
+    text = _library_text(p)
+    textures = _load_cached(str(p), text, bool(complete))
+    shipped = path is None or os.path.realpath(p) == os.path.realpath(LIBRARY_PATH)
+    return LibraryFile(str(p), hashlib.sha256(text.encode("utf-8")).hexdigest(), MappingProxyType(textures), shipped)
 
 
 def load_library(path: str | Path | None = None, complete: bool | None = None) -> dict[int, Texture]:
@@ -396,14 +442,47 @@ def load_library(path: str | Path | None = None, complete: bool | None = None) -
 
     Everything is validated before anything is returned; ``complete`` (default: True for the shipped file)
     also demands T1..T117 with the textures the dissertation names at their numbers."""
-    p = Path(path) if path is not None else LIBRARY_PATH
-    if complete is None:
-        complete = path is None
+    return dict(read_library(path, complete).textures)
+
+
+#: How every place that names a texture library of one's own says what it wants: a scene's ``[scene] library``,
+#: an experiment's ``[experiment] library``, ``texture-sweep --library``.
+LIBRARY_VALUE = "the path of a texture library file (TOML, or .json as `biotac-bench textures --json` prints)"
+
+
+def _shown(value) -> str:
+    """``repr(value)`` for messages, shortened when long (a hostile file can hold a 1 MB string)."""
+    text = repr(value)
+    return text if len(text) <= 120 else f"{text[:95]}… ({len(text)} characters)"
+
+
+def library_path(value, where: str, naming_file: str | Path | None = None) -> str:
+    """The absolute path of the library file that ``value`` names at ``where`` (``"scene.library"``,
+    ``"experiment.library"``, ``"--library"``): relative to the folder of ``naming_file`` (the scene or experiment
+    file that names it; None or a ``"<scene>"``-like source: the working folder).  :class:`TextureError` (its one
+    problem naming ``where`` and the value) if ``value`` is no path."""
+    if not isinstance(value, str) or not value.strip() or "\0" in value:
+        raise TextureError(str(naming_file or where), [f"{where} = {_shown(value)}: {LIBRARY_VALUE}"])
+    base = Path(naming_file).parent if naming_file is not None else Path(".")
+    return str((base / value).resolve())
+
+
+def named_problems(where: str, value, path: str, error: TextureError) -> list[str]:
+    """The problems of the library file ``path`` (named by ``value`` at ``where``), each saying where it was named
+    and which file it is: ``scene.library = 'mine.toml' (/abs/mine.toml): T5 'kraft paper': hurst = 7: allowed
+    range is 0.1 to 1``."""
+    return [f"{where} = {_shown(value)} ({path}): {p}" for p in error.problems]
+
+
+def named_library(value, where: str, naming_file: str | Path | None = None) -> LibraryFile:
+    """The library file ``value`` names at ``where`` (:func:`library_path`), read and validated: a
+    :class:`TextureError` whose problems each name ``where``, the value, the file, then the texture, field, value
+    and allowed range (:func:`named_problems`)."""
+    path = library_path(value, where, naming_file)
     try:
-        st = p.stat()
-    except OSError as e:
-        raise TextureError(str(p), [f"cannot read the file: {e.strerror}"]) from None
-    return dict(_load_cached(str(p), st.st_mtime_ns, st.st_size, bool(complete)))
+        return read_library(path)
+    except TextureError as e:
+        raise TextureError(str(naming_file or where), named_problems(where, value, path, e)) from None
 
 
 _NUMBER_RE = re.compile(r"^\s*[Tt]?\s*(\d+)\s*$")
@@ -428,9 +507,13 @@ class UnknownTextureError(TextureError):
 
 def texture(number_or_name: int | str, path: str | Path | None = None) -> Texture:
     """One texture by number (``10``, ``"T10"``, ``"10"``) or name (``"velcro hooks"``, case-insensitive)."""
-    lib = load_library(path)
-    source = str(path if path is not None else LIBRARY_PATH)
-    q = number_or_name
+    lib = read_library(path)
+    return _lookup(lib.textures, lib.path, number_or_name)
+
+
+def _lookup(lib, source: str, q) -> Texture:
+    """Texture ``q`` (number or name) of ``lib`` (the textures of the file ``source``), or
+    :class:`UnknownTextureError` saying what the library holds and what comes close."""
     if isinstance(q, bool) or not isinstance(q, (int, str)):
         raise TextureError(source, [f"texture {q!r}: give a number (10, 'T10') or a name ('velcro hooks')"])
     m = _NUMBER_RE.match(q) if isinstance(q, str) else None
