@@ -22,8 +22,14 @@ Runs the texture rig (lower until the PDC target, hold, slide 5 cm, lift) over c
 repetitions — each trial an independent task on Dask (a LocalCluster on this machine's cores, or an existing
 scheduler with --scheduler / DASK_SCHEDULER_ADDRESS) — and computes traction, roughness and fineness per trial.
 
+The textures come from the shipped library, or from one of your own: --library FILE (relative to the current
+folder; the format of fixtures/textures/library.toml, or .json as `biotac-bench textures --json` prints; the
+workers must be able to read the file).  Scenes name one with [scene] library, experiments with [experiment]
+library, each relative to its own file.
+
 Writes into --out (default: a fresh out/texture-sweep[-n]): trials.csv and trials.json (one row per trial:
-texture, movement, repetition, seed, skin, the three properties, the true normal force, simulated and wall time),
+texture, movement, repetition, seed, skin, the library file, the three properties, the true normal force,
+simulated and wall time; trials.json also states the library: path, SHA-256 of its text, shipped or not),
 wear.csv (ridge height each movement wears off in {PILOT_WORTH_TRIALS} trials, a pilot's worth, on a fresh skin),
 properties.png (each property against force and velocity).  Movements keep their grid ids in every file.  An
 --out folder that holds anything is refused; --force replaces an earlier sweep's files there.
@@ -34,6 +40,7 @@ workers.  Ctrl-C stops the sweep (exit 130; SIGTERM: 143) and writes nothing —
 finishes every file first.  Examples:
   biotac-bench texture-sweep --textures {PILOT_TEXTURES} --trials 6      # D ch. 6's pilot (2160 trials)
   biotac-bench texture-sweep --textures 902 --movements 7,14,21 --trials 2 --workers 1
+  biotac-bench texture-sweep --library my_textures.toml --textures 950 --movements 7 --trials 2
 """
 
 
@@ -53,22 +60,38 @@ def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
     return values
 
 
-def _texture_numbers(text: str) -> list[int]:
-    """--textures: texture numbers or names, comma-separated, each in the library and none twice (ValueError
-    naming --textures and the value otherwise)."""
+def library_option(value: str | None):
+    """--library: the texture library file given (relative to the working folder, as
+    :func:`bench.textures.library.named_library` names it; its problems in one ValueError naming --library, the
+    file, texture, field, value and allowed range), or the shipped library (None)."""
+    from bench.errors import TextureError
+    from bench.textures.library import named_library, read_library
+
+    if value is None:
+        return read_library()  # a broken shipped library is reported as such
+    try:
+        return named_library(value, "--library")
+    except TextureError as e:
+        raise ValueError("; ".join(e.problems)) from None
+
+
+def _texture_numbers(text: str, library=None) -> list[int]:
+    """--textures: texture numbers or names, comma-separated, each in ``library`` (a
+    :class:`~bench.textures.library.LibraryFile`; None: the shipped one) and none twice (ValueError naming
+    --textures and the value otherwise)."""
     from bench.errors import TextureError
     from bench.experiments.trials import listed_twice
-    from bench.textures.library import load_library, texture
 
-    load_library()  # a broken library file is reported as such
+    library = library or library_option(None)
     numbers = []
     for item in (x.strip() for x in text.split(",")):
         if not item:
             continue
         try:
-            numbers.append(texture(item).number)
+            numbers.append(library.texture(item).number)
         except TextureError as e:
-            raise ValueError(f"--textures: {'; '.join(e.problems)} (biotac-bench textures lists them)") from None
+            lists = "biotac-bench textures" + (f" --library {library.path}" if not library.shipped else "")
+            raise ValueError(f"--textures: {'; '.join(e.problems)} ({lists} lists them)") from None
     if not numbers:
         raise ValueError("--textures: give at least one texture (numbers or names, comma-separated)")
     if listed_twice(numbers):
@@ -97,17 +120,18 @@ def _cmd_texture_sweep(a) -> int:
     from bench.reporting.outdir import FolderKind
     from bench.reporting.sweep_plots import properties_vs_movement
     from bench.rigs.texture_rig import movement_grid
-    from bench.textures.library import load_library
 
     grid = movement_grid()
-    textures = _texture_numbers(a.textures)
+    library = library_option(a.library)
+    textures = _texture_numbers(a.textures, library)
     ids = list(range(len(grid))) if a.movements == "all" else _int_list("--movements", a.movements, 0, len(grid) - 1)
     movements = [grid[i] for i in ids]
     kind = FolderKind("an earlier sweep's files", SWEEP_FILES)
     folder = _open_out(a.out, "out/texture-sweep", a.force, kind)  # checked and locked before anything runs
     try:
         out = folder.path
-        tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin, movement_ids=ids)
+        tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin, movement_ids=ids,
+                            library="" if library.shipped else library.path)
         spec = ClusterSpec.from_env(a.scheduler, a.workers)
         print(f"{len(tasks)} trials ({len(textures)} textures × {len(movements)} movements × {a.trials}) on "
               f"{spec.describe()}", file=sys.stderr)
@@ -117,11 +141,10 @@ def _cmd_texture_sweep(a) -> int:
         with signals_held():  # a signal meanwhile: every file finished first, then the stop
             folder.clear_earlier()
             write_rows_csv(out / "trials.csv", rows)
-            write_text(out / "trials.json", strict_json({"wall_s": wall, "workers": spec.describe(), "rows": rows},
-                                                        indent=1))
+            write_text(out / "trials.json", strict_json({"wall_s": wall, "workers": spec.describe(),
+                                                         "library": library.record(), "rows": rows}, indent=1))
             write_rows_csv(out / "wear.csv", wear_per_movement(movements, movement_ids=ids))
-            lib = load_library()
-            properties_vs_movement(rows_to_arrays(rows), {n: lib[n].name for n in textures},
+            properties_vs_movement(rows_to_arrays(rows), {n: library.textures[n].name for n in textures},
                                    out / "properties.png")
     finally:
         folder.close()
@@ -143,6 +166,9 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                    help="the sweep's seed; each trial's seed derives from it")
     s.add_argument("--fidelity", default="default", choices=list(PROFILES))
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
+    s.add_argument("--library", metavar="FILE",
+                   help="the textures come from this library file (TOML as fixtures/textures/library.toml, or .json "
+                        "as `biotac-bench textures --json` prints; default: the shipped library)")
     s.add_argument("--out", help="output folder (default: a fresh out/texture-sweep[-n]); refused if it holds "
                                  "anything, unless --force")
     s.add_argument("--force", action="store_true", help="replace an earlier sweep's files in --out as the new ones "

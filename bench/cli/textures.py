@@ -15,8 +15,11 @@ friction against the silicone skin, the texture's Young's modulus, thermal mater
 
 The file is validated completely before anything is listed; every problem names the texture, the field, the
 value and what is allowed.  --json prints the textures in the file's own fields and units; saved as a .json
-file, that list is a library --library reads back; edit it to try your own surfaces in the texture experiment
-([experiment] library = "FILE" in an experiment file; scenes and texture-sweep use the shipped library).
+file, that list is a library --library reads back.  Edit it (or a copy of the TOML) to try surfaces of your own,
+named the same way everywhere: a scene slides over them with [scene] library = "FILE", the texture experiment
+with [experiment] library = "FILE" (each relative to the file that names it), texture-sweep --library FILE
+(relative to the current folder).  A scene's record.json and report.md, texture-sweep's trials.json and
+trials.csv state the library used (path and the SHA-256 of its text).
 
 examples:
   biotac-bench textures                      # all of them
@@ -24,6 +27,7 @@ examples:
   biotac-bench textures --show 100           # or --show T100, --show burlap: every field and its source
   biotac-bench textures --json > textures.json
   biotac-bench textures --library textures.json --show 100
+  biotac-bench texture-sweep --library textures.json --textures 100 --movements 7 --trials 2
 """
 
 

@@ -119,7 +119,9 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
         # the whole scene: its fields as run (command-line overrides applied and named), and the file's own text
         "scene": {"name": sc.name, "source": sc.source, "description": sc.description, "seed": sc.seed,
                   "fidelity": sc.fidelity, "duration_s": sc.duration_s,
-                  "overrides": dict(getattr(sc, "overrides", {}) or {}), "text": sc.text},
+                  "overrides": dict(getattr(sc, "overrides", {}) or {}), "text": sc.text,
+                  # the texture library the slides came from (path, SHA-256 of its text, shipped or one's own)
+                  "library": getattr(sc, "library", None)},
         "host": {"sequence": sc.sequence, "slot_rate_Hz": sc.slot_rate_Hz, "spi_clock_Hz": sc.spi_clock_Hz,
                  "spi": sc.spi},
         "faults": dict(sc.faults),
@@ -350,6 +352,10 @@ def markdown_report(record: dict) -> str:
     if "sensor" in record:
         who = record["sensor"]
         lines.append(f"- sensor {who['index']}: {who['variant']}, unit {who['unit']}, serial `{who['serial']}`")
+    if sc.get("library"):
+        lib = sc["library"]
+        lines.append(f"- texture library: `{lib['path']}` ({'the shipped one' if lib['shipped'] else 'the scene’s own'}"
+                     f", SHA-256 `{lib['sha256'][:16]}…`)")
     if record.get("faults"):
         lines.append("- faults: " + ", ".join(f"`{k} = {v}`" for k, v in record["faults"].items()))
     lines.append("")

@@ -106,6 +106,9 @@ class Scene:
     #: [sensor.faults]); ``common_faults`` the scene's [faults] alone, which sensors it does not describe have
     #: (None: the same as ``faults``, a scene built in code).  Sensors 2..N keep theirs in ``sensors``.
     common_faults: dict | None = None
+    #: the texture library the slides came from: {"path", "sha256", "shipped"} (``[scene] library``, else the shipped
+    #: one; None: no slide and no library named)
+    library: dict | None = None
 
     def __post_init__(self):
         if self.serial is None:
@@ -257,6 +260,8 @@ class _Checker:
         return {}
 
 
+#: ``textures`` of :func:`_slides` when the scene names no library: the shipped one, read only if a slide needs it
+_SHIPPED = object()
 STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step",
                   "heater_failure", "slide", "replace_skin")
 _STIMULUS_FIELDS = {
@@ -282,9 +287,10 @@ SP_ELECTRODE_NAMES = tuple(f"E{n}" for n in range(20, 25))  # the BioTac SP's fi
 
 
 def _stimuli(c: _Checker, items, duration, params: SensorParams, targets: list | None = None,
-             params_of=None, variant_of=None):
+             params_of=None, variant_of=None, textures=_SHIPPED):
     """The stimuli of ``items``; ``targets`` (if given) receives the sensor number of each stimulus returned.
-    ``params_of(k)``/``variant_of(k)``: sensor k's parameters and variant (default: ``params``, "biotac")."""
+    ``params_of(k)``/``variant_of(k)``: sensor k's parameters and variant (default: ``params``, "biotac");
+    ``textures``: the scene's texture library, as :func:`_slides` takes it."""
     first_once: dict = {}  # (kind, sensor) of power_on, heater_failure: which stimulus gave the one allowed
     out = []
     if not isinstance(items, list):
@@ -304,15 +310,16 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams, targets: list |
         k = c.number(st, "sensor", w, 1, MAX_SENSORS, "(a sensor number)", default=1, integer=True) or 1
         before = len(out)
         _one_stimulus(c, st, w, kind, k, duration, params_of(k) if params_of else params,
-                      variant_of(k) if variant_of else "biotac", first_once, out)
+                      variant_of(k) if variant_of else "biotac", first_once, out, textures)
         if targets is not None:
             targets.extend([k] * (len(out) - before))
     return out
 
 
 def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, params: SensorParams,
-                  variant: str, first_once: dict, out: list) -> None:
-    """Append the stimuli of one [[stimulus]] table (for sensor ``k``) to ``out``."""
+                  variant: str, first_once: dict, out: list, textures=_SHIPPED) -> None:
+    """Append the stimuli of one [[stimulus]] table (for sensor ``k``) to ``out`` (``textures``: as for
+    :func:`_slides`)."""
     if kind == "tap":
         peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
         dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
@@ -464,13 +471,15 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         if temp is not None:
             out += [AmbientStep(t, temp) for t in at]
     elif kind == "slide":
-        out += _slides(c, st, w, duration)
+        out += _slides(c, st, w, duration, textures)
     elif kind == "replace_skin":
         out += [SkinReplacement(t) for t in c.times(st, "at_s", w, duration)]
 
 
-def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
-    """One :class:`SlideSpec` per start instant (a list of ``start_s`` is a list of trials)."""
+def _slides(c: _Checker, st: dict, w: str, duration, textures=_SHIPPED) -> list[SlideSpec]:
+    """One :class:`SlideSpec` per start instant (a list of ``start_s`` is a list of trials).  ``textures``: the
+    scene's own library (a :class:`~bench.textures.library.LibraryFile`), :data:`_SHIPPED` (the shipped library),
+    or None (the scene's library could not be read: that is its problem, and the texture is not looked up)."""
     from bench.errors import TextureError
     from bench.textures.library import texture as find_texture
 
@@ -488,11 +497,13 @@ def _slides(c: _Checker, st: dict, w: str, duration) -> list[SlideSpec]:
     tex = None
     if "texture" not in st:
         c.problems.append(f"{w}.texture is missing: a library texture by number (30, \"T30\") or name")
-    else:
+    elif textures is not None:
+        own = textures is not _SHIPPED
         try:
-            tex = find_texture(st["texture"])
+            tex = textures.texture(st["texture"]) if own else find_texture(st["texture"])
         except TextureError as e:
-            c.problems.append(f"{w}.texture = {_r(st['texture'])}: " + "; ".join(_cut(p) for p in e.problems))
+            c.problems.append(f"{w}.texture = {_r(st['texture'])}: " + "; ".join(_cut(p) for p in e.problems)
+                              + (f" (the scene's library, scene.library: {_cut(textures.path)})" if own else ""))
     timing = ("velocity_mm_per_s", "distance_mm", "approach_s", "hold_s", "accel_s", "lift_s")
     if None in [vals[k] for k in timing]:
         return []
@@ -930,6 +941,22 @@ def _sensors_tables(c: _Checker, items, duration) -> dict:
     return out
 
 
+def _library(c: _Checker, meta: dict, source: str):
+    """The scene's texture library: ``[scene] library`` (a path relative to the scene file, as an experiment file
+    names one: :func:`bench.textures.library.named_library`) read and validated; :data:`_SHIPPED` if the scene
+    names none; None, its problems noted, if the file named cannot be read or is invalid."""
+    from bench.errors import TextureError
+    from bench.textures.library import named_library
+
+    if "library" not in meta:
+        return _SHIPPED
+    try:
+        return named_library(meta["library"], "scene.library", source)
+    except TextureError as e:
+        c.problems += [_cut(p, 600) for p in e.problems]
+        return None
+
+
 def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     """Validate a scene given as a dict (the parsed TOML); raise :class:`SceneError` listing every problem."""
     c = _Checker()
@@ -941,7 +968,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     meta = c.table(data, "scene", "it needs at least name and duration_s")
     if "scene" not in data:
         c.problems.append("[scene] table is missing (needs at least name and duration_s)")
-    c.known_keys(meta, "scene", {"name", "description", "duration_s", "seed", "fidelity"})
+    c.known_keys(meta, "scene", {"name", "description", "duration_s", "seed", "fidelity", "library"})
     name = meta.get("name")
     if "scene" in data and not isinstance(data["scene"], dict):
         pass  # the table's shape is the problem; its fields are not looked for
@@ -994,10 +1021,11 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     c.known_keys(noise_t, "noise", names)
     noise = NoiseSources(**{k: c.boolean(noise_t, k, "noise", True) for k in names})
 
+    textures = _library(c, meta, source)
     targets: list[int] = []
     stimuli = _stimuli(c, data.get("stimulus", []), duration, params, targets,
                        params_of=lambda k: others[k].params if k in others else params,
-                       variant_of=lambda k: others[k].variant if k in others else variant)
+                       variant_of=lambda k: others[k].variant if k in others else variant, textures=textures)
     if len(stimuli) > MAX_INSTANTS:
         c.problems.append(f"stimulus: {len(stimuli)} stimuli (every instant of every [[stimulus]] counts): at most "
                           f"{MAX_INSTANTS} per scene")
@@ -1129,13 +1157,18 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
                                               p_k.contact_radius_at_1N_m)
         sensors[k] = SensorSpec(k, u, ser, p_k, var, per_sensor.get(k, []) + slides_k, before, own.state(), skins_k,
                                 dict(faults_of.get(k, common)))
+    if textures is _SHIPPED and any(isinstance(s, SlideSpec) for lst in slide_specs_of.values() for s in lst):
+        from bench.textures.library import read_library
+
+        textures = read_library()  # the one the slides' textures came from, for the record
     return Scene(name=name, duration_s=float(duration), seed=int(seed), fidelity=fidelity,
                  description=description, params=params, sequence=sequence,
                  slot_rate_Hz=float(slot_rate), spi_clock_Hz=float(clock), spi=spi, noise=noise, stimuli=stimuli,
                  faults=faults_of[1], common_faults=dict(common),
                  impact_detection=impact_detection, source=source, text=text,
                  skin_before=skin_before, skin_after=skin.state(), trial_skins=trial_skins,
-                 unit=unit, serial=serial, variant=variant, sensors=sensors)
+                 unit=unit, serial=serial, variant=variant, sensors=sensors,
+                 library=None if textures is _SHIPPED else textures.record())
 
 
 def read_scene_text(path: str | Path) -> str:
