@@ -36,7 +36,7 @@ status "interrupted"; exit status 130 / 143.
 
 scene file (TOML):
   [scene]    name, duration_s, seed (0), fidelity ("fast" | "default" | "reference"), description,
-             library = "my_textures.toml" (the slides' textures come from this library file, relative to the
+             library = "my_textures.toml" (the library file every slide's texture comes from, relative to the
              scene file; default the shipped one; record.json and report.md state its path and SHA-256)
   [sensor]   sensor 1: unit = 17 | "nominal" | "BT..." (a sensor unit: `biotac-bench units`), variant = "biotac" |
              "biotac-sp", and any sensor parameter by name on top of the unit, e.g. inflation_volume_mL = 0.6
@@ -60,8 +60,8 @@ scene file (TOML):
                   "wood", "polystyrene foam", ...) and object_temperature_C for thermal contact
      power_on     at_s   (heaters start from ambient)        ambient_step  at_s, temperature_C
      heater_failure  at_s
-     slide        start_s (s or list: one trial each), texture (number, "T30" or name in the scene's library;
-                  biotac-bench textures), force_N, velocity_mm_per_s, distance_mm; approach_s (0.3), hold_s (0.5),
+     slide        start_s (s or list: one trial each), texture (library number, "T30" or name; biotac-bench
+                  textures), force_N, velocity_mm_per_s, distance_mm; approach_s (0.3), hold_s (0.5),
                   accel_s (0.05), lift_s (0.2), start_position_mm (default: drawn from the seed)
      replace_skin at_s   (a fresh skin between slides)
   [skin]     fingerprints = true | false, ridge_height_um (200 = new), wear = true, wear_coefficient (7.7e-6)
