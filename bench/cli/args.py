@@ -287,3 +287,18 @@ def replaceable_report(marker: bytes, what: str):
 
     parse.__name__ = what
     return parse
+
+
+def library_option(value: str | None):
+    """--library: the texture library file given (relative to the working folder, as
+    :func:`bench.textures.library.named_library` names it; its problems in one ValueError naming --library, the
+    file, texture, field, value and allowed range), or the shipped library (None)."""
+    from bench.errors import TextureError
+    from bench.textures.library import named_library, read_library
+
+    if value is None:
+        return read_library()  # a broken shipped library is reported as such
+    try:
+        return named_library(value, "--library")
+    except TextureError as e:
+        raise ValueError("; ".join(e.problems)) from None

@@ -60,27 +60,14 @@ def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
     return values
 
 
-def library_option(value: str | None):
-    """--library: the texture library file given (relative to the working folder, as
-    :func:`bench.textures.library.named_library` names it; its problems in one ValueError naming --library, the
-    file, texture, field, value and allowed range), or the shipped library (None)."""
-    from bench.errors import TextureError
-    from bench.textures.library import named_library, read_library
-
-    if value is None:
-        return read_library()  # a broken shipped library is reported as such
-    try:
-        return named_library(value, "--library")
-    except TextureError as e:
-        raise ValueError("; ".join(e.problems)) from None
-
-
 def _texture_numbers(text: str, library=None) -> list[int]:
     """--textures: texture numbers or names, comma-separated, each in ``library`` (a
     :class:`~bench.textures.library.LibraryFile`; None: the shipped one) and none twice (ValueError naming
     --textures and the value otherwise)."""
     from bench.errors import TextureError
     from bench.experiments.trials import listed_twice
+
+    from bench.cli.args import library_option
 
     library = library or library_option(None)
     numbers = []
@@ -119,6 +106,7 @@ def _cmd_texture_sweep(a) -> int:
     from bench.reporting.experiment_report import write_rows_csv, write_text
     from bench.reporting.outdir import FolderKind
     from bench.reporting.sweep_plots import properties_vs_movement
+    from bench.cli.args import library_option
     from bench.rigs.texture_rig import movement_grid
 
     grid = movement_grid()

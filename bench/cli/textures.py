@@ -96,15 +96,17 @@ def _table(textures) -> str:
 
 
 def _cmd_textures(a) -> int:
-    from bench.textures.library import UnknownTextureError, load_library, texture, texture_record
+    from bench.cli.args import library_option
+    from bench.textures.library import UnknownTextureError, texture_record
 
     if a.show is not None and a.group:
         raise ValueError(f"--show {a.show} prints one texture and --group {a.group} filters the list: give one or the "
                          f"other")
-    lib = load_library(a.library)
+    library = library_option(a.library)  # as texture-sweep --library names it
+    lib = library.textures
     if a.show is not None:
         try:
-            t = texture(a.show, a.library)
+            t = library.texture(a.show)
         except UnknownTextureError as e:
             raise ValueError(e.for_option("--show")) from None
         print(strict_json(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
