@@ -214,3 +214,24 @@ def test_a_library_named_by_a_file_resolves_against_that_files_folder(tmp_path, 
     assert L.library_path("lib.toml", "--library") == str(tmp_path / "lib.toml")
     with pytest.raises(TextureError, match=r"--library = 'a\\x00b': the path of a texture library file"):
         L.library_path("a\0b", "--library")
+
+
+def test_a_hostile_library_value_is_named_in_a_message_of_bounded_length(tmp_path):
+    """A 100 000-character path (its file name too long to open) is named shortened, value and resolved path
+    both: the problem stays a readable line, not 200 kB."""
+    scene, _ = _files(tmp_path, library='"' + "x" * 100_000 + '"')
+    with pytest.raises(SceneError) as e:
+        load_scene(scene)
+    (problem,) = e.value.problems
+    assert problem.startswith("scene.library = 'xxx") and "(100002 characters)" in problem
+    assert "cannot read the file" in problem and len(problem) < 600
+
+
+def test_the_pytest_plugin_takes_a_scene_with_a_library_of_its_own(tmp_path):
+    """biotac_sensor(scene=...) / biotac_bridge(scene=...) load a scene file as `run` does: its slides come from
+    the scene's own library, found relative to the scene file."""
+    from bench.pytest_plugin.fixtures import load_scene_like
+
+    scene, lib = _files(tmp_path)
+    sc = load_scene_like(str(scene))
+    assert [s.texture.name for s in sc.stimuli] == ["my coarse felt"] and sc.library["path"] == str(lib.resolve())

@@ -8,6 +8,13 @@ scene files (:mod:`bench.scenes.scene`).  :func:`texture` looks one texture up b
 :class:`UnknownTextureError` (a ``TextureError``) for one the library does not hold.  A library file may also be
 JSON (``.json``): the list of textures ``biotac-bench textures --json`` prints, the same fields and units.
 
+A library of one's own is named one way everywhere (:func:`named_library`): ``[scene] library`` and
+``[experiment] library``, relative to the file that names them, and ``--library`` of ``texture-sweep`` and
+``textures``, relative to the working folder; every problem names the key, the file, then the texture, field,
+value and allowed range.  :func:`read_library` gives a :class:`LibraryFile`: the textures and the SHA-256 of the
+text they were parsed from (what the outputs state); the parse is cached on that text, so an edit is always seen.
+In Python, ``read_library("mine.toml").texture(950)`` is the texture a :class:`emulator.sliding.Slide` takes.
+
 Allowed values (physical ranges, wide enough for any real surface, narrow enough to catch a wrong unit):
 
 ==============================  ==================  ===========================================================
@@ -450,10 +457,14 @@ def load_library(path: str | Path | None = None, complete: bool | None = None) -
 LIBRARY_VALUE = "the path of a texture library file (TOML, or .json as `biotac-bench textures --json` prints)"
 
 
+def _short(text: str, limit: int = 300) -> str:
+    """``text`` for messages, shortened when long (a hostile file can hold a 1 MB string)."""
+    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+
+
 def _shown(value) -> str:
-    """``repr(value)`` for messages, shortened when long (a hostile file can hold a 1 MB string)."""
-    text = repr(value)
-    return text if len(text) <= 120 else f"{text[:95]}… ({len(text)} characters)"
+    """``repr(value)`` for messages, shortened when long."""
+    return _short(repr(value), 120)
 
 
 def library_path(value, where: str, naming_file: str | Path | None = None) -> str:
@@ -471,7 +482,7 @@ def named_problems(where: str, value, path: str, error: TextureError) -> list[st
     """The problems of the library file ``path`` (named by ``value`` at ``where``), each saying where it was named
     and which file it is: ``scene.library = 'mine.toml' (/abs/mine.toml): T5 'kraft paper': hurst = 7: allowed
     range is 0.1 to 1``."""
-    return [f"{where} = {_shown(value)} ({path}): {p}" for p in error.problems]
+    return [f"{where} = {_shown(value)} ({_short(path)}): {p}" for p in error.problems]
 
 
 def named_library(value, where: str, naming_file: str | Path | None = None) -> LibraryFile:
