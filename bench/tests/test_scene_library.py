@@ -235,3 +235,14 @@ def test_the_pytest_plugin_takes_a_scene_with_a_library_of_its_own(tmp_path):
     scene, lib = _files(tmp_path)
     sc = load_scene_like(str(scene))
     assert [s.texture.name for s in sc.stimuli] == ["my coarse felt"] and sc.library["path"] == str(lib.resolve())
+
+
+def test_a_scene_takes_the_json_list_that_textures_json_prints(tmp_path, capsys):
+    """`biotac-bench textures --library mine.toml --json > mine.json`: the scene naming mine.json slides over the
+    same texture as the one naming mine.toml."""
+    scene, lib = _files(tmp_path)
+    assert cli.main(["textures", "--library", str(lib), "--json"]) == 0
+    (tmp_path / "libs" / "mine.json").write_text(capsys.readouterr().out)
+    from_json = parse_scene_text(SCENE.format(library='"../libs/mine.json"', texture="950"), source=str(scene))
+    assert from_json.stimuli[0].texture == load_scene(scene).stimuli[0].texture
+    assert from_json.library["path"].endswith("mine.json") and not from_json.library["shipped"]
