@@ -18,8 +18,8 @@ value and what is allowed.  --json prints the textures in the file's own fields 
 file, that list is a library --library reads back.  Edit it (or a copy of the TOML) to try surfaces of your own,
 named the same way everywhere: a scene slides over them with [scene] library = "FILE", the texture experiment
 with [experiment] library = "FILE" (each relative to the file that names it), texture-sweep --library FILE
-(relative to the current folder).  A scene's record.json and report.md, texture-sweep's trials.json and
-trials.csv state the library used (path and the SHA-256 of its text).
+(relative to the current folder).  A scene's record.json and report.md and texture-sweep's trials.json state
+the library used (path and the SHA-256 of its text); trials.csv names the file on every row.
 
 examples:
   biotac-bench textures                      # all of them
@@ -130,6 +130,6 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     p.add_argument("--show", metavar="N", help="one texture in full: number (10, T10) or name (\"velcro hooks\")")
     p.add_argument("--json", action="store_true", help="JSON in the library file's fields and units")
     p.add_argument("--library", metavar="FILE",
-                   help="another library file: TOML as the shipped one, or .json as --json prints (default: "
-                        "fixtures/textures/library.toml, which must hold all of T1..T117)")
+                   help="another library file, relative to the current folder: TOML as the shipped one, or .json "
+                        "as --json prints (default: fixtures/textures/library.toml, which must hold all of T1..T117)")
     p.set_defaults(func=_cmd_textures)
