@@ -184,10 +184,11 @@ def exchange_words(port, start: np.ndarray, end: np.ndarray, mosi: np.ndarray,
     if n_cmd:
         tick = int(ticks_array(cmd_end[n_cmd - 1:n_cmd])[0])
         if deferred >= 0:
-            port.prepared = _Prepared("pending", tick)
+            port.prepared = _Prepared("pending", tick, sample=True)
             port._deferred = (int(channel_of_byte[first[deferred]]), float(cmd_end[deferred]))
         else:
-            port.prepared = _Prepared("word", tick, word=int(prepared[n_cmd - 1]), consumed=bool(consumed))
+            port.prepared = _Prepared("word", tick, word=int(prepared[n_cmd - 1]), consumed=bool(consumed),
+                                      sample=bool(n_acc and acc_at[n_acc - 1] == n_cmd - 1))
     elif before is not None and consumed:
         before.consumed = True
     return out

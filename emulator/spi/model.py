@@ -205,12 +205,13 @@ class Transfer:
 
 @dataclass
 class _Prepared:
-    kind: str  # "word" or "property"
+    kind: str  # "word", "pending" (a conversion not yet resolved) or "property"
     ready_tick: int
     word: int = 0
     data: bytes = b""
     is_string: bool = False
     consumed: bool = False
+    sample: bool = False  # a sampling result: ``bad_parity`` inverts its parity bit as it is served
 
 
 class SensorPort:
@@ -251,6 +252,7 @@ class SensorPort:
         self._window_open = False
         self._out = b""
         self._out_fill = 0
+        self._served_word = 0  # the data word the open window serves (what a read of it keeps for resend)
         self._bitpos = 0
         self._rx = 0
         self._delivered_full_word = False
@@ -267,9 +269,10 @@ class SensorPort:
         code = int(self.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))[0])
         if self.prepared is not None and self.prepared.kind == "pending":
             self.prepared.kind = "word"
-            self.prepared.word = self._data_word(code)
+            self.prepared.word = int(proto.RESPONSE_WORD[code])  # (parity fault applied as it is served)
 
     def _data_word(self, value: int) -> int:
+        """A write's acknowledgement word: the parity fault in force when the write is taken (as the RTL's)."""
         word = int(proto.RESPONSE_WORD[value])
         return word ^ 0x0100 if self.faults.bad_parity else word
 
@@ -292,7 +295,10 @@ class SensorPort:
             self._out_fill = 0xFF
             self._serving = True
         else:
-            self._out, self._out_fill = p.word.to_bytes(2, "big"), 0x00
+            # a sampling result takes the parity fault in force as it leaves (the RTL's word at chip-select fall),
+            # so a fault set or cleared between a conversion and its read acts on that read
+            self._served_word = p.word ^ 0x0100 if p.sample and self.faults.bad_parity else p.word
+            self._out, self._out_fill = self._served_word.to_bytes(2, "big"), 0x00
             self._serving = True
 
     def miso_bit(self, pos: int) -> int:
@@ -343,7 +349,7 @@ class SensorPort:
                     p.consumed = True
                 elif n >= 16:
                     p.consumed = True
-                    self.last_sent = p.word
+                    self.last_sent = self._served_word  # resent as it was read
             return
         if n < 16:
             self.incomplete += 1
@@ -374,7 +380,7 @@ class SensorPort:
                 self.unprovided_requests += 1
                 self._prepare_word(err["channel_not_recognized"], t)
             else:
-                self.prepared = _Prepared("pending", now)
+                self.prepared = _Prepared("pending", now, sample=True)
                 self._deferred = (channel, t)
         elif b0 == CMD_READ_PROPERTY:
             if b1 in self.properties:
