@@ -9,6 +9,7 @@ the schedule.  The sensors' variants are a Verilog parameter (``SP``), so a harn
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import struct
 import subprocess
@@ -19,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from emulator.rtl import build
-from emulator.spi.model import SensorPort
+from emulator.spi.model import Faults, SensorPort
 from emulator.spi.vectors import rtl_provided_masks, variants_of
 
 HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
@@ -27,12 +28,38 @@ DEFAULT_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_harness"
 TRANSFER = np.dtype([("t_ps", "<i8"), ("half_ps", "<i4"), ("nbits", "<u2"), ("cs", "u1"), ("keep_cs", "u1"),
                      ("mosi", "<u8"), ("reset_mask", "u1"), ("pad", "u1", 7)])
 CODE = np.dtype([("sensor", "u1"), ("channel", "u1"), ("code", "<u2")])
+#: One sensor's fault ports as the harness takes them (its ``SensorFaults``): in the header, and as a fault change.
+FAULTS = np.dtype([("sensor", "u1"), ("miso_flip_en", "u1"), ("mosi_flip_en", "u1"), ("stuck_en", "u1"),
+                   ("stuck_val", "u1"), ("bad_parity", "u1"), ("slow", "u1"), ("pad", "u1"),
+                   ("miso_flip_bit", "<u2"), ("mosi_flip_bit", "<u2")])
 #: How long (wall s) :meth:`RtlBus.close` waits for the streaming harness to exit after its input ends.
 CLOSE_TIMEOUT_S = 5.0
 
 
 class HarnessError(RuntimeError):
     pass
+
+
+def checked_faults(faults) -> Faults:
+    """A sensor's faults (a :class:`~emulator.spi.model.Faults`, or a dict of its fields) as a new ``Faults``,
+    checked as ``Faults(...)`` checks them (a field changed in place after construction included): ValueError
+    naming the field and what it allows."""
+    fields = dataclasses.asdict(faults) if isinstance(faults, Faults) else dict(faults)
+    return Faults(**fields)
+
+
+def fault_records(faults: dict) -> np.ndarray:
+    """The harness's records (:data:`FAULTS`) of the fault ports of the sensors ``faults`` names ({sensor 1–5: a
+    ``Faults`` or a dict of its fields}), in sensor order."""
+    out = np.zeros(len(faults), FAULTS)
+    for r, n in zip(out, sorted(faults)):
+        f = checked_faults(faults[n])
+        r["sensor"] = n
+        r["miso_flip_en"], r["miso_flip_bit"] = f.miso_flip_bit is not None, f.miso_flip_bit or 0
+        r["mosi_flip_en"], r["mosi_flip_bit"] = f.mosi_flip_bit is not None, f.mosi_flip_bit or 0
+        r["stuck_en"], r["stuck_val"] = f.miso_stuck is not None, f.miso_stuck or 0
+        r["bad_parity"], r["slow"] = f.bad_parity, f.slow_response
+    return out
 
 
 def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int):
@@ -120,23 +147,13 @@ class Harness:
 
     @staticmethod
     def _header(vec: dict, n: int) -> bytes:
-        """The schedule's header: sensors present, MISO pull, faults, and the channels each sensor provides
-        (``vec["provided"]``: {sensor: channel indices}; a sensor not named there provides all it recognises)."""
+        """The schedule's header: sensors present, MISO pull, each sensor's faults at the start (``vec["faults"]``:
+        {sensor: a ``Faults`` or its fields}), and the channels each sensor provides (``vec["provided"]``: {sensor:
+        channel indices}; a sensor not named there provides all it recognises)."""
         f = {int(k): v for k, v in vec.get("faults", {}).items()}
-
-        def mask(pred):
-            return sum(1 << (s - 1) for s, d in f.items() if pred(d))
-
-        def bits(key):
-            return [int(f.get(i, {}).get(key) or 0) for i in range(1, 6)]
-
-        return struct.pack("<8sBB6B5H5H5QQ", b"BTSPIV2\0", sum(1 << (s - 1) for s in vec["sensors"]),
-                           int(vec["pull_up"]), mask(lambda d: d.get("miso_flip_bit") is not None),
-                           mask(lambda d: d.get("mosi_flip_bit") is not None),
-                           mask(lambda d: d.get("miso_stuck") is not None), mask(lambda d: d.get("miso_stuck") == 1),
-                           mask(lambda d: d.get("bad_parity")), mask(lambda d: d.get("slow_response")),
-                           *bits("miso_flip_bit"), *bits("mosi_flip_bit"),
-                           *rtl_provided_masks(vec), n)
+        faults = fault_records({n: f.get(n, Faults()) for n in range(1, 6)})
+        return (struct.pack("<8sBB", b"BTSPIV3\0", sum(1 << (s - 1) for s in vec["sensors"]), int(vec["pull_up"]))
+                + faults.tobytes() + struct.pack("<5QQ", *rtl_provided_masks(vec), n))
 
     def run(self, vec: dict, transfers: np.ndarray, codes: np.ndarray) -> dict:
         self.ensure_built()
@@ -248,9 +265,9 @@ class HarnessPeripheral:
 
 
 class _RtlPort(SensorPort):
-    """A sensor's port as :class:`RtlBus` keeps it (provided channels, conversion window): SPI faults cannot be set
-    on it — the RTL's fault ports are fixed while the harness streams — so setting one is refused by name rather
-    than changing nothing the host could see."""
+    """A sensor's port as :class:`RtlBus` keeps it (provided channels, conversion window, SPI faults).  Its
+    ``faults`` are set as on the software bus — ``port.faults = Faults(...)`` (``Faults()`` clears them) — and
+    reach the RTL's fault ports at the bus's next transfer; anything but a ``Faults`` is refused by name."""
 
     @property
     def faults(self):
@@ -258,9 +275,9 @@ class _RtlPort(SensorPort):
 
     @faults.setter
     def faults(self, faults) -> None:
-        if faults.any:
-            raise ValueError(f"sensor {self.index}: SPI faults ({faults!r}) need the software SPI bus (spi="
-                             f"'software'); the RTL bus's fault ports are fixed while it streams")
+        if not isinstance(faults, Faults):
+            raise ValueError(f"sensor {self.index}: faults = {faults!r:.80}: must be an emulator.spi.model.Faults, "
+                             f"e.g. Faults(bad_parity=True), Faults(miso_stuck=1); Faults() clears them")
         self._faults = faults
 
 
@@ -273,11 +290,13 @@ class RtlBus:
     sensor's ADC-busy window carried from call to call), and handed to the RTL with the batch; the RTL is told
     which channels each sensor provides.  A chip select held across transfers is one window, as on the software
     bus (:meth:`_windows`).  A conversion the RTL requests that was not computed, or one computed that it does not
-    request, is a :class:`HarnessError`.  Faults and hot-plugging need the software bus: the set of sensors is
-    fixed here.  One difference remains: a call that ends on a sampling command has its code computed as if the
-    bus stayed quiet during the conversion (the RTL asks for it within the call), where the software bus judges
-    that coupling at the next call's first transfer; traffic that reads its results (every firmware's) never
-    ends a call there.
+    request, is a :class:`HarnessError`.  SPI faults (each port's ``faults``, set between calls as on the software
+    bus) reach the RTL's fault ports as chip select falls for the next call's first transfer — where the software
+    bus applies them — and a MOSI bit flip changes the commands whose conversions are computed.  Hot-plugging needs
+    the software bus: the set of sensors is fixed here.  One difference remains: a call that ends on a sampling
+    command has its code computed as if the bus stayed quiet during the conversion (the RTL asks for it within the
+    call), where the software bus judges that coupling at the next call's first transfer; traffic that reads its
+    results (every firmware's) never ends a call there.
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
@@ -293,6 +312,7 @@ class RtlBus:
         self.present = sum(1 << (n - 1) for n in sensors)
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
+        self._faults_in_rtl = {n: Faults() for n in sensors}  # what the harness's fault ports hold, by sensor
         self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE)
         self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False,
@@ -300,13 +320,14 @@ class RtlBus:
         self.proc.stdin.flush()
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
 
-    def _windows(self, n: int, start, end, cs, mosi, nbits, keep):
+    def _windows(self, n: int, start, end, cs, mosi, nbits, keep, flip: int | None = None):
         """Sensor ``n``'s chip-select windows that close among these transfers, as the software bus sees them: a
         window opens at the first transfer selecting the sensor and stays open while transfers hold chip select and
         go on selecting it (one left open at the end of a call is carried into the next); it closes at the end of a
         transfer that releases chip select, or at the start of one that selects other sensors.  Its command is the
-        first 16 bits clocked in it.  Returns (fall s, rise s, command — 0 with fewer than 16 bits —, the bus's next
-        activity s) arrays."""
+        first 16 bits clocked in it, as the sensor receives them: bit position ``flip`` (from chip-select fall; the
+        ``mosi_flip_bit`` fault in force for these transfers) inverted.  Returns (fall s, rise s, command — 0 with
+        fewer than 16 bits —, the bus's next activity s) arrays."""
         from emulator.spi.model import SELECT_ALL, SELECT_CODE
 
         rows, window = [], self._open_window.get(n)
@@ -314,6 +335,8 @@ class RtlBus:
             to_it = (cs == SELECT_ALL) | (cs == SELECT_CODE[n])
             shift = np.clip(nbits - 16, 0, None).astype(np.uint64)
             command = np.where(nbits >= 16, np.asarray(mosi, np.uint64) >> shift & np.uint64(0xFFFF), 0)
+            if flip is not None:
+                command = np.where(nbits >= 16, command ^ np.uint64(1 << (15 - flip)), 0)
             after = np.append(start[1:], np.inf)
             return start[to_it], end[to_it], command[to_it].astype(np.uint16), after[to_it]
         for i in range(start.size):
@@ -327,7 +350,10 @@ class RtlBus:
             if window is None:
                 window = [float(start[i]), 0, 0]  # fall, first bits, how many
             take = min(16 - window[2], int(nbits[i]))
-            window[1] = (window[1] << take) | (int(mosi[i]) >> (int(nbits[i]) - take) & ((1 << take) - 1))
+            bits = int(mosi[i]) >> (int(nbits[i]) - take) & ((1 << take) - 1)
+            if flip is not None and window[2] <= flip < window[2] + take:
+                bits ^= 1 << (window[2] + take - 1 - flip)
+            window[1] = (window[1] << take) | bits
             window[2] += take
             if not keep[i]:
                 rows.append((window[0], end[i], window[1] if window[2] >= 16 else 0,
@@ -337,12 +363,14 @@ class RtlBus:
         fall, rise, command, after = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 4
         return fall.astype(float), rise.astype(float), command.astype(np.uint16), after.astype(float)
 
-    def _codes_for(self, start, end, cs, mosi, nbits, keep):
+    def _codes_for(self, start, end, cs, mosi, nbits, keep, faults: dict):
         """ADC codes of the conversions these transfers start (:func:`accepted_conversions` of each sensor's
-        chip-select windows), sensor by sensor: rows (sensor, channel, code)."""
+        chip-select windows, under ``faults``: {sensor: the ``Faults`` in force}), sensor by sensor: rows (sensor,
+        channel, code)."""
         out = [np.zeros((0, 3), np.int64)]
         for n, port in self.ports.items():
-            fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep)
+            fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep,
+                                                       faults[n].mosi_flip_bit)
             channels, instants, coupled, self._last_sampling_tick[n] = accepted_conversions(
                 port, fall, rise, command, after, self._last_sampling_tick[n])
             if channels.size:
@@ -360,12 +388,18 @@ class RtlBus:
         tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
         tr["nbits"], tr["cs"], tr["keep_cs"] = nbits, cs, np.asarray(keep, bool)
         tr["mosi"] = np.asarray(mosi, dtype=np.uint64)
-        c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits, np.broadcast_to(keep, start.shape))
+        faults = self._faults_in_force()
+        changed = {n: f for n, f in faults.items() if f != self._faults_in_rtl[n]} if start.size else {}
+        c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits, np.broadcast_to(keep, start.shape),
+                            faults)
         codes = np.zeros(len(c), CODE)
         if len(c):
             codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
-        self.proc.stdin.write(struct.pack("<II", start.size, len(codes)) + tr.tobytes() + codes.tobytes())
+        records = fault_records(changed)
+        self.proc.stdin.write(struct.pack("<III", start.size, len(codes), len(records)) + tr.tobytes()
+                              + codes.tobytes() + records.tobytes())
         self.proc.stdin.flush()
+        self._faults_in_rtl.update(changed)
         raw = np.frombuffer(self._read(8 * (start.size + 3)), dtype="<u8")
         self.evals = int(raw[start.size + 2])
         mismatched, unrequested = int(raw[start.size]), int(raw[start.size + 1])
@@ -373,6 +407,17 @@ class RtlBus:
             raise HarnessError(f"the RTL requested other conversions than the emulator computed "
                                f"({mismatched} mismatched, {unrequested} unrequested)")
         return raw[:start.size]
+
+    def _faults_in_force(self) -> dict:
+        """Each sensor's faults for the next transfers, checked (a value set in place out of range: ValueError
+        naming the sensor and the field, before anything reaches the harness)."""
+        out = {}
+        for n, port in self.ports.items():
+            try:
+                out[n] = checked_faults(port.faults)
+            except ValueError as e:
+                raise ValueError(f"sensor {n}: {e}") from None
+        return out
 
     def _read(self, n: int) -> bytes:
         buf = b""

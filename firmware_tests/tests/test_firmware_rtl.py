@@ -6,6 +6,7 @@ import pytest
 
 from bench.hosts.cosim import VirtualBoard, default_sensors
 from bench.tests.host_benches import run_firmware
+from emulator.spi.model import Faults
 
 pytestmark = [pytest.mark.firmware, pytest.mark.rtl]
 
@@ -28,20 +29,59 @@ def test_faults_that_need_the_software_bus_say_so():
     board.bus.close()
 
 
-def test_spi_faults_on_the_rtl_bus_are_refused_not_ignored():
-    """The documented way to inject an SPI fault on a bridge, ``setattr(board.bus.ports[k], "faults", Faults(...))``,
-    changed nothing over the RTL (its fault ports are fixed while the harness streams): the host saw clean frames
-    and the test passed.  It is refused by name; clearing faults (an empty ``Faults()``) stays allowed."""
+#: (virtual s after start-up, sensor, faults): each sensor's fault set, then cleared (Faults()) 40 ms later.
+FAULT_SCHEDULE = [(0.04, 1, Faults(bad_parity=True)), (0.08, 1, Faults()), (0.08, 2, Faults(miso_flip_bit=5)),
+                  (0.12, 2, Faults()), (0.12, 3, Faults(slow_response=True)), (0.16, 3, Faults()),
+                  (0.16, 2, Faults(miso_stuck=0)), (0.20, 2, Faults()), (0.20, 1, Faults(mosi_flip_bit=1)),
+                  (0.24, 1, Faults())]
+
+
+def _schedule_faults(board) -> None:
+    for dt, n, faults in FAULT_SCHEDULE:
+        board.at(board.t + dt, lambda b, n=n, f=faults: setattr(b.bus.ports[n], "faults", f))
+
+
+def test_a_fault_schedule_gives_the_same_frames_over_the_rtl_as_over_the_software_model():
+    """The documented way to inject SPI faults on a bridge, ``board.at(t, lambda b: setattr(b.bus.ports[k], "faults",
+    Faults(...)))``: corrupted parity, a flipped MISO bit, a slow response, MISO stuck low and a MOSI bit flip, on
+    sensors 1, 2 and 3, each set and cleared mid-stream, give the host the same frames over the RTL (its fault ports
+    changed while the harness streams) as over the software model.  Each fault shows (its sensor's samples flagged;
+    sensor 2 stuck low reads as unplugged and is dropped) and the stream is clean before the first and after the
+    last."""
+    runs = {spi: run_firmware(default_sensors(3, seed=5), 0.3, status=False, spi=spi, prepare=_schedule_faults)
+            for spi in ("software", "rtl")}
+    soft, rtl = runs["software"].frames, runs["rtl"].frames
+    assert len(rtl) == len(soft) >= 25 and runs["rtl"].stats.crc_errors == 0
+    for k, (a, b) in enumerate(zip(soft, rtl)):
+        assert a.sensor_mask == b.sensor_mask and np.array_equal(a.codes, b.codes) and \
+            np.array_equal(a.status, b.status), f"frame {k} differs"
+    flagged = [{n for n, bad in zip(f.sensors, (f.status != 0).any(axis=0)) if bad} for f in rtl]
+    assert set().union(*flagged) == {1, 2, 3}  # every sensor's fault reached the host
+    assert not set().union(*flagged[:3], *flagged[-3:])
+    assert rtl[-1].sensors == [1, 3]  # MISO stuck low: the firmware took sensor 2 for unplugged, on both buses
+
+
+def _first_frame(driver, wanted, max_frames: int = 200):
+    """The first frame the driver yields that is ``wanted``, within ``max_frames`` (None if none is)."""
+    return next((f for f in driver.frames(max_frames=max_frames, timeout_s=10.0) if wanted(f)), None)
+
+
+def test_an_spi_fault_set_on_the_rtl_bridge_reaches_the_host_and_a_bad_one_is_refused_by_name():
+    """Over a bridge on the RTL (threads, pty, driver): a parity fault set with ``bench.at`` flags the host's
+    samples, clearing it makes them clean again, and a value that is not a ``Faults`` stops the bench naming the
+    sensor and what it takes (the RTL port used to refuse every fault; it now takes them and refuses only that)."""
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.driver import BridgeDriver
-    from emulator.spi.model import Faults
+
+    def set_faults(faults):
+        return lambda b: setattr(b.bus.ports[1], "faults", faults)
 
     board = VirtualBoard(default_sensors(1), spi="rtl")
     try:
+        board.bus.ports[1].faults = Faults(miso_stuck=1)
         board.bus.ports[1].faults = Faults()
-        with pytest.raises(ValueError, match=r"sensor 1: SPI faults .*need the software SPI bus"):
-            board.bus.ports[1].faults = Faults(miso_stuck=1)
-        assert not board.bus.ports[1].faults.any
+        with pytest.raises(ValueError, match=r"sensor 1: faults = .*must be an emulator\.spi\.model\.Faults"):
+            board.bus.ports[1].faults = {"miso_stuck": 1}
     finally:
         board.bus.close()
     bench = FirmwareBench(n_sensors=1, spi="rtl").start()
@@ -49,9 +89,13 @@ def test_spi_faults_on_the_rtl_bus_are_refused_not_ignored():
     try:
         driver.start()
         next(driver.frames(max_frames=1))
-        bench.at(bench.virtual_time, lambda b: setattr(b.bus.ports[1], "faults", Faults(bad_parity=True)))
-        list(driver.frames(max_frames=20, timeout_s=2.0))
+        bench.at(bench.virtual_time, set_faults(Faults(bad_parity=True)))
+        assert _first_frame(driver, lambda f: (f.status == 1).all()) is not None  # (frames already sent first)
+        bench.at(bench.virtual_time, set_faults(Faults()))
+        assert _first_frame(driver, lambda f: (f.status == 0).all()) is not None
+        bench.at(bench.virtual_time, set_faults("bad_parity"))
+        list(driver.frames(max_frames=5, timeout_s=2.0))
     finally:
         driver.close()
-        with pytest.raises(RuntimeError, match="need the software SPI bus"):
+        with pytest.raises(RuntimeError, match=r"sensor 1: faults = .*bad_parity.*: must be an emulator\.spi"):
             bench.stop()

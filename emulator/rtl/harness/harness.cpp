@@ -10,8 +10,11 @@
 //   OUT:      one uint64 MISO value per transfer, then uint64 counts of mismatched ADC requests, unused codes
 //             and model evaluations
 // usage: harness --stream
-//   stdin:  a Header (n_transfers ignored), then batches: uint32 n_transfers, uint32 n_codes, Transfer records,
-//           CodeRecord records; the RTL keeps its state and time runs on from batch to batch
+//   stdin:  a Header (n_transfers ignored), then batches: uint32 n_transfers, uint32 n_codes, uint32 n_faults,
+//           Transfer records, CodeRecord records, SensorFaults records (fault changes: each sensor's fault ports
+//           set to the record's when chip select falls for the batch's first transfer, before anything is
+//           clocked, as the software bus applies a fault set between two of its calls; a batch with no transfers
+//           keeps them for the next one); the RTL keeps its state and time runs on from batch to batch
 //   stdout: per batch, one uint64 MISO per transfer, then uint64 mismatched requests, unused codes and model
 //           evaluations so far; the harness exits when stdin ends
 #include <cstdint>
@@ -29,11 +32,16 @@
 #include "verilated.h"
 
 #pragma pack(push, 1)
+// One sensor's fault ports (biotac_bus's flt_* bits of that sensor); flags are 0 or 1, bit positions 0..15.
+struct SensorFaults {
+    uint8_t sensor;  // 1..5
+    uint8_t miso_flip_en, mosi_flip_en, stuck_en, stuck_val, bad_parity, slow, pad;
+    uint16_t miso_flip_bit, mosi_flip_bit;
+};
 struct Header {
-    char magic[8];  // "BTSPIV2\0"
+    char magic[8];  // "BTSPIV3\0"
     uint8_t present, pull_up;
-    uint8_t miso_flip_en, mosi_flip_en, stuck_en, stuck_val, bad_parity, slow;
-    uint16_t miso_flip_bit[5], mosi_flip_bit[5];
+    SensorFaults faults[5];  // sensors 1..5 in order
     uint64_t provided[5];  // per sensor, bit c set where it provides channel c (the others answer "EX")
     uint64_t n_transfers;
 };
@@ -75,6 +83,31 @@ struct Harness {
     uint64_t mismatches = 0;
     std::deque<std::pair<int64_t, int>> line;  // recent (time, level) changes of MISO
     uint64_t evals = 0;
+    std::vector<SensorFaults> pending_faults;  // set as chip select falls for the next transfer
+
+    // Set sensor f.sensor's fault ports (not evaluated here).
+    void set_faults(const SensorFaults& f) {
+        int i = f.sensor - 1;
+        uint8_t bit = (uint8_t)(1u << i);
+        auto flag = [bit](uint8_t port, uint8_t on) { return (uint8_t)(on ? (port | bit) : (port & ~bit)); };
+        auto field = [i](uint64_t port, uint16_t value) {
+            return (port & ~(0xFFFULL << (12 * i))) | ((uint64_t)(value & 0xFFF) << (12 * i));
+        };
+        top->flt_miso_flip_en = flag(top->flt_miso_flip_en, f.miso_flip_en);
+        top->flt_mosi_flip_en = flag(top->flt_mosi_flip_en, f.mosi_flip_en);
+        top->flt_miso_stuck_en = flag(top->flt_miso_stuck_en, f.stuck_en);
+        top->flt_miso_stuck_val = flag(top->flt_miso_stuck_val, f.stuck_val);
+        top->flt_bad_parity = flag(top->flt_bad_parity, f.bad_parity);
+        top->flt_slow = flag(top->flt_slow, f.slow);
+        top->flt_miso_flip_bit = field(top->flt_miso_flip_bit, f.miso_flip_bit);
+        top->flt_mosi_flip_bit = field(top->flt_mosi_flip_bit, f.mosi_flip_bit);
+    }
+    void apply_pending_faults() {
+        if (pending_faults.empty()) return;
+        for (const auto& f : pending_faults) set_faults(f);
+        pending_faults.clear();
+        eval();
+    }
 
     void eval() {
         top->eval();
@@ -159,24 +192,27 @@ static void add_codes(Harness& H, const char* data, size_t n) {
     }
 }
 
+// Whether a fault record names a sensor 1..5 with flags 0/1 and bit positions 0..15 (else a message, exit 2).
+static bool valid_faults(const SensorFaults& f, const char* where) {
+    bool ok = f.sensor >= 1 && f.sensor <= 5 && f.miso_flip_en <= 1 && f.mosi_flip_en <= 1 && f.stuck_en <= 1 &&
+              f.stuck_val <= 1 && f.bad_parity <= 1 && f.slow <= 1 && f.miso_flip_bit < 16 && f.mosi_flip_bit < 16;
+    if (!ok) std::fprintf(stderr, "harness: %s: a fault record for sensor %d outside its ranges (sensor 1..5, flags "
+                          "0/1, bit positions 0..15)\n", where, f.sensor);
+    return ok;
+}
+
+static bool valid_header(const Header& h) {
+    for (int i = 0; i < 5; ++i)
+        if (h.faults[i].sensor != i + 1 || !valid_faults(h.faults[i], "header")) return false;
+    return true;
+}
+
 static void setup(Harness& H, const Header& h) {
     auto& top = *H.top;
     top.clk = 1;
     top.present = h.present;
     top.pull_up = h.pull_up;
-    top.flt_miso_flip_en = h.miso_flip_en;
-    top.flt_mosi_flip_en = h.mosi_flip_en;
-    top.flt_miso_stuck_en = h.stuck_en;
-    top.flt_miso_stuck_val = h.stuck_val;
-    top.flt_bad_parity = h.bad_parity;
-    top.flt_slow = h.slow;
-    uint64_t mf = 0, sf = 0;
-    for (int i = 0; i < 5; ++i) {
-        mf |= (uint64_t)(h.miso_flip_bit[i] & 0xFFF) << (12 * i);
-        sf |= (uint64_t)(h.mosi_flip_bit[i] & 0xFFF) << (12 * i);
-    }
-    top.flt_miso_flip_bit = mf;
-    top.flt_mosi_flip_bit = sf;
+    for (int i = 0; i < 5; ++i) H.set_faults(h.faults[i]);
     for (int i = 0; i < 5; ++i) {  // 64 bits per sensor, as two 32-bit words of the wide port
         top.provided[2 * i] = (uint32_t)h.provided[i];
         top.provided[2 * i + 1] = (uint32_t)(h.provided[i] >> 32);
@@ -198,6 +234,7 @@ static uint64_t play(Harness& H, const Transfer& t) {
         H.eval();
     }
     H.advance_to(t.t_ps);
+    H.apply_pending_faults();
     int64_t half = t.half_ps;
     top.cs_code = t.cs;
     top.mosi = t.nbits ? (t.nbits - 1 < 64 ? (t.mosi >> (t.nbits - 1)) & 1 : 0) : 0;
@@ -227,23 +264,31 @@ static bool read_exact(void* buf, size_t n) { return std::fread(buf, 1, n, stdin
 
 static int stream_mode() {
     Header h;
-    if (!read_exact(&h, sizeof h) || std::string(h.magic, 7) != "BTSPIV2") {
+    if (!read_exact(&h, sizeof h) || std::string(h.magic, 7) != "BTSPIV3") {
         std::fprintf(stderr, "harness: malformed stream header\n");
         return 2;
     }
+    if (!valid_header(h)) return 2;
     Harness H;
     setup(H, h);
-    uint32_t counts[2];
+    uint32_t counts[3];
     std::vector<Transfer> trs;
     std::vector<char> codes;
+    std::vector<SensorFaults> faults;
     std::vector<uint64_t> out;
     while (read_exact(counts, sizeof counts)) {
         trs.resize(counts[0]);
         codes.resize((size_t)counts[1] * sizeof(CodeRecord));
+        faults.resize(counts[2]);
         if ((counts[0] && !read_exact(trs.data(), counts[0] * sizeof(Transfer))) ||
-            (counts[1] && !read_exact(codes.data(), codes.size()))) {
+            (counts[1] && !read_exact(codes.data(), codes.size())) ||
+            (counts[2] && !read_exact(faults.data(), counts[2] * sizeof(SensorFaults)))) {
             std::fprintf(stderr, "harness: truncated batch\n");
             return 2;
+        }
+        for (const auto& f : faults) {
+            if (!valid_faults(f, "fault change")) return 2;
+            H.pending_faults.push_back(f);
         }
         add_codes(H, codes.data(), codes.size());
         out.resize(counts[0] + 3);
@@ -267,10 +312,11 @@ int main(int argc, char** argv) {
     if (sched.size() < sizeof(Header)) { std::fprintf(stderr, "harness: schedule too short\n"); return 2; }
     Header h;
     std::memcpy(&h, sched.data(), sizeof h);
-    if (std::string(h.magic, 7) != "BTSPIV2" || sched.size() != sizeof h + h.n_transfers * sizeof(Transfer)) {
+    if (std::string(h.magic, 7) != "BTSPIV3" || sched.size() != sizeof h + h.n_transfers * sizeof(Transfer)) {
         std::fprintf(stderr, "harness: malformed schedule file\n");
         return 2;
     }
+    if (!valid_header(h)) return 2;
     const Transfer* trs = reinterpret_cast<const Transfer*>(sched.data() + sizeof h);
     Harness H;
     add_codes(H, codes.data(), codes.size());

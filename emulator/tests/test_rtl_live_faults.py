@@ -1,0 +1,138 @@
+"""SPI faults set while the RTL streams: a fault schedule (``bus.ports[k].faults = Faults(...)`` between calls, as a
+bridge's ``bench.at`` events set them) gives the same words over the RTL in the C++ harness (:class:`RtlBus`) as
+over the software bus, each change acting from the first transfer after it, on its own sensor only."""
+
+import numpy as np
+import pytest
+
+from emulator.spi import protocol as proto
+from emulator.spi.model import SELECT_CODE, Bus, Faults, SensorPort
+
+pytestmark = pytest.mark.rtl
+
+ERR = proto.ERROR_WORDS
+CALL_S, CLOCK_HZ = 1e-3, proto.HOST_DEFAULT_CLOCK_HZ
+#: One call's transfers: (µs after the call's start, sensor, channel sampled or None for a read).  The first two
+#: read the commands that ended the call before (so a fault set in between acts on a result converted before it).
+CALL = [(0, 1, None), (10, 3, None), (100, 1, "PDC"), (110, 3, "PAC"), (170, 1, None), (180, 3, None),
+        (300, 1, "E1"), (310, 3, "TDC")]
+S1 = [k for k, (_, n, _) in enumerate(CALL) if n == 1]
+S3 = [k for k, (_, n, _) in enumerate(CALL) if n == 3]
+READS_S3 = [k for k, (_, n, c) in enumerate(CALL) if n == 3 and c is None]
+#: The schedule: {call: {sensor: faults set just before it}}; each fault is cleared (Faults()) a call later.
+SCHEDULE = {1: {1: Faults(miso_stuck=1)},
+            2: {1: Faults(), 3: Faults(bad_parity=True)},
+            3: {3: Faults(), 1: Faults(miso_flip_bit=3)},
+            4: {1: Faults(), 3: Faults(slow_response=True)},
+            5: {3: Faults(), 1: Faults(mosi_flip_bit=0)},
+            6: {1: Faults()}}
+CALLS = 7
+
+
+@pytest.fixture(scope="module")
+def harness():
+    from emulator.rtl.harness import Harness
+
+    h = Harness()
+    h.ensure_built()
+    return h
+
+
+def _sensors():
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.sensor import Sensor
+
+    return {n: Sensor(channels_read=list(DEFAULT_FRAME_NAMES), seed=n + 4) for n in (1, 3)}
+
+
+def _call(k: int):
+    """(start s, select codes, MOSI words) of call ``k``."""
+    from emulator.channels import channel_index
+
+    start = np.array([0.01 + k * CALL_S + us * 1e-6 for us, _, _ in CALL])
+    cs = np.array([SELECT_CODE[n] for _, n, _ in CALL])
+    mosi = np.array([0 if c is None else int(proto.sample_command(channel_index(c))) << 8 for _, _, c in CALL],
+                    np.uint16)
+    return start, cs, mosi
+
+
+def _play(bus, schedule: dict) -> np.ndarray:
+    """Words of the calls over ``bus`` (a software Bus or an RtlBus) with ``schedule``'s faults: (call, transfer)."""
+    words = []
+    try:
+        for k in range(CALLS):
+            for n, faults in schedule.get(k, {}).items():
+                bus.ports[n].faults = faults
+            start, cs, mosi = _call(k)
+            words.append(bus.exchange_words(start, cs, mosi, CLOCK_HZ))
+    finally:
+        bus.close()
+    return np.array(words, np.uint16)
+
+
+def _software(schedule: dict) -> np.ndarray:
+    return _play(Bus({n: SensorPort(s, n) for n, s in _sensors().items()}), schedule)
+
+
+def _rtl(harness, schedule: dict) -> np.ndarray:
+    from emulator.rtl.harness import RtlBus
+
+    return _play(RtlBus(_sensors(), harness=harness), schedule)
+
+
+def test_a_fault_schedule_gives_the_same_words_over_the_rtl_as_over_the_software_bus(harness):
+    """MISO stuck high, a flipped MISO bit and a MOSI bit flip on sensor 1, corrupted parity and a slow response on
+    sensor 3, each set between two calls and cleared a call later: word for word the same over the RTL (its fault
+    ports changed while it streams) as over the software bus — the MOSI flip turning sensor 1's reads into PAC
+    commands whose conversions the RTL requests (a code the emulator did not compute would be a HarnessError)."""
+    soft = _software(SCHEDULE)
+    rtl = _rtl(harness, SCHEDULE)
+    differ = [(k, i, hex(a), hex(b)) for k, i in zip(*np.nonzero(rtl != soft)) for a, b in [(rtl[k, i], soft[k, i])]]
+    assert not differ, f"(call, transfer, RTL, software): {differ[:6]}"
+
+
+def test_each_fault_acts_from_the_first_transfer_after_it_and_on_its_own_sensor_only(harness):
+    """Over the RTL, against the same calls without faults: a fault acts on its sensor's first transfer of the call
+    it was set before (a read, first in the call) and on no other sensor's, and a cleared one is gone by then — a
+    change landing one transfer late, or on the other sensor, fails here."""
+    clean, rtl = _rtl(harness, {}), _rtl(harness, SCHEDULE)
+    data = proto.decode_response(clean[:, [0, 1, 4, 5]])[1]
+    assert data[1:].all() and not proto.is_error_word(clean[1:, [0, 1, 4, 5]]).any()  # clean reads: data
+    # call 1, sensor 1 stuck high: every word 0xFFFF; sensor 3 untouched
+    assert (rtl[1, S1] == 0xFFFF).all() and np.array_equal(rtl[1, S3], clean[1, S3])
+    # call 2: sensor 1 cleared; sensor 3's reads leave with the parity bit inverted, the first one too (its
+    # conversion was made in call 1, before the fault was set)
+    assert np.array_equal(rtl[2, S1], clean[2, S1])
+    assert np.array_equal(rtl[2, READS_S3], clean[2, READS_S3] ^ 0x0100)
+    assert not proto.decode_response(rtl[2, READS_S3])[1].any()
+    # call 3: sensor 3 cleared; sensor 1's bit 3 (from chip-select fall) inverted in every word
+    assert np.array_equal(rtl[3, S3], clean[3, S3])
+    assert np.array_equal(rtl[3, S1], clean[3, S1] ^ 0x1000)
+    # call 4: sensor 1 cleared; sensor 3 slow: its result 70 µs after the command is not ready yet ("E.")
+    assert np.array_equal(rtl[4, S1], clean[4, S1])
+    assert rtl[4, 5] == ERR["insufficient_delay"] and rtl[4, 1] == clean[4, 1]
+    # call 5: sensor 1 receives bit 0 inverted: its E1 command arrives with even parity, read in call 6 as "EE";
+    # sensor 3 (cleared) reads data again
+    assert rtl[6, 0] == ERR["parity"] and proto.decode_response(rtl[5, READS_S3])[1].all()
+
+
+def test_an_rtl_port_takes_faults_only(harness):
+    """``port.faults`` on the RTL bus takes a ``Faults`` (set or cleared); anything else — a dict, None — is refused
+    naming the sensor and what it takes; a field set in place out of range is refused by name at the next call,
+    before the harness sees it."""
+    from emulator.rtl.harness import RtlBus
+
+    bus = RtlBus(_sensors(), harness=harness)
+    try:
+        bus.ports[3].faults = Faults(bad_parity=True)
+        bus.ports[3].faults = Faults()
+        for bad in ({"bad_parity": True}, None):
+            with pytest.raises(ValueError, match=r"sensor 3: faults = .*must be an emulator\.spi\.model\.Faults"):
+                bus.ports[3].faults = bad
+        bus.ports[1].faults.miso_flip_bit = 16
+        with pytest.raises(ValueError, match=r"sensor 1: Faults\.miso_flip_bit = 16: must be None or a bit position"):
+            bus.exchange_words(*_call(0), CLOCK_HZ)
+        bus.ports[1].faults = Faults()
+        assert bus.exchange_words(*_call(0), CLOCK_HZ).size == len(CALL)  # the harness goes on
+    finally:
+        bus.close()
