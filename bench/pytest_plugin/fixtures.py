@@ -88,8 +88,9 @@ Keywords (every one optional)
         corrupt_rate, drop_rate   line faults: the probability that each byte is corrupted / dropped
         step_s        the firmware's virtual-time step (s, default 0.01)
         SPI faults in virtual time: ``bench.at(t_s, lambda board: setattr(board.bus.ports[k], "faults",
-        Faults(miso_stuck=1)))``; unplug/plug/glitch: ``board.unplug(k)`` (all on the software SPI bus: with
-        ``spi="rtl"`` they are refused, and the bench's error is raised when it stops)
+        Faults(miso_stuck=1)))`` (either SPI bus: over ``spi="rtl"`` from the same transfer, the same words);
+        unplug/plug/glitch: ``board.unplug(k)`` (the software SPI bus only: with ``spi="rtl"`` they are refused,
+        and the bench's error is raised when it stops)
       biotac_cheetah only (``CheetahBench``):
         trace         keep every transfer (start s, select code, bits, MOSI) in ``bench.trace``
 
