@@ -136,3 +136,91 @@ def test_an_rtl_port_takes_faults_only(harness):
         assert bus.exchange_words(*_call(0), CLOCK_HZ).size == len(CALL)  # the harness goes on
     finally:
         bus.close()
+
+
+def test_a_fault_changed_inside_a_held_chip_select_acts_on_the_bits_clocked_after_it(harness):
+    """With chip select held across calls (how a host streams a property byte by byte), a fault set between two
+    bytes acts from the next byte on: MISO stuck high for one byte of the serial number reads 0xFF there only; a
+    MOSI flip of bit 0 set before a command's first byte turns 0x80 (sample PAC) into a read, and set only after
+    it has been clocked changes nothing, the PAC conversion happening — over the RTL as over the software bus."""
+    from emulator.rtl.harness import RtlBus
+    from emulator.spi.model import SELECT_NONE, Transfer
+
+    s1 = SELECT_CODE[1]
+    steps = [(None, (s1, 0x6115, 16, False)), (None, (s1, 0, 8, True)), (Faults(miso_stuck=1), (s1, 0, 8, True)),
+             (Faults(), (s1, 0, 8, True)), (None, (SELECT_NONE, 0, 0, False)),
+             (Faults(mosi_flip_bit=0), (s1, 0x80, 8, True)), (Faults(), (s1, 0, 8, False)),
+             (None, (s1, 0, 16, False)),
+             (None, (s1, 0x80, 8, True)), (Faults(mosi_flip_bit=0), (s1, 0, 8, False)),
+             (Faults(), (s1, 0, 16, False))]
+
+    def play(bus):
+        try:
+            out = []
+            for k, (faults, (cs, mosi, nbits, keep)) in enumerate(steps):
+                if faults is not None:
+                    bus.ports[1].faults = faults
+                out.append(bus.transfer(Transfer(0.01 + 100e-6 * k, cs, mosi, nbits, CLOCK_HZ, keep)))
+            return out
+        finally:
+            bus.close()
+
+    soft = play(Bus({n: SensorPort(s, n) for n, s in _sensors().items()}))
+    rtl = play(RtlBus(_sensors(), harness=harness))
+    assert rtl == soft, ([hex(w) for w in rtl], [hex(w) for w in soft])
+    assert rtl[1:4] == [ord("B"), 0xFF, ord("0")]  # "BT0…": the second byte read stuck high
+    assert not proto.decode_response(rtl[7])[1] and proto.decode_response(rtl[10])[1]
+
+
+@pytest.mark.parametrize("record,words", [
+    (dict(sensor=6), "fault change: a fault record for sensor 6 outside its ranges"),
+    (dict(sensor=2, stuck_en=2), "fault change: a fault record for sensor 2 outside its ranges"),
+    (dict(sensor=1, miso_flip_en=1, miso_flip_bit=16), "fault change: a fault record for sensor 1 outside"),
+    (None, "malformed stream header"),
+], ids=["sensor-6", "flag-2", "bit-16", "old-format-header"])
+def test_the_streaming_harness_refuses_what_its_fault_ports_cannot_take(harness, record, words):
+    """The harness checks each fault change it is sent (sensor 1–5, flags 0/1, bit positions 0–15) and stops with
+    a message naming it, rather than set ports of another sensor or bits past the 16 a word has; a stream in the
+    format before fault changes (header BTSPIV2) is refused at its header."""
+    import struct
+    import subprocess
+
+    from emulator.rtl.harness import FAULTS, TRANSFER, Harness
+
+    header = Harness._header({"sensors": [1, 2], "pull_up": False}, 0)
+    tr = np.zeros(1, TRANSFER)
+    tr["t_ps"], tr["half_ps"], tr["nbits"], tr["cs"] = 10_000_000, 113_636, 16, SELECT_CODE[1]
+    rec = np.zeros(1, FAULTS)
+    for key, value in (record or {}).items():
+        rec[key] = value
+    if record is None:
+        header = b"BTSPIV2\0" + header[8:]
+    batch = struct.pack("<III", 1, 0, 1) + tr.tobytes() + rec.tobytes()
+    r = subprocess.run([str(harness.binary), "--stream"], input=header + batch, capture_output=True, timeout=60)
+    assert r.returncode == 2 and words in r.stderr.decode(), r.stderr
+    assert r.stdout == b""  # nothing played
+
+
+def test_an_edited_harness_cpp_is_rebuilt_not_reused(tmp_path, monkeypatch):
+    """The stream format lives in harness.cpp (the fault changes came with an edit of it): a build whose stamp is
+    another harness.cpp's digest is rebuilt, never run with the new format (one with the same sources is reused)."""
+    from emulator.rtl import harness as H
+
+    builds = []
+
+    def fake_build(self):
+        builds.append(self.build_dir)
+        self.binary.parent.mkdir(parents=True, exist_ok=True)
+        self.binary.write_text("built")
+        return self.binary
+
+    monkeypatch.setattr(H.Harness, "_build", fake_build)
+    h = H.Harness(tmp_path / "h")
+    h.ensure_built()
+    h.ensure_built()
+    assert len(builds) == 1
+    edited = tmp_path / "harness.cpp"
+    edited.write_text(H.HARNESS_CPP.read_text() + "\n// edited\n")
+    monkeypatch.setattr(H, "HARNESS_CPP", edited)
+    h.ensure_built()
+    assert len(builds) == 2
