@@ -18,15 +18,17 @@ CALL = [(0, 1, None), (10, 3, None), (100, 1, "PDC"), (110, 3, "PAC"), (170, 1, 
         (300, 1, "E1"), (310, 3, "TDC")]
 S1 = [k for k, (_, n, _) in enumerate(CALL) if n == 1]
 S3 = [k for k, (_, n, _) in enumerate(CALL) if n == 3]
-READS_S3 = [k for k, (_, n, c) in enumerate(CALL) if n == 3 and c is None]
+READS_S1, READS_S3 = ([k for k, (_, n, c) in enumerate(CALL) if n == s and c is None] for s in (1, 3))
 #: The schedule: {call: {sensor: faults set just before it}}; each fault is cleared (Faults()) a call later.
 SCHEDULE = {1: {1: Faults(miso_stuck=1)},
             2: {1: Faults(), 3: Faults(bad_parity=True)},
             3: {3: Faults(), 1: Faults(miso_flip_bit=3)},
             4: {1: Faults(), 3: Faults(slow_response=True)},
             5: {3: Faults(), 1: Faults(mosi_flip_bit=0)},
-            6: {1: Faults()}}
-CALLS = 7
+            6: {1: Faults()},
+            7: {1: Faults(bad_parity=True)},
+            8: {1: Faults()}}
+CALLS = 9
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +84,8 @@ def _rtl(harness, schedule: dict) -> np.ndarray:
 
 def test_a_fault_schedule_gives_the_same_words_over_the_rtl_as_over_the_software_bus(harness):
     """MISO stuck high, a flipped MISO bit and a MOSI bit flip on sensor 1, corrupted parity and a slow response on
-    sensor 3, each set between two calls and cleared a call later: word for word the same over the RTL (its fault
+    sensor 3, and corrupted parity on sensor 1 after a call with no faults, each set between two calls and cleared a
+    call later: word for word the same over the RTL (its fault
     ports changed while it streams) as over the software bus — the MOSI flip turning sensor 1's reads into PAC
     commands whose conversions the RTL requests (a code the emulator did not compute would be a HarnessError)."""
     soft = _software(SCHEDULE)
@@ -114,6 +117,10 @@ def test_each_fault_acts_from_the_first_transfer_after_it_and_on_its_own_sensor_
     # call 5: sensor 1 receives bit 0 inverted: its E1 command arrives with even parity, read in call 6 as "EE";
     # sensor 3 (cleared) reads data again
     assert rtl[6, 0] == ERR["parity"] and proto.decode_response(rtl[5, READS_S3])[1].all()
+    # call 7, after a call with no faults: sensor 1's reads leave with the parity bit inverted, the first one (its
+    # conversion made by the software bus's vectorized path in call 6) too; sensor 3 untouched
+    assert np.array_equal(rtl[7, READS_S1], clean[7, READS_S1] ^ 0x0100) and np.array_equal(rtl[7, S3], clean[7, S3])
+    assert np.array_equal(rtl[8], clean[8])  # all clear
 
 
 def test_an_rtl_port_takes_faults_only(harness):
