@@ -179,6 +179,37 @@ def test_a_fault_changed_inside_a_held_chip_select_acts_on_the_bits_clocked_afte
     assert not proto.decode_response(rtl[7])[1] and proto.decode_response(rtl[10])[1]
 
 
+def test_a_write_acknowledgement_keeps_the_parity_fault_in_force_when_the_write_was_taken(harness):
+    """Corrupted parity acts on a write's acknowledgement as the write is taken, not as it is read: set between the
+    write and its read it leaves the acknowledgement clean; cleared there, the acknowledgement still reads with
+    the parity bit inverted — over the RTL as over the software bus (a sample's word, by contrast, takes the fault
+    in force when it is read: the schedule test)."""
+    from emulator.rtl.harness import RtlBus
+
+    write = 0x400B  # parameter 0 := 5 (odd parity)
+    s1 = np.array([SELECT_CODE[1]])
+    words = {}
+    for name, make in (("software", lambda: Bus({n: SensorPort(s, n) for n, s in _sensors().items()})),
+                       ("RTL", lambda: RtlBus(_sensors(), harness=harness))):
+        bus = make()
+        try:
+            out = []
+            for k, (before_write, before_read) in enumerate(((None, Faults(bad_parity=True)),
+                                                            (Faults(bad_parity=True), Faults()))):
+                t = 0.01 + k * 1e-3
+                if before_write is not None:
+                    bus.ports[1].faults = before_write
+                bus.exchange_words(np.array([t]), s1, np.array([write], np.uint16), CLOCK_HZ)
+                bus.ports[1].faults = before_read
+                out += list(bus.exchange_words(np.array([t + 100e-6]), s1, np.array([0], np.uint16), CLOCK_HZ))
+            words[name] = out
+        finally:
+            bus.close()
+    assert words["RTL"] == words["software"], words
+    clean, corrupted = words["RTL"]
+    assert proto.decode_response(clean)[1] and corrupted == clean ^ 0x0100
+
+
 @pytest.mark.parametrize("record,words", [
     (dict(sensor=6), "fault change: a fault record for sensor 6 outside its ranges"),
     (dict(sensor=2, stuck_en=2), "fault change: a fault record for sensor 2 outside its ranges"),
