@@ -264,23 +264,6 @@ class HarnessPeripheral:
         return res["miso"].astype(np.uint16)
 
 
-class _RtlPort(SensorPort):
-    """A sensor's port as :class:`RtlBus` keeps it (provided channels, conversion window, SPI faults).  Its
-    ``faults`` are set as on the software bus — ``port.faults = Faults(...)`` (``Faults()`` clears them) — and
-    reach the RTL's fault ports at the bus's next transfer; anything but a ``Faults`` is refused by name."""
-
-    @property
-    def faults(self):
-        return self._faults
-
-    @faults.setter
-    def faults(self, faults) -> None:
-        if not isinstance(faults, Faults):
-            raise ValueError(f"sensor {self.index}: faults = {faults!r:.80}: must be an emulator.spi.model.Faults, "
-                             f"e.g. Faults(bad_parity=True), Faults(miso_stuck=1); Faults() clears them")
-        self._faults = faults
-
-
 class RtlBus:
     """The RTL of five sensors' SPI side, in a persistent C++ harness, with the calls of :class:`Bus`.
 
@@ -308,7 +291,9 @@ class RtlBus:
         if self.harness.sp != mask:
             raise ValueError(f"the harness was built for SP mask {self.harness.sp}, the sensors need {mask}")
         self.harness.ensure_built()
-        self.ports = {n: _RtlPort(s, n) for n, s in sensors.items()}  # provided channels, conversion window
+        # each sensor's port: provided channels, conversion window, SPI faults (set as on the software bus —
+        # port.faults = Faults(...) — they reach the RTL's fault ports at the bus's next transfer)
+        self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}
         self.present = sum(1 << (n - 1) for n in sensors)
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor

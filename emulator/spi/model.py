@@ -222,7 +222,7 @@ class SensorPort:
     def __init__(self, sensor, index: int = 1, faults: Faults | None = None, properties=None):
         self.sensor = sensor
         self.index = index
-        self.faults = faults or Faults()
+        self.faults = Faults() if faults is None else faults
         self.variant = ch.variant(getattr(sensor, "variant", ch.DEFAULT_VARIANT))
         self.recognized = self.variant.sampled_channels  # channels this variant has (others answer EX)
         serial = getattr(sensor, "serial", None)  # a unit's own serial (scene-built sensors); None: the default
@@ -238,6 +238,19 @@ class SensorPort:
         self.unprovided_requests = 0
         self.coupled_conversions = 0
 
+
+    @property
+    def faults(self) -> Faults:
+        """The SPI faults in force (``port.faults = Faults(...)``; ``Faults()`` clears them): on the software bus
+        from the next transfer, over the RTL from the bus's next transfer too."""
+        return self._faults
+
+    @faults.setter
+    def faults(self, faults) -> None:
+        if not isinstance(faults, Faults):
+            raise ValueError(f"sensor {self.index}: faults = {faults!r:.80}: must be an emulator.spi.model.Faults, "
+                             f"e.g. Faults(bad_parity=True), Faults(miso_stuck=1); Faults() clears them")
+        self._faults = faults
     def reset(self) -> None:
         """Power-on state: nothing prepared, nothing to resend, the writable registers 0 (as the RTL's reset clears
         them; the ``reset`` fault calls this mid-stream).

@@ -574,3 +574,17 @@ def test_any_transfer_of_1_to_15_bits_is_counted_incomplete(nbits):
     b = bus()
     b.transfer(Transfer(0.0, SELECT_CODE[1], (1 << nbits) - 1, nbits))
     assert b.ports[1].incomplete == 1
+
+
+def test_a_software_port_takes_faults_only_as_the_rtl_port_does():
+    """``port.faults`` takes a ``Faults`` (``Faults()`` clears them; None at construction means none); a dict or
+    None set later is refused naming the sensor and what it takes (a dict had failed at the next transfer, deep in
+    the state machine) — one rule for the software and the RTL bus."""
+    p = port(2)
+    assert p.faults == Faults()
+    p.faults = Faults(bad_parity=True)
+    assert p.faults.bad_parity
+    for bad in ({"bad_parity": True}, None):
+        with pytest.raises(ValueError, match=r"sensor 2: faults = .*must be an emulator\.spi\.model\.Faults"):
+            p.faults = bad
+    assert p.faults == Faults(bad_parity=True)  # unchanged by the refused values
