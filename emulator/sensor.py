@@ -111,6 +111,19 @@ def _frame_plan(node_of_channel: bytes, n_nodes: int, channels: bytes) -> tuple:
 
 _ALL = np.zeros(0, dtype=np.int64)  # (_interpolate: every position)
 
+#: the most grid samples one physics block holds: a longer ``block_s`` is computed in blocks of this many (results
+#: do not depend on the block size, and memory stays ~20 MB whatever block is asked for: 3.7 s at the reference grid)
+MAX_BLOCK_SAMPLES = 2**18
+
+
+def _block_samples(block_s, fs: float) -> int:
+    """Grid samples per physics block for a block of ``block_s`` s on a grid of ``fs`` Hz: at least 1, at most
+    :data:`MAX_BLOCK_SAMPLES`; a block that is not a finite duration > 0 s is refused."""
+    if isinstance(block_s, bool) or not isinstance(block_s, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(block_s) and block_s > 0):
+        raise ValueError(f"block_s = {block_s!r}: the physics block must be a finite duration > 0 s")
+    return min(MAX_BLOCK_SAMPLES, max(1, int(round(block_s * fs))))
+
 
 @njit(cache=True)
 def _grid_positions(times, fs):
@@ -150,7 +163,8 @@ class Sensor:
     fidelity : profile name or :class:`Fidelity`
     seed : scene seed; every random effect draws from a stream keyed by (seed, effect name)
     noise : which noise sources are on
-    block_s : physics block length in s (results do not depend on it)
+    block_s : physics block length in s, finite and > 0 (results do not depend on it; a block longer than
+        :data:`MAX_BLOCK_SAMPLES` grid samples is computed in pieces of that many)
     start_s : the instant (s) at which the sensor starts, settled at rest; earlier instants do not exist
     faults : sensor faults: ``electrode_open``/``electrode_short`` (lists of electrode numbers), ``mux_stuck``
         (electrode number), ``thermistor`` ("open" or "short"), ``heater_failed`` (True), ``fluid_leak_mL_per_min``
@@ -191,7 +205,7 @@ class Sensor:
         self.seed = int(seed)
         self.noise = noise
         self.fs = self.fidelity.grid_Hz
-        self.block_n = max(1, int(round(block_s * self.fs)))
+        self.block_n = _block_samples(block_s, self.fs)
         self.channels_read = sorted({int(c) if isinstance(c, (int, np.integer)) else ch.channel_index(c)
                                      for c in channels_read})
         unknown = [c for c in self.channels_read if c not in self.variant.sampled_channels]
@@ -204,9 +218,13 @@ class Sensor:
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)
         motions = [s for s in stimuli if isinstance(s, (Slide, CommandedMotion))]
         f = self.fidelity
+        # built only for scenes that slide, and only if something reads the grid: the pressure channels, a recorded
+        # signal or the electrodes (a sliding motion's pad reads its forces); TDC and TAC alone never need it (the
+        # thermal contact takes the nominal load)
+        grid_read = bool(self.nodes or self.record_signals or any(c >= ch.ELECTRODE_FIRST for c in self.channels_read))
         self.sliding = (SlidingContact(motions, self.params, self.fs, f.sliding_dx_m, f.friction_substeps,
                                        f.patch_radii, self.seed, ridges=f.ridges)
-                        if motions else None)  # built only for scenes that slide
+                        if motions and grid_read else None)
         self.electrodes = self._electrode_model(stimuli)
         # a sliding motion's electrode contact reads the sliding contact's forces: it runs when electrodes are read
         fed = self.electrodes is not None and self.sliding is not None

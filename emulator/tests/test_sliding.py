@@ -44,6 +44,25 @@ def test_nothing_of_sliding_is_built_for_a_scene_without_sliding():
 
 
 @pytest.mark.unit
+def test_a_sliding_scene_read_only_for_its_temperatures_builds_no_sliding_contact():
+    """TDC and TAC read the thermal contact's nominal load, never the grid: the sliding contact (its texture tracks
+    and patch tables, ~0.1 s to build at the reference profile) is not built, and the temperatures are those of a
+    sensor that also reads PDC (and so builds it)."""
+    slide = Slide(0.1, SAND, 0.5, 0.01, 0.01)
+    warm = Sensor(stimuli=[slide], channels_read=["TDC", "TAC"], fidelity="reference", seed=2)
+    assert warm.sliding is None and warm.graph.effects == []
+    assert warm.thermal is not None  # the slide's contact still warms or cools the skin
+    both = Sensor(stimuli=[slide], channels_read=["TDC", "TAC", "PDC"], fidelity="reference", seed=2)
+    assert both.sliding is not None
+    t, c = np.repeat(np.linspace(0.0, 2.0, 200), 2), np.tile([2, 3], 200)  # TAC, TDC
+    assert np.array_equal(warm.sample(c, t), both.sample(c, t))
+    for read in (["E1"], ["TDC", "PAC"]):  # the electrodes (the pad's forces) and the pressure path do need it
+        assert Sensor(stimuli=[slide], channels_read=read).sliding is not None
+    recorded = Sensor(stimuli=[slide], channels_read=["TDC"], record_signals=("tangential_force_N",))
+    assert "sliding_contact" in [e.name for e in recorded.graph.effects]
+
+
+@pytest.mark.unit
 def test_stick_then_slip_tangential_force_ramps_to_static_then_settles_at_kinetic():
     """While the skin sticks the tangential force ramps at k_t·V; it peaks near µs·N and settles on the Stribeck
     curve at the sliding speed, µ(V)·N."""

@@ -224,3 +224,28 @@ def test_thermal_and_electrodes_do_not_depend_on_block_size(block_s):
         return Sensor(stimuli=stim, channels_read=names, seed=8, block_s=bs).sample(chans, t)
 
     assert np.array_equal(codes(block_s), codes(2.0))
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), 0.0, -0.5, "2"])
+def test_a_block_that_is_not_a_finite_positive_duration_is_refused_by_name(bad):
+    """block_s NaN once failed as "cannot convert float NaN to integer"; 0 and negative ran as 1-sample blocks."""
+    with pytest.raises(ValueError, match=r"block_s = .*: the physics block must be a finite duration > 0 s"):
+        Sensor(block_s=bad)
+
+
+def test_a_huge_block_is_computed_in_bounded_pieces_with_the_same_codes():
+    """block_s = 10⁶ s on the reference grid once asked for 525 GiB at the first sample (MemoryError); the grid is
+    now computed at most MAX_BLOCK_SAMPLES at a time, and the codes are those of the default 2 s blocks."""
+    from emulator.sensor import MAX_BLOCK_SAMPLES
+
+    huge = Sensor(stimuli=SCENE, channels_read=["PAC", "PDC"], fidelity="reference", seed=3, block_s=1e6)
+    assert huge.block_n == MAX_BLOCK_SAMPLES
+    t = np.arange(int(0.25 * 4400)) / 4400.0 + 1e-4
+    ch = np.tile([0, 1], t.size // 2)
+    tracemalloc.start()
+    got = huge.sample(ch, t)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 200e6  # bytes: a few blocks of 2**18 samples, not 1e6 s of grid
+    ref = Sensor(stimuli=SCENE, channels_read=["PAC", "PDC"], fidelity="reference", seed=3).sample(ch, t)
+    assert np.array_equal(got, ref)
