@@ -1,8 +1,9 @@
 """What accuracy costs in time: fidelity profiles measured against the reference profile.
 
 For every profile and shipped scene:
-  * PAC RMS error (bits): the noise-free analog PAC at the scene's PAC sampling instants, against
-    the reference profile's, over the whole scene;
+  * RMS error (bits) of each kind of channel the scene reads (PAC, PDC, TDC, TAC, electrodes): the noise-free
+    analog value at every conversion the scene's host makes (every sensor), against the reference profile's, over
+    the whole scene (:func:`profile_errors`; committed in fixtures/fidelity/errors.json, which a test recomputes);
   * spectral error (dB): mean |ΔPSD| over 20–1000 Hz of the PAC codes (all noise on, through SPI)
     against the reference profile; the row "reference (other seed)" shows the statistical floor of
     this estimate (two noise realisations of the same model);
@@ -26,7 +27,7 @@ from bench.running.runner import build_sensor, run_scene
 from bench.running.sampler import Sampler
 from bench.paths import FIXTURES, REPO, SCENES_DIR
 from bench.scenes.scene import load_scene
-from emulator.channels import DEFAULT_FRAME_NAMES, DEFAULT_VARIANT, PAC
+from emulator.channels import DEFAULT_FRAME_NAMES, DEFAULT_VARIANT, ELECTRODE_FIRST, PAC, PDC, TAC, TDC
 from emulator.conversions import ADC_LSB_V
 from emulator.fidelity import PROFILES
 from emulator.params import SensorParams
@@ -35,22 +36,60 @@ from emulator.spi.peripheral import SoftwarePeripheral
 
 
 
-def _pac_instants(scene) -> np.ndarray:
-    """The instants (s) at which the scene's host samples PAC."""
+#: the kinds of channel whose error :func:`profile_errors` measures, each over every conversion of that kind
+ERROR_KINDS = ("PAC", "PDC", "TDC", "TAC", "electrodes")
+
+
+def _conversions(scene) -> tuple[np.ndarray, np.ndarray]:
+    """The instants (s) and channel indices of every conversion the host of ``scene`` (one sensor) makes, in order."""
     sampler = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz)
     _, t_sampled, channel = sampler.slots(np.arange(int(round(scene.duration_s * scene.slot_rate_Hz))))
-    return t_sampled[channel == PAC]
+    return t_sampled, channel
 
 
-def _deterministic_pac_bits(scene, fidelity: str, times: np.ndarray) -> np.ndarray:
+def _kind_masks(channels: np.ndarray) -> dict[str, np.ndarray]:
+    """For each of :data:`ERROR_KINDS` that ``channels`` holds: where it sits (a boolean mask)."""
+    masks = {"PAC": channels == PAC, "PDC": channels == PDC, "TDC": channels == TDC, "TAC": channels == TAC,
+             "electrodes": channels >= ELECTRODE_FIRST}
+    return {kind: masks[kind] for kind in ERROR_KINDS if masks[kind].any()}
+
+
+def _noise_free_bits(scene, fidelity: str, times: np.ndarray, channels: np.ndarray) -> np.ndarray:
+    """The noise-free analog value (ADC LSB, before quantization) of every conversion of one-sensor ``scene`` at
+    ``fidelity``, asked for as its host asks: a second of conversions at a time, in the frame's order (the electrode
+    multiplexer remembers the order)."""
     scene.fidelity, scene.noise = fidelity, NoiseSources.none()
-    return build_sensor(scene).analog_trace("PAC", times) / ADC_LSB_V
+    sensor = build_sensor(scene)
+    out = np.empty(times.size)
+    step = max(1, int(round(scene.slot_rate_Hz)))
+    for i in range(0, times.size, step):
+        out[i:i + step] = sensor.analog(channels[i:i + step], times[i:i + step])
+    return out / ADC_LSB_V
+
+
+def profile_errors(path, profiles=tuple(PROFILES)) -> dict[str, dict[str, float]]:
+    """Each profile's deterministic error against ``reference`` on the scene file ``path``: {profile: {kind: RMS
+    error in bits}}, for every kind of :data:`ERROR_KINDS` the scene's host reads, over every conversion of that
+    kind of every sensor of the scene (noise off; the analog value before quantization, in ADC LSB)."""
+    diffs: dict[str, dict[str, list]] = {name: {} for name in profiles}
+    for k in range(1, load_scene(path).n_sensors + 1):
+        times, channels = _conversions(load_scene(path).for_sensor(k))
+        masks = _kind_masks(channels)
+        ref = _noise_free_bits(load_scene(path).for_sensor(k), "reference", times, channels)
+        for name in profiles:
+            d = (np.zeros(ref.size) if name == "reference"
+                 else _noise_free_bits(load_scene(path).for_sensor(k), name, times, channels) - ref)
+            for kind, sel in masks.items():
+                diffs[name].setdefault(kind, []).append(d[sel])
+    return {name: {kind: float(np.sqrt(np.mean(np.concatenate(parts) ** 2))) for kind, parts in per.items()}
+            for name, per in diffs.items()}
 
 
 def _noisy_run(scene, fidelity: str, seed: int):
     scene.fidelity, scene.noise, scene.seed = fidelity, NoiseSources(), seed
     rec = run_scene(scene, progress=False)
-    return rec.channels["PAC"].codes.astype(float), rec.wall_s / rec.simulated_s
+    pac = rec.channels["PAC"].codes.astype(float) if "PAC" in rec.channels else None
+    return pac, rec.wall_s / rec.simulated_s
 
 
 def _spectral_error_dB(x: np.ndarray, ref: np.ndarray, fs: float) -> float:
@@ -60,31 +99,35 @@ def _spectral_error_dB(x: np.ndarray, ref: np.ndarray, fs: float) -> float:
     return float(np.mean(np.abs(a[band] - b[band])))
 
 
-def fidelity_table(progress=print) -> list[dict]:
+def fidelity_table(progress=print, scenes=None) -> list[dict]:
+    """One row per scene (``scenes``: scene files; default every shipped scene) and profile: ``error_bits``
+    (:func:`profile_errors`: each channel kind's noise-free RMS error against ``reference``, bits; PAC's also as
+    ``pac_rms_error_bits``), the spectral error of PAC (dB; None if the scene reads no PAC) and the measured wall
+    time per simulated second of the full noisy run through SPI; then a "reference (other seed)" row: the spectral
+    estimate's own floor."""
     rows = []
-    for path in sorted(SCENES_DIR.glob("*.toml")):
+    for path in (sorted(SCENES_DIR.glob("*.toml")) if scenes is None else scenes):
         base = load_scene(path)
-        if "PAC" not in base.channels:
-            continue
-        times = _pac_instants(base)
-        pac_rate = times.size / base.duration_s
-        ref_det = _deterministic_pac_bits(load_scene(path), "reference", times)
+        progress(f"… {base.name}: noise-free errors")
+        errors = profile_errors(path)
+        spectral = "PAC" in base.channels
+        times, channels = _conversions(base)
+        pac_rate = np.count_nonzero(channels == PAC) / base.duration_s
         ref_noisy, ref_cost = _noisy_run(load_scene(path), "reference", base.seed)
         for name in PROFILES:
             progress(f"… {base.name} / {name}")
             if name == "reference":
-                det_err, spec, cost = 0.0, 0.0, ref_cost
+                spec, cost = 0.0 if spectral else None, ref_cost
             else:
-                det = _deterministic_pac_bits(load_scene(path), name, times)
-                det_err = float(np.sqrt(np.mean((det - ref_det) ** 2)))
                 noisy, cost = _noisy_run(load_scene(path), name, base.seed)
-                spec = _spectral_error_dB(noisy, ref_noisy, pac_rate)
-            rows.append({"scene": base.name, "profile": name, "pac_rms_error_bits": det_err,
-                         "spectral_error_dB": spec, "wall_ms_per_sim_s": 1e3 * cost,
-                         "realtime_factor": 1.0 / cost})
+                spec = _spectral_error_dB(noisy, ref_noisy, pac_rate) if spectral else None
+            rows.append({"scene": base.name, "profile": name, "error_bits": errors[name],
+                         "pac_rms_error_bits": errors[name].get("PAC"), "spectral_error_dB": spec,
+                         "wall_ms_per_sim_s": 1e3 * cost, "realtime_factor": 1.0 / cost})
         other, _ = _noisy_run(load_scene(path), "reference", base.seed + 1)
-        rows.append({"scene": base.name, "profile": "reference (other seed)", "pac_rms_error_bits": None,
-                     "spectral_error_dB": _spectral_error_dB(other, ref_noisy, pac_rate),
+        rows.append({"scene": base.name, "profile": "reference (other seed)", "error_bits": None,
+                     "pac_rms_error_bits": None,
+                     "spectral_error_dB": _spectral_error_dB(other, ref_noisy, pac_rate) if spectral else None,
                      "wall_ms_per_sim_s": None, "realtime_factor": None})
     return rows
 
@@ -582,6 +625,39 @@ def write_scene_fingerprint_fixture(path=None) -> dict:
     return doc
 
 
+#: each profile's noise-free error against ``reference`` on every shipped scene (:func:`profile_errors`): the errors
+#: the project states; bench/tests/test_fidelity_errors.py recomputes them
+FIDELITY_ERROR_FIXTURE = FIXTURES / "fidelity" / "errors.json"
+FIDELITY_ERROR_COMMAND = ".venv/bin/python -m bench.verification.benchmark --write-fidelity-errors"
+
+
+def write_fidelity_error_fixture(path=None, say=print) -> dict:
+    """Recompute :func:`profile_errors` for every shipped scene and write them to ``path`` (default
+    :data:`FIDELITY_ERROR_FIXTURE`; only for an intended change of a profile's error, said in the commit)."""
+    from bench.atomic import atomic_write
+
+    path = FIDELITY_ERROR_FIXTURE if path is None else path
+    scenes = {}
+    for scene_path in sorted(SCENES_DIR.glob("*.toml")):
+        t0 = time.perf_counter()
+        scenes[scene_path.stem] = profile_errors(scene_path)
+        say(f"{scene_path.stem}: {time.perf_counter() - t0:.1f} s")
+    doc = {"about": "Each fidelity profile's error against the reference profile on every shipped scene "
+                    "(fixtures/scenes/*.toml, every sensor): per kind of channel the scene's host reads, the RMS over "
+                    "all its conversions of the noise-free analog value's difference, in ADC LSB (bits). "
+                    "bench/tests/test_fidelity_errors.py recomputes them: a change of any profile's error fails "
+                    "there until this file (and the README's table) says the new error.",
+           "regenerate": f"only for an intended change of these errors, said in the commit message: "
+                         f"{FIDELITY_ERROR_COMMAND}",
+           "kinds": list(ERROR_KINDS),
+           "made_with": fingerprint_environment(),
+           "scenes": scenes}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as tmp:
+        tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return doc
+
+
 def _fingerprints_main(argv) -> int:
     """``python -m bench.verification.benchmark OUT.json [OLD.json]``: write the fingerprints; with OLD.json (another
     tree's), list the runs whose codes differ and exit 1 if any does.  ``--write-fixture``: rewrite
@@ -596,7 +672,16 @@ def _fingerprints_main(argv) -> int:
     ap.add_argument("--write-fixture", action="store_true",
                     help="rewrite the committed fingerprints of the scenes that do not slide (fixtures/fingerprints/"
                          "scenes_default.json) and nothing else; only for an intended change of their codes")
+    ap.add_argument("--write-fidelity-errors", action="store_true",
+                    help="rewrite the committed errors of the fidelity profiles (fixtures/fidelity/errors.json) and "
+                         "nothing else; only for an intended change of a profile's error")
     a = ap.parse_args(argv)
+    if a.write_fidelity_errors:
+        if a.write_fixture or a.out is not None or a.scenes != SCENES_DIR:
+            ap.error("--write-fidelity-errors takes no other option or file (it measures the shipped scenes)")
+        doc = write_fidelity_error_fixture()
+        print(f"wrote {FIDELITY_ERROR_FIXTURE}: {len(doc['scenes'])} scenes")
+        return 0
     if a.write_fixture:
         if a.out is not None or a.scenes != SCENES_DIR:
             ap.error("--write-fixture takes no OUT.json, OLD.json or --scenes (it fingerprints the shipped scenes)")
@@ -616,6 +701,21 @@ def _fingerprints_main(argv) -> int:
         print(f"DIFFERENT {k}: {old.get(k)} -> {prints.get(k)}")
     print(f"{len(prints)} runs, {len(differ)} with different codes")
     return 1 if differ else 0
+
+
+def fidelity_lines(rows: list[dict]) -> list[str]:
+    """The fidelity table of :func:`fidelity_table` as text: per scene and profile each channel kind's noise-free RMS
+    error (bits; — where the scene reads no such channel), PAC's spectral error (dB) and the cost."""
+    kinds = {"PAC": "PAC", "PDC": "PDC", "TDC": "TDC", "TAC": "TAC", "electrodes": "E"}
+    lines = ["Fidelity profiles: error against the reference profile (noise-free RMS, bits, per channel kind), and cost",
+             f"{'scene':22s} {'profile':24s} " + " ".join(f"{k:>9s}" for k in kinds.values())
+             + f" {'PAC spectral (dB)':>18s} {'ms / sim s':>11s} {'× real time':>12s}"]
+    for r in rows:
+        err = r.get("error_bits") or {}
+        lines.append(f"{r['scene']:22s} {r['profile']:24s} " + " ".join(_fmt(err.get(k), "9.4f") for k in kinds)
+                     + f" {_fmt(r['spectral_error_dB'], '18.3f')} {_fmt(r['wall_ms_per_sim_s'], '11.2f')} "
+                     f"{_fmt(r['realtime_factor'], '12.0f')}")
+    return lines
 
 
 def _fmt(v, spec):
@@ -669,13 +769,7 @@ def main(args) -> int:
 
         print(strict_json(result, indent=2))
         return 0
-    print("Fidelity profiles: error against the reference profile, and cost")
-    print(f"{'scene':16s} {'profile':24s} {'PAC RMS err (bits)':>19s} {'spectral err (dB)':>18s} "
-          f"{'ms / sim s':>11s} {'× real time':>12s}")
-    for r in result["fidelity"]:
-        print(f"{r['scene']:16s} {r['profile']:24s} {_fmt(r['pac_rms_error_bits'], '19.4f')} "
-              f"{_fmt(r['spectral_error_dB'], '18.3f')} {_fmt(r['wall_ms_per_sim_s'], '11.2f')} "
-              f"{_fmt(r['realtime_factor'], '12.0f')}")
+    print("\n".join(fidelity_lines(result["fidelity"])))
     print("\nFull 44-slot frame at rest, through SPI:")
     for r in result["throughput"]:
         print(f"  {r['fidelity']:10s} {r['realtime_factor']:8.0f}× real time "

@@ -1,0 +1,113 @@
+"""What accuracy costs, measured: each fidelity profile's error against ``reference`` on every shipped scene, per kind
+of channel the scene reads (PAC, PDC, TDC, TAC, electrodes), is committed in fixtures/fidelity/errors.json and
+recomputed here (about 45 s for all scenes, 26 s of them the 125 s movement sweep); the benchmark's table measures
+every channel kind and the cost of each profile."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from bench.paths import REPO, SCENES_DIR
+from bench.scenes.scene import load_scene
+from bench.verification.benchmark import (ERROR_KINDS, FIDELITY_ERROR_COMMAND, FIDELITY_ERROR_FIXTURE, _conversions,
+                                          _kind_masks, fidelity_lines, fidelity_table, profile_errors)
+from emulator.fidelity import PROFILES
+
+FIXTURE = json.loads(FIDELITY_ERROR_FIXTURE.read_text(encoding="utf-8"))
+FIXTURE_NAME = FIDELITY_ERROR_FIXTURE.relative_to(REPO)
+
+
+def kinds_read(path) -> set[str]:
+    """The channel kinds the host of the scene at ``path`` converts, over all its sensors."""
+    scene = load_scene(path)
+    return {kind for k in range(1, scene.n_sensors + 1) for kind in _kind_masks(_conversions(scene.for_sensor(k))[1])}
+
+
+@pytest.mark.unit
+def test_the_stated_errors_cover_every_shipped_scene_profile_and_channel_kind_it_reads():
+    assert FIXTURE["kinds"] == list(ERROR_KINDS)
+    assert set(FIXTURE["scenes"]) == {p.stem for p in SCENES_DIR.glob("*.toml")}
+    for name, per_profile in FIXTURE["scenes"].items():
+        assert set(per_profile) == set(PROFILES), name
+        read = kinds_read(SCENES_DIR / f"{name}.toml")
+        assert read >= {"PAC", "PDC"}, (name, read)
+        for profile, errors in per_profile.items():
+            assert set(errors) == read, (name, profile)  # not only PAC: every kind the scene reads
+            assert all(math.isfinite(v) and v >= 0.0 for v in errors.values()), (name, profile)
+        assert set(per_profile["reference"].values()) == {0.0}
+
+
+@pytest.mark.stability
+@pytest.mark.parametrize("name", sorted(FIXTURE["scenes"]))
+def test_each_profile_has_its_stated_error_on_each_shipped_scene(name):
+    """A change of the model, a profile or the measurement that moves any profile's error by more than 0.1 %
+    (or 1e-6 bits) fails here until the fixture (and the README's table) states the new error."""
+    now = profile_errors(SCENES_DIR / f"{name}.toml")
+    stated = FIXTURE["scenes"][name]
+    wrong = [f"{name} / {profile} / {kind}: stated {stated[profile].get(kind)!r} bits, measured {value!r} bits"
+             for profile, errors in now.items() for kind, value in errors.items()
+             if stated[profile].get(kind) is None or value != pytest.approx(stated[profile][kind], rel=1e-3, abs=1e-6)]
+    wrong += [f"{name} / {profile}: stated kinds {sorted(stated[profile])}, measured {sorted(now[profile])}"
+              for profile in now if set(stated[profile]) != set(now[profile])]
+    assert not wrong, "\n".join(wrong) + (f"\nIf the change is intended, regenerate {FIXTURE_NAME} with "
+                                          f"`{FIDELITY_ERROR_COMMAND}`, say why in the commit, and update the "
+                                          f"README's table")
+
+
+SCENE = """
+[scene]
+name = "{name}"
+duration_s = 1.0
+seed = 5
+
+[host]
+sequence = {sequence}
+
+[[stimulus]]
+kind = "touch"
+start_s = 0.2
+force_N = 1.0
+ramp_s = 0.02
+hold_s = 0.3
+electrode = "E9"
+material = "glass"
+
+[[stimulus]]
+kind = "tap"
+at_s = 0.7
+peak_N = 0.8
+"""
+
+
+@pytest.mark.unit
+def test_the_fidelity_table_measures_every_channel_kind_read_and_each_profiles_cost(tmp_path):
+    """One scene reading the default frame, one reading no PAC (such a scene was once left out of the table): per
+    profile every kind read has its error (zero for the reference itself, not zero for the fast grid), PAC's spectral
+    error where PAC is read, and a measured cost; the text table prints each kind."""
+    full, no_pac = tmp_path / "full.toml", tmp_path / "no_pac.toml"
+    full.write_text(SCENE.format(name="full-frame", sequence='"default"'), encoding="utf-8")
+    no_pac.write_text(SCENE.format(name="no-pac", sequence='["PDC", "TDC", "E9"]'), encoding="utf-8")
+    rows = fidelity_table(progress=lambda m: None, scenes=[full, no_pac])
+    assert [(r["scene"], r["profile"]) for r in rows] == [
+        (scene, p) for scene in ("full-frame", "no-pac") for p in (*PROFILES, "reference (other seed)")]
+    by = {(r["scene"], r["profile"]): r for r in rows}
+    for scene, read in (("full-frame", set(ERROR_KINDS)), ("no-pac", {"PDC", "TDC", "electrodes"})):
+        for p in PROFILES:
+            r = by[scene, p]
+            assert set(r["error_bits"]) == read, (scene, p)
+            assert 0.0 < r["wall_ms_per_sim_s"] < math.inf
+            assert r["realtime_factor"] == pytest.approx(1e3 / r["wall_ms_per_sim_s"])
+            assert r["pac_rms_error_bits"] == r["error_bits"].get("PAC")
+            assert (r["spectral_error_dB"] is None) == ("PAC" not in read)
+        assert set(by[scene, "reference"]["error_bits"].values()) == {0.0}
+        assert by[scene, "fast"]["error_bits"]["PDC"] > 0.0 and by[scene, "fast"]["error_bits"]["electrodes"] > 0.0
+    assert by["full-frame", "fast"]["error_bits"]["PAC"] > 0.0
+    assert by["full-frame", "reference (other seed)"]["spectral_error_dB"] > 0.0
+    lines = fidelity_lines(rows)
+    assert all(k in lines[1].split() for k in ("PAC", "PDC", "TDC", "TAC", "E"))
+    fast = next(line for line in lines if line.startswith("no-pac") and " fast " in line)
+    assert fast.split()[2] == "—" and float(fast.split()[3]) == pytest.approx(by["no-pac", "fast"]["error_bits"]["PDC"],
+                                                                          abs=1e-4)
