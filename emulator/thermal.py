@@ -25,7 +25,8 @@ to D eq. 4.4) in a divider with 30 kΩ from 10 V, buffered with a gain of 1.1 so
 exactly as the published conversion assumes (whose constants are the nominal part's: a unit with another R25 or
 Beta reads slightly off through it, as a real unit does), low-passed at 22.6 Hz -> TDC.  TAC = 1.65 V + 98 · HP(TDC), a first-order high-pass
 at 0.45 Hz (Table 4-1; the text's 5 Hz is not used): for changes slower than 0.35 s, TAC − 1.65 V ≈
-98·τ·dV_TDC/dt, which :func:`emulator.conversions.tac_to_celsius_per_s` inverts.
+98·τ·dV_TDC/dt, which :func:`emulator.conversions.tac_to_celsius_per_s` inverts; TAC swings between the 0 and 3.3 V
+supply rails (a fast cold or hot contact at an extreme ambient drives it there).
 """
 
 from __future__ import annotations
@@ -563,7 +564,9 @@ class ThermalModel:
         if self.noise_V:
             v = v + self.noise_V * self.rng.standard_normal(v.shape)
         tdc = self.tdc_filter(v)
-        tac = TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc)
+        # TAC's amplifier swings between the supply rails, as the pressure front end's (a fast enough TDC swing, e.g.
+        # cold aluminium at a hot ambient, drives it past 0 V); the high-pass's capacitor keeps following TDC
+        tac = np.clip(TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc), 0.0, self.p.supply_rail_V)
         self._append(k_first, xs, tdc, tac)
 
     def _advance_chunk(self) -> None:

@@ -249,3 +249,20 @@ def test_a_huge_block_is_computed_in_bounded_pieces_with_the_same_codes():
     assert peak < 200e6  # bytes: a few blocks of 2**18 samples, not 1e6 s of grid
     ref = Sensor(stimuli=SCENE, channels_read=["PAC", "PDC"], fidelity="reference", seed=3).sample(ch, t)
     assert np.array_equal(got, ref)
+
+
+@pytest.mark.parametrize("object_C", [-40.0, 120.0])
+def test_a_contact_at_the_temperature_range_ends_keeps_tac_between_the_rails(object_C):
+    """Aluminium at −40 °C or 120 °C (the scene's object range) touching a finger in a 60 °C room (the ambient
+    range's top): TDC swings fast enough to drive TAC (1.65 V + 98·HP(TDC)) past a rail, once as far as −0.26 V
+    at the ADC input; TAC saturates at the rail like every other amplifier output."""
+    from emulator.stimuli import Touch
+
+    touch = Touch(1.0, 100.0, 3.0, 0.2, electrode="E17", material="aluminum", object_temperature_C=object_C,
+                  indenter_radius_mm=6.0)
+    s = Sensor(SensorParams(ambient_temperature_C=60.0), [touch], ["TDC", "TAC", "PDC"], "fast", seed=1)
+    t = np.repeat(np.arange(0.0, 6.0, 0.01), 3)
+    chans = np.tile([3, 2, 1], t.size // 3)
+    v, _ = _bounded(s, chans, t)
+    tac = v[chans == 2]
+    assert tac.min() == 0.0 or tac.max() == s.params.supply_rail_V  # it did reach a rail
