@@ -468,8 +468,6 @@ class ElectrodeModel:
         self._hist = [rest[None, :].copy()]
         a = np.exp(-p.mux_acquisition_s / p.mux_settling_s)
         self.mux_keep = a  # fraction of the previous electrode's value left in a sample
-        # the hold node's recursion (see sample): b = [1] padded with the zero lfilter pads it with
-        self._mux_b, self._mux_a = np.array([1.0, 0.0]), np.array([1.0, -a])
         self.mux_injection = a * p.mux_injection_V
         self.mux_node = float(rest[0])
         self.stuck = self.faults.get("mux_stuck")  # electrode number the multiplexer is stuck on
@@ -594,12 +592,27 @@ class ElectrodeModel:
         if electrode.min() < 1 or electrode.max() > self.n:
             raise ValueError(f"electrode numbers {electrode.min()}..{electrode.max()}: this sensor has E1..E{self.n}")
         target = self.targets(electrode, np.asarray(times, float))
-        # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions
+        # hold node: x_k = (1 − a)·target_k + a·(x_{k−1} + injection), a first-order recursion over conversions,
+        # between 0 V and the supply rail
         a = self.mux_keep
-        y, _ = filters.lfilter(self._mux_b, self._mux_a, (1 - a) * target + self.mux_injection,
-                               np.array([a * self.mux_node]))
+        y = _hold_node((1 - a) * target + self.mux_injection, a, self.mux_node, self.p.supply_rail_V)
         self.mux_node = float(y[-1])
         return y
+
+
+@njit(cache=True)
+def _hold_node(u, a, x0, rail):  # pragma: no cover - compiled
+    """The multiplexer's hold node over conversions: x_k = a·x_{k−1} + u_k from x_{−1} = ``x0`` (V), as lfilter
+    computes it (the same bits), held between 0 V and ``rail`` (V): charge injected at every switch, with too short
+    an acquisition to settle (mux_acquisition_s ≪ mux_settling_s), once piled up past 3.3 V at the ADC input."""
+    x = np.empty(u.size)
+    prev = x0
+    for k in range(u.size):
+        v = a * prev + u[k]
+        v = 0.0 if v < 0.0 else (rail if v > rail else v)
+        x[k] = v
+        prev = v
+    return x
 
 
 def electrode_number(channel) -> np.ndarray:

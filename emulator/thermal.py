@@ -25,8 +25,8 @@ to D eq. 4.4) in a divider with 30 kΩ from 10 V, buffered with a gain of 1.1 so
 exactly as the published conversion assumes (whose constants are the nominal part's: a unit with another R25 or
 Beta reads slightly off through it, as a real unit does), low-passed at 22.6 Hz -> TDC.  TAC = 1.65 V + 98 · HP(TDC), a first-order high-pass
 at 0.45 Hz (Table 4-1; the text's 5 Hz is not used): for changes slower than 0.35 s, TAC − 1.65 V ≈
-98·τ·dV_TDC/dt, which :func:`emulator.conversions.tac_to_celsius_per_s` inverts; TAC swings between the 0 and 3.3 V
-supply rails (a fast cold or hot contact at an extreme ambient drives it there).
+98·τ·dV_TDC/dt, which :func:`emulator.conversions.tac_to_celsius_per_s` inverts.  TDC and TAC swing between 0 V and
+the 3.3 V supply rail (a shorted thermistor drives TDC there; a fast cold or hot contact at an extreme ambient, TAC).
 """
 
 from __future__ import annotations
@@ -442,11 +442,16 @@ class ThermalModel:
         self.tac_filter = filters.SosFilter(filters.discretize(zh, ph, kh, fs, tac_discretization, gain_at_hz=10.0))
         v0 = float(self._tdc_from_state(self.x[None, :])[0])
         self.tdc_filter.settle(v0)
-        self.tac_filter.settle(v0)
+        tdc0 = float(self._rails(v0))  # the buffer's output
+        self.tac_filter.settle(tdc0)
         self._hist_t = np.zeros(0)
         self._hist = np.zeros((0, 3))  # core °C, TDC V, TAC V at step instants
         self._pending: list = []  # chunks not yet merged into the history
-        self._append(self.k, self.x[None, :], np.array([v0]), np.array([TAC_BIAS_V]))
+        self._append(self.k, self.x[None, :], np.array([tdc0]), np.array([float(self._rails(TAC_BIAS_V))]))
+
+    def _rails(self, v):
+        """``v`` (V) limited to the amplifiers' output swing, 0 V to the supply rail (TDC's buffer, TAC's amplifier)."""
+        return np.clip(v, 0.0, self.p.supply_rail_V)
 
     # --- inputs ------------------------------------------------------------------------------
     def inputs_at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -563,10 +568,11 @@ class ThermalModel:
         v = self._tdc_from_state(xs)
         if self.noise_V:
             v = v + self.noise_V * self.rng.standard_normal(v.shape)
-        tdc = self.tdc_filter(v)
-        # TAC's amplifier swings between the supply rails, as the pressure front end's (a fast enough TDC swing, e.g.
-        # cold aluminium at a hot ambient, drives it past 0 V); the high-pass's capacitor keeps following TDC
-        tac = np.clip(TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc), 0.0, self.p.supply_rail_V)
+        # TDC's buffer and TAC's amplifier swing between the supply rails, as the pressure front end's: a shorted
+        # thermistor (11 V from the 10 V divider) or a low-R25 part drives TDC there, a fast enough TDC swing (cold
+        # aluminium at a hot ambient) TAC
+        tdc = self._rails(self.tdc_filter(v))
+        tac = self._rails(TAC_BIAS_V + TAC_GAIN * self.tac_filter(tdc))
         self._append(k_first, xs, tdc, tac)
 
     def _advance_chunk(self) -> None:
@@ -757,4 +763,4 @@ def _steady_state(p: SensorParams, thermistor_fault, heater_failed: bool) -> tup
     model = ThermalModel(p, ThermalEvents([]), seed=0, faults=faults)
     x = model.x
     tdc = float(tdc_volts(thermistor_ohm(x[BEAD], p), (faults or {}).get("thermistor")))
-    return float(x[CORE]), tdc, TAC_BIAS_V
+    return float(x[CORE]), float(model._rails(tdc)), float(model._rails(TAC_BIAS_V))

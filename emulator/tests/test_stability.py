@@ -266,3 +266,43 @@ def test_a_contact_at_the_temperature_range_ends_keeps_tac_between_the_rails(obj
     v, _ = _bounded(s, chans, t)
     tac = v[chans == 2]
     assert tac.min() == 0.0 or tac.max() == s.params.supply_rail_V  # it did reach a rail
+
+
+EVERY_KIND = ["PAC", "PDC", "TDC", "TAC", "E1", "E9", "E17"]
+
+
+def _every_kind_scene():
+    """A drop, a tone, a sheared aluminium touch over E9, a 3 N press, a power-on and a slide over the 3 mm grating."""
+    from bench.textures.library import texture
+    from emulator.sliding import Slide
+    from emulator.stimuli import PowerOn, Touch
+
+    return [SphereDrop(0.05, SPHERES["1 mm steel bearing"][0]), Vibration(0.02, 0.2, 1e-6, 330.0),
+            Touch(0.1, 0.4, 0.05, 0.1, electrode="E9", material="aluminum", tangential_N=0.5), PowerOn(0.0),
+            Press(0.3, 3.0, 0.05, 0.05),
+            Slide(0.5, texture("3 mm grating"), 1.0, 0.05, 0.02, approach_s=0.02, hold_s=0.05, accel_s=0.01,
+                  lift_s=0.02)]
+
+
+@pytest.mark.parametrize("name", sorted(n for n, f in PARAMETER_FIELDS.items() if f.type in ("float", float)))
+def test_every_parameter_at_either_end_of_its_range_keeps_every_channel_between_the_rails(name):
+    """Each parameter at its range's ends, every kind of channel read through a scene that touches, presses, drops,
+    warms and slides: every analog value finite and inside 0..supply rail.  At mux_settling_s = 1 ms (or
+    mux_acquisition_s = 0.1 µs) the hold node's injected charge once piled up to 3.37 V, at thermistor_r25_ohm =
+    1 kΩ TDC read 10.6 V, and at supply_rail_V = 1 V TAC stayed at its 1.65 V bias."""
+    lo, hi = PARAMETER_FIELDS[name].metadata["range"]
+    from emulator.channels import channel_index
+
+    idx = np.array([channel_index(c) for c in EVERY_KIND] * 600)
+    t = np.arange(idx.size) / 4400.0
+    for value in (lo, hi):
+        p = SensorParams().replace(**{name: value})
+        with np.errstate(over="raise", invalid="raise", divide="raise"):  # none on the way either (underflow is 0)
+            _bounded(Sensor(p, _every_kind_scene(), EVERY_KIND, "fast", seed=1), idx, t)
+
+
+def test_a_shorted_thermistor_holds_tdc_at_the_rail_not_at_11_V():
+    """The 10 V divider over a shorted thermistor would put 11 V on TDC's buffer output: it stops at the rail."""
+    s = Sensor(channels_read=["TDC", "TAC"], faults={"thermistor": "short"})
+    v, codes = _bounded(s, np.array([3, 2, 3, 2]), np.array([0.1, 0.1, 2.0, 2.0]))
+    assert v[0] == v[2] == s.params.supply_rail_V and list(codes[::2]) == [4095, 4095]
