@@ -1133,12 +1133,6 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
                 c.problems.append(f"{which}pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity "
                                   f"'{fidelity}' ({grid:.0f} Hz); use \"default\" or \"reference\"")
-        if profile(fidelity).duct_resonance:
-            for k, table in sorted(tables.items()):
-                duct = table.params.duct_resonance_Hz
-                if duct >= 0.45 * grid:
-                    c.problems.append(f"{table.where}.duct_resonance_Hz = {duct:g} Hz needs a grid above "
-                                      f"{duct / 0.45:.0f} Hz; fidelity '{fidelity}' has {grid:.0f} Hz")
     if c.problems:
         raise SceneError(source, c.problems)
     fresh_skin = copy.deepcopy(skin)

@@ -42,14 +42,16 @@ def test_run_force_with_an_impossible_sensor_keeps_the_earlier_run(tmp_path, cap
 
 def test_a_sensor_that_cannot_be_built_is_a_scene_error_before_anything_runs(tmp_path):
     """check_buildable builds each sensor as the run would first: a scene changed in Python after it was read (the
-    reading would refuse it) whose second sensor's duct resonance the reference grid cannot hold is refused, naming
-    the sensor; the shipped scenes all build."""
+    reading would refuse it) whose second sensor is given a 3 kHz tone the fast profile's 4.4 kHz grid cannot hold
+    is refused, naming the sensor; the shipped scenes all build."""
+    from emulator.stimuli import Vibration
+
     scene = load_scene(SCENES_DIR / "grasp_three_fingers.toml")
     for k in (2, 3):  # a middle finger and the last
         spec = scene.sensor_spec(k)
-        too_high = dataclasses.replace(spec, params=spec.params.replace(duct_resonance_Hz=100e3))
-        broken = dataclasses.replace(scene, fidelity="reference", sensors={**scene.sensors, k: too_high})
-        with pytest.raises(SceneError, match=rf"sensor {k}: duct resonance 100000 Hz needs a grid above 222222 Hz"):
+        too_high = dataclasses.replace(spec, stimuli=[*spec.stimuli, Vibration(0.1, 0.2, 1e-6, 3000.0)])
+        broken = dataclasses.replace(scene, fidelity="fast", sensors={**scene.sensors, k: too_high})
+        with pytest.raises(SceneError, match=rf"sensor {k}: vibration at 3000 Hz needs a finer grid than 4400 Hz"):
             check_buildable(broken)
     for path in sorted(SCENES_DIR.glob("*.toml")):
         check_buildable(load_scene(path))
