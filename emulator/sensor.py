@@ -116,12 +116,9 @@ _ALL = np.zeros(0, dtype=np.int64)  # (_interpolate: every position)
 MAX_BLOCK_SAMPLES = 2**18
 
 
-def _block_samples(block_s, fs: float) -> int:
-    """Grid samples per physics block for a block of ``block_s`` s on a grid of ``fs`` Hz: at least 1, at most
-    :data:`MAX_BLOCK_SAMPLES`; a block that is not a finite duration > 0 s is refused."""
-    if isinstance(block_s, bool) or not isinstance(block_s, (int, float, np.integer, np.floating)) \
-            or not (math.isfinite(block_s) and block_s > 0):
-        raise ValueError(f"block_s = {block_s!r}: the physics block must be a finite duration > 0 s")
+def _block_samples(block_s: float, fs: float) -> int:
+    """Grid samples per physics block for a block of ``block_s`` s (finite, > 0: checked by :class:`Sensor`) on a
+    grid of ``fs`` Hz: at least 1, at most :data:`MAX_BLOCK_SAMPLES`."""
     return min(MAX_BLOCK_SAMPLES, max(1, int(round(block_s * fs))))
 
 

@@ -101,12 +101,13 @@ def test_open_and_shorted_faults_read_at_the_rails(fault, channel, check):
 
 
 def test_a_broken_thermistor_with_the_adcs_noise_reads_as_docs_faults_md_says():
-    """docs/faults.md: open reads 0 to 2, mostly 0 (the ADC's noise at the bottom rail), shorted 4095."""
+    """docs/faults.md: open reads 0 to 2, mostly 0 (the ADC's noise at the bottom rail); shorted, TDC's buffer stops
+    at the supply rail, which reads 4095 with the ADC's noise, now and then 4094."""
     t = 0.1 + np.arange(2000) * 1e-3
     open_ = Sensor(channels_read=["TDC"], faults={"thermistor": "open"}, seed=3).sample([channel_index("TDC")] * 2000, t)
     short = Sensor(channels_read=["TDC"], faults={"thermistor": "short"}, seed=3).sample([channel_index("TDC")] * 2000, t)
     assert open_.max() <= 2 and np.mean(open_ == 0) > 0.8, np.unique(open_, return_counts=True)
-    assert (short == 4095).all(), np.unique(short)
+    assert short.min() >= 4094 and np.mean(short == 4095) > 0.99, np.unique(short, return_counts=True)
 
 
 @pytest.mark.parametrize("fault, after_itself, after_another", [
