@@ -169,3 +169,66 @@ def test_exports_are_written_for_runs_up_to_600_s(tmp_path, duration_s, exported
     assert set(skipped) == (set() if exported else exports)
     report = (tmp_path / "o" / "report.md").read_text()
     assert all(("600 simulated s" in skipped[n] and f"`{n}` not written" in report) for n in skipped)
+
+
+# --- Firmware and host stacks: the pytest plugin's keywords -------------------------------------------------------
+
+def _readme_keyword_table() -> dict[str, set[str]]:
+    """The README's fixture table: {row name: the keywords (backticked) it lists}."""
+    table = re.search(r"^\s*\| fixture \| keywords \|\n(.*?)\n\n", README, flags=re.S | re.M).group(1)
+    rows = {}
+    for line in table.splitlines()[1:]:  # past the |---| rule
+        name, words = line.strip().strip("|").split("|")
+        rows[name.strip()] = set(re.findall(r"`(\w+)`", words))
+    return rows
+
+
+def _takes(factory) -> set[str]:
+    """The keywords a factory fixture takes, as its refusal of an unknown one lists them."""
+    with pytest.raises(pytest.fail.Exception) as e:
+        factory(no_such_keyword=1)
+    return set(str(e.value).split("; it takes ")[1].split(", "))
+
+
+def test_the_plugins_fixtures_take_the_keywords_the_readme_lists(biotac_sensor, biotac_bridge, biotac_cheetah):
+    """README, pytest plugin: the table of each factory's keywords is what each one takes — no more, no fewer."""
+    rows = _readme_keyword_table()
+    every, shared = rows["all three"], rows["`biotac_bridge`, `biotac_cheetah`"]
+    assert _takes(biotac_sensor) == every | rows["`biotac_sensor`"]
+    assert _takes(biotac_bridge) == every | shared | rows["`biotac_bridge` only"]
+    assert _takes(biotac_cheetah) == every | shared | rows["`biotac_cheetah` only"]
+
+
+def test_biotac_sensor_hands_its_sensor_options_to_the_sensor(biotac_sensor):
+    """README: the sensor options `block_s` (s) and `record_signals` reach the emulated sensor."""
+    sensor = biotac_sensor(block_s=0.5, record_signals=("normal_force_N",)).sensor
+    assert sensor.block_n == round(0.5 * sensor.fs) and sensor.record_signals == ("normal_force_N",)
+
+
+# --- What accuracy costs in time: the profiles ------------------------------------------------------------------
+
+@pytest.mark.parametrize("name, grid_Hz, discretization, electrodes_Hz, second_order", [
+    ("fast", 4400.0, "bilinear", 250.0, False),
+    ("default", 8800.0, "prewarped", 500.0, False),
+    ("reference", 70400.0, "prewarped", 2000.0, True)])
+def test_each_profile_runs_the_grid_and_effects_the_readme_gives(name, grid_Hz, discretization, electrodes_Hz,
+                                                                 second_order):
+    """README: `fast` (4.4 kHz grid, plain bilinear, electrodes at 250 Hz), `default` (8.8 kHz, every corner
+    prewarped, electrodes at 500 Hz), `reference` (70.4 kHz, prewarped, electrodes at 2 kHz, plus the duct resonance
+    and second-stage noise) — as a sensor built on each profile runs them."""
+    from emulator.sensor import Sensor
+    from emulator.transducer import Bridge
+
+    sensor = Sensor(channels_read=["PAC", "E1"], fidelity=name)
+    bridge, = [e for e in sensor.graph.effects if isinstance(e, Bridge)]
+    assert (sensor.fs, sensor.fidelity.discretization, sensor.electrodes.rate_Hz) == (grid_Hz, discretization,
+                                                                                      electrodes_Hz)
+    assert (bridge.duct is not None, "stage2_noise" in {e.name for e in sensor.graph.effects}) == (second_order,) * 2
+
+
+def test_the_reference_profile_slides_at_the_readmes_resolution():
+    """README: reference's sliding is 2.5 µm textures, 16 patch radii, friction ×4, ridge-resolved fingerprints."""
+    from emulator.fidelity import profile
+
+    ref = profile("reference")
+    assert (ref.sliding_dx_m, ref.patch_radii, ref.friction_substeps, ref.ridges) == (2.5e-6, 16, 4, "resolved")
