@@ -1,8 +1,6 @@
-"""README statements of the sections the earlier audits left unguarded (third README audit): the noise budget as
-printed, the shipped scenes and what each one does, the chunk a signal stops a run at, and the 600 simulated s up
-to which a run keeps its samples in memory and writes its exports."""
+"""README statements the earlier audits left unguarded (third README audit): the noise budget as printed, the
+shipped scenes and what each one does, the pytest plugin's keyword table, and the fidelity profiles."""
 
-import math
 import re
 import tomllib
 
@@ -10,10 +8,7 @@ import pytest
 
 from bench.cli import main as cli
 from bench.paths import FIXTURES, REPO
-from bench.reporting.session import run_to_folder
-from bench.running.runner import run_scene
-from bench.scenes.scene import load_scene, parse_scene
-from bench.tests.test_run_review import _signal_at_first_chunk
+from bench.scenes.scene import load_scene
 
 pytestmark = pytest.mark.unit
 README = (REPO / "README.md").read_text(encoding="utf-8")
@@ -41,15 +36,6 @@ def test_the_readmes_noise_budget_is_what_the_command_prints(capsys):
     printed = capsys.readouterr().out.rstrip("\n").splitlines()
     assert printed == _readme_budget()
     assert [line.split()[0] for line in printed if re.match(r"E\d", line)] == [f"E{n}" for n in range(1, 20)]
-
-
-def test_the_adc_input_noise_is_enob_11_1_less_quantization():
-    """README: the ADC's 0.45 LSB is a 12-bit ENOB of 11.1 less quantization: 2^(12 − 11.1)/√12 LSB in
-    quadrature minus 1/√12 LSB (0.455 LSB; the budget's reference share takes it to 0.45)."""
-    from emulator.params import SensorParams
-
-    total = 2 ** (12 - 11.1) / math.sqrt(12)
-    assert SensorParams().adc_noise_rms_bits == pytest.approx(math.sqrt(total**2 - 1 / 12), abs=0.01)
 
 
 # --- Scenes: the shipped ones -----------------------------------------------------------------------------------
@@ -112,65 +98,6 @@ def test_each_shipped_scene_does_what_the_readme_says():
                and first["velocity_mm_per_s"] == pytest.approx(v, abs=0.1) for f, v in high)
 
 
-def test_the_three_fingers_scene_is_the_readmes_grasp():
-    """README, Several fingers: thumb (unit 17) at 0.5 s with 2 N, index (unit 18) at 0.9 s with 1.2 N, the middle
-    finger lands at 1.3 s (0.8 N) and slips 8 mm over acrylic."""
-    from bench.textures.library import texture
-
-    grasp = _scene("grasp_three_fingers")
-    assert grasp["sensor"]["unit"] == 17 and [(s["index"], s["unit"]) for s in grasp["sensors"]][0] == (2, 18)
-    thumb, index = _stimuli("grasp_three_fingers", "touch")
-    assert (thumb["sensor"], thumb["start_s"], thumb["force_N"]) == (1, 0.5, 2.0)
-    assert (index["sensor"], index["start_s"], index["force_N"]) == (2, 0.9, 1.2)
-    assert {thumb["material"], index["material"]} == {"acrylic"}
-    middle, = _stimuli("grasp_three_fingers", "slide")
-    assert middle["sensor"] == 3 and middle["start_s"] + middle["approach_s"] == pytest.approx(1.3)
-    assert (middle["force_N"], middle["distance_mm"]) == (0.8, 8.0)
-    assert texture(middle["texture"]).material == "acrylic"
-
-
-# --- What a run writes: the chunk a signal stops at, and the 600 s ------------------------------------------------
-
-def test_a_signal_stops_the_run_at_the_next_4_simulated_s(tmp_path, monkeypatch):
-    """README, Interruption: Ctrl-C stops the run at the next chunk (4 simulated s) — a run into a folder, as
-    `biotac-bench run` makes it, with its default chunk."""
-    _signal_at_first_chunk(monkeypatch)
-    sc = parse_scene({"scene": {"name": "w", "duration_s": 10.0}, "host": {"sequence": ["PDC"]}})
-    res = run_to_folder(sc, tmp_path / "o", plots=False, progress=False)
-    assert (res.exit_code, res.record["status"], res.record["simulated_s"]) == (130, "interrupted", 4.0)
-
-
-def _long(duration_s: float):
-    """A quiet scene of ``duration_s`` simulated s, cheap to run (PDC at 100 Hz, the fast profile)."""
-    return parse_scene({"scene": {"name": "long", "duration_s": duration_s, "fidelity": "fast"},
-                        "host": {"sequence": ["PDC"], "slot_rate_Hz": 100.0}})
-
-
-@pytest.mark.parametrize("duration_s, kept", [(600.0, True), (600.5, False)])
-def test_run_scene_keeps_every_sample_for_scenes_up_to_600_s(duration_s, kept):
-    """README: `run_scene(scene)` keeps every sample in `Recording.channels` for scenes up to 600 s; longer ones
-    keep the summary only."""
-    rec = run_scene(_long(duration_s), progress=False, chunk_s=100.0)
-    assert rec.simulated_s == duration_s
-    assert (len(rec.channels["PDC"].codes) if kept else len(rec.channels)) == (60000 if kept else 0)  # 100 Hz × 600 s
-
-
-@pytest.mark.parametrize("duration_s, exported", [(600.0, True), (600.5, False)])
-def test_exports_are_written_for_runs_up_to_600_s(tmp_path, duration_s, exported):
-    """README: the exports (codes.npz, samples.csv) are written for runs up to 600 simulated s; a longer run keeps
-    only samples.h5 and says so in report.md and record.json (`skipped_outputs`)."""
-    res = run_to_folder(_long(duration_s), tmp_path / "o", csv=True, plots=False, progress=False)
-    assert res.exit_code == 0
-    exports = {"codes.npz", "samples.csv"}
-    written = {p.name for p in (tmp_path / "o").iterdir()}
-    assert (exports <= written) is exported and (exports & written == set()) is not exported
-    assert "samples.h5" in written
-    skipped = res.record.get("skipped_outputs", {})
-    assert set(skipped) == (set() if exported else exports)
-    report = (tmp_path / "o" / "report.md").read_text()
-    assert all(("600 simulated s" in skipped[n] and f"`{n}` not written" in report) for n in skipped)
-
-
 # --- Firmware and host stacks: the pytest plugin's keywords -------------------------------------------------------
 
 def _readme_keyword_table() -> dict[str, set[str]]:
@@ -225,10 +152,3 @@ def test_each_profile_runs_the_grid_and_effects_the_readme_gives(name, grid_Hz, 
                                                                                       electrodes_Hz)
     assert (bridge.duct is not None, "stage2_noise" in {e.name for e in sensor.graph.effects}) == (second_order,) * 2
 
-
-def test_the_reference_profile_slides_at_the_readmes_resolution():
-    """README: reference's sliding is 2.5 µm textures, 16 patch radii, friction ×4, ridge-resolved fingerprints."""
-    from emulator.fidelity import profile
-
-    ref = profile("reference")
-    assert (ref.sliding_dx_m, ref.patch_radii, ref.friction_substeps, ref.ridges) == (2.5e-6, 16, 4, "resolved")
