@@ -98,6 +98,19 @@ def test_each_shipped_scene_does_what_the_readme_says():
                and first["velocity_mm_per_s"] == pytest.approx(v, abs=0.1) for f, v in high)
 
 
+def test_the_readme_counts_the_hostile_corpus_as_it_is():
+    """README, Scenes: "The corpus in `fixtures/hostile/` (N scene files in M cases, K command lines)": the files in
+    `scenes/`, the entries of `scenes.json` (a few are paths that are not files) and those of `cli.json`."""
+    import json
+
+    files, cases, lines = map(int, re.search(r"`fixtures/hostile/` \((\d+) scene files in (\d+) cases, (\d+) command "
+                                              r"lines\)", README).groups())
+    hostile = FIXTURES / "hostile"
+    assert files == sum(1 for p in (hostile / "scenes").iterdir() if p.is_file())
+    assert cases == len(json.loads((hostile / "scenes.json").read_text(encoding="utf-8"))["scenes"])
+    assert lines == len(json.loads((hostile / "cli.json").read_text(encoding="utf-8"))["invocations"])
+
+
 # --- Firmware and host stacks: the pytest plugin's keywords -------------------------------------------------------
 
 def _readme_keyword_table() -> dict[str, set[str]]:
