@@ -130,9 +130,12 @@ def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkey
     from bench.reporting.experiment_report import write_outputs
 
     files = write_outputs(result, tmp_path / "out")
-    for name in ("report.md", "summary.json", "accuracy.csv", "confusion.csv", "trials.csv",
-                 "probability_evolution.png", "properties_at_optimal_movements.png"):
-        assert name in files and (tmp_path / "out" / name).stat().st_size > 0
+    readme_outputs = ("report.md", "summary.json", "accuracy.csv", "accuracy_per_texture.csv", "confusion.csv",
+                      "trials.csv", "trials.json", "pilot_uncertainty.csv", "properties_at_optimal_movements.png",
+                      "probability_evolution.png")  # README, the texture experiment's outputs: every one, no other
+    assert sorted(files) == sorted(readme_outputs)
+    for name in readme_outputs:
+        assert (tmp_path / "out" / name).stat().st_size > 0
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(summary["best_movements"]) == {"traction", "roughness", "fineness"}
     report = (tmp_path / "out" / "report.md").read_text()
