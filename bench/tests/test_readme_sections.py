@@ -1,5 +1,6 @@
 """README statements the earlier audits left unguarded (third README audit): the noise budget as printed, the
-shipped scenes and what each one does, the pytest plugin's keyword table, and the fidelity profiles."""
+shipped scenes and what each one does, the hostile corpus's size, the pytest plugin's keyword table, and the fidelity
+profiles as a sensor runs them."""
 
 import re
 import tomllib
