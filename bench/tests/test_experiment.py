@@ -21,6 +21,9 @@ def test_shipped_experiment_files_validate():
     assert full.identification_simulations == 8000 and full.training_textures is None  # all 117
     assert len(full.pilot_textures) == 10
     assert full.pair_choice == "similar-description" and full.pairs is None  # D's kind of pairs (pairs.py)
+    # README: "thresholds 99.9 % for pairs and 99 % for 117-way, at most 10 movements"; 8 pairs, 5 trials each
+    assert (full.pair_threshold, full.identification_threshold, full.max_moves) == (0.999, 0.99, 10)
+    assert (full.n_pairs, full.validation_trials, full.exclude_high_power) == (8, 5, True)
     every = E.load_experiment(FIXTURES / "experiments" / "fishel2012_all.toml")
     assert every.identify_all_textures and vars(every) | {"identify_all_textures": False, "name": full.name,
                                                           "source": full.source} == vars(full)
