@@ -431,6 +431,7 @@ class ExperimentResult:
     pair_results: dict  # strategy -> list of ExplorationResult (one per true texture of each pair)
     identification_results: dict  # strategy -> list of ExplorationResult
     wall_s: dict = field(default_factory=dict)
+    library: dict = field(default_factory=dict)  # the texture library as read at the start: path, sha256, shipped
 
 
 def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: str, seed: int,
@@ -476,10 +477,11 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     import time
 
     from bench.campaigns.engine import ClusterSpec, close, connect
-    from bench.textures.library import load_library
+    from bench.textures.library import read_library
 
     wall = {}
-    lib = load_library(spec.library)
+    library = read_library(spec.library)  # (complete when shipped, as load_library)
+    lib = library.textures
     grid = movement_grid()
     client = connect(cluster or ClusterSpec.from_env())
     try:
@@ -554,7 +556,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                             for true in val_textures]
     wall["exploration"] = time.perf_counter() - t0
     return ExperimentResult(spec, pilot_rows, u_full, best, wear_per_movement(), training_rows, history, pairs,
-                            validation_rows, pair_results, ident_results, wall)
+                            validation_rows, pair_results, ident_results, wall, library.record())
 
 
 def identified_among(result: ExperimentResult) -> int:

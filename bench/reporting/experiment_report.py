@@ -104,7 +104,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     if "bayesian" in result.identification_results:
         write_rows_csv(out / "confusion.csv", confusion_rows(result.identification_results["bayesian"]))
         names.append("confusion.csv")
-    record = {"spec": {k: v for k, v in vars(result.spec).items()}, "best_movements":
+    record = {"spec": {k: v for k, v in vars(result.spec).items()}, "library": result.library, "best_movements":
               {p: movement_label(m) for p, m in zip(ex.PROPERTIES, result.best_movements)},
               "pairs": result.pairs, "pair_separation_sigma": _pair_separation(result), "summary": s,
               "bayesian_beats_baselines_on": beats_baselines(result),
@@ -224,12 +224,16 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
     d = D_FIGURES
     lines = [f"# Texture experiment: {result.spec.name}", "",
              "Bayesian exploration (D ch. 6) run end to end on the emulated BioTac: every value below comes from "
-             "sliding trials of the texture rig read over SPI. Nothing was tuned toward these numbers.", "",
-             "## Optimal movements (pilot)", "",
-             "Expected uncertainty U over the pilot's textures (lower is better); D's pick's rank is among the "
-             "movements this pilot kept (high-power ones excluded for wear).", "",
-             "| property | emulator's pick (U) | dissertation's pick | its U here | its rank here |",
-             "|---|---|---|---|---|"]
+             "sliding trials of the texture rig read over SPI. Nothing was tuned toward these numbers.", ""]
+    if result.library:
+        lib_rec = result.library
+        where = "the shipped fixtures/textures/library.toml" if lib_rec["shipped"] else lib_rec["path"]
+        lines += [f"Texture library: {where} (SHA-256 {lib_rec['sha256'][:16]}…).", ""]
+    lines += ["## Optimal movements (pilot)", "",
+              "Expected uncertainty U over the pilot's textures (lower is better); D's pick's rank is among the "
+              "movements this pilot kept (high-power ones excluded for wear).", "",
+              "| property | emulator's pick (U) | dissertation's pick | its U here | its rank here |",
+              "|---|---|---|---|---|"]
     for p, row in pilot_pick_comparison(result).items():
         rank = {"excluded-high-power": "excluded (high power)", "not-run": "not in this pilot"}.get(
             row["d_status"], f"{row['d_rank']} of {row['kept']}")

@@ -191,6 +191,13 @@ def test_an_experiment_on_a_texture_library_of_ones_own(no_rig, tmp_path):
     assert sorted(map(sorted, result.pairs)) == [[5, 6], [74, 75]]
     write_outputs(result, tmp_path / "out")
     assert "my coarse cotton" in (tmp_path / "out" / "report.md").read_text()
+    import hashlib
+    import json
+
+    digest = hashlib.sha256((tmp_path / "lib" / "mine.toml").read_bytes()).hexdigest()
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["library"] == {
+        "path": spec.library, "sha256": digest, "shipped": False}  # named by path and content, as a scene's is
+    assert f"Texture library: {spec.library} (SHA-256 {digest[:16]}…)" in (tmp_path / "out" / "report.md").read_text()
 
 
 def test_a_trial_slides_the_texture_of_its_own_library(monkeypatch):

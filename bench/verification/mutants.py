@@ -3893,6 +3893,11 @@ CATALOGUE += [
            'max_moves = 5',
            ('bench/tests/test_experiment.py::test_shipped_experiment_files_validate',),
            "D's experiment file stops exploring after 5 movements, not 10"),
+    Mutant('experiment-summary-without-library', 'outputs', 'bench/reporting/experiment_report.py',
+           '"library": result.library, "best_movements":',
+           '"best_movements":',
+           ('bench/tests/test_experiment_variants.py::test_an_experiment_on_a_texture_library_of_ones_own',),
+           'summary.json does not name the texture library the experiment ran on (path, SHA-256)'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
