@@ -26,3 +26,28 @@ SCENE_DESCRIPTIONS = {
     "sphere_drops": "4 × SphereDrop: a 1 mm steel bearing landing at 0.4, 0.7, 1 and 1.3 s",
     "press": "1 × Touch: 1 N over E17 from 0.3 s (0.2 s ramps, 0.6 s hold)",
 }
+
+#: the SPI buses a campaign runs over (``campaign --spi``): the software model, or the Verilog RTL in the C++ harness
+SPI_BUSES = ("software", "rtl")
+
+#: faults whose effect the RTL bus cannot carry yet -> why (every other fault runs over either bus)
+NEEDS_SOFTWARE_SPI = {
+    "unplug_replug": "unplugging and plugging a sensor back (the RTL harness's set of sensors is fixed)",
+}
+
+
+def check_bus(faults, spi: str) -> None:
+    """ValueError unless every fault of ``faults`` (names) can run over the SPI bus ``spi`` (one of
+    :data:`SPI_BUSES`): naming each one that cannot, why, and what to run instead."""
+    if spi not in SPI_BUSES:
+        raise ValueError(f"spi = {spi!r}: one of {', '.join(SPI_BUSES)}")
+    if spi == "software":
+        return
+    faults = list(faults)
+    refused = [f for f in faults if f in NEEDS_SOFTWARE_SPI]
+    if refused:
+        rest = [f for f in faults if f not in NEEDS_SOFTWARE_SPI]
+        raise ValueError(
+            f"{'; '.join(f'{f} needs the software SPI bus: {NEEDS_SOFTWARE_SPI[f]}' for f in refused)}. Run "
+            f"{'it' if len(refused) == 1 else 'them'} with --spi software"
+            + (f", and the others over the RTL with --faults {','.join(rest)}" if rest else ""))

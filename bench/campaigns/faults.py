@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bench.atomic import atomic_write
-from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS
+from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS, check_bus
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
@@ -192,9 +192,10 @@ def _schedule_after_start(board, schedule) -> None:
     board.send_to_firmware = first_bytes
 
 
-def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) -> dict:
-    """One fault in one scene: the verdict (``passed``, ``problem``), what was expected, and ``seconds`` (the case's
-    wall time, s).  A crash or hang of the firmware or driver is this case's failure, never an exception."""
+def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, spi: str = "software") -> dict:
+    """One fault in one scene over the SPI bus ``spi`` ("software" or "rtl"): the verdict (``passed``, ``problem``),
+    what was expected, the bus, and ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or
+    driver is this case's failure, never an exception."""
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.cosim import default_sensors
     from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, BridgeDriver, Status
@@ -207,7 +208,7 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) 
         sensor_faults = kw.pop("sensor_faults", None)
         if sensor_faults:  # the sensors the bench would build, with these faults of their own
             kw["sensors"] = default_sensors(kw["n_sensors"], SCENES[scene], seed, faults=sensor_faults)
-        fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, **kw)
+        fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, spi=spi, **kw)
         _schedule_after_start(fb.board, fault.schedule)
         with fb:
             drv = BridgeDriver(fb.port)
@@ -232,51 +233,72 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150) 
                 problem = "out-of-range data reached the caller"
     except Exception as e:  # a crash or hang of the firmware or driver is a failure of the case
         problem = f"{type(e).__name__}: {e}"
-    return {"fault": fault.name, "scene": scene, "seed": seed, "expected": fault.expected,
+    return {"fault": fault.name, "scene": scene, "seed": seed, "spi": spi, "expected": fault.expected,
             "passed": problem is None, "problem": problem, "seconds": time.perf_counter() - t0}
 
 
 @dataclass(frozen=True)
 class CaseTask:
-    """One case of a campaign as a task: names and a seed (a fault's schedule holds functions, which do not travel
-    to a worker; the worker looks the fault and scene up by name)."""
+    """One case of a campaign as a task: names, a seed and the SPI bus (a fault's schedule holds functions, which do
+    not travel to a worker; the worker looks the fault and scene up by name)."""
 
     fault: str
     scene: str
     seed: int
+    spi: str = "software"
 
 
 def run_case_task(task: CaseTask) -> dict:
     """The engine's task: :func:`run_case` for the named fault and scene (a plain dict; ``seconds`` is wall s)."""
-    return run_case(FAULTS[task.fault], task.scene, task.seed)
+    return run_case(FAULTS[task.fault], task.scene, task.seed, spi=task.spi)
 
 
-def campaign_tasks(faults, scenes, seeds) -> list[CaseTask]:
-    """Every fault × scene × seed, in that order; ValueError for an empty campaign or an unknown name."""
+def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTask]:
+    """Every fault × scene × seed over the SPI bus ``spi``, in that order; ValueError for an empty campaign, an
+    unknown name, or a fault the bus cannot carry (:func:`~bench.campaigns.case_names.check_bus`)."""
     faults, scenes, seeds = list(faults), list(scenes), list(seeds)
     if not (faults and scenes and seeds):
         raise ValueError("a campaign needs at least one fault, one scene and one seed (it would pass vacuously)")
     unknown = [f for f in faults if f not in FAULTS] + [s for s in scenes if s not in SCENES]
     if unknown:
         raise ValueError(f"unknown fault or scene: {', '.join(map(str, unknown))}")
-    return [CaseTask(f, s, seed) for f in faults for s in scenes for seed in seeds]
+    check_bus(faults, spi)
+    return [CaseTask(f, s, seed, spi) for f in faults for s in scenes for seed in seeds]
 
 
-def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool = False) -> list[dict]:
-    """Every fault × scene × seed on the campaign engine (``spec``: a :class:`~bench.campaigns.engine.ClusterSpec`,
-    default from the environment; or a connected ``client``); results in task order, one dict per case."""
+def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool = False,
+                 spi: str = "software") -> list[dict]:
+    """Every fault × scene × seed over the SPI bus ``spi`` on the campaign engine (``spec``: a
+    :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment; or a connected ``client``); results
+    in task order, one dict per case.  A fault the bus cannot carry is refused (ValueError) before anything runs."""
     from bench.campaigns.engine import run_tasks
     from bench.hosts.cosim import build_firmware
 
-    tasks = campaign_tasks(faults, scenes, seeds)
+    tasks = campaign_tasks(faults, scenes, seeds, spi)
+    if spi == "rtl":  # once, here, as the firmware: not one Verilator build per worker at the same time
+        from emulator.rtl.harness import Harness
+
+        Harness().ensure_built()
     build_firmware()  # once, here: the workers find it built (and a build error is one error, not one per case)
     return run_tasks(run_case_task, tasks, spec=spec, client=client, progress=progress, desc="cases")
 
 
+def _bus(results: list[dict]) -> str:
+    """The SPI bus the results ran over ("software" or "rtl"; results from before the bus was recorded: software);
+    ValueError for results from both buses (one report, one bus)."""
+    buses = sorted({r.get("spi", "software") for r in results})
+    if len(buses) > 1:
+        raise ValueError(f"results over SPI buses {', '.join(buses)}: a report holds one campaign over one bus")
+    return buses[0] if buses else "software"
+
+
 def write_junit(results: list[dict], path: Path) -> None:
+    """The JUnit XML report: one test case per result (the same names over either bus, so that two reports compare
+    case by case), the SPI bus they ran over as the suite's property ``spi``."""
     suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results)),
                        failures=str(sum(not r["passed"] for r in results)),
                        time=f"{sum(r['seconds'] for r in results):.3f}")
+    ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=_bus(results))
     for r in results:
         case = ET.SubElement(suite, "testcase", classname=f"campaign.{r['fault']}",
                              name=f"{r['scene']}[seed={r['seed']}]", time=f"{r['seconds']:.3f}")
@@ -287,11 +309,12 @@ def write_junit(results: list[dict], path: Path) -> None:
         ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
 
 
-def write_unfinished_junit(path: Path, why: str) -> None:
+def write_unfinished_junit(path: Path, why: str, spi: str = "software") -> None:
     """A JUnit report for a campaign that gave no results (stopped by Ctrl-C or SIGTERM, or unable to run): one
     error saying ``why``, so that a CI step that publishes the report whatever the exit status shows it, not an
-    earlier campaign's report left at the path."""
+    earlier campaign's report left at the path; the SPI bus it was to run over as the suite's property ``spi``."""
     suite = ET.Element("testsuite", name="biotac-fault-campaign", tests="1", failures="0", errors="1", time="0")
+    ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=spi)
     case = ET.SubElement(suite, "testcase", classname="campaign", name="unfinished", time="0")
     ET.SubElement(case, "error", message=why)
     with atomic_write(path) as tmp:
@@ -299,7 +322,9 @@ def write_unfinished_junit(path: Path, why: str) -> None:
 
 
 def summary(results: list[dict]) -> str:
-    lines = [f"{'fault':18s} {'scene':13s} {'seed':>4s}  result  expected / problem"]
+    """The summary table: a header naming the SPI bus the cases ran over, one line per case, the count of passes and
+    failures."""
+    lines = [f"{'fault':18s} {'scene':13s} {'seed':>4s}  result  expected / problem  (SPI bus: {_bus(results)})"]
     for r in results:
         lines.append(f"{r['fault']:18s} {r['scene']:13s} {r['seed']:4d}  {'PASS' if r['passed'] else 'FAIL':6s}  "
                      f"{r['expected'] if r['passed'] else r['problem']}")

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS
+from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
 from bench.cli.args import add_cluster_arguments, one_line_errors, replaceable_report, sigterm_like_ctrl_c, whole
 
 
@@ -36,6 +36,7 @@ def _cmd_campaign(a) -> int:
     """The campaign, holding --junit's lock from start to end: two campaigns never write one report."""
     from bench.reporting.outdir import lock_exclusively, release_and_remove
 
+    check_bus(a.faults, a.spi)  # a fault the bus cannot carry: refused by name before anything (the report) is touched
     report = Path(a.junit)
     report.parent.mkdir(parents=True, exist_ok=True)  # (--junit's check found it can be made)
     lock_path = report.parent / f".{report.name}.lock"
@@ -55,17 +56,18 @@ def _run_campaign(a, report: Path) -> int:
 
     spec = ClusterSpec.from_env(a.scheduler, a.workers)
     print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
-          f"{a.seeds} seed(s)) on {spec.describe()}", file=sys.stderr)
+          f"{a.seeds} seed(s)) over the {a.spi} SPI bus on {spec.describe()}", file=sys.stderr)
     n_cases = len(a.faults) * len(a.scenes) * a.seeds
     try:
-        results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet)
+        results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet,
+                                        spi=a.spi)
     except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
         # report says so: an earlier campaign's passing report left at --junit would be published as this one's
         why = (f"the campaign was stopped before its {n_cases} case(s) finished" if isinstance(e, KeyboardInterrupt)
                else f"the campaign could not run: {e}")
         with signals_held():
             try:
-                campaign.write_unfinished_junit(report, f"{why}; no case's result is reported")
+                campaign.write_unfinished_junit(report, f"{why}; no case's result is reported", a.spi)
             except OSError as oe:
                 print(f"error: --junit {a.junit}: the report saying so could not be written ({oe.strerror or oe})",
                       file=sys.stderr)
@@ -107,9 +109,15 @@ faults (--faults), each with what a correct firmware and driver do:
 scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene files of `biotac-bench scenes`):
 {_listed(SCENE_DESCRIPTIONS)}
 
+--spi rtl runs the cases over the Verilog RTL in the C++ harness instead of the software model (the same verdicts
+are expected; the summary and the report's property "spi" say which bus ran).  Faults the RTL cannot carry yet are
+refused by name before anything runs (run them with --spi software):
+{_listed(NEEDS_SOFTWARE_SPI)}
+
   biotac-bench campaign                                   # every fault in every scene, seed 0
   biotac-bench campaign --faults unplug_replug,serial_loss --scenes rest --seeds 3 --junit out/c.xml
   biotac-bench campaign --seeds 10 --scheduler tcp://10.0.0.5:8786        # on an existing Dask cluster
+  biotac-bench campaign --spi rtl --faults none,parity_errors,brownout_reset --scenes rest   # over the RTL
 """
 
 
@@ -127,6 +135,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     default="out/campaign.xml",
                     help="where to write the JUnit XML report (one test case per fault × scene × seed; an earlier "
                          "report there is replaced, as CI tools expect; any other file is refused)")
+    cp.add_argument("--spi", choices=list(SPI_BUSES), default="software",
+                    help="the sensors' SPI side: the software model (default) or the Verilog RTL in the C++ harness")
     add_cluster_arguments(cp)
     cp.add_argument("--quiet", action="store_true", help="no progress bar")
     cp.set_defaults(func=sigterm_like_ctrl_c(_cmd_campaign))

@@ -88,7 +88,8 @@ class VirtualBoard:
 
     def _software_bus(self, what: str) -> None:
         if self.spi != "software":
-            raise ValueError(f"{what} needs the software SPI bus (the RTL's set of sensors is fixed)")
+            raise ValueError(f"{what} needs the software SPI bus (spi='software'): the RTL harness's set of sensors "
+                             f"is fixed")
 
     def unplug(self, n: int) -> None:
         self._software_bus("unplugging a sensor")
@@ -105,8 +106,8 @@ class VirtualBoard:
         inside a frame's SPI sequence at the first word boundary at or after ``t_s`` that is not inside a window the
         firmware holds open on one sensor — between a sampling command and its read, say, where it loses the
         pending result; elsewhere at the firmware's first HAL call from ``t_s`` on.  (Events of :meth:`at` act
-        between the firmware's HAL calls.)"""
-        self._software_bus("a timed reset (a brown-out)")
+        between the firmware's HAL calls.)  On either SPI bus: over the RTL the port's reset reaches the RTL sensor
+        just before the next word (:class:`emulator.rtl.harness.RtlSensorPort`)."""
         if not math.isfinite(t_s) or t_s < 0:
             raise ValueError(f"reset_at: t_s = {t_s!r} s: must be a finite instant ≥ 0")
         self.resets.append((float(t_s), int(n)))
@@ -119,10 +120,9 @@ class VirtualBoard:
             self.bus.ports[sensor].reset()
 
     def glitch(self, n: int) -> None:
-        """Toggle sensor n's chip select with no clock edges (a glitch on the line), now."""
+        """Toggle sensor n's chip select with no clock edges (a glitch on the line), now (on either SPI bus)."""
         from emulator.spi.model import SELECT_CODE
 
-        self._software_bus("a glitch")
         tr = Transfer(self.t, SELECT_CODE[n], 0, 0, SPI_CLOCK_HZ)
         self.bus.transfer(tr)
         self.t = tr.end_s

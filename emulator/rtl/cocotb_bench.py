@@ -17,6 +17,7 @@ import cocotb
 from cocotb.triggers import Timer
 from cocotb.utils import get_sim_time
 
+from emulator.rtl.harness import fault_port_values
 from emulator.spi.model import Transfer
 from emulator.spi.vectors import rtl_provided_masks
 
@@ -89,26 +90,10 @@ async def reset(dut, present=0b11111, pull_up=False):
 
 
 def set_faults(dut, faults: dict) -> None:
-    """Apply per-sensor faults given as {sensor: Faults-as-dict} to the fault ports."""
-    en = {"miso_flip": 0, "mosi_flip": 0, "stuck_en": 0, "stuck_val": 0, "parity": 0, "slow": 0}
-    miso_bits = mosi_bits = 0
-    for key, f in faults.items():
-        i = int(key) - 1
-        if f.get("miso_flip_bit") is not None:
-            en["miso_flip"] |= 1 << i
-            miso_bits |= f["miso_flip_bit"] << (12 * i)
-        if f.get("mosi_flip_bit") is not None:
-            en["mosi_flip"] |= 1 << i
-            mosi_bits |= f["mosi_flip_bit"] << (12 * i)
-        if f.get("miso_stuck") is not None:
-            en["stuck_en"] |= 1 << i
-            en["stuck_val"] |= f["miso_stuck"] << i
-        en["parity"] |= int(bool(f.get("bad_parity"))) << i
-        en["slow"] |= int(bool(f.get("slow_response"))) << i
-    dut.flt_miso_flip_en.value, dut.flt_miso_flip_bit.value = en["miso_flip"], miso_bits
-    dut.flt_mosi_flip_en.value, dut.flt_mosi_flip_bit.value = en["mosi_flip"], mosi_bits
-    dut.flt_miso_stuck_en.value, dut.flt_miso_stuck_val.value = en["stuck_en"], en["stuck_val"]
-    dut.flt_bad_parity.value, dut.flt_slow.value = en["parity"], en["slow"]
+    """Set the fault ports to per-sensor faults given as {sensor: a ``Faults`` or its fields as a dict}; a sensor not
+    named has none (the harness's own mapping: :func:`emulator.rtl.harness.fault_port_values`)."""
+    for port, value in fault_port_values(faults).items():
+        getattr(dut, port).value = value
 
 
 @cocotb.test()

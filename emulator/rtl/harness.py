@@ -51,6 +51,9 @@ def checked_faults(faults) -> Faults:
 def fault_records(faults: dict) -> np.ndarray:
     """The harness's records (:data:`FAULTS`) of the fault ports of the sensors ``faults`` names ({sensor 1–5: a
     ``Faults`` or a dict of its fields}), in sensor order."""
+    bad = [n for n in faults if not (isinstance(n, (int, np.integer)) and 1 <= n <= 5)]
+    if bad:
+        raise ValueError(f"fault records for sensors {bad!r}: sensors are 1 to 5")
     out = np.zeros(len(faults), FAULTS)
     for r, n in zip(out, sorted(faults)):
         f = checked_faults(faults[n])
@@ -59,6 +62,26 @@ def fault_records(faults: dict) -> np.ndarray:
         r["mosi_flip_en"], r["mosi_flip_bit"] = f.mosi_flip_bit is not None, f.mosi_flip_bit or 0
         r["stuck_en"], r["stuck_val"] = f.miso_stuck is not None, f.miso_stuck or 0
         r["bad_parity"], r["slow"] = f.bad_parity, f.slow_response
+    return out
+
+
+#: The fault ports of :data:`FAULTS`' fields, as ``biotac_bus`` packs them: port name -> (record field, bits per
+#: sensor).  A one-bit flag per sensor, or a 12-bit field per sensor (the bit positions).
+FAULT_PORTS = {"flt_miso_flip_en": ("miso_flip_en", 1), "flt_miso_flip_bit": ("miso_flip_bit", 12),
+               "flt_mosi_flip_en": ("mosi_flip_en", 1), "flt_mosi_flip_bit": ("mosi_flip_bit", 12),
+               "flt_miso_stuck_en": ("stuck_en", 1), "flt_miso_stuck_val": ("stuck_val", 1),
+               "flt_bad_parity": ("bad_parity", 1), "flt_slow": ("slow", 1)}
+
+
+def fault_port_values(faults: dict) -> dict[str, int]:
+    """The values of ``biotac_bus``'s fault ports (:data:`FAULT_PORTS`) for ``faults`` ({sensor 1–5, or its
+    name as a string: a ``Faults`` or a dict of its fields}; a sensor not named has none): what a simulator
+    driving the ports directly (the cocotb bench) assigns — the same records the C++ harness takes."""
+    records = fault_records({int(n): f for n, f in faults.items()})
+    out = dict.fromkeys(FAULT_PORTS, 0)
+    for r in records:
+        for port, (field, width) in FAULT_PORTS.items():
+            out[port] |= int(r[field]) << (width * (int(r["sensor"]) - 1))
     return out
 
 
@@ -264,6 +287,22 @@ class HarnessPeripheral:
         return res["miso"].astype(np.uint16)
 
 
+class RtlSensorPort(SensorPort):
+    """A sensor's port on an :class:`RtlBus`: the reference for its variant, provided channels and conversion
+    window, and its SPI faults.  ``reset()`` (a brown-out) resets this reference port now and the RTL sensor just
+    before the bus's next transfer (that transfer's reset mask), where the software bus's port acts on it."""
+
+    def __init__(self, sensor, index: int, bus: "RtlBus"):
+        self._bus = None  # (SensorPort's constructor resets the port: power-on state, nothing for the RTL)
+        super().__init__(sensor, index)
+        self._bus = bus
+
+    def reset(self) -> None:
+        if self._bus is not None:
+            self._bus._reset_requested(self.index)
+        super().reset()
+
+
 class RtlBus:
     """The RTL of five sensors' SPI side, in a persistent C++ harness, with the calls of :class:`Bus`.
 
@@ -275,8 +314,9 @@ class RtlBus:
     bus (:meth:`_windows`).  A conversion the RTL requests that was not computed, or one computed that it does not
     request, is a :class:`HarnessError`.  SPI faults (each port's ``faults``, set between calls as on the software
     bus) reach the RTL's fault ports as chip select falls for the next call's first transfer — where the software
-    bus applies them — and a MOSI bit flip changes the commands whose conversions are computed.  Hot-plugging needs
-    the software bus: the set of sensors is fixed here.  One difference remains: a call that ends on a sampling
+    bus applies them — and a MOSI bit flip changes the commands whose conversions are computed.  A port's
+    ``reset()`` (a brown-out) resets that RTL sensor just before the next transfer (:class:`RtlSensorPort`), also
+    where the software bus acts on it.  Hot-plugging needs the software bus: the set of sensors is fixed here.  One difference remains: a call that ends on a sampling
     command has its code computed as if the bus stayed quiet during the conversion (the RTL asks for it within the
     call), where the software bus judges that coupling at the next call's first transfer; traffic that reads its
     results (every firmware's) never ends a call there.
@@ -293,7 +333,8 @@ class RtlBus:
         self.harness.ensure_built()
         # each sensor's port: provided channels, conversion window, SPI faults (set as on the software bus —
         # port.faults = Faults(...) — they reach the RTL's fault ports at the bus's next transfer)
-        self.ports = {n: SensorPort(s, n) for n, s in sensors.items()}
+        self.ports = {n: RtlSensorPort(s, n, self) for n, s in sensors.items()}
+        self._resets: set[int] = set()  # sensors reset (port.reset()) since the last transfer: reset at the next
         self.present = sum(1 << (n - 1) for n in sensors)
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
@@ -363,7 +404,18 @@ class RtlBus:
                 out.append(np.column_stack([np.full(channels.size, n), channels, codes]).astype(np.int64))
         return np.concatenate(out)
 
+    def _reset_requested(self, n: int) -> None:
+        """Sensor ``n``'s port was reset: the RTL sensor is reset just before the next transfer.  Refused (ValueError)
+        inside a chip-select window this bus holds open on the sensor: the software port starts counting the
+        window's bits afresh, the RTL's counter runs on (it restarts only as chip select rises)."""
+        if self._open_window.get(n) is not None:
+            raise ValueError(f"sensor {n}: reset() inside a chip-select window held open across calls: over the RTL "
+                             f"a reset acts between windows only (release chip select first, or use the software bus)")
+        self._resets.add(n)
+
     def _play(self, start, cs, mosi, nbits, clock, keep):
+        from emulator.spi.fastpath import _NO_TICK
+
         start = np.asarray(start, float)
         clock = np.broadcast_to(np.asarray(clock, float), start.shape)
         nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
@@ -375,6 +427,10 @@ class RtlBus:
         tr["mosi"] = np.asarray(mosi, dtype=np.uint64)
         faults = self._faults_in_force()
         changed = {n: f for n, f in faults.items() if f != self._faults_in_rtl[n]} if start.size else {}
+        if start.size and self._resets:  # reset just before the first transfer; the RTL forgets its ADC-busy window
+            tr["reset_mask"][0] = sum(1 << (n - 1) for n in self._resets)
+            self._last_sampling_tick.update(dict.fromkeys(self._resets, _NO_TICK))
+            self._resets.clear()
         c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits, np.broadcast_to(keep, start.shape),
                             faults)
         codes = np.zeros(len(c), CODE)

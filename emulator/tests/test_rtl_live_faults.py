@@ -262,3 +262,60 @@ def test_an_edited_harness_cpp_is_rebuilt_not_reused(tmp_path, monkeypatch):
     monkeypatch.setattr(H, "HARNESS_CPP", edited)
     h.ensure_built()
     assert len(builds) == 2
+
+
+def _play_with_resets(bus, calls, resets: dict) -> list:
+    """Words of ``calls`` ([(start s, select codes, MOSI words)]) over ``bus``, resetting the ports ``resets`` names
+    ({call: [sensors]}) just before each call (``bus.ports[n].reset()``, a brown-out as a bridge's ``reset_at``)."""
+    out = []
+    try:
+        for k, (start, cs, mosi) in enumerate(calls):
+            for n in resets.get(k, []):
+                bus.ports[n].reset()
+            out.append([int(w) for w in bus.exchange_words(start, cs, mosi, CLOCK_HZ)])
+    finally:
+        bus.close()
+    return out
+
+
+def test_a_port_reset_reaches_the_rtl_at_the_next_transfer_with_the_software_bus_words(harness):
+    """``bus.ports[k].reset()`` between calls resets that sensor in the RTL just before the next call's first
+    transfer, as on the software bus: the result converted before it is gone (its read gets "E_"), the other
+    sensor's is served, and a sampling command 4 µs after one from before the reset is accepted (the reset forgot
+    the ADC-busy window: "E-" without it) and its result read — word for word the same over both buses."""
+    from emulator.rtl.harness import RtlBus
+
+    calls = [_call(k) for k in range(4)]
+    s1, pdc = np.array([SELECT_CODE[1]]), np.array([int(proto.sample_command(1)) << 8], np.uint16)
+    t = calls[3][0][-1] + 100e-6
+    calls.append((np.array([t]), s1, pdc))  # a sampling command ends the call; the next one starts 0.2 µs later
+    t += 16.5 / CLOCK_HZ + 0.2e-6
+    calls.append((np.array([t, t + 100e-6]), np.repeat(s1, 2), np.array([pdc[0], 0], np.uint16)))
+    resets = {1: [1], 3: [1, 3], 5: [1]}
+    soft = _play_with_resets(Bus({n: SensorPort(s, n) for n, s in _sensors().items()}), calls, resets)
+    rtl = _play_with_resets(RtlBus(_sensors(), harness=harness), calls, resets)
+    assert rtl == soft, [(k, [hex(w) for w in a], [hex(w) for w in b]) for k, (a, b) in enumerate(zip(rtl, soft))
+                         if a != b]
+    nothing = ERR["nothing_to_resend"]
+    assert rtl[1][0] == nothing and rtl[2][0] != nothing and proto.decode_response(rtl[1][1])[1]  # sensor 3 kept
+    assert rtl[3][0] == rtl[3][1] == nothing
+    assert not proto.is_error_word(rtl[5][1]) and proto.decode_response(rtl[5][1])[1]  # accepted, not "E-"
+
+
+def test_a_port_reset_inside_a_window_held_open_over_the_rtl_is_refused_by_name(harness):
+    """A reset while this bus holds chip select open on the sensor across calls is refused naming the sensor (the
+    RTL's bit counter would run on where the software port's restarts); released, the reset is taken."""
+    from emulator.rtl.harness import RtlBus
+    from emulator.spi.model import Transfer
+
+    bus = RtlBus(_sensors(), harness=harness)
+    try:
+        bus.transfer(Transfer(0.01, SELECT_CODE[1], 0x61, 8, CLOCK_HZ, keep_cs=True))
+        with pytest.raises(ValueError, match=r"sensor 1: reset\(\) inside a chip-select window held open"):
+            bus.ports[1].reset()
+        bus.ports[3].reset()  # another sensor's: taken
+        bus.transfer(Transfer(0.0101, SELECT_CODE[1], 0x15, 8, CLOCK_HZ))
+        bus.ports[1].reset()
+        assert bus.transfer(Transfer(0.0102, SELECT_CODE[1], 0, 16, CLOCK_HZ)) == ERR["nothing_to_resend"]
+    finally:
+        bus.close()
