@@ -23,10 +23,47 @@ def test_firmware_over_rtl_streams_the_same_frames_as_over_the_software_model(n_
 
 
 def test_faults_that_need_the_software_bus_say_so():
+    """Unplugging and plugging a sensor over the RTL are refused by name (its set of sensors is fixed); a glitch and
+    a timed reset are taken."""
     board = VirtualBoard(default_sensors(1), spi="rtl")
-    with pytest.raises(ValueError, match="needs the software SPI bus"):
-        board.unplug(1)
-    board.bus.close()
+    try:
+        for act, what in ((board.unplug, "unplugging"), (board.plug, "plugging")):
+            with pytest.raises(ValueError, match=f"{what} a sensor needs the software SPI bus .spi='software'.: the "
+                                                 f"RTL harness's set of sensors is fixed"):
+                act(1)
+        board.glitch(1)
+        board.reset_at(1, 0.01)
+    finally:
+        board.bus.close()
+
+
+#: brown-outs (virtual s after start-up, sensor) and chip-select glitches (virtual s, sensor)
+RESETS = [(0.05 + 20e-6, 2), (0.1 + 20e-6, 1), (0.1 + 30e-6, 3), (0.15 + 1e-3, 2), (0.2, 2)]
+GLITCHES = [(0.06, 1), (0.12, 3), (0.17, 2)]
+
+
+def _schedule_resets_and_glitches(board) -> None:
+    for dt, n in RESETS:
+        board.reset_at(n, board.t + dt)
+    for dt, n in GLITCHES:
+        board.at(board.t + dt, lambda b, n=n: b.glitch(n))
+
+
+def test_brownouts_and_glitches_give_the_same_frames_over_the_rtl_as_over_the_software_model():
+    """``board.reset_at`` (a brown-out inside a frame's SPI sequence: the port's reset reaches the RTL sensor with
+    the next word) and ``board.glitch`` on three sensors give the host the same frames over the RTL as over the
+    software model: each reset loses a pending result (an error word reaches the host for that sensor), no sensor
+    is dropped, and the glitches change nothing."""
+    runs = {spi: run_firmware(default_sensors(3, seed=5), 0.3, status=False, spi=spi,
+                              prepare=_schedule_resets_and_glitches) for spi in ("software", "rtl")}
+    soft, rtl = runs["software"].frames, runs["rtl"].frames
+    assert len(rtl) == len(soft) >= 25 and runs["rtl"].stats.crc_errors == 0
+    for k, (a, b) in enumerate(zip(soft, rtl)):
+        assert a.sensor_mask == b.sensor_mask and np.array_equal(a.codes, b.codes) and \
+            np.array_equal(a.status, b.status), f"frame {k} differs"
+    flagged = [{n for n, bad in zip(f.sensors, (f.status != 0).any(axis=0)) if bad} for f in rtl]
+    assert set().union(*flagged) == {1, 2, 3}  # every reset sensor lost a result the host then saw flagged
+    assert rtl[-1].sensors == [1, 2, 3]
 
 
 #: (virtual s after start-up, sensor, faults): each sensor's fault set, then cleared (Faults()) 40 ms later.

@@ -1,0 +1,77 @@
+"""The fault campaign over the Verilog RTL (``campaign --spi rtl``): the same verdicts as over the software bus, the
+bus named in the summary and the JUnit report, and a fault the RTL cannot carry yet refused by name before anything
+runs."""
+
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from bench.campaigns import faults as campaign
+from bench.tests.test_cli_review import invoke
+
+#: a small campaign over either bus: the brown-out (a reset through the RTL's reset mask), the glitch and two SPI
+#: faults set mid-stream, each with a reaction of its own to see
+FAULTS, SCENE = ["none", "parity_errors", "brownout_reset", "cs_glitch"], "rest"
+
+
+@pytest.mark.rtl
+@pytest.mark.firmware
+def test_a_small_campaign_gives_the_same_verdicts_over_the_rtl_as_over_the_software_bus(tmp_path):
+    """Four faults, one scene, one seed, on one LocalCluster worker: every case passes over both buses (the
+    brown-out's check needs the reset to have lost a pending result, so over the RTL it passes only if the reset
+    reached the RTL), each result and each report names its bus, and the two reports hold the same test cases."""
+    from bench.campaigns.engine import ClusterSpec, close, connect
+
+    client = connect(ClusterSpec(workers=1))
+    try:
+        runs = {spi: campaign.run_campaign(FAULTS, [SCENE], [0], client=client, spi=spi) for spi in ("software", "rtl")}
+    finally:
+        close(client)
+    verdicts = {spi: [(r["fault"], r["passed"], r["problem"]) for r in results] for spi, results in runs.items()}
+    assert verdicts["rtl"] == verdicts["software"] == [(f, True, None) for f in FAULTS]
+    cases = {}
+    for spi, results in runs.items():
+        assert {r["spi"] for r in results} == {spi}
+        assert campaign.summary(results).splitlines()[0].endswith(f"(SPI bus: {spi})")
+        campaign.write_junit(results, tmp_path / f"{spi}.xml")
+        suite = ET.parse(tmp_path / f"{spi}.xml").getroot()
+        assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")] == [("spi", spi)]
+        cases[spi] = [(c.get("classname"), c.get("name")) for c in suite.findall("testcase")]
+    assert cases["rtl"] == cases["software"]
+
+
+@pytest.mark.unit
+def test_a_fault_the_rtl_cannot_carry_is_refused_by_name_before_anything_runs(monkeypatch, capsys, tmp_path):
+    """``unplug_replug`` over the RTL (its set of sensors is fixed) is refused naming the fault, why, and what to run
+    instead — by the task list and by the command line, in one line with exit status 2, before the campaign runs
+    or its report is touched; over the software bus it is taken."""
+    with pytest.raises(ValueError, match=r"^unplug_replug needs the software SPI bus: unplugging and plugging a "
+                                         r"sensor back \(the RTL harness's set of sensors is fixed\)\. Run it with "
+                                         r"--spi software, and the others over the RTL with --faults none,cs_glitch$"):
+        campaign.campaign_tasks(["none", "unplug_replug", "cs_glitch"], [SCENE], [0], "rtl")
+    assert [t.spi for t in campaign.campaign_tasks(["unplug_replug"], [SCENE], [0, 1], "software")] == ["software"] * 2
+    assert [t.spi for t in campaign.campaign_tasks(["none"], [SCENE], [0], "rtl")] == ["rtl"]
+    with pytest.raises(ValueError, match=r"spi = 'verilog': one of software, rtl"):
+        campaign.campaign_tasks(["none"], [SCENE], [0], "verilog")
+
+    def ran(*args, **kw):
+        raise AssertionError("the campaign ran with a fault the RTL cannot carry")
+
+    monkeypatch.setattr(campaign, "run_campaign", ran)
+    report = tmp_path / "c.xml"
+    status, out, err = invoke(["campaign", "--spi", "rtl", "--scenes", SCENE, "--junit", str(report)], capsys)
+    assert status == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert "unplug_replug needs the software SPI bus" in err and "--spi software" in err
+    assert "--faults none,parity_errors,miso_stuck,brownout_reset,cs_glitch" in err
+    assert list(tmp_path.iterdir()) == []  # no report, no lock left
+
+
+@pytest.mark.unit
+def test_results_over_two_buses_make_no_single_report(tmp_path):
+    """A report names one bus: results from both are refused (ValueError naming them) rather than reported as one;
+    results from before the bus was recorded count as the software bus's."""
+    results = [{"fault": "none", "scene": SCENE, "seed": 0, "expected": "-", "passed": True, "problem": None,
+                "seconds": 0.1, **extra} for extra in ({"spi": "rtl"}, {})]
+    with pytest.raises(ValueError, match="results over SPI buses rtl, software: a report holds one campaign"):
+        campaign.write_junit(results, tmp_path / "c.xml")
+    assert campaign.summary(results[1:]).splitlines()[0].endswith("(SPI bus: software)")
