@@ -70,12 +70,13 @@ def test_a_fault_campaign_runs_its_cases_on_the_cluster_with_the_same_verdicts_f
     assert len(ran) == 4 and all(key.startswith("_run_group-") for key, _ in ran)  # one Dask task a case
     assert {worker for _, worker in ran} == set(cluster[0].scheduler_info["workers"])  # both workers ran cases
     reports = [ET.parse(tmp_path / name).getroot() for name in ("one.xml", "two.xml")]
-    verdicts = [[(c.get("classname"), c.get("name"), _problem(c)) for c in report] for report in reports]
+    verdicts = [[(c.get("classname"), c.get("name"), _problem(c)) for c in report.iter("testcase")]
+                for report in reports]
     assert verdicts[0] == verdicts[1] == [(f"campaign.{r['fault']}", f"{r['scene']}[seed={r['seed']}]", r["problem"])
                                           for r in serial]
     assert all(r["passed"] for r in serial)
     for report in reports:  # each case's own wall time, adding up to the suite's
-        times = [float(c.get("time")) for c in report]
+        times = [float(c.get("time")) for c in report.iter("testcase")]
         assert all(t > 0 for t in times) and float(report.get("time")) == pytest.approx(sum(times), abs=0.01)
 
 
