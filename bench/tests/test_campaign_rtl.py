@@ -75,3 +75,14 @@ def test_results_over_two_buses_make_no_single_report(tmp_path):
     with pytest.raises(ValueError, match="results over SPI buses rtl, software: a report holds one campaign"):
         campaign.write_junit(results, tmp_path / "c.xml")
     assert campaign.summary(results[1:]).splitlines()[0].endswith("(SPI bus: software)")
+
+
+@pytest.mark.rtl
+@pytest.mark.firmware
+def test_a_case_runs_over_the_bus_its_task_names():
+    """A task's bus reaches the bench its case builds: ``unplug_replug`` run anyway over the RTL (past the
+    refusal) fails as the RTL board refuses the unplugging, by name; over the software bus it passes."""
+    rtl = campaign.run_case_task(campaign.CaseTask("unplug_replug", SCENE, 0, "rtl"))
+    assert not rtl["passed"] and rtl["spi"] == "rtl"
+    assert "unplugging a sensor needs the software SPI bus" in rtl["problem"], rtl["problem"]
+    assert campaign.run_case_task(campaign.CaseTask("unplug_replug", SCENE, 0))["passed"]

@@ -319,3 +319,20 @@ def test_a_port_reset_inside_a_window_held_open_over_the_rtl_is_refused_by_name(
         assert bus.transfer(Transfer(0.0102, SELECT_CODE[1], 0, 16, CLOCK_HZ)) == ERR["nothing_to_resend"]
     finally:
         bus.close()
+
+
+def test_the_fault_ports_a_simulator_sets_come_from_the_harness_records_sensor_by_sensor():
+    """:func:`fault_port_values` (what the cocotb bench assigns) packs each sensor's record into its own slice of the
+    bus's ports — a one-bit flag at bit n-1, a bit position at bits 12(n-1).. — sensors named by number or string (a
+    vector file's keys); no faults clear every port; a sensor outside 1–5 is refused by name."""
+    from emulator.rtl.harness import FAULT_PORTS, fault_port_values
+
+    ports = fault_port_values({2: Faults(miso_stuck=1, bad_parity=True), "3": {"mosi_flip_bit": 5},
+                               5: Faults(miso_flip_bit=0, slow_response=True)})
+    assert ports == {"flt_miso_flip_en": 0b10000, "flt_miso_flip_bit": 0, "flt_mosi_flip_en": 0b00100,
+                     "flt_mosi_flip_bit": 5 << 24, "flt_miso_stuck_en": 0b00010, "flt_miso_stuck_val": 0b00010,
+                     "flt_bad_parity": 0b00010, "flt_slow": 0b10000}
+    assert fault_port_values({}) == dict.fromkeys(FAULT_PORTS, 0)
+    assert fault_port_values({4: Faults(miso_flip_bit=15)})["flt_miso_flip_bit"] == 15 << 36
+    with pytest.raises(ValueError, match=r"fault records for sensors \[6\]: sensors are 1 to 5"):
+        fault_port_values({6: Faults()})
