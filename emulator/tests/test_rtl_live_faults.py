@@ -327,10 +327,10 @@ def test_the_fault_ports_a_simulator_sets_come_from_the_harness_records_sensor_b
     vector file's keys); no faults clear every port; a sensor outside 1–5 is refused by name."""
     from emulator.rtl.harness import FAULT_PORTS, fault_port_values
 
-    ports = fault_port_values({2: Faults(miso_stuck=1, bad_parity=True), "3": {"mosi_flip_bit": 5},
-                               5: Faults(miso_flip_bit=0, slow_response=True)})
+    ports = fault_port_values({1: Faults(miso_stuck=0), 2: Faults(miso_stuck=1, bad_parity=True),
+                               "3": {"mosi_flip_bit": 5}, 5: Faults(miso_flip_bit=0, slow_response=True)})
     assert ports == {"flt_miso_flip_en": 0b10000, "flt_miso_flip_bit": 0, "flt_mosi_flip_en": 0b00100,
-                     "flt_mosi_flip_bit": 5 << 24, "flt_miso_stuck_en": 0b00010, "flt_miso_stuck_val": 0b00010,
+                     "flt_mosi_flip_bit": 5 << 24, "flt_miso_stuck_en": 0b00011, "flt_miso_stuck_val": 0b00010,
                      "flt_bad_parity": 0b00010, "flt_slow": 0b10000}
     assert fault_port_values({}) == dict.fromkeys(FAULT_PORTS, 0)
     assert fault_port_values({4: Faults(miso_flip_bit=15)})["flt_miso_flip_bit"] == 15 << 36
