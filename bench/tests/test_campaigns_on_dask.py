@@ -180,11 +180,13 @@ def test_two_builds_of_the_firmware_at_once_both_succeed(tmp_path):
     assert not list(tmp_path.rglob("*.partial"))
 
 
-@pytest.mark.parametrize("argv", [["campaign", "--faults", "none", "--scenes", "rest", "--junit", "{tmp}/c.xml"],
+@pytest.mark.parametrize("argv", [["campaign", "--faults", "none", "--scenes", "rest", "--junit", "{tmp}/c.xml",
+                                   "--spi", "rtl"],
                                   ["claims", "--seeds", "1", "--only", "scales"]])
 def test_no_scheduler_at_the_address_is_one_line_and_exit_2_within_seconds(argv, capsys, tmp_path):
     """... and a campaign's --junit then says the campaign could not run (an earlier campaign's passing report left
-    there would be published as this one's by a CI step that publishes reports whatever the exit status)."""
+    there would be published as this one's by a CI step that publishes reports whatever the exit status), and over
+    which SPI bus it was to run."""
     import xml.etree.ElementTree as ET
 
     (tmp_path / "c.xml").write_text('<?xml version="1.0" encoding="utf-8"?>\n<testsuite name="biotac-fault-campaign" '
@@ -201,6 +203,7 @@ def test_no_scheduler_at_the_address_is_one_line_and_exit_2_within_seconds(argv,
         assert (suite.get("tests"), suite.get("errors"), suite.get("failures")) == ("1", "1", "0")
         assert suite.find("testcase/error").get("message").startswith(
             "the campaign could not run: no Dask scheduler answers at tcp://127.0.0.1:9")
+        assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")] == [("spi", "rtl")]
 
 
 @pytest.mark.parametrize("argv", [["campaign", "--workers", "0"], ["claims", "--seeds", "1", "--workers", "0"]])
