@@ -89,6 +89,14 @@ def _listed(table: dict) -> str:
     return "\n".join(f"  {name:<18} {text}" for name, text in table.items())
 
 
+def _over_the_rtl() -> str:
+    """What --help says of the faults over the RTL: every one, or those refused (:data:`NEEDS_SOFTWARE_SPI`)."""
+    if not NEEDS_SOFTWARE_SPI:
+        return "Every fault runs over either bus."
+    return ("Faults the RTL cannot carry yet are refused by name before anything runs (run them with --spi "
+            f"software):\n{_listed(NEEDS_SOFTWARE_SPI)}")
+
+
 #: campaign's --help: its faults and scenes listed from :mod:`bench.campaigns.case_names` (light: the names the
 #: campaign's registries are built from)
 CAMPAIGN_HELP = f"""\
@@ -110,14 +118,12 @@ scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene 
 {_listed(SCENE_DESCRIPTIONS)}
 
 --spi rtl runs the cases over the Verilog RTL in the C++ harness instead of the software model (the same verdicts
-are expected; the summary and the report's property "spi" say which bus ran).  Faults the RTL cannot carry yet are
-refused by name before anything runs (run them with --spi software):
-{_listed(NEEDS_SOFTWARE_SPI)}
+are expected; the summary and the report's property "spi" say which bus ran).  {_over_the_rtl()}
 
   biotac-bench campaign                                   # every fault in every scene, seed 0
   biotac-bench campaign --faults unplug_replug,serial_loss --scenes rest --seeds 3 --junit out/c.xml
   biotac-bench campaign --seeds 10 --scheduler tcp://10.0.0.5:8786        # on an existing Dask cluster
-  biotac-bench campaign --spi rtl --faults none,parity_errors,brownout_reset --scenes rest   # over the RTL
+  biotac-bench campaign --spi rtl --scenes rest --junit out/c-rtl.xml       # every fault over the RTL
 """
 
 

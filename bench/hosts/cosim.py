@@ -86,19 +86,20 @@ class VirtualBoard:
         self.events.append((t_s, action))
         self.events.sort(key=lambda e: e[0])
 
-    def _software_bus(self, what: str) -> None:
-        if self.spi != "software":
-            raise ValueError(f"{what} needs the software SPI bus (spi='software'): the RTL harness's set of sensors "
-                             f"is fixed")
-
     def unplug(self, n: int) -> None:
-        self._software_bus("unplugging a sensor")
+        """Unplug sensor n (on either SPI bus: over the RTL its sensor leaves the RTL's sensors present at the next
+        transfer)."""
         self.bus.ports.pop(n, None)
 
     def plug(self, n: int) -> None:
-        """Plug sensor n back in: it starts from power-on state (its physics carries on)."""
-        self._software_bus("plugging a sensor")
-        port = SensorPort(self.sensors[n], n)
+        """Plug sensor n back in: it starts from power-on state (its physics carries on).  Over the RTL it rejoins
+        the RTL's sensors present, reset, at the next transfer."""
+        if self.spi == "rtl":
+            from emulator.rtl.harness import RtlSensorPort
+
+            port = RtlSensorPort(self.sensors[n], n, self.bus)
+        else:
+            port = SensorPort(self.sensors[n], n)
         self.bus.ports[n] = port
 
     def reset_at(self, n: int, t_s: float) -> None:

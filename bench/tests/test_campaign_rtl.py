@@ -1,5 +1,5 @@
 """The fault campaign over the Verilog RTL (``campaign --spi rtl``): the same verdicts as over the software bus, the
-bus named in the summary and the JUnit report, and a fault the RTL cannot carry yet refused by name before anything
+bus named in the summary and the JUnit report, and a fault the RTL could not carry refused by name before anything
 runs."""
 
 import xml.etree.ElementTree as ET
@@ -9,17 +9,18 @@ import pytest
 from bench.campaigns import faults as campaign
 from bench.tests.test_cli_review import invoke
 
-#: a small campaign over either bus: the brown-out (a reset through the RTL's reset mask), the glitch and two SPI
-#: faults set mid-stream, each with a reaction of its own to see
-FAULTS, SCENE = ["none", "parity_errors", "brownout_reset", "cs_glitch"], "rest"
+#: a small campaign over either bus: hot-plugging and the brown-out (the RTL's sensors present and reset mask), the
+#: glitch and an SPI fault set mid-stream, each with a reaction of its own to see
+FAULTS, SCENE = ["none", "unplug_replug", "parity_errors", "brownout_reset", "cs_glitch"], "rest"
 
 
 @pytest.mark.rtl
 @pytest.mark.firmware
 def test_a_small_campaign_gives_the_same_verdicts_over_the_rtl_as_over_the_software_bus(tmp_path):
-    """Four faults, one scene, one seed, on one LocalCluster worker: every case passes over both buses (the
+    """Five faults, one scene, one seed, on one LocalCluster worker: every case passes over both buses (the
     brown-out's check needs the reset to have lost a pending result, so over the RTL it passes only if the reset
-    reached the RTL), each result and each report names its bus, and the two reports hold the same test cases."""
+    reached the RTL; unplug_replug's, the sensor lost and found again), each result and each report names its bus,
+    and the two reports hold the same test cases."""
     from bench.campaigns.engine import ClusterSpec, close, connect
 
     client = connect(ClusterSpec(workers=1))
@@ -42,12 +43,18 @@ def test_a_small_campaign_gives_the_same_verdicts_over_the_rtl_as_over_the_softw
 
 @pytest.mark.unit
 def test_a_fault_the_rtl_cannot_carry_is_refused_by_name_before_anything_runs(monkeypatch, capsys, tmp_path):
-    """``unplug_replug`` over the RTL (its set of sensors is fixed) is refused naming the fault, why, and what to run
-    instead — by the task list and by the command line, in one line with exit status 2, before the campaign runs
-    or its report is touched; over the software bus it is taken."""
-    with pytest.raises(ValueError, match=r"^unplug_replug needs the software SPI bus: unplugging and plugging a "
-                                         r"sensor back \(the RTL harness's set of sensors is fixed\)\. Run it with "
-                                         r"--spi software, and the others over the RTL with --faults none,cs_glitch$"):
+    """Every fault runs over the RTL now; one listed as needing the software bus (here ``unplug_replug``, as it
+    was before hot-plugging reached the RTL) is refused over the RTL naming the fault, why, and what to run instead
+    — by the task list and by the command line, in one line with exit status 2, before the campaign runs or its
+    report is touched; over the software bus it is taken."""
+    from bench.campaigns import case_names
+
+    assert case_names.NEEDS_SOFTWARE_SPI == {}
+    campaign.campaign_tasks(case_names.FAULT_EXPECTED, [SCENE], [0], "rtl")  # every fault taken
+    monkeypatch.setitem(case_names.NEEDS_SOFTWARE_SPI, "unplug_replug", "hot-plugging (say)")
+    with pytest.raises(ValueError, match=r"^unplug_replug needs the software SPI bus: hot-plugging \(say\)\. Run it "
+                                         r"with --spi software, and the others over the RTL with --faults "
+                                         r"none,cs_glitch$"):
         campaign.campaign_tasks(["none", "unplug_replug", "cs_glitch"], [SCENE], [0], "rtl")
     assert [t.spi for t in campaign.campaign_tasks(["unplug_replug"], [SCENE], [0, 1], "software")] == ["software"] * 2
     assert [t.spi for t in campaign.campaign_tasks(["none"], [SCENE], [0], "rtl")] == ["rtl"]
@@ -79,10 +86,19 @@ def test_results_over_two_buses_make_no_single_report(tmp_path):
 
 @pytest.mark.rtl
 @pytest.mark.firmware
-def test_a_case_runs_over_the_bus_its_task_names():
-    """A task's bus reaches the bench its case builds: ``unplug_replug`` run anyway over the RTL (past the
-    refusal) fails as the RTL board refuses the unplugging, by name; over the software bus it passes."""
-    rtl = campaign.run_case_task(campaign.CaseTask("unplug_replug", SCENE, 0, "rtl"))
-    assert not rtl["passed"] and rtl["spi"] == "rtl"
-    assert "unplugging a sensor needs the software SPI bus" in rtl["problem"], rtl["problem"]
-    assert campaign.run_case_task(campaign.CaseTask("unplug_replug", SCENE, 0))["passed"]
+def test_a_case_runs_over_the_bus_its_task_names(monkeypatch):
+    """A task's bus reaches the bench its case builds (the bench's board is then the RTL's), for either bus."""
+    from bench.hosts import bridge
+
+    built = []
+
+    class Spy(bridge.FirmwareBench):
+        def __init__(self, *a, **kw):
+            super().__init__(*a, **kw)
+            built.append((kw.get("spi"), type(self.board.bus).__name__))
+
+    monkeypatch.setattr(bridge, "FirmwareBench", Spy)
+    for spi in ("rtl", "software"):
+        result = campaign.run_case_task(campaign.CaseTask("none", SCENE, 0, spi))
+        assert result["passed"] and result["spi"] == spi
+    assert built == [("rtl", "RtlBus"), ("software", "Bus")]

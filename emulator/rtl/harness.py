@@ -25,8 +25,11 @@ from emulator.spi.vectors import rtl_provided_masks, variants_of
 
 HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_harness"
+#: One transfer as the harness takes it; ``reset_mask``: sensors reset just before it; with ``set_present`` 1,
+#: ``present``: the sensors plugged in from just before it (applied before the resets).
 TRANSFER = np.dtype([("t_ps", "<i8"), ("half_ps", "<i4"), ("nbits", "<u2"), ("cs", "u1"), ("keep_cs", "u1"),
-                     ("mosi", "<u8"), ("reset_mask", "u1"), ("pad", "u1", 7)])
+                     ("mosi", "<u8"), ("reset_mask", "u1"), ("present", "u1"), ("set_present", "u1"),
+                     ("pad", "u1", 5)])
 CODE = np.dtype([("sensor", "u1"), ("channel", "u1"), ("code", "<u2")])
 #: One sensor's fault ports as the harness takes them (its ``SensorFaults``): in the header, and as a fault change.
 FAULTS = np.dtype([("sensor", "u1"), ("miso_flip_en", "u1"), ("mosi_flip_en", "u1"), ("stuck_en", "u1"),
@@ -206,7 +209,7 @@ class Harness:
         tr = np.zeros(len(vec["transfers"]), TRANSFER)
         for i, d in enumerate(vec["transfers"]):
             tr[i] = (d["t_ps"], d["half_ps"], d["nbits"], d["cs"], int(d["keep_cs"]), int(d["mosi"], 16) & (2**64 - 1),
-                     sum(1 << (n - 1) for n in resets.get(i, [])), (0,) * 7)
+                     sum(1 << (n - 1) for n in resets.get(i, [])), 0, 0, (0,) * 5)
         codes = np.array([(c["sensor"], c["channel"], c["code"]) for c in vec["conversions"]], dtype=CODE)
         return self.run(vec, tr, codes)
 
@@ -316,7 +319,10 @@ class RtlBus:
     bus) reach the RTL's fault ports as chip select falls for the next call's first transfer — where the software
     bus applies them — and a MOSI bit flip changes the commands whose conversions are computed.  A port's
     ``reset()`` (a brown-out) resets that RTL sensor just before the next transfer (:class:`RtlSensorPort`), also
-    where the software bus acts on it.  Hot-plugging needs the software bus: the set of sensors is fixed here.  One difference remains: a call that ends on a sampling
+    where the software bus acts on it.  Hot-plugging as on the software bus: a port removed from ``ports`` is a
+    sensor unplugged, one put back (an :class:`RtlSensorPort` of this bus) a sensor plugged in in power-on state;
+    the RTL's sensors present change, and a sensor plugged in is reset, just before the next transfer.  The set of
+    sensors that can be plugged in is the one the bus started with (:meth:`_hot_plugged`).  One difference remains: a call that ends on a sampling
     command has its code computed as if the bus stayed quiet during the conversion (the RTL asks for it within the
     call), where the software bus judges that coupling at the next call's first transfer; traffic that reads its
     results (every firmware's) never ends a call there.
@@ -335,7 +341,11 @@ class RtlBus:
         # port.faults = Faults(...) — they reach the RTL's fault ports at the bus's next transfer)
         self.ports = {n: RtlSensorPort(s, n, self) for n, s in sensors.items()}
         self._resets: set[int] = set()  # sensors reset (port.reset()) since the last transfer: reset at the next
-        self.present = sum(1 << (n - 1) for n in sensors)
+        # hot-plugging: the ports the RTL holds plugged in (a port removed from ``ports``: unplugged; a port added or
+        # replaced: plugged in, in power-on state), and what each sensor's RTL was started with
+        self._ports_in_rtl = dict(self.ports)
+        self._started_with = {n: (p.variant.name, p.provided) for n, p in self.ports.items()}
+        self.present = sum(1 << (n - 1) for n in sensors)  # the sensors plugged in, as the RTL's mask
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
         self._faults_in_rtl = {n: Faults() for n in sensors}  # what the harness's fault ports hold, by sensor
@@ -404,6 +414,36 @@ class RtlBus:
                 out.append(np.column_stack([np.full(channels.size, n), channels, codes]).astype(np.int64))
         return np.concatenate(out)
 
+    def _check_ports(self) -> None:
+        """ValueError naming the sensor for a port the RTL cannot hold (before anything reaches the harness): a
+        sensor it was not started with, a port that is not this bus's :class:`RtlSensorPort`, or another variant or
+        other channels than it was started with."""
+        for n, port in self.ports.items():
+            if n not in self._started_with:
+                raise ValueError(f"sensor {n}: not on this RTL bus when it started (sensors "
+                                 f"{sorted(self._started_with)}): its set of sensors is fixed at start-up, each can be "
+                                 f"unplugged and plugged back in")
+            if not (isinstance(port, RtlSensorPort) and port._bus is self):
+                raise ValueError(f"sensor {n}: a port plugged into an RTL bus must be RtlSensorPort(sensor, {n}, bus) "
+                                 f"(its resets reach the RTL), not {type(port).__name__}")
+            if (port.variant.name, port.provided) != self._started_with[n]:
+                raise ValueError(f"sensor {n}: plugged back in as {port.variant.name} providing "
+                                 f"{len(port.provided)} channels; the RTL was started with {self._started_with[n][0]} "
+                                 f"providing {len(self._started_with[n][1])}: plug the same kind of sensor back in")
+
+    def _hot_plugged(self) -> int:
+        """The sensors plugged in now (``ports``' keys) as the RTL's mask, after a sensor was unplugged (its port
+        removed) or plugged in (a port added or replaced: reset with the mask, power-on state, its ADC-busy window
+        and any window held open forgotten); the ports checked by :meth:`_check_ports`."""
+        for n in set(self._ports_in_rtl) | set(self.ports):
+            if self._ports_in_rtl.get(n) is not self.ports.get(n):
+                self._open_window.pop(n, None)
+                if n in self.ports:
+                    self._resets.add(n)
+        self._ports_in_rtl = dict(self.ports)
+        self.present = sum(1 << (n - 1) for n in self.ports)
+        return self.present
+
     def _reset_requested(self, n: int) -> None:
         """Sensor ``n``'s port was reset: the RTL sensor is reset just before the next transfer.  Refused (ValueError)
         inside a chip-select window this bus holds open on the sensor: the software port starts counting the
@@ -425,8 +465,11 @@ class RtlBus:
         tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
         tr["nbits"], tr["cs"], tr["keep_cs"] = nbits, cs, np.asarray(keep, bool)
         tr["mosi"] = np.asarray(mosi, dtype=np.uint64)
+        self._check_ports()
         faults = self._faults_in_force()
         changed = {n: f for n, f in faults.items() if f != self._faults_in_rtl[n]} if start.size else {}
+        if start.size and self._ports_in_rtl != self.ports:  # a sensor unplugged or plugged in since the last call
+            tr["present"][0], tr["set_present"][0] = self._hot_plugged(), 1
         if start.size and self._resets:  # reset just before the first transfer; the RTL forgets its ADC-busy window
             tr["reset_mask"][0] = sum(1 << (n - 1) for n in self._resets)
             self._last_sampling_tick.update(dict.fromkeys(self._resets, _NO_TICK))

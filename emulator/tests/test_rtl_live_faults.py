@@ -336,3 +336,78 @@ def test_the_fault_ports_a_simulator_sets_come_from_the_harness_records_sensor_b
     assert fault_port_values({4: Faults(miso_flip_bit=15)})["flt_miso_flip_bit"] == 15 << 36
     with pytest.raises(ValueError, match=r"fault records for sensors \[6\]: sensors are 1 to 5"):
         fault_port_values({6: Faults()})
+
+
+def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_port_it_cannot_hold(harness):
+    """A port removed from ``bus.ports`` (unplugged: its reads see the idle line) and put back (plugged in, in
+    power-on state: its first read "E_") give the same words over the RTL as over the software bus.  The RTL bus
+    refuses, naming the sensor, a sensor it did not start with, a port that is not its own ``RtlSensorPort``, and a
+    sensor of other channels — before anything reaches the harness (it goes on afterwards)."""
+    from emulator.rtl.harness import RtlBus, RtlSensorPort
+    from emulator.sensor import Sensor
+
+    def call(k):  # _call(k) with reads of both sensors last (a call ending on a sampling command has its code
+        # computed within the call over the RTL, at the next call on the software bus — never, if the sensor is
+        # unplugged before it: its sensor's noise then runs on differently)
+        start, cs, mosi = _call(k)
+        return (np.append(start, start[-1] + [100e-6, 110e-6]), np.append(cs, [SELECT_CODE[1], SELECT_CODE[3]]),
+                np.append(mosi, [0, 0]).astype(np.uint16))
+
+    def play(bus, port_of):
+        out = []
+        try:
+            for k in range(5):
+                if k == 1:
+                    bus.ports.pop(3)
+                if k == 3:
+                    bus.ports[3] = port_of(bus)
+                out.append([int(w) for w in bus.exchange_words(*call(k), CLOCK_HZ)])
+        finally:
+            bus.close()
+        return out
+
+    sensors, rtl_sensors = _sensors(), _sensors()
+    soft = play(Bus({n: SensorPort(s, n) for n, s in sensors.items()}), lambda bus: SensorPort(sensors[3], 3))
+    rtl = play(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[3], 3, bus))
+    assert rtl == soft
+    assert set(rtl[1][k] for k in S3) == set(rtl[2][k] for k in S3) == {0}  # unplugged: the idle line (pull-down)
+    assert rtl[3][1] == ERR["nothing_to_resend"] and proto.decode_response(rtl[3][5])[1]  # power-on, then data
+
+    bus = RtlBus(_sensors(), harness=harness)
+    try:
+        for n, port, words in ((4, lambda: RtlSensorPort(sensors[1], 4, bus), r"sensor 4: not on this RTL bus when "
+                                r"it started \(sensors \[1, 3\]\): its set of sensors is fixed"),
+                               (3, lambda: SensorPort(sensors[3], 3), r"sensor 3: a port plugged into an RTL bus must "
+                                r"be RtlSensorPort\(sensor, 3, bus\).*not SensorPort"),
+                               (3, lambda: RtlSensorPort(Sensor(channels_read=["PAC"]), 3, bus),
+                                r"sensor 3: plugged back in as biotac providing 1 channels; the RTL was started with "
+                                r"biotac providing")):
+            kept = dict(bus.ports)
+            bus.ports[n] = port()
+            with pytest.raises(ValueError, match=words):
+                bus.exchange_words(*_call(0), CLOCK_HZ)
+            bus.ports.clear()
+            bus.ports.update(kept)
+        assert bus.exchange_words(*_call(1), CLOCK_HZ).size == len(CALL)
+    finally:
+        bus.close()
+
+
+@pytest.mark.parametrize("field,value", [("reset_mask", 0x20), ("set_present", 2), ("present", 0x21)])
+def test_the_streaming_harness_refuses_a_reset_or_sensors_present_outside_its_five_sensors(harness, field, value):
+    """A transfer's reset mask or sensors present with a bit past the five sensors, or a set_present flag other than
+    0/1, stops the harness with a message naming it, before anything is played."""
+    import struct
+    import subprocess
+
+    from emulator.rtl.harness import TRANSFER, Harness
+
+    header = Harness._header({"sensors": [1, 2], "pull_up": False}, 0)
+    tr = np.zeros(1, TRANSFER)
+    tr["t_ps"], tr["half_ps"], tr["nbits"], tr["cs"] = 10_000_000, 113_636, 16, SELECT_CODE[1]
+    tr["set_present"] = 1
+    tr[field] = value
+    r = subprocess.run([str(harness.binary), "--stream"], input=header + struct.pack("<III", 1, 0, 0) + tr.tobytes(),
+                       capture_output=True, timeout=60)
+    assert r.returncode == 2 and b"transfer 0 of a batch: a reset mask or sensors present outside" in r.stderr, r.stderr
+    assert r.stdout == b""

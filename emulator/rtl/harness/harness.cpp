@@ -52,7 +52,9 @@ struct Transfer {
     uint8_t cs, keep_cs;
     uint64_t mosi;
     uint8_t reset_mask;  // sensors reset just before this transfer (bit i = sensor i + 1)
-    uint8_t pad[7];
+    uint8_t present;     // with set_present = 1: the sensors plugged in from just before this transfer (hot-plugging;
+    uint8_t set_present; // before the resets, so a sensor plugged back in is reset as it appears); 0: unchanged
+    uint8_t pad[5];
 };
 struct CodeRecord {
     uint8_t sensor, channel;
@@ -226,6 +228,11 @@ static void setup(Harness& H, const Header& h) {
 
 static uint64_t play(Harness& H, const Transfer& t) {
     auto& top = *H.top;
+    if (t.set_present) {
+        H.advance_to(t.t_ps - 20);
+        top.present = t.present;
+        H.eval();
+    }
     if (t.reset_mask) {
         H.advance_to(t.t_ps - 20);
         top.rst_n = 0x1F & ~t.reset_mask;
@@ -289,6 +296,13 @@ static int stream_mode() {
         for (const auto& f : faults) {
             if (!valid_faults(f, "fault change")) return 2;
             H.pending_faults.push_back(f);
+        }
+        for (uint32_t i = 0; i < counts[0]; ++i) {
+            if (trs[i].reset_mask > 0x1F || trs[i].set_present > 1 || (trs[i].set_present && trs[i].present > 0x1F)) {
+                std::fprintf(stderr, "harness: transfer %u of a batch: a reset mask or sensors present outside the "
+                             "five sensors (bits 0..4), or set_present other than 0/1\n", i);
+                return 2;
+            }
         }
         add_codes(H, codes.data(), codes.size());
         out.resize(counts[0] + 3);
