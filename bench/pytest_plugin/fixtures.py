@@ -89,9 +89,8 @@ Keywords (every one optional)
         step_s        the firmware's virtual-time step (s, default 0.01)
         SPI faults in virtual time: ``bench.at(t_s, lambda board: setattr(board.bus.ports[k], "faults",
         Faults(miso_stuck=1)))`` (either SPI bus: over ``spi="rtl"`` from the same transfer, the same words);
-        glitches and brown-outs: ``board.glitch(k)``, ``board.reset_at(k, t_s)`` (either SPI bus);
-        unplug/plug: ``board.unplug(k)`` (the software SPI bus only: with ``spi="rtl"`` they are refused, and the
-        bench's error is raised when it stops)
+        glitches, brown-outs and hot-plugging: ``board.glitch(k)``, ``board.reset_at(k, t_s)``,
+        ``board.unplug(k)``, ``board.plug(k)`` (either SPI bus, the same frames)
       biotac_cheetah only (``CheetahBench``):
         trace         keep every transfer (start s, select code, bits, MOSI) in ``bench.trace``
 
