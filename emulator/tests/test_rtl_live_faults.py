@@ -11,6 +11,7 @@ from emulator.spi.model import SELECT_CODE, Bus, Faults, SensorPort
 pytestmark = pytest.mark.rtl
 
 ERR = proto.ERROR_WORDS
+RESEND = 0x2000  # the resend command (first byte 0x20): the sensor prepares the last word it served again
 CALL_S, CLOCK_HZ = 1e-3, proto.HOST_DEFAULT_CLOCK_HZ
 #: One call's transfers: (µs after the call's start, sensor, channel sampled or None for a read).  The first two
 #: read the commands that ended the call before (so a fault set in between acts on a result converted before it).
@@ -340,7 +341,7 @@ def test_the_fault_ports_a_simulator_sets_come_from_the_harness_records_sensor_b
 
 def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_port_it_cannot_hold(harness):
     """A port removed from ``bus.ports`` (unplugged: its reads see the idle line) and put back (plugged in, in
-    power-on state: its first read "E_") give the same words over the RTL as over the software bus.  The RTL bus
+    power-on state: its first read "E_", and a resend "E_" too) give the same words over the RTL as over the software bus.  The RTL bus
     refuses, naming the sensor, a sensor it did not start with, a port that is not its own ``RtlSensorPort``, and a
     sensor of other channels — before anything reaches the harness (it goes on afterwards)."""
     from emulator.rtl.harness import RtlBus, RtlSensorPort
@@ -350,6 +351,8 @@ def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_po
         # computed within the call over the RTL, at the next call on the software bus — never, if the sensor is
         # unplugged before it: its sensor's noise then runs on differently)
         start, cs, mosi = _call(k)
+        if k == 3:  # sensor 3's first transfer after it is plugged back in asks to resend its last word
+            mosi[1] = RESEND
         return (np.append(start, start[-1] + [100e-6, 110e-6]), np.append(cs, [SELECT_CODE[1], SELECT_CODE[3]]),
                 np.append(mosi, [0, 0]).astype(np.uint16))
 
@@ -371,7 +374,8 @@ def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_po
     rtl = play(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[3], 3, bus))
     assert rtl == soft
     assert set(rtl[1][k] for k in S3) == set(rtl[2][k] for k in S3) == {0}  # unplugged: the idle line (pull-down)
-    assert rtl[3][1] == ERR["nothing_to_resend"] and proto.decode_response(rtl[3][5])[1]  # power-on, then data
+    # power-on: nothing prepared, and nothing to resend (the word it read before it was unplugged is gone); then data
+    assert rtl[3][1] == rtl[3][3] == ERR["nothing_to_resend"] and proto.decode_response(rtl[3][5])[1]
 
     bus = RtlBus(_sensors(), harness=harness)
     try:
