@@ -321,11 +321,12 @@ class RtlBus:
     ``reset()`` (a brown-out) resets that RTL sensor just before the next transfer (:class:`RtlSensorPort`), also
     where the software bus acts on it.  Hot-plugging as on the software bus: a port removed from ``ports`` is a
     sensor unplugged, one put back (an :class:`RtlSensorPort` of this bus) a sensor plugged in in power-on state;
-    the RTL's sensors present change, and a sensor plugged in is reset, just before the next transfer.  The set of
-    sensors that can be plugged in is the one the bus started with (:meth:`_hot_plugged`).  One difference remains: a call that ends on a sampling
-    command has its code computed as if the bus stayed quiet during the conversion (the RTL asks for it within the
-    call), where the software bus judges that coupling at the next call's first transfer; traffic that reads its
-    results (every firmware's) never ends a call there.
+    the RTL's sensors present change, and a sensor plugged in is reset, just before the next transfer.  The sensors
+    that can be plugged in are those the bus started with (:meth:`_check_ports`).  One difference remains: a call
+    that ends on a sampling command has its code computed as if the bus stayed quiet during the conversion (the RTL
+    asks for it within the call), where the software bus judges that coupling at the next call's first transfer
+    (and never, if the sensor is unplugged before it); traffic that reads its results (every firmware's) never ends
+    a call there.
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
