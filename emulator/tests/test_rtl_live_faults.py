@@ -341,9 +341,10 @@ def test_the_fault_ports_a_simulator_sets_come_from_the_harness_records_sensor_b
 
 def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_port_it_cannot_hold(harness):
     """A port removed from ``bus.ports`` (unplugged: its reads see the idle line) and put back (plugged in, in
-    power-on state: its first read "E_", and a resend "E_" too) give the same words over the RTL as over the software bus.  The RTL bus
-    refuses, naming the sensor, a sensor it did not start with, a port that is not its own ``RtlSensorPort``, and a
-    sensor of other channels — before anything reaches the harness (it goes on afterwards)."""
+    power-on state: its first read "E_", and a resend "E_" too) give the same words over the RTL as over the
+    software bus.  The RTL bus refuses, naming the sensor, a sensor it did not start with, a port that is not its
+    own ``RtlSensorPort``, and a sensor of other channels — before anything reaches the harness (it goes on
+    afterwards)."""
     from emulator.rtl.harness import RtlBus, RtlSensorPort
     from emulator.sensor import Sensor
 
