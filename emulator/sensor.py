@@ -119,7 +119,7 @@ MAX_BLOCK_SAMPLES = 2**18
 def _block_samples(block_s: float, fs: float) -> int:
     """Grid samples per physics block for a block of ``block_s`` s (finite, > 0: checked by :class:`Sensor`) on a
     grid of ``fs`` Hz: at least 1, at most :data:`MAX_BLOCK_SAMPLES`."""
-    return min(MAX_BLOCK_SAMPLES, max(1, int(round(block_s * fs))))
+    return max(1, int(round(min(block_s * fs, MAX_BLOCK_SAMPLES))))  # (capped before rounding: 1e308 s × fs is inf)
 
 
 @njit(cache=True)
@@ -180,8 +180,8 @@ class Sensor:
         if params is not None and not isinstance(params, SensorParams):
             raise TypeError(f"params = {params!r}: give a SensorParams, e.g. SensorParams().replace("
                             f"inflation_volume_mL=0.6) (emulator.params)")
-        if not (isinstance(block_s, (int, float)) and not isinstance(block_s, bool) and np.isfinite(block_s)
-                and block_s > 0):
+        if not (isinstance(block_s, (int, float, np.integer, np.floating)) and not isinstance(block_s, bool)
+                and np.isfinite(block_s) and block_s > 0):  # (numpy numbers too, as the seed takes them)
             raise ValueError(f"block_s = {block_s!r}: must be a finite number > 0 (the physics block, s)")
         if not (isinstance(seed, (int, np.integer, float, np.floating)) and not isinstance(seed, bool)
                 and np.isfinite(seed) and float(seed).is_integer() and seed >= 0):  # 3262.0 is a whole number

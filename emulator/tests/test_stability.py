@@ -233,6 +233,17 @@ def test_a_block_that_is_not_a_finite_positive_duration_is_refused_by_name(bad):
         Sensor(block_s=bad)
 
 
+@pytest.mark.parametrize("block_s", [1e308, np.float32(0.5), np.int64(1)])
+def test_any_finite_positive_block_is_taken_as_its_number_of_grid_samples(block_s):
+    """A block of 1e308 s (finite, so it passes the check) overflowed to inf grid samples and raised OverflowError
+    ("cannot convert float infinity to integer"); numpy numbers (np.float32(0.5), np.int64(1): what a caller holding
+    arrays passes, and what the seed takes) were refused as "must be a finite number > 0"."""
+    from emulator.sensor import MAX_BLOCK_SAMPLES
+
+    s = Sensor(block_s=block_s)
+    assert s.block_n == round(min(float(block_s) * s.fs, MAX_BLOCK_SAMPLES))
+
+
 def test_a_huge_block_is_computed_in_bounded_pieces_with_the_same_codes():
     """block_s = 10⁶ s on the reference grid once asked for 525 GiB at the first sample (MemoryError); the grid is
     now computed at most MAX_BLOCK_SAMPLES at a time, and the codes are those of the default 2 s blocks."""
