@@ -8,6 +8,12 @@ status 2 (an error's own ``exit_status`` where it has one), never a traceback.
 from __future__ import annotations
 
 
+def shortened(text: str, limit: int = 300) -> str:
+    """``text`` for a message, at most ``limit`` characters: cut, with its length said, when longer (a hostile
+    file can hold a 1 MB string or path).  The one rule for the scene's and the texture library's messages."""
+    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+
+
 class BenchError(Exception):
     """Root of the bench's own errors."""
 

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from bench import tomlfile
-from bench.errors import SceneError
+from bench.errors import SceneError, shortened
 from bench.paths import folder_name_problem
 from bench.scenes.limits import MAX_SENSORS
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
@@ -58,12 +58,12 @@ def _r(v, limit: int = 80) -> str:
         text = v.isoformat() if isinstance(v, (datetime.datetime, datetime.date, datetime.time)) else repr(v)
     except (RecursionError, ValueError):
         text = f"<{type(v).__name__}>"
-    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+    return shortened(text, limit)
 
 
 def _cut(text: str, limit: int = 300) -> str:
-    """A message from elsewhere, shortened when long."""
-    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+    """A message from elsewhere, shortened when long (:func:`bench.errors.shortened`)."""
+    return shortened(text, limit)
 
 
 def _real(v) -> bool:

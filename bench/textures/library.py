@@ -55,7 +55,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from bench import tomlfile
-from bench.errors import TextureError
+from bench.errors import TextureError, shortened
 from bench.paths import FIXTURES
 from emulator.texture import PeriodicComponent, Texture
 from emulator.thermal import MATERIALS
@@ -457,14 +457,9 @@ def load_library(path: str | Path | None = None, complete: bool | None = None) -
 LIBRARY_VALUE = "the path of a texture library file (TOML, or .json as `biotac-bench textures --json` prints)"
 
 
-def _short(text: str, limit: int = 300) -> str:
-    """``text`` for messages, shortened when long (a hostile file can hold a 1 MB string)."""
-    return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
-
-
 def _shown(value) -> str:
     """``repr(value)`` for messages, shortened when long."""
-    return _short(repr(value), 120)
+    return shortened(repr(value), 120)
 
 
 def library_path(value, where: str, naming_file: str | Path | None = None) -> str:
@@ -482,7 +477,7 @@ def named_problems(where: str, value, path: str, error: TextureError) -> list[st
     """The problems of the library file ``path`` (named by ``value`` at ``where``), each saying where it was named
     and which file it is: ``scene.library = 'mine.toml' (/abs/mine.toml): T5 'kraft paper': hurst = 7: allowed
     range is 0.1 to 1``."""
-    return [f"{where} = {_shown(value)} ({_short(path)}): {p}" for p in error.problems]
+    return [f"{where} = {_shown(value)} ({shortened(path)}): {p}" for p in error.problems]
 
 
 def named_library(value, where: str, naming_file: str | Path | None = None) -> LibraryFile:
