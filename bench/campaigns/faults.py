@@ -276,9 +276,13 @@ def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool =
 
     tasks = campaign_tasks(faults, scenes, seeds, spi)
     if spi == "rtl":  # once, here, as the firmware: not one Verilator build per worker at the same time
-        from emulator.rtl.harness import Harness
+        from bench.errors import BuildError
+        from emulator.rtl.harness import Harness, HarnessError
 
-        Harness().ensure_built()
+        try:
+            Harness().ensure_built()
+        except HarnessError as e:  # (the emulator's RuntimeError: as the bench's, the campaign could not run)
+            raise BuildError(f"--spi rtl: the RTL harness could not be built: {e}") from None
     build_firmware()  # once, here: the workers find it built (and a build error is one error, not one per case)
     return run_tasks(run_case_task, tasks, spec=spec, client=client, progress=progress, desc="cases")
 

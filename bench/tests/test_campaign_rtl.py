@@ -102,3 +102,29 @@ def test_a_case_runs_over_the_bus_its_task_names(monkeypatch):
         result = campaign.run_case_task(campaign.CaseTask("none", SCENE, 0, spi))
         assert result["passed"] and result["spi"] == spi
     assert built == [("rtl", "RtlBus"), ("software", "Bus")]
+
+
+@pytest.mark.unit
+def test_an_rtl_harness_that_does_not_build_is_one_line_and_an_unfinished_report(monkeypatch, capsys, tmp_path):
+    """campaign --spi rtl builds the C++ harness once before any case: a build that fails (no Verilator, a compiler
+    error) is the bench's error, naming the harness, with its diagnostics and exit status 2 (no traceback), and the --junit report says the campaign could not run, over the
+    RTL — an earlier campaign's passing report left there would be published as this one's. (The harness's error is
+    a RuntimeError, not the bench's own: it ended the command in a traceback and left the earlier report.)"""
+    from emulator.rtl import harness
+
+    def no_build(self):
+        raise harness.HarnessError("building the harness failed:\n%Error: verilator: not found")
+
+    monkeypatch.setattr(harness.Harness, "ensure_built", no_build)
+    report = tmp_path / "c.xml"
+    campaign.write_junit([{"fault": "none", "scene": SCENE, "seed": 0, "expected": "-", "passed": True,
+                           "problem": None, "seconds": 0.1}], report)  # an earlier campaign's, passing
+    status, out, err = invoke(["campaign", "--spi", "rtl", "--faults", "none", "--scenes", SCENE, "--junit",
+                               str(report), "--quiet"], capsys)
+    assert status == 2 and "Traceback" not in err, err
+    said = err.split("error: ", 1)[1]  # (the line after the cases' count; the build's diagnostics follow it)
+    assert said.startswith("--spi rtl: the RTL harness could not be built") and "verilator: not found" in said, err
+    suite = ET.parse(report).getroot()
+    assert suite.get("errors") == "1" and suite.find("testcase").get("name") == "unfinished"
+    assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")] == [("spi", "rtl")]
+    assert "the campaign could not run" in suite.find("testcase/error").get("message")
