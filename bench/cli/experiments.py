@@ -108,6 +108,8 @@ def _cmd_texture_sweep(a) -> int:
     from bench.reporting.sweep_plots import properties_vs_movement
     from bench.cli.args import library_option
     from bench.rigs.texture_rig import movement_grid
+    from bench.errors import TextureError
+    from bench.textures.library import check_unchanged
 
     grid = movement_grid()
     library = library_option(a.library)
@@ -126,6 +128,10 @@ def _cmd_texture_sweep(a) -> int:
         t0 = time.perf_counter()
         rows = sweep(tasks, spec=spec, progress=not a.quiet)
         wall = time.perf_counter() - t0
+        try:  # (each trial read the file on its worker)
+            check_unchanged(library, "the sweep")
+        except TextureError as e:
+            raise ValueError(f"{library.path}: {'; '.join(e.problems)}") from None  # (one line)
         with signals_held():  # a signal meanwhile: every file finished first, then the stop
             folder.clear_earlier()
             write_rows_csv(out / "trials.csv", rows)

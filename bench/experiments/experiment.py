@@ -370,9 +370,11 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
               client=None, log=print) -> list[dict]:
     """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code (a
     cache file that does not hold them is said and replaced)."""
-    libraries = "".join(hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in sorted({t.library for t in tasks
-                                                                                         if t.library}))
-    key = hashlib.sha256((repr(tasks) + _code_digest() + libraries).encode()).hexdigest()[:16]
+    from bench.textures.library import check_unchanged, read_library
+
+    libraries = [read_library(f) for f in sorted({t.library for t in tasks if t.library})]  # as read now
+    key = hashlib.sha256((repr(tasks) + _code_digest() + "".join(lib.sha256 for lib in libraries)).encode()
+                         ).hexdigest()[:16]
     path = None if cache_dir is None else cache_dir / f"{name}-{key}.json"
     if path is not None and path.exists():
         rows, why = _cached_rows(path, tasks)
@@ -380,6 +382,8 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
             return rows
         log(f"note: the cached {name} stage {path} is {why}: its trials run again and replace it")
     rows = sweep(tasks, spec=spec, client=client, progress=progress) if tasks else []
+    for lib in libraries:  # the trials read it on their workers: an edit meanwhile is refused, never cached
+        check_unchanged(lib, f"the {name} stage")
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_write(path) as tmp:  # a unique temporary name: explores sharing a cache never collide
@@ -477,7 +481,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     import time
 
     from bench.campaigns.engine import ClusterSpec, close, connect
-    from bench.textures.library import read_library
+    from bench.textures.library import check_unchanged, read_library
 
     wall = {}
     library = read_library(spec.library)  # (complete when shipped, as load_library)
@@ -537,6 +541,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         wall["validation"] = time.perf_counter() - t0
     finally:
         close(client)
+    check_unchanged(library, "the experiment's stages")  # the library the outputs name is the one every stage ran
     # 4. virtual exploration
     t0 = time.perf_counter()
     pair_results, ident_results = {}, {}

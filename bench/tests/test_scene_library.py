@@ -246,3 +246,50 @@ def test_a_scene_takes_the_json_list_that_textures_json_prints(tmp_path, capsys)
     from_json = parse_scene_text(SCENE.format(library='"../libs/mine.json"', texture="950"), source=str(scene))
     assert from_json.stimuli[0].texture == load_scene(scene).stimuli[0].texture
     assert from_json.library["path"].endswith("mine.json") and not from_json.library["shipped"]
+
+
+def _edit_meanwhile(lib, rows_of):
+    """A stand-in for the trials' ``sweep`` that edits the library file while the trials run (each trial reads it
+    on its worker), then returns ``rows_of(tasks)``."""
+    def sweep(tasks, **kw):
+        lib.write_text(MY_LIBRARY.format(mu=0.9, hurst=0.7))
+        return rows_of(tasks)
+    return sweep
+
+
+def test_a_library_edited_while_the_trials_run_is_refused_not_stated_or_cached(tmp_path, monkeypatch, capsys):
+    """The trials read the library file on their workers, the outputs state its SHA-256 as read at the start, and a
+    stage cache is keyed on it: an edit while they ran had mixed two libraries under the first one's name and hash
+    (and cached the mix as the first). texture-sweep then writes nothing and says so in one line; an experiment
+    stage caches nothing and says so; an unedited library runs as before."""
+    from dataclasses import asdict
+
+    from bench.experiments import experiment as E
+    from bench.experiments import trials
+
+    _, lib = _files(tmp_path)
+    monkeypatch.chdir(tmp_path)
+
+    def rows_of(tasks):
+        return [dict(asdict(t), traction=0.1, roughness=1.0, fineness=2.0, true_normal_N=0.5, start_position_m=0.01,
+                     simulated_s=7.0, wall_s=1.0) for t in tasks]
+
+    monkeypatch.setattr(trials, "sweep", _edit_meanwhile(lib, rows_of))
+    out = tmp_path / "sweep"
+    assert cli.main(["texture-sweep", "--library", "libs/mine.toml", "--textures", "950", "--movements", "7",
+                     "--trials", "1", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    said = err.splitlines()[-1]  # (after the trials' count)
+    assert said.startswith(f"error: {lib.resolve()}: the library file changed while the sweep ran (SHA-256 ") \
+        and said.endswith("nothing is written; run again") and err.count("error") == 1, err
+    assert not out.exists()
+    _files(tmp_path)
+    tasks = [E.TrialTask(texture=950, force_N=0.5, velocity_m_per_s=0.01, trial=0, seed=1, movement_id=7,
+                         stage="pilot", library=str(lib.resolve()))]
+    monkeypatch.setattr(E, "sweep", _edit_meanwhile(lib, rows_of))
+    with pytest.raises(TextureError, match=r"changed while the pilot stage ran \(SHA-256 \w{16}… at the start, "):
+        E.run_stage("pilot", tasks, tmp_path / "cache", progress=False)
+    assert not (tmp_path / "cache").exists()
+    monkeypatch.setattr(E, "sweep", lambda tasks, **kw: rows_of(tasks))  # unedited: run and cached
+    assert E.run_stage("pilot", tasks, tmp_path / "cache", progress=False) == rows_of(tasks)
+    assert len(list((tmp_path / "cache").iterdir())) == 1

@@ -444,6 +444,21 @@ def read_library(path: str | Path | None = None, complete: bool | None = None) -
     return LibraryFile(str(p), hashlib.sha256(text.encode("utf-8")).hexdigest(), MappingProxyType(textures), shipped)
 
 
+def check_unchanged(library: LibraryFile, what: str) -> None:
+    """:class:`TextureError` if the file ``library`` was read from no longer holds the text read (``what``: what
+    ran meanwhile, e.g. "the sweep"): its trials read the file again, each on its worker, so an edit while they ran
+    mixes two libraries under the one path and SHA-256 the outputs state, and a stage cache keyed on the first."""
+    try:
+        now = hashlib.sha256(_library_text(library.path).encode("utf-8")).hexdigest()
+    except TextureError as e:
+        now = None
+        why = "; ".join(e.problems)
+    if now != library.sha256:
+        why = f"SHA-256 {library.sha256[:16]}… at the start, {now[:16]}… now" if now else why
+        raise TextureError(library.path, [f"the library file changed while {what} ran ({why}): its trials may mix "
+                                          f"both versions, so nothing is written; run again"])
+
+
 def load_library(path: str | Path | None = None, complete: bool | None = None) -> dict[int, Texture]:
     """The textures of a library file (default: the shipped ``fixtures/textures/library.toml``), by number, in SI.
 
