@@ -200,6 +200,25 @@ def test_an_experiment_on_a_texture_library_of_ones_own(no_rig, tmp_path):
     assert f"Texture library: {spec.library} (SHA-256 {digest[:16]}…)" in (tmp_path / "out" / "report.md").read_text()
 
 
+def test_a_library_edited_between_the_stages_is_refused_after_them(no_rig, tmp_path):
+    """Each stage reads the library file as it starts (its trials on their workers): an edit between the pilot and
+    the training had each stage consistent with itself, while the outputs named the library as read at the start —
+    the one neither the training nor the validation ran. The experiment refuses, naming the file and both hashes."""
+    from bench.errors import TextureError
+
+    spec = _my_experiment(tmp_path)
+
+    def log(message):
+        if message.startswith("training:"):  # between the pilot's trials and the training's
+            (tmp_path / "lib" / "mine.toml").write_text(MY_LIBRARY.format(seed=8))
+
+    with pytest.raises(TextureError, match=r"changed while the experiment's stages ran \(SHA-256 \w{16}… at the "
+                                           r"start, \w{16}… now\)"):
+        E.run_experiment(spec, cache_dir=None, progress=False, log=log)
+    _my_experiment(tmp_path)  # unedited: it runs
+    assert E.run_experiment(spec, cache_dir=None, progress=False, log=lambda m: None).library["shipped"] is False
+
+
 def test_a_trial_slides_the_texture_of_its_own_library(monkeypatch):
     from bench.experiments import trials
     from bench.textures import library
