@@ -474,13 +474,15 @@ class Bus:
 
     ``ports`` maps sensor number (1–5) to its :class:`SensorPort`; a number with no port is an absent
     sensor.  MISO is the OR of the sensors driving it; with nobody driving it idles at 0
-    (``pull_up=False``) or 1, so an absent sensor reads back 0x00 or 0xFF bytes.
+    (``pull_up=False``) or 1, so an absent sensor reads back 0x00 or 0xFF bytes.  Removing a port unplugs the
+    sensor, also with chip select held on it (its window goes with it: nothing it received is acted on); a port
+    put in plugs one in, which sees chip select fall at the next transfer that selects it.
     """
 
     ports: dict[int, SensorPort]
     pull_up: bool = False
     out_of_spec_transfers: int = 0
-    _selected: set = field(default_factory=set)
+    _selected: dict = field(default_factory=dict)  # sensor -> its port, while chip select is held on it
     _last_end: float = -math.inf
     _open: bool = False
     _line: list = field(default_factory=list)  # recent (time, level) changes of the MISO line
@@ -526,9 +528,12 @@ class Bus:
         for port in self.ports.values():
             port.resolve_conversion(tr.start_s)
         now = self.selected_by(tr.cs)
-        for n in self._selected - now:  # select code changed with chip select held: those sensors see CS rise
+        # a sensor unplugged (or its port replaced) with chip select held on it took its window along: nothing is
+        # left to see chip select rise, and the one plugged in sees it fall as the held select code reaches it
+        held = {n for n, port in self._selected.items() if self.ports.get(n) is port}
+        for n in held - now:  # select code changed with chip select held: those sensors see CS rise
             self.ports[n].cs_rise(tr.start_s)
-        for n in now - self._selected if self._open else now:
+        for n in now - held if self._open else now:
             self.ports[n].cs_fall(tr.start_s)
         # the line: first bit (or pull level) from chip-select fall, the next bit at every falling edge
         self._record(tr.start_s, self._level(now))
@@ -551,11 +556,11 @@ class Bus:
                 miso = (miso << 1) | self._line_at(tr.start_s + (k + 0.5) * T - MISO_VALID_DELAY_S)
         self._last_end = tr.end_s
         if tr.keep_cs:
-            self._selected, self._open = now, True
+            self._selected, self._open = {n: self.ports[n] for n in now}, True
         else:
             for n in now:
                 self.ports[n].cs_rise(tr.end_s)
-            self._selected, self._open = set(), False
+            self._selected, self._open = {}, False
             self._record(tr.end_s, int(self.pull_up))
         return miso
 
