@@ -121,8 +121,9 @@ dissertation, model = this emulator's choice) and what it is.  Any of them can b
 """
 
 VALIDATE_HELP = """\
-Validates each scene completely (nothing runs) and prints "ok" with its name, duration, stimuli and fidelity, or
-every problem with its field, value and allowed range.  Exit status 0 if every scene is valid, 1 if any is not,
+Validates each scene completely (nothing runs) and prints "ok" with its name, duration, stimuli and fidelity (and
+the SPI side if it is the RTL, the texture library's path and SHA-256 prefix if the scene slides), or every
+problem with its field, value and allowed range.  Exit status 0 if every scene is valid, 1 if any is not,
 2 for bad arguments.
 
   biotac-bench validate my_scene.toml
@@ -203,11 +204,24 @@ def _cmd_validate(a) -> int:
                     f" stimuli in all)" if sc.n_sensors > 1 else "")
             n = len(sc.stimuli)
             print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {stimuli_count(n)}, fidelity "
-                  f"{sc.fidelity}{more})")
+                  f"{sc.fidelity}{more}{_before_running(sc)})")
         except SceneError as e:
             print(e, file=sys.stderr)
             bad += 1
     return 1 if bad else 0
+
+
+def _before_running(sc) -> str:
+    """What else a user should know before running a valid scene, for the "ok" line: the SPI side when it is the
+    RTL (built and run under Verilator), and the texture library its slides use (path and the first 16 hex digits
+    of its SHA-256, as report.md shows them) when any sensor slides; "" otherwise."""
+    from emulator.sliding import Slide
+
+    parts = [f"SPI {sc.spi}"] if sc.spi != "software" else []
+    slides = any(isinstance(st, Slide) for k in range(1, sc.n_sensors + 1) for st in sc.sensor_spec(k).stimuli)
+    if slides and sc.library is not None:
+        parts.append(f"textures {shown_path(Path(sc.library['path']))} sha256 {sc.library['sha256'][:16]}")
+    return "".join(f", {p}" for p in parts)
 
 
 def shipped_scenes() -> dict[str, Path]:
