@@ -186,14 +186,18 @@ def stimuli_count(n: int) -> str:
     return f"{n} {'stimulus' if n == 1 else 'stimuli'}"
 
 
-def one_line_errors(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """Usage errors of this subcommand as one line (``biotac-bench CMD: error: argument --flag: ...``), status 2."""
+class OneLineErrorParser(argparse.ArgumentParser):
+    """The parser of ``biotac-bench`` and of every subcommand (argparse makes a parser's subparsers of its own
+    class): a usage error is one line on stderr, ``biotac-bench CMD: error: argument --flag: ... (see biotac-bench
+    CMD --help)``, exit status 2, instead of argparse's usage block followed by the error.  The parsed arguments'
+    ``command_prog`` is the innermost command's name (``biotac-bench cheetah serve``), for errors found later."""
 
-    def error(message: str):
-        parser.exit(2, f"{parser.prog}: error: {message} (see {parser.prog} --help)\n")
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.set_defaults(command_prog=self.prog)
 
-    parser.error = error
-    return parser
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 # --- output ----------------------------------------------------------

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
-from bench.cli.args import add_cluster_arguments, one_line_errors, replaceable_report, sigterm_like_ctrl_c, whole
+from bench.cli.args import add_cluster_arguments, replaceable_report, sigterm_like_ctrl_c, whole
 
 
 def _names(kind: str):
@@ -128,9 +128,9 @@ are expected; the summary and the report's property "spi" say which bus ran).  {
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    cp = one_line_errors(sub.add_parser(
+    cp = sub.add_parser(
         "campaign", help="fault campaign: fault × scene × seed through firmware and driver", description=CAMPAIGN_HELP,
-        formatter_class=fmt))
+        formatter_class=fmt)
     cp.add_argument("--faults", type=_names("faults"), default="all",
                     help="comma-separated fault names (listed above), or all")
     cp.add_argument("--scenes", type=_names("scenes"), default="all",

@@ -6,7 +6,7 @@ import argparse
 import shlex
 import sys
 
-from bench.cli.args import any_seed, number, one_line_errors, sigterm_raises, stimuli_count, whole
+from bench.cli.args import any_seed, number, sigterm_raises, stimuli_count, whole
 from bench.running.signals import signals_deferred
 
 
@@ -70,7 +70,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                     "biotac-bench cheetah serve --help says how to point your program at it.",
                         formatter_class=fmt)
     chsub = ch.add_subparsers(dest="cheetah_command", metavar="ACTION", required=True)
-    sv = one_line_errors(chsub.add_parser(
+    sv = chsub.add_parser(
         "serve", help="serve an emulated adapter until stopped",
         description="Serves one emulated Cheetah adapter (port 0) with --sensors emulated sensors on a Unix socket in "
                     "a private folder, and prints the line to export:\n\n"
@@ -82,7 +82,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "  biotac-bench cheetah serve taps --sensors 1   # prints: export BIOTAC_CHEETAH_SOCKET=...\n"
                     "  # then, in another shell: paste that line and run your program with the printed cheetah.so "
                     "beside it",
-        formatter_class=fmt))
+        formatter_class=fmt)
     sv.add_argument("scene", nargs="?", type=scene_argument,
                     help="scene file, or a shipped scene's name, the sensors are built from (default: none, the "
                          "sensors at rest)")

@@ -9,8 +9,7 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import (Terminated, any_seed, number, one_line_errors, output_file, sigterm_raises,
-                            stimuli_count, whole)
+from bench.cli.args import Terminated, any_seed, number, output_file, sigterm_raises, stimuli_count, whole
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
 
@@ -392,7 +391,7 @@ def _cmd_record(a) -> int:
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     from bench.cli.scenes import scene_argument
 
-    br = one_line_errors(sub.add_parser(
+    br = sub.add_parser(
         "bridge", help="run the bridge firmware against emulated sensors on a serial port (pty)",
         description="Compiles and runs the reference bridge firmware (firmware_tests/firmware) against emulated "
                     "sensors in virtual time and exposes its UART as a pty that any program can open as a serial "
@@ -402,7 +401,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "The host's receive buffer holds --rx-buffer bytes: paced, a host that stops reading loses "
                     "what does not fit (an overrun, as on a real UART without flow control) and the firmware "
                     "streams on; with --fast the firmware waits for a reading host instead. Stops on Ctrl-C or "
-                    "SIGTERM.", formatter_class=fmt))
+                    "SIGTERM.", formatter_class=fmt)
     br.add_argument("--sensors", type=whole(1, 5), default=None,
                     help="emulated sensors, 1 to 5 (default: the scene's count with --scene, else 1)")
     br.add_argument("--scene", type=scene_argument,
@@ -424,7 +423,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                          "(default: the scene's host.spi, else software)")
     br.set_defaults(func=_cmd_bridge)
 
-    rc = one_line_errors(sub.add_parser(
+    rc = sub.add_parser(
         "record", help="record a bridge's serial stream to NPZ (and CSV)",
         description="Reads the bridge firmware's frames from a serial port (a device, a pty, or a pyserial URL "
                     "such as socket://host:port) and writes codes, status and sequence numbers to NPZ; reports "
@@ -445,7 +444,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "during the recording.\n\n"
                     "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
                     "the set of sensors changes during the recording, codes[frame, slot, sensor - 1] with status "
-                    "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt))
+                    "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt)
     rc.add_argument("port", help="the bridge's serial port: a device, a pty (`biotac-bench bridge` prints it) or "
                                  "a pyserial URL such as socket://host:port")
     rc.add_argument("--seconds", type=number(0, 86_400 * 7, lo_open=True), default=1.0,

@@ -59,9 +59,9 @@ def _version() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from bench.cli.args import HelpFormatter
+    from bench.cli.args import HelpFormatter, OneLineErrorParser
 
-    p = argparse.ArgumentParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=HelpFormatter)
+    p = OneLineErrorParser(prog="biotac-bench", description=MAIN_HELP, formatter_class=HelpFormatter)
     p.add_argument("--version", action="version", version=f"biotac-bench {_version()}")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for group in command_groups():
@@ -112,8 +112,8 @@ def _main(argv) -> int:
                 return 2
             args, extra = parser.parse_known_args(argv)
             if extra:
-                hint = BARE_VALUE_HINTS.get(args.command, f"see biotac-bench {args.command} --help")
-                print(f"biotac-bench {args.command}: error: unrecognized arguments: {' '.join(extra)}; {hint}",
+                hint = BARE_VALUE_HINTS.get(args.command, f"see {args.command_prog} --help")
+                print(f"{args.command_prog}: error: unrecognized arguments: {' '.join(extra)}; {hint}",
                       file=sys.stderr)
                 return 2
             return args.func(args)

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import number, one_line_errors
+from bench.cli.args import number
 from bench.paths import REPO
 
 _TRANSFER_KEYS = {"t_ps": int, "cs": int, "nbits": int, "mosi": str, "half_ps": int, "keep_cs": bool, "miso": str}
@@ -219,9 +219,9 @@ BioTac SP (its "variants") runs on an RTL built for that mix of variants, in a f
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    rt = one_line_errors(sub.add_parser(
+    rt = sub.add_parser(
         "rtl", help="the Verilog twin: lint, replay vector files (waveforms on request), stream",
-        description=RTL_HELP, formatter_class=fmt))
+        description=RTL_HELP, formatter_class=fmt)
     rt.add_argument("action", choices=["lint", "vectors", "stream"], help="what to do (described above)")
     rt.add_argument("files", nargs="*", help="vector files (for 'vectors' only; the others refuse files)")
     rt.add_argument("--waves", action="store_true",

@@ -323,10 +323,10 @@ def _path(what: str):
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    from bench.cli.args import any_seed, one_line_errors
+    from bench.cli.args import any_seed
 
-    r = one_line_errors(sub.add_parser("run", help="run a scene and write samples, codes, record, report and plots",
-                                       description=RUN_HELP, formatter_class=fmt))
+    r = sub.add_parser("run", help="run a scene and write samples, codes, record, report and plots",
+                       description=RUN_HELP, formatter_class=fmt)
     r.add_argument("scene", type=scene_argument,
                    help="scene file (TOML) or a shipped scene's name, e.g. sphere_drops or my_scene.toml")
     r.add_argument("--out", help="output folder (default: a fresh out/<scene name>[-n])")  # checked by OutFolder
@@ -348,8 +348,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
     r.set_defaults(func=_cmd_run)
 
-    v = one_line_errors(sub.add_parser("validate", help="check scene files without running them",
-                                       description=VALIDATE_HELP, formatter_class=fmt))
+    v = sub.add_parser("validate", help="check scene files without running them",
+                       description=VALIDATE_HELP, formatter_class=fmt)
     v.add_argument("scenes", nargs="+", type=_path("a scene file"),
                    help="scene file (TOML) or a shipped scene's name; several are checked one after another")
     v.set_defaults(func=_cmd_validate)
@@ -358,5 +358,4 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
             ("scenes", "list the shipped scenes: name, file, what each does", SCENES_HELP, _cmd_scenes),
             ("profiles", "list the fidelity profiles", PROFILES_HELP, _cmd_profiles),
             ("params", "list every sensor parameter with unit, range and source", PARAMS_HELP, _cmd_params)):
-        one_line_errors(sub.add_parser(name, help=help_line, description=description, formatter_class=fmt)
-                        ).set_defaults(func=func)
+        sub.add_parser(name, help=help_line, description=description, formatter_class=fmt).set_defaults(func=func)

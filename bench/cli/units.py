@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from bench.cli.args import one_line_errors, strict_json, unit_serial, whole
+from bench.cli.args import strict_json, unit_serial, whole
 
 UNITS_HELP = """\
 A sensor unit is one real device: its parameters drawn deterministically from documented manufacturing spreads
@@ -70,8 +70,8 @@ _DERIVED_UNITS = {"resting_pressure_Pa": "Pa", "resting_PDC_V": "V", "resting_PD
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     from emulator.units import MAX_UNIT_SEED
 
-    u = one_line_errors(sub.add_parser("units", help="a sensor unit's parameters (manufacturing spreads)",
-                                       description=UNITS_HELP, formatter_class=fmt))
+    u = sub.add_parser("units", help="a sensor unit's parameters (manufacturing spreads)",
+                       description=UNITS_HELP, formatter_class=fmt)
     which = u.add_mutually_exclusive_group()
     which.add_argument("--seed", type=whole(0, MAX_UNIT_SEED), help=f"unit seed (0 to {MAX_UNIT_SEED}); default: "
                                                                     "the nominal unit")

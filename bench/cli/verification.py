@@ -160,10 +160,8 @@ sliding, rig, Dask and exploration benchmarks; --effects only the per-effect tab
 
 
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
-    from bench.cli.args import one_line_errors
-
-    nb = one_line_errors(sub.add_parser("noise-budget", help="the PAC noise budget, source by source",
-                                        description=NOISE_BUDGET_HELP, formatter_class=fmt))
+    nb = sub.add_parser("noise-budget", help="the PAC noise budget, source by source",
+                        description=NOISE_BUDGET_HELP, formatter_class=fmt)
     nb.add_argument("--json", action="store_true",
                     help="print the budget's rows as JSON (source, channel, rti_uV, pac_bits, note; a non-finite "
                          "number is null)")
