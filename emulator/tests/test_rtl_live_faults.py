@@ -418,49 +418,16 @@ def test_the_streaming_harness_refuses_a_reset_or_sensors_present_outside_its_fi
     assert r.stdout == b""
 
 
-@pytest.mark.parametrize("pull_up", [False, True])
-def test_a_sensor_unplugged_with_chip_select_held_on_it_leaves_the_idle_line_on_both_buses(harness, pull_up):
-    """Unplugging sensor 1 (its port removed from ``bus.ports``) in the middle of a property stream held open on it:
-    the next transfers with its select code read the idle line (0x0000 with the pull-down, 0xFFFF with the pull-up;
-    no KeyError), sensor 3 answers as ever, and plugged back in sensor 1 starts from power-on ("E_").  The RTL bus
-    (pull-down only) gives the same words."""
-    from emulator.channels import channel_index
+
+def test_a_sensor_unplugged_with_chip_select_held_on_it_gives_the_same_words_over_the_rtl(harness):
+    """The software bus's unplug in the middle of a property stream held open
+    (:func:`emulator.tests.test_spi_model.unplugged_mid_stream`: the idle line, then power-on "E_" once plugged
+    back in) gives the same words over the RTL bus."""
     from emulator.rtl.harness import RtlBus, RtlSensorPort
-    from emulator.spi.model import Transfer
+    from emulator.tests.test_spi_model import unplugged_mid_stream
 
-    s1, s3 = SELECT_CODE[1], SELECT_CODE[3]
-    serial = (0x61 << 8) | 0x15  # stream the serial-number property
-    pac = int(proto.sample_command(channel_index("PAC"))) << 8
-
-    def play(bus, port_of) -> list[int]:
-        t, out = 0.01, []
-
-        def clock(cs, mosi, keep=False):
-            nonlocal t
-            out.append(bus.transfer(Transfer(t, cs, mosi, 16, CLOCK_HZ, keep_cs=keep)))
-            t += 100e-6
-
-        try:
-            clock(s1, serial)
-            clock(s1, 0, keep=True)  # the first two bytes of the serial ("BT"), chip select held for the rest
-            bus.ports.pop(1)  # unplugged with chip select held on it
-            clock(s1, 0, keep=True)
-            clock(s1, 0)
-            clock(s3, pac)
-            clock(s3, 0)
-            bus.ports[1] = port_of(bus)
-            clock(s1, 0)
-        finally:
-            bus.close()
-        return out
-
-    soft_sensors = _sensors()
-    soft = play(Bus({n: SensorPort(s, n) for n, s in soft_sensors.items()}, pull_up=pull_up),
-                lambda bus: SensorPort(soft_sensors[1], 1))
-    idle = 0xFFFF if pull_up else 0
-    assert soft[1] == int.from_bytes(b"BT", "big") and soft[2] == soft[3] == idle
-    assert proto.decode_response(soft[5])[1] and soft[6] == ERR["nothing_to_resend"]
-    if not pull_up:  # the RTL bus idles low
-        rtl_sensors = _sensors()
-        rtl = play(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus))
-        assert rtl == soft, [(k, hex(a), hex(b)) for k, (a, b) in enumerate(zip(rtl, soft)) if a != b]
+    soft_sensors, rtl_sensors = _sensors(), _sensors()
+    soft = unplugged_mid_stream(Bus({n: SensorPort(s, n) for n, s in soft_sensors.items()}),
+                                lambda bus: SensorPort(soft_sensors[1], 1))
+    rtl = unplugged_mid_stream(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus))
+    assert rtl == soft, [(k, hex(a), hex(b)) for k, (a, b) in enumerate(zip(rtl, soft)) if a != b]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from emulator.channels import DEFAULT_FRAME_NAMES
+from emulator.channels import DEFAULT_FRAME_NAMES, channel_index
 from emulator.sensor import NoiseSources, Sensor
 from emulator.spi import protocol as proto
 from emulator.spi.model import (SELECT_ALL, SELECT_CODE, SELECT_NONE, Bus, Faults, SensorPort, Transfer,
@@ -588,3 +588,37 @@ def test_a_software_port_takes_faults_only_as_the_rtl_port_does():
         with pytest.raises(ValueError, match=r"sensor 2: faults = .*must be an emulator\.spi\.model\.Faults"):
             p.faults = bad
     assert p.faults == Faults(bad_parity=True)  # unchanged by the refused values
+
+
+def unplugged_mid_stream(b, port_of, clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ) -> list[int]:
+    """The words of: sensor 1's serial number asked for and its first two bytes read with chip select held, sensor 1
+    unplugged (its port removed from ``b.ports``) inside that window, two more reads of it (the last releasing chip
+    select), sensor 3 sampling PAC and read, sensor 1 plugged back in (``port_of(b)``) and read.  Closes ``b``."""
+    s1, s3, t, out = SELECT_CODE[1], SELECT_CODE[3], 0.01, []
+    steps = [(s1, 0x6115, False), (s1, 0, True), None, (s1, 0, True), (s1, 0, False),
+             (s3, int(proto.sample_command(channel_index("PAC"))) << 8, False), (s3, 0, False),
+             "plug", (s1, 0, False)]
+    try:
+        for step in steps:
+            if step is None:
+                b.ports.pop(1)
+            elif step == "plug":
+                b.ports[1] = port_of(b)
+            else:
+                out.append(b.transfer(Transfer(t, step[0], step[1], 16, clock_hz, keep_cs=step[2])))
+                t += 100e-6
+    finally:
+        b.close()
+    return out
+
+
+@pytest.mark.parametrize("pull_up,idle", [(False, 0x0000), (True, 0xFFFF)])
+def test_a_sensor_unplugged_with_chip_select_held_on_it_leaves_the_idle_line(pull_up, idle):
+    """Unplugging a sensor inside a chip-select window held open on it (a property stream): its select code then
+    reads the pull level (no error), the other sensor answers as ever, and plugged back in it starts from power-on
+    ("E_": nothing prepared)."""
+    sensors = {n: Sensor(channels_read=ALL, seed=n, noise=NoiseSources.none()) for n in (1, 3)}
+    words = unplugged_mid_stream(Bus({n: SensorPort(s, n) for n, s in sensors.items()}, pull_up=pull_up),
+                                 lambda b: SensorPort(sensors[1], 1))
+    assert words[1] == int.from_bytes(b"BT", "big") and words[2] == words[3] == idle
+    assert proto.decode_response(words[5])[1] and words[6] == E["nothing_to_resend"]
