@@ -435,7 +435,16 @@ class RtlBus:
     def _hot_plugged(self) -> int:
         """The sensors plugged in now (``ports``' keys) as the RTL's mask, after a sensor was unplugged (its port
         removed) or plugged in (a port added or replaced: reset with the mask, power-on state, its ADC-busy window
-        and any window held open forgotten); the ports checked by :meth:`_check_ports`."""
+        and any window held open forgotten); the ports checked by :meth:`_check_ports`.  Refused (ValueError) for a
+        sensor unplugged and plugged back in between two calls inside a chip-select window held open on it: its RTL
+        would stay selected through the reset, which does not restart the window's bit counter (see
+        :meth:`_reset_requested`), where the software bus's new port sees chip select fall."""
+        for n, port in self.ports.items():
+            old = self._ports_in_rtl.get(n)
+            if old is not None and old is not port and self._open_window.get(n) is not None:
+                raise ValueError(f"sensor {n}: unplugged and plugged back in inside a chip-select window held open "
+                                 f"on it: over the RTL a sensor is plugged in between windows only (release chip "
+                                 f"select first, make a call while it is unplugged, or use the software bus)")
         for n in set(self._ports_in_rtl) | set(self.ports):
             if self._ports_in_rtl.get(n) is not self.ports.get(n):
                 self._open_window.pop(n, None)

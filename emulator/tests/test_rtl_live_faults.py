@@ -431,3 +431,27 @@ def test_a_sensor_unplugged_with_chip_select_held_on_it_gives_the_same_words_ove
                                 lambda bus: SensorPort(soft_sensors[1], 1))
     rtl = unplugged_mid_stream(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus))
     assert rtl == soft, [(k, hex(a), hex(b)) for k, (a, b) in enumerate(zip(rtl, soft)) if a != b]
+
+
+def test_a_sensor_plugged_back_in_inside_a_window_held_open_over_the_rtl_is_refused_by_name(harness):
+    """Unplugged and plugged back in between two calls inside a chip-select window held open on it, the RTL sensor
+    would see no chip-select fall (the software bus's new port does): refused naming the sensor, before anything
+    reaches the harness; with a call in between (the sensor away while the window is held) it is taken."""
+    from emulator.rtl.harness import RtlBus, RtlSensorPort
+    from emulator.spi.model import Transfer
+
+    sensors = _sensors()
+    bus = RtlBus(sensors, harness=harness)
+    try:
+        bus.transfer(Transfer(0.01, SELECT_CODE[1], 0x6115, 16, CLOCK_HZ))
+        bus.transfer(Transfer(0.0101, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True))
+        bus.ports[1] = RtlSensorPort(sensors[1], 1, bus)
+        with pytest.raises(ValueError, match=r"sensor 1: unplugged and plugged back in inside a chip-select window"):
+            bus.transfer(Transfer(0.0102, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True))
+        port = bus.ports.pop(1)
+        assert bus.transfer(Transfer(0.0103, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True)) == 0  # away: idle line
+        bus.ports[1] = port
+        # plugged in while chip select is held on its code: it sees chip select fall, power-on: nothing prepared
+        assert bus.transfer(Transfer(0.0104, SELECT_CODE[1], 0, 16, CLOCK_HZ)) == ERR["nothing_to_resend"]
+    finally:
+        bus.close()
