@@ -4,10 +4,14 @@ limit (checked without recursion).  Every problem becomes the caller's error cla
 
 from __future__ import annotations
 
+import datetime
+import math
 import os
 import stat
 import tomllib
 from pathlib import Path
+
+from bench.errors import shortened
 
 
 def _position(data: bytes, offset: int) -> str:
@@ -99,3 +103,53 @@ def parse(text: str, source: str, error, max_nesting: int, needed: str) -> dict:
 
 def _cut(text: str, limit: int = 300) -> str:
     return text if len(text) <= limit else text[:limit] + f"… ({len(text)} characters)"
+
+
+_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r"}
+_BARE_KEY = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-")
+
+
+def _basic_string(text: str) -> str:
+    """``text`` as a TOML basic string: quotes, backslashes and control or other unprintable characters escaped
+    (so a message shows them rather than acting on the terminal)."""
+    out = []
+    for ch in text:
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ch.isprintable() and not 0xD800 <= ord(ch) <= 0xDFFF:
+            out.append(ch)
+        else:
+            out.append(f"\\u{ord(ch):04X}" if ord(ch) <= 0xFFFF else f"\\U{ord(ch):08X}")
+    return '"' + "".join(out) + '"'
+
+
+def _spell(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf")
+    if isinstance(v, str):
+        return _basic_string(v)
+    if isinstance(v, (datetime.datetime, datetime.date, datetime.time)):
+        return v.isoformat()
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(map(_spell, v)) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{k if isinstance(k, str) and k and set(k) <= _BARE_KEY else _spell(str(k))} = "
+                               f"{_spell(x)}" for k, x in v.items()) + "}"
+    return repr(v)  # not from a TOML file (None, an object a Python caller passed): Python's spelling
+
+
+def spelled(v, limit: int = 80) -> str:
+    """``v`` for a message as a TOML file spells it (``"x"``, ``true``, ``[1, "a"]``, ``{a = 1}``, ``inf``, a date
+    as written), so a message about a TOML file speaks TOML back; a value TOML cannot hold (None, an object)
+    keeps its ``repr``.  Shortened past ``limit`` characters (:func:`bench.errors.shortened`)."""
+    try:
+        text = _spell(v)
+    except (RecursionError, ValueError):
+        text = f"<{type(v).__name__}>"
+    return shortened(text, limit)

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from bench import tomlfile
+from bench.tomlfile import spelled
 from bench.errors import BenchError
 from bench.experiments import design
 from bench.experiments import exploration as ex
@@ -186,7 +187,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             ok = False
         if not ok:
             rng = f" ({lo} to {hi})" if lo is not None else ""
-            problems.append(f"{table}.{key} = {v!r}: must be {kind.__name__ if isinstance(kind, type) else kind}{rng}")
+            problems.append(f"{table}.{key} = {spelled(v)}: must be "
+                            f"{kind.__name__ if isinstance(kind, type) else kind}{rng}")
             return default
         return v
 
@@ -197,7 +199,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         if v == "all":
             return None
         if not isinstance(v, list) or not v or not all(isinstance(n, int) and not isinstance(n, bool) for n in v):
-            problems.append(f"{table}.{key} = {v!r}: a list of texture numbers, or \"all\"")
+            problems.append(f"{table}.{key} = {spelled(v)}: a list of texture numbers, or \"all\"")
             return default
         missing = [n for n in v if n not in lib]
         if missing:
@@ -213,19 +215,19 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.seed = get("experiment", "seed", int, 0, 2**63 - 1, spec.seed)
     fid = get("experiment", "fidelity", str, default=spec.fidelity)
     if fid not in PROFILES:
-        problems.append(f"experiment.fidelity = {fid!r}: one of {', '.join(PROFILES)}")
+        problems.append(f"experiment.fidelity = {spelled(fid)}: one of {', '.join(PROFILES)}")
     spec.fidelity = fid
     every = [n for n in lib if n <= 117]  # "all": the 117 textures of D's library
     spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or every
     if len(spec.pilot_textures) < 2:
-        problems.append(f"pilot.textures = {spec.pilot_textures!r}: at least 2 textures (the pilot measures how "
+        problems.append(f"pilot.textures = {spelled(spec.pilot_textures)}: at least 2 textures (the pilot measures how "
                         f"well each movement tells textures apart)")
     spec.pilot_trials = get("pilot", "trials", int, 2, 100, spec.pilot_trials)
     mv = t["pilot"].get("movements")
     if mv is not None and mv != "all":
         if not isinstance(mv, list) or len(mv) < 3 or not all(isinstance(m, int) and not isinstance(m, bool)
                                                               and 0 <= m < 36 for m in mv):
-            problems.append(f"pilot.movements = {mv!r}: \"all\" or a list of at least 3 grid ids 0..35")
+            problems.append(f"pilot.movements = {spelled(mv)}: \"all\" or a list of at least 3 grid ids 0..35")
         elif listed_twice(mv):
             problems.append(f"pilot.movements: grid id(s) {listed_twice(mv)} listed twice")
         else:
@@ -234,9 +236,9 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     if spec.exclude_high_power and spec.pilot_movements is not None:
         kept = [m for m in spec.pilot_movements if m not in excluded_movements(spec, spec.pilot_movements)]
         if not kept:
-            problems.append(f"pilot.movements = {spec.pilot_movements!r}: every one is a high-power movement, which "
-                            f"pilot.exclude_high_power = true leaves out of the choice (their wear); list others too, "
-                            f"or set exclude_high_power = false")
+            problems.append(f"pilot.movements = {spelled(spec.pilot_movements)}: every one is a high-power movement, "
+                            f"which pilot.exclude_high_power = true leaves out of the choice (their wear); list others "
+                            f"too, or set exclude_high_power = false")
     spec.training_textures = textures("training", "textures", None)
     spec.training_trials = get("training", "trials", int, 2, 100, spec.training_trials)
     spec.wear = get("training", "wear", bool, default=spec.wear)
@@ -244,8 +246,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.replace_at = get("training", "replace_at", float, 0.01, 1.0, spec.replace_at)
     if "replace_at" in t["training"] and (spec.wear is False or spec.replace_skin is False):
         off = "training.wear = false" if spec.wear is False else "training.replace_skin = false"
-        problems.append(f"training.replace_at = {t['training']['replace_at']!r} with {off}: no skin is replaced then, "
-                        f"so replace_at would be ignored; give one or the other")
+        problems.append(f"training.replace_at = {spelled(t['training']['replace_at'])} with {off}: no skin is replaced "
+                        f"then, so replace_at would be ignored; give one or the other")
     pairs = t["validation"].get("pairs")
     chosen_by = [k for k in ("n_pairs", "pair_choice") if k in t["validation"]]
     if pairs is not None and chosen_by:
@@ -254,7 +256,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     if pairs is not None:
         if not isinstance(pairs, list) or not pairs or not all(isinstance(p, list) and len(p) == 2 and all(
                 isinstance(n, int) and not isinstance(n, bool) for n in p) for p in pairs):
-            problems.append(f"validation.pairs = {pairs!r}: a list of at least one [a, b] texture-number pair "
+            problems.append(f"validation.pairs = {spelled(pairs)}: a list of at least one [a, b] texture-number pair "
                             f"(leave pairs out to have n_pairs chosen by pair_choice)")
         else:
             spec.pairs = [tuple(p) for p in pairs]
@@ -276,7 +278,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.n_pairs = get("validation", "n_pairs", int, 1, 58, spec.n_pairs)
     choice = t["validation"].get("pair_choice", spec.pair_choice)
     if choice not in PAIR_CHOICES:
-        problems.append(f"validation.pair_choice = {choice!r}: one of " + ", ".join(f'"{c}"' for c in PAIR_CHOICES))
+        problems.append(f"validation.pair_choice = {spelled(choice)}: one of "
+                        + ", ".join(f'"{c}"' for c in PAIR_CHOICES))
     else:
         spec.pair_choice = choice
     trained = [n for n in (spec.training_textures or every) if n in lib]
@@ -288,14 +291,14 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             available = sum(groups.count(g) // 2 for g in set(groups))
         if available < spec.n_pairs:
             problems.append(f"validation.n_pairs = {spec.n_pairs}: the training textures hold only {available} "
-                            f"disjoint pairs for pair_choice = {spec.pair_choice!r}")
+                            f"disjoint pairs for pair_choice = {spelled(spec.pair_choice)}")
     spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
     strategies = t["exploration"].get("strategies", list(spec.strategies))
     if not isinstance(strategies, list) or not strategies or any(not isinstance(s, str) or s not in ex.STRATEGIES
                                                                   for s in strategies):
-        problems.append(f"exploration.strategies = {strategies!r}: a list of {', '.join(ex.STRATEGIES)}")
+        problems.append(f"exploration.strategies = {spelled(strategies)}: a list of {', '.join(ex.STRATEGIES)}")
     elif "bayesian" not in strategies or listed_twice(strategies):
-        problems.append(f"exploration.strategies = {strategies!r}: \"bayesian\" and, to compare with it, any of "
+        problems.append(f"exploration.strategies = {spelled(strategies)}: \"bayesian\" and, to compare with it, any of "
                         f"{', '.join(s for s in ex.STRATEGIES if s != 'bayesian')}, each once (the experiment, its "
                         f"report and the ablations measure Bayesian exploration)")
     else:
@@ -314,7 +317,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
     spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
     if noise_scale_problem(spec.noise_scale):
-        problems.append(f"sensor.noise_scale = {spec.noise_scale!r}: {noise_scale_problem(spec.noise_scale)}")
+        problems.append(f"sensor.noise_scale = {spelled(spec.noise_scale)}: {noise_scale_problem(spec.noise_scale)}")
     spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)
     if "name" not in t["experiment"]:
         problems.append("[experiment] table with a name is missing (e.g. name = \"my-variant\")")
@@ -451,7 +454,7 @@ def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: 
         pairs = similar_description_pairs(model.textures, n_pairs, lib)
         if len(pairs) < n_pairs:
             raise ExperimentError(source, [f"validation.n_pairs = {n_pairs}: the training textures hold only "
-                                           f"{len(pairs)} disjoint similar pairs (pair_choice = {choice!r})"])
+                                           f"{len(pairs)} disjoint similar pairs (pair_choice = {spelled(choice)})"])
         return pairs
     conf = model.confusion()  # (K, K, M, P)
     mi = model.movement_index(best)
@@ -472,7 +475,7 @@ def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: 
         if len(pairs) == n_pairs:
             return pairs
     raise ExperimentError(source, [f"validation.n_pairs = {n_pairs}: the training textures hold only {len(pairs)} "
-                                   f"disjoint pairs within one library group (pair_choice = {choice!r})"])
+                                   f"disjoint pairs within one library group (pair_choice = {spelled(choice)})"])
 
 
 def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache", cluster=None,

@@ -50,15 +50,8 @@ IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S = 3, 0.1
 
 
 def _r(v, limit: int = 80) -> str:
-    """``repr(v)`` for messages, shortened when long (a hostile file can hold a 1 MB string); a TOML date or time
-    as the file spells it (not ``datetime.datetime(...)``)."""
-    import datetime
-
-    try:
-        text = v.isoformat() if isinstance(v, (datetime.datetime, datetime.date, datetime.time)) else repr(v)
-    except (RecursionError, ValueError):
-        text = f"<{type(v).__name__}>"
-    return shortened(text, limit)
+    """``v`` for messages as the scene file spells it, shortened when long (:func:`bench.tomlfile.spelled`)."""
+    return tomlfile.spelled(v, limit)
 
 
 def _cut(text: str, limit: int = 300) -> str:
@@ -431,7 +424,7 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         )
         names = ELECTRODE_NAMES + (SP_ELECTRODE_NAMES if variant == "biotac-sp" else ())
         if st.get("electrode") in SP_ELECTRODE_NAMES and variant != "biotac-sp":
-            c.problems.append(f"{w}.electrode = {_r(st['electrode'])}: sensor {k} is a {variant!r}, which has "
+            c.problems.append(f"{w}.electrode = {_r(st['electrode'])}: sensor {k} is a {_r(variant)}, which has "
                               f"E1..E19; E20..E24 are on a \"biotac-sp\" ([sensor] or [[sensors]] variant)")
         electrode = c.choice(st, "electrode", w, names) if st.get("electrode") not in SP_ELECTRODE_NAMES \
             or variant == "biotac-sp" else None
@@ -509,7 +502,7 @@ def _slides(c: _Checker, st: dict, w: str, duration, textures=_SHIPPED) -> list[
         return []
     v, d, a = vals["velocity_mm_per_s"] / 1e3, vals["distance_mm"] / 1e3, vals["accel_s"]
     if d < v * a:
-        c.problems.append(f"{w}.distance_mm = {vals['distance_mm']!r}: shorter than the stage's acceleration and "
+        c.problems.append(f"{w}.distance_mm = {_r(vals['distance_mm'])}: shorter than the stage's acceleration and "
                           f"braking at this velocity ({v * a * 1e3:.3g} mm); lower accel_s or slide farther")
         return []
     # its span is checked whatever its texture and force (a bad one is a problem of its own)
@@ -726,7 +719,7 @@ def _sensor_faults(c: _Checker, table: dict, where: str, duration, variant: str)
                           f"sensor's table) of faults by name: {', '.join(FAULT_KEYS)}")
         return {}
     n = _variant_electrodes(variant)
-    return _faults(c, own, duration, n, f"{where}.faults", f" (this sensor is a {variant!r})")
+    return _faults(c, own, duration, n, f"{where}.faults", f" (this sensor is a {_r(variant)})")
 
 
 def _with_common_faults(c: _Checker, common: dict, own: dict, where: str) -> dict:

@@ -55,6 +55,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from bench import tomlfile
+from bench.tomlfile import spelled
 from bench.errors import TextureError, shortened
 from bench.paths import FIXTURES
 from emulator.texture import PeriodicComponent, Texture
@@ -172,10 +173,10 @@ class _Checker:
             return spec.to_si(spec.default)
         v = table[key]
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            self.add(who, f"{name} = {v!r}: must be a number, {spec.lo:g} to {spec.hi:g}{unit}")
+            self.add(who, f"{name} = {spelled(v)}: must be a number, {spec.lo:g} to {spec.hi:g}{unit}")
             return None
         if not math.isfinite(v) or not spec.lo <= v <= spec.hi:
-            self.add(who, f"{name} = {v!r}: allowed range is {spec.lo:g} to {spec.hi:g}{unit}")
+            self.add(who, f"{name} = {spelled(v)}: allowed range is {spec.lo:g} to {spec.hi:g}{unit}")
             return None
         return spec.to_si(v)
 
@@ -186,10 +187,10 @@ class _Checker:
             return None
         v = table[key]
         if not isinstance(v, str) or (required and not v.strip()):
-            self.add(who, f"{key} = {v!r}: must be {'non-empty ' if required else ''}text")
+            self.add(who, f"{key} = {spelled(v)}: must be {'non-empty ' if required else ''}text")
             return None
         if tomlfile.unprintable(v):
-            self.add(who, f"{key} = {v!r:.80}: must be printable text (no control characters, NUL or lone "
+            self.add(who, f"{key} = {spelled(v)}: must be printable text (no control characters, NUL or lone "
                           f"surrogates: it is written into reports and tables)")
             return None
         return v
@@ -197,7 +198,7 @@ class _Checker:
 
 def _periodic(c: _Checker, who: str, items) -> tuple[PeriodicComponent, ...] | None:
     if not isinstance(items, list) or not all(isinstance(p, dict) for p in items):
-        c.add(who, f"periodic = {items!r}: must be an array of tables ([[texture.periodic]])")
+        c.add(who, f"periodic = {spelled(items)}: must be an array of tables ([[texture.periodic]])")
         return None
     out, ok = [], True
     for j, p in enumerate(items):
@@ -210,13 +211,13 @@ def _periodic(c: _Checker, who: str, items) -> tuple[PeriodicComponent, ...] | N
         vals = {spec.attr: c.number(who, p, k, spec, where) for k, spec in PERIODIC_FIELDS.items()}
         harmonics = p.get("harmonics", [])
         if not isinstance(harmonics, list) or len(harmonics) > MAX_HARMONICS:
-            c.add(who, f"{where}harmonics = {harmonics!r}: must be a list of at most {MAX_HARMONICS} relative "
+            c.add(who, f"{where}harmonics = {spelled(harmonics)}: must be a list of at most {MAX_HARMONICS} relative "
                        "amplitudes (2nd, 3rd, ...), each -1 to 1")
             harmonics = None
         else:
             for k, h in enumerate(harmonics):
                 if isinstance(h, bool) or not isinstance(h, (int, float)) or not math.isfinite(h) or abs(h) > 1:
-                    c.add(who, f"{where}harmonics[{k}] = {h!r}: allowed range is -1 to 1 (relative to the "
+                    c.add(who, f"{where}harmonics[{k}] = {spelled(h)}: allowed range is -1 to 1 (relative to the "
                                "fundamental)")
                     harmonics = None
                     break
@@ -242,7 +243,7 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
         c.add("library", "no [[texture]] tables")
         items = []
     elif not isinstance(items, list):
-        c.add("library", f"texture = {items!r}: must be an array of tables ([[texture]])")
+        c.add("library", f"texture = {spelled(items)}: must be an array of tables ([[texture]])")
         items = []
 
     seen = _Seen()
@@ -257,7 +258,8 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
             c.add("library", f"textures {_ranges(missing)} are missing: the library holds T1..T{LIBRARY_SIZE}")
         for n, expected in NAMED.items():
             if n in out and out[n].name != expected:
-                c.add(_label(n, out[n].name), f"name = {out[n].name!r}: D ch. 6 names texture {n} {expected!r}")
+                c.add(_label(n, out[n].name),
+                      f"name = {spelled(out[n].name)}: D ch. 6 names texture {n} {spelled(expected)}")
     if c.problems:
         raise TextureError(source, c.problems)
     return dict(sorted(out.items()))
@@ -275,7 +277,7 @@ class _Seen:
 def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     """One ``[[texture]]`` table, or None after recording its problems."""
     if not isinstance(t, dict):
-        c.add(f"texture[{i}]", f"{t!r}: must be a table ([[texture]])")
+        c.add(f"texture[{i}]", f"{spelled(t)}: must be a table ([[texture]])")
         return None
     number, name = t.get("number"), t.get("name")
     if isinstance(number, int) and not isinstance(number, bool):
@@ -292,7 +294,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
         c.add(who, f"number is missing (1 to {LIBRARY_SIZE}, or {TEST_GROUP[1]} to {TEST_GROUP[2]} for test surfaces)")
         number = None
     elif isinstance(number, bool) or not isinstance(number, int) or group_of(number) is None:
-        c.add(who, f"number = {number!r}: allowed 1 to {LIBRARY_SIZE} (the library) or {TEST_GROUP[1]} to "
+        c.add(who, f"number = {spelled(number)}: allowed 1 to {LIBRARY_SIZE} (the library) or {TEST_GROUP[1]} to "
                    f"{TEST_GROUP[2]} (test surfaces), a whole number")
         number = None
     elif number in seen.numbers:
@@ -302,27 +304,27 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     name = c.text(who, t, "name")
     if name is not None:
         if len(name) > MAX_NAME or name != name.strip():
-            c.add(who, f"name = {name!r}: at most {MAX_NAME} characters, no leading or trailing spaces")
+            c.add(who, f"name = {spelled(name)}: at most {MAX_NAME} characters, no leading or trailing spaces")
         elif re.fullmatch(r"[Tt]?\d+", name):
-            c.add(who, f"name = {name!r}: looks like a texture number (\"T5\" and \"5\" look textures up by number), "
-                       f"so it would hide another texture; give it a name")
+            c.add(who, f"name = {spelled(name)}: looks like a texture number (\"T5\" and \"5\" look textures up by "
+                       f"number), so it would hide another texture; give it a name")
         elif name.casefold() in seen.names:
-            c.add(who, f"name = {name!r}: already used by {seen.names[name.casefold()]}; names are unique")
+            c.add(who, f"name = {spelled(name)}: already used by {seen.names[name.casefold()]}; names are unique")
         else:
             seen.names[name.casefold()] = who
     group = c.text(who, t, "group")
     if group is not None and number is not None and group != group_of(number):
         expected = group_of(number)
         lo, hi = next((lo, hi) for g, lo, hi in GROUPS + (TEST_GROUP,) if g == expected)
-        c.add(who, f"group = {group!r}: texture {number} is in group {expected!r} (numbers {lo}-{hi}); "
+        c.add(who, f"group = {spelled(group)}: texture {number} is in group {spelled(expected)} (numbers {lo}-{hi}); "
                    f"groups: {', '.join(GROUP_NAMES)}")
     elif group is not None and group not in GROUP_NAMES:
-        c.add(who, f"group = {group!r}: must be one of: {', '.join(GROUP_NAMES)}")
+        c.add(who, f"group = {spelled(group)}: must be one of: {', '.join(GROUP_NAMES)}")
     seed = t.get("seed")
     if "seed" not in t:
         c.add(who, "seed is missing (a whole number, 0 to 2**63-1, unique)")
     elif isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
-        c.add(who, f"seed = {seed!r}: must be a whole number, 0 to 2**63-1")
+        c.add(who, f"seed = {spelled(seed)}: must be a whole number, 0 to 2**63-1")
     elif seed in seen.seeds:
         c.add(who, f"seed = {seed}: already the seed of {seen.seeds[seed]}; each texture is its own surface")
     else:
@@ -331,13 +333,13 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     # physics: numbers in SI, friction consistent, a known thermal material, periodic components
     vals = {spec.attr: c.number(who, t, k, spec) for k, spec in NUMBER_FIELDS.items()}
     if None not in vals.values() and vals["mu_kinetic"] > vals["mu_static"]:
-        c.add(who, f"mu_kinetic = {t['mu_kinetic']!r}: must not exceed mu_static = {t['mu_static']!r} "
+        c.add(who, f"mu_kinetic = {spelled(t['mu_kinetic'])}: must not exceed mu_static = {spelled(t['mu_static'])} "
                    "(kinetic friction ≤ static)")
     material = c.text(who, t, "material")
     if material is not None and material not in MATERIALS:
         near = difflib.get_close_matches(material, list(MATERIALS), n=3, cutoff=0.5)
-        hint = f" (did you mean {', '.join(map(repr, near))}?)" if near else ""
-        c.add(who, f"material = {material!r}: unknown{hint}; known materials (emulator.thermal.MATERIALS): "
+        hint = f" (did you mean {', '.join(map(spelled, near))}?)" if near else ""
+        c.add(who, f"material = {spelled(material)}: unknown{hint}; known materials (emulator.thermal.MATERIALS): "
                    f"{', '.join(MATERIALS)}")
     source = c.text(who, t, "source")
     description = c.text(who, t, "description", required=False)
@@ -473,8 +475,8 @@ LIBRARY_VALUE = "the path of a texture library file (TOML, or .json as `biotac-b
 
 
 def _shown(value) -> str:
-    """``repr(value)`` for messages, shortened when long."""
-    return shortened(repr(value), 120)
+    """``value`` for messages as the file spells it, shortened when long."""
+    return spelled(value, 120)
 
 
 def library_path(value, where: str, naming_file: str | Path | None = None) -> str:
