@@ -151,8 +151,8 @@ def group_of(number: int) -> str | None:
 
 
 def _label(number: int, name) -> str:
-    """How problems name a texture: ``T10 'velcro hooks'``."""
-    return f"T{number} {name!r}" if isinstance(name, str) and name else f"T{number}"
+    """How problems name a texture: ``T10 "velcro hooks"`` (the name as the file spells it)."""
+    return f"T{number} {spelled(name)}" if isinstance(name, str) and name else f"T{number}"
 
 
 class _Checker:
@@ -283,7 +283,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     if isinstance(number, int) and not isinstance(number, bool):
         who = _label(number, name)
     else:  # no usable number: say where the table is
-        who = f"texture[{i}]" + (f" {name!r}" if isinstance(name, str) and name else "")
+        who = f"texture[{i}]" + (f" {spelled(name)}" if isinstance(name, str) and name else "")
     n_before = len(c.problems)
     for k in t:
         if k not in KNOWN_FIELDS:
@@ -492,7 +492,7 @@ def library_path(value, where: str, naming_file: str | Path | None = None) -> st
 
 def named_problems(where: str, value, path: str, error: TextureError) -> list[str]:
     """The problems of the library file ``path`` (named by ``value`` at ``where``), each saying where it was named
-    and which file it is: ``scene.library = 'mine.toml' (/abs/mine.toml): T5 'kraft paper': hurst = 7: allowed
+    and which file it is: ``scene.library = "mine.toml" (/abs/mine.toml): T5 "kraft paper": hurst = 7: allowed
     range is 0.1 to 1``."""
     return [f"{where} = {_shown(value)} ({shortened(path)}): {p}" for p in error.problems]
 
