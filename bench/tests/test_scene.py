@@ -38,15 +38,15 @@ def test_every_problem_is_reported_at_once():
                      "host": {"sequence": ["PAC", "QQQ"], "spi_clock_Hz": 20e6},
                      "sensor": {"stage1_gain": 0.0, "no_such": 1}})
     text = "\n".join(msgs)
-    for needle in ("scene.name", "scene.fidelity = 'ultra'", "host.sequence[1] = 'QQQ'", "host.spi_clock_Hz",
-                   "sensor.stage1_gain = 0.0", "unknown field 'no_such'"):
+    for needle in ("scene.name", 'scene.fidelity = "ultra"', 'host.sequence[1] = "QQQ"', "host.spi_clock_Hz",
+                   "sensor.stage1_gain = 0.0", 'unknown field "no_such"'):
         assert needle in text
 
 
 def test_stimulus_after_the_end_and_unknown_sphere_are_refused():
     msgs = problems({**MINIMAL, "stimulus": [{"kind": "sphere_drop", "sphere": "marble", "at_s": [0.5, 3.0]}]})
     text = "\n".join(msgs)
-    assert "stimulus[0].sphere = 'marble'" in text and "0.45 mm solder ball" in text
+    assert 'stimulus[0].sphere = "marble"' in text and "0.45 mm solder ball" in text
     assert "stimulus[0].at_s[1] = 3.0 s: after the end of the scene" in text
 
 
@@ -145,7 +145,7 @@ def test_bad_types_are_reported_not_crashed_on():
     msgs = problems({"scene": {"name": "t", "duration_s": "long", "seed": 1.5},
                      "stimulus": {"kind": "tap"}})
     text = "\n".join(msgs)
-    assert "scene.duration_s = 'long'" in text and "scene.seed = 1.5" in text and "array of tables" in text
+    assert 'scene.duration_s = "long"' in text and "scene.seed = 1.5" in text and "array of tables" in text
 
 
 def test_toml_syntax_errors_and_missing_files_name_the_file(tmp_path):
@@ -190,8 +190,8 @@ def test_touch_thermal_kinds_and_faults_are_validated():
                                               "material": "cheese"}],
                      "faults": {"electrode_open": [0, 20], "thermistor": "melted", "fan": True}})
     text = "\n".join(msgs)
-    for needle in ("stimulus[0].electrode = 'E42'", "stimulus[0].material = 'cheese'", "faults.electrode_open",
-                   "faults.thermistor = 'melted'", "unknown field 'fan'"):
+    for needle in ('stimulus[0].electrode = "E42"', 'stimulus[0].material = "cheese"', "faults.electrode_open",
+                   'faults.thermistor = "melted"', 'unknown field "fan"'):
         assert needle in text
 
 

@@ -110,7 +110,7 @@ def test_a_sensor_served_beyond_the_scenes_has_the_common_faults_and_rests():
 @pytest.mark.parametrize("text, words", [
     # a 19-electrode finger's own table: 1..19, and says why
     ('[[sensors]]\nindex = 2\n[sensors.faults]\nelectrode_open = [22]\n',
-     "sensors[0].faults.electrode_open = [22]: a list of electrode numbers 1..19 (this sensor is a 'biotac')"),
+     'sensors[0].faults.electrode_open = [22]: a list of electrode numbers 1..19 (this sensor is a "biotac")'),
     ('[sensor]\nvariant = "biotac-sp"\n[sensor.faults]\nmux_stuck = 25\n',
      "sensor.faults.mux_stuck = 25: allowed range is 1 to 24"),
     ('[sensor]\nvariant = "biotac-sp"\n[[sensors]]\nindex = 2\n[faults]\nmux_stuck = 22\n',  # a mixed hand
@@ -118,9 +118,9 @@ def test_a_sensor_served_beyond_the_scenes_has_the_common_faults_and_rests():
      "a \"biotac-sp\"'s E20..E24 go in its own [sensor.faults] or [sensors.faults])"),
     # one fault in two places
     ('[faults]\nthermistor = "short"\n[sensor.faults]\nthermistor = "open"\n',
-     "sensor.faults.thermistor: [faults] already gives thermistor = 'short' to every sensor"),
+     'sensor.faults.thermistor: [faults] already gives thermistor = "short" to every sensor'),
     ('[faults]\nheater_failed = true\n[sensor.faults]\nheater_failed = false\n',  # "false" is a statement too
-     "sensor.faults.heater_failed: [faults] already gives heater_failed = True to every sensor"),
+     'sensor.faults.heater_failed: [faults] already gives heater_failed = true to every sensor'),
     ('[faults]\nfluid_leak_mL_per_min = 5.0\n[sensor.faults]\nfluid_leak_start_s = 0.1\n',
      "sensor.faults.fluid_leak_start_s = 0.1: a leak needs its rate too, in the same table"),
     # open in one, shorted in the other
@@ -135,7 +135,7 @@ def test_a_sensor_served_beyond_the_scenes_has_the_common_faults_and_rests():
      "heater_failure at 0.1 s (sensor 2): sensors[0].faults.heater_failed = true says the heaters never ran"),
     # shapes and names
     ('[sensor]\nfaults = 3\n', "sensor.faults = 3: must be a table ([sensor.faults] after the sensor's table)"),
-    ('[sensor.faults]\nelectrode_broken = [1]\n', "sensor.faults: unknown field 'electrode_broken'"),
+    ('[sensor.faults]\nelectrode_broken = [1]\n', 'sensor.faults: unknown field "electrode_broken"'),
     ('[sensor.faults]\nfluid_leak_start_s = 0.1\n', "sensor.faults.fluid_leak_start_s = 0.1: a leak needs its rate"),
 ])
 def test_a_sensors_own_faults_are_checked_by_name(text, words):

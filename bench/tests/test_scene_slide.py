@@ -72,10 +72,10 @@ def test_the_skin_tables_ridge_height_and_wear_coefficient_reach_the_skin_that_s
     (_slide(texture="no such cloth"), ["stimulus[0].texture", "no such cloth"]),
     ({k: v for k, v in _slide().items() if k != "texture"}, ["stimulus[0].texture is missing"]),
     (_slide(force_N=-1), ["stimulus[0].force_N", "-1"]),
-    (_slide(velocity_mm_per_s="fast"), ["stimulus[0].velocity_mm_per_s", "'fast'"]),
+    (_slide(velocity_mm_per_s="fast"), ["stimulus[0].velocity_mm_per_s", '"fast"']),
     (_slide(distance_mm=0.5, velocity_mm_per_s=100), ["stimulus[0].distance_mm", "acceleration"]),
     (_slide(start_s=19.0), ["ends at", "after the end of the scene"]),
-    (_slide(grip=True), ["unknown field 'grip'"]),
+    (_slide(grip=True), ['unknown field "grip"']),
 ])
 def test_bad_slides_are_named_with_field_and_value(stimulus, words):
     text = _problems(stimulus)

@@ -237,7 +237,7 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
         raise TextureError(source, ["the library must be a table holding [[texture]] tables"])
     for k in data:
         if k != "texture":
-            c.add("library", f"unknown top-level key {k!r}: the file holds [[texture]] tables only")
+            c.add("library", f"unknown top-level key {spelled(k)}: the file holds [[texture]] tables only")
     items = data.get("texture")
     if items is None or items == []:
         c.add("library", "no [[texture]] tables")
@@ -287,7 +287,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     n_before = len(c.problems)
     for k in t:
         if k not in KNOWN_FIELDS:
-            c.add(who, f"unknown field {k!r}; known fields: {', '.join(sorted(KNOWN_FIELDS))}")
+            c.add(who, f"unknown field {spelled(k)}; known fields: {', '.join(sorted(KNOWN_FIELDS))}")
 
     # identity: number, name, group, seed
     if "number" not in t:
