@@ -211,7 +211,7 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
         "*biotac_bridge(): variant given with sensors, which already describes the sensors*",
         "*biotac_bridge(): n_sensors = 3 given with 2 sensors (numbered [[]1, 2[]]); leave n_sensors out*",
         "*biotac_cheetah(): sensors = {}: no sensors on the bus*",
-        "*biotac_bridge(): */bad.toml: 1 problem(s):*", "*host.sequence[[]1[]] = 'QQQ'*",
+        "*biotac_bridge(): */bad.toml: 1 problem(s):*", '*host.sequence[[]1[]] = "QQQ"*',
         "*biotac_cheetah(): tapz: 1 problem(s):*", "*close matches: taps*",
         "*biotac_sensor(): unit given with scene*",
         "*the scene describes 2 sensors*not 1*",

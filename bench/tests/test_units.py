@@ -230,23 +230,23 @@ unit = "BTU0000000000004"
 @pytest.mark.parametrize("text, needle", [
     ("[sensor]\nunit = -1\n", "sensor.unit = -1: a unit seed 0 to 2147483647"),
     ("[sensor]\nunit = 1.5\n", "sensor.unit = 1.5"),
-    ("[sensor]\nunit = \"XX12\"\n", "sensor.unit = 'XX12'"),
+    ("[sensor]\nunit = \"XX12\"\n", 'sensor.unit = "XX12"'),
     ("[sensor]\nunit = \"BT$$\"\n", "a serial number starts with 'BT'"),
-    ("[sensor]\nvariant = \"biotac-xl\"\n", "sensor.variant = 'biotac-xl': must be one of: biotac, biotac-sp"),
+    ("[sensor]\nvariant = \"biotac-xl\"\n", 'sensor.variant = "biotac-xl": must be one of: biotac, biotac-sp'),
     ("[[sensors]]\nindex = 1\n", "sensors[0].index = 1: sensor 1 is described by the [sensor] table"),
     ("[[sensors]]\nindex = 6\n", "sensors[0].index = 6: allowed range is 2 to 5"),
     ("[[sensors]]\nunit = 3\n", "sensors[0].index is missing"),
     ("[[sensors]]\nindex = 2\n[[sensors]]\nindex = 2\n", "sensors[1].index = 2: sensor 2 is already described by "
                                                        "sensors[0]"),
     ("[sensors]\nindex = 2\n", "must be an array of tables ([[sensors]])"),
-    ("[[sensors]]\nindex = 2\ncolour = 1\n", "sensors[0]: unknown field 'colour'"),
+    ("[[sensors]]\nindex = 2\ncolour = 1\n", 'sensors[0]: unknown field "colour"'),
     ("[[sensors]]\nindex = 2\ninflation_volume_mL = 9.0\n", "sensors[0].inflation_volume_mL"),
     ("[[stimulus]]\nkind = \"tap\"\nat_s = 0.1\npeak_N = 1.0\nsensor = 7\n", "stimulus[0].sensor = 7: allowed range "
                                                                             "is 1 to 5"),
-    ("[[stimulus]]\nkind = \"tap\"\nat_s = 0.1\npeak_N = 1.0\nsensor = \"2\"\n", "stimulus[0].sensor = '2': must be "
+    ("[[stimulus]]\nkind = \"tap\"\nat_s = 0.1\npeak_N = 1.0\nsensor = \"2\"\n", 'stimulus[0].sensor = "2": must be '
                                                                                "a whole number"),
     ("[[stimulus]]\nkind = \"touch\"\nstart_s = 0.1\nforce_N = 1.0\nelectrode = \"E22\"\n",
-     "sensor 1 is a 'biotac', which has E1..E19"),
+     'sensor 1 is a "biotac", which has E1..E19'),
 ])
 def test_bad_unit_sensor_and_variant_keys_are_refused_naming_the_field(text, needle):
     with pytest.raises(SceneError) as e:

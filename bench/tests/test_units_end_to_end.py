@@ -102,7 +102,7 @@ def test_a_scene_checks_an_sp_frame_and_accepts_its_electrodes_in_the_host_seque
         parse_scene_text(head.format(d=fifty_slots, v="biotac-sp"))
     sc = parse_scene_text(head.format(d=0.1, v="biotac-sp") + '[host]\nsequence = ["E22", "PAC"]\n')
     assert sc.sequence == ["E22", "PAC"]
-    with pytest.raises(SceneError, match=r"host.sequence\[0\] = 'E22'.*biotac-sp"):
+    with pytest.raises(SceneError, match=r'host.sequence\[0\] = "E22".*biotac-sp'):
         parse_scene_text(head.format(d=0.1, v="biotac") + '[host]\nsequence = ["E22", "PAC"]\n')
 
 
