@@ -1,0 +1,77 @@
+"""Messages about a TOML file (scene, experiment, texture library) spell values as the file does
+(:func:`bench.tomlfile.spelled`): ``"x"`` not ``'x'``, ``true`` not ``True``, ``{a = 1}`` not ``{'a': 1}``."""
+
+import datetime
+import math
+import re
+import tomllib
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bench.errors import SceneError
+from bench.experiments import experiment as E
+from bench.paths import FIXTURES
+from bench.scenes.scene import load_scene, parse_scene_text
+from bench.tomlfile import spelled
+
+NO_LIMIT = 10 ** 9
+
+#: what tomllib can give: text without surrogates (TOML cannot hold them), 64-bit integers, finite floats, dates
+_TEXT = st.text(st.characters(exclude_categories=("Cs",)), max_size=20)
+_SCALARS = (st.booleans() | st.integers(-2 ** 63, 2 ** 63 - 1) | st.floats(allow_nan=False) | _TEXT
+            | st.dates() | st.times() | st.datetimes()
+            | st.builds(lambda d, minutes: d.replace(tzinfo=datetime.timezone(datetime.timedelta(minutes=minutes))),
+                        st.datetimes(), st.integers(-1439, 1439)))  # TOML's offsets: whole minutes
+_VALUES = st.recursive(_SCALARS, lambda inner: st.lists(inner, max_size=4)
+                       | st.dictionaries(_TEXT, inner, max_size=4), max_leaves=12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_VALUES)
+def test_a_value_spelled_for_a_message_reads_back_as_the_same_value(value):
+    """Round trip: what a message shows, pasted into a TOML file, is the value the file held."""
+    assert tomllib.loads(f"x = {spelled(value, NO_LIMIT)}")["x"] == value
+
+
+@pytest.mark.parametrize("value, text", [
+    ("x", '"x"'), (True, "true"), (False, "false"), (7, "7"), (0.5, "0.5"), (1e300, "1e+300"),
+    (math.inf, "inf"), (-math.inf, "-inf"), (math.nan, "nan"), ([1, "a"], '[1, "a"]'), ({"a": 1}, "{a = 1}"),
+    ({"b c": [True]}, '{"b c" = [true]}'), ({}, "{}"), ('a"b\\c\nd', r'"a\"b\\c\nd"'), ("\x1b[31m", r'"\u001B[31m"'),
+    ("é☃", '"é☃"'), (datetime.date(2020, 1, 2), "2020-01-02"),
+    (None, "None"), (object, repr(object)),  # not TOML values (a Python caller's): Python's spelling
+])
+def test_values_are_spelled_as_toml_does(value, text):
+    assert spelled(value, NO_LIMIT) == text
+
+
+def test_a_long_value_is_shortened_saying_its_length():
+    text = spelled("x" * 1000)
+    assert len(text) <= 80 and text.startswith('"xxx') and "(1002 characters)" in text
+
+
+def test_a_hostile_scenes_message_shows_the_value_as_toml_does():
+    """fixtures/hostile: ``scene = "x"`` names the value as the file spells it, not Python's ``'x'``."""
+    with pytest.raises(SceneError) as e:
+        load_scene(FIXTURES / "hostile" / "scenes" / "shape-scene-string.toml")
+    assert e.value.problems[0].startswith('scene = "x": must be a table') and "'x'" not in str(e.value)
+
+
+@pytest.mark.parametrize("fidelity", ['a"b', "back\\slash", "new\nline", "tab\there", "bell\x07", "ünïcödé"])
+def test_a_scene_message_quotes_awkward_text_as_a_valid_toml_string(fidelity):
+    """Quotes, backslashes, line breaks and control characters come out escaped: the shown value reads back."""
+    text = f'[scene]\nname = "s"\nduration_s = 1.0\nfidelity = {spelled(fidelity)}\n'
+    with pytest.raises(SceneError) as e:
+        parse_scene_text(text)
+    (shown,) = [m.group(1) for p in e.value.problems if (m := re.fullmatch(r"scene\.fidelity = (.*): must be.*", p))]
+    assert tomllib.loads(f"x = {shown}")["x"] == fidelity
+
+
+def test_an_experiment_files_message_shows_the_value_as_toml_does(tmp_path):
+    """The experiment file's checks (its ``get`` of a typed field) speak TOML too: ``true``, not ``True``."""
+    f = tmp_path / "x.toml"
+    f.write_text('[experiment]\nname = "x"\n[pilot]\ntrials = true\n')
+    with pytest.raises(E.ExperimentError) as e:
+        E.load_experiment(f)
+    assert "pilot.trials = true: must be int" in str(e.value)
