@@ -5,7 +5,6 @@ limit (checked without recursion).  Every problem becomes the caller's error cla
 from __future__ import annotations
 
 import datetime
-import math
 import os
 import stat
 import tomllib
@@ -126,12 +125,8 @@ def _basic_string(text: str) -> str:
 def _spell(v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isnan(v):
-            return "nan"
-        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf")
+    if isinstance(v, (int, float)):
+        return repr(v)  # Python's float spelling is TOML's too: 0.5, 1e+300, inf, -inf, nan
     if isinstance(v, str):
         return _basic_string(v)
     if isinstance(v, (datetime.datetime, datetime.date, datetime.time)):
