@@ -335,7 +335,7 @@ def test_a_scene_name_that_is_a_path_is_rejected(tmp_path, capsys):
     f = tmp_path / "evil.toml"
     f.write_text('[scene]\nname = "../../x"\nduration_s = 1.0\n')
     assert cli.main(["run", str(f), "--quiet"]) == 2
-    assert "scene.name = '../../x'" in capsys.readouterr().err
+    assert 'scene.name = "../../x"' in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------------------------------- contents
