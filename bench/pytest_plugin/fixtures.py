@@ -312,10 +312,11 @@ def _cheetah_scene_kw(scene, n_sensors: int | None, seed: int | None, kw: dict) 
     program's business; the adapter serves the software SPI model only)."""
     from bench.errors import SceneError
     from bench.hosts.scene_sensors import sensors_from_scene
+    from bench.tomlfile import spelled
 
     if scene.spi != "software":
-        raise SceneError(scene.source, [f"host.spi = {scene.spi!r}: the Cheetah adapter serves the software SPI "
-                                        "model only"])
+        raise SceneError(scene.source, [f"host.spi = {spelled(scene.spi)}: the Cheetah adapter serves the "
+                                        "software SPI model only"])
     n_sensors = scene.n_sensors if n_sensors is None else n_sensors
     return {**kw, "n_sensors": n_sensors, "sensors": sensors_from_scene(scene, n_sensors, seed=seed),
             "seed": scene.seed if seed is None else seed}
