@@ -22,6 +22,20 @@ def test_firmware_over_rtl_streams_the_same_frames_as_over_the_software_model(n_
         assert np.array_equal(a.codes, b.codes) and np.array_equal(a.status, b.status)
 
 
+def _same_frames_on_both_buses(seconds: float, prepare, min_frames: int, status: bool = False) -> dict:
+    """Run the bridge firmware with three sensors over the software model and over the RTL, ``prepare`` scheduling
+    the same events on each board; check the host got the same frames (sensors, codes, status words) over both and
+    no CRC error; return both runs by bus."""
+    runs = {spi: run_firmware(default_sensors(3, seed=5), seconds, status=status, spi=spi, prepare=prepare)
+            for spi in ("software", "rtl")}
+    soft, rtl = runs["software"].frames, runs["rtl"].frames
+    assert len(rtl) == len(soft) >= min_frames and runs["rtl"].stats.crc_errors == 0
+    for k, (a, b) in enumerate(zip(soft, rtl)):
+        assert a.sensor_mask == b.sensor_mask and np.array_equal(a.codes, b.codes) and \
+            np.array_equal(a.status, b.status), f"frame {k} differs"
+    return runs
+
+
 def _schedule_hot_plugging(board) -> None:
     """Sensor 2 unplugged at 50 ms and plugged back in at 120 ms; sensor 3 unplugged at 150 ms, back at 200 ms."""
     for dt, act, n in ((0.05, "unplug", 2), (0.12, "plug", 2), (0.15, "unplug", 3), (0.2, "plug", 3)):
@@ -32,13 +46,8 @@ def test_hot_plugging_gives_the_same_frames_and_status_over_the_rtl_as_over_the_
     """``board.unplug`` / ``board.plug`` over the RTL (the RTL's sensors present changed, a sensor plugged back in
     reset, at the next word) give the host the same frames and the same status as over the software model: sensor
     2 lost and found again (it answers its serial number from power-on), sensor 3 lost."""
-    runs = {spi: run_firmware(default_sensors(3, seed=5), 0.4, spi=spi, prepare=_schedule_hot_plugging)
-            for spi in ("software", "rtl")}
-    soft, rtl = runs["software"].frames, runs["rtl"].frames
-    assert len(rtl) == len(soft) >= 35 and runs["rtl"].stats.crc_errors == 0
-    for k, (a, b) in enumerate(zip(soft, rtl)):
-        assert a.sensor_mask == b.sensor_mask and np.array_equal(a.codes, b.codes) and \
-            np.array_equal(a.status, b.status), f"frame {k} differs"
+    runs = _same_frames_on_both_buses(0.4, _schedule_hot_plugging, 35, status=True)
+    rtl = runs["rtl"].frames
     assert runs["rtl"].status == runs["software"].status
     assert (runs["rtl"].status.losses, runs["rtl"].status.finds) == (2, 1)
     masks = [f.sensor_mask for f in rtl]
@@ -62,13 +71,7 @@ def test_brownouts_and_glitches_give_the_same_frames_over_the_rtl_as_over_the_so
     the next word) and ``board.glitch`` on three sensors give the host the same frames over the RTL as over the
     software model: each reset loses a pending result (an error word reaches the host for that sensor), no sensor
     is dropped, and the glitches change nothing."""
-    runs = {spi: run_firmware(default_sensors(3, seed=5), 0.3, status=False, spi=spi,
-                              prepare=_schedule_resets_and_glitches) for spi in ("software", "rtl")}
-    soft, rtl = runs["software"].frames, runs["rtl"].frames
-    assert len(rtl) == len(soft) >= 25 and runs["rtl"].stats.crc_errors == 0
-    for k, (a, b) in enumerate(zip(soft, rtl)):
-        assert a.sensor_mask == b.sensor_mask and np.array_equal(a.codes, b.codes) and \
-            np.array_equal(a.status, b.status), f"frame {k} differs"
+    rtl = _same_frames_on_both_buses(0.3, _schedule_resets_and_glitches, 25)["rtl"].frames
     flagged = [{n for n, bad in zip(f.sensors, (f.status != 0).any(axis=0)) if bad} for f in rtl]
     assert set().union(*flagged) == {1, 2, 3}  # every reset sensor lost a result the host then saw flagged
     assert rtl[-1].sensors == [1, 2, 3]
@@ -93,13 +96,7 @@ def test_a_fault_schedule_gives_the_same_frames_over_the_rtl_as_over_the_softwar
     changed while the harness streams) as over the software model.  Each fault shows (its sensor's samples flagged;
     sensor 2 stuck low reads as unplugged and is dropped) and the stream is clean before the first and after the
     last."""
-    runs = {spi: run_firmware(default_sensors(3, seed=5), 0.3, status=False, spi=spi, prepare=_schedule_faults)
-            for spi in ("software", "rtl")}
-    soft, rtl = runs["software"].frames, runs["rtl"].frames
-    assert len(rtl) == len(soft) >= 25 and runs["rtl"].stats.crc_errors == 0
-    for k, (a, b) in enumerate(zip(soft, rtl)):
-        assert a.sensor_mask == b.sensor_mask and np.array_equal(a.codes, b.codes) and \
-            np.array_equal(a.status, b.status), f"frame {k} differs"
+    rtl = _same_frames_on_both_buses(0.3, _schedule_faults, 25)["rtl"].frames
     flagged = [{n for n, bad in zip(f.sensors, (f.status != 0).any(axis=0)) if bad} for f in rtl]
     assert set().union(*flagged) == {1, 2, 3}  # every sensor's fault reached the host
     assert not set().union(*flagged[:3], *flagged[-3:])
