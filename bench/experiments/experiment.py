@@ -316,8 +316,9 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
     spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
-    if noise_scale_problem(spec.noise_scale):
-        problems.append(f"sensor.noise_scale = {spelled(spec.noise_scale)}: {noise_scale_problem(spec.noise_scale)}")
+    noise_problem = noise_scale_problem(spec.noise_scale)
+    if noise_problem:
+        problems.append(f"sensor.noise_scale = {spelled(spec.noise_scale)}: {noise_problem}")
     spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)
     if "name" not in t["experiment"]:
         problems.append("[experiment] table with a name is missing (e.g. name = \"my-variant\")")

@@ -3589,7 +3589,7 @@ CATALOGUE += [
            ('bench/tests/test_experiment.py::test_noise_scale_takes_zero_for_a_noise_free_sensor_and_refuses_what_the_sensor_cannot_express',),
            'noise_scale = 0 scales the parameters (divides by zero in every trial)'),
     Mutant('noise-scale-range-unchecked', 'experiment', 'bench/experiments/experiment.py',
-           '    if noise_scale_problem(spec.noise_scale):\n',
+           '    if noise_problem:\n',
            '    if False:\n',
            ('bench/tests/test_experiment.py::test_noise_scale_takes_zero_for_a_noise_free_sensor_and_refuses_what_the_sensor_cannot_express',),
            'a noise_scale the sensor cannot express passes validation (every trial fails)'),
