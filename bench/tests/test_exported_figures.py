@@ -160,23 +160,28 @@ def test_a_slide_that_ends_after_the_scene_by_its_acceleration_is_refused():
         parse_scene({"scene": {"name": "short", "duration_s": end - 0.1}, "stimulus": [slide]})
 
 
-def test_the_streamed_spectrogram_is_scipys_column_for_column():
-    """The PAC spectrogram computed chunk by chunk (80 ms Tukey(0.25) windows, half overlap, no averaging for a short
-    run) equals scipy.signal.spectrogram of the whole record: every row, the Nyquist row too (one-sided density:
-    doubled except DC and Nyquist), and column times at the windows' centres after the first sample."""
+def _accumulated_and_scipys(x: np.ndarray, fs: float, t0: float, max_columns: int):
+    """(freqs Hz, times s, Sxx) of the run's spectrogram accumulator fed ``x`` (sampled at ``fs`` Hz from ``t0`` s)
+    in chunks of 1000, and scipy's spectrogram of the whole record with the same window (80 ms, half overlap)."""
     from scipy.signal import spectrogram
 
     from bench.running.aggregate import SpectrogramAccumulator
 
-    fs, t0 = 2200.0, 0.3
-    x = np.random.default_rng(3).normal(size=4400) + np.sin(2 * np.pi * 1100.0 * np.arange(4400) / fs)
     t = t0 + np.arange(x.size) / fs
-    acc = SpectrogramAccumulator(duration_s=2.0, max_columns=10_000)
+    acc = SpectrogramAccumulator(duration_s=x.size / fs, max_columns=max_columns)
     for a in range(0, x.size, 1000):
         acc.add(t[a:a + 1000], x[a:a + 1000])
     acc.finish()
-    freqs, times, sxx = acc.result()
-    f_ref, t_ref, s_ref = spectrogram(x, fs, window=("tukey", 0.25), nperseg=176, noverlap=88)
+    return acc.result(), spectrogram(x, fs, window=("tukey", 0.25), nperseg=176, noverlap=88)
+
+
+def test_the_streamed_spectrogram_is_scipys_column_for_column():
+    """The PAC spectrogram computed chunk by chunk (80 ms Tukey(0.25) windows, half overlap, no averaging for a short
+    run) equals scipy.signal.spectrogram of the whole record: every row, the Nyquist row too (one-sided density:
+    doubled except DC and Nyquist), and column times at the windows' centres after the first sample."""
+    fs, t0 = 2200.0, 0.3
+    x = np.random.default_rng(3).normal(size=4400) + np.sin(2 * np.pi * 1100.0 * np.arange(4400) / fs)
+    (freqs, times, sxx), (f_ref, t_ref, s_ref) = _accumulated_and_scipys(x, fs, t0, max_columns=10_000)
     assert np.allclose(freqs, f_ref) and np.allclose(times, t0 + t_ref, rtol=0, atol=1e-9)
     assert np.allclose(sxx, s_ref, rtol=1e-9, atol=0)
 
@@ -185,19 +190,9 @@ def test_a_long_runs_spectrogram_averages_consecutive_windows_into_at_most_the_c
     """README: the PAC spectrogram is averaged to at most 1000 columns. With a limit of 10 columns, 4 s at 2200 Hz
     (99 windows of 80 ms, half overlap) gives 10 columns, each the mean — not the sum — of 10 consecutive windows
     of scipy's spectrogram of the whole record (the last of the remaining 9), at the mean of their instants."""
-    from scipy.signal import spectrogram
-
-    from bench.running.aggregate import SpectrogramAccumulator
-
     fs = 2200.0
     x = np.random.default_rng(5).normal(size=8800)
-    t = np.arange(x.size) / fs
-    acc = SpectrogramAccumulator(duration_s=4.0, max_columns=10)
-    for a in range(0, x.size, 1000):
-        acc.add(t[a:a + 1000], x[a:a + 1000])
-    acc.finish()
-    _, times, sxx = acc.result()
-    _, t_ref, s_ref = spectrogram(x, fs, window=("tukey", 0.25), nperseg=176, noverlap=88)
+    (_, times, sxx), (_, t_ref, s_ref) = _accumulated_and_scipys(x, fs, 0.0, max_columns=10)
     assert s_ref.shape[1] == 99 and sxx.shape[1] == 10
     groups = [slice(10 * i, min(10 * i + 10, 99)) for i in range(10)]
     assert np.allclose(sxx, np.stack([s_ref[:, g].mean(axis=1) for g in groups], axis=1), rtol=1e-9, atol=0)
