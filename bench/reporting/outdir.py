@@ -14,7 +14,10 @@
 
 The lock file stays in the folder after the run (removing it would let two runs lock two different files of
 the same name); it holds the pid of the run that last locked it. A folder the command made and left holding nothing
-but its lock (refused or failed before writing) is removed at close, lock and all (:func:`release_and_remove`).
+but its lock (refused or failed before writing) is removed at close, lock and all (:func:`release_and_remove`), and
+so is each folder above it that the command made (``--out a/b/c``: all three) and that is then empty — never one it
+did not make.  A second command that opens the folder while the first removes it makes it again and locks it
+(:class:`FolderGone`, tried :data:`VANISHED_ATTEMPTS` times, then refused saying to try again).
 """
 
 from __future__ import annotations
@@ -78,6 +81,14 @@ class OutDirError(BenchError, ValueError):
     """The out folder cannot be used (the message names the flag and the path)."""
 
 
+class FolderGone(OutDirError):
+    """The folder being made or locked was removed meanwhile (by another command that made it, as it ended)."""
+
+
+#: how many times :meth:`OutFolder.open` makes and locks a folder that another command keeps removing
+VANISHED_ATTEMPTS = 5
+
+
 def _is_temp(name: str, files=RUN_FILES) -> bool:
     """Whether ``name`` is a temporary file (:func:`temp_path`) of one of ``files``."""
     return name.startswith(".") and name.endswith(TEMP_SUFFIX) and any(name.startswith(f".{f}.") for f in files)
@@ -91,6 +102,9 @@ class OutFolder:
         self.path, self._lock_fd, self.flag, self.kind = path, lock_fd, flag, kind
         self._deferred_keep: tuple[str, ...] | None = None  # earlier results to remove at clear_earlier()
         self._created = False  # made by this open (removed at close if it then holds nothing but the lock)
+        #: every folder this open made (the folder itself and those above it), outermost first, with its identity
+        #: (st_dev, st_ino): removed at close, innermost first, when the folder holds nothing but the lock
+        self._made: list[tuple[Path, tuple[int, int]]] = []
 
     # ---- opening
     @classmethod
@@ -99,14 +113,23 @@ class OutFolder:
         """Check, create and lock ``path``; refuse it if it holds anything but ``keep`` (names of entries to leave
         alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before — at once,
         or, with ``defer_clearing``, only at :meth:`clear_earlier` (a long command that fails first keeps them)."""
-        try:
-            existed = Path(os.fspath(path)).is_dir()
-        except (OSError, ValueError):
-            existed = False
-        p = _make_folder(path, flag)
         where = f"{flag} {os.fspath(path)!r}"
-        fd = _lock(p, where, flag)
+        made: list[tuple[Path, tuple[int, int]]] = []
+        for _ in range(VANISHED_ATTEMPTS):  # the folder removed under us (FolderGone): made again, locked again
+            try:
+                p = _make_folder(path, flag, made)
+                fd = _lock(p, where, flag)
+                break
+            except FolderGone:
+                continue
+        else:
+            _remove_made(made)
+            raise OutDirError(f"{where}: the folder was removed each time this command made it and went to lock it "
+                              f"({VANISHED_ATTEMPTS} times; another command that made it removes it as it ends); "
+                              f"try again") from None
+        existed = p not in [d for d, _ in made]
         folder = cls(p, fd, flag, kind)
+        folder._made = made
         folder._created = not existed
         try:
             folder._probe_writable()
@@ -219,7 +242,8 @@ class OutFolder:
     # ---- closing
     def close(self) -> None:
         """Release the lock. A folder this command made that holds nothing but its lock (the command was refused
-        or failed before writing anything) is removed, so a refused command leaves no folder behind."""
+        or failed before writing anything) is removed, with each folder above it that this command made and that
+        is then empty, so a refused command leaves no folder behind (and removes none it did not make)."""
         if self._lock_fd is None:
             return
         fd, self._lock_fd = self._lock_fd, None
@@ -229,8 +253,7 @@ class OutFolder:
             only_lock = False
         if only_lock:
             release_and_remove(fd, self.path / LOCK_NAME)
-            with contextlib.suppress(OSError):
-                os.rmdir(self.path)  # (not empty if another command has meanwhile locked it: it stays)
+            _remove_made(self._made)  # (not empty if another command has meanwhile locked it: it stays)
         else:
             with contextlib.suppress(OSError):
                 os.close(fd)  # releases the flock
@@ -259,7 +282,8 @@ def lock_exclusively(lock_path: Path, where: str, busy, holder_is: str = "anothe
     except OSError as e:
         if e.errno == errno.ELOOP:
             raise OutDirError(f"{where}: {lock_path.name} is a symbolic link; remove it") from None
-        raise OutDirError(f"{where}: {lock_path.parent} is not writable ({e.strerror or e})") from None
+        gone = FolderGone if e.errno == errno.ENOENT else OutDirError  # (OutFolder.open makes it again)
+        raise gone(f"{where}: {lock_path.parent} is not writable ({e.strerror or e})") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
@@ -335,9 +359,11 @@ def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: Fol
     raise last or OutDirError(f"{flag}: no free folder next to {os.fspath(base)!r}")
 
 
-def _make_folder(path, flag: str) -> Path:
+def _make_folder(path, flag: str, made: list | None = None) -> Path:
     """Create the folder ``path`` (named by ``flag`` in errors) after checking it: no NUL byte, not empty, not a
-    broken symbolic link, not a file, creatable."""
+    broken symbolic link, not a file, creatable.  Each folder it creates (``path`` and those above it), outermost
+    first, is appended to ``made`` with its identity (st_dev, st_ino); on an error those are removed again.  A
+    folder on the way that vanishes meanwhile (another command removing it as it ends) raises :class:`FolderGone`."""
     raw = os.fspath(path)
     where = f"{flag} {raw!r}"
     if "\x00" in raw:
@@ -345,30 +371,71 @@ def _make_folder(path, flag: str) -> Path:
     if not raw.strip():
         raise OutDirError(f"{where}: the path is empty")
     p = Path(raw)
+    made = [] if made is None else made
+    new: list[tuple[Path, tuple[int, int]]] = []
     try:
         if p.is_symlink() and not p.exists():
             raise OutDirError(f"{where}: is a broken symbolic link")
         if p.exists() and not p.is_dir():
             raise OutDirError(f"{where}: is a file, not a folder")
-        p.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise OutDirError(f"{where}: is a file, not a folder") from None
+        for d in [*reversed(p.parents), p]:
+            try:
+                os.mkdir(d)
+            except FileNotFoundError:
+                if d.parent.is_dir():  # it is there, yet refuses folders (/proc): not a race
+                    raise
+                raise FolderGone(f"{where}: cannot create the folder: {d.parent} was removed meanwhile") from None
+            except OSError as e:
+                if d.is_dir():  # there already (EEXIST; or EACCES, EROFS for a folder there that we cannot write)
+                    continue
+                if isinstance(e, FileExistsError):  # a file (or a link to none) where the folder should be
+                    raise OutDirError(f"{where}: is a file, not a folder" if d == p else
+                                      f"{where}: cannot create the folder: a part of the path is a file") from None
+                raise
+            st = os.lstat(d)
+            new.append((d, (st.st_dev, st.st_ino)))
     except NotADirectoryError:
+        _remove_made(new)
         raise OutDirError(f"{where}: cannot create the folder: a part of the path is a file") from None
+    except OutDirError:
+        _remove_made(new)
+        raise
     except OSError as e:
+        _remove_made(new)
         raise OutDirError(f"{where}: cannot create the folder: {e.strerror or e}") from None
+    made += new
     return p
+
+
+def _remove_made(made: list[tuple[Path, tuple[int, int]]]) -> None:
+    """Remove the folders ``made`` (as :func:`_make_folder` listed them), innermost first: each that is still the
+    one made (same identity) and empty; a folder gone or replaced meanwhile is skipped; the first that is not empty
+    stops the removal (those above it hold it)."""
+    for d, identity in reversed(made):
+        try:
+            st = os.lstat(d)
+        except OSError:
+            continue
+        if (st.st_dev, st.st_ino) != identity:
+            continue
+        try:
+            os.rmdir(d)
+        except OSError:
+            return
 
 
 def writable_folder(path, flag: str = "--out") -> Path:
     """Check a shared folder before a long job runs (an experiment's stage cache, which runs share on purpose):
-    :func:`_make_folder`'s checks and a write probe — :class:`OutDirError` naming ``flag`` otherwise. No lock,
-    nothing refused or removed (each file goes in under a temporary name, renamed into place)."""
-    p = _make_folder(path, flag)
+    :func:`_make_folder`'s checks and a write probe — :class:`OutDirError` naming ``flag`` otherwise (the folders it
+    made for the probe removed again). No lock, nothing refused or removed (each file goes in under a temporary
+    name, renamed into place)."""
+    made: list[tuple[Path, tuple[int, int]]] = []
+    p = _make_folder(path, flag, made)
     try:
         fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)
         os.close(fd)
         os.unlink(name)
     except OSError as e:
+        _remove_made(made)
         raise OutDirError(f"{flag} {os.fspath(path)!r}: the folder is not writable ({e.strerror or e})") from None
     return p

@@ -1,0 +1,113 @@
+"""The out folder's own folders: a command that made ``--out a/b/c`` and wrote nothing removes every folder it made
+at close, and none it did not make; a second command opening the folder while the first removes it gets the folder
+(or, if it keeps vanishing, a message saying so), never "not writable"."""
+
+import fcntl
+import os
+
+import pytest
+
+from bench.reporting import outdir
+from bench.reporting.outdir import LOCK_NAME, OutDirError, OutFolder
+
+pytestmark = pytest.mark.unit
+
+
+def test_a_nested_folder_the_command_made_is_removed_up_to_the_first_it_did_not_make(tmp_path):
+    """`--out a/b/c` with none of them there: close removes c, b and a (c alone was removed before)."""
+    OutFolder.open(tmp_path / "a" / "b" / "c").close()
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "user").mkdir()  # the user's: stays, as does everything above it
+    OutFolder.open(tmp_path / "user" / "x" / "y").close()
+    assert [p.name for p in tmp_path.iterdir()] == ["user"] and list((tmp_path / "user").iterdir()) == []
+    OutFolder.open(tmp_path / "p" / "q" / ".." / "r").close()  # made p, p/q and p/r: all three removed
+    assert [p.name for p in tmp_path.iterdir()] == ["user"]
+
+
+def test_a_made_folder_that_something_else_filled_meanwhile_stays(tmp_path):
+    """A folder the command made but that holds another file by close (the user's) is not removed, nor any above."""
+    with OutFolder.open(tmp_path / "a" / "b" / "c"):
+        (tmp_path / "a" / "notes.txt").write_text("mine")
+    assert [p.name for p in (tmp_path / "a").iterdir()] == ["notes.txt"]
+
+
+def test_a_folder_removed_by_the_command_that_made_it_just_before_the_lock_is_made_again(tmp_path, monkeypatch):
+    """The first command closes (removing a/b, which it made) after the second has made sure of the folder but
+    before it opens the lock file there: the second makes the folders again and runs (it was refused "not
+    writable"); at its close it removes them, as it made them."""
+    first = OutFolder.open(tmp_path / "a" / "b")
+    real_lock, ends = outdir._lock, [first]
+
+    def first_ends_then_lock(folder, where, flag):
+        if ends:
+            ends.pop().close()
+            assert not (tmp_path / "a").exists()
+        return real_lock(folder, where, flag)
+
+    monkeypatch.setattr(outdir, "_lock", first_ends_then_lock)
+    second = OutFolder.open(tmp_path / "a" / "b")
+    assert not ends and (tmp_path / "a" / "b" / LOCK_NAME).read_text() == f"{os.getpid()}\n"
+    second.close()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_folder_removed_between_opening_its_lock_file_and_locking_it_is_made_again(tmp_path, monkeypatch):
+    """The first command ends between the second's open of the lock file and its flock: the flock then holds a
+    removed file in a removed folder; the second takes a new lock in the folder made again."""
+    first = OutFolder.open(tmp_path / "a")
+    real_flock, ends = fcntl.flock, [first]
+
+    def first_ends_then_flock(fd, op):
+        if ends:
+            ends.pop().close()
+            assert not (tmp_path / "a").exists()
+        return real_flock(fd, op)
+
+    monkeypatch.setattr(fcntl, "flock", first_ends_then_flock)
+    with OutFolder.open(tmp_path / "a") as second:
+        assert not ends and os.path.samestat(os.fstat(second._lock_fd), os.lstat(tmp_path / "a" / LOCK_NAME))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_parent_removed_while_the_folders_are_being_made_is_made_again(tmp_path, monkeypatch):
+    """The first command removes a (which it made) just after the second found a there and before it makes a/b."""
+    first = OutFolder.open(tmp_path / "a")
+    real_mkdir, ends = os.mkdir, [first]
+
+    def first_ends_then_mkdir(path, *args, **kw):
+        if ends and os.fspath(path).endswith(os.sep + "b"):
+            ends.pop().close()
+        return real_mkdir(path, *args, **kw)
+
+    monkeypatch.setattr(os, "mkdir", first_ends_then_mkdir)
+    with OutFolder.open(tmp_path / "a" / "b"):
+        assert not ends and (tmp_path / "a" / "b" / LOCK_NAME).exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_folder_that_keeps_vanishing_is_refused_saying_to_try_again(tmp_path, monkeypatch):
+    """If the folder is removed before every attempt to lock it, the command gives up with a message saying why and
+    what to do (not "not writable"), and leaves none of the folders it made."""
+    real_lock = outdir._lock
+
+    def removed_each_time(folder, where, flag):
+        os.rmdir(folder)
+        return real_lock(folder, where, flag)
+
+    monkeypatch.setattr(outdir, "_lock", removed_each_time)
+    with pytest.raises(OutDirError) as e:
+        OutFolder.open(tmp_path / "a" / "b")
+    message = str(e.value)
+    assert message.startswith(f"--out {str(tmp_path / 'a' / 'b')!r}: ") and "try again" in message, message
+    assert "removed" in message and "not writable" not in message, message
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_folder_the_user_put_in_place_of_one_the_command_made_is_not_removed(tmp_path):
+    """The user moved the command's folder into a new a/ of their own while it ran: close removes the command's
+    (empty) folder, not the user's a/, though it is empty by then and stands where the command made one."""
+    with OutFolder.open(tmp_path / "a" / "b"):
+        (tmp_path / "a").rename(tmp_path / "old")
+        (tmp_path / "a").mkdir()
+        (tmp_path / "old" / "b").rename(tmp_path / "a" / "b")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "old"] and list((tmp_path / "a").iterdir()) == []
