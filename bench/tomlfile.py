@@ -45,6 +45,12 @@ def read_text(path: str | Path, error, max_bytes: int, empty_hint: str, folder_h
     """The text of a TOML file, or ``error(source, [problem])`` naming the file and what is wrong with it:
     unreadable, not a regular file, larger than ``max_bytes``, empty (``empty_hint`` says what it needs), not
     UTF-8 (a leading byte-order mark is allowed and dropped), a NUL byte."""
+    return read_stored(path, error, max_bytes, empty_hint, folder_hint)[1]
+
+
+def read_stored(path: str | Path, error, max_bytes: int, empty_hint: str, folder_hint: str = "") -> tuple[bytes, str]:
+    """The file's bytes as stored (what ``sha256sum`` hashes: a byte-order mark included) and its text as
+    :func:`read_text` gives it (the mark dropped), from one reading; the same errors."""
     where = str(path)
     if "\0" in where:
         raise error(repr(where)[1:-1], ["the path contains a NUL byte"])
@@ -59,7 +65,7 @@ def read_text(path: str | Path, error, max_bytes: int, empty_hint: str, folder_h
         if st.st_size > max_bytes:
             raise error(where, [f"the file is {st.st_size} bytes: it may hold at most {size_text}"])
         with open(path, "rb") as f:
-            data = f.read(max_bytes + 1)
+            stored = data = f.read(max_bytes + 1)
     except OSError as e:
         raise error(where, [f"cannot read the file: {e.strerror or e}"]) from None
     if len(data) > max_bytes:
@@ -76,7 +82,7 @@ def read_text(path: str | Path, error, max_bytes: int, empty_hint: str, folder_h
     if nul >= 0:
         raise error(where, [f"the file holds a NUL byte at {_position(data, nul)}: not a text file"])
     try:
-        return data.decode("utf-8")
+        return stored, data.decode("utf-8")
     except UnicodeDecodeError as e:
         raise error(where, [f"not UTF-8 text: byte 0x{data[e.start]:02x} at {_position(data, e.start)} "
                             f"cannot be decoded (TOML files are UTF-8; save the file as UTF-8)"]) from None

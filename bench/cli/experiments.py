@@ -29,7 +29,7 @@ library, each relative to its own file.
 
 Writes into --out (default: a fresh out/texture-sweep[-n]): trials.csv and trials.json (one row per trial:
 texture, movement, repetition, seed, skin, the library file, the three properties, the true normal force,
-simulated and wall time; trials.json also states the library: path, SHA-256 of its text, shipped or not),
+simulated and wall time; trials.json also states the library: path, SHA-256 of the file, shipped or not),
 wear.csv (ridge height each movement wears off in {PILOT_WORTH_TRIALS} trials, a pilot's worth, on a fresh skin),
 properties.png (each property against force and velocity).  Movements keep their grid ids in every file.  An
 --out folder that holds anything is refused; --force replaces an earlier sweep's files there.

@@ -120,7 +120,7 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
         "scene": {"name": sc.name, "source": sc.source, "description": sc.description, "seed": sc.seed,
                   "fidelity": sc.fidelity, "duration_s": sc.duration_s,
                   "overrides": dict(getattr(sc, "overrides", {}) or {}), "text": sc.text,
-                  # the texture library the slides came from (path, SHA-256 of its text, shipped or one's own)
+                  # the texture library the slides came from (path, SHA-256 of the file, shipped or one's own)
                   "library": getattr(sc, "library", None)},
         "host": {"sequence": sc.sequence, "slot_rate_Hz": sc.slot_rate_Hz, "spi_clock_Hz": sc.spi_clock_Hz,
                  "spi": sc.spi},

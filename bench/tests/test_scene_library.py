@@ -83,6 +83,22 @@ def test_a_scene_slides_over_a_texture_only_its_own_library_has_and_its_record_n
         in report
 
 
+def test_a_librarys_hash_is_that_of_its_bytes_as_stored_a_byte_order_mark_and_all(tmp_path):
+    """Users compare the stated SHA-256 with sha256sum: a library saved with a UTF-8 byte-order mark is hashed with
+    it (the mark was left out), in the library read, a scene's record and the check that the file did not change
+    while trials ran; taking the mark out is a change of the file the outputs name."""
+    scene, lib = _files(tmp_path)
+    lib.write_bytes(b"\xef\xbb\xbf" + lib.read_bytes())
+    stored = hashlib.sha256(lib.read_bytes()).hexdigest()
+    read = L.read_library(lib)
+    assert read.sha256 == stored and read.textures[950].name == "my coarse felt"
+    assert load_scene(scene).library["sha256"] == stored
+    L.check_unchanged(read, "the test")  # the same bytes: no change
+    lib.write_bytes(lib.read_bytes()[3:])
+    with pytest.raises(TextureError, match="the library file changed while the test ran"):
+        L.check_unchanged(read, "the test")
+
+
 def test_a_scene_without_a_library_of_its_own_states_the_shipped_one():
     sc = load_scene("fixtures/scenes/grating.toml")
     assert sc.library == {"path": str(L.LIBRARY_PATH), "shipped": True,

@@ -12,7 +12,8 @@ A library of one's own is named one way everywhere (:func:`named_library`): ``[s
 ``[experiment] library``, relative to the file that names them, and ``--library`` of ``texture-sweep`` and
 ``textures``, relative to the working folder; every problem names the key, the file, then the texture, field,
 value and allowed range.  :func:`read_library` gives a :class:`LibraryFile`: the textures and the SHA-256 of the
-text they were parsed from (what the outputs state); the parse is cached on that text, so an edit is always seen.
+file they were parsed from, its bytes as stored (what the outputs state, as ``sha256sum`` prints it); the parse is
+cached on the file's text, so an edit is always seen.
 In Python, ``read_library("mine.toml").texture(950)`` is the texture a :class:`emulator.sliding.Slide` takes.
 
 Allowed values (physical ranges, wide enough for any real surface, narrow enough to catch a wrong unit):
@@ -376,7 +377,7 @@ def read_library_file(path: str | Path) -> dict:
     ``biotac-bench textures --json`` prints, one texture as ``--show N --json`` prints, or the TOML's object); an
     unreadable or oversized file, a device or pipe, non-UTF-8 bytes, syntax errors and absurd nesting raise
     :class:`TextureError` naming the file (:mod:`bench.tomlfile`)."""
-    return _parse_text(_library_text(path), str(path))
+    return _parse_text(_library_file(path)[0], str(path))
 
 
 def _parse_text(text: str, path: str) -> dict:
@@ -403,8 +404,12 @@ def _parse_text(text: str, path: str) -> dict:
     return {"texture": data} if isinstance(data, list) else data
 
 
-def _library_text(path: str | Path) -> str:
-    return tomlfile.read_text(path, TextureError, MAX_LIBRARY_BYTES, "no [[texture]] tables: the library is empty")
+def _library_file(path: str | Path) -> tuple[str, str]:
+    """The library file's text and the SHA-256 (hex) of its bytes as stored — what ``sha256sum`` prints for it, a
+    byte-order mark included — from one reading."""
+    stored, text = tomlfile.read_stored(path, TextureError, MAX_LIBRARY_BYTES,
+                                        "no [[texture]] tables: the library is empty")
+    return text, hashlib.sha256(stored).hexdigest()
 
 
 @functools.lru_cache(maxsize=8)
@@ -416,7 +421,7 @@ def _load_cached(path: str, text: str, complete: bool) -> dict[int, Texture]:
 @dataclass(frozen=True, eq=False)
 class LibraryFile:
     """A texture library file as read: ``path`` (as given; absolute when a scene, an experiment or a command names
-    it), ``sha256`` (hex digest of its text as read: UTF-8, a leading byte-order mark left out), ``textures`` by
+    it), ``sha256`` (hex digest of the file's bytes as stored, as ``sha256sum`` prints it), ``textures`` by
     number in SI units, and whether it is the shipped ``fixtures/textures/library.toml``."""
 
     path: str
@@ -435,15 +440,15 @@ class LibraryFile:
 
 def read_library(path: str | Path | None = None, complete: bool | None = None) -> LibraryFile:
     """The library file ``path`` (default: the shipped one) read and validated completely: its textures and the
-    hash of the text they came from (one reading: the hash is of what was parsed).  ``complete`` as for
+    hash of the file's bytes they came from (one reading: the hash is of what was parsed).  ``complete`` as for
     :func:`load_library`; a file that cannot be read or is invalid raises :class:`TextureError` naming it."""
     p = Path(path) if path is not None else LIBRARY_PATH
     if complete is None:
         complete = path is None
-    text = _library_text(p)
+    text, sha256 = _library_file(p)
     textures = _load_cached(str(p), text, bool(complete))
     shipped = path is None or os.path.realpath(p) == os.path.realpath(LIBRARY_PATH)
-    return LibraryFile(str(p), hashlib.sha256(text.encode("utf-8")).hexdigest(), MappingProxyType(textures), shipped)
+    return LibraryFile(str(p), sha256, MappingProxyType(textures), shipped)
 
 
 def check_unchanged(library: LibraryFile, what: str) -> None:
@@ -451,7 +456,7 @@ def check_unchanged(library: LibraryFile, what: str) -> None:
     ran meanwhile, e.g. "the sweep"): its trials read the file again, each on its worker, so an edit while they ran
     mixes two libraries under the one path and SHA-256 the outputs state, and a stage cache keyed on the first."""
     try:
-        now = hashlib.sha256(_library_text(library.path).encode("utf-8")).hexdigest()
+        now = _library_file(library.path)[1]
     except TextureError as e:
         now = None
         why = "; ".join(e.problems)
