@@ -97,7 +97,7 @@ def _table(textures) -> str:
 
 
 def _cmd_textures(a) -> int:
-    from bench.cli.args import library_option
+    from bench.cli.args import library_option, shell_word
     from bench.textures.library import UnknownTextureError, texture_record
 
     if a.show is not None and a.group:
@@ -120,7 +120,12 @@ def _cmd_textures(a) -> int:
         print(strict_json([texture_record(t) for t in items], indent=2, ensure_ascii=False))
         return 0
     print(_table(items))
-    print(f"\n{len(items)} texture(s); `biotac-bench textures --show N` prints one with its source")
+    if not items:
+        print("\n0 texture(s)")
+        return 0
+    library_flag = f" --library {shell_word(a.library)}" if a.library is not None else ""
+    print(f"\n{len(items)} texture(s); `biotac-bench textures{library_flag} --show {items[0].number}` (or another "
+          f"number or name) prints one with its source")
     return 0
 
 

@@ -221,6 +221,43 @@ def test_the_json_listing_is_a_library_the_command_reads_back(tmp_path, capsys):
 
 
 @unit
+@pytest.mark.parametrize("name", ["lib.json", "my libs/lib's.json", "-lib.json"])
+def test_the_listings_footer_suggests_a_command_that_works_as_typed(name, tmp_path, capsys, monkeypatch):
+    """The footer named `--show N` without --library: typed, it showed the shipped library's texture or none. It is
+    now a whole command — the --library given (quoted for the shell, a leading '-' made a path) and a number the
+    listing holds — and that command, split as a shell splits it, shows the library's texture."""
+    import shlex
+
+    _, one, _ = invoke(["textures", "--show", "burlap", "--json"], capsys)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+    (tmp_path / name).write_text(one.replace('"name": "burlap"', '"name": "my burlap"'))
+    status, out, err = invoke(["textures", f"--library={name}"], capsys)
+    assert status == 0, err
+    (typed,) = re.findall(r"`(biotac-bench [^`]*)`", out.splitlines()[-1])
+    argv = shlex.split(typed)
+    assert argv[0] == "biotac-bench" and "--show" in argv
+    status, shown, err = invoke(argv[1:], capsys)
+    assert status == 0 and shown.startswith("T100 my burlap"), (typed, err)
+    status, out, err = invoke(["textures", f"--library={name}", "--group", "glass"], capsys)
+    assert status == 0 and out.splitlines()[-1] == "0 texture(s)", out  # nothing to show: no suggestion
+
+
+@unit
+@pytest.mark.parametrize("path", ["plain.json", "it's here.json", "-dash.json", "new\nline.json", "\x1b[31mred.json",
+                                  "back\\slash\x07.json", "ünï\u200bcode.json", "bad\udcffbyte.json"])
+def test_a_path_suggested_in_a_command_is_one_word_the_shell_reads_back(path):
+    """bash reads :func:`shell_word` back as the path (a leading '-' as ./-…), and the word itself holds no line
+    break or control character (so the footer shows them rather than acting on the terminal)."""
+    from bench.cli.args import shell_word
+
+    word = shell_word(path)
+    assert word.isprintable(), word
+    done = subprocess.run(["bash", "-c", f"printf %s {word}"], capture_output=True, check=True)
+    assert done.stdout == os.fsencode(("./" if path.startswith("-") else "") + path)
+
+
+@unit
 @pytest.mark.parametrize("text, words", [("[", ["JSON syntax error", "line 1"]),
                                          ("[" * 5000 + "]" * 5000, ["nested too deeply"]),
                                          ('[{"texture": [[[[[[[[[1]]]]]]]]]}]', ["nested more than 8"]),
