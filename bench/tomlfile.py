@@ -114,18 +114,43 @@ _ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f
 _BARE_KEY = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-")
 
 
+def _is_surrogate(ch: str) -> bool:
+    return 0xD800 <= ord(ch) <= 0xDFFF
+
+
 def _basic_string(text: str) -> str:
     """``text`` as a TOML basic string: quotes, backslashes and control or other unprintable characters escaped
-    (so a message shows them rather than acting on the terminal)."""
+    (so a message shows them rather than acting on the terminal); a lone surrogate, which no TOML string can hold
+    (nor its ``\\uD800`` escape), as U+FFFD (:func:`spelled` says which surrogate it stands for)."""
     out = []
     for ch in text:
         if ch in _ESCAPES:
             out.append(_ESCAPES[ch])
-        elif ch.isprintable() and not 0xD800 <= ord(ch) <= 0xDFFF:
+        elif _is_surrogate(ch):
+            out.append(REPLACEMENT)
+        elif ch.isprintable():
             out.append(ch)
         else:
             out.append(f"\\u{ord(ch):04X}" if ord(ch) <= 0xFFFF else f"\\U{ord(ch):08X}")
     return '"' + "".join(out) + '"'
+
+
+#: what a message shows in place of a lone surrogate (only a JSON file holds one, as "\\ud800"; TOML text cannot)
+REPLACEMENT = "\ufffd"
+
+
+def _surrogates(v, found: dict) -> None:
+    """Collect the lone surrogates in the text of ``v`` (strings, keys, nested lists and tables) into ``found``,
+    in order (an iterative walk: no recursion)."""
+    stack = [v]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, str):
+            found.update((ch, None) for ch in x if _is_surrogate(ch))
+        elif isinstance(x, dict):
+            stack += [x[k] for k in reversed(list(x))] + [k for k in reversed(list(x))]
+        elif isinstance(x, (list, tuple)):
+            stack += reversed(x)
 
 
 def _spell(v) -> str:
@@ -148,9 +173,18 @@ def _spell(v) -> str:
 def spelled(v, limit: int = 80) -> str:
     """``v`` for a message as a TOML file spells it (``"x"``, ``true``, ``[1, "a"]``, ``{a = 1}``, ``inf``, a date
     as written), so a message about a TOML file speaks TOML back; a value TOML cannot hold (None, an object)
-    keeps its ``repr``.  Shortened past ``limit`` characters (:func:`bench.errors.shortened`)."""
+    keeps its ``repr``.  Text holding a lone surrogate (a JSON library's ``"\\ud800"``) is shown with U+FFFD in its
+    place, and a note after it names the surrogates as JSON escapes them.  Shortened past ``limit`` characters
+    (:func:`bench.errors.shortened`; the note after it, at most three surrogates named)."""
     try:
         text = _spell(v)
+        found: dict = {}
+        _surrogates(v, found)
     except (RecursionError, ValueError):
-        text = f"<{type(v).__name__}>"
-    return shortened(text, limit)
+        text, found = f"<{type(v).__name__}>", {}
+    text = shortened(text, limit)
+    if not found:
+        return text
+    named = ", ".join(f"\\u{ord(ch):04x}" for ch in list(found)[:3]) + (", …" if len(found) > 3 else "")
+    return (f"{text} ({REPLACEMENT} stands for the lone surrogate{'s' if len(found) > 1 else ''} {named}, which TOML "
+            f"text cannot hold)")

@@ -46,6 +46,30 @@ def test_values_are_spelled_as_toml_does(value, text):
     assert spelled(value, NO_LIMIT) == text
 
 
+@pytest.mark.parametrize("value, text", [
+    ("copy\ud800paper", '"copy\ufffdpaper" (\ufffd stands for the lone surrogate \\ud800, which TOML text cannot hold)'),
+    (["\udfff", {"k\ud800": "\udfff"}],
+     '["\ufffd", {"k\ufffd" = "\ufffd"}] (\ufffd stands for the lone surrogates \\udfff, \\ud800, which TOML text '
+     'cannot hold)'),
+])
+def test_a_lone_surrogate_shows_as_a_replacement_character_and_says_which(value, text):
+    """Only a JSON library can hold a lone surrogate ("\\ud800"), and no TOML text can (it showed as "\\uD800",
+    which TOML refuses): the value is shown as valid TOML with U+FFFD in its place, and a note after it names the
+    surrogate as JSON escapes it."""
+    assert spelled(value, NO_LIMIT) == text
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.lists(st.characters() | st.sampled_from(["\ud800", "\udfff", "\udc80"]), max_size=6).map("".join),
+                min_size=1, max_size=3))  # (st.text leaves surrogates out, whatever its alphabet)
+def test_text_with_lone_surrogates_is_shown_as_toml_reading_back_with_replacement_characters(texts):
+    """Any text, lone surrogates among it: what precedes the note reads back as the text, U+FFFD for each."""
+    shown = spelled(texts, NO_LIMIT)
+    has = any(0xD800 <= ord(ch) <= 0xDFFF for t in texts for ch in t)
+    value = shown[:shown.rindex(" (\ufffd stands for")] if has else shown
+    assert tomllib.loads(f"x = {value}")["x"] == [re.sub("[\ud800-\udfff]", "\ufffd", t) for t in texts]
+
+
 def test_a_long_value_is_shortened_saying_its_length():
     text = spelled("x" * 1000)
     assert len(text) <= 80 and text.startswith('"xxx') and "(1002 characters)" in text
