@@ -75,17 +75,59 @@ NOISE_AMPLITUDES = ("adc_noise_rms_bits", "adc_reference_noise_ppm", "pac_path_n
                     "mains_amplitude_V", "spi_coupling_rms_V", "tdc_noise_V")
 
 
-def noise_scale_problem(noise_scale: float) -> str | None:
-    """Why the sensor cannot take ``noise_scale`` (None when it can): 0 turns every noise source off; any other
-    scale must leave each scaled parameter inside its documented range (the bridge's Johnson noise scales through
-    its resistance, ×k², so k ≥ √(R_min / R)). ``noise_scale`` is a scale factor (dimensionless)."""
+#: how each parameter the noise scale k changes goes with k: the amplitudes ×k, the bridge's resistance ×k² (its
+#: Johnson noise goes as √R) and the amplifier's current noise ×1/k (it flows through R: ×k overall)
+NOISE_SCALING = {**{name: 1 for name in NOISE_AMPLITUDES}, "amp_current_noise_A_per_rtHz": -1,
+                 "bridge_resistance_ohm": 2}
+_POWER = {1: "×k", 2: "×k²", -1: "×1/k"}
+_WHY = {"bridge_resistance_ohm": "the bridge's resistance goes ×k² as its Johnson noise goes with √R",
+        "amp_current_noise_A_per_rtHz": "the amplifier's current noise goes ×1/k as it flows through R ×k²"}
+
+
+def _three_digits(x: float, up: bool) -> float:
+    """``x`` (> 0) to three significant digits, rounded up or down (an end of a range stays inside it)."""
+    scale = 10.0 ** (2 - math.floor(math.log10(x)))
+    return (math.ceil if up else math.floor)(x * scale) / scale
+
+
+def noise_scale_range(base: SensorParams | None = None) -> tuple[tuple[float, str, str], tuple[float, str, str]]:
+    """The scales k > 0 the sensor ``base`` (default: nominal) takes, as its two ends (k, the scaled parameter
+    that sets it, and why: how it goes with k and which end of its documented range it reaches there); an end no
+    parameter sets is 0 or inf with no parameter.  k is dimensionless."""
+    p = base or SensorParams()
+    lo, hi = (0.0, "", ""), (math.inf, "", "")
+    for name, power in NOISE_SCALING.items():
+        v = getattr(p, name)
+        if v <= 0:
+            continue  # 0 stays 0 at every scale
+        meta = SensorParams.__dataclass_fields__[name].metadata
+        (r_lo, r_hi), unit = meta["range"], meta["unit"]
+        at_min = (r_lo / v) ** (1 / power) if r_lo > 0 else (0.0 if power > 0 else math.inf)
+        at_max = (r_hi / v) ** (1 / power)
+        for k, limit, word in ((at_min, r_lo, "minimum"), (at_max, r_hi, "maximum")):
+            grows = (word == "maximum") == (power > 0)  # this end bounds k from above
+            why = f"{name} {_POWER[power]} passes its {word} {limit:g} {unit}"
+            if grows and k < hi[0]:
+                hi = (k, name, why)
+            elif not grows and k > lo[0]:  # (0: no bound)
+                lo = (k, name, why)
+    return lo, hi
+
+
+def noise_scale_problem(noise_scale: float, base: SensorParams | None = None) -> str | None:
+    """Why the sensor ``base`` (default: nominal) cannot take ``noise_scale`` (None when it can): 0 turns every
+    noise source off; any other scale must leave each scaled parameter inside its documented range
+    (:func:`noise_scale_range`; the hint names the parameter that limits each end, and its ends, rounded inward
+    to three digits, are scales the sensor takes; they hold 1, as ``base`` is a valid sensor). ``noise_scale`` is a
+    scale factor (dimensionless)."""
     try:
-        _params(noise_scale)
+        _params(noise_scale, base)
     except ValueError as e:
-        lo, hi = SensorParams.__dataclass_fields__["bridge_resistance_ohm"].metadata["range"]
-        r = SensorParams().bridge_resistance_ohm
-        return (f"{e} — give 0 (every noise source off) or {math.sqrt(lo / r):.3g}…{math.sqrt(hi / r):.3g} "
-                f"(the bridge's Johnson noise scales through its resistance, ×k²)")
+        (lo, lo_name, lo_why), (hi, hi_name, hi_why) = noise_scale_range(base)
+        notes = "".join(f"; {_WHY[n]}" for n in dict.fromkeys((lo_name, hi_name)) if n in _WHY)
+        lo_s, hi_s = f"{_three_digits(lo, up=True):g}", f"{_three_digits(hi, up=False):g}"
+        return (f"{e} — give 0 (every noise source off) or {lo_s}…{hi_s} (below {lo_s}, {lo_why}; above {hi_s}, "
+                f"{hi_why}{notes})")
     return None
 
 
@@ -94,15 +136,13 @@ def noise_sources(noise_scale: float) -> NoiseSources:
     return NoiseSources.none() if noise_scale == 0 else NoiseSources()
 
 
-def _params(noise_scale: float) -> SensorParams:
-    """Nominal parameters with every noise source scaled by ``noise_scale`` in amplitude (0: nominal, the
-    sources being switched off by :func:`noise_sources`)."""
-    p = SensorParams()
+def _params(noise_scale: float, base: SensorParams | None = None) -> SensorParams:
+    """The parameters ``base`` (default: nominal) with every noise source scaled by ``noise_scale`` in amplitude
+    (:data:`NOISE_SCALING`; 0: ``base`` as it is, the sources being switched off by :func:`noise_sources`)."""
+    p = base or SensorParams()
     if noise_scale in (0.0, 1.0):
         return p
-    scaled = {name: getattr(p, name) * noise_scale for name in NOISE_AMPLITUDES}
-    scaled["amp_current_noise_A_per_rtHz"] /= noise_scale ** 2  # i·R: ×k overall with R ×k²
-    return p.replace(bridge_resistance_ohm=p.bridge_resistance_ohm * noise_scale ** 2, **scaled)
+    return p.replace(**{name: getattr(p, name) * noise_scale ** power for name, power in NOISE_SCALING.items()})
 
 
 def run_trial_task(task: TrialTask) -> dict:

@@ -453,6 +453,31 @@ def test_noise_scale_takes_zero_for_a_noise_free_sensor_and_refuses_what_the_sen
     assert not out.exists()
 
 
+@pytest.mark.parametrize("changed", [{}, {"pac_path_noise_rms_bits": 5.0}, {"amp_current_noise_A_per_rtHz": 5e-10},
+                                     {"bridge_resistance_ohm": 1e5}])
+def test_the_noise_scale_hint_gives_scales_the_sensor_takes_and_names_what_limits_each_end(changed):
+    """The hint named the bridge's resistance as the only limit, and its ends (0.141…14.1) were rounded outward: 0.141
+    was refused.  For the nominal sensor and for sensors (valid parameter sets, as a unit might have) where another
+    scaled parameter binds first — a noisier PAC path at the top, a larger amplifier current noise (×1/k) at the
+    bottom — the printed ends are taken, and just past each one the parameter the sensor refuses is the one named."""
+    import re
+
+    from bench.experiments.trials import _params, noise_scale_problem
+    from emulator.params import SensorParams
+
+    base = SensorParams().replace(**changed)
+    hint = noise_scale_problem(1e-6, base)
+    m = re.search(r"give 0 \(every noise source off\) or ([0-9.e+-]+)…([0-9.e+-]+) \(", hint)
+    assert m, hint
+    lo, hi = float(m.group(1)), float(m.group(2))
+    assert noise_scale_problem(lo, base) is None and noise_scale_problem(hi, base) is None, (lo, hi)
+    for k, end in ((lo * 0.99, "below"), (hi * 1.01, "above")):
+        with pytest.raises(ValueError) as e:
+            _params(k, base)
+        refused = re.match(r"sensor\.(\w+) = ", str(e.value)).group(1)
+        assert re.search(rf"{end} [0-9.e+-]+, {refused} ", hint), (k, str(e.value), hint)
+
+
 def test_a_trial_with_an_undefined_property_is_kept_in_the_cache_and_refused_by_name_from_the_normals(tmp_path):
     """A trial row whose codes left a property undefined (null, with the reason) is a trial's result: the stage
     cache keeps it (a null without a reason is not one), and the trial table refuses it by texture, movement and
