@@ -111,3 +111,20 @@ def test_a_folder_the_user_put_in_place_of_one_the_command_made_is_not_removed(t
         (tmp_path / "a").mkdir()
         (tmp_path / "old" / "b").rename(tmp_path / "a" / "b")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "old"] and list((tmp_path / "a").iterdir()) == []
+
+
+def test_a_parent_that_is_there_but_refuses_a_folder_is_not_taken_for_a_race(tmp_path, monkeypatch):
+    """mkdir saying "no such file" while the parent is there (as /proc does) is the answer, not a folder removed
+    meanwhile: refused at once as "cannot create the folder", none of the folders made left behind."""
+    real_mkdir, tries = os.mkdir, []
+
+    def refuses_c(path, *args, **kw):
+        if os.fspath(path).endswith(os.sep + "c"):
+            tries.append(path)
+            raise FileNotFoundError(2, "No such file or directory", os.fspath(path))
+        return real_mkdir(path, *args, **kw)
+
+    monkeypatch.setattr(os, "mkdir", refuses_c)
+    with pytest.raises(OutDirError, match=r": cannot create the folder: No such file or directory$"):
+        OutFolder.open(tmp_path / "a" / "b" / "c")
+    assert len(tries) == 1 and list(tmp_path.iterdir()) == []
