@@ -7,11 +7,34 @@ status 2 (an error's own ``exit_status`` where it has one), never a traceback.
 
 from __future__ import annotations
 
+import os
+import shlex
+
 
 def shortened(text: str, limit: int = 300) -> str:
     """``text`` for a message, at most ``limit`` characters: cut, with its length said, when longer (a hostile
     file can hold a 1 MB string or path).  The one rule for the scene's and the texture library's messages."""
     return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
+
+
+def shell_word(text: str) -> str:
+    """``text`` (a path a user gave) as one word of a command line to type into a POSIX shell: quoted when it
+    needs it; one starting with '-' made a relative path ('./-x'), so argparse takes it as a value, not a flag; one
+    holding a control or other unprintable character in bash's $'…' quoting, its bytes escaped (a message shows them,
+    rather than acting on the terminal)."""
+    if text.startswith("-"):
+        text = "./" + text
+    if text.isprintable():
+        return shlex.quote(text)
+    out = []
+    for ch in text:
+        if ch in "'\\":
+            out.append("\\" + ch)
+        elif ch.isprintable():
+            out.append(ch)
+        else:
+            out.append("".join(f"\\x{b:02x}" for b in os.fsencode(ch)))
+    return "$'" + "".join(out) + "'"
 
 
 class BenchError(Exception):

@@ -10,7 +10,6 @@ import json
 import math
 import numbers
 import os
-import shlex
 import signal
 import sys
 import tempfile
@@ -308,22 +307,3 @@ def library_option(value: str | None):
     except TextureError as e:
         raise ValueError("; ".join(e.problems)) from None
 
-
-def shell_word(text: str) -> str:
-    """``text`` (a path a user gave) as one word of a command line to type into a POSIX shell: quoted when it
-    needs it; one starting with '-' made a relative path ('./-x'), so argparse takes it as a value, not a flag; one
-    holding a control or other unprintable character in bash's $'…' quoting, its bytes escaped (a message shows them,
-    rather than acting on the terminal)."""
-    if text.startswith("-"):
-        text = "./" + text
-    if text.isprintable():
-        return shlex.quote(text)
-    out = []
-    for ch in text:
-        if ch in "'\\":
-            out.append("\\" + ch)
-        elif ch.isprintable():
-            out.append(ch)
-        else:
-            out.append("".join(f"\\x{b:02x}" for b in os.fsencode(ch)))
-    return "$'" + "".join(out) + "'"

@@ -97,7 +97,8 @@ def _table(textures) -> str:
 
 
 def _cmd_textures(a) -> int:
-    from bench.cli.args import library_option, shell_word
+    from bench.cli.args import library_option
+    from bench.errors import shell_word
     from bench.textures.library import UnknownTextureError, texture_record
 
     if a.show is not None and a.group:

@@ -139,7 +139,7 @@ def load_experiment(path: str | Path) -> ExperimentSpec:
 
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
-    from bench.textures.library import library_path, load_library, named_problems
+    from bench.textures.library import library_path, listing_command, load_library, named_problems
     from emulator.fidelity import PROFILES
 
     problems: list[str] = []
@@ -203,7 +203,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             return default
         missing = [n for n in v if n not in lib]
         if missing:
-            problems.append(f"{table}.{key}: no texture {missing} in the library (biotac-bench textures)")
+            problems.append(f"{table}.{key}: no texture {missing} in the library (`{listing_command(spec.library)}`)")
         if listed_twice(v):
             problems.append(f"{table}.{key}: texture(s) {listed_twice(v)} listed twice")
         return v

@@ -244,12 +244,36 @@ def test_the_listings_footer_suggests_a_command_that_works_as_typed(name, tmp_pa
 
 
 @unit
+def test_a_listing_suggested_for_a_library_of_ones_own_lists_that_library(tmp_path, capsys, monkeypatch):
+    """`textures --library X --show zzzz` and an experiment naming a texture its own library lacks suggested
+    `biotac-bench textures`, which lists the shipped library: the suggestion names the library, and works typed."""
+    import shlex
+
+    from bench.experiments import experiment as E
+
+    _, one, _ = invoke(["textures", "--show", "burlap", "--json"], capsys)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my lib.json").write_text(one.replace('"name": "burlap"', '"name": "my burlap"'))
+    status, _, err = invoke(["textures", "--library", "my lib.json", "--show", "zzzz"], capsys)
+    assert status == 2 and "no texture named 'zzzz'" in err, err
+    (typed,) = re.findall(r"`(biotac-bench [^`]*)` lists them all", err)
+    status, out, err = invoke(shlex.split(typed)[1:], capsys)
+    assert status == 0 and "T100  my burlap" in out and "1 texture(s)" in out, (typed, err)
+    with pytest.raises(E.ExperimentError) as e:
+        E.parse_experiment({"experiment": {"name": "x", "library": "my lib.json"}, "pilot": {"textures": [7]}},
+                           str(tmp_path / "x.toml"))
+    (typed,) = re.findall(r"no texture \[7\] in the library \(`(biotac-bench [^`]*)`\)", str(e.value))
+    status, out, err = invoke(shlex.split(typed)[1:], capsys)
+    assert status == 0 and "T100  my burlap" in out, (typed, err)
+
+
+@unit
 @pytest.mark.parametrize("path", ["plain.json", "it's here.json", "-dash.json", "new\nline.json", "\x1b[31mred.json",
                                   "back\\slash\x07.json", "ünï\u200bcode.json", "bad\udcffbyte.json"])
 def test_a_path_suggested_in_a_command_is_one_word_the_shell_reads_back(path):
     """bash reads :func:`shell_word` back as the path (a leading '-' as ./-…), and the word itself holds no line
     break or control character (so the footer shows them rather than acting on the terminal)."""
-    from bench.cli.args import shell_word
+    from bench.errors import shell_word
 
     word = shell_word(path)
     assert word.isprintable(), word

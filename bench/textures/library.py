@@ -57,7 +57,7 @@ from types import MappingProxyType
 
 from bench import tomlfile
 from bench.tomlfile import spelled
-from bench.errors import TextureError, shortened
+from bench.errors import TextureError, shell_word, shortened
 from bench.paths import FIXTURES
 from emulator.texture import PeriodicComponent, Texture
 from emulator.thermal import MATERIALS
@@ -539,6 +539,14 @@ def texture(number_or_name: int | str, path: str | Path | None = None) -> Textur
     return _lookup(lib.textures, lib.path, number_or_name)
 
 
+def listing_command(path: str | Path | None) -> str:
+    """The command that lists the library file ``path`` (None: the shipped one), to suggest in a message: one that
+    works as typed (the path one shell word, :func:`bench.errors.shell_word`; absolute paths stay absolute)."""
+    if path is None or os.path.realpath(path) == os.path.realpath(LIBRARY_PATH):
+        return "biotac-bench textures"
+    return f"biotac-bench textures --library {shell_word(os.fspath(path))}"
+
+
 def _lookup(lib, source: str, q) -> Texture:
     """Texture ``q`` (number or name) of ``lib`` (the textures of the file ``source``), or
     :class:`UnknownTextureError` saying what the library holds and what comes close."""
@@ -561,7 +569,7 @@ def _lookup(lib, source: str, q) -> Texture:
     near = difflib.get_close_matches(key, names, n=5, cutoff=0.5)
     near += [nm for nm in names if key and key in nm and nm not in near][:5 - len(near)]
     hint = ("close matches: " + ", ".join(f"T{by_name[nm].number} {by_name[nm].name!r}" for nm in near)
-            if near else "no close matches (`biotac-bench textures` lists them all)")
+            if near else f"no close matches (`{listing_command(source)}` lists them all)")
     raise UnknownTextureError(source, q, f"no texture named {q!r}; {hint}")
 
 
