@@ -53,6 +53,8 @@ D_FIGURES = {"pairs accuracy %": 99.6, "pairs median moves": 3, "117-way accurac
              "best movements": {"traction": "1.26 N @ 1 cm/s", "roughness": "0.2 N @ 6.31 cm/s",
                                 "fineness": "0.5 N @ 2.5 cm/s"}}
 STRATEGY_NAMES = ("bayesian", "cycle", "random")
+#: the largest [sensor] noise_scale an experiment file may give (dimensionless; the sensor's own ranges allow 14.1)
+MAX_NOISE_SCALE = 10.0
 #: D's pilot picks (ch. 6) as (normal force N, velocity m/s), per property
 D_BEST_MOVEMENTS = {"traction": (1.26, 0.01), "roughness": (0.2, 0.0631), "fineness": (0.5, 0.025)}
 
@@ -315,8 +317,9 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
                                           spec.identification_simulations)
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
-    spec.noise_scale = get("sensor", "noise_scale", float, 0.0, 10.0, 1.0)
-    noise_problem = noise_scale_problem(spec.noise_scale)
+    spec.noise_scale = get("sensor", "noise_scale", float, 0.0, MAX_NOISE_SCALE, 1.0)
+    noise_problem = noise_scale_problem(spec.noise_scale,
+                                        most=(MAX_NOISE_SCALE, "the largest an experiment file takes"))
     if noise_problem:
         problems.append(f"sensor.noise_scale = {spelled(spec.noise_scale)}: {noise_problem}")
     spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)

@@ -114,16 +114,20 @@ def noise_scale_range(base: SensorParams | None = None) -> tuple[tuple[float, st
     return lo, hi
 
 
-def noise_scale_problem(noise_scale: float, base: SensorParams | None = None) -> str | None:
+def noise_scale_problem(noise_scale: float, base: SensorParams | None = None,
+                        most: tuple[float, str] | None = None) -> str | None:
     """Why the sensor ``base`` (default: nominal) cannot take ``noise_scale`` (None when it can): 0 turns every
     noise source off; any other scale must leave each scaled parameter inside its documented range
     (:func:`noise_scale_range`; the hint names the parameter that limits each end, and its ends, rounded inward
-    to three digits, are scales the sensor takes; they hold 1, as ``base`` is a valid sensor). ``noise_scale`` is a
-    scale factor (dimensionless)."""
+    to three digits, are scales the sensor takes; they hold 1, as ``base`` is a valid sensor). ``most``: the
+    caller's own largest scale and what sets it (an experiment file's field), the hint's upper end when lower.
+    ``noise_scale`` is a scale factor (dimensionless)."""
     try:
         _params(noise_scale, base)
     except ValueError as e:
         (lo, lo_name, lo_why), (hi, hi_name, hi_why) = noise_scale_range(base)
+        if most is not None and most[0] < hi:
+            hi, hi_name, hi_why = most[0], "", most[1]
         notes = "".join(f"; {_WHY[n]}" for n in dict.fromkeys((lo_name, hi_name)) if n in _WHY)
         lo_s, hi_s = f"{_three_digits(lo, up=True):g}", f"{_three_digits(hi, up=False):g}"
         return (f"{e} — give 0 (every noise source off) or {lo_s}…{hi_s} (below {lo_s}, {lo_why}; above {hi_s}, "

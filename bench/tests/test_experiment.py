@@ -478,6 +478,24 @@ def test_the_noise_scale_hint_gives_scales_the_sensor_takes_and_names_what_limit
         assert re.search(rf"{end} [0-9.e+-]+, {refused} ", hint), (k, str(e.value), hint)
 
 
+def test_an_experiment_files_noise_scale_hint_offers_only_scales_the_file_takes():
+    """The file's [sensor] noise_scale is at most 10, below the sensor's own top (14.1): the hint's upper end is the
+    file's, said so, and a scale just past it is refused by the file."""
+    import re
+
+    with pytest.raises(E.ExperimentError) as e:
+        E.parse_experiment({"experiment": {"name": "x"}, "sensor": {"noise_scale": 0.1}}, "x.toml")
+    m = re.search(r"or ([0-9.e+-]+)…([0-9.e+-]+) \(below .*; above [0-9.e+-]+, (.*?)[;)]", str(e.value))
+    assert m and float(m.group(2)) == 10 and "experiment file" in m.group(3), str(e.value)
+    for k, refused in ((float(m.group(1)), False), (10.0, False), (10.01, True)):
+        data = {"experiment": {"name": "x"}, "sensor": {"noise_scale": k}}
+        if refused:
+            with pytest.raises(E.ExperimentError, match=r"sensor.noise_scale = 10.01: must be float \(0.0 to 10.0\)"):
+                E.parse_experiment(data, "x.toml")
+        else:
+            assert E.parse_experiment(data, "x.toml").noise_scale == k
+
+
 def test_a_trial_with_an_undefined_property_is_kept_in_the_cache_and_refused_by_name_from_the_normals(tmp_path):
     """A trial row whose codes left a property undefined (null, with the reason) is a trial's result: the stage
     cache keeps it (a null without a reason is not one), and the trial table refuses it by texture, movement and
