@@ -40,6 +40,7 @@ class FaultCase:
     bench_kw: dict
     schedule: list  # (seconds after streaming starts, action(board))
     check: object  # (frames, status, parser stats) -> problem string or None
+    trace: object = None  # (board) -> problem string or None: the fault's own mark on the bus (that it happened)
 
 
 def _mask_returns(frames, status, stats):
@@ -115,6 +116,21 @@ def _resting_pdc_falls_as_the_fluid_leaks(frames, status, stats):
                 f"{min(drops):.1f} to {max(drops):.1f}")
 
 
+#: how often the cs_glitch case toggles sensor 1's chip select with no clock edges (50 ms apart from 0.1 s)
+CS_GLITCHES = 10
+
+
+def _every_glitch_reached_sensor_1(board):
+    """cs_glitch's trace: sensor 1's port, on either SPI bus, counted exactly :data:`CS_GLITCHES` chip-select
+    windows with no clock edges (the firmware's own traffic makes none), so a glitch dropped on the way — or one
+    sent to another sensor — fails the case, where the healthy link it leaves behind would pass it."""
+    port = board.bus.ports.get(1)
+    seen = 0 if port is None else port.empty_windows
+    if seen != CS_GLITCHES:
+        return (f"sensor 1 saw {seen} chip-select windows with no clock edges; the case glitches it "
+                f"{CS_GLITCHES} times (a glitch went missing or astray)")
+
+
 def _clean(frames, status, stats):
     flagged = sum(int((f.status != 0).sum()) for f in frames)
     if stats.crc_errors or stats.dropped_frames or flagged:
@@ -132,15 +148,20 @@ FAULT_CASES = {
     "miso_stuck": ({"n_sensors": 2}, [(0.2, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))],
                    _drops_sensor),
     "brownout_reset": ({}, [(0.3, lambda b: b.reset_at(1, b.t + BROWNOUT_INTO_FRAME_S))], _survives_reset),
-    "cs_glitch": ({}, [(0.1 + 0.05 * k, lambda b: b.glitch(1)) for k in range(10)], _clean),
+    "cs_glitch": ({}, [(0.1 + 0.05 * k, lambda b: b.glitch(1)) for k in range(CS_GLITCHES)], _clean),
     "serial_corruption": ({"corrupt_rate": 5e-4}, [], _resyncs),
     "serial_loss": ({"drop_rate": 5e-4}, [], _resyncs),
     "fluid_leak": ({"sensor_faults": {"fluid_leak_mL_per_min": LEAK_CASE_ML_PER_MIN}}, [],
                    _resting_pdc_falls_as_the_fluid_leaks),
 }
 
+#: The traces of the faults whose correct reaction shows nothing to the host (name -> trace(board)): what the bus
+#: recorded of the fault, so that a fault dropped on the way fails its case rather than passing as a healthy link.
+FAULT_TRACES = {"cs_glitch": _every_glitch_reached_sensor_1}
+
 #: The campaign's faults, in :data:`~bench.campaigns.case_names.FAULT_EXPECTED`'s order with its expected reactions.
-FAULTS = {name: FaultCase(name, expected, *FAULT_CASES[name]) for name, expected in FAULT_EXPECTED.items()}
+FAULTS = {name: FaultCase(name, expected, *FAULT_CASES[name], FAULT_TRACES.get(name))
+          for name, expected in FAULT_EXPECTED.items()}
 
 #: Each scene of :data:`~bench.campaigns.case_names.SCENE_DESCRIPTIONS`: its stimuli for sensor 1, as described there.
 SCENE_STIMULI = {
@@ -221,6 +242,8 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
         unapplied = len(fb.board.events) + len(fb.board.resets)  # the fault's actions the run never reached
         if fault.schedule and unapplied:
             problem = f"{unapplied} of the fault's scheduled actions never happened (the stream ended before them)"
+        elif fault.trace is not None and (missing := fault.trace(fb.board)) is not None:
+            problem = missing
         elif len(frames) < frames_wanted // 2:
             problem = f"only {len(frames)} frames arrived"
         elif status is None:

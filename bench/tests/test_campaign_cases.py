@@ -1,8 +1,9 @@
 """Every case of the default fault campaign (9 faults × 4 scenes, seed 0) through the bridge firmware, a pty and the
 host driver passes — and every check that can tell a fault from its absence fails on the same bench without the
-fault, so a case cannot pass because nothing happened.  ``none`` and ``cs_glitch`` expect nothing to be seen (a
-healthy link; a chip-select window with no clock edges is ignored), so they have no negative; a case whose
-scheduled actions never happened fails for that.  The fluid leak's
+fault, so a case cannot pass because nothing happened.  ``none`` and ``cs_glitch`` expect the host to see nothing
+(a healthy link; a chip-select window with no clock edges is ignored): ``none`` has no fault to miss, and
+``cs_glitch`` also needs the bus's trace of its glitches (sensor 1's port counts them), so a glitch dropped on the
+way fails it, on either SPI bus; a case whose scheduled actions never happened fails for that.  The fluid leak's
 negatives are in test_campaign_leak.py."""
 
 from __future__ import annotations
@@ -64,6 +65,24 @@ def test_a_fault_whose_actions_never_happen_fails_the_case():
     result = run_case(late, "rest", 0)
     assert not result["passed"] and "1 of the fault's scheduled actions never happened" in result["problem"]
 
+
+@pytest.mark.parametrize("spi", ["software", pytest.param("rtl", marks=[pytest.mark.rtl, pytest.mark.firmware])])
+def test_the_glitch_case_passes_only_with_its_glitches_on_the_bus(spi):
+    """cs_glitch's correct reaction shows the host nothing, so a glitch lost on the way would leave a healthy link
+    that passes: with its glitches the case passes; with every other one of its schedule's actions doing nothing
+    it fails, naming how many empty chip-select windows sensor 1 saw and how many the case makes — over either SPI
+    bus."""
+    import dataclasses
+
+    glitch = campaign.FAULTS["cs_glitch"]
+    result = run_case(glitch, "rest", 0, spi=spi)
+    assert result["passed"], result
+    half = dataclasses.replace(glitch, schedule=[(dt, act if k % 2 else lambda b: None)
+                                                 for k, (dt, act) in enumerate(glitch.schedule)])
+    result = run_case(half, "rest", 0, spi=spi)
+    assert not result["passed"] and result["problem"].startswith(
+        f"sensor 1 saw {campaign.CS_GLITCHES // 2} chip-select windows with no clock edges; the case glitches it "
+        f"{campaign.CS_GLITCHES} times"), result
 
 
 def test_a_fault_that_silences_the_stream_fails_the_case_saying_how_many_frames_came():

@@ -364,7 +364,8 @@ class RtlBus:
         transfer that releases chip select, or at the start of one that selects other sensors.  Its command is the
         first 16 bits clocked in it, as the sensor receives them: bit position ``flip`` (from chip-select fall; the
         ``mosi_flip_bit`` fault in force for these transfers) inverted.  Returns (fall s, rise s, command — 0 with
-        fewer than 16 bits —, the bus's next activity s) arrays."""
+        fewer than 16 bits —, the bus's next activity s) arrays.  A window that closes with no bit clocked (a
+        glitch) counts in the port's ``empty_windows``, as the software port counts it."""
         from emulator.spi.model import SELECT_ALL, SELECT_CODE
 
         rows, window = [], self._open_window.get(n)
@@ -375,6 +376,7 @@ class RtlBus:
             if flip is not None:
                 command = np.where(nbits >= 16, command ^ np.uint64(1 << (15 - flip)), 0)
             after = np.append(start[1:], np.inf)
+            self.ports[n].empty_windows += int(np.count_nonzero(to_it & (nbits == 0)))
             return start[to_it], end[to_it], command[to_it].astype(np.uint16), after[to_it]
         for i in range(start.size):
             if cs[i] != SELECT_ALL and cs[i] != SELECT_CODE[n]:
@@ -382,6 +384,7 @@ class RtlBus:
                     # (the software bus judges the conversion's coupling at the next transfer's start, as ever)
                     rows.append((window[0], start[i], window[1] if window[2] >= 16 else 0,
                                  start[i + 1] if i + 1 < start.size else np.inf))
+                    self.ports[n].empty_windows += int(window[2] == 0)
                     window = None
                 continue
             if window is None:
@@ -395,6 +398,7 @@ class RtlBus:
             if not keep[i]:
                 rows.append((window[0], end[i], window[1] if window[2] >= 16 else 0,
                              start[i + 1] if i + 1 < start.size else np.inf))
+                self.ports[n].empty_windows += int(window[2] == 0)
                 window = None
         self._open_window[n] = window
         fall, rise, command, after = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 4

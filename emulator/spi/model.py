@@ -235,6 +235,7 @@ class SensorPort:
         self.reset()
         # counters a report can show
         self.incomplete = 0
+        self.empty_windows = 0  # chip-select windows with no clock edge (a glitch on the line: ignored)
         self.unprovided_requests = 0
         self.coupled_conversions = 0
 
@@ -353,6 +354,8 @@ class SensorPort:
         if n < 8:
             if n:
                 self.incomplete += 1
+            else:
+                self.empty_windows += 1
             return
         b0 = (self._rx >> (min(n, 16) - 8)) & 0xFF
         if b0 == 0x00:  # a read
