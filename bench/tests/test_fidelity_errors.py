@@ -152,3 +152,15 @@ def test_the_readme_fidelity_table_states_the_measured_errors_of_every_shipped_s
             if stated != measured:
                 wrong.append(f"{name} / {profile}: README {stated}, {FIXTURE_NAME} {measured}")
     assert not wrong, "README's fidelity table (regenerate with ./scripts/benchmark):\n" + "\n".join(wrong)
+
+
+@pytest.mark.unit
+def test_profile_errors_take_a_scene_built_in_code_as_they_take_its_file_and_leave_it_as_it_was(tmp_path):
+    """``profile_errors`` of a :class:`Scene` (how the sliding benchmark passes its slide) equals that of the file it
+    was read from, and measuring leaves the caller's scene at its own fidelity and noise."""
+    path = tmp_path / "full.toml"
+    path.write_text(SCENE.format(name="full-frame", sequence='"default"'), encoding="utf-8")
+    scene = load_scene(path)
+    before = (scene.fidelity, scene.noise, scene.seed)
+    assert profile_errors(scene) == profile_errors(path)
+    assert (scene.fidelity, scene.noise, scene.seed) == before

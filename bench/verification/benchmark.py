@@ -15,10 +15,12 @@ one simulated hour (in a subprocess, so the number is the stream's own).
 
 from __future__ import annotations
 
+import copy
 import json
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -38,6 +40,8 @@ from emulator.spi.peripheral import SoftwarePeripheral
 
 #: the kinds of channel whose error :func:`profile_errors` measures, each over every conversion of that kind
 ERROR_KINDS = ("PAC", "PDC", "TDC", "TAC", "electrodes")
+#: each of :data:`ERROR_KINDS` as a column of the printed tables (the fidelity table, the sliding one)
+ERROR_KIND_COLUMNS = {"PAC": "PAC", "PDC": "PDC", "TDC": "TDC", "TAC": "TAC", "electrodes": "E"}
 
 
 def _conversions(scene) -> tuple[np.ndarray, np.ndarray]:
@@ -67,18 +71,23 @@ def _noise_free_bits(scene, fidelity: str, times: np.ndarray, channels: np.ndarr
     return out / ADC_LSB_V
 
 
-def profile_errors(path, profiles=tuple(PROFILES)) -> dict[str, dict[str, float]]:
-    """Each profile's deterministic error against ``reference`` on the scene file ``path``: {profile: {kind: RMS
+def profile_errors(scene, profiles=tuple(PROFILES)) -> dict[str, dict[str, float]]:
+    """Each profile's deterministic error against ``reference`` on ``scene`` (a scene file's path, or a
+    :class:`~bench.scenes.scene.Scene`, which is left as it is: each profile measures a copy): {profile: {kind: RMS
     error in bits}}, for every kind of :data:`ERROR_KINDS` the scene's host reads, over every conversion of that
     kind of every sensor of the scene (noise off; the analog value before quantization, in ADC LSB)."""
+    def fresh():
+        """A new copy of the scene (measuring one sets its fidelity and noise)."""
+        return load_scene(scene) if isinstance(scene, (str, Path)) else copy.deepcopy(scene)
+
     diffs: dict[str, dict[str, list]] = {name: {} for name in profiles}
-    for k in range(1, load_scene(path).n_sensors + 1):
-        times, channels = _conversions(load_scene(path).for_sensor(k))
+    for k in range(1, fresh().n_sensors + 1):
+        times, channels = _conversions(fresh().for_sensor(k))
         masks = _kind_masks(channels)
-        ref = _noise_free_bits(load_scene(path).for_sensor(k), "reference", times, channels)
+        ref = _noise_free_bits(fresh().for_sensor(k), "reference", times, channels)
         for name in profiles:
             d = (np.zeros(ref.size) if name == "reference"
-                 else _noise_free_bits(load_scene(path).for_sensor(k), name, times, channels) - ref)
+                 else _noise_free_bits(fresh().for_sensor(k), name, times, channels) - ref)
             for kind, sel in masks.items():
                 diffs[name].setdefault(kind, []).append(d[sel])
     return {name: {kind: float(np.sqrt(np.mean(np.concatenate(parts) ** 2))) for kind, parts in per.items()}
@@ -706,7 +715,7 @@ def _fingerprints_main(argv) -> int:
 def fidelity_lines(rows: list[dict]) -> list[str]:
     """The fidelity table of :func:`fidelity_table` as text: per scene and profile each channel kind's noise-free RMS
     error (bits; — where the scene reads no such channel), PAC's spectral error (dB) and the cost."""
-    kinds = {"PAC": "PAC", "PDC": "PDC", "TDC": "TDC", "TAC": "TAC", "electrodes": "E"}
+    kinds = ERROR_KIND_COLUMNS
     lines = ["Fidelity profiles: error against the reference profile (noise-free RMS, bits, per channel kind), and cost",
              f"{'scene':22s} {'profile':24s} " + " ".join(f"{k:>9s}" for k in kinds.values())
              + f" {'PAC spectral (dB)':>18s} {'ms / sim s':>11s} {'× real time':>12s}"]

@@ -1,9 +1,11 @@
 """Benchmarks of sliding, the texture rig and the experiment's campaigns: what each fidelity profile costs and how
-wrong it is while sliding, rig trials per second, Dask scaling (1 vs 2 workers, overhead per task, an estimate
-for a larger cluster), and exploration steps per second.  Printed by ``biotac-bench benchmark --textures``."""
+wrong it is while sliding (each channel kind's error, measured as the fidelity table measures it), rig trials per
+second, Dask scaling (1 vs 2 workers, overhead per task, an estimate for a larger cluster), and exploration steps
+per second.  Printed by ``biotac-bench benchmark --textures``."""
 
 from __future__ import annotations
 
+import copy
 import time
 
 import numpy as np
@@ -17,34 +19,58 @@ TRIAL_REPEATS = 10  # a rig trial's cost: the shortest wall time of this many ru
 # machine's load only adds time; 10 runs of ~20 ms cost 0.2 s a row and find a quiet moment far more often than 3)
 
 
-def _slide_pac_bits(texture, fidelity: str) -> tuple[np.ndarray, float]:
-    """Noise-free analog PAC (LSB) of a scripted 5 cm slide at 0.5 N, 2.5 cm/s, and its wall time (s)."""
-    from emulator import conversions as conv
+#: how long (s) the benchmark's slide scene runs on after the finger lifts
+SLIDE_TAIL_S = 0.2
+
+
+def slide_scene(texture):
+    """The benchmark's slide on ``texture`` as a one-sensor scene built in code: from 0.2 s, 5 cm at 0.5 N and
+    2.5 cm/s from 0.3 m along the texture (approach, hold, acceleration and lift the :class:`Slide`'s defaults), read
+    through the default 44-slot frame at 4400 slots/s, ending :data:`SLIDE_TAIL_S` after the lift; no noise."""
+    from bench.scenes.scene import Scene
 
     slide = Slide(0.2, texture, 0.5, 0.025, 0.05, start_position_m=0.3)
-    t = np.arange(0.0, slide.end_s + 0.2, 1 / PAC_RATE_HZ)
-    t0 = time.perf_counter()
-    sensor = Sensor(stimuli=[slide], channels_read=["PAC"], fidelity=fidelity, noise=NoiseSources.none())
-    x = sensor.analog_trace("PAC", t) / conv.ADC_LSB_V
-    return x, time.perf_counter() - t0
+    return Scene(name=f"slide on {texture.name}", duration_s=slide.end_s + SLIDE_TAIL_S, seed=1, stimuli=[slide],
+                 noise=NoiseSources.none())
+
+
+def _slide_pac_bits(scene, fidelity: str) -> np.ndarray:
+    """Noise-free analog PAC (LSB) of :func:`slide_scene`'s ``scene`` at ``fidelity``, sampled evenly at
+    :data:`PAC_RATE_HZ` over the scene (its stimuli copied: the scene is left as it is)."""
+    from emulator import conversions as conv
+
+    t = np.arange(0.0, scene.duration_s, 1 / PAC_RATE_HZ)
+    sensor = Sensor(stimuli=copy.deepcopy(scene.stimuli), channels_read=["PAC"], fidelity=fidelity,
+                    noise=NoiseSources.none())
+    return sensor.analog_trace("PAC", t) / conv.ADC_LSB_V
+
+
+#: the profiles the sliding benchmark compares (each against ``reference``)
+SLIDING_PROFILES = ("fast", "default", "reference")
 
 
 def sliding_fidelity(textures=(901, 902, 30), say=lambda m: None) -> list[dict]:
-    """Per texture and profile: PAC RMS error (LSB) and spectral error (dB, 20–700 Hz) of a noise-free slide
-    against the reference profile, and the rig trial's cost (lower, hold, slide 5 cm, full frame, noise on; the
-    best of :data:`TRIAL_REPEATS` runs)."""
+    """Per texture and profile, on :func:`slide_scene`: ``error_bits``, each channel kind's noise-free RMS error
+    against the reference profile (bits; the fidelity table's :func:`~bench.verification.benchmark.profile_errors`,
+    so every kind of the default frame), PAC's also as ``pac_rms_error_bits``; PAC's spectral error (dB,
+    20–700 Hz); and the rig trial's cost (lower, hold, slide 5 cm, full frame, noise on; the best of
+    :data:`TRIAL_REPEATS` runs)."""
     from bench.textures.library import texture
+    from bench.verification.benchmark import profile_errors
 
     rows = []
     for number in textures:
         tex = texture(number)
-        ref, _ = _slide_pac_bits(tex, "reference")
+        scene = slide_scene(tex)
+        say(f"… sliding on {tex.name}: noise-free errors")
+        errors = profile_errors(scene, SLIDING_PROFILES)
+        ref = _slide_pac_bits(scene, "reference")
         f = np.fft.rfftfreq(ref.size, 1 / PAC_RATE_HZ)
         band = (f >= 20) & (f <= 700)
         ref_spec = np.abs(np.fft.rfft(ref * np.hanning(ref.size)))[band] ** 2
-        for profile in ("fast", "default", "reference"):
+        for profile in SLIDING_PROFILES:
             say(f"… sliding on {tex.name}, {profile}")
-            x, _ = _slide_pac_bits(tex, profile)
+            x = _slide_pac_bits(scene, profile)
             spec = np.abs(np.fft.rfft(x * np.hanning(x.size)))[band] ** 2
             spectral = float(np.sqrt(np.mean((10 * np.log10((spec + 1e-12) / (ref_spec + 1e-12))) ** 2)))
             task = TrialTask(number, 0.5, 0.025, 0, trial_seed(1, "bench", number), fidelity=profile)
@@ -54,8 +80,9 @@ def sliding_fidelity(textures=(901, 902, 30), say=lambda m: None) -> list[dict]:
                 t0 = time.perf_counter()
                 row = run_trial_task(task)
                 wall = min(wall, time.perf_counter() - t0)
-            rows.append({"texture": tex.name, "profile": profile, "pac_rms_error_bits": float(np.sqrt(np.mean((x - ref) ** 2))),
-                         "spectral_error_dB": spectral, "trial_simulated_s": row["simulated_s"], "trial_wall_s": wall,
+            rows.append({"texture": tex.name, "profile": profile, "error_bits": errors[profile],
+                         "pac_rms_error_bits": errors[profile]["PAC"], "spectral_error_dB": spectral,
+                         "trial_simulated_s": row["simulated_s"], "trial_wall_s": wall,
                          "realtime_factor": row["simulated_s"] / wall})
     return rows
 
@@ -120,15 +147,21 @@ def results(say=lambda m: None) -> dict:
 
 
 def report(say=lambda m: None, measured: dict | None = None) -> str:
+    """The measurements of :func:`results` (or ``measured``) as text: the sliding table with each channel kind's
+    error (— where none was measured), the campaign engine's scaling, the exploration speed."""
+    from bench.verification.benchmark import ERROR_KIND_COLUMNS, _fmt
+
     r_all = measured if measured is not None else results(say)
-    lines = ["Sliding: a 5 cm slide at 0.5 N, 2.5 cm/s — error against the reference profile (noise-free PAC) and "
-             f"the cost of a rig trial (lower, hold, slide, lift; full 44-slot frame, noise on; best of {TRIAL_REPEATS} "
-             "runs):",
-             f"  {'texture':20s} {'profile':10s} {'PAC RMS err (bits)':>19s} {'spectral err (dB)':>18s} "
-             f"{'trial sim s':>12s} {'trial wall s':>13s} {'× real time':>12s}"]
+    lines = ["Sliding: a 5 cm slide at 0.5 N, 2.5 cm/s — error against the reference profile (noise-free RMS, bits, "
+             "per channel kind of the default frame; PAC's spectrum, dB) and the cost of a rig trial (lower, hold, "
+             f"slide, lift; full 44-slot frame, noise on; best of {TRIAL_REPEATS} runs):",
+             f"  {'texture':20s} {'profile':10s} " + " ".join(f"{k:>9s}" for k in ERROR_KIND_COLUMNS.values())
+             + f" {'PAC spectral (dB)':>18s} {'trial sim s':>12s} {'trial wall s':>13s} {'× real time':>12s}"]
     for r in r_all["sliding"]:
-        lines.append(f"  {r['texture']:20s} {r['profile']:10s} {r['pac_rms_error_bits']:19.3f} "
-                     f"{r['spectral_error_dB']:18.3f} {r['trial_simulated_s']:12.2f} {r['trial_wall_s']:13.3f} "
+        err = r.get("error_bits") or {}
+        lines.append(f"  {r['texture']:20s} {r['profile']:10s} "
+                     + " ".join(_fmt(err.get(k), "9.4f") for k in ERROR_KIND_COLUMNS)
+                     + f" {r['spectral_error_dB']:18.3f} {r['trial_simulated_s']:12.2f} {r['trial_wall_s']:13.3f} "
                      f"{r['realtime_factor']:12.0f}")
     d = r_all["dask_scaling"]
     lines += [f"\nCampaign engine (Dask LocalCluster), {d['trials']} rig trials "
