@@ -13,7 +13,7 @@ from bench.verification import benchmark, benchmark_textures as bt
 pytestmark = pytest.mark.unit
 
 SLIDING = [{"texture": "3 mm grating", "profile": "fast",
-            "error_bits": {"PAC": 1.0, "PDC": 0.25, "TDC": 0.0, "TAC": 0.0, "electrodes": 0.125},
+            "error_bits": {"PAC": 1.0, "PDC": 0.25, "TDC": 0.5, "TAC": 0.0625, "electrodes": 0.125},
             "pac_rms_error_bits": 1.0, "spectral_error_dB": 2.0, "trial_simulated_s": 6.0, "trial_wall_s": 0.01,
             "realtime_factor": 600.0}]
 #: the keys of a sliding row (``benchmark --textures --json``): the fidelity table's per-kind errors and PAC's
@@ -54,7 +54,7 @@ def test_the_sliding_table_marks_a_kind_not_measured():
     row = {**SLIDING[0], "error_bits": {k: v for k, v in SLIDING[0]["error_bits"].items() if k != "TAC"}}
     text = bt.report(measured={"sliding": [row], "dask_scaling": DASK, "exploration_steps_per_s": 1.0})
     fields = next(line for line in text.splitlines() if line.strip().startswith("3 mm grating")).split()
-    assert fields[4:9] == ["1.0000", "0.2500", "0.0000", "—", "0.1250"]
+    assert fields[4:9] == ["1.0000", "0.2500", "0.5000", "—", "0.1250"]
 
 
 def test_the_sliding_rows_give_each_channel_kinds_error_by_the_fidelity_tables_function(monkeypatch):
