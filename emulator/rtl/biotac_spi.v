@@ -167,11 +167,11 @@ module biotac_spi #(
     // emulator/spi/model.py).
     wire accept_sample = rx_count >= 12'd16 && provided[channel]
                          && b0[7] && (^b0) && is_sampled(channel) && !busy;
-    // (A command ending while the sensor is held in reset still starts the ADC, which is not reset; nothing serves
-    // its result, as the reset branch below prepares nothing.)
+    // A command ending while the sensor is held in reset (unplugged: the bus holds an absent sensor in reset, and
+    // its chip select rises as it goes) starts nothing: the reset branch below prepares nothing either.
     initial sample_req = 1'b0;
     always @(posedge cs_n) begin
-        if (accept_sample) sample_req <= ~sample_req;
+        if (accept_sample && rst_n) sample_req <= ~sample_req;
     end
 
     integer r;

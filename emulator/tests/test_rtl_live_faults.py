@@ -419,17 +419,20 @@ def test_the_streaming_harness_refuses_a_reset_or_sensors_present_outside_its_fi
 
 
 
-def test_a_sensor_unplugged_with_chip_select_held_on_it_gives_the_same_words_over_the_rtl(harness):
-    """The software bus's unplug in the middle of a property stream held open
-    (:func:`emulator.tests.test_spi_model.unplugged_mid_stream`: the idle line, then power-on "E_" once plugged
-    back in) gives the same words over the RTL bus."""
+@pytest.mark.parametrize("sampling", [False, True], ids=["property-stream", "sampling-command"])
+def test_a_sensor_unplugged_with_chip_select_held_on_it_gives_the_same_words_over_the_rtl(harness, sampling):
+    """The software bus's unplug in the middle of a property stream, or of a window holding a whole sampling command
+    not yet acted on, held open (:func:`emulator.tests.test_spi_model.unplugged_mid_stream`: the idle line, then
+    power-on "E_" once plugged back in, then data) gives the same words over the RTL bus: the RTL holds an absent
+    sensor in reset, so the chip-select rise its unplugging makes neither prepares nor requests a conversion."""
     from emulator.rtl.harness import RtlBus, RtlSensorPort
     from emulator.tests.test_spi_model import unplugged_mid_stream
 
     soft_sensors, rtl_sensors = _sensors(), _sensors()
     soft = unplugged_mid_stream(Bus({n: SensorPort(s, n) for n, s in soft_sensors.items()}),
-                                lambda bus: SensorPort(soft_sensors[1], 1))
-    rtl = unplugged_mid_stream(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus))
+                                lambda bus: SensorPort(soft_sensors[1], 1), sampling=sampling)
+    rtl = unplugged_mid_stream(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus),
+                               sampling=sampling)
     assert rtl == soft, [(k, hex(a), hex(b)) for k, (a, b) in enumerate(zip(rtl, soft)) if a != b]
 
 

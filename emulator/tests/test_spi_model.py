@@ -590,14 +590,18 @@ def test_a_software_port_takes_faults_only_as_the_rtl_port_does():
     assert p.faults == Faults(bad_parity=True)  # unchanged by the refused values
 
 
-def unplugged_mid_stream(b, port_of, clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ) -> list[int]:
-    """The words of: sensor 1's serial number asked for and its first two bytes read with chip select held, sensor 1
-    unplugged (its port removed from ``b.ports``) inside that window, two more reads of it (the last releasing chip
-    select), sensor 3 sampling PAC and read, sensor 1 plugged back in (``port_of(b)``) and read.  Closes ``b``."""
+def unplugged_mid_stream(b, port_of, clock_hz: float = proto.HOST_DEFAULT_CLOCK_HZ, sampling: bool = False
+                         ) -> list[int]:
+    """The words of: sensor 1's serial number asked for and its first two bytes read with chip select held (with
+    ``sampling``: a read, then a whole PDC sampling command sent with chip select held), sensor 1 unplugged (its
+    port removed from ``b.ports``) inside that window, two more reads of it (the last releasing chip select), sensor
+    3 sampling PAC and read, sensor 1 plugged back in (``port_of(b)``) and read, then sampling PDC and read.  One
+    transfer a call, 100 µs apart.  Closes ``b``."""
     s1, s3, t, out = SELECT_CODE[1], SELECT_CODE[3], 0.01, []
-    steps = [(s1, 0x6115, False), (s1, 0, True), None, (s1, 0, True), (s1, 0, False),
-             (s3, int(proto.sample_command(channel_index("PAC"))) << 8, False), (s3, 0, False),
-             "plug", (s1, 0, False)]
+    pac, pdc = (int(proto.sample_command(channel_index(c))) << 8 for c in ("PAC", "PDC"))
+    held = [(s1, 0, False), (s1, pdc, True)] if sampling else [(s1, 0x6115, False), (s1, 0, True)]
+    steps = [*held, None, (s1, 0, True), (s1, 0, False), (s3, pac, False), (s3, 0, False),
+             "plug", (s1, 0, False), (s1, pdc, False), (s1, 0, False)]
     try:
         for step in steps:
             if step is None:
@@ -612,13 +616,17 @@ def unplugged_mid_stream(b, port_of, clock_hz: float = proto.HOST_DEFAULT_CLOCK_
     return out
 
 
+@pytest.mark.parametrize("sampling", [False, True], ids=["property-stream", "sampling-command"])
 @pytest.mark.parametrize("pull_up,idle", [(False, 0x0000), (True, 0xFFFF)])
-def test_a_sensor_unplugged_with_chip_select_held_on_it_leaves_the_idle_line(pull_up, idle):
-    """Unplugging a sensor inside a chip-select window held open on it (a property stream): its select code then
-    reads the pull level (no error), the other sensor answers as ever, and plugged back in it starts from power-on
-    ("E_": nothing prepared)."""
+def test_a_sensor_unplugged_with_chip_select_held_on_it_leaves_the_idle_line(pull_up, idle, sampling):
+    """Unplugging a sensor inside a chip-select window held open on it (a property stream, or a whole sampling
+    command not yet acted on): its select code then reads the pull level (no error), the other sensor answers as
+    ever, and plugged back in it starts from power-on ("E_": nothing prepared, the held command forgotten) and
+    samples as ever."""
     sensors = {n: Sensor(channels_read=ALL, seed=n, noise=NoiseSources.none()) for n in (1, 3)}
     words = unplugged_mid_stream(Bus({n: SensorPort(s, n) for n, s in sensors.items()}, pull_up=pull_up),
-                                 lambda b: SensorPort(sensors[1], 1))
-    assert words[1] == int.from_bytes(b"BT", "big") and words[2] == words[3] == idle
-    assert proto.decode_response(words[5])[1] and words[6] == E["nothing_to_resend"]
+                                 lambda b: SensorPort(sensors[1], 1), sampling=sampling)
+    assert words[1] == (E["nothing_to_resend"] if sampling else int.from_bytes(b"BT", "big"))
+    assert words[2] == words[3] == idle
+    assert proto.decode_response(words[5])[1] and words[6] == words[7] == E["nothing_to_resend"]
+    assert proto.decode_response(words[8])[1]
