@@ -3,8 +3,9 @@
 // outputs; with none selected it idles at pull_up, so an absent sensor reads 0x00 or 0xFF.  The SP parameter
 // makes chosen sensors BioTac SPs (E20..E24 answer data instead of "EX"; their own property ROM).  ``provided``
 // tells each sensor which channels it was built to provide (the others answer "EX").  A sensor not ``present``
-// is held in reset: unplugged inside a chip-select window held open on it, the chip-select rise it sees acts on
-// nothing (no result prepared, no conversion requested), and plugged back in it starts from power-on.
+// is held in reset and told it is absent: unplugged inside a chip-select window held open on it, the chip-select
+// rise it sees acts on nothing (no result prepared, no conversion requested), and plugged back in it starts from
+// power-on.
 `default_nettype none
 
 module biotac_bus #(
@@ -41,7 +42,8 @@ module biotac_bus #(
         for (i = 0; i < 5; i = i + 1) begin : sensor
             assign selected[i] = present[i] && (cs_code == ADDRESS[3*i +: 3] || cs_code == 3'b111);
             biotac_spi #(.SENSOR(i + 1), .VARIANT(SP[i] ? 1 : 0)) spi (
-                .clk(clk), .rst_n(rst_n[i] & present[i]), .sck(sck), .cs_n(!selected[i]), .mosi(mosi), .miso(miso_each[i]),
+                .clk(clk), .rst_n(rst_n[i] & present[i]), .present(present[i]), .sck(sck), .cs_n(!selected[i]),
+                .mosi(mosi), .miso(miso_each[i]),
                 .sample_req(sample_req[i]), .sample_channel(sample_channel[6*i +: 6]),
                 .sample_code(sample_code[12*i +: 12]), .sample_ack(sample_ack[i]),
                 .flt_miso_flip_en(flt_miso_flip_en[i]), .flt_miso_flip_bit(flt_miso_flip_bit[12*i +: 12]),

@@ -18,7 +18,8 @@ module biotac_spi #(
     parameter integer VARIANT = 0  // 0: BioTac, E1..E19 (channels 17..35); 1: BioTac SP, E1..E24 (17..40)
 ) (
     input  wire        clk,          // 1 MHz timer clock
-    input  wire        rst_n,        // asynchronous reset (the "reset mid-stream" fault)
+    input  wire        rst_n,        // asynchronous reset (the "reset mid-stream" fault; held while unplugged)
+    input  wire        present,      // plugged in: a sensor unplugged starts no conversion
     input  wire        sck,
     input  wire        cs_n,         // this sensor's chip select, decoded by the bus
     input  wire        mosi,
@@ -167,11 +168,13 @@ module biotac_spi #(
     // emulator/spi/model.py).
     wire accept_sample = rx_count >= 12'd16 && provided[channel]
                          && b0[7] && (^b0) && is_sampled(channel) && !busy;
-    // A command ending while the sensor is held in reset (unplugged: the bus holds an absent sensor in reset, and
-    // its chip select rises as it goes) starts nothing: the reset branch below prepares nothing either.
+    // A sensor unplugged inside a chip-select window holding a whole sampling command sees chip select rise as it
+    // goes: it requests nothing (``present`` low), and prepares nothing (the bus holds it in reset).  A command
+    // ending while a present sensor is held in reset still starts the ADC, which is not reset; nothing serves its
+    // result, as the reset branch below prepares nothing.
     initial sample_req = 1'b0;
     always @(posedge cs_n) begin
-        if (accept_sample && rst_n) sample_req <= ~sample_req;
+        if (accept_sample && present) sample_req <= ~sample_req;
     end
 
     integer r;

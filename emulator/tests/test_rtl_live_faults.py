@@ -402,82 +402,52 @@ def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_po
 def test_the_streaming_harness_refuses_a_reset_or_sensors_present_outside_its_five_sensors(harness, field, value):
     """A transfer's reset mask or sensors present with a bit past the five sensors, or a set_present flag other than
     0/1, stops the harness with a message naming it, before anything is played."""
-    import struct
-    import subprocess
-
-    from emulator.rtl.harness import TRANSFER, Harness
-
-    header = Harness._header({"sensors": [1, 2], "pull_up": False}, 0)
-    tr = np.zeros(1, TRANSFER)
-    tr["t_ps"], tr["half_ps"], tr["nbits"], tr["cs"] = 10_000_000, 113_636, 16, SELECT_CODE[1]
+    tr = _raw_transfers([(SELECT_CODE[1], 0)])
     tr["set_present"] = 1
     tr[field] = value
-    r = subprocess.run([str(harness.binary), "--stream"], input=header + struct.pack("<III", 1, 0, 0) + tr.tobytes(),
-                       capture_output=True, timeout=60)
+    r = _stream(harness, [1, 2], tr)
     assert r.returncode == 2 and b"transfer 0 of a batch: a reset mask or sensors present outside" in r.stderr, r.stderr
     assert r.stdout == b""
 
 
+def _raw_transfers(words) -> np.ndarray:
+    """The streaming harness's records of 16-bit transfers ``words`` ([(select code, MOSI word)]), 100 µs apart from
+    10 µs, at the host's default clock, each releasing chip select."""
+    from emulator.rtl.harness import TRANSFER
 
-@pytest.mark.parametrize("sampling", [False, True], ids=["property-stream", "sampling-command"])
-def test_a_sensor_unplugged_with_chip_select_held_on_it_gives_the_same_words_over_the_rtl(harness, sampling):
-    """The software bus's unplug in the middle of a property stream, or of a window holding a whole sampling command
-    not yet acted on, held open (:func:`emulator.tests.test_spi_model.unplugged_mid_stream`: the idle line, then
-    power-on "E_" once plugged back in, then data) gives the same words over the RTL bus: the RTL holds an absent
-    sensor in reset, so the chip-select rise its unplugging makes neither prepares nor requests a conversion."""
-    from emulator.rtl.harness import RtlBus, RtlSensorPort
-    from emulator.tests.test_spi_model import unplugged_mid_stream
-
-    soft_sensors, rtl_sensors = _sensors(), _sensors()
-    soft = unplugged_mid_stream(Bus({n: SensorPort(s, n) for n, s in soft_sensors.items()}),
-                                lambda bus: SensorPort(soft_sensors[1], 1), sampling=sampling)
-    rtl = unplugged_mid_stream(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus),
-                               sampling=sampling)
-    assert rtl == soft, [(k, hex(a), hex(b)) for k, (a, b) in enumerate(zip(rtl, soft)) if a != b]
+    tr = np.zeros(len(words), TRANSFER)
+    tr["t_ps"] = 10_000_000 + 100_000_000 * np.arange(len(words))
+    tr["half_ps"], tr["nbits"] = round(0.5e12 / CLOCK_HZ), 16
+    tr["cs"], tr["mosi"] = [c for c, _ in words], [w for _, w in words]
+    return tr
 
 
-def test_a_sensor_plugged_back_in_inside_a_window_held_open_over_the_rtl_is_refused_by_name(harness):
-    """Unplugged and plugged back in between two calls inside a chip-select window held open on it, the RTL sensor
-    would see no chip-select fall (the software bus's new port does): refused naming the sensor, before anything
-    reaches the harness; with a call in between (the sensor away while the window is held) it is taken."""
-    from emulator.rtl.harness import RtlBus, RtlSensorPort
-    from emulator.spi.model import Transfer
+def _stream(harness, sensors: list, tr: np.ndarray):
+    """Run the streaming harness (no faults, pull-down, ``sensors`` present) on one batch ``tr`` with no codes: the
+    finished process (its stdout: a uint64 MISO per transfer, then three counts)."""
+    import struct
+    import subprocess
 
-    sensors = _sensors()
-    bus = RtlBus(sensors, harness=harness)
-    try:
-        bus.transfer(Transfer(0.01, SELECT_CODE[1], 0x6115, 16, CLOCK_HZ))
-        bus.transfer(Transfer(0.0101, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True))
-        bus.ports[1] = RtlSensorPort(sensors[1], 1, bus)
-        with pytest.raises(ValueError, match=r"sensor 1: unplugged and plugged back in inside a chip-select window"):
-            bus.transfer(Transfer(0.0102, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True))
-        port = bus.ports.pop(1)
-        assert bus.transfer(Transfer(0.0103, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True)) == 0  # away: idle line
-        bus.ports[1] = port
-        # plugged in while chip select is held on its code: it sees chip select fall, power-on: nothing prepared
-        assert bus.transfer(Transfer(0.0104, SELECT_CODE[1], 0, 16, CLOCK_HZ)) == ERR["nothing_to_resend"]
-    finally:
-        bus.close()
+    from emulator.rtl.harness import Harness
+
+    header = Harness._header({"sensors": sensors, "pull_up": False}, 0)
+    return subprocess.run([str(harness.binary), "--stream"],
+                          input=header + struct.pack("<III", len(tr), 0, 0) + tr.tobytes(), capture_output=True,
+                          timeout=60)
 
 
-def test_a_chip_select_window_with_no_clock_edge_counts_on_its_sensors_port_on_either_bus(harness):
-    """A glitch (chip select toggled with no clock edge) counts in the selected sensors' ``empty_windows``, over
-    the RTL as over the software bus: one on sensor 1, one on sensor 3, one on both (select all), one held on sensor 1
-    until the select code moves on; a window held open and then clocked, a clocked word and a glitch selecting
-    nobody count nothing.  (The fault campaign's cs_glitch case checks its glitches by this count.)"""
-    from emulator.rtl.harness import RtlBus
-    from emulator.spi.model import SELECT_ALL, SELECT_NONE, Transfer
-
-    s1, s3 = SELECT_CODE[1], SELECT_CODE[3]
-    steps = [(s1, 0, 0, False), (s3, 0, 0, False), (s1, 0x8000, 16, False), (s1, 0, 0, True), (s3, 0, 16, False),
-             (s1, 0, 0, True), (s1, 0, 16, False), (SELECT_ALL, 0, 0, False), (SELECT_NONE, 0, 0, False)]
-    counts = {}
-    for name, bus in (("software", Bus({n: SensorPort(s, n) for n, s in _sensors().items()})),
-                      ("RTL", RtlBus(_sensors(), harness=harness))):
-        try:
-            for k, (cs, mosi, nbits, keep) in enumerate(steps):
-                bus.transfer(Transfer(0.01 + 100e-6 * k, cs, mosi, nbits, CLOCK_HZ, keep))
-            counts[name] = {n: port.empty_windows for n, port in bus.ports.items()}
-        finally:
-            bus.close()
-    assert counts == {"software": {1: 3, 3: 2}, "RTL": {1: 3, 3: 2}}
+def test_the_rtl_holds_an_absent_sensor_in_reset_so_it_comes_back_in_power_on_state_by_itself(harness):
+    """``biotac_bus`` alone (no reset pulse from the bench): sensor 1 asked for its serial number, then read, serves
+    "BT"; asked, unplugged (its ``present`` bit cleared: its select code reads the idle line), plugged back in and
+    read, it answers "E_" (nothing prepared: it was held in reset while away).  No request, no code left over."""
+    ask, read = (SELECT_CODE[1], 0x6115), (SELECT_CODE[1], 0)
+    plugged, away = _raw_transfers([ask, read]), _raw_transfers([ask, read, read])
+    away["set_present"][1:], away["present"][1:] = 1, [0, 1]
+    out = {}
+    for name, tr in (("plugged", plugged), ("away", away)):
+        r = _stream(harness, [1], tr)
+        assert r.returncode == 0, r.stderr
+        out[name] = [int(w) for w in np.frombuffer(r.stdout, "<u8")]
+        assert out[name][len(tr):len(tr) + 2] == [0, 0]  # no mismatched request, no code left
+    assert out["plugged"][1] == int.from_bytes(b"BT", "big")
+    assert out["away"][1:3] == [0, ERR["nothing_to_resend"]]
