@@ -88,15 +88,17 @@ def fault_port_values(faults: dict) -> dict[str, int]:
     return out
 
 
-def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int):
+def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int, convert_last: bool = True):
     """The conversions the sensor behind ``port`` (a :class:`~emulator.spi.model.SensorPort`: its variant, provided
     channels and conversion window) performs for 16-bit transfers to it — chip select falling at ``start`` and
     rising at ``end`` (s), the bus clocking next at ``next_activity`` (s) — decided by the software model's own
     routine (:func:`emulator.spi.fastpath._commands`): a sampling command of a recognised channel it provides,
     not within CONVERSION_TICKS (5 µs) of the previous sampling command of a recognised channel (that one answers
     "E-"; busy and unprovided commands restart the window too).  ``last_sampling_tick``: that previous command's
-    tick of the 1 MHz timer (``fastpath._NO_TICK``: none).  Returns (channels, instants s, whether the bus clocks
-    within the conversion, the last sampling tick afterwards)."""
+    tick of the 1 MHz timer (``fastpath._NO_TICK``: none).  The last conversion, when nothing is known after it (its
+    next activity infinite), is among them judged quiet with ``convert_last``, else left out (the software bus
+    converts it at the bus's next activity).  Returns (channels, instants s, whether the bus clocks within the
+    conversion, the last sampling tick afterwards, the conversion left out: (channel, instant s) or None)."""
     from emulator.spi.fastpath import _TABLES, _commands
 
     word_of_byte, recognized, channel_of = _TABLES[port.variant.name]
@@ -108,8 +110,9 @@ def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_ti
         np.ascontiguousarray(next_activity, float), word_of_byte, recognized, channel_of, port.provided_lut,
         int(last_sampling_tick), float(port.conversion_s), first, cmd_end, prepared, acc_at, acc_channel, acc_time,
         acc_coupled)
-    n_acc += deferred >= 0  # the model converts a last command with no next activity known later; the RTL asks now
-    return acc_channel[:n_acc], acc_time[:n_acc], acc_coupled[:n_acc], int(last_tick)
+    left = None if deferred < 0 or convert_last else (int(acc_channel[n_acc]), float(acc_time[n_acc]))
+    n_acc += deferred >= 0 and convert_last  # the model converts a last command with no next activity known later
+    return acc_channel[:n_acc], acc_time[:n_acc], acc_coupled[:n_acc], int(last_tick), left
 
 
 def _variant_of(sensor) -> str:
@@ -272,8 +275,8 @@ class HarnessPeripheral:
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
         end = start + 16.5 / clock
-        channels, instants, coupled, _ = accepted_conversions(self._reference, start, end, mosi,
-                                                              np.append(start[1:], np.inf), _NO_TICK)
+        channels, instants, coupled, _, _ = accepted_conversions(self._reference, start, end, mosi,
+                                                                 np.append(start[1:], np.inf), _NO_TICK)
         samples = self.sensor.sample(channels, instants, bus_active=coupled)
         shift_us = int(np.floor(start[0] * 1e6)) - 1
         t_ps = np.round((start - shift_us * 1e-6) * 1e12).astype(np.int64)
@@ -322,11 +325,11 @@ class RtlBus:
     where the software bus acts on it.  Hot-plugging as on the software bus: a port removed from ``ports`` is a
     sensor unplugged, one put back (an :class:`RtlSensorPort` of this bus) a sensor plugged in in power-on state;
     the RTL's sensors present change, and a sensor plugged in is reset, just before the next transfer.  The sensors
-    that can be plugged in are those the bus started with (:meth:`_check_ports`).  One difference remains: a call
-    that ends on a sampling command has its code computed as if the bus stayed quiet during the conversion (the RTL
-    asks for it within the call), where the software bus judges that coupling at the next call's first transfer
-    (and never, if the sensor is unplugged before it); traffic that reads its results (every firmware's) never ends
-    a call there.
+    that can be plugged in are those the bus started with (:meth:`_check_ports`).  A call that ends on a sampling
+    command has its code computed at the next call, as on the software bus: its coupling judged by that call's first
+    transfer (:meth:`_deferred_codes`); the RTL's request waits in the harness (a read meanwhile: "E.") and is
+    answered before that transfer — with no code computed (code 0, never served) if the sensor was unplugged or
+    its port replaced in between, where the software bus never converts it.
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
@@ -348,6 +351,7 @@ class RtlBus:
         self._started_with = {n: (p.variant.name, p.provided) for n, p in self.ports.items()}
         self.present = sum(1 << (n - 1) for n in sensors)  # the sensors plugged in, as the RTL's mask
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
+        self._deferred: dict[int, tuple] = {}  # sensor -> (port, channel, instant s) of the conversion a call ended on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
         self._faults_in_rtl = {n: Faults() for n in sensors}  # what the harness's fault ports hold, by sensor
         self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,
@@ -404,16 +408,35 @@ class RtlBus:
         fall, rise, command, after = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 4
         return fall.astype(float), rise.astype(float), command.astype(np.uint16), after.astype(float)
 
+    def _deferred_codes(self, next_activity_s: float) -> np.ndarray:
+        """Codes of the conversions the last call ended on (at most one a sensor), now that the bus's next activity
+        (s, this call's first transfer) is known: disturbed if it falls within the conversion, as the software
+        port's ``resolve_conversion`` judges it.  A sensor unplugged or whose port was replaced since converts
+        nothing (its code 0 answers the RTL's request; its sensor was reset, nothing serves it).  Rows (sensor,
+        channel, code)."""
+        rows = []
+        for n, (port, channel, t) in sorted(self._deferred.items()):
+            code = 0
+            if self.ports.get(n) is port:
+                coupled = next_activity_s < t + port.conversion_s
+                code = int(port.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))[0])
+            rows.append((n, channel, code))
+        self._deferred.clear()
+        return np.array(rows, np.int64).reshape(-1, 3)
+
     def _codes_for(self, start, end, cs, mosi, nbits, keep, faults: dict):
         """ADC codes of the conversions these transfers start (:func:`accepted_conversions` of each sensor's
-        chip-select windows, under ``faults``: {sensor: the ``Faults`` in force}), sensor by sensor: rows (sensor,
-        channel, code)."""
-        out = [np.zeros((0, 3), np.int64)]
+        chip-select windows, under ``faults``: {sensor: the ``Faults`` in force}), sensor by sensor, after those of
+        the conversions the last call ended on (:meth:`_deferred_codes`): rows (sensor, channel, code).  The
+        conversion these transfers end on (nothing known after it) is left for the next call."""
+        out = [self._deferred_codes(float(start[0]))]
         for n, port in self.ports.items():
             fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep,
                                                        faults[n].mosi_flip_bit)
-            channels, instants, coupled, self._last_sampling_tick[n] = accepted_conversions(
-                port, fall, rise, command, after, self._last_sampling_tick[n])
+            channels, instants, coupled, self._last_sampling_tick[n], left = accepted_conversions(
+                port, fall, rise, command, after, self._last_sampling_tick[n], convert_last=False)
+            if left is not None:
+                self._deferred[n] = (port, *left)
             if channels.size:
                 codes = port.sensor.sample(channels, instants, bus_active=coupled)
                 out.append(np.column_stack([np.full(channels.size, n), channels, codes]).astype(np.int64))
@@ -489,7 +512,7 @@ class RtlBus:
             self._last_sampling_tick.update(dict.fromkeys(self._resets, _NO_TICK))
             self._resets.clear()
         c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits, np.broadcast_to(keep, start.shape),
-                            faults)
+                            faults) if start.size else np.zeros((0, 3), np.int64)
         codes = np.zeros(len(c), CODE)
         if len(c):
             codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
@@ -498,12 +521,15 @@ class RtlBus:
                               + codes.tobytes() + records.tobytes())
         self.proc.stdin.flush()
         self._faults_in_rtl.update(changed)
-        raw = np.frombuffer(self._read(8 * (start.size + 3)), dtype="<u8")
+        raw = np.frombuffer(self._read(8 * (start.size + 4)), dtype="<u8")
         self.evals = int(raw[start.size + 2])
         mismatched, unrequested = int(raw[start.size]), int(raw[start.size + 1])
-        if mismatched or unrequested:  # a code left over would be served to a later command of its channel
+        waiting = int(raw[start.size + 3])
+        if mismatched or unrequested or waiting != len(self._deferred):  # a code left over would be served to a
+            # later command of its channel; a request waiting that the emulator left for no next call, or none
             raise HarnessError(f"the RTL requested other conversions than the emulator computed "
-                               f"({mismatched} mismatched, {unrequested} unrequested)")
+                               f"({mismatched} mismatched, {unrequested} unrequested, {waiting} waiting for the "
+                               f"next call where the emulator left {len(self._deferred)})")
         return raw[:start.size]
 
     def _faults_in_force(self) -> dict:

@@ -540,9 +540,32 @@ def test_a_transfer_longer_than_16_bits_commands_with_its_first_16_over_the_rtl_
 
 def test_a_call_that_ends_on_a_sampling_command_converts_it_over_the_rtl_as_over_the_software(harness):
     """A host that sends a sampling command in one call and reads its result in the next (50 µs later, the bus
-    quiet in between): the RTL asks for the conversion within the first call and gets the software model's code."""
+    quiet in between): the RTL asks for the conversion within the first call, the harness answers it as the second
+    comes, with the software model's code."""
     start, mosi = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")), (260, 0))
     for split in (1, 3):
         words = _assert_all_routes_agree(_words_over_every_route(
             harness, {1: ["PDC", "PAC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi, split=split))
         assert proto.decode_response(words[[1, 3]])[1].all()
+
+
+def test_a_call_that_ends_on_a_sampling_command_is_coupled_by_the_next_call_over_the_rtl_as_over_the_software(
+        harness):
+    """A call ending on a sampling command, the next call clocking the bus within its 5 µs conversion (1.35 µs after
+    chip select rose: SPI coupling disturbs it) or after it (60 µs): the software bus judges the coupling at the next
+    call's first transfer, and so does the RTL bus (the harness answers the RTL's request when that call comes) —
+    word for word the same codes, and the coupled one differs from the quiet one (the coupling is seen)."""
+    from emulator.sensor import Sensor
+
+    from emulator.channels import channel_index
+
+    read = {}
+    for gap_us in (3, 60):
+        start, mosi = _schedule((0, _cmd("PDC")), (gap_us, 0), (gap_us + 60, 0))
+        words = _assert_all_routes_agree(_words_over_every_route(
+            harness, {1: ["PDC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi, split=1))
+        (read[gap_us],) = words[~proto.is_error_word(words)]  # the read 3 µs after gets "E." (not ready yet)
+    t = np.array([0.01 + 16.5 / CLOCK_HZ])
+    coupled, quiet = (Sensor(channels_read=["PDC"], seed=3).sample(np.array([channel_index("PDC")]), t,
+                                                                    bus_active=np.array([b]))[0] for b in (True, False))
+    assert coupled != quiet and read[3] == proto.RESPONSE_WORD[coupled] and read[60] == proto.RESPONSE_WORD[quiet]

@@ -348,14 +348,12 @@ def test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_po
     from emulator.rtl.harness import RtlBus, RtlSensorPort
     from emulator.sensor import Sensor
 
-    def call(k):  # _call(k) with reads of both sensors last (a call ending on a sampling command has its code
-        # computed within the call over the RTL, at the next call on the software bus — never, if the sensor is
-        # unplugged before it: its sensor's noise then runs on differently)
+    def call(k):  # _call(k): it ends on sensor 3's sampling command, converted at the next call on either bus —
+        # never, if sensor 3 is unplugged before it (the RTL's request then answered with no code computed)
         start, cs, mosi = _call(k)
         if k == 3:  # sensor 3's first transfer after it is plugged back in asks to resend its last word
             mosi[1] = RESEND
-        return (np.append(start, start[-1] + [100e-6, 110e-6]), np.append(cs, [SELECT_CODE[1], SELECT_CODE[3]]),
-                np.append(mosi, [0, 0]).astype(np.uint16))
+        return start, cs, mosi
 
     def play(bus, port_of):
         out = []

@@ -15,8 +15,11 @@
 //           set to the record's when chip select falls for the batch's first transfer, before anything is
 //           clocked, as the software bus applies a fault set between two of its calls; a batch with no transfers
 //           keeps them for the next one); the RTL keeps its state and time runs on from batch to batch
-//   stdout: per batch, one uint64 MISO per transfer, then uint64 mismatched requests, unused codes and model
-//           evaluations so far; the harness exits when stdin ends
+//   stdout: per batch, one uint64 MISO per transfer, then uint64 mismatched requests, unused codes, model
+//           evaluations so far and requests waiting for their code; the harness exits when stdin ends.  A request
+//           made when its sensor has no code queued waits for one (the RTL answers "E." meanwhile): the conversion
+//           a batch ends on has its code in the next batch, first for that sensor, answered before anything is
+//           played (the software bus judges its coupling by the bus's next activity, the next call)
 #include <cstdint>
 #include <algorithm>
 #include <cstdio>
@@ -82,6 +85,7 @@ struct Harness {
     int64_t now = 0, next_timer_edge = HALF_TIMER_PS;
     std::vector<std::deque<CodeRecord>> codes = std::vector<std::deque<CodeRecord>>(5);
     uint8_t last_req = 0;
+    uint8_t waiting = 0;  // sensors whose latest request waits for its code (bit i = sensor i + 1)
     uint64_t mismatches = 0;
     std::deque<std::pair<int64_t, int>> line;  // recent (time, level) changes of MISO
     uint64_t evals = 0;
@@ -126,19 +130,30 @@ struct Harness {
         uint8_t changed = req ^ last_req;
         if (!changed) return;
         last_req = req;
+        mismatches += (uint64_t)__builtin_popcount(changed & waiting);  // asked again before the code came
+        waiting |= changed;
+        answer();
+    }
+    // Answer each waiting request whose sensor has a code queued: the code if it is of the channel asked for, else
+    // a mismatch (answered 0).  A request with no code queued keeps waiting (its sample_ack bit unchanged).
+    void answer() {
+        uint8_t ack = top->sample_ack;
         for (int i = 0; i < 5; ++i) {
-            if (!(changed >> i & 1)) continue;
+            if (!(waiting >> i & 1) || codes[i].empty()) continue;
             int channel = (top->sample_channel >> (6 * i)) & 0x3F;
             uint16_t code = 0;
-            if (codes[i].empty() || codes[i].front().channel != channel) {
+            if (codes[i].front().channel != channel) {
                 ++mismatches;
             } else {
                 code = codes[i].front().code;
                 codes[i].pop_front();
             }
             top->sample_code = (top->sample_code & ~(0xFFFULL << (12 * i))) | ((uint64_t)code << (12 * i));
+            ack = (uint8_t)((ack & ~(1u << i)) | (top->sample_req & (1u << i)));
+            waiting &= (uint8_t)~(1u << i);
         }
-        top->sample_ack = req;
+        if (ack == top->sample_ack) return;
+        top->sample_ack = ack;
         top->eval();
         ++evals;
     }
@@ -305,13 +320,15 @@ static int stream_mode() {
             }
         }
         add_codes(H, codes.data(), codes.size());
-        out.resize(counts[0] + 3);
+        H.answer();  // the requests the last batch ended on, now that their codes came
+        out.resize(counts[0] + 4);
         for (uint32_t i = 0; i < counts[0]; ++i) out[i] = play(H, trs[i]);
         uint64_t left = 0;
         for (auto& q : H.codes) left += q.size();
         out[counts[0]] = H.mismatches;
         out[counts[0] + 1] = left;
         out[counts[0] + 2] = H.evals;
+        out[counts[0] + 3] = (uint64_t)__builtin_popcount(H.waiting);
         std::fwrite(out.data(), sizeof(uint64_t), out.size(), stdout);
         std::fflush(stdout);
     }
@@ -338,6 +355,7 @@ int main(int argc, char** argv) {
     std::vector<uint64_t> out(h.n_transfers);
     for (uint64_t i = 0; i < h.n_transfers; ++i) out[i] = play(H, trs[i]);
     H.advance_to(H.now + 200000000);  // 200 µs for any last request
+    H.mismatches += (uint64_t)__builtin_popcount(H.waiting);  // every code is in the file: one not there is a mismatch
     FILE* f = std::fopen(argv[3], "wb");
     if (!f) { std::fprintf(stderr, "harness: cannot write %s\n", argv[3]); return 2; }
     std::fwrite(out.data(), sizeof(uint64_t), out.size(), f);
