@@ -166,15 +166,15 @@ module biotac_spi #(
     // has no reset: a reset is not a request (toggling it asked the bench for a conversion nobody commanded), and
     // the ADC is not reset, so a conversion already started completes; its result is never served (as in
     // emulator/spi/model.py).
-    wire accept_sample = rx_count >= 12'd16 && provided[channel]
-                         && b0[7] && (^b0) && is_sampled(channel) && !busy;
     // A sensor unplugged inside a chip-select window holding a whole sampling command sees chip select rise as it
     // goes: it requests nothing (``present`` low), and prepares nothing (the bus holds it in reset).  A command
     // ending while a present sensor is held in reset still starts the ADC, which is not reset; nothing serves its
     // result, as the reset branch below prepares nothing.
+    wire accept_sample = present && rx_count >= 12'd16 && provided[channel]
+                         && b0[7] && (^b0) && is_sampled(channel) && !busy;
     initial sample_req = 1'b0;
     always @(posedge cs_n) begin
-        if (accept_sample && present) sample_req <= ~sample_req;
+        if (accept_sample) sample_req <= ~sample_req;
     end
 
     integer r;

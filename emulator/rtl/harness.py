@@ -434,7 +434,7 @@ class RtlBus:
             fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep,
                                                        faults[n].mosi_flip_bit)
             channels, instants, coupled, self._last_sampling_tick[n], left = accepted_conversions(
-                port, fall, rise, command, after, self._last_sampling_tick[n], convert_last=False)
+                port, fall, rise, command, after, convert_last=False, last_sampling_tick=self._last_sampling_tick[n])
             if left is not None:
                 self._deferred[n] = (port, *left)
             if channels.size:

@@ -449,3 +449,44 @@ def test_the_rtl_holds_an_absent_sensor_in_reset_so_it_comes_back_in_power_on_st
         assert out[name][len(tr):len(tr) + 2] == [0, 0]  # no mismatched request, no code left
     assert out["plugged"][1] == int.from_bytes(b"BT", "big")
     assert out["away"][1:3] == [0, ERR["nothing_to_resend"]]
+
+
+@pytest.mark.parametrize("sampling", [False, True], ids=["property-stream", "sampling-command"])
+def test_a_sensor_unplugged_with_chip_select_held_on_it_gives_the_same_words_over_the_rtl(harness, sampling):
+    """The software bus's unplug in the middle of a property stream, or of a window holding a whole sampling command
+    not yet acted on, held open (:func:`emulator.tests.test_spi_model.unplugged_mid_stream`: the idle line, then
+    power-on "E_" once plugged back in, then data) gives the same words over the RTL bus: the RTL holds an absent
+    sensor in reset, so the chip-select rise its unplugging makes neither prepares nor requests a conversion."""
+    from emulator.rtl.harness import RtlBus, RtlSensorPort
+    from emulator.tests.test_spi_model import unplugged_mid_stream
+
+    soft_sensors, rtl_sensors = _sensors(), _sensors()
+    soft = unplugged_mid_stream(Bus({n: SensorPort(s, n) for n, s in soft_sensors.items()}),
+                                lambda bus: SensorPort(soft_sensors[1], 1), sampling=sampling)
+    rtl = unplugged_mid_stream(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus),
+                               sampling=sampling)
+    assert rtl == soft, [(k, hex(a), hex(b)) for k, (a, b) in enumerate(zip(rtl, soft)) if a != b]
+
+
+def test_a_sensor_plugged_back_in_inside_a_window_held_open_over_the_rtl_is_refused_by_name(harness):
+    """Unplugged and plugged back in between two calls inside a chip-select window held open on it, the RTL sensor
+    would see no chip-select fall (the software bus's new port does): refused naming the sensor, before anything
+    reaches the harness; with a call in between (the sensor away while the window is held) it is taken."""
+    from emulator.rtl.harness import RtlBus, RtlSensorPort
+    from emulator.spi.model import Transfer
+
+    sensors = _sensors()
+    bus = RtlBus(sensors, harness=harness)
+    try:
+        bus.transfer(Transfer(0.01, SELECT_CODE[1], 0x6115, 16, CLOCK_HZ))
+        bus.transfer(Transfer(0.0101, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True))
+        bus.ports[1] = RtlSensorPort(sensors[1], 1, bus)
+        with pytest.raises(ValueError, match=r"sensor 1: unplugged and plugged back in inside a chip-select window"):
+            bus.transfer(Transfer(0.0102, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True))
+        port = bus.ports.pop(1)
+        assert bus.transfer(Transfer(0.0103, SELECT_CODE[1], 0, 16, CLOCK_HZ, keep_cs=True)) == 0  # away: idle line
+        bus.ports[1] = port
+        # plugged in while chip select is held on its code: it sees chip select fall, power-on: nothing prepared
+        assert bus.transfer(Transfer(0.0104, SELECT_CODE[1], 0, 16, CLOCK_HZ)) == ERR["nothing_to_resend"]
+    finally:
+        bus.close()
