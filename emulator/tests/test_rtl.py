@@ -541,12 +541,15 @@ def test_a_transfer_longer_than_16_bits_commands_with_its_first_16_over_the_rtl_
 def test_a_call_that_ends_on_a_sampling_command_converts_it_over_the_rtl_as_over_the_software(harness):
     """A host that sends a sampling command in one call and reads its result in the next (50 µs later, the bus
     quiet in between): the RTL asks for the conversion within the first call, the harness answers it as the second
-    comes, with the software model's code."""
+    comes, with the software model's code.  A schedule that ends on a sampling command: the RTL batch by batch
+    (reset at each batch) converts it as the batch ends, the emulator computing its code (else a HarnessError)."""
     start, mosi = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")), (260, 0))
+    cs = np.full(start.size, SELECT_CODE[1])
     for split in (1, 3):
         words = _assert_all_routes_agree(_words_over_every_route(
-            harness, {1: ["PDC", "PAC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi, split=split))
+            harness, {1: ["PDC", "PAC"]}, start, cs, mosi, split=split))
         assert proto.decode_response(words[[1, 3]])[1].all()
+    _assert_all_routes_agree(_words_over_every_route(harness, {1: ["PDC", "PAC"]}, start[:3], cs[:3], mosi[:3]))
 
 
 def test_a_call_that_ends_on_a_sampling_command_is_coupled_by_the_next_call_over_the_rtl_as_over_the_software(
