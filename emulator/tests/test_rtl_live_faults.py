@@ -490,3 +490,26 @@ def test_a_sensor_plugged_back_in_inside_a_window_held_open_over_the_rtl_is_refu
         assert bus.transfer(Transfer(0.0104, SELECT_CODE[1], 0, 16, CLOCK_HZ)) == ERR["nothing_to_resend"]
     finally:
         bus.close()
+
+
+def test_a_chip_select_window_with_no_clock_edge_counts_on_its_sensors_port_on_either_bus(harness):
+    """A glitch (chip select toggled with no clock edge) counts in the selected sensors' ``empty_windows``, over
+    the RTL as over the software bus: one on sensor 1, one on sensor 3, one on both (select all), one held on sensor 1
+    until the select code moves on; a window held open and then clocked, a clocked word and a glitch selecting
+    nobody count nothing.  (The fault campaign's cs_glitch case checks its glitches by this count.)"""
+    from emulator.rtl.harness import RtlBus
+    from emulator.spi.model import SELECT_ALL, SELECT_NONE, Transfer
+
+    s1, s3 = SELECT_CODE[1], SELECT_CODE[3]
+    steps = [(s1, 0, 0, False), (s3, 0, 0, False), (s1, 0x8000, 16, False), (s1, 0, 0, True), (s3, 0, 16, False),
+             (s1, 0, 0, True), (s1, 0, 16, False), (SELECT_ALL, 0, 0, False), (SELECT_NONE, 0, 0, False)]
+    counts = {}
+    for name, bus in (("software", Bus({n: SensorPort(s, n) for n, s in _sensors().items()})),
+                      ("RTL", RtlBus(_sensors(), harness=harness))):
+        try:
+            for k, (cs, mosi, nbits, keep) in enumerate(steps):
+                bus.transfer(Transfer(0.01 + 100e-6 * k, cs, mosi, nbits, CLOCK_HZ, keep))
+            counts[name] = {n: port.empty_windows for n, port in bus.ports.items()}
+        finally:
+            bus.close()
+    assert counts == {"software": {1: 3, 3: 2}, "RTL": {1: 3, 3: 2}}
