@@ -141,8 +141,11 @@ def one_sensor(unit=None, variant=None, stimuli=(), channels=None, seed: int = 0
     from emulator.sensor import Sensor
     from emulator.units import unit as unit_of
 
+    from emulator.spi.model import variant_serial
+
     u = unit_of(unit, base=params)
     v = variant_of("biotac" if variant is None else variant)
+    variant_serial(u.serial, v.name)  # ValueError: a "BTSP..." serial on a sensor that is not an SP
     sensor = Sensor(params=u.params, stimuli=list(stimuli), seed=seed, variant=v.name,
                     channels_read=v.frame_names if channels is None else channels, **sensor_kw)
     sensor.serial = None if u.seed is None else u.serial

@@ -879,6 +879,7 @@ class _SensorTable(NamedTuple):
 def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _SensorTable:
     """The :class:`_SensorTable` of ``table`` (named ``where``), its problems noted."""
     from emulator.channels import VARIANTS
+    from emulator.spi.model import serial_variant_problem
     from emulator.units import unit as make_unit
 
     c.known_keys(table, where, set(PARAMETER_FIELDS) | set(SENSOR_KEYS) | {"faults"} | set(extra))
@@ -897,6 +898,9 @@ def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _
             except (ValueError, TypeError, OverflowError) as e:
                 c.problems.append(_cut(str(e)))
     u = make_unit(which if which is not None else None)
+    if which is not None and table.get("variant", "biotac") in VARIANTS:  # (a bad variant is its own problem)
+        if problem := serial_variant_problem(u.serial, variant):
+            c.problems.append(f"{where}.unit = {_r(which)}: {problem}")
     params = dataclasses.replace(u.params, **changes)  # (each value checked above)
     if inconsistent := params.inconsistencies(where):  # values each in range that no sensor can have together
         c.problems += inconsistent

@@ -45,6 +45,32 @@ def test_the_serial_an_sp_answers_gives_back_its_unit():
     assert sensors_from_scene(sc, 1)[1].params == unit(17).params
 
 
+def test_a_biotac_given_an_sp_serial_is_refused_where_it_is_given():
+    """An SP's serial ("BTSP...", what a host tells an SP by) given to a 19-electrode sensor made it answer that
+    serial: the bridge firmware took it for an SP and asked it for E20..E24 in every frame (5 error words each).
+    A scene ([sensor] and [[sensors]]), a port and the plugin's sensors refuse it, naming the unit to give instead."""
+    from bench.errors import SceneError
+    from bench.pytest_plugin.fixtures import one_sensor
+    from emulator.sensor import Sensor
+    from emulator.spi.model import SensorPort
+
+    head = '[scene]\nname = "x"\nduration_s = 0.2\n'
+    hint = r'sensor.unit = "BTSP000000000017": .*"biotac" \(E1..E19\): give variant = "biotac-sp", or unit = 17'
+    with pytest.raises(SceneError, match=hint):
+        parse_scene_text(head + '[sensor]\nunit = "BTSP000000000017"\n')
+    with pytest.raises(SceneError, match=r'sensors\[0\].unit = "BTSP01UNIT000042": .*not starting "BTSP"'):
+        parse_scene_text(head + '[[sensors]]\nindex = 2\nunit = "BTSP01UNIT000042"\nvariant = "biotac"\n')
+    sp = parse_scene_text(head + '[sensor]\nunit = "BTSP000000000017"\nvariant = "biotac-sp"\n')
+    assert (sp.unit, sp.serial) == ("17", "BTSP000000000017")  # an SP may answer it
+    sensor = Sensor(channels_read=["PDC"])
+    sensor.serial = "BTSP000000000017"
+    with pytest.raises(ValueError, match='is a "biotac"'):
+        SensorPort(sensor)
+    with pytest.raises(ValueError, match='is a "biotac"'):
+        one_sensor("BTSP000000000017")
+    assert one_sensor("BTSP000000000017", "biotac-sp").params == one_sensor(17).params
+
+
 @pytest.mark.firmware  # builds the Cheetah library
 def test_each_unit_in_a_scene_reports_its_own_serial_through_the_cheetah_path(monkeypatch):
     from bench.hosts.scene_sensors import sensors_from_scene

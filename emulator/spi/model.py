@@ -109,12 +109,36 @@ def check_serial(serial: str) -> bytes:
     return serial.encode("ascii")
 
 
+def serial_variant_problem(serial: str, variant: str = ch.DEFAULT_VARIANT) -> str | None:
+    """Why a sensor of ``variant`` cannot answer ``serial`` (None if it can): a serial starting "BTSP" is what a
+    host tells a BioTac SP by (firmware ``has_bt_serial``), so a sensor of another variant answering it would be
+    taken for an SP and asked for electrodes it does not have."""
+    sp_prefix = SERIAL_PREFIX["biotac-sp"][:4]
+    v = ch.variant(variant).name
+    if v == "biotac-sp" or not isinstance(serial, str) or not serial.startswith(sp_prefix):
+        return None
+    from emulator.units import seed_of_serial, serial_for
+
+    hint = f'a serial not starting "{sp_prefix}"'
+    try:
+        seed = seed_of_serial(serial)
+    except ValueError:  # a seed out of range: the serial is refused by name where it is given
+        seed = None
+    if seed is not None and variant_serial(serial_for(seed), "biotac-sp") == serial:  # an SP's form of unit `seed`
+        hint = f'unit = {seed} (or "{serial_for(seed)}")'
+    return (f'serial "{serial}" starts "{sp_prefix}", which a host reads as a BioTac SP\'s (E1..E24), but this sensor '
+            f'is a "{v}" (E1..E{ch.variant(v).n_electrodes}): give variant = "biotac-sp", or {hint}')
+
+
 def variant_serial(serial: str, variant: str = ch.DEFAULT_VARIANT) -> str:
     """The serial a sensor of ``variant`` reports for a unit's serial number: unchanged, except that a BioTac SP's
     must start "BTSP" (the host tells the variants apart by it: firmware ``has_bt_serial``), so an SP unit whose
     serial does not is reported as "BTSP" + the last 12 characters after its "BT" (``BTU0000000000005`` ->
-    ``BTSP000000000005``)."""
+    ``BTSP000000000005``).  A sensor of another variant whose serial starts "BTSP" is refused
+    (:func:`serial_variant_problem`): a host would take it for an SP and ask it for E20..E24."""
     sp_prefix = SERIAL_PREFIX["biotac-sp"][:4]
+    if problem := serial_variant_problem(serial, variant):
+        raise ValueError(problem)
     if ch.variant(variant).name != "biotac-sp" or serial.startswith(sp_prefix):
         return serial
     return sp_prefix + serial[2:][-(SERIAL_LENGTH - len(sp_prefix)):]
