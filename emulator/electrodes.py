@@ -90,15 +90,23 @@ def _electrode_table(name: str) -> np.ndarray:
 
 
 def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:
-    """A point of the core surface: ``x_mm`` along the finger, ``angle_deg`` from the ventral midline (−z) to +y."""
+    """A point of the core surface (the wetted skin's shape, :func:`free_skin_grid`), mm: ``x_mm`` along the finger
+    — on the cylinder of radius CORE_RADIUS_MM for x ≤ 0, on the hemispherical tip for 0 < x ≤ CORE_RADIUS_MM (its
+    apex) — and ``angle_deg`` from the ventral midline (−z) to +y.  Beyond the apex there is no finger: ValueError."""
+    if not x_mm <= CORE_RADIUS_MM:
+        raise ValueError(f"x_mm = {x_mm!r}: the finger ends at its tip's apex, x = {CORE_RADIUS_MM:g} mm")
     a = np.radians(angle_deg)
-    return np.array([x_mm, CORE_RADIUS_MM * np.sin(a), -CORE_RADIUS_MM * np.cos(a)])
+    r = CORE_RADIUS_MM if x_mm <= 0.0 else np.sqrt(CORE_RADIUS_MM**2 - x_mm**2)
+    return np.array([x_mm, r * np.sin(a), -r * np.cos(a)])
 
 
 def surface_point_over_mm(position_mm) -> np.ndarray:
-    """The core-surface point radially over ``position_mm`` (same x; a point off the finger's axis), mm."""
-    x, y, z = position_mm
-    return surface_point_mm(x, np.degrees(np.arctan2(y, -z)))
+    """The core-surface point over ``position_mm``, mm: radially from the finger's axis on the cylinder (x ≤ 0),
+    from the tip's centre on the hemispherical tip (x > 0), so an electrode near the tip is not passed by."""
+    p = np.asarray(position_mm, float)
+    if p[0] > 0.0:
+        return CORE_RADIUS_MM * p / np.linalg.norm(p)
+    return surface_point_mm(p[0], np.degrees(np.arctan2(p[1], -p[2])))
 
 
 @dataclass

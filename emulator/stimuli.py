@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from emulator.effects import Block, Effect
+from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM
 from emulator.mechanics import (AIR_DENSITY_KG_PER_M3, AIR_VISCOSITY_PA_S, GRAVITY_M_PER_S2, fall_speed_m_per_s,
                                 hertz_contact)
 from emulator.params import SensorParams
@@ -291,12 +292,13 @@ class Press(CheckedFields, ForceStimulus):
 @dataclass
 class Touch(Press):
     """A contact at a place on the skin, with an object: the force profile of :class:`Press`, plus where
-    (``x_mm`` along the finger, ``angle_deg`` around it from the ventral midline, or over ``electrode``),
+    (``x_mm`` along the finger, from the skin's clamp at −20 mm to the tip's apex at 5 mm, ``angle_deg`` around it
+    from the ventral midline, or over ``electrode``),
     the indenter's radius, a tangential force (N at full normal force, direction ``shear_angle_deg``
     from +x toward +angle) and, for thermal contact, the object's ``material`` and temperature."""
 
-    LIMITS = {**Press.LIMITS, "x_mm": FINITE, "angle_deg": FINITE, "indenter_radius_mm": POSITIVE,
-              "tangential_N": FINITE, "shear_angle_deg": FINITE,
+    LIMITS = {**Press.LIMITS, "x_mm": Limit(SKIN_BASE_X_MM, CORE_RADIUS_MM), "angle_deg": FINITE,
+              "indenter_radius_mm": POSITIVE, "tangential_N": FINITE, "shear_angle_deg": FINITE,
               "object_temperature_C": CELSIUS.or_none()}
     x_mm: float = -5.0
     angle_deg: float = 0.0

@@ -19,6 +19,7 @@ from bench.errors import SceneError, shortened
 from bench.paths import folder_name_problem
 from bench.scenes.limits import MAX_SENSORS
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
+from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM
 from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
@@ -415,7 +416,7 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
             force_N=c.number(st, "force_N", w, 0.0, 50.0, "N", required=True),
             ramp_s=c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5),
             hold_s=c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0),
-            x_mm=c.number(st, "x_mm", w, -20.0, 8.0, "mm", default=-5.0),
+            x_mm=c.number(st, "x_mm", w, SKIN_BASE_X_MM, CORE_RADIUS_MM, "mm", default=-5.0),  # base clamp to tip apex
             angle_deg=c.number(st, "angle_deg", w, -180.0, 180.0, "°", default=0.0),
             indenter_radius_mm=c.number(st, "indenter_radius_mm", w, 0.1, 15.0, "mm", default=3.0),
             tangential_N=c.number(st, "tangential_N", w, -20.0, 20.0, "N", default=0.0),

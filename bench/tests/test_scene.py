@@ -195,6 +195,15 @@ def test_touch_thermal_kinds_and_faults_are_validated():
         assert needle in text
 
 
+def test_a_touch_beyond_the_fingertips_apex_is_refused():
+    """The finger ends at its tip's apex, x = 5 mm: a touch at x_mm = 8 had been taken and dented the electrodes from
+    3 mm beyond the tip.  The apex itself is a place."""
+    touch = {"kind": "touch", "start_s": 0.1, "force_N": 1.0, "ramp_s": 0.2, "hold_s": 0.3}
+    (msg,) = problems({**MINIMAL, "stimulus": [{**touch, "x_mm": 5.5}]})
+    assert msg == "stimulus[0].x_mm = 5.5: allowed range is -20.0 to 5.0 mm"
+    assert parse_scene({**MINIMAL, "stimulus": [{**touch, "x_mm": 5.0}]}).stimuli[0].x_mm == 5.0
+
+
 @pytest.mark.parametrize("stimulus", [
     {"kind": "vibration", "start_s": 0.1, "duration_s": 0.5, "amplitude_um": 1.0, "frequency_Hz": 100.0},
     {"kind": "pressure", "start_s": 0.1, "duration_s": 0.5, "offset_kPa": 1.0},

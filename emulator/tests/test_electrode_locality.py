@@ -158,6 +158,29 @@ def test_a_1N_press_changes_mostly_the_nearest_electrodes_and_little_beyond_10_m
     assert wide[dist > 10.0].max() > d[dist > 10.0].max() and wide[dist > 14.0].max() < 10.0
 
 
+def test_a_press_over_a_tip_electrode_moves_it_as_much_as_one_over_the_pad():
+    """E7..E10 sit on the hemispherical tip, nearer the axis than the pad's 5 mm: a contact "over" them had been put
+    on the pad's cylinder continued beyond the tip, 2.7 mm from E7 (E7 moved 93 codes, the pad's electrodes 381)."""
+    d, _ = _press_changes(SensorParams())
+    pressed = np.diag(d)
+    assert pressed.min() > 0.9 * np.median(pressed), np.round(pressed)
+
+
+@pytest.mark.parametrize("variant", ["biotac", "biotac-sp"])
+def test_a_contact_over_an_electrode_is_centred_on_the_skin_over_it(variant):
+    from emulator.electrodes import CORE_RADIUS_MM, free_skin_grid, surface_point_mm
+
+    pos = electrode_positions_mm(variant)
+    centres = np.array([surface_point_over_mm(q) for q in pos])
+    assert np.linalg.norm(centres - pos, axis=1).max() < 0.5  # mm (E7's 5.30 mm from the tip's centre: 0.30)
+    skin, _ = free_skin_grid(180.0, 0.25)
+    for x, a in ((4.9, 0.0), (3.0, 40.0), (0.5, -90.0), (-5.0, 10.0)):  # each on the modelled skin's surface
+        assert np.linalg.norm(skin - surface_point_mm(x, a), axis=1).min() < 0.25, (x, a)
+    assert np.allclose(surface_point_mm(CORE_RADIUS_MM, 30.0), [CORE_RADIUS_MM, 0.0, 0.0])  # the apex
+    with pytest.raises(ValueError, match="x_mm = 5.5: the finger ends at its tip's apex, x = 5 mm"):
+        surface_point_mm(5.5, 0.0)
+
+
 def test_the_profile_falls_off_as_documented():
     from emulator.electrodes import indentation_profile
 

@@ -25,6 +25,7 @@ BAD_STIMULI = [
     (lambda: Press(0.1, 1.0, hold_s=-1.0), "Press.hold_s", "≥ 0"),
     (lambda: Touch(0.1, -1.0), "Touch.force_N", "≥ 0"),
     (lambda: Touch(0.1, 1.0, x_mm=NAN), "Touch.x_mm", "finite number"),
+    (lambda: Touch(0.1, 1.0, x_mm=8.0), "Touch.x_mm", "from -20 to 5"),  # beyond the tip's apex: no skin there
     (lambda: Touch(0.1, 1.0, indenter_radius_mm=0.0), "Touch.indenter_radius_mm", "> 0"),
     (lambda: Touch(0.1, 1.0, tangential_N=INF), "Touch.tangential_N", "finite number"),
     (lambda: Touch(0.1, 1.0, material="aluminum", object_temperature_C=-300.0), "Touch.object_temperature_C",
