@@ -159,7 +159,7 @@ def unit(which=None, base: SensorParams | None = None) -> Unit:
     if isinstance(which, str) and which.startswith(SERIAL_PREFIX):
         seed = seed_of_serial(which)
         return Unit(which, base if seed is None else draw_params(seed, base), seed)
-    if isinstance(which, str) and which.isdigit():
+    if isinstance(which, str) and which.isascii() and which.isdigit():  # ("²".isdigit(), but int("²") fails)
         which = int(which)
     if isinstance(which, bool) or not isinstance(which, (int, np.integer)) or not 0 <= which <= MAX_UNIT_SEED:
         raise ValueError(f"unit {which!r}: a unit seed 0 to {MAX_UNIT_SEED}, \"{NOMINAL}\", or a serial number "

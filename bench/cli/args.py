@@ -165,10 +165,10 @@ def _checked(check, text: str) -> None:
 
 
 def unit_serial(text: str) -> str:
-    """A sensor unit's serial number ("BT...", emulator.units.check_serial)."""
-    from emulator.units import check_serial
+    """A sensor unit's serial number ("BT...", emulator.units.seed_of_serial: also a seed it names in range)."""
+    from emulator.units import seed_of_serial
 
-    _checked(check_serial, text)
+    _checked(seed_of_serial, text)
     return text
 
 
@@ -176,7 +176,7 @@ def unit_choice(text: str):
     """A sensor unit: a unit seed (whole number), "nominal" or a serial number (emulator.units.unit)."""
     from emulator.units import unit
 
-    which = int(text) if text.isdigit() else text
+    which = int(text) if text.isascii() and text.isdigit() else text
     _checked(lambda _: unit(which), text)
     return which
 

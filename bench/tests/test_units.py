@@ -268,6 +268,24 @@ def test_the_units_command_prints_a_unit_compares_it_and_refuses_bad_values():
         assert r.returncode == 2 and needle in r.stderr and "Traceback" not in r.stderr, r.stderr
 
 
+def test_a_unit_given_in_an_odd_form_is_refused_in_one_line_naming_the_command_and_the_flag():
+    """A serial of the seed form naming a seed past 2³¹ − 1 passed the flag's check and failed in the command
+    ("error: serial ..."); a non-ASCII digit passed str.isdigit ("²" then failed in int(): "invalid unit_choice
+    value"; "١٧" became unit 17, which a scene's unit = "١٧" refuses)."""
+    for argv, line in ((("units", "--serial", "BTU9999999999999"), "biotac-bench units: error: argument --serial: "
+                        "serial 'BTU9999999999999': unit seed 9999999999999 is above 2147483647"),
+                       (("claims", "--unit", "²", "--only", "scales"), "biotac-bench claims: error: argument --unit: "
+                        "unit '²': a unit seed 0 to 2147483647"),
+                       (("claims", "--unit", "١٧", "--only", "scales"), "biotac-bench claims: error: argument --unit: "
+                        "unit '١٧': a unit seed 0 to 2147483647")):
+        r = run_cli(*argv)
+        assert r.returncode == 2 and r.stderr.startswith(line) and r.stderr.count("\n") == 1, (argv, r.stderr)
+    for odd in ("²", "١٧"):
+        with pytest.raises(ValueError, match="a unit seed 0 to 2147483647"):
+            unit(odd)
+    assert unit("17").seed == 17
+
+
 def test_claims_unit_runs_the_claims_on_that_unit():
     r = run_cli("claims", "--unit", 17, "--only", "scales", "--json")
     assert r.returncode == 0, r.stderr
