@@ -200,10 +200,10 @@ def _cmd_validate(a) -> int:
         try:
             sc = load_scene(scene_file(f))
             check_buildable(sc)
-            more = (f", {sc.n_sensors} sensors ({sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))}"
-                    f" stimuli in all)" if sc.n_sensors > 1 else "")
-            n = len(sc.stimuli)
-            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {stimuli_count(n)}, fidelity "
+            in_all = sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))
+            more = f", {sc.n_sensors} sensors ({stimuli_count(in_all)} in all)" if sc.n_sensors > 1 else ""
+            n = f"{stimuli_count(len(sc.stimuli))}{' on sensor 1' if sc.n_sensors > 1 else ''}"
+            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {n}, fidelity "
                   f"{sc.fidelity}{more}{_before_running(sc)})")
         except SceneError as e:
             print(e, file=sys.stderr)

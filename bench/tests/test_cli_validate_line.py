@@ -55,3 +55,13 @@ def test_a_library_named_but_not_slid_on_is_not_shown_and_the_rtl_is(tmp_path, m
     assert _ok_line(["validate", "scene.toml"], capsys).endswith(", 0 stimuli, fidelity default)")
     (tmp_path / "scene.toml").write_text((tmp_path / "scene.toml").read_text() + '\n[host]\nspi = "rtl"\n')
     assert _ok_line(["validate", "scene.toml"], capsys).endswith(", fidelity default, SPI rtl)")
+
+
+def test_a_scene_of_several_fingers_counts_sensor_1s_stimuli_and_all_of_them(tmp_path, monkeypatch, capsys):
+    """With several fingers the first count is sensor 1's alone: a scene whose only tap is on sensor 4 read
+    "0 stimuli, ..., 4 sensors (1 stimuli in all)", as if the scene had none."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "hand.toml").write_text('[scene]\nname = "hand"\nduration_s = 0.5\n[[sensors]]\nindex = 2\n'
+                                        '[[stimulus]]\nkind = "tap"\nsensor = 4\nat_s = 0.2\npeak_N = 1.0\n')
+    assert _ok_line(["validate", "hand.toml"], capsys) == ("hand.toml: ok (hand, 0.5 s, 0 stimuli on sensor 1, fidelity "
+                                                           "default, 4 sensors (1 stimulus in all))")
