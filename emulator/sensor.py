@@ -210,6 +210,10 @@ class Sensor:
             raise ValueError(f"channel {ch.variant('biotac-sp').channel_name.get(unknown[0], unknown[0])} "
                              f"(index {unknown[0]}) is not a sampled channel of a {self.variant.name!r} sensor "
                              f"(E1..E{self.variant.n_electrodes}, PAC, PDC, TAC, TDC)")
+        for st in stimuli:  # whether or not an electrode is read: the place must be on this sensor
+            if isinstance(st, Touch) and st.electrode is not None and st.electrode not in self.variant.channel_index:
+                raise ValueError(f"touch over electrode {st.electrode!r}: a {self.variant.name!r} sensor has "
+                                 f"E1..E{self.variant.n_electrodes}")
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
         self.record_signals = tuple(record_signals)
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)
@@ -345,12 +349,8 @@ class Sensor:
                 continue
             if not isinstance(s, Touch):
                 continue
-            if s.electrode is not None:
-                k = ch.channel_index(s.electrode) - ch.ELECTRODE_FIRST
-                if not 0 <= k < len(positions):
-                    raise ValueError(f"touch over electrode {s.electrode!r}: a {self.variant.name!r} sensor has "
-                                     f"E1..E{len(positions)}")
-                centre = surface_point_over_mm(positions[k])
+            if s.electrode is not None:  # (one of this sensor's: checked when it was made)
+                centre = surface_point_over_mm(positions[self.variant.channel_index[s.electrode] - ch.ELECTRODE_FIRST])
             else:
                 centre = surface_point_mm(s.x_mm, s.angle_deg)
             a, phi = np.arctan2(centre[1], -centre[2]), np.radians(s.shear_angle_deg)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from emulator.channels import ELECTRODE_COUNT
 from emulator.effects import Block, Effect
 from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM
 from emulator.mechanics import (AIR_DENSITY_KG_PER_M3, AIR_VISCOSITY_PA_S, GRAVITY_M_PER_S2, fall_speed_m_per_s,
@@ -311,6 +312,10 @@ class Touch(Press):
 
     def __post_init__(self):
         super().__post_init__()
+        most = max(ELECTRODE_COUNT.values())
+        if self.electrode is not None and self.electrode not in {f"E{k}" for k in range(1, most + 1)}:
+            raise ValueError(f"Touch.electrode = {self.electrode!r}: an electrode's name, E1..E{most} (E20..E{most} on "
+                             "a \"biotac-sp\"), or None for the place x_mm, angle_deg")
         if self.object_temperature_C is not None and self.material is None:  # a scene refuses it too
             raise ValueError(f"Touch.object_temperature_C = {self.object_temperature_C!r} needs a material (e.g. "
                              f"material=\"aluminum\"): without one the touch exchanges no heat")

@@ -26,6 +26,8 @@ BAD_STIMULI = [
     (lambda: Touch(0.1, -1.0), "Touch.force_N", "≥ 0"),
     (lambda: Touch(0.1, 1.0, x_mm=NAN), "Touch.x_mm", "finite number"),
     (lambda: Touch(0.1, 1.0, x_mm=8.0), "Touch.x_mm", "from -20 to 5"),  # beyond the tip's apex: no skin there
+    (lambda: Touch(0.1, 1.0, electrode="E42"), "Touch.electrode", "E1..E24"),  # had been taken when no E was read
+    (lambda: Touch(0.1, 1.0, electrode="PDC"), "Touch.electrode", "E1..E24"),
     (lambda: Touch(0.1, 1.0, indenter_radius_mm=0.0), "Touch.indenter_radius_mm", "> 0"),
     (lambda: Touch(0.1, 1.0, tangential_N=INF), "Touch.tangential_N", "finite number"),
     (lambda: Touch(0.1, 1.0, material="aluminum", object_temperature_C=-300.0), "Touch.object_temperature_C",
@@ -162,6 +164,17 @@ def test_sensor_arguments_are_refused_naming_the_argument(kw, needle):
 
     with pytest.raises((ValueError, TypeError), match=needle):
         Sensor(**kw)
+
+
+def test_a_touch_over_an_electrode_the_sensor_lacks_is_refused_also_when_no_electrode_is_read():
+    """A touch over E22 on a 19-electrode sensor reading only PDC pressed somewhere unnamed: the place was checked
+    only when the electrode model was built."""
+    from emulator.sensor import Sensor
+
+    for read in (["PDC"], ["E1"]):
+        with pytest.raises(ValueError, match="touch over electrode 'E22': a 'biotac' sensor has E1..E19"):
+            Sensor(stimuli=[Touch(0.1, 1.0, electrode="E22")], channels_read=read)
+    Sensor(stimuli=[Touch(0.1, 1.0, electrode="E22")], channels_read=["PDC"], variant="biotac-sp")
 
 
 def test_a_whole_seed_written_as_a_float_is_the_same_seed():
