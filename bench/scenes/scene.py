@@ -183,15 +183,16 @@ class _Checker:
 
     def number(self, table: dict, key: str, where: str, lo: float, hi: float, unit: str,
                default=None, required=False, integer=False):
+        note = unit[1:-1] if unit.startswith("(") and unit.endswith(")") else None  # what it is, not its unit
         if key not in table:
             if required:
-                self.problems.append(f"{where}.{key} is missing ({unit + ', ' if unit else ''}{lo} to {hi})")
+                self.problems.append(f"{where}.{key} is missing ({(note or unit) + ', ' if unit else ''}{lo} to {hi})")
             return default
         v = table[key]
         kind = "a whole number" if integer else "a number"
         if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
-            self.problems.append(f"{where}.{key} = {_r(v)}: must be {kind}{' in ' + unit if unit else ''} "
-                                 f"({lo} to {hi})")
+            what = f" ({note}, {lo} to {hi})" if note else f"{' in ' + unit if unit else ''} ({lo} to {hi})"
+            self.problems.append(f"{where}.{key} = {_r(v)}: must be {kind}{what}")
             return default
         if not _real(v) or not lo <= v <= hi:
             self.problems.append(f"{where}.{key} = {_r(v)}: allowed range is {lo} to {hi}{' ' + unit if unit else ''}")

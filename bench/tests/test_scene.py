@@ -195,6 +195,21 @@ def test_touch_thermal_kinds_and_faults_are_validated():
         assert needle in text
 
 
+def test_a_sensor_number_of_the_wrong_type_or_missing_is_named_in_plain_words():
+    """The sensor numbers' description was spelled as a unit: "must be a whole number in (a sensor number) (2 to
+    5)", "is missing ((a sensor number), 2 to 5)"."""
+    assert problems({**MINIMAL, "sensors": [{"index": 2.0}]}) == [
+        "sensors[0].index = 2.0: must be a whole number (a sensor number, 2 to 5)"]
+    assert problems({**MINIMAL, "sensors": [{"unit": 3}]}) == ["sensors[0].index is missing (a sensor number, 2 to 5)"]
+    tap = {"kind": "tap", "at_s": 0.2, "peak_N": 1.0}
+    assert problems({**MINIMAL, "stimulus": [{**tap, "sensor": "2"}]}) == [
+        'stimulus[0].sensor = "2": must be a whole number (a sensor number, 1 to 5)']
+    assert problems({**MINIMAL, "stimulus": [{**tap, "sensor": 6}]}) == [
+        "stimulus[0].sensor = 6: allowed range is 1 to 5 (a sensor number)"]
+    assert problems({**MINIMAL, "stimulus": [{**tap, "peak_N": "1"}]}) == [  # a unit is still said as one
+        'stimulus[0].peak_N = "1": must be a number in N (0.0 to 50.0)']
+
+
 def test_a_touch_beyond_the_fingertips_apex_is_refused():
     """The finger ends at its tip's apex, x = 5 mm: a touch at x_mm = 8 had been taken and dented the electrodes from
     3 mm beyond the tip.  The apex itself is a place."""
