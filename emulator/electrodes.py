@@ -100,6 +100,20 @@ def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:
     return np.array([x_mm, r * np.sin(a), -r * np.cos(a)])
 
 
+def nail_touch_problem(angle_deg, p: SensorParams) -> str | None:
+    """Why a contact centred ``angle_deg`` from the ventral midline cannot be modelled (None if it can): beyond
+    ``free_skin_half_angle_deg`` the skin is tethered at the nail, and the model has no contact there — its force
+    would reach the fluid as a touch on the pad does (a 1 N touch at 180° raised PDC 84 codes, as at 0°)."""
+    if angle_deg is None:
+        return None
+    half = p.free_skin_half_angle_deg
+    if abs((float(angle_deg) + 180.0) % 360.0 - 180.0) <= half:
+        return None
+    return (f"beyond {half:g}° from the ventral midline the skin is tethered at the nail (free_skin_half_angle_deg), "
+            f"where the model has no contact (its force would load the fluid as on the pad); allowed -{half:g} to "
+            f"{half:g}°")
+
+
 def surface_point_over_mm(position_mm) -> np.ndarray:
     """The core-surface point over ``position_mm``, mm: radially from the finger's axis on the cylinder (x ≤ 0),
     from the tip's centre on the hemispherical tip (x > 0), so an electrode near the tip is not passed by."""

@@ -24,8 +24,8 @@ from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import FluidLeak, ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
 from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N
-from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, surface_point_mm,
-                                 surface_point_over_mm)
+from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, nail_touch_problem,
+                                 surface_point_mm, surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, MountVibration, PowerOn,
                               PressureCalibrator, Touch, Vibration, calibration_pressure, skin_displacement)
 from emulator.skin import contact_patch_area_m2
@@ -214,6 +214,9 @@ class Sensor:
             if isinstance(st, Touch) and st.electrode is not None and st.electrode not in self.variant.channel_index:
                 raise ValueError(f"touch over electrode {st.electrode!r}: a {self.variant.name!r} sensor has "
                                  f"E1..E{self.variant.n_electrodes}")
+            why = isinstance(st, Touch) and st.electrode is None and nail_touch_problem(st.angle_deg, self.params)
+            if why:
+                raise ValueError(f"Touch.angle_deg = {st.angle_deg!r}: {why}")
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
         self.record_signals = tuple(record_signals)
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)

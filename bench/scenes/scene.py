@@ -19,7 +19,7 @@ from bench.errors import SceneError, shortened
 from bench.paths import folder_name_problem
 from bench.scenes.limits import MAX_SENSORS
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
-from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM
+from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM, nail_touch_problem
 from emulator.fidelity import PROFILES
 from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
@@ -431,6 +431,8 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
         electrode = c.choice(st, "electrode", w, names) if st.get("electrode") not in SP_ELECTRODE_NAMES \
             or variant == "biotac-sp" else None
         mat = c.choice(st, "material", w, tuple(MATERIALS))
+        if (problem := nail_touch_problem(vals["angle_deg"], params)) is not None:
+            c.problems.append(f"{w}.angle_deg = {_r(st['angle_deg'])}: {problem}")
         where = [k for k in ("x_mm", "angle_deg") if k in st]
         if "electrode" in st and where:
             c.problems.append(f"{w}: give the place either as electrode ({_r(st['electrode'])}) or as x_mm + "

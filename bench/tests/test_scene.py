@@ -195,6 +195,20 @@ def test_touch_thermal_kinds_and_faults_are_validated():
         assert needle in text
 
 
+def test_a_touch_on_the_skin_tethered_at_the_nail_is_refused_by_that_fingers_own_limit():
+    """A 1 N touch at 180° (on the nail) raised PDC 84 codes, exactly as on the pad: the model's contact loads the
+    fluid wherever it is.  Beyond free_skin_half_angle_deg (120°) it is refused; a finger given 180° takes it."""
+    touch = {"kind": "touch", "start_s": 0.1, "force_N": 1.0, "ramp_s": 0.2, "hold_s": 0.3}
+    (msg,) = problems({**MINIMAL, "stimulus": [{**touch, "angle_deg": -150.0}]})
+    assert msg.startswith("stimulus[0].angle_deg = -150.0: beyond 120° from the ventral midline the skin is "
+                          "tethered at the nail") and msg.endswith("allowed -120 to 120°")
+    assert parse_scene({**MINIMAL, "stimulus": [{**touch, "angle_deg": 120.0}]}).stimuli[0].angle_deg == 120.0
+    hand = {**MINIMAL, "sensors": [{"index": 2, "free_skin_half_angle_deg": 180.0}]}
+    assert parse_scene({**hand, "stimulus": [{**touch, "angle_deg": 180.0, "sensor": 2}]}).n_sensors == 2
+    (msg,) = problems({**hand, "stimulus": [{**touch, "angle_deg": 180.0}]})  # sensor 1 keeps 120°
+    assert msg.startswith("stimulus[0].angle_deg = 180.0: beyond 120°")
+
+
 def test_a_sensor_number_of_the_wrong_type_or_missing_is_named_in_plain_words():
     """The sensor numbers' description was spelled as a unit: "must be a whole number in (a sensor number) (2 to
     5)", "is missing ((a sensor number), 2 to 5)"."""

@@ -177,6 +177,17 @@ def test_a_touch_over_an_electrode_the_sensor_lacks_is_refused_also_when_no_elec
     Sensor(stimuli=[Touch(0.1, 1.0, electrode="E22")], channels_read=["PDC"], variant="biotac-sp")
 
 
+def test_a_sensor_refuses_a_touch_on_the_skin_tethered_at_the_nail():
+    from emulator.params import SensorParams
+    from emulator.sensor import Sensor
+
+    for angle in (121.0, -180.0, 200.0):  # 200° is -160°
+        with pytest.raises(ValueError, match=f"Touch.angle_deg = {angle!r}: beyond 120° .* tethered at the nail"):
+            Sensor(stimuli=[Touch(0.1, 1.0, angle_deg=angle)], channels_read=["PDC"])
+    Sensor(stimuli=[Touch(0.1, 1.0, angle_deg=-120.0), Touch(0.1, 1.0, angle_deg=350.0)], channels_read=["PDC"])
+    Sensor(stimuli=[Touch(0.1, 1.0, angle_deg=180.0)], params=SensorParams(free_skin_half_angle_deg=180.0))
+
+
 def test_a_whole_seed_written_as_a_float_is_the_same_seed():
     """``Sensor(seed=3262.0)`` is seed 3262 (the claims' vibration sweep passes 1000 + a frequency in Hz): the
     argument check refused it for a while, stopping `claims --only vibration`."""
