@@ -351,6 +351,7 @@ class RtlBus:
         self._started_with = {n: (p.variant.name, p.provided) for n, p in self.ports.items()}
         self.present = sum(1 << (n - 1) for n in sensors)  # the sensors plugged in, as the RTL's mask
         self._last_sampling_tick = dict.fromkeys(sensors, _NO_TICK)  # each sensor's ADC-busy window, carried on
+        self._last_end = -np.inf  # when the last call's last transfer released chip select (s)
         self._deferred: dict[int, tuple] = {}  # sensor -> (port, channel, instant s) of the conversion a call ended on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
         self._faults_in_rtl = {n: Faults() for n in sensors}  # what the harness's fault ports hold, by sensor
@@ -496,7 +497,7 @@ class RtlBus:
         start = np.asarray(start, float)
         clock = np.broadcast_to(np.asarray(clock, float), start.shape)
         nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
-        end = start + (nbits + 0.5) / clock
+        end = self._checked_ends(start, nbits, clock)
         tr = np.zeros(start.size, TRANSFER)
         tr["t_ps"] = np.round(start * 1e12).astype(np.int64)
         tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
@@ -530,7 +531,30 @@ class RtlBus:
             raise HarnessError(f"the RTL requested other conversions than the emulator computed "
                                f"({mismatched} mismatched, {unrequested} unrequested, {waiting} waiting for the "
                                f"next call where the emulator left {len(self._deferred)})")
+        if start.size:
+            self._last_end = float(end[-1])
         return raw[:start.size]
+
+    def _checked_ends(self, start, nbits, clock) -> np.ndarray:
+        """When each transfer releases chip select (s), checked as on the software bus: a transfer no bus can clock
+        (a start that is not finite, bits < 0, a clock that is not positive), or one starting before the one before
+        it ended — in this call or the last — is a ValueError naming it, before anything reaches the harness."""
+        from emulator.spi.model import impossible_transfer_error, overlap_error
+        from emulator.spi.protocol import TIME_TOLERANCE_S
+
+        if not start.size:
+            return start
+        bad = ~np.isfinite(start) | (nbits < 0) | ~(clock > 0) | ~np.isfinite(clock)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise impossible_transfer_error(f"#{k} of the call (start {start[k]} s, {nbits[k]} bits at "
+                                            f"{clock[k]} Hz)")
+        end = start + (nbits + 0.5) / clock
+        before = np.concatenate(([self._last_end], end[:-1]))
+        early = np.flatnonzero(start < before - TIME_TOLERANCE_S)
+        if early.size:
+            raise overlap_error(float(start[early[0]]))
+        return end
 
     def _faults_in_force(self) -> dict:
         """Each sensor's faults for the next transfers, checked (a value set in place out of range: ValueError

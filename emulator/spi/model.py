@@ -486,6 +486,16 @@ def _check_batch(start, mosi, clock, last_end) -> np.ndarray:
     return end
 
 
+def overlap_error(start_s: float) -> ValueError:
+    """The error for a transfer starting at ``start_s`` (s) before the previous one on its bus ended."""
+    return ValueError(f"transfer at {start_s:.9f} s starts before the previous one ended")
+
+
+def impossible_transfer_error(what) -> ValueError:
+    """The error for a transfer no bus can clock (``what``: the transfer, or where it is in a batch)."""
+    return ValueError(f"impossible transfer: {what}")
+
+
 @njit(cache=True)
 def _overlapping(start, end, least_gap) -> bool:
     """Whether a transfer starts less than ``least_gap`` (s) after the one before it ends."""
@@ -546,9 +556,9 @@ class Bus:
     def transfer(self, tr: Transfer) -> int:
         """Clock one transfer; returns the MISO bits the host samples (``nbits`` bits, MSB first)."""
         if tr.nbits < 0 or tr.clock_hz <= 0 or not math.isfinite(tr.start_s):
-            raise ValueError(f"impossible transfer: {tr}")
+            raise impossible_transfer_error(tr)
         if tr.start_s < self._last_end - proto.TIME_TOLERANCE_S:
-            raise ValueError(f"transfer at {tr.start_s:.9f} s starts before the previous one ended")
+            raise overlap_error(tr.start_s)
         lo, hi = proto.SPI_CLOCK_RANGE_HZ
         if not lo <= tr.clock_hz <= hi:
             self.out_of_spec_transfers += 1

@@ -513,3 +513,34 @@ def test_a_chip_select_window_with_no_clock_edge_counts_on_its_sensors_port_on_e
         finally:
             bus.close()
     assert counts == {"software": {1: 3, 3: 2}, "RTL": {1: 3, 3: 2}}
+
+
+def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_and_loses_nothing(harness):
+    """A call starting before the last one ended, a transfer overlapping the one before it in its call, a start
+    that is not finite and a clock of 0 Hz: the same ValueError on both buses (the RTL bus had played the first into
+    the harness and failed with a HarnessError about conversions), and nothing reaches the RTL — the next valid
+    call gives the software bus's words."""
+    from emulator.rtl.harness import RtlBus
+
+    s1 = SELECT_CODE[1]
+    pdc = int(proto.sample_command(1)) << 8  # PDC (channel 1)
+    late = ([0.5, 0.5 + 1e-4], [s1, s1], [pdc, 0])
+    bad_calls = [(([0.1], [s1], [pdc]), CLOCK_HZ, r"transfer at 0\.100000000 s starts before the previous one ended"),
+                 (([0.6, 0.6 + 1e-6], [s1, s1], [0, 0]), CLOCK_HZ,
+                  r"transfer at 0\.600001000 s starts before the previous one ended"),
+                 (([np.nan], [s1], [0]), CLOCK_HZ, r"impossible transfer"),
+                 (([0.7], [s1], [0]), 0.0, r"impossible transfer")]
+    words = {}
+    for name, bus in (("software", Bus({n: SensorPort(s, n) for n, s in _sensors().items()})),
+                      ("RTL", RtlBus(_sensors(), harness=harness))):
+        try:
+            got = list(bus.exchange_words(*late, CLOCK_HZ))
+            for args, clock, message in bad_calls:
+                with pytest.raises(ValueError, match=message):
+                    bus.exchange_words(*args, clock)
+            got += list(bus.exchange_words([0.8, 0.8 + 1e-4], [s1, s1], [pdc, 0], CLOCK_HZ))
+            words[name] = got
+        finally:
+            bus.close()
+    assert words["RTL"] == words["software"]
+    assert words["software"][1] != 0 and words["software"][3] != 0  # both reads carry a conversion
