@@ -4404,6 +4404,21 @@ CATALOGUE += [
            '        if (problem := nail_touch_problem(vals["angle_deg"], SensorParams())) is not None:',
            ('bench/tests/test_scene.py::test_a_touch_on_the_skin_tethered_at_the_nail_is_refused_by_that_fingers_own_limit',),
            "a scene judges every finger's touch by the nominal 120°, not the finger's own free_skin_half_angle_deg"),
+    Mutant('rtlbus-overlap-unchecked', 'rtl', 'emulator/rtl/harness.py',
+           '        if early.size:\n            raise overlap_error(float(start[early[0]]))\n',
+           '',
+           ('emulator/tests/test_rtl_live_faults.py::test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_and_loses_nothing',),
+           "the RTL bus plays a call that starts before the last one ended (a HarnessError about conversions, not the software bus's error)"),
+    Mutant('rtlbus-last-end-not-kept', 'rtl', 'emulator/rtl/harness.py',
+           '        if start.size:\n            self._last_end = float(end[-1])\n',
+           '',
+           ('emulator/tests/test_rtl_live_faults.py::test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_and_loses_nothing',),
+           'the RTL bus forgets when the last call ended: a call going back in time is played'),
+    Mutant('rtlbus-impossible-transfer-played', 'rtl', 'emulator/rtl/harness.py',
+           '        if bad.any():\n            k = int(np.flatnonzero(bad)[0])\n',
+           '        if False:\n            k = int(np.flatnonzero(bad)[0])\n',
+           ('emulator/tests/test_rtl_live_faults.py::test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_and_loses_nothing',),
+           'the RTL bus plays a transfer starting at NaN or clocked at 0 Hz'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
