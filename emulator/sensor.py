@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+import warnings
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -27,7 +28,8 @@ from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_l
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, nail_touch_problem,
                                  surface_point_mm, surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, MountVibration, PowerOn,
-                              PressureCalibrator, Touch, Vibration, calibration_pressure, skin_displacement)
+                              OutsideModelWarning, PressureCalibrator, SphereDrop, Touch, Vibration,
+                              calibration_pressure, drop_depth_problem, skin_displacement)
 from emulator.skin import contact_patch_area_m2
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
@@ -217,6 +219,9 @@ class Sensor:
             why = isinstance(st, Touch) and st.electrode is None and nail_touch_problem(st.angle_deg, self.params)
             if why:
                 raise ValueError(f"Touch.angle_deg = {st.angle_deg!r}: {why}")
+            if isinstance(st, SphereDrop) and (why := drop_depth_problem(st, self.params)):
+                warnings.warn(f"SphereDrop at {st.time_s!r} s: {why} (a scene refuses it; its codes here are the "
+                              f"model's extrapolation)", OutsideModelWarning, stacklevel=2)
         self.nodes = sorted({CHANNEL_NODE[c] for c in self.channels_read if c in CHANNEL_NODE})
         self.record_signals = tuple(record_signals)
         self.thermal, self.thermal_steady = self._thermal_model(stimuli)

@@ -252,6 +252,26 @@ class SphereDrop(CheckedFields, ForceStimulus):
         return self.impulse_Ns * np.interp(x, _HERTZ_X, _HERTZ_C)
 
 
+class OutsideModelWarning(UserWarning):
+    """A stimulus a :class:`~emulator.sensor.Sensor` built in Python takes although the model does not hold for it
+    (a scene file refuses it): its codes are the model's extrapolation, for analyses that probe it there."""
+
+
+def drop_depth_problem(drop: SphereDrop, p: SensorParams) -> str | None:
+    """Why a Hertz drop cannot be modelled on a sensor of parameters ``p`` (None if it can): at its deepest the
+    sphere would push the skin through the fluid over the core (``resting_gap_mm``), where it meets the core and
+    Hertz's contact on a deep soft layer no longer holds (a drop given ``contact_s`` is a legacy half-sine: taken)."""
+    if drop.contact_s is not None:
+        return None
+    depth_m = hertz_contact(drop.mass_kg, drop.sphere_radius_m, drop.impact_speed_m_per_s, drop.contact_modulus_Pa)[2]
+    if depth_m <= p.resting_gap_mm * 1e-3:
+        return None
+    return (f"a {drop.mass_kg * 1e6:g} mg sphere from {drop.height_m:g} m lands at "
+            f"{drop.impact_speed_m_per_s:.3g} m/s and would indent the skin {depth_m * 1e3:.2f} mm, past the "
+            f"{p.resting_gap_mm:g} mm of fluid over the core (resting_gap_mm), where the model's Hertz contact does "
+            f"not hold: drop it from lower or drop a lighter sphere")
+
+
 def sphere_drop_on(params: SensorParams, time_s: float, mass_kg: float, height_m: float = DROP_HEIGHT_M,
                    sphere: str | None = None, radius_m: float | None = None) -> SphereDrop:
     """A Hertz drop on a sensor: restitution and skin modulus from ``params``; the radius from ``radius_m``, else

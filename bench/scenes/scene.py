@@ -25,8 +25,8 @@ from emulator.params import PARAMETER_FIELDS, SensorParams, check_parameter
 from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
 from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERES, AmbientStep, HeaterFailure, PowerOn,
-                              Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, sphere_drop_on,
-                              sphere_radius_m)
+                              Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, drop_depth_problem,
+                              sphere_drop_on, sphere_radius_m)
 from emulator.effects import effect_rng
 from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import Slide
@@ -370,7 +370,11 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
             mass = None if name is None else SPHERES[name][0]
         for t in c.times(st, "at_s", w, duration):
             if mass is not None and height is not None and ok:
-                out.append(sphere_drop_on(params, t, mass, height, sphere=name, radius_m=radius))
+                drop = sphere_drop_on(params, t, mass, height, sphere=name, radius_m=radius)
+                if (problem := drop_depth_problem(drop, params)) is not None:
+                    c.problems.append(f"{w}: {problem}")
+                    break
+                out.append(drop)
     elif kind == "vibration":
         start = c.times(st, "start_s", w, duration)
         dur = c.number(st, "duration_s", w, 1e-3, MAX_DURATION_S, "s", required=True)

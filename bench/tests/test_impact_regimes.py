@@ -80,6 +80,7 @@ def test_pulses_long_against_the_period_make_the_threshold_follow_energy(bench, 
     assert 100.0 * energy_over_momentum(long) < energy_over_momentum(d_regime)
 
 
+@pytest.mark.filterwarnings("ignore::emulator.stimuli.OutsideModelWarning")  # outside Hertz on purpose
 def test_stretching_d_s_pulses_moves_the_threshold_from_momentum_to_energy(bench, sigma, d_regime):
     """Consistency of the chain's pulse response (the 129 Pa contact indents 4–47 radii, far outside Hertz): the
     same six spheres and chain, only the contact's plane-strain modulus lowered (t_c ∝

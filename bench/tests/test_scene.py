@@ -289,3 +289,17 @@ def test_a_toml_date_or_a_missing_name_is_named_as_the_file_spells_it():
     text = "\n".join(msgs)
     assert "scene.duration_s = 1979-05-27T07:32:00+00:00: must be a number" in text and "datetime." not in text
     assert "scene.name is missing: a name of 1 to 100 ASCII letters" in text
+
+
+def test_a_drop_that_would_push_the_skin_onto_the_core_is_refused_naming_the_stimulus_and_that_fingers_gap():
+    """A scene's sphere_drop deeper than the fluid over the core is refused naming the stimulus and how deep it
+    would go; D's heaviest sphere from the highest height allowed (10 m: 0.9 mm) is taken; a finger with a thicker
+    fluid layer takes the heavy drop."""
+    heavy = {"kind": "sphere_drop", "mass_mg": 10000, "height_m": 0.07, "at_s": 0.3}
+    (msg,) = problems({**MINIMAL, "stimulus": [heavy]})
+    assert msg.startswith("stimulus[0]: a 10000 mg sphere from 0.07 m") and "past the 1.5 mm of fluid" in msg
+    ok = parse_scene({**MINIMAL, "stimulus": [{"kind": "sphere_drop", "sphere": "5/64 in aluminum bearing",
+                                               "height_m": 10.0, "at_s": 0.3}]})
+    assert isinstance(ok.stimuli[0], SphereDrop)
+    thick = parse_scene({**MINIMAL, "sensor": {"resting_gap_mm": 2.0}, "stimulus": [heavy]})
+    assert isinstance(thick.stimuli[0], SphereDrop)

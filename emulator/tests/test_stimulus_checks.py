@@ -3,6 +3,8 @@ physical, an SPI fault outside its range, or a bench with a sensor count the bri
 adapter cannot address, is a ValueError naming the field, the value and what is allowed — never a stimulus that
 silently produces nothing or a numpy overflow later."""
 
+import dataclasses
+
 import pytest
 
 from emulator.spi.model import Faults
@@ -199,3 +201,37 @@ def test_a_whole_seed_written_as_a_float_is_the_same_seed():
     a, b = (Sensor(stimuli=[Tap(0.01, 1.0)], seed=s) for s in (3262, 3262.0))
     t = np.arange(200) / 4400.0
     assert b.seed == 3262 and np.array_equal(a.sample(np.zeros(200, int), t), b.sample(np.zeros(200, int), t))
+
+
+def _hertz_depth_m(drop) -> float:
+    """Hertz's peak indentation of a rigid sphere on a soft half-space, written out here (m):
+    δ = (15·m·v² / (16·E*·√R))^(2/5)."""
+    m, v, R, E = drop.mass_kg, drop.impact_speed_m_per_s, drop.sphere_radius_m, drop.contact_modulus_Pa
+    return (15.0 * m * v**2 / (16.0 * E * R**0.5)) ** 0.4
+
+
+def test_a_drop_that_would_push_the_skin_onto_the_core_is_warned_of_by_the_sensor_with_its_own_gap():
+    """A Hertz drop deeper than the fluid over the core (``resting_gap_mm``) is outside the model (the sphere would
+    meet the core): a scene refuses it (bench/tests/test_scene.py); a Sensor built in Python warns, saying how deep
+    (analyses probe the chain there on purpose); shallower, on a thicker fluid layer or as the legacy half-sine
+    (``contact_s``: no depth), nothing is said."""
+    import warnings
+
+    from emulator.params import SensorParams
+    from emulator.sensor import Sensor
+    from emulator.stimuli import OutsideModelWarning, sphere_drop_on
+
+    p = SensorParams()
+    heavy = sphere_drop_on(p, 0.1, 0.01, 0.07)  # a steel sphere
+    depth = _hertz_depth_m(heavy)
+    assert depth > p.resting_gap_mm * 1e-3  # 10 g from 7 cm: ~1.7 mm into 1.5 mm of fluid
+    with pytest.warns(OutsideModelWarning, match=rf"SphereDrop at 0\.1 s: .* indent the skin {depth * 1e3:.2f} mm, "
+                                                   r"past the 1\.5 mm of fluid over the core \(resting_gap_mm\)"):
+        Sensor(stimuli=[heavy], channels_read=["PDC"], params=p)
+    shallower = dataclasses.replace(heavy, mass_kg=heavy.mass_kg * 0.6)  # δ ∝ m^(2/5)·R^(-1/5) ∝ m^(1/3): ×0.84
+    assert _hertz_depth_m(shallower) < p.resting_gap_mm * 1e-3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Sensor(stimuli=[heavy], channels_read=["PDC"], params=SensorParams(resting_gap_mm=depth * 1e3 * 1.01))
+        Sensor(stimuli=[shallower], channels_read=["PDC"], params=p)
+        Sensor(stimuli=[dataclasses.replace(heavy, contact_s=1e-3)], channels_read=["PDC"], params=p)

@@ -86,7 +86,7 @@ def landing_at(b: Bench, t: float, mass_kg: float, radius_m: float, speed_m_per_
 
 
 def threshold_speeds(b: Bench, sigma_bits: float, rule=analysis.DetectionRule(), spheres=None,
-                     contact_modulus_Pa: float | None = None, bracket_m_per_s=(1e-5, 1e2), iterations: int = 30
+                     contact_modulus_Pa: float | None = None, bracket_m_per_s=(1e-5, 10.0), iterations: int = 30
                      ) -> dict[str, float]:
     """Per sphere (name -> (mass kg, radius m); default D Table 5-2), the impact speed (m/s) at which the
     noise-free PAC first has more than ``rule.min_points`` samples at 2200 S/s beyond ``rule.n_sigma``·σ within the
@@ -132,7 +132,7 @@ def pulse_spectrum_share(d: SphereDrop, frequency_Hz: float, points: int = 4000)
 
 
 def threshold_scaling(b: Bench, sigma_bits: float, spheres=None, contact_modulus_Pa: float | None = None,
-                      bracket_m_per_s=(1e-5, 1e2)) -> dict:
+                      bracket_m_per_s=(1e-5, 10.0)) -> dict:
     """At each sphere's detection threshold: impact speed (m/s), kinetic energy ½·m·v² (J), momentum m·v (N·s),
     peak Hertz force (N), contact duration over the resonance period, the pulse's spectrum share at the ringing
     frequency, and the drop height through air that gives the speed (m; inf above the terminal speed); and the
