@@ -151,13 +151,18 @@ def commit_new(temps: dict[Path, Path]) -> list[Path]:
 @contextlib.contextmanager
 def atomic_write(final):
     """``with atomic_write(path) as tmp: write tmp`` → renamed to ``path`` on success; removed on an error or a
-    signal (KeyboardInterrupt), so nothing half-written is ever left under either name."""
+    signal (KeyboardInterrupt), so nothing half-written is ever left under either name.  An :class:`OSError` that
+    names no file (ENOSPC, EFBIG) or only the temporary one leaves naming ``path``."""
     final = Path(final)
-    tmp = temp_path(final)
+    tmp = None
     try:
+        tmp = temp_path(final)
         yield tmp
         commit(tmp, final)  # (a folder in the way fails here: the temporary file goes too)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+    except BaseException as e:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        if isinstance(e, OSError) and (e.filename is None or tmp is None or e.filename == str(tmp)):
+            e.filename = str(final)  # a full disk's error names no file (or a temporary one): say which failed
         raise

@@ -100,6 +100,28 @@ def _open_out(path, default, force: bool, kind, keep=()):
     return OutFolder.open(path, force=force, kind=kind, keep=keep, defer_clearing=True)
 
 
+def _results_not_written(e: OSError, out: Path, files, trials_json: str):
+    """The error for results that could not all be written into ``out`` (a full disk): the file and the disk's
+    words, which of ``files`` are in place, and where the trials are — ``out``'s trials.json, else a trials.json
+    (``trials_json``, its text) saved in the system's temporary folder, else lost.  Exit status 1."""
+    from bench.atomic import save_in_temp_folder
+    from bench.errors import OutputNotWritten
+
+    written = [f for f in files if (out / f).is_file()]
+    if "trials.json" in written:
+        where = f"the trials are in {out}/trials.json"
+    else:
+        try:
+            saved = save_in_temp_folder(lambda path: path.write_text(trials_json, encoding="utf-8"),
+                                        "biotac-trials-", ".json")
+            where = f"the trials were saved to {saved} instead"
+        except OSError as lost:
+            where = f"the trials could not be saved in the temporary folder either ({lost.strerror or lost}): lost"
+    failed = Path(e.filename).name if e.filename else "a file"
+    return OutputNotWritten(f"{out}/{failed} could not be written ({e.strerror or e}); written: "
+                            f"{', '.join(written) or 'nothing'}; {where}")
+
+
 def _cmd_texture_sweep(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
@@ -132,14 +154,18 @@ def _cmd_texture_sweep(a) -> int:
             check_unchanged(library, "the sweep")
         except TextureError as e:
             raise ValueError(f"{library.path}: {'; '.join(e.problems)}") from None  # (one line)
+        trials_json = strict_json({"wall_s": wall, "workers": spec.describe(), "library": library.record(),
+                                   "rows": rows}, indent=1)
         with signals_held():  # a signal meanwhile: every file finished first, then the stop
             folder.clear_earlier()
-            write_rows_csv(out / "trials.csv", rows)
-            write_text(out / "trials.json", strict_json({"wall_s": wall, "workers": spec.describe(),
-                                                         "library": library.record(), "rows": rows}, indent=1))
-            write_rows_csv(out / "wear.csv", wear_per_movement(movements, movement_ids=ids))
-            properties_vs_movement(rows_to_arrays(rows), {n: library.textures[n].name for n in textures},
-                                   out / "properties.png")
+            try:
+                write_rows_csv(out / "trials.csv", rows)
+                write_text(out / "trials.json", trials_json)
+                write_rows_csv(out / "wear.csv", wear_per_movement(movements, movement_ids=ids))
+                properties_vs_movement(rows_to_arrays(rows), {n: library.textures[n].name for n in textures},
+                                       out / "properties.png")
+            except OSError as e:
+                raise _results_not_written(e, out, SWEEP_FILES, trials_json) from None
     finally:
         folder.close()
     sim = sum(r["simulated_s"] for r in rows)
@@ -232,7 +258,7 @@ DEFAULT_CACHE = "out/cache"
 def _cmd_explore(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.experiment import ablated, identified_among, load_experiment, run_experiment, summary
-    from bench.reporting.experiment_report import OUTPUT_FILES, write_outputs, write_text
+    from bench.reporting.experiment_report import OUTPUT_FILES, trial_rows, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, writable_folder
 
     if a.no_cache and a.cache is not None:
@@ -264,7 +290,10 @@ def _cmd_explore(a) -> int:
             where = out if label == "baseline" else out / label
             with signals_held():
                 folder.clear_earlier()  # (once: the baseline's results come first)
-                files = write_outputs(result, where)
+                try:
+                    files = write_outputs(result, where)
+                except OSError as e:
+                    raise _results_not_written(e, where, OUTPUT_FILES, strict_json(trial_rows(result))) from None
             rows.append((label, what, summary(result), identified_among(result)))
             print(f"wrote {where}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
         if names:

@@ -376,7 +376,7 @@ def _cached_rows(path: Path, tasks: list[TrialTask]) -> tuple[list[dict] | None,
 def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=None, progress: bool = True,
               client=None, log=print) -> list[dict]:
     """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code (a
-    cache file that does not hold them is said and replaced)."""
+    cache file that does not hold them is said and replaced; one that cannot be written, a full disk, is said)."""
     from bench.textures.library import check_unchanged, read_library
 
     libraries = [read_library(f) for f in sorted({t.library for t in tasks if t.library})]  # as read now
@@ -392,9 +392,13 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
     for lib in libraries:  # the trials read it on their workers: an edit meanwhile is refused, never cached
         check_unchanged(lib, f"the {name} stage")
     if path is not None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_write(path) as tmp:  # a unique temporary name: explores sharing a cache never collide
-            tmp.write_text(json.dumps(rows))
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_write(path) as tmp:  # a unique temporary name: explores sharing a cache never collide
+                tmp.write_text(json.dumps(rows))
+        except OSError as e:  # a full disk: the trials are in hand, the experiment needs no cache to go on
+            log(f"note: the {name} stage's trials could not be cached at {path} ({e.strerror or e}): the experiment "
+                f"goes on; a re-run runs them again")
     return rows
 
 

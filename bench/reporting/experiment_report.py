@@ -70,6 +70,11 @@ def pilot_pick_comparison(result: ExperimentResult) -> dict[str, dict]:
     return out
 
 
+def trial_rows(result: ExperimentResult) -> list[dict]:
+    """Every trial of an experiment, pilot, training and validation in that order (trials.csv and trials.json)."""
+    return result.pilot_rows + result.training_rows + result.validation_rows
+
+
 def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     """Write every output of an experiment into ``out``; returns the file names."""
     from bench.textures.library import load_library
@@ -77,7 +82,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     out.mkdir(parents=True, exist_ok=True)
     lib = load_library(result.spec.library)
     names = []
-    rows = result.pilot_rows + result.training_rows + result.validation_rows
+    rows = trial_rows(result)
     write_rows_csv(out / "trials.csv", rows)
     write_text(out / "trials.json", strict_json(rows))
     names += ["trials.csv", "trials.json"]
