@@ -8,7 +8,7 @@ import signal
 import sys
 from pathlib import Path
 
-from bench.cli.args import stimuli_count
+from bench.cli.args import Terminated, sigterm_like_ctrl_c, stimuli_count
 from bench.paths import REPO, SCENES_DIR
 from emulator.fidelity import PROFILES
 
@@ -153,10 +153,10 @@ def _cmd_run(a) -> int:
             if folder is not None:
                 folder.close()
         _print_run(a, scene, res)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as e:  # (SIGTERM too: Terminated)
         if res is None:
             raise
-        res.late_signal = "SIGINT"  # only the summary was cut short: the files were all written before it
+        res.late_signal = "SIGTERM" if isinstance(e, Terminated) else "SIGINT"  # only the summary was cut short
     if res.late_signal:
         print(f"{res.late_signal} after the run's files were written: {res.folder}/ holds them all (record.json "
               f"status \"{res.record['status']}\")", file=sys.stderr)
@@ -346,7 +346,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                         "scene's [host] spi, else software)")
     r.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     r.add_argument("--quiet", action="store_true", help="no progress bar, no report on the terminal")
-    r.set_defaults(func=_cmd_run)
+    r.set_defaults(func=sigterm_like_ctrl_c(_cmd_run))  # (outside the run's own guard: before and after it)
 
     v = sub.add_parser("validate", help="check scene files without running them",
                        description=VALIDATE_HELP, formatter_class=fmt)
