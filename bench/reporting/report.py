@@ -286,7 +286,9 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
 
 def _record_not_written(folder: OutFolder, record: dict, rec: Recording, e: OSError) -> OutputNotWritten:
     """record.json could not be written (the last file: a full disk, say): the files already in place are marked
-    failed where that still works, and the error says that the folder is incomplete without its record."""
+    failed where that still works, and the error says that the folder is incomplete without its record — and the
+    run's own error, which the record would have held (where samples that did not fit were saved, say)."""
+    earlier = record.get("error")
     _fail(record, f"writing record.json: {e.strerror or e}", "record.json")
     with contextlib.suppress(Exception):
         store.set_status(folder.path / "samples.h5", record["status"], rec.simulated_s, record["error"])
@@ -294,7 +296,8 @@ def _record_not_written(folder: OutFolder, record: dict, rec: Recording, e: OSEr
         folder.write_text("report.md", markdown_report(record))
     return OutputNotWritten(f"{folder.path}/record.json could not be written ({e.strerror or e}): the run's other "
                             f"files there are incomplete without it (status \"failed\" where it could still be "
-                            f"marked); make room and run again with --force")
+                            f"marked); make room and run again with --force"
+                            + (f"; the run's error: {earlier}" if earlier else ""))
 
 
 def _fail(record: dict, problem: str, missing: str | None = None) -> None:

@@ -63,17 +63,13 @@ def run_to_folder(scene, out=None, *, force: bool = False, csv: bool = False, np
                 store.abort()
                 raise
             guard.begin_writing()  # a signal from now on stops exports and plots; one before it only the simulation
+            earlier = None if store.failed else rec.error  # the run's own failure (a NaN at the ADC): kept
+            if not store.failed:
+                with contextlib.suppress(Exception):  # (a failure sets store.failed: the samples are kept below)
+                    store.close("running", rec.simulated_s, rec.error)
             if store.failed:
                 h5 = _keep_what_was_streamed(store, h5, rec, folder, compression)
-            else:
-                try:
-                    store.close("running", rec.simulated_s, rec.error)
-                except Exception as e:
-                    rec.status = "failed"
-                    rec.error = "; ".join(([rec.error] if rec.error else []) + [f"writing samples.h5: {os_reason(e)}"])
-                    with contextlib.suppress(OSError):
-                        os.unlink(h5)
-                    h5 = None
+                rec.error = "; ".join(filter(None, [earlier, rec.error]))
             if guard.signum is not None and rec.status == "ok":
                 rec.status = "interrupted"
             sensor_records = {k: _write_sensor(sub, folder, k, guard=guard, csv=csv, plots=plots, npz=npz,

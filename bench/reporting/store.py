@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -139,13 +140,17 @@ class SampleStore:
         return kept
 
     def close(self, status: str = "running", simulated_s: float = 0.0, error: str | None = None) -> None:
-        """Write what is buffered, set the run's status attributes, flush and close the file."""
+        """Write what is buffered, set the run's status attributes, flush and close the file.  A failure (a full
+        disk: HDF5 writes its cached metadata only now) raises with :attr:`failed` set and the file left open, so
+        that :meth:`salvage` can still read every sample back; :meth:`abort` closes it."""
         try:
             self.flush(everything=True)
             self.f.attrs.update({"status": status, "simulated_s": float(simulated_s), "error": error or ""})
             self.f.flush()
-        finally:
-            self.f.close()
+        except Exception as e:
+            self.failed = self.failed or os_reason(e)
+            raise
+        self.f.close()
 
     def abort(self) -> None:
         try:
@@ -155,9 +160,13 @@ class SampleStore:
 
 
 def os_reason(e: BaseException) -> str:
-    """An error in a few words: the system's text for an ``OSError``'s errno (HDF5's own message runs to several
-    lines of buffer addresses), else the error's message."""
-    return os.strerror(e.errno) if isinstance(e, OSError) and e.errno else str(e)
+    """An error in a few words: the system's text for an ``OSError``'s errno, or for the errno HDF5's own message
+    names (it runs to several lines of buffer addresses and times, and reaches Python without an errno), else the
+    message's first line."""
+    if isinstance(e, OSError) and e.errno:
+        return os.strerror(e.errno)
+    named = re.search(r"\berrno = (\d+)", str(e))
+    return os.strerror(int(named.group(1))) if named else str(e).split("\n", 1)[0]
 
 
 def set_status(path: Path, status: str, simulated_s: float, error: str | None, **extra) -> None:

@@ -211,3 +211,94 @@ def test_the_broken_samples_file_is_deleted_before_the_samples_are_written_again
     res = run_to_folder(_scene(), out, plots=False, progress=False, chunk_s=0.5)
     assert res.record["status"] == "failed" and "samples.h5 holds" in res.record["error"], res.record["error"]
     assert beside == [[]]
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("run_error", [None, "NumericalError: NaN at the ADC"])
+def test_a_disk_full_when_samples_h5_is_closed_keeps_every_sample(tmp_path, monkeypatch, run_error):
+    """HDF5 writes its cached metadata only when the file is flushed and closed, so a disk that fills after the last
+    sample was taken fails there (seen on a 200 kB tmpfs: "Slist already enabled?"); every sample of the run is
+    still kept, read back before the broken file is closed — they were deleted with it, and the record named HDF5's
+    words only — and a failure of the run itself stays in the error beside it."""
+    scene = _scene()
+    if run_error:
+        ran = session.run_scene
+
+        def failing(*a, **kw):
+            rec = ran(*a, **kw)
+            rec.status, rec.error = "failed", run_error
+            return rec
+
+        monkeypatch.setattr(session, "run_scene", failing)
+    flush, calls = h5py.File.flush, []
+
+    def full_once(self):
+        calls.append(self.filename)
+        if len(calls) == 1:
+            raise OSError(errno.ENOSPC, "Can't write data (file write failed: errno = 28, ...)")
+        return flush(self)
+
+    monkeypatch.setattr(h5py.File, "flush", full_once)
+    out = tmp_path / "o"
+    res = run_to_folder(scene, out, plots=False, progress=False, chunk_s=0.5)
+    monkeypatch.undo()
+    assert res.exit_code == 1 and res.record["status"] == "failed" and res.record["simulated_s"] == scene.duration_s
+    assert res.record["error"] == ((f"{run_error}; " if run_error else "") + "writing samples.h5 at 6.000 s: No space "
+                                   "left on device; samples.h5 holds the 6.000 s recorded before it"), res.record["error"]
+    assert "samples.h5" in res.record["outputs"]
+    _assert_holds(out / "samples.h5", _expected_before(scene, scene.duration_s))
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("error, reason", [
+    (OSError(errno.ENOSPC, "Can't write"), "No space left on device"),
+    (OSError("Unable to flush file (file write failed: time = Tue Nov 24 09:48:53 2026\n, filename = 'x.h5', "
+             "file descriptor = 7, errno = 28, error message = 'No space left on device', buf = 0x5581, "
+             "total write size = 4096)"), "No space left on device"),
+    (RuntimeError("Slist already enabled? (slist already enabled?)\nsecond line"),
+     "Slist already enabled? (slist already enabled?)"),
+])
+def test_os_reason_is_the_systems_words_for_hdf5s_errno_else_the_first_line(error, reason):
+    """HDF5's errors reach Python without an errno, their text spanning lines of buffer addresses and times: the
+    reason is the system's text for the errno the message names, else the message's first line."""
+    assert store.os_reason(error) == reason
+
+
+@pytest.mark.unit
+def test_samples_saved_elsewhere_are_named_when_record_json_cannot_be_written(tmp_path, monkeypatch, capsys):
+    """Seen on a 200 kB tmpfs: samples.h5 did not fit (saved in the system's temporary folder), then record.json did
+    not fit either; its one error line must name where the samples went — it said only that record.json was
+    missing, and the only file naming them was report.md."""
+    from bench import atomic
+    from bench.cli.main import main
+
+    out, tmp = tmp_path / "o", tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    flush, written, commit = h5py.File.flush, session.write_recording, atomic.commit
+
+    def full_once(self, calls=[]):
+        calls.append(1)
+        if len(calls) == 1:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return flush(self)
+
+    def no_room_in_out(path, rec, compression="gzip"):
+        if path.parent == out:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return written(path, rec, compression)
+
+    def no_room_for_the_record(tmp_file, final):
+        if final.name == "record.json":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return commit(tmp_file, final)
+
+    monkeypatch.setattr(h5py.File, "flush", full_once)
+    monkeypatch.setattr(session, "write_recording", no_room_in_out)
+    monkeypatch.setattr(atomic, "commit", no_room_for_the_record)
+    assert main(["run", "rest", "--out", str(out), "--quiet", "--no-plots"]) == 1
+    err = capsys.readouterr().err
+    (saved,) = tmp.glob("biotac-samples-*.h5")
+    lines = [line for line in err.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and f"{out}/record.json could not be written" in lines[0], err
+    assert f"the 10.000 s recorded before it were saved as {saved}" in lines[0], err
