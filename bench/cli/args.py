@@ -197,7 +197,13 @@ class OneLineErrorParser(argparse.ArgumentParser):
         self.set_defaults(command_prog=self.prog)
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {escaped(message)} (see {self.prog} --help)\n")
+
+
+def escaped(text: str) -> str:
+    """``text`` with each character that is not printable (a line break, a terminal's escape sequence — a path may
+    hold them) written as Python writes it in a string (``\\n``, ``\\x1b``): one line, shown as it is."""
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
 
 
 # --- output ----------------------------------------------------------

@@ -65,3 +65,22 @@ def test_an_unknown_command_is_one_line_too(capsys):
     err = capsys.readouterr().err
     assert e.value.code == 2 and len(err.splitlines()) == 1
     assert err.startswith("biotac-bench: error: argument COMMAND: invalid choice: 'no-such-command'")
+
+
+@pytest.mark.parametrize("argv", [["record", "loop://", "--out", "{tmp}/a\nb/"],
+                                  ["campaign", "--junit", "{tmp}/a\rb/", "--scenes", "rest"],
+                                  ["record", "loop://", "--out", "{tmp}/a\x1b[2Jb/"]],
+                         ids=["newline", "carriage-return", "escape-sequence"])
+def test_a_path_with_line_breaks_or_control_characters_stays_one_line(argv, tmp_path, capsys):
+    """A path may hold any byte but NUL and '/': a line break in it must not split the one error line (nor an escape
+    sequence clear the terminal); it is shown escaped, as Python writes it in a string."""
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    try:
+        status = cli.main(argv)
+    except SystemExit as e:
+        status = e.code
+    lines = capsys.readouterr().err.splitlines()
+    assert status == 2 and len(lines) == 1, lines
+    (path,) = [a for a in argv if a.startswith(str(tmp_path))]
+    shown = path.encode("unicode_escape").decode("ascii")
+    assert f": {shown}: is a folder" in lines[0] and "\x1b" not in lines[0], lines
