@@ -147,10 +147,10 @@ class SampleStore:
             self.flush(everything=True)
             self.f.attrs.update({"status": status, "simulated_s": float(simulated_s), "error": error or ""})
             self.f.flush()
+            self.f.close()
         except Exception as e:
             self.failed = self.failed or os_reason(e)
             raise
-        self.f.close()
 
     def abort(self) -> None:
         try:

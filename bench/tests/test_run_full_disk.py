@@ -302,3 +302,26 @@ def test_samples_saved_elsewhere_are_named_when_record_json_cannot_be_written(tm
     lines = [line for line in err.splitlines() if line.startswith("error:")]
     assert len(lines) == 1 and f"{out}/record.json could not be written" in lines[0], err
     assert f"the 10.000 s recorded before it were saved as {saved}" in lines[0], err
+
+
+@pytest.mark.unit
+def test_a_samples_file_that_fails_to_close_is_never_taken_for_a_written_one(tmp_path, monkeypatch):
+    """HDF5 may report the full disk only as the file closes: the run must not call such a samples.h5 written (it
+    would be listed in the record, broken or missing), but keep its samples as for any failed write or say they are
+    lost."""
+    scene = _scene()
+    close = h5py.File.close
+
+    def full_at_close(self):
+        streamed = bool(self) and self.filename.endswith(".part")  # the stream's file, not a fresh one
+        close(self)
+        if streamed and not getattr(full_at_close, "done", False):
+            full_at_close.done = True
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(h5py.File, "close", full_at_close)
+    res = run_to_folder(scene, tmp_path / "o", plots=False, progress=False, chunk_s=0.5)
+    monkeypatch.undo()
+    assert res.record["status"] == "failed" and res.record["error"].startswith(
+        "writing samples.h5 at 6.000 s: No space left on device; "), res.record["error"]
+    assert "samples.h5" not in res.record["outputs"] or "samples.h5 holds the 6.000 s" in res.record["error"]
