@@ -119,3 +119,14 @@ def test_a_stage_cache_that_cannot_be_written_is_a_note_and_the_experiment_goes_
         assert re.search(rf"note: the {stage} stage's trials could not be cached at {cache}/{stage}-\w+\.json "
                          rf"\({NO_SPACE}\)", err), err
 
+
+
+def test_a_sweep_whose_trials_fit_nowhere_says_they_are_lost(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(T, "sweep", _in_process_sweep)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "no-such-folder"))  # the temporary folder unusable too
+    out = tmp_path / "o"
+    _disk_full_for(monkeypatch, set(), out)
+    assert cli.main([*SWEEP, "--out", str(out)]) == 1
+    line = _one_error_line(capsys.readouterr().err)
+    assert line.endswith("written: nothing; the trials could not be saved in the temporary folder either (No such "
+                         "file or directory): lost"), line
