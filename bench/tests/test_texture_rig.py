@@ -33,6 +33,13 @@ def test_movement_grid_is_d_eqs_6_20_and_6_21():
     assert any(np.isclose(powers[k], powers[k + 1]) for k in range(len(powers) - 1))
 
 
+def test_a_movements_label_states_its_force_in_N_and_speed_in_cm_per_s():
+    """D names movements in N and cm/s (eqs 6.20–6.21): 0.02 m/s is 2 cm/s, D's level-7 step 10^0.2 × 1 cm/s is
+    1.58 cm/s.  (A mutation hunt: a label 10× off in speed misnamed the wear claim's movement.)"""
+    assert Movement(0.5, 0.02).label() == "0.50 N @ 2.00 cm/s"
+    assert Movement(0.2 * 10**0.2, 0.01 * 10**0.2).label() == "0.32 N @ 1.58 cm/s"
+
+
 D_BATCH_S, FRAME_S = 0.1, 0.01  # D ch. 6: data and the stepper's controls every 100 ms; the 44-slot frame
 
 

@@ -412,6 +412,20 @@ def test_a_slides_force_ramps_are_raised_cosines():
 
 
 @pytest.mark.unit
+def test_a_slide_moves_the_texture_by_its_distance_ramps_included():
+    """Slide's docstring: the stage slides the texture at ``velocity_m_per_s`` over ``distance_m``, accelerating
+    (and braking) over ``accel_s``.  The travel, ∫v dt, is that distance (m) — 10 mm at 20 mm/s with 0.1 s linear
+    ramps, 2 mm of them spent in the ramps — and the stage cruises at the velocity and is still at the slide's end.
+    (A mutation hunt: a slide that ended ``accel_s`` early travelled 8 mm.)"""
+    slide = Slide(0.1, SMOOTH, 1.0, 0.02, 0.01, accel_s=0.1)
+    t = np.linspace(slide.slide_start_s - 0.1, slide.slide_end_s + 0.1, 400_001)
+    v = slide.stage_velocity_m_per_s(t)
+    assert np.trapezoid(v, t) == pytest.approx(0.01, rel=1e-6)
+    assert v.max() == pytest.approx(0.02, rel=1e-9)
+    assert slide.stage_velocity_m_per_s(slide.slide_end_s) == 0.0
+
+
+@pytest.mark.unit
 def test_a_position_held_finger_feels_the_heights_it_slides_over():
     """A rig holds the finger's depth (the stepper stopped), so the load follows the texture's height from the
     touchdown spot: sliding over 60 µm RMS sand at a fixed depth the normal load fluctuates by over 10 % of its
