@@ -121,6 +121,17 @@ def test_the_population_of_units_has_the_documented_spreads_each_drawn_independe
         assert all(np.sign(getattr(u, name)) == np.sign(getattr(nominal, name)) for u in units), name
 
 
+@pytest.mark.parametrize("edge_Hz", [200.0, 350.0])
+def test_units_drawn_around_a_base_at_the_published_resonance_range_edge_stay_inside_it(edge_Hz):
+    """The module's docstring: a unit's resonance is drawn σ 5 Hz around its base and clipped to the published
+    200–350 Hz.  Around a base at either edge about half the draws fall outside: every unit is still drawn (no
+    range error) with its resonance clipped to the edge, and the others stay within 3σ (15 Hz) of the base."""
+    drawn = np.array([unit(s, base=SensorParams(resonance_Hz=edge_Hz)).params.resonance_Hz for s in range(40)])
+    assert np.all((drawn >= 200.0) & (drawn <= 350.0))
+    assert np.count_nonzero(drawn == edge_Hz) >= 8  # ~20 expected: the clip, not luck, keeps them inside
+    assert np.all(np.abs(drawn - edge_Hz) <= 15.0)
+
+
 def test_resting_electrode_codes_differ_across_electrodes_and_units():
     nominal = resting_electrode_codes(SensorParams())
     assert len(set(nominal)) <= 2  # identical electrodes at rest (± one code of rounding)
