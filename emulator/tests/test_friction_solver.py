@@ -173,3 +173,22 @@ def test_the_kernels_contact_stiffness_is_the_hertz_law_s_slope(load_N):
     h = 1e-6 * depth
     slope = K * ((depth + h) ** 1.5 - (depth - h) ** 1.5) / (2 * h)
     assert friction.hertz_stiffness_per_cbrt_N(K) * load_N ** (1 / 3) == pytest.approx(slope, rel=1e-6)
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize("r", [0.0, 0.5, 1.0, 2.0])
+def test_a_textures_steady_friction_is_the_solvers_gaussian_stribeck_curve(r):
+    """LuGre's steady-state friction (Canudas de Wit et al., IEEE TAC 1995) is
+    µ(v) = µk + (µs − µk)·exp(−(v/vs)²) + µv·v, v the sliding speed (m/s), vs the Stribeck velocity (m/s).
+    :meth:`Texture.friction_coefficient` (the steady value the sliding tests compare the simulation with) must be
+    that curve, and the solver's ``_stribeck`` the same at any speed, not only at v = vs where exp(−r²) = exp(−r).
+    (A mutation hunt: a linear exponent there passed, the tests reading it at r = 1 and r = 10 only.)"""
+    v = r * FOAM.stribeck_velocity_m_per_s
+    expected = FOAM.mu_kinetic + (FOAM.mu_static - FOAM.mu_kinetic) * math.exp(-r * r)
+    assert float(FOAM.friction_coefficient(v)) == pytest.approx(expected, rel=1e-12)
+    assert float(FOAM.friction_coefficient(-v)) == pytest.approx(expected, rel=1e-12)  # |v|: either direction
+    g, _ = friction._stribeck(v, FOAM.mu_static, FOAM.mu_kinetic, FOAM.stribeck_velocity_m_per_s)
+    assert g == pytest.approx(expected, rel=1e-12)
+    viscous = Texture(31, "viscous", "test", rms_height_m=0.0, correlation_length_m=300e-6, hurst=0.8,
+                      mu_static=1.0, mu_kinetic=0.8, mu_per_velocity_s_per_m=2.0, seed=5)
+    assert float(viscous.friction_coefficient(v)) == pytest.approx(expected + 2.0 * v, rel=1e-12)

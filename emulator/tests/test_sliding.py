@@ -426,6 +426,20 @@ def test_a_slide_moves_the_texture_by_its_distance_ramps_included():
 
 
 @pytest.mark.unit
+def test_a_commanded_stage_changes_speed_at_its_acceleration():
+    """CommandedMotion.move_stage: from the command's instant + latency the stage accelerates at ``accel_m_per_s2``
+    until it runs at the new velocity: 0 → 50 mm/s at 0.5 m/s² takes 0.1 s (halfway, 25 mm/s), and so does braking
+    back to rest; the returned (start, end) are those instants (s).  (A mutation hunt: a ramp twice as steep, with
+    a velocity jump at its end, passed the rig's tests.)"""
+    m = CommandedMotion(SMOOTH, latency_s=0.02)
+    assert m.move_stage(0.1, 0.05, accel_m_per_s2=0.5) == pytest.approx((0.12, 0.22), abs=1e-12)
+    v = m.stage_velocity_m_per_s(np.array([0.12, 0.17, 0.21, 0.22, 0.3]))
+    np.testing.assert_allclose(v, [0.0, 0.025, 0.045, 0.05, 0.05], atol=1e-12)
+    assert m.move_stage(0.3, 0.0, accel_m_per_s2=0.5) == pytest.approx((0.32, 0.42), abs=1e-12)
+    np.testing.assert_allclose(m.stage_velocity_m_per_s(np.array([0.37, 0.42, 0.5])), [0.025, 0.0, 0.0], atol=1e-12)
+
+
+@pytest.mark.unit
 def test_a_position_held_finger_feels_the_heights_it_slides_over():
     """A rig holds the finger's depth (the stepper stopped), so the load follows the texture's height from the
     touchdown spot: sliding over 60 µm RMS sand at a fixed depth the normal load fluctuates by over 10 % of its
