@@ -215,6 +215,20 @@ def test_resonance_is_sqrt_k_over_m_and_anchored_at_nominal_inflation():
         p.replace(inflation_volume_mL=0.3).resonance_at_inflation_Hz
 
 
+@pytest.mark.parametrize("volume_mL", [0.3, 0.5, 0.7])
+def test_the_fluid_moving_with_the_skin_is_a_third_of_the_layer_under_it(volume_mL):
+    """The fluid under the loaded skin shears as a Couette layer: velocity U·z/h from 0 at the core to the skin's U,
+    kinetic energy ½·ρ·A·∫₀ʰ(U·z/h)²dz = ½·(ρ·A·h/3)·U², so a third of the layer's mass (kg) moves with the skin,
+    the layer h = V / wetted area (m).  (A mutation hunt: half the layer passed — the resonance is anchored at the
+    nominal inflation, so the share only shows off it.)"""
+    p = SensorParams().replace(inflation_volume_mL=volume_mL)
+    sf = skin_fluid(p)
+    h = volume_mL * 1e-6 / p.fluid_wetted_area_m2
+    assert sf.layer_thickness_m == pytest.approx(h, rel=1e-12)
+    assert sf.moving_mass_kg - sf.skin_mass_kg == pytest.approx(
+        p.fluid_density_kg_per_m3 * p.skin_load_area_m2 * h / 3, rel=1e-9)
+
+
 # --- Hertz impacts ---------------------------------------------------------------------------------------
 def test_sphere_radii_match_the_names():
     for name, r in SPHERE_RADII_M.items():

@@ -216,6 +216,19 @@ def test_to_physical_converts_each_channel_and_leaves_bad_slots_nan():
     assert first["TDC_C"] == pytest.approx(conv.tdc_to_celsius(2500.0))
 
 
+def test_to_physical_reads_pdc_from_its_channel_in_kpa_above_the_given_rest():
+    """SENSOR.md §4: fluid pressure = (PDC − offset) · 0.0365 kPa/bit.  ``pdc_offset`` is that offset (the rest's
+    code), none reading from code 0; only PDC's slots (channel 1) make the series, not TAC's (channel 2).
+    (A mutation hunt: an ignored offset or PDC read from the TAC slot passed.)"""
+    channels = np.array([1, 2, 1, 0, 1])
+    codes = np.array([[1000], [3000], [1100], [2048], [900]], np.uint16)
+    frame = DataFrame(1, 0b1, channels, codes, np.zeros_like(codes, np.uint8))
+    rested = D.to_physical(frame, pdc_offset=1000.0)[1]["PDC_kPa"]
+    np.testing.assert_allclose(rested, [0.0, 100 * 0.0365, -100 * 0.0365], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(D.to_physical(frame)[1]["PDC_kPa"], [1000 * 0.0365, 1100 * 0.0365, 900 * 0.0365],
+                               rtol=1e-12)
+
+
 def test_counting_afresh_forgets_what_an_earlier_host_left_in_the_stream():
     """`record` after a host that was killed mid-stream: the tail of an old frame and the frames the bridge lost while
     nobody read are the earlier session's; counted afresh from the new START, a contiguous recording shows no CRC
