@@ -78,6 +78,21 @@ def test_force_curve_is_linear_below_the_knee_and_flattens_above():
     assert static_pressure_from_force(-1.0, p) == 0.0
 
 
+@pytest.mark.parametrize("width_N", [0.08, 1.0, 2.0])  # the default, and the knee width's range up to its top
+def test_the_force_curve_starts_from_zero_at_first_touch_for_any_knee_width(width_N):
+    """P(F) = k·(F − (1 − r)·w·(softplus((F − F_knee)/w) − softplus(−F_knee/w))) (mechanics.static_pressure_from_force):
+    the second softplus makes P(0) = 0, so a touch of 1 µN raises the pressure by k·1 µN at most (Pa), whatever the
+    knee's width w (N); below the knee the curve is then k·F less a smooth share that grows from zero.  (A mutation
+    hunt: without it the curve jumped by ~0.5·k·1 N at first touch for a 2 N wide knee, which the default 0.08 N
+    width hides to 1e-11.)"""
+    p = SensorParams().replace(force_knee_width_N=width_N)
+    k = p.force_to_pressure_Pa_per_N
+    touch = static_pressure_from_force(1e-6, p)
+    assert 0.0 <= touch <= k * 1e-6
+    f = np.array([0.1, 0.5, 1.0])
+    assert np.all(static_pressure_from_force(f, p) <= k * f)
+
+
 def test_inflation_raises_resting_pressure_and_moves_the_resonance_within_200_to_350_Hz():
     vols = [0.2, 0.4, 0.6, 0.8, 1.0]
     pressures = [SensorParams(inflation_volume_mL=v).resting_pressure_Pa for v in vols]
