@@ -68,6 +68,26 @@ def _slow_host(fb: FirmwareBench, frames: int, bite: int = 50) -> tuple[FramePar
         os.close(fd)
 
 
+def test_an_overrun_starts_after_the_bytes_that_fit_and_grows_while_the_buffer_stays_full():
+    """The receive buffer keeps what fits of a delivery and loses the rest: the overrun's offset (bytes since the
+    link opened) is where the loss starts, after the bytes kept, and losses that follow each other are one range
+    (the module's docstring: "merged when adjacent").  ``overrun_frames()`` finds the frames hit from these offsets.
+    (A mutation hunt: an offset at the delivery's first byte, and a list that never merged, passed.)"""
+    link = PtyLink(rx_buffer=RX_BUFFER_BYTES)  # nobody reads: the buffer fills
+    try:
+        assert link.deliver(bytes(RX_BUFFER_BYTES - 10)) == RX_BUFFER_BYTES - 10
+        deadline = time.monotonic() + 5
+        while link.room() != 10 and time.monotonic() < deadline:  # the kernel moves the bytes through the pty
+            time.sleep(0.001)
+        assert link.room() == 10
+        assert link.deliver(bytes(14)) == 10  # 10 fit, the last 4 are lost
+        assert link.overruns == [(RX_BUFFER_BYTES, 4)]
+        assert link.deliver(bytes(6)) == 0
+        assert link.overruns == [(RX_BUFFER_BYTES, 10)] and link.bytes_overrun == 10
+    finally:
+        link.close()
+
+
 def test_the_link_keeps_every_byte_of_a_sender_that_waited_and_drops_the_excess_otherwise():
     link = PtyLink(rx_buffer=RX_BUFFER_BYTES)
     host = os.open(link.path, os.O_RDWR | os.O_NOCTTY)
