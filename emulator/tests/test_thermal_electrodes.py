@@ -335,3 +335,30 @@ def test_the_first_response_to_a_touch_scales_with_the_objects_own_temperature()
         swings.append(after[np.argmax(np.abs(after))])
     assert swings[0] < swings[1] < 0 < swings[2]
     assert swings[1] - swings[0] == pytest.approx(swings[2] - swings[1], rel=0.05)
+
+
+#: effusivity √(kρc) bands (W·s^½/(m²·K)) of the classes of surfaces a fingertip tells apart by touch, from the
+#: textbook tables the materials come from (Incropera & DeWitt App. A; Callister): conductors (metals, graphite)
+#: above 5000, stone, glass and ceramics 1000–3000, solid polymers, rubbers, leather, paper and wood 200–1000,
+#: foams, felts, fabrics and fur below 200
+EFFUSIVITY_CLASSES = {
+    (5000.0, 1e5): ("aluminum", "steel", "stainless steel", "graphite"),
+    (1000.0, 3000.0): ("granite", "glass", "ceramic tile"),
+    (200.0, 1000.0): ("acrylic", "PTFE", "nylon", "polyethylene", "polypropylene", "phenolic laminate", "vinyl (PVC)",
+                      "silicone rubber", "rubber (soft)", "leather", "paper", "hardwood", "wood"),
+    (10.0, 200.0): ("balsa", "cork", "cotton fabric", "polystyrene foam", "polyurethane foam", "EVA foam",
+                    "wool felt", "fur"),
+}
+
+
+def test_every_material_draws_heat_as_its_class_does():
+    """What a touch feels is the surface's effusivity √(kρc): a metal colder than stone or glass, those colder than
+    plastics and wood, those colder than foams and fabrics.  Every material of the table sits in its class's band,
+    and the bands cover the whole table.  (A mutation hunt: acrylic's conductivity ten times too high passed.)"""
+    listed = [name for names in EFFUSIVITY_CLASSES.values() for name in names]
+    assert sorted(listed) == sorted(MATERIALS)
+    for (lo, hi), names in EFFUSIVITY_CLASSES.items():
+        for name in names:
+            m = MATERIALS[name]
+            assert m.effusivity == pytest.approx(np.sqrt(m.k * m.rho * m.c), rel=1e-12)
+            assert lo <= m.effusivity <= hi, (name, m.effusivity)
