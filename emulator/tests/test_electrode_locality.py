@@ -275,8 +275,10 @@ def test_resting_gaps_drawn_below_the_clearance_stop_at_twice_the_bottoming_gap(
 
 def test_the_free_skin_grid_tiles_the_untethered_cylinder_and_tip():
     """The free skin (free_skin_grid) is the cylinder x ∈ [−20, 0] mm and the hemispherical tip (r = 5 mm) within
-    ±θ of the ventral midline: its areas sum to 20·r·2θ + r²·2θ (the tip's ∫ sin φ dφ over [0, π/2] is 1), and every
-    point lies on the core."""
+    ±θ of the ventral midline: its areas sum to 20·r·2θ + r²·2θ (the tip's ∫ sin φ dφ over [0, π/2] is 1), every
+    point lies on the core, and the cylinder's area is spread evenly along it (its centroid at x = −10 mm, its points
+    from the base clamp to the tip).  (A mutation hunt: the cylinder's points squeezed into its front half, with
+    their areas kept, passed.)"""
     from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM, free_skin_grid
 
     r = CORE_RADIUS_MM
@@ -285,6 +287,8 @@ def test_the_free_skin_grid_tiles_the_untethered_cylinder_and_tip():
         two_theta = 2 * np.radians(half_deg)
         cyl = pts[:, 0] <= 0.0
         assert area[cyl].sum() == pytest.approx(-SKIN_BASE_X_MM * r * two_theta, rel=1e-9)
+        assert np.average(pts[cyl, 0], weights=area[cyl]) == pytest.approx(SKIN_BASE_X_MM / 2, rel=1e-9)
+        assert pts[cyl, 0].min() < SKIN_BASE_X_MM + 0.5 and pts[cyl, 0].max() > -0.5
         assert area[~cyl].sum() == pytest.approx(r * r * two_theta, rel=2e-3)  # midpoint rule over φ
         assert np.allclose(np.hypot(pts[cyl, 1], pts[cyl, 2]), r)
         assert np.allclose(np.linalg.norm(pts[~cyl], axis=1), r)
