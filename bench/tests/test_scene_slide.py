@@ -204,7 +204,8 @@ def test_the_reports_skin_line_gives_the_worn_skin_after_the_trials(two_slides):
 def test_the_sliding_table_prints_the_true_normal_force_and_the_ridge_height_in_um(two_slides):
     """report.md's sliding table under its header: "true normal force (N)" is the force measured on the skin
     while sliding (the record's true_normal_N, not the commanded 1 N echoed; to the printed 1e-3 N), and
-    "ridge height (µm)" the skin's in micrometres (≈ 150 µm, the [skin] table's, within 1 %)."""
+    "ridge height (µm)" the skin's in micrometres (≈ 150 µm, the [skin] table's, within 1 %); "velocity (cm/s)" the
+    fixture's 20 mm/s as 2 cm/s (a mutation hunt: the speed printed ten times too small passed)."""
     from bench.reporting.report import markdown_report
 
     _, _, record = two_slides
@@ -216,6 +217,7 @@ def test_the_sliding_table_prints_the_true_normal_force_and_the_ridge_height_in_
         assert float(row["true normal force (N)"]) == pytest.approx(trial["true_normal_N"], abs=6e-4)
         assert row["true normal force (N)"] != f"{trial['force_N']:.3f}"  # measured, not the command
         assert float(row["ridge height (µm)"]) == pytest.approx(150.0, rel=0.01)
+        assert float(row["velocity (cm/s)"]) == pytest.approx(2.0, rel=1e-9)
 
 
 def test_the_sliding_plots_give_slip_in_cm_per_s_and_ridges_in_um(two_slides, tmp_path, monkeypatch):
