@@ -116,13 +116,18 @@ def test_an_interrupted_runs_report_names_the_signal(taps):
 
 def test_the_impact_tables_energy_is_d_table_5_2s_in_microjoules():
     """The impact table's "energy (µJ)" of a 1 mm steel bearing dropped from 7 cm is D Table 5-2's 2.805 µJ
-    (m·g·h = 4.089 mg · 9.807 m/s² · 0.07 m); printed to 3 decimals, so within 0.002 µJ."""
+    (m·g·h = 4.089 mg · 9.807 m/s² · 0.07 m); printed to 3 decimals, so within 0.002 µJ.  The record's mass is that
+    4.089 mg, and the "rate" column is detected / drops in percent.  (A mutation hunt: a mass in grams and a rate
+    printed as a fraction passed.)"""
     sc = parse_scene_text('[scene]\nname = "drop"\nduration_s = 0.6\nseed = 1\n[analysis]\nimpact_detection = true\n'
                           '[[stimulus]]\nkind = "sphere_drop"\nsphere = "1 mm steel bearing"\nat_s = 0.3\n')
-    report = markdown_report(build_record(run_scene(sc, progress=False), []))
+    record = build_record(run_scene(sc, progress=False), [])
+    report = markdown_report(record)
     row = _md_table(report, "| sphere |")[0]
     assert row["sphere"] == "1 mm steel bearing"
     assert float(row["energy (µJ)"]) == pytest.approx(2.805, abs=0.002)
+    assert record["impact_detection"]["spheres"]["1 mm steel bearing"]["mass_mg"] == pytest.approx(4.089, rel=1e-3)
+    assert row["rate"] == f"{100 * int(row['detected']) / int(row['drops']):.0f} %"
 
 
 def test_the_effects_table_gives_milliseconds_per_simulated_second(taps):
