@@ -279,6 +279,24 @@ def test_the_wear_law_meets_d_wear_observations_with_its_calibrated_knobs():
 SHIPPED_PAIRS = [(85, 86), (4, 5), (59, 64), (101, 114), (74, 75), (116, 117), (48, 50), (14, 15)]
 
 
+def test_the_description_scales_are_the_117_textures_spreads_whatever_test_surfaces_the_library_holds():
+    """pairs.feature_scales: each feature's spread over the library's 117 textures (D's set), so the test surfaces
+    a library may add (numbers 900–999) move no scale and no pair; here ten extreme ones (a 3 mm RMS, 50 mm
+    correlation, µ 3 surface) that would widen every spread.  (A mutation hunt: scales over every texture of the
+    library passed, the shipped library's two test surfaces moving them by < 1 %.)"""
+    import dataclasses
+
+    from bench.experiments import pairs as P
+    from bench.textures.library import load_library
+
+    lib = {n: t for n, t in load_library().items() if n <= 117}
+    odd = dataclasses.replace(lib[1], group="test surfaces", rms_height_m=3e-3, correlation_length_m=0.05,
+                              mu_static=3.0, mu_kinetic=3.0)
+    with_tests = {**lib, **{900 + k: dataclasses.replace(odd, number=900 + k, seed=10_000 + k) for k in range(10)}}
+    np.testing.assert_array_equal(P.feature_scales(with_tests), P.feature_scales(lib))
+    assert P.similar_description_pairs(range(1, 118), 8, with_tests) == P.similar_description_pairs(range(1, 118), 8, lib)
+
+
 def test_similar_pairs_meet_their_definition_and_are_taken_nearest_first():
     from bench.experiments import pairs as P
     from bench.textures.library import load_library
