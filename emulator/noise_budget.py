@@ -72,19 +72,21 @@ def thermistor_noise_V(params: SensorParams) -> tuple[float, float]:
             params.tdc_noise_V * float(np.sqrt(np.sum(h_tac**2))))
 
 
-def resting_volts(params: SensorParams) -> dict[str, float]:
-    """Noise-free analog value (V) at the ADC input of every sampled channel of the sensor at rest."""
+def resting_volts(params: SensorParams, variant: str = ch.DEFAULT_VARIANT) -> dict[str, float]:
+    """Noise-free analog value (V) at the ADC input of every sampled channel of the sensor (``variant``: its
+    electrodes) at rest."""
     from emulator.sensor import NoiseSources, Sensor
 
-    names = ["PAC", "PDC", "TDC", "TAC"] + [f"E{n}" for n in range(1, 20)]
-    s = Sensor(params, [], names, seed=0, noise=NoiseSources.none())
+    names = ["PAC", "PDC", "TDC", "TAC"] + [f"E{n}" for n in range(1, ch.variant(variant).n_electrodes + 1)]
+    s = Sensor(params, [], names, seed=0, noise=NoiseSources.none(), variant=variant)
     idx = np.array([ch.channel_index(n) for n in names])
     v = s.analog(idx, np.full(idx.size, 0.5))
     return dict(zip(names, (float(x) for x in v)))
 
 
-def budget(params: SensorParams | None = None) -> list[BudgetLine]:
-    """Every channel's noise at rest, source by source (the PAC section first, as D Table 5-1)."""
+def budget(params: SensorParams | None = None, variant: str = ch.DEFAULT_VARIANT) -> list[BudgetLine]:
+    """Every channel's noise at rest, source by source (the PAC section first, as D Table 5-1), for a sensor of
+    ``params`` (default: the nominal unit) and ``variant`` (its electrodes: E1..E19, or E1..E24 for an SP)."""
     p = params or SensorParams()
     enbw = pac_noise_bandwidth_Hz(p)
     to_pac_bits = p.stage1_gain * p.stage2_gain / ADC_LSB_V
@@ -116,7 +118,7 @@ def budget(params: SensorParams | None = None) -> list[BudgetLine]:
     hum_lines = [BudgetLine(f"{name} ({f:.0f} Hz)", a / math.sqrt(2) * 1e6, a / math.sqrt(2) * to_pac_bits, note)
                  for name, (_, f, a), note in zip(hum_names, hum, hum_notes)]
     lines += hum_lines
-    rest = resting_volts(p)
+    rest = resting_volts(p, variant)
     codes = {n: v / ADC_LSB_V for n, v in rest.items()}
     ref = {n: p.adc_reference_noise_ppm * 1e-6 * abs(c) for n, c in codes.items()}
     adc_line = BudgetLine("ADC input noise (every channel)", None, p.adc_noise_rms_bits,
@@ -139,7 +141,7 @@ def budget(params: SensorParams | None = None) -> list[BudgetLine]:
     pdc_band = math.sqrt(pdc_noise_bandwidth_Hz(p))
     to_pdc_bits = p.stage1_gain / ADC_LSB_V
     tdc_V, tac_V = thermistor_noise_V(p)
-    for name in ["PDC", "TDC", "TAC"] + [f"E{n}" for n in range(1, 20)]:
+    for name in ["PDC", "TDC", "TAC"] + [n for n in rest if n.startswith("E")]:
         if name == "PDC":
             path = [("intrinsic noise × stage-1 gain", intrinsic_density * pdc_band * to_pdc_bits,
                      "the Table 5-1 sources before the 99.1 gain"),

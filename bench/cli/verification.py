@@ -10,6 +10,7 @@ from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, 
                             scheduler_address, sigterm_like_ctrl_c, strict_json, unit_choice, whole)
 from bench.errors import OutputNotWritten
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
+from emulator.channels import DEFAULT_VARIANT, VARIANTS
 from emulator.fidelity import PROFILES
 
 
@@ -31,12 +32,15 @@ class ClaimGroupChoices:
 
 def _cmd_noise_budget(a) -> int:
     from emulator.noise_budget import budget, format_budget
+    from emulator.units import unit
 
-    lines = budget()
+    u = unit(a.unit)
+    lines = budget(u.params, a.variant)
     if a.json:
         print(strict_json([vars(x) for x in lines], indent=2))
     else:
-        print(format_budget(lines))
+        print(f"unit {u.name} (serial {u.serial}), variant {a.variant}")
+        print(format_budget(lines, u.params))
     return 0
 
 
@@ -117,8 +121,10 @@ harmonics, the ADC's quantization, input and reference noise, the calibrated ext
 Each row gives µV referred to the input (over the 1040 Hz band), Pa and PAC bits RMS, and they add up (in
 quadrature) to the total at the ADC output, beside the published 1.4 ± 0.1 bits; then every other channel's
 noise at rest in LSB RMS.  Computed from the model's parameters: nothing is simulated, it takes a second.
+A unit's own resting codes set its reference noise channel by channel (--unit); an SP lists E20..E24 too.
 
   biotac-bench noise-budget
+  biotac-bench noise-budget --unit 17 --variant biotac-sp
   biotac-bench noise-budget --json > budget.json
 """
 
@@ -165,6 +171,11 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     nb.add_argument("--json", action="store_true",
                     help="print the budget's rows as JSON (source, channel, rti_uV, pac_bits, note; a non-finite "
                          "number is null)")
+    nb.add_argument("--unit", type=unit_choice, default=None,
+                    help="the sensor unit: a unit seed, \"nominal\" (default) or a serial number \"BT...\" "
+                         "(biotac-bench units)")
+    nb.add_argument("--variant", choices=VARIANTS, default=DEFAULT_VARIANT,
+                    help=f"the sensor variant (default {DEFAULT_VARIANT}; biotac-sp has E20..E24)")
     nb.set_defaults(func=_cmd_noise_budget)
 
     c = sub.add_parser("claims", help="measure every published figure on the emulator; exit 1 if any fails",

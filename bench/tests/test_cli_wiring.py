@@ -115,6 +115,38 @@ def test_noise_budget_json_has_the_documented_fields(capsys):
     assert {"PAC", "PDC", "TAC", "TDC"} <= channels and any(c.startswith("E") for c in channels)
 
 
+def test_noise_budget_takes_a_unit_and_a_variant(capsys):
+    """`noise-budget --unit 17 --variant biotac-sp`: the SP's 24 electrodes (the BioTac's 19 by default), each with
+    the reference noise at that unit's own resting code — ppm × the code a noise-free Sensor of that unit and
+    variant rests at, read here — which differs between electrodes (the unit's resting gaps spread) and from the
+    nominal unit's; the text names the unit and its serial."""
+    import json
+
+    import numpy as np
+
+    from emulator import channels as ch
+    from emulator.conversions import ADC_LSB_V
+    from emulator.sensor import NoiseSources, Sensor
+    from emulator.units import unit
+
+    def reference_noise(args):
+        assert main(["noise-budget", "--json", *args]) == 0
+        rows = json.loads(capsys.readouterr().out)
+        return {r["channel"]: r["pac_bits"] for r in rows if r["source"].endswith(": ADC reference noise")}
+
+    sp17, nominal = reference_noise(["--unit", "17", "--variant", "biotac-sp"]), reference_noise([])
+    assert [c for c in sp17 if c.startswith("E")] == [f"E{k}" for k in range(1, 25)]
+    assert [c for c in nominal if c.startswith("E")] == [f"E{k}" for k in range(1, 20)]
+    p = unit(17).params
+    names = [f"E{k}" for k in range(1, 25)]
+    rest = Sensor(p, [], names, seed=0, noise=NoiseSources.none(), variant="biotac-sp").analog(
+        np.array([ch.channel_index(n) for n in names]), np.full(24, 0.5)) / ADC_LSB_V
+    assert [sp17[n] for n in names] == pytest.approx(p.adc_reference_noise_ppm * 1e-6 * np.abs(rest), rel=1e-9)
+    assert len({round(sp17[n], 6) for n in names}) > 5 and sp17["E1"] != nominal["E1"]
+    assert main(["noise-budget", "--unit", "17", "--variant", "biotac-sp"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == "unit 17 (serial BTU0000000000017), variant biotac-sp"
+
+
 def test_units_compare_prints_each_parameters_difference_from_nominal(capsys):
     """`units --seed 17 --compare`: beside each value the nominal one and the difference (in % where the nominal is
     not zero); with --json the nominal values under "nominal"."""

@@ -20,7 +20,7 @@ SCENES = FIXTURES / "scenes"
 
 def _readme_budget() -> list[str]:
     """The README's printed budget, its one `E1..E19` row (README: "the command prints all 19") expanded."""
-    block = re.search(r"```\n(PAC noise budget .*?)\n```", README, flags=re.S).group(1).splitlines()
+    block = re.search(r"```\n(unit nominal .*?\nPAC noise budget .*?)\n```", README, flags=re.S).group(1).splitlines()
     out = []
     for line in block:
         if line.startswith("E1..E19 "):
