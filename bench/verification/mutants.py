@@ -4614,6 +4614,21 @@ CATALOGUE += [
            'f = np.array([description_features(t) for n, t in sorted(lib.items())])',
            ('bench/tests/test_experiment.py::test_the_description_scales_are_the_117_textures_spreads_whatever_test_surfaces_the_library_holds',),
            "the pairs' description scales are taken over every texture, test surfaces included"),
+    Mutant('noise-budget-unit-ignored', 'cli', 'bench/cli/verification.py',
+           '    lines = budget(u.params, a.variant)\n',
+           '    lines = budget(None, a.variant)\n',
+           ('bench/tests/test_cli_wiring.py::test_noise_budget_takes_a_unit_and_a_variant',),
+           "noise-budget --unit prints the nominal unit's budget"),
+    Mutant('noise-budget-sp-electrodes-left-out', 'physics', 'emulator/noise_budget.py',
+           '    s = Sensor(params, [], names, seed=0, noise=NoiseSources.none(), variant=variant)',
+           '    s = Sensor(params, [], names[:23], seed=0, noise=NoiseSources.none(), variant=variant)',
+           ('bench/tests/test_cli_wiring.py::test_noise_budget_takes_a_unit_and_a_variant',),
+           "the noise budget's resting codes for an SP read the BioTac's channels only (E20..E24 left out)"),
+    Mutant('noise-budget-electrodes-fixed-19', 'physics', 'emulator/noise_budget.py',
+           '    for name in ["PDC", "TDC", "TAC"] + [n for n in rest if n.startswith("E")]:',
+           '    for name in ["PDC", "TDC", "TAC"] + [f"E{n}" for n in range(1, 20)]:',
+           ('bench/tests/test_cli_wiring.py::test_noise_budget_takes_a_unit_and_a_variant',),
+           'the noise budget lists E1..E19 whatever the variant'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
