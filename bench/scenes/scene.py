@@ -916,6 +916,24 @@ def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _
     return _SensorTable(u.name, variant, params, u.serial, _sensor_faults(c, table, where, duration, variant), where)
 
 
+def _one_finger_per_unit(c: _Checker, tables: dict) -> None:
+    """A unit is one real device with one serial: two fingers given the same unit (the nominal unit aside, whose
+    fingers each keep their port's default serial) are a problem naming both."""
+    from emulator.units import NOMINAL
+
+    first: dict[str, int] = {}
+    for n, t in sorted(tables.items()):
+        if t.unit == NOMINAL:
+            continue
+        if t.serial in first:
+            m = first[t.serial]
+            c.problems.append(f"{t.where}.unit: sensor {n} is given unit {t.unit} (serial {t.serial}), already sensor "
+                              f"{m}'s ({'[sensor]' if m == 1 else tables[m].where}): a unit is one real device, so each finger needs its own "
+                              f"(another seed or serial)")
+        else:
+            first[t.serial] = n
+
+
 def _sensors_tables(c: _Checker, items, duration) -> dict:
     """Sensors 2..N from ``[[sensors]]``: number -> :class:`_SensorTable`."""
     out: dict = {}
@@ -997,6 +1015,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
     first = _sensor_table(c, sensor, "sensor", duration)
     unit, variant, params, serial = first.unit, first.variant, first.params, first.serial
     others = _sensors_tables(c, data.get("sensors", []), duration)
+    _one_finger_per_unit(c, {1: first, **others})
 
     host = c.table(data, "host", "sequence, slot_rate_Hz, spi_clock_Hz, spi")
     c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz", "spi"})

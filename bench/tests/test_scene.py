@@ -303,3 +303,17 @@ def test_a_drop_that_would_push_the_skin_onto_the_core_is_refused_naming_the_sti
     assert isinstance(ok.stimuli[0], SphereDrop)
     thick = parse_scene({**MINIMAL, "sensor": {"resting_gap_mm": 2.0}, "stimulus": [heavy]})
     assert isinstance(thick.stimuli[0], SphereDrop)
+
+
+def test_two_fingers_given_one_unit_are_refused_naming_both_and_nominal_twins_are_taken():
+    """A unit is one real device with one serial: sensor 2 given sensor 1's unit (as a seed or as its serial), or
+    sensors 2 and 3 sharing one, is refused naming both; fingers of the nominal unit (each keeps its port's default
+    serial) and fingers of different units are taken."""
+    base = {**MINIMAL, "sensor": {"unit": 17}}
+    (msg,) = problems({**base, "sensors": [{"index": 2, "unit": "BTU0000000000017"}]})
+    assert msg == ("sensors[0].unit: sensor 2 is given unit 17 (serial BTU0000000000017), already sensor 1's "
+                   "([sensor]): a unit is one real device, so each finger needs its own (another seed or serial)")
+    (msg,) = problems({**base, "sensors": [{"index": 3, "unit": 5}, {"index": 2, "unit": 5}]})
+    assert msg.startswith("sensors[0].unit: sensor 3 is given unit 5") and "already sensor 2's (sensors[1])" in msg
+    parse_scene({**MINIMAL, "sensors": [{"index": 2}, {"index": 3}]})
+    parse_scene({**base, "sensors": [{"index": 2, "unit": 18}, {"index": 3, "unit": "BTU0000000000019"}]})
