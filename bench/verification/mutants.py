@@ -4629,6 +4629,16 @@ CATALOGUE += [
            '    for name in ["PDC", "TDC", "TAC"] + [f"E{n}" for n in range(1, 20)]:',
            ('bench/tests/test_cli_wiring.py::test_noise_budget_takes_a_unit_and_a_variant',),
            'the noise budget lists E1..E19 whatever the variant'),
+    Mutant('one-unit-on-two-fingers-taken', 'scene', 'bench/scenes/scene.py',
+           '    _one_finger_per_unit(c, {1: first, **others})\n',
+           '',
+           ('bench/tests/test_scene.py::test_two_fingers_given_one_unit_are_refused_naming_both_and_nominal_twins_are_taken',),
+           'two fingers of one unit answer one serial, as no two real devices do'),
+    Mutant('nominal-twins-refused', 'scene', 'bench/scenes/scene.py',
+           '        if t.unit == NOMINAL:\n            continue\n',
+           '',
+           ('bench/tests/test_scene.py::test_two_fingers_given_one_unit_are_refused_naming_both_and_nominal_twins_are_taken',),
+           "fingers of the nominal unit (each with its port's own serial) refused as one device"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
