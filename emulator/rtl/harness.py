@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from emulator.rtl import build
-from emulator.spi.model import Faults, SensorPort
+from emulator.spi.model import Faults, SensorPort, checked_transfer_ends
 from emulator.spi.vectors import rtl_provided_masks, variants_of
 
 HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
@@ -497,7 +497,7 @@ class RtlBus:
         start = np.asarray(start, float)
         clock = np.broadcast_to(np.asarray(clock, float), start.shape)
         nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
-        end = self._checked_ends(start, nbits, clock)
+        end = checked_transfer_ends(start, nbits, clock, self._last_end)  # as the software bus checks them
         tr = np.zeros(start.size, TRANSFER)
         tr["t_ps"] = np.round(start * 1e12).astype(np.int64)
         tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
@@ -534,27 +534,6 @@ class RtlBus:
         if start.size:
             self._last_end = float(end[-1])
         return raw[:start.size]
-
-    def _checked_ends(self, start, nbits, clock) -> np.ndarray:
-        """When each transfer releases chip select (s), checked as on the software bus: a transfer no bus can clock
-        (a start that is not finite, bits < 0, a clock that is not positive), or one starting before the one before
-        it ended — in this call or the last — is a ValueError naming it, before anything reaches the harness."""
-        from emulator.spi.model import impossible_transfer_error, overlap_error
-        from emulator.spi.protocol import TIME_TOLERANCE_S
-
-        if not start.size:
-            return start
-        bad = ~np.isfinite(start) | (nbits < 0) | ~(clock > 0) | ~np.isfinite(clock)
-        if bad.any():
-            k = int(np.flatnonzero(bad)[0])
-            raise impossible_transfer_error(f"#{k} of the call (start {start[k]} s, {nbits[k]} bits at "
-                                            f"{clock[k]} Hz)")
-        end = start + (nbits + 0.5) / clock
-        before = np.concatenate(([self._last_end], end[:-1]))
-        early = np.flatnonzero(start < before - TIME_TOLERANCE_S)
-        if early.size:
-            raise overlap_error(float(start[early[0]]))
-        return end
 
     def _faults_in_force(self) -> dict:
         """Each sensor's faults for the next transfers, checked (a value set in place out of range: ValueError

@@ -496,6 +496,27 @@ def impossible_transfer_error(what) -> ValueError:
     return ValueError(f"impossible transfer: {what}")
 
 
+def checked_transfer_ends(start, nbits, clock, previous_end_s: float) -> np.ndarray:
+    """When each transfer of a call releases chip select (s), checked as one transfer is: one no bus can clock (a
+    start that is not finite, bits < 0, a clock that is not positive) or one starting before the one before it
+    ended — in this call or, ``previous_end_s``, the last — is a ValueError naming the first such."""
+    start = np.asarray(start, float)
+    nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
+    clock = np.broadcast_to(np.asarray(clock, float), start.shape)
+    if not start.size:
+        return start
+    bad = ~np.isfinite(start) | (nbits < 0) | ~(clock > 0) | ~np.isfinite(clock)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise impossible_transfer_error(f"#{k} of the call (start {start[k]} s, {nbits[k]} bits at {clock[k]} Hz)")
+    end = start + (nbits + 0.5) / clock
+    before = np.concatenate(([previous_end_s], end[:-1]))
+    early = np.flatnonzero(start < before - proto.TIME_TOLERANCE_S)
+    if early.size:
+        raise overlap_error(float(start[early[0]]))
+    return end
+
+
 @njit(cache=True)
 def _overlapping(start, end, least_gap) -> bool:
     """Whether a transfer starts less than ``least_gap`` (s) after the one before it ends."""
@@ -620,7 +641,7 @@ class Bus:
         keep = np.zeros(start.shape, bool) if keep_cs is None else np.asarray(keep_cs, bool)
         if start.size == 0:
             return np.zeros(0, np.uint16)
-        end = start + 16.5 / clock
+        end = checked_transfer_ends(start, 16, clock, self._last_end)
         lo, hi = proto.SPI_CLOCK_RANGE_HZ
         selected = {n: (cs == SELECT_ALL) | (cs == SELECT_CODE[n]) for n in self.ports}
         same_sensor_held = any(np.any(keep[:-1] & sel[:-1] & sel[1:]) for sel in selected.values())
