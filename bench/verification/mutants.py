@@ -3894,11 +3894,6 @@ CATALOGUE += [
            'tr["present"][0], tr["set_present"][0] = self._hot_plugged(), 0',
            ('emulator/tests/test_rtl_live_faults.py::test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_port_it_cannot_hold', 'firmware_tests/tests/test_firmware_rtl.py::test_hot_plugging_gives_the_same_frames_and_status_over_the_rtl_as_over_the_software_model', 'bench/tests/test_campaign_rtl.py::test_a_small_campaign_gives_the_same_verdicts_over_the_rtl_as_over_the_software_bus'),
            'unplugging a sensor over the RTL removes the Python port and leaves the RTL sensor plugged in (silently)'),
-    Mutant('rtl-plugged-sensor-not-reset', 'rtl', 'emulator/rtl/harness.py',
-           '                if n in self.ports:\n                    self._resets.add(n)\n',
-           '                if n in self.ports:\n                    pass\n',
-           ('emulator/tests/test_rtl_live_faults.py::test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_port_it_cannot_hold',),
-           'a sensor plugged back in over the RTL keeps the state it was unplugged with (not power-on)'),
     Mutant('rtl-plug-any-sensor', 'rtl', 'emulator/rtl/harness.py',
            '            if n not in self._started_with:\n',
            '            if False:\n',
@@ -4639,6 +4634,11 @@ CATALOGUE += [
            '    if False:\n        k = int(np.flatnonzero(bad)[0])\n',
            ('emulator/tests/test_rtl_live_faults.py::test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_and_loses_nothing',),
            'a transfer starting at NaN or clocked at 0 Hz is played'),
+    Mutant('rtl-plugged-sensor-not-reset', 'rtl', 'emulator/rtl/harness.py',
+           '                if n in self.ports:\n                    self._resets.add(n)\n',
+           '                if n in self.ports:\n                    pass\n',
+           ('emulator/tests/test_rtl_live_faults.py::test_hot_plugging_over_the_rtl_gives_the_software_bus_words_and_refuses_a_port_it_cannot_hold', 'emulator/tests/test_rtl_live_faults.py::test_a_port_replaced_between_two_calls_comes_up_in_power_on_state_on_either_bus'),
+           'a sensor plugged back in over the RTL keeps the state it was unplugged with (not power-on)'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -544,3 +544,30 @@ def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_a
             bus.close()
     assert words["RTL"] == words["software"]
     assert words["software"][1] != 0 and words["software"][3] != 0  # both reads carry a conversion
+
+
+def test_a_port_replaced_between_two_calls_comes_up_in_power_on_state_on_either_bus(harness):
+    """A sensor's port replaced between two calls with no call while it was away (unplugged and plugged back in at
+    once: the RTL's present mask never drops, so only the bus's reset brings its sensor to power-on): after it was
+    asked for its serial number, the new port's first read is "E_" (nothing prepared) on both buses, then data."""
+    from emulator.rtl.harness import RtlBus, RtlSensorPort
+
+    s1 = SELECT_CODE[1]
+    pdc = int(proto.sample_command(1)) << 8
+
+    def play(bus, port_of):
+        try:
+            words = [int(w) for w in bus.exchange_words([0.01, 0.0101], [s1, s1], [0x6115, 0], CLOCK_HZ)]
+            bus.ports[1] = port_of(bus)
+            words += [int(w) for w in bus.exchange_words([0.02, 0.0201, 0.0202], [s1, s1, s1], [0, pdc, 0],
+                                                         CLOCK_HZ)]
+            return words
+        finally:
+            bus.close()
+
+    sensors, rtl_sensors = _sensors(), _sensors()
+    soft = play(Bus({n: SensorPort(s, n) for n, s in sensors.items()}), lambda bus: SensorPort(sensors[1], 1))
+    rtl = play(RtlBus(rtl_sensors, harness=harness), lambda bus: RtlSensorPort(rtl_sensors[1], 1, bus))
+    assert rtl == soft
+    assert rtl[1] == int.from_bytes(b"BT", "big") and rtl[2] == ERR["nothing_to_resend"]
+    assert proto.decode_response(rtl[4])[1]
