@@ -496,6 +496,24 @@ def test_chip_select_held_on_one_sensor_makes_one_window_on_the_word_path_too():
     assert b.exchange_words(start[1:], cs[1:], mosi[1:], 4.4e6).tolist() == words[1:].tolist()
 
 
+def test_a_window_held_open_by_the_last_word_of_a_call_goes_on_into_the_next_call_on_the_word_path():
+    """Chip select held by a call's last word (``keep_cs``) stays asserted into the next call, as ``transfer``
+    and the RTL bus hold it: the sampling command and the next call's read are one 32-bit window (the read's half
+    is zeros, not the converted code).  The word path had taken such a call as plain word traffic and released
+    chip select at its end, so the next call read a conversion."""
+    start = np.array([0.0, 200e-6, 400e-6])
+    cs = np.full(3, SELECT_CODE[1])
+    mosi = np.array([0x8300, 0, 0], np.uint16)
+    keep = np.array([True, False, False])
+    fast, slow = bus(), bus()
+    words = [int(w) for w in fast.exchange_words(start[:1], cs[:1], mosi[:1], 4.4e6, keep[:1])]
+    words += [int(w) for w in fast.exchange_words(start[1:], cs[1:], mosi[1:], 4.4e6, keep[1:])]
+    ref = [slow.transfer(Transfer(float(s), int(c), int(m), 16, keep_cs=bool(k)))
+           for s, c, m, k in zip(start, cs, mosi, keep)]
+    assert words == ref
+    assert words[:2] == [E["nothing_to_resend"], 0x0000] and value(words[2]) == RESTING_PDC  # (converted as CS rose)
+
+
 def test_a_clock_past_10_MHz_on_the_word_path_is_counted_and_sampled_late():
     """docs/faults.md (as the transfer-level test above): every transfer above 10 MHz is counted out of spec and at
     20 MHz (25 ns half period < 45 ns) the host samples each bit one bit late: the word read is the good one shifted
