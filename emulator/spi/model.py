@@ -654,13 +654,18 @@ class Bus:
                              for t, c, m, f, k in zip(start, cs, mosi, clock, keep)], dtype=np.uint16)
         for port in self.ports.values():
             port.resolve_conversion(float(start[0]))
+        # a transfer holding chip select into one that selects other sensors (or none) is its sensors' window until
+        # that one starts, as on the transfer-level path: its command acts then, and the bus's next activity after
+        # it is the transfer after that one
         next_bus = np.append(start[1:], np.inf)
+        rise = np.where(keep, next_bus, end)
+        after = np.where(keep, np.append(start[2:], [np.inf, np.inf])[:start.size], next_bus)
         miso = np.zeros(start.shape, dtype=np.uint16)
         anyone = np.zeros(start.shape, bool)
         for n, port in self.ports.items():
             sel = selected[n]
             if sel.any():
-                miso[sel] |= exchange_words(port, start[sel], end[sel], mosi[sel], next_bus[sel])
+                miso[sel] |= exchange_words(port, start[sel], rise[sel], mosi[sel], after[sel])
                 anyone |= sel
         if self.pull_up:
             miso[~anyone] = 0xFFFF

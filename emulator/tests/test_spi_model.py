@@ -514,6 +514,44 @@ def test_a_window_held_open_by_the_last_word_of_a_call_goes_on_into_the_next_cal
     assert words[:2] == [E["nothing_to_resend"], 0x0000] and value(words[2]) == RESTING_PDC  # (converted as CS rose)
 
 
+def test_a_window_held_until_the_select_code_moves_on_ends_when_it_moves_on_on_the_word_path():
+    """A sampling command with chip select held, the select code moving to nobody 100 µs later: the sensor sees
+    chip select rise as the code moves on (transfer-level path, RTL), so a read 20 µs after that is too soon ("E.");
+    the word path had ended the window with the command's own transfer and served the code."""
+    start = np.array([0.0, 100e-6, 120e-6])
+    cs = np.array([SELECT_CODE[1], SELECT_NONE, SELECT_CODE[1]])
+    mosi = np.array([0x8300, 0, 0], np.uint16)
+    keep = np.array([True, False, False])
+    words = bus().exchange_words(start, cs, mosi, 4.4e6, keep).tolist()
+    slow = bus()
+    assert words == [slow.transfer(Transfer(float(s), int(c), int(m), 16, keep_cs=bool(k)))
+                     for s, c, m, k in zip(start, cs, mosi, keep)]
+    assert words == [E["nothing_to_resend"], 0x0000, E["insufficient_delay"]]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_word_traffic_holding_chip_select_anywhere_gives_the_transfer_level_words(seed):
+    """Commands and reads to two sensors, chip select held on a random fifth of them (into a transfer to another
+    sensor, to nobody, or past the call's end), gaps from 0 to 100 µs (so a conversion meets the bus or not), cut
+    into calls at random: word for word, and the conversions coupled, as transfer by transfer."""
+    rng = np.random.default_rng(seed)
+    n = 400
+    cs = rng.choice([SELECT_CODE[1], SELECT_CODE[3], SELECT_ALL, SELECT_NONE], n)
+    mosi = np.where(rng.random(n) < 0.5, 0, [int(proto.sample_command(c)) << 8 for c in rng.choice([0, 1, 17], n)])
+    keep = rng.random(n) < 0.2
+    keep[:-1] &= ~(((cs[:-1] == cs[1:]) & (cs[:-1] != SELECT_NONE)) | (cs[:-1] == SELECT_ALL) | (cs[1:] == SELECT_ALL))
+    start = 1e-3 + np.cumsum(16.5 / 4.4e6 + rng.choice([0.0, 2e-6, 20e-6, 100e-6], n))
+    cuts = [0, *sorted(rng.choice(np.arange(1, n), 8, replace=False).tolist()), n]
+    fast = Bus({k: port(k, noise=NoiseSources()) for k in (1, 3)})
+    slow = Bus({k: port(k, noise=NoiseSources()) for k in (1, 3)})
+    a = np.concatenate([fast.exchange_words(start[i:j], cs[i:j], mosi[i:j].astype(np.uint16), 4.4e6, keep[i:j])
+                        for i, j in zip(cuts[:-1], cuts[1:])])
+    b = np.array([slow.transfer(Transfer(float(s), int(c), int(m), 16, 4.4e6, bool(k)))
+                  for s, c, m, k in zip(start, cs, mosi, keep)])
+    assert np.array_equal(a, b), np.flatnonzero(a != b)[:5]
+    assert [p.coupled_conversions for p in fast.ports.values()] == [p.coupled_conversions for p in slow.ports.values()]
+
+
 def test_a_clock_past_10_MHz_on_the_word_path_is_counted_and_sampled_late():
     """docs/faults.md (as the transfer-level test above): every transfer above 10 MHz is counted out of spec and at
     20 MHz (25 ns half period < 45 ns) the host samples each bit one bit late: the word read is the good one shifted
