@@ -32,9 +32,12 @@ class ClaimGroupChoices:
 
 def _cmd_noise_budget(a) -> int:
     from emulator.noise_budget import budget, format_budget
+    from emulator.spi.model import serial_variant_problem
     from emulator.units import unit
 
     u = unit(a.unit)
+    if problem := serial_variant_problem(u.serial, a.variant):  # as a scene, a port and the plugin refuse it
+        raise ValueError(f"--unit {u.serial} --variant {a.variant}: {problem}")
     lines = budget(u.params, a.variant)
     if a.json:
         print(strict_json([vars(x) for x in lines], indent=2))

@@ -147,6 +147,19 @@ def test_noise_budget_takes_a_unit_and_a_variant(capsys):
     assert capsys.readouterr().out.splitlines()[0] == "unit 17 (serial BTU0000000000017), variant biotac-sp"
 
 
+def test_noise_budget_refuses_an_sp_serial_on_a_biotac_as_every_other_place_does(capsys):
+    """`noise-budget --unit BTSP000000000005` (variant biotac by default): a serial a host reads as an SP's on a
+    19-electrode sensor is refused in one line naming both flags and the fix (exit 2, nothing printed), as a scene,
+    a port and the plugin refuse it; with --variant biotac-sp it is that unit."""
+    assert main(["noise-budget", "--unit", "BTSP000000000005"]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.startswith('error: --unit BTSP000000000005 --variant biotac: serial "BTSP000000000005" starts "BTSP"')
+    assert 'give variant = "biotac-sp", or unit = 5' in err and err.count("\n") == 1
+    assert main(["noise-budget", "--unit", "BTSP000000000005", "--variant", "biotac-sp"]) == 0
+    assert capsys.readouterr().out.startswith("unit 5 (serial BTSP000000000005), variant biotac-sp\n")
+
+
 def test_units_compare_prints_each_parameters_difference_from_nominal(capsys):
     """`units --seed 17 --compare`: beside each value the nominal one and the difference (in % where the nominal is
     not zero); with --json the nominal values under "nominal"."""
