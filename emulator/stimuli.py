@@ -333,7 +333,8 @@ class Touch(Press):
     def __post_init__(self):
         super().__post_init__()
         most = max(ELECTRODE_COUNT.values())
-        if self.electrode is not None and self.electrode not in {f"E{k}" for k in range(1, most + 1)}:
+        if self.electrode is not None and not (isinstance(self.electrode, str)
+                                               and self.electrode in {f"E{k}" for k in range(1, most + 1)}):
             raise ValueError(f"Touch.electrode = {self.electrode!r}: an electrode's name, E1..E{most} (E20..E{most} on "
                              "a \"biotac-sp\"), or None for the place x_mm, angle_deg")
         if self.object_temperature_C is not None and self.material is None:  # a scene refuses it too

@@ -30,6 +30,7 @@ BAD_STIMULI = [
     (lambda: Touch(0.1, 1.0, x_mm=8.0), "Touch.x_mm", "from -20 to 5"),  # beyond the tip's apex: no skin there
     (lambda: Touch(0.1, 1.0, electrode="E42"), "Touch.electrode", "E1..E24"),  # had been taken when no E was read
     (lambda: Touch(0.1, 1.0, electrode="PDC"), "Touch.electrode", "E1..E24"),
+    (lambda: Touch(0.1, 1.0, electrode=["E1"]), "Touch.electrode", "E1..E24"),  # (had been a TypeError: unhashable)
     (lambda: Touch(0.1, 1.0, indenter_radius_mm=0.0), "Touch.indenter_radius_mm", "> 0"),
     (lambda: Touch(0.1, 1.0, tangential_N=INF), "Touch.tangential_N", "finite number"),
     (lambda: Touch(0.1, 1.0, material="aluminum", object_temperature_C=-300.0), "Touch.object_temperature_C",
