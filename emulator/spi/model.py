@@ -576,7 +576,7 @@ class Bus:
 
     def transfer(self, tr: Transfer) -> int:
         """Clock one transfer; returns the MISO bits the host samples (``nbits`` bits, MSB first)."""
-        if tr.nbits < 0 or tr.clock_hz <= 0 or not math.isfinite(tr.start_s):
+        if tr.nbits < 0 or not 0 < tr.clock_hz < math.inf or not math.isfinite(tr.start_s):  # (a NaN clock too)
             raise impossible_transfer_error(tr)
         if tr.start_s < self._last_end - proto.TIME_TOLERANCE_S:
             raise overlap_error(tr.start_s)

@@ -517,9 +517,9 @@ def test_a_chip_select_window_with_no_clock_edge_counts_on_its_sensors_port_on_e
 
 def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_and_loses_nothing(harness):
     """A call starting before the last one ended, a transfer overlapping the one before it in its call, a start
-    that is not finite and a clock of 0 Hz: the same ValueError on both buses (the RTL bus had played the first into
-    the harness and failed with a HarnessError about conversions), and nothing reaches the RTL — the next valid
-    call gives the software bus's words."""
+    that is not finite and a clock of 0 Hz, NaN or infinite: the same ValueError on both buses (the RTL bus had
+    played the first into the harness and failed with a HarnessError about conversions), and nothing reaches the
+    RTL — the next valid call gives the software bus's words."""
     from emulator.rtl.harness import RtlBus
 
     s1 = SELECT_CODE[1]
@@ -529,7 +529,9 @@ def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_a
                  (([0.6, 0.6 + 1e-6], [s1, s1], [0, 0]), CLOCK_HZ,
                   r"transfer at 0\.600001000 s starts before the previous one ended"),
                  (([np.nan], [s1], [0]), CLOCK_HZ, r"impossible transfer"),
-                 (([0.7], [s1], [0]), 0.0, r"impossible transfer")]
+                 (([0.7], [s1], [0]), 0.0, r"impossible transfer"),
+                 (([0.7], [s1], [0]), np.nan, r"impossible transfer"),  # (the software bus: a bare ValueError about
+                 (([0.7], [s1], [0]), np.inf, r"impossible transfer")]  # NaN, and a ZeroDivisionError for inf)
     words = {}
     for name, bus in (("software", Bus({n: SensorPort(s, n) for n, s in _sensors().items()})),
                       ("RTL", RtlBus(_sensors(), harness=harness))):
