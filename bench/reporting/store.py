@@ -162,11 +162,11 @@ class SampleStore:
 def os_reason(e: BaseException) -> str:
     """An error in a few words: the system's text for an ``OSError``'s errno, or for the errno HDF5's own message
     names (it runs to several lines of buffer addresses and times, and reaches Python without an errno), else the
-    message's first line."""
+    message's first line, else (an empty message) the error's type: never empty, since a reason marks a failure."""
     if isinstance(e, OSError) and e.errno:
         return os.strerror(e.errno)
     named = re.search(r"\berrno = (\d+)", str(e))
-    return os.strerror(int(named.group(1))) if named else str(e).split("\n", 1)[0]
+    return os.strerror(int(named.group(1))) if named else str(e).split("\n", 1)[0] or type(e).__name__
 
 
 def set_status(path: Path, status: str, simulated_s: float, error: str | None, **extra) -> None:

@@ -257,6 +257,7 @@ def test_a_disk_full_when_samples_h5_is_closed_keeps_every_sample(tmp_path, monk
              "total write size = 4096)"), "No space left on device"),
     (RuntimeError("Slist already enabled? (slist already enabled?)\nsecond line"),
      "Slist already enabled? (slist already enabled?)"),
+    (RuntimeError(), "RuntimeError"),  # an empty message: the reason still marks the failure
 ])
 def test_os_reason_is_the_systems_words_for_hdf5s_errno_else_the_first_line(error, reason):
     """HDF5's errors reach Python without an errno, their text spanning lines of buffer addresses and times: the

@@ -4664,6 +4664,11 @@ CATALOGUE += [
            '        if False:',
            ('emulator/tests/test_stimulus_checks.py::test_a_stimulus_with_an_impossible_value_is_refused_naming_field_value_and_range',),
            "Touch takes electrode='E42' or 'PDC': with no electrode read it presses an unnamed place"),
+    Mutant('os-reason-empty-for-an-empty-message', 'outputs', 'bench/reporting/store.py',
+           '[0] or type(e).__name__',
+           '[0]',
+           ('bench/tests/test_run_full_disk.py::test_os_reason_is_the_systems_words_for_hdf5s_errno_else_the_first_line',),
+           'an error with an empty message gives an empty reason, so a failed samples.h5 is taken for a written one'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
