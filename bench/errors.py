@@ -17,6 +17,12 @@ def shortened(text: str, limit: int = 300) -> str:
     return text if len(text) <= limit else f"{text[:limit - 25]}… ({len(text)} characters)"
 
 
+def escaped(text: str) -> str:
+    """``text`` with each character that is not printable (a line break, a terminal's escape sequence — a path may
+    hold them) written as Python writes it in a string (``\\n``, ``\\x1b``): one line, shown as it is."""
+    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
+
+
 def shell_word(text: str) -> str:
     """``text`` (a path a user gave) as one word of a command line to type into a POSIX shell: quoted when it
     needs it; one starting with '-' made a relative path ('./-x'), so argparse takes it as a value, not a flag; one

@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from bench.atomic import open_regular
+from bench.errors import escaped
 
 
 # --- help ------------------------------------------------------------
@@ -198,12 +199,6 @@ class OneLineErrorParser(argparse.ArgumentParser):
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {escaped(message)} (see {self.prog} --help)\n")
-
-
-def escaped(text: str) -> str:
-    """``text`` with each character that is not printable (a line break, a terminal's escape sequence — a path may
-    hold them) written as Python writes it in a string (``\\n``, ``\\x1b``): one line, shown as it is."""
-    return "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text)
 
 
 # --- output ----------------------------------------------------------

@@ -309,3 +309,17 @@ def test_a_library_edited_while_the_trials_run_is_refused_not_stated_or_cached(t
     monkeypatch.setattr(E, "sweep", lambda tasks, **kw: rows_of(tasks))  # unedited: run and cached
     assert E.run_stage("pilot", tasks, tmp_path / "cache", progress=False) == rows_of(tasks)
     assert len(list((tmp_path / "cache").iterdir())) == 1
+
+
+def test_a_library_path_with_control_characters_is_shown_escaped_on_one_line(tmp_path):
+    """A library file whose path holds a line break or a terminal escape: each problem names the path with those
+    characters escaped (one line; nothing reaches the terminal as a control sequence)."""
+    from bench.errors import TextureError
+    from bench.textures.library import named_library
+
+    odd = tmp_path / "no\x1bpe\nx.toml"
+    odd.write_text("[[texture]]\nnumber = 1\n", encoding="utf-8")
+    with pytest.raises(TextureError) as e:
+        named_library(str(odd), "--library")
+    assert e.value.problems and all("\n" not in p and "\x1b" not in p for p in e.value.problems)
+    assert all("no\\x1bpe\\nx.toml" in p for p in e.value.problems)

@@ -57,7 +57,7 @@ from types import MappingProxyType
 
 from bench import tomlfile
 from bench.tomlfile import spelled
-from bench.errors import TextureError, shell_word, shortened
+from bench.errors import TextureError, escaped, shell_word, shortened
 from bench.paths import FIXTURES
 from emulator.texture import PeriodicComponent, Texture
 from emulator.thermal import MATERIALS
@@ -499,7 +499,7 @@ def named_problems(where: str, value, path: str, error: TextureError) -> list[st
     """The problems of the library file ``path`` (named by ``value`` at ``where``), each saying where it was named
     and which file it is: ``scene.library = "mine.toml" (/abs/mine.toml): T5 "kraft paper": hurst = 7: allowed
     range is 0.1 to 1``."""
-    return [f"{where} = {_shown(value)} ({shortened(path)}): {p}" for p in error.problems]
+    return [f"{where} = {_shown(value)} ({shortened(escaped(str(path)))}): {p}" for p in error.problems]
 
 
 def named_library(value, where: str, naming_file: str | Path | None = None) -> LibraryFile:

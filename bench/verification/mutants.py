@@ -3910,7 +3910,7 @@ CATALOGUE += [
            ('bench/tests/test_experiment_variants.py::test_a_stage_is_run_again_when_its_library_file_changes',),
            'an edited library file reuses the stage cache of its earlier content'),
     Mutant('library-problem-without-file', 'textures', 'bench/textures/library.py',
-           'return [f"{where} = {_shown(value)} ({shortened(path)}): {p}" for p in error.problems]',
+           'return [f"{where} = {_shown(value)} ({shortened(escaped(str(path)))}): {p}" for p in error.problems]',
            'return [f"{where} = {_shown(value)}: {p}" for p in error.problems]',
            ('bench/tests/test_scene_library.py::test_a_bad_library_file_in_a_scene_is_one_clean_error_naming_the_file_and_field',),
            "a bad library's problems do not name the resolved file"),
@@ -4669,6 +4669,11 @@ CATALOGUE += [
            '[0]',
            ('bench/tests/test_run_full_disk.py::test_os_reason_is_the_systems_words_for_hdf5s_errno_else_the_first_line',),
            'an error with an empty message gives an empty reason, so a failed samples.h5 is taken for a written one'),
+    Mutant('library-path-shown-raw', 'textures', 'bench/textures/library.py',
+           '({shortened(escaped(str(path)))})',
+           '({shortened(str(path))})',
+           ('bench/tests/test_scene_library.py::test_a_library_path_with_control_characters_is_shown_escaped_on_one_line',),
+           "a library path's line breaks and escape sequences reach the terminal raw in its problems"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
