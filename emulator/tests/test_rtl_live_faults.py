@@ -521,6 +521,7 @@ def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_a
     played the first into the harness and failed with a HarnessError about conversions), and nothing reaches the
     RTL — the next valid call gives the software bus's words."""
     from emulator.rtl.harness import RtlBus
+    from emulator.spi.model import Transfer
 
     s1 = SELECT_CODE[1]
     pdc = int(proto.sample_command(1)) << 8  # PDC (channel 1)
@@ -540,6 +541,9 @@ def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_a
             for args, clock, message in bad_calls:
                 with pytest.raises(ValueError, match=message):
                     bus.exchange_words(*args, clock)
+                if len(args[0]) == 1:  # and one transfer at a time
+                    with pytest.raises(ValueError, match=message):
+                        bus.transfer(Transfer(float(args[0][0]), s1, 0, 16, clock))
             got += list(bus.exchange_words([0.8, 0.8 + 1e-4], [s1, s1], [pdc, 0], CLOCK_HZ))
             words[name] = got
         finally:
