@@ -100,6 +100,18 @@ def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:
     return np.array([x_mm, r * np.sin(a), -r * np.cos(a)])
 
 
+def shear_direction(center_mm, shear_angle_deg: float) -> np.ndarray:
+    """Unit vector (3,) of a shear at the core-surface point ``center_mm`` (mm), in the surface's tangent plane:
+    cos φ·m + sin φ·c, φ = ``shear_angle_deg``, c = (0, cos a, sin a) the tangent around the finger (toward +angle
+    a) and m the tangent along it toward the tip — +x on the cylinder (x ≤ 0); on the hemispherical tip (x > 0)
+    n × c with n its outward normal, along the meridian toward the apex (at the apex, over it toward the back)."""
+    center = np.asarray(center_mm, float)
+    a, phi = np.arctan2(center[1], -center[2]), np.radians(shear_angle_deg)
+    around = np.array([0, np.cos(a), np.sin(a)])
+    along = np.array([1.0, 0, 0]) if center[0] <= 0.0 else np.cross(center / np.linalg.norm(center), around)
+    return np.cos(phi) * along + np.sin(phi) * around
+
+
 def nail_touch_problem(angle_deg, p: SensorParams) -> str | None:
     """Why a contact centred ``angle_deg`` from the ventral midline cannot be modelled (None if it can): beyond
     ``free_skin_half_angle_deg`` the skin is tethered at the nail, and the model has no contact there — its force

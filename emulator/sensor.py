@@ -26,10 +26,11 @@ from emulator.mechanics import FluidLeak, ForceCoupling, RestingPressure, Vibrat
 from emulator.params import SensorParams
 from emulator.sliding import CommandedMotion, Slide, SlidingContact, commanded_load_N
 from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, electrode_positions_mm, nail_touch_problem,
-                                 surface_point_mm, surface_point_over_mm)
+                                 shear_direction, surface_point_mm, surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, MountVibration, PowerOn,
                               OutsideModelWarning, PressureCalibrator, SphereDrop, Touch, Vibration,
-                              calibration_pressure, drop_depth_problem, skin_displacement)
+                              calibration_pressure, contact_place, drop_depth_problem, skin_displacement,
+                              touch_slip_problem)
 from emulator.skin import contact_patch_area_m2
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
@@ -213,12 +214,17 @@ class Sensor:
                              f"(index {unknown[0]}) is not a sampled channel of a {self.variant.name!r} sensor "
                              f"(E1..E{self.variant.n_electrodes}, PAC, PDC, TAC, TDC)")
         for st in stimuli:  # whether or not an electrode is read: the place must be on this sensor
-            if isinstance(st, Touch) and st.electrode is not None and st.electrode not in self.variant.channel_index:
-                raise ValueError(f"touch over electrode {st.electrode!r}: a {self.variant.name!r} sensor has "
-                                 f"E1..E{self.variant.n_electrodes}")
-            why = isinstance(st, Touch) and st.electrode is None and nail_touch_problem(st.angle_deg, self.params)
+            place = contact_place(st)
+            if place is not None and place[0] is not None and place[0] not in self.variant.channel_index:
+                raise ValueError(f"{type(st).__name__.lower()} over electrode {place[0]!r}: a {self.variant.name!r} "
+                                 f"sensor has E1..E{self.variant.n_electrodes}")
+            why = place is not None and place[0] is None and nail_touch_problem(place[2], self.params)
             if why:
-                raise ValueError(f"Touch.angle_deg = {st.angle_deg!r}: {why}")
+                raise ValueError(f"{type(st).__name__}.angle_deg = {place[2]!r}: {why}")
+            if isinstance(st, Touch) and (why := touch_slip_problem(st)):
+                warnings.warn(f"Touch at {st.start_s!r} s: tangential_N = {st.tangential_N!r} N {why} (a scene "
+                              f"refuses it; its codes here are the model's extrapolation)", OutsideModelWarning,
+                              stacklevel=2)
             if isinstance(st, SphereDrop) and (why := drop_depth_problem(st, self.params)):
                 warnings.warn(f"SphereDrop at {st.time_s!r} s: {why} (a scene refuses it; its codes here are the "
                               f"model's extrapolation)", OutsideModelWarning, stacklevel=2)
@@ -355,16 +361,18 @@ class Sensor:
             if isinstance(s, (Slide, CommandedMotion)):
                 contacts.append(self._pad_contact(s))
                 continue
-            if not isinstance(s, Touch):
+            place = contact_place(s)  # a touch; a tap or press given a place (none: only the fluid feels it)
+            if place is None:
                 continue
-            if s.electrode is not None:  # (one of this sensor's: checked when it was made)
-                centre = surface_point_over_mm(positions[self.variant.channel_index[s.electrode] - ch.ELECTRODE_FIRST])
+            electrode, x_mm, angle_deg = place
+            if electrode is not None:  # (one of this sensor's: checked when it was made)
+                centre = surface_point_over_mm(positions[self.variant.channel_index[electrode] - ch.ELECTRODE_FIRST])
             else:
-                centre = surface_point_mm(s.x_mm, s.angle_deg)
-            a, phi = np.arctan2(centre[1], -centre[2]), np.radians(s.shear_angle_deg)
-            direction = np.cos(phi) * np.array([1.0, 0, 0]) + np.sin(phi) * np.array([0, np.cos(a), np.sin(a)])
+                centre = surface_point_mm(x_mm, angle_deg)
+            sheared = isinstance(s, Touch)
+            direction = shear_direction(centre, s.shear_angle_deg if sheared else 0.0)
             contacts.append(Contact(centre, s.indenter_radius_mm, s.force,
-                                    s.tangential_N / s.force_N if s.force_N else 0.0, tuple(direction),
+                                    s.tangential_N / s.force_N if sheared and s.force_N else 0.0, tuple(direction),
                                     s.start_s, s.end_s))
         return ElectrodeModel(self.params, contacts, self.faults, self.fidelity.discretization,
                               self.fidelity.electrode_rate_Hz, positions=positions, leak=self.leak)

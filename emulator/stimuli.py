@@ -139,14 +139,59 @@ class ForceStimulus(ABC):
         return (self.cumulative(t + h) - self.cumulative(t - h)) / (2 * h)
 
 
+#: the fields of a contact's place on the skin, optional for a press or a tap (None: no place, only the fluid feels
+#: it): ``x_mm`` along the finger from the skin's clamp to the tip's apex, ``angle_deg`` around it from the ventral
+#: midline, or over ``electrode``, pressed by an indenter of ``indenter_radius_mm``
+PLACE_LIMITS = {"x_mm": Limit(SKIN_BASE_X_MM, CORE_RADIUS_MM, optional=True), "angle_deg": FINITE.or_none(),
+                "indenter_radius_mm": POSITIVE}
+#: the place of a contact given no x_mm or no angle_deg: the ventral pad (mm, °)
+DEFAULT_X_MM, DEFAULT_ANGLE_DEG = -5.0, 0.0
+
+
+def _check_place(s) -> None:
+    """Refuse a place the stimulus ``s`` (a tap, press or touch) cannot have: an electrode that is no electrode's
+    name, or, where the place is optional (a tap, a press), both an electrode and x_mm/angle_deg."""
+    name = type(s).__name__
+    most = max(ELECTRODE_COUNT.values())
+    if s.electrode is not None and not (isinstance(s.electrode, str)
+                                        and s.electrode in {f"E{k}" for k in range(1, most + 1)}):
+        raise ValueError(f"{name}.electrode = {s.electrode!r}: an electrode's name, E1..E{most} (E20..E{most} on "
+                         "a \"biotac-sp\"), or None for the place x_mm, angle_deg")
+    if s.electrode is not None and not isinstance(s, Touch) and (s.x_mm is not None or s.angle_deg is not None):
+        raise ValueError(f"{name}: give the place either as electrode ({s.electrode!r}) or as x_mm, angle_deg "
+                         f"(x_mm = {s.x_mm!r}, angle_deg = {s.angle_deg!r}), not both")
+
+
+def contact_place(s) -> tuple[str | None, float, float] | None:
+    """Where a force stimulus ``s`` presses the skin: (electrode or None, x_mm, angle_deg), x_mm and angle_deg
+    defaulting to the ventral pad's (−5 mm, 0°); None if it has no place (a press or tap given none, a sphere
+    drop): then only the fluid feels it and the electrodes stay at rest."""
+    if not isinstance(s, (Tap, Press)):
+        return None
+    if s.electrode is None and s.x_mm is None and s.angle_deg is None:
+        return None
+    return (s.electrode, DEFAULT_X_MM if s.x_mm is None else s.x_mm,
+            DEFAULT_ANGLE_DEG if s.angle_deg is None else s.angle_deg)
+
+
 @dataclass
 class Tap(CheckedFields, ForceStimulus):
-    """A finger tap: raised-cosine force pulse of ``peak_N`` lasting ``duration_s`` from ``time_s``."""
+    """A finger tap: raised-cosine force pulse of ``peak_N`` lasting ``duration_s`` from ``time_s``; optionally at
+    a place (``x_mm``/``angle_deg`` or ``electrode``, ``indenter_radius_mm``: as a :class:`Touch`'s), where it
+    dents the electrodes as a touch of that force would (no place: only the fluid feels it)."""
 
-    LIMITS = {"time_s": INSTANT_S, "peak_N": NON_NEGATIVE, "duration_s": POSITIVE}
+    LIMITS = {"time_s": INSTANT_S, "peak_N": NON_NEGATIVE, "duration_s": POSITIVE, **PLACE_LIMITS}
     time_s: float
     peak_N: float
     duration_s: float = 0.03
+    x_mm: float | None = None
+    angle_deg: float | None = None
+    electrode: str | None = None
+    indenter_radius_mm: float = 3.0
+
+    def __post_init__(self):
+        super().__post_init__()
+        _check_place(self)
 
     @property
     def start_s(self):
@@ -160,6 +205,13 @@ class Tap(CheckedFields, ForceStimulus):
         T = self.duration_s
         x = np.clip(np.asarray(t, float) - self.time_s, 0.0, T)
         return 0.5 * self.peak_N * (x - T / (2 * np.pi) * np.sin(2 * np.pi * x / T))
+
+    def force(self, t):
+        """Force in N: the raised cosine (F_peak/2)·(1 − cos(2π·x/T)) over x = t − time_s in [0, T], else 0."""
+        T = self.duration_s
+        x = np.asarray(t, float) - self.time_s
+        inside = (x >= 0.0) & (x <= T)
+        return np.where(inside, 0.5 * self.peak_N * (1.0 - np.cos(2 * np.pi * np.clip(x, 0.0, T) / T)), 0.0)
 
 
 @dataclass
@@ -284,13 +336,24 @@ def sphere_drop_on(params: SensorParams, time_s: float, mass_kg: float, height_m
 
 @dataclass
 class Press(CheckedFields, ForceStimulus):
-    """Press and hold: ramp to ``force_N`` over ``ramp_s``, hold ``hold_s``, ramp back down."""
+    """Press and hold: ramp to ``force_N`` over ``ramp_s``, hold ``hold_s``, ramp back down; optionally at a place
+    (``x_mm``/``angle_deg`` or ``electrode``, ``indenter_radius_mm``), where it dents the electrodes exactly as a
+    :class:`Touch` without shear or object (no place: only the fluid feels it)."""
 
-    LIMITS = {"start": INSTANT_S, "force_N": NON_NEGATIVE, "ramp_s": POSITIVE, "hold_s": NON_NEGATIVE}
+    LIMITS = {"start": INSTANT_S, "force_N": NON_NEGATIVE, "ramp_s": POSITIVE, "hold_s": NON_NEGATIVE,
+              **PLACE_LIMITS}
     start: float
     force_N: float
     ramp_s: float = 0.5
     hold_s: float = 1.0
+    x_mm: float | None = None
+    angle_deg: float | None = None
+    electrode: str | None = None
+    indenter_radius_mm: float = 3.0
+
+    def __post_init__(self):
+        super().__post_init__()
+        _check_place(self)
 
     @property
     def start_s(self):
@@ -309,38 +372,6 @@ class Press(CheckedFields, ForceStimulus):
         down = F * (d - d**2 / (2 * r))
         return up + hold + down
 
-
-@dataclass
-class Touch(Press):
-    """A contact at a place on the skin, with an object: the force profile of :class:`Press`, plus where
-    (``x_mm`` along the finger, from the skin's clamp at −20 mm to the tip's apex at 5 mm, ``angle_deg`` around it
-    from the ventral midline, or over ``electrode``),
-    the indenter's radius, a tangential force (N at full normal force, direction ``shear_angle_deg``
-    from +x toward +angle) and, for thermal contact, the object's ``material`` and temperature."""
-
-    LIMITS = {**Press.LIMITS, "x_mm": Limit(SKIN_BASE_X_MM, CORE_RADIUS_MM), "angle_deg": FINITE,
-              "indenter_radius_mm": POSITIVE, "tangential_N": FINITE, "shear_angle_deg": FINITE,
-              "object_temperature_C": CELSIUS.or_none()}
-    x_mm: float = -5.0
-    angle_deg: float = 0.0
-    electrode: str | None = None
-    indenter_radius_mm: float = 3.0
-    tangential_N: float = 0.0
-    shear_angle_deg: float = 0.0
-    material: str | None = None
-    object_temperature_C: float | None = None
-
-    def __post_init__(self):
-        super().__post_init__()
-        most = max(ELECTRODE_COUNT.values())
-        if self.electrode is not None and not (isinstance(self.electrode, str)
-                                               and self.electrode in {f"E{k}" for k in range(1, most + 1)}):
-            raise ValueError(f"Touch.electrode = {self.electrode!r}: an electrode's name, E1..E{most} (E20..E{most} on "
-                             "a \"biotac-sp\"), or None for the place x_mm, angle_deg")
-        if self.object_temperature_C is not None and self.material is None:  # a scene refuses it too
-            raise ValueError(f"Touch.object_temperature_C = {self.object_temperature_C!r} needs a material (e.g. "
-                             f"material=\"aluminum\"): without one the touch exchanges no heat")
-
     def force(self, t):
         """Normal force in N (piecewise linear: ramp, hold, ramp down)."""
         F, r, h = self.force_N, self.ramp_s, self.hold_s
@@ -348,6 +379,52 @@ class Touch(Press):
         up = np.clip(x / r, 0, 1)
         down = np.clip((x - r - h) / r, 0, 1)
         return F * np.where(x < 0, 0.0, up - down)
+
+
+@dataclass
+class Touch(Press):
+    """A contact at a place on the skin, with an object: the force profile of :class:`Press`, plus where
+    (``x_mm`` along the finger, from the skin's clamp at −20 mm to the tip's apex at 5 mm, ``angle_deg`` around it
+    from the ventral midline, or over ``electrode``),
+    the indenter's radius, a tangential force (N at full normal force, at most :data:`TOUCH_STATIC_FRICTION` times
+    it, in the skin's tangent plane at the place: ``shear_angle_deg`` 0° along the finger toward the tip — on the
+    hemispherical tip along its meridian toward the apex — and 90° toward +angle) and, for thermal contact, the
+    object's ``material`` and temperature."""
+
+    LIMITS = {**Press.LIMITS, "x_mm": Limit(SKIN_BASE_X_MM, CORE_RADIUS_MM), "angle_deg": FINITE,
+              "tangential_N": FINITE, "shear_angle_deg": FINITE, "object_temperature_C": CELSIUS.or_none()}
+    x_mm: float = DEFAULT_X_MM
+    angle_deg: float = DEFAULT_ANGLE_DEG
+    tangential_N: float = 0.0
+    shear_angle_deg: float = 0.0
+    material: str | None = None
+    object_temperature_C: float | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.object_temperature_C is not None and self.material is None:  # a scene refuses it too
+            raise ValueError(f"Touch.object_temperature_C = {self.object_temperature_C!r} needs a material (e.g. "
+                             f"material=\"aluminum\"): without one the touch exchanges no heat")
+
+
+#: the largest static friction coefficient µs of the fingertip's silicone skin on any surface a touch may press
+#: (1): the texture library's highest class, a dry silicone elastomer on an elastomer (1.3; rubber on rubber 1.16,
+#: rubber on clean glass ≳ 1, Grosch 1963; fixtures/textures/library.toml's friction rules, whose 117 textures
+#: span µs 0.26–1.2).  A touch sheared beyond µs·force_N would slip: that is a slide, not a touch.
+TOUCH_STATIC_FRICTION = 1.3
+
+
+def touch_slip_problem(touch: Touch) -> str | None:
+    """Why a touch's ``tangential_N`` cannot be held (None if it can; the text follows the field and its value):
+    beyond the static friction :data:`TOUCH_STATIC_FRICTION`·``force_N`` the skin would slip, which the touch's
+    contact does not model."""
+    limit_N = TOUCH_STATIC_FRICTION * touch.force_N
+    if abs(touch.tangential_N) <= limit_N:
+        return None
+    return (f"exceeds the static friction µs·force_N = "
+            f"{TOUCH_STATIC_FRICTION:g} × {touch.force_N!r} N = {limit_N:.3g} N (µs ≤ {TOUCH_STATIC_FRICTION:g}: "
+            f"silicone skin on the grippiest surfaces, TOUCH_STATIC_FRICTION): a fingertip held so would slip; "
+            f"lower the shear or raise force_N, or for a slipping contact use a slide (kind = \"slide\")")
 
 
 @dataclass

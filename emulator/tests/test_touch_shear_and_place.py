@@ -86,7 +86,8 @@ def test_a_shear_beyond_static_friction_is_warned_of_naming_the_touch_field_valu
 
 def _codes(stimuli, t, channels=E_IDX):
     s = Sensor(stimuli=stimuli, channels_read=E + ["PDC"], noise=QUIET)
-    return np.stack([s.sample(channels, np.full(channels.size, ti) + np.arange(channels.size) * 1e-5) for ti in t])
+    return np.stack([s.sample(channels, np.full(channels.size, ti) + np.arange(channels.size) * 1e-5)
+                     for ti in t]).astype(int)
 
 
 T = np.array([0.05, 0.2, 0.45, 0.7, 1.0, 1.4])
