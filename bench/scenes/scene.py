@@ -26,7 +26,7 @@ from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
 from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERES, AmbientStep, HeaterFailure, PowerOn,
                               Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, drop_depth_problem,
-                              sphere_drop_on, sphere_radius_m)
+                              sphere_drop_on, sphere_radius_m, touch_slip_problem)
 from emulator.effects import effect_rng
 from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import Slide
@@ -257,16 +257,18 @@ class _Checker:
 
 #: ``textures`` of :func:`_slides` when the scene names no library: the shipped one, read only if a slide needs it
 _SHIPPED = object()
+#: where a touch presses, and optionally a tap or a press (then its electrodes feel it, as under a touch)
+PLACE_FIELDS = ("x_mm", "angle_deg", "electrode", "indenter_radius_mm")
 STIMULUS_KINDS = ("tap", "press", "touch", "sphere_drop", "vibration", "pressure", "power_on", "ambient_step",
                   "heater_failure", "slide", "replace_skin")
 _STIMULUS_FIELDS = {
-    "tap": {"kind", "at_s", "peak_N", "duration_s"},
-    "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s"},
+    "tap": {"kind", "at_s", "peak_N", "duration_s", *PLACE_FIELDS},
+    "press": {"kind", "start_s", "force_N", "ramp_s", "hold_s", *PLACE_FIELDS},
     "sphere_drop": {"kind", "at_s", "sphere", "mass_mg", "height_m", "diameter_mm", "material"},
     "vibration": {"kind", "start_s", "duration_s", "amplitude_um", "frequency_Hz", "f_start_Hz", "f_stop_Hz", "fade_s"},
     "pressure": {"kind", "start_s", "duration_s", "offset_kPa", "amplitude_Pa", "frequency_Hz", "fade_s"},
-    "touch": {"kind", "start_s", "force_N", "ramp_s", "hold_s", "x_mm", "angle_deg", "electrode",
-              "indenter_radius_mm", "tangential_N", "shear_angle_deg", "material", "object_temperature_C"},
+    "touch": {"kind", "start_s", "force_N", "ramp_s", "hold_s", *PLACE_FIELDS, "tangential_N", "shear_angle_deg",
+              "material", "object_temperature_C"},
     "power_on": {"kind", "at_s"},
     "ambient_step": {"kind", "at_s", "temperature_C"},
     "heater_failure": {"kind", "at_s"},
@@ -301,6 +303,13 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams, targets: list |
         kind = c.choice(st, "kind", w, STIMULUS_KINDS, required=True)
         if kind is None:
             continue
+        if kind == "sphere_drop":  # said why, rather than an unknown field
+            for key in [f for f in PLACE_FIELDS if f in st]:
+                c.problems.append(f"{w}.{key}: a sphere_drop has no place on the finger (the model gives its "
+                                  f"sub-millisecond impulse to the fluid, PDC and PAC, not to the electrodes); for a "
+                                  f"contact the electrodes feel, use a tap or a touch with x_mm + angle_deg or "
+                                  f"electrode")
+                st = {f: v for f, v in st.items() if f != key}
         c.known_keys(st, w, _STIMULUS_FIELDS[kind])
         k = c.number(st, "sensor", w, 1, MAX_SENSORS, "(a sensor number)", default=1, integer=True) or 1
         before = len(out)
@@ -311,6 +320,36 @@ def _stimuli(c: _Checker, items, duration, params: SensorParams, targets: list |
     return out
 
 
+def _place(c: _Checker, st: dict, w: str, k: int, variant: str, params: SensorParams, optional: bool) -> dict:
+    """The place fields (:data:`PLACE_FIELDS`) of a touch, or of a tap or press (``optional``: no place unless one
+    is given, x_mm and angle_deg then None) on sensor ``k`` of ``variant``, for the stimulus's constructor; each
+    problem (range, an electrode the finger lacks, the nail, two places, an indenter with no place) appended."""
+    default_x, default_angle = (None, None) if optional else (-5.0, 0.0)
+    place = dict(x_mm=c.number(st, "x_mm", w, SKIN_BASE_X_MM, CORE_RADIUS_MM, "mm", default=default_x),  # base clamp
+                 angle_deg=c.number(st, "angle_deg", w, -180.0, 180.0, "°", default=default_angle),  # to tip apex
+                 indenter_radius_mm=c.number(st, "indenter_radius_mm", w, 0.1, 15.0, "mm", default=3.0))
+    names = ELECTRODE_NAMES + (SP_ELECTRODE_NAMES if variant == "biotac-sp" else ())
+    if st.get("electrode") in SP_ELECTRODE_NAMES and variant != "biotac-sp":
+        c.problems.append(f"{w}.electrode = {_r(st['electrode'])}: sensor {k} is a {_r(variant)}, which has "
+                          f"E1..E19; E20..E24 are on a \"biotac-sp\" ([sensor] or [[sensors]] variant)")
+    place["electrode"] = c.choice(st, "electrode", w, names) if st.get("electrode") not in SP_ELECTRODE_NAMES \
+        or variant == "biotac-sp" else None
+    if (problem := nail_touch_problem(place["angle_deg"], params)) is not None:
+        c.problems.append(f"{w}.angle_deg = {_r(st['angle_deg'])}: {problem}")
+    where = [k for k in ("x_mm", "angle_deg") if k in st]
+    if "electrode" in st and where:
+        c.problems.append(f"{w}: give the place either as electrode ({_r(st['electrode'])}) or as x_mm + "
+                          f"angle_deg ({', '.join(f'{k} = {_r(st[k])}' for k in where)}), not both")
+        if optional:  # (refused; the stimulus made for the span check takes the x_mm/angle_deg place)
+            place["electrode"] = None
+    if optional and "indenter_radius_mm" in st and not ("electrode" in st or where):
+        c.problems.append(f"{w}.indenter_radius_mm: the indenter of a place: give x_mm + angle_deg or electrode "
+                          f"too (without a place only the fluid feels a {st.get('kind')}, no electrode)")
+    if place["indenter_radius_mm"] is None:  # (out of range: a problem already; no stimulus is made of it)
+        place["indenter_radius_mm"] = 3.0
+    return place
+
+
 def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, params: SensorParams,
                   variant: str, first_once: dict, out: list, textures=_SHIPPED) -> None:
     """Append the stimuli of one [[stimulus]] table (for sensor ``k``) to ``out`` (``textures``: as for
@@ -318,16 +357,18 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
     if kind == "tap":
         peak = c.number(st, "peak_N", w, 0.0, 50.0, "N", required=True)
         dur = c.number(st, "duration_s", w, 1e-3, 10.0, "s", default=0.03)
+        place = _place(c, st, w, k, variant, params, optional=True)
         if dur is not None:  # its span is checked whatever its force (a bad peak_N is a problem of its own)
-            taps = [Tap(t, 0.0 if peak is None else peak, dur) for t in c.times(st, "at_s", w, duration)]
+            taps = [Tap(t, 0.0 if peak is None else peak, dur, **place) for t in c.times(st, "at_s", w, duration)]
             out += _valid(peak is not None, _ending_in_scene(c, w, "tap", taps, duration))
     elif kind == "press":
         start = c.times(st, "start_s", w, duration)
         force = c.number(st, "force_N", w, 0.0, 50.0, "N", required=True)
         ramp = c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5)
         hold = c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0)
+        place = _place(c, st, w, k, variant, params, optional=True)
         if None not in (ramp, hold):
-            presses = [Press(t, 0.0 if force is None else force, ramp, hold) for t in start]
+            presses = [Press(t, 0.0 if force is None else force, ramp, hold, **place) for t in start]
             out += _valid(force is not None, _ending_in_scene(c, w, "press", presses, duration))
     elif kind == "sphere_drop":
         # a Hertz impact on this sensor's skin (emulator.stimuli.sphere_drop_on): a named sphere gives its mass and
@@ -417,30 +458,22 @@ def _one_stimulus(c: _Checker, st: dict, w: str, kind: str, k: int, duration, pa
             out += _valid(given, _ending_in_scene(c, w, "pressure", calibrators, duration))
     elif kind == "touch":
         start = c.times(st, "start_s", w, duration)
+        place = _place(c, st, w, k, variant, params, optional=False)
+        electrode = place.pop("electrode")
         vals = dict(
             force_N=c.number(st, "force_N", w, 0.0, 50.0, "N", required=True),
             ramp_s=c.number(st, "ramp_s", w, 1e-3, 3600.0, "s", default=0.5),
             hold_s=c.number(st, "hold_s", w, 0.0, 36000.0, "s", default=1.0),
-            x_mm=c.number(st, "x_mm", w, SKIN_BASE_X_MM, CORE_RADIUS_MM, "mm", default=-5.0),  # base clamp to tip apex
-            angle_deg=c.number(st, "angle_deg", w, -180.0, 180.0, "°", default=0.0),
-            indenter_radius_mm=c.number(st, "indenter_radius_mm", w, 0.1, 15.0, "mm", default=3.0),
+            **place,
             tangential_N=c.number(st, "tangential_N", w, -20.0, 20.0, "N", default=0.0),
             shear_angle_deg=c.number(st, "shear_angle_deg", w, -180.0, 180.0, "°", default=0.0),
             object_temperature_C=c.number(st, "object_temperature_C", w, -40.0, 120.0, "°C"),
         )
-        names = ELECTRODE_NAMES + (SP_ELECTRODE_NAMES if variant == "biotac-sp" else ())
-        if st.get("electrode") in SP_ELECTRODE_NAMES and variant != "biotac-sp":
-            c.problems.append(f"{w}.electrode = {_r(st['electrode'])}: sensor {k} is a {_r(variant)}, which has "
-                              f"E1..E19; E20..E24 are on a \"biotac-sp\" ([sensor] or [[sensors]] variant)")
-        electrode = c.choice(st, "electrode", w, names) if st.get("electrode") not in SP_ELECTRODE_NAMES \
-            or variant == "biotac-sp" else None
         mat = c.choice(st, "material", w, tuple(MATERIALS))
-        if (problem := nail_touch_problem(vals["angle_deg"], params)) is not None:
-            c.problems.append(f"{w}.angle_deg = {_r(st['angle_deg'])}: {problem}")
-        where = [k for k in ("x_mm", "angle_deg") if k in st]
-        if "electrode" in st and where:
-            c.problems.append(f"{w}: give the place either as electrode ({_r(st['electrode'])}) or as x_mm + "
-                              f"angle_deg ({', '.join(f'{k} = {_r(st[k])}' for k in where)}), not both")
+        if None not in (vals["force_N"], vals["tangential_N"]):  # a shear the skin holds without slipping
+            probe = Touch(0.0, vals["force_N"], tangential_N=vals["tangential_N"])
+            if (problem := touch_slip_problem(probe)) is not None:
+                c.problems.append(f"{w}.tangential_N = {_r(st['tangential_N'])}: {problem}")
         if "object_temperature_C" in st and "material" not in st:
             c.problems.append(f"{w}.object_temperature_C = {_r(st['object_temperature_C'])}: an object "
                               f"temperature needs a material for the thermal contact (e.g. \"aluminum\")")
