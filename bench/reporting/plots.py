@@ -12,7 +12,8 @@ import numpy as np
 from matplotlib.patches import Rectangle
 
 from bench.reporting.figures import figure_file
-from emulator.stimuli import AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration
+from emulator.stimuli import (AmbientStep, PowerOn, Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration,
+                              contact_place)
 
 
 def _mark_stimuli(ax, stimuli, t_max):
@@ -187,7 +188,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
                 ax.set_title(f"{rec.scene.name}: PAC spectrogram (80 ms windows{avg})")
 
         plots.append(("spectrogram.png", spectrogram))
-    if "E1" in names and any(isinstance(s, Touch) for s in rec.scene.stimuli):
+    if "E1" in names and any(contact_place(s) is not None for s in rec.scene.stimuli):  # touches, placed taps/presses
         plots.append(("electrode_map.png", lambda path: electrode_map(rec, path)))
     if getattr(rec, "forces", None) and len(rec.forces.get("t", ())):
         plots.append(("forces.png", lambda path: sliding_forces(rec, path)))
@@ -253,12 +254,14 @@ def electrode_map(rec, path: Path) -> None:
         ax.add_patch(Rectangle((-16, -np.pi * CORE_RADIUS_MM / 1.6), 21, 2 * np.pi * CORE_RADIUS_MM / 1.6,
                                    fill=False, ls="--", color="gray"))
         for s in rec.scene.stimuli:  # under the electrodes, so that no label is hidden
-            if isinstance(s, Touch):
-                if s.electrode:
-                    k = int(s.electrode[1:]) - 1
+            place = contact_place(s)  # a touch, or a tap or press given a place
+            if place is not None:
+                electrode, x_mm, angle_deg = place
+                if electrode:
+                    k = int(electrode[1:]) - 1
                     x, a = pos[k, 0], arc[k]
                 else:
-                    x, a = s.x_mm, CORE_RADIUS_MM * np.radians(s.angle_deg)
+                    x, a = x_mm, CORE_RADIUS_MM * np.radians(angle_deg)
                 ax.plot(x, a, "x", color="red", ms=9, mew=2, zorder=1)
         sc = ax.scatter(pos[:, 0], arc, c=change, s=300, cmap="viridis", edgecolors="black", zorder=2)
         shade = sc.to_rgba(np.asarray(change, float))

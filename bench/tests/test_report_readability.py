@@ -208,3 +208,22 @@ def test_the_electrode_maps_cross_sits_on_the_touched_electrode(tmp_path, drawn)
     label = next(a for a in ax.texts if a.get_text() == "E7")
     assert len(crosses) == 1
     assert (float(crosses[0].get_xdata()[0]), float(crosses[0].get_ydata()[0])) == pytest.approx(label.xy, abs=1e-9)
+
+
+def test_the_electrode_map_marks_a_placed_tap_and_leaves_a_bare_press_out(tmp_path, drawn):
+    """A tap given x_mm/angle_deg dents the electrodes: electrode_map.png is drawn with one red × at its place
+    (x_mm, and R·angle around the finger, to 1e-9 mm); a press given no place is not marked (only the fluid felt it)."""
+    from bench.reporting.plots import scene_plots
+    from bench.reporting.report import baselines
+    from emulator.electrodes import CORE_RADIUS_MM
+
+    sc = parse_scene_text('[scene]\nname = "map"\nduration_s = 2.0\nseed = 1\n[[stimulus]]\nkind = "tap"\n'
+                          'at_s = 0.4\npeak_N = 2.0\nx_mm = -8.0\nangle_deg = 20.0\n[[stimulus]]\nkind = "press"\n'
+                          'start_s = 0.6\nforce_N = 1.0\nramp_s = 0.2\nhold_s = 0.2\n')
+    rec = run_scene(sc, progress=False)
+    dict(scene_plots(rec, baselines(rec)))["electrode_map.png"](tmp_path / "electrode_map.png")
+    _, ax = drawn["electrode_map.png"]
+    crosses = [line for line in ax.get_lines() if line.get_marker() == "x"]
+    assert len(crosses) == 1
+    assert (float(crosses[0].get_xdata()[0]), float(crosses[0].get_ydata()[0])) == pytest.approx(
+        (-8.0, CORE_RADIUS_MM * np.radians(20.0)), abs=1e-9)
