@@ -49,14 +49,17 @@ scene file (TOML):
   [noise]    johnson, amplifier, mains_hum, adc, spi_coupling = true | false
   [analysis] impact_detection = true   (applies D ch. 5's rule to every sphere drop)
   [[stimulus]] one table per stimulus, by kind:
-     tap          at_s (s or list), peak_N, duration_s (0.03)
-     press        start_s, force_N, ramp_s (0.5), hold_s (1.0)
-     sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07; falls through air)
+     tap          at_s (s or list), peak_N, duration_s (0.03); optional place as a touch's (then the electrodes
+                  there feel it; without one only PDC/PAC move)
+     press        start_s, force_N, ramp_s (0.5), hold_s (1.0); optional place as a touch's (as for tap)
+     sphere_drop  at_s, sphere ("0.45 mm solder ball", ...) or mass_mg, height_m (0.07; falls through air);
+                  no place (its impulse reaches the fluid only)
      vibration    start_s, duration_s, amplitude_um, frequency_Hz  | f_start_Hz + f_stop_Hz (log sweep), fade_s
                   (0.01, at most duration_s / 2: a raised-cosine fade-in and fade-out)
      pressure     start_s, duration_s, offset_kPa, amplitude_Pa, frequency_Hz, fade_s  (calibrator on the liquid)
      touch        start_s, force_N, ramp_s, hold_s; where: electrode ("E17") or x_mm + angle_deg;
-                  indenter_radius_mm (3), tangential_N, shear_angle_deg; material ("aluminum", "glass",
+                  indenter_radius_mm (3), tangential_N (at most 1.3 × force_N: beyond, the skin would slip;
+                  use a slide), shear_angle_deg (0 toward the tip, 90 around); material ("aluminum", "glass",
                   "wood", "polystyrene foam", ...) and object_temperature_C for thermal contact
      power_on     at_s   (heaters start from ambient)        ambient_step  at_s, temperature_C
      heater_failure  at_s
