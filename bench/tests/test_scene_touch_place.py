@@ -61,3 +61,18 @@ def test_a_sphere_drop_given_a_place_is_refused_saying_why():
     msgs = problems({**MINIMAL, "stimulus": [{"kind": "sphere_drop", "sphere": "1 mm steel bearing", "at_s": 0.5,
                                               "electrode": "E7"}]})
     assert any(m.startswith("stimulus[0].electrode: a sphere_drop has no place on the finger") for m in msgs), msgs
+
+
+def test_a_placed_tap_shorter_than_two_electrode_steps_is_refused_naming_the_profiles_that_fit():
+    """The electrodes' model samples a placed tap's force at its own rate (fast 250 Hz, default 500 Hz, reference
+    2 kHz): a 5 ms tap at a place needs 8 ms on fast; default and reference take it, and a 5 ms tap with no place
+    (only the fluid feels it, on the grid) is taken on fast."""
+    tap = {"kind": "tap", "at_s": 0.5, "peak_N": 1.0, "duration_s": 0.005, "electrode": "E7"}
+    fast = {"scene": {"name": "t", "duration_s": 2.0, "fidelity": "fast"}}
+    (msg,) = problems({**fast, "stimulus": [tap]})
+    assert msg == ("the stimulus starting at 0.5 s: a tap of 5 ms at a place is shorter than two steps of the "
+                   "electrodes' model at fidelity 'fast' (250 Hz: at least 8 ms); lengthen duration_s or use "
+                   "\"default\" or \"reference\""), msg
+    assert parse_scene({**MINIMAL, "stimulus": [tap]}).stimuli[0].electrode == "E7"
+    bare = {k: v for k, v in tap.items() if k != "electrode"}
+    assert parse_scene({**fast, "stimulus": [bare]}).stimuli[0].electrode is None
