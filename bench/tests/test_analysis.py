@@ -88,3 +88,73 @@ def test_streaming_detection_is_the_sliding_windows_rising_edges_whatever_the_bl
         for a, b in zip(np.r_[0, cuts], np.r_[cuts, n]):
             parts.update(x[a:b])
         assert parts.events == expected
+
+
+def test_the_detection_rule_is_ds_four_sigma_in_a_100_ms_window():
+    """D ch. 5's rule as DetectionRule's defaults: four points at 4.1 σ within 100 ms are detected, at 3.9 σ they are
+    not, and the window [t, t + 0.1 s) leaves out a point at its end (times in s, σ = 1)."""
+    t = np.arange(2200) / 2200.0
+    x = np.zeros_like(t)
+    x[[10, 20, 30, 40]] = 3.9
+    assert not analysis.detected_in_window(x, t, 0.0, 0.0, 1.0)
+    x[[10, 20, 30, 40]] = 4.1
+    assert analysis.detected_in_window(x, t, 0.0, 0.0, 1.0)
+    x[40], x[220] = 0.0, 4.1  # the fourth point at t = 0.1 s exactly: outside [0, 0.1)
+    assert t[220] == 0.0 + 0.1
+    assert not analysis.detected_in_window(x, t, 0.0, 0.0, 1.0)
+    x[220], x[300] = 0.0, 4.1  # the fourth point 136 ms after the first: no 100 ms window holds all four
+    det = analysis.StreamingDetector(0.0, 1.0, 2200.0)
+    det.update(x)
+    assert det.events == 0 and det.samples == 2200
+    det.update(x[:100])
+    assert det.samples == 2300  # the samples seen in all, over every block
+
+
+@pytest.mark.parametrize("rate_Hz", [1106.0, 2205.7, 4400.0])
+def test_the_streaming_window_is_the_nearest_whole_number_of_samples(rate_Hz):
+    """The sliding window spans the rule's 0.1 s to within half a sample at rates that do not divide it."""
+    assert abs(analysis.StreamingDetector(0.0, 1.0, rate_Hz).window_n - 0.1 * rate_Hz) <= 0.5
+
+
+def test_a_proportional_fits_r_squared_is_taken_against_the_mean():
+    """R² = 1 − Σ(y − s·x)² / Σ(y − ȳ)²: data far from the origin fitted through it explain less than their
+    spread (here R² < 0, where the uncentred 1 − Σr²/Σy² would be 0.98)."""
+    x = np.linspace(1.0, 2.0, 50)
+    y = x + 10.0
+    fit = analysis.fit_proportional(x, y)
+    expected = 1 - np.sum((y - fit.slope * x) ** 2) / np.sum((y - y.mean()) ** 2)
+    assert fit.r_squared == pytest.approx(expected) and fit.r_squared < 0
+
+
+def test_the_welch_spectrum_is_in_db_of_power():
+    """White noise of variance σ² at fs has a one-sided density 2σ²/fs (units²/Hz): welch_db gives
+    10·log10 of it (within 0.3 dB over 2^16 samples)."""
+    fs, sigma = 1000.0, 3.0
+    f, db = analysis.welch_db(np.random.default_rng(2).normal(0, sigma, 1 << 16), fs)
+    assert np.median(db[1:-1]) == pytest.approx(10 * np.log10(2 * sigma**2 / fs), abs=0.3)
+
+
+def test_the_causal_band_pass_starts_in_the_steady_state_of_its_first_sample():
+    """A constant signal (an offset the band-pass removes) gives no output at all, its first samples included: the
+    filter starts as if the signal had always been there."""
+    y = analysis.causal_band_pass(np.full(2000, 500.0), 10000.0, 30.0, 200.0)
+    assert np.max(np.abs(y)) < 1e-9 * 500.0
+
+
+def test_the_stick_phase_runs_from_the_stages_first_move_to_the_last_instant_before_half_slip():
+    """A log (1 ms steps) whose stage starts at 0.1 s at 10 mm/s and whose skin slips at 40 % of it from 0.2 s and
+    at 60 % from 0.25 s: the stage starts at 0.1 s, the last stuck instant is 0.249 s, the onset 0.25 s (slip ≥ half
+    the stage's velocity)."""
+    t = np.arange(400) / 1000.0
+    v = np.where(t >= 0.1, 0.01, 0.0)
+    slip = np.select([t >= 0.25, t >= 0.2], [0.006, 0.004], 0.0)
+    phase = analysis.stick_phase(t, v, slip)
+    assert (phase.stage_start_s, phase.last_stuck_s, phase.slip_onset_s) == pytest.approx((0.1, 0.249, 0.25))
+
+
+def test_a_ramp_from_zero_is_capped_at_the_floor_and_a_falling_force_is_no_ramp():
+    """A force rising from 0 N counts its first value as 1e-3 of its last (ratio 1000, never inf); a force that
+    falls, even ending above where it started at one sample, is no ramp (0)."""
+    assert analysis.ramp_ratio(np.linspace(0.0, 2.0, 10)) == pytest.approx(1000.0)
+    falling = np.array([1.0, 3.0, 2.5, 2.0, 1.5, 1.2])
+    assert analysis.ramp_ratio(falling) == 0.0
