@@ -351,6 +351,27 @@ def test_the_samplers_transfers_are_its_slots_command_then_read():
     assert parts[0].channels.dtype == channel.dtype and sampler.next_slot == 168
 
 
+def test_the_samplers_chunks_read_exactly_the_slots_asked_and_its_slot_must_hold_two_words_and_the_delay():
+    """``chunks(n, c)`` reads n slots in reads of at most c (the last one shorter), refusing c < 1; a slot too short
+    for the command, the 50 µs wait and the read (at 150 kHz a word takes 110 µs: 270 µs of the 227 µs slot at
+    4.4 kHz, though one word and the wait would fit) is refused when the sampler is made."""
+    from bench.running.sampler import Sampler
+
+    class Zeros:
+        variant = None
+
+        def exchange(self, batch):
+            return np.zeros(batch.start_s.size, dtype=np.uint16)
+
+    sampler = Sampler(Zeros())
+    assert [s.codes.size for s in sampler.chunks(10, 4)] == [4, 4, 2] and sampler.next_slot == 10
+    with pytest.raises(ValueError, match="chunk_slots = 0: must be at least 1"):
+        next(sampler.chunks(10, 0))
+    with pytest.raises(ValueError, match="cannot hold command"):
+        Sampler(Zeros(), clock_hz=150e3)
+    assert Sampler(Zeros(), clock_hz=300e3).word_s < 0.5 * (1 / 4400 - 50e-6)  # two words fit at 300 kHz
+
+
 def test_the_sampler_decodes_each_reads_word_as_the_protocol_does():
     """(consistency) :meth:`Sampler.read` decodes each slot's read word (a table look-up, compiled) as
     :func:`~emulator.spi.protocol.decode_response` does — the code, and status ok, parity error, or error word —
