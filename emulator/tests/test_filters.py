@@ -100,3 +100,16 @@ def test_columns_filtered_along_axis_0_are_lfilters_to_the_bit(taps):
         y, zf = filters.lfilter(b, a, x, zi, axis=0)
         y_ref, zf_ref = signal.lfilter(b, a, x, axis=0, zi=zi)
         assert np.array_equal(y, y_ref) and np.array_equal(zf, zf_ref)
+
+
+def test_the_matched_z_design_maps_each_pole_by_exp_and_the_zeros_at_infinity_to_nyquist():
+    """Matched z (s = r -> z = exp(r/fs)): a 2-pole low-pass at 1 kHz on an 8.8 kHz grid has its poles at exp(p/fs),
+    its two zeros at infinity at z = −1 (no response at all at Nyquist, 4.4 kHz) and unit DC gain."""
+    fs = 8800.0
+    z, p, k = filters.lowpass_butter2(1000.0)
+    sos = filters.discretize(z, p, k, fs, "matched")
+    zd, pd, _ = signal.sos2zpk(sos)
+    assert np.allclose(np.sort_complex(pd), np.sort_complex(np.exp(p / fs)))
+    assert np.allclose(zd, -1.0)
+    _, h = signal.sosfreqz(sos, worN=[0.0, fs / 2], fs=fs)
+    assert abs(h[0]) == pytest.approx(1.0) and abs(h[1]) < 1e-9
