@@ -372,6 +372,21 @@ def test_the_samplers_chunks_read_exactly_the_slots_asked_and_its_slot_must_hold
     assert Sampler(Zeros(), clock_hz=300e3).word_s < 0.5 * (1 / 4400 - 50e-6)  # two words fit at 300 kHz
 
 
+def test_the_sampler_reads_the_frame_of_the_sensor_behind_an_rtl_peripheral():
+    """A peripheral that has no variant of its own but holds a sensor (the RTL harness's peripheral) gets its
+    sensor's default frame: 54 slots behind an SP, 44 behind a BioTac; a peripheral with neither gets the default
+    BioTac's (:func:`variant_of`)."""
+    from bench.running.sampler import Sampler, variant_of
+
+    class Holder:
+        def __init__(self, variant):
+            self.sensor = type("FakeSensor", (), {"variant": variant})()
+
+    assert variant_of(Holder("biotac-sp")) == "biotac-sp" and Sampler(Holder("biotac-sp")).sequence.size == 54
+    assert variant_of(Holder("biotac")) == "biotac" and Sampler(Holder("biotac")).sequence.size == 44
+    assert variant_of(object()) == variant_of(None) == "biotac"
+
+
 def test_the_sampler_decodes_each_reads_word_as_the_protocol_does():
     """(consistency) :meth:`Sampler.read` decodes each slot's read word (a table look-up, compiled) as
     :func:`~emulator.spi.protocol.decode_response` does — the code, and status ok, parity error, or error word —
