@@ -113,3 +113,18 @@ def test_the_matched_z_design_maps_each_pole_by_exp_and_the_zeros_at_infinity_to
     assert np.allclose(zd, -1.0)
     _, h = signal.sosfreqz(sos, worN=[0.0, fs / 2], fs=fs)
     assert abs(h[0]) == pytest.approx(1.0) and abs(h[1]) < 1e-9
+
+
+def test_a_first_order_high_pass_has_its_3_db_corner_at_its_frequency():
+    """highpass_1st(f): −3.01 dB at f (here 10 Hz on an 8.8 kHz grid, prewarped), unit gain far above it."""
+    sos = filters.discretize(*filters.highpass_1st(10.0), 8800.0, "prewarped", gain_at_hz=1000.0)
+    assert _gain_db(sos, 10.0, 8800.0) == pytest.approx(-3.01, abs=0.01)
+    assert _gain_db(sos, 2000.0, 8800.0) == pytest.approx(0.0, abs=0.01)
+
+
+def test_a_single_section_with_a_first_order_numerator_keeps_its_second_order_denominator():
+    """SosFilter runs one section through 2 taps only when both b2 and a2 are 0: a section with one zero and two
+    poles (b2 = 0, a2 ≠ 0) gives scipy's sosfilt output."""
+    sos = np.array([[0.2, 0.1, 0.0, 1.0, -1.2, 0.5]])
+    x = np.random.default_rng(4).standard_normal(500)
+    assert np.allclose(filters.SosFilter(sos)(x), signal.sosfilt(sos, x))
