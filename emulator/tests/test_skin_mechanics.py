@@ -81,6 +81,28 @@ def test_creep_ratio_and_retardation_time():
     assert r == pytest.approx(1.0, abs=1e-6) and tau == pytest.approx(1.0, rel=1e-6)
 
 
+@pytest.mark.parametrize("make, needle", [
+    (lambda: Creep([1.0], [1.0]), "sum to 1: must sum to"),  # no instantaneous response: r = 0
+    (lambda: Creep([1.0, 2.0], [-0.1, 0.5]), "each must be ≥ 0"),  # a negative weight: a creep that recovers
+    (lambda: sls_retardation(0.0, 0.5), "relaxation_time_s = 0.0: must be > 0"),
+])
+def test_creep_refuses_weights_and_times_outside_its_law(make, needle):
+    """The normalized creep c(t) = 1 − Σ w_i·exp(−t/τ_i) needs weights ≥ 0 summing below 1 (a step's instantaneous
+    response r = 1 − Σ w_i > 0) and a relaxation time > 0 s: each violation is refused naming the value."""
+    with pytest.raises(ValueError, match=needle):
+        make()
+
+
+def test_creep_stepped_at_another_rate_uses_that_rates_coefficients():
+    """A force step held 1 s creeps to the same response whatever the sample rate a Creep (τ = 0.2 s, r = 0.5) is
+    stepped at, even when one instance is stepped at 1 kHz and then at 100 Hz (its coefficients are kept per rate):
+    1 − 0.5·exp(−1/0.2) at the end of the held second."""
+    creep = Creep.standard_linear_solid(0.2, 0.5)
+    creep.step(np.zeros(10), 1000.0)
+    y = creep.step(np.ones(101), 100.0)  # from rest, the step at the first sample, then 1 s held
+    assert y[-1] == pytest.approx(1 - 0.5 * math.exp(-1.0 / 0.2), rel=1e-3)
+
+
 def _pressure(params, force, fs=1000.0, block=97):
     fc = ForceCoupling(params, fs, "matched")
     out = []
