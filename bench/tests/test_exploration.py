@@ -109,6 +109,12 @@ def test_benefit_alpha_is_one_over_uses_and_penalises_repeats():
     assert np.all(ex.benefit(u[1:3], 1) < ex.benefit(u[1:3], 0))
 
 
+def test_benefit_takes_an_uncertainty_rounded_past_0_or_1_as_0_or_1():
+    """U = 1 − Σ P_i²/Σ_j C_ij P_j can round a hair below 0 (one certain candidate) or above 1: the benefit is then
+    that of U = 0 (1) or U = 1 (0), never NaN from a fractional power of a negative number."""
+    assert np.array_equal(ex.benefit(np.array([-1e-16, 1.0 + 1e-15]), 2), [1.0, 0.0])
+
+
 # ------------------------------------------------------------------------------------------------ table and model
 
 
