@@ -89,6 +89,18 @@ def test_batched_uncertainty_matches_the_formula_and_is_independent_of_batching(
     assert np.allclose(ex.uncertainty_rows(c, post, 1e-6, other), pruned, rtol=1e-13, atol=1e-15)
 
 
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_candidates_at_the_pruning_threshold_are_left_out_and_a_row_with_none_left_is_fully_uncertain(backend):
+    """Only candidates with posterior > prune enter U: with prune = 0 (the exact formula), a candidate at posterior 0
+    that overlaps no other (C_ij = 0 for j ≠ i) adds no 0/0 term, and U is that of the two others (two identical
+    textures: 1/2); a row whose every candidate is at or below the threshold has no term: U = 1."""
+    c = np.zeros((3, 3, 1))
+    c[:2, :2], c[2, 2] = 1.0, 1.0
+    u = ex.uncertainty_rows(c, np.array([[0.5, 0.5, 0.0]]), prune=0.0, backend=backend)
+    assert u[0, 0] == pytest.approx(0.5)
+    assert ex.uncertainty_rows(c, np.full((1, 3), 1e-13), prune=1e-12, backend=backend)[0, 0] == 1.0
+
+
 def test_posterior_update_is_bayes_rule_and_sums_to_one():
     prior = np.array([0.5, 0.3, 0.2, 0.0])
     mean, sigma = np.array([0.0, 1.0, 2.0, 0.5]), np.array([1.0, 0.5, 2.0, 1.0])
