@@ -233,6 +233,18 @@ def test_alpha_sends_the_next_choice_elsewhere_after_a_use():
     assert by_combo(ctx, ex.ExplorationState(post, made, 1), np.array([0.5]))[0] == 0
 
 
+def test_the_trial_drawn_does_not_depend_on_the_movement_chosen():
+    """Each step draws its choice and its validation trial from separate uniforms (sim_uniforms: [choice, trial,
+    tie-break]): with the random strategy over 4 movements × 3 properties and 5 validation trials, the trial drawn at
+    the first step is uncorrelated with the choice (|r| < 0.1 over 2000 simulations), and each trial is drawn about
+    equally often."""
+    train, valid = tables(np.zeros((2, 4, 3)), 1.0)
+    r = ex.simulate(ex.fit_model(train), valid, 1, strategy="random", max_moves=1, n_sims=2000, seed=4)
+    choice = (r.movement[:, 0] * 3 + r.prop[:, 0]).astype(float)
+    assert abs(np.corrcoef(choice, r.trial[:, 0])[0, 1]) < 0.1
+    assert np.all(np.abs(np.bincount(r.trial[:, 0], minlength=5) / 2000 - 0.2) < 0.04)
+
+
 def test_cycle_and_random_strategies():
     ctx = ex.prepare(pilot_case(), exclude_movements=[3])
     state = ex.ExplorationState(np.full((4, 10), 0.1), np.zeros((4, 4, 3), np.int64), 0)
