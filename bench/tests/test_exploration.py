@@ -245,6 +245,17 @@ def test_the_trial_drawn_does_not_depend_on_the_movement_chosen():
     assert np.all(np.abs(np.bincount(r.trial[:, 0], minlength=5) / 2000 - 0.2) < 0.04)
 
 
+def test_validation_trials_of_movements_the_model_lacks_are_ignored():
+    """A validation table may hold movements the training did not (an excluded movement): the simulation draws from
+    the model's movements only, exactly as if those rows were absent."""
+    train, valid = tables(np.arange(24.0).reshape(2, 4, 3), 1.0)
+    extra = ex.TrialTable(valid.texture, valid.movement + 10, valid.prop, valid.trial, valid.value)
+    model = ex.fit_model(train)
+    a = ex.simulate(model, valid, 1, n_sims=20, seed=3)
+    b = ex.simulate(model, ex.TrialTable.concat([valid, extra]), 1, n_sims=20, seed=3)
+    assert np.array_equal(a.trial, b.trial) and np.array_equal(a.value, b.value, equal_nan=True)
+
+
 def test_cycle_and_random_strategies():
     ctx = ex.prepare(pilot_case(), exclude_movements=[3])
     state = ex.ExplorationState(np.full((4, 10), 0.1), np.zeros((4, 4, 3), np.int64), 0)
