@@ -79,3 +79,25 @@ def test_each_effect_counts_the_samples_it_processed():
     assert {name: c.samples for name, c in graph.costs.items()} == {"source": 400, "to_b": 400}
     assert all(c.seconds > 0 for c in graph.costs.values())
     assert graph.costs["to_b"].consumes == ("a",) and graph.costs["to_b"].produces == ("b",)
+
+
+def test_a_passive_effect_fed_by_one_of_its_inputs_stays():
+    """A passive effect is left out only when none of its inputs is produced: fed by one of two (a pressure with no
+    temperature model beside it), it runs and reads zeros for the other."""
+    candidates = [Toy("source", [], ["a"], offset=2.0), Toy("mix", ["a", "unfed"], ["y"], gain=3.0, passive=True)]
+    graph = build_graph(candidates, {"y"})
+    assert names(graph) == ["source", "mix"]
+    assert np.array_equal(graph.run(Block(0, 4, 1000.0))["y"], np.full(4, 6.0))
+
+
+def test_each_effect_draws_its_own_random_stream_from_the_seed_and_its_name():
+    """effect_rng(seed, name): the same seed and name give the same numbers, another name other numbers (so two noise
+    sources never add coherently), another seed other numbers."""
+    from emulator.effects import effect_rng
+
+    def draw(seed, name):
+        return effect_rng(seed, name).standard_normal(8)
+
+    assert np.array_equal(draw(1, "johnson"), draw(1, "johnson"))
+    assert not np.array_equal(draw(1, "johnson"), draw(1, "amplifier"))
+    assert not np.array_equal(draw(1, "johnson"), draw(2, "johnson"))

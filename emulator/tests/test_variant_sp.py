@@ -290,3 +290,18 @@ def test_a_cocotb_build_folder_shared_between_sp_masks_is_rebuilt_when_the_mask_
         rtl.build()
     assert forced == [True, False, True, False, True]
     assert (tmp_path / "sp_mask.txt").read_text() == "1"
+
+
+def test_channel_names_are_case_blind_and_an_unknown_one_names_the_known_range():
+    """``channel_index`` takes a name in either case ("e7" is E7, channel 23); an unknown name is refused naming the
+    channels known: E1..E24 when no variant is given (any variant's), E1..E19 on a BioTac, E1..E24 on an SP; an
+    empty sequence is refused by name."""
+    assert ch.channel_index("e7") == ch.channel_index("E7") == 23 and ch.channel_index("pac") == ch.PAC
+    with pytest.raises(ValueError, match=r"unknown channel 'E25'; known: PAC, PDC, TAC, TDC, E1\.\.E24$"):
+        ch.channel_index("E25")
+    with pytest.raises(ValueError, match=r"unknown channel 'E20'; known: PAC, PDC, TAC, TDC, E1\.\.E19$"):
+        ch.channel_index("E20", "biotac")
+    with pytest.raises(ValueError, match=r"E1\.\.E24$"):
+        ch.channel_index("E25", "biotac-sp")
+    with pytest.raises(ValueError, match="sequence is empty"):
+        ch.parse_sequence([])
