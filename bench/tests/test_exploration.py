@@ -395,6 +395,8 @@ def test_summaries():
     fake = dataclasses.replace(results[0], decided=decided, correct=decided == 1)
     labels, counts = ex.confusion_matrix(fake, labels=[1, 2, 3])
     assert counts[0].tolist() == [2, 2, 0] and ex.accuracy(fake) == 0.5
+    none = ex.simulate(model, valid, 1, n_sims=0)  # no simulation: the accuracy is undefined, not 0 %
+    assert np.isnan(ex.accuracy(none)) and np.isnan(ex.median_moves(none))
 
 
 def test_spread_check_sees_a_shift_of_the_validation_trials_and_nothing_else():
