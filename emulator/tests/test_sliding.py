@@ -296,6 +296,7 @@ def test_wear_needs_a_sliding_speed_and_a_fresh_skin_restores_the_ridges():
     fresh = worn.replace()
     assert worn.ridge_factor < 1 and fresh.ridge_factor == 1 and fresh.serial == 2 and fresh.trials == 0
     assert fresh.wear_power_exponent == 2.0 and fresh.history() == worn.history()
+    assert fresh.sliding_distance_m == fresh.frictional_work_J == 0.0 < worn.sliding_distance_m  # its own use only
     for bad in (dict(wear_power_exponent=float("nan")), dict(reference_power_W=0.0),
                 dict(visible_flat_width_m=0.5e-3)):
         with pytest.raises(ValueError):
