@@ -162,7 +162,7 @@ def test_noise_budget_refuses_an_sp_serial_on_a_biotac_as_every_other_place_does
 
 def test_units_compare_prints_each_parameters_difference_from_nominal(capsys):
     """`units --seed 17 --compare`: beside each value the nominal one and the difference (in % where the nominal is
-    not zero); with --json the nominal values under "nominal"."""
+    not zero) and its unit; with --json the nominal values under "nominal"."""
     import json
 
     assert main(["units", "--seed", "17", "--compare"]) == 0
@@ -170,6 +170,8 @@ def test_units_compare_prints_each_parameters_difference_from_nominal(capsys):
     row = next(r for r in lines if r[0] == "resonance_Hz")
     value, nominal, diff = float(row[1]), float(row[2]), float(row[3])
     assert value != nominal and diff == pytest.approx(100 * (value - nominal) / nominal, abs=0.006)
+    units = {r[0]: r[-1] for r in lines}  # each row ends with its unit: the parameter's, or a derived figure's
+    assert (units["resonance_Hz"], units["inflation_volume_mL"], units["resting_pressure_Pa"]) == ("Hz", "mL", "Pa")
     assert main(["units", "--seed", "17", "--compare", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["nominal"]["resonance_Hz"] == pytest.approx(nominal, rel=1e-5)
