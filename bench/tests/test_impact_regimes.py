@@ -101,3 +101,55 @@ def test_a_bracket_that_misses_the_threshold_is_refused(bench, sigma):
     for bracket in ((0.01, 1.0), (1e-6, 1e-3)):
         with pytest.raises(ValueError, match="outside"):
             threshold_speeds(bench, sigma, spheres=one, bracket_m_per_s=bracket)
+
+
+def test_each_heavy_steel_ball_is_a_steel_sphere_of_its_named_diameter():
+    """Consistency: each long-pulse ball's mass (kg) is steel's density times the volume of a sphere of its radius
+    (m), and the radius is half the diameter in its name (mm)."""
+    from emulator.stimuli import MATERIAL_DENSITY_KG_PER_M3
+
+    for name, (mass, radius) in HEAVY_STEEL_SPHERES.items():
+        assert radius == pytest.approx(float(name.split()[0]) / 2e3, rel=1e-12), name
+        assert mass == pytest.approx(MATERIAL_DENSITY_KG_PER_M3["steel"] * 4 / 3 * np.pi * radius**3, rel=1e-12)
+
+
+def test_no_height_in_air_gives_a_sphere_its_terminal_speed():
+    """A fall through air approaches the terminal speed and never reaches it: asked for exactly that speed,
+    height_in_air answers inf (at once: it must not search for a height forever); just below it, a finite height
+    above the vacuum one v²/2g (m)."""
+    from bench.verification.claims.impact import D_SPHERES, height_in_air
+    from emulator.mechanics import GRAVITY_M_PER_S2, terminal_speed_m_per_s
+
+    mass, radius = D_SPHERES["0.45 mm solder ball"]
+    v = terminal_speed_m_per_s(mass, radius)
+    assert height_in_air(mass, radius, v) == np.inf
+    assert (0.9 * v) ** 2 / (2 * GRAVITY_M_PER_S2) < height_in_air(mass, radius, 0.9 * v) < np.inf
+
+
+def test_the_threshold_speed_is_where_ds_rule_first_detects_the_noise_free_ring(bench, sigma):
+    """Consistency with analysis.detected_in_window (D's rule: > 3 samples beyond 4σ in 100 ms at 2200 S/s): the
+    noise-free PAC of the 0.45 mm solder ball landing at its threshold speed is detected, at 0.98 of it is not."""
+    from bench.verification.analysis import detected_in_window
+    from bench.verification.claims.impact import D_SPHERES, landing_at
+
+    name = "0.45 mm solder ball"
+    v = threshold_speeds(bench, sigma, spheres={name: D_SPHERES[name]})[name]
+
+    def detected(speed):
+        t, x = bench.analog_pac_bits([landing_at(bench, 0.05, *D_SPHERES[name], speed)], 0.15, rate_Hz=2200.0)
+        return detected_in_window(x - x[t < 0.045].mean(), t, 0.05, 0.0, sigma)
+
+    assert detected(v) and not detected(0.98 * v)
+
+
+@pytest.mark.parametrize("name", ["5/64 in aluminum bearing", "1 mm steel bearing"])
+def test_the_ring_amplitude_is_the_impulse_through_the_chain_to_within_the_pulses_length(bench, name):
+    """Derived (predicted_ring_amplitude_bits: the unrelaxed force slope, the resonance, the stage-1 second-order
+    Butterworth |H| = 1/√(1 + (f/fc)⁴) and the stage-2 high-pass at the ringing frequency): the fitted ring of the
+    noise-free analog PAC after a 7 cm drop is that of the impulse m·v·(1 + e) to 2.5 % (the Hertz pulse's length,
+    ≤ 1 % here, is the remainder); the claim row allows 10 %, within which a first-order low-pass's 4 % fits."""
+    from bench.verification.claims.impact import predicted_ring_amplitude_bits, ring
+
+    fit, d = ring(bench, name)
+    impulse = d.mass_kg * d.impact_speed_m_per_s * (1 + bench.params.impact_restitution)
+    assert fit.amplitude / predicted_ring_amplitude_bits(bench, impulse) == pytest.approx(1.0, abs=0.025)
