@@ -81,3 +81,19 @@ def test_builds_of_one_output_at_once_each_write_a_temporary_of_their_own(tmp_pa
     for t in threads:
         t.join()
     assert results == [out, out] and len(set(names)) == 2 and out.read_text() == "built"
+
+
+def test_a_compiler_failing_after_writing_part_of_its_output_leaves_nothing(tmp_path, monkeypatch):
+    """cc removes its own output when it fails, but a compiler killed mid-write, or another toolchain, may not: the
+    half-written temporary file is removed with the failure, and the output never appears."""
+    def failing_cc(cmd, **kw):
+        Path(cmd[cmd.index("-o") + 1]).write_text("half")
+
+        class Failed:
+            returncode, stderr = 1, "killed"
+        return Failed()
+
+    monkeypatch.setattr(native.subprocess, "run", failing_cc)
+    with pytest.raises(BuildError, match="does not compile:\nkilled"):
+        native.compile_c([tmp_path / "x.c"], tmp_path / "out" / "lib.so")
+    assert not list((tmp_path / "out").iterdir())
