@@ -366,11 +366,12 @@ class SensorParams:
 PARAMETER_FIELDS = {f.name: f for f in dataclasses.fields(SensorParams)}
 
 
-def check_parameter(name: str, value, where: str) -> None:
-    """Raise ValueError naming ``where``, the value and the allowed range if ``value`` is out of range."""
+def check_parameter(name: str, value, where: str, spell=repr) -> None:
+    """Raise ValueError naming ``where``, the value and the allowed range if ``value`` is out of range; ``spell``
+    writes the value (Python's ``repr``; a scene file's caller passes its TOML spelling)."""
     meta = PARAMETER_FIELDS[name].metadata
     lo, hi = meta["range"]
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{where} = {value!r}: must be a finite number in {meta['unit']} ({lo} to {hi})")
+        raise ValueError(f"{where} = {spell(value)}: must be a finite number in {meta['unit']} ({lo} to {hi})")
     if not lo <= value <= hi:
-        raise ValueError(f"{where} = {value!r} {meta['unit']}: allowed range is {lo} to {hi} {meta['unit']}")
+        raise ValueError(f"{where} = {spell(value)} {meta['unit']}: allowed range is {lo} to {hi} {meta['unit']}")

@@ -129,25 +129,51 @@ def seed_of_serial(serial: str) -> int | None:
     """The unit seed a serial number stands for: ``BTU`` + 13 digits is that seed, and so is ``BTSP`` + 12 digits
     (the serial a BioTac SP of that unit answers, so a serial read from an SP gives back its unit); the nominal
     serial is None; any other serial starting with "BT" seeds the draw through a hash of its text."""
-    check_serial(serial)
+    if problem := serial_problem(serial):
+        raise ValueError(f"serial {_shown(serial)}: {problem}")
     if serial == NOMINAL_SERIAL:
         return None
-    m = _SEED_SERIAL.match(serial) or _SP_SEED_SERIAL.match(serial)
-    if m:
-        seed = int(m.group(1))
-        if seed > MAX_UNIT_SEED:
-            raise ValueError(f"serial {serial!r}: unit seed {seed} is above {MAX_UNIT_SEED}")
-        return seed
+    named = _named_seed(serial)
+    if named is not None:
+        return named  # (in range: serial_problem checked it)
     return int.from_bytes(hashlib.sha256(serial.encode()).digest()[:4], "little") & MAX_UNIT_SEED
 
 
-def check_serial(serial) -> None:
-    """ValueError unless ``serial`` is a serial number: "BT" then 1 to 14 letters, digits, '-' or '_'."""
+def _form_problem(serial) -> str | None:
     if (not isinstance(serial, str) or not serial.startswith(SERIAL_PREFIX) or not 3 <= len(serial) <= MAX_SERIAL_LENGTH
             or not all(c.isascii() and (c.isalnum() or c in "-_") for c in serial)):
-        shown = repr(serial) if len(repr(serial)) <= 60 else repr(serial)[:50] + "…"
-        raise ValueError(f"serial {shown}: a serial number starts with {SERIAL_PREFIX!r} and has 3 to "
-                         f"{MAX_SERIAL_LENGTH} ASCII letters, digits, '-' or '_'")
+        return (f'a serial number starts with "{SERIAL_PREFIX}" and has 3 to {MAX_SERIAL_LENGTH} ASCII letters, '
+                f"digits, '-' or '_'")
+    return None
+
+
+def serial_problem(serial) -> str | None:
+    """Why ``serial`` is no unit's serial number (None if it is one), without quoting it, so a caller names it in its
+    own spelling (a scene file's TOML): not "BT" then 1 to 14 letters, digits, '-' or '_'; or a serial of the seed
+    form (``BTU`` + 13 digits, ``BTSP`` + 12) naming a seed above :data:`MAX_UNIT_SEED`."""
+    if problem := _form_problem(serial):
+        return problem
+    named = _named_seed(serial)
+    if named is not None and named > MAX_UNIT_SEED:
+        return f"unit seed {named} is above {MAX_UNIT_SEED}"
+    return None
+
+
+def _named_seed(serial: str) -> int | None:
+    """The seed a serial of the seed form names (in range or not), None for any other serial."""
+    m = _SEED_SERIAL.match(serial) or _SP_SEED_SERIAL.match(serial)
+    return int(m.group(1)) if m else None
+
+
+def _shown(serial) -> str:
+    return repr(serial) if len(repr(serial)) <= 60 else repr(serial)[:50] + "…"
+
+
+def check_serial(serial) -> None:
+    """ValueError unless ``serial`` is a serial number: "BT" then 1 to 14 letters, digits, '-' or '_' (a seed it
+    names is checked by :func:`seed_of_serial`)."""
+    if problem := _form_problem(serial):
+        raise ValueError(f"serial {_shown(serial)}: {problem}")
 
 
 def unit(which=None, base: SensorParams | None = None) -> Unit:
@@ -163,7 +189,7 @@ def unit(which=None, base: SensorParams | None = None) -> Unit:
         which = int(which)
     if isinstance(which, bool) or not isinstance(which, (int, np.integer)) or not 0 <= which <= MAX_UNIT_SEED:
         raise ValueError(f"unit {which!r}: a unit seed 0 to {MAX_UNIT_SEED}, \"{NOMINAL}\", or a serial number "
-                         f"starting with {SERIAL_PREFIX!r}")
+                         f"starting with \"{SERIAL_PREFIX}\"")
     return Unit(serial_for(int(which)), draw_params(int(which), base), int(which))
 
 

@@ -886,7 +886,7 @@ def _check_impact_detection(c: _Checker, sequence, slot_rate: float, duration: f
 
 def _unit_value(c: _Checker, table: dict, where: str):
     """``table["unit"]``: a unit seed (whole number), "nominal", or a serial number ("BT..."); None if invalid."""
-    from emulator.units import MAX_UNIT_SEED, NOMINAL, SERIAL_PREFIX, seed_of_serial
+    from emulator.units import MAX_UNIT_SEED, NOMINAL, SERIAL_PREFIX, serial_problem
 
     v = table.get("unit", NOMINAL)
     if isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= MAX_UNIT_SEED:
@@ -894,12 +894,10 @@ def _unit_value(c: _Checker, table: dict, where: str):
     if isinstance(v, str) and v == NOMINAL:
         return v
     if isinstance(v, str) and v.startswith(SERIAL_PREFIX):
-        try:
-            seed_of_serial(v)  # a valid serial, and a seed in range if it names one
-            return v
-        except ValueError as e:
-            c.problems.append(f"{where}.unit = {_r(v)}: {_cut(str(e))}")
+        if problem := serial_problem(v):  # a valid serial, and a seed in range if it names one
+            c.problems.append(f"{where}.unit = {_r(v)}: {problem}")
             return None
+        return v
     c.problems.append(f"{where}.unit = {_r(v)}: a unit seed 0 to {MAX_UNIT_SEED} (e.g. unit = 17), \"{NOMINAL}\", "
                       f"or a serial number starting with \"{SERIAL_PREFIX}\" (biotac-bench units)")
     return None
@@ -934,7 +932,7 @@ def _sensor_table(c: _Checker, table: dict, where: str, duration, extra=()) -> _
                 c.problems.append(f"{where}.{k} = {_r(v)}: allowed range is {lo} to {hi} {unit_}")
                 continue
             try:
-                check_parameter(k, v, where=f"{where}.{k}")
+                check_parameter(k, v, where=f"{where}.{k}", spell=_r)
                 changes[k] = v
             except (ValueError, TypeError, OverflowError) as e:
                 c.problems.append(_cut(str(e)))

@@ -99,3 +99,18 @@ def test_an_experiment_files_message_shows_the_value_as_toml_does(tmp_path):
     with pytest.raises(E.ExperimentError) as e:
         E.load_experiment(f)
     assert "pilot.trials = true: must be int" in str(e.value)
+
+
+@pytest.mark.parametrize("table, shown", [
+    ('unit = "BT!x"', 'sensor.unit = "BT!x": a serial number starts with "BT" and has 3 to 16'),
+    ('unit = "BTU9999999999999"', 'sensor.unit = "BTU9999999999999": unit seed 9999999999999 is above'),
+    ('inflation_volume_mL = "x"', 'sensor.inflation_volume_mL = "x": must be a finite number in mL'),
+    ("inflation_volume_mL = true", "sensor.inflation_volume_mL = true: must be a finite number in mL"),
+])
+def test_a_scene_message_about_a_sensors_unit_or_parameter_speaks_toml(table, shown):
+    """A bad serial or parameter is named once, as the file spells it: the emulator's own check quoted it again in
+    Python's spelling (``sensor.unit = "BT!x": serial 'BT!x': ... starts with 'BT'``, ``= True``)."""
+    with pytest.raises(SceneError) as e:
+        parse_scene_text(f'[scene]\nname = "s"\nduration_s = 1.0\n[sensor]\n{table}\n')
+    (problem,) = e.value.problems
+    assert problem.startswith(shown) and "serial '" not in problem and "True" not in problem, problem

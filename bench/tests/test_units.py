@@ -242,7 +242,7 @@ unit = "BTU0000000000004"
     ("[sensor]\nunit = -1\n", "sensor.unit = -1: a unit seed 0 to 2147483647"),
     ("[sensor]\nunit = 1.5\n", "sensor.unit = 1.5"),
     ("[sensor]\nunit = \"XX12\"\n", 'sensor.unit = "XX12"'),
-    ("[sensor]\nunit = \"BT$$\"\n", "a serial number starts with 'BT'"),
+    ("[sensor]\nunit = \"BT$$\"\n", 'sensor.unit = "BT$$": a serial number starts with "BT"'),
     ("[sensor]\nvariant = \"biotac-xl\"\n", 'sensor.variant = "biotac-xl": must be one of: biotac, biotac-sp'),
     ("[[sensors]]\nindex = 1\n", "sensors[0].index = 1: sensor 1 is described by the [sensor] table"),
     ("[[sensors]]\nindex = 6\n", "sensors[0].index = 6: allowed range is 2 to 5"),
