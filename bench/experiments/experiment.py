@@ -139,6 +139,26 @@ def load_experiment(path: str | Path) -> ExperimentSpec:
                             str(path))
 
 
+#: how a message names the kind of value a field of an experiment file takes (as the scene's messages do)
+_KIND_NAMES = {int: "a whole number", float: "a number", bool: "true or false"}
+#: at most this many bad items of one list are named, each a problem of its own (then how many more)
+MAX_ITEMS_NAMED = 5
+
+
+def _whole(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def item_problems(where: str, items: list, ok, what: str) -> list[str]:
+    """One problem per item of ``items`` (the list ``where`` of a file) that ``ok`` refuses, naming it by index and
+    value and saying ``what`` an item is; at most :data:`MAX_ITEMS_NAMED`, then how many more."""
+    bad = [(i, v) for i, v in enumerate(items) if not ok(v)]
+    out = [f"{where}[{i}] = {spelled(v)}: must be {what}" for i, v in bad[:MAX_ITEMS_NAMED]]
+    if len(bad) > MAX_ITEMS_NAMED:
+        out.append(f"{where}: {len(bad) - MAX_ITEMS_NAMED} more item(s) refused for the same reason")
+    return out
+
+
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
     from bench.textures.library import library_path, listing_command, load_library, named_problems
@@ -160,7 +180,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         elif not isinstance(v, dict):
             problems.append(f"[{k}] must be a table")
         else:
-            problems += [f"{k}: unknown field {f!r}; known: {', '.join(sorted(known[k]))}" for f in v if f not in known[k]]
+            problems += [f"{k}: unknown field {spelled(f)}; known: {', '.join(sorted(known[k]))}" for f in v if f not in known[k]]
     if problems:
         raise ExperimentError(source, problems)
     spec = ExperimentSpec(source=source)
@@ -185,12 +205,12 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         if kind is float and isinstance(v, int) and not isinstance(v, bool):
             v = float(v)  # 2 means 2.0
         ok = isinstance(v, kind) and not isinstance(v, bool) if kind is not bool else isinstance(v, bool)
-        if ok and lo is not None and not (lo <= v <= hi):
-            ok = False
         if not ok:
             rng = f" ({lo} to {hi})" if lo is not None else ""
-            problems.append(f"{table}.{key} = {spelled(v)}: must be "
-                            f"{kind.__name__ if isinstance(kind, type) else kind}{rng}")
+            problems.append(f"{table}.{key} = {spelled(v)}: must be {_KIND_NAMES[kind]}{rng}")
+            return default
+        if lo is not None and not (lo <= v <= hi):
+            problems.append(f"{table}.{key} = {spelled(v)}: allowed range is {lo} to {hi}")
             return default
         return v
 
@@ -200,8 +220,11 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         v = t[table][key]
         if v == "all":
             return None
-        if not isinstance(v, list) or not v or not all(isinstance(n, int) and not isinstance(n, bool) for n in v):
+        if not isinstance(v, list) or not v:
             problems.append(f"{table}.{key} = {spelled(v)}: a list of texture numbers, or \"all\"")
+            return default
+        if bad := item_problems(f"{table}.{key}", v, lambda n: _whole(n), "a texture number (a whole number)"):
+            problems.extend(bad)
             return default
         missing = [n for n in v if n not in lib]
         if missing:
@@ -215,10 +238,11 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     else:
         spec.name = t["experiment"].get("name", spec.name)
     spec.seed = get("experiment", "seed", int, 0, 2**63 - 1, spec.seed)
-    fid = get("experiment", "fidelity", str, default=spec.fidelity)
-    if fid not in PROFILES:
+    fid = t["experiment"].get("fidelity", spec.fidelity)
+    if not isinstance(fid, str) or fid not in PROFILES:
         problems.append(f"experiment.fidelity = {spelled(fid)}: one of {', '.join(PROFILES)}")
-    spec.fidelity = fid
+    else:
+        spec.fidelity = fid
     every = [n for n in lib if n <= 117]  # "all": the 117 textures of D's library
     spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or every
     if len(spec.pilot_textures) < 2:
@@ -227,9 +251,11 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.pilot_trials = get("pilot", "trials", int, 2, 100, spec.pilot_trials)
     mv = t["pilot"].get("movements")
     if mv is not None and mv != "all":
-        if not isinstance(mv, list) or len(mv) < 3 or not all(isinstance(m, int) and not isinstance(m, bool)
-                                                              and 0 <= m < 36 for m in mv):
+        if not isinstance(mv, list) or len(mv) < 3:
             problems.append(f"pilot.movements = {spelled(mv)}: \"all\" or a list of at least 3 grid ids 0..35")
+        elif bad := item_problems("pilot.movements", mv, lambda m: _whole(m) and 0 <= m < 36,
+                                  "a grid id, a whole number 0 to 35"):
+            problems.extend(bad)
         elif listed_twice(mv):
             problems.append(f"pilot.movements: grid id(s) {listed_twice(mv)} listed twice")
         else:

@@ -36,9 +36,9 @@ def test_shipped_experiment_files_validate():
     ({"exploration": {"strategies": ["psychic"]}}, ["exploration.strategies"]),
     ({"exploration": {"pair_threshold": 1.5}}, ["exploration.pair_threshold = 1.5"]),
     ({"trainig": {}}, ["unknown table [trainig]"]),
-    ({"training": {"trails": 5}}, ["training: unknown field 'trails'"]),
+    ({"training": {"trails": 5}}, ['training: unknown field "trails"']),
     ({"validation": {"pairs": [[2, 3, 4]]}}, ["validation.pairs"]),
-    ({"pilot": {"movements": [0, 99, 1]}}, ["pilot.movements"]),
+    ({"pilot": {"movements": [0, 99, 1]}}, ["pilot.movements[1] = 99: must be a grid id, a whole number 0 to 35"]),
     ({"training": {"replace_at": 0.0}}, ["training.replace_at = 0.0", "0.01 to 1.0"]),
     ({"validation": {"pair_choice": "nearest"}}, ['validation.pair_choice = "nearest"', '"similar-description"']),
     ({"validation": {"pairs": [[2, 2]]}}, ["validation.pairs", "[[2, 2]]", "with itself"]),
@@ -50,7 +50,7 @@ def test_shipped_experiment_files_validate():
     ({"experiment": {"name": "."}}, ['experiment.name = "."']),
     ({"experiment": {"name": "x" * 300}}, ["experiment.name", "1 to 100"]),
     ({"pilot": {"textures": [30]}}, ["pilot.textures = [30]", "at least 2"]),
-    ({"pilot": {"movements": [True, False, 5]}}, ["pilot.movements"]),
+    ({"pilot": {"movements": [True, False, 5]}}, ["pilot.movements[0] = true", "pilot.movements[1] = false"]),
     ({"validation": {"pairs": [[True, 2]]}}, ["validation.pairs"]),
     ({"exploration": {"pair_simulations": 1}}, ["exploration.pair_simulations = 1", "2 to"]),
     ({"exploration": {"pair_simulations": 999}}, ["exploration.pair_simulations = 999", "even"]),
@@ -508,7 +508,7 @@ def test_an_experiment_files_noise_scale_hint_offers_only_scales_the_file_takes(
     for k, refused in ((float(m.group(1)), False), (10.0, False), (10.01, True)):
         data = {"experiment": {"name": "x"}, "sensor": {"noise_scale": k}}
         if refused:
-            with pytest.raises(E.ExperimentError, match=r"sensor.noise_scale = 10.01: must be float \(0.0 to 10.0\)"):
+            with pytest.raises(E.ExperimentError, match=r"sensor.noise_scale = 10.01: allowed range is 0.0 to 10.0"):
                 E.parse_experiment(data, "x.toml")
         else:
             assert E.parse_experiment(data, "x.toml").noise_scale == k
@@ -534,3 +534,27 @@ def test_a_trial_with_an_undefined_property_is_kept_in_the_cache_and_refused_by_
                                                 r"\(PAC is constant"):
         E.table_from_rows([good, row])
     assert len(E.table_from_rows([good])) == 3
+
+
+@pytest.mark.parametrize("section, expected", [
+    ({"pilot": {"trials": 2.5}}, ["pilot.trials = 2.5: must be a whole number (2 to 100)"]),
+    ({"pilot": {"trials": 101}}, ["pilot.trials = 101: allowed range is 2 to 100"]),
+    ({"training": {"replace_at": "half"}}, ['training.replace_at = "half": must be a number (0.01 to 1.0)']),
+    ({"training": {"wear": 1}}, ["training.wear = 1: must be true or false"]),
+    ({"experiment": {"fidelity": 3}}, ["experiment.fidelity = 3: one of fast, default, reference"]),
+    ({"pilot": {"movements": [0, 1, "2", 3.0]}},
+     ['pilot.movements[2] = "2": must be a grid id, a whole number 0 to 35',
+      "pilot.movements[3] = 3.0: must be a grid id, a whole number 0 to 35"]),
+    ({"pilot": {"textures": [1, 2, [3]]}}, ["pilot.textures[2] = [3]: must be a texture number (a whole number)"]),
+    ({"pilot": {"movements": [0, 1, 2] + [-1] * 9}},
+     [f"pilot.movements[{i}] = -1: must be a grid id, a whole number 0 to 35" for i in range(3, 8)]
+     + ["pilot.movements: 4 more item(s) refused for the same reason"]),
+])
+def test_an_experiment_files_messages_name_kinds_in_words_and_each_bad_item_of_a_list(section, expected):
+    """A field of the wrong kind is named in words as a scene's are ("a whole number", not Python's "int"), a value
+    out of range says the range, and a bad item of a list is named by index and value (at most five of them, then
+    how many more): "pilot.movements = [...]: a list of grid ids" left the user to find which."""
+    data = {**section, "experiment": {"name": "x", **section.get("experiment", {})}}
+    with pytest.raises(E.ExperimentError) as e:
+        E.parse_experiment(data, "x.toml")
+    assert e.value.problems == expected, e.value.problems

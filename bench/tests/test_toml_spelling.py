@@ -98,7 +98,7 @@ def test_an_experiment_files_message_shows_the_value_as_toml_does(tmp_path):
     f.write_text('[experiment]\nname = "x"\n[pilot]\ntrials = true\n')
     with pytest.raises(E.ExperimentError) as e:
         E.load_experiment(f)
-    assert "pilot.trials = true: must be int" in str(e.value)
+    assert "pilot.trials = true: must be a whole number (2 to 100)" in str(e.value)
 
 
 @pytest.mark.parametrize("table, shown", [
