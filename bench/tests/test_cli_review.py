@@ -189,7 +189,7 @@ def test_a_repository_path_given_from_another_folder_gets_the_full_path(tmp_path
 # ------------------------------------------------------------------------------------------ textures
 @unit
 @pytest.mark.parametrize("query, words", [("999", ["no texture number 999", "closest: "]),
-                                          ("burlapp", ["no texture named 'burlapp'", "T100 'burlap'"])])
+                                          ("burlapp", ['no texture named "burlapp"', 'T100 "burlap"'])])
 def test_an_unknown_texture_names_the_flag_not_a_broken_library(query, words, capsys):
     status, _, err = invoke(["textures", "--show", query], capsys)
     assert status == 2 and err.startswith("error: --show: ") and all(w in err for w in words), err
@@ -255,7 +255,7 @@ def test_a_listing_suggested_for_a_library_of_ones_own_lists_that_library(tmp_pa
     monkeypatch.chdir(tmp_path)
     (tmp_path / "my lib.json").write_text(one.replace('"name": "burlap"', '"name": "my burlap"'))
     status, _, err = invoke(["textures", "--library", "my lib.json", "--show", "zzzz"], capsys)
-    assert status == 2 and "no texture named 'zzzz'" in err, err
+    assert status == 2 and 'no texture named "zzzz"' in err, err
     (typed,) = re.findall(r"`(biotac-bench [^`]*)` lists them all", err)
     status, out, err = invoke(shlex.split(typed)[1:], capsys)
     assert status == 0 and "T100  my burlap" in out and "1 texture(s)" in out, (typed, err)

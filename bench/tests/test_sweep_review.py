@@ -67,7 +67,7 @@ def test_a_texture_or_movement_listed_twice_is_refused():
     (["--textures", "902,T902"], ["--textures", "[902] listed twice"]),
     (["--textures", "902", "--movements", "7,14,7"], ["--movements", "[7] listed twice"]),
     (["--textures", "999"], ["--textures: no texture number 999", "closest"]),
-    (["--textures", "43,no such thing"], ["--textures: no texture named 'no such thing'"]),
+    (["--textures", "43,no such thing"], ['--textures: no texture named "no such thing"']),
 ])
 def test_bad_textures_and_movements_name_the_flag_not_the_library_file(argv, words, tmp_path, capsys):
     assert cli.main(["texture-sweep", *argv, "--out", str(tmp_path / "o")]) == 2

@@ -270,13 +270,15 @@ def test_lookup_by_number_or_name():
 
 
 @pytest.mark.parametrize("query, fragments", [
-    ("velcro hook", ["no texture named 'velcro hook'", "T10 'velcro hooks'", "T11 'velcro loops'"]),
-    ("aluminium", ["no texture named 'aluminium'", "T45 'milled aluminum'", "T46 'polished aluminum'"]),
-    ("zzzz", ["no texture named 'zzzz'", "biotac-bench textures"]),
-    (999, ["no texture number 999", "T1-T117"]),
-    (True, ["give a number"]),
+    ("velcro hook", ['no texture named "velcro hook"', 'T10 "velcro hooks"', 'T11 "velcro loops"']),
+    ("aluminium", ['no texture named "aluminium"', 'T45 "milled aluminum"', 'T46 "polished aluminum"']),
+    ("zzzz", ['no texture named "zzzz"', "biotac-bench textures"]),
+    (999, ["no texture number 999", "T1-T117", 'closest: T117 "faux fur", T901 "60-grit sandpaper"']),
+    (True, ['texture true: give a number (10, "T10") or a name ("velcro hooks")']),
 ])
 def test_lookup_errors_list_close_matches(query, fragments):
+    """Names asked for and names offered are spelled as the library file and every other message spells them
+    (``"velcro hooks"``, not Python's ``'velcro hooks'``)."""
     with pytest.raises(TextureError) as e:
         texture(query)
     assert all(x in str(e.value) for x in fragments), str(e.value)
@@ -313,7 +315,7 @@ def test_cli_errors_print_cleanly(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("error: --group 'plastics'") and "coarse weaves" in err and "Traceback" not in err
     assert cli.main(["textures", "--show", "velcro hook"]) == 2
-    assert "T10 'velcro hooks'" in capsys.readouterr().err
+    assert 'T10 "velcro hooks"' in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text(_edit("mu_kinetic = 0.48", "mu_kinetic = 0.9"), encoding="utf-8")
     assert cli.main(["textures", "--library", str(bad)]) == 2

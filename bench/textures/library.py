@@ -551,7 +551,7 @@ def _lookup(lib, source: str, q) -> Texture:
     """Texture ``q`` (number or name) of ``lib`` (the textures of the file ``source``), or
     :class:`UnknownTextureError` saying what the library holds and what comes close."""
     if isinstance(q, bool) or not isinstance(q, (int, str)):
-        raise TextureError(source, [f"texture {q!r}: give a number (10, 'T10') or a name ('velcro hooks')"])
+        raise TextureError(source, [f'texture {spelled(q)}: give a number (10, "T10") or a name ("velcro hooks")'])
     m = _NUMBER_RE.match(q) if isinstance(q, str) else None
     if isinstance(q, int) or m:
         n = q if isinstance(q, int) else int(m.group(1))
@@ -560,7 +560,7 @@ def _lookup(lib, source: str, q) -> Texture:
         nums = sorted(lib)
         near = sorted(nums, key=lambda k: abs(k - n))[:3]
         raise UnknownTextureError(source, q, f"no texture number {n}; the library holds {_ranges(nums)}; closest: "
-                                  + ", ".join(f"T{k} {lib[k].name!r}" for k in sorted(near)))
+                                  + ", ".join(_label(k, lib[k].name) for k in sorted(near)))
     by_name = {t.name.casefold(): t for t in lib.values()}
     key = q.strip().casefold()
     if key in by_name:
@@ -568,9 +568,9 @@ def _lookup(lib, source: str, q) -> Texture:
     names = list(by_name)
     near = difflib.get_close_matches(key, names, n=5, cutoff=0.5)
     near += [nm for nm in names if key and key in nm and nm not in near][:5 - len(near)]
-    hint = ("close matches: " + ", ".join(f"T{by_name[nm].number} {by_name[nm].name!r}" for nm in near)
+    hint = ("close matches: " + ", ".join(_label(by_name[nm].number, by_name[nm].name) for nm in near)
             if near else f"no close matches (`{listing_command(source)}` lists them all)")
-    raise UnknownTextureError(source, q, f"no texture named {q!r}; {hint}")
+    raise UnknownTextureError(source, q, f"no texture named {spelled(q)}; {hint}")
 
 
 def texture_record(t: Texture) -> dict:
