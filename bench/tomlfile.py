@@ -170,12 +170,13 @@ def _spell(v) -> str:
     return repr(v)  # not from a TOML file (None, an object a Python caller passed): Python's spelling
 
 
-def spelled(v, limit: int = 80) -> str:
+def spelled(v, limit: int = 80, note: bool = True) -> str:
     """``v`` for a message as a TOML file spells it (``"x"``, ``true``, ``[1, "a"]``, ``{a = 1}``, ``inf``, a date
     as written), so a message about a TOML file speaks TOML back; a value TOML cannot hold (None, an object)
     keeps its ``repr``.  Text holding a lone surrogate (a JSON library's ``"\\ud800"``) is shown with U+FFFD in its
     place, and a note after it names the surrogates as JSON escapes them.  Shortened past ``limit`` characters
-    (:func:`bench.errors.shortened`; the note after it, at most three surrogates named)."""
+    (:func:`bench.errors.shortened`; the note after it, at most three surrogates named).  ``note=False`` leaves the
+    note out: for a label repeated before problems, one of which shows the value with its note."""
     try:
         text = _spell(v)
         found: dict = {}
@@ -183,7 +184,7 @@ def spelled(v, limit: int = 80) -> str:
     except (RecursionError, ValueError):
         text, found = f"<{type(v).__name__}>", {}
     text = shortened(text, limit)
-    if not found:
+    if not found or not note:
         return text
     named = ", ".join(f"\\u{ord(ch):04x}" for ch in list(found)[:3]) + (", …" if len(found) > 3 else "")
     return (f"{text} ({REPLACEMENT} stands for the lone surrogate{'s' if len(found) > 1 else ''} {named}, which TOML "

@@ -342,6 +342,20 @@ def test_a_json_library_with_a_lone_surrogate_in_a_name_is_refused_by_field(tmp_
                                           and "printable" in p for p in e.value.problems), e.value.problems
 
 
+def test_a_lone_surrogates_note_shows_once_per_problem_though_the_name_labels_each(tmp_path):
+    """A JSON texture named with a lone surrogate: each of its problems is labelled by the name (U+FFFD in the
+    surrogate's place), and the note saying which surrogate it stands for comes once, with the name's own problem
+    (it came twice in one line: after the label and after the value)."""
+    record = tomllib.loads(GOOD)["texture"][0] | {"name": "copy\ud800paper", "mu_kinetic": 9.0}
+    f = tmp_path / "lib.json"
+    f.write_text(json.dumps([record]), encoding="utf-8")
+    with pytest.raises(TextureError) as e:
+        load_library(f)
+    notes = [p.count("stands for the lone surrogate \\ud800") for p in e.value.problems]
+    assert len(notes) == 2 and sorted(notes) == [0, 1], e.value.problems
+    assert all(p.startswith(f'T{record["number"]} "copy\ufffdpaper": ') for p in e.value.problems), e.value.problems
+
+
 def test_a_json_library_with_a_key_given_twice_is_refused(tmp_path):
     """JSON keeps the last of two equal keys silently (TOML refuses them): the library refuses them too."""
     record = json.dumps(tomllib.loads(GOOD)["texture"][0])

@@ -152,8 +152,9 @@ def group_of(number: int) -> str | None:
 
 
 def _label(number: int, name) -> str:
-    """How problems name a texture: ``T10 "velcro hooks"`` (the name as the file spells it)."""
-    return f"T{number} {spelled(name)}" if isinstance(name, str) and name else f"T{number}"
+    """How problems name a texture: ``T10 "velcro hooks"`` (the name as the file spells it; a lone surrogate in it
+    as U+FFFD without :func:`spelled`'s note, which the name's own problem gives: the note once per message)."""
+    return f"T{number} {spelled(name, note=False)}" if isinstance(name, str) and name else f"T{number}"
 
 
 class _Checker:
@@ -284,7 +285,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     if isinstance(number, int) and not isinstance(number, bool):
         who = _label(number, name)
     else:  # no usable number: say where the table is
-        who = f"texture[{i}]" + (f" {spelled(name)}" if isinstance(name, str) and name else "")
+        who = f"texture[{i}]" + (f" {spelled(name, note=False)}" if isinstance(name, str) and name else "")
     n_before = len(c.problems)
     for k in t:
         if k not in KNOWN_FIELDS:
