@@ -180,11 +180,12 @@ def spelled(v, limit: int = 80, note: bool = True) -> str:
     try:
         text = _spell(v)
         found: dict = {}
-        _surrogates(v, found)
+        if note:
+            _surrogates(v, found)
     except (RecursionError, ValueError):
         text, found = f"<{type(v).__name__}>", {}
     text = shortened(text, limit)
-    if not found or not note:
+    if not found:
         return text
     named = ", ".join(f"\\u{ord(ch):04x}" for ch in list(found)[:3]) + (", …" if len(found) > 3 else "")
     return (f"{text} ({REPLACEMENT} stands for the lone surrogate{'s' if len(found) > 1 else ''} {named}, which TOML "
