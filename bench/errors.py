@@ -47,21 +47,23 @@ class BenchError(Exception):
     """Root of the bench's own errors."""
 
 
-class SceneError(BenchError, ValueError):
+class FileProblems(BenchError, ValueError):
+    """A file a user gave is invalid: ``source`` names it (as given), ``problems`` lists every problem found.  The
+    message shows the file's name :func:`escaped` (a path may hold a line break or a terminal's escape sequence)."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source, self.problems = source, problems
+        super().__init__(f"{escaped(str(source))}: {len(problems)} problem(s):\n"
+                         + "\n".join(f"  - {p}" for p in problems))
+
+
+class SceneError(FileProblems):
     """A scene file is invalid; ``problems`` lists every problem found (field, value, what is allowed)."""
 
-    def __init__(self, source: str, problems: list[str]):
-        self.source, self.problems = source, problems
-        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
 
-
-class TextureError(BenchError, ValueError):
+class TextureError(FileProblems):
     """A texture library file is invalid, or a texture asked for is not in it; ``problems`` lists every problem
     (texture, field, value, what is allowed)."""
-
-    def __init__(self, source: str, problems: list[str]):
-        self.source, self.problems = source, problems
-        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
 
 
 class BuildError(BenchError, RuntimeError):

@@ -21,11 +21,12 @@ def _cmd_serve(a) -> int:
         from bench.errors import SceneError
         from bench.hosts.scene_sensors import sensors_from_scene
         from bench.scenes.scene import load_scene
+        from bench.tomlfile import spelled
 
         scene = load_scene(a.scene)
         if scene.spi != "software":
-            raise SceneError(scene.source, [f"host.spi = {scene.spi!r}: the Cheetah adapter serves the software "
-                                            "SPI model only"])
+            raise SceneError(scene.source, [f"host.spi = {spelled(scene.spi)}: the Cheetah adapter serves the "
+                                            "software SPI model only"])
         kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
         what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' ("
                 + "; ".join(f"sensor {k} feels {stimuli_count(len(scene.sensor_spec(k).stimuli))}"

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from bench.cli.args import Terminated, sigterm_like_ctrl_c, stimuli_count
+from bench.errors import escaped
 from bench.paths import REPO, SCENES_DIR
 from emulator.fidelity import PROFILES
 
@@ -206,7 +207,7 @@ def _cmd_validate(a) -> int:
             in_all = sum(len(sc.sensor_spec(k).stimuli) for k in range(1, sc.n_sensors + 1))
             more = f", {sc.n_sensors} sensors ({stimuli_count(in_all)} in all)" if sc.n_sensors > 1 else ""
             n = f"{stimuli_count(len(sc.stimuli))}{' on sensor 1' if sc.n_sensors > 1 else ''}"
-            print(f"{f}: ok ({sc.name}, {sc.duration_s} s, {n}, fidelity "
+            print(f"{escaped(f)}: ok ({sc.name}, {sc.duration_s} s, {n}, fidelity "
                   f"{sc.fidelity}{more}{_before_running(sc)})")
         except SceneError as e:
             print(e, file=sys.stderr)
@@ -233,12 +234,13 @@ def shipped_scenes() -> dict[str, Path]:
 
 
 def shown_path(path: Path) -> str:
-    """``path`` as it works from the current folder: relative to it when inside it, else absolute."""
+    """``path`` as it works from the current folder: relative to it when inside it, else absolute (for a message:
+    :func:`bench.errors.escaped`)."""
     path = path.resolve()
     try:
-        return str(path.relative_to(Path.cwd().resolve()))
+        return escaped(str(path.relative_to(Path.cwd().resolve())))
     except ValueError:
-        return str(path)
+        return escaped(str(path))
 
 
 def scene_file(text: str) -> str:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, replaceable_report,
                             scheduler_address, sigterm_like_ctrl_c, strict_json, unit_choice, whole)
-from bench.errors import OutputNotWritten
+from bench.errors import OutputNotWritten, escaped
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.channels import DEFAULT_VARIANT, VARIANTS
 from emulator.fidelity import PROFILES
@@ -54,11 +54,12 @@ def _cmd_claims(a) -> int:
     from emulator.units import unit
 
     groups = a.only or list(CLAIM_GROUPS)
+    plots = escaped(a.plots or "")  # the folder as messages show it (a control character in it escaped)
     if a.plots:  # checked before anything runs: the plot needs the vibration group, and a folder it can write
         from bench.reporting.outdir import writable_folder
 
         if "vibration" not in groups:
-            raise ValueError(f"--plots {a.plots}: the frequency-sensitivity plot needs the vibration claims; add "
+            raise ValueError(f"--plots {plots}: the frequency-sensitivity plot needs the vibration claims; add "
                              f"--only vibration")
         writable_folder(a.plots, "--plots")
         from bench.reporting.plots import SENSITIVITY_PLOT
@@ -66,7 +67,7 @@ def _cmd_claims(a) -> int:
         try:  # only a plot this command wrote is replaced
             replaceable_report(b"\x89PNG", "a PNG plot")(str(Path(a.plots) / SENSITIVITY_PLOT))
         except argparse.ArgumentTypeError as e:
-            raise ValueError(f"--plots {a.plots}: {e}") from None
+            raise ValueError(f"--plots {plots}: {escaped(str(e))}") from None
     unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
@@ -106,9 +107,9 @@ def _cmd_claims(a) -> int:
         try:
             out = sensitivity_plot(claims, Path(a.plots))
         except OSError as e:
-            raise OutputNotWritten(f"--plots {a.plots}: {SENSITIVITY_PLOT} could not be written "
+            raise OutputNotWritten(f"--plots {plots}: {SENSITIVITY_PLOT} could not be written "
                                    f"({e.strerror or e}); the claims above ran and are reported") from None
-        print(f"wrote {out}", file=sys.stderr)
+        print(f"wrote {escaped(str(out))}", file=sys.stderr)
     return 0 if all(c.ok for c in claims) else 1
 
 

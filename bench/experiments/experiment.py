@@ -34,7 +34,7 @@ import numpy as np
 
 from bench import tomlfile
 from bench.tomlfile import spelled
-from bench.errors import BenchError
+from bench.errors import FileProblems
 from bench.experiments import design
 from bench.experiments import exploration as ex
 from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
@@ -67,12 +67,8 @@ def d_best_movement_ids() -> dict[str, int]:
             for p, (f, v) in D_BEST_MOVEMENTS.items()}
 
 
-class ExperimentError(BenchError, ValueError):
+class ExperimentError(FileProblems):
     """An experiment file is invalid; ``problems`` lists every problem (field, value, what is allowed)."""
-
-    def __init__(self, source: str, problems: list[str]):
-        self.source, self.problems = source, problems
-        super().__init__(f"{source}: {len(problems)} problem(s):\n" + "\n".join(f"  - {p}" for p in problems))
 
 
 @dataclass

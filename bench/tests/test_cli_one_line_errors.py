@@ -9,6 +9,7 @@ import argparse
 import pytest
 
 from bench.cli import main as cli
+from bench.paths import REPO
 
 pytestmark = pytest.mark.unit
 
@@ -84,3 +85,33 @@ def test_a_path_with_line_breaks_or_control_characters_stays_one_line(argv, tmp_
     (path,) = [a for a in argv if a.startswith(str(tmp_path))]
     shown = path.encode("unicode_escape").decode("ascii")
     assert f": {shown}: is a folder" in lines[0] and "\x1b" not in lines[0], lines
+
+
+@pytest.mark.parametrize("case", ["claims-plots-group", "claims-plots-in-the-way", "validate-bad-scene",
+                                  "validate-ok-line"])
+def test_a_path_with_control_characters_is_shown_escaped_in_command_messages(case, tmp_path, capsys):
+    """Messages a command writes after parsing (not argparse's, which escape already) show a path a user gave with
+    its control characters escaped: ``claims --plots`` refused, a scene file's problems and its "ok" line printed
+    the raw escape sequence (which acts on the terminal) or line break (which splits the line)."""
+    odd = tmp_path / "a\x1b[2Jb\nc"
+    if case.startswith("claims"):
+        if case.endswith("in-the-way"):
+            odd.mkdir()
+            (odd / "frequency_sensitivity.png").write_text("my notes")
+        argv = ["claims", "--quick", "--plots", str(odd), "--only", "vibration" if "way" in case else "scales"]
+    else:
+        odd = odd.with_suffix(".toml")
+        text = (REPO / "fixtures" / "scenes" / "taps.toml").read_text()
+        odd.write_text(text if case.endswith("ok-line") else "[scene]\nname = \"x\"\n")
+        argv = ["validate", str(odd)]
+    status = cli.main(argv)
+    out = capsys.readouterr()
+    shown = str(odd).encode("unicode_escape").decode("ascii")
+    printed = (out.out if case.endswith("ok-line") else out.err).splitlines()
+    assert status == {"validate-ok-line": 0, "validate-bad-scene": 1}.get(case, 2), out
+    named = f"error: --plots {shown}: " if case.startswith("claims") else f"{shown}: "
+    assert printed and printed[0].startswith(named) and "\x1b" not in out.out + out.err, printed
+    if case.startswith("claims"):
+        assert len(printed) == 1, printed
+    if case.endswith("in-the-way"):  # the plot's own path, in argparse's message passed on
+        assert f"{shown}/frequency_sensitivity.png: already there" in printed[0], printed

@@ -339,3 +339,13 @@ def test_explore_help_describes_every_ablation_from_its_registry(capsys):
     _, out, _ = invoke(["explore", "--help"], capsys)
     for name, (what, _) in ABLATIONS.items():
         assert re.search(rf"^  {name}: {re.escape(what)}$", out, re.M), name
+
+
+@unit
+def test_cheetah_serve_names_a_scenes_rtl_spi_as_the_file_spells_it(tmp_path, capsys):
+    """A scene whose [host] spi the adapter cannot serve is refused before serving, the value in TOML spelling (as
+    the pytest plugin's factory says it), not Python's ``'rtl'``."""
+    scene = tmp_path / "rtl.toml"
+    scene.write_text('[scene]\nname = "r"\nduration_s = 0.1\n[host]\nspi = "rtl"\n')
+    status, out, err = invoke(["cheetah", "serve", str(scene)], capsys)
+    assert status == 2 and 'host.spi = "rtl": the Cheetah adapter serves the software SPI model only' in err, err

@@ -527,7 +527,7 @@ class UnknownTextureError(TextureError):
         self.query, self.problem = query, problem
 
     def __str__(self) -> str:
-        return f"{self.problem} (library: {self.source})"
+        return f"{self.problem} (library: {escaped(str(self.source))})"
 
     def for_option(self, option: str) -> str:
         """The message for a command-line flag: ``--show: no texture number 999; the library holds ...``."""
