@@ -55,6 +55,7 @@ D_FIGURES = {"pairs accuracy %": 99.6, "pairs median moves": 3, "117-way accurac
 STRATEGY_NAMES = ("bayesian", "cycle", "random")
 #: the largest [sensor] noise_scale an experiment file may give (dimensionless; the sensor's own ranges allow 14.1)
 MAX_NOISE_SCALE = 10.0
+_MOST_NOISE_WHY = "the largest an experiment file takes"
 #: D's pilot picks (ch. 6) as (normal force N, velocity m/s), per property
 D_BEST_MOVEMENTS = {"traction": (1.26, 0.01), "roughness": (0.2, 0.0631), "fineness": (0.5, 0.025)}
 
@@ -120,7 +121,10 @@ def ablated(spec: ExperimentSpec, name: str) -> tuple[ExperimentSpec, str]:
     same = all(getattr(spec, k) == v for k, v in fields.items())
     diffs = ", ".join(f"{k} {getattr(spec, k)!r} → {v!r}" for k, v in fields.items()
                       if same or getattr(spec, k) != v)  # the fields it changes (all of them when none)
-    problem = noise_scale_problem(fields["noise_scale"]) if "noise_scale" in fields else None
+    problem = None
+    if "noise_scale" in fields:  # the hint: what the file's own value may be (the variant scales it)
+        factor = fields["noise_scale"] / spec.noise_scale if spec.noise_scale else 1.0
+        problem = noise_scale_problem(fields["noise_scale"], most=(MAX_NOISE_SCALE, _MOST_NOISE_WHY), factor=factor)
     if problem:
         raise ExperimentError(f"--ablation {name}", [f"sensor.noise_scale {spec.noise_scale!r} → "
                                                      f"{fields['noise_scale']!r}: {problem}"])
@@ -340,8 +344,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     spec.identify_all_textures = get("exploration", "identify_all_textures", bool, default=False)
     spec.fingerprints = get("skin", "fingerprints", bool, default=True)
     spec.noise_scale = get("sensor", "noise_scale", float, 0.0, MAX_NOISE_SCALE, 1.0)
-    noise_problem = noise_scale_problem(spec.noise_scale,
-                                        most=(MAX_NOISE_SCALE, "the largest an experiment file takes"))
+    noise_problem = noise_scale_problem(spec.noise_scale, most=(MAX_NOISE_SCALE, _MOST_NOISE_WHY))
     if noise_problem:
         problems.append(f"sensor.noise_scale = {spelled(spec.noise_scale)}: {noise_problem}")
     spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)

@@ -115,23 +115,31 @@ def noise_scale_range(base: SensorParams | None = None) -> tuple[tuple[float, st
 
 
 def noise_scale_problem(noise_scale: float, base: SensorParams | None = None,
-                        most: tuple[float, str] | None = None) -> str | None:
+                        most: tuple[float, str] | None = None, factor: float = 1.0) -> str | None:
     """Why the sensor ``base`` (default: nominal) cannot take ``noise_scale`` (None when it can): 0 turns every
     noise source off; any other scale must leave each scaled parameter inside its documented range
     (:func:`noise_scale_range`; the hint names the parameter that limits each end, and its ends, rounded inward
     to three digits, are scales the sensor takes; they hold 1, as ``base`` is a valid sensor). ``most``: the
     caller's own largest scale and what sets it (an experiment file's field), the hint's upper end when lower.
-    ``noise_scale`` is a scale factor (dimensionless)."""
+    ``factor``: ``noise_scale`` is the value a user gave × ``factor`` (an ablation's: double-noise, 2), and the
+    hint gives the values the user can give, each taken both as it is and × ``factor``.
+    ``noise_scale`` and ``factor`` are scale factors (dimensionless)."""
     try:
         _params(noise_scale, base)
     except ValueError as e:
         (lo, lo_name, lo_why), (hi, hi_name, hi_why) = noise_scale_range(base)
+        once = f" once ×{factor:g}"
+        if factor > 1:  # the given value's top: the sensor's top ÷ factor
+            hi, hi_why = hi / factor, hi_why + once
+        elif 0 < factor < 1:
+            lo, lo_why = lo / factor, lo_why + once
         if most is not None and most[0] < hi:
             hi, hi_name, hi_why = most[0], "", most[1]
         notes = "".join(f"; {_WHY[n]}" for n in dict.fromkeys((lo_name, hi_name)) if n in _WHY)
         lo_s, hi_s = f"{_three_digits(lo, up=True):g}", f"{_three_digits(hi, up=False):g}"
-        return (f"{e} — give 0 (every noise source off) or {lo_s}…{hi_s} (below {lo_s}, {lo_why}; above {hi_s}, "
-                f"{hi_why}{notes})")
+        given = f"values before ×{factor:g}; " if factor != 1 else ""
+        return (f"{e} — give 0 (every noise source off) or {lo_s}…{hi_s} ({given}below {lo_s}, {lo_why}; above "
+                f"{hi_s}, {hi_why}{notes})")
     return None
 
 

@@ -558,3 +558,24 @@ def test_an_experiment_files_messages_name_kinds_in_words_and_each_bad_item_of_a
     with pytest.raises(E.ExperimentError) as e:
         E.parse_experiment(data, "x.toml")
     assert e.value.problems == expected, e.value.problems
+
+
+def test_the_double_noise_hint_gives_the_range_of_the_files_own_noise_scale():
+    """The double-noise ablation doubles the file's noise_scale, so the file's value may be at most half the sensor's
+    top (14.1 / 2 = 7.07): the hint gave the sensor's range (…14.1), which the file's value, doubled, leaves.  The
+    hint's ends, typed into the file, run the ablation; just past its top end, the ablation is refused again."""
+    import re
+
+    def spec(k):
+        return E.parse_experiment({"experiment": {"name": "x"}, "sensor": {"noise_scale": k}}, "x.toml")
+
+    with pytest.raises(E.ExperimentError) as e:
+        E.ablated(spec(8.0), "double-noise")
+    m = re.search(r"give 0 \(every noise source off\) or ([0-9.e+-]+)…([0-9.e+-]+) \(values before ×2; ", str(e.value))
+    assert m, str(e.value)
+    lo, hi = float(m.group(1)), float(m.group(2))
+    assert hi == 7.07 and "passes its maximum 1e+06 Ω once ×2" in str(e.value), str(e.value)
+    for k in (lo, hi):
+        assert E.ablated(spec(k), "double-noise")[0].noise_scale == 2 * k
+    with pytest.raises(E.ExperimentError):
+        E.ablated(spec(hi * 1.001), "double-noise")
