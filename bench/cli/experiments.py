@@ -4,6 +4,7 @@ exploration experiment of D ch. 6, both on Dask."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from pathlib import Path
@@ -259,7 +260,7 @@ def _cmd_explore(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.experiment import ablated, identified_among, load_experiment, run_experiment, summary
     from bench.reporting.experiment_report import OUTPUT_FILES, trial_rows, write_outputs, write_text
-    from bench.reporting.outdir import FolderKind, writable_folder
+    from bench.reporting.outdir import FolderKind, made_folders, writable_folder
 
     if a.no_cache and a.cache is not None:
         raise ValueError(f"--cache {a.cache} with --no-cache: --no-cache runs every trial again and caches nothing; "
@@ -277,9 +278,10 @@ def _cmd_explore(a) -> int:
     keep = () if a.no_cache or a.out is None else tuple(filter(None, [_entry_inside(a.cache, a.out)]))
     # both checked before anything runs; the out folder is locked while the experiment runs
     folder = _open_out(a.out, f"out/explore/{spec.name}", a.force, kind, keep)
-    try:
+    # a cache folder this command makes, then refused or failed, is removed if empty (before --out is closed)
+    with contextlib.closing(folder), made_folders() as made:
         out = folder.path
-        cache = None if a.no_cache else writable_folder(a.cache, "--cache")
+        cache = None if a.no_cache else writable_folder(a.cache, "--cache", made)
         cluster = ClusterSpec.from_env(a.scheduler, a.workers)
         rows = []
         for label, sp, what in variants:
@@ -308,8 +310,6 @@ def _cmd_explore(a) -> int:
             print("\n".join(lines))
         else:
             print((out / "report.md").read_text())
-    finally:
-        folder.close()
     return 0
 
 

@@ -48,6 +48,14 @@ def _cmd_noise_budget(a) -> int:
 
 
 def _cmd_claims(a) -> int:
+    from bench.reporting.outdir import made_folders
+
+    with made_folders() as made:  # a --plots folder this command made, left empty by a refusal: removed
+        return _claims(a, made)
+
+
+def _claims(a, made: list) -> int:
+    """``claims``; ``made``: where the folders it makes are noted (:func:`bench.reporting.outdir.made_folders`)."""
     from bench.verification.claims import (CLAIM_GROUPS, Bench, format_spread_table, format_table, run_claims,
                                            run_claims_over_seeds)
 
@@ -61,7 +69,7 @@ def _cmd_claims(a) -> int:
         if "vibration" not in groups:
             raise ValueError(f"--plots {plots}: the frequency-sensitivity plot needs the vibration claims; add "
                              f"--only vibration")
-        writable_folder(a.plots, "--plots")
+        writable_folder(a.plots, "--plots", made)
         from bench.reporting.plots import SENSITIVITY_PLOT
 
         try:  # only a plot this command wrote is replaced
@@ -89,11 +97,10 @@ def _cmd_claims(a) -> int:
         from bench.campaigns.engine import ClusterSpec
         from bench.verification.claims.core import STARTS_A_CLUSTER
 
-        if not STARTS_A_CLUSTER.intersection(groups):
-            print(f"error: --workers and --scheduler go with --seeds or a group that runs a campaign of its own "
-                  f"({', '.join(sorted(STARTS_A_CLUSTER))}); one seed of the other groups runs in this process",
-                  file=sys.stderr)
-            return 2
+        if not STARTS_A_CLUSTER.intersection(groups):  # (an error: a --plots folder made is removed)
+            raise ValueError(f"--workers and --scheduler go with --seeds or a group that runs a campaign of its own "
+                             f"({', '.join(sorted(STARTS_A_CLUSTER))}); one seed of the other groups runs in this "
+                             f"process")
         cluster = ClusterSpec.from_env(a.scheduler, a.workers)
     bench = Bench(fidelity=a.fidelity, seed=a.seed, quick=a.quick, cluster=cluster, **unit_kw)
     claims = run_claims(bench, groups, progress=progress)

@@ -424,18 +424,36 @@ def _remove_made(made: list[tuple[Path, tuple[int, int]]]) -> None:
             return
 
 
-def writable_folder(path, flag: str = "--out") -> Path:
+@contextlib.contextmanager
+def made_folders():
+    """A list for :func:`writable_folder` (``made=``) to note the folders it creates in; if the block ends in an
+    error (the command refused, failed or stopped), each of them still empty is removed, innermost first, as
+    :func:`_remove_made` does (never one the command did not make, nor one replaced meanwhile), so a command refused
+    after checking its folders leaves none behind.  A command that ran keeps them (a stage cache is kept across
+    runs, even one a full disk left empty)."""
+    made: list[tuple[Path, tuple[int, int]]] = []
+    try:
+        yield made
+    except BaseException:
+        _remove_made(made)
+        raise
+
+
+def writable_folder(path, flag: str = "--out", made: list | None = None) -> Path:
     """Check a shared folder before a long job runs (an experiment's stage cache, which runs share on purpose):
     :func:`_make_folder`'s checks and a write probe — :class:`OutDirError` naming ``flag`` otherwise (the folders it
     made for the probe removed again). No lock, nothing refused or removed (each file goes in under a temporary
-    name, renamed into place)."""
-    made: list[tuple[Path, tuple[int, int]]] = []
-    p = _make_folder(path, flag, made)
+    name, renamed into place).  ``made`` (:func:`made_folders`): where the folders it creates are noted, to be
+    removed if the command ends leaving them empty."""
+    new: list[tuple[Path, tuple[int, int]]] = []
+    p = _make_folder(path, flag, new)
     try:
         fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)
         os.close(fd)
         os.unlink(name)
     except OSError as e:
-        _remove_made(made)
+        _remove_made(new)
         raise OutDirError(f"{flag} {os.fspath(path)!r}: the folder is not writable ({e.strerror or e})") from None
+    if made is not None:
+        made += new
     return p

@@ -128,3 +128,41 @@ def test_a_parent_that_is_there_but_refuses_a_folder_is_not_taken_for_a_race(tmp
     with pytest.raises(OutDirError, match=r": cannot create the folder: No such file or directory$"):
         OutFolder.open(tmp_path / "a" / "b" / "c")
     assert len(tries) == 1 and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("argv, made, refused", [
+    (["claims", "--quick", "--only", "vibration", "--plots", "{tmp}/p/q", "--workers", "2"], "p",
+     "--workers and --scheduler go with --seeds"),
+    (["explore", "{quick}", "--out", "{tmp}/out", "--cache", "{tmp}/c/d", "--scheduler", "tcp://127.0.0.1:1",
+      "--workers", "2"], "c", "--workers 2 sizes the LocalCluster"),
+])
+def test_a_folder_a_command_made_for_plots_or_a_cache_is_removed_when_it_is_refused_after(argv, made, refused,
+                                                                                          tmp_path, capsys):
+    """``claims --plots a/b`` and ``explore --cache a/b`` check (and so make) their folders before anything runs; a
+    refusal found after that left them behind, empty.  Each folder the command made is removed again, as --out's are;
+    one the user had made stays (it is not the command's)."""
+    from bench.cli import main as cli
+    from bench.paths import FIXTURES
+
+    quick = FIXTURES / "experiments" / "quick.toml"
+    args = [a.replace("{tmp}", str(tmp_path)).replace("{quick}", str(quick)) for a in argv]
+    assert cli.main(args) == 2
+    assert refused in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / made).mkdir()
+    assert cli.main(args) == 2
+    assert [p.name for p in tmp_path.iterdir()] == [made] and list((tmp_path / made).iterdir()) == []
+
+
+def test_made_folders_removes_only_after_an_error_and_only_empty_ones(tmp_path):
+    """made_folders: a block that ends well keeps the folders it made, even empty (a stage cache is kept across runs);
+    one that ends in an error removes those still empty, and keeps one it wrote into."""
+    with outdir.made_folders() as made:
+        outdir.writable_folder(tmp_path / "kept" / "empty", "--cache", made)
+    with pytest.raises(RuntimeError), outdir.made_folders() as made:
+        outdir.writable_folder(tmp_path / "c" / "d", "--cache", made)
+        (tmp_path / "c" / "d" / "entry").write_text("x")
+        outdir.writable_folder(tmp_path / "e" / "f", "--plots", made)
+        raise RuntimeError("refused later")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c", "kept"]
+    assert (tmp_path / "kept" / "empty").is_dir() and (tmp_path / "c" / "d" / "entry").exists()
