@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from bench.errors import FirmwareError
+from bench.hosts.driver import BridgeDriver
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
 from emulator import channels as ch
@@ -26,8 +27,6 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
-#: bt_set_pattern's result for a channel it does not sample (the ACK's "bad value", bt_bridge.h)
-BAD_VALUE = 3
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
@@ -218,12 +217,12 @@ class CoSim:
     def set_pattern(self, channels) -> None:
         """Set the firmware's sampling pattern directly (as its PATTERN command would, without a reply on the
         UART): 1–64 channel indices (or names), each PAC, PDC, TAC, TDC or E1..E24 (E20..E24 exist on a BioTac
-        SP only; a 19-electrode sensor answers them with error words)."""
-        idx = [c if isinstance(c, int) else ch.channel_index(c) for c in channels]
-        if any(not 0 <= i <= 255 for i in idx):  # not a byte: refused before the firmware sees it
-            result = BAD_VALUE
-        else:
-            result = self.lib.bt_set_pattern(self.state, bytes(idx), C.c_size_t(len(idx))) & 0xFF
+        SP only; a 19-electrode sensor answers them with error words).  Entries are checked as the driver's
+        (:meth:`bench.hosts.driver.BridgeDriver.pattern_bytes`: True is no channel, an index not a byte is
+        refused before the firmware sees it); the firmware judges the channels."""
+        channels = list(channels)
+        payload = BridgeDriver.pattern_bytes(channels)  # (ValueError before the firmware sees anything)
+        result = self.lib.bt_set_pattern(self.state, payload, C.c_size_t(len(payload))) & 0xFF
         if result:
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
                              + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E24"))

@@ -390,7 +390,19 @@ class BridgeDriver:
         """Send PATTERN (channel indices 0–255 or names such as "PAC", "E7"; at most :data:`MAX_PATTERN`); the
         firmware ACKs 0, or 1 for an empty pattern and 3 for an index it does not sample.  A longer pattern is
         refused here (ValueError), sending nothing (the firmware would answer it ACK 1), and so is an entry that is
-        neither a whole index 0–255 nor a channel name (0.5 or True had been sent as channel 0 or 1)."""
+        not a byte (:meth:`pattern_bytes`)."""
+        payload = self.pattern_bytes(channels)
+        if len(payload) > MAX_PATTERN:
+            raise ValueError(f"a pattern of {len(payload)} channels: the bridge firmware takes at most {MAX_PATTERN}")
+        return self.send(CMD_PATTERN, payload)
+
+    @staticmethod
+    def pattern_bytes(channels) -> bytes:
+        """The payload of a PATTERN command for ``channels``: each an index 0–255 (an int, numpy's too) or a channel
+        name ("PAC", "e7").  An index no channel has (16, HAL's 15, 99) is sent: the firmware judges it and answers
+        ACK 3 (SENSOR.md's channels are 0–3, 15 and 17–40; a test of the firmware sends such indices on purpose).
+        ValueError, naming the entry by position, for anything else: 0.5 or True had gone out as channel 0 or 1, and
+        a whole float (3.0) is refused too — an index names a channel, as a scene's whole-number fields refuse 3.0."""
         from emulator.channels import channel_index
 
         indices = []
@@ -398,12 +410,11 @@ class BridgeDriver:
             if isinstance(c, str):
                 c = channel_index(c)  # ValueError naming the known channels
             elif isinstance(c, (bool, np.bool_)) or not isinstance(c, (int, np.integer)) or not 0 <= c <= 255:
-                raise ValueError(f"pattern[{k}] = {c!r}: a channel index 0 to 255 or a channel name (\"PAC\", \"E7\")")
+                whole = isinstance(c, float) and c.is_integer() and 0 <= c <= 255
+                raise ValueError(f"pattern[{k}] = {c!r}: a channel index 0 to 255 or a channel name (\"PAC\", \"E7\")"
+                                 + (f"; give {int(c)}, an int (an index names a channel)" if whole else ""))
             indices.append(int(c))
-        payload = bytes(indices)
-        if len(payload) > MAX_PATTERN:
-            raise ValueError(f"a pattern of {len(payload)} channels: the bridge firmware takes at most {MAX_PATTERN}")
-        return self.send(CMD_PATTERN, payload)
+        return bytes(indices)
 
     def request_status(self) -> int:
         return self.send(CMD_STATUS)

@@ -354,6 +354,20 @@ def test_a_pattern_entry_that_is_no_channel_is_refused_before_anything_is_sent(b
     assert port.commands == []
 
 
+@pytest.mark.firmware
+def test_a_whole_float_in_a_pattern_is_refused_saying_which_int_to_give_and_a_non_channel_index_is_sent():
+    """A channel index names a channel: 3.0 is refused (as a scene's whole-number fields refuse it), the message
+    saying to give 3; an index no channel has (16) is a byte and goes to the firmware, which answers ACK 3 — the
+    firmware is what a host test checks."""
+    port = FakeFirmware()
+    drv = BridgeDriver(port)
+    with pytest.raises(ValueError, match=r"pattern\[0\] = 3\.0: a channel index 0 to 255 .*; give 3, an int"):
+        drv.set_pattern([3.0, 1])
+    assert port.commands == []
+    drv.set_pattern([16])
+    assert port.commands == [("cmd", CMD_PATTERN, bytes([16]))]
+
+
 def test_a_pattern_may_name_its_channels():
     port = FakeFirmware()
     drv = BridgeDriver(port)

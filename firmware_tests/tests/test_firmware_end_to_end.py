@@ -222,8 +222,10 @@ def test_firmware_that_does_not_compile_reports_the_compiler_and_caches_nothing(
 
 
 def test_a_refused_pattern_leaves_the_pattern_as_it_was():
-    """CoSim.set_pattern: an index that is not a byte (273, which a byte would wrap to E1) is refused before the
-    firmware sees it, like a channel the firmware does not sample: the pattern set before stays, frame after frame."""
+    """CoSim.set_pattern: an entry that is no byte (273, which a byte would wrap to E1), True (channel 1 as a
+    number) or a whole float (3.0) is refused before the firmware sees it, naming the entry as the driver does; an
+    index no channel has — 16 (SENSOR.md: channels 0–3, HAL 15, E1.. from 17), HAL's 15 (no signal), 99 — is
+    refused by the firmware.  Either way the pattern set before stays, frame after frame."""
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
     from bench.hosts.driver import DataFrame, FrameParser, encode
 
@@ -232,8 +234,13 @@ def test_a_refused_pattern_leaves_the_pattern_as_it_was():
     try:
         sim = CoSim(board)
         sim.set_pattern([1, 0])
-        for refused in ([273], [99]):
-            with pytest.raises(ValueError, match="refused by the firmware: channels are PAC, PDC"):
+        for refused, why in (([273], r"pattern\[0\] = 273: a channel index 0 to 255"),
+                             ([0, True], r"pattern\[1\] = True: a channel index 0 to 255"),
+                             ([3.0], r"pattern\[0\] = 3\.0: a channel index 0 to 255 .*; give 3, an int"),
+                             ([16], "refused by the firmware: channels are PAC, PDC"),
+                             ([15], "refused by the firmware: channels are PAC, PDC"),
+                             ([99], "refused by the firmware: channels are PAC, PDC")):
+            with pytest.raises(ValueError, match=why):
                 sim.set_pattern(refused)
         board.send_to_firmware(encode(CMD_START))
         sim.run(0.05)
