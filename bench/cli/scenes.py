@@ -170,7 +170,7 @@ def _cmd_run(a) -> int:
 
 def _print_run(a, scene, res) -> None:
     """The report and what was written where, and a line for an interrupted or failed run."""
-    from bench.reporting.report import sensor_serial
+    from bench.reporting.report import identity_words, sensor_identity
 
     out, record = res.folder, res.record
     if not a.quiet:
@@ -178,8 +178,8 @@ def _print_run(a, scene, res) -> None:
     print(f"wrote {out}/ ({', '.join(record['outputs'])})" + (" for sensor 1" if scene.n_sensors > 1 else ""))
     for k, sub_record in sorted(res.sensor_records.items()):
         spec = scene.sensor_spec(k)
-        print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} (unit "
-              f"{spec.unit}, serial {sensor_serial(spec, k)}, {stimuli_count(len(spec.stimuli))}"
+        print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} "
+              f"({identity_words(sensor_identity(spec, k))}, {stimuli_count(len(spec.stimuli))}"
               + "".join(f", {n} = {v}" for n, v in spec.faults.items()) + ")")
         for name, why in sub_record.get("skipped_outputs", {}).items():
             print(f"note: sensor{k}/{name} {why}", file=sys.stderr)

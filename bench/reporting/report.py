@@ -105,6 +105,25 @@ def sensor_serial(spec, k: int) -> str:
     return variant_serial(spec.serial, spec.variant)
 
 
+def sensor_identity(spec, k: int) -> dict:
+    """Who sensor ``k`` (``spec``: its :class:`~bench.scenes.scene.SensorSpec`) is, for its record: ``unit`` (the unit
+    whose parameters it has) and ``serial`` (:func:`sensor_serial`); a sensor the scene does not describe — sensor
+    1's twin: its unit's parameters, but no serial of its own, so it answers its port's default — also has
+    ``twin_of: 1``, so that "unit 17" beside a serial that is not unit 17's is not taken for unit 17 itself."""
+    who = {"unit": spec.unit, "serial": sensor_serial(spec, k)}
+    return {**who, "twin_of": 1} if not spec.serial else who
+
+
+def identity_words(who: dict, quote: str = "") -> str:
+    """A :func:`sensor_identity` in words: "unit 17, serial BTU0000000000017", or for a twin "sensor 1's twin (unit
+    17's parameters), serial BT0101EMU0000003 (its port's default)"; the serial between ``quote``s (Markdown's
+    backtick in report.md)."""
+    serial = f"{quote}{who['serial']}{quote}"
+    if who.get("twin_of"):
+        return f"sensor {who['twin_of']}'s twin (unit {who['unit']}'s parameters), serial {serial} (its port's default)"
+    return f"unit {who['unit']}, serial {serial}"
+
+
 def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None,
                  interrupted_by: str | None = None, sensor_index: int = 1) -> dict:
     """The JSON record of ``rec``; ``sensor_index``: which sensor of the scene ``rec`` is (sensors 2..N are run as
@@ -126,8 +145,7 @@ def build_record(rec: Recording, outputs: list[str], skipped: dict | None = None
                  "spi": sc.spi},
         "faults": dict(sc.faults),
         # the sensor: the serial is the one it answers as sensor sensor_index of a bus (bridge, Cheetah adapter)
-        "sensor": {"index": sensor_index, "unit": spec.unit, "variant": spec.variant,
-                   "serial": sensor_serial(spec, sensor_index)},
+        "sensor": {"index": sensor_index, "variant": spec.variant, **sensor_identity(spec, sensor_index)},
         "analysis": {"impact_detection": sc.impact_detection},
         "noise": asdict(sc.noise),
         "sensor_parameters": asdict(sc.params),
@@ -251,7 +269,7 @@ def write_outputs(rec: Recording, out_dir, csv: bool = False, plots: bool = True
         record = _safe_record(rec, planned, skipped, interrupted_by, sensor_index)
         if sensors:
             record["sensors"] = {f"sensor{k}": {**{key: r.get(key) for key in ("status", "error", "outputs")},
-                                                "serial": sensor_serial(rec.scene.sensor_spec(k), k)}
+                                                **sensor_identity(rec.scene.sensor_spec(k), k)}
                                  for k, r in sorted(sensors.items())}
             for k, r in sorted(sensors.items()):
                 if r.get("status") == "failed" and record["status"] != "failed":
@@ -354,7 +372,7 @@ def markdown_report(record: dict) -> str:
               f"- fidelity `{sc['fidelity']}`, seed {sc['seed']}, SPI side: {spi}"]
     if "sensor" in record:
         who = record["sensor"]
-        lines.append(f"- sensor {who['index']}: {who['variant']}, unit {who['unit']}, serial `{who['serial']}`")
+        lines.append(f"- sensor {who['index']}: {who['variant']}, {identity_words(who, '`')}")
     if sc.get("library"):
         lib = sc["library"]
         lines.append(f"- texture library: `{lib['path']}` ({'the shipped one' if lib['shipped'] else 'the scene’s own'}"

@@ -128,19 +128,27 @@ def test_the_serial_reported_is_the_one_the_sensors_port_answers(tmp_path):
 
 
 def test_run_prints_and_records_the_serial_each_sensor_answers(tmp_path):
+    """Sensor 3, undescribed, is sensor 1's twin: unit 17's parameters but no serial of its own (its port's
+    default).  Its record, report and line say so (``twin_of``): they said "unit 17" beside a serial that is not
+    unit 17's, as if it were that unit (which one finger only can be)."""
     out = tmp_path / "out"
     r = run_cli("run", sp_scene(tmp_path, 0.2, TWIN_TAP), "--out", out, "--quiet", "--no-plots", timeout=300)
     assert r.returncode == 0, r.stderr
     assert "for sensor 2 (unit 18, serial BTSP000000000018," in r.stdout, r.stdout
-    assert "for sensor 3 (unit 17, serial BTSP01EMU0000003," in r.stdout, r.stdout  # a twin: its port's default
+    assert ("for sensor 3 (sensor 1's twin (unit 17's parameters), serial BTSP01EMU0000003 (its port's default),"
+            in r.stdout), r.stdout
     record = json.loads((out / "record.json").read_text())
     assert record["sensor"] == {"index": 1, "unit": "17", "variant": "biotac-sp", "serial": "BTSP000000000017"}
-    assert {k: v["serial"] for k, v in record["sensors"].items()} == {"sensor2": "BTSP000000000018",
-                                                                    "sensor3": "BTSP01EMU0000003"}
+    assert {k: (v["unit"], v["serial"], v.get("twin_of")) for k, v in record["sensors"].items()} == {
+        "sensor2": ("18", "BTSP000000000018", None), "sensor3": ("17", "BTSP01EMU0000003", 1)}
     assert json.loads((out / "sensor2" / "record.json").read_text())["sensor"]["serial"] == "BTSP000000000018"
+    assert json.loads((out / "sensor3" / "record.json").read_text())["sensor"] == {
+        "index": 3, "unit": "17", "twin_of": 1, "variant": "biotac-sp", "serial": "BTSP01EMU0000003"}
     report = (out / "report.md").read_text()
     assert "- sensor 1: biotac-sp, unit 17, serial `BTSP000000000017`" in report
     assert "`sensor2/`: ok, serial `BTSP000000000018`" in report and "serial `BTSP01EMU0000003`" in report
+    assert ("- sensor 3: biotac-sp, sensor 1's twin (unit 17's parameters), serial `BTSP01EMU0000003` (its port's "
+            "default)") in (out / "sensor3" / "report.md").read_text()
 
 
 @pytest.mark.unit
