@@ -52,11 +52,22 @@ def _units_cmd(a) -> int:
         what = PARAMETER_FIELDS[name].metadata["unit"] if name in PARAMETER_FIELDS else _DERIVED_UNITS[name]
         line = f"{name:34s} {_fmt(v)}"
         if a.compare:
-            d = v - ref[name]
-            rel = f"{100 * d / ref[name]:+.2f} %" if ref[name] and name != "electrode_gap_seed" else f"{d:+.4g}"
-            line += f" {_fmt(ref[name])} {rel:>12s}"
+            line += f" {_fmt(ref[name])} {_difference(name, v, ref[name]):>12s}"
         print(f"{line}  {what}")
     return 0
+
+
+#: drawn values that name a draw rather than measure anything: a difference of two of them means nothing
+_LABELS = ("electrode_gap_seed",)
+
+
+def _difference(name: str, v, nominal) -> str:
+    """The difference column of ``units --compare``: relative (%) to a non-zero nominal value, else absolute in the
+    parameter's unit; for a label (a seed), only whether it differs."""
+    if name in _LABELS:
+        return "differs" if v != nominal else "same"
+    d = v - nominal
+    return f"{100 * d / nominal:+.2f} %" if nominal else f"{d:+.4g}"
 
 
 def _fmt(v) -> str:

@@ -179,6 +179,15 @@ def test_units_compare_prints_each_parameters_difference_from_nominal(capsys):
     assert doc["parameters"]["resonance_Hz"] == pytest.approx(value, rel=1e-5)
 
 
+def test_units_compare_says_only_whether_a_seed_differs(capsys):
+    """The electrode-gap seed names a draw: `units --compare` printed its numeric difference from the nominal's
+    (+5.444e+08), which means nothing; it says "differs" (or "same" for the nominal unit itself)."""
+    for argv, said in ((["--seed", "17"], "differs"), ([], "same")):
+        assert main(["units", *argv, "--compare"]) == 0
+        (row,) = [r.split() for r in capsys.readouterr().out.splitlines() if r.startswith("electrode_gap_seed ")]
+        assert row[3] == said, row
+
+
 def test_params_lists_each_parameter_with_its_unit_range_and_source(capsys):
     """`params` (README): every sensor parameter with its unit, range and source."""
     from emulator.params import PARAMETER_FIELDS
