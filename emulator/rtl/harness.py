@@ -98,21 +98,22 @@ def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_ti
     tick of the 1 MHz timer (``fastpath._NO_TICK``: none).  The last conversion, when nothing is known after it (its
     next activity infinite), is among them judged quiet with ``convert_last``, else left out (the software bus
     converts it at the bus's next activity).  Returns (channels, instants s, whether the bus clocks within the
-    conversion, the last sampling tick afterwards, the conversion left out: (channel, instant s) or None)."""
+    conversion, the last sampling tick afterwards, the conversion left out: (channel, instant s) or None, how many
+    commands asked for a channel the sensor recognises but does not provide — the port's ``unprovided_requests``)."""
     from emulator.spi.fastpath import _TABLES, _commands
 
     word_of_byte, recognized, channel_of = _TABLES[port.variant.name]
     n = len(mosi)
     first, prepared, acc_at, acc_channel = (np.empty(n, np.int64) for _ in range(4))
     cmd_end, acc_time, acc_coupled = np.empty(n), np.empty(n), np.empty(n, bool)
-    _, _, last_tick, _, n_acc, deferred = _commands(
+    _, _, last_tick, unprovided, n_acc, deferred = _commands(
         np.ascontiguousarray(mosi, np.uint16), np.ascontiguousarray(start, float), np.ascontiguousarray(end, float),
         np.ascontiguousarray(next_activity, float), word_of_byte, recognized, channel_of, port.provided_lut,
         int(last_sampling_tick), float(port.conversion_s), first, cmd_end, prepared, acc_at, acc_channel, acc_time,
         acc_coupled)
     left = None if deferred < 0 or convert_last else (int(acc_channel[n_acc]), float(acc_time[n_acc]))
     n_acc += deferred >= 0 and convert_last  # the model converts a last command with no next activity known later
-    return acc_channel[:n_acc], acc_time[:n_acc], acc_coupled[:n_acc], int(last_tick), left
+    return acc_channel[:n_acc], acc_time[:n_acc], acc_coupled[:n_acc], int(last_tick), left, int(unprovided)
 
 
 def _variant_of(sensor) -> str:
@@ -275,8 +276,8 @@ class HarnessPeripheral:
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
         end = start + 16.5 / clock
-        channels, instants, coupled, _, _ = accepted_conversions(self._reference, start, end, mosi,
-                                                                 np.append(start[1:], np.inf), _NO_TICK)
+        channels, instants, coupled, _, _, _ = accepted_conversions(self._reference, start, end, mosi,
+                                                                    np.append(start[1:], np.inf), _NO_TICK)
         samples = self.sensor.sample(channels, instants, bus_active=coupled)
         shift_us = int(np.floor(start[0] * 1e6)) - 1
         t_ps = np.round((start - shift_us * 1e-6) * 1e12).astype(np.int64)
@@ -329,7 +330,11 @@ class RtlBus:
     command has its code computed at the next call, as on the software bus: its coupling judged by that call's first
     transfer (:meth:`_deferred_codes`); the RTL's request waits in the harness (a read meanwhile: "E.") and is
     answered before that transfer — with no code computed (code 0, never served) if the sensor was unplugged or
-    its port replaced in between, where the software bus never converts it.
+    its port replaced in between, where the software bus never converts it.  Each port counts what the software
+    port counts — ``empty_windows``, ``incomplete``, ``unprovided_requests``, ``coupled_conversions`` — from the same
+    decoding of its chip-select windows that decides the conversions (:meth:`_count_closed`,
+    :func:`accepted_conversions`, :meth:`_deferred_codes`): the counts are the reference model's reading of the
+    traffic the RTL received, not read out of the RTL (it has no such counters).
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
@@ -369,27 +374,26 @@ class RtlBus:
         transfer that releases chip select, or at the start of one that selects other sensors.  Its command is the
         first 16 bits clocked in it, as the sensor receives them: bit position ``flip`` (from chip-select fall; the
         ``mosi_flip_bit`` fault in force for these transfers) inverted.  Returns (fall s, rise s, command — 0 with
-        fewer than 16 bits —, the bus's next activity s) arrays.  A window that closes with no bit clocked (a
-        glitch) counts in the port's ``empty_windows``, as the software port counts it."""
+        fewer than 16 bits —, the bus's next activity s) arrays.  Each window closed is counted on the port as the
+        software port counts it (:meth:`_count_closed`)."""
         from emulator.spi.model import SELECT_ALL, SELECT_CODE
 
         rows, window = [], self._open_window.get(n)
         if window is None and not keep.any():  # every transfer its own window (the firmware's word traffic)
             to_it = (cs == SELECT_ALL) | (cs == SELECT_CODE[n])
-            shift = np.clip(nbits - 16, 0, None).astype(np.uint64)
-            command = np.where(nbits >= 16, np.asarray(mosi, np.uint64) >> shift & np.uint64(0xFFFF), 0)
-            if flip is not None:
-                command = np.where(nbits >= 16, command ^ np.uint64(1 << (15 - flip)), 0)
+            k = np.minimum(nbits, 16).astype(np.uint64)
+            bits = np.asarray(mosi, np.uint64) >> (nbits.astype(np.uint64) - k) & ((np.uint64(1) << k) - np.uint64(1))
+            if flip is not None:  # (a window of no more than ``flip`` bits never reaches it)
+                at = np.where(k > flip, k.astype(np.int64) - 1 - flip, 0).astype(np.uint64)
+                bits = np.where(k > flip, bits ^ (np.uint64(1) << at), bits)
             after = np.append(start[1:], np.inf)
-            self.ports[n].empty_windows += int(np.count_nonzero(to_it & (nbits == 0)))
-            return start[to_it], end[to_it], command[to_it].astype(np.uint16), after[to_it]
+            return self._count_closed(n, start[to_it], end[to_it], k[to_it].astype(int), bits[to_it], after[to_it])
         for i in range(start.size):
             if cs[i] != SELECT_ALL and cs[i] != SELECT_CODE[n]:
                 if window is not None:  # the select code moved on with chip select held: this sensor's CS rises
                     # (the software bus judges the conversion's coupling at the next transfer's start, as ever)
-                    rows.append((window[0], start[i], window[1] if window[2] >= 16 else 0,
+                    rows.append((window[0], start[i], window[2], window[1],
                                  start[i + 1] if i + 1 < start.size else np.inf))
-                    self.ports[n].empty_windows += int(window[2] == 0)
                     window = None
                 continue
             if window is None:
@@ -401,13 +405,25 @@ class RtlBus:
             window[1] = (window[1] << take) | bits
             window[2] += take
             if not keep[i]:
-                rows.append((window[0], end[i], window[1] if window[2] >= 16 else 0,
-                             start[i + 1] if i + 1 < start.size else np.inf))
-                self.ports[n].empty_windows += int(window[2] == 0)
+                rows.append((window[0], end[i], window[2], window[1], start[i + 1] if i + 1 < start.size else np.inf))
                 window = None
         self._open_window[n] = window
-        fall, rise, command, after = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 4
-        return fall.astype(float), rise.astype(float), command.astype(np.uint16), after.astype(float)
+        fall, rise, k, bits, after = (np.array(c) for c in zip(*rows)) if rows else (np.zeros(0),) * 5
+        return self._count_closed(n, fall.astype(float), rise.astype(float), k.astype(int), bits.astype(np.uint64),
+                                  after.astype(float))
+
+    def _count_closed(self, n: int, fall, rise, k, bits, after):
+        """Count sensor ``n``'s closed windows on its port as :meth:`SensorPort.cs_rise` counts them — ``k``: the bits
+        clocked in each (at most the 16 the sensor keeps), ``bits``: those bits as received — and return (fall s, rise
+        s, command — its 16 bits, 0 with fewer —, next activity s).  A window with no clock edge (a glitch) is one of
+        ``empty_windows``; one with fewer than 8 bits, or fewer than 16 whose first byte is not 0 (not a read), one of
+        ``incomplete`` (the sensor ignores both)."""
+        port = self.ports[n]
+        first_byte = np.where(k >= 8, bits >> np.maximum(k - 8, 0).astype(np.uint64), 0)
+        port.empty_windows += int(np.count_nonzero(k == 0))
+        port.incomplete += int(np.count_nonzero((k > 0) & ((k < 8) | ((k < 16) & (first_byte != 0)))))
+        command = np.where(k >= 16, bits, 0).astype(np.uint16)
+        return fall, rise, command, after
 
     def _deferred_codes(self, next_activity_s: float) -> np.ndarray:
         """Codes of the conversions the last call ended on (at most one a sensor), now that the bus's next activity
@@ -420,6 +436,7 @@ class RtlBus:
             code = 0
             if self.ports.get(n) is port:
                 coupled = next_activity_s < t + port.conversion_s
+                port.coupled_conversions += int(coupled)
                 code = int(port.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))[0])
             rows.append((n, channel, code))
         self._deferred.clear()
@@ -434,8 +451,10 @@ class RtlBus:
         for n, port in self.ports.items():
             fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep,
                                                        faults[n].mosi_flip_bit)
-            channels, instants, coupled, self._last_sampling_tick[n], left = accepted_conversions(
+            channels, instants, coupled, self._last_sampling_tick[n], left, unprovided = accepted_conversions(
                 port, fall, rise, command, after, convert_last=False, last_sampling_tick=self._last_sampling_tick[n])
+            port.unprovided_requests += unprovided
+            port.coupled_conversions += int(np.count_nonzero(coupled))
             if left is not None:
                 self._deferred[n] = (port, *left)
             if channels.size:

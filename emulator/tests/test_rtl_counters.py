@@ -1,0 +1,101 @@
+"""The counters a sensor's port keeps (``incomplete``, ``unprovided_requests``, ``coupled_conversions``,
+``empty_windows``) over the RTL bus (:class:`emulator.rtl.harness.RtlBus`) as over the software bus, the reference."""
+
+import numpy as np
+import pytest
+
+from emulator.spi import protocol as proto
+from emulator.spi.model import SELECT_ALL, SELECT_CODE, Bus, Faults, SensorPort, Transfer
+
+pytestmark = pytest.mark.rtl
+
+CLOCK_HZ = 10e6  # a 16-bit transfer lasts 1.65 µs: the next one can start inside a 5 µs conversion
+COUNTERS = ("incomplete", "unprovided_requests", "coupled_conversions", "empty_windows")
+S1, S3 = SELECT_CODE[1], SELECT_CODE[3]
+
+
+@pytest.fixture(scope="module")
+def harness():
+    from emulator.rtl.harness import Harness
+
+    h = Harness()
+    h.ensure_built()
+    return h
+
+
+def _cmd(name: str) -> int:
+    """The 16-bit sampling command of channel ``name``."""
+    from emulator.channels import channel_index
+
+    return int(proto.sample_command(channel_index(name))) << 8
+
+
+def _sensors():
+    """Sensor 1 provides PDC and E1 only (PAC and TAC: recognised, not provided); sensor 3 the default frame."""
+    from emulator.channels import DEFAULT_FRAME_NAMES
+    from emulator.sensor import Sensor
+
+    return {1: Sensor(channels_read=["PDC", "E1"], seed=5), 3: Sensor(channels_read=list(DEFAULT_FRAME_NAMES), seed=7)}
+
+
+def _at(us: float) -> float:
+    return 0.01 + us * 1e-6
+
+
+#: The traffic: ("words", [(µs, select, MOSI word)]) a call of 16-bit words; ("bits", µs, select, MOSI, bits, keep)
+#: one transfer; ("faults", sensor, Faults) set between calls.
+TRAFFIC = [
+    # PDC on 1, coupled by sensor 3's read 2 µs later; PAC and TAC on 1: not provided; a call ending on E1 on 1
+    ("words", [(0, S1, _cmd("PDC")), (2, S3, 0), (60, S1, 0), (100, S1, _cmd("PAC")), (200, S3, _cmd("PAC")),
+               (260, S3, 0), (280, S1, _cmd("TAC")), (300, S1, _cmd("E1"))]),
+    ("bits", 302, S3, 0b00000, 5, False),  # inside E1's conversion (coupled, judged at this call); 5 bits on 3
+    ("bits", 360, S1, 0x000, 12, False),  # 12 bits, first byte 0: a read, not incomplete
+    ("bits", 400, S1, 0xA50, 12, False),  # 12 bits, first byte 0xA5: incomplete
+    ("bits", 440, S3, 0x0, 4, True), ("bits", 442, S3, 0x0F, 8, False),  # one window of 12 bits, a read
+    ("bits", 480, S3, 0x8, 4, True), ("bits", 482, S3, 0x01, 8, False),  # 12 bits, first byte 0x80: incomplete
+    ("bits", 520, S1, 0, 0, False),  # a glitch: an empty window
+    ("faults", 1, Faults(mosi_flip_bit=3)),
+    ("bits", 560, S1, 0x000, 12, False),  # received as 0x100: first byte 0x10, incomplete
+    ("bits", 600, S1, 0x0, 4, True), ("bits", 602, S1, 0x00, 8, False),  # held: received 0x100 too, incomplete
+    ("faults", 1, Faults()),
+    ("words", [(700, SELECT_ALL, _cmd("PDC")), (703, S3, 0), (760, S1, 0), (770, S3, 0),
+               (800, S1, _cmd("PAC")), (802, S1, _cmd("PAC")), (900, S3, _cmd("E1"))]),  # busy PAC: E-, not counted
+    ("words", [(903, S1, 0), (960, S3, 0)]),  # sensor 3's E1 coupled by this call's first transfer
+]
+
+
+def _drive(bus) -> tuple[dict, list]:
+    """Play :data:`TRAFFIC` on ``bus`` (closed after): each port's counters and the MISO the host got."""
+    miso = []
+    try:
+        for step in TRAFFIC:
+            if step[0] == "words":
+                us, cs, mosi = zip(*step[1])
+                miso += list(bus.exchange_words(np.array([_at(u) for u in us]), np.array(cs),
+                                                np.array(mosi, np.uint16), CLOCK_HZ))
+            elif step[0] == "bits":
+                _, us, cs, mosi, nbits, keep = step
+                miso.append(bus.transfer(Transfer(_at(us), cs, mosi, nbits, CLOCK_HZ, keep)))
+            else:
+                bus.ports[step[1]].faults = step[2]
+        return {n: {c: getattr(p, c) for c in COUNTERS} for n, p in bus.ports.items()}, [int(m) for m in miso]
+    finally:
+        bus.close()
+
+
+def test_the_rtl_bus_counts_what_the_software_bus_counts(harness):
+    """The same traffic — windows of 5 and 12 bits (one held over two transfers), reads of fewer than 16 bits, a
+    MOSI bit flip turning a short read into a short command (on a window of one transfer and on a held one), a
+    glitch, commands for channels a sensor recognises but does not provide, conversions the bus clocks into within
+    5 µs (also one a call ends on, judged by the next call's first transfer), a busy command — gives the same MISO
+    and the same counters over the RTL as over the software bus, and those counts are the ones the traffic was made
+    of (sensor 1: three short commands, three unprovided channels, three coupled conversions, one glitch)."""
+    from emulator.rtl.harness import RtlBus
+
+    software, soft_miso = _drive(Bus({n: SensorPort(s, n) for n, s in _sensors().items()}))
+    rtl, rtl_miso = _drive(RtlBus(_sensors(), harness=harness))
+    assert rtl_miso == soft_miso
+    expected = {1: {"incomplete": 3, "unprovided_requests": 3, "coupled_conversions": 3, "empty_windows": 1},
+                3: {"incomplete": 2, "unprovided_requests": 0, "coupled_conversions": 2, "empty_windows": 0}}
+    assert software == expected  # (the reference counts what the traffic was made of)
+    assert rtl == software
