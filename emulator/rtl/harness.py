@@ -547,12 +547,29 @@ class RtlBus:
         waiting = int(raw[start.size + 3])
         if mismatched or unrequested or waiting != len(self._deferred):  # a code left over would be served to a
             # later command of its channel; a request waiting that the emulator left for no next call, or none
-            raise HarnessError(f"the RTL requested other conversions than the emulator computed "
-                               f"({mismatched} mismatched, {unrequested} unrequested, {waiting} waiting for the "
-                               f"next call where the emulator left {len(self._deferred)})")
+            raise HarnessError(self._disagreement(start, mismatched, unrequested, waiting))
         if start.size:
             self._last_end = float(end[-1])
         return raw[:start.size]
+
+    def _disagreement(self, start, mismatched: int, unrequested: int, waiting: int) -> str:
+        """What a call's conversions disagreeing between the RTL and the emulator means (the call's transfers start at
+        ``start`` s; the harness's counts after it): the RTL asked for conversions the emulator did not compute or
+        the other way round, or — ``waiting`` — it is left waiting for codes for another number of sensors than
+        the emulator left a conversion to (:attr:`_deferred`): they disagree on which sampling command a call ends
+        on.  Either way the RTL's next codes would be wrong: the bus cannot go on."""
+        where = (f"after the call of {start.size} transfers from {start[0]:.9f} s to {start[-1]:.9f} s" if start.size
+                 else "after a call with no transfers")
+        left = sorted(self._deferred)
+        what = []
+        if mismatched or unrequested:
+            what.append(f"the RTL requested other conversions than the emulator computed ({mismatched} requests "
+                        f"mismatched, {unrequested} codes never requested)")
+        if waiting != len(left):
+            what.append(f"{waiting} RTL conversion request(s) wait for a code, where the emulator left "
+                        f"{len(left)} conversion(s) for the next call (sensors {left}); one per sensor whose "
+                        f"call ended on a sampling command is expected")
+        return f"RTL bus {where}: " + "; ".join(what) + " — close this bus (its RTL and emulator disagree)"
 
     def _faults_in_force(self) -> dict:
         """Each sensor's faults for the next transfers, checked (a value set in place out of range: ValueError

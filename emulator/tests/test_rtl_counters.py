@@ -99,3 +99,38 @@ def test_the_rtl_bus_counts_what_the_software_bus_counts(harness):
                 3: {"incomplete": 2, "unprovided_requests": 0, "coupled_conversions": 2, "empty_windows": 0}}
     assert software == expected  # (the reference counts what the traffic was made of)
     assert rtl == software
+
+
+@pytest.mark.parametrize("miscount,ends_on_command", [(+1, False), (-1, True)],
+                         ids=["a request reported waiting that the emulator left none for",
+                              "none reported waiting where the emulator left one"])
+def test_a_harness_reporting_another_number_of_waiting_requests_stops_the_bus_with_a_clear_error(
+        harness, miscount, ends_on_command):
+    """The RTL bus checks, after each call, that the harness has as many conversion requests waiting for a code as
+    the emulator left conversions for the next call (one per sensor whose call ended on a sampling command): a
+    harness reporting one more (the call ends on a read) or one fewer (the call ends on a command) is a
+    HarnessError saying which call, both counts and the sensors the emulator left, and that the bus cannot go on;
+    the bus still closes."""
+    from emulator.rtl.harness import HarnessError, RtlBus
+
+    class MiscountingBus(RtlBus):
+        def _read(self, n: int) -> bytes:  # the harness's last word of a call: requests waiting for a code
+            raw = bytearray(super()._read(n))
+            raw[-8:] = (int.from_bytes(raw[-8:], "little") + miscount).to_bytes(8, "little")
+            return bytes(raw)
+
+    bus = MiscountingBus(_sensors(), harness=harness)
+    try:
+        last = _cmd("PDC") if ends_on_command else 0
+        expected = (r"RTL bus after the call of 2 transfers from 0\.010000000 s to 0\.010060000 s: "
+                    + (r"0 RTL conversion request\(s\) wait for a code, where the emulator left 1 conversion\(s\) for "
+                       r"the next call \(sensors \[1\]\)" if ends_on_command else
+                       r"1 RTL conversion request\(s\) wait for a code, where the emulator left 0 conversion\(s\) for "
+                       r"the next call \(sensors \[\]\)")
+                    + r".* close this bus")
+        with pytest.raises(HarnessError, match=expected):
+            bus.exchange_words(np.array([_at(0), _at(60)]), np.array([S1, S1]), np.array([0, last], np.uint16),
+                               CLOCK_HZ)
+    finally:
+        bus.close()
+    assert bus.proc.poll() is not None
