@@ -257,6 +257,12 @@ class HarnessPeripheral:
     and the batch is shifted to start just after that reset, so nothing but the protocol state in flight
     at a batch boundary is lost: the host sampler's batches end on a completed read, so none is.  Any
     request the RTL makes that the codes do not match, or a code it does not request, is an error.
+
+    A batch ending on a sampling command has that conversion computed at the next call, its coupling judged by
+    that call's first transfer, as the software port does: its result is never served here (the RTL is reset
+    before the next batch), but computing it draws from the sensor's ADC noise and, when coupled, its SPI-coupling
+    noise, so converting it at once (always quiet) would shift every later coupled conversion's code.  The RTL
+    still requests it within its batch and is answered a placeholder code (0) that nothing reads.
     """
 
     def __init__(self, sensor, harness: Harness | None = None):
@@ -268,6 +274,7 @@ class HarnessPeripheral:
         self.harness = harness or Harness(sp=sp_mask({1: _variant_of(sensor)}))
         self._reference = SensorPort(sensor)  # only for its variant, provided channels and conversion window
         self.channels_read = sensor.channels_read
+        self._deferred: tuple[int, float] | None = None  # (channel, instant s) of the conversion the last batch ended on
 
     def exchange(self, batch) -> np.ndarray:
         from emulator.spi.fastpath import _NO_TICK
@@ -276,9 +283,17 @@ class HarnessPeripheral:
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
         end = start + 16.5 / clock
-        channels, instants, coupled, _, _, _ = accepted_conversions(self._reference, start, end, mosi,
-                                                                    np.append(start[1:], np.inf), _NO_TICK)
+        if start.size == 0:
+            return np.zeros(0, np.uint16)
+        if self._deferred is not None:  # the last batch's final conversion, judged by this batch's first transfer
+            (channel, t), self._deferred = self._deferred, None
+            coupled = bool(start[0] < t + self._reference.conversion_s)
+            self.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))  # (never served)
+        channels, instants, coupled, _, self._deferred, _ = accepted_conversions(
+            self._reference, start, end, mosi, np.append(start[1:], np.inf), _NO_TICK, convert_last=False)
         samples = self.sensor.sample(channels, instants, bus_active=coupled)
+        if self._deferred is not None:  # the RTL requests it within this batch: a placeholder no transfer reads
+            channels, samples = np.append(channels, self._deferred[0]), np.append(samples, 0)
         shift_us = int(np.floor(start[0] * 1e6)) - 1
         t_ps = np.round((start - shift_us * 1e-6) * 1e12).astype(np.int64)
         tr = np.zeros(start.size, TRANSFER)

@@ -542,7 +542,8 @@ def test_a_call_that_ends_on_a_sampling_command_converts_it_over_the_rtl_as_over
     """A host that sends a sampling command in one call and reads its result in the next (50 µs later, the bus
     quiet in between): the RTL asks for the conversion within the first call, the harness answers it as the second
     comes, with the software model's code.  A schedule that ends on a sampling command: the RTL batch by batch
-    (reset at each batch) converts it as the batch ends, the emulator computing its code (else a HarnessError)."""
+    (reset at each batch) requests its conversion as the batch ends and is answered (else a HarnessError); the
+    emulator computes the code at the next batch, as the software port does."""
     start, mosi = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")), (260, 0))
     cs = np.full(start.size, SELECT_CODE[1])
     for split in (1, 3):
@@ -572,3 +573,33 @@ def test_a_call_that_ends_on_a_sampling_command_is_coupled_by_the_next_call_over
     coupled, quiet = (Sensor(channels_read=["PDC"], seed=3).sample(np.array([channel_index("PDC")]), t,
                                                                     bus_active=np.array([b]))[0] for b in (True, False))
     assert coupled != quiet and read[3] == proto.RESPONSE_WORD[coupled] and read[60] == proto.RESPONSE_WORD[quiet]
+
+
+def test_a_batch_ending_on_a_sampling_command_is_converted_by_the_next_batch_over_the_rtl_as_over_the_software(
+        harness):
+    """Batch by batch (HarnessPeripheral, a scene's route) as over the software port: a batch ending on a sampling
+    command has its conversion judged by the next batch's first transfer (here 1 µs after it: SPI coupling disturbs
+    it), which draws from the sensor's coupling noise, so the coupled conversion after it reads the same code by
+    either route (had the RTL route converted the first one quiet as its batch ended, the second would take the
+    first's draw).  Pinned as well: the RTL is reset at each batch, so the next batch's first read finds nothing
+    ("E_", and "E_" again as the next command goes out) where the software port's conversion is not ready yet ("E.")
+    and then served; every word after that command is the same."""
+    from emulator.rtl.harness import HarnessPeripheral
+    from emulator.sensor import Sensor
+    from emulator.spi.model import SensorPort
+    from emulator.spi.peripheral import TransferBatch
+
+    first = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")))
+    end_us = 200 + 16.5 / CLOCK_HZ * 1e6
+    second = _schedule((end_us + 1, 0), (260, _cmd("PDC")), (262, 0), (330, 0))
+    words = {}
+    for route, port in (("software", SensorPort), ("RTL per batch", lambda s: HarnessPeripheral(s, harness))):
+        p = port(Sensor(channels_read=["PDC", "PAC"], seed=3))
+        words[route] = [p.exchange(TransferBatch(start, mosi, CLOCK_HZ)) for start, mosi in (first, second)]
+    soft, rtl = words["software"], words["RTL per batch"]
+    assert np.array_equal(soft[0], rtl[0])
+    err = proto.ERROR_WORDS
+    assert list(rtl[1][:2]) == [err["nothing_to_resend"]] * 2  # PAC's result went with the reset
+    assert soft[1][0] == err["insufficient_delay"] and not proto.is_error_word(soft[1][1])  # (served as PDC's goes)
+    assert np.array_equal(soft[1][2:], rtl[1][2:]), ([hex(w) for w in soft[1]], [hex(w) for w in rtl[1]])
+    assert not proto.is_error_word(soft[1][3])  # the coupled PDC conversion is read
