@@ -8,7 +8,7 @@ names in the same order, and each scene's description names its stimuli as they 
 
 #: fault name -> what a correct firmware and driver do, in the order the campaign runs them
 FAULT_EXPECTED = {
-    "none": "no errors, no drops",
+    "none": "no errors, no drops, nothing flagged; before the first stimulus every code in its resting band",
     "unplug_replug": "sensor 2 lost within 2 frames, found again within 1 s",
     "parity_errors": "every sample flagged, counted",
     "miso_stuck": "stuck sensor treated as absent",

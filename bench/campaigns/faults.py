@@ -2,7 +2,8 @@
 
 Each fault states what a correct firmware and driver do; a run passes when the stream stays decodable,
 nothing corrupted reaches the caller, the expected reaction is seen, a fault whose correct reaction shows the host
-nothing left its trace on the bus (:data:`FAULT_TRACES`: it happened), and nothing hangs (every wait is bounded).  Results go to JUnit XML and a summary table.
+nothing left its trace on the bus (:data:`FAULT_TRACES`: it happened), with no fault the data read as each
+sensor at rest before the scene's first stimulus (:data:`AT_REST`), and nothing hangs (every wait is bounded).  Results go to JUnit XML and a summary table.
 
 The cases are independent tasks on the campaign engine (:mod:`bench.campaigns.engine`: a Dask LocalCluster or an
 existing scheduler).  A task is a case's description — fault name, scene name, seed (:class:`CaseTask`) — and a
@@ -41,6 +42,7 @@ class FaultCase:
     schedule: list  # (seconds after streaming starts, action(board))
     check: object  # (frames, status, parser stats) -> problem string or None
     trace: object = None  # (board) -> problem string or None: the fault's own mark on the bus (that it happened)
+    at_rest: bool = False  # the frames before the scene's first stimulus must read as each sensor at rest
 
 
 def _mask_returns(frames, status, stats):
@@ -138,10 +140,79 @@ def _clean(frames, status, stats):
                 f"{flagged} flagged samples)")
 
 
+def _healthy(frames, status, stats):
+    """The healthy link's check (:func:`_clean`) and the firmware's own counters: no parity errors, error words,
+    losses, finds or command errors, and every frame streams every sensor the case has (the first frame's)."""
+    if problem := _clean(frames, status, stats):
+        return problem
+    counted = {name: getattr(status, name) for name in ("parity_errors", "error_words", "losses", "finds",
+                                                       "command_errors") if getattr(status, name)}
+    if counted:
+        return f"the firmware flagged faults on a healthy link ({', '.join(f'{k} {v}' for k, v in counted.items())})"
+    masks = sorted({f.sensor_mask for f in frames})
+    if len(masks) > 1:
+        return f"the sensors streamed changed on a healthy link (sensor masks seen: {masks})"
+
+
+#: How far (in σ of each channel's noise at rest, from :func:`emulator.noise_budget.budget`) a code of a sensor at
+#: rest may lie from its noise-free resting code, plus one code for quantization: 6σ, which Gaussian noise exceeds
+#: about once in 5·10⁸ samples (a case reads ~7000 per sensor).
+REST_BAND_SIGMAS = 6.0
+#: Frames left out before a scene's first stimulus (a frame's instant is estimated from START, 10 ms each): margin
+#: for the firmware's delay between START and its first frame.
+REST_MARGIN_FRAMES = 2
+#: Fewest frames the at-rest check needs before the first stimulus (else the case fails: it would check nothing).
+REST_MIN_FRAMES = 10
+
+
+def resting_bands(sensor) -> dict[str, tuple[float, float]]:
+    """Each channel's resting band of ``sensor`` (its unit's parameters and variant): channel name -> (lowest,
+    highest) code, the noise-free resting code (:func:`emulator.noise_budget.resting_volts`) ± REST_BAND_SIGMAS × its
+    noise at rest (codes) + 1 code."""
+    from emulator import noise_budget as nb
+    from emulator.conversions import ADC_LSB_V
+
+    rest = nb.resting_volts(sensor.params, sensor.variant)
+    sigma = nb.channel_totals(nb.budget(sensor.params, sensor.variant))
+    half = {name: REST_BAND_SIGMAS * sigma[name] + 1 for name in rest}
+    return {name: (v / ADC_LSB_V - half[name], v / ADC_LSB_V + half[name]) for name, v in rest.items()}
+
+
+def not_at_rest(frames, sensors: dict, stimuli, start_s: float) -> str | None:
+    """Why the frames before the first of ``stimuli`` (all frames without any) do not read as ``sensors`` ({number:
+    Sensor}) at rest, or None: every clean sample of each sensor within its :func:`resting_bands`.  Frame ``seq``
+    is taken to start at ``start_s`` + seq × its duration (s from power-on; ``start_s``: when the firmware received
+    START); frames within :data:`REST_MARGIN_FRAMES` of the first stimulus are left out."""
+    from bench.hosts.driver import SLOT_RATE_HZ
+    from emulator import channels as ch
+
+    quiet_until = min((st.start_s for st in stimuli), default=np.inf)
+    frame_s = len(frames[0].channels) / SLOT_RATE_HZ
+    quiet = [f for f in frames if start_s + (f.seq + 1 + REST_MARGIN_FRAMES) * frame_s <= quiet_until]
+    if len(quiet) < REST_MIN_FRAMES:
+        return (f"only {len(quiet)} frames before the scene's first stimulus at {quiet_until:g} s (at least "
+                f"{REST_MIN_FRAMES} needed to check the sensor at rest)")
+    for n, sensor in sorted(sensors.items()):
+        bands = resting_bands(sensor)
+        for f in quiet:
+            if n not in f.sensors:
+                continue
+            column = f.sensors.index(n)
+            for slot, channel in enumerate(f.channels):
+                name = ch.variant(sensor.variant).channel_name[int(channel)]
+                lo, hi = bands[name]
+                code = int(f.codes[slot, column])
+                if f.status[slot, column] == 0 and not lo <= code <= hi:
+                    return (f"sensor {n} at rest read {name} = {code} in frame {f.seq} (at about "
+                            f"{start_s + f.seq * frame_s:.3f} s), outside its resting band {lo:.0f}..{hi:.0f} "
+                            f"(resting code ± {REST_BAND_SIGMAS:g}σ of its noise + 1)")
+    return None
+
+
 #: How each fault of :data:`~bench.campaigns.case_names.FAULT_EXPECTED` is made and checked: name -> (bench
 #: keywords, schedule, check).
 FAULT_CASES = {
-    "none": ({}, [], _clean),
+    "none": ({}, [], _healthy),
     "unplug_replug": ({"n_sensors": 2}, [(0.3, lambda b: b.unplug(2)), (0.8, lambda b: b.plug(2))], _mask_returns),
     "parity_errors": ({}, [(0.1, lambda b: setattr(b.bus.ports[1], "faults", Faults(bad_parity=True)))],
                       _flags_parity),
@@ -159,8 +230,12 @@ FAULT_CASES = {
 #: recorded of the fault, so that a fault dropped on the way fails its case rather than passing as a healthy link.
 FAULT_TRACES = {"cs_glitch": _every_glitch_reached_sensor_1}
 
+#: The faults whose data must read, before the scene's first stimulus, as each sensor at rest (:func:`not_at_rest`):
+#: with no fault a broken "healthy" path (codes shifted, channels swapped, a sensor's unit mixed up) fails the case.
+AT_REST = {"none"}
+
 #: The campaign's faults, in :data:`~bench.campaigns.case_names.FAULT_EXPECTED`'s order with its expected reactions.
-FAULTS = {name: FaultCase(name, expected, *FAULT_CASES[name], FAULT_TRACES.get(name))
+FAULTS = {name: FaultCase(name, expected, *FAULT_CASES[name], FAULT_TRACES.get(name), name in AT_REST)
           for name, expected in FAULT_EXPECTED.items()}
 
 #: Each scene of :data:`~bench.campaigns.case_names.SCENE_DESCRIPTIONS`: its stimuli for sensor 1, as described there.
@@ -197,20 +272,24 @@ def _ask(drv: BridgeDriver, send, reply_type, tries: int):
     return None
 
 
-def _schedule_after_start(board, schedule) -> None:
+def _schedule_after_start(board, schedule) -> list:
     """Schedule ``schedule``'s actions (virtual s after streaming starts, action) when the firmware receives the
     host's first bytes (its START), in the firmware's own thread: when the host reads the virtual time or when its
     request is taken moves nothing.  (Scheduled from the host, a host slowed by a busy machine placed the actions
-    late, several at once: cs_glitch then failed with "errors on a healthy link".)"""
+    late, several at once: cs_glitch then failed with "errors on a healthy link".)  Returns a list that then holds
+    that instant (virtual s from power-on)."""
     receive = board.send_to_firmware
+    started = []
 
     def first_bytes(data: bytes) -> None:
         board.send_to_firmware = receive
+        started.append(board.t)
         for dt, action in schedule:
             board.at(board.t + dt, action)
         receive(data)
 
     board.send_to_firmware = first_bytes
+    return started
 
 
 def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, spi: str = "software") -> dict:
@@ -230,7 +309,7 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
         if sensor_faults:  # the sensors the bench would build, with these faults of their own
             kw["sensors"] = default_sensors(kw["n_sensors"], SCENES[scene], seed, faults=sensor_faults)
         fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, spi=spi, **kw)
-        _schedule_after_start(fb.board, fault.schedule)
+        started = _schedule_after_start(fb.board, fault.schedule)
         with fb:
             drv = BridgeDriver(fb.port)
             tries = LOSSY_LINE_TRIES if fb.corrupt_rate or fb.drop_rate else 1
@@ -254,6 +333,8 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
                                  or [np.array([2048])])
             if problem is None and not (0 <= pac.min() and pac.max() <= 4095):
                 problem = "out-of-range data reached the caller"
+            if problem is None and fault.at_rest:
+                problem = not_at_rest(frames, fb.board.sensors, SCENES[scene], started[0])
     except Exception as e:  # a crash or hang of the firmware or driver is a failure of the case
         problem = f"{type(e).__name__}: {e}"
     return {"fault": fault.name, "scene": scene, "seed": seed, "spi": spi, "expected": fault.expected,
