@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
 from emulator.rtl import build
 
 DEFAULT_BUILD_DIR = Path(__file__).resolve().parents[2] / "out" / "rtl_build"
+
+
+def _waves_in(folder: Path) -> list[Path]:
+    """The waveform files (FST, VCD) directly in ``folder``."""
+    return sorted([*folder.glob("*.fst"), *folder.glob("*.vcd")])
 
 
 def build_dir_for(sp: int = 0, waves: bool = False) -> Path:
@@ -58,17 +64,26 @@ class Rtl:
             stamp.write_text(str(self.sp))
 
     def _run(self, testcase: str, env: dict) -> dict:
+        """Run cocotb test ``testcase`` with ``env`` set; its result.  The simulation runs in a fresh hidden folder of
+        the build folder (``.<testcase>.<random>.part``), so a waveform it dumps is written there; only when the
+        simulator has exited cleanly is the waveform renamed into the build folder (replacing the last one whole),
+        and the folder goes whatever happens (an error, Ctrl-C): a waveform is never left half written under its
+        final name."""
         with tempfile.TemporaryDirectory() as tmp:
             result = Path(tmp) / "result.json"
             extra = {**env, "BIOTAC_RESULT": str(result)}
             old = {k: os.environ.get(k) for k in extra}
             os.environ.update(extra)
+            run_dir = Path(tempfile.mkdtemp(dir=self.build_dir, prefix=f".{testcase}.", suffix=".part"))
             try:
                 self.runner.test(hdl_toplevel="tb_top", test_module="emulator.rtl.cocotb_bench",
                                  testcase=testcase, build_dir=str(self.build_dir), waves=self.waves,
-                                 test_dir=str(self.build_dir), results_xml=str(Path(tmp) / "results.xml"),
+                                 test_dir=str(run_dir), results_xml=str(Path(tmp) / "results.xml"),
                                  log_file=str(self.build_dir / f"{testcase}.log"))
+                for wave in _waves_in(run_dir):  # complete: the simulator closed it and exited cleanly
+                    os.replace(wave, self.build_dir / wave.name)
             finally:
+                shutil.rmtree(run_dir, ignore_errors=True)
                 for k, v in old.items():
                     if v is None:
                         os.environ.pop(k, None)
@@ -80,7 +95,8 @@ class Rtl:
             return json.loads(result.read_text())
 
     def wave_files(self) -> list[Path]:
-        return sorted([*self.build_dir.glob("*.fst"), *self.build_dir.glob("*.vcd")])
+        """The waveforms in the build folder (complete ones: see :meth:`_run`)."""
+        return _waves_in(self.build_dir)
 
     def run_vectors(self, paths) -> dict:
         """Replay vector files in one simulation; returns {path: {"miso": [...], ...}}.  Each file's sensor
