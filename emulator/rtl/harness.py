@@ -170,7 +170,7 @@ class Harness:
                "--top-module", "biotac_bus", f"-GSP=5'd{self.sp}", "-Mdir", str(self.build_dir / "obj"),
                "-o", str(self.binary),
                "-Wno-fatal", "-Wno-lint", "-Wno-style", str(HARNESS_CPP), *map(str, build.SOURCES)]
-        r = subprocess.run(cmd, capture_output=True, text=True, env=build.verilator_env())
+        r = build.run_build(cmd, capture_output=True, text=True, env=build.verilator_env())
         if r.returncode != 0:
             raise HarnessError(f"building the harness failed:\n{r.stdout[-3000:]}\n{r.stderr[-3000:]}")
         return self.binary

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import subprocess
 import tempfile
 from pathlib import Path
 
@@ -44,6 +45,19 @@ class Rtl:
         from cocotb_tools.runner import get_runner
 
         self.runner = get_runner("verilator")
+        if hasattr(self.runner, "_execute_cmds"):  # (cocotb's own step runner, pinned; without it: cocotb's way)
+            self.runner._execute_cmds = self._execute_steps
+
+    def _execute_steps(self, cmds, cwd, stdout=None) -> None:
+        """cocotb's runner's steps (Verilator, make, the simulator), each through :func:`build.run_build`: in a process
+        group of its own that SIGINT and SIGTERM are passed on to, where cocotb's ``subprocess.run`` left make and the
+        compilers (or the simulator) running when this process alone was sent SIGTERM.  Output to ``stdout`` (a
+        file; None: this process's), a step that fails a RuntimeError with its exit status, as cocotb's own."""
+        for cmd in cmds:
+            r = build.run_build(cmd, cwd=cwd, env=self.runner.env, stdout=stdout,
+                                stderr=None if stdout is None else subprocess.STDOUT)
+            if r.returncode != 0:
+                raise RuntimeError(f"Command failed with return code: {r.returncode}")
 
     def build(self) -> None:
         """Build (or bring up to date) the simulator in its folder, under the folder's lock: two processes building
