@@ -3,7 +3,8 @@
 Each fault states what a correct firmware and driver do; a run passes when the stream stays decodable,
 nothing corrupted reaches the caller, the expected reaction is seen, a fault whose correct reaction shows the host
 nothing left its trace on the bus (:data:`FAULT_TRACES`: it happened), with no fault the data read as each
-sensor at rest before the scene's first stimulus (:data:`AT_REST`), and nothing hangs (every wait is bounded).  Results go to JUnit XML and a summary table.
+sensor at rest before the scene's first stimulus (:data:`AT_REST`), and nothing hangs (every wait is bounded).
+Results go to JUnit XML and a summary table.
 
 The cases are independent tasks on the campaign engine (:mod:`bench.campaigns.engine`: a Dask LocalCluster or an
 existing scheduler).  A task is a case's description — fault name, scene name, seed (:class:`CaseTask`) — and a

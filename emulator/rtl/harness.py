@@ -274,7 +274,7 @@ class HarnessPeripheral:
         self.harness = harness or Harness(sp=sp_mask({1: _variant_of(sensor)}))
         self._reference = SensorPort(sensor)  # only for its variant, provided channels and conversion window
         self.channels_read = sensor.channels_read
-        self._deferred: tuple[int, float] | None = None  # (channel, instant s) of the conversion the last batch ended on
+        self._deferred: tuple[int, float] | None = None  # (channel, instant s) of the last batch's final conversion
 
     def exchange(self, batch) -> np.ndarray:
         from emulator.spi.fastpath import _NO_TICK
@@ -346,8 +346,8 @@ class RtlBus:
     transfer (:meth:`_deferred_codes`); the RTL's request waits in the harness (a read meanwhile: "E.") and is
     answered before that transfer — with no code computed (code 0, never served) if the sensor was unplugged or
     its port replaced in between, where the software bus never converts it.  Each port counts what the software
-    port counts — ``empty_windows``, ``incomplete``, ``unprovided_requests``, ``coupled_conversions`` — from the same
-    decoding of its chip-select windows that decides the conversions (:meth:`_count_closed`,
+    port counts — ``empty_windows``, ``incomplete``, ``unprovided_requests``, ``coupled_conversions`` — from the
+    same decoding of its chip-select windows that decides the conversions (:meth:`_count_closed`,
     :func:`accepted_conversions`, :meth:`_deferred_codes`): the counts are the reference model's reading of the
     traffic the RTL received, not read out of the RTL (it has no such counters).
     """
@@ -429,10 +429,10 @@ class RtlBus:
 
     def _count_closed(self, n: int, fall, rise, k, bits, after):
         """Count sensor ``n``'s closed windows on its port as :meth:`SensorPort.cs_rise` counts them — ``k``: the bits
-        clocked in each (at most the 16 the sensor keeps), ``bits``: those bits as received — and return (fall s, rise
-        s, command — its 16 bits, 0 with fewer —, next activity s).  A window with no clock edge (a glitch) is one of
-        ``empty_windows``; one with fewer than 8 bits, or fewer than 16 whose first byte is not 0 (not a read), one of
-        ``incomplete`` (the sensor ignores both)."""
+        clocked in each (at most the 16 the sensor keeps), ``bits``: those bits as received — and return (fall s,
+        rise s, command — its 16 bits, 0 with fewer —, next activity s).  A window with no clock edge (a glitch) is
+        one of ``empty_windows``; one with fewer than 8 bits, or fewer than 16 whose first byte is not 0 (not a
+        read), one of ``incomplete`` (the sensor ignores both)."""
         port = self.ports[n]
         first_byte = np.where(k >= 8, bits >> np.maximum(k - 8, 0).astype(np.uint64), 0)
         port.empty_windows += int(np.count_nonzero(k == 0))
