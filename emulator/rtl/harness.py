@@ -88,7 +88,7 @@ def fault_port_values(faults: dict) -> dict[str, int]:
     return out
 
 
-def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int, convert_last: bool = True):
+def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_tick: int):
     """The conversions the sensor behind ``port`` (a :class:`~emulator.spi.model.SensorPort`: its variant, provided
     channels and conversion window) performs for 16-bit transfers to it — chip select falling at ``start`` and
     rising at ``end`` (s), the bus clocking next at ``next_activity`` (s) — decided by the software model's own
@@ -96,8 +96,8 @@ def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_ti
     not within CONVERSION_TICKS (5 µs) of the previous sampling command of a recognised channel (that one answers
     "E-"; busy and unprovided commands restart the window too).  ``last_sampling_tick``: that previous command's
     tick of the 1 MHz timer (``fastpath._NO_TICK``: none).  The last conversion, when nothing is known after it (its
-    next activity infinite), is among them judged quiet with ``convert_last``, else left out (the software bus
-    converts it at the bus's next activity).  Returns (channels, instants s, whether the bus clocks within the
+    next activity infinite), is left out: the software model converts it at the bus's next activity, so do the
+    callers (RtlBus, HarnessPeripheral).  Returns (channels, instants s, whether the bus clocks within the
     conversion, the last sampling tick afterwards, the conversion left out: (channel, instant s) or None, how many
     commands asked for a channel the sensor recognises but does not provide — the port's ``unprovided_requests``)."""
     from emulator.spi.fastpath import _TABLES, _commands
@@ -111,8 +111,7 @@ def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_ti
         np.ascontiguousarray(next_activity, float), word_of_byte, recognized, channel_of, port.provided_lut,
         int(last_sampling_tick), float(port.conversion_s), first, cmd_end, prepared, acc_at, acc_channel, acc_time,
         acc_coupled)
-    left = None if deferred < 0 or convert_last else (int(acc_channel[n_acc]), float(acc_time[n_acc]))
-    n_acc += deferred >= 0 and convert_last  # the model converts a last command with no next activity known later
+    left = None if deferred < 0 else (int(acc_channel[n_acc]), float(acc_time[n_acc]))
     return acc_channel[:n_acc], acc_time[:n_acc], acc_coupled[:n_acc], int(last_tick), left, int(unprovided)
 
 
@@ -290,7 +289,7 @@ class HarnessPeripheral:
             coupled = bool(start[0] < t + self._reference.conversion_s)
             self.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))  # (never served)
         channels, instants, coupled, _, self._deferred, _ = accepted_conversions(
-            self._reference, start, end, mosi, np.append(start[1:], np.inf), _NO_TICK, convert_last=False)
+            self._reference, start, end, mosi, np.append(start[1:], np.inf), _NO_TICK)
         samples = self.sensor.sample(channels, instants, bus_active=coupled)
         if self._deferred is not None:  # the RTL requests it within this batch: a placeholder no transfer reads
             channels, samples = np.append(channels, self._deferred[0]), np.append(samples, 0)
@@ -467,7 +466,7 @@ class RtlBus:
             fall, rise, command, after = self._windows(n, start, end, cs, mosi, nbits, keep,
                                                        faults[n].mosi_flip_bit)
             channels, instants, coupled, self._last_sampling_tick[n], left, unprovided = accepted_conversions(
-                port, fall, rise, command, after, convert_last=False, last_sampling_tick=self._last_sampling_tick[n])
+                port, fall, rise, command, after, last_sampling_tick=self._last_sampling_tick[n])
             port.unprovided_requests += unprovided
             port.coupled_conversions += int(np.count_nonzero(coupled))
             if left is not None:
