@@ -474,16 +474,31 @@ def _check_batch(start, mosi, clock, last_end) -> np.ndarray:
         raise ValueError("start_s and mosi must have the same length")
     if start.size == 0:
         return start
+    if not np.isfinite(start).all():  # NaN compared false with every bound: it had passed, and read a word
+        bad = int(np.flatnonzero(~np.isfinite(start))[0])
+        raise ValueError(f"transfer #{bad}: start_s = {float(start[bad])!r}: every start must be a finite time (s)")
     lo, hi = proto.SPI_CLOCK_RANGE_HZ
-    if clock.min() < lo or clock.max() > hi:
+    if not (clock.min() >= lo and clock.max() <= hi):  # NaN fails this too
         c = np.broadcast_to(clock, start.shape)
-        bad = int(np.flatnonzero((c < lo) | (c > hi))[0])
+        bad = int(np.flatnonzero(~((c >= lo) & (c <= hi)))[0])
         raise ValueError(f"transfer #{bad}: SCK {c[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
     end = start + 16.5 / clock
     eps = proto.TIME_TOLERANCE_S
     if start[0] < last_end - eps or _overlapping(start, end, -eps):
-        raise ValueError("transfers must be in time order and must not overlap")
+        raise ValueError(_order_problem(start, end, last_end, eps))
     return end
+
+
+def _order_problem(start, end, last_end: float, eps: float) -> str:
+    """Which transfer of a batch breaks time order (s): the first, against the port's previous call, or one against
+    the transfer before it (a transfer holds chip select for 16.5 SCK periods)."""
+    rule = "transfers must be in time order and must not overlap"
+    if start[0] < last_end - eps:
+        return (f"{rule}: transfer #0 starts at {start[0]:.9g} s, before the previous call's last transfer ended "
+                f"({last_end:.9g} s); a port's time only runs forward")
+    i = int(np.flatnonzero(start[1:] - end[:-1] < -eps)[0]) + 1
+    return (f"{rule}: transfer #{i} starts at {start[i]:.9g} s, before transfer #{i - 1} (from {start[i - 1]:.9g} s) "
+            f"ends at {end[i - 1]:.9g} s")
 
 
 def overlap_error(start_s: float) -> ValueError:
@@ -544,6 +559,14 @@ class Bus:
     _last_end: float = -math.inf
     _open: bool = False
     _line: list = field(default_factory=list)  # recent (time, level) changes of the MISO line
+
+    def __post_init__(self):
+        first: dict[int, int] = {}  # id of a port object -> the first sensor number it was given
+        for n, p in self.ports.items():
+            if id(p) in first:  # one port answering two selects: each window would garble the other's state
+                raise ValueError(f"Bus: sensors {first[id(p)]} and {n} are the same SensorPort object: each sensor "
+                                 f"number needs a port (and a sensor) of its own")
+            first[id(p)] = n
 
     def close(self) -> None:
         """Nothing to release (a bus backed by a simulator process, like the RTL one, stops it here)."""
