@@ -63,6 +63,14 @@ def encode(frame_type: int, payload: bytes = b"") -> bytes:
     return SYNC + body + struct.pack("<H", crc16(body))
 
 
+class FrameChannels(dict):
+    """A frame's codes by channel name: a channel it does not carry is a KeyError naming the ones it does."""
+
+    def __missing__(self, name):
+        raise KeyError(f"{name!r}: not in this frame's pattern; it carries {', '.join(self) or 'no channel'} "
+                       f"(set the pattern with BridgeDriver.set_pattern, or the bench's pattern=)")
+
+
 @dataclass
 class DataFrame:
     """One frame of samples: ``codes[slot, sensor]`` (12 bits) and ``status`` (0 ok, 1 parity, 2 error word)."""
@@ -82,10 +90,18 @@ class DataFrame:
         """``ok[slot, sensor]``: the slot carries a code (status 0); an error word or a parity error never does."""
         return self.status == 0
 
+    def _column(self, sensor) -> int:
+        """The codes' column of ``sensor`` (a number 1–5 in this frame's mask); ValueError naming those present."""
+        if sensor not in self.sensors or isinstance(sensor, bool):
+            raise ValueError(f"sensor {sensor!r} is not in this frame (sensor mask 0x{self.sensor_mask:02X}: sensors "
+                             f"{self.sensors or 'none'}; numbered from 1)")
+        return self.sensors.index(sensor)
+
     def samples(self, sensor: int) -> dict[str, np.ndarray]:
-        """Sensor ``sensor``'s codes by channel name (PAC, E20 …), only the slots with status 0."""
-        k = self.sensors.index(sensor)
-        out = {}
+        """Sensor ``sensor``'s codes by channel name (PAC, E20 …), only the slots with status 0; a channel the frame
+        does not carry is a KeyError naming the channels it does."""
+        k = self._column(sensor)
+        out = FrameChannels()
         for name in dict.fromkeys(channel_name(c) for c in self.channels):
             sel = (np.array([channel_name(c) for c in self.channels]) == name) & self.ok[:, k]
             out[name] = self.codes[sel, k]
@@ -94,7 +110,7 @@ class DataFrame:
     def errors(self, sensor: int) -> list[tuple[int, str, str]]:
         """Sensor ``sensor``'s failed slots: (slot, channel name, "error word" or "parity error") — e.g. E20..E24
         asked of a 19-electrode BioTac, which answers each with its "channel not recognized" error word."""
-        k = self.sensors.index(sensor)
+        k = self._column(sensor)
         return [(int(i), channel_name(self.channels[i]), STATUS_NAMES[int(self.status[i, k])])
                 for i in np.flatnonzero(self.status[:, k] != 0)]
 
@@ -371,8 +387,15 @@ class BridgeDriver:
     def close(self) -> None:
         self.serial.close()
 
+    def _check_open(self, what: str) -> None:
+        """Refuse a call after :meth:`close` (pyserial's own error there was a TypeError about a file number)."""
+        if not getattr(self.serial, "is_open", True):
+            raise RuntimeError(f"BridgeDriver.{what}(): the driver's port {getattr(self.serial, 'port', '?')} is "
+                               f"closed (close() was called); open a new BridgeDriver(port) to talk to the bridge")
+
     def send(self, frame_type: int, payload: bytes = b"") -> int:
         """Send a command frame; returns its number (for :meth:`reply_to`)."""
+        self._check_open("send")
         self.serial.write(encode(frame_type, payload))
         self.serial.flush()
         self._sent += 1
@@ -461,6 +484,7 @@ class BridgeDriver:
     def poll(self) -> list:
         """Read what has arrived; returns the decoded items (frames, statuses, acks).  Low level: the data frames
         among them also wait in the backlog for :meth:`frames` (use one or the other to take frames)."""
+        self._check_open("poll")
         try:
             data = self.serial.read(max(1, self.serial.in_waiting or 1))
         except OSError:  # EIO: the other side of the pty went away (pyserial's SerialException is an OSError)
