@@ -9,6 +9,12 @@ A background thread runs the firmware in virtual time in 10 ms steps, moving byt
 firmware's UART.  Faults are scheduled in virtual time (:meth:`at`) or applied at once (:meth:`now`); the
 line itself can corrupt or drop bytes (``corrupt_rate``, ``drop_rate``).
 
+``firmware=``: the firmware to run — None (the reference bridge firmware), your C sources (a list of paths, built
+with :func:`bench.hosts.cosim.build_firmware`, headers beside them part of the build's key) or a library you built;
+it must export ``bt_bridge_size``, ``bt_init``, ``bt_step`` and ``bt_set_pattern`` (``bt_bridge.h``).  A firmware
+whose ``bt_step`` never returns is reported by :meth:`stop` (a :class:`~bench.errors.FirmwareError`) after
+:data:`STOP_TIMEOUT_S` of wall time.
+
 The host's side of the link is a finite receive buffer (:class:`bench.hosts.serial_link.PtyLink`, 4096 bytes by
 default, ``rx_buffer=``).  Paced to the wall clock (``realtime=True``, what ``biotac-bench bridge`` does), it
 behaves like a UART without flow control: bytes arrive at the baud rate, and a host that does not read in time
@@ -36,7 +42,8 @@ import time
 
 import numpy as np
 
-from bench.hosts.cosim import CoSim, VirtualBoard
+from bench.errors import FirmwareError
+from bench.hosts.cosim import CoSim, VirtualBoard, firmware_library
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
 
@@ -44,6 +51,8 @@ from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
 HOST_GONE_S = 0.2
 #: Unpaced, before the host's first byte: how often (wall s) the bench looks for it (virtual time stands still).
 HOST_POLL_S = 0.002
+#: How long (wall s) stop() waits for the firmware to end its step before it reports a hung firmware.
+STOP_TIMEOUT_S = 10.0
 
 
 def _check_action(what: str, action) -> None:
@@ -57,7 +66,7 @@ class FirmwareBench:
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
                  step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software",
                  rx_buffer: int = RX_BUFFER_BYTES, keep_arrivals: bool = False, pattern=None,
-                 variant: str = "biotac", host_gone_s: float = HOST_GONE_S):
+                 variant: str = "biotac", host_gone_s: float = HOST_GONE_S, firmware=None):
         if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
             raise ValueError(f"speed = {speed!r}: must be a number > 0 (virtual seconds per wall second)")
         for name, flag in (("realtime", realtime), ("pull_up", pull_up), ("keep_arrivals", keep_arrivals)):
@@ -81,6 +90,7 @@ class FirmwareBench:
             raise ValueError(f"corrupt_rate + drop_rate = {corrupt_rate + drop_rate:g}: together at most 1 (each byte "
                              f"is dropped, corrupted or sent as it is)")
         sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)
+        library = firmware_library(firmware)  # built (or refused) before a pty or an RTL harness exists
         self.link = PtyLink(baudrate, rx_buffer=rx_buffer, keep_arrivals=keep_arrivals)
         self.baudrate = baudrate
         self._line_free_at = 0.0  # wall time when the paced UART has sent everything so far
@@ -89,10 +99,17 @@ class FirmwareBench:
         self.port = self.link.path
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
-        self.board = VirtualBoard(sensors, uart_out=self._line, pull_up=pull_up, spi=spi)
-        self.sim = CoSim(self.board)
-        if pattern is not None:
-            self.sim.set_pattern(pattern)
+        self.board = None
+        try:
+            self.board = VirtualBoard(sensors, uart_out=self._line, pull_up=pull_up, spi=spi)
+            self.sim = CoSim(self.board, library)
+            if pattern is not None:
+                self.sim.set_pattern(pattern)
+        except BaseException:  # a refused pattern, a library that does not load: nothing left open behind it
+            self.link.close()
+            if self.board is not None:
+                self.board.bus.close()
+            raise
         self.realtime, self.speed, self.step_s = realtime, speed, step_s
         self._stop = threading.Event()
         self._requests: queue.Queue = queue.Queue()  # (virtual time or None, action): applied by the bench thread
@@ -182,12 +199,20 @@ class FirmwareBench:
         if not (isinstance(t_s, numbers.Real) and not isinstance(t_s, bool) and math.isfinite(t_s) and t_s >= 0):
             raise ValueError(f"at: t_s = {t_s!r}: must be a finite virtual time ≥ 0 s (e.g. bench.virtual_time + 0.5)")
         _check_action("at", action)
+        self._check_running("at")
         self._requests.put((float(t_s), action))
 
     def now(self, action) -> None:
         """Apply ``action(board)`` before the firmware's next step (never blocks the caller)."""
         _check_action("now", action)
+        self._check_running("now")
         self._requests.put((None, action))
+
+    def _check_running(self, what: str) -> None:
+        """Refuse scheduling on a stopped bench: the action would silently never run."""
+        if self._stop.is_set():
+            raise RuntimeError(f"{what}: the bench on {self.port} is stopped (stop() was called): an action given now "
+                               f"would never run; schedule faults before stopping it")
 
     @property
     def virtual_time(self) -> float:
@@ -226,8 +251,16 @@ class FirmwareBench:
             return
         self._stop.set()
         if self._thread.is_alive():
-            self._thread.join(timeout=10)
+            self._thread.join(timeout=STOP_TIMEOUT_S)
         self.link.close()
+        if self._thread.is_alive():  # inside the firmware's bt_step: a loop that never returns to the bench
+            self.board.abandoned.set()
+            raise FirmwareError(
+                f"the firmware did not return from bt_step within {STOP_TIMEOUT_S:g} s of wall time after stop() "
+                f"(virtual time {self.board.t:.6f} s): it hangs in a loop (one waiting for a byte or a time that "
+                f"only comes between steps, or one that calls no HAL function); its port is closed, its SPI bus left "
+                f"open and its thread parked at its next HAL call (a loop calling none keeps a core busy until the "
+                f"process ends)")
         self.board.bus.close()
         if self.error is not None:
             raise RuntimeError(f"the firmware bench stopped with an error: {self.error!r}") from self.error

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import ctypes as C
 import math
+import threading
 import time
 from collections import deque
 from pathlib import Path
 
 import numpy as np
 
-from bench.errors import FirmwareError
+from bench.errors import BuildError, FirmwareError
 from bench.hosts.driver import BridgeDriver
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
@@ -30,11 +31,56 @@ SPI_CLOCK_HZ = 4.4e6
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
-    """Compile firmware sources (C11) into a shared library; cached by the sources' and headers' contents."""
+    """Compile firmware sources (C11) into a shared library; cached by the contents of the sources, of the headers
+    beside them and of the reference firmware's headers (``bt_hal.h``), so editing a header of your own rebuilds.
+    A source that is not a file is a :class:`BuildError` naming it."""
     sources = [Path(s) for s in (sources or sorted(FIRMWARE_DIR.glob("*.c")))]
-    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + sorted(FIRMWARE_DIR.glob("*.h")))
+    for s in sources:
+        if not s.is_file():
+            raise BuildError(f"the firmware: source {str(s)!r} is not a file (give C source files, e.g. "
+                             f"sorted(Path('my_firmware').glob('*.c')))")
+    folders = sorted({s.resolve().parent for s in sources} | {FIRMWARE_DIR.resolve()})
+    headers = [h for folder in folders for h in sorted(folder.glob("*.h"))]
+    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + headers)
     return compile_c(sources, folder / "libbtbridge.so", flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}"),
                      what="the firmware")
+
+
+#: What a firmware library must export for the bench to run it (bt_bridge.h).
+FIRMWARE_SYMBOLS = ("bt_bridge_size", "bt_init", "bt_step", "bt_set_pattern")
+
+
+def firmware_library(firmware=None) -> Path:
+    """The shared library to run for ``firmware``: None, the reference firmware (built); a list of C sources, built
+    with :func:`build_firmware`; or the path of a library you built (``.so``).  Anything else is a
+    :class:`BuildError` saying what is allowed."""
+    if firmware is None:
+        return build_firmware()
+    if isinstance(firmware, (str, Path)):
+        path = Path(firmware)
+        if path.suffix == ".c":
+            return build_firmware([path])
+        if not path.is_file():
+            raise BuildError(f"firmware = {str(firmware)!r}: no such library (give a built .so, a list of C sources, "
+                             f"or None for the reference firmware)")
+        return path
+    if isinstance(firmware, (list, tuple)) and firmware and all(isinstance(s, (str, Path)) for s in firmware):
+        return build_firmware(list(firmware))
+    raise BuildError(f"firmware = {firmware!r}: give None (the reference firmware), a list of C source files, or "
+                     f"the path of a built .so")
+
+
+def load_firmware(library: Path) -> C.CDLL:
+    """Load a firmware library, checking it exports :data:`FIRMWARE_SYMBOLS` (FirmwareError naming those missing)."""
+    try:
+        lib = C.CDLL(str(library))
+    except OSError as e:
+        raise FirmwareError(f"the firmware library {str(library)!r} cannot be loaded: {e}") from e
+    missing = [name for name in FIRMWARE_SYMBOLS if not hasattr(lib, name)]
+    if missing:
+        raise FirmwareError(f"the firmware library {str(library)!r} does not export {', '.join(missing)}; the bench "
+                            f"calls {', '.join(FIRMWARE_SYMBOLS)} (firmware_tests/firmware/bt_bridge.h)")
+    return lib
 
 
 class BtWord(C.Structure):
@@ -79,6 +125,9 @@ class VirtualBoard:
         self.events: list[tuple[float, object]] = []
         self.resets: list[tuple[float, int]] = []  # (virtual time s, sensor): brown-outs inside an SPI sequence
         self.error: BaseException | None = None
+        #: Set when the bench gave up on a hung firmware: its next HAL call parks its thread for good, so a loop
+        #: that keeps calling the HAL stops spending a core for the rest of the process.
+        self.abandoned = threading.Event()
 
     # --- faults and events ---------------------------------------------------------------
     def at(self, t_s: float, action) -> None:
@@ -140,6 +189,8 @@ class VirtualBoard:
     # --- the HAL ------------------------------------------------------------------------
     def _guard(fn):  # noqa: N805 - decorator inside the class body
         def wrapped(self, *a):
+            if self.abandoned.is_set():
+                threading.Event().wait()  # never set: the firmware's thread sleeps until the process ends
             try:
                 return fn(self, *a)
             except BaseException as e:  # an exception must not unwind through C: keep it, stop the run
@@ -205,7 +256,7 @@ class CoSim:
 
     def __init__(self, board: VirtualBoard, library: Path | None = None):
         self.board = board
-        self.lib = C.CDLL(str(library or build_firmware()))
+        self.lib = load_firmware(library or build_firmware())
         self.lib.bt_bridge_size.restype = C.c_size_t
         self.state = C.create_string_buffer(self.lib.bt_bridge_size())
         self._cb = [SEQ_FN(board.spi_sequence), BYTES_FN(board.spi_bytes), DELAY_FN(board.delay_us),

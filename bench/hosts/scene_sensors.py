@@ -124,6 +124,12 @@ def bench_sensors(n_sensors, sensors, stimuli, seed: int, variant: str) -> dict:
         odd = {n: s for n, s in sensors.items() if not (isinstance(s, Sensor) or callable(getattr(s, "sample", None)))}
         if odd:
             raise ValueError(f"sensors = {odd!r}: each must be an emulator.sensor.Sensor (or sample like one)")
+        first: dict[int, int] = {}  # id of a sensor object -> the first number it was given
+        for n, s in sensors.items():
+            if id(s) in first:  # one object answering two numbers: each asks it for instants the other has passed
+                raise ValueError(f"sensors {first[id(s)]} and {n} are the same Sensor object: each sensor number needs "
+                                 f"a sensor of its own (build one per number)")
+            first[id(s)] = n
         return dict(sensors)
     if not _whole_1_to_max(n_sensors):
         raise ValueError(f"n_sensors = {n_sensors!r}: must be a whole number from 1 to {MAX_SENSORS} "

@@ -1,0 +1,120 @@
+"""A firmware team runs its own firmware on the bench (README "Plugging in your own"): FirmwareBench(firmware=...)
+and so ``biotac_bridge(firmware=...)`` take C sources or a built library; a header beside the sources is part of the
+build's key (editing it rebuilds); a missing source, a library without the bridge's entry points, a refused pattern
+leave nothing open; a firmware that hangs is reported by stop() rather than left silently spinning; scheduling on a
+stopped bench, and one Sensor object under two sensor numbers, are refused."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import pytest
+
+from bench.errors import BuildError, FirmwareError
+from bench.hosts import bridge as bridge_module
+from bench.hosts.bridge import FirmwareBench
+from bench.hosts.cosim import FIRMWARE_DIR, build_firmware, firmware_library
+from bench.hosts.driver import BridgeDriver
+from bench.hosts.native import compile_c
+from bench.pytest_plugin.fixtures import one_sensor
+
+pytestmark = pytest.mark.firmware
+
+REFERENCE = (FIRMWARE_DIR / "bt_bridge.c").read_text()
+STEP = "void bt_step(bt_bridge *b) {\n    serve_host(b);\n"
+assert STEP in REFERENCE, "the reference firmware's bt_step changed: update these tests' edits"
+
+
+def own_firmware(tmp_path, extra_step: str = "", header: str = "#define MY_MARK 7\n"):
+    """The reference firmware copied into ``tmp_path`` as a user's, with its own header (``my.h``), a marker
+    function ``my_mark`` returning MY_MARK, and ``extra_step`` run at the start of every bt_step."""
+    (tmp_path / "my.h").write_text(header)
+    src = tmp_path / "my_bridge.c"
+    src.write_text('#include "my.h"\n' + REFERENCE.replace(STEP, STEP + extra_step)
+                   + "\nint my_mark(void);\nint my_mark(void) { return MY_MARK; }\n")
+    return src
+
+
+def test_your_own_firmware_streams_through_the_bench_and_the_driver(tmp_path):
+    src = own_firmware(tmp_path)
+    with FirmwareBench(n_sensors=1, firmware=[src]) as bench:
+        assert bench.sim.lib.my_mark() == 7  # the user's library is the one running
+        driver = BridgeDriver(bench.port)
+        driver.start()
+        assert len(list(driver.frames(max_frames=20, timeout_s=5))) == 20
+        driver.close()
+    assert firmware_library(str(src)) == firmware_library([src])  # a single .c path too
+    assert firmware_library(firmware_library([src])) == firmware_library([src])  # a built .so as it is
+
+
+def test_a_header_beside_your_sources_is_part_of_the_build(tmp_path):
+    src = own_firmware(tmp_path)
+    first = build_firmware([src], out_dir=tmp_path / "out")
+    (tmp_path / "my.h").write_text("#define MY_MARK 8\n")  # the .c unchanged: had reused the stale library
+    second = build_firmware([src], out_dir=tmp_path / "out")
+    assert first != second
+    import ctypes
+    assert ctypes.CDLL(str(second)).my_mark() == 8
+
+
+def test_what_is_not_a_firmware_is_refused_by_name(tmp_path):
+    with pytest.raises(BuildError, match=r"source '.*nope\.c' is not a file"):
+        FirmwareBench(firmware=[tmp_path / "nope.c"])
+    with pytest.raises(BuildError, match=r"firmware = '.*nope\.so': no such library"):
+        FirmwareBench(firmware=str(tmp_path / "nope.so"))
+    with pytest.raises(BuildError, match=r"firmware = 42: give None \(the reference firmware\), a list of C source"):
+        FirmwareBench(firmware=42)
+    empty = tmp_path / "empty.c"
+    empty.write_text("int nothing_here(void);\nint nothing_here(void) { return 0; }\n")
+    lib = compile_c([empty], tmp_path / "libempty.so", flags=("-shared", "-fPIC"))
+    fds = len(os.listdir("/proc/self/fd"))
+    with pytest.raises(FirmwareError, match=r"does not export bt_bridge_size, bt_init, bt_step, bt_set_pattern"):
+        FirmwareBench(firmware=lib)
+    assert len(os.listdir("/proc/self/fd")) == fds, "a refused firmware left its pty open"
+
+
+def test_a_refused_pattern_leaves_no_pty_open():
+    fds = len(os.listdir("/proc/self/fd"))
+    with pytest.raises(ValueError, match="refused by the firmware"):
+        FirmwareBench(pattern=[99])
+    assert len(os.listdir("/proc/self/fd")) == fds
+
+
+def test_a_hung_firmware_is_reported_by_stop_and_parked(tmp_path, monkeypatch):
+    """A bt_step that loops forever once streaming passes 0.1 s of virtual time (calling micros, a HAL function)."""
+    monkeypatch.setattr(bridge_module, "STOP_TIMEOUT_S", 0.5)
+    src = own_firmware(tmp_path, "    if (b->streaming && b->hal->micros(b->hal->ctx) > 100000) {\n"
+                                 "        for (;;) { (void)b->hal->micros(b->hal->ctx); }\n    }\n")
+    bench = FirmwareBench(firmware=[src]).start()
+    driver = BridgeDriver(bench.port)
+    driver.start()
+    frames = list(driver.frames(max_frames=5, timeout_s=10))  # the first frames may wait on loading the kernels
+    frames += list(driver.frames(max_frames=100, timeout_s=0.5))
+    assert 5 <= len(frames) < 20  # streamed up to the hang at 0.1 s (10 ms frames), then nothing
+    with pytest.raises(FirmwareError, match=r"the firmware did not return from bt_step within 0\.5 s of wall time "
+                                            r"after stop\(\) \(virtual time 0\.1\d* s\): it hangs in a loop"):
+        bench.stop()
+    assert bench.board.abandoned.is_set()
+    cpu = time.process_time()
+    time.sleep(0.3)
+    assert bench._thread.is_alive() and time.process_time() - cpu < 0.1  # parked in its HAL call, not spinning
+    bench.stop()  # idempotent: nothing more to say
+    driver.close()
+
+
+def test_scheduling_on_a_stopped_bench_is_refused():
+    bench = FirmwareBench().start()
+    bench.at(0.5, lambda board: None)
+    bench.stop()
+    for schedule in (lambda: bench.at(1.0, lambda board: None), lambda: bench.now(lambda board: None)):
+        with pytest.raises(RuntimeError, match=r"the bench on .* is stopped \(stop\(\) was called\): an action given "
+                                               r"now would never run"):
+            schedule()
+
+
+def test_one_sensor_object_under_two_numbers_is_refused():
+    s = one_sensor()
+    with pytest.raises(ValueError, match=r"sensors 1 and 3 are the same Sensor object: each sensor number needs a "
+                                         r"sensor of its own"):
+        FirmwareBench(sensors={1: s, 2: one_sensor(), 3: s})
