@@ -87,12 +87,19 @@ Keywords (every one optional)
         pull_up       MISO pulled up when no sensor drives it (default False)
         corrupt_rate, drop_rate   line faults: the probability that each byte is corrupted / dropped
         step_s        the firmware's virtual-time step (s, default 0.01)
+        firmware      your firmware instead of the reference one: a list of C source files (built with
+                      ``bench.hosts.cosim.build_firmware``) or a built library; a bt_step that never returns
+                      fails the test at teardown, naming the hang
         SPI faults in virtual time: ``bench.at(t_s, lambda board: setattr(board.bus.ports[k], "faults",
         Faults(miso_stuck=1)))`` (either SPI bus: over ``spi="rtl"`` from the same transfer, the same words);
         glitches, brown-outs and hot-plugging: ``board.glitch(k)``, ``board.reset_at(k, t_s)``,
         ``board.unplug(k)``, ``board.plug(k)`` (either SPI bus, the same frames)
       biotac_cheetah only (``CheetahBench``):
         trace         keep every transfer (start s, select code, bits, MOSI) in ``bench.trace``
+
+The factories are called (``spi = biotac_sensor()``); using one as the sensor or bench it makes is an
+AttributeError saying so.  A bench that fails when it is stopped (a hung firmware, an error in its thread) fails
+the test at teardown with that error in one message, after every bench of the test has been stopped.
 
 ``scene``: a ``Scene``, a scene file's path, or a shipped scene's name as ``biotac-bench run`` takes it ("taps").
 Sensor k is the scene's sensor k (unit, parameters, variant, stimuli, faults, noise, fidelity; see
@@ -213,6 +220,28 @@ def _refuse_beside(fixture: str, what: str, given: dict, refused) -> None:
               f"leave {'it' if len(clash) == 1 else 'them'} out (or {what})")
 
 
+class Factory:
+    """A factory fixture's value: call it to get a sensor or a bench; using it as one (``biotac_sensor.exchange``)
+    is an AttributeError saying to call it first (it had been "'function' object has no attribute 'exchange'")."""
+
+    def __init__(self, name: str, make, gives: str):
+        self._name, self._make, self._gives = name, make, gives
+
+    def __call__(self, *args, **kw):
+        __tracebackhide__ = True
+        return self._make(*args, **kw)
+
+    def __getattr__(self, attr: str):
+        __tracebackhide__ = True
+        if attr.startswith("__"):  # copy, pickle and friends look for these: no hint, the plain error
+            raise AttributeError(attr)
+        raise AttributeError(f"{self._name} is a factory fixture, not {self._gives}: call it first, e.g. "
+                             f"x = {self._name}() (keywords in bench/pytest_plugin/fixtures.py), then x.{attr}")
+
+    def __repr__(self):
+        return f"<{self._name} factory: call it to get {self._gives}>"
+
+
 @pytest.fixture
 def biotac_sensor():
     """Factory: ``biotac_sensor(stimuli=(), channels=None, seed=0, unit=None, variant=None, scene=None, **kw)``
@@ -240,14 +269,14 @@ def biotac_sensor():
         except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"biotac_sensor(): {e}")
 
-    return make
+    return Factory("biotac_sensor", make, "a sensor's SPI side")
 
 
-def _benches(fixture: str, bench_class, scene_kw):
+def _benches(fixture: str, bench_class, scene_kw, gives: str):
     """A factory fixture's body: build the sensors (module docstring; ``scene_kw(scene, n_sensors, seed, kw)``:
     the bench's keywords for a scene's sensors), start ``bench_class`` on them on demand, stop each after the
     test."""
-    from bench.errors import SceneError
+    from bench.errors import BenchError
 
     own = set(inspect.signature(bench_class).parameters) - {"n_sensors", "stimuli", "seed", "sensors", "variant"}
     allowed = {"n_sensors", "stimuli", "seed", "sensors", "scene", *SENSOR_DESCRIPTION, *own}
@@ -264,15 +293,21 @@ def _benches(fixture: str, bench_class, scene_kw):
         kw.update(_given(stimuli=stimuli, units=units, seed=None if kw.get("seed") is None else int(kw["seed"])))
         try:
             bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
-        except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
+        except (BenchError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"; BuildError: firmware
             _fail(f"{fixture}(): {e}")
         started.append(bench.start())
         return bench
 
-    yield make
+    yield Factory(fixture, make, gives)
     ended.append(True)
-    for bench in started:
-        bench.stop()
+    problems = []
+    for bench in started:  # every bench is stopped, whatever an earlier one reported
+        try:
+            bench.stop()
+        except (BenchError, RuntimeError) as e:  # a hung firmware, an error inside the bench's thread
+            problems.append(f"{fixture}: bench on {getattr(bench, 'port', '?')}: {e}")
+    if problems:
+        _fail("\n".join(problems))
 
 
 def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw) -> dict:
@@ -332,7 +367,7 @@ def biotac_bridge():
     (``BridgeDriver(bench.port).start()``); keywords in the module docstring."""
     from bench.hosts.bridge import FirmwareBench
 
-    yield from _benches("biotac_bridge", FirmwareBench, _bridge_scene_kw)
+    yield from _benches("biotac_bridge", FirmwareBench, _bridge_scene_kw, "a FirmwareBench")
 
 
 @pytest.fixture
@@ -349,4 +384,4 @@ def biotac_cheetah():
     in the module docstring."""
     from bench.hosts.cheetah_server import CheetahBench
 
-    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw)
+    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw, "a CheetahBench")
