@@ -9,7 +9,8 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import Terminated, any_seed, number, output_file, sigterm_raises, stimuli_count, whole
+from bench.cli.args import (Terminated, any_seed, existing_file, number, output_file, sigterm_raises, stimuli_count,
+                            whole)
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
 
@@ -28,6 +29,26 @@ def bridge_scene_kw(scene, n_sensors: int | None = None, seed: int | None = None
     n_sensors = scene.n_sensors if n_sensors is None else n_sensors
     return {"n_sensors": n_sensors, "sensors": sensors_from_scene(scene, n_sensors, seed=seed),
             "pattern": firmware_pattern(scene), "spi": spi or scene.spi, "seed": scene.seed if seed is None else seed}
+
+
+def firmware_file(text: str) -> str:
+    """argparse type of bridge's --firmware: a readable C source (.c) or a built library (.so)."""
+    existing_file(text)
+    if Path(text).suffix not in (".c", ".so"):
+        raise argparse.ArgumentTypeError(f"{text}: give C sources (.c) or one built library (.so)")
+    return text
+
+
+def firmware_choice(files) -> str | list | None:
+    """FirmwareBench's ``firmware`` for --firmware's files: None (the reference firmware), one library, or the
+    sources; a library among other files is a ValueError (one library is the whole firmware)."""
+    if not files:
+        return None
+    libraries = [f for f in files if f.endswith(".so")]
+    if libraries and len(files) > 1:
+        raise ValueError(f"bridge --firmware: {libraries[0]} is a built library, the whole firmware: give it alone, "
+                         f"or only C sources")
+    return files[0] if libraries else list(files)
 
 
 def _cmd_bridge(a) -> int:
@@ -52,14 +73,15 @@ def _cmd_bridge(a) -> int:
     with sigterm_raises():
         try:
             fb = FirmwareBench(realtime=not a.fast, speed=a.speed, baudrate=a.baud, rx_buffer=a.rx_buffer,
-                               **kw).start()
+                               firmware=firmware_choice(a.firmware), **kw).start()
         except KeyboardInterrupt as e:  # the first start builds the firmware (and the RTL): seconds to minutes
             name, status = ("SIGTERM", 143) if isinstance(e, Terminated) else ("SIGINT", 130)
             print(f"{name} while the bridge was starting (building the firmware"
                   f"{' and the RTL' if kw['spi'] == 'rtl' else ''}): no port was opened", file=sys.stderr)
             return status
         try:
-            print(f"bridge firmware running with {what}", flush=True)
+            print(f"{'your firmware (' + ', '.join(a.firmware) + ')' if a.firmware else 'bridge firmware'} running "
+                  f"with {what}", flush=True)
             print(f"serial port: {fb.port}", flush=True)
             print(f"UART {a.baud} baud, host receive buffer {a.rx_buffer} bytes"
                   + (" (a host that stops reading loses what does not fit, as on a real UART)" if not a.fast else
@@ -418,6 +440,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="the UART's baud rate (paces the line; default 3000000)")
     br.add_argument("--rx-buffer", type=whole(1024, 1 << 24), default=4096, metavar="BYTES",
                     help="the host's receive buffer in bytes (default 4096)")
+    br.add_argument("--firmware", nargs="+", type=firmware_file, metavar="FILE",
+                    help="your firmware instead of the reference one: its C sources (built with bt_hal.h and "
+                         "bt_bridge.h on the include path) or one built .so; it must export bt_bridge_size, "
+                         "bt_init, bt_step and bt_set_pattern (firmware_tests/firmware/bt_bridge.h)")
     br.add_argument("--spi", choices=["software", "rtl"], default=None,
                     help="the sensors' SPI side: the software model, or the Verilog RTL in the C++ harness "
                          "(default: the scene's host.spi, else software)")

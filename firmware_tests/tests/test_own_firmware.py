@@ -118,3 +118,36 @@ def test_one_sensor_object_under_two_numbers_is_refused():
     with pytest.raises(ValueError, match=r"sensors 1 and 3 are the same Sensor object: each sensor number needs a "
                                          r"sensor of its own"):
         FirmwareBench(sensors={1: s, 2: one_sensor(), 3: s})
+
+
+def test_the_bridge_command_runs_your_firmware_and_refuses_what_is_not_one(tmp_path, capsys):
+    """`biotac-bench bridge --firmware FILE...`: C sources or one built library; a missing file, another kind of file
+    and a library beside other files are refused in one line (exit 2), a library without the entry points too."""
+    from bench.cli.main import main as run_main
+
+    def main(argv) -> int:
+        """The command's exit status (argparse's refusals end in SystemExit)."""
+        try:
+            return run_main(argv)
+        except SystemExit as e:
+            return e.code
+
+    src = own_firmware(tmp_path)
+    assert main(["bridge", "--firmware", str(src), "--fast", "--seconds", "0.3"]) == 0
+    assert f"your firmware ({src}) running with 1 emulated sensor(s) at rest" in capsys.readouterr().out
+    lib = firmware_library([src])
+    assert main(["bridge", "--firmware", str(lib), "--fast", "--seconds", "0.3"]) == 0
+    capsys.readouterr()
+    other = tmp_path / "notes.txt"
+    other.write_text("x")
+    for argv, message in (([str(tmp_path / "nope.c")], "nope.c: no such file"),
+                          ([str(other)], "notes.txt: give C sources (.c) or one built library (.so)"),
+                          ([str(lib), str(src)], "is a built library, the whole firmware: give it alone")):
+        assert main(["bridge", "--firmware", *argv, "--fast", "--seconds", "0.3"]) == 2
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    empty = tmp_path / "empty.c"
+    empty.write_text("int nothing_here(void);\nint nothing_here(void) { return 0; }\n")
+    bare = compile_c([empty], tmp_path / "libempty.so", flags=("-shared", "-fPIC"))
+    assert main(["bridge", "--firmware", str(bare), "--fast", "--seconds", "0.3"]) == 2
+    assert "does not export bt_bridge_size, bt_init, bt_step, bt_set_pattern" in capsys.readouterr().err
