@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -293,8 +293,10 @@ def _schedule_after_start(board, schedule) -> list:
     return started
 
 
-def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, spi: str = "software") -> dict:
-    """One fault in one scene over the SPI bus ``spi`` ("software" or "rtl"): the verdict (``passed``, ``problem``),
+def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, spi: str = "software",
+             firmware=None) -> dict:
+    """One fault in one scene over the SPI bus ``spi`` ("software" or "rtl") with ``firmware`` (None: the reference
+    one; else FirmwareBench's ``firmware=``: your C sources or library): the verdict (``passed``, ``problem``),
     what was expected, the bus, and ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or
     driver is this case's failure, never an exception."""
     from bench.hosts.bridge import FirmwareBench
@@ -306,6 +308,8 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
     problem = None
     try:
         kw = {"n_sensors": 1, **fault.bench_kw}
+        if firmware is not None:
+            kw["firmware"] = list(firmware) if isinstance(firmware, tuple) else firmware
         sensor_faults = kw.pop("sensor_faults", None)
         if sensor_faults:  # the sensors the bench would build, with these faults of their own
             kw["sensors"] = default_sensors(kw["n_sensors"], SCENES[scene], seed, faults=sensor_faults)
@@ -338,8 +342,16 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
                 problem = not_at_rest(frames, fb.board.sensors, SCENES[scene], started[0])
     except Exception as e:  # a crash or hang of the firmware or driver is a failure of the case
         problem = f"{type(e).__name__}: {e}"
-    return {"fault": fault.name, "scene": scene, "seed": seed, "spi": spi, "expected": fault.expected,
+    return {"fault": fault.name, "scene": scene, "seed": seed, "spi": spi, "firmware": firmware_name(firmware),
+            "expected": fault.expected,
             "passed": problem is None, "problem": problem, "seconds": time.perf_counter() - t0}
+
+
+def firmware_name(firmware) -> str:
+    """How a report names the firmware a case ran: "reference", or your sources' or library's paths."""
+    if firmware is None:
+        return "reference"
+    return ", ".join(map(str, firmware)) if isinstance(firmware, (list, tuple)) else str(firmware)
 
 
 @dataclass(frozen=True)
@@ -351,11 +363,12 @@ class CaseTask:
     scene: str
     seed: int
     spi: str = "software"
+    firmware: tuple | str | None = None  # None: the reference firmware; your sources (a tuple) or library (a path)
 
 
 def run_case_task(task: CaseTask) -> dict:
     """The engine's task: :func:`run_case` for the named fault and scene (a plain dict; ``seconds`` is wall s)."""
-    return run_case(FAULTS[task.fault], task.scene, task.seed, spi=task.spi)
+    return run_case(FAULTS[task.fault], task.scene, task.seed, spi=task.spi, firmware=task.firmware)
 
 
 def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTask]:
@@ -372,12 +385,12 @@ def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTas
 
 
 def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool = False,
-                 spi: str = "software") -> list[dict]:
+                 spi: str = "software", firmware=None) -> list[dict]:
     """Every fault × scene × seed over the SPI bus ``spi`` on the campaign engine (``spec``: a
     :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment; or a connected ``client``); results
     in task order, one dict per case.  A fault the bus cannot carry is refused (ValueError) before anything runs."""
     from bench.campaigns.engine import run_tasks
-    from bench.hosts.cosim import build_firmware
+    from bench.hosts.cosim import build_firmware, firmware_library
 
     tasks = campaign_tasks(faults, scenes, seeds, spi)
     if spi == "rtl":  # once, here, as the firmware: not one Verilator build per worker at the same time
@@ -389,6 +402,10 @@ def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool =
         except HarnessError as e:  # (the emulator's RuntimeError: as the bench's, the campaign could not run)
             raise BuildError(f"--spi rtl: the RTL harness could not be built: {e}") from None
     build_firmware()  # once, here: the workers find it built (and a build error is one error, not one per case)
+    if firmware is not None:  # yours: built (or refused) here once too; each worker finds it by the same paths
+        firmware_library(firmware)
+        firmware = tuple(map(str, firmware)) if isinstance(firmware, (list, tuple)) else str(firmware)
+        tasks = [replace(t, firmware=firmware) for t in tasks]
     return run_tasks(run_case_task, tasks, spec=spec, client=client, progress=progress, desc="cases")
 
 
@@ -406,8 +423,11 @@ def write_junit(results: list[dict], path: Path) -> None:
     case by case), the SPI bus they ran over as the suite's property ``spi``."""
     suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results)),
                        failures=str(sum(not r["passed"] for r in results)),
+                       errors="0", skipped="0",  # required by the JUnit schema CI tools validate against
                        time=f"{sum(r['seconds'] for r in results):.3f}")
     ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=_bus(results))
+    firmwares = sorted({r.get("firmware", "reference") for r in results})
+    ET.SubElement(suite.find("properties"), "property", name="firmware", value="; ".join(firmwares) or "reference")
     for r in results:
         case = ET.SubElement(suite, "testcase", classname=f"campaign.{r['fault']}",
                              name=f"{r['scene']}[seed={r['seed']}]", time=f"{r['seconds']:.3f}")

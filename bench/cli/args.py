@@ -128,6 +128,26 @@ def existing_file(text: str) -> str:
     return text
 
 
+def firmware_file(text: str) -> str:
+    """argparse type of --firmware (bridge, campaign): a readable C source (.c) or a built library (.so)."""
+    existing_file(text)
+    if Path(text).suffix not in (".c", ".so"):
+        raise argparse.ArgumentTypeError(f"{text}: give C sources (.c) or one built library (.so)")
+    return text
+
+
+def firmware_choice(files, command: str) -> str | list | None:
+    """FirmwareBench's ``firmware`` for --firmware's files: None (the reference firmware), one library, or the
+    sources; a library among other files is a ValueError (one library is the whole firmware)."""
+    if not files:
+        return None
+    libraries = [f for f in files if f.endswith(".so")]
+    if libraries and len(files) > 1:
+        raise ValueError(f"{command} --firmware: {libraries[0]} is a built library, the whole firmware: give it "
+                         f"alone, or only C sources")
+    return files[0] if libraries else list(files)
+
+
 def output_file(text: str) -> str:
     """argparse type: a path a file can be written to (its folder exists or can be made, and a file can be created
     in it: tried with a file removed at once, so a path that only permissions would allow is refused before a long

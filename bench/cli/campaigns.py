@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 
 from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
-from bench.cli.args import add_cluster_arguments, replaceable_report, sigterm_like_ctrl_c, whole
+from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
+                            sigterm_like_ctrl_c, whole)
 
 
 def _names(kind: str):
@@ -37,6 +38,7 @@ def _cmd_campaign(a) -> int:
     from bench.reporting.outdir import lock_exclusively, release_and_remove
 
     check_bus(a.faults, a.spi)  # a fault the bus cannot carry: refused by name before anything (the report) is touched
+    firmware_choice(a.firmware, "campaign")  # a library beside other files: refused before the report is touched
     report = Path(a.junit)
     report.parent.mkdir(parents=True, exist_ok=True)  # (--junit's check found it can be made)
     lock_path = report.parent / f".{report.name}.lock"
@@ -55,12 +57,14 @@ def _run_campaign(a, report: Path) -> int:
     from bench.errors import BenchError
 
     spec = ClusterSpec.from_env(a.scheduler, a.workers)
+    firmware = firmware_choice(a.firmware, "campaign")
     print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
-          f"{a.seeds} seed(s)) over the {a.spi} SPI bus on {spec.describe()}", file=sys.stderr)
+          f"{a.seeds} seed(s)) over the {a.spi} SPI bus on {spec.describe()}, firmware: "
+          f"{campaign.firmware_name(firmware)}", file=sys.stderr)
     n_cases = len(a.faults) * len(a.scenes) * a.seeds
     try:
         results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet,
-                                        spi=a.spi)
+                                        spi=a.spi, firmware=firmware)
     except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
         # report says so: an earlier campaign's passing report left at --junit would be published as this one's
         why = (f"the campaign was stopped before its {n_cases} case(s) finished" if isinstance(e, KeyboardInterrupt)
@@ -144,5 +148,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     cp.add_argument("--spi", choices=list(SPI_BUSES), default="software",
                     help="the sensors' SPI side: the software model (default) or the Verilog RTL in the C++ harness")
     add_cluster_arguments(cp)
+    cp.add_argument("--firmware", nargs="+", type=firmware_file, metavar="FILE",
+                    help="your firmware instead of the reference one, checked against every case: its C sources or "
+                         "one built .so (as bridge --firmware); the report's property \"firmware\" names it")
     cp.add_argument("--quiet", action="store_true", help="no progress bar")
     cp.set_defaults(func=sigterm_like_ctrl_c(_cmd_campaign))

@@ -9,8 +9,8 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import (Terminated, any_seed, existing_file, number, output_file, sigterm_raises, stimuli_count,
-                            whole)
+from bench.cli.args import (Terminated, any_seed, firmware_choice, firmware_file, number, output_file, sigterm_raises,
+                            stimuli_count, whole)
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
 
@@ -29,26 +29,6 @@ def bridge_scene_kw(scene, n_sensors: int | None = None, seed: int | None = None
     n_sensors = scene.n_sensors if n_sensors is None else n_sensors
     return {"n_sensors": n_sensors, "sensors": sensors_from_scene(scene, n_sensors, seed=seed),
             "pattern": firmware_pattern(scene), "spi": spi or scene.spi, "seed": scene.seed if seed is None else seed}
-
-
-def firmware_file(text: str) -> str:
-    """argparse type of bridge's --firmware: a readable C source (.c) or a built library (.so)."""
-    existing_file(text)
-    if Path(text).suffix not in (".c", ".so"):
-        raise argparse.ArgumentTypeError(f"{text}: give C sources (.c) or one built library (.so)")
-    return text
-
-
-def firmware_choice(files) -> str | list | None:
-    """FirmwareBench's ``firmware`` for --firmware's files: None (the reference firmware), one library, or the
-    sources; a library among other files is a ValueError (one library is the whole firmware)."""
-    if not files:
-        return None
-    libraries = [f for f in files if f.endswith(".so")]
-    if libraries and len(files) > 1:
-        raise ValueError(f"bridge --firmware: {libraries[0]} is a built library, the whole firmware: give it alone, "
-                         f"or only C sources")
-    return files[0] if libraries else list(files)
 
 
 def _cmd_bridge(a) -> int:
@@ -73,7 +53,7 @@ def _cmd_bridge(a) -> int:
     with sigterm_raises():
         try:
             fb = FirmwareBench(realtime=not a.fast, speed=a.speed, baudrate=a.baud, rx_buffer=a.rx_buffer,
-                               firmware=firmware_choice(a.firmware), **kw).start()
+                               firmware=firmware_choice(a.firmware, "bridge"), **kw).start()
         except KeyboardInterrupt as e:  # the first start builds the firmware (and the RTL): seconds to minutes
             name, status = ("SIGTERM", 143) if isinstance(e, Terminated) else ("SIGINT", 130)
             print(f"{name} while the bridge was starting (building the firmware"
