@@ -49,10 +49,15 @@ def with_odd_parity(seven_bits) -> np.ndarray:
 
 
 def sample_command(channel) -> np.ndarray:
-    """First byte of the sampling command for channel index/indices (e.g. PAC -> 0x80, PDC -> 0x83)."""
-    c = np.asarray(channel, dtype=np.uint16)
-    if np.any(c > 63):
-        raise ValueError("channel index must be 0..63")
+    """First byte of the sampling command for channel index/indices (e.g. PAC -> 0x80, PDC -> 0x83); an index that
+    is not a whole number 0..63 is a ValueError naming it (1.5 and True had been taken as channel 1, PDC)."""
+    c = np.asarray(channel)
+    if c.size and c.dtype.kind not in "iu":  # a float, a bool, a name: never truncated into another channel
+        raise ValueError(f"channel index {channel!r}: a whole number 0..63 (by name: "
+                         f"emulator.channels.channel_index(\"PDC\"))")
+    if np.any(c < 0) or np.any(c > 63):
+        raise ValueError(f"channel index {int(c[(c < 0) | (c > 63)].flat[0])}: must be 0..63")
+    c = c.astype(np.uint16)
     return with_odd_parity(0x40 | c)
 
 

@@ -4,6 +4,8 @@ batch going back in time (naming the transfer and both times, s), and one port o
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -51,3 +53,16 @@ def test_one_port_under_two_sensor_numbers_is_refused():
     with pytest.raises(ValueError, match=r"Bus: sensors 1 and 2 are the same SensorPort object"):
         Bus({1: p, 2: p})
     Bus({1: p, 2: port()})  # two ports: fine
+
+
+@pytest.mark.parametrize("bad, words", [(1.5, "channel index 1.5: a whole number 0..63"),
+                                        (True, "channel index True: a whole number 0..63"),
+                                        ("PDC", "channel index 'PDC': a whole number 0..63"),
+                                        ([0, 70], "channel index 70: must be 0..63"),
+                                        (-1, "channel index -1: must be 0..63")])
+def test_a_sampling_command_for_no_channel_is_refused_naming_the_index(bad, words):
+    """1.5 and True had been taken as channel 1 (PDC); -1 raised numpy's OverflowError."""
+    with pytest.raises(ValueError, match=re.escape(words)):
+        proto.sample_command(bad)
+    assert proto.sample_command(1) == 0x83 and list(proto.sample_command(np.array([0, 63]))) == [0x80, 0xFE]
+    assert proto.sample_command([]).size == 0
