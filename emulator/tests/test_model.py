@@ -313,9 +313,15 @@ def test_a_sensor_started_between_grid_samples_can_be_read_at_its_start():
 def test_a_tap_is_a_raised_cosine_pulse_peaking_at_its_middle():
     # raised cosine F = peak·(1 − cos(2π·x/T))/2: 0, peak/2, peak, peak/2, 0 at x = 0, T/4, T/2, 3T/4, T; 1 µN
     # covers the central difference (h = 1e-7 s) of the closed-form cumulative
+    from emulator.stimuli import ForceStimulus
+
     tap = Tap(0.1, 1.5, 0.04)
     x = np.array([0.0, 0.25, 0.5, 0.75, 1.0]) * 0.04
     assert tap.force(0.1 + x) == pytest.approx([0.0, 0.75, 1.5, 0.75, 0.0], abs=1e-6)
+    # the exact force a placed tap's electrodes feel is the derivative of the cumulative the fluid feels (the base
+    # class's central difference)
+    t = np.linspace(0.0, 0.2, 2001)
+    assert tap.force(t) == pytest.approx(ForceStimulus.force(tap, t), abs=1e-6)
 
 
 def test_a_press_lasts_both_ramps_and_a_touch_has_the_force_of_its_cumulative():
@@ -329,11 +335,13 @@ def test_a_press_lasts_both_ramps_and_a_touch_has_the_force_of_its_cumulative():
     fs = 8800.0
     force = ContactForce([press]).process(Block(0, int(2.0 * fs), fs), {})["contact_force_N"]
     assert force.sum() / fs == pytest.approx(2.0 * (0.3 + 0.5), rel=1e-9)
-    # a Touch's piecewise-linear force (what its electrodes feel) is the derivative of the cumulative it shares with
-    # Press (what the fluid feels); 1 µN covers the central difference
+    # a Touch's (and a placed press's) piecewise-linear force (what its electrodes feel) is the derivative of the
+    # cumulative it shares with Press (what the fluid feels); 1 µN covers the base class's central difference
+    from emulator.stimuli import ForceStimulus
+
     touch = Touch(0.1, 2.0, 0.3, 0.5)
     t = np.linspace(0.0, 2.0, 2001)
-    assert touch.force(t) == pytest.approx(Press.force(touch, t), abs=1e-6)
+    assert touch.force(t) == pytest.approx(ForceStimulus.force(touch, t), abs=1e-6)
 
 
 def test_a_sweeps_measured_frequency_follows_the_logarithmic_law_and_frequency_at():
