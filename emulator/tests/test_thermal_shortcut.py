@@ -38,5 +38,8 @@ def test_the_shortcut_builds_no_thermal_network_model(monkeypatch):
 
     monkeypatch.setattr(thermal, "ThermalModel", refuse)
     thermal._steady_state.cache_clear()
-    core, tdc, tac = thermal.steady_state(SensorParams().replace(ambient_temperature_C=21.5), {"heater_failed": True})
+    p = SensorParams().replace(ambient_temperature_C=21.5)
+    core, tdc, tac = thermal.steady_state(p)
+    assert core == pytest.approx(21.5 + p.heater_rise_K, abs=0.05) and 0.0 < tdc < 3.3 and tac == 1.65
+    core, tdc, tac = thermal.steady_state(p, {"heater_failed": True})
     assert core == pytest.approx(21.5, abs=0.5) and 0.0 < tdc < 3.3 and tac == 1.65
