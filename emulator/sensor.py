@@ -299,7 +299,7 @@ class Sensor:
             effects.append(CoreTemperature(self.thermal))
         effects += [RestingPressure(p, self.leak, self._start_s), ForceCoupling(p, fs, disc, self.leak),
                     VibrationCoupling(p, fs, disc, self.leak),
-                    Bridge(p, fs, disc, duct_resonance=f.duct_resonance, thermal=dynamic,
+                    Bridge(p, fs, duct_resonance=f.duct_resonance, thermal=dynamic,
                            settled_temperature_C=None if dynamic else self.thermal_steady[0])]
         if self.noise.johnson:
             effects.append(johnson_noise(p, fs, self.seed))

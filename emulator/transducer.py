@@ -3,10 +3,12 @@
 Output (differential, V) = excitation · (offset(T) + sensitivity · (1 + span drift·ΔT) · pressure),
 i.e. 2.18 mV/kPa at 10 V.  Its 5 kΩ output resistance makes Johnson noise √(4kTR) at the bridge
 temperature.  In the reference profile the 2 cm fluid duct between skin and transducer adds its
-closed-tube resonance (18.7 kHz, negligible below 1 kHz).  A resonance at or above :data:`DUCT_PREWARP_LIMIT` of the
-grid rate (31.7 kHz on the reference grid; the parameter's range reaches 100 kHz) cannot be placed on the grid
-where it is: it is mapped by the plain bilinear transform, which keeps its response below a few kHz (where PAC and
-PDC look) to within (f/fs)², and leaves its peak warped down below Nyquist, beyond the 1040 Hz anti-aliasing filter.
+closed-tube resonance (18.7 kHz, negligible below 1 kHz).  It matters only far below its peak, where PAC and PDC
+look, so it is mapped by the plain bilinear transform, whatever the profile's discretization: that keeps its
+response below a few kHz to within (f/fs)² of the analog one (8e-5 over 1 Hz–2 kHz at the nominal resonance on the
+reference grid), and leaves its peak warped down, beyond the 1040 Hz anti-aliasing filter (to 15.6 kHz from 18.7;
+one at or above Nyquist — the parameter's range reaches 100 kHz — lands below it).  Prewarping it instead would put
+the peak where it belongs but give the band the response of a resonance moved up by as much (7e-3 off at nominal).
 """
 
 from __future__ import annotations
@@ -18,10 +20,6 @@ from emulator.effects import Block, Effect, effect_rng
 from emulator.params import SensorParams
 
 
-#: a duct resonance at or above this fraction of the grid rate is discretized by the plain bilinear transform
-DUCT_PREWARP_LIMIT = 0.45
-
-
 class Bridge(Effect):
     """Piezoresistive bridge: fluid pressure (Pa) -> differential voltage at the stage-1 input."""
 
@@ -29,8 +27,8 @@ class Bridge(Effect):
     consumes = ("fluid_pressure_Pa",)
     produces = ("stage1_input_V",)
 
-    def __init__(self, params: SensorParams, fs: float, discretization: str, duct_resonance: bool,
-                 thermal: bool = False, settled_temperature_C: float | None = None):
+    def __init__(self, params: SensorParams, fs: float, duct_resonance: bool, thermal: bool = False,
+                 settled_temperature_C: float | None = None):
         t = params.bridge_temperature_C if settled_temperature_C is None else settled_temperature_C
         self.span = params.bridge_span_at(t)
         self.offset = params.bridge_offset_at(t)
@@ -40,11 +38,10 @@ class Bridge(Effect):
         self.duct = None
         if duct_resonance:
             w0 = 2 * np.pi * params.duct_resonance_Hz
-            if params.duct_resonance_Hz >= DUCT_PREWARP_LIMIT * fs:
-                discretization = "bilinear"  # (prewarping it to near Nyquist would shorten its in-band delay)
             q = params.duct_quality_factor
             poles = np.roots([1.0, w0 / q, w0**2])
-            self.duct = filters.SosFilter(filters.discretize([], poles, w0**2, fs, discretization))
+            # (plain bilinear: its in-band response, not its peak, is what the channels see; see the module's doc)
+            self.duct = filters.SosFilter(filters.discretize([], poles, w0**2, fs, "bilinear"))
 
     def settle(self, inputs):
         p = inputs["fluid_pressure_Pa"]

@@ -289,7 +289,7 @@ def test_the_bridge_settles_where_it_runs_whatever_the_core_temperature(core_C):
 
     p = SensorParams()
     for duct, fs in ((False, 8800.0), (True, 88000.0)):  # the duct resonance (18.7 kHz) needs the finer grid
-        bridge = Bridge(p, fs, "prewarped", duct, thermal=True)
+        bridge = Bridge(p, fs, duct, thermal=True)
         pressure = 4000.0
         start = bridge.settle({"fluid_pressure_Pa": pressure, "bridge_temperature_C": core_C})["stage1_input_V"]
         first = bridge.process(Block(0, 4, fs), {"fluid_pressure_Pa": np.full(4, pressure),
