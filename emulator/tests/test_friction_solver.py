@@ -41,11 +41,12 @@ def _residual(u, x, z, v, normal, mu_s, mu_k, mu_v):
 
 @pytest.mark.unit
 def test_the_residual_slope_is_its_derivative():
-    """dG/du against a central difference (step 1e-7 of the slip, away from its corner at v_r = 0): within 1e-5
-    relative plus 1e-6 N·s/m (the difference's own truncation and rounding)."""
+    """dG/du against a central difference (step 3e-7 of the slip, away from its corner at v_r = 0): within 1e-5
+    relative or 1e-6 N·s/m (the difference's own truncation and rounding: at a step of 1e-7 a slip of 0.18 mm/s
+    gave rounding of 1.2e-6 N·s/m, G being ~1 N over a step of 2e-11 m/s)."""
     checked = 0
     for x, z, v, normal, u, mu_s, mu_k, mu_v in _states(400, 1):
-        du = 1e-7 * max(abs(v - u), 1e-3)
+        du = 3e-7 * max(abs(v - u), 1e-3)
         if abs(v - u) < 10 * du:
             continue
         slope = _residual(u, x, z, v, normal, mu_s, mu_k, mu_v)[1]
@@ -127,17 +128,21 @@ def test_the_load_taken_piece_by_piece_is_the_contact_law_of_the_depth_to_the_bi
 
 @pytest.mark.unit
 def test_where_the_friction_weakens_with_slip_the_step_keeps_the_bracketed_solvers_root():
-    """A lift-off step of the skin-wear scene (seed 4; stage still, 0.56 N, the skin slipping back through the
-    Stribeck curve's falling part) where G has three roots: Newton, which would settle on the nearest, hands the
-    step to the bracketed solver, so the outcome is the one the scenes always had (to the bit)."""
-    state = dict(x=0.00026201447388640367, z=6.8465480021606956e-06, v_stage=0.0, h=H, normal=0.5584683772242441,
-                 k_t=K_T, c_t=C_T, sigma0=SIGMA0, sigma1=SIGMA1, mu_s=0.7200828574215904, mu_k=0.5760662859372724,
+    """A step with the stage still, 15 N, the skin slipping back through the Stribeck curve's falling part, where G
+    has three roots (−18, −8.3 and −0.6 mm/s) and its slope at the last velocity, −12 mm/s, is positive but less
+    than half the skin's: Newton, which would settle on the nearest, hands the step to the bracketed solver, so the
+    outcome is the bracketed solver's (to the bit).  (The state of a lift-off step of the skin-wear scene served
+    here until the bristle damping faded with slip, which left that step one root.)"""
+    state = dict(x=0.0051118481792780494, z=5.105854860058298e-06, v_stage=0.0, h=H, normal=14.948997170072474,
+                 k_t=K_T, c_t=C_T, sigma0=SIGMA0, sigma1=SIGMA1, mu_s=0.6247578111682892, mu_k=0.5061764513829671,
                  vs=VS, mu_v=0.0)
-    u_prev = -0.003506709585069863
+    u_prev = -0.012
     args = tuple(state.values())
-    g = [_residual(u, state["x"], state["z"], 0.0, state["normal"], state["mu_s"], state["mu_k"], 0.0)[0]
-         for u in np.linspace(-0.0095, -0.0035, 61)]
-    assert np.count_nonzero(np.diff(np.sign(g))) == 3  # three roots around the last velocity
+    g = [_residual(u, state["x"], state["z"], 0.0, state["normal"], state["mu_s"], state["mu_k"], 0.0)
+         for u in np.linspace(-0.025, 0.003, 57)]
+    assert np.count_nonzero(np.diff(np.sign([x[0] for x in g]))) == 3  # three roots around the last velocity
+    slope = _residual(u_prev, state["x"], state["z"], 0.0, state["normal"], state["mu_s"], state["mu_k"], 0.0)[1]
+    assert 0.0 < slope < 0.5 * (K_T * H + C_T)
     bound = friction._velocity_bound(state["x"], state["z"], 0.0, H, state["normal"], K_T, C_T, SIGMA0, SIGMA1,
                                      state["mu_s"], 0.0)
     assert friction._step_velocity(u_prev, *args) == friction._solve_bracketed(u_prev, *args, bound)
