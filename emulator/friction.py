@@ -112,8 +112,10 @@ def _bristle_after(z, vr, dt, sigma0, mu_s, mu_k, vs):
 @njit(cache=True, inline="always")
 def _bristle_damping(vr, sigma1, vs):
     """The bristle damping (s/m) at slip velocity ``vr`` (m/s) and its derivative d/dv_r (s²/m²): ``sigma1`` at rest,
-    fading over the Stribeck velocity ``vs`` (m/s) as σ1·exp(−(v_r/v_s)²), the velocity-dependent damping of Olsson
-    et al. (Eur. J. Control 4(3), 1998) for LuGre.  With a constant σ1 the friction element is not passive when µ
+    fading over the Stribeck velocity ``vs`` (m/s) as σ1·exp(−(v_r/v_s)²): the velocity-dependent damping Olsson
+    et al. (Eur. J. Control 4(3), 1998) give for LuGre (attributed from the literature's use, not checked against
+    the paper's text), with its velocity scale taken as the texture's Stribeck velocity (a model choice: no new
+    parameter, and not fitted to any claim).  With a constant σ1 the friction element is not passive when µ
     falls with slip (σ1 > µv·µk/(µs − µk), every texture of the library): where the bristles' deflection exceeds
     the new steady state — a slip's onset, where g falls from µs to µk within a step — the damping term σ1·dz/dt
     outweighs the bristles' force and the friction pushes the skin along the slip (−7.7 N at 20 N, 20 cm/s),
