@@ -72,13 +72,14 @@ def test_every_claim_is_labelled_and_no_read_back_poses_as_a_prediction():
 
 def test_the_table_holds_the_rows_the_readme_counts():
     """README, Published figures: "53 predictions among its 94 rows (10 calibrated, 11 derived, 20 consistency).
-    Fifteen of the 53 are documented deviations ... The other 38 predictions pass"."""
+    Fourteen of the 53 are documented deviations ... The other 39 predictions pass" (the 117-way accuracy passes
+    since the bristle damping fades with slip: 98.3 %, within D's 90–99 %; it was 99.6 %)."""
     from bench.verification.claims import kind_counts
 
     rows = [c for group in CLAIM_GROUPS for c in _claims(group)]
     assert len(rows) == 94
     assert kind_counts(rows) == {"prediction": 53, "calibrated": 10, "derived": 11, "consistency": 20}
-    assert sorted((c.kind, c.result) for c in rows if c.result != "PASS") == [("prediction", "DEVIATES")] * 15
+    assert sorted((c.kind, c.result) for c in rows if c.result != "PASS") == [("prediction", "DEVIATES")] * 14
 
 
 @pytest.mark.parametrize("group", list(CLAIM_GROUPS))
