@@ -330,18 +330,6 @@ def test_a_shorted_thermistor_holds_tdc_at_the_rail_not_at_11_V():
     assert v[0] == v[2] == s.params.supply_rail_V and list(codes[::2]) == [4095, 4095]
 
 
-def test_the_nominal_duct_resonance_peaks_at_its_frequency_on_the_reference_grid():
-    """The 2 cm duct's 18.7 kHz lies below 0.45 × the reference profile's 70.4 kHz grid, so it is prewarped: the
-    discrete bridge's gain peaks at 18.7 kHz (within 1 %), where the plain bilinear map would put it near 15.6 kHz."""
-    from scipy import signal
-
-    s = Sensor(channels_read=["PDC"], fidelity="reference", seed=1)
-    duct = next(e for e in s.graph.effects if e.name == "bridge").duct
-    f = np.linspace(5e3, 30e3, 5001)
-    _, h = signal.sosfreqz(duct.sos, worN=f, fs=s.fs)
-    assert f[np.argmax(np.abs(h))] == pytest.approx(s.params.duct_resonance_Hz, rel=0.01)
-
-
 @pytest.mark.parametrize("q", [0.5, 100.0])  # duct_quality_factor's range
 @pytest.mark.parametrize("f0", [0.45 * 70400.0, 100e3])  # 0.45 × the reference grid, and the range's top
 def test_a_duct_resonance_beyond_the_reference_grid_runs_with_its_in_band_response(f0, q):
