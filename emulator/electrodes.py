@@ -100,13 +100,19 @@ def surface_point_mm(x_mm: float, angle_deg: float) -> np.ndarray:
     return np.array([x_mm, r * np.sin(a), -r * np.cos(a)])
 
 
-def shear_direction(center_mm, shear_angle_deg: float) -> np.ndarray:
+def shear_direction(center_mm, shear_angle_deg: float, angle_deg: float | None = None) -> np.ndarray:
     """Unit vector (3,) of a shear at the core-surface point ``center_mm`` (mm), in the surface's tangent plane:
     cos φ·m + sin φ·c, φ = ``shear_angle_deg``, c = (0, cos a, sin a) the tangent around the finger (toward +angle
     a) and m the tangent along it toward the tip — +x on the cylinder (x ≤ 0); on the hemispherical tip (x > 0)
-    n × c with n its outward normal, along the meridian toward the apex (at the apex, over it toward the back)."""
+    n × c with n its outward normal, along the meridian toward the apex (at the apex, over it toward the back).
+    a is the point's angle around the finger; at the apex, where the point has none (y = z = 0), the place's
+    ``angle_deg`` (°) names its meridian, as a point just below the apex on it would (None: 0°, ventral)."""
     center = np.asarray(center_mm, float)
-    a, phi = np.arctan2(center[1], -center[2]), np.radians(shear_angle_deg)
+    if center[1] == 0.0 and center[2] == 0.0:  # the apex: arctan2 of two zeros gave 0 or π by their signs
+        a = np.radians(0.0 if angle_deg is None else angle_deg)
+    else:
+        a = np.arctan2(center[1], -center[2])
+    phi = np.radians(shear_angle_deg)
     around = np.array([0, np.cos(a), np.sin(a)])
     along = np.array([1.0, 0, 0]) if center[0] <= 0.0 else np.cross(center / np.linalg.norm(center), around)
     return np.cos(phi) * along + np.sin(phi) * around

@@ -370,7 +370,8 @@ class Sensor:
             else:
                 centre = surface_point_mm(x_mm, angle_deg)
             sheared = isinstance(s, Touch)
-            direction = shear_direction(centre, s.shear_angle_deg if sheared else 0.0)
+            direction = shear_direction(centre, s.shear_angle_deg if sheared else 0.0,
+                                        None if electrode is not None else angle_deg)
             contacts.append(Contact(centre, s.indenter_radius_mm, s.force,
                                     s.tangential_N / s.force_N if sheared and s.force_N else 0.0, tuple(direction),
                                     s.start_s, s.end_s))

@@ -142,3 +142,16 @@ def test_a_placed_press_on_the_nail_or_on_an_electrode_the_sensor_lacks_is_refus
 
 def test_the_apex_is_on_the_finger_and_its_normal_is_plus_x():
     assert _outward_normal(surface_point_mm(CORE_RADIUS_MM, 0.0)) == pytest.approx([1.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("angle_deg", [0.0, 30.0, 80.0, 100.0, -100.0])
+@pytest.mark.parametrize("shear_angle_deg", [0.0, 90.0])
+def test_a_shear_at_the_apex_follows_the_touchs_own_meridian_as_just_below_it(angle_deg, shear_angle_deg):
+    """At the apex (x_mm = 5) the place's point no longer tells its angle around the finger (y = z = 0, their signs
+    those of zeros): the shear follows the touch's angle_deg as it does a micrometre below the apex — not the same
+    direction for every angle, nor one flipped dorsal/ventral between 80° and 100°."""
+    apex = _contact(Touch(0.1, 1.0, tangential_N=0.5, x_mm=CORE_RADIUS_MM, angle_deg=angle_deg,
+                          shear_angle_deg=shear_angle_deg))
+    below = _contact(Touch(0.1, 1.0, tangential_N=0.5, x_mm=CORE_RADIUS_MM - 1e-6, angle_deg=angle_deg,
+                           shear_angle_deg=shear_angle_deg))
+    assert np.array(apex.shear_direction) == pytest.approx(np.array(below.shear_direction), abs=1e-3)
