@@ -47,7 +47,8 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
     runner stopping a job) ended it and left make and the compilers running; a child killed on the way out takes
     only the child with it.  In their own group they get both signals from here (a Ctrl-C forwarded, so it still
     reaches them as before: ``run --spi rtl`` still sees the build die of it), and if this call ends early (an
-    exception, Ctrl-C raising KeyboardInterrupt) the whole group is killed.  A signal this process ignores is
+    exception, Ctrl-C raising KeyboardInterrupt) the whole group is killed.  A signal that comes while the step is
+    being started is held until its group is known, then passed on and acted on.  A signal this process ignores is
     neither forwarded nor handled.  Outside the main thread (no signal handlers there) the step runs in this
     process's group, as before.  Nothing survives a SIGKILL of this process: no handler runs."""
     import signal
@@ -60,11 +61,14 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
         return subprocess.run(cmd, **kw)
     group: list[int] = []  # the step's process group, once started
     previous = {}
+    early: list = []  # signals that came while the step was being started: acted on once its group is known
 
     def forward(signum, frame):
-        if group:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(group[0], signum)
+        if not group:  # (acting now — KeyboardInterrupt — would leave the step started meanwhile running)
+            early.append((signum, frame))
+            return
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(group[0], signum)
         handler = previous[signum]
         if callable(handler):
             handler(signum, frame)
@@ -78,8 +82,10 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
             if handler not in (signal.SIG_IGN, None):  # (None: a handler not set from Python; left alone)
                 previous[s] = signal.signal(s, forward)
         proc = subprocess.Popen(cmd, process_group=0, **kw)
-        group.append(proc.pid)
         try:
+            group.append(proc.pid)
+            while early:
+                forward(*early.pop(0))
             out, err = proc.communicate()
         except BaseException:
             with contextlib.suppress(ProcessLookupError, PermissionError):
@@ -89,6 +95,8 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+        for signum, _ in early:  # the step never started (Popen failed): this process acts on them as it would have
+            signal.raise_signal(signum)
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 

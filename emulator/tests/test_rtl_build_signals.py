@@ -112,3 +112,53 @@ def test_a_terminals_ctrl_c_still_reaches_the_build(tmp_path, guarded):
         _kill_left(pids)
         if host.poll() is None:
             host.kill()
+
+
+def test_a_ctrl_c_arriving_while_the_step_starts_still_ends_it(monkeypatch):
+    """A SIGINT that arrives as the step is being started — its process made, its group not yet noted to forward
+    to — is acted on once it is: the step is stopped and waited for, and KeyboardInterrupt raised.  (Acted on at
+    once, the KeyboardInterrupt left the step running in a group of its own, which no terminal's Ctrl-C reaches.)"""
+    from emulator.rtl import build
+
+    started = []
+    real = subprocess.Popen
+
+    def popen_then_ctrl_c(*args, **kwargs):
+        started.append(real(*args, **kwargs))
+        os.kill(os.getpid(), signal.SIGINT)  # handled by Python at its next instruction, inside this call
+        time.sleep(0.2)
+        return started[-1]
+
+    monkeypatch.setattr(build.subprocess, "Popen", popen_then_ctrl_c)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        t0 = time.monotonic()
+        with pytest.raises(KeyboardInterrupt):
+            build.run_build(["sleep", "10"])
+        assert started and started[0].poll() is not None, "the step was left running"
+        assert time.monotonic() - t0 < 5.0, "the Ctrl-C was not acted on: the step ran to its end"
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        for p in started:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+
+
+def test_a_ctrl_c_held_while_a_step_fails_to_start_is_not_lost(monkeypatch):
+    """A SIGINT held while the step was being started, which then failed to start (no such program), is acted on
+    all the same when run_build gives up: KeyboardInterrupt, not only the start's error."""
+    from emulator.rtl import build
+
+    def ctrl_c_then_fail(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)
+        raise FileNotFoundError(2, "No such file or directory", args[0][0])
+
+    monkeypatch.setattr(build.subprocess, "Popen", ctrl_c_then_fail)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            build.run_build(["no-such-compiler"])
+    finally:
+        signal.signal(signal.SIGINT, previous)
