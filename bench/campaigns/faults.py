@@ -166,17 +166,38 @@ REST_MARGIN_FRAMES = 2
 REST_MIN_FRAMES = 10
 
 
-def resting_bands(sensor) -> dict[str, tuple[float, float]]:
-    """Each channel's resting band of ``sensor`` (its unit's parameters and variant): channel name -> (lowest,
-    highest) code, the noise-free resting code (:func:`emulator.noise_budget.resting_volts`) ± REST_BAND_SIGMAS × its
-    noise at rest (codes) + 1 code."""
+def resting_volts_in_order(params, variant: str, order) -> dict[str, tuple[float, float]]:
+    """Noise-free values (V) at the ADC input of each channel named in ``order`` of a sensor (``params``,
+    ``variant``) at rest, read as frames sampling ``order`` over and over read them: channel name -> (lowest,
+    highest) over the first frame and the next.  The multiplexer keeps a part of the electrode converted before
+    (exp(−t_acq/τ): ``mux_acquisition_s``, ``mux_settling_s``): in the first frame the first electrode follows no
+    other, in each later one the previous frame's last electrode — so it reads differently at rest in each, where
+    :func:`emulator.noise_budget.resting_volts` gives only the first."""
+    from emulator import channels as ch
+    from emulator.sensor import NoiseSources, Sensor
+
+    names = list(dict.fromkeys(order))
+    s = Sensor(params, [], names, seed=0, noise=NoiseSources.none(), variant=variant)
+    idx = np.array([ch.channel_index(n) for n in order] * 2)
+    v = s.analog(idx, np.full(idx.size, 0.5))
+    out: dict[str, tuple[float, float]] = {}
+    for n, x in zip(order * 2, v):
+        lo, hi = out.get(n, (x, x))
+        out[n] = (min(lo, float(x)), max(hi, float(x)))
+    return out
+
+
+def resting_bands(sensor, order) -> dict[str, tuple[float, float]]:
+    """Each channel's resting band of ``sensor`` (its unit's parameters and variant) in frames sampling the channels
+    named in ``order``: channel name -> (lowest, highest) code, the noise-free resting codes
+    (:func:`resting_volts_in_order`) widened by REST_BAND_SIGMAS × its noise at rest (codes) + 1 code each way."""
     from emulator import noise_budget as nb
     from emulator.conversions import ADC_LSB_V
 
-    rest = nb.resting_volts(sensor.params, sensor.variant)
+    rest = resting_volts_in_order(sensor.params, sensor.variant, list(order))
     sigma = nb.channel_totals(nb.budget(sensor.params, sensor.variant))
     half = {name: REST_BAND_SIGMAS * sigma[name] + 1 for name in rest}
-    return {name: (v / ADC_LSB_V - half[name], v / ADC_LSB_V + half[name]) for name, v in rest.items()}
+    return {name: (lo / ADC_LSB_V - half[name], hi / ADC_LSB_V + half[name]) for name, (lo, hi) in rest.items()}
 
 
 def not_at_rest(frames, sensors: dict, stimuli, start_s: float) -> str | None:
@@ -194,7 +215,8 @@ def not_at_rest(frames, sensors: dict, stimuli, start_s: float) -> str | None:
         return (f"only {len(quiet)} frames before the scene's first stimulus at {quiet_until:g} s (at least "
                 f"{REST_MIN_FRAMES} needed to check the sensor at rest)")
     for n, sensor in sorted(sensors.items()):
-        bands = resting_bands(sensor)
+        names = [ch.variant(sensor.variant).channel_name[int(c)] for c in quiet[0].channels]
+        bands = resting_bands(sensor, names)
         for f in quiet:
             if n not in f.sensors:
                 continue

@@ -107,3 +107,29 @@ def test_a_scene_stimulated_too_early_to_check_rest_fails_rather_than_checking_n
     frames = [SimpleNamespace(seq=k, channels=np.zeros(44, int)) for k in range(150)]
     problem = campaign.not_at_rest(frames, {}, [Tap(0.05, 1.0)], 0.001)
     assert problem is not None and problem.startswith("only 2 frames before the scene's first stimulus at 0.05 s")
+
+
+def test_a_unit_whose_electrodes_rest_far_apart_passes_read_in_its_frames_order(monkeypatch):
+    """The multiplexer keeps a fraction exp(−t_acq/τ) of the previous electrode's value in each sample: in a
+    streamed frame E1 follows the previous frame's last electrode, not the electrode order the noise budget reads
+    them in.  A "biotac-sp" of unit 1234 (E24 rests ~1200 codes below E1, so E1 reads ~8 codes low in every frame
+    but the first) at rest passes the case: each band is centred on the code the sensor reads at rest in the
+    frame's own order."""
+    import dataclasses
+
+    from emulator.sensor import Sensor
+    from emulator.units import draw_params
+
+    unit = draw_params(1234)
+    real_init = Sensor.__init__
+
+    def as_unit(self, *args, **kwargs):
+        if not args and "params" not in kwargs:  # the bench's sensors
+            kwargs["params"] = unit
+        real_init(self, *args, **kwargs)
+
+    monkeypatch.setattr(Sensor, "__init__", as_unit)
+    case = dataclasses.replace(campaign.FAULTS["none"], bench_kw={"variant": "biotac-sp"})
+    for seed in (0, 1):
+        result = run_case(case, "rest", seed)
+        assert result["passed"], result
