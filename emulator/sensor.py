@@ -29,8 +29,8 @@ from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, elec
                                  shear_direction, surface_point_mm, surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, MountVibration, PowerOn,
                               OutsideModelWarning, PressureCalibrator, SphereDrop, Touch, Vibration,
-                              calibration_pressure, contact_place, drop_depth_problem, skin_displacement,
-                              touch_slip_problem)
+                              PLACED_TAP_MIN_STEPS, calibration_pressure, contact_place, drop_depth_problem,
+                              placed_tap_too_short, skin_displacement, touch_slip_problem)
 from emulator.skin import contact_patch_area_m2
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
@@ -213,6 +213,7 @@ class Sensor:
             raise ValueError(f"channel {ch.variant('biotac-sp').channel_name.get(unknown[0], unknown[0])} "
                              f"(index {unknown[0]}) is not a sampled channel of a {self.variant.name!r} sensor "
                              f"(E1..E{self.variant.n_electrodes}, PAC, PDC, TAC, TDC)")
+        reads_electrodes = any(c >= ch.ELECTRODE_FIRST for c in self.channels_read)
         for st in stimuli:  # whether or not an electrode is read: the place must be on this sensor
             place = contact_place(st)
             if place is not None and place[0] is not None and place[0] not in self.variant.channel_index:
@@ -225,6 +226,12 @@ class Sensor:
                 warnings.warn(f"Touch at {st.start_s!r} s: tangential_N = {st.tangential_N!r} N {why} (a scene "
                               f"refuses it; its codes here are the model's extrapolation)", OutsideModelWarning,
                               stacklevel=2)
+            if placed_tap_too_short(st, self.fidelity.electrode_rate_Hz) and reads_electrodes:
+                rate = self.fidelity.electrode_rate_Hz
+                warnings.warn(f"Tap at {st.time_s!r} s: {st.duration_s * 1e3:g} ms at a place is shorter than two "
+                              f"steps of the electrodes' model at fidelity {self.fidelity.name!r} ({rate:.0f} Hz: "
+                              f"at least {PLACED_TAP_MIN_STEPS * 1e3 / rate:g} ms): its dent depends on where the "
+                              f"steps fall (a scene refuses it)", OutsideModelWarning, stacklevel=2)
             if isinstance(st, SphereDrop) and (why := drop_depth_problem(st, self.params)):
                 warnings.warn(f"SphereDrop at {st.time_s!r} s: {why} (a scene refuses it; its codes here are the "
                               f"model's extrapolation)", OutsideModelWarning, stacklevel=2)

@@ -214,6 +214,18 @@ class Tap(CheckedFields, ForceStimulus):
         return np.where(inside, 0.5 * self.peak_N * (1.0 - np.cos(2 * np.pi * np.clip(x, 0.0, T) / T)), 0.0)
 
 
+#: fewest steps of the electrodes' model a tap given a place lasts: the model samples its force at its rate
+#: (:attr:`emulator.fidelity.Fidelity.electrode_rate_Hz`), and over fewer the dent depends on where the samples fall
+PLACED_TAP_MIN_STEPS = 2
+
+
+def placed_tap_too_short(s, electrode_rate_Hz: float) -> bool:
+    """Whether ``s`` is a tap given a place that lasts under :data:`PLACED_TAP_MIN_STEPS` steps of the electrodes'
+    model at ``electrode_rate_Hz`` (Hz)."""
+    return (isinstance(s, Tap) and contact_place(s) is not None
+            and s.duration_s < PLACED_TAP_MIN_STEPS / electrode_rate_Hz)
+
+
 @dataclass
 class SphereDrop(CheckedFields, ForceStimulus):
     """A sphere of ``mass_kg`` dropped from ``height_m`` through still air landing at ``time_s``: a Hertz impact.

@@ -26,7 +26,8 @@ from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
 from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERES, AmbientStep, HeaterFailure, PowerOn,
                               Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, drop_depth_problem,
-                              contact_place, sphere_drop_on, sphere_radius_m, touch_slip_problem)
+                              PLACED_TAP_MIN_STEPS, contact_place, placed_tap_too_short, sphere_drop_on,
+                              sphere_radius_m, touch_slip_problem)
 from emulator.effects import effect_rng
 from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import Slide
@@ -1188,14 +1189,14 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
                 c.problems.append(f"{which}pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity "
                                   f"'{fidelity}' ({grid:.0f} Hz); use \"default\" or \"reference\"")
-            elif isinstance(s, Tap) and s.duration_s < 2.0 / profile(fidelity).electrode_rate_Hz:
-                # the electrodes' model samples a placed tap's force at its rate: under two samples per pulse its
-                # dent would depend on where the samples fall, not on the tap
+            elif placed_tap_too_short(s, profile(fidelity).electrode_rate_Hz):
                 rate = profile(fidelity).electrode_rate_Hz
-                fits = " or ".join(f'"{n}"' for n, f in PROFILES.items() if s.duration_s >= 2.0 / f.electrode_rate_Hz)
+                fits = " or ".join(f'"{n}"' for n, f in PROFILES.items()
+                                     if not placed_tap_too_short(s, f.electrode_rate_Hz))
                 c.problems.append(f"{which}a tap of {s.duration_s * 1e3:g} ms at a place is shorter than two steps "
                                   f"of the electrodes' model at fidelity '{fidelity}' ({rate:.0f} Hz: at least "
-                                  f"{2e3 / rate:g} ms); lengthen duration_s" + (f" or use {fits}" if fits else ""))
+                                  f"{PLACED_TAP_MIN_STEPS * 1e3 / rate:g} ms); lengthen duration_s"
+                                  + (f" or use {fits}" if fits else ""))
     if c.problems:
         raise SceneError(source, c.problems)
     fresh_skin = copy.deepcopy(skin)

@@ -155,3 +155,18 @@ def test_a_shear_at_the_apex_follows_the_touchs_own_meridian_as_just_below_it(an
     below = _contact(Touch(0.1, 1.0, tangential_N=0.5, x_mm=CORE_RADIUS_MM - 1e-6, angle_deg=angle_deg,
                            shear_angle_deg=shear_angle_deg))
     assert np.array(apex.shear_direction) == pytest.approx(np.array(below.shear_direction), abs=1e-3)
+
+
+def test_a_placed_tap_too_short_for_the_electrodes_model_is_warned_of_in_python_as_a_scene_refuses_it():
+    """A 3 ms tap over E17 on "fast" (electrodes stepped every 4 ms) moves E17 by ~300 codes or not at all depending
+    on where the steps fall (0.100 s: nothing; 0.102 s: a dent): a scene refuses it, a Python Sensor that reads an
+    electrode warns (OutsideModelWarning naming the tap, its length and the least length); 8 ms is taken silently,
+    and so is the short tap when no electrode is read (only the fluid's channels feel it)."""
+    with pytest.warns(OutsideModelWarning, match=r"Tap at 0\.1 s: 3 ms at a place is shorter than two steps of the "
+                                                 r"electrodes' model at fidelity 'fast' \(250 Hz: at least 8 ms\)"):
+        Sensor(stimuli=[Tap(0.1, 2.0, 0.003, electrode="E17")], channels_read=["E17"], fidelity="fast")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Sensor(stimuli=[Tap(0.1, 2.0, 0.008, electrode="E17")], channels_read=["E17"], fidelity="fast")
+        Sensor(stimuli=[Tap(0.1, 2.0, 0.003, electrode="E17")], channels_read=["PDC"], fidelity="fast")
+        Sensor(stimuli=[Tap(0.1, 2.0, 0.003)], channels_read=["E17"], fidelity="fast")
