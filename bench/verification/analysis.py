@@ -150,7 +150,7 @@ def band_power_2hz(x: np.ndarray, fs: float, f_center: float) -> float:
 
 
 def largest_2hz_band(x: np.ndarray, fs: float, f_min: float = 2.0) -> tuple[float, float]:
-    """(frequency, power) of the 2 Hz band with most power in a 1 s spectrum, above ``f_min``."""
+    """(frequency, power) of the 2 Hz band with most power in a 1 s spectrum, centred at ``f_min`` (Hz) or above."""
     f, p = spectrum_1s(x, fs)
     band = np.convolve(p, np.ones(3), mode="same")  # bins k-1, k, k+1 at 1 Hz spacing
     band[f < f_min] = 0.0

@@ -37,8 +37,6 @@ HUMAN_THRESHOLD_POINTS: tuple[tuple[float, float, str], ...] = (
     (1000.0, 3.0, _B88),
 )
 
-BEST_FREQUENCY_HZ = min(HUMAN_THRESHOLD_POINTS, key=lambda x: x[1])[0]
-
 
 def human_threshold_m(frequency_Hz) -> np.ndarray:
     """Human detection threshold (peak displacement, m) at each frequency (Hz), from the published points."""
