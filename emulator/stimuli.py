@@ -15,7 +15,7 @@ import dataclasses
 import math
 import numbers
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
 
@@ -175,15 +175,12 @@ def contact_place(s) -> tuple[str | None, float, float] | None:
 
 
 @dataclass
-class Tap(CheckedFields, ForceStimulus):
-    """A finger tap: raised-cosine force pulse of ``peak_N`` lasting ``duration_s`` from ``time_s``; optionally at
-    a place (``x_mm``/``angle_deg`` or ``electrode``, ``indenter_radius_mm``: as a :class:`Touch`'s), where it
-    dents the electrodes as a touch of that force would (no place: only the fluid feels it)."""
+class PlacedForce(CheckedFields, ForceStimulus):
+    """A force stimulus optionally given a place on the skin, as keywords only (a subclass's own fields come first
+    in its constructor): ``x_mm``/``angle_deg`` or ``electrode``, pressed by an indenter of ``indenter_radius_mm``
+    (mm, °); no place: only the fluid feels it.  The fields' limits are :data:`PLACE_LIMITS`."""
 
-    LIMITS = {"time_s": INSTANT_S, "peak_N": NON_NEGATIVE, "duration_s": POSITIVE, **PLACE_LIMITS}
-    time_s: float
-    peak_N: float
-    duration_s: float = 0.03
+    _: KW_ONLY
     x_mm: float | None = None
     angle_deg: float | None = None
     electrode: str | None = None
@@ -192,6 +189,18 @@ class Tap(CheckedFields, ForceStimulus):
     def __post_init__(self):
         super().__post_init__()
         _check_place(self)
+
+
+@dataclass
+class Tap(PlacedForce):
+    """A finger tap: raised-cosine force pulse of ``peak_N`` lasting ``duration_s`` from ``time_s``; optionally at
+    a place (``x_mm``/``angle_deg`` or ``electrode``, ``indenter_radius_mm``: as a :class:`Touch`'s), where it
+    dents the electrodes as a touch of that force would (no place: only the fluid feels it)."""
+
+    LIMITS = {"time_s": INSTANT_S, "peak_N": NON_NEGATIVE, "duration_s": POSITIVE, **PLACE_LIMITS}
+    time_s: float
+    peak_N: float
+    duration_s: float = 0.03
 
     @property
     def start_s(self):
@@ -347,7 +356,7 @@ def sphere_drop_on(params: SensorParams, time_s: float, mass_kg: float, height_m
 
 
 @dataclass
-class Press(CheckedFields, ForceStimulus):
+class Press(PlacedForce):
     """Press and hold: ramp to ``force_N`` over ``ramp_s``, hold ``hold_s``, ramp back down; optionally at a place
     (``x_mm``/``angle_deg`` or ``electrode``, ``indenter_radius_mm``), where it dents the electrodes exactly as a
     :class:`Touch` without shear or object (no place: only the fluid feels it)."""
@@ -358,14 +367,6 @@ class Press(CheckedFields, ForceStimulus):
     force_N: float
     ramp_s: float = 0.5
     hold_s: float = 1.0
-    x_mm: float | None = None
-    angle_deg: float | None = None
-    electrode: str | None = None
-    indenter_radius_mm: float = 3.0
-
-    def __post_init__(self):
-        super().__post_init__()
-        _check_place(self)
 
     @property
     def start_s(self):
@@ -405,6 +406,7 @@ class Touch(Press):
 
     LIMITS = {**Press.LIMITS, "x_mm": Limit(SKIN_BASE_X_MM, CORE_RADIUS_MM), "angle_deg": FINITE,
               "tangential_N": FINITE, "shear_angle_deg": FINITE, "object_temperature_C": CELSIUS.or_none()}
+    _: KW_ONLY  # (as the place's fields: after start, force_N, ramp_s, hold_s, by keyword only)
     x_mm: float = DEFAULT_X_MM
     angle_deg: float = DEFAULT_ANGLE_DEG
     tangential_N: float = 0.0

@@ -86,6 +86,29 @@ def test_good_stimuli_are_still_made():
     assert Tap(0.1, 1.0).cumulative(1.0) == pytest.approx(0.015)
 
 
+def test_the_place_is_declared_once_and_given_by_keyword_only():
+    """Tap and Press take their place (x_mm, angle_deg, electrode, indenter_radius_mm) from one declaration,
+    PlacedForce's, by keyword only; their own fields stay positional as before (a place given positionally is a
+    TypeError, not a value landing in the wrong field — a Touch's fifth positional had been x_mm)."""
+    from emulator.stimuli import PlacedForce
+
+    place = ("x_mm", "angle_deg", "electrode", "indenter_radius_mm")
+    for cls in (Tap, Press):
+        assert not set(place) & set(vars(cls).get("__annotations__", {})), cls.__name__
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        assert all(fields[k].kw_only for k in place)
+    assert set(place) <= set(vars(PlacedForce)["__annotations__"])
+    assert all(f.kw_only for f in dataclasses.fields(Touch) if f.name not in ("start", "force_N", "ramp_s", "hold_s"))
+    tap, press = Tap(0.1, 2.0, 0.05, electrode="E3"), Press(0.2, 1.5, 0.1, 0.4, x_mm=-3.0, angle_deg=10.0)
+    assert (tap.time_s, tap.peak_N, tap.duration_s, tap.electrode) == (0.1, 2.0, 0.05, "E3")
+    assert (press.start, press.force_N, press.ramp_s, press.hold_s, press.x_mm, press.angle_deg) == \
+        (0.2, 1.5, 0.1, 0.4, -3.0, 10.0)
+    for make in (lambda: Tap(0.1, 2.0, 0.05, -3.0), lambda: Press(0.2, 1.5, 0.1, 0.4, -3.0),
+                 lambda: Touch(0.2, 1.5, 0.1, 0.4, -3.0)):
+        with pytest.raises(TypeError, match="positional argument"):
+            make()
+
+
 def test_scenes_and_the_fault_campaign_still_build_their_stimuli():
     from bench.campaigns.faults import SCENES
     from bench.scenes.scene import load_scene
