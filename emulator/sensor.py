@@ -29,8 +29,8 @@ from emulator.electrodes import (Contact, ElectrodeModel, electrode_number, elec
                                  shear_direction, surface_point_mm, surface_point_over_mm)
 from emulator.stimuli import (AmbientStep, ContactForce, ForceStimulus, HeaterFailure, MountVibration, PowerOn,
                               OutsideModelWarning, PressureCalibrator, SphereDrop, Touch, Vibration,
-                              PLACED_TAP_MIN_STEPS, calibration_pressure, contact_place, drop_depth_problem,
-                              placed_tap_too_short, skin_displacement, touch_slip_problem)
+                              PLACED_CONTACT_MIN_STEPS, calibration_pressure, contact_place, contact_span,
+                              drop_depth_problem, placed_contact_too_short, skin_displacement, touch_slip_problem)
 from emulator.skin import contact_patch_area_m2
 from emulator.thermal import ThermalContact, ThermalEvents, ThermalModel, material, steady_state
 from emulator.transducer import Bridge, CoreTemperature, johnson_noise
@@ -226,12 +226,13 @@ class Sensor:
                 warnings.warn(f"Touch at {st.start_s!r} s: tangential_N = {st.tangential_N!r} N {why} (a scene "
                               f"refuses it; its codes here are the model's extrapolation)", OutsideModelWarning,
                               stacklevel=2)
-            if placed_tap_too_short(st, self.fidelity.electrode_rate_Hz) and reads_electrodes:
-                rate = self.fidelity.electrode_rate_Hz
-                warnings.warn(f"Tap at {st.time_s!r} s: {st.duration_s * 1e3:g} ms at a place is shorter than two "
-                              f"steps of the electrodes' model at fidelity {self.fidelity.name!r} ({rate:.0f} Hz: "
-                              f"at least {PLACED_TAP_MIN_STEPS * 1e3 / rate:g} ms): its dent depends on where the "
-                              f"steps fall (a scene refuses it)", OutsideModelWarning, stacklevel=2)
+            if placed_contact_too_short(st, self.fidelity.electrode_rate_Hz) and reads_electrodes:
+                rate, (span_s, fields) = self.fidelity.electrode_rate_Hz, contact_span(st)
+                warnings.warn(f"{type(st).__name__} at {st.start_s!r} s: {span_s * 1e3:g} ms ({fields}) "
+                              f"at a place is shorter than two steps of the electrodes' model at fidelity "
+                              f"{self.fidelity.name!r} ({rate:.0f} Hz: at least "
+                              f"{PLACED_CONTACT_MIN_STEPS * 1e3 / rate:g} ms): its dent depends on where the steps "
+                              f"fall (a scene refuses it)", OutsideModelWarning, stacklevel=2)
             if isinstance(st, SphereDrop) and (why := drop_depth_problem(st, self.params)):
                 warnings.warn(f"SphereDrop at {st.time_s!r} s: {why} (a scene refuses it; its codes here are the "
                               f"model's extrapolation)", OutsideModelWarning, stacklevel=2)

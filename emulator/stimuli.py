@@ -223,16 +223,25 @@ class Tap(PlacedForce):
         return np.where(inside, 0.5 * self.peak_N * (1.0 - np.cos(2 * np.pi * np.clip(x, 0.0, T) / T)), 0.0)
 
 
-#: fewest steps of the electrodes' model a tap given a place lasts: the model samples its force at its rate
-#: (:attr:`emulator.fidelity.Fidelity.electrode_rate_Hz`), and over fewer the dent depends on where the samples fall
-PLACED_TAP_MIN_STEPS = 2
+#: fewest steps of the electrodes' model a tap or a press given a place (a touch too) lasts, start to end: the model
+#: samples its force at its rate (:attr:`emulator.fidelity.Fidelity.electrode_rate_Hz`), and over fewer the dent
+#: depends on where the samples fall (measured on "fast", 250 Hz, E17 at 2 N: a 3 ms tap dents 0 or 297 codes, a
+#: press of 1 ms ramps and no hold 0 or 410, and one of 3 ms ramps 228 to 410, as the start moves by 1 ms; at 8 ms,
+#: the tap 355 to 410 and the press 352 to 410; a press of 1 ms ramps held 0.1 s dents 773 at any start)
+PLACED_CONTACT_MIN_STEPS = 2
 
 
-def placed_tap_too_short(s, electrode_rate_Hz: float) -> bool:
-    """Whether ``s`` is a tap given a place that lasts under :data:`PLACED_TAP_MIN_STEPS` steps of the electrodes'
-    model at ``electrode_rate_Hz`` (Hz)."""
-    return (isinstance(s, Tap) and contact_place(s) is not None
-            and s.duration_s < PLACED_TAP_MIN_STEPS / electrode_rate_Hz)
+def placed_contact_too_short(s, electrode_rate_Hz: float) -> bool:
+    """Whether ``s`` is a tap or a press (a touch too) given a place that lasts, start to end (a tap's duration_s,
+    a press's 2·ramp_s + hold_s), under :data:`PLACED_CONTACT_MIN_STEPS` steps of the electrodes' model at
+    ``electrode_rate_Hz`` (Hz)."""
+    return contact_place(s) is not None and contact_span(s)[0] < PLACED_CONTACT_MIN_STEPS / electrode_rate_Hz
+
+
+def contact_span(s) -> tuple[float, str]:
+    """How long a tap or a press (a touch too) lasts, start to end (s), from its own fields (not end_s − start_s,
+    which rounds with the start), and those fields as a message names them."""
+    return (s.duration_s, "duration_s") if isinstance(s, Tap) else (2 * s.ramp_s + s.hold_s, "2·ramp_s + hold_s")
 
 
 @dataclass

@@ -26,8 +26,8 @@ from emulator.sensor import NoiseSources
 from emulator.spi import protocol as proto
 from emulator.stimuli import (DROP_HEIGHT_M, MATERIAL_DENSITY_KG_PER_M3, SPHERES, AmbientStep, HeaterFailure, PowerOn,
                               Press, PressureCalibrator, SphereDrop, Tap, Touch, Vibration, drop_depth_problem,
-                              PLACED_TAP_MIN_STEPS, contact_place, placed_tap_too_short, sphere_drop_on,
-                              sphere_radius_m, touch_slip_problem)
+                              PLACED_CONTACT_MIN_STEPS, contact_place, contact_span, placed_contact_too_short,
+                              sphere_drop_on, sphere_radius_m, touch_slip_problem)
 from emulator.effects import effect_rng
 from emulator.skin import Skin, contact_patch_area_m2
 from emulator.sliding import Slide
@@ -1175,7 +1175,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
 
         grid = profile(fidelity).grid_Hz
         for k, s in ((k, x) for k, lst in per_sensor.items() for x in lst):
-            if not isinstance(s, (Vibration, PressureCalibrator)) and not (isinstance(s, Tap) and contact_place(s)):
+            if not isinstance(s, (Vibration, PressureCalibrator)) and not contact_place(s):
                 continue
             # which one: its start (and finger), as the other checks across stimuli name it (two identical lines
             # had said nothing of which vibration or pressure stimulus was meant)
@@ -1189,14 +1189,14 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
             elif isinstance(s, PressureCalibrator) and s.amplitude_Pa > 0 and s.frequency_Hz >= 0.45 * grid:
                 c.problems.append(f"{which}pressure at {s.frequency_Hz:.0f} Hz needs a finer grid than fidelity "
                                   f"'{fidelity}' ({grid:.0f} Hz); use \"default\" or \"reference\"")
-            elif placed_tap_too_short(s, profile(fidelity).electrode_rate_Hz):
-                rate = profile(fidelity).electrode_rate_Hz
+            elif placed_contact_too_short(s, profile(fidelity).electrode_rate_Hz):
+                rate, (span_s, fields) = profile(fidelity).electrode_rate_Hz, contact_span(s)
                 fits = " or ".join(f'"{n}"' for n, f in PROFILES.items()
-                                     if not placed_tap_too_short(s, f.electrode_rate_Hz))
-                c.problems.append(f"{which}a tap of {s.duration_s * 1e3:g} ms at a place is shorter than two steps "
-                                  f"of the electrodes' model at fidelity '{fidelity}' ({rate:.0f} Hz: at least "
-                                  f"{PLACED_TAP_MIN_STEPS * 1e3 / rate:g} ms); lengthen duration_s"
-                                  + (f" or use {fits}" if fits else ""))
+                                     if not placed_contact_too_short(s, f.electrode_rate_Hz))
+                c.problems.append(f"{which}a {type(s).__name__.lower()} of {span_s * 1e3:g} ms ({fields}) at a "
+                                  f"place is shorter than two steps of the electrodes' model at fidelity "
+                                  f"'{fidelity}' ({rate:.0f} Hz: at least {PLACED_CONTACT_MIN_STEPS * 1e3 / rate:g} "
+                                  f"ms); lengthen {fields}" + (f" or use {fits}" if fits else ""))
     if c.problems:
         raise SceneError(source, c.problems)
     fresh_skin = copy.deepcopy(skin)

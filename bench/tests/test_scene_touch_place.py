@@ -70,9 +70,27 @@ def test_a_placed_tap_shorter_than_two_electrode_steps_is_refused_naming_the_pro
     tap = {"kind": "tap", "at_s": 0.5, "peak_N": 1.0, "duration_s": 0.005, "electrode": "E7"}
     fast = {"scene": {"name": "t", "duration_s": 2.0, "fidelity": "fast"}}
     (msg,) = problems({**fast, "stimulus": [tap]})
-    assert msg == ("the stimulus starting at 0.5 s: a tap of 5 ms at a place is shorter than two steps of the "
-                   "electrodes' model at fidelity 'fast' (250 Hz: at least 8 ms); lengthen duration_s or use "
+    assert msg == ("the stimulus starting at 0.5 s: a tap of 5 ms (duration_s) at a place is shorter than two steps "
+                   "of the electrodes' model at fidelity 'fast' (250 Hz: at least 8 ms); lengthen duration_s or use "
                    "\"default\" or \"reference\""), msg
     assert parse_scene({**MINIMAL, "stimulus": [tap]}).stimuli[0].electrode == "E7"
     bare = {k: v for k, v in tap.items() if k != "electrode"}
+    assert parse_scene({**fast, "stimulus": [bare]}).stimuli[0].electrode is None
+
+
+def test_a_placed_press_or_touch_shorter_than_two_electrode_steps_is_refused_as_a_placed_tap_is():
+    """The tap's rule on a press's whole span, 2·ramp_s + hold_s (a touch is a placed press): 1 ms ramps held 1 ms
+    (3 ms) over E7 need 8 ms on fast and 4 ms on default, so only "reference" takes them; short ramps held long
+    are taken (the dent is then held over many steps), and so is the short press with no place."""
+    press = {"kind": "press", "start_s": 0.5, "force_N": 1.0, "ramp_s": 0.001, "hold_s": 0.001, "electrode": "E7"}
+    fast = {"scene": {"name": "t", "duration_s": 2.0, "fidelity": "fast"}}
+    (msg,) = problems({**fast, "stimulus": [press]})
+    assert msg == ("the stimulus starting at 0.5 s: a press of 3 ms (2·ramp_s + hold_s) at a place is shorter than "
+                   "two steps of the electrodes' model at fidelity 'fast' (250 Hz: at least 8 ms); lengthen "
+                   "2·ramp_s + hold_s or use \"reference\""), msg
+    (msg,) = problems({**fast, "stimulus": [{**TOUCH, "ramp_s": 0.001, "hold_s": 0.0}]})
+    assert msg.startswith("the stimulus starting at 0.1 s: a touch of 2 ms (2·ramp_s + hold_s) at a place"), msg
+    held = parse_scene({**fast, "stimulus": [{**press, "hold_s": 0.5}]}).stimuli[0]
+    assert (held.ramp_s, held.electrode) == (0.001, "E7")
+    bare = {k: v for k, v in press.items() if k != "electrode"}
     assert parse_scene({**fast, "stimulus": [bare]}).stimuli[0].electrode is None

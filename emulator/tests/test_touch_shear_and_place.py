@@ -162,7 +162,7 @@ def test_a_placed_tap_too_short_for_the_electrodes_model_is_warned_of_in_python_
     on where the steps fall (0.100 s: nothing; 0.102 s: a dent): a scene refuses it, a Python Sensor that reads an
     electrode warns (OutsideModelWarning naming the tap, its length and the least length); 8 ms is taken silently,
     and so is the short tap when no electrode is read (only the fluid's channels feel it)."""
-    with pytest.warns(OutsideModelWarning, match=r"Tap at 0\.1 s: 3 ms at a place is shorter than two steps of the "
+    with pytest.warns(OutsideModelWarning, match=r"Tap at 0\.1 s: 3 ms \(duration_s\) at a place is shorter than two steps of the "
                                                  r"electrodes' model at fidelity 'fast' \(250 Hz: at least 8 ms\)"):
         Sensor(stimuli=[Tap(0.1, 2.0, 0.003, electrode="E17")], channels_read=["E17"], fidelity="fast")
     with warnings.catch_warnings():
@@ -170,3 +170,23 @@ def test_a_placed_tap_too_short_for_the_electrodes_model_is_warned_of_in_python_
         Sensor(stimuli=[Tap(0.1, 2.0, 0.008, electrode="E17")], channels_read=["E17"], fidelity="fast")
         Sensor(stimuli=[Tap(0.1, 2.0, 0.003, electrode="E17")], channels_read=["PDC"], fidelity="fast")
         Sensor(stimuli=[Tap(0.1, 2.0, 0.003)], channels_read=["E17"], fidelity="fast")
+
+
+def test_a_placed_press_too_short_for_the_electrodes_model_is_warned_of_as_a_placed_tap_is():
+    """The same rule as a tap's, on the whole press (2·ramp_s + hold_s): on "fast" (4 ms steps) a press over E17 of
+    1 ms ramps and no hold dents E17 by 410 codes or not at all as its start moves by 1 ms; a Python Sensor reading
+    an electrode warns naming the press, its span's fields and the least span (8 ms), as does a touch's; 8 ms (3 ms
+    ramps held 2 ms) and 1 ms ramps held 0.1 s (short ramps: only the onset's instant is quantised) are taken, and
+    so is the short press with no place or no electrode read."""
+    with pytest.warns(OutsideModelWarning, match=r"Press at 0\.1 s: 2 ms \(2·ramp_s \+ hold_s\) at a place is shorter "
+                                                 r"than two steps of the electrodes' model at fidelity 'fast' \(250 Hz: "
+                                                 r"at least 8 ms\)"):
+        Sensor(stimuli=[Press(0.1, 2.0, 0.001, 0.0, electrode="E17")], channels_read=["E17"], fidelity="fast")
+    with pytest.warns(OutsideModelWarning, match=r"Touch at 0\.1 s: 7 ms \(2·ramp_s \+ hold_s\) at a place"):
+        Sensor(stimuli=[Touch(0.1, 2.0, 0.003, 0.001)], channels_read=["E17"], fidelity="fast")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for press in (Press(0.1, 2.0, 0.003, 0.002, electrode="E17"), Press(0.1, 2.0, 0.001, 0.1, electrode="E17")):
+            Sensor(stimuli=[press], channels_read=["E17"], fidelity="fast")
+        Sensor(stimuli=[Press(0.1, 2.0, 0.001, 0.0, electrode="E17")], channels_read=["PDC"], fidelity="fast")
+        Sensor(stimuli=[Press(0.1, 2.0, 0.001, 0.0)], channels_read=["E17"], fidelity="fast")
