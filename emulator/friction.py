@@ -291,6 +291,27 @@ def _solve_bracketed(u_prev, x, z, v_stage, h, normal, k_t, c_t, sigma0, sigma1,
 #: the friction's scale 1 + ε never falls below this (a guard for any amplitude; at 3 % RMS it is never reached)
 MIN_FLUCTUATION_SCALE = 0.1
 
+#: how deep the friction fluctuation ε dips, in its RMS, for :func:`stribeck_velocity_limit_m_per_s` (a bound with
+#: margin: the shipped library's 119 fluctuation tracks at 1.25 µm dip at most 5.2 RMS below their mean, 4.5 on
+#: average; 6 × 3 % RMS keeps µ above 0.82 of its value)
+FLUCTUATION_DIP_PER_RMS = 6.0
+
+
+def stribeck_velocity_limit_m_per_s(mu_kinetic: float, sigma1_s_per_m: float, fluctuation_rms: float) -> float:
+    """The largest Stribeck velocity v_s (m/s) of a texture of kinetic friction ``mu_kinetic`` (1) with which the
+    friction element stays passive under a bristle damping at rest of ``sigma1_s_per_m`` (s/m): the damping fades
+    over v_s, so σ1·|v|·exp(−(v/v_s)²) peaks at σ1·v_s/√(2e), which must stay within 4·g (:func:`_bristle_damping`),
+    g at its least µk × :func:`fluctuation_floor` (the fluctuation scales µ).  Infinite without bristle damping."""
+    if sigma1_s_per_m <= 0.0:
+        return math.inf
+    return 4.0 * math.sqrt(2.0 * math.e) * mu_kinetic * fluctuation_floor(fluctuation_rms) / sigma1_s_per_m
+
+
+def fluctuation_floor(fluctuation_rms: float) -> float:
+    """The least scale 1 + ε (1) a friction fluctuation of ``fluctuation_rms`` (1) is taken to give µ:
+    1 − :data:`FLUCTUATION_DIP_PER_RMS` × ``fluctuation_rms``, not below :data:`MIN_FLUCTUATION_SCALE`."""
+    return max(1.0 - FLUCTUATION_DIP_PER_RMS * fluctuation_rms, MIN_FLUCTUATION_SCALE)
+
 
 class Ridges(NamedTuple):
     """The ridge-resolved fingerprint (one contact): ridge ``j`` sits at ``offsets_m[j]`` (m) from the patch centre

@@ -21,6 +21,7 @@ from emulator.adc import Adc
 from emulator.effects import Block, Effect, build_graph
 from emulator.extrinsic import MainsHum, MountNoise
 from emulator.fidelity import Fidelity, profile
+from emulator.friction import fluctuation_floor, stribeck_velocity_limit_m_per_s
 from emulator.frontend import Stage1, Stage2, amplifier_noise, stage2_noise
 from emulator.mechanics import FluidLeak, ForceCoupling, RestingPressure, VibrationCoupling
 from emulator.params import SensorParams
@@ -233,6 +234,9 @@ class Sensor:
                               f"{self.fidelity.name!r} ({rate:.0f} Hz: at least "
                               f"{PLACED_CONTACT_MIN_STEPS * 1e3 / rate:g} ms): its dent depends on where the steps "
                               f"fall (a scene refuses it)", OutsideModelWarning, stacklevel=2)
+            if isinstance(st, (Slide, CommandedMotion)) and (why := self._friction_passivity_problem(st.texture)):
+                warnings.warn(f"{type(st).__name__} at {st.start_s!r} s: {why} (a library refuses such a texture; "
+                              f"its codes here are the model's extrapolation)", OutsideModelWarning, stacklevel=2)
             if isinstance(st, SphereDrop) and (why := drop_depth_problem(st, self.params)):
                 warnings.warn(f"SphereDrop at {st.time_s!r} s: {why} (a scene refuses it; its codes here are the "
                               f"model's extrapolation)", OutsideModelWarning, stacklevel=2)
@@ -358,6 +362,18 @@ class Sensor:
         if events.any and (thermal_read or pressure_read):
             return ThermalModel(p, events, self.seed, self.faults, noise=self.noise.thermistor), None
         return None, steady_state(p, self.faults)
+
+    def _friction_passivity_problem(self, texture) -> str | None:
+        """Why this sensor's friction element is not passive on ``texture`` (None if it is): its Stribeck velocity
+        (m/s) past :func:`emulator.friction.stribeck_velocity_limit_m_per_s` at the sensor's bristle damping."""
+        sigma1, tex = self.params.bristle_damping_per_N, texture
+        limit = stribeck_velocity_limit_m_per_s(tex.mu_kinetic, sigma1, tex.friction_fluctuation_rms)
+        if tex.stribeck_velocity_m_per_s <= limit * (1.0 + 1e-12):
+            return None
+        return (f"texture {tex.number} ({tex.name}): stribeck_velocity_m_per_s = {tex.stribeck_velocity_m_per_s!r} "
+                f"is past {limit:.4g} m/s, the most with which the friction stays passive at mu_kinetic = "
+                f"{tex.mu_kinetic!r} and bristle_damping_per_N = {sigma1:g} s/m (σ1·v_s/√(2e) ≤ 4·µk × "
+                f"{fluctuation_floor(tex.friction_fluctuation_rms):g}): at a slip's onset it could give energy back")
 
     def _electrode_model(self, stimuli):
         """The electrode model, only if the host reads an electrode."""

@@ -164,6 +164,9 @@ BROKEN = {
                               ['T5 "kraft paper"', "mu_static = 12.0", "0.02 to 3"]),
     "optional field bad": (GOOD + "stribeck_velocity_mm_per_s = -1.0\n",
                            ['T5 "kraft paper"', "stribeck_velocity_mm_per_s = -1.0", "0.01 to 1000 mm/s"]),
+    "stribeck velocity past passivity": (GOOD + "stribeck_velocity_mm_per_s = 500.0\n",
+                                         ['T5 "kraft paper"', "stribeck_velocity_mm_per_s = 500.0",
+                                          "0.01 to 122.4 mm/s", "mu_kinetic = 0.48", "30 s/m"]),
     "unknown material": (_edit('material = "paper"', 'material = "papyrus"'),
                          ['T5 "kraft paper"', 'material = "papyrus"', "unknown", '"paper"', "aluminum"]),
     "wrong group": (_edit('group = "paper-like"', 'group = "glass"'),
@@ -386,3 +389,30 @@ def test_an_edited_library_file_is_read_again_even_at_the_same_size(tmp_path):
     st = f.stat()
     os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))  # a later modification time, as any edit gets
     assert load_library(f)[5].hurst == 0.8
+
+
+def test_the_stribeck_velocity_is_held_to_passivity_and_the_default_and_shipped_library_pass(tmp_path):
+    """A texture's Stribeck velocity is allowed up to emulator.friction.stribeck_velocity_limit_m_per_s at its own
+    µk and the largest σ1 a sensor may have (30 s/m): the default 5 mm/s at the lowest µk (0.02, limit 5.1 mm/s),
+    and every shipped texture, within it (the shipped library's largest σ1·v_s/√(2e) / (4·µk·0.82) is 0.094,
+    graphite's); the limit itself is allowed, a hair above it is not."""
+    from bench.textures.library import SIGMA1_MAX_S_PER_M
+    from emulator.friction import stribeck_velocity_limit_m_per_s
+    from emulator.texture import FRICTION_FLUCTUATION_RMS
+
+    def limit(mu_k):
+        return stribeck_velocity_limit_m_per_s(mu_k, SIGMA1_MAX_S_PER_M, FRICTION_FLUCTUATION_RMS)
+
+    assert limit(1.0) * 1e3 == pytest.approx(255, abs=0.5)  # the module's docstring: 255 × µk mm/s
+    worst = max(t.stribeck_velocity_m_per_s / limit(t.mu_kinetic) for t in load_library().values())
+    assert worst == pytest.approx(0.094, abs=0.001)
+    lowest = _edit("mu_static = 0.6", "mu_static = 0.02", _edit("mu_kinetic = 0.48", "mu_kinetic = 0.02"))
+    f = tmp_path / "lib.toml"
+    f.write_text(lowest, encoding="utf-8")
+    assert load_library(f)[5].stribeck_velocity_m_per_s == 0.005
+    at = limit(0.48) * 1e3
+    f.write_text(GOOD + f"stribeck_velocity_mm_per_s = {at!r}\n", encoding="utf-8")
+    assert load_library(f)[5].stribeck_velocity_m_per_s == pytest.approx(at * 1e-3, rel=1e-12)
+    f.write_text(GOOD + f"stribeck_velocity_mm_per_s = {at * (1 + 1e-9)!r}\n", encoding="utf-8")
+    with pytest.raises(TextureError, match="stribeck_velocity_mm_per_s"):
+        load_library(f)

@@ -26,7 +26,7 @@ rms_height_um                   0.0001 - 3000 µm    0.1 nm (atomically flat) to
 correlation_length_um           0.1 - 50000 µm      sub-µm grains to 50 mm features (≪ the 1 m stored surface)
 hurst                           0.1 - 1.0           roughness exponent of a self-affine surface (0 < H ≤ 1)
 mu_static, mu_kinetic           0.02 - 3.0          lubricated contacts to clean soft elastomers; μk ≤ μs
-stribeck_velocity_mm_per_s      0.01 - 1000 mm/s    optional, default 5 mm/s (the model's)
+stribeck_velocity_mm_per_s      0.01 - 1000 mm/s    optional, default 5 mm/s; at most 255 × μk mm/s (below)
 mu_per_velocity_s_per_m         0 - 20 s/m          optional, default 0; viscous rise of μ with speed
 modulus_MPa                     0.0005 - 1e6 MPa    0.5 kPa (fur pile) to 1000 GPa (diamond)
 material                        emulator.thermal.MATERIALS
@@ -36,6 +36,10 @@ periodic[].amplitude_um         0.001 - 5000 µm     fundamental, peak
 periodic[].harmonics            ≤ 16 values, −1..1  relative amplitudes of the 2nd, 3rd, ... harmonics
 periodic[].orientation_deg      −85 - 85°           ridge normal vs sliding direction (omit ridges along it)
 ==============================  ==================  ===========================================================
+
+The Stribeck velocity's cap keeps the friction element passive (:func:`_check_passive_friction`): the bristle
+damping fades over it, and with the largest damping a sensor may have (30 s/m) and μk at the deepest dip of its
+fluctuation (0.82 μk) it allows 4·√(2e)·0.82·μk/30 s/m, 255 × μk mm/s (5.1 mm/s at μk = 0.02: the default always).
 
 ``name`` (unique, case-insensitive), ``group`` (the dissertation's group for the number), ``source`` (where the
 numbers come from, non-empty) and ``description`` are text.  The shipped library must hold all of T1..T117, with
@@ -59,7 +63,9 @@ from bench import tomlfile
 from bench.tomlfile import spelled
 from bench.errors import TextureError, escaped, shell_word, shortened
 from bench.paths import FIXTURES
-from emulator.texture import PeriodicComponent, Texture
+from emulator.friction import fluctuation_floor, stribeck_velocity_limit_m_per_s
+from emulator.params import PARAMETER_FIELDS
+from emulator.texture import FRICTION_FLUCTUATION_RMS, PeriodicComponent, Texture
 from emulator.thermal import MATERIALS
 
 MAX_LIBRARY_BYTES = 4_000_000  # a texture library file larger than 4 MB is refused before it is parsed
@@ -337,6 +343,8 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     if None not in vals.values() and vals["mu_kinetic"] > vals["mu_static"]:
         c.add(who, f"mu_kinetic = {spelled(t['mu_kinetic'])}: must not exceed mu_static = {spelled(t['mu_static'])} "
                    "(kinetic friction ≤ static)")
+    elif None not in vals.values():
+        _check_passive_friction(c, who, t, vals["mu_kinetic"], vals["stribeck_velocity_m_per_s"])
     material = c.text(who, t, "material")
     if material is not None and material not in MATERIALS:
         near = difflib.get_close_matches(material, list(MATERIALS), n=3, cutoff=0.5)
@@ -350,6 +358,26 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
         return None
     return Texture(number=number, name=name, group=group, material=material, seed=seed, source=source,
                    description=description or "", periodic=periodic, **vals)
+
+
+#: the largest bristle damping at rest σ1 (s/m) a sensor may have (SensorParams' range): a library texture must
+#: keep the friction element passive under it, whatever sensor slides on it
+SIGMA1_MAX_S_PER_M = PARAMETER_FIELDS["bristle_damping_per_N"].metadata["range"][1]
+
+
+def _check_passive_friction(c: _Checker, who: str, t: dict, mu_kinetic: float, stribeck_m_per_s: float) -> None:
+    """Refuse a Stribeck velocity (m/s) over which the bristle damping fades too slowly for the texture's kinetic
+    friction: the friction element could then give energy back (emulator.friction.stribeck_velocity_limit_m_per_s)."""
+    limit = stribeck_velocity_limit_m_per_s(mu_kinetic, SIGMA1_MAX_S_PER_M, FRICTION_FLUCTUATION_RMS)
+    if stribeck_m_per_s <= limit * (1.0 + 1e-12):
+        return
+    spec = NUMBER_FIELDS["stribeck_velocity_mm_per_s"]
+    shown = spelled(t["stribeck_velocity_mm_per_s"]) if "stribeck_velocity_mm_per_s" in t else f"{spec.default:g} (default)"
+    c.add(who, f"stribeck_velocity_mm_per_s = {shown}: allowed range is {spec.lo:g} to {spec.from_si(limit):.4g} "
+               f"mm/s with mu_kinetic = {spelled(t['mu_kinetic'])}: the bristle damping σ1 (up to "
+               f"{SIGMA1_MAX_S_PER_M:g} s/m) fades over it, and the friction stays passive only while "
+               f"σ1·v_s/√(2e) ≤ 4·µk·{fluctuation_floor(FRICTION_FLUCTUATION_RMS):g} (µk at the deepest dip of "
+               f"its {FRICTION_FLUCTUATION_RMS:.0%} fluctuation)")
 
 
 def _ranges(numbers: list[int]) -> str:

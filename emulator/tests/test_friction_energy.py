@@ -15,7 +15,7 @@ from numba import njit
 
 from emulator import friction
 from emulator.params import SensorParams
-from emulator.texture import Texture, friction_fluctuation
+from emulator.texture import FRICTION_FLUCTUATION_RMS, Texture, friction_fluctuation
 
 pytestmark = pytest.mark.unit
 
@@ -98,3 +98,57 @@ def test_the_friction_element_dissipates_at_every_step(case, texture, fluctuatio
     assert dissipated[worst] >= -1e-12 * total, (dissipated[worst], total, force[worst], slip[worst])
     fast = np.abs(slip) > 10 * tex.stribeck_velocity_m_per_s
     assert not steady or np.all(force[fast] * np.sign(slip[fast]) > 0.0)
+
+
+def test_a_stribeck_velocity_past_its_limit_gives_energy_back_and_one_at_it_does_not():
+    """The fading damping keeps the element passive only while σ1·v_s/√(2e) ≤ 4·g: a texture the library's ranges
+    alone took (µs 0.3, µk 0.2, v_s 500 mm/s, 0.01–1000 allowed) under the largest σ1 a sensor may have (30 s/m)
+    gives energy back at a slip's onset (5 N, the stage ramped to 0.1–0.5 m/s in 0.3 ms, 14 µs steps); at
+    :func:`friction.stribeck_velocity_limit_m_per_s` (51 mm/s for it, what the library now allows) no step does,
+    with or without the fluctuation."""
+    from emulator.params import PARAMETER_FIELDS
+
+    sigma1 = PARAMETER_FIELDS["bristle_damping_per_N"].metadata["range"][1]
+    p = SensorParams(bristle_damping_per_N=sigma1)
+    h = 4 * STEP_S
+    t = np.arange(int(0.1 / h)) * h
+    limit = friction.stribeck_velocity_limit_m_per_s(0.2, sigma1, FRICTION_FLUCTUATION_RMS)
+    assert limit == pytest.approx(0.051, rel=0.01)
+
+    def worst(vs, speed, fluctuation):
+        tex = Texture(950, "slick", "test", rms_height_m=1e-6, correlation_length_m=1e-4, hurst=0.8, mu_static=0.3,
+                      mu_kinetic=0.2, stribeck_velocity_m_per_s=vs, seed=950)
+        eps = friction_fluctuation(tex, DX_M) if fluctuation else np.zeros(1)
+        d, _, _ = _dissipation(np.full(t.size, 5.0), speed * np.clip((t - 0.01) / 3e-4, 0, 1), h,
+                               p.skin_tangential_stiffness_N_per_m, p.skin_tangential_damping_N_s_per_m,
+                               p.bristle_stiffness_per_N, sigma1, tex.mu_static, tex.mu_kinetic, vs, 0.0, eps, DX_M)
+        return d.min() / d.sum()
+
+    assert min(worst(0.5, v, False) for v in (0.1, 0.25, 0.5)) < -1e-6
+    for v in (0.1, 0.25, 0.5):
+        for fluctuation in (False, True):
+            assert worst(limit, v, fluctuation) >= -1e-12, (v, fluctuation)
+
+
+def test_a_python_slide_on_a_texture_past_its_stribeck_limit_is_warned_of_at_the_sensors_own_damping():
+    """A Texture made in Python skips the library's check: a Sensor warns (OutsideModelWarning naming the slide,
+    texture, field, value and limit) when its Stribeck velocity passes the limit at the sensor's own σ1 — 0.5 m/s
+    at µk 0.2 and the nominal 10 s/m (limit 0.153 m/s) — and takes 0.1 m/s, and 0.5 m/s without bristle damping."""
+    import warnings
+
+    from emulator.sensor import Sensor
+    from emulator.sliding import Slide
+    from emulator.stimuli import OutsideModelWarning
+
+    def slide(vs):
+        tex = Texture(950, "slick", "test", rms_height_m=1e-6, correlation_length_m=1e-4, hurst=0.8, mu_static=0.3,
+                      mu_kinetic=0.2, stribeck_velocity_m_per_s=vs, seed=950)
+        return Slide(0.1, tex, 0.5, 0.01, 0.01)
+
+    with pytest.warns(OutsideModelWarning, match=r"Slide at 0\.1 s: texture 950 \(slick\): stribeck_velocity_m_per_s "
+                                                 r"= 0\.5 is past 0\.153 m/s, .* bristle_damping_per_N = 10 s/m"):
+        Sensor(stimuli=[slide(0.5)], channels_read=["PDC"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Sensor(stimuli=[slide(0.1)], channels_read=["PDC"])
+        Sensor(stimuli=[slide(0.5)], channels_read=["PDC"], params=SensorParams(bristle_damping_per_N=0.0))
