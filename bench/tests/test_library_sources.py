@@ -101,7 +101,7 @@ def test_roughness_sigma_falls_about_as_one_over_root_window():
     over nested windows of 0.1 / 0.4 s and 0.2 / 0.8 s from 0.15 s after the slide starts. Sampling variance of
     a stationary vibration over independent stretches (starts anywhere on a 1 m texture: on D's 75 mm square the
     strokes overlap and share their windows' track): σ ratio 2 for 4× the window. Accepted 1.4–2.8 (geometric mean
-    of the four ratios; 1.43–2.27 per texture and pair over 30 trials of 7 textures; see the assert for this run's)."""
+    of the four ratios; 1.44–2.40 per texture and pair over 30 trials of 7 textures; see the assert for this run's)."""
     rig = TextureRig(settings=RigSettings(distance_m=0.065, texture_side_m=1.0), skin=Skin(), wear=False)
     windows = (0.1, 0.4, 0.2, 0.8)
     ratios = []
