@@ -52,7 +52,7 @@ def test_a_fast_steady_slide_on_sandpaper_keeps_the_kinetic_friction_on_the_effe
                    "mean µ_r is estimated over the track's first 20 mm, and it is subtracted only while the ridges "
                    "move although their force persists while the skin sticks")
 @pytest.mark.parametrize("force_N, velocity_m_per_s, distance_m", [(20.0, 0.5, 0.1), (2.0, 0.01, 0.01)],
-                         ids=["20N-0.5m/s", "2N-1cm/s"])
+                         ids=["20N-0.5m_per_s", "2N-1cm_per_s"])
 def test_the_ridge_resolved_fingerprint_keeps_the_slides_mean_friction(force_N, velocity_m_per_s, distance_m):
     """Consistency with the model's own contract (emulator/friction.py: the texture's µ holds the ridges' share, so
     they add their fluctuation about their mean): on the reference grid the ridge-resolved fingerprint changes the
