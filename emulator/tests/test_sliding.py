@@ -637,9 +637,9 @@ def test_the_reference_profiles_hardest_sand_slide_has_converged_in_its_step():
     at the reference's 3.55 µs, 10.96 at 1.78 µs, 9.87 at the default grid's 114 µs (the damping term's spikes at
     each slip's onset grew as the step shrank), which made the fidelity table's 10.9 % between fast, default and
     reference on this slide; what is left of that (11.48 N against 12.03) is the ridge-resolved fingerprint, not
-    the step (the reference grid with the effective comb gives 12.07): the ridges give 5.5 % less force in this
-    slide than in a steady one over the same track, and their subtracted mean µ_r, taken over the track's first
-    20 mm, is 2 % above the slide's 10 cm (docs/experiment/texture_fidelity.md)."""
+    the step (the reference grid with the effective comb gives 12.07): the ridges' subtracted mean µ_r, taken over
+    the track's first 20 mm (0.688 at 20 N), exceeds what they give over the slide (0.661), and they start from
+    rest below their mean (docs/experiment/texture_fidelity.md)."""
     import dataclasses
 
     from emulator.fidelity import PROFILES
