@@ -46,7 +46,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
@@ -454,7 +453,9 @@ class SensorPort:
         start = np.asarray(batch.start_s, float)
         mosi = np.asarray(batch.mosi, dtype=np.uint16)
         clock = np.asarray(batch.clock_hz, float)
-        end = _check_batch(start, mosi, clock, getattr(self, "_last_end", -np.inf))
+        if start.shape != mosi.shape:
+            raise ValueError(f"a batch of {start.size} start times and {mosi.size} MOSI words: one word per start")
+        end = checked_transfer_ends(start, 16, clock, getattr(self, "_last_end", -np.inf), proto.SPI_CLOCK_RANGE_HZ)
         if start.size == 0:
             return np.zeros(0, np.uint16)
         if is_plain(self, mosi):
@@ -468,77 +469,41 @@ class SensorPort:
         return miso
 
 
-def _check_batch(start, mosi, clock, last_end) -> np.ndarray:
-    """Validate a batch of 16-bit transfers; returns when each releases chip select (s)."""
-    if start.shape != mosi.shape:
-        raise ValueError("start_s and mosi must have the same length")
-    if start.size == 0:
-        return start
-    if not np.isfinite(start).all():  # NaN compared false with every bound: it had passed, and read a word
-        bad = int(np.flatnonzero(~np.isfinite(start))[0])
-        raise ValueError(f"transfer #{bad}: start_s = {float(start[bad])!r}: every start must be a finite time (s)")
-    lo, hi = proto.SPI_CLOCK_RANGE_HZ
-    if not (clock.min() >= lo and clock.max() <= hi):  # NaN fails this too
-        c = np.broadcast_to(clock, start.shape)
-        bad = int(np.flatnonzero(~((c >= lo) & (c <= hi)))[0])
-        raise ValueError(f"transfer #{bad}: SCK {c[bad]:.0f} Hz outside {lo:.0f}–{hi:.0f} Hz")
-    end = start + 16.5 / clock
-    eps = proto.TIME_TOLERANCE_S
-    if start[0] < last_end - eps or _overlapping(start, end, -eps):
-        raise ValueError(_order_problem(start, end, last_end, eps))
-    return end
-
-
-def _order_problem(start, end, last_end: float, eps: float) -> str:
-    """Which transfer of a batch breaks time order (s): the first, against the port's previous call, or one against
-    the transfer before it (a transfer holds chip select for 16.5 SCK periods)."""
-    rule = "transfers must be in time order and must not overlap"
-    if start[0] < last_end - eps:
-        return (f"{rule}: transfer #0 starts at {start[0]:.9g} s, before the previous call's last transfer ended "
-                f"({last_end:.9g} s); a port's time only runs forward")
-    i = int(np.flatnonzero(start[1:] - end[:-1] < -eps)[0]) + 1
-    return (f"{rule}: transfer #{i} starts at {start[i]:.9g} s, before transfer #{i - 1} (from {start[i - 1]:.9g} s) "
-            f"ends at {end[i - 1]:.9g} s")
-
-
-def overlap_error(start_s: float) -> ValueError:
-    """The error for a transfer starting at ``start_s`` (s) before the previous one on its bus ended."""
-    return ValueError(f"transfer at {start_s:.9f} s starts before the previous one ended")
-
-
-def impossible_transfer_error(what) -> ValueError:
-    """The error for a transfer no bus can clock (``what``: the transfer, or where it is in a batch)."""
-    return ValueError(f"impossible transfer: {what}")
-
-
-def checked_transfer_ends(start, nbits, clock, previous_end_s: float) -> np.ndarray:
-    """When each transfer of a call releases chip select (s), checked as one transfer is: one no bus can clock (a
-    start that is not finite, bits < 0, a clock that is not positive) or one starting before the one before it
-    ended — in this call or, ``previous_end_s``, the last — is a ValueError naming the first such."""
-    start = np.asarray(start, float)
-    nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
+def checked_transfer_ends(start, nbits, clock, previous_end_s: float, clock_range=None) -> np.ndarray:
+    """When each transfer of a call releases chip select (s): start + (nbits + ½)/clock.  The one check of a call's
+    transfers, on every bus and port: a ValueError naming the first transfer (its place in the call), what is wrong
+    with it and what is allowed — a start that is not a finite time (s), bits < 0, a clock (Hz) that is not finite
+    and > 0 (or outside ``clock_range`` = (lo, hi) Hz, where a caller serves only those), or a start before the
+    transfer before it ended (in this call, or ``previous_end_s``: the previous call's last), within
+    ``protocol.TIME_TOLERANCE_S``."""
+    start = np.atleast_1d(np.asarray(start, float))
+    nbits = np.broadcast_to(np.asarray(nbits), start.shape)
     clock = np.broadcast_to(np.asarray(clock, float), start.shape)
     if not start.size:
         return start
-    bad = ~np.isfinite(start) | (nbits < 0) | ~(clock > 0) | ~np.isfinite(clock)
-    if bad.any():
-        k = int(np.flatnonzero(bad)[0])
-        raise impossible_transfer_error(f"#{k} of the call (start {start[k]} s, {nbits[k]} bits at {clock[k]} Hz)")
+    if clock_range is None:
+        bad_clock, allowed = ~(clock > 0) | ~np.isfinite(clock), "a finite frequency > 0"
+    else:
+        lo, hi = clock_range
+        bad_clock, allowed = ~((clock >= lo) & (clock <= hi)), f"{lo:.0f}–{hi:.0f} Hz (SENSOR.md §6)"
+    problems = ((~np.isfinite(start), lambda k: f"start_s = {float(start[k])!r}: must be a finite time (s)"),
+                (nbits < 0, lambda k: f"{int(nbits[k])} bits: must be 0 or more"),
+                (bad_clock, lambda k: f"SCK {float(clock[k]):.10g} Hz: must be {allowed}"))
+    for bad, says in problems:
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"transfer #{k} of the call: {says(k)}")
     end = start + (nbits + 0.5) / clock
     before = np.concatenate(([previous_end_s], end[:-1]))
     early = np.flatnonzero(start < before - proto.TIME_TOLERANCE_S)
     if early.size:
-        raise overlap_error(float(start[early[0]]))
+        k = int(early[0])
+        after = (f"the previous call's last transfer ended ({previous_end_s:.9g} s)" if k == 0 else
+                 f"transfer #{k - 1} (from {start[k - 1]:.9g} s) ends at {end[k - 1]:.9g} s")
+        raise ValueError(f"transfer #{k} of the call starts at {start[k]:.9g} s, before {after}: transfers must be in "
+                         f"time order and must not overlap (a transfer holds chip select for its bits + ½ SCK "
+                         f"periods)")
     return end
-
-
-@njit(cache=True)
-def _overlapping(start, end, least_gap) -> bool:
-    """Whether a transfer starts less than ``least_gap`` (s) after the one before it ends."""
-    for i in range(1, start.size):
-        if start[i] - end[i - 1] < least_gap:
-            return True
-    return False
 
 
 @dataclass
@@ -599,10 +564,7 @@ class Bus:
 
     def transfer(self, tr: Transfer) -> int:
         """Clock one transfer; returns the MISO bits the host samples (``nbits`` bits, MSB first)."""
-        if tr.nbits < 0 or not 0 < tr.clock_hz < math.inf or not math.isfinite(tr.start_s):  # (a NaN clock too)
-            raise impossible_transfer_error(tr)
-        if tr.start_s < self._last_end - proto.TIME_TOLERANCE_S:
-            raise overlap_error(tr.start_s)
+        checked_transfer_ends(tr.start_s, tr.nbits, tr.clock_hz, self._last_end)
         lo, hi = proto.SPI_CLOCK_RANGE_HZ
         if not lo <= tr.clock_hz <= hi:
             self.out_of_spec_transfers += 1

@@ -526,13 +526,17 @@ def test_a_call_out_of_time_order_or_impossible_is_refused_alike_on_either_bus_a
     s1 = SELECT_CODE[1]
     pdc = int(proto.sample_command(1)) << 8  # PDC (channel 1)
     late = ([0.5, 0.5 + 1e-4], [s1, s1], [pdc, 0])
-    bad_calls = [(([0.1], [s1], [pdc]), CLOCK_HZ, r"transfer at 0\.100000000 s starts before the previous one ended"),
+    bad_calls = [(([0.1], [s1], [pdc]), CLOCK_HZ,
+                  r"transfer #0 of the call starts at 0\.1 s, before the previous call's last transfer ended "
+                  r"\(0\.5001\d* s\): transfers must be in time order"),
                  (([0.6, 0.6 + 1e-6], [s1, s1], [0, 0]), CLOCK_HZ,
-                  r"transfer at 0\.600001000 s starts before the previous one ended"),
-                 (([np.nan], [s1], [0]), CLOCK_HZ, r"impossible transfer"),
-                 (([0.7], [s1], [0]), 0.0, r"impossible transfer"),
-                 (([0.7], [s1], [0]), np.nan, r"impossible transfer"),  # (the software bus: a bare ValueError about
-                 (([0.7], [s1], [0]), np.inf, r"impossible transfer")]  # NaN, and a ZeroDivisionError for inf)
+                  r"transfer #1 of the call starts at 0\.600001 s, before transfer #0 \(from 0\.6 s\) ends at "
+                  r"0\.60000\d* s: transfers must be in time order"),
+                 (([np.nan], [s1], [0]), CLOCK_HZ, r"transfer #0 of the call: start_s = nan: must be a finite time"),
+                 (([0.7], [s1], [0]), 0.0, r"transfer #0 of the call: SCK 0 Hz: must be a finite frequency > 0"),
+                 # (the software bus had raised a bare ValueError about NaN, and a ZeroDivisionError for inf)
+                 (([0.7], [s1], [0]), np.nan, r"transfer #0 of the call: SCK nan Hz: must be a finite frequency > 0"),
+                 (([0.7], [s1], [0]), np.inf, r"transfer #0 of the call: SCK inf Hz: must be a finite frequency > 0")]
     words = {}
     for name, bus in (("software", Bus({n: SensorPort(s, n) for n, s in _sensors().items()})),
                       ("RTL", RtlBus(_sensors(), harness=harness))):

@@ -26,25 +26,25 @@ def port() -> SensorPort:
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
 def test_a_start_time_that_is_not_finite_is_refused_naming_the_transfer(bad):
     spi = port()
-    with pytest.raises(ValueError, match=rf"transfer #1: start_s = {bad!r}: every start must be a finite time \(s\)"):
+    with pytest.raises(ValueError, match=rf"transfer #1 of the call: start_s = {bad!r}: must be a finite time \(s\)"):
         spi.exchange(TransferBatch(np.array([0.1, bad, 0.2]), np.array([PDC_COMMAND, 0, 0], np.uint16)))
 
 
 def test_a_nan_clock_is_refused_naming_the_transfer_and_the_range():
     spi = port()
     clock = np.array([4.4e6, np.nan])
-    with pytest.raises(ValueError, match=r"transfer #1: SCK nan Hz outside 500000–10000000 Hz"):
+    with pytest.raises(ValueError, match=r"transfer #1 of the call: SCK nan Hz: must be 500000–10000000 Hz"):
         spi.exchange(TransferBatch(np.array([0.1, 0.2]), np.array([PDC_COMMAND, 0], np.uint16), clock))
 
 
 def test_going_back_in_time_names_the_transfer_and_both_times():
     spi = port()
     spi.exchange(TransferBatch(np.array([1.0, 1.0001]), np.array([PDC_COMMAND, 0], np.uint16)))
-    with pytest.raises(ValueError, match=r"transfer #0 starts at 0\.5 s, before the previous call's last transfer "
-                                         r"ended \(1\.000103\d* s\)"):
+    with pytest.raises(ValueError, match=r"transfer #0 of the call starts at 0\.5 s, before the previous call's "
+                                         r"last transfer ended \(1\.000103\d* s\)"):
         spi.exchange(TransferBatch(np.array([0.5]), np.array([PDC_COMMAND], np.uint16)))
-    with pytest.raises(ValueError, match=r"transfer #2 starts at 2\.000001 s, before transfer #1 \(from 2 s\) ends at "
-                                         r"2\.00000375 s"):
+    with pytest.raises(ValueError, match=r"transfer #2 of the call starts at 2\.000001 s, before transfer #1 "
+                                         r"\(from 2 s\) ends at 2\.00000375 s"):
         spi.exchange(TransferBatch(np.array([1.5, 2.0, 2.000001]), np.array([PDC_COMMAND, 0, 0], np.uint16)))
 
 
