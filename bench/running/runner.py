@@ -102,7 +102,8 @@ def check_buildable(scene: Scene) -> None:
 
 
 def peripheral_for(scene: Scene, sensor: Sensor):
-    """The sensor's SPI side the scene asks for: the software model, or the RTL through the C++ harness."""
+    """The sensor's SPI side the scene asks for: the software model, or the RTL through the C++ harness (a process:
+    ``close()`` it when done, as :func:`run_one_sensor` does)."""
     if scene.spi == "rtl":
         from emulator.rtl.harness import HarnessPeripheral
 
@@ -186,13 +187,13 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
     parts: dict[str, list] = {n: [] for n in names}
     error, status = None, "ok"
     done = 0
-    sensor = None
+    sensor = peripheral = None
     bar = tqdm(total=round(scene.duration_s, 3), unit="sim s", disable=not progress, desc=scene.name,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]")
     try:
         sensor = build_sensor(scene)
-        sampler = Sampler(peripheral_for(scene, sensor), scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz,
-                          variant=scene.variant)
+        peripheral = peripheral_for(scene, sensor)
+        sampler = Sampler(peripheral, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz, variant=scene.variant)
         total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))
         chunk_slots = max(1, int(round(chunk_s * scene.slot_rate_Hz)))
         for s in sampler.chunks(total_slots, chunk_slots):
@@ -217,6 +218,8 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
         status = "interrupted" if isinstance(e, BuildError) and should_stop is not None and should_stop() else "failed"
     finally:
         bar.close()
+        if hasattr(peripheral, "close"):  # the RTL's harness process
+            peripheral.close()
     try:
         summary.finish()
     except Exception as e:  # a summary that cannot finish must not hide the run

@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from emulator.rtl import build
-from emulator.spi.model import Faults, SensorPort, checked_transfer_ends
+from emulator.spi import protocol as proto
+from emulator.spi.model import PORT_COUNTERS, Faults, SensorPort, checked_transfer_ends
 from emulator.spi.vectors import rtl_provided_masks, variants_of
 
 HARNESS_CPP = Path(__file__).resolve().parent / "harness" / "harness.cpp"
@@ -35,6 +36,8 @@ CODE = np.dtype([("sensor", "u1"), ("channel", "u1"), ("code", "<u2")])
 FAULTS = np.dtype([("sensor", "u1"), ("miso_flip_en", "u1"), ("mosi_flip_en", "u1"), ("stuck_en", "u1"),
                    ("stuck_val", "u1"), ("bad_parity", "u1"), ("slow", "u1"), ("pad", "u1"),
                    ("miso_flip_bit", "<u2"), ("mosi_flip_bit", "<u2")])
+#: The slowest SCK (Hz) the harness takes: its half period in ps is a signed 32-bit field.
+MIN_CLOCK_HZ = 0.5e12 / (2**31 - 1)
 #: How long (wall s) :meth:`RtlBus.close` waits for the streaming harness to exit after its input ends.
 CLOSE_TIMEOUT_S = 5.0
 
@@ -96,8 +99,8 @@ def accepted_conversions(port, start, end, mosi, next_activity, last_sampling_ti
     not within CONVERSION_TICKS (5 µs) of the previous sampling command of a recognised channel (that one answers
     "E-"; busy and unprovided commands restart the window too).  ``last_sampling_tick``: that previous command's
     tick of the 1 MHz timer (``fastpath._NO_TICK``: none).  The last conversion, when nothing is known after it (its
-    next activity infinite), is left out: the software model converts it at the bus's next activity, so do the
-    callers (RtlBus, HarnessPeripheral).  Returns (channels, instants s, whether the bus clocks within the
+    next activity infinite), is left out: the software model converts it at the bus's next activity, so does the
+    caller (:class:`RtlBus`).  Returns (channels, instants s, whether the bus clocks within the
     conversion, the last sampling tick afterwards, the conversion left out: (channel, instant s) or None, how many
     commands asked for a channel the sensor recognises but does not provide — the port's ``unprovided_requests``)."""
     from emulator.spi.fastpath import _TABLES, _commands
@@ -247,65 +250,47 @@ class Harness:
 
 
 class HarnessPeripheral:
-    """The RTL, run by the C++ harness, behind the same ``exchange(TransferBatch)`` as the software model.
-
-    For each batch the emulator computes the ADC codes of the conversions the software model performs
-    (:func:`accepted_conversions`: not those answered "EX" or "E-") at the instants their commands end, the
-    harness plays the batch against the RTL, told the sensor's provided channels, serving those codes, and
-    the MISO words come back.  The RTL is reset at the start of every batch (its ADC-busy window with it)
-    and the batch is shifted to start just after that reset, so nothing but the protocol state in flight
-    at a batch boundary is lost: the host sampler's batches end on a completed read, so none is.  Any
-    request the RTL makes that the codes do not match, or a code it does not request, is an error.
-
-    A batch ending on a sampling command has that conversion computed at the next call, its coupling judged by
-    that call's first transfer, as the software port does: its result is never served here (the RTL is reset
-    before the next batch), but computing it draws from the sensor's ADC noise and, when coupled, its SPI-coupling
-    noise, so converting it at once (always quiet) would shift every later coupled conversion's code.  The RTL
-    still requests it within its batch and is answered a placeholder code (0) that nothing reads.
-    """
+    """A sensor alone on its bus over the RTL (a scene's ``spi = "rtl"`` route), behind the same
+    ``exchange(TransferBatch)`` as the software model's :meth:`~emulator.spi.model.SensorPort.exchange`: each batch is
+    checked as that one checks it (:func:`~emulator.spi.model.checked_batch`) and played on a one-sensor
+    :class:`RtlBus` whose RTL state, ADC-busy window, pending conversion and time run on from batch to batch, so the
+    words do not depend on how the traffic is split into batches.  Its counters (``incomplete``, ``empty_windows``,
+    ``unprovided_requests``, ``coupled_conversions``: :data:`~emulator.spi.model.PORT_COUNTERS`) are its port's, as
+    the software port's.  ``close()`` stops the harness (also as a context manager)."""
 
     def __init__(self, sensor, harness: Harness | None = None):
-        from emulator.spi.model import SensorPort
-
-        from emulator.rtl.build import sp_mask
-
         self.sensor = sensor
-        self.harness = harness or Harness(sp=sp_mask({1: _variant_of(sensor)}))
-        self._reference = SensorPort(sensor)  # only for its variant, provided channels and conversion window
+        self.bus = RtlBus({1: sensor}, harness=harness)
+        self.harness = self.bus.harness
+        self.port = self.bus.ports[1]
         self.channels_read = sensor.channels_read
-        self._deferred: tuple[int, float] | None = None  # (channel, instant s) of the last batch's final conversion
 
     def exchange(self, batch) -> np.ndarray:
-        from emulator.spi.fastpath import _NO_TICK
+        """MISO words (uint16) for a batch of 16-bit transfers to this sensor (start s, MOSI words, SCK Hz)."""
+        from emulator.spi.model import SELECT_CODE, checked_batch
 
-        start = np.asarray(batch.start_s, float)
-        mosi = np.asarray(batch.mosi, dtype=np.uint16)
-        clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
-        end = start + 16.5 / clock
+        start, mosi, clock, _ = checked_batch(batch, self.bus._last_end)
         if start.size == 0:
             return np.zeros(0, np.uint16)
-        if self._deferred is not None:  # the last batch's final conversion, judged by this batch's first transfer
-            (channel, t), self._deferred = self._deferred, None
-            coupled = bool(start[0] < t + self._reference.conversion_s)
-            self.sensor.sample(np.array([channel]), np.array([t]), bus_active=np.array([coupled]))  # (never served)
-        channels, instants, coupled, _, self._deferred, _ = accepted_conversions(
-            self._reference, start, end, mosi, np.append(start[1:], np.inf), _NO_TICK)
-        samples = self.sensor.sample(channels, instants, bus_active=coupled)
-        if self._deferred is not None:  # the RTL requests it within this batch: a placeholder no transfer reads
-            channels, samples = np.append(channels, self._deferred[0]), np.append(samples, 0)
-        shift_us = int(np.floor(start[0] * 1e6)) - 1
-        t_ps = np.round((start - shift_us * 1e-6) * 1e12).astype(np.int64)
-        tr = np.zeros(start.size, TRANSFER)
-        tr["t_ps"], tr["half_ps"] = t_ps, np.round(0.5e12 / clock).astype(np.int32)
-        tr["nbits"], tr["cs"], tr["mosi"] = 16, 1, mosi
-        codes = np.zeros(channels.size, CODE)
-        codes["sensor"], codes["channel"], codes["code"] = 1, channels, samples
-        res = self.harness.run({"sensors": [1], "pull_up": False, "provided": {1: self._reference.provided}}, tr,
-                               codes)
-        if res["mismatched_requests"] or res["unrequested"]:
-            raise HarnessError(f"the RTL requested other conversions than the emulator computed "
-                               f"({res['mismatched_requests']} mismatched, {res['unrequested']} unrequested)")
-        return res["miso"].astype(np.uint16)
+        return self.bus.exchange_words(start, np.full(start.shape, SELECT_CODE[1]), mosi, clock)
+
+    def close(self) -> None:
+        """Stop the harness (idempotent)."""
+        self.bus.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _port_counter(name: str) -> property:
+    return property(lambda self: getattr(self.port, name), doc=f"The port's ``{name}`` count.")
+
+
+for _name in PORT_COUNTERS:
+    setattr(HarnessPeripheral, _name, _port_counter(_name))
 
 
 class RtlSensorPort(SensorPort):
@@ -348,7 +333,9 @@ class RtlBus:
     port counts — ``empty_windows``, ``incomplete``, ``unprovided_requests``, ``coupled_conversions`` — from the
     same decoding of its chip-select windows that decides the conversions (:meth:`_count_closed`,
     :func:`accepted_conversions`, :meth:`_deferred_codes`): the counts are the reference model's reading of the
-    traffic the RTL received, not read out of the RTL (it has no such counters).
+    traffic the RTL received, not read out of the RTL (it has no such counters).  The bus counts
+    ``out_of_spec_transfers`` as the software bus does: transfers clocked outside 500 kHz–10 MHz, which the RTL
+    serves all the same (above about 11.1 MHz the host samples MISO late, as on the software bus).
     """
 
     def __init__(self, sensors: dict, harness: "Harness | None" = None):
@@ -380,6 +367,8 @@ class RtlBus:
                                                "provided": {n: p.provided for n, p in self.ports.items()}}, 0))
         self.proc.stdin.flush()
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
+        #: transfers clocked outside the SPI clock range (500 kHz–10 MHz), as the software bus counts them
+        self.out_of_spec_transfers = 0
 
     def _windows(self, n: int, start, end, cs, mosi, nbits, keep, flip: int | None = None):
         """Sensor ``n``'s chip-select windows that close among these transfers, as the software bus sees them: a
@@ -531,6 +520,12 @@ class RtlBus:
         clock = np.broadcast_to(np.asarray(clock, float), start.shape)
         nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
         end = checked_transfer_ends(start, nbits, clock, self._last_end)  # as the software bus checks them
+        lo, hi = proto.SPI_CLOCK_RANGE_HZ
+        out_of_spec = int(np.count_nonzero((clock < lo) | (clock > hi)))
+        if start.size and clock.min() < MIN_CLOCK_HZ:  # (its half period would not fit the harness's 32-bit field)
+            k = int(np.argmax(clock < MIN_CLOCK_HZ))
+            raise ValueError(f"transfer #{k} of the call: SCK {float(clock[k]):.10g} Hz: the RTL harness clocks at "
+                             f"least {MIN_CLOCK_HZ:.0f} Hz (a half period of at most 2^31 - 1 ps)")
         tr = np.zeros(start.size, TRANSFER)
         tr["t_ps"] = np.round(start * 1e12).astype(np.int64)
         tr["half_ps"] = np.round(0.5e12 / clock).astype(np.int32)
@@ -564,6 +559,7 @@ class RtlBus:
             raise HarnessError(self._disagreement(start, mismatched, unrequested, waiting))
         if start.size:
             self._last_end = float(end[-1])
+        self.out_of_spec_transfers += out_of_spec  # (counted once the RTL clocked them)
         return raw[:start.size]
 
     def _disagreement(self, start, mismatched: int, unrequested: int, waiting: int) -> str:

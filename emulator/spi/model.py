@@ -450,21 +450,15 @@ class SensorPort:
         """
         from emulator.spi.fastpath import exchange_words, is_plain
 
-        start = np.asarray(batch.start_s, float)
-        mosi = np.asarray(batch.mosi, dtype=np.uint16)
-        clock = np.asarray(batch.clock_hz, float)
-        if start.shape != mosi.shape:
-            raise ValueError(f"a batch of {start.size} start times and {mosi.size} MOSI words: one word per start")
-        end = checked_transfer_ends(start, 16, clock, getattr(self, "_last_end", -np.inf), proto.SPI_CLOCK_RANGE_HZ)
+        start, mosi, clock, end = checked_batch(batch, getattr(self, "_last_end", -np.inf))
         if start.size == 0:
             return np.zeros(0, np.uint16)
         if is_plain(self, mosi):
             miso = exchange_words(self, start, end, mosi)
         else:
-            clocks = np.broadcast_to(clock, start.shape)
             bus = Bus({self.index: self})
             miso = np.array([bus.transfer(Transfer(float(s), SELECT_CODE.get(self.index, 1), int(m), 16, float(c)))
-                             for s, m, c in zip(start, mosi, clocks)], dtype=np.uint16)
+                             for s, m, c in zip(start, mosi, clock)], dtype=np.uint16)
         self._last_end = float(end[-1])
         return miso
 
@@ -504,6 +498,27 @@ def checked_transfer_ends(start, nbits, clock, previous_end_s: float, clock_rang
                          f"time order and must not overlap (a transfer holds chip select for its bits + ½ SCK "
                          f"periods)")
     return end
+
+
+def checked_batch(batch, previous_end_s: float):
+    """A lone sensor's batch of 16-bit transfers (a ``TransferBatch``) as arrays — start s, MOSI words, SCK Hz (one
+    per transfer) — and when each ends (s), checked by :func:`checked_transfer_ends` within the SPI clock range (a
+    lone sensor's host clocks within spec: the buses count a clock outside it, ``out_of_spec_transfers``), and one
+    MOSI word per start.  The same check for every lone-sensor route (:meth:`SensorPort.exchange`, the RTL's
+    ``HarnessPeripheral``)."""
+    start = np.atleast_1d(np.asarray(batch.start_s, float))
+    mosi = np.atleast_1d(np.asarray(batch.mosi, dtype=np.uint16))
+    if start.shape != mosi.shape:
+        raise ValueError(f"a batch of {start.size} start times and {mosi.size} MOSI words: one word per start")
+    clock = np.broadcast_to(np.asarray(batch.clock_hz, float), start.shape)
+    return start, mosi, clock, checked_transfer_ends(start, 16, clock, previous_end_s, proto.SPI_CLOCK_RANGE_HZ)
+
+
+#: What a sensor's port counts (on every bus, and on a lone sensor's port): chip-select windows with fewer bits than
+#: the sensor acts on (``incomplete``), with no clock edge (``empty_windows``), sampling commands for a channel the
+#: sensor recognises but does not provide (``unprovided_requests``), conversions the bus clocked into
+#: (``coupled_conversions``).
+PORT_COUNTERS = ("incomplete", "empty_windows", "unprovided_requests", "coupled_conversions")
 
 
 @dataclass

@@ -323,7 +323,8 @@ def _words_over_every_route(harness, channels_of: dict, start, cs, mosi, split: 
     if list(channels_of) == [1]:
         batch = TransferBatch(start, mosi, clock_hz)
         words["software port"] = SensorPort(sensors()[1]).exchange(batch)
-        words["RTL per batch"] = HarnessPeripheral(sensors()[1], harness).exchange(batch)
+        with HarnessPeripheral(sensors()[1], harness) as rtl_port:
+            words["RTL per batch"] = rtl_port.exchange(batch)
     return words
 
 
@@ -575,31 +576,35 @@ def test_a_call_that_ends_on_a_sampling_command_is_coupled_by_the_next_call_over
     assert coupled != quiet and read[3] == proto.RESPONSE_WORD[coupled] and read[60] == proto.RESPONSE_WORD[quiet]
 
 
-def test_a_batch_ending_on_a_sampling_command_is_converted_by_the_next_batch_over_the_rtl_as_over_the_software(
-        harness):
-    """Batch by batch (HarnessPeripheral, a scene's route) as over the software port: a batch ending on a sampling
-    command has its conversion judged by the next batch's first transfer (here 1 µs after it: SPI coupling disturbs
-    it), which draws from the sensor's coupling noise, so the coupled conversion after it reads the same code by
-    either route (had the RTL route converted the first one quiet as its batch ended, the second would take the
-    first's draw).  Pinned as well: the RTL is reset at each batch, so the next batch's first read finds nothing
-    ("E_", and "E_" again as the next command goes out) where the software port's conversion is not ready yet ("E.")
-    and then served; every word after that command is the same."""
+def test_a_lone_sensors_answers_do_not_depend_on_how_its_traffic_is_split_into_batches(harness):
+    """The same transfers to a sensor alone, in one batch or split in two at any point, give the same words and the
+    same counts, over the software port and over the RTL batch by batch (HarnessPeripheral, a scene's route), and the
+    same by either route: a batch ending on a sampling command has its conversion judged by the next batch's first
+    transfer (here a sampling command 2 µs after it: coupled), that command is busy ("E-": the RTL had been reset at
+    each batch, forgetting its ADC-busy window, and converted it), a result prepared in one batch is served in the
+    next, a coupled conversion is read, and a channel the sensor does not provide answers "EX"."""
     from emulator.rtl.harness import HarnessPeripheral
     from emulator.sensor import Sensor
-    from emulator.spi.model import SensorPort
+    from emulator.spi.model import PORT_COUNTERS, SensorPort
     from emulator.spi.peripheral import TransferBatch
 
-    first = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")))
-    end_us = 200 + 16.5 / CLOCK_HZ * 1e6
-    second = _schedule((end_us + 1, 0), (260, _cmd("PDC")), (262, 0), (330, 0))
-    words = {}
-    for route, port in (("software", SensorPort), ("RTL per batch", lambda s: HarnessPeripheral(s, harness))):
-        p = port(Sensor(channels_read=["PDC", "PAC"], seed=3))
-        words[route] = [p.exchange(TransferBatch(start, mosi, CLOCK_HZ)) for start, mosi in (first, second)]
-    soft, rtl = words["software"], words["RTL per batch"]
-    assert np.array_equal(soft[0], rtl[0])
-    err = proto.ERROR_WORDS
-    assert list(rtl[1][:2]) == [err["nothing_to_resend"]] * 2  # PAC's result went with the reset
-    assert soft[1][0] == err["insufficient_delay"] and not proto.is_error_word(soft[1][1])  # (served as PDC's goes)
-    assert np.array_equal(soft[1][2:], rtl[1][2:]), ([hex(w) for w in soft[1]], [hex(w) for w in rtl[1]])
-    assert not proto.is_error_word(soft[1][3])  # the coupled PDC conversion is read
+    start, mosi = _schedule((0, _cmd("PDC")), (60, 0), (200, _cmd("PAC")), (202, _cmd("PDC")), (260, 0),
+                            (300, _cmd("PDC")), (302, 0), (360, 0), (400, _cmd("TAC")), (460, 0))
+    answers = {}
+    for route, make in (("software", SensorPort), ("RTL per batch", lambda s: HarnessPeripheral(s, harness))):
+        for split in (None, *range(1, start.size)):
+            port = make(Sensor(channels_read=["PDC", "PAC"], seed=3))
+            calls = (slice(None),) if split is None else (slice(None, split), slice(split, None))
+            try:
+                words = np.concatenate([port.exchange(TransferBatch(start[c], mosi[c], CLOCK_HZ)) for c in calls])
+                counts = {c: getattr(port, c) for c in PORT_COUNTERS}
+            finally:
+                getattr(port, "close", lambda: None)()
+            answers[route, split] = ([hex(w) for w in words], counts)
+    reference = answers["software", None]
+    assert all(a == reference for a in answers.values()), {k: a for k, a in answers.items() if a != reference}
+    words, counts = reference
+    err = {k: hex(v) for k, v in proto.ERROR_WORDS.items()}
+    assert words[4] == err["insufficient_sampling_delay"] and words[6] == err["insufficient_delay"]
+    assert words[9] == err["channel_not_recognized"] and not proto.is_error_word(int(words[7], 16))
+    assert counts == {"incomplete": 0, "empty_windows": 0, "unprovided_requests": 1, "coupled_conversions": 2}
