@@ -134,3 +134,87 @@ def test_a_harness_reporting_another_number_of_waiting_requests_stops_the_bus_wi
     finally:
         bus.close()
     assert bus.proc.poll() is not None
+
+
+#: Out-of-spec traffic: (µs, select, MOSI word, SCK Hz) — words at 20 MHz (the host samples MISO a bit late), one at
+#: 450 kHz, and the range's own edges, 10 MHz and 500 kHz (in spec).
+OUT_OF_SPEC = [(0, S1, _cmd("PDC"), 20e6), (100, S1, 0, 20e6), (200, S3, _cmd("PAC"), 450e3), (300, S3, 0, 10e6),
+               (400, S1, _cmd("E1"), 500e3), (500, S1, 0, 10e6)]
+
+
+def _software_bus(harness):
+    return Bus({n: SensorPort(s, n) for n, s in _sensors().items()})
+
+
+def _rtl_bus(harness):
+    from emulator.rtl.harness import RtlBus
+
+    return RtlBus(_sensors(), harness=harness)
+
+
+@pytest.mark.parametrize("make", [_software_bus, _rtl_bus], ids=["software bus", "RTL bus"])
+def test_every_bus_counts_transfers_clocked_out_of_spec_alike(harness, make):
+    """Transfers clocked outside 500 kHz–10 MHz (20 MHz, 450 kHz; the edges themselves are in spec) are served and
+    counted in ``out_of_spec_transfers`` — 3 here, on every bus, by the word path and transfer by transfer — and
+    the 20 MHz read arrives one bit late (PDC's word shifted right), the same words on every bus."""
+    words = {}
+    for path in ("words", "transfers"):
+        bus = make(harness)
+        try:
+            if path == "words":
+                us, cs, mosi, clock = (np.array(c) for c in zip(*OUT_OF_SPEC))
+                got = bus.exchange_words(np.array([_at(u) for u in us]), cs, mosi.astype(np.uint16), clock)
+            else:
+                got = [bus.transfer(Transfer(_at(u), c, m, 16, f)) for u, c, m, f in OUT_OF_SPEC]
+            words[path] = [int(w) for w in got]
+            assert bus.out_of_spec_transfers == 3, path
+        finally:
+            bus.close()
+    reference = _software_bus(harness)
+    expected = [int(w) for w in reference.exchange_words(*(np.array(c) for c in (
+        [_at(u) for u, *_ in OUT_OF_SPEC], [c for _, c, _, _ in OUT_OF_SPEC], [m for _, _, m, _ in OUT_OF_SPEC],
+        [f for *_, f in OUT_OF_SPEC])))]
+    assert words["words"] == words["transfers"] == expected
+    from emulator.spi.peripheral import TransferBatch
+
+    good = SensorPort(_sensors()[1], 1).exchange(  # what PDC's read carries at 10 MHz, sampled on time
+        TransferBatch(np.array([_at(0), _at(100)]), np.array([_cmd("PDC"), 0], np.uint16), CLOCK_HZ))
+    assert expected[1] == int(good[1]) >> 1 and not proto.is_error_word(good[1])
+
+
+def _software_port(sensor, harness):
+    return SensorPort(sensor, 1)
+
+
+def _rtl_port(sensor, harness):
+    from emulator.rtl.harness import HarnessPeripheral
+
+    return HarnessPeripheral(sensor, harness)
+
+
+@pytest.mark.parametrize("make", [_software_port, _rtl_port], ids=["software port", "RTL port"])
+def test_every_lone_sensor_route_refuses_out_of_spec_clocks_alike_and_counts_as_its_port(harness, make):
+    """A sensor alone on its bus (a scene's host: SensorPort.exchange, or the RTL's HarnessPeripheral) serves only
+    clocks within 500 kHz–10 MHz: 20 MHz and 450 kHz are refused with the same message naming the transfer, the
+    clock and the range, and nothing is played; in-spec traffic then counts on either route what the software port
+    counts: a channel not provided (PAC), two conversions clocked into within 5 µs."""
+    from emulator.spi.model import PORT_COUNTERS
+    from emulator.spi.peripheral import TransferBatch
+
+    port = make(_sensors()[1], harness)
+    try:
+        for bad in (20e6, 450e3):
+            with pytest.raises(ValueError, match=rf"transfer #1 of the call: SCK {bad:.0f} Hz: must be "
+                                                 rf"500000–10000000 Hz"):
+                port.exchange(TransferBatch(np.array([_at(0), _at(100)]), np.array([_cmd("PDC"), 0], np.uint16),
+                                            np.array([CLOCK_HZ, bad])))
+        words = port.exchange(TransferBatch(np.array([_at(u) for u in (0, 2, 60, 100, 160, 300, 302, 360)]),
+                                            np.array([_cmd("PDC"), 0, 0, _cmd("PAC"), 0, _cmd("E1"), 0, 0],
+                                                     np.uint16), CLOCK_HZ))
+        counts = {c: getattr(port, c) for c in PORT_COUNTERS}
+    finally:
+        getattr(port, "close", lambda: None)()
+    err = proto.ERROR_WORDS
+    assert words[0] == err["nothing_to_resend"]  # (the refused calls played nothing: no word prepared before)
+    assert words[4] == err["channel_not_recognized"] and not proto.is_error_word(words[2])
+    assert counts == {"incomplete": 0, "empty_windows": 0, "unprovided_requests": 1, "coupled_conversions": 2}
