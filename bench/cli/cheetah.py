@@ -9,6 +9,9 @@ import sys
 from bench.cli.args import any_seed, number, sigterm_raises, stimuli_count, whole
 from bench.running.signals import signals_deferred
 
+#: Sensors served without a scene (``--sensors`` not given); with one, the scene's count.
+DEFAULT_SENSORS = 3
+
 
 def _cmd_serve(a) -> int:
     import time
@@ -16,7 +19,8 @@ def _cmd_serve(a) -> int:
     from bench.hosts.cheetah_server import CheetahBench
 
     kw = {}
-    what = f"{a.sensors} emulated sensor(s) at rest"
+    n_sensors = DEFAULT_SENSORS if a.sensors is None else a.sensors
+    what = f"{n_sensors} emulated sensor(s) at rest"
     if a.scene:
         from bench.errors import SceneError
         from bench.hosts.scene_sensors import sensors_from_scene
@@ -27,8 +31,9 @@ def _cmd_serve(a) -> int:
         if scene.spi != "software":
             raise SceneError(scene.source, [f"host.spi = {spelled(scene.spi)}: the Cheetah adapter serves the "
                                             "software SPI model only"])
-        kw["sensors"] = sensors_from_scene(scene, a.sensors, seed=a.seed)
-        what = (f"{a.sensors} emulated sensor(s) built from scene '{scene.name}' ("
+        n_sensors = scene.n_sensors if a.sensors is None else a.sensors
+        kw["sensors"] = sensors_from_scene(scene, n_sensors, seed=a.seed)
+        what = (f"{n_sensors} emulated sensor(s) built from scene '{scene.name}' ("
                 + "; ".join(f"sensor {k} feels {stimuli_count(len(scene.sensor_spec(k).stimuli))}"
                             for k in range(1, scene.n_sensors + 1)) + ")")
         if scene.sequence != "default" or scene.slot_rate_Hz != 4400.0:
@@ -37,7 +42,7 @@ def _cmd_serve(a) -> int:
     else:
         kw["seed"] = 1 if a.seed is None else a.seed
     with sigterm_raises():
-        cb = CheetahBench(a.sensors, **kw).start()
+        cb = CheetahBench(n_sensors, **kw).start()
         try:
             print(f"export BIOTAC_CHEETAH_SOCKET={shlex.quote(cb.socket_path)}", flush=True)
             print(f"emulated Cheetah adapter (port 0) with {what}\n"
@@ -87,7 +92,9 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     sv.add_argument("scene", nargs="?", type=scene_argument,
                     help="scene file, or a shipped scene's name, the sensors are built from (default: none, the "
                          "sensors at rest)")
-    sv.add_argument("--sensors", type=whole(1, 5), default=3, help="emulated sensors, 1 to 5")
+    sv.add_argument("--sensors", type=whole(1, 5), default=None,
+                    help=f"emulated sensors, 1 to 5 (default: the scene's count with SCENE, else {DEFAULT_SENSORS}; "
+                         f"with SCENE at least its count)")
     sv.add_argument("--seed", type=any_seed,
                     help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
                          "seed + k without")

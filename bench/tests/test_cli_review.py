@@ -64,7 +64,7 @@ def test_every_help_page_has_a_description_with_an_example_and_every_argument_a_
     (("claims",), ["(default: 2012)", "(default: default)"]),
     (("campaign",), ["(default: 1)", "(default: out/campaign.xml)", "(default: all)"]),
     (("rtl",), ["(default: 1)"]),
-    (("cheetah", "serve"), ["(default: 3)"]),
+    (("cheetah", "serve"), ["(default: the scene's count with SCENE, else 3"]),
     (("run",), ["(default gzip"]),
 ])
 def test_help_pages_show_their_defaults(names, shown, capsys):
