@@ -50,7 +50,12 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
     exception, Ctrl-C raising KeyboardInterrupt) the whole group is killed.  A signal that comes while the step is
     being started is held until its group is known, then passed on and acted on.  A signal this process ignores is
     neither forwarded nor handled.  Outside the main thread (no signal handlers there) the step runs in this
-    process's group, as before.  Nothing survives a SIGKILL of this process: no handler runs."""
+    process's group, as before.  Nothing survives a SIGKILL of this process: no handler runs.
+
+    Output the step would write to this process's stdout or stderr (``stdout`` / ``stderr`` None) goes through a
+    pipe that this process copies there as it comes: the step's group is never a terminal's foreground group, and
+    under ``stty tostop`` a terminal stops a background process that writes to it (SIGTTOU) — the build had waited
+    for it for ever."""
     import signal
     import threading
 
@@ -59,6 +64,14 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
     kw = dict(stdout=stdout, stderr=stderr, text=text, env=env, cwd=cwd, stdin=subprocess.DEVNULL)
     if threading.current_thread() is not threading.main_thread():
         return subprocess.run(cmd, **kw)
+    # this process's stdout and stderr, where the step's output goes to them, go through pipes this process copies:
+    # a terminal stops a background group's process writing to it under ``stty tostop`` (SIGTTOU), and the step's
+    # group is never the terminal's foreground group
+    relays = []
+    for name, fd in (("stdout", 1), ("stderr", 2)):
+        if kw[name] is None:
+            read_end, kw[name] = os.pipe()
+            relays.append((read_end, kw[name], fd))
     group: list[int] = []  # the step's process group, once started
     previous = {}
     early: list = []  # signals that came while the step was being started: acted on once its group is known
@@ -81,7 +94,14 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
             handler = signal.getsignal(s)
             if handler not in (signal.SIG_IGN, None):  # (None: a handler not set from Python; left alone)
                 previous[s] = signal.signal(s, forward)
-        proc = subprocess.Popen(cmd, process_group=0, **kw)
+        try:
+            proc = subprocess.Popen(cmd, process_group=0, **kw)
+        finally:
+            for _, write_end, _ in relays:
+                os.close(write_end)
+        copiers = [threading.Thread(target=_copy, args=(read_end, fd), daemon=True) for read_end, _, fd in relays]
+        for c in copiers:
+            c.start()
         try:
             group.append(proc.pid)
             while early:
@@ -92,12 +112,27 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
                 os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
             raise
+        finally:
+            for c in copiers:  # (each ends as the last writer of its pipe ends)
+                c.join()
     finally:
+        for read_end, _, _ in relays:
+            with contextlib.suppress(OSError):
+                os.close(read_end)
         for s, handler in previous.items():
             signal.signal(s, handler)
         for signum, _ in early:  # the step never started (Popen failed): this process acts on them as it would have
             signal.raise_signal(signum)
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
+def _copy(read_end: int, fd: int) -> None:
+    """Copy what a step writes into a pipe (``read_end``) to this process's ``fd`` as it comes, until the pipe ends
+    (what cannot be written — a closed terminal, a full disk — is dropped: the step must not stall on it)."""
+    while chunk := os.read(read_end, 65536):
+        with contextlib.suppress(OSError):
+            while chunk:
+                chunk = chunk[os.write(fd, chunk):]
 
 
 def verilator_root() -> Path:
