@@ -254,13 +254,18 @@ class FirmwareBench:
             self._thread.join(timeout=STOP_TIMEOUT_S)
         self.link.close()
         if self._thread.is_alive():  # inside the firmware's bt_step: a loop that never returns to the bench
-            self.board.abandoned.set()
-            raise FirmwareError(
-                f"the firmware did not return from bt_step within {STOP_TIMEOUT_S:g} s of wall time after stop() "
-                f"(virtual time {self.board.t:.6f} s): it hangs in a loop (one waiting for a byte or a time that "
-                f"only comes between steps, or one that calls no HAL function); its port is closed, its SPI bus left "
-                f"open and its thread parked at its next HAL call (a loop calling none keeps a core busy until the "
-                f"process ends)")
+            hung = (f"the firmware did not return from bt_step within {STOP_TIMEOUT_S:g} s of wall time after stop() "
+                    f"(virtual time {self.board.t:.6f} s): it hangs in a loop (one waiting for a byte or a time that "
+                    f"only comes between steps, or one that calls no HAL function; its last HAL call: "
+                    f"{self.board.last_hal_call or 'none'}; firmware {self.sim.library})")
+            self.sim.stop_step(self._thread.ident)  # the step guard's signal: the firmware's loop is left
+            self._thread.join(timeout=STOP_TIMEOUT_S)
+            if self._thread.is_alive():  # (stuck inside a HAL call of the bench's: parked at its next one)
+                self.board.abandoned.set()
+                raise FirmwareError(f"{hung}; the watchdog could not stop it: its port is closed, its SPI bus left "
+                                    f"open and its thread parked at its next HAL call")
+            self.board.bus.close()
+            raise FirmwareError(f"{hung}; the watchdog stopped it (its thread ended; its port and SPI bus are closed)")
         self.board.bus.close()
         if self.error is not None:
             raise RuntimeError(f"the firmware bench stopped with an error: {self.error!r}") from self.error

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes as C
 import math
+import signal
 import threading
 import time
 from collections import deque
@@ -28,6 +29,26 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
+GUARD_SOURCE = Path(__file__).resolve().parent / "c" / "step_guard.c"
+#: The signal that stops a hung bt_step (:meth:`CoSim.stop_step`): a real-time signal nothing else here uses.
+GUARD_SIGNAL = signal.SIGRTMIN + 3
+_guard_lock = threading.Lock()
+_guard: list = []  # the loaded step guard, once its handler is installed
+
+
+def step_guard() -> C.CDLL:
+    """The step guard (``bench/hosts/c/step_guard.c``), built and loaded once, its signal handler installed."""
+    with _guard_lock:
+        if not _guard:
+            folder = build_folder(REPO / "out" / "firmware", [GUARD_SOURCE, FIRMWARE_DIR / "bt_hal.h"])
+            lib = C.CDLL(str(compile_c([GUARD_SOURCE], folder / "libbtguard.so",
+                                       flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}"), what="the step guard")))
+            lib.bt_guard_step.argtypes = [C.c_void_p, C.c_void_p]
+            lib.bt_guard_wrap.argtypes = [C.c_void_p, C.c_void_p]
+            if lib.bt_guard_install(int(GUARD_SIGNAL)) != 0:
+                raise BuildError(f"the step guard cannot handle signal {int(GUARD_SIGNAL)}")
+            _guard.append(lib)
+        return _guard[0]
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
@@ -128,6 +149,7 @@ class VirtualBoard:
         #: Set when the bench gave up on a hung firmware: its next HAL call parks its thread for good, so a loop
         #: that keeps calling the HAL stops spending a core for the rest of the process.
         self.abandoned = threading.Event()
+        self.last_hal_call: str | None = None  # the HAL function the firmware called last (where a hang is)
 
     # --- faults and events ---------------------------------------------------------------
     def at(self, t_s: float, action) -> None:
@@ -188,9 +210,12 @@ class VirtualBoard:
 
     # --- the HAL ------------------------------------------------------------------------
     def _guard(fn):  # noqa: N805 - decorator inside the class body
+        name = fn.__name__
+
         def wrapped(self, *a):
             if self.abandoned.is_set():
                 threading.Event().wait()  # never set: the firmware's thread sleeps until the process ends
+            self.last_hal_call = name
             try:
                 return fn(self, *a)
             except BaseException as e:  # an exception must not unwind through C: keep it, stop the run
@@ -256,14 +281,26 @@ class CoSim:
 
     def __init__(self, board: VirtualBoard, library: Path | None = None):
         self.board = board
-        self.lib = load_firmware(library or build_firmware())
+        self.library = Path(library or build_firmware())
+        self.lib = load_firmware(self.library)
         self.lib.bt_bridge_size.restype = C.c_size_t
         self.state = C.create_string_buffer(self.lib.bt_bridge_size())
         self._cb = [SEQ_FN(board.spi_sequence), BYTES_FN(board.spi_bytes), DELAY_FN(board.delay_us),
                     MICROS_FN(board.micros), WRITE_FN(board.uart_write), READ_FN(board.uart_read)]
         self.hal = BtHal(None, *self._cb)
-        self.lib.bt_init(self.state, C.byref(self.hal))
+        # the firmware gets the step guard's HAL: each call blocks the guard's signal while the bench's HAL runs
+        self._guard = step_guard()
+        self._guarded_hal = BtHal()
+        self._guard.bt_guard_wrap(C.byref(self.hal), C.byref(self._guarded_hal))
+        self._step = C.cast(self.lib.bt_step, C.c_void_p)
+        self.lib.bt_init(self.state, C.byref(self._guarded_hal))
         self._raise()
+
+    def stop_step(self, thread_id: int) -> None:
+        """Stop the bt_step that thread ``thread_id`` (its ``threading`` ident) runs — a watchdog giving up on a
+        hung firmware: the step ends (as it returns from a HAL call, if inside one) and :meth:`run` raises
+        :class:`FirmwareError`.  The firmware's state is not to be used after: its loop was left midway."""
+        signal.pthread_kill(thread_id, GUARD_SIGNAL)
 
     def set_pattern(self, channels) -> None:
         """Set the firmware's sampling pattern directly (as its PATTERN command would, without a reply on the
@@ -286,14 +323,17 @@ class CoSim:
     def run(self, seconds: float, realtime: bool = False, max_steps: int | None = None) -> None:
         """Run the firmware until ``seconds`` more of virtual time have passed.
 
-        A firmware that stops advancing time (a hang in a loop that calls no HAL) cannot be interrupted from
-        here; ``max_steps`` bounds the number of main-loop passes and raises if they run out first.
+        A firmware that stops advancing time (a hang in a loop that calls no HAL) is not interrupted from here:
+        another thread can end its step (:meth:`stop_step`, :class:`FirmwareError` here), and ``max_steps`` bounds
+        the number of main-loop passes, raising if they run out first.
         """
         end = self.board.t + seconds
         wall0, virt0 = time.perf_counter(), self.board.t
         steps = 0
         while self.board.t < end:
-            self.lib.bt_step(self.state)
+            if self._guard.bt_guard_step(self._step, self.state):
+                raise FirmwareError(f"the firmware's bt_step was stopped by the bench's watchdog at virtual time "
+                                    f"{self.board.t:.6f} s (it hung)")
             self._raise()
             steps += 1
             if max_steps is not None and steps >= max_steps:

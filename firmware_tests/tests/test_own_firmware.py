@@ -81,11 +81,18 @@ def test_a_refused_pattern_leaves_no_pty_open():
     assert len(os.listdir("/proc/self/fd")) == fds
 
 
-def test_a_hung_firmware_is_reported_by_stop_and_parked(tmp_path, monkeypatch):
-    """A bt_step that loops forever once streaming passes 0.1 s of virtual time (calling micros, a HAL function)."""
+@pytest.mark.parametrize("loop, last_call", [
+    ("for (;;) { (void)b->hal->micros(b->hal->ctx); }", "micros"),
+    ("for (volatile unsigned long k = 0;; k++) { }", "micros"),  # (its last HAL call: the condition's)
+], ids=["a loop calling the HAL", "a loop calling none"])
+def test_a_hung_firmware_is_reported_by_stop_and_stopped_without_a_busy_core(tmp_path, monkeypatch, loop, last_call):
+    """A bt_step that loops forever once streaming passes 0.1 s of virtual time, calling a HAL function or none:
+    stop() reports what hangs and where — bt_step, the wall time waited, the virtual time, the firmware's last HAL
+    call and its library — and the watchdog stops the loop: the firmware's thread ends (it spun a core until the
+    process ended when it called no HAL) and the process spends no CPU on it after."""
     monkeypatch.setattr(bridge_module, "STOP_TIMEOUT_S", 0.5)
     src = own_firmware(tmp_path, "    if (b->streaming && b->hal->micros(b->hal->ctx) > 100000) {\n"
-                                 "        for (;;) { (void)b->hal->micros(b->hal->ctx); }\n    }\n")
+                                 f"        {loop}\n    }}\n")
     bench = FirmwareBench(firmware=[src]).start()
     driver = BridgeDriver(bench.port)
     driver.start()
@@ -93,12 +100,14 @@ def test_a_hung_firmware_is_reported_by_stop_and_parked(tmp_path, monkeypatch):
     frames += list(driver.frames(max_frames=100, timeout_s=0.5))
     assert 5 <= len(frames) < 20  # streamed up to the hang at 0.1 s (10 ms frames), then nothing
     with pytest.raises(FirmwareError, match=r"the firmware did not return from bt_step within 0\.5 s of wall time "
-                                            r"after stop\(\) \(virtual time 0\.1\d* s\): it hangs in a loop"):
+                                            r"after stop\(\) \(virtual time 0\.1\d* s\): it hangs in a loop .*its "
+                                            rf"last HAL call: {last_call}; firmware .*libbtbridge\.so\); the "
+                                            r"watchdog stopped it \(its thread ended"):
         bench.stop()
-    assert bench.board.abandoned.is_set()
+    assert not bench._thread.is_alive() and not bench.board.abandoned.is_set()
     cpu = time.process_time()
     time.sleep(0.3)
-    assert bench._thread.is_alive() and time.process_time() - cpu < 0.1  # parked in its HAL call, not spinning
+    assert time.process_time() - cpu < 0.1  # nothing spinning
     bench.stop()  # idempotent: nothing more to say
     driver.close()
 
