@@ -112,6 +112,33 @@ def test_a_hung_firmware_is_reported_by_stop_and_stopped_without_a_busy_core(tmp
     driver.close()
 
 
+def test_a_firmware_held_inside_a_hal_call_is_reported_parked_and_ends_when_the_call_returns(monkeypatch):
+    """A step the watchdog's signal cannot end at once — the firmware's thread inside one of the bench's HAL calls
+    (here a scheduled action that waits) — is reported as not stopped, its thread parked at its next HAL call; the
+    signal waits, blocked, and ends the step as soon as the HAL call returns: the thread ends then."""
+    import threading
+
+    monkeypatch.setattr(bridge_module, "STOP_TIMEOUT_S", 0.3)
+    release, entered = threading.Event(), threading.Event()
+
+    def wait(board):
+        entered.set()
+        release.wait(30)
+
+    bench = FirmwareBench(realtime=True).start()  # (paced: the firmware runs without a host's first byte)
+    bench.now(lambda board: board.at(board.t, wait))  # applied at the firmware's next HAL call
+    assert entered.wait(30)
+    with pytest.raises(FirmwareError, match=r"did not return from bt_step within 0\.3 s .*the watchdog could not "
+                                            r"stop it: its port is closed, its SPI bus left open and its thread "
+                                            r"parked at its next HAL call"):
+        bench.stop()
+    assert bench._thread.is_alive() and bench.board.abandoned.is_set()
+    release.set()
+    bench._thread.join(10)
+    assert not bench._thread.is_alive()  # the pending signal ended the step as the HAL call returned
+    bench.board.bus.close()
+
+
 def test_scheduling_on_a_stopped_bench_is_refused():
     bench = FirmwareBench().start()
     bench.at(0.5, lambda board: None)
