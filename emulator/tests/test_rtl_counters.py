@@ -218,3 +218,21 @@ def test_every_lone_sensor_route_refuses_out_of_spec_clocks_alike_and_counts_as_
     assert words[0] == err["nothing_to_resend"]  # (the refused calls played nothing: no word prepared before)
     assert words[4] == err["channel_not_recognized"] and not proto.is_error_word(words[2])
     assert counts == {"incomplete": 0, "empty_windows": 0, "unprovided_requests": 1, "coupled_conversions": 2}
+
+
+def test_a_clock_too_slow_for_the_harness_is_refused_by_name_and_plays_nothing(harness):
+    """The harness takes an SCK half period in a signed 32-bit count of ps: a clock below about 233 Hz (here 100 Hz)
+    would wrap it; the RTL bus refuses it naming the transfer, the clock and the least it clocks, counts nothing and
+    plays on (the software bus serves it, out of spec)."""
+    from emulator.rtl.harness import MIN_CLOCK_HZ, RtlBus
+
+    bus = RtlBus(_sensors(), harness=harness)
+    try:
+        with pytest.raises(ValueError, match=r"transfer #0 of the call: SCK 100 Hz: the RTL harness clocks at least "
+                                             r"233 Hz"):
+            bus.transfer(Transfer(_at(0), S1, 0, 16, 100.0))
+        assert bus.out_of_spec_transfers == 0
+        assert bus.transfer(Transfer(_at(0), S1, 0, 16, MIN_CLOCK_HZ * 1.001)) == proto.ERROR_WORDS["nothing_to_resend"]
+        assert bus.out_of_spec_transfers == 1
+    finally:
+        bus.close()
