@@ -579,7 +579,9 @@ class Bus:
 
     def transfer(self, tr: Transfer) -> int:
         """Clock one transfer; returns the MISO bits the host samples (``nbits`` bits, MSB first)."""
-        checked_transfer_ends(tr.start_s, tr.nbits, tr.clock_hz, self._last_end)
+        if not (tr.nbits >= 0 and 0 < tr.clock_hz < math.inf and math.isfinite(tr.start_s)
+                and tr.start_s >= self._last_end - proto.TIME_TOLERANCE_S):  # (scalar test first: per-transfer path)
+            checked_transfer_ends(tr.start_s, tr.nbits, tr.clock_hz, self._last_end)
         lo, hi = proto.SPI_CLOCK_RANGE_HZ
         if not lo <= tr.clock_hz <= hi:
             self.out_of_spec_transfers += 1
