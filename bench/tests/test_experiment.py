@@ -26,7 +26,9 @@ def test_shipped_experiment_files_validate():
     assert (full.n_pairs, full.validation_trials, full.exclude_high_power) == (8, 5, True)
     every = E.load_experiment(FIXTURES / "experiments" / "fishel2012_all.toml")
     assert every.identify_all_textures and vars(every) | {"identify_all_textures": False, "name": full.name,
-                                                          "source": full.source} == vars(full)
+                                                          "source": full.source,
+                                                          "identification_simulations": 8000} == vars(full)
+    assert every.identification_simulations == 117 * 500  # a total: 500 per texture, as its published figures ran
 
 
 @pytest.mark.parametrize("data, words", [
@@ -153,6 +155,10 @@ def test_quick_experiment_runs_end_to_end_and_caches_its_stages(tmp_path, monkey
                              log=lambda m: None)
     write_outputs(every, tmp_path / "every")
     assert f"of {len(spec.training_textures)} identified textures" in (tmp_path / "every" / "report.md").read_text()
+    # identification_simulations is the total over the textures identified, all of them here (not only the pairs')
+    n = len(spec.training_textures)
+    for strategy in spec.strategies:
+        assert sum(len(r) for r in every.identification_results[strategy]) == n * (spec.identification_simulations // n)
 
 
 def test_explore_command_reports_bad_input_without_traceback(tmp_path, capsys):
