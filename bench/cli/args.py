@@ -316,8 +316,9 @@ def replaceable_report(marker: bytes, what: str):
 
 def library_option(value: str | None):
     """--library: the texture library file given (relative to the working folder, as
-    :func:`bench.textures.library.named_library` names it; its problems in one ValueError naming --library, the
-    file, texture, field, value and allowed range), or the shipped library (None)."""
+    :func:`bench.textures.library.named_library` names it), or the shipped library (None).  A bad file is a
+    ValueError naming --library, the file, texture, field, value and allowed range: one line for one problem, else
+    one problem a line, as an experiment file's ``[experiment] library`` lists them."""
     from bench.errors import TextureError
     from bench.textures.library import named_library, read_library
 
@@ -326,5 +327,7 @@ def library_option(value: str | None):
     try:
         return named_library(value, "--library")
     except TextureError as e:
-        raise ValueError("; ".join(e.problems)) from None
+        if len(e.problems) == 1:
+            raise ValueError(e.problems[0]) from None
+        raise ValueError(str(e)) from None
 

@@ -220,6 +220,23 @@ def test_texture_sweep_names_a_bad_library_or_a_texture_it_lacks_in_one_line(tmp
     assert not (tmp_path / "out").exists()
 
 
+def test_texture_sweep_and_textures_list_several_library_problems_one_a_line(tmp_path, monkeypatch, capsys):
+    """Several problems (a research group's library with a slip in two fields) are listed one a line under the
+    count, as explore lists an experiment file's library problems, not run together on one line with '; '."""
+    _, lib = _files(tmp_path, hurst=7, mu=9)
+    monkeypatch.chdir(tmp_path)
+    where = f'--library = "libs/mine.toml" ({lib.resolve()}): T950 "my coarse felt": '
+    for argv in (["texture-sweep", "--library", "libs/mine.toml", "--textures", "950"],
+                 ["textures", "--library", "libs/mine.toml"]):
+        assert cli.main(argv) == 2
+        lines = capsys.readouterr().err.splitlines()
+        assert lines[0] == "error: --library: 3 problem(s):" and len(lines) == 4, lines
+        assert lines[1:] == [f"  - {where}hurst = 7: allowed range is 0.1 to 1",
+                             f"  - {where}mu_static = 9: allowed range is 0.02 to 3",
+                             f"  - {where}mu_kinetic = 9: allowed range is 0.02 to 3"]
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_library_named_by_a_file_resolves_against_that_files_folder(tmp_path, monkeypatch):
     """The path rule itself: relative to the naming file's folder, whatever the working folder; a pseudo-source
     ("<scene>", a scene built in code) and a command line resolve against the working folder."""

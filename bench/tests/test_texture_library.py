@@ -194,6 +194,13 @@ BROKEN = {
                              ['T5 "kraft paper"', "periodic[0].harmonics = 0.3", "list"]),
     "periodic unknown field": (GOOD + PERIODIC + "phase_deg = 10.0\n",
                                ['T5 "kraft paper"', "periodic[0].phase_deg", "unknown field"]),
+    # a typing slip names the field meant (found by a research group's own library: the slip gave only "missing")
+    "misspelt field": (_edit("rms_height_um = 6.0", "rms_heigth_um = 6.0"),
+                       ['T5 "kraft paper"', 'unknown field "rms_heigth_um" (did you mean "rms_height_um"?)']),
+    "misspelt periodic field": (GOOD + _edit("period_mm = 1.0", "period_um = 1.0", PERIODIC),
+                                ['periodic[0].period_um: unknown field (did you mean "period_mm"?)']),
+    "escape sequence in a periodic field's name": (GOOD + PERIODIC + '"a\\u001b[2J" = 1.0\n',
+                                                    ["periodic[0].a\\x1b[2J: unknown field;"]),
     "ridges along the track": (GOOD + PERIODIC + "orientation_deg = 90.0\n",
                                ['T5 "kraft paper"', "periodic[0].orientation_deg = 90.0", "-85 to 85"]),
     "periodic not tables": (GOOD + "periodic = 3\n", ['T5 "kraft paper"', "periodic = 3", "array of tables"]),

@@ -204,6 +204,12 @@ class _Checker:
         return v
 
 
+def _did_you_mean(key: str, known) -> str:
+    """`` (did you mean "rms_height_um"?)`` for a field name one typing slip from a known one, else ``""``."""
+    near = difflib.get_close_matches(key, list(known), n=1, cutoff=0.8)
+    return f" (did you mean {spelled(near[0])}?)" if near else ""
+
+
 def _periodic(c: _Checker, who: str, items) -> tuple[PeriodicComponent, ...] | None:
     if not isinstance(items, list) or not all(isinstance(p, dict) for p in items):
         c.add(who, f"periodic = {spelled(items)}: must be an array of tables ([[texture.periodic]])")
@@ -213,8 +219,9 @@ def _periodic(c: _Checker, who: str, items) -> tuple[PeriodicComponent, ...] | N
         where = f"periodic[{j}]."
         for k in p:
             if k not in PERIODIC_FIELDS and k != "harmonics":
-                c.add(who, f"{where}{k}: unknown field; known fields: "
-                           f"{', '.join(sorted([*PERIODIC_FIELDS, 'harmonics']))}")
+                known = [*PERIODIC_FIELDS, "harmonics"]
+                c.add(who, f"{where}{escaped(k)}: unknown field{_did_you_mean(k, known)}; known fields: "
+                           f"{', '.join(sorted(known))}")
                 ok = False
         vals = {spec.attr: c.number(who, p, k, spec, where) for k, spec in PERIODIC_FIELDS.items()}
         harmonics = p.get("harmonics", [])
@@ -295,7 +302,8 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     n_before = len(c.problems)
     for k in t:
         if k not in KNOWN_FIELDS:
-            c.add(who, f"unknown field {spelled(k)}; known fields: {', '.join(sorted(KNOWN_FIELDS))}")
+            c.add(who, f"unknown field {spelled(k)}{_did_you_mean(k, KNOWN_FIELDS)}; known fields: "
+                       f"{', '.join(sorted(KNOWN_FIELDS))}")
 
     # identity: number, name, group, seed
     if "number" not in t:
