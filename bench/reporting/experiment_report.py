@@ -247,13 +247,15 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
                      f"{d_u} | {rank} |")
     lines += ["", "## Accuracy and movements to converge", "",
               "| task | strategy | accuracy | median movements | dissertation |", "|---|---|---|---|---|"]
+    among = identified_among(result)  # the identification's N-way beside D's 117-way, never one for the other
     for k, v in s.items():
         task, strat = k.split("/")
         ref = ""
         if strat == "bayesian":
             ref = (f"{d['pairs accuracy %']} %, median {d['pairs median moves']} (humans {d['human pairs accuracy %']} %)"
-                   if task == "pairs" else f"{d['117-way accuracy %']} %, median {d['117-way median moves']}")
-        lines.append(f"| {task} | {strat} | {100 * v['accuracy']:.1f} % | {v['median_moves']:g} | {ref} |")
+                   if task == "pairs" else f"{d['117-way accuracy %']} %, median {d['117-way median moves']} (117-way)")
+        label = task if task == "pairs" else f"{task} ({among}-way)"
+        lines.append(f"| {label} | {strat} | {100 * v['accuracy']:.1f} % | {v['median_moves']:g} | {ref} |")
     n_val = len({int(r.true_texture) for r in result.identification_results.get("bayesian", ())})  # identified
     baselines = [words for name, words in (("cycle", "cycling"), ("random", "random choice"))
                  if name in result.identification_results]

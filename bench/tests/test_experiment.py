@@ -432,6 +432,7 @@ def _check_tables_against_the_result(out, result, summary):
         if not line.startswith("|"):
             break
         task, strategy, accuracy = (c.strip() for c in line.strip("|").split("|")[:3])
+        task = task.removesuffix(f" ({E.identified_among(result)}-way)")  # identification (N-way)
         assert float(accuracy.rstrip(" %")) == pytest.approx(100 * s[f"{task}/{strategy}"]["accuracy"], abs=0.051)
     if summary["spread_check"]:
         i = lines.index("| property | validation | leave-one-out | ratio |")

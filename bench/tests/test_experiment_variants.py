@@ -125,6 +125,27 @@ def test_the_probability_evolution_plot_says_how_many_textures_it_chooses_among(
     assert titles["probability_evolution.png"].startswith("Bayesian exploration (5-way)")
 
 
+def test_the_accuracy_table_says_how_many_textures_identification_chooses_among(no_rig, tmp_path):
+    """A research group's 5-texture experiment: the table's identification row stood as "identification" beside
+    D's 117-way figure, as if the two were the same task."""
+    write_outputs(E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None), tmp_path)
+    rows = [line for line in (tmp_path / "report.md").read_text().splitlines() if line.startswith("| identification")]
+    assert [r.split("|")[1:3] for r in rows] == [[" identification (5-way) ", " bayesian "],
+                                                 [" identification (5-way) ", " cycle "],
+                                                 [" identification (5-way) ", " random "]]
+    assert rows[0].endswith("| 95.4 %, median 5 (117-way) |")
+
+
+def test_identification_simulations_is_the_total_over_every_texture_identified(no_rig):
+    """identify_all_textures: the total was divided by the pairs' textures alone (2 here), so each of the 5
+    textures ran 10 and 50 ran where the file asked for 20."""
+    result = E.run_experiment(_spec(identify_all_textures=True), cache_dir=None, progress=False, log=lambda m: None)
+    for strategy, results in result.identification_results.items():
+        assert sorted(int(r.true_texture) for r in results) == [43, 46, 100, 101, 102]
+        assert [len(r) for r in results] == [4] * 5, strategy  # 20 in all
+    assert E.summary(result)["identification/bayesian"]["simulations"] == 20
+
+
 @pytest.mark.parametrize("training, off", [({"replace_skin": False}, "training.replace_skin = false"),
                                            ({"wear": False}, "training.wear = false")])
 def test_replace_at_with_no_replacement_is_a_contradiction(training, off):
