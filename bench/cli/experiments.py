@@ -125,7 +125,7 @@ def _results_not_written(e: OSError, out: Path, files, trials_json: str):
 
 def _cmd_texture_sweep(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
-    from bench.experiments.trials import rows_to_arrays, sweep, sweep_tasks, wear_per_movement
+    from bench.experiments.trials import clipped_note, rows_to_arrays, sweep, sweep_tasks, wear_per_movement
     from bench.reporting.experiment_report import write_rows_csv, write_text
     from bench.reporting.outdir import FolderKind
     from bench.reporting.sweep_plots import properties_vs_movement
@@ -172,6 +172,8 @@ def _cmd_texture_sweep(a) -> int:
     sim = sum(r["simulated_s"] for r in rows)
     print(f"wrote {out}/ ({', '.join(SWEEP_FILES)}): {len(rows)} trials, "
           f"{sim:.0f} simulated s in {wall:.1f} s wall ({sim / wall:.0f}× real time)")
+    if clipped_note(rows):
+        print(f"note: {clipped_note(rows)}")
     return 0
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from bench.experiments.design import PILOT_WORTH_TRIALS
 from bench.rigs.texture_rig import Movement, RigSettings, TextureRig, movement_grid
-from bench.textures.properties import properties
+from bench.textures.properties import pac_at_rails, properties
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources
 from emulator.skin import Skin, contact_patch_area_m2
@@ -158,7 +158,8 @@ def _params(noise_scale: float, base: SensorParams | None = None) -> SensorParam
 
 
 def run_trial_task(task: TrialTask) -> dict:
-    """Run one trial on the rig; returns a flat row: the task, the three properties, the true force, timing."""
+    """Run one trial on the rig; returns a flat row: the task, the three properties, the PAC samples at the ADC's
+    rails in their window (``pac_at_rails``), the true force, timing."""
     from bench.textures.library import texture
 
     skin = Skin(fingerprints=task.fingerprints, ridge_height_m=task.ridge_height_m, serial=task.skin_serial)
@@ -169,9 +170,20 @@ def run_trial_task(task: TrialTask) -> dict:
                           trial=task.trial)
     row = asdict(task)
     row.update(properties(trial.recording))
-    row.update(true_normal_N=trial.true_normal_N, start_position_m=trial.start_position_m,
-               simulated_s=float(trial.recording.pac_t[-1]), wall_s=trial.wall_s)
+    row.update(pac_at_rails=pac_at_rails(trial.recording), true_normal_N=trial.true_normal_N,
+               start_position_m=trial.start_position_m, simulated_s=float(trial.recording.pac_t[-1]),
+               wall_s=trial.wall_s)
     return row
+
+
+def clipped_note(rows: list[dict]) -> str:
+    """A sentence on the trials whose PAC reached the ADC's rails in the measurement window (``pac_at_rails`` > 0),
+    or "" when none did: their roughness and fineness are of a clipped vibration."""
+    clipped = sum(1 for r in rows if r["pac_at_rails"])
+    if not clipped:
+        return ""
+    return (f"{clipped} of {len(rows)} trials had PAC at the ADC's rails (code 0 or 4095) in their measurement window "
+            f"(trials.csv: pac_at_rails, the samples there): their roughness and fineness are of a clipped vibration")
 
 
 def schedule_skin(tasks: list[TrialTask], wear: bool = True, replace_at: float | None = FIRST_VISIBLE_WEAR,

@@ -15,6 +15,7 @@ from bench.experiments.experiment import (D_FIGURES, ExperimentResult, beats_bas
                                           excluded_movements, identified_among, movement_label, summary,
                                           table_from_rows)
 from bench.experiments.pairs import pair_separation_sigma
+from bench.experiments.trials import clipped_note
 from bench.atomic import atomic_write
 from bench.cli.args import strict_json
 from bench.reporting.figures import figure_file
@@ -117,6 +118,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
               "pilot_picks_against_d": pilot_pick_comparison(result),
               "skin_replacements": max((h["skin"] for h in result.skin_history), default=1) - 1,
               "skin_wear": _skin_wear(result.spec),
+              "trials_with_pac_at_rails": sum(1 for r in trial_rows(result) if r["pac_at_rails"]),
               "spread_check": ex.spread_check(table_from_rows(result.training_rows),
                                               table_from_rows(result.validation_rows))
               if result.validation_rows else None,
@@ -303,4 +305,7 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
               f"over D's training session at the first visible wear; β: after 60 trials of one movement, visible "
               f"wear at power level 8 and none at ≤ 7, D Fig. 6-7).",
               "Wall time per stage (s): " + ", ".join(f"{k} {v:.1f}" for k, v in result.wall_s.items()), ""]
+    clipped = clipped_note(trial_rows(result))
+    if clipped:
+        lines[-1:-1] = [f"Clipped: {clipped}."]
     return "\n".join(lines)

@@ -23,6 +23,7 @@ def _synthetic_sweep(tasks, **_):
         row.update(traction=0.2 + 0.05 * (t.texture % 7) + 0.01 * rng.standard_normal(),
                    roughness=5.0 + 0.3 * (t.texture % 5) + 0.05 * rng.standard_normal(),
                    fineness=5.0 + 0.2 * (t.texture % 3) + 0.05 * rng.standard_normal(),
+                   pac_at_rails=3 if t.texture == 100 else 0,  # burlap's PAC clipped, as a coarse weave's may be
                    true_normal_N=t.force_N, start_position_m=0.0, simulated_s=1.0, wall_s=0.0)
         rows.append(row)
     return rows
@@ -134,6 +135,18 @@ def test_the_accuracy_table_says_how_many_textures_identification_chooses_among(
                                                  [" identification (5-way) ", " cycle "],
                                                  [" identification (5-way) ", " random "]]
     assert rows[0].endswith("| 95.4 %, median 5 (117-way) |")
+
+
+def test_the_report_and_summary_count_the_trials_whose_pac_was_clipped(no_rig, tmp_path):
+    """A trial whose PAC sat at the ADC's rails in its measurement window has the roughness and fineness of a clipped
+    vibration: nothing said so (a coarse texture of one's own clipped in a third of the window, unremarked)."""
+    result = E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None)
+    write_outputs(result, tmp_path)
+    rows = [*result.pilot_rows, *result.training_rows, *result.validation_rows]
+    clipped = sum(1 for r in rows if r["texture"] == 100)
+    assert clipped and _strict((tmp_path / "summary.json").read_text())["trials_with_pac_at_rails"] == clipped
+    assert (f"Clipped: {clipped} of {len(rows)} trials had PAC at the ADC's rails (code 0 or 4095) in their "
+            "measurement window") in (tmp_path / "report.md").read_text()
 
 
 def test_identification_simulations_is_the_total_over_every_texture_identified(no_rig):

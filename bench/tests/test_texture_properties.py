@@ -305,3 +305,17 @@ def test_each_segment_loses_its_own_mean_so_a_drifting_pac_keeps_its_centroid():
     0 Hz and the centroid stays the tone's (194 Hz, ± 5 %); one mean for all segments drags it to 9 Hz."""
     rec = make_trial(lambda t, rng: 20 * np.sin(2 * np.pi * 200 * t) + 300 * (t - START) / (END - START))
     assert tp.spectral_centroid(rec) == pytest.approx(200.0, rel=0.05)
+
+
+def test_pac_at_rails_counts_the_clipped_samples_of_the_measurement_window_only():
+    """Roughness and fineness cannot see clipping; pac_at_rails says where the vibration hit code 0 or 4095."""
+    rec = make_trial(lambda t, rng: 3000.0 * np.sign(np.sin(2 * np.pi * 50.0 * t)))  # ±3000 on 2048: both rails
+    w = tp.measurement_window(rec)
+    inside = (rec.pac_t >= w[0]) & (rec.pac_t <= w[1])
+    clipped = np.clip(rec.pac, 0, 4095)
+    rec = tp.TrialRecording(pac_t=rec.pac_t, pac=clipped, pdc_t=rec.pdc_t, pdc=rec.pdc, current_t=rec.current_t,
+                            current_A=rec.current_A, contact_s=CONTACT, slide_start_s=START, slide_end_s=END)
+    expected = int(((clipped[inside] == 0) | (clipped[inside] == 4095)).sum())
+    assert expected > 0.9 * inside.sum() and tp.pac_at_rails(rec) == expected
+    assert ((clipped == 0) | (clipped == 4095))[~inside].any()  # clipped outside the window too: not counted
+    assert tp.pac_at_rails(make_trial(lambda t, rng: 1500.0 * np.sin(2 * np.pi * 50.0 * t))) == 0  # 548..3548

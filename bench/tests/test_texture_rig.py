@@ -222,6 +222,18 @@ def test_a_trial_row_reports_the_force_the_rig_reached_not_the_one_it_was_told()
     assert row["force_N"] == task.force_N and row["true_normal_N"] > 1.02 * task.force_N
 
 
+def test_a_trial_row_counts_its_pac_samples_at_the_rails():
+    """Foam at 0.8 N, 6.31 cm/s drives PAC to the ADC's rails for much of its measurement window; the 3 mm grating at
+    0.32 N, 1.58 cm/s does not.  The row says so (pac_at_rails); the properties alone cannot."""
+    from bench.experiments.trials import run_trial_task, sweep_tasks
+
+    grid = movement_grid()
+    clipped, clean = (run_trial_task(t) for t in (*sweep_tasks([30], [grid[22]], 1, 0, movement_ids=[22]),
+                                                  *sweep_tasks([902], [grid[7]], 1, 0, movement_ids=[7])))
+    assert clipped["pac_at_rails"] > 100 and clean["pac_at_rails"] == 0
+    assert isinstance(clipped["pac_at_rails"], int)  # a count (trials.csv, the stage cache's JSON)
+
+
 def test_the_wear_table_agrees_with_a_skin_worn_trial_by_trial():
     """wear.csv's trials to the first visible wear and loss per second, against a fresh Skin worn one trial at a time
     until its worn fraction reaches the first visible wear, and against the trial's length at the rig (distance /

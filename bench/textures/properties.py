@@ -67,6 +67,8 @@ BACKGROUND_GUARD_S = 0.05
 POWER_FLOOR = 1e-3
 #: Spectral-centroid segments: length (samples) and overlap (fraction).
 CENTROID_WINDOW, CENTROID_OVERLAP = 256, 0.5
+#: The 12-bit ADC's lowest and highest codes: a PAC sample at either is clipped (the vibration went there or beyond).
+PAC_RAILS = (0, 4095)
 #: Layout tag written into every trial file.
 NPZ_FORMAT = "biotac-bench trial recording v1"
 #: Arrays every trial file holds (see :func:`save_npz`).
@@ -363,6 +365,13 @@ def fineness(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEAS
              window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> float:
     """Fineness = ln(spectral centroid / 1 Hz) (D eq. 6.19)."""
     return float(math.log(spectral_centroid(rec, lead, tail, window, overlap)))
+
+
+def pac_at_rails(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL) -> int:
+    """PAC samples at the ADC's rails (:data:`PAC_RAILS`) in the measurement window: where they are not 0, the
+    roughness and fineness are of a clipped vibration (the properties do not see it; a reader of them should)."""
+    x = rec.pac[_in(rec.pac_t, measurement_window(rec, lead, tail))]
+    return int(np.count_nonzero((x <= PAC_RAILS[0]) | (x >= PAC_RAILS[1])))
 
 
 def properties(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
