@@ -101,11 +101,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
                  "accuracy_%": round(100 * v["accuracy"], PERCENT_DECIMALS),
                  "median_moves": v["median_moves"], "simulations": v["simulations"]} for k, v in s.items()]
     write_rows_csv(out / "accuracy.csv", acc_rows)
-    per_tex = [{"texture": t, "name": lib[t].name,
-                **{f"{k}_accuracy": round(v["per_texture_accuracy"][t], PERCENT_DECIMALS + 2) for k, v in s.items()
-                   if t in v["per_texture_accuracy"]}}
-               for t in sorted({t for v in s.values() for t in v["per_texture_accuracy"]})]
-    write_rows_csv(out / "accuracy_per_texture.csv", per_tex)
+    write_rows_csv(out / "accuracy_per_texture.csv", accuracy_per_texture_rows(s, lib))
     names += ["accuracy.csv", "accuracy_per_texture.csv"]
     if "bayesian" in result.identification_results:
         write_rows_csv(out / "confusion.csv", confusion_rows(result.identification_results["bayesian"]))
@@ -129,6 +125,15 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     write_text(out / "report.md", markdown(result, record, lib))
     names.append("report.md")
     return names
+
+
+def accuracy_per_texture_rows(s: dict, lib) -> list[dict]:
+    """accuracy_per_texture.csv from :func:`summary` ``s``: a row per texture (number, ``lib[number].name``), a column
+    ``<task>/<strategy>_accuracy_%`` per run, in percent as accuracy.csv (empty where the texture was not a truth)."""
+    return [{"texture": t, "name": lib[t].name,
+             **{f"{k}_accuracy_%": round(100 * v["per_texture_accuracy"][t], PERCENT_DECIMALS) for k, v in s.items()
+                if t in v["per_texture_accuracy"]}}
+            for t in sorted({t for v in s.values() for t in v["per_texture_accuracy"]})]
 
 
 #: how the report introduces the validation pairs, per ``pair_choice``

@@ -149,6 +149,26 @@ def test_the_report_and_summary_count_the_trials_whose_pac_was_clipped(no_rig, t
             "measurement window") in (tmp_path / "report.md").read_text()
 
 
+def test_accuracy_per_texture_is_in_percent_as_accuracy_csv(no_rig, tmp_path):
+    """accuracy.csv said accuracy_% (100.0) while accuracy_per_texture.csv held fractions (1.0, 0.88) under a name
+    without a unit: a group merging the two tables read 1 % for a perfect texture."""
+    import csv
+
+    result = E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None)
+    write_outputs(result, tmp_path)
+    s = E.summary(result)
+    rows = list(csv.DictReader(open(tmp_path / "accuracy_per_texture.csv", newline="")))
+    assert [k for k in rows[0] if k not in ("texture", "name")] == [f"{k}_accuracy_%" for k in s]
+    for row in rows:
+        for k, v in s.items():
+            if int(row["texture"]) in v["per_texture_accuracy"]:
+                assert float(row[f"{k}_accuracy_%"]) == pytest.approx(
+                    100 * v["per_texture_accuracy"][int(row["texture"])], abs=1e-4)
+    overall = {f"{r['task']}/{r['strategy']}": float(r["accuracy_%"])
+               for r in csv.DictReader(open(tmp_path / "accuracy.csv", newline=""))}
+    assert overall == {k: pytest.approx(100 * v["accuracy"], abs=1e-4) for k, v in s.items()}
+
+
 def test_identification_simulations_is_the_total_over_every_texture_identified(no_rig):
     """identify_all_textures: the total was divided by the pairs' textures alone (2 here), so each of the 5
     textures ran 10 and 50 ran where the file asked for 20."""
