@@ -37,7 +37,7 @@ from bench.tomlfile import spelled
 from bench.errors import FileProblems
 from bench.experiments import design
 from bench.experiments import exploration as ex
-from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs
+from bench.experiments.pairs import PAIR_CHOICES, similar_description_pairs, why_not_pairs
 from bench.experiments.trials import (
     FIRST_VISIBLE_WEAR, TrialTask, listed_twice, noise_scale_problem, schedule_skin, sweep, sweep_tasks, trial_seed,
     wear_per_movement,
@@ -318,8 +318,14 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             groups = [lib[n].group for n in trained]
             available = sum(groups.count(g) // 2 for g in set(groups))
         if available < spec.n_pairs:
+            why = ""
+            if spec.pair_choice == "similar-description":
+                refused = why_not_pairs(trained, lib)
+                why = (" (a pair shares group, thermal material and compliance, both ridged or both not"
+                       + (f"; within a group here: {', '.join(refused)}" if refused else "") + ")")
             problems.append(f"validation.n_pairs = {spec.n_pairs}: the training textures hold only {available} "
-                            f"disjoint pairs for pair_choice = {spelled(spec.pair_choice)}")
+                            f"disjoint pairs for pair_choice = {spelled(spec.pair_choice)}{why}; name them with "
+                            f"pairs = [[a, b], ...], or train on more textures")
     spec.validation_trials = get("validation", "trials", int, 1, 100, spec.validation_trials)
     strategies = t["exploration"].get("strategies", list(spec.strategies))
     if not isinstance(strategies, list) or not strategies or any(not isinstance(s, str) or s not in ex.STRATEGIES

@@ -69,6 +69,15 @@ def admissible(ta, tb) -> str | None:
     return None
 
 
+def why_not_pairs(textures, lib: dict, most: int = 4) -> list[str]:
+    """Why textures of one library group among ``textures`` are no similar pair: ``"T43/T46: different thermal
+    materials"`` for the first ``most`` such pairs (by number), then how many more."""
+    ids = sorted(int(n) for n in textures)
+    found = [f"T{a}/T{b}: {why}" for i, a in enumerate(ids) for b in ids[i + 1:]
+             if lib[a].group == lib[b].group and (why := admissible(lib[a], lib[b])) is not None]
+    return found[:most] + ([f"{len(found) - most} more"] if len(found) > most else [])
+
+
 def description_distance(ta, tb, scales: np.ndarray) -> float:
     """Distance of two textures' descriptions in units of the library's spread (absent periodic features: 0)."""
     d = np.nan_to_num((description_features(ta) - description_features(tb)) / scales)

@@ -60,6 +60,10 @@ def test_shipped_experiment_files_validate():
      ["validation.n_pairs = 8", "only 1 disjoint pairs", "similar-description"]),
     ({"training": {"textures": [1, 2, 3, 4]}, "validation": {"n_pairs": 3, "pair_choice": "most-confused"}},
      ["validation.n_pairs = 3", "most-confused"]),
+    # a research group's own selection: "only 0 disjoint pairs" said neither why nor what to do
+    ({"training": {"textures": [10, 30, 43, 46, 84, 100]}, "validation": {"n_pairs": 1}},
+     ["validation.n_pairs = 1", "only 0 disjoint pairs", "within a group here: T43/T46: different thermal materials)",
+      "name them with pairs = [[a, b], ...]"]),
     # a second hostile pass: a traceback, and a pilot whose every movement is excluded found only after it ran
     ({"exploration": {"strategies": [["bayesian"]]}}, ['exploration.strategies = [["bayesian"]]']),
     ({"exploration": {"strategies": [{"a": 1}]}}, ["exploration.strategies"]),
