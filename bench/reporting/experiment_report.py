@@ -58,14 +58,17 @@ def pilot_status(result: ExperimentResult) -> dict[int, str]:
 
 def pilot_pick_comparison(result: ExperimentResult) -> dict[str, dict]:
     """Per property: U of the pilot's pick and of D's pick (D ch. 6), and D's pick's rank (1 = least uncertain)
-    among the movements the pilot kept (None if the pilot excluded or did not run it)."""
+    among the movements the pilot kept (None if the pilot excluded or did not run it); ``tied_with``: the other kept
+    movements whose U equals the pick's (the pick is then the lowest grid id of them, not a better movement)."""
     status = pilot_status(result)
     kept = [m for m, st in status.items() if st == "run"]
     out = {}
     for prop, d_id in d_best_movement_ids().items():
         u = result.pilot_uncertainty[:, ex.PROPERTIES.index(prop)]
         order = sorted(kept, key=lambda m: u[m])
-        out[prop] = {"pick_U": float(u[int(result.best_movements[ex.PROPERTIES.index(prop)])]),
+        pick = int(result.best_movements[ex.PROPERTIES.index(prop)])
+        out[prop] = {"pick_U": float(u[pick]),
+                     "tied_with": [movement_label(m) for m in kept if m != pick and u[m] == u[pick]],
                      "d_U": float(u[d_id]) if np.isfinite(u[d_id]) else None, "d_status": status[d_id],
                      "d_rank": order.index(d_id) + 1 if d_id in kept else None, "kept": len(kept)}
     return out
@@ -250,8 +253,9 @@ def markdown(result: ExperimentResult, record: dict, lib) -> str:
         rank = {"excluded-high-power": "excluded (high power)", "not-run": "not in this pilot"}.get(
             row["d_status"], f"{row['d_rank']} of {row['kept']}")
         d_u = "—" if row["d_U"] is None else f"{row['d_U']:.3g}"
-        lines.append(f"| {p} | {record['best_movements'][p]} (U = {row['pick_U']:.3g}) | {d['best movements'][p]} | "
-                     f"{d_u} | {rank} |")
+        tie = (f"; tied with {', '.join(row['tied_with'])}, the lowest grid id taken" if row["tied_with"] else "")
+        lines.append(f"| {p} | {record['best_movements'][p]} (U = {row['pick_U']:.3g}{tie}) | {d['best movements'][p]} "
+                     f"| {d_u} | {rank} |")
     lines += ["", "## Accuracy and movements to converge", "",
               "| task | strategy | accuracy | median movements | dissertation |", "|---|---|---|---|---|"]
     among = identified_among(result)  # the identification's N-way beside D's 117-way, never one for the other

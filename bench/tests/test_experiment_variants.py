@@ -169,6 +169,28 @@ def test_accuracy_per_texture_is_in_percent_as_accuracy_csv(no_rig, tmp_path):
     assert overall == {k: pytest.approx(100 * v["accuracy"], abs=1e-4) for k, v in s.items()}
 
 
+def test_a_pilot_pick_tied_with_other_movements_says_so(no_rig, tmp_path, monkeypatch):
+    """A small pilot of textures far apart: roughness separates them perfectly at every movement (U = 0 at each), and
+    the report named the lowest grid id as the least uncertain movement without saying the others were as good."""
+    def far_apart(tasks, **_):
+        rows = _synthetic_sweep(tasks)
+        for r in rows:  # roughness 100 σ apart at every movement: no overlap left to compute
+            r["roughness"] = 5.0 + 10.0 * [43, 46, 100, 101, 102].index(r["texture"]) + 0.01 * (r["trial"] - 0.5)
+        return rows
+
+    monkeypatch.setattr(E, "sweep", far_apart)
+    result = E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None)
+    write_outputs(result, tmp_path)
+    picks = _strict((tmp_path / "summary.json").read_text())["pilot_picks_against_d"]
+    assert picks["roughness"]["pick_U"] == 0.0 and int(result.best_movements[1]) == 0
+    assert picks["roughness"]["tied_with"] == [E.movement_label(7), E.movement_label(14)]
+    assert picks["traction"]["tied_with"] == []  # the synthetic traction's noise differs per movement
+    report = (tmp_path / "report.md").read_text()
+    assert (f"| roughness | {E.movement_label(0)} (U = 0; tied with {E.movement_label(7)}, {E.movement_label(14)}, "
+            "the lowest grid id taken) |") in report
+    assert "tied" not in next(line for line in report.splitlines() if line.startswith("| traction |"))
+
+
 def test_identification_simulations_is_the_total_over_every_texture_identified(no_rig):
     """identify_all_textures: the total was divided by the pairs' textures alone (2 here), so each of the 5
     textures ran 10 and 50 ran where the file asked for 20."""
