@@ -19,6 +19,7 @@ from bench.experiments.trials import clipped_note
 from bench.atomic import atomic_write
 from bench.cli.args import strict_json
 from bench.reporting.figures import figure_file
+from bench.reporting.sweep_plots import PROPERTIES as PROPERTY_LABELS
 
 #: every file :func:`write_outputs` may write (what ``explore --force`` may replace)
 OUTPUT_FILES = ("trials.csv", "trials.json", "pilot_uncertainty.csv", "accuracy.csv", "accuracy_per_texture.csv",
@@ -188,10 +189,16 @@ def _plots(result: ExperimentResult, out: Path, lib) -> list[str]:
             sel = [r for r in rows if r["movement_id"] == int(m)]
             tex = sorted({r["texture"] for r in sel})
             vals = [[r[prop] for r in sel if r["texture"] == t] for t in tex]
-            axes[p].errorbar(tex, [np.mean(v) for v in vals], yerr=[np.std(v) for v in vals], fmt=".", ms=3,
+            # one slot per texture, labelled with its number: T1..T117 as before, a library's own T950 beside T46
+            # rather than 900 numbers away, where its neighbours' bars ran together
+            slots = np.arange(len(tex))
+            axes[p].errorbar(slots, [np.mean(v) for v in vals], yerr=[np.std(v) for v in vals], fmt=".", ms=3,
                              lw=0.7)
+            every = max(1, -(-len(tex) // 30))  # at most 30 labels
+            axes[p].set_xticks(slots[::every], [str(t) for t in tex[::every]],
+                               rotation=90 if len(tex) > 12 else 0, fontsize=7)
             axes[p].set_xlabel("texture number")
-            axes[p].set_ylabel(prop)
+            axes[p].set_ylabel(dict(PROPERTY_LABELS)[prop])
             axes[p].set_title(f"{prop} at {movement_label(m)}")
             axes[p].grid(alpha=0.3)
     names.append("properties_at_optimal_movements.png")

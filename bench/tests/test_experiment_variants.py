@@ -191,6 +191,30 @@ def test_a_pilot_pick_tied_with_other_movements_says_so(no_rig, tmp_path, monkey
     assert "tied" not in next(line for line in report.splitlines() if line.startswith("| traction |"))
 
 
+def test_the_properties_plot_gives_each_texture_a_slot_and_its_units(no_rig, tmp_path, monkeypatch):
+    """Plotted against the texture number, T100..T102 sat beside T43/T46 at a fiftieth of the axis (and a library's
+    T950 900 numbers away, its neighbours' bars run together); the y axes named no unit."""
+    from contextlib import contextmanager
+
+    from bench.reporting import experiment_report
+
+    seen, figure_file = {}, experiment_report.figure_file
+
+    @contextmanager
+    def noting_axes(path, *args, **kw):
+        with figure_file(path, *args, **kw) as (fig, axes):
+            yield fig, axes
+            if path.name == "properties_at_optimal_movements.png":
+                seen.update({ax.get_ylabel(): ([t.get_text() for t in ax.get_xticklabels()],
+                                               list(ax.get_xticks())) for ax in axes})
+
+    monkeypatch.setattr(experiment_report, "figure_file", noting_axes)
+    write_outputs(E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None), tmp_path)
+    assert sorted(seen) == ["fineness (ln Hz)", "roughness (ln bits²)", "traction (A)"]
+    for labels, ticks in seen.values():
+        assert labels == ["43", "46", "100", "101", "102"] and ticks == [0, 1, 2, 3, 4]
+
+
 def test_identification_simulations_is_the_total_over_every_texture_identified(no_rig):
     """identify_all_textures: the total was divided by the pairs' textures alone (2 here), so each of the 5
     textures ran 10 and 50 ran where the file asked for 20."""
