@@ -230,8 +230,16 @@ def _close_parts(*parts) -> None:
 
 
 def close(client) -> None:
-    """Close ``client`` and the LocalCluster :func:`connect` started for it, if any."""
-    _close_parts(client, getattr(client, "_owned_cluster", None))
+    """Close ``client`` and the LocalCluster :func:`connect` started for it, if any.  A client that lost its
+    scheduler logs the cancelled reconnection as a traceback while it closes: the bench has said what happened in
+    one line (:func:`run_tasks`), so the client's log is held to critical errors meanwhile."""
+    log = logging.getLogger("distributed.client")
+    level = log.level
+    log.setLevel(logging.CRITICAL)
+    try:
+        _close_parts(client, getattr(client, "_owned_cluster", None))
+    finally:
+        log.setLevel(level)
 
 
 #: at most this many tasks per Dask task (a group of rig trials lasts well under a second)
@@ -286,6 +294,11 @@ def run_tasks(fn: Callable, tasks: Sequence, spec: ClusterSpec | None = None, cl
                 except Exception as e:  # a task that kept failing after its retries, or a group lost for good
                     for f in futures:
                         f.cancel()
+                    if getattr(e, "reason", None) == "scheduler-connection-lost":  # no task failed: the cluster went
+                        raise CampaignError(
+                            f"lost the connection to the Dask scheduler at {client.scheduler.address} after {bar.n} "
+                            f"of {len(tasks)} tasks had finished; start the scheduler and its workers again and run "
+                            f"again (an experiment's finished stages are in its cache)") from None
                     k, what = e.args if isinstance(e, TaskFailed) else (i, f"{type(e).__name__}: {e}")
                     raise CampaignError(f"task {k} ({tasks[k]!r}) failed: {what}") from None
                 results[i:i + len(done)] = done

@@ -1,6 +1,7 @@
 """The campaign engine on Dask: results in task order and identical for 1 and 2 workers, a worker killed
 mid-task loses nothing, an existing scheduler by address, clear errors."""
 
+import logging
 import os
 from pathlib import Path
 
@@ -71,6 +72,70 @@ def test_a_worker_killed_mid_task_loses_nothing(tmp_path, n):
     tasks = [(str(tmp_path / "died-once"), k) for k in range(n)]
     assert run_tasks(die_once, tasks, ClusterSpec(workers=2), progress=False) == [2 * k for k in range(n)]
     assert (tmp_path / "died-once").read_text() == "died"  # the kill did happen
+
+
+def kill_the_scheduler(task):
+    """The first task kills the scheduler (its pid in the task) and every task then takes a moment."""
+    import signal
+    import time
+
+    pid, k = task
+    if k == 0:
+        os.kill(pid, signal.SIGKILL)
+    time.sleep(0.5)
+    return k
+
+
+def test_a_scheduler_lost_mid_run_is_one_line_naming_it_not_a_task_and_a_traceback(capfd):
+    """A research group's scheduler killed mid-sweep: distributed logged a traceback as the client closed, and the
+    error blamed "task 0 (…) failed: FutureCancelledError …" — no task had failed."""
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    from distributed import Client
+
+    from bench.paths import REPO
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env, "cwd": REPO}
+    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                                  "--port", str(port), "--dashboard-address", ":0"], **quiet)
+    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
+                               "--no-nanny"], **quiet)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:  # the scheduler up, the worker joined
+            try:
+                with Client(address, timeout="2s") as c:
+                    if c.scheduler_info()["workers"]:
+                        break
+            except OSError:
+                pass
+            time.sleep(0.2)
+        capfd.readouterr()
+        logged = []  # what distributed's client logs (its own handler writes to the stderr it found at import)
+        catcher = logging.Handler(logging.ERROR)
+        catcher.emit = logged.append
+        logging.getLogger("distributed.client").addHandler(catcher)
+        try:
+            with pytest.raises(CampaignError) as e:
+                run_tasks(kill_the_scheduler, [(scheduler.pid, k) for k in range(6)], ClusterSpec(scheduler=address),
+                          progress=False)
+        finally:
+            logging.getLogger("distributed.client").removeHandler(catcher)
+        assert str(e.value).startswith(f"lost the connection to the Dask scheduler at {address} after 0 of 6 tasks "
+                                       "had finished; start the scheduler and its workers again")
+        assert not logged and "Traceback" not in capfd.readouterr().err
+    finally:
+        for p in (worker, scheduler):
+            p.kill()
+            p.wait()
 
 
 def test_an_existing_scheduler_by_address_and_by_environment(monkeypatch):
