@@ -588,7 +588,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     t0 = time.perf_counter()
     pair_results, ident_results = {}, {}
     all_ctx = ex.prepare(train, best_movements=best)
-    per_texture = max(1, spec.identification_simulations // len(val_textures))  # the total over all identified
+    share = dict(zip(val_textures, simulation_shares(spec.identification_simulations, len(val_textures))))
     for s in spec.strategies:
         pair_results[s] = []
         for a, b in pairs:
@@ -598,12 +598,18 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                                                    threshold=spec.pair_threshold, max_moves=spec.max_moves,
                                                    n_sims=spec.pair_simulations // 2, seed=spec.seed, context=ctx))
         ident_results[s] = [ex.simulate(train, val_table, true, strategy=s, threshold=spec.identification_threshold,
-                                        max_moves=spec.max_moves, n_sims=per_texture, seed=spec.seed + 1,
+                                        max_moves=spec.max_moves, n_sims=share[true], seed=spec.seed + 1,
                                         context=all_ctx)
                             for true in val_textures]
     wall["exploration"] = time.perf_counter() - t0
     return ExperimentResult(spec, pilot_rows, u_full, best, wear_per_movement(), training_rows, history, pairs,
                             validation_rows, pair_results, ident_results, wall, library.record())
+
+
+def simulation_shares(total: int, n: int) -> list[int]:
+    """``total`` simulations shared among ``n`` textures: as equal as whole numbers allow (the first ``total % n``
+    one more), so the file's number is the number run; at least one each."""
+    return [max(1, total // n + (k < total % n)) for k in range(n)]
 
 
 def identified_among(result: ExperimentResult) -> int:

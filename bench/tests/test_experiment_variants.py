@@ -223,6 +223,11 @@ def test_identification_simulations_is_the_total_over_every_texture_identified(n
         assert sorted(int(r.true_texture) for r in results) == [43, 46, 100, 101, 102]
         assert [len(r) for r in results] == [4] * 5, strategy  # 20 in all
     assert E.summary(result)["identification/bayesian"]["simulations"] == 20
+    # a total the textures do not divide is still the total run (22 over 5 had run 20: floor division)
+    result = E.run_experiment(_spec(identify_all_textures=True, identification_simulations=22), cache_dir=None,
+                              progress=False, log=lambda m: None)
+    assert [len(r) for r in result.identification_results["bayesian"]] == [5, 5, 4, 4, 4]
+    assert E.simulation_shares(3, 4) == [1, 1, 1, 1]  # at least one each: every texture identified has a figure
 
 
 @pytest.mark.parametrize("training, off", [({"replace_skin": False}, "training.replace_skin = false"),
