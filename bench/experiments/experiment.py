@@ -304,6 +304,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
                 problems.append(f"validation.pairs: texture(s) {untrained} not among the training textures (the "
                                 f"classifier knows only those)")
     spec.n_pairs = get("validation", "n_pairs", int, 1, 58, spec.n_pairs)
+    if spec.pairs is not None:  # the pairs listed are the pairs validated: summary.json's spec says how many
+        spec.n_pairs = len(spec.pairs)
     choice = t["validation"].get("pair_choice", spec.pair_choice)
     if choice not in PAIR_CHOICES:
         problems.append(f"validation.pair_choice = {spelled(choice)}: one of "

@@ -79,6 +79,13 @@ def test_bad_experiment_files_name_field_and_value(data, words):
         assert w in str(e.value)
 
 
+def test_pairs_listed_in_the_file_are_the_pairs_counted():
+    """With pairs = [[a, b], [c, d]], summary.json's spec said n_pairs = 8 (the default, unused) beside two pairs."""
+    spec = E.parse_experiment({"experiment": {"name": "x"}, "training": {"textures": [2, 3, 4, 5]},
+                               "validation": {"pairs": [[2, 3], [4, 5]]}}, "x.toml")
+    assert spec.pairs == [(2, 3), (4, 5)] and spec.n_pairs == 2
+
+
 def test_all_pilot_textures_means_the_117_and_whole_numbers_serve_as_floats():
     spec = E.parse_experiment({"experiment": {"name": "x"}, "pilot": {"textures": "all"},
                                "sensor": {"noise_scale": 2}, "training": {"replace_at": 1}}, "x.toml")
