@@ -55,6 +55,15 @@ def common_rest_codes(codes, rest_codes, p) -> np.ndarray:
     return _codes_of_ohm(zs + 1.0 / g_equivalent)
 
 
+def monotonic_until_bottomed(z_ohm, z_bottom_ohm: float, within: float = 0.02) -> bool:
+    """True when the impedances ``z_ohm`` (Ω, by rising force) rise at every step, except a step between two
+    readings that are both at the bottomed skin's impedance ``z_bottom_ohm`` (within the fraction ``within``); the
+    first reading must not be bottomed (the lightest force leaves fluid to squeeze)."""
+    z = np.asarray(z_ohm, float)
+    bottomed = np.abs(z / z_bottom_ohm - 1.0) < within
+    return bool(np.all((np.diff(z) > 0) | (bottomed[:-1] & bottomed[1:])) and not bottomed[0])
+
+
 @claim_group("electrodes")
 def electrode_claims(b: Bench) -> list[Claim]:
     """Monotonic impedance with force, the pressed electrode moves most, locality, localisation, PDC consistency."""
@@ -88,8 +97,7 @@ def electrode_claims(b: Bench) -> list[Claim]:
     # ... until the skin bottoms on the core over it (a thin-gap electrode of a drawn unit bottoms under a few N):
     # from there the impedance stays at that of the minimum gap
     z_bottom = b.params.electrode_series_ohm + b.params.fluid_sheet_ohm_mm / b.params.minimum_gap_mm
-    bottomed = np.abs(np.array(z17) / z_bottom - 1.0) < 0.02
-    monotonic = bool(np.all((np.diff(z17) > 0) | (bottomed[:-1] & bottomed[1:])) and not bottomed[0])
+    monotonic = monotonic_until_bottomed(z17, z_bottom)
     # pressing over each electrode moves that electrode most (its fluid thins most: common-rest code falls most)
     hits = 0
     for n in range(1, 20):

@@ -29,6 +29,21 @@ def tdc_sweep(b: Bench, settings=tuple((a, None) for a in SWEEP_AMBIENT_C), offs
         out.append((bead, float(np.mean(rec["TDC"][1]))))
     return out
 
+
+def range_top_C(sweep: list[tuple[float, float]]) -> float:
+    """Where the mean TDC code reaches 4094 (°C): the line through the last two unclipped (mean code < 4093.5)
+    points of ``sweep`` ((thermistor °C, mean code), in rising temperature) extended to code 4094; inf when no point
+    clips (the top was not reached, so the sweep cannot place it)."""
+    unclipped = [(t, c) for t, c in sweep if c < 4093.5]
+    if len(unclipped) == len(sweep):
+        return float("inf")
+    if len(unclipped) < 2:
+        raise ValueError(f"the TDC range sweep has {len(unclipped)} unclipped point(s) below code 4094: two are "
+                         "needed to place the top; start the sweep cooler")
+    (t1, c1), (t2, c2) = unclipped[-2:]
+    return float(t2 + (4094.0 - c2) * (t2 - t1) / (c2 - c1))
+
+
 THERMAL_MATERIALS = ("aluminum", "glass", "wood", "polystyrene foam")
 
 _ORDER = ("from k, ρ, c of each material (Incropera & DeWitt) through the thermal network; the contact "
@@ -50,13 +65,10 @@ def thermal_claims(b: Bench) -> list[Claim]:
     overlaps = (np.maximum(beads[1:], beads[:-1]) >= 0.0) & (np.minimum(beads[1:], beads[:-1]) <= 70.0)
     codes_per_K = np.abs(np.diff(codes) / np.diff(beads))[overlaps]  # mean slope over each ~5 K step
     resolution = float(1.0 / codes_per_K.min())
-    hottest = int(np.argmax(beads))
     # range top: heat the settled thermistor past the last code (ambient 60 °C, heater rise 10..20 K) and find
     # where the mean code reaches 4094 from the last two unclipped points
     top = tdc_sweep(b, tuple((60.0, r) for r in np.arange(10.0, 20.01, 1.0)), offset=300)
-    unclipped = [(t, c) for t, c in top if c < 4093.5]
-    (t1, c1), (t2, c2) = unclipped[-2:]
-    top_C = t2 + (4094.0 - c2) * (t2 - t1) / (c2 - c1) if len(unclipped) < len(top) else np.inf
+    top_C = range_top_C(top)
     # touch and hold, 10 s, on each material at room temperature
     drops, tacs = {}, {}
     for k, m in enumerate(THERMAL_MATERIALS):

@@ -1,0 +1,98 @@
+"""How the force, thermal, vibration and electrode claims measure: each row's number is the worst of the parts it
+lists, taken over the range its name states, and the helpers behind the rows (the hysteresis loop's width, the
+press's loading phase, the resonance peak's window) do what their docstrings say.  A mutation hunt found these
+measurements unguarded: a wrong helper still let every row pass."""
+
+import numpy as np
+import pytest
+
+from bench.tests.test_claims import _claims
+from bench.verification.claims import Bench
+from emulator import conversions as conv
+
+pytestmark = pytest.mark.claims
+
+
+def _row(group, name):
+    (c,) = [c for c in _claims(group) if c.name == name]
+    return c
+
+
+# --- force ------------------------------------------------------------------------------------------------------
+def test_loop_width_is_the_widest_unloading_gap_at_equal_force_over_the_mean_rise_at_2_N():
+    """A made loop: loading rise 50 codes/N, unloading the same plus a bump of 3 codes peaking at 1.5 N, and a top
+    at 2 N drifting from 100 to 104 codes (mean 102).  The width is the bump's 3 codes over 102: the largest gap
+    (not the mean), anywhere over 0.3–1.7 N (not only at low force), unloading over loading, over the mean top."""
+    from bench.verification.claims.force import loop_width
+
+    up = np.linspace(0.0, 1.95, 40)  # N, steps of 0.05 N: the levels 0.3..1.7 fall on samples
+    down = up[::-1]
+    top_f = np.full(11, 2.0)
+    force = np.concatenate([up, top_f, down])
+    bump = 3.0 * np.exp(-(((down - 1.5) / 0.2) ** 2))  # codes
+    rise = np.concatenate([50.0 * up, np.linspace(100.0, 104.0, 11), 50.0 * down + bump])
+    loading = np.concatenate([np.ones(40 + 6, bool), np.zeros(5 + 40, bool)])
+    assert loop_width(force, rise, loading) == pytest.approx(3.0 / 102.0, rel=1e-9)
+
+
+def test_the_press_cycle_splits_loading_from_unloading_and_its_rise_starts_at_zero():
+    """press_cycle's mask is True while the force rises or holds and False while it falls (the hysteresis loop
+    compares the two at equal force), and the rise is measured from the rest before the press (≈ 0 codes there)."""
+    from bench.verification.claims.force import CYCLE, press_cycle
+
+    force, rise, loading = press_cycle(Bench())
+    assert loading.any() and (~loading).any()
+    assert np.all(np.diff(force[loading]) >= -1e-12), "the loading phase holds a falling force"
+    assert np.all(np.diff(force[~loading]) <= 1e-12), "the unloading phase holds a rising force"
+    assert force[loading].max() == pytest.approx(CYCLE["force_N"])
+    at_rest = (force == 0.0) & loading
+    assert np.count_nonzero(at_rest) >= 20 and abs(rise[at_rest].mean()) < 0.5  # codes
+
+
+# --- thermal ----------------------------------------------------------------------------------------------------
+def test_the_tdc_rows_span_0_to_70_C_and_report_their_worst_step():
+    """The conversion row says "over 0–70 °C": its settled thermistor temperatures reach both ends, its number is the
+    largest conversion error among them, and the resolution row is the coarsest code step per kelvin among the
+    neighbouring temperatures inside 0–70 °C (the same sweep)."""
+    conversion = _row("thermal", "TDC conversion error over 0–70 °C")
+    sweep = conversion.details["bead_C_and_mean_code"]
+    beads = np.array([b for b, _ in sweep])
+    codes = np.array([c for _, c in sweep])
+    assert beads.min() <= 0.5 and beads.max() >= 69.5, (beads.min(), beads.max())
+    errors = np.abs(conv.tdc_to_celsius(codes) - beads)
+    assert conversion.measured == pytest.approx(errors.max(), rel=1e-9)
+    resolution = _row("thermal", "TDC resolution over 0–70 °C")
+    inside = (np.maximum(beads[1:], beads[:-1]) >= 0.0) & (np.minimum(beads[1:], beads[:-1]) <= 70.0)
+    per_K = np.abs(np.diff(codes) / np.diff(beads))[inside]
+    assert inside.sum() >= 13 and resolution.measured == pytest.approx(1.0 / per_K.min(), rel=1e-9)
+
+
+def test_the_range_top_is_where_the_line_through_the_last_two_unclipped_points_reaches_4094():
+    """range_top_C: a line through the last two points below code 4093.5 (not earlier ones), extended to 4094; a
+    sweep that never clips cannot place the top (inf: the row fails), and one with a single unclipped point is
+    refused by name."""
+    from bench.verification.claims.thermal import range_top_C
+
+    sweep = [(66.0, 3900.0), (68.0, 3950.0), (70.0, 4010.0), (72.0, 4060.0), (74.0, 4094.6), (76.0, 4095.0)]
+    assert range_top_C(sweep) == pytest.approx(72.0 + (4094.0 - 4060.0) * 2.0 / 50.0, rel=1e-12)  # 73.36 °C
+    assert range_top_C(sweep[:4]) == np.inf
+    with pytest.raises(ValueError, match="1 unclipped point"):
+        range_top_C([(72.0, 4060.0), (74.0, 4094.6)])
+    top = _row("thermal", "TDC range top (code 4094)")
+    assert top.measured == range_top_C(top.details["bead_C_and_mean_code"])
+    assert any(c >= 4093.5 for _, c in top.details["bead_C_and_mean_code"])  # the sweep reached the top
+
+
+# --- electrodes -------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("z, monotonic", [
+    ([500.0, 800.0, 1000.0, 1000.0], True),  # rises, then holds at the bottomed impedance
+    ([500.0, 800.0, 995.0, 990.0], True),  # both last readings within 2 % of bottomed: the gap is at its minimum
+    ([500.0, 800.0, 800.0, 1000.0], False),  # a flat step away from the bottom (20 % under it)
+    ([500.0, 1000.0, 900.0], False),  # falls from the bottom to 10 % under it: only one end is bottomed
+    ([1000.0, 1000.0, 1000.0], False),  # bottomed at the lightest force
+    ([500.0, 700.0, 650.0, 900.0], False),  # falls mid-way
+])
+def test_the_impedance_row_allows_flat_steps_only_once_the_skin_has_bottomed(z, monotonic):
+    from bench.verification.claims.electrodes import monotonic_until_bottomed
+
+    assert monotonic_until_bottomed(z, 1000.0) is monotonic
