@@ -83,6 +83,57 @@ def test_the_range_top_is_where_the_line_through_the_last_two_unclipped_points_r
     assert any(c >= 4093.5 for _, c in top.details["bead_C_and_mean_code"])  # the sweep reached the top
 
 
+# --- vibration --------------------------------------------------------------------------------------------------
+def test_the_vibration_rows_span_d_s_band_and_report_their_worst_frequency():
+    """"PAC RMS proportional to drive amplitude" is judged on its worst drive frequency, and both it and the
+    human-threshold row cover D's band up to its top, 900 Hz (the threshold row from 10 Hz, its lowest)."""
+    row = _row("vibration", "PAC RMS proportional to drive amplitude")
+    per = row.details["r_squared_by_frequency_Hz"]
+    assert len(per) >= 5 and min(per) <= 20.0 and max(per) == 900.0
+    assert row.measured == min(per.values()) and all(0.999 <= r <= 1.0 for r in per.values())
+    human = _row("vibration", "sensor beats human threshold at every frequency").details["ratio_by_frequency"]
+    assert min(human) == 10.0 and max(human) == 900.0
+
+
+def test_d_min_s_background_is_d_s_resting_band_as_the_noise_row_measures_it():
+    """D eq. 5.3's background: the typical (median) second's largest 2 Hz band at rest, D's 0.2 bits² (± 30 %, the
+    noise row's tolerance); the noise row measures the same quantity on other seconds, so the two agree (± 25 %)
+    where the loudest second's band (0.28 bits²) would not."""
+    background = _row("vibration", "d_min near the 330 Hz resonance").details["background_bits2"]
+    band = _row("noise", "largest 2 Hz band of a 1 s PAC spectrum at rest")
+    assert 0.14 <= background <= 0.26
+    assert background == pytest.approx(band.measured, rel=0.25)
+
+
+@pytest.mark.parametrize("mains_Hz", [50.0, 60.0, 51.0])
+def test_the_peak_search_grid_is_5_Hz_over_250_to_400_Hz_clear_of_mains_harmonics(mains_Hz):
+    """peak_search_frequencies_Hz: every 5 Hz from 250 to 400 Hz, both ends included, except those within 3 Hz of a
+    harmonic of the unit's own mains frequency (a hum line in the drive's 2 Hz band would read as response); at 51 Hz
+    the harmonics fall 1–2 Hz from grid points (255 Hz on 255, 306 beside 305, 357 between 355 and 360)."""
+    from emulator.params import SensorParams
+    from bench.verification.claims.vibration import peak_search_frequencies_Hz
+
+    grid = peak_search_frequencies_Hz(Bench(params=SensorParams().replace(mains_frequency_Hz=mains_Hz)))
+    harmonics = mains_Hz * np.arange(1, 10)
+    expected = [f for f in np.arange(250.0, 400.1, 5.0) if np.min(np.abs(f - harmonics)) > 3.0]
+    assert list(grid) == expected and len(grid) >= 25
+    assert set(np.arange(250.0, 400.1, 5.0)) - set(grid) == {f for f in np.arange(250.0, 400.1, 5.0)
+                                                             if np.min(np.abs(f - harmonics)) <= 3.0}
+    assert len(set(np.arange(250.0, 400.1, 5.0)) - set(grid)) == {50.0: 4, 60.0: 2, 51.0: 4}[mains_Hz]
+
+
+def test_a_sensitivity_peak_at_the_search_edge_fails_the_near_330_Hz_row():
+    """A unit resonating at 200 Hz (the parameter's lowest) peaks at the search grid's 250 Hz edge, outside
+    300–360 Hz: that is no peak "around 330 Hz", and the d_min row fails (NaN) rather than reporting the edge."""
+    from emulator.params import SensorParams
+    from bench.verification.claims.vibration import vibration_claims
+
+    rows = vibration_claims(Bench(params=SensorParams().replace(resonance_Hz=200.0)))
+    (near,) = [c for c in rows if c.name == "d_min near the 330 Hz resonance"]
+    assert near.details["peak_Hz"] < 300.0, near.details["peak_Hz"]
+    assert np.isnan(near.measured) and not near.passed
+
+
 # --- electrodes -------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("z, monotonic", [
     ([500.0, 800.0, 1000.0, 1000.0], True),  # rises, then holds at the bottomed impedance
@@ -96,3 +147,13 @@ def test_the_impedance_row_allows_flat_steps_only_once_the_skin_has_bottomed(z, 
     from bench.verification.claims.electrodes import monotonic_until_bottomed
 
     assert monotonic_until_bottomed(z, 1000.0) is monotonic
+
+
+def test_a_resting_code_at_or_below_the_series_impedance_is_refused_as_a_pressed_one_is():
+    """common_rest_codes needs fluid resistance left in the rest as in the pressed codes: a rest whose code implies
+    Z ≤ Z_series (code 4000: 237 Ω) is refused by name, not turned into a negative conductance."""
+    from bench.verification.claims.electrodes import common_rest_codes
+    from emulator.params import SensorParams
+
+    with pytest.raises(ValueError, match="series impedance"):
+        common_rest_codes(np.array([2900.0]), np.array([4000.0]), SensorParams())
