@@ -157,3 +157,16 @@ def test_a_resting_code_at_or_below_the_series_impedance_is_refused_as_a_pressed
 
     with pytest.raises(ValueError, match="series impedance"):
         common_rest_codes(np.array([2900.0]), np.array([4000.0]), SensorParams())
+
+
+@pytest.mark.parametrize("group, name", [
+    ("thermal", "TDC drop after 10 s: Al > glass > wood > foam"),
+    ("thermal", "TAC transient: Al > glass > wood > foam"),
+    ("electrodes", "pressed electrode's impedance rises with force"),
+])
+def test_a_yes_or_no_row_accepts_only_yes(group, name):
+    """Rows whose number is a truth value (1 ordered or monotonic, 0 not) accept exactly 1: a range reaching 0 would
+    pass the row whatever was measured, and its expected text ("strictly ordered", "monotonic ...") states no number
+    for the range check to compare."""
+    row = _row(group, name)
+    assert (row.low, row.high) == (1.0, 1.0) and row.measured in (0.0, 1.0) and row.passed
