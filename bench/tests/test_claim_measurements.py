@@ -170,3 +170,14 @@ def test_a_yes_or_no_row_accepts_only_yes(group, name):
     for the range check to compare."""
     row = _row(group, name)
     assert (row.low, row.high) == (1.0, 1.0) and row.measured in (0.0, 1.0) and row.passed
+
+
+def test_the_contact_estimate_is_the_change_weighted_centroid_of_the_four_electrodes_that_move_most():
+    """contact_estimate_mm: of six made electrodes on a line (x = 0..5 mm), those whose changes are largest in size
+    (−5, 3, 2, −1 codes at x = 1..4: a change's sign does not matter) weighted 5:3:2:1, the 0.1 and 0.5 code ones
+    left out: x = (5·1 + 3·2 + 2·3 + 1·4) / 11 mm."""
+    from bench.verification.claims.electrodes import contact_estimate_mm
+
+    positions = np.column_stack([np.arange(6.0), np.zeros(6), np.full(6, 7.0)])  # mm
+    estimate = contact_estimate_mm(np.array([0.1, -5.0, 3.0, 2.0, -1.0, 0.5]), positions)
+    assert estimate == pytest.approx([21.0 / 11.0, 0.0, 7.0], rel=1e-12)

@@ -64,6 +64,14 @@ def monotonic_until_bottomed(z_ohm, z_bottom_ohm: float, within: float = 0.02) -
     return bool(np.all((np.diff(z) > 0) | (bottomed[:-1] & bottomed[1:])) and not bottomed[0])
 
 
+def contact_estimate_mm(changes, positions_mm, k: int = 4) -> np.ndarray:
+    """Where a contact is (mm, as ``positions_mm``' rows): the centroid of the ``k`` electrodes whose ``changes``
+    (codes, either sign) are largest in size, each weighted by the size of its change."""
+    d = np.abs(np.asarray(changes, float))
+    top = np.argsort(d)[-k:]
+    return (d[top, None] * positions_mm[top]).sum(axis=0) / d[top].sum()
+
+
 @claim_group("electrodes")
 def electrode_claims(b: Bench) -> list[Claim]:
     """Monotonic impedance with force, the pressed electrode moves most, locality, localisation, PDC consistency."""
@@ -119,9 +127,7 @@ def electrode_claims(b: Bench) -> list[Claim]:
     errors = []
     for x_mm in (-11.0, -7.5, -4.0, -0.5, 2.0):
         for angle in (-50.0, -25.0, 0.0, 25.0, 50.0):
-            d = np.abs(change(Touch(0.2, 1.0, 0.3, 1.0, x_mm=x_mm, angle_deg=angle), 0.6))
-            top = np.argsort(d)[-4:]
-            estimate = (d[top, None] * pos[top]).sum(axis=0) / d[top].sum()
+            estimate = contact_estimate_mm(change(Touch(0.2, 1.0, 0.3, 1.0, x_mm=x_mm, angle_deg=angle), 0.6), pos)
             errors.append(float(np.linalg.norm(estimate - surface_point_mm(x_mm, angle))))
     locate_mm = float(np.median(errors))
     # the same contact's DC pressure: 11.5 mN per PDC bit
