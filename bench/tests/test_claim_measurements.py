@@ -181,3 +181,13 @@ def test_the_contact_estimate_is_the_change_weighted_centroid_of_the_four_electr
     positions = np.column_stack([np.arange(6.0), np.zeros(6), np.full(6, 7.0)])  # mm
     estimate = contact_estimate_mm(np.array([0.1, -5.0, 3.0, 2.0, -1.0, 0.5]), positions)
     assert estimate == pytest.approx([21.0 / 11.0, 0.0, 7.0], rel=1e-12)
+
+
+# --- sliding ----------------------------------------------------------------------------------------------------
+def test_the_slip_onset_rise_is_the_band_power_ratio_in_decibels():
+    """The slip-onset row is 10·log10 of the 30–200 Hz band's mean square (bits²) over the 100 ms after slip to that
+    over the stick phase: a power ratio in dB (20·log10 would double it and pass a 5 dB rise)."""
+    row = _row("sliding", "slip onset: 30–200 Hz PAC power, sliding over stick")
+    stick, slip = row.details["stick_band_bits2"], row.details["slip_band_bits2"]
+    assert 0.0 < stick < slip
+    assert row.measured == pytest.approx(10.0 * np.log10(slip / stick), rel=1e-12)

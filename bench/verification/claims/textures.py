@@ -79,7 +79,7 @@ def _slip_onset_claims(b: Bench, slide: Slide, t: np.ndarray, pac: np.ndarray) -
         stuck_force = tangential[stuck]
         ramp = ramp_ratio(stuck_force)
         detail = {"stage_moves_s": phase.stage_start_s, "last_stuck_s": phase.last_stuck_s,
-                  "slip_onset_s": phase.slip_onset_s,
+                  "slip_onset_s": phase.slip_onset_s, "stick_band_bits2": stick, "slip_band_bits2": slip,
                   "stick_over_hold_dB": 10 * np.log10(stick / power(slide.slide_start_s - 0.2, slide.slide_start_s)),
                   "steady_sliding_over_stick_dB": 10 * np.log10(
                       power(slide.slide_start_s + 0.3, slide.slide_end_s - 0.05) / stick),
