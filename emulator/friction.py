@@ -36,7 +36,9 @@ without slipping feels no ridge force, and a ridge deflected by a slip keeps pus
 direction a ridge over a positive limit loads elastically by ``k_j·|v_r|·dt`` (``k_j`` = the ridge's stiffness per
 length × its chord across the patch) up to ``L_j`` and, when ``L_j`` falls below ``F_j`` (a feature's crest passes),
 releases to it within the step; over a negative limit (a feature's back) it follows it.  The tangential force
-gains ``Σ F_j`` less its mean while the ridges move, ``µ_r·N`` (``µ_r``, :func:`ridge_friction_coefficients`: the
+gains ``Σ F_j`` less its mean ``µ_r·N`` in the direction of the last slip that moved the ridges, through the stick
+phases after it too (a deflected ridge keeps pushing while the skin sticks), nothing before the first such slip
+since touchdown (``µ_r``, :func:`ridge_friction_coefficients`, over the track the motion's patch crosses: the
 ridges' catch-and-release dissipates, a share of friction the texture's measured µ holds already, so the skin's
 stick-slip keeps that µ and the ridges add their fluctuation about their mean); rigid ridges (``k_j`` → ∞,
 ``µ_r`` = 0) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a
@@ -74,7 +76,9 @@ RIDGE_SLIP_FLOOR_M_PER_S = CATCH_VELOCITY_M_PER_S
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
 #: (m) and slope (1) where the finger touched down (a position-held finger's load changes with the height from
 #: there; the slope is kept for the record but not subtracted: see the slope force below)
-STATE_SIZE = 7  # ... whether the finger is touching (1.0) or not (0.0), and the skin's last velocity (m/s)
+#: ... whether the finger is touching (1.0) or not (0.0), the skin's last velocity (m/s), and the direction (±1) of
+#: the last slip that moved the resolved ridges (0.0 none since the finger touched down: see _slide_kernel)
+STATE_SIZE = 8
 
 # (the helpers below are inlined into slide_block at numba's IR level, ``inline="always"``: the same arithmetic,
 # about an eighth less time per sample than calls)
@@ -507,31 +511,34 @@ def _texture_series(n0, r, kn, modulus_eff, layer_m):
     return k_tex / (kn + k_tex)
 
 
-#: how far (m) :func:`ridge_friction_coefficients` slides the ridges, and the share of it (1) they load over first
-RIDGE_FRICTION_TRAVEL_M = 0.02
-RIDGE_FRICTION_SETTLE = 0.25
+#: :func:`ridge_friction_coefficients`' ridges load from rest over this stretch of the track (m) before the stretch
+#: their mean is taken over (model choice: a quarter of the 20 mm the estimate first slid over, the settling it
+#: allowed then; the ridges start undeflected and reach their steady catch and release within a few features)
+RIDGE_FRICTION_SETTLE_M = 5e-3
 
 
 @njit(cache=True)
 def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffness_per_length, radii, radius_1N, K,
-                                modulus_eff, layer_m, dx, travel_m):
+                                modulus_eff, layer_m, dx, settle_n, track_n):
     """The ridge-resolved ridges' share of the friction coefficient (1), per patch radius of ``radii`` (m): their
-    mean force per N of load over a slow forward slide of ``travel_m`` (m) from rest at the crest table's start
-    (:func:`_ridges_step` in slips of half a table step, at the load N = (r / ``radius_1N``)³ that makes radius r
-    and its texture series factor, averaged after the first :data:`RIDGE_FRICTION_SETTLE` of the travel).  A
-    texture's measured friction coefficient is a fingertip's, ridges included, so while the skin slips the step
-    adds the ridges' force less this mean times the load while the ridges move.  Compliant ridges dissipate what
-    they store at each release (Prandtl–Tomlinson), so this is positive on rough tracks and ~0 on smooth ones (a
-    numerically tiny negative mean is taken as 0); rigid ridges (``stiffness_per_length`` inf, the comb) or no gain
-    store nothing: 0.  The ridges move only with the slip, not with time, so the slide's speed
-    does not enter."""
+    mean force per N of load over a slow forward slide from rest at the crest table's index 0 (:func:`_ridges_step`
+    in slips of half a table step ``dx`` (m), at the load N = (r / ``radius_1N``)³ that makes radius r and its
+    texture series factor), averaged over the ``track_n`` table positions after the first ``settle_n`` (over which
+    the ridges load from rest): the caller makes the table's positions from ``settle_n`` on the track the motion's
+    patch crosses, so the mean is the one the ridges give there (the ridges' mean over 20 mm stretches of 60-grit
+    differs by ±12 % between stretches).  A texture's measured friction coefficient is a fingertip's, ridges
+    included, so the step adds the ridges' force less this mean times the load once a slip has loaded them.
+    Compliant ridges dissipate what they store at each release (Prandtl–Tomlinson), so this is positive on rough
+    tracks and ~0 on smooth ones (a numerically tiny negative mean is taken as 0); rigid ridges
+    (``stiffness_per_length`` inf, the comb) or no gain store nothing: 0.  The ridges move only with the slip, not
+    with time, so the slide's speed does not enter."""
     out = np.zeros(radii.size)
     if gain == 0.0 or math.isinf(stiffness_per_length) or stiffness_per_length == 0.0:
         return out
     shares, stiffness = np.zeros(offsets_m.size), np.zeros(offsets_m.size)
     slip = 0.5 * dx
-    steps = int(travel_m / slip)
-    settle = int(RIDGE_FRICTION_SETTLE * steps)
+    settle = 2 * settle_n  # (two slips a position)
+    steps = settle + max(2 * track_n, 1)
     kn_per_cbrt_n = hertz_stiffness_per_cbrt_N(K)
     for k in range(radii.size):
         r = radii[k]
@@ -579,7 +586,8 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
     ``fluctuation``: the friction coefficient's relative fluctuation ε (1) along the same positions;
     ``modulus_eff``: the texture's E/(1 − ν²) (Pa) and ``layer_m`` its layer thickness (m): soft textures yield
     in series with the skin, so their features reach the fluid attenuated by k_tex/(k_n + k_tex);
-    ``state``: x, z, p, touchdown height and slope, touching (updated in place); ``touchdown_reference``: a
+    ``state``: x, z, p, touchdown height and slope, touching, the skin's last velocity and the ridges' last slip
+    direction (updated in place); ``touchdown_reference``: a
     position-held finger (a rig) takes the touchdown spot as its reference, so its load changes with the height
     from there; a force-controlled finger (scripted slides) holds the commanded force on average, so heights are
     taken from the track's mean (zero).
@@ -593,6 +601,9 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
     h = dt / substeps
     touching = 1 if state[5] > 0.5 else 0
     u_prev = state[6]
+    # the direction (±1) of the last slip that moved the ridges, 0.0 before any since touchdown: their mean force
+    # µ_r·N is taken off in it from then on, stuck or slipping, since a ridge a slip deflected keeps pushing
+    ridge_direction = state[7]
     kn_per_cbrt_n = hertz_stiffness_per_cbrt_N(K)
     n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
     mu_ridges = 0.0
@@ -640,9 +651,10 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                 normal = 0.0
                 slope = 0.0
             if normal == 0.0:  # no load, no friction: the skin relaxes on its own, G(u) is linear
-                if resolved:  # the ridges leave the surface: unloaded, no release events
+                if resolved:  # the ridges leave the surface: unloaded, no release events, no slip remembered
                     ridge_state[:, :] = 0.0
                     ridge_force, ridge_mean = 0.0, 0.0
+                    ridge_direction = 0.0
                 u = -k_t * x / (k_t * h + c_t)
                 u_prev = u
                 z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)[0]
@@ -659,7 +671,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                     ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                              ridge_stiffness, p, dx, normal * series * ridge_gain,
                                                              0.0, 0.0, slip_floor)
-                    ridge_mean = 0.0
+                    ridge_mean = ridge_direction * mu_ridges * normal
                     releases += events
                     released += drop
                 x += 0.0
@@ -676,9 +688,11 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                 ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                          ridge_stiffness, p, dx, normal * series * ridge_gain,
                                                          catching, vr * h, slip_floor)
-                # (their mean while they move: a slip below the floor moves no ridge and takes no share)
-                moving = abs(vr * h) >= slip_floor
-                ridge_mean = math.copysign(mu_ridges * normal, vr) if moving else 0.0
+                # (their mean in the last moving slip's direction: a slip below the floor moves no ridge and keeps
+                # the direction; before the first, no ridge is deflected and nothing is taken off)
+                if abs(vr * h) >= slip_floor:
+                    ridge_direction = 1.0 if vr > 0.0 else -1.0
+                ridge_mean = ridge_direction * mu_ridges * normal
                 releases += events
                 released += drop
             x += u * h
@@ -688,13 +702,14 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
             vr_sum += vr
         out_normal[n] = normal
         out_tangential[n] = f_sum / substeps + normal * slope
-        if resolved:  # the ridges' force about its mean while slipping, which the texture's µ holds already
+        if resolved:  # the ridges' force about its mean, which the texture's µ holds already
             out_tangential[n] += ridge_force - ridge_mean
             out_releases[n] = releases
             out_released[n] = released
         out_slip_velocity[n] = vr_sum / substeps
         out_position[n] = p
     state[0], state[1], state[2], state[3], state[4], state[5], state[6] = x, z, p, h_ref, s_ref, float(touching), u_prev
+    state[7] = ridge_direction
 
 
 def new_state(position_m: float = 0.0) -> np.ndarray:

@@ -51,7 +51,7 @@ from emulator.effects import Block, Effect, effect_rng
 from emulator.fidelity import RIDGE_MODELS
 from emulator.params import SensorParams
 from emulator.skin import Skin
-from emulator.texture import Texture, friction_fluctuation, periodic_on_grid, random_profile
+from emulator.texture import SURFACE_LENGTH_M, Texture, friction_fluctuation, periodic_on_grid, random_profile
 
 POISSON_RATIO = 0.3  # of texture materials, for E/(1 − ν²) (model choice; 0.5 for rubbers changes it by 20 %)
 #: a commanded motion's load is not known when its contact is built (the rig sends its commands as it goes): its
@@ -640,24 +640,28 @@ class SlidingContact(Effect):
                                              c["reach"], dx_m)
             else:  # a ring around the finger, which starts at position 0
                 self._centre_ring(c, 0)
-            if ridges == "resolved":  # the ridges' share of the texture's friction, from the track's start
+            if ridges == "resolved":  # the ridges' share of the texture's friction over the track crossed
                 c["ridge_parts"][5] = self._ridge_friction(c)
             self._contacts.append(c)
 
     def _ridge_friction(self, c: dict) -> np.ndarray:
         """The ridge-resolved ridges' mean share of contact ``c``'s friction coefficient per patch radius (1:
-        :func:`friction.ridge_friction_coefficients` over :data:`friction.RIDGE_FRICTION_TRAVEL_M` of the track from
-        its start, on a crest table of its own, so however the contact holds its tables)."""
+        :func:`friction.ridge_friction_coefficients`) over the track its patch crosses: from the motion's start
+        position over its travel (a slide's distance, a commanded motion's ``max_travel_m``; at most the texture's
+        :data:`emulator.texture.SURFACE_LENGTH_M`, over which the surface repeats), the ridges loaded from rest over
+        :data:`friction.RIDGE_FRICTION_SETTLE_M` before it, on a crest table of its own (so however the contact
+        holds its tables)."""
         weights, shifts, offsets, gain, stiffness = c["ridge_parts"][:5]
-        p, m = self.params, c["motion"]
-        travel, tex = friction.RIDGE_FRICTION_TRAVEL_M, m.texture
-        n = int(np.ceil(travel / self.dx_m)) + 2 * c["reach"] + 2
-        crest = crest_table(tex, c["skin"], m.start_position_m, 0, n, n, c["reach"], self.dx_m)
+        p, m, dx = self.params, c["motion"], self.dx_m
+        settle_n = int(np.ceil(friction.RIDGE_FRICTION_SETTLE_M / dx))
+        track_n = max(int(np.ceil(min(m.max_travel_m, SURFACE_LENGTH_M) / dx)), 1)
+        n = settle_n + track_n + 2 * c["reach"] + 2
+        crest = crest_table(m.texture, c["skin"], m.start_position_m - settle_n * dx, 0, n, n, c["reach"], dx)
         return friction.ridge_friction_coefficients(crest, weights, shifts, offsets, float(gain), float(stiffness),
                                                     c["radii"], p.contact_radius_at_1N_m,
                                                     p.contact_stiffness_N_per_m1_5,
-                                                    tex.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
-                                                    self.dx_m, travel)
+                                                    m.texture.modulus_Pa / (1 - POISSON_RATIO**2), TEXTURE_LAYER_M,
+                                                    dx, settle_n, track_n)
 
     # --- the tables of a long track: a ring of tiles around the finger -------------------------------------------
     def _centre_ring(self, c: dict, tile: int) -> None:
