@@ -520,22 +520,24 @@ RIDGE_FRICTION_SETTLE_M = 5e-3
 @njit(cache=True)
 def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffness_per_length, radii, radius_1N, K,
                                 modulus_eff, layer_m, dx, settle_n, track_n):
-    """The ridge-resolved ridges' share of the friction coefficient (1), per patch radius of ``radii`` (m): their
-    mean force per N of load over a slow forward slide from rest at the crest table's index 0 (:func:`_ridges_step`
-    in slips of half a table step ``dx`` (m), at the load N = (r / ``radius_1N``)³ that makes radius r and its
-    texture series factor), averaged over the ``track_n`` table positions after the first ``settle_n`` (over which
-    the ridges load from rest): the caller makes the table's positions from ``settle_n`` on the track the motion's
-    patch crosses, so the mean is the one the ridges give there (the ridges' mean over 20 mm stretches of 60-grit
-    differs by ±12 % between stretches).  A texture's measured friction coefficient is a fingertip's, ridges
-    included, so the step adds the ridges' force less this mean times the load once a slip has loaded them.
-    Compliant ridges dissipate what they store at each release (Prandtl–Tomlinson), so this is positive on rough
-    tracks and ~0 on smooth ones (a numerically tiny negative mean is taken as 0); rigid ridges
-    (``stiffness_per_length`` inf, the comb) or no gain store nothing: 0.  The ridges move only with the slip, not
-    with time, so the slide's speed does not enter."""
+    """The ridge-resolved ridges' share of the friction coefficient (1), per patch radius of ``radii`` (m): what
+    their catch and release dissipates per N of load over a slow forward slide from rest at the crest table's index
+    0 (:func:`_ridges_step` in slips of half a table step ``dx`` (m), at the load N = (r / ``radius_1N``)³ that
+    makes radius r and its texture series factor): their mean force over the ``track_n`` table positions after the
+    first ``settle_n`` (over which they load from rest) less the rigid ridges' (the comb's slope force, whose mean
+    over a stretch is the climb between its ends: conservative, and the comb keeps it).  The caller makes the
+    table's positions from ``settle_n`` on the track the motion's patch crosses, so the share is the one the ridges
+    take there (their mean over 20 mm stretches of 60-grit differs by ±12 % between stretches).  A texture's
+    measured friction coefficient is a fingertip's, ridges included, so the step adds the ridges' force less this
+    share times the load once a slip has loaded them.  Compliant ridges dissipate what they store at each release
+    (Prandtl–Tomlinson), so this is positive on rough tracks and ~0 on smooth ones (a numerically tiny negative
+    share is taken as 0); rigid ridges (``stiffness_per_length`` inf, the comb) or no gain store nothing: 0.  The
+    ridges move only with the slip, not with time, so the slide's speed does not enter."""
     out = np.zeros(radii.size)
     if gain == 0.0 or math.isinf(stiffness_per_length) or stiffness_per_length == 0.0:
         return out
     shares, stiffness = np.zeros(offsets_m.size), np.zeros(offsets_m.size)
+    rigid = np.full(offsets_m.size, math.inf)
     slip = 0.5 * dx
     settle = 2 * settle_n  # (two slips a position)
     steps = settle + max(2 * track_n, 1)
@@ -548,6 +550,9 @@ def ridge_friction_coefficients(crest, weights, shifts, offsets_m, gain, stiffne
         _ridge_elements(weights, k, 0.0, offsets_m, r, stiffness_per_length, shares, stiffness)
         state = np.zeros((RIDGE_STATE_ROWS, offsets_m.size))
         total = 0.0
+        for n in range(settle, steps):  # the rigid ridges' force at their bases: no state, no settling
+            force, _, _ = _ridges_step(state, crest, shifts, shares, rigid, n * slip, dx, scale, 1.0, slip, 0.0)
+            total -= force
         for n in range(steps):
             force, _, _ = _ridges_step(state, crest, shifts, shares, stiffness, n * slip, dx, scale, 1.0, slip, 0.0)
             if n >= settle:
