@@ -633,13 +633,13 @@ def test_at_the_most_bristle_damping_allowed_a_hard_slide_keeps_its_friction_on_
 @pytest.mark.unit
 def test_the_reference_profiles_hardest_sand_slide_has_converged_in_its_step():
     """Rough sand at the scene limits' corner (20 N, 0.5 m/s; 60 µm RMS): the reference profile's mean friction is
-    that of half its friction step to 0.3 % (11.42 N both).  With a constant bristle damping it was not: 10.80 N
+    that of half its friction step to 0.3 % (11.76 N both).  With a constant bristle damping it was not: 10.80 N
     at the reference's 3.55 µs, 10.96 at 1.78 µs, 9.87 at the default grid's 114 µs (the damping term's spikes at
     each slip's onset grew as the step shrank), which made the fidelity table's 10.9 % between fast, default and
-    reference on this slide; what is left of that (11.48 N against 12.03) is the ridge-resolved fingerprint, not
-    the step (the reference grid with the effective comb gives 12.07): the ridges' subtracted mean µ_r, taken over
-    the track's first 20 mm (0.688 at 20 N), exceeds what they give over the slide (0.661), and they start from
-    rest below their mean (docs/experiment/texture_fidelity.md)."""
+    reference on this slide; what is left of that (11.76 N against 12.07 with the effective comb on the same grid,
+    −2.6 %) is the ridge-resolved fingerprint, not the step.  Until 2026-11-24 it was 11.48 N: the ridges'
+    subtracted mean µ_r was taken over the track's first 20 mm (0.688 at 20 N), above what they give over the
+    slide (0.661); it is now taken over the slide's own track (docs/experiment/texture_fidelity.md)."""
     import dataclasses
 
     from emulator.fidelity import PROFILES
