@@ -250,8 +250,8 @@ def test_caught_crests_add_friction_as_prandtl_tomlinson_predicts(force):
     positive share µ_r of the load (read under the base instead of where the held crest is, the ridges could only
     follow the limit down and it would be negative), and added on top of the texture's µ in a real slide it raises
     the steady friction over the rigid comb's by ≥ 5 % (measured +13 % at 0.5 N, +24 % at 1.26 N), by µ_r within
-    25 % (the quasi-static share over the slide's own track predicts the sliding one; measured 0.97 and 0.91 µ_r).  Rigid ridges dissipate
-    nothing."""
+    25 % (the quasi-static share over the slide's own track predicts the sliding one; measured 0.97 and 0.91 µ_r).
+    Rigid ridges dissipate nothing."""
     slide = _slide(force=force, distance=0.006)
     contact = SlidingContact([slide], SensorParams(), GRID.grid_Hz, GRID.sliding_dx_m, GRID.friction_substeps,
                              GRID.patch_radii, 3, ridges="resolved")
@@ -397,8 +397,8 @@ def test_a_deflected_ridge_keeps_pushing_when_the_stage_stops():
     """Consistency: the ridges' force is their elastic force Σ k_j·δ_j, which only a slip changes, so when the stage
     stops after a slide they keep pushing: the resolved tangential force stays above the comb's (their friction is
     the same; the comb's slope force went with the slip) by what the deflections hold less their mean share, tens of
-    mN (0.074 N: 0.125 N held, 0.051 N taken off), unchanged while nothing slips.  (Scaled by the catch factor, as it was, that force vanished with the slip and came back when
-    the stage moved on.)"""
+    mN (0.074 N: 0.125 N held, 0.051 N taken off), unchanged while nothing slips.  (Scaled by the catch factor, as
+    it was, that force vanished with the slip and came back when the stage moved on.)"""
     _, resolved = _run(_press_slide_stop(), end_s=0.6)
     _, comb = _run(_press_slide_stop(), "effective", end_s=0.6)
     t = np.arange(resolved["tangential_force_N"].size) / GRID.grid_Hz

@@ -63,8 +63,8 @@ def test_the_ridge_resolved_fingerprint_keeps_the_slides_mean_friction(force_N, 
     one slide's track differs from a longer track's).  Fast steady slides over two stretches of the track (whose
     first 20 mm are rougher and smoother than the slide's 10 cm) guard µ_r taken over the slide's own track; slow
     stick-slipping ones guard its subtraction while the skin sticks.  Measured: 20 N, 0.5 m/s −0.3 % (0.561·N
-    against 0.563·N), from 40 mm +2.2 %; 2 N, 1 cm/s −2.3 %; 20 N, 5 cm/s −2.0 % (0.572·N against 0.584·N); before
-    the mends −7.2 % (0.52·N), +13 %, +20 % (0.73·N, above µs = 0.7) and +59 % (0.93·N)."""
+    against 0.563·N), from 40 mm +2.2 %; 2 N, 1 cm/s −2.3 %; 20 N, 5 cm/s −2.0 % (0.572·N against 0.584·N);
+    before the mends −7.2 % (0.52·N), +13 %, +20 % (0.73·N, above µs = 0.7) and +59 % (0.93·N)."""
     reference = PROFILES["reference"]
     comb = dataclasses.replace(reference, name="reference, effective comb", ridges="effective")
     resolved, _ = _mean_friction_N(reference, force_N, velocity_m_per_s, distance_m, start_position_m)
