@@ -44,6 +44,7 @@ Gains (stage 1: 10, stage 2: 99.1), the ADC and the noise parameters stay nomina
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 from dataclasses import dataclass
 
@@ -165,8 +166,12 @@ def _named_seed(serial: str) -> int | None:
     return int(m.group(1)) if m else None
 
 
-def _shown(serial) -> str:
-    return repr(serial) if len(repr(serial)) <= 60 else repr(serial)[:50] + "…"
+def _shown(value) -> str:
+    """``value`` for a message as the bench's messages spell a value: text in double quotes (its quotes, backslashes
+    and control characters escaped as JSON escapes them, so ``BT x'y`` reads ``"BT x'y"``, never Python's
+    ``'abc'``), anything else as Python writes it; cut after 50 characters when longer than 60."""
+    text = json.dumps(value, ensure_ascii=False) if isinstance(value, str) else repr(value)
+    return text if len(text) <= 60 else text[:50] + "…"
 
 
 def check_serial(serial) -> None:
@@ -188,7 +193,7 @@ def unit(which=None, base: SensorParams | None = None) -> Unit:
     if isinstance(which, str) and which.isascii() and which.isdigit():  # ("²".isdigit(), but int("²") fails)
         which = int(which)
     if isinstance(which, bool) or not isinstance(which, (int, np.integer)) or not 0 <= which <= MAX_UNIT_SEED:
-        raise ValueError(f"unit {which!r}: a unit seed 0 to {MAX_UNIT_SEED}, \"{NOMINAL}\", or a serial number "
+        raise ValueError(f"unit {_shown(which)}: a unit seed 0 to {MAX_UNIT_SEED}, \"{NOMINAL}\", or a serial number "
                          f"starting with \"{SERIAL_PREFIX}\"")
     return Unit(serial_for(int(which)), draw_params(int(which), base), int(which))
 

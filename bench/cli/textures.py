@@ -44,13 +44,19 @@ def _periods(t) -> str:
 
 
 def _pick_group(text: str) -> str:
+    """The group ``--group text`` names: its name in any case, or the one group whose name holds ``text``; an empty or
+    unknown one is refused listing every group, an ambiguous one listing those it is part of, the value spelled as
+    the rest of the CLI spells values (``"glas"``, TOML's spelling; never Python's ``'glas'``)."""
     from bench.textures.library import GROUP_NAMES
+    from bench.tomlfile import spelled
 
     key = text.strip().casefold()
     exact = [g for g in GROUP_NAMES if g.casefold() == key]
     found = exact or [g for g in GROUP_NAMES if key and key in g.casefold()]
     if len(found) != 1:
-        raise ValueError(f"--group {text!r}: {'ambiguous' if found else 'unknown'}; groups: {', '.join(GROUP_NAMES)}")
+        if found:
+            raise ValueError(f"--group {spelled(text)}: ambiguous, part of {len(found)} groups: {', '.join(found)}")
+        raise ValueError(f"--group {spelled(text)}: {'unknown' if key else 'empty'}; groups: {', '.join(GROUP_NAMES)}")
     return found[0]
 
 
@@ -114,7 +120,7 @@ def _cmd_textures(a) -> int:
         print(strict_json(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
         return 0
     items = list(lib.values())
-    if a.group:
+    if a.group is not None:  # (an empty --group "" is refused, not taken as no filter)
         group = _pick_group(a.group)
         items = [t for t in items if t.group == group]
     if a.json:

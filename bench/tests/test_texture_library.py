@@ -323,7 +323,7 @@ def test_cli_group_and_show(capsys):
 def test_cli_errors_print_cleanly(tmp_path, capsys):
     assert cli.main(["textures", "--group", "plastics"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: --group 'plastics'") and "coarse weaves" in err and "Traceback" not in err
+    assert err.startswith('error: --group "plastics"') and "coarse weaves" in err and "Traceback" not in err
     assert cli.main(["textures", "--show", "velcro hook"]) == 2
     assert 'T10 "velcro hooks"' in capsys.readouterr().err
     bad = tmp_path / "bad.toml"

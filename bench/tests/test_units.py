@@ -284,11 +284,11 @@ def test_a_unit_given_in_an_odd_form_is_refused_in_one_line_naming_the_command_a
     ("error: serial ..."); a non-ASCII digit passed str.isdigit ("²" then failed in int(): "invalid unit_choice
     value"; "١٧" became unit 17, which a scene's unit = "١٧" refuses)."""
     for argv, line in ((("units", "--serial", "BTU9999999999999"), "biotac-bench units: error: argument --serial: "
-                        "serial 'BTU9999999999999': unit seed 9999999999999 is above 2147483647"),
+                        'serial "BTU9999999999999": unit seed 9999999999999 is above 2147483647'),
                        (("claims", "--unit", "²", "--only", "scales"), "biotac-bench claims: error: argument --unit: "
-                        "unit '²': a unit seed 0 to 2147483647"),
+                        'unit "²": a unit seed 0 to 2147483647'),
                        (("claims", "--unit", "١٧", "--only", "scales"), "biotac-bench claims: error: argument --unit: "
-                        "unit '١٧': a unit seed 0 to 2147483647")):
+                        'unit "١٧": a unit seed 0 to 2147483647')):
         r = run_cli(*argv)
         assert r.returncode == 2 and r.stderr.startswith(line) and r.stderr.count("\n") == 1, (argv, r.stderr)
     for odd in ("²", "١٧"):
