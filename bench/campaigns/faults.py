@@ -440,13 +440,51 @@ def _bus(results: list[dict]) -> str:
     return buses[0] if buses else "software"
 
 
-def write_junit(results: list[dict], path: Path) -> None:
+#: how a report's suite states when the campaign began: UTC, to the second, with no zone (the Ant JUnit schema's
+#: ``timestamp`` allows none; Jenkins and GitLab show it as the run's date)
+JUNIT_TIMESTAMP = "%Y-%m-%dT%H:%M:%S"
+
+
+def _when_and_where(started) -> dict[str, str]:
+    """A report suite's ``timestamp`` — when the campaign ``started`` (a datetime; None: now), in UTC as
+    :data:`JUNIT_TIMESTAMP` — and ``hostname``, the machine it ran on (``localhost`` when it has no name), as the
+    Ant JUnit schema asks and Jenkins and GitLab show them."""
+    import socket
+    from datetime import datetime, timezone
+
+    when = (started or datetime.now(timezone.utc)).astimezone(timezone.utc)
+    return {"timestamp": when.strftime(JUNIT_TIMESTAMP), "hostname": socket.gethostname() or "localhost"}
+
+
+def _write_suite(suite: ET.Element, path: Path) -> None:
+    """Close ``suite`` with the suite-level ``system-out`` and ``system-err`` the Ant schema requires after the test
+    cases (empty: each case carries its own), and write it whole or not at all."""
+    ET.SubElement(suite, "system-out")
+    ET.SubElement(suite, "system-err")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as tmp:
+        ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
+
+
+def case_output(r: dict) -> str:
+    """What a report's test case shows as its output (``system-out``), passed or failed: the fault, scene, seed, SPI
+    bus and firmware it ran, the verdict with what was expected (and the problem, for a failure) and its wall time."""
+    verdict = "PASS" if r["passed"] else f"FAIL: {r['problem']}"
+    return (f"fault {r['fault']} in scene {r['scene']}, seed {r['seed']}, over the {r.get('spi', 'software')} SPI bus, "
+            f"firmware {r.get('firmware', 'reference')}\nexpected: {r['expected']}\n{verdict}\n"
+            f"wall time {r['seconds']:.3f} s\n")
+
+
+def write_junit(results: list[dict], path: Path, started=None) -> None:
     """The JUnit XML report: one test case per result (the same names over either bus, so that two reports compare
-    case by case), the SPI bus they ran over as the suite's property ``spi``."""
+    case by case), each with its output (:func:`case_output`, a passing case's too: a CI page shows what it
+    checked), a failure carrying the problem; the suite says when the campaign ``started`` (a datetime; None: now)
+    and on which host (:func:`_when_and_where`), and the SPI bus and firmware as its properties ``spi`` and
+    ``firmware``."""
     suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results)),
                        failures=str(sum(not r["passed"] for r in results)),
                        errors="0", skipped="0",  # required by the JUnit schema CI tools validate against
-                       time=f"{sum(r['seconds'] for r in results):.3f}")
+                       time=f"{sum(r['seconds'] for r in results):.3f}", **_when_and_where(started))
     ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=_bus(results))
     firmwares = sorted({r.get("firmware", "reference") for r in results})
     ET.SubElement(suite.find("properties"), "property", name="firmware", value="; ".join(firmwares) or "reference")
@@ -455,21 +493,23 @@ def write_junit(results: list[dict], path: Path) -> None:
                              name=f"{r['scene']}[seed={r['seed']}]", time=f"{r['seconds']:.3f}")
         if not r["passed"]:
             ET.SubElement(case, "failure", message=r["problem"]).text = f"expected: {r['expected']}"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(path) as tmp:  # whole or not at all
-        ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
+            case.find("failure").set("type", "unexpected-reaction")  # (the Ant schema requires a type)
+        ET.SubElement(case, "system-out").text = case_output(r)
+    _write_suite(suite, path)
 
 
-def write_unfinished_junit(path: Path, why: str, spi: str = "software") -> None:
+def write_unfinished_junit(path: Path, why: str, spi: str = "software", started=None) -> None:
     """A JUnit report for a campaign that gave no results (stopped by Ctrl-C or SIGTERM, or unable to run): one
     error saying ``why``, so that a CI step that publishes the report whatever the exit status shows it, not an
-    earlier campaign's report left at the path; the SPI bus it was to run over as the suite's property ``spi``."""
-    suite = ET.Element("testsuite", name="biotac-fault-campaign", tests="1", failures="0", errors="1", time="0")
+    earlier campaign's report left at the path; the SPI bus it was to run over as the suite's property ``spi``, and
+    when it ``started`` (None: now) and on which host, as :func:`write_junit` says."""
+    suite = ET.Element("testsuite", name="biotac-fault-campaign", tests="1", failures="0", errors="1", skipped="0",
+                       time="0", **_when_and_where(started))
     ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=spi)
     case = ET.SubElement(suite, "testcase", classname="campaign", name="unfinished", time="0")
-    ET.SubElement(case, "error", message=why)
-    with atomic_write(path) as tmp:
-        ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
+    ET.SubElement(case, "error", message=why, type="unfinished")
+    ET.SubElement(case, "system-out").text = f"{why}\n"
+    _write_suite(suite, path)
 
 
 def summary(results: list[dict]) -> str:

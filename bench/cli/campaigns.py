@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from datetime import datetime, timezone
 from pathlib import Path
 
 from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
@@ -62,6 +63,7 @@ def _run_campaign(a, report: Path) -> int:
           f"{a.seeds} seed(s)) over the {a.spi} SPI bus on {spec.describe()}, firmware: "
           f"{campaign.firmware_name(firmware)}", file=sys.stderr)
     n_cases = len(a.faults) * len(a.scenes) * a.seeds
+    started = datetime.now(timezone.utc)  # the report's timestamp: when the campaign began
     try:
         results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet,
                                         spi=a.spi, firmware=firmware)
@@ -71,7 +73,7 @@ def _run_campaign(a, report: Path) -> int:
                else f"the campaign could not run: {e}")
         with signals_held():
             try:
-                campaign.write_unfinished_junit(report, f"{why}; no case's result is reported", a.spi)
+                campaign.write_unfinished_junit(report, f"{why}; no case's result is reported", a.spi, started)
             except OSError as oe:
                 print(f"error: --junit {a.junit}: the report saying so could not be written ({oe.strerror or oe})",
                       file=sys.stderr)
@@ -79,7 +81,7 @@ def _run_campaign(a, report: Path) -> int:
     print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
     try:
         with signals_held():  # a signal meanwhile: the report is finished first, then the stop
-            campaign.write_junit(results, report)
+            campaign.write_junit(results, report, started)
     except OSError as e:
         print(f"error: --junit {a.junit}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
               f"holds the results", file=sys.stderr)
@@ -106,11 +108,12 @@ def _over_the_rtl() -> str:
 CAMPAIGN_HELP = f"""\
 Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a pty and the host
 driver (one case: about 150 frames), and checks that the firmware and driver react as stated; prints a summary
-and writes JUnit XML (each case's wall time as its time).  Each case is an independent task on Dask (a LocalCluster
-on this machine's cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the verdicts are the
-same for any number of workers.  An --junit path where no file can be created is refused before anything runs;
-the summary is printed before the report is written; a second campaign naming a report a first one is still
-running for is refused (a lock file beside the report, removed at the end).  Exit status 1 if any case fails or
+and writes JUnit XML (each case's wall time as its time and what it ran and expected as its system-out; the
+suite's start, UTC, and host as its timestamp and hostname).  Each case is an independent task on Dask (a
+LocalCluster on this machine's cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the
+verdicts are the same for any number of workers.  An --junit path where no file can be created is refused
+before anything runs; the summary is printed before the report is written; a second campaign naming a report a
+first one is still running for is refused (a lock file beside the report, removed at the end).  Exit status 1 if any case fails or
 the report could not be written after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the
 campaign (exit 130; SIGTERM: 143) and its --junit report holds one error saying it was stopped, no case's result;
 a campaign that could not run (no scheduler at the address) leaves one error saying why.

@@ -112,7 +112,7 @@ def test_campaign_prints_its_summary_before_the_report_and_keeps_it_when_the_rep
                 "problem": None, "seconds": 0.5}]
     shown_before_writing = []
 
-    def write_fails(res, path):
+    def write_fails(res, path, started=None):
         shown_before_writing.append(capsys.readouterr().out)
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
