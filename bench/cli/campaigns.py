@@ -106,17 +106,17 @@ def _over_the_rtl() -> str:
 #: campaign's --help: its faults and scenes listed from :mod:`bench.campaigns.case_names` (light: the names the
 #: campaign's registries are built from)
 CAMPAIGN_HELP = f"""\
-Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a pty and the host
-driver (one case: about 150 frames), and checks that the firmware and driver react as stated; prints a summary
-and writes JUnit XML (each case's wall time as its time and what it ran and expected as its system-out; the
-suite's start, UTC, and host as its timestamp and hostname).  Each case is an independent task on Dask (a
-LocalCluster on this machine's cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the
-verdicts are the same for any number of workers.  An --junit path where no file can be created is refused
-before anything runs; the summary is printed before the report is written; a second campaign naming a report a
-first one is still running for is refused (a lock file beside the report, removed at the end).  Exit status 1 if any case fails or
-the report could not be written after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the
-campaign (exit 130; SIGTERM: 143) and its --junit report holds one error saying it was stopped, no case's result;
-a campaign that could not run (no scheduler at the address) leaves one error saying why.
+Runs every chosen fault in every chosen scene for each seed through the bridge firmware, a pty and the host driver
+(one case: about 150 frames), and checks that the firmware and driver react as stated; prints a summary and writes
+JUnit XML (each case's wall time as its time and what it ran and expected as its system-out; the suite's start, UTC,
+and host as its timestamp and hostname).  Each case is an independent task on Dask (a LocalCluster on this machine's
+cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the verdicts are the same for any number
+of workers.  An --junit path where no file can be created is refused before anything runs; the summary is printed
+before the report is written; a second campaign naming a report a first one is still running for is refused (a lock
+file beside the report, removed at the end).  Exit status 1 if any case fails or the report could not be written
+after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the campaign (exit 130; SIGTERM: 143)
+and its --junit report holds one error saying it was stopped, no case's result; a campaign that could not run (no
+scheduler at the address) leaves one error saying why.
 
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}
