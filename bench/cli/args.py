@@ -185,6 +185,15 @@ def _checked(check, text: str) -> None:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+def say_leftovers(folder):
+    """``folder`` (an opened :class:`~bench.reporting.outdir.OutFolder`), after saying on stderr which temporary files
+    an interrupted run had left in it and that opening it removed them (nothing when there were none)."""
+    note = folder.stale_note()
+    if note:
+        print(escaped(note), file=sys.stderr)
+    return folder
+
+
 def unit_serial(text: str) -> str:
     """A sensor unit's serial number ("BT...", emulator.units.seed_of_serial: also a seed it names in range)."""
     from emulator.units import seed_of_serial

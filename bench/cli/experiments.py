@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench.cli.args import add_cluster_arguments, any_seed, sigterm_like_ctrl_c, strict_json, whole
+from bench.cli.args import add_cluster_arguments, any_seed, say_leftovers, sigterm_like_ctrl_c, strict_json, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from emulator.fidelity import PROFILES
 
@@ -88,7 +88,8 @@ def _texture_numbers(text: str, library=None) -> list[int]:
 
 
 def _open_out(path, default, force: bool, kind, keep=()):
-    """The out folder, checked and locked: ``path`` (refused if it holds anything but ``keep``, unless ``force``)
+    """The out folder, checked and locked: ``path`` (refused if it holds anything but ``keep``, unless ``force``;
+    temporary files an interrupted run left are removed, :func:`say_leftovers` says which)
     or, without it, a fresh ``default[-n]`` (``default`` itself with ``force``) — as ``run`` does.  The earlier
     results ``force`` replaces stay until ``clear_earlier()``, called as the new ones are written: a sweep or an
     experiment that fails or is stopped first leaves them as they were."""
@@ -140,7 +141,7 @@ def _cmd_texture_sweep(a) -> int:
     ids = list(range(len(grid))) if a.movements == "all" else _int_list("--movements", a.movements, 0, len(grid) - 1)
     movements = [grid[i] for i in ids]
     kind = FolderKind("an earlier sweep's files", SWEEP_FILES)
-    folder = _open_out(a.out, "out/texture-sweep", a.force, kind)  # checked and locked before anything runs
+    folder = say_leftovers(_open_out(a.out, "out/texture-sweep", a.force, kind))  # checked, locked before anything
     try:
         out = folder.path
         tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin, movement_ids=ids,
@@ -279,7 +280,7 @@ def _cmd_explore(a) -> int:
     kind = FolderKind("the earlier results" + cache_kept, OUTPUT_FILES + ("ablations.md",), tuple(ABLATIONS))
     keep = () if a.no_cache or a.out is None else tuple(filter(None, [_entry_inside(a.cache, a.out)]))
     # both checked before anything runs; the out folder is locked while the experiment runs
-    folder = _open_out(a.out, f"out/explore/{spec.name}", a.force, kind, keep)
+    folder = say_leftovers(_open_out(a.out, f"out/explore/{spec.name}", a.force, kind, keep))
     # a cache folder this command makes, then refused or failed, is removed if empty (before --out is closed)
     with contextlib.closing(folder), made_folders() as made:
         out = folder.path

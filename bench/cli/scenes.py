@@ -137,7 +137,8 @@ problem with its field, value and allowed range.  Exit status 0 if every scene i
 
 
 def _cmd_run(a) -> int:
-    from bench.reporting.outdir import OutFolder
+    from bench.cli.args import say_leftovers
+    from bench.reporting.outdir import OutFolder, fresh_folder
     from bench.reporting.session import run_to_folder
     from bench.running.runner import check_buildable
     from bench.scenes.scene import load_scene
@@ -147,15 +148,15 @@ def _cmd_run(a) -> int:
                  if v is not None}
     scene = load_scene(a.scene, overrides)  # validated completely, then the out folder checked: both before running
     check_buildable(scene)
-    folder = OutFolder.open(a.out, force=a.force) if a.out is not None else None
+    folder = say_leftovers(OutFolder.open(a.out, force=a.force) if a.out is not None
+                           else fresh_folder(Path("out") / scene.name, force=a.force))
     res = None
     try:
         try:
             res = run_to_folder(scene, folder, force=a.force, csv=a.csv, npz=True if a.npz else None,
                                 plots=not a.no_plots, progress=not a.quiet, compression=a.compression)
         finally:
-            if folder is not None:
-                folder.close()
+            folder.close()
         _print_run(a, scene, res)
     except KeyboardInterrupt as e:  # (SIGTERM too: Terminated)
         if res is None:

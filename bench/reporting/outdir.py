@@ -7,6 +7,13 @@
   nothing, if anything in it is not the command's own (its :class:`FolderKind`: a run's :data:`RUN_FILES` and
   sensor<k>/ folders, a texture sweep's or an experiment's files and subfolders, leftover temporary files); only
   then does it remove the earlier files, ``record.json`` before everything else.
+* Temporary files an interrupted run left (:func:`stale_temps`: killed by SIGKILL, the OOM killer or a power cut,
+  with no chance to remove them) are never taken for results.  Once the lock is held no other command is writing
+  into the folder, so each regular file named as the command's own temporary files are (``.<one of its
+  files>.<mkstemp's 8 characters>.part``) is such a leftover; a symbolic link, a folder or any other name is not,
+  and stays the user's.  A folder that holds nothing else is used without ``--force``, the leftovers removed and
+  named (:meth:`OutFolder.stale_note`, which the commands print); a folder refused for holding more removes
+  nothing, and its refusal names them apart from the rest.
 * Every file is written under a temporary name in the folder itself (``.<name>.<random>.part``, created with
   ``O_EXCL``, so a symlink planted there is never followed) and renamed into place with ``os.replace``, which
   replaces a symlink rather than writing through it (:func:`atomic_write`).  A reader sees a file complete or not
@@ -26,6 +33,7 @@ import contextlib
 import errno
 import fcntl
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -89,9 +97,26 @@ class FolderGone(OutDirError):
 VANISHED_ATTEMPTS = 5
 
 
+#: the name of the folder's write probe (:meth:`OutFolder._probe_writable`, :func:`writable_folder`), a temporary
+#: file of every kind of folder
+PROBE = "probe"
+#: a temporary file's name (:func:`temp_path`): "." + the final name + "." + mkstemp's 8 random characters (lower
+#: case letters, digits, "_") + :data:`TEMP_SUFFIX`
+_TEMP_NAME = re.compile(r"\.(?P<final>.+)\.[a-z0-9_]{8}" + re.escape(TEMP_SUFFIX))
+
+
 def _is_temp(name: str, files=RUN_FILES) -> bool:
-    """Whether ``name`` is a temporary file (:func:`temp_path`) of one of ``files``."""
-    return name.startswith(".") and name.endswith(TEMP_SUFFIX) and any(name.startswith(f".{f}.") for f in files)
+    """Whether ``name`` is a temporary file (:func:`temp_path`) of one of ``files`` or of the write probe."""
+    m = _TEMP_NAME.fullmatch(name)
+    return m is not None and (m.group("final") in files or m.group("final") == PROBE)
+
+
+def stale_temps(folder: Path, kind: FolderKind = RUN) -> list[str]:
+    """The temporary files an interrupted run left in ``folder`` (sorted names): regular files (by lstat: never a
+    symbolic link, a folder, a FIFO) named as ``kind``'s own temporary files are (:func:`_is_temp`).  Leftovers only
+    while the caller holds the folder's lock: a command writing into the folder holds it too."""
+    return sorted(e.name for e in os.scandir(folder)
+                  if _is_temp(e.name, kind.files) and e.is_file(follow_symlinks=False))
 
 
 class OutFolder:
@@ -101,6 +126,8 @@ class OutFolder:
     def __init__(self, path: Path, lock_fd: int, flag: str = "--out", kind: FolderKind = RUN):
         self.path, self._lock_fd, self.flag, self.kind = path, lock_fd, flag, kind
         self._deferred_keep: tuple[str, ...] | None = None  # earlier results to remove at clear_earlier()
+        #: the temporary files an interrupted run had left, removed when this command opened the folder
+        self.stale: tuple[str, ...] = ()
         self._created = False  # made by this open (removed at close if it then holds nothing but the lock)
         #: every folder this open made (the folder itself and those above it), outermost first, with its identity
         #: (st_dev, st_ino): removed at close, innermost first, when the folder holds nothing but the lock
@@ -147,7 +174,7 @@ class OutFolder:
 
     def _probe_writable(self) -> None:
         try:
-            fd, name = tempfile.mkstemp(dir=self.path, prefix=".record.json.", suffix=TEMP_SUFFIX)
+            fd, name = tempfile.mkstemp(dir=self.path, prefix=f".{PROBE}.", suffix=TEMP_SUFFIX)
         except OSError as e:
             raise OutDirError(f"{self._where()}: the folder is not writable ({e.strerror or e})") from None
         os.close(fd)
@@ -165,12 +192,16 @@ class OutFolder:
         the folder and of each of ``kind``'s subfolders, symbolic links not followed) and remove nothing unless
         all of it is the command's own — then (``remove``; else at :meth:`clear_earlier`) remove ``record.json``
         first (never a stale "ok"), then the subfolders, then the rest."""
-        entries = sorted(e.name for e in os.scandir(self.path) if e.name != LOCK_NAME and e.name not in keep)
+        stale = stale_temps(self.path, self.kind)
+        entries = sorted(e.name for e in os.scandir(self.path)
+                         if e.name != LOCK_NAME and e.name not in keep and e.name not in stale)
         if not entries:
+            self._remove_stale(stale)
             return
         listed = ", ".join(entries[:6]) + (f", … ({len(entries)} entries)" if len(entries) > 6 else "")
         if not force:
-            raise OutDirError(f"{self._where()}: the folder is not empty ({listed}); pass --force to replace "
+            left = f"; it also holds {_stale_words(stale)}" if stale else ""
+            raise OutDirError(f"{self._where()}: the folder is not empty ({listed}){left}; pass --force to replace "
                               f"{self.kind.what}, or choose a fresh folder")
         files, subfolders, foreign = _own_entries(self.path, self.kind, keep)
         sub_files: dict[str, list[str]] = {}
@@ -181,6 +212,7 @@ class OutFolder:
         if foreign:
             raise OutDirError(f"{self._where()}: --force only replaces {self.kind.what}, and the folder also "
                               f"holds: {', '.join(foreign[:6])}" + (" …" if len(foreign) > 6 else ""))
+        self._remove_stale(stale)  # (never results: gone at once, even when the earlier results wait for clear_earlier)
         if not remove:
             self._deferred_keep = keep
             return
@@ -213,6 +245,17 @@ class OutFolder:
             except OSError as e:
                 raise OutDirError(f"{self._where()}: cannot remove {name} of an earlier run "
                                   f"({e.strerror or e})") from None
+
+    def _remove_stale(self, names: list[str]) -> None:
+        """Remove the temporary files an interrupted run left (:func:`stale_temps`), noting them in :attr:`stale`."""
+        self._remove(names)
+        self.stale += tuple(names)
+
+    def stale_note(self) -> str | None:
+        """What the command says when it removed temporary files an interrupted run had left (None if none)."""
+        if not self.stale:
+            return None
+        return f"note: {self._where()}: removed {_stale_words(list(self.stale))}"
 
     # ---- writing
     def temp_path(self, name: str) -> Path:
@@ -263,6 +306,13 @@ class OutFolder:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _stale_words(names: list[str]) -> str:
+    """Temporary files an interrupted run left, named for a message (at most 6)."""
+    shown = ", ".join(names[:6]) + (" …" if len(names) > 6 else "")
+    return (f"{len(names)} temporary file{'s' if len(names) > 1 else ''} that an interrupted run left, killed (or the "
+            f"machine down) before it could clean up, partial writes and never results: {shown}")
 
 
 def _lock(folder: Path, where: str, flag: str) -> int:
@@ -328,7 +378,7 @@ def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> 
         real_dir = e.is_dir(follow_symlinks=False)
         if e.name in kind.subfolders and real_dir:
             subfolders.append(e.name)
-        elif _is_temp(e.name, kind.files) and not real_dir:
+        elif _is_temp(e.name, kind.files) and e.is_file(follow_symlinks=False):
             files.append(e.name)
         elif e.name in kind.files and not real_dir:
             if kind.owns(folder / e.name):
@@ -342,12 +392,13 @@ def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> 
 
 def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN,
                  defer_clearing: bool = False) -> OutFolder:
-    """The default out folder: ``base`` if it is absent or empty, else ``base-2``, ``base-3``, … — the first
-    that is free and not locked by another run (with ``force``: ``base``, its earlier files replaced)."""
+    """The default out folder: ``base`` if it is absent or empty (or holds only the temporary files an interrupted
+    run left, which opening it removes), else ``base-2``, ``base-3``, … — the first that is free and not locked by
+    another run (with ``force``: ``base``, its earlier files replaced)."""
     last = None
     for n in range(1, 1000):
         p = base if n == 1 else base.with_name(f"{base.name}-{n}")
-        if not force and p.is_dir() and any(e.name != LOCK_NAME for e in os.scandir(p)):
+        if not force and p.is_dir() and _holds_more_than_leftovers(p, kind):
             continue
         try:
             return OutFolder.open(p, force=force, flag=flag, kind=kind, defer_clearing=defer_clearing)
@@ -357,6 +408,13 @@ def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: Fol
                 continue
             raise
     raise last or OutDirError(f"{flag}: no free folder next to {os.fspath(base)!r}")
+
+
+def _holds_more_than_leftovers(folder: Path, kind: FolderKind) -> bool:
+    """Whether ``folder`` holds anything but its lock and the temporary files an interrupted run left
+    (:func:`stale_temps`; :meth:`OutFolder.open` removes those, so a folder holding only them is free)."""
+    stale = stale_temps(folder, kind)
+    return any(e.name != LOCK_NAME and e.name not in stale for e in os.scandir(folder))
 
 
 def _make_folder(path, flag: str, made: list | None = None) -> Path:
@@ -448,7 +506,7 @@ def writable_folder(path, flag: str = "--out", made: list | None = None) -> Path
     new: list[tuple[Path, tuple[int, int]]] = []
     p = _make_folder(path, flag, new)
     try:
-        fd, name = tempfile.mkstemp(dir=p, prefix=".probe.", suffix=TEMP_SUFFIX)
+        fd, name = tempfile.mkstemp(dir=p, prefix=f".{PROBE}.", suffix=TEMP_SUFFIX)
         os.close(fd)
         os.unlink(name)
     except OSError as e:

@@ -76,7 +76,7 @@ def test_only_sensor2_to_max_sensors_folders_are_a_runs_own(tmp_path, foreign):
 def test_force_replaces_every_sensor_folder_of_an_earlier_run(tmp_path):
     out = tmp_path / "o"
     _earlier_several_sensor_run(out, sensors=range(2, MAX_SENSORS + 1))
-    (out / "sensor2" / ".codes.npz.x1y2.part").write_text("left over")
+    (out / "sensor2" / ".codes.npz.x1y2_3z4.part").write_text("left over")  # (mkstemp: 8 characters)
     OutFolder.open(out, force=True).close()
     assert [p.name for p in out.iterdir()] == [LOCK_NAME]
 
