@@ -147,3 +147,18 @@ def test_the_temporary_names_the_bench_makes_are_the_ones_it_recognises(tmp_path
     assert stale_temps(tmp_path) == sorted(p.name for p in made)
     for p in made:
         os.unlink(p)
+
+
+def test_a_texture_sweep_into_a_folder_an_interrupted_sweep_left_says_so(tmp_path, monkeypatch, capsys):
+    from bench.cli import main as cli
+    from bench.experiments import trials as T
+    from bench.tests.test_sweep_review import _in_process_sweep
+
+    monkeypatch.setattr(T, "sweep", _in_process_sweep)
+    out = tmp_path / "o"
+    _interrupted_run(out, (".trials.csv.0a1b2c3d.part",))
+    assert cli.main(["texture-sweep", "--textures", "902", "--movements", "21", "--trials", "1", "--quiet",
+                     "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"note: --out '{out}': removed 1 temporary file that an interrupted run left" in err, err
+    assert ".trials.csv.0a1b2c3d.part" in err and not stale_temps(out) and (out / "trials.csv").exists()
