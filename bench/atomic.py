@@ -2,12 +2,14 @@
 
 Every output of the bench (run folders, sweeps, experiments, stage caches, recordings) is written this way, so a
 reader never sees a half-written file under its final name, and an interruption leaves at most a temporary
-``.<name>.<random>.part`` (removed by :func:`atomic_write` on an error or a signal)."""
+``.<name>.<random>.part`` (removed by :func:`atomic_write` on an error or a signal).  The lock files that keep two
+commands from writing the same thing (:func:`take_lock`) live here too."""
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import os
 import stat
 import tempfile
@@ -166,3 +168,72 @@ def atomic_write(final):
         if isinstance(e, OSError) and (e.filename is None or tmp is None or e.filename == str(tmp)):
             e.filename = str(final)  # a full disk's error names no file (or a temporary one): say which failed
         raise
+
+
+class LockHeld(BlockingIOError):
+    """:func:`take_lock` found the lock held by another process: ``holder`` is the pid its lock file names ("" when
+    it names none)."""
+
+    def __init__(self, path, holder: str):
+        super().__init__(errno.EWOULDBLOCK, "held by another process", str(path))
+        self.holder = holder
+
+
+class LockFailed(OSError):
+    """The lock file opened, but ``flock`` on it failed (a file system without locks); errno and text as flock's."""
+
+
+def lock_holder(fd: int) -> str:
+    """The pid a lock file names (what :func:`take_lock` writes into it), "" if it names none or cannot be read."""
+    try:
+        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    except OSError:
+        return ""
+    return text if text.isdigit() else ""
+
+
+def take_lock(lock_path: Path, wait=None) -> int:
+    """Take the exclusive ``flock`` on ``lock_path`` (created, mode 0644, never followed if it is a symbolic link)
+    and write this process's pid into it; returns its file descriptor (closing it releases the lock).  Held by
+    another process: :class:`LockHeld` — or, with ``wait``, ``wait(holder)`` is called once (the holder's pid, "" if
+    unknown) and the lock waited for (a signal's KeyboardInterrupt ends the wait).  A lock file its holder removed
+    meanwhile (:func:`release_lock`) is taken afresh.  Opening the file raises as ``os.open`` does (ELOOP: a symbolic
+    link; ENOENT: the folder is gone); :class:`LockFailed` when ``flock`` fails otherwise."""
+    fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = lock_holder(fd)
+            if wait is None:
+                raise LockHeld(lock_path, holder) from None
+            wait(holder)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+    except LockHeld:
+        os.close(fd)
+        raise
+    except OSError as e:
+        os.close(fd)
+        raise LockFailed(e.errno, e.strerror, str(lock_path)) from None
+    except BaseException:
+        os.close(fd)
+        raise
+    try:
+        same = os.path.samestat(os.fstat(fd), os.lstat(lock_path))
+    except OSError:
+        same = False
+    if not same:  # its holder removed it (release_lock) between our open and our lock: take the new one
+        os.close(fd)
+        return take_lock(lock_path, wait)
+    with contextlib.suppress(OSError):  # the pid only names the holder to a process refused (a full disk: unnamed)
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+    return fd
+
+
+def release_lock(fd: int, lock_path: Path) -> None:
+    """Remove the lock file taken with :func:`take_lock` as ``fd``, then release it (a process that opened the old
+    file meanwhile finds it gone once it holds the lock, and takes a new one)."""
+    with contextlib.suppress(OSError):
+        os.unlink(lock_path)
+    os.close(fd)

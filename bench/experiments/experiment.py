@@ -24,6 +24,7 @@ Markdown report side by side with D's numbers.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -43,7 +44,7 @@ from bench.experiments.trials import (
     wear_per_movement,
 )
 from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
-from bench.atomic import atomic_write
+from bench.atomic import atomic_write, release_lock, take_lock
 from bench.rigs.texture_rig import movement_grid
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"
@@ -409,13 +410,25 @@ def _cached_rows(path: Path, tasks: list[TrialTask]) -> tuple[list[dict] | None,
 def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=None, progress: bool = True,
               client=None, log=print) -> list[dict]:
     """Run a stage's trials, or read them from the cache when the same tasks ran before with the same code (a
-    cache file that does not hold them is said and replaced; one that cannot be written, a full disk, is said)."""
-    from bench.textures.library import check_unchanged, read_library
+    cache file that does not hold them is said and replaced; one that cannot be written, a full disk, is said).
+    Explores sharing a cache run each stage once: the cache entry is locked while it is read or run and written
+    (:func:`_entry_lock`), and one that finds it locked waits, then reads what the other cached."""
+    from bench.textures.library import read_library
 
     libraries = [read_library(f) for f in sorted({t.library for t in tasks if t.library})]  # as read now
     key = hashlib.sha256((repr(tasks) + _code_digest() + "".join(lib.sha256 for lib in libraries)).encode()
                          ).hexdigest()[:16]
     path = None if cache_dir is None else cache_dir / f"{name}-{key}.json"
+    with _entry_lock(path, name, log):
+        return _stage_rows(name, tasks, path, libraries, spec, progress, client, log)
+
+
+def _stage_rows(name: str, tasks: list[TrialTask], path: Path | None, libraries, spec, progress: bool, client,
+                log) -> list[dict]:
+    """:func:`run_stage`'s work, its cache entry ``path`` (None: no cache) locked by the caller: the rows from the
+    entry, or the trials run (their ``libraries`` checked unchanged) and cached."""
+    from bench.textures.library import check_unchanged
+
     if path is not None and path.exists():
         rows, why = _cached_rows(path, tasks)
         if rows is not None:
@@ -433,6 +446,48 @@ def run_stage(name: str, tasks: list[TrialTask], cache_dir: Path | None, spec=No
             log(f"note: the {name} stage's trials could not be cached at {path} ({e.strerror or e}): the experiment "
                 f"goes on; a re-run runs them again")
     return rows
+
+
+#: how many times :func:`_entry_lock` makes the cache folder again when it vanishes as the lock is taken
+ENTRY_LOCK_ATTEMPTS = 5
+
+
+@contextlib.contextmanager
+def _entry_lock(path: Path | None, name: str, log):
+    """Hold the lock of the stage cache entry ``path`` (the file ``.<entry>.lock`` beside it, removed when released)
+    while the ``name`` stage is read from it or run and written into it.  An explore sharing the cache that wants
+    the same stage meanwhile says so through ``log`` and waits, then reads the trials this one cached (or runs them,
+    if this one ended without caching them): no trial runs twice, no entry is written twice.  The cache folder is
+    made again if it vanished (an explore that made it removes it, empty, as it fails).  Without a cache, or where
+    no lock can be taken (said: the cache folder is not writable, so no entry can be written either), nothing is
+    held."""
+    if path is None:
+        yield
+        return
+    lock_path = path.with_name(f".{path.name}.lock")
+
+    def waiting(holder: str) -> None:
+        who = f"another explore (pid {holder})" if holder else "another explore"
+        log(f"note: {who} sharing the cache {path.parent} is running the {name} stage's trials; waiting for it to "
+            f"finish, then reading them from the cache (or running them, if it ends without caching them)")
+
+    fd = None
+    for _ in range(ENTRY_LOCK_ATTEMPTS):
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd = take_lock(lock_path, wait=waiting)
+            break
+        except FileNotFoundError:  # the folder removed between making it and locking: made again
+            continue
+        except OSError as e:
+            log(f"note: the {name} stage's cache entry {path} could not be locked ({e.strerror or e}): an explore "
+                f"sharing the cache may run its trials too")
+            break
+    try:
+        yield
+    finally:
+        if fd is not None:
+            release_lock(fd, lock_path)
 
 
 def table_from_rows(rows: list[dict], movement_ids: dict | None = None) -> ex.TrialTable:

@@ -31,13 +31,13 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import fcntl
 import os
 import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from bench.atomic import LockFailed, LockHeld, release_lock, take_lock
 from bench.atomic import TEMP_SUFFIX, atomic_write, commit, read_head, temp_path  # noqa: F401 (re-exported)
 from bench.errors import BenchError
 from bench.scenes.limits import MAX_SENSORS
@@ -323,49 +323,26 @@ def _lock(folder: Path, where: str, flag: str) -> int:
 
 
 def lock_exclusively(lock_path: Path, where: str, busy, holder_is: str = "another run") -> int:
-    """Take the exclusive, non-blocking ``flock`` on ``lock_path`` (created, never followed if it is a symbolic
-    link) and write this process's pid into it; returns its file descriptor (closing it releases the lock), or
-    raises :class:`OutDirError` naming ``where`` — ``busy(who)`` says what to do when another process holds it
-    (``who``: ``holder_is`` and its pid)."""
+    """Take the exclusive, non-blocking lock on ``lock_path`` (:func:`~bench.atomic.take_lock`: created, never
+    followed if it is a symbolic link, this process's pid written into it); returns its file descriptor (closing it
+    releases the lock), or raises :class:`OutDirError` naming ``where`` — ``busy(who)`` says what to do when another
+    process holds it (``who``: ``holder_is`` and its pid)."""
     try:
-        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+        return take_lock(lock_path)
+    except LockHeld as e:
+        who = f"{holder_is} (pid {e.holder})" if e.holder else holder_is
+        raise OutDirError(f"{where}: {busy(who)}") from None
+    except LockFailed as e:
+        raise OutDirError(f"{where}: cannot lock {lock_path} ({e.strerror or e})") from None
     except OSError as e:
         if e.errno == errno.ELOOP:
             raise OutDirError(f"{where}: {lock_path.name} is a symbolic link; remove it") from None
         gone = FolderGone if e.errno == errno.ENOENT else OutDirError  # (OutFolder.open makes it again)
         raise gone(f"{where}: {lock_path.parent} is not writable ({e.strerror or e})") from None
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        try:
-            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
-        except OSError:
-            holder = ""
-        os.close(fd)
-        who = f"{holder_is} (pid {holder})" if holder.isdigit() else holder_is
-        raise OutDirError(f"{where}: {busy(who)}") from None
-    except OSError as e:
-        os.close(fd)
-        raise OutDirError(f"{where}: cannot lock {lock_path} ({e.strerror or e})") from None
-    try:
-        same = os.path.samestat(os.fstat(fd), os.lstat(lock_path))
-    except OSError:
-        same = False
-    if not same:  # its holder removed it (release_and_remove) between our open and our lock: take the new one
-        os.close(fd)
-        return lock_exclusively(lock_path, where, busy, holder_is)
-    with contextlib.suppress(OSError):  # the pid only names the holder to a process refused (a full disk: unnamed)
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-    return fd
 
 
-def release_and_remove(fd: int, lock_path: Path) -> None:
-    """Remove the lock file taken with :func:`lock_exclusively` as ``fd``, then release it (a process that opened
-    the old file meanwhile finds it gone once it holds the lock, and takes a new one)."""
-    with contextlib.suppress(OSError):
-        os.unlink(lock_path)
-    os.close(fd)
+#: remove a lock file taken with :func:`lock_exclusively`, then release it (:func:`~bench.atomic.release_lock`)
+release_and_remove = release_lock
 
 
 def _own_entries(folder: Path, kind: FolderKind, keep: tuple[str, ...] = ()) -> tuple[list[str], list[str], list[str]]:
