@@ -18,6 +18,7 @@ worker on another machine builds its own (the build is atomic, also between thre
 
 from __future__ import annotations
 
+import re
 import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
@@ -456,11 +457,28 @@ def _when_and_where(started) -> dict[str, str]:
     return {"timestamp": when.strftime(JUNIT_TIMESTAMP), "hostname": socket.gethostname() or "localhost"}
 
 
+#: the characters XML 1.0 cannot hold, escaped or not (its ``Char`` production: tab, line feed and carriage return
+#: are the only controls it allows; lone surrogates and U+FFFE, U+FFFF are none)
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+
+
+def xml_text(text: str) -> str:
+    """``text`` with each character XML 1.0 cannot hold spelled out as Python spells it (ESC: ``\\x1b``), so a
+    report carrying it stays well-formed and still shows it."""
+    return _NOT_XML.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"), text)
+
+
 def _write_suite(suite: ET.Element, path: Path) -> None:
     """Close ``suite`` with the suite-level ``system-out`` and ``system-err`` the Ant schema requires after the test
-    cases (empty: each case carries its own), and write it whole or not at all."""
+    cases (empty: each case carries its own), and write it whole or not at all, every text and attribute value
+    made XML-safe (:func:`xml_text`: a problem, a path or a reason may hold control characters)."""
     ET.SubElement(suite, "system-out")
     ET.SubElement(suite, "system-err")
+    for element in suite.iter():
+        if element.text:
+            element.text = xml_text(element.text)
+        for key, value in element.attrib.items():
+            element.set(key, xml_text(value))
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_write(path) as tmp:
         ET.ElementTree(suite).write(tmp, encoding="utf-8", xml_declaration=True)
