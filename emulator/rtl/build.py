@@ -99,7 +99,9 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
         finally:
             for _, write_end, _ in relays:
                 os.close(write_end)
-        copiers = [threading.Thread(target=_copy, args=(read_end, fd), daemon=True) for read_end, _, fd in relays]
+        ended = threading.Event()  # the step has ended: its copiers copy what it left in the pipes, then stop
+        copiers = [threading.Thread(target=_copy, args=(read_end, fd, ended), daemon=True)
+                   for read_end, _, fd in relays]
         for c in copiers:
             c.start()
         try:
@@ -112,8 +114,9 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
                 os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
             raise
-        finally:
-            for c in copiers:  # (each ends as the last writer of its pipe ends)
+        finally:  # (not when the last writer of its pipe ends: a process the step left behind may hold it)
+            ended.set()
+            for c in copiers:
                 c.join()
     finally:
         for read_end, _, _ in relays:
@@ -126,10 +129,33 @@ def run_build(cmd, *, capture_output: bool = False, text: bool = False, env: dic
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
-def _copy(read_end: int, fd: int) -> None:
+#: how often (s) a copier of a step's output looks whether the step has ended, and how long (s) after that it goes on
+#: copying what is left in the pipe (a process the step left behind that keeps writing is cut off then)
+RELAY_POLL_S = 0.05
+RELAY_DRAIN_S = 1.0
+
+
+def _copy(read_end: int, fd: int, ended) -> None:
     """Copy what a step writes into a pipe (``read_end``) to this process's ``fd`` as it comes, until the pipe ends
-    (what cannot be written — a closed terminal, a full disk — is dropped: the step must not stall on it)."""
-    while chunk := os.read(read_end, 65536):
+    or, once the step has ``ended`` (a :class:`threading.Event`), until the pipe holds nothing more (at most
+    :data:`RELAY_DRAIN_S` s more): a process the step started and left behind may keep the pipe open for ever.
+    What cannot be written — a closed terminal, a full disk — is dropped: the step must not stall on it."""
+    import select
+    import time
+
+    drain_end = None
+    while True:
+        if ended.is_set() and drain_end is None:
+            drain_end = time.monotonic() + RELAY_DRAIN_S
+        if not select.select([read_end], [], [], RELAY_POLL_S)[0]:
+            if drain_end is not None:
+                return
+            continue
+        if drain_end is not None and time.monotonic() > drain_end:
+            return
+        chunk = os.read(read_end, 65536)
+        if not chunk:
+            return
         with contextlib.suppress(OSError):
             while chunk:
                 chunk = chunk[os.write(fd, chunk):]

@@ -3,6 +3,7 @@ terminal's foreground group: under ``stty tostop`` a process of a background gro
 stopped (SIGTTOU), and the build waited for it for ever.  Its output goes through a pipe and this process writes it:
 the step says what it says and ends, also on a terminal with ``tostop``."""
 
+import contextlib
 import os
 import re
 import select
@@ -53,3 +54,21 @@ def test_a_build_step_on_a_terminal_with_tostop_is_not_stopped_and_its_output_is
     text = out.decode(errors="replace")
     assert "returncode 0" in text, f"the build step never ended (stopped writing to the terminal?): {text!r}"
     assert "step out" in text and "step err" in text, text
+
+
+def test_a_step_that_leaves_a_background_process_holding_its_output_ends_with_the_step(capfd):
+    """The copying ends when the step ends, not when the last holder of its output does: a step leaving a process
+    behind that keeps the output open (a daemon it started) returns at once (< 3 s wall, against the helper's
+    20 s), what the step wrote before it ended still shown."""
+    from emulator.rtl.build import run_build
+
+    t0 = time.monotonic()
+    r = run_build(["sh", "-c", "sleep 20 & echo helper $!; echo step done"])
+    took = time.monotonic() - t0
+    out = capfd.readouterr().out
+    helper = re.search(r"helper (\d+)", out)
+    if helper:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(int(helper.group(1)), 9)
+    assert r.returncode == 0 and "step done" in out and helper, out
+    assert took < 3.0, f"run_build waited {took:.1f} s for a process the step left behind"
