@@ -5901,6 +5901,21 @@ CATALOGUE += [
            '            fd = take_lock(lock_path)\n',
            ('bench/tests/test_shared_stage_cache.py',),
            'an explore finding the stage cache entry locked does not wait for it: both run the trials'),
+    Mutant('junit-control-characters-raw', 'campaign', 'bench/campaigns/faults.py',
+           '    for element in suite.iter():\n        if element.text:\n',
+           '    for element in ():\n        if element.text:\n',
+           ('bench/tests/test_junit_xml_chars.py::test_a_case_with_control_characters_gives_a_parseable_report_that_names_them', 'bench/tests/test_junit_xml_chars.py::test_an_unfinished_campaign_with_control_characters_in_its_reason_gives_a_parseable_report'),
+           'text holding characters XML 1.0 cannot hold (ESC, NUL) is written raw: the JUnit report is not well-formed'),
+    Mutant('lock-by-existence', 'campaign', 'bench/atomic.py',
+           '    fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)\n',
+           '    fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)\n',
+           ('bench/tests/test_lock_killed_holder.py::test_a_killed_holders_lock_is_taken_at_once_and_a_live_one_is_named',),
+           'a lock file left by a SIGKILLed holder counts as held (lock by existence): the next command is refused or waits'),
+    Mutant('build-relay-waits-for-leftover-writers', 'rtl', 'emulator/rtl/build.py',
+           '            if drain_end is not None:\n                return\n            continue\n',
+           '            continue\n',
+           ('emulator/tests/test_rtl_build_tty.py::test_a_step_that_leaves_a_background_process_holding_its_output_ends_with_the_step',),
+           "run_build keeps copying until every holder of the step's output pipe exits: a process the step left behind holds the build (and a Ctrl-C) until it ends"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
