@@ -293,14 +293,21 @@ class CoSim:
         self._guarded_hal = BtHal()
         self._guard.bt_guard_wrap(C.byref(self.hal), C.byref(self._guarded_hal))
         self._step = C.cast(self.lib.bt_step, C.c_void_p)
+        self._stop_requested = False  # (set by stop_step: run raises before its next step)
         self.lib.bt_init(self.state, C.byref(self._guarded_hal))
         self._raise()
 
     def stop_step(self, thread_id: int) -> None:
         """Stop the bt_step that thread ``thread_id`` (its ``threading`` ident) runs — a watchdog giving up on a
         hung firmware: the step ends (as it returns from a HAL call, if inside one) and :meth:`run` raises
-        :class:`FirmwareError`.  The firmware's state is not to be used after: its loop was left midway."""
-        signal.pthread_kill(thread_id, GUARD_SIGNAL)
+        :class:`FirmwareError`.  The firmware's state is not to be used after: its loop was left midway.  The request
+        is also kept, so that a signal arriving between two steps (which has no step to leave) still ends :meth:`run`
+        before its next step; a thread that has already ended is no error."""
+        self._stop_requested = True
+        try:
+            signal.pthread_kill(thread_id, GUARD_SIGNAL)
+        except ProcessLookupError:  # (the thread ended between the caller's look and the signal)
+            pass
 
     def set_pattern(self, channels) -> None:
         """Set the firmware's sampling pattern directly (as its PATTERN command would, without a reply on the
@@ -331,7 +338,7 @@ class CoSim:
         wall0, virt0 = time.perf_counter(), self.board.t
         steps = 0
         while self.board.t < end:
-            if self._guard.bt_guard_step(self._step, self.state):
+            if self._stop_requested or self._guard.bt_guard_step(self._step, self.state):
                 raise FirmwareError(f"the firmware's bt_step was stopped by the bench's watchdog at virtual time "
                                     f"{self.board.t:.6f} s (it hung)")
             self._raise()

@@ -5916,6 +5916,11 @@ CATALOGUE += [
            '            continue\n',
            ('emulator/tests/test_rtl_build_tty.py::test_a_step_that_leaves_a_background_process_holding_its_output_ends_with_the_step',),
            "run_build keeps copying until every holder of the step's output pipe exits: a process the step left behind holds the build (and a Ctrl-C) until it ends"),
+    Mutant('watchdog-request-lost-between-steps', 'host', 'bench/hosts/cosim.py',
+           '            if self._stop_requested or self._guard.bt_guard_step(self._step, self.state):',
+           '            if self._guard.bt_guard_step(self._step, self.state):',
+           ('firmware_tests/tests/test_own_firmware.py::test_a_stop_requested_between_two_steps_still_ends_run',),
+           "a watchdog's signal that arrives between two steps is lost: run carries on with a firmware the bench gave up on"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -187,3 +187,22 @@ def test_the_bridge_command_runs_your_firmware_and_refuses_what_is_not_one(tmp_p
     bare = compile_c([empty], tmp_path / "libempty.so", flags=("-shared", "-fPIC"))
     assert main(["bridge", "--firmware", str(bare), "--fast", "--seconds", "0.3"]) == 2
     assert "does not export bt_bridge_size, bt_init, bt_step, bt_set_pattern" in capsys.readouterr().err
+
+
+def test_a_stop_requested_between_two_steps_still_ends_run():
+    """The watchdog's signal can arrive while no bt_step runs (between two of run's passes, or before the first):
+    the step guard then has no loop to leave and ignores it. The request is kept, so run still raises before its
+    next step instead of carrying on."""
+    import threading
+
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
+
+    board = VirtualBoard(default_sensors(1))
+    try:
+        sim = CoSim(board)
+        sim.run(0.002)  # runs as usual
+        sim.stop_step(threading.get_ident())  # delivered here and now: no step is running to be left
+        with pytest.raises(FirmwareError, match="stopped by the bench's watchdog"):
+            sim.run(0.002)
+    finally:
+        board.bus.close()
