@@ -13,6 +13,7 @@ import fcntl
 import os
 import stat
 import tempfile
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -192,6 +193,11 @@ def lock_holder(fd: int) -> str:
     return text if text.isdigit() else ""
 
 
+#: how long (s) a process refused a lock gives its holder to write its pid into the lock file, which it does just
+#: after taking the lock (the refusal or the wait then names it)
+HOLDER_PID_WAIT_S = 0.5
+
+
 def take_lock(lock_path: Path, wait=None) -> int:
     """Take the exclusive ``flock`` on ``lock_path`` (created, mode 0644, never followed if it is a symbolic link)
     and write this process's pid into it; returns its file descriptor (closing it releases the lock).  Held by
@@ -205,6 +211,10 @@ def take_lock(lock_path: Path, wait=None) -> int:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = lock_holder(fd)
+            named_by = time.monotonic() + HOLDER_PID_WAIT_S
+            while not holder and time.monotonic() < named_by:  # (its holder writes its pid just after locking)
+                time.sleep(0.002)
+                holder = lock_holder(fd)
             if wait is None:
                 raise LockHeld(lock_path, holder) from None
             wait(holder)

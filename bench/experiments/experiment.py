@@ -458,9 +458,9 @@ def _entry_lock(path: Path | None, name: str, log):
     while the ``name`` stage is read from it or run and written into it.  An explore sharing the cache that wants
     the same stage meanwhile says so through ``log`` and waits, then reads the trials this one cached (or runs them,
     if this one ended without caching them): no trial runs twice, no entry is written twice.  The cache folder is
-    made again if it vanished (an explore that made it removes it, empty, as it fails).  Without a cache, or where
-    no lock can be taken (said: the cache folder is not writable, so no entry can be written either), nothing is
-    held."""
+    made again if it vanished (an explore that made it removes it, empty, as it fails — as this does: a cache folder
+    this call made is removed again, if empty, when the stage fails).  Without a cache, or where no lock can be
+    taken (said: the cache folder is not writable, so no entry can be written either), nothing is held."""
     if path is None:
         yield
         return
@@ -471,7 +471,7 @@ def _entry_lock(path: Path | None, name: str, log):
         log(f"note: {who} sharing the cache {path.parent} is running the {name} stage's trials; waiting for it to "
             f"finish, then reading them from the cache (or running them, if it ends without caching them)")
 
-    fd = None
+    fd, made = None, not path.parent.exists()
     for _ in range(ENTRY_LOCK_ATTEMPTS):
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -485,6 +485,14 @@ def _entry_lock(path: Path | None, name: str, log):
             break
     try:
         yield
+    except BaseException:
+        if fd is not None:
+            release_lock(fd, lock_path)
+            fd = None
+        if made:  # (nothing cached: the folder this call made goes, unless another explore's entry is in it)
+            with contextlib.suppress(OSError):
+                path.parent.rmdir()
+        raise
     finally:
         if fd is not None:
             release_lock(fd, lock_path)

@@ -5881,11 +5881,6 @@ CATALOGUE += [
            '    folder = _open_out(a.out, "out/texture-sweep", a.force, kind)',
            ('bench/tests/test_interrupted_leftovers.py::test_a_texture_sweep_into_a_folder_an_interrupted_sweep_left_says_so',),
            "texture-sweep removes an interrupted sweep's leftovers without a note on stderr"),
-    Mutant('shared-cache-lock-file-left', 'experiment', 'bench/experiments/experiment.py',
-           '            release_lock(fd, lock_path)\n',
-           '            release_lock(fd, lock_path.with_name("elsewhere"))\n',
-           ('bench/tests/test_shared_stage_cache.py',),
-           "the stage cache entry's lock file stays in the cache after the stage"),
     Mutant('fresh-cache-said-unreadable', 'experiment', 'bench/experiments/experiment.py',
            '    if path is not None and path.exists():\n        rows, why = _cached_rows(path, tasks)\n',
            '    if path is not None:\n        rows, why = _cached_rows(path, tasks)\n',
@@ -5921,6 +5916,16 @@ CATALOGUE += [
            '            if self._guard.bt_guard_step(self._step, self.state):',
            ('firmware_tests/tests/test_own_firmware.py::test_a_stop_requested_between_two_steps_still_ends_run',),
            "a watchdog's signal that arrives between two steps is lost: run carries on with a firmware the bench gave up on"),
+    Mutant('stage-cache-folder-kept-after-failure', 'experiment', 'bench/experiments/experiment.py',
+           "        if made:  # (nothing cached: the folder this call made goes, unless another explore's entry is in it)\n",
+           "        if False:  # (nothing cached: the folder this call made goes, unless another explore's entry is in it)\n",
+           ('bench/tests/test_scene_library.py::test_a_library_edited_while_the_trials_run_is_refused_not_stated_or_cached',),
+           'a stage that fails leaves behind the empty cache folder it made (the entry lock makes the folder before the stage runs)'),
+    Mutant('shared-cache-lock-file-left', 'experiment', 'bench/experiments/experiment.py',
+           '    finally:\n        if fd is not None:\n            release_lock(fd, lock_path)\n',
+           '    finally:\n        if fd is not None:\n            release_lock(fd, lock_path.with_name("elsewhere"))\n',
+           ('bench/tests/test_shared_stage_cache.py',),
+           "the stage cache entry's lock file stays in the cache after the stage"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
