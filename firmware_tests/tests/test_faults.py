@@ -49,9 +49,11 @@ def test_parity_errors_are_flagged_never_passed_as_data():
 def test_miso_stuck_high_looks_like_an_absent_sensor_and_is_dropped():
     """MISO stuck high reads 0xFFFF, an idle line: after two whole frames of it (bt_bridge.c LOST_AFTER_FRAMES,
     every slot flagged, its 0xFF bytes failing odd parity) the firmware drops the sensor at once, not at the next
-    once-a-second search, and never finds it again (its serial number reads 0xFF); sensor 1 streams on clean."""
+    once-a-second search, and never finds it again (its serial number reads 0xFF); sensor 1 streams on clean.
+    (200 frames, 2 s: the fault comes 0.3 s after the test reads the virtual time, which can be a few tenths of a
+    second after streaming began, and over 100 frames, a whole search period, must follow the drop.)"""
     with FirmwareBench(2) as fb:
-        drv, frames, status = run(fb, 150, [(0.3, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))])
+        drv, frames, status = run(fb, 200, [(0.3, lambda b: setattr(b.bus.ports[2], "faults", Faults(miso_stuck=1)))])
     both = [f for f in frames if f.sensor_mask == 0b11]
     stuck = [f for f in both if (f.status[:, 1] != 0).any()]
     assert frames[0].sensor_mask == 0b11 and frames[-1].sensor_mask == 0b01 and len(frames) - len(both) > 100
