@@ -483,19 +483,16 @@ def _entry_lock(path: Path | None, name: str, log):
             log(f"note: the {name} stage's cache entry {path} could not be locked ({e.strerror or e}): an explore "
                 f"sharing the cache may run its trials too")
             break
+    done = False
     try:
         yield
-    except BaseException:
-        if fd is not None:
-            release_lock(fd, lock_path)
-            fd = None
-        if made:  # (nothing cached: the folder this call made goes, unless another explore's entry is in it)
-            with contextlib.suppress(OSError):
-                path.parent.rmdir()
-        raise
+        done = True
     finally:
         if fd is not None:
             release_lock(fd, lock_path)
+        if made and not done:  # (nothing cached: the folder it made goes, unless another explore holds an entry)
+            with contextlib.suppress(OSError):
+                path.parent.rmdir()
 
 
 def table_from_rows(rows: list[dict], movement_ids: dict | None = None) -> ex.TrialTable:
