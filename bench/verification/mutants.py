@@ -5926,6 +5926,11 @@ CATALOGUE += [
            '        if fd is not None:\n            release_lock(fd, lock_path.with_name("elsewhere"))\n',
            ('bench/tests/test_shared_stage_cache.py',),
            "the stage cache entry's lock file stays in the cache after the stage"),
+    Mutant('scheduler-connect-default-timeout', 'campaigns', 'bench/campaigns/engine.py',
+           '            client = Client(spec.scheduler, timeout="5s")\n',
+           '            client = Client(spec.scheduler)\n',
+           ('bench/tests/test_campaigns_on_dask.py::test_no_scheduler_at_the_address_is_one_line_and_exit_2_within_seconds',),
+           "no scheduler at --scheduler's address: the client waits distributed's default 30 s connect timeout instead of 5 s before saying so"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
