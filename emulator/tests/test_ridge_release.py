@@ -315,18 +315,32 @@ def test_the_share_is_taken_only_while_the_ridges_move():
         assert np.all(smooth._contacts[0]["ridge_parts"][5] < 1e-3)
 
 
+#: the landing spots on the texture of the slides over which the mean friction is averaged (m, along its 1 m track)
+STRETCHES_M = tuple(0.037 * k for k in range(16))
+
+
 @pytest.mark.unit
 def test_the_mean_friction_converges_as_the_texture_step_shrinks():
-    """Consistency: with the ridges' share held by the texture's µ, the steady friction at texture steps of 5, 2.5
-    and 1.25 µm is the comb's within 2 % at each (measured 0.985, 0.984, 0.985 with the share over the slide's own
-    5 mm; 0.999, 1.002, 1.003 with it over the track's first 20 mm; without the share it grew with each halving,
-    1.19, 1.23, 1.25 × the comb's)."""
-    slide = _slide(distance=0.005)
+    """Consistency: with the ridges' share held by the texture's µ, the steady friction over 5 mm at 0.5 N, 1 cm/s
+    at texture steps of 5, 2.5 and 1.25 µm is the comb's within 2 % on average over 16 stretches of the track
+    (measured 1.002 at each step), and each stretch's ratio changes by less than 1 % from one halving of the step to
+    the next (measured at most 0.36 % and 0.13 %; without the share it grew with each halving, 1.19, 1.23, 1.25 × the
+    comb's).  One stretch is not enough to hold the mean to 2 %: the ridges' force about its mean over 5 mm scatters
+    with SD 2 % from stretch to stretch (0.969–1.039; the stretch at 0, which this test used alone until
+    2026-11-24, gives 0.985, 0.984, 0.985)."""
+    ratios = []
     for dx in (5e-6, 2.5e-6, 1.25e-6):
         grid = dataclasses.replace(GRID, sliding_dx_m=dx)
-        ratio = (_steady_friction_coefficient(_run(slide, grid=grid)[1], slide)
-                 / _steady_friction_coefficient(_run(slide, "effective", grid=grid)[1], slide))
-        assert ratio == pytest.approx(1.0, abs=0.02), (dx, ratio)
+        row = []
+        for start_m in STRETCHES_M:
+            slide = Slide(0.0, SAND, 0.5, 0.01, 0.005, approach_s=0.02, hold_s=0.02, accel_s=0.01, lift_s=0.02,
+                          start_position_m=start_m)
+            row.append(_steady_friction_coefficient(_run(slide, grid=grid)[1], slide)
+                       / _steady_friction_coefficient(_run(slide, "effective", grid=grid)[1], slide))
+        ratios.append(row)
+    ratios = np.array(ratios)
+    assert np.all(np.abs(ratios.mean(axis=1) - 1.0) < 0.02), ratios.mean(axis=1)
+    assert np.max(np.abs(np.diff(ratios, axis=0))) < 0.01, np.abs(np.diff(ratios, axis=0)).max(axis=1)
 
 
 def _events_per_s(contact, t0: float, t1: float) -> float:
