@@ -37,6 +37,7 @@ _IMPORTED_AT = _time.time()
 _LOADED_BEFORE = frozenset(sys.modules) - {__name__}
 
 from bench.errors import BenchError  # noqa: E402 (after the snapshot above)
+from bench.tomlfile import spelled  # noqa: E402
 
 
 class CampaignError(BenchError, RuntimeError):
@@ -78,8 +79,8 @@ def check_address(text: str, where: str) -> str:
     ``where`` (the flag or the environment variable) — instead of distributed's words about a port, later."""
     m = _ADDRESS.match(text.strip())
     if not m or not 0 < int(m.group(3)) < 65536:
-        raise ValueError(f"{where} {text!r}: not a scheduler address; give tcp://HOST:PORT (the scheduler prints its "
-                         f"own, e.g. tcp://10.0.0.5:8786)")
+        raise ValueError(f"{where} {spelled(text)}: not a scheduler address; give tcp://HOST:PORT (the scheduler "
+                         f"prints its own, e.g. tcp://10.0.0.5:8786)")
     return text.strip()
 
 

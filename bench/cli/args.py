@@ -5,11 +5,13 @@ SIGTERM/SIGINT helpers for long-running commands."""
 from __future__ import annotations
 
 import argparse
+import ast
 import functools
 import json
 import math
 import numbers
 import os
+import re
 import signal
 import sys
 import tempfile
@@ -18,6 +20,7 @@ from pathlib import Path
 
 from bench.atomic import open_regular
 from bench.errors import escaped
+from bench.tomlfile import spelled
 
 
 # --- help ------------------------------------------------------------
@@ -43,7 +46,7 @@ def number(lo: float | None = None, hi: float | None = None, lo_open: bool = Fal
         try:
             v = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+            raise argparse.ArgumentTypeError(f"{spelled(text)} is not a number") from None
         if not math.isfinite(v):
             raise argparse.ArgumentTypeError(f"{text}: must be a finite number")
         if lo is not None and (v <= lo if lo_open else v < lo):
@@ -64,7 +67,7 @@ def whole(lo: int | None = None, hi: int | None = None):
         try:
             v = int(text, 10)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+            raise argparse.ArgumentTypeError(f"{spelled(text)} is not a whole number") from None
         if (lo is not None and v < lo) or (hi is not None and v > hi):
             rng = (f"{lo} to {hi}" if hi is not None else f"≥ {lo}") if lo is not None else f"≤ {hi}"
             raise argparse.ArgumentTypeError(f"{text}: must be {rng}")
@@ -227,7 +230,26 @@ class OneLineErrorParser(argparse.ArgumentParser):
         self.set_defaults(command_prog=self.prog)
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {escaped(message)} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {escaped(argparse_message(message))} (see {self.prog} --help)\n")
+
+
+#: a Python string literal, as argparse's own messages quote a value with repr ('x', or "it's")
+_PY_STR = r"'(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\""
+#: where argparse's own messages (Python 3.11 to 3.13) show the value typed in repr
+_ARGPARSE_VALUE = re.compile(rf"(invalid choice: |invalid [^:]* value: |ignored explicit argument )({_PY_STR})")
+#: the list of choices argparse's "invalid choice" ends with, each in repr
+_ARGPARSE_CHOICES = re.compile(rf"\(choose from ((?:{_PY_STR})(?:, (?:{_PY_STR}))*)\)$")
+
+
+def argparse_message(message: str) -> str:
+    """argparse's own error ``message`` spoken as the bench's messages speak: the value typed in double quotes as
+    :func:`bench.tomlfile.spelled` spells any value a user gave (``invalid choice: "x"``, never Python's ``'x'``),
+    and the choices listed bare, comma-separated, as the bench's own messages list names (``choose from run,
+    validate``).  Any other message (the bench's own, raised through argparse) is returned as it is."""
+    message = _ARGPARSE_VALUE.sub(lambda m: m.group(1) + spelled(ast.literal_eval(m.group(2))), message)
+    return _ARGPARSE_CHOICES.sub(
+        lambda m: "(choose from " + ", ".join(ast.literal_eval(s.group()) for s in re.finditer(_PY_STR, m.group(1)))
+                  + ")", message)
 
 
 # --- output ----------------------------------------------------------

@@ -10,6 +10,7 @@ from pathlib import Path
 from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
 from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
                             sigterm_like_ctrl_c, whole)
+from bench.tomlfile import spelled
 
 
 def _names(kind: str):
@@ -21,7 +22,8 @@ def _names(kind: str):
             return list(known)
         names = [n.strip() for n in text.split(",")]
         if not all(names):
-            raise argparse.ArgumentTypeError(f"{text!r}: comma-separated names (or all); known: {', '.join(known)}")
+            raise argparse.ArgumentTypeError(f"{spelled(text)}: comma-separated names (or all); known: "
+                                             f"{', '.join(known)}")
         bad = [n for n in names if n not in known]
         if bad:
             raise argparse.ArgumentTypeError(f"unknown {', '.join(bad)}; known: {', '.join(known)}")

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from bench.cli.args import add_cluster_arguments, any_seed, say_leftovers, sigterm_like_ctrl_c, strict_json, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
+from bench.tomlfile import spelled
 from emulator.fidelity import PROFILES
 
 #: what texture-sweep writes into its out folder (what --force may replace)
@@ -52,12 +53,12 @@ def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
     try:
         values = [int(x) for x in text.split(",") if x.strip()]
     except ValueError:
-        raise ValueError(f"{flag} = {text!r}: give comma-separated whole numbers, e.g. 2,10,30") from None
+        raise ValueError(f"{flag} = {spelled(text)}: give comma-separated whole numbers, e.g. 2,10,30") from None
     bad = [v for v in values if not lo <= v <= hi]
     if not values or bad:
-        raise ValueError(f"{flag} = {text!r}: every value must be within {lo} and {hi}")
+        raise ValueError(f"{flag} = {spelled(text)}: every value must be within {lo} and {hi}")
     if listed_twice(values):
-        raise ValueError(f"{flag} = {text!r}: {listed_twice(values)} listed twice")
+        raise ValueError(f"{flag} = {spelled(text)}: {listed_twice(values)} listed twice")
     return values
 
 
@@ -67,6 +68,7 @@ def _texture_numbers(text: str, library=None) -> list[int]:
     --textures and the value otherwise)."""
     from bench.errors import TextureError
     from bench.experiments.trials import listed_twice
+    from bench.textures.library import listing_command
 
     from bench.cli.args import library_option
 
@@ -78,12 +80,12 @@ def _texture_numbers(text: str, library=None) -> list[int]:
         try:
             numbers.append(library.texture(item).number)
         except TextureError as e:
-            lists = "biotac-bench textures" + (f" --library {library.path}" if not library.shipped else "")
+            lists = listing_command(None if library.shipped else library.path)
             raise ValueError(f"--textures: {'; '.join(e.problems)} ({lists} lists them)") from None
     if not numbers:
         raise ValueError("--textures: give at least one texture (numbers or names, comma-separated)")
     if listed_twice(numbers):
-        raise ValueError(f"--textures = {text!r}: texture(s) {listed_twice(numbers)} listed twice")
+        raise ValueError(f"--textures = {spelled(text)}: texture(s) {listed_twice(numbers)} listed twice")
     return numbers
 
 

@@ -13,6 +13,7 @@ from bench.cli.args import (Terminated, any_seed, firmware_choice, firmware_file
                             stimuli_count, whole)
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
+from bench.tomlfile import spelled
 
 
 # --- bridge ------------------------------------------------------------------------------------------------------
@@ -153,8 +154,8 @@ def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
     csv_path = _csv_beside(out)
     if csv_path in present and not _is_recording_csv(csv_path):
         raise BenchError(f"--out {out}: {csv_path} is not a recording's CSV (its first line is not "
-                         f"{RECORDING_CSV_HEADER!r}); --force replaces only an earlier recording: move it away, or "
-                         f"give another --out")
+                         f"{spelled(RECORDING_CSV_HEADER)}); --force replaces only an earlier recording: move it away, "
+                         f"or give another --out")
 
 
 def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True) -> tuple[list[Path], dict]:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from bench.cli.args import number, sigterm_like_ctrl_c
 from bench.paths import REPO
+from bench.tomlfile import spelled
 
 _TRANSFER_KEYS = {"t_ps": int, "cs": int, "nbits": int, "mosi": str, "half_ps": int, "keep_cs": bool, "miso": str}
 
@@ -57,7 +58,7 @@ def vector_file_problem(path: str) -> str | None:
         for key, kind in _TRANSFER_KEYS.items():
             v = d.get(key)
             if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
-                return f"not a vector file (transfers[{k}].{key} = {v!r})"
+                return f"not a vector file (transfers[{k}].{key} = {spelled(v)})"
         try:
             int(d["mosi"], 16), int(d["miso"], 16)
         except ValueError:
@@ -68,7 +69,7 @@ def vector_file_problem(path: str) -> str | None:
                     f"t_ps 0..{MAX_T_PS})")
         for line in ("mosi", "miso"):
             if d[line].strip().startswith("-") or int(d[line], 16) >> d["nbits"]:
-                return (f"not a vector file (transfers[{k}].{line} = {d[line]!r}: a hex number of at most its "
+                return (f"not a vector file (transfers[{k}].{line} = {spelled(d[line])}: a hex number of at most its "
                         f"{d['nbits']} bits)")
         if k and d["t_ps"] < end_ps(vec["transfers"][k - 1]):
             return f"not a vector file (transfers[{k}] starts before transfers[{k - 1}] ends: t_ps must rise)"
@@ -81,7 +82,7 @@ def vector_file_problem(path: str) -> str | None:
                 and all(isinstance(v, int) and not isinstance(v, bool) for v in c.values())
                 and c["sensor"] in sensors and 0 <= c["channel"] <= 255 and 0 <= c["t_ps"] <= MAX_T_PS
                 and 0 <= c["code"] <= 4095):
-            return (f"not a vector file (conversions[{k}] = {c!r:.80}: sensor (one of sensors), channel, t_ps and "
+            return (f"not a vector file (conversions[{k}] = {spelled(c)}: sensor (one of sensors), channel, t_ps and "
                     f"code 0..4095, whole numbers)")
 
     def sensor_key(k) -> bool:  # "1", not "01" or "+1": a sensor written two ways would be two entries for one
@@ -93,7 +94,8 @@ def vector_file_problem(path: str) -> str | None:
                 raise ValueError
             Faults(**f)
         except (ValueError, TypeError):
-            return f"not a vector file (faults[{key!r}] = {f!r:.80}: a sensor of sensors -> its faults' fields)"
+            return (f"not a vector file (faults[{spelled(key)}] = {spelled(f)}: a sensor of sensors -> its faults' "
+                    f"fields)")
     from emulator import channels as ch
 
     variants = vec.get("variants", {})
@@ -108,8 +110,8 @@ def vector_file_problem(path: str) -> str | None:
                       if sensor_key(key) else None)
         if not (recognised and isinstance(chans, list) and all(
                 isinstance(c, int) and not isinstance(c, bool) and c in recognised for c in chans)):
-            return (f"not a vector file (provided[{key!r}] = {chans!r:.80}: a sensor of sensors -> channel indices "
-                    f"its variant recognises)")
+            return (f"not a vector file (provided[{spelled(key)}] = {spelled(chans)}: a sensor of sensors -> channel "
+                    f"indices its variant recognises)")
     resets = vec.get("resets", {})
     if not isinstance(resets, dict) or not all(
             k.isascii() and k.isdigit() and k == str(int(k)) and int(k) < len(vec["transfers"]) and isinstance(v, list)

@@ -321,7 +321,7 @@ def _path(what: str):
         if not text:
             raise argparse.ArgumentTypeError(f"an empty path: give {what}")
         if "\0" in text:
-            raise argparse.ArgumentTypeError(f"{text!r}: the path contains a NUL byte")
+            raise argparse.ArgumentTypeError(f"{escaped(text)}: the path contains a NUL byte")
         return text
 
     parse.__name__ = what

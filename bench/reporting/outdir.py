@@ -39,7 +39,7 @@ from pathlib import Path
 
 from bench.atomic import LockFailed, LockHeld, release_lock, take_lock
 from bench.atomic import TEMP_SUFFIX, atomic_write, commit, read_head, temp_path  # noqa: F401 (re-exported)
-from bench.errors import BenchError
+from bench.errors import BenchError, escaped
 from bench.scenes.limits import MAX_SENSORS
 
 LOCK_NAME = ".biotac-bench.lock"
@@ -86,7 +86,15 @@ RUN_SENSOR = RUN.inner()
 
 
 class OutDirError(BenchError, ValueError):
-    """The out folder cannot be used (the message names the flag and the path)."""
+    """The out folder cannot be used (the message names it: :func:`folder_named`)."""
+
+
+def folder_named(path, flag: str = "--out", default: bool = False) -> str:
+    """How a message names an out folder: ``--out PATH``, the flag and the path as the user gave them (unquoted, as
+    every message shows a path; :func:`~bench.errors.escaped`: one line), or, for the folder a command chose itself
+    because no ``flag`` was given (``default``), ``PATH (the default folder; --out chooses another)``."""
+    shown = escaped(os.fspath(path))
+    return f"{shown} (the default folder; {flag} chooses another)" if default else f"{flag} {shown}"
 
 
 class FolderGone(OutDirError):
@@ -123,8 +131,10 @@ class OutFolder:
     """A checked, locked out folder; use :meth:`open`, then :meth:`atomic` / :meth:`write_text`, then
     :meth:`close` (or use it as a context manager)."""
 
-    def __init__(self, path: Path, lock_fd: int, flag: str = "--out", kind: FolderKind = RUN):
+    def __init__(self, path: Path, lock_fd: int, flag: str = "--out", kind: FolderKind = RUN, default: bool = False):
         self.path, self._lock_fd, self.flag, self.kind = path, lock_fd, flag, kind
+        #: whether the command chose this folder itself (no ``flag`` given): messages say so (:func:`folder_named`)
+        self.default = default
         self._deferred_keep: tuple[str, ...] | None = None  # earlier results to remove at clear_earlier()
         #: the temporary files an interrupted run had left, removed when this command opened the folder
         self.stale: tuple[str, ...] = ()
@@ -136,15 +146,16 @@ class OutFolder:
     # ---- opening
     @classmethod
     def open(cls, path, force: bool = False, flag: str = "--out", kind: FolderKind = RUN,
-             keep: tuple[str, ...] = (), defer_clearing: bool = False) -> "OutFolder":
+             keep: tuple[str, ...] = (), defer_clearing: bool = False, default: bool = False) -> "OutFolder":
         """Check, create and lock ``path``; refuse it if it holds anything but ``keep`` (names of entries to leave
         alone, e.g. a cache inside it) unless ``force``, which replaces what ``kind`` wrote there before — at once,
-        or, with ``defer_clearing``, only at :meth:`clear_earlier` (a long command that fails first keeps them)."""
-        where = f"{flag} {os.fspath(path)!r}"
+        or, with ``defer_clearing``, only at :meth:`clear_earlier` (a long command that fails first keeps them).
+        ``default``: the command chose ``path`` itself, no ``flag`` was given (messages say so)."""
+        where = folder_named(path, flag, default)
         made: list[tuple[Path, tuple[int, int]]] = []
         for _ in range(VANISHED_ATTEMPTS):  # the folder removed under us (FolderGone): made again, locked again
             try:
-                p = _make_folder(path, flag, made)
+                p = _make_folder(path, where, made)
                 fd = _lock(p, where, flag)
                 break
             except FolderGone:
@@ -155,7 +166,7 @@ class OutFolder:
                               f"({VANISHED_ATTEMPTS} times; another command that made it removes it as it ends); "
                               f"try again") from None
         existed = p not in [d for d, _ in made]
-        folder = cls(p, fd, flag, kind)
+        folder = cls(p, fd, flag, kind, default)
         folder._made = made
         folder._created = not existed
         try:
@@ -170,7 +181,7 @@ class OutFolder:
         return folder
 
     def _where(self) -> str:
-        return f"{self.flag} {os.fspath(self.path)!r}"
+        return folder_named(self.path, self.flag, self.default)
 
     def _probe_writable(self) -> None:
         try:
@@ -378,13 +389,13 @@ def fresh_folder(base: Path, force: bool = False, flag: str = "--out", kind: Fol
         if not force and p.is_dir() and _holds_more_than_leftovers(p, kind):
             continue
         try:
-            return OutFolder.open(p, force=force, flag=flag, kind=kind, defer_clearing=defer_clearing)
+            return OutFolder.open(p, force=force, flag=flag, kind=kind, defer_clearing=defer_clearing, default=True)
         except OutDirError as e:
             last = e
             if "is writing into this folder" in str(e) or "not empty" in str(e):
                 continue
             raise
-    raise last or OutDirError(f"{flag}: no free folder next to {os.fspath(base)!r}")
+    raise last or OutDirError(f"{folder_named(base, flag, default=True)}: no free folder next to it")
 
 
 def _holds_more_than_leftovers(folder: Path, kind: FolderKind) -> bool:
@@ -394,13 +405,13 @@ def _holds_more_than_leftovers(folder: Path, kind: FolderKind) -> bool:
     return any(e.name != LOCK_NAME and e.name not in stale for e in os.scandir(folder))
 
 
-def _make_folder(path, flag: str, made: list | None = None) -> Path:
-    """Create the folder ``path`` (named by ``flag`` in errors) after checking it: no NUL byte, not empty, not a
-    broken symbolic link, not a file, creatable.  Each folder it creates (``path`` and those above it), outermost
-    first, is appended to ``made`` with its identity (st_dev, st_ino); on an error those are removed again.  A
-    folder on the way that vanishes meanwhile (another command removing it as it ends) raises :class:`FolderGone`."""
+def _make_folder(path, where: str, made: list | None = None) -> Path:
+    """Create the folder ``path`` (named as ``where`` in errors: :func:`folder_named`) after checking it: no NUL
+    byte, not empty, not a broken symbolic link, not a file, creatable.  Each folder it creates (``path`` and those
+    above it), outermost first, is appended to ``made`` with its identity (st_dev, st_ino); on an error those are
+    removed again.  A folder on the way that vanishes meanwhile (another command removing it as it ends) raises
+    :class:`FolderGone`."""
     raw = os.fspath(path)
-    where = f"{flag} {raw!r}"
     if "\x00" in raw:
         raise OutDirError(f"{where}: the path contains a NUL byte")
     if not raw.strip():
@@ -481,14 +492,15 @@ def writable_folder(path, flag: str = "--out", made: list | None = None) -> Path
     name, renamed into place).  ``made`` (:func:`made_folders`): where the folders it creates are noted, to be
     removed if the command ends leaving them empty."""
     new: list[tuple[Path, tuple[int, int]]] = []
-    p = _make_folder(path, flag, new)
+    where = folder_named(path, flag)
+    p = _make_folder(path, where, new)
     try:
         fd, name = tempfile.mkstemp(dir=p, prefix=f".{PROBE}.", suffix=TEMP_SUFFIX)
         os.close(fd)
         os.unlink(name)
     except OSError as e:
         _remove_made(new)
-        raise OutDirError(f"{flag} {os.fspath(path)!r}: the folder is not writable ({e.strerror or e})") from None
+        raise OutDirError(f"{where}: the folder is not writable ({e.strerror or e})") from None
     if made is not None:
         made += new
     return p

@@ -131,7 +131,8 @@ def _write_sensor(sub: Recording, folder: OutFolder, k: int, **kw) -> dict:
     """Sensor ``k``'s outputs into ``folder``/sensor<k>/ (its own lock, taken while ``folder``'s is held), under
     the run's signal guard (in ``kw``): its record, or — if even the folder cannot be used — a failed stand-in."""
     try:
-        with OutFolder.open(folder.path / f"sensor{k}", flag=folder.flag, kind=RUN_SENSOR) as sub_folder:
+        with OutFolder.open(folder.path / f"sensor{k}", flag=folder.flag, kind=RUN_SENSOR,
+                            default=folder.default) as sub_folder:
             return write_outputs(sub, sub_folder, sensor_index=k, **kw)
     except Exception as e:
         return {"status": "failed", "error": f"{type(e).__name__}: {e}", "outputs": []}

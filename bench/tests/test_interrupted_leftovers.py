@@ -63,7 +63,7 @@ def test_a_folder_holding_only_an_interrupted_runs_files_is_used_without_force(t
     with OutFolder.open(out) as folder:
         assert folder.stale == LEFT
         note = folder.stale_note()
-    assert note.startswith(f"note: --out '{out}': removed 2 temporary files that an interrupted run left")
+    assert note.startswith(f"note: --out {out}: removed 2 temporary files that an interrupted run left")
     assert all(n in note for n in LEFT) and "never results" in note
     assert _names(out) == [LOCK_NAME]
 
@@ -160,5 +160,31 @@ def test_a_texture_sweep_into_a_folder_an_interrupted_sweep_left_says_so(tmp_pat
     assert cli.main(["texture-sweep", "--textures", "902", "--movements", "21", "--trials", "1", "--quiet",
                      "--out", str(out)]) == 0
     err = capsys.readouterr().err
-    assert f"note: --out '{out}': removed 1 temporary file that an interrupted run left" in err, err
+    assert f"note: --out {out}: removed 1 temporary file that an interrupted run left" in err, err
     assert ".trials.csv.0a1b2c3d.part" in err and not stale_temps(out) and (out / "trials.csv").exists()
+
+
+def test_the_default_folder_s_note_says_no_out_was_given(tmp_path, monkeypatch, capsys):
+    """Without --out the sweep chooses out/texture-sweep itself: its note about an interrupted sweep's leftovers
+    names that folder as the default one (and how to choose another), never "--out" the user did not give."""
+    from bench.cli import main as cli
+    from bench.experiments import trials as T
+    from bench.tests.test_sweep_review import _in_process_sweep
+
+    monkeypatch.setattr(T, "sweep", _in_process_sweep)
+    monkeypatch.chdir(tmp_path)
+    _interrupted_run(tmp_path / "out" / "texture-sweep", (".trials.csv.0a1b2c3d.part",))
+    assert cli.main(["texture-sweep", "--textures", "902", "--movements", "21", "--trials", "1", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert ("note: out/texture-sweep (the default folder; --out chooses another): removed 1 temporary file that an "
+            "interrupted run left") in err and "--out out" not in err, err
+
+
+def test_a_default_folder_refused_says_no_out_was_given(tmp_path):
+    base = tmp_path / "press-hold"
+    base.mkdir()
+    (base / "notes.txt").write_text("mine")
+    with pytest.raises(OutDirError) as e:
+        fresh_folder(base, force=True)
+    assert str(e.value).startswith(f"{base} (the default folder; --out chooses another): --force only replaces "), e
+    assert (base / "notes.txt").read_text() == "mine"

@@ -98,7 +98,7 @@ def test_a_folder_that_keeps_vanishing_is_refused_saying_to_try_again(tmp_path, 
     with pytest.raises(OutDirError) as e:
         OutFolder.open(tmp_path / "a" / "b")
     message = str(e.value)
-    assert message.startswith(f"--out {str(tmp_path / 'a' / 'b')!r}: ") and "try again" in message, message
+    assert message.startswith(f"--out {tmp_path / 'a' / 'b'}: ") and "try again" in message, message
     assert "removed" in message and "not writable" not in message, message
     assert list(tmp_path.iterdir()) == []
 

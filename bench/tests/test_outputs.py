@@ -93,7 +93,7 @@ def test_a_file_as_out_is_refused_before_anything_runs(tmp_path):
     p = _bench("run", _scene_file(tmp_path, 36000.0), "--out", f, "--quiet")
     out, err = p.communicate(timeout=120)
     assert p.returncode == 2, err
-    assert f"--out '{f}'" in err and "is a file" in err and "Traceback" not in err
+    assert f"--out {f}: " in err and "is a file" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
     assert time.perf_counter() - t0 < 60  # ten simulated hours did not run first
     assert f.read_text() == "mine"
@@ -126,7 +126,7 @@ def test_an_unwritable_out_is_refused(tmp_path, capsys):
         target = ro / "out"
     assert cli.main(["run", str(_scene_file(tmp_path, 1.0)), "--out", str(target), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert f"--out '{target}'" in err and ("cannot create" in err or "not writable" in err)
+    assert f"--out {target}: " in err and ("cannot create" in err or "not writable" in err)
 
 
 @pytest.mark.unit
@@ -139,7 +139,7 @@ def test_a_non_empty_out_is_refused_without_force_and_force_replaces_the_earlier
     capsys.readouterr()
     assert cli.main(["run", scene, "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert "not empty" in err and "--force" in err and f"--out '{out}'" in err
+    assert "not empty" in err and "--force" in err and f"--out {out}: " in err
     assert json.loads((out / "record.json").read_text()) == first  # untouched
     assert cli.main(["run", scene, "--out", str(out), "--quiet", "--force", "--no-plots", "--seed", "6"]) == 0
     second = check_consistent(out, "ok")

@@ -36,22 +36,22 @@ BAD = {
     "conversion for an absent sensor": (_set(("conversions", 0, "sensor"), 9), "conversions[0]"),
     "conversion code out of range": (_set(("conversions", 0, "code"), 99999), "conversions[0]"),
     "conversion not an object": (_set(("conversions", 0), "x"), "conversions[0]"),
-    "faults not a sensor's": (_set(("faults",), {"1": "bogus"}), "faults['1']"),
-    "faults with an unknown field": (_set(("faults",), {"1": {"melted": True}}), "faults['1']"),
+    "faults not a sensor's": (_set(("faults",), {"1": "bogus"}), 'faults["1"]'),
+    "faults with an unknown field": (_set(("faults",), {"1": {"melted": True}}), 'faults["1"]'),
     "resets not a table": (_set(("resets",), "x"), "resets"),
     "a sensor listed twice": (_set(("sensors",), [1, 1]), "listed twice"),
     "transfers going back in time": (_set(("transfers", 1, "t_ps"), 0), "t_ps must rise"),
     "an instant a thousand years on": (_set(("transfers", 2, "t_ps"), 10**18), "out of range"),
     "a million bits": (_set(("transfers", 0, "nbits"), 10**6), "out of range"),
     "a clock of 500 GHz": (_set(("transfers", 0, "half_ps"), 1), "out of range"),
-    "negative MOSI": (_set(("transfers", 0, "mosi"), "-1"), "mosi = '-1'"),
+    "negative MOSI": (_set(("transfers", 0, "mosi"), "-1"), 'mosi = "-1"'),
     "MOSI wider than its bits": (_set(("transfers", 0, "mosi"), "ffffffffff"), "at most its 16 bits"),
     "no transfers": (_set(("transfers",), []), "no transfers"),
     # a second hostile pass: an int() traceback without the file, and values read as something else
     "a reset key that is a superscript digit": (_set(("resets",), {"²": [1]}), "resets"),
     "a reset key written twice as 0 and 00": (_set(("resets",), {"0": [1], "00": [1]}), "resets"),
     "a sensor that is a boolean": (_set(("sensors",), [True]), "sensors must be a list of sensor numbers"),
-    "MISO wider than its bits": (_set(("transfers", 0, "miso"), "ffffffffff"), "miso = 'ffffffffff'"),
+    "MISO wider than its bits": (_set(("transfers", 0, "miso"), "ffffffffff"), 'miso = "ffffffffff"'),
     # from a mutation hunt: refusals nothing exercised
     "a select code past the 3 bits": (_set(("transfers", 0, "cs"), 8), "transfers[0]"),
     "a reset of an absent sensor": (_set(("resets",), {"0": [3]}), "resets"),
@@ -59,16 +59,16 @@ BAD = {
     # the sensors' variants and provided channels (the SP beside a partial BioTac)
     "a variant nobody makes": (_set(("variants",), {"1": "biotac-xl"}), "variants: a sensor of sensors"),
     "a variant for an absent sensor": (_set(("variants",), {"3": "biotac-sp"}), "variants: a sensor of sensors"),
-    "provided channels that are names": (_set(("provided",), {"1": ["PAC"]}), "provided['1']"),
+    "provided channels that are names": (_set(("provided",), {"1": ["PAC"]}), 'provided["1"]'),
     "a provided channel its variant lacks": (_set(("provided",), {"1": [36]}), "its variant recognises"),
-    "provided channels of an absent sensor": (_set(("provided",), {"4": [0]}), "provided['4']"),
+    "provided channels of an absent sensor": (_set(("provided",), {"4": [0]}), 'provided["4"]'),
     "provided not a table": (_set(("provided",), [0, 1]), "provided: a sensor of sensors"),
     # a sensor written two ways ("1" and "01"): the check looked the variant up by the text, the tools by the number
     # (variants {"1": SP, "01": BioTac} passed and ran sensor 1 as a BioTac on an SP-less build)
     "a sensor's variant given as 1 and as 01": (_set(("variants",), {"1": "biotac-sp", "01": "biotac"}),
                                                 "variants: a sensor of sensors"),
-    "a provided key 01": (_set(("provided",), {"01": [0]}), "provided['01']"),
-    "a faults key 01": (_set(("faults",), {"01": {}}), "faults['01']"),
+    "a provided key 01": (_set(("provided",), {"01": [0]}), 'provided["01"]'),
+    "a faults key 01": (_set(("faults",), {"01": {}}), 'faults["01"]'),
 }
 
 

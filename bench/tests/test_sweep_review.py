@@ -112,7 +112,7 @@ def test_sweep_files_share_grid_ids_and_an_earlier_sweep_needs_force(tmp_path, m
     before = {p.name: p.read_bytes() for p in first.iterdir()}
     assert cli.main([*argv[:-1], "--movements", "14", "--out", str(first)]) == 2
     err = capsys.readouterr().err
-    assert f"--out '{first}'" in err and "not empty" in err and "--force" in err and "Traceback" not in err
+    assert f"--out {first}: " in err and "not empty" in err and "--force" in err and "Traceback" not in err
     assert {p.name: p.read_bytes() for p in first.iterdir()} == before  # nothing lost
     assert cli.main([*argv[:-1], "--movements", "14", "--out", str(first), "--force"]) == 0
     assert [r["movement_id"] for r in _csv(first / "wear.csv")] == ["14"]
@@ -170,7 +170,7 @@ def test_explore_protects_its_results_and_reruns_from_the_cache(tmp_path, monkey
     before = sorted(p.name for p in out.rglob("*"))
     assert cli.main([*base, "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert f"--out '{out}'" in err and "pass --force" in err and "cache" in err and "Traceback" not in err
+    assert f"--out {out}: " in err and "pass --force" in err and "cache" in err and "Traceback" not in err
     assert sorted(p.name for p in out.rglob("*")) == before
     # --force, or a new folder: the earlier results (and ablation folder) replaced, no trial runs again
     monkeypatch.setattr(E, "sweep", lambda *a, **k: pytest.fail("a cached stage ran trials again"))
