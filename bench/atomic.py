@@ -78,6 +78,20 @@ def temp_path(final: Path) -> Path:
     return Path(tmp)
 
 
+def written_temp(final, write) -> Path:
+    """A temporary file beside ``final`` (:func:`temp_path`) holding what ``write(fh)`` wrote into it (binary), for
+    the caller to move into place (:func:`commit`, :func:`commit_new`) — several files all at once, say, where
+    :func:`atomic_write` places one; on any error or signal it is removed, and none is left."""
+    tmp = temp_path(Path(final))
+    try:
+        with open(tmp, "wb") as fh:
+            write(fh)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return tmp
+
+
 def save_in_temp_folder(write, prefix: str, suffix: str) -> Path:
     """Write a file that could not go where it was asked (a full disk) into the system's temporary folder instead,
     through ``write(path)``, with the mode a new file gets from the umask (not mkstemp's 0600); its path.  Raises

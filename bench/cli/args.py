@@ -189,8 +189,9 @@ def _checked(check, text: str) -> None:
 
 
 def say_leftovers(folder):
-    """``folder`` (an opened :class:`~bench.reporting.outdir.OutFolder`), after saying on stderr which temporary files
-    an interrupted run had left in it and that opening it removed them (nothing when there were none)."""
+    """``folder`` (an opened :class:`~bench.reporting.outdir.OutFolder`, or :class:`~bench.reporting.outdir.OutFile`),
+    after saying on stderr which temporary files an interrupted run had left in it (or beside it) and that opening it
+    removed them (nothing when there were none)."""
     note = folder.stale_note()
     if note:
         print(escaped(note), file=sys.stderr)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
 from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
-                            sigterm_like_ctrl_c, whole)
+                            say_leftovers, sigterm_like_ctrl_c, whole)
 from bench.tomlfile import spelled
 
 
@@ -37,21 +37,15 @@ def _names(kind: str):
 
 
 def _cmd_campaign(a) -> int:
-    """The campaign, holding --junit's lock from start to end: two campaigns never write one report."""
-    from bench.reporting.outdir import lock_exclusively, release_and_remove
+    """The campaign, holding --junit's lock from start to end (:class:`~bench.reporting.outdir.OutFile`): two
+    campaigns never write one report, and the temporary files of a campaign killed as it wrote its report are
+    removed and named."""
+    from bench.reporting.outdir import OutFile
 
     check_bus(a.faults, a.spi)  # a fault the bus cannot carry: refused by name before anything (the report) is touched
     firmware_choice(a.firmware, "campaign")  # a library beside other files: refused before the report is touched
-    report = Path(a.junit)
-    report.parent.mkdir(parents=True, exist_ok=True)  # (--junit's check found it can be made)
-    lock_path = report.parent / f".{report.name}.lock"
-    lock = lock_exclusively(lock_path, f"--junit {a.junit}",
-                            lambda who: f"{who} is writing this report; wait for it to end or choose another --junit",
-                            holder_is="another campaign")
-    try:
-        return _run_campaign(a, report)
-    finally:
-        release_and_remove(lock, lock_path)
+    with say_leftovers(OutFile.open(a.junit, "--junit", "campaign", "this report")) as report:
+        return _run_campaign(a, report.path)
 
 
 def _run_campaign(a, report: Path) -> int:

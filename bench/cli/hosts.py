@@ -9,8 +9,8 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import (Terminated, any_seed, firmware_choice, firmware_file, number, output_file, sigterm_raises,
-                            stimuli_count, whole)
+from bench.cli.args import (Terminated, any_seed, firmware_choice, firmware_file, number, output_file, say_leftovers,
+                            sigterm_raises, stimuli_count, whole)
 from bench.errors import BenchError, OutputNotWritten
 from bench.running.signals import signals_deferred
 from bench.tomlfile import spelled
@@ -203,17 +203,19 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
             fh.write("".join(f"{f.seq},{k},{name_of.get(int(ch), ch)},{s},{f.codes[k, j]},{f.status[k, j]}\n"
                              for k, ch in enumerate(f.channels) for j, s in enumerate(f.sensors)).encode())
 
+    from bench.atomic import written_temp
+
     temps: dict[Path, Path] = {}
     try:
         out.parent.mkdir(parents=True, exist_ok=True)  # (a full disk may refuse even the folder)
-        temps[out] = _written_temp(out, write_npz)
+        temps[out] = written_temp(out, write_npz)
     except OSError as e:  # a stream cannot be recorded again: the NPZ goes where there is room, and says so
         raise OutputNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
                                + _rescue(write_npz)) from None
     not_written = {}
     if csv:
         try:
-            temps[_csv_beside(out)] = _written_temp(_csv_beside(out), write_csv)
+            temps[_csv_beside(out)] = written_temp(_csv_beside(out), write_csv)
         except OSError as e:  # the NPZ holds every sample: it is placed, and the CSV's absence said
             not_written[_csv_beside(out)] = e.strerror or str(e)
         except BaseException:  # anything else: no temporary file left behind unnamed
@@ -221,20 +223,6 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
             raise
     _place_recording(out, temps, _csv_beside(out) in temps, force)  # refused or failed: kept, and named
     return list(temps), not_written
-
-
-def _written_temp(final: Path, write) -> Path:
-    """A temporary file beside ``final`` holding what ``write(fh)`` writes (binary), or, on any error, none."""
-    from bench.atomic import temp_path
-
-    tmp = temp_path(final)
-    try:
-        with open(tmp, "wb") as fh:
-            write(fh)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return tmp
 
 
 def _rescue(write) -> str:
@@ -264,7 +252,7 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
     recording (:func:`_refuse_overwriting` found nothing at the start) is refused.  With ``force`` the replaced
     recording's CSV beside ``out`` is removed (it would not match) and the files replace an earlier recording
     (:func:`bench.atomic.commit`), never a file that is not a recording's, come meanwhile.  Refused or failed, the
-    recording stays in its temporary files beside ``out``, which the BenchError names."""
+    recording is kept beside ``out`` under names of its own (:func:`_keep_aside`), which the BenchError names."""
     import errno
 
     from bench.atomic import commit, commit_new
@@ -291,8 +279,39 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
                    + ("" if force else " without --force"))
         else:
             why = f"cannot put the recording in place: {e}"
-        kept = " and ".join(str(tmp) for tmp in temps.values() if tmp.exists())
-        raise BenchError(f"--out {out}: {why}; the recording is kept as {kept} (rename it to use it)") from None
+        raise BenchError(f"--out {out}: {why}; the recording is kept as {_keep_aside(temps)} (rename it to use "
+                         f"it)") from None
+
+
+def _keep_aside(temps: dict[Path, Path]) -> str:
+    """Give a finished recording that cannot take its place (``temps``: final name -> temporary file) names of its
+    own beside it, ``NAME.kept-<8 random hex digits>.npz`` (and ``.csv``, the same digits), so that it is never
+    taken for what an interrupted record left (:class:`~bench.reporting.outdir.OutFile` removes those); replacing
+    nothing (:func:`bench.atomic.commit_new`; a file system without hard links: a rename to the fresh random
+    name).  The files as a message names them; under their temporary names if even that fails."""
+    import secrets
+
+    from bench.atomic import commit_new
+
+    left = {final: tmp for final, tmp in temps.items() if tmp.exists()}
+    aside: dict[Path, Path] = {}
+    for _ in range(5):
+        digits = secrets.token_hex(4)
+        aside = {final.with_name(f"{final.stem}.kept-{digits}{final.suffix}"): tmp for final, tmp in left.items()}
+        try:
+            return " and ".join(map(str, commit_new(aside)))
+        except FileExistsError:
+            continue  # (8 random digits taken: another draw)
+        except OSError:  # no hard links here: a rename, to a name nothing holds
+            if any(os.path.lexists(p) for p in aside):
+                continue
+            try:
+                for kept, tmp in aside.items():
+                    os.rename(tmp, kept)
+            except OSError:
+                break
+            return " and ".join(map(str, aside))
+    return " and ".join(str(p) for p in [*aside, *left.values()] if os.path.lexists(p))
 
 
 def _open_driver(port: str, baud: int):
@@ -309,12 +328,21 @@ def _open_driver(port: str, baud: int):
 
 
 def _cmd_record(a) -> int:
+    """The recording, holding --out's lock from start to end (:class:`~bench.reporting.outdir.OutFile`): two
+    records never write one file, and the temporary files of a record killed as it wrote are removed and named."""
+    from bench.reporting.outdir import OutFile
+
+    out = Path(a.out)
+    _refuse_overwriting(out, a.csv, a.force)
+    with say_leftovers(OutFile.open(out, "--out", "record", "this recording", beside=(_csv_beside(out).name,))):
+        return _record(a, out)
+
+
+def _record(a, out: Path) -> int:
     from tqdm import tqdm
 
     from bench.hosts.driver import CMD_START, SLOT_RATE_HZ
 
-    out = Path(a.out)
-    _refuse_overwriting(out, a.csv, a.force)
     frames, end, detail = [], "complete", ""
     recorded_s = 0.0
     drv = None
@@ -440,8 +468,10 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "--out (or a CSV beside it) is refused before anything is recorded unless --force, which "
                     "replaces it and removes its CSV if this recording writes none (a CSV there that is not a "
                     "recording's is refused even with --force). Without --force, a file that appears there "
-                    "during the recording is not replaced either: the recording is then kept under its temporary "
-                    "name beside --out (.NAME.<random>.part, which the error gives; rename it to use it). A full "
+                    "during the recording is not replaced either: the recording is then kept beside it (--out r.npz: "
+                    "r.kept-<8 hex digits>.npz, and .csv), which the error gives; rename it to use it. What a "
+                    "record killed as it wrote left (.NAME.<random>.part) is removed, and named, by the next record "
+                    "to the same --out; two records never write one --out at once (the second is refused). A full "
                     "disk loses nothing received: a CSV that does not fit is named and the NPZ placed; an NPZ that "
                     "cannot be written goes to the system's temporary folder, which the error names. The port is "
                     "opened exclusively (another record, or any program locking it, is refused; CRC errors and "

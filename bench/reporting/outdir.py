@@ -248,14 +248,7 @@ class OutFolder:
 
     def _remove(self, names: list[str]) -> None:
         """Remove these files of an earlier run (paths relative to the folder), in this order."""
-        for name in names:
-            try:
-                os.unlink(self.path / name)
-            except FileNotFoundError:
-                pass
-            except OSError as e:
-                raise OutDirError(f"{self._where()}: cannot remove {name} of an earlier run "
-                                  f"({e.strerror or e})") from None
+        _remove_files(self.path, names, self._where(), "of an earlier run")
 
     def _remove_stale(self, names: list[str]) -> None:
         """Remove the temporary files an interrupted run left (:func:`stale_temps`), noting them in :attr:`stale`."""
@@ -319,11 +312,81 @@ class OutFolder:
         self.close()
 
 
-def _stale_words(names: list[str]) -> str:
-    """Temporary files an interrupted run left, named for a message (at most 6)."""
+def _remove_files(folder: Path, names, where: str, what: str) -> None:
+    """Remove these files (paths relative to ``folder``), in this order, skipping one already gone; one that cannot
+    be removed is an :class:`OutDirError` naming ``where``, the file and ``what`` it is ("of an earlier run")."""
+    for name in names:
+        try:
+            os.unlink(folder / name)
+        except FileNotFoundError:
+            pass
+        except OSError as e:
+            raise OutDirError(f"{where}: cannot remove {name} {what} ({e.strerror or e})") from None
+
+
+def _stale_words(names: list[str], command: str = "run") -> str:
+    """Temporary files an interrupted ``command`` left, named for a message (at most 6)."""
     shown = ", ".join(names[:6]) + (" …" if len(names) > 6 else "")
-    return (f"{len(names)} temporary file{'s' if len(names) > 1 else ''} that an interrupted run left, killed (or the "
-            f"machine down) before it could clean up, partial writes and never results: {shown}")
+    return (f"{len(names)} temporary file{'s' if len(names) > 1 else ''} that an interrupted {command} left, killed "
+            f"(or the machine down) before it could clean up, partial writes and never results: {shown}")
+
+
+class OutFile:
+    """A lone output file a command writes (``campaign --junit``, ``record --out``) with the lock beside it
+    (``.<name>.lock``, :func:`lock_exclusively`), held from :meth:`open` to :meth:`close`: a second command writing
+    the same file is refused at once, and — no other command writing it meanwhile — the temporary files of it, or
+    of the files written ``beside`` it (record's CSV), that are found there (``.<name>.<random>.part``, regular
+    files only, as :func:`atomic_write` names them) are what an interrupted command left, killed with no chance to
+    clean up (SIGKILL, the OOM killer, a power cut): :meth:`open` removes them and :meth:`stale_note` names them.
+    The file itself is written with :func:`atomic_write` (or :func:`temp_path` and a commit), so a reader never
+    sees it half-written."""
+
+    def __init__(self, path: Path, where: str, command: str):
+        self.path, self.where, self.command = path, where, command
+        self._lock_fd: int | None = None
+        self._lock_path = path.parent / f".{path.name}.lock"
+        self._made: list[tuple[Path, tuple[int, int]]] = []
+        #: the temporary files an interrupted command had left, removed when this one opened the file
+        self.stale: tuple[str, ...] = ()
+
+    @classmethod
+    def open(cls, path, flag: str, command: str, what: str, beside: tuple[str, ...] = ()) -> "OutFile":
+        """Make ``path``'s folder (removed again at close if the command leaves it empty), take the lock and remove
+        the leftovers; :class:`OutDirError` naming ``flag`` and the path if the lock is held (by another
+        ``command``: ``what`` is the file, for the refusal: "this report") or the folder cannot be made."""
+        path = Path(path)
+        out = cls(path, f"{flag} {escaped(os.fspath(path))}", command)
+        _make_folder(path.parent, out.where, out._made)
+        try:
+            out._lock_fd = lock_exclusively(out._lock_path, out.where,
+                                            lambda who: f"{who} is writing {what}; wait for it to end or choose "
+                                                        f"another {flag}", holder_is=f"another {command}")
+            names = (path.name, *beside)
+            out.stale = tuple(sorted(e.name for e in os.scandir(path.parent) if e.is_file(follow_symlinks=False)
+                                     and (m := _TEMP_NAME.fullmatch(e.name)) and m.group("final") in names))
+            _remove_files(path.parent, out.stale, out.where, f"(a temporary file an interrupted {command} left)")
+        except BaseException:
+            out.close()
+            raise
+        return out
+
+    def stale_note(self) -> str | None:
+        """What the command says when it removed temporary files an interrupted one had left (None if none)."""
+        return f"note: {self.where}: removed {_stale_words(list(self.stale), self.command)}" if self.stale else None
+
+    def close(self) -> None:
+        """Release and remove the lock, then each folder :meth:`open` made that is left empty (nothing written)."""
+        if self._lock_fd is not None:
+            fd, self._lock_fd = self._lock_fd, None
+            release_and_remove(fd, self._lock_path)
+        _remove_made(self._made)
+        self._made = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
 
 def _lock(folder: Path, where: str, flag: str) -> int:

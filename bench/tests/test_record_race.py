@@ -1,7 +1,10 @@
 """``record`` checks --out at the start, and a file that appears there during a (long) recording is not replaced at
-the end either unless --force: the recording is refused in one line naming the path, exit status 2, and kept under
-its temporary name beside --out, which the error names, so nothing is lost.  The placement replaces nothing by
+the end either unless --force: the recording is refused in one line naming the path, exit status 2, and kept beside
+--out under a name of its own (``NAME.kept-<8 hex digits>.npz``, never a temporary name, which the next record would
+take for an interrupted one's leftover), which the error names, so nothing is lost.  The placement replaces nothing by
 construction (bench.atomic.commit_new: hard links, all or none), not by a check before a rename."""
+
+import re
 
 import numpy as np
 import pytest
@@ -53,9 +56,13 @@ def _record(monkeypatch, out, *flags, meanwhile=lambda: None) -> int:
 
 
 def _kept(folder):
-    """The temporary files left in ``folder``, by the final name they were for."""
-    return {p.name.split(".")[1] + "." + p.name.split(".")[2]: p for p in folder.iterdir()
-            if p.name.startswith(".") and p.name.endswith(TEMP_SUFFIX)}
+    """The files a refused recording was kept as in ``folder``, by the final name they were for; none of them a
+    temporary file (nor any other temporary file left)."""
+    assert not [p for p in folder.iterdir() if p.name.endswith(TEMP_SUFFIX)]
+    kept = {m.group(1) + m.group(2): p for p in folder.iterdir()
+            if (m := re.fullmatch(r"(.+)\.kept-[0-9a-f]{8}(\.npz|\.csv)", p.name))}
+    assert len({p.name.split(".")[1] for p in kept.values()}) <= 1, kept  # an NPZ and its CSV: the same digits
+    return kept
 
 
 def _assert_a_whole_recording(npz):
