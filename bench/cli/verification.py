@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
 from bench.cli.args import (MAX_LOCAL_WORKERS, any_seed, local_workers, number, replaceable_report,
-                            scheduler_address, sigterm_like_ctrl_c, strict_json, unit_choice, whole)
+                            say_leftovers, scheduler_address, sigterm_like_ctrl_c, strict_json, unit_choice, whole)
 from bench.errors import OutputNotWritten, escaped
 from bench.verification.claim_names import CLAIM_GROUP_NAMES
 from emulator.channels import DEFAULT_VARIANT, VARIANTS
@@ -50,12 +51,15 @@ def _cmd_noise_budget(a) -> int:
 def _cmd_claims(a) -> int:
     from bench.reporting.outdir import made_folders
 
-    with made_folders() as made:  # a --plots folder this command made, left empty by a refusal: removed
-        return _claims(a, made)
+    # a --plots folder this command made, left empty by a refusal: removed (made_folders)
+    with made_folders() as made, contextlib.ExitStack() as held:
+        return _claims(a, made, held)
 
 
-def _claims(a, made: list) -> int:
-    """``claims``; ``made``: where the folders it makes are noted (:func:`bench.reporting.outdir.made_folders`)."""
+def _claims(a, made: list, held: contextlib.ExitStack) -> int:
+    """``claims``; ``made``: where the folders it makes are noted (:func:`bench.reporting.outdir.made_folders`);
+    ``held``: what stays open until the command ends (the plot's lock, :class:`~bench.reporting.outdir.OutFile`:
+    the temporary plot a killed claims left is removed and named)."""
     from bench.verification.claims import (CLAIM_GROUPS, Bench, format_spread_table, format_table, run_claims,
                                            run_claims_over_seeds)
 
@@ -76,6 +80,10 @@ def _claims(a, made: list) -> int:
             replaceable_report(b"\x89PNG", "a PNG plot")(str(Path(a.plots) / SENSITIVITY_PLOT))
         except argparse.ArgumentTypeError as e:
             raise ValueError(f"--plots {plots}: {escaped(str(e))}") from None
+        from bench.reporting.outdir import OutFile
+
+        held.enter_context(say_leftovers(OutFile.open(Path(a.plots) / SENSITIVITY_PLOT, "--plots", "claims run",
+                                                      "this plot")))
     unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:

@@ -81,10 +81,18 @@ def test_claims_plots_refuses_what_it_did_not_write_before_running(tmp_path, cap
 
 
 def test_claims_plots_replaces_its_own_earlier_plot(tmp_path, capsys):
+    """... and removes, and names, the temporary plot a claims killed as it saved the plot left there (no other
+    file, and no lock file, stays)."""
     from bench.cli import main as cli
 
     target = tmp_path / "frequency_sensitivity.png"
     target.write_bytes(b"\x89PNG earlier")
+    left = tmp_path / ".frequency_sensitivity.png.0a1b2c3d.part"
+    left.write_bytes(b"\x89PNG half written")
     assert cli.main(["claims", "--only", "vibration", "--quick", "--plots", str(tmp_path)]) == 0
     assert target.read_bytes()[:4] == b"\x89PNG" and len(target.read_bytes()) > 1000
-    assert f"wrote {target}" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"wrote {target}" in err
+    assert (f"note: --plots {target}: removed 1 temporary file that an interrupted claims run left, killed (or the "
+            f"machine down) before it could clean up, partial writes and never results: {left.name}") in err, err
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]
