@@ -105,6 +105,46 @@ def test_d_min_s_background_is_d_s_resting_band_as_the_noise_row_measures_it():
     assert background == pytest.approx(band.measured, rel=0.25)
 
 
+def test_the_proportionality_row_fits_through_the_origin_and_no_drive_reads_nothing():
+    """"Proportional" has two halves: the row's R² per frequency is that of a fit through the origin (a free line
+    would forgive an offset) of the band RMS it lists per drive, and the measurement reads exactly nothing at no
+    drive (noise off: an offset in the measurement, too small for R² to see, reads there)."""
+    from bench.verification import analysis
+    from bench.verification.claims.vibration import drive_rms_bits
+    from emulator.sensor import NoiseSources
+
+    row = _row("vibration", "PAC RMS proportional to drive amplitude")
+    drives, rms = row.details["drive_m"], row.details["rms_bits_by_frequency_Hz"]
+    assert len(drives) >= 4 and set(rms) == set(row.details["r_squared_by_frequency_Hz"])
+    for f, r in rms.items():
+        assert len(r) == len(drives) and all(np.diff(r) > 0), f
+        assert row.details["r_squared_by_frequency_Hz"][f] == analysis.fit_proportional(drives, r).r_squared, f
+        assert drive_rms_bits(Bench(), [0.0], f, NoiseSources.none()) == [0.0], f
+
+
+def test_d_min_s_band_powers_are_the_drive_s_power_at_its_frequency():
+    """D eq. 5.3's P_1µm, in the d_min row's details for the sweep and the peak search: the 2 Hz band at each drive
+    frequency holds the drive's own power, A²/2 of the noise-free PAC (before the ADC) at that frequency over the same
+    second, within the band's noise and hum (its RMS within 0.3 bits); a band beside the drive would hold ~nothing;
+    and each d_min is eq. 5.3 of its band power and the background."""
+    from bench.verification.analysis import minimum_detectable_amplitude
+    from emulator.stimuli import Vibration
+
+    row = _row("vibration", "d_min near the 330 Hz resonance")
+    b, background = Bench(), row.details["background_bits2"]
+    for powers, d_min in ((row.details["band_power_bits2"], row.details["d_min_m"]),
+                          (row.details["peak_search_band_power_bits2"], row.details["peak_search_d_min_m"])):
+        assert set(powers) == set(d_min) and len(powers) >= 20
+        for f, p in powers.items():
+            t, x = b.analog_pac_bits([Vibration(0.0, 2.0, 1e-6, f, fade_s=0.0)], 2.0)
+            second = (t >= 1.0) & (t < 2.0)
+            fit = np.column_stack([np.sin(2 * np.pi * f * t[second]), np.cos(2 * np.pi * f * t[second]),
+                                   np.ones(np.count_nonzero(second))])
+            (s, c, _), *_ = np.linalg.lstsq(fit, x[second], rcond=None)
+            assert abs(np.sqrt(p) - np.sqrt((s**2 + c**2) / 2)) <= 0.3, (f, p, (s**2 + c**2) / 2)
+            assert d_min[f] == minimum_detectable_amplitude(1e-6, p, noise_band_bits2=background), f
+
+
 @pytest.mark.parametrize("mains_Hz", [50.0, 60.0, 51.0])
 def test_the_peak_search_grid_is_5_Hz_over_250_to_400_Hz_clear_of_mains_harmonics(mains_Hz):
     """peak_search_frequencies_Hz: every 5 Hz from 250 to 400 Hz, both ends included, except those within 3 Hz of a
