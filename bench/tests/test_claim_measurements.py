@@ -83,6 +83,37 @@ def test_the_range_top_is_where_the_line_through_the_last_two_unclipped_points_r
     assert any(c >= 4093.5 for _, c in top.details["bead_C_and_mean_code"])  # the sweep reached the top
 
 
+def test_the_tac_rate_integrates_to_the_tdc_temperature_change():
+    """TAC is TDC through a first-order high-pass (τ = 1/(2π·0.45 Hz)): y + τ·y' = τ·x', so the rate r read from it
+    obeys ∫r dt + τ·Δr = ΔT.  Over the aluminum touch (1 s to 11 s) the rate the thermal rows read — TAC's resting
+    level taken before the touch, a running mean — integrates to the TDC's own cooling (−0.95 K) within 3 %; a
+    resting level taken 2 s into the touch (12 % off) or a running sum in place of a mean (×20) would not."""
+    from bench.verification.claims.thermal import material_touch, tac_rate_C_per_s
+
+    t, tdc, tac = material_touch(Bench(), "aluminum", seed_offset=0)
+    at, rate = tac_rate_C_per_s(t, tac, tdc)
+    a, z = 0.7, 11.0  # s: before the touch, and at its end
+    inside = (at >= a) & (at <= z)
+    tau = 1.0 / (2 * np.pi * 0.45)
+    integral = np.trapezoid(rate[inside], at[inside]) + tau * (np.interp(z, at, rate) - np.interp(a, at, rate))
+    temp = conv.tdc_to_celsius(tdc)
+    cooled = temp[np.abs(t - z) <= 0.1].mean() - temp[np.abs(t - a) <= 0.1].mean()
+    assert cooled < -0.5
+    assert integral == pytest.approx(cooled, rel=0.03)
+
+
+def test_the_tac_rate_s_smoothing_keeps_the_resting_noise_under_the_weakest_transient():
+    """The running mean exists for the noise: at rest (a touch that exchanges no heat) the largest cooling the rate
+    reads is under a fifth of the transient the TAC row reports for polystyrene foam, its weakest material (2e-4 of
+    1.5e-3 °C/s); read over 50 ms instead of 200 ms the noise alone would read a third of it."""
+    from bench.verification.claims.thermal import material_touch, tac_rate_C_per_s
+
+    foam = _row("thermal", "TAC transient: Al > glass > wood > foam").details["peak_cooling_C_per_s"]["polystyrene foam"]
+    t, tdc, tac = material_touch(Bench(), None, seed_offset=4)
+    _, rate = tac_rate_C_per_s(t, tac, tdc)
+    assert 0.0 < -np.min(rate) < foam / 5, (-np.min(rate), foam)
+
+
 # --- vibration --------------------------------------------------------------------------------------------------
 def test_the_vibration_rows_span_d_s_band_and_report_their_worst_frequency():
     """"PAC RMS proportional to drive amplitude" is judged on its worst drive frequency, and both it and the

@@ -46,6 +46,37 @@ def range_top_C(sweep: list[tuple[float, float]]) -> float:
 
 THERMAL_MATERIALS = ("aluminum", "glass", "wood", "polystyrene foam")
 
+#: the touches start at 1 s: the record before this instant (s) is the rest (TDC's resting temperature, TAC's
+#: resting level)
+REST_BEFORE_S = 0.9
+#: the TAC-derived rate is a running mean over this long (s), which keeps the noise's own peaks (a few
+#: 1e-4 °C/s at rest) under the weakest material's transient
+TAC_SMOOTHING_S = 0.2
+
+
+def material_touch(b: Bench, material: str | None, seed_offset: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(instants s, TDC codes, TAC codes) of a 1 N touch (6 mm indenter over E17) on ``material`` at room
+    temperature from 1 s, held 10 s, TDC and TAC each read at 100 S/s for 11.5 s (``material`` None: a touch that
+    exchanges no heat)."""
+    touch = Touch(1.0, 1.0, 0.2, 10.0, electrode="E17", indenter_radius_mm=6.0, material=material)
+    rec = b.acquire([touch], 11.5, sequence=("TDC", "TAC"), slot_rate_Hz=200.0, seed_offset=seed_offset)
+    t, tdc = rec["TDC"]
+    return t, tdc, rec["TAC"][1]
+
+
+def tac_rate_C_per_s(t, tac, tdc, rest_before_s: float = REST_BEFORE_S,
+                     smoothing_s: float = TAC_SMOOTHING_S) -> tuple[np.ndarray, np.ndarray]:
+    """(instants s, rate of temperature change °C/s) from TAC and TDC codes ``tac``, ``tdc`` read at the evenly
+    spaced instants ``t`` (s): the emulator's TAC relation (:func:`emulator.conversions.tac_to_celsius_per_s`) with
+    TAC's resting level its mean before ``rest_before_s``, then a running mean over ``smoothing_s`` (whole windows
+    only; each instant is its window's mean instant)."""
+    t = np.asarray(t, float)
+    rate = conv.tac_to_celsius_per_s(tac, tdc, np.mean(np.asarray(tac, float)[t < rest_before_s]))
+    n = int(round(smoothing_s / np.median(np.diff(t))))
+    window = np.ones(n) / n
+    return np.convolve(t, window, mode="valid"), np.convolve(rate, window, mode="valid")
+
+
 _ORDER = ("from k, ρ, c of each material (Incropera & DeWitt) through the thermal network; the contact "
           "conductance is a model choice, not tuned to the order")
 
@@ -72,15 +103,12 @@ def thermal_claims(b: Bench) -> list[Claim]:
     # touch and hold, 10 s, on each material at room temperature
     drops, tacs = {}, {}
     for k, m in enumerate(THERMAL_MATERIALS):
-        touch = Touch(1.0, 1.0, 0.2, 10.0, electrode="E17", indenter_radius_mm=6.0, material=m)
-        rec = b.acquire([touch], 11.5, sequence=("TDC", "TAC"), slot_rate_Hz=200.0, seed_offset=k)
-        t, tdc = rec["TDC"]
-        _, tac = rec["TAC"]
+        t, tdc, tac = material_touch(b, m, seed_offset=k)
         temp = conv.tdc_to_celsius(tdc)
-        before = temp[t < 0.9].mean()
+        before = temp[t < REST_BEFORE_S].mean()
         drops[m] = float(before - temp[(t > 10.9) & (t < 11.2)].mean())
-        rate = conv.tac_to_celsius_per_s(tac, tdc, np.mean(tac[t < 0.9]))
-        tacs[m] = float(-np.min(np.convolve(rate, np.ones(20) / 20, mode="valid")))
+        _, rate = tac_rate_C_per_s(t, tac, tdc)
+        tacs[m] = float(-np.min(rate))
     order_drop = all(drops[a] > drops[c] for a, c in zip(THERMAL_MATERIALS, THERMAL_MATERIALS[1:]))
     order_tac = all(tacs[a] > tacs[c] for a, c in zip(THERMAL_MATERIALS, THERMAL_MATERIALS[1:]))
     return [
