@@ -254,6 +254,36 @@ def test_the_contact_estimate_is_the_change_weighted_centroid_of_the_four_electr
     assert estimate == pytest.approx([21.0 / 11.0, 0.0, 7.0], rel=1e-12)
 
 
+def test_the_held_codes_are_the_hold_s_own_not_the_ramp_s():
+    """held_codes reads a touch in its hold: for the claims' 1 N touch over E17 (full force at 0.5 s, read at 0.6 s)
+    every electrode's held code is within 1.5 codes of its own reading at 0.6 s (the skin creeps ~0.03 codes per
+    ms); a window reaching 0.2 s back, into the ramp, would read the pressed electrode ~26 codes nearer its rest."""
+    from bench.verification.claims.electrodes import ELECTRODES, held_codes
+    from emulator.sensor import NoiseSources
+    from emulator.stimuli import Touch
+
+    b, touch, at_s = Bench(), Touch(0.2, 1.0, 0.3, 1.0, electrode="E17"), 0.6
+    held = held_codes(b, touch, at_s)
+    twice = [e for e in ELECTRODES for _ in range(2)]
+    rec = b.acquire([touch], at_s + 0.05, sequence=twice, slot_rate_Hz=3800.0, noise=NoiseSources.none())
+    at = []
+    for e in ELECTRODES:
+        t, code = rec[e][0][1::2], rec[e][1][1::2]
+        at.append(code[np.argmin(np.abs(t - at_s))])
+    assert held[16] < at[16] + 300 and np.max(np.abs(held - np.array(at))) <= 1.5, held - np.array(at)
+    assert at[16] < held_codes(b, Touch(5.0, 1.0), 1.0)[16] - 300  # pressed: E17 read 350 codes below its rest
+
+
+def test_a_contact_s_change_beyond_10_mm_is_the_faint_tail_of_its_dent_and_rim():
+    """The locality row's detail: for each of the 19 contacts the largest |Δcode| beyond 10 mm (2.4 w) of the pressed
+    electrode is the volume-balanced profile's faint tail, under 6 codes (emulator/electrodes.py: "under 6 codes beyond
+    8 mm", next to −380 on the pressed electrode) but not nothing (−0.01…−0.02 of the central depth out to 3.5 w):
+    a rim bulge that is missing (the dent's own tail then reads 6–12 codes) or twice as wide (56) would show here."""
+    row = _row("electrodes", "a 1 N contact's change stays in the nearest 4 electrodes")
+    far = row.details["largest_change_beyond_10_mm_codes"]
+    assert len(far) == 19 and all(1.0 <= c < 6.0 for c in far), far
+
+
 # --- sliding ----------------------------------------------------------------------------------------------------
 def test_the_slip_onset_rise_is_the_band_power_ratio_in_decibels():
     """The slip-onset row is 10·log10 of the 30–200 Hz band's mean square (bits²) over the 100 ms after slip to that

@@ -72,30 +72,38 @@ def contact_estimate_mm(changes, positions_mm, k: int = 4) -> np.ndarray:
     return (d[top, None] * positions_mm[top]).sum(axis=0) / d[top].sum()
 
 
+#: a touch's electrode codes are averaged from this long (s) before the instant asked for to the record's end, this
+#: long (s) after it: inside the hold of the claims' touches (full force 0.1 s before the instant)
+HELD_BEFORE_S, HELD_AFTER_S = 0.02, 0.05
+
+
+def held_codes(b: Bench, touch, at_s: float) -> np.ndarray:
+    """Each electrode's code (E1..E19, noise off) during ``touch``: the mean from :data:`HELD_BEFORE_S` before
+    ``at_s`` (s) to :data:`HELD_AFTER_S` after it.  Each electrode is read twice in a row and the second reading
+    kept: it has no memory of the previous electrode."""
+    twice = [e for e in ELECTRODES for _ in range(2)]
+    rec = b.acquire([touch], at_s + HELD_AFTER_S, sequence=twice, slot_rate_Hz=3800.0, noise=NoiseSources.none())
+    out = []
+    for e in ELECTRODES:
+        t, code = rec[e]
+        second = slice(1, None, 2)
+        t, code = t[second], code[second]
+        out.append(float(code[t >= at_s - HELD_BEFORE_S].astype(float).mean()))
+    return np.array(out)
+
+
 @claim_group("electrodes")
 def electrode_claims(b: Bench) -> list[Claim]:
     """Monotonic impedance with force, the pressed electrode moves most, locality, localisation, PDC consistency."""
 
-    def codes(touch, at_s):
-        # each electrode read twice in a row; the second reading has no memory of the previous electrode
-        twice = [e for e in ELECTRODES for _ in range(2)]
-        rec = b.acquire([touch], at_s + 0.05, sequence=twice, slot_rate_Hz=3800.0, noise=NoiseSources.none())
-        out = []
-        for e in ELECTRODES:
-            t, code = rec[e]
-            second = slice(1, None, 2)
-            t, code = t[second], code[second]
-            out.append(float(code[t >= at_s - 0.02].astype(float).mean()))
-        return np.array(out)
-
     def pattern(touch, at_s):
-        return conv.impedance_ohm(codes(touch, at_s))
+        return conv.impedance_ohm(held_codes(b, touch, at_s))
 
-    rest_codes = codes(Touch(5.0, 1.0), 1.0)
+    rest_codes = held_codes(b, Touch(5.0, 1.0), 1.0)
 
     def change(touch, at_s):
         """Each electrode's change in common-rest codes (module docstring)."""
-        return (common_rest_codes(codes(touch, at_s), rest_codes, b.params)
+        return (common_rest_codes(held_codes(b, touch, at_s), rest_codes, b.params)
                 - common_rest_codes(rest_codes, rest_codes, b.params))
 
     # monotonic rise of the pressed electrode's impedance with force
