@@ -49,6 +49,49 @@ def test_the_press_cycle_splits_loading_from_unloading_and_its_rise_starts_at_ze
     assert np.count_nonzero(at_rest) >= 20 and abs(rise[at_rest].mean()) < 0.5  # codes
 
 
+def test_the_creep_row_measures_the_skins_creep_law_as_a_share_of_the_settled_reading():
+    """The held 1 N's PDC grows from the early to the late window as the skin-and-fluid standard linear solid grows
+    the force it passes on (sls_creep_growth: 9.0 % of the late reading); the row's growth, a share of the late
+    (settled) reading, is that within 0.6 point (the early window's 10 noisy PDC samples: 9.3 % measured), where a
+    share of the early reading would be 10.3 %."""
+    from bench.verification.claims.force import sls_creep_growth
+    from emulator.params import SensorParams
+
+    row = _row("force", "PDC creep under a held 1 N, 0.2 → 10 s")
+    law = 100 * sls_creep_growth(SensorParams())
+    assert 8.5 < law < 9.5 and row.details["creep_law_%"] == law
+    assert abs(row.measured - law) <= 0.6, (row.measured, law)
+    early, late = row.details["early_codes"], row.details["late_codes"]
+    assert row.measured == pytest.approx(100 * (late - early) / late, rel=1e-12)
+
+
+@pytest.mark.parametrize("relaxed_fraction", [0.4, 0.85])
+def test_the_creep_law_follows_the_skin_s_relaxed_modulus(relaxed_fraction):
+    """A skin that relaxes further (E∞/E0 = 0.4) creeps more, one nearly elastic (0.85) less: the PDC still grows as
+    the closed-form standard linear solid says (within 0.6 point), so the creep row reads back the unit's own skin."""
+    from bench.verification.claims.force import force_claims, sls_creep_growth
+    from emulator.params import SensorParams
+
+    p = SensorParams().replace(skin_relaxed_modulus_fraction=relaxed_fraction)
+    (row,) = [c for c in force_claims(Bench(params=p)) if c.name.startswith("PDC creep")]
+    law = 100 * sls_creep_growth(p)
+    assert abs(law - 100 * sls_creep_growth(SensorParams())) > 2.0  # another skin, another creep
+    assert abs(row.measured - law) <= 0.6, (row.measured, law)
+
+
+@pytest.mark.parametrize("knee", [0.125, 0.4])
+def test_the_knee_row_reads_back_the_unit_s_slope_above_the_knee(knee):
+    """The force curve's slope above the knee is force_slope_above_knee times the slope below: the row measures it
+    within 5 % for a unit whose fraction is half the nominal 0.25 (which the old accepted range, 0..0.5, let pass
+    whatever the curve did) or 0.4, and accepts it."""
+    from bench.verification.claims.force import force_claims
+    from emulator.params import SensorParams
+
+    rows = force_claims(Bench(params=SensorParams().replace(force_slope_above_knee=knee)))
+    (row,) = [c for c in rows if c.name == "slope above the knee / slope below"]
+    assert row.measured == pytest.approx(knee, rel=0.05) and row.passed
+
+
 # --- thermal ----------------------------------------------------------------------------------------------------
 def test_the_tdc_rows_span_0_to_70_C_and_report_their_worst_step():
     """The conversion row says "over 0–70 °C": its settled thermistor temperatures reach both ends, its number is the

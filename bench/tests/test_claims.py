@@ -39,7 +39,7 @@ EXPECTED_KINDS = {
     "PDC code at full transducer range 103.4 kPa": "consistency",  # tolerance = the whole ADC range
     "force per PDC bit, 0–2 N": "calibrated",  # skin_direct_stiffness_N_per_m; the bridge/gain/ADC still enter
     "linearity of force -> PDC, 0–2 N": "calibrated",  # skin_relaxed_modulus_fraction (R² near 0.995)
-    "PDC creep under a held 1 N, 0.2 → 10 s": "consistency",  # bounds on a model choice; D has no figure
+    "PDC creep under a held 1 N, 0.2 → 10 s": "consistency",  # reads back the skin's creep law; D has no figure
     "PDC hysteresis loop, 0–2 N at 0.5 N/s": "consistency",
     "slope above the knee / slope below": "consistency",
     "impact ringing frequency": "calibrated",  # resonance_Hz anchors the skin's moving mass at 0.5 mL
