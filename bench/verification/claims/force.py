@@ -16,9 +16,9 @@ CYCLE = dict(start=0.5, force_N=2.0, ramp_s=4.0, hold_s=0.2)
 #: the creep row's press (1 N reached in 0.1 s, held 10 s) and the windows (s) of its early and late readings
 CREEP_HOLD = dict(start=0.5, force_N=1.0, ramp_s=0.1, hold_s=10.0)
 CREEP_EARLY_S, CREEP_LATE_S = (0.62, 0.72), (10.3, 10.6)
-#: the creep row accepts the creep law's growth ± this many percentage points (its 5 seeds: within 0.4)
+#: the creep row accepts the creep law's growth ± this many percentage points (seeds 2012–2021: within 0.51)
 CREEP_READ_BACK_POINTS = 1.0
-#: the knee row accepts force_slope_above_knee ± this fraction (its 5 seeds: +2–3 %)
+#: the knee row accepts force_slope_above_knee ± this fraction (seeds 2012–2021: +2–3 %)
 KNEE_READ_BACK = 0.1
 
 
