@@ -202,6 +202,7 @@ class Sensor:
             raise ValueError(f"start_s = {start_s!r}: must be a finite instant ≥ 0 s")
         self._start_s = float(start_s)
         stimuli = list(stimuli)
+        self.stimuli = tuple(stimuli)  # what the sensor feels, as given (reports say it; nothing reads it back)
         self.fidelity = profile(fidelity) if isinstance(fidelity, str) else fidelity
         self.seed = int(seed)
         self.noise = noise

@@ -77,7 +77,8 @@ Keywords (every one optional)
       biotac_bridge only (``FirmwareBench``):
         realtime      pace the firmware to the wall clock (default False: it waits for your program to read)
         speed         virtual seconds per wall second when paced (default 1)
-        spi           "software" (default; with ``scene``: its host.spi) or "rtl" (the Verilog twin)
+        spi           "software" (default; with ``scene``: its host.spi; ``pytest --biotac-spi rtl|software``
+                      replaces that default for the whole session) or "rtl" (the Verilog twin)
         pattern       the firmware's sampling pattern: channel indices (default: the variant's default frame)
         baudrate      the UART's (default 3000000); rx_buffer: the host's receive buffer (bytes, default 4096)
         keep_arrivals keep every byte's arrival (``bench.overrun_frames()``)
@@ -108,6 +109,10 @@ Sensor k is the scene's sensor k (unit, parameters, variant, stimuli, faults, no
 used (a scene asking for the RTL is refused: the adapter serves the software model).  A scene that is not valid,
 or a keyword the fixture does not take, fails the test with the problem in one message (no traceback).
 
+A failing test's report says what every sensor and bench its factories made was and felt (the call, each
+sensor's serial, seed, fidelity, sensor and SPI faults and stimuli, the bench's virtual time: "Captured biotac
+call"), and ``--junitxml`` keeps the same text as each test's property ``biotac`` (:mod:`bench.pytest_plugin.hooks`).
+
 Sensor units: each sensor carries its unit's parameters and serial number (``sensor.serial``, None for the nominal
 unit), and answers that serial as its serial property (a BioTac SP's as "BTSP…"; the nominal unit: its port's
 default, one per sensor number).
@@ -118,6 +123,9 @@ from __future__ import annotations
 import inspect
 
 import pytest
+
+#: The plugin's hooks (what a failing test's sensors were and felt: its report and JUnit property ``biotac``).
+pytest_plugins = ("bench.pytest_plugin.hooks",)
 
 #: Keywords of emulator.sensor.Sensor the factories pass on to every sensor they build.
 SENSOR_KEYWORDS = ("params", "fidelity", "noise", "faults", "block_s", "start_s", "record_signals")
@@ -222,14 +230,20 @@ def _refuse_beside(fixture: str, what: str, given: dict, refused) -> None:
 
 class Factory:
     """A factory fixture's value: call it to get a sensor or a bench; using it as one (``biotac_sensor.exchange``)
-    is an AttributeError saying to call it first (it had been "'function' object has no attribute 'exchange'")."""
+    is an AttributeError saying to call it first (it had been "'function' object has no attribute 'exchange'").
+    What each call makes is remembered on the test's item ``node`` (:func:`bench.pytest_plugin.hooks.remember`), for
+    the failure report and the JUnit property that say what the sensors were and felt."""
 
-    def __init__(self, name: str, make, gives: str):
-        self._name, self._make, self._gives = name, make, gives
+    def __init__(self, name: str, make, gives: str, node):
+        self._name, self._make, self._gives, self._node = name, make, gives, node
 
     def __call__(self, *args, **kw):
         __tracebackhide__ = True
-        return self._make(*args, **kw)
+        from bench.pytest_plugin.hooks import remember  # (registered by pytest_plugins above)
+
+        made = self._make(*args, **kw)
+        remember(self._node, self._name, args, kw, made)
+        return made
 
     def __getattr__(self, attr: str):
         __tracebackhide__ = True
@@ -243,7 +257,7 @@ class Factory:
 
 
 @pytest.fixture
-def biotac_sensor():
+def biotac_sensor(request):
     """Factory: ``biotac_sensor(stimuli=(), channels=None, seed=0, unit=None, variant=None, scene=None, **kw)``
     -> the SPI side of an emulated sensor, in process (``spi.exchange(TransferBatch(...))``); keywords in the
     module docstring."""
@@ -269,13 +283,14 @@ def biotac_sensor():
         except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"biotac_sensor(): {e}")
 
-    return Factory("biotac_sensor", make, "a sensor's SPI side")
+    return Factory("biotac_sensor", make, "a sensor's SPI side", request.node)
 
 
-def _benches(fixture: str, bench_class, scene_kw, gives: str):
+def _benches(fixture: str, bench_class, scene_kw, gives: str, node, defaults=None):
     """A factory fixture's body: build the sensors (module docstring; ``scene_kw(scene, n_sensors, seed, kw)``:
     the bench's keywords for a scene's sensors), start ``bench_class`` on them on demand, stop each after the
-    test."""
+    test (``node``: the test's item, where what is made is remembered; ``defaults``: keywords a call that leaves
+    them out gets, e.g. the session's ``--biotac-spi``)."""
     from bench.errors import BenchError
 
     own = set(inspect.signature(bench_class).parameters) - {"n_sensors", "stimuli", "seed", "sensors", "variant"}
@@ -290,6 +305,7 @@ def _benches(fixture: str, bench_class, scene_kw, gives: str):
                                f"serves its own test only")
         _check_keywords(fixture, kw, allowed)
         _check_values(fixture, n_sensors, stimuli, kw.get("seed"))
+        kw = {**(defaults or {}), **kw}
         kw.update(_given(stimuli=stimuli, units=units, seed=None if kw.get("seed") is None else int(kw["seed"])))
         try:
             bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
@@ -298,7 +314,7 @@ def _benches(fixture: str, bench_class, scene_kw, gives: str):
         started.append(bench.start())
         return bench
 
-    yield Factory(fixture, make, gives)
+    yield Factory(fixture, make, gives, node)
     ended.append(True)
     problems = []
     for bench in started:  # every bench is stopped, whatever an earlier one reported
@@ -361,13 +377,15 @@ def _cheetah_scene_kw(scene, n_sensors: int | None, seed: int | None, kw: dict) 
 
 
 @pytest.fixture
-def biotac_bridge():
+def biotac_bridge(request):
     """Factory: ``biotac_bridge(n_sensors=None, stimuli=(), units=None, variant=None, scene=None, **kw)`` -> the
     bridge firmware on a pty at ``bench.port``; it streams frames only after the host sends START
     (``BridgeDriver(bench.port).start()``); keywords in the module docstring."""
     from bench.hosts.bridge import FirmwareBench
 
-    yield from _benches("biotac_bridge", FirmwareBench, _bridge_scene_kw, "a FirmwareBench")
+    spi = request.config.getoption("biotac_spi", None)  # --biotac-spi: the session's SPI side
+    yield from _benches("biotac_bridge", FirmwareBench, _bridge_scene_kw, "a FirmwareBench", request.node,
+                        defaults={} if spi is None else {"spi": spi})
 
 
 @pytest.fixture
@@ -378,10 +396,10 @@ def biotac_serial_port(biotac_bridge):
 
 
 @pytest.fixture
-def biotac_cheetah():
+def biotac_cheetah(request):
     """Factory: ``biotac_cheetah(n_sensors=None, stimuli=(), units=None, variant=None, scene=None, **kw)`` ->
     emulated sensors behind cheetah.so (``bench.lib_dir``, ``bench.env`` for your Cheetah-based program); keywords
     in the module docstring."""
     from bench.hosts.cheetah_server import CheetahBench
 
-    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw, "a CheetahBench")
+    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw, "a CheetahBench", request.node)

@@ -1,0 +1,132 @@
+"""pytest plugin, hooks: what the emulated sensors of a test were and what they felt, shown where a CI looks.
+
+Every sensor or bench a factory fixture (:mod:`bench.pytest_plugin.fixtures`) makes is remembered on the test's
+item.  When the test fails (in its set-up, call or teardown) its report gains a section ``biotac`` — printed under
+the failure as "Captured biotac call" — saying, for each one, how it was made (the factory call as written), and
+per sensor its variant, the serial it answers, its noise seed, fidelity profile, sensor faults, SPI faults set on
+its port at that moment and every stimulus it feels, with the bench's virtual time reached: enough to rerun the
+failure and to see what the sensor saw.  After the test's call the same text is recorded as the test's property
+``biotac`` (``item.user_properties``), which ``--junitxml`` writes into the test case's ``<properties>``, passed
+or failed.
+
+``--biotac-spi software|rtl`` runs every ``biotac_bridge`` of the session over that SPI side unless its call gives
+``spi=``: one test suite, run over the software model and again over the Verilog RTL in CI, unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+#: The sensors and benches a test's factories made, in order: (fixture, the call as written, the object).
+MADE = pytest.StashKey[list]()
+#: The longest a keyword's value or a stimulus is written in the description (characters; longer ones are cut).
+MAX_VALUE_CHARS = 200
+#: At most this many stimuli are listed per sensor (the rest are counted).
+MAX_STIMULI = 20
+
+
+def _short(text: str) -> str:
+    """``text`` cut to :data:`MAX_VALUE_CHARS` characters, saying so."""
+    return text if len(text) <= MAX_VALUE_CHARS else text[:MAX_VALUE_CHARS - 1] + "…"
+
+
+def remember(node, fixture: str, args: tuple, kw: dict, made) -> None:
+    """Remember on the test item ``node`` that ``fixture(*args, **kw)`` made ``made`` (a SensorPort or a bench)."""
+    call = ", ".join([_short(repr(a)) for a in args] + [f"{k}={_short(repr(v))}" for k, v in kw.items()])
+    node.stash.setdefault(MADE, []).append((fixture, f"{fixture}({call})", made))
+
+
+def stimulus_text(stimulus) -> str:
+    """A stimulus as its kind and the fields that are set (a dataclass's None fields left out), e.g.
+    ``Tap(time_s=0.5, peak_N=1.0, ...)``; anything else as its repr."""
+    if dataclasses.is_dataclass(stimulus) and not isinstance(stimulus, type):
+        fields = ", ".join(f"{f.name}={getattr(stimulus, f.name)!r}" for f in dataclasses.fields(stimulus)
+                           if f.repr and getattr(stimulus, f.name) is not None)
+        return _short(f"{type(stimulus).__name__}({fields})")
+    return _short(repr(stimulus))
+
+
+def sensor_lines(index: int, sensor, port) -> list[str]:
+    """What sensor ``index`` is and feels (``port``: its SPI side on the bus, None while unplugged)."""
+    from emulator.spi.model import Faults, default_serial, variant_serial
+
+    variant = sensor.variant.name
+    serial = default_serial(index, variant) if getattr(sensor, "serial", None) is None else \
+        variant_serial(sensor.serial, variant)
+    spi_faults = "unplugged" if port is None else (
+        "none" if getattr(port, "faults", Faults()) == Faults() else
+        ", ".join(f"{f.name}={getattr(port.faults, f.name)!r}" for f in dataclasses.fields(port.faults)
+                  if getattr(port.faults, f.name) != getattr(Faults(), f.name)))
+    stimuli = list(getattr(sensor, "stimuli", ()))
+    lines = [f"  sensor {index}: {variant}, serial {serial}, seed {sensor.seed}, fidelity {sensor.fidelity.name}, "
+             f"sensor faults {_short(repr(sensor.faults)) if sensor.faults else 'none'}, SPI faults {spi_faults}",
+             f"    stimuli: {len(stimuli) or 'none'}"]
+    lines += [f"      {stimulus_text(s)}" for s in stimuli[:MAX_STIMULI]]
+    if len(stimuli) > MAX_STIMULI:
+        lines.append(f"      … and {len(stimuli) - MAX_STIMULI} more")
+    return lines
+
+
+def describe(fixture: str, call: str, made) -> str:
+    """How ``made`` was made (``call``) and, per sensor, what it is and feels; a bench's virtual time so far."""
+    lines = [call]
+    if fixture == "biotac_sensor":
+        lines += sensor_lines(made.index, made.sensor, made)
+        return "\n".join(lines)
+    if fixture == "biotac_bridge":
+        board = made.board
+        lines.append(f"  port {made.port}, SPI side {board.spi}, virtual time {board.t:.6f} s"
+                     + (f", line faults: {made.bytes_corrupted} byte(s) corrupted, {made.bytes_dropped} dropped"
+                        if made.corrupt_rate or made.drop_rate else ""))
+        sensors, ports = board.sensors, board.bus.ports
+    else:  # biotac_cheetah: the sensors behind the adapter
+        lines.append(f"  socket {made.socket_path}, host time {made.t:.6f} s, {made.batches} batch(es) clocked"
+                     + (f", client errors: {'; '.join(made.client_errors)}" if made.client_errors else ""))
+        ports = made.bus.ports
+        sensors = {k: p.sensor for k, p in ports.items()}
+    for k in sorted(sensors):
+        lines += sensor_lines(k, sensors[k], ports.get(k))
+    return "\n".join(lines)
+
+
+def description(item) -> str | None:
+    """Every sensor and bench the test's factories made, described (None if it made none)."""
+    made = item.stash.get(MADE, None)
+    if not made:
+        return None
+    texts = []
+    for fixture, call, obj in made:
+        try:
+            texts.append(describe(fixture, call, obj))
+        except Exception as e:  # noqa: BLE001 - a description must never hide the test's own failure
+            texts.append(f"{call}\n  (not described: {type(e).__name__}: {e})")
+    return "\n".join(texts)
+
+
+#: The SPI sides a bridge can run on (``--biotac-spi``).
+SPI_SIDES = ("software", "rtl")
+
+
+def pytest_addoption(parser) -> None:
+    """``--biotac-spi``: run every ``biotac_bridge`` of the session on that SPI side unless the test's call says
+    ``spi=`` (a scene's ``host.spi`` is replaced, as ``biotac-bench run --spi`` replaces it)."""
+    parser.getgroup("biotac", "emulated BioTac (bench.pytest_plugin)").addoption(
+        "--biotac-spi", choices=SPI_SIDES, default=None, dest="biotac_spi",
+        help="SPI side of every biotac_bridge whose call gives no spi=: the software model or the Verilog RTL "
+             "(Verilator); default: the call's scene's host.spi, else software")
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item, call):
+    """A failing test's report gains the ``biotac`` section; after the call the text is also the test's property
+    ``biotac`` (JUnit XML)."""
+    report = yield
+    text = description(item)
+    if text is not None:
+        if report.failed:
+            report.sections.append((f"Captured biotac {report.when}", text))
+        if report.when == "call":
+            item.user_properties.append(("biotac", text))
+    return report

@@ -1,0 +1,129 @@
+"""The pytest plugin as a CI team reads its results: a failing test's report says what each emulated sensor was
+and felt (the factory call, each sensor's serial, seed, faults and stimuli, the bench's virtual time), the JUnit XML
+carries the same as the test's property ``biotac``, and ``--biotac-spi`` runs every bridge of a session over the
+chosen SPI side unless a test says otherwise.  The users' sessions run in subprocesses: in process, a second
+session would load numpy's and numba's modules again after pytester unloads them, which they refuse."""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+
+import pytest
+
+pytestmark = pytest.mark.firmware
+pytest_plugins = ["pytester"]
+
+SEEN = '''
+import time
+
+from bench.hosts.driver import BridgeDriver
+from emulator.spi.model import Faults
+from emulator.stimuli import Tap
+
+
+def test_fails_after_reading(biotac_bridge, biotac_sensor, biotac_cheetah):
+    bench = biotac_bridge(n_sensors=2, stimuli=[Tap(0.3, 1.0)], seed=7)
+    bench.now(lambda board: setattr(board.bus.ports[2], "faults", Faults(miso_stuck=1)))
+    driver = BridgeDriver(bench.port)
+    driver.start()
+    frames = list(driver.frames(max_frames=20, timeout_s=20))
+    driver.close()
+    deadline = time.monotonic() + 20
+    while bench.board.bus.ports.get(2) is not None and bench.board.bus.ports[2].faults == Faults():
+        assert time.monotonic() < deadline, "the bench never applied the fault"
+        time.sleep(0.01)
+    biotac_sensor(scene="{scene}", seed=5)
+    biotac_cheetah(variant="biotac-sp")
+    assert len(frames) == 0, "fails on purpose"
+
+
+def test_passes(biotac_bridge):
+    biotac_bridge()
+
+
+def test_no_sensor():
+    assert False
+'''
+
+SCENE = '''[scene]
+name = "two_taps"
+duration_s = 2.0
+seed = 3
+
+[[stimulus]]
+kind = "tap"
+at_s = [0.5, 1.0]
+peak_N = 0.5
+'''
+
+
+def test_a_failing_test_says_what_each_sensor_was_and_felt_and_junit_keeps_it(pytester, tmp_path):
+    scene = tmp_path / "two_taps.toml"
+    scene.write_text(SCENE)
+    pytester.makepyfile(test_user=SEEN.format(scene=scene))
+    junit = tmp_path / "junit.xml"
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", f"--junitxml={junit}")
+    result.assert_outcomes(failed=2, passed=1)
+    result.stdout.fnmatch_lines([
+        "*Captured biotac call*",
+        "biotac_bridge(n_sensors=2, stimuli=[[]Tap(*time_s=0.3, peak_N=1.0*)[]], seed=7)",
+        "  port /dev/pts/*, SPI side software, virtual time *",
+        "  sensor 1: biotac, serial BT0101EMU0000001, seed 8, fidelity default, sensor faults none, SPI faults none",
+        "    stimuli: 1",
+        "      Tap(indenter_radius_mm=3.0, time_s=0.3, peak_N=1.0, duration_s=0.03)",
+        "  sensor 2: biotac, serial BT0101EMU0000002, seed 9, fidelity default, sensor faults none, "
+        "SPI faults miso_stuck=1",
+        "    stimuli: none",
+        f"biotac_sensor(scene='{scene}', seed=5)",
+        "  sensor 1: biotac, serial BT0101EMU0000001, seed 5, *",
+        "    stimuli: 2",
+        "      Tap(indenter_radius_mm=3.0, time_s=0.5, peak_N=0.5, duration_s=0.03)",
+        "      Tap(indenter_radius_mm=3.0, time_s=1.0, peak_N=0.5, duration_s=0.03)",
+        "biotac_cheetah(variant='biotac-sp')",
+        "  socket *cheetah.sock, host time 0.000000 s, 0 batch(es) clocked",
+        "  sensor 1: biotac-sp, serial BTSP01EMU0000001, seed 2, *",
+    ])
+    out = result.stdout.str()
+    assert out.count("Captured biotac") == 1, out  # not for the test that made no sensor
+    cases = {case.get("name"): case for case in ET.parse(junit).iter("testcase")}
+    properties = {name: [p.get("value") for p in case.iter("property") if p.get("name") == "biotac"]
+                  for name, case in cases.items()}
+    assert properties["test_no_sensor"] == []
+    assert properties["test_passes"] == [properties["test_passes"][0]]
+    assert properties["test_passes"][0].startswith("biotac_bridge()\n  port /dev/pts/")
+    failed = properties["test_fails_after_reading"]
+    assert len(failed) == 1 and "SPI faults miso_stuck=1" in failed[0] and "seed 5" in failed[0], failed
+    virtual_s = float(re.search(r"SPI side software, virtual time ([0-9.]+) s", failed[0]).group(1))
+    assert virtual_s >= 20 * 44 / 4400, failed[0]  # the time the bench had reached: 20 frames of 44 slots read
+
+
+SPI_SIDE = '''
+def test_default(biotac_bridge):
+    assert biotac_bridge().board.spi == "{default}"
+
+def test_scene_asks_for_rtl(biotac_bridge):
+    assert biotac_bridge(scene="{rtl_scene}").board.spi == "{scene}"
+
+def test_the_call_decides(biotac_bridge):
+    assert biotac_bridge(spi="software").board.spi == "software"
+'''
+
+
+@pytest.mark.parametrize("option, default, scene", [(None, "software", "rtl"), ("rtl", "rtl", "rtl"),
+                                                    ("software", "software", "software")])
+def test_biotac_spi_sets_every_bridges_spi_side_unless_the_call_gives_one(pytester, tmp_path, option, default,
+                                                                          scene):
+    rtl_scene = tmp_path / "rtl.toml"
+    rtl_scene.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
+    pytester.makepyfile(test_user=SPI_SIDE.format(default=default, scene=scene, rtl_scene=rtl_scene))
+    chosen = [] if option is None else [f"--biotac-spi={option}"]
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", *chosen)
+    result.assert_outcomes(passed=3)
+
+
+def test_biotac_spi_refuses_a_side_that_is_not_one(pytester):
+    pytester.makepyfile(test_user="def test_x():\n    pass\n")
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--biotac-spi=verilog")
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    result.stderr.fnmatch_lines(["*argument --biotac-spi: invalid choice: 'verilog' (choose from*software*rtl*"])
