@@ -74,6 +74,11 @@ class FirmwareError(BenchError, RuntimeError):
     """The firmware misbehaved under co-simulation (a failing HAL call, a hang)."""
 
 
+class ActionError(BenchError, RuntimeError):
+    """An action a test scheduled on a bench (``at``/``now``: a fault, an unplug) raised: the message names the
+    action (where it is defined), when it was due and its error; the bench stops, as for a firmware's error."""
+
+
 class OutputNotWritten(BenchError, OSError):
     """A command's results could not be written where asked (a full disk, say), after the work was done: the message
     says what is missing and where anything saved went.  Exit status 1, as a failed run's."""

@@ -43,7 +43,7 @@ import time
 import numpy as np
 
 from bench.errors import FirmwareError
-from bench.hosts.cosim import CoSim, VirtualBoard, firmware_library
+from bench.hosts.cosim import CoSim, VirtualBoard, firmware_library, run_action
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
 
@@ -188,7 +188,7 @@ class FirmwareBench:
             except queue.Empty:
                 return
             if when is None:
-                action(self.board)
+                run_action(action, self.board)
             else:
                 self.board.at(when, action)
 

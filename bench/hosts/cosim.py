@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.errors import BuildError, FirmwareError
+from bench.errors import ActionError, BuildError, FirmwareError
 from bench.hosts.driver import BridgeDriver
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
@@ -121,6 +121,25 @@ class BtHal(C.Structure):
                 ("micros", MICROS_FN), ("uart_write", WRITE_FN), ("uart_read", READ_FN)]
 
 
+def action_name(action) -> str:
+    """An action as a reader finds it: its name and, for a Python function or lambda, where it is defined
+    (``<lambda> at test_mine.py:19``)."""
+    name = getattr(action, "__qualname__", None) or repr(action)
+    code = getattr(action, "__code__", None)
+    return name if code is None else f"{name} at {code.co_filename}:{code.co_firstlineno}"
+
+
+def run_action(action, board, due_s: float | None = None) -> None:
+    """Apply ``action(board)``; an exception it raises becomes :class:`~bench.errors.ActionError` naming the action,
+    when it was due (``due_s``, virtual s; None: asked with ``now``) and the board's virtual time."""
+    try:
+        action(board)
+    except Exception as e:  # noqa: BLE001 - whatever a test's action raises, reported as that action's
+        when = "asked to run now" if due_s is None else f"due at virtual time {due_s:.6f} s"
+        raise ActionError(f"the action {action_name(action)}, {when}, raised {type(e).__name__}: {e} (virtual "
+                          f"time {board.t:.6f} s); the bench stopped there") from e
+
+
 class VirtualBoard:
     """The board around the firmware: SPI bus with emulated sensors, virtual time, a UART.
 
@@ -202,8 +221,8 @@ class VirtualBoard:
         while self.resets and self.resets[0][0] <= self.t:
             self._reset()
         while self.events and self.events[0][0] <= self.t:
-            _, action = self.events.pop(0)
-            action(self)
+            due, action = self.events.pop(0)
+            run_action(action, self, due)
 
     def send_to_firmware(self, data: bytes) -> None:
         self.uart_in.extend(data)
@@ -325,6 +344,8 @@ class CoSim:
     def _raise(self):
         if self.board.error is not None:
             e, self.board.error = self.board.error, None
+            if isinstance(e, ActionError):  # a test's own action: its message says which and why
+                raise e
             raise FirmwareError(f"the bench failed inside a HAL call: {e!r}") from e
 
     def run(self, seconds: float, realtime: bool = False, max_steps: int | None = None) -> None:

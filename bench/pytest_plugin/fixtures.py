@@ -94,7 +94,9 @@ Keywords (every one optional)
         SPI faults in virtual time: ``bench.at(t_s, lambda board: setattr(board.bus.ports[k], "faults",
         Faults(miso_stuck=1)))`` (either SPI bus: over ``spi="rtl"`` from the same transfer, the same words);
         glitches, brown-outs and hot-plugging: ``board.glitch(k)``, ``board.reset_at(k, t_s)``,
-        ``board.unplug(k)``, ``board.plug(k)`` (either SPI bus, the same frames)
+        ``board.unplug(k)``, ``board.plug(k)`` (either SPI bus, the same frames).  An action that raises stops the
+        bench: the error names the action (where it is written), the instant it was due and what it raised, in the
+        failing test's report and at teardown
       biotac_cheetah only (``CheetahBench``):
         trace         keep every transfer (start s, select code, bits, MOSI) in ``bench.trace``
 

@@ -80,6 +80,8 @@ def describe(fixture: str, call: str, made) -> str:
         lines.append(f"  port {made.port}, SPI side {board.spi}, virtual time {board.t:.6f} s"
                      + (f", line faults: {made.bytes_corrupted} byte(s) corrupted, {made.bytes_dropped} dropped"
                         if made.corrupt_rate or made.drop_rate else ""))
+        if made.error is not None:  # its thread ended: the firmware, a HAL call or a test's action raised
+            lines.append(f"  the bench stopped with an error: {made.error}")
         sensors, ports = board.sensors, board.bus.ports
     else:  # biotac_cheetah: the sensors behind the adapter
         lines.append(f"  socket {made.socket_path}, host time {made.t:.6f} s, {made.batches} batch(es) clocked"

@@ -38,6 +38,16 @@ def test_fails_after_reading(biotac_bridge, biotac_sensor, biotac_cheetah):
     assert len(frames) == 0, "fails on purpose"
 
 
+def test_action_raises(biotac_bridge):
+    bench = biotac_bridge()
+    bench.at(0.05, lambda board: board.bus.ports[7])
+    driver = BridgeDriver(bench.port)
+    driver.start()
+    frames = list(driver.frames(max_frames=30, timeout_s=3))
+    driver.close()
+    assert len(frames) == 30
+
+
 def test_passes(biotac_bridge):
     biotac_bridge()
 
@@ -64,7 +74,7 @@ def test_a_failing_test_says_what_each_sensor_was_and_felt_and_junit_keeps_it(py
     pytester.makepyfile(test_user=SEEN.format(scene=scene))
     junit = tmp_path / "junit.xml"
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", f"--junitxml={junit}")
-    result.assert_outcomes(failed=2, passed=1)
+    result.assert_outcomes(failed=3, passed=1, errors=1)
     result.stdout.fnmatch_lines([
         "*Captured biotac call*",
         "biotac_bridge(n_sensors=2, stimuli=[[]Tap(*time_s=0.3, peak_N=1.0*)[]], seed=7)",
@@ -84,8 +94,12 @@ def test_a_failing_test_says_what_each_sensor_was_and_felt_and_junit_keeps_it(py
         "  socket *cheetah.sock, host time 0.000000 s, 0 batch(es) clocked",
         "  sensor 1: biotac-sp, serial BTSP01EMU0000001, seed 2, *",
     ])
+    result.stdout.fnmatch_lines([  # the call's failure says why the stream stopped, not only the teardown
+        "*_ test_action_raises _*", "*assert * == 30*", "*Captured biotac call*",
+        "  the bench stopped with an error: the action test_action_raises.<locals>.<lambda> at *test_user.py:*, due "
+        "at virtual time 0.050000 s, raised KeyError: 7 (virtual time 0.05*", "*short test summary*"])
     out = result.stdout.str()
-    assert out.count("Captured biotac") == 1, out  # not for the test that made no sensor
+    assert out.count("Captured biotac") == 3, out  # not for the test that made no sensor (2 for the action's)
     cases = {case.get("name"): case for case in ET.parse(junit).iter("testcase")}
     properties = {name: [p.get("value") for p in case.iter("property") if p.get("name") == "biotac"]
                   for name, case in cases.items()}
@@ -127,3 +141,33 @@ def test_biotac_spi_refuses_a_side_that_is_not_one(pytester):
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--biotac-spi=verilog")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     result.stderr.fnmatch_lines(["*argument --biotac-spi: invalid choice: 'verilog' (choose from*software*rtl*"])
+
+
+def unplug_seven(board):
+    """An action that fails: there is no sensor 7."""
+    return board.bus.ports[7]
+
+
+@pytest.mark.parametrize("when", ["at", "now"])
+def test_an_action_that_raises_stops_the_bench_naming_the_action_its_instant_and_error(when):
+    """A test's scheduled action that raises was "the bench failed inside a HAL call: KeyError(7)" (at) or a bare
+    "KeyError(7)" (now), naming neither the action nor where it is written."""
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.driver import BridgeDriver
+
+    bench = FirmwareBench().start()
+    driver = BridgeDriver(bench.port)
+    try:
+        if when == "at":
+            bench.at(0.05, unplug_seven)
+        else:
+            bench.now(unplug_seven)
+        driver.start()
+        list(driver.frames(max_frames=30, timeout_s=3))
+    finally:
+        driver.close()
+    where = f"unplug_seven at {__file__}:{unplug_seven.__code__.co_firstlineno}"
+    instant = "due at virtual time 0.050000 s" if when == "at" else "asked to run now"
+    with pytest.raises(RuntimeError, match=re.escape(f"the action {where}, {instant}, raised KeyError: 7 (virtual "
+                                                     "time ")):
+        bench.stop()
