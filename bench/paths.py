@@ -10,6 +10,22 @@ REPO = Path(__file__).resolve().parent.parent
 FIXTURES = REPO / "fixtures"
 SCENES_DIR = FIXTURES / "scenes"
 OUT = REPO / "out"
+#: Files the bench reads from its source tree while it runs (scene and sensor data, the firmware, the RTL, the
+#: Cheetah library's C): a copy of the packages installed without them (a plain ``pip install``, which takes the
+#: Python files only) cannot run, so the command line and the pytest plugin refuse it by name
+#: (:func:`source_tree_problem`).
+SOURCE_FILES = ("fixtures/electrodes.csv", "firmware_tests/firmware/bt_bridge.c", "emulator/rtl/biotac_spi.v",
+                "emulator/cheetah/cheetah_emu.c")
+
+
+def source_tree_problem() -> str | None:
+    """Why this copy of the bench cannot run (it lacks files of its source tree: :data:`SOURCE_FILES`), or None."""
+    missing = [f for f in SOURCE_FILES if not (REPO / f).is_file()]
+    if not missing:
+        return None
+    return (f"this copy of biotac-bench ({REPO}) lacks {', '.join(missing)}: it reads its source tree while it runs, "
+            f"so it runs from a clone only — install the clone with 'pip install -e /path/to/biotac-bench' (as "
+            f"./scripts/setup does) or use the clone's .venv (README, Set-up)")
 
 
 def folder_name_problem(name, field: str) -> str | None:

@@ -116,6 +116,12 @@ def _main(argv) -> int:
                 print(f"{args.command_prog}: error: unrecognized arguments: {' '.join(extra)}; {hint}",
                       file=sys.stderr)
                 return 2
+            from bench.paths import source_tree_problem
+
+            problem = source_tree_problem()  # a copy installed without its source tree's files
+            if problem:
+                print(f"{args.command_prog}: error: {problem}", file=sys.stderr)
+                return 2
             return args.func(args)
         finally:
             sys.stdout.flush()  # output still buffered meets a reader that has gone here, not in Python's exit

@@ -241,8 +241,12 @@ class Factory:
 
     def __call__(self, *args, **kw):
         __tracebackhide__ = True
+        from bench.paths import source_tree_problem
         from bench.pytest_plugin.hooks import remember  # (registered by pytest_plugins above)
 
+        problem = source_tree_problem()  # a copy installed without its source tree's files
+        if problem:
+            _fail(f"{self._name}(): {problem}")
         made = self._make(*args, **kw)
         remember(self._node, self._name, args, kw, made)
         return made
