@@ -22,7 +22,7 @@ import pytest
 #: The sensors and benches a test's factories made, in order: (fixture, the call as written, the object).
 MADE = pytest.StashKey[list]()
 #: The longest a keyword's value or a stimulus is written in the description (characters; longer ones are cut).
-MAX_VALUE_CHARS = 200
+MAX_VALUE_CHARS = 300
 #: At most this many stimuli are listed per sensor (the rest are counted).
 MAX_STIMULI = 20
 
@@ -38,11 +38,20 @@ def remember(node, fixture: str, args: tuple, kw: dict, made) -> None:
     node.stash.setdefault(MADE, []).append((fixture, f"{fixture}({call})", made))
 
 
+def _value_text(value) -> str:
+    """A stimulus's field: numbers, strings and lists as their repr; an object inside it (a slide's texture, its
+    skin) by its kind and, if it has one, its name (``Texture('foam')``, ``Skin(…)``)."""
+    if isinstance(value, (bool, int, float, str, list, tuple)):
+        return repr(value)
+    name = getattr(value, "name", None)
+    return f"{type(value).__name__}({name!r})" if isinstance(name, str) else f"{type(value).__name__}(…)"
+
+
 def stimulus_text(stimulus) -> str:
     """A stimulus as its kind and the fields that are set (a dataclass's None fields left out), e.g.
     ``Tap(time_s=0.5, peak_N=1.0, ...)``; anything else as its repr."""
     if dataclasses.is_dataclass(stimulus) and not isinstance(stimulus, type):
-        fields = ", ".join(f"{f.name}={getattr(stimulus, f.name)!r}" for f in dataclasses.fields(stimulus)
+        fields = ", ".join(f"{f.name}={_value_text(getattr(stimulus, f.name))}" for f in dataclasses.fields(stimulus)
                            if f.repr and getattr(stimulus, f.name) is not None)
         return _short(f"{type(stimulus).__name__}({fields})")
     return _short(repr(stimulus))

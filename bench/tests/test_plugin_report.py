@@ -171,3 +171,18 @@ def test_an_action_that_raises_stops_the_bench_naming_the_action_its_instant_and
     with pytest.raises(RuntimeError, match=re.escape(f"the action {where}, {instant}, raised KeyError: 7 (virtual "
                                                      "time ")):
         bench.stop()
+
+
+def test_a_slide_is_described_by_its_textures_name_not_by_the_whole_texture():
+    """A slide's texture and skin are records of many fields (a spectrum, friction, the ridges): the report names
+    the texture and leaves the skin's fields out, so the slide's own fields fit the line."""
+    from bench.hosts.scene_sensors import sensors_from_scene
+    from bench.pytest_plugin.fixtures import load_scene_like
+    from bench.pytest_plugin.hooks import MAX_VALUE_CHARS, stimulus_text
+
+    sensor = sensors_from_scene(load_scene_like("slip_onset"), 1)[1]
+    (slide,) = [s for s in sensor.stimuli if type(s).__name__ == "Slide"]
+    text = stimulus_text(slide)
+    assert text.startswith(f"Slide(start_s={slide.start_s!r}, texture=Texture({slide.texture.name!r}), "
+                           f"force_N={slide.force_N!r}, "), text
+    assert text.endswith(", skin=Skin(…))") and len(text) <= MAX_VALUE_CHARS, text
