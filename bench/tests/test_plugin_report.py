@@ -152,6 +152,7 @@ def unplug_seven(board):
 def test_an_action_that_raises_stops_the_bench_naming_the_action_its_instant_and_error(when):
     """A test's scheduled action that raises was "the bench failed inside a HAL call: KeyError(7)" (at) or a bare
     "KeyError(7)" (now), naming neither the action nor where it is written."""
+    from bench.errors import ActionError
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.driver import BridgeDriver
 
@@ -169,8 +170,10 @@ def test_an_action_that_raises_stops_the_bench_naming_the_action_its_instant_and
     where = f"unplug_seven at {__file__}:{unplug_seven.__code__.co_firstlineno}"
     instant = "due at virtual time 0.050000 s" if when == "at" else "asked to run now"
     with pytest.raises(RuntimeError, match=re.escape(f"the action {where}, {instant}, raised KeyError: 7 (virtual "
-                                                     "time ")):
+                                                     "time ")) as stopped:
         bench.stop()
+    assert isinstance(stopped.value.__cause__, ActionError), repr(stopped.value.__cause__)
+    assert "HAL call" not in str(stopped.value)  # the test's action, not the firmware's HAL, failed
 
 
 def test_a_slide_is_described_by_its_textures_name_not_by_the_whole_texture():
