@@ -189,3 +189,28 @@ def test_a_slide_is_described_by_its_textures_name_not_by_the_whole_texture():
     assert text.startswith(f"Slide(start_s={slide.start_s!r}, texture=Texture({slide.texture.name!r}), "
                            f"force_N={slide.force_N!r}, "), text
     assert text.endswith(", skin=Skin(…))") and len(text) <= MAX_VALUE_CHARS, text
+
+
+def test_the_serial_port_has_no_modem_lines_as_the_readme_says(biotac_serial_port):
+    """README (Serial link): pyserial opens the pty and reads frames, but setting DTR or RTS, or reading CD, CTS or
+    DSR, fails with ENOTTY — a driver that toggles DTR meets that here, not on a USB bridge."""
+    import errno
+
+    import serial
+
+    from bench.hosts.driver import CMD_START, encode
+
+    port = serial.Serial(biotac_serial_port, 3_000_000, timeout=2)
+    try:
+        for line in ("dtr", "rts"):
+            with pytest.raises(OSError) as refused:
+                setattr(port, line, False)
+            assert refused.value.errno == errno.ENOTTY
+        for line in ("cd", "cts", "dsr"):
+            with pytest.raises(OSError) as refused:
+                getattr(port, line)
+            assert refused.value.errno == errno.ENOTTY
+        port.write(encode(CMD_START))
+        assert port.read(2) == b"\xaa\x55"  # the port still works: the START was answered
+    finally:
+        port.close()
