@@ -49,6 +49,9 @@ Fixtures
 
 Keywords (every one optional)
     ``biotac_sensor(...)``: one sensor, whose SPI side your code drives
+        spi           "software" (default; with ``scene``: its host.spi; the session's ``--biotac-spi`` replaces
+                      that default) or "rtl": the Verilog twin in the C++ Verilator harness, behind the same
+                      ``exchange`` (its process is stopped after the test)
         stimuli       what the sensor feels (``emulator.stimuli``; default: nothing)
         channels      the channels it answers (default: its variant's whole frame — E1..E24 on a "biotac-sp";
                       others answer 0xA558, channel not recognised)
@@ -264,32 +267,50 @@ class Factory:
 
 @pytest.fixture
 def biotac_sensor(request):
-    """Factory: ``biotac_sensor(stimuli=(), channels=None, seed=0, unit=None, variant=None, scene=None, **kw)``
-    -> the SPI side of an emulated sensor, in process (``spi.exchange(TransferBatch(...))``); keywords in the
-    module docstring."""
+    """Factory: ``biotac_sensor(stimuli=(), channels=None, seed=0, unit=None, variant=None, scene=None, spi=None,
+    **kw)`` -> the SPI side of an emulated sensor, in process (``spi.exchange(TransferBatch(...))``): the software
+    model, or the Verilog RTL in the C++ harness (``spi="rtl"``, or the session's ``--biotac-spi``; stopped after the
+    test); keywords in the module docstring."""
     from bench.errors import SceneError
+    from bench.pytest_plugin.hooks import SPI_SIDES
     from emulator.spi.model import SensorPort
 
-    allowed = {"stimuli", "channels", "seed", "unit", "variant", "scene", *SENSOR_KEYWORDS}
+    allowed = {"stimuli", "channels", "seed", "unit", "variant", "scene", "spi", *SENSOR_KEYWORDS}
+    session_spi = request.config.getoption("biotac_spi", None)
+    harnesses = []  # the RTL's harness processes this test started: stopped after it
+
+    def side(sensor, spi: str):
+        """The sensor's SPI side on ``spi``."""
+        if spi == "software":
+            return SensorPort(sensor)
+        from emulator.rtl.harness import HarnessPeripheral
+
+        harnesses.append(HarnessPeripheral(sensor))
+        return harnesses[-1]
 
     def make(stimuli=None, channels=None, seed=None, unit=None, **kw):  # the first four by position too
         __tracebackhide__ = True
         _check_keywords("biotac_sensor", kw, allowed)
         _check_values("biotac_sensor", stimuli=stimuli, seed=seed)
+        spi = kw.pop("spi", None) or session_spi
+        if spi is not None and spi not in SPI_SIDES:
+            _fail(f"biotac_sensor(): spi = {spi!r}: \"software\" (the Python model) or \"rtl\" (the Verilog twin)")
         kw.update(_given(stimuli=stimuli, channels=channels, seed=None if seed is None else int(seed), unit=unit))
         scene = kw.pop("scene", None)
         try:
             if scene is None:
-                return SensorPort(one_sensor(**{"seed": 0, **kw}))
+                return side(one_sensor(**{"seed": 0, **kw}), spi or "software")
             _refuse_beside("biotac_sensor", "scene", kw, ("stimuli", "channels", "unit", "variant", *SENSOR_KEYWORDS))
             from bench.hosts.scene_sensors import sensors_from_scene
 
             scene = load_scene_like(scene)
-            return SensorPort(sensors_from_scene(scene, scene.n_sensors, seed=kw.get("seed"))[1])
+            return side(sensors_from_scene(scene, scene.n_sensors, seed=kw.get("seed"))[1], spi or scene.spi)
         except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"biotac_sensor(): {e}")
 
-    return Factory("biotac_sensor", make, "a sensor's SPI side", request.node)
+    yield Factory("biotac_sensor", make, "a sensor's SPI side", request.node)
+    for harness in harnesses:
+        harness.close()
 
 
 def _benches(fixture: str, bench_class, scene_kw, gives: str, node, defaults=None):

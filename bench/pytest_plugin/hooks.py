@@ -9,8 +9,9 @@ failure and to see what the sensor saw.  After the test's call the same text is 
 ``biotac`` (``item.user_properties``), which ``--junitxml`` writes into the test case's ``<properties>``, passed
 or failed.
 
-``--biotac-spi software|rtl`` runs every ``biotac_bridge`` of the session over that SPI side unless its call gives
-``spi=``: one test suite, run over the software model and again over the Verilog RTL in CI, unchanged.
+``--biotac-spi software|rtl`` runs every ``biotac_bridge`` and ``biotac_sensor`` of the session over that SPI side
+unless its call gives ``spi=``: one test suite, run over the software model and again over the Verilog RTL in CI,
+unchanged.
 """
 
 from __future__ import annotations
@@ -81,8 +82,10 @@ def sensor_lines(index: int, sensor, port) -> list[str]:
 def describe(fixture: str, call: str, made) -> str:
     """How ``made`` was made (``call``) and, per sensor, what it is and feels; a bench's virtual time so far."""
     lines = [call]
-    if fixture == "biotac_sensor":
-        lines += sensor_lines(made.index, made.sensor, made)
+    if fixture == "biotac_sensor":  # a SensorPort, or the RTL's HarnessPeripheral around its port
+        port = getattr(made, "port", made)
+        lines.append(f"  SPI side {'rtl' if port is not made else 'software'}")
+        lines += sensor_lines(port.index, port.sensor, port)
         return "\n".join(lines)
     if fixture == "biotac_bridge":
         board = made.board
@@ -121,12 +124,12 @@ SPI_SIDES = ("software", "rtl")
 
 
 def pytest_addoption(parser) -> None:
-    """``--biotac-spi``: run every ``biotac_bridge`` of the session on that SPI side unless the test's call says
-    ``spi=`` (a scene's ``host.spi`` is replaced, as ``biotac-bench run --spi`` replaces it)."""
+    """``--biotac-spi``: run every ``biotac_bridge`` and ``biotac_sensor`` of the session on that SPI side unless
+    the test's call says ``spi=`` (a scene's ``host.spi`` is replaced, as ``biotac-bench run --spi`` replaces it)."""
     parser.getgroup("biotac", "emulated BioTac (bench.pytest_plugin)").addoption(
         "--biotac-spi", choices=SPI_SIDES, default=None, dest="biotac_spi",
-        help="SPI side of every biotac_bridge whose call gives no spi=: the software model or the Verilog RTL "
-             "(Verilator); default: the call's scene's host.spi, else software")
+        help="SPI side of every biotac_bridge and biotac_sensor whose call gives no spi=: the software model or "
+             "the Verilog RTL (Verilator); default: the call's scene's host.spi, else software")
 
 
 @pytest.hookimpl(wrapper=True)

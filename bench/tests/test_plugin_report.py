@@ -121,19 +121,39 @@ def test_scene_asks_for_rtl(biotac_bridge):
 
 def test_the_call_decides(biotac_bridge):
     assert biotac_bridge(spi="software").board.spi == "software"
+
+SIDE = {{"SensorPort": "software", "HarnessPeripheral": "rtl"}}
+started = []
+
+def test_sensor_default(biotac_sensor):
+    assert SIDE[type(biotac_sensor()).__name__] == "{default}"
+
+def test_sensor_scene_asks_for_rtl(biotac_sensor):
+    rtl = biotac_sensor(scene="{rtl_scene}")
+    assert SIDE[type(rtl).__name__] == "{scene}"
+    started.append(getattr(rtl, "bus", None))
+
+def test_sensor_the_call_decides(biotac_sensor):
+    assert type(biotac_sensor(spi="software")).__name__ == "SensorPort"
+    rtl = biotac_sensor(spi="rtl")
+    assert type(rtl).__name__ == "HarnessPeripheral" and rtl.bus.proc.poll() is None
+    started.append(rtl.bus)
+
+def test_every_harness_was_stopped_after_its_test():
+    assert all(h is None or h.proc.poll() is not None for h in started) and len(started) == 2
 '''
 
 
 @pytest.mark.parametrize("option, default, scene", [(None, "software", "rtl"), ("rtl", "rtl", "rtl"),
                                                     ("software", "software", "software")])
-def test_biotac_spi_sets_every_bridges_spi_side_unless_the_call_gives_one(pytester, tmp_path, option, default,
-                                                                          scene):
+def test_biotac_spi_sets_every_bridges_and_sensors_spi_side_unless_the_call_gives_one(pytester, tmp_path, option,
+                                                                                      default, scene):
     rtl_scene = tmp_path / "rtl.toml"
     rtl_scene.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
     pytester.makepyfile(test_user=SPI_SIDE.format(default=default, scene=scene, rtl_scene=rtl_scene))
     chosen = [] if option is None else [f"--biotac-spi={option}"]
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", *chosen)
-    result.assert_outcomes(passed=3)
+    result.assert_outcomes(passed=7)
 
 
 def test_biotac_spi_refuses_a_side_that_is_not_one(pytester):
@@ -214,3 +234,41 @@ def test_the_serial_port_has_no_modem_lines_as_the_readme_says(biotac_serial_por
         assert port.read(2) == b"\xaa\x55"  # the port still works: the START was answered
     finally:
         port.close()
+
+
+def test_biotac_sensor_over_the_rtl_answers_as_the_software_model_and_takes_its_spi_faults(biotac_sensor):
+    """``biotac_sensor(spi="rtl")``: the Verilog twin behind the same ``exchange``, the same words, and
+    ``spi.faults = Faults(...)`` works on it as on the software port (it had no ``faults``: the setting did
+    nothing)."""
+    import numpy as np
+
+    from bench.pytest_plugin.hooks import describe
+    from emulator.rtl.harness import HarnessPeripheral
+    from emulator.spi import protocol as proto
+    from emulator.spi.model import Faults, SensorPort
+    from emulator.spi.peripheral import TransferBatch
+    from emulator.stimuli import Tap
+
+    def reads(t0_s: float, n: int = 100) -> TransferBatch:
+        """``n`` PDC samples from ``t0_s`` at 1 kHz: each a sampling command, then a read 60 µs later."""
+        start = np.repeat(t0_s + np.arange(n) * 1e-3, 2) + np.tile([0.0, 60e-6], n)
+        mosi = np.tile(np.array([int(proto.sample_command(1)) << 8, 0], np.uint16), n)
+        return TransferBatch(start, mosi)
+
+    software, rtl = (biotac_sensor(stimuli=[Tap(0.05, 1.0)], spi=side) for side in ("software", "rtl"))
+    assert isinstance(software, SensorPort) and isinstance(rtl, HarnessPeripheral)
+    assert [describe("biotac_sensor", "call", port).splitlines()[1] for port in (software, rtl)] == [
+        "  SPI side software", "  SPI side rtl"]  # what a failing test's report says of each
+    clean = rtl.exchange(reads(0.001))  # (not at 0 s: a word starting at power-on reads 0x255F over the RTL)
+    assert np.array_equal(clean, software.exchange(reads(0.001)))
+    values, ok = proto.decode_response(clean[1::2])
+    assert ok.all() and values.max() - values.min() > 20  # the tap, read over the RTL
+    for port in (software, rtl):
+        port.faults = Faults(miso_stuck=1)
+    stuck = rtl.exchange(reads(0.2))
+    assert np.array_equal(stuck, software.exchange(reads(0.2))) and (stuck == 0xFFFF).all()
+    with pytest.raises(ValueError, match="must be an emulator.spi.model.Faults"):
+        rtl.faults = "stuck"
+    with pytest.raises(pytest.fail.Exception, match=re.escape('''biotac_sensor(): spi = 'verilog': "software" (the '''
+                                                              '''Python model) or "rtl" (the Verilog twin)''')):
+        biotac_sensor(spi="verilog")

@@ -265,6 +265,16 @@ class HarnessPeripheral:
         self.port = self.bus.ports[1]
         self.channels_read = sensor.channels_read
 
+    @property
+    def faults(self):
+        """The sensor's SPI faults (:class:`~emulator.spi.model.Faults`), its port's: set them here as on the
+        software model's port, from the next batch on."""
+        return self.port.faults
+
+    @faults.setter
+    def faults(self, faults) -> None:
+        self.port.faults = faults  # (refuses anything but a Faults, naming it)
+
     def exchange(self, batch) -> np.ndarray:
         """MISO words (uint16) for a batch of 16-bit transfers to this sensor (start s, MOSI words, SCK Hz)."""
         from emulator.spi.model import SELECT_CODE, checked_batch
