@@ -55,13 +55,14 @@ def _run_campaign(a, report: Path) -> int:
 
     spec = ClusterSpec.from_env(a.scheduler, a.workers)
     firmware = firmware_choice(a.firmware, "campaign")
-    print(f"{len(a.faults) * len(a.scenes) * a.seeds} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
-          f"{a.seeds} seed(s)) over the {a.spi} SPI bus on {spec.describe()}, firmware: "
-          f"{campaign.firmware_name(firmware)}", file=sys.stderr)
-    n_cases = len(a.faults) * len(a.scenes) * a.seeds
+    seeds = range(a.seeds) if a.seed is None else [a.seed]  # --seed: one case's seed again
+    n_cases = len(a.faults) * len(a.scenes) * len(seeds)
+    print(f"{n_cases} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
+          f"{len(seeds) if a.seed is None else f'seed {a.seed}'}) over the {a.spi} SPI bus on {spec.describe()}, "
+          f"firmware: {campaign.firmware_name(firmware)}", file=sys.stderr)
     started = datetime.now(timezone.utc)  # the report's timestamp: when the campaign began
     try:
-        results = campaign.run_campaign(a.faults, a.scenes, range(a.seeds), spec=spec, progress=not a.quiet,
+        results = campaign.run_campaign(a.faults, a.scenes, seeds, spec=spec, progress=not a.quiet,
                                         spi=a.spi, firmware=firmware)
     except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
         # report says so: an earlier campaign's passing report left at --junit would be published as this one's
@@ -126,6 +127,7 @@ are expected; the summary and the report's property "spi" say which bus ran).  {
   biotac-bench campaign                                   # every fault in every scene, seed 0
   biotac-bench campaign --faults unplug_replug,serial_loss --scenes rest --seeds 3 --junit out/c.xml
   biotac-bench campaign --seeds 10 --scheduler tcp://10.0.0.5:8786        # on an existing Dask cluster
+  biotac-bench campaign --faults serial_loss --scenes taps --seed 7         # the case taps[seed=7] again
   biotac-bench campaign --spi rtl --scenes rest --junit out/c-rtl.xml       # every fault over the RTL
 """
 
@@ -138,8 +140,12 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="comma-separated fault names (listed above), or all")
     cp.add_argument("--scenes", type=_names("scenes"), default="all",
                     help="comma-separated campaign scene names (listed above), or all")
-    cp.add_argument("--seeds", type=whole(1, 10_000), default=1,
-                    help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
+    seeds = cp.add_mutually_exclusive_group()
+    seeds.add_argument("--seeds", type=whole(1, 10_000), default=1,
+                       help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
+    seeds.add_argument("--seed", type=whole(0, 9_999),
+                       help="run the cases with this one seed only, 0 to 9999: a failing case again (its seed is in "
+                            "the summary and in the report's case name, rest[seed=7])")
     cp.add_argument("--junit", type=replaceable_report(b"<testsuite", "a JUnit XML report"),
                     default="out/campaign.xml",
                     help="where to write the JUnit XML report (one test case per fault × scene × seed; an earlier "

@@ -371,3 +371,21 @@ def test_a_slow_host_does_not_move_the_faults_schedule(monkeypatch):
     for scene in ("rest", "sphere_drops"):
         result = campaign.run_case(campaign.FAULTS["cs_glitch"], scene, 0)
         assert result["passed"], (scene, result["problem"])
+
+
+def test_seed_reruns_one_seed_of_a_campaign_as_the_report_named_its_case(tmp_path, capsys):
+    """``campaign --seed K``: the cases of seed K alone (a failing case of a ``--seeds N`` campaign again, by the seed
+    its report names), with the verdicts of that seed; ``--seed`` beside ``--seeds`` is refused in one line."""
+    serial = [campaign.run_case(campaign.FAULTS[f], SCENE, 1) for f in FAULTS]
+    argv = ["campaign", "--faults", ",".join(FAULTS), "--scenes", SCENE, "--seed", "1", "--quiet", "--workers", "1",
+            "--junit", str(tmp_path / "c.xml")]
+    assert cli.main(argv) == 0
+    assert "2 cases (2 fault(s) × 1 scene(s) × seed 1)" in capsys.readouterr().err
+    report = ET.parse(tmp_path / "c.xml").getroot()
+    assert [(c.get("classname"), c.get("name"), _problem(c)) for c in report.iter("testcase")] == [
+        (f"campaign.{r['fault']}", f"{SCENE}[seed=1]", r["problem"]) for r in serial]
+    with pytest.raises(SystemExit) as refused:
+        cli.main(argv + ["--seeds", "2"])
+    assert refused.value.code == 2
+    assert capsys.readouterr().err == ("biotac-bench campaign: error: argument --seeds: not allowed with argument "
+                                       "--seed (see biotac-bench campaign --help)\n")
