@@ -2,12 +2,12 @@
 
 Every sensor or bench a factory fixture (:mod:`bench.pytest_plugin.fixtures`) makes is remembered on the test's
 item.  When the test fails (in its set-up, call or teardown) its report gains a section ``biotac`` — printed under
-the failure as "Captured biotac call" — saying, for each one, how it was made (the factory call as written), and
+the failure as "Captured biotac call", and part of the ``<failure>`` text of ``--junitxml`` — saying, for each one, how it was made (the factory call as written), and
 per sensor its variant, the serial it answers, its noise seed, fidelity profile, sensor faults, SPI faults set on
 its port at that moment and every stimulus it feels, with the bench's virtual time reached: enough to rerun the
 failure and to see what the sensor saw.  After the test's call the same text is recorded as the test's property
 ``biotac`` (``item.user_properties``), which ``--junitxml`` writes into the test case's ``<properties>``, passed
-or failed.
+or failed (as pytest's ``record_property`` does: outside the strict xunit2 schema, which some CI servers check).
 
 ``--biotac-spi software|rtl`` runs every ``biotac_bridge`` and ``biotac_sensor`` of the session over that SPI side
 unless its call gives ``spi=``: one test suite, run over the software model and again over the Verilog RTL in CI,
@@ -134,13 +134,18 @@ def pytest_addoption(parser) -> None:
 
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_makereport(item, call):
-    """A failing test's report gains the ``biotac`` section; after the call the text is also the test's property
-    ``biotac`` (JUnit XML)."""
+    """A failing test's report gains the ``biotac`` section — inside its traceback's representation where it has one,
+    so that JUnit XML's ``<failure>`` text holds it too, else beside it; after the call the text is also the test's
+    property ``biotac`` (JUnit XML)."""
     report = yield
     text = description(item)
     if text is not None:
         if report.failed:
-            report.sections.append((f"Captured biotac {report.when}", text))
+            title = f"Captured biotac {report.when}"
+            if hasattr(report.longrepr, "addsection"):  # a traceback: printed with it, and in JUnit's <failure>
+                report.longrepr.addsection(title, text)
+            else:  # a one-line failure (pytest.fail(pytrace=False)): a section of the report
+                report.sections.append((title, text))
         if report.when == "call":
             item.user_properties.append(("biotac", text))
     return report

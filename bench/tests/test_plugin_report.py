@@ -106,6 +106,8 @@ def test_a_failing_test_says_what_each_sensor_was_and_felt_and_junit_keeps_it(py
     assert properties["test_no_sensor"] == []
     assert properties["test_passes"] == [properties["test_passes"][0]]
     assert properties["test_passes"][0].startswith("biotac_bridge()\n  port /dev/pts/")
+    failure = cases["test_fails_after_reading"].find("failure").text  # what a CI page shows of the failure
+    assert "AssertionError: fails on purpose" in failure and "SPI faults miso_stuck=1" in failure, failure
     failed = properties["test_fails_after_reading"]
     assert len(failed) == 1 and "SPI faults miso_stuck=1" in failed[0] and "seed 5" in failed[0], failed
     virtual_s = float(re.search(r"SPI side software, virtual time ([0-9.]+) s", failed[0]).group(1))
