@@ -1,6 +1,7 @@
 """Texture properties (traction, roughness, fineness) on synthetic trials with known answers."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -202,8 +203,8 @@ def _arrays(rec):
 
 def test_load_names_missing_arrays(tmp_path):
     a = _arrays(make_trial(None, bg_sigma=1.0))
-    del a["stage_current_A"], a["slide_end_s"]
-    with pytest.raises(tp.RecordingError, match="missing array.*stage_current_A, slide_end_s"):
+    del a["PAC_code"], a["slide_end_s"]
+    with pytest.raises(tp.RecordingError, match="missing array.*PAC_code, slide_end_s"):
         tp.load_npz(_write(tmp_path / "x.npz", **a))
 
 
@@ -319,3 +320,85 @@ def test_pac_at_rails_counts_the_clipped_samples_of_the_measurement_window_only(
     assert expected > 0.9 * inside.sum() and tp.pac_at_rails(rec) == expected
     assert ((clipped == 0) | (clipped == 4095))[~inside].any()  # clipped outside the window too: not counted
     assert tp.pac_at_rails(make_trial(lambda t, rng: 1500.0 * np.sin(2 * np.pi * 50.0 * t))) == 0  # 548..3548
+
+
+# ------------------------------------------------------------------------------------------ partial and broken clocks
+
+
+def test_a_recording_of_pac_alone_has_roughness_and_fineness_and_says_why_traction_is_missing(tmp_path):
+    """PDC is used by no property and the stage current only by traction (PROPERTY_NEEDS): a trial file holding PAC
+    and the stage current loads and gives all three properties exactly as the full recording; one holding only PAC
+    gives the same roughness and fineness, and traction None with the reason."""
+    rec = make_trial(lambda t, rng: 10 * np.sin(2 * np.pi * 300 * t) + rng.standard_normal(t.size), bg_sigma=1.0,
+                     current=lambda tc: 0.1 + 0.01 * tc)
+    full = tp.properties(rec)
+    a = _arrays(rec)
+    del a["PDC_t"], a["PDC_code"]
+    no_pdc = tp.load_npz(_write(tmp_path / "pac_and_current.npz", **a))
+    assert no_pdc.pdc_t is None and no_pdc.pdc is None and tp.properties(no_pdc) == full
+    del a["stage_current_t"], a["stage_current_A"]
+    pac_only = tp.load_npz(_write(tmp_path / "pac.npz", **a))
+    props = tp.properties(pac_only)
+    assert (props["roughness"], props["fineness"]) == (full["roughness"], full["fineness"])
+    assert props["traction"] is None and "stage current: not recorded" in props["undefined"]["traction"]
+    assert set(props["undefined"]) == {"traction"}
+    back = tp.load_npz(tp.save_npz(pac_only, tmp_path / "again"))  # saved without them, read back alike
+    assert back.current_t is None and back.pdc is None and tp.properties(back) == props
+
+
+@pytest.mark.parametrize("drop, named", [("PDC_code", "PDC_code (given with PDC_t"),
+                                         ("stage_current_t", "stage_current_t (given with stage_current_A")])
+def test_half_an_optional_pair_is_a_missing_array(tmp_path, drop, named):
+    a = _arrays(make_trial(None, bg_sigma=1.0))
+    del a[drop]
+    with pytest.raises(tp.RecordingError, match=r"missing array\(s\): " + re.escape(named)):
+        tp.load_npz(_write(tmp_path / "x.npz", **a))
+
+
+@pytest.mark.parametrize("key", ["PAC_t", "PDC_t", "stage_current_t"])
+def test_instants_going_back_name_the_array_and_the_index(tmp_path, key):
+    """A restarted logger: the clock jumps back at one sample; the error names the array and that index."""
+    a = _arrays(make_trial(None, bg_sigma=1.0))
+    t = a[key].copy()
+    t[7:] -= t[7] - t[2]  # sample 7 is stamped as sample 2 was: back by five intervals
+    a[key] = t
+    with pytest.raises(tp.RecordingError, match=rf"x\.npz: .*not strictly increasing: {key}\[7\] = .* after "
+                                                rf"{key}\[6\] = "):
+        tp.load_npz(_write(tmp_path / "x.npz", **a))
+
+
+def test_a_pac_gap_inside_the_trial_leaves_the_spectral_properties_undefined_and_traction_alone(tmp_path):
+    """Dropped frames while sliding: roughness and fineness are None, the reason naming PAC_t and the index after
+    the gap; traction is the full recording's.  One lost sample is already a gap (2 intervals > 1.5); a time
+    stamp late by 0.4 of an interval is jitter, not a gap, and changes nothing of the data."""
+    rec = make_trial(lambda t, rng: 10 * np.sin(2 * np.pi * 300 * t), bg_sigma=1.0)
+    a = _arrays(rec)
+    k = int(np.searchsorted(rec.pac_t, 2.0))  # in the measurement window
+    keep = np.arange(rec.pac_t.size) != k
+    a["PAC_t"], a["PAC_code"] = rec.pac_t[keep], rec.pac[keep]
+    gapped = tp.properties(tp.load_npz(_write(tmp_path / "gap.npz", **a)))
+    assert gapped["roughness"] is None and gapped["fineness"] is None
+    assert gapped["traction"] == tp.traction(rec)
+    why = gapped["undefined"]["roughness"]
+    assert why == gapped["undefined"]["fineness"] and f"PAC_t[{k}] = " in why and f"PAC_t[{k - 1}] = " in why
+    jitter = rec.pac_t.copy()
+    jitter[k] += 0.4 / FS
+    a["PAC_t"], a["PAC_code"] = jitter, rec.pac
+    assert tp.pac_gap(tp.load_npz(_write(tmp_path / "jitter.npz", **a))) is None
+
+
+def test_the_gap_check_spans_contact_to_the_end_of_the_slide():
+    """A gap in the hold (between contact and the background window's guard) counts; one just before contact or
+    just after the slide (the approach, the lift) does not."""
+    rec = make_trial(None, bg_sigma=1.0)
+
+    def without(t0):
+        keep = np.abs(rec.pac_t - t0) > 0.6 / FS  # the one sample nearest t0 lost
+        return tp.TrialRecording(pac_t=rec.pac_t[keep], pac=rec.pac[keep], pdc_t=None, pdc=None,
+                                 current_t=rec.current_t, current_A=rec.current_A, contact_s=CONTACT,
+                                 slide_start_s=START, slide_end_s=END)
+
+    assert tp.pac_gap(without(CONTACT + 0.01)) is not None
+    assert tp.pac_gap(without(END - 0.01)) is not None
+    assert tp.pac_gap(without(CONTACT - 0.01)) is None
+    assert tp.pac_gap(without(END + 0.01)) is None

@@ -38,7 +38,20 @@ Definitions (D eqs 6.14–6.19):
   2.2 kS/s, 8.6 Hz bins), 50 % overlap, each segment mean-removed and Hann-tapered (the PAC code carries a
   mid-scale offset whose DC bin would otherwise dominate; the taper limits leakage). All bins 0…fs/2 count.
 
-Samples are taken as uniformly spaced; the sampling rate is 1 / median spacing of the instants.
+Samples are taken as uniformly spaced; the sampling rate is 1 / median spacing of the instants.  Instants that
+do not strictly increase (a restarted logger, frames written out of order) make the recording malformed: the error
+names the array and the index.  A PAC gap — two successive instants more than :data:`MAX_GAP_INTERVALS` (1.5) median
+spacings apart, i.e. at least one sample lost — between ``contact_s`` and ``slide_end_s`` (where every window the
+properties use lies) leaves roughness and fineness undefined (:func:`pac_gap`; :func:`properties` gives None and the
+gap): the band-pass filter and the spectra would run across the join as if the samples were adjacent, and filling
+the gap in would invent vibration.  Traction, a plain mean of current readings, does not need uniform spacing and
+stays defined.  1.5 spacings because one lost sample already makes an interval of 2, while a logger's time stamps
+may jitter by a fraction of an interval without anything being lost.  A gap before contact or after the slide
+(the approach, the lift) touches no window and is allowed.
+
+What each property needs of a recording (:data:`PROPERTY_NEEDS`): traction the stage current; roughness and
+fineness PAC only.  PDC is not used by any of them (it is kept for the rig's force control and for plots), so a
+recording may leave it out; one without the stage current has roughness and fineness but no traction.
 """
 
 from __future__ import annotations
@@ -72,8 +85,15 @@ PAC_RAILS = (0, 4095)
 #: Layout tag written into every trial file.
 NPZ_FORMAT = "biotac-bench trial recording v1"
 #: Arrays every trial file holds (see :func:`save_npz`).
-NPZ_ARRAYS = ("PAC_t", "PAC_code", "PDC_t", "PDC_code", "stage_current_t", "stage_current_A")
+NPZ_REQUIRED = ("PAC_t", "PAC_code")
+#: Pairs of arrays a trial file may leave out (both or neither), each with what cannot be computed without it.
+NPZ_OPTIONAL = {("PDC_t", "PDC_code"): "nothing of the three properties (PDC is not used by them)",
+                ("stage_current_t", "stage_current_A"): "traction (the mean stage motor current)"}
 NPZ_SCALARS = ("contact_s", "slide_start_s", "slide_end_s")
+#: Which recorded series each property is computed from.
+PROPERTY_NEEDS = {"traction": ("stage current",), "roughness": ("PAC",), "fineness": ("PAC",)}
+#: A PAC interval longer than this many median spacings is a gap (samples lost): see the module's docstring.
+MAX_GAP_INTERVALS = 1.5
 
 
 class RecordingError(BenchError, ValueError):
@@ -86,8 +106,9 @@ class UndefinedProperty(RecordingError):
     centroid). :func:`properties` records it as None with this reason."""
 
 
-def _series(name: str, t: Any, x: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Validate one (instants, values) pair: 1-D, same length, non-empty, finite, instants strictly increasing."""
+def _series(name: str, key: str, t: Any, x: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Validate one (instants, values) pair: 1-D, same length, non-empty, finite, instants strictly increasing
+    (``key``: the instants' name in a trial file, ``PAC_t``, which the error for a step back names with its index)."""
     try:
         t = np.asarray(t, dtype=np.float64)
         x = np.asarray(x, dtype=np.float64)
@@ -101,8 +122,11 @@ def _series(name: str, t: Any, x: Any) -> tuple[np.ndarray, np.ndarray]:
         raise RecordingError(f"{name}: empty")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
         raise RecordingError(f"{name}: contains NaN or infinite values")
-    if t.size > 1 and not np.all(np.diff(t) > 0):
-        raise RecordingError(f"{name}: instants are not strictly increasing")
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise RecordingError(f"{name}: instants are not strictly increasing: {key}[{k}] = {t[k]!r} s after "
+                             f"{key}[{k - 1}] = {t[k - 1]!r} s (a restarted logger, or frames out of order?)")
     return t, x
 
 
@@ -111,8 +135,9 @@ class TrialRecording:
     """One exploratory trial: what the sensor and the stage recorded, and when the phases began.
 
     ``pac_t``/``pac`` — PAC instants (s) and 12-bit codes (2.2 kS/s in the default frame);
-    ``pdc_t``/``pdc`` — PDC instants (s) and codes; ``current_t``/``current_A`` — stage motor current instants (s)
-    and current (A); ``contact_s`` — the finger reached the target force (the stepper stops); ``slide_start_s`` /
+    ``pdc_t``/``pdc`` — PDC instants (s) and codes, or both None (no property uses PDC);
+    ``current_t``/``current_A`` — stage motor current instants (s) and current (A), or both None (then traction is
+    undefined); ``contact_s`` — the finger reached the target force (the stepper stops); ``slide_start_s`` /
     ``slide_end_s`` — the stage starts / stops sliding. All instants share one clock (s).
     Metadata (free, not used by the computations): ``texture`` (id or name), ``force_N``, ``velocity_m_s``,
     ``trial`` (repetition number), ``seed``, and ``extra`` (any JSON-serialisable dict).
@@ -121,10 +146,10 @@ class TrialRecording:
 
     pac_t: np.ndarray
     pac: np.ndarray
-    pdc_t: np.ndarray
-    pdc: np.ndarray
-    current_t: np.ndarray
-    current_A: np.ndarray
+    pdc_t: np.ndarray | None
+    pdc: np.ndarray | None
+    current_t: np.ndarray | None
+    current_A: np.ndarray | None
     contact_s: float
     slide_start_s: float
     slide_end_s: float
@@ -136,9 +161,13 @@ class TrialRecording:
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        for name, (tf, xf) in {"PAC": ("pac_t", "pac"), "PDC": ("pdc_t", "pdc"),
-                               "stage current": ("current_t", "current_A")}.items():
-            t, x = _series(name, getattr(self, tf), getattr(self, xf))
+        for name, (tf, xf, key) in {"PAC": ("pac_t", "pac", "PAC_t"), "PDC": ("pdc_t", "pdc", "PDC_t"),
+                                    "stage current": ("current_t", "current_A", "stage_current_t")}.items():
+            if name != "PAC" and getattr(self, tf) is None and getattr(self, xf) is None:
+                continue  # not recorded (the module's docstring: what each property needs)
+            if name != "PAC" and (getattr(self, tf) is None or getattr(self, xf) is None):
+                raise RecordingError(f"{name}: {tf} and {xf} are given both or neither (one of them is None)")
+            t, x = _series(name, key, getattr(self, tf), getattr(self, xf))
             object.__setattr__(self, tf, t)
             object.__setattr__(self, xf, x)
         phases = {}
@@ -175,16 +204,18 @@ class TrialRecording:
 def save_npz(rec: TrialRecording, path: str | Path) -> Path:
     """Write ``rec`` to ``path`` (compressed NPZ) and return the path.
 
-    Layout (every key always present): ``PAC_t``, ``PDC_t``, ``stage_current_t`` — instants (s, float64);
-    ``PAC_code``, ``PDC_code`` — codes (float64; integers for real 12-bit data); ``stage_current_A`` — motor current
-    (A); ``contact_s``, ``slide_start_s``, ``slide_end_s`` — 0-d float64 (s); ``meta_json`` — 0-d string, the JSON
-    of :meth:`TrialRecording.metadata`; ``format`` — 0-d string :data:`NPZ_FORMAT`. The PAC/PDC names match the
+    Layout: ``PAC_t``, ``PDC_t``, ``stage_current_t`` — instants (s, float64); ``PAC_code``, ``PDC_code`` — codes
+    (float64; integers for real 12-bit data); ``stage_current_A`` — motor current (A); ``contact_s``,
+    ``slide_start_s``, ``slide_end_s`` — 0-d float64 (s); ``meta_json`` — 0-d string, the JSON of
+    :meth:`TrialRecording.metadata`; ``format`` — 0-d string :data:`NPZ_FORMAT`.  The PDC pair and the stage
+    current pair are left out when the recording has none (:data:`NPZ_OPTIONAL`).  The PAC/PDC names match the
     ``codes.npz`` a scene run writes.
     """
     path = Path(path)
+    optional = {k: v for k, v in (("PDC_t", rec.pdc_t), ("PDC_code", rec.pdc), ("stage_current_t", rec.current_t),
+                                  ("stage_current_A", rec.current_A)) if v is not None}
     np.savez_compressed(
-        path, PAC_t=rec.pac_t, PAC_code=rec.pac, PDC_t=rec.pdc_t, PDC_code=rec.pdc,
-        stage_current_t=rec.current_t, stage_current_A=rec.current_A,
+        path, PAC_t=rec.pac_t, PAC_code=rec.pac, **optional,
         contact_s=np.float64(rec.contact_s), slide_start_s=np.float64(rec.slide_start_s),
         slide_end_s=np.float64(rec.slide_end_s), meta_json=np.array(json.dumps(rec.metadata())),
         format=np.array(NPZ_FORMAT))
@@ -194,17 +225,27 @@ def save_npz(rec: TrialRecording, path: str | Path) -> Path:
 def load_npz(path: str | Path) -> TrialRecording:
     """Read a trial written by :func:`save_npz` (or by anything producing the same layout).
 
-    ``meta_json`` and ``format`` are optional; every array and phase is required. Raises :class:`RecordingError`
-    naming each missing key, or the malformed array.
+    ``meta_json`` and ``format`` are optional, and so are the PDC pair and the stage current pair
+    (:data:`NPZ_OPTIONAL`: a pair is given whole or not at all; without the stage current there is no traction);
+    PAC and the phases are required.  Raises :class:`RecordingError` naming each missing key, or the malformed array
+    (instants that do not strictly increase: the array and the index).  PAC gaps are not an error here: they leave
+    roughness and fineness undefined (:func:`pac_gap`).
     """
     try:
         data = np.load(Path(path), allow_pickle=False)
     except (OSError, ValueError) as e:
         raise RecordingError(f"{path}: cannot read as NPZ ({e})") from None
     with data:
-        missing = [k for k in NPZ_ARRAYS + NPZ_SCALARS if k not in data.files]
+        missing = [k for k in NPZ_REQUIRED + NPZ_SCALARS if k not in data.files]
+        for pair, lost in NPZ_OPTIONAL.items():
+            absent = [k for k in pair if k not in data.files]
+            if len(absent) == 1:
+                missing.append(f"{absent[0]} (given with {pair[pair.index(absent[0]) - 1]}; without both, {lost} "
+                               "cannot be computed)")
         if missing:
             raise RecordingError(f"{path}: missing array(s): {', '.join(missing)}")
+        arrays = {k: data[k] if k in data.files else None
+                  for k in ("PDC_t", "PDC_code", "stage_current_t", "stage_current_A")}
         if "format" in data.files and str(data["format"]) != NPZ_FORMAT:
             raise RecordingError(f"{path}: format is {str(data['format'])!r}, expected {NPZ_FORMAT!r}")
         for k in NPZ_SCALARS:
@@ -222,8 +263,8 @@ def load_npz(path: str | Path) -> TrialRecording:
         kwargs = {k: meta[k] for k in known if k in meta and meta[k] is not None}
         try:
             return TrialRecording(
-                pac_t=data["PAC_t"], pac=data["PAC_code"], pdc_t=data["PDC_t"], pdc=data["PDC_code"],
-                current_t=data["stage_current_t"], current_A=data["stage_current_A"],
+                pac_t=data["PAC_t"], pac=data["PAC_code"], pdc_t=arrays["PDC_t"], pdc=arrays["PDC_code"],
+                current_t=arrays["stage_current_t"], current_A=arrays["stage_current_A"],
                 contact_s=data["contact_s"].reshape(()), slide_start_s=data["slide_start_s"].reshape(()),
                 slide_end_s=data["slide_end_s"].reshape(()), **kwargs)
         except RecordingError as e:
@@ -254,6 +295,24 @@ def background_window(rec: TrialRecording, guard_s: float = BACKGROUND_GUARD_S) 
 
 def _in(t: np.ndarray, window: tuple[float, float]) -> np.ndarray:
     return (t >= window[0]) & (t <= window[1])
+
+
+def pac_gap(rec: TrialRecording) -> str | None:
+    """The first PAC gap between ``contact_s`` and ``slide_end_s`` — an interval longer than
+    :data:`MAX_GAP_INTERVALS` median spacings, samples lost there — said in words (the array, the index, the
+    instants, the gap and the tolerance, s), or None.  The module's docstring says why roughness and fineness are
+    then undefined."""
+    first, last = np.searchsorted(rec.pac_t, [rec.contact_s, rec.slide_end_s], side="left")
+    lo, hi = max(int(first) - 1, 0), min(int(last) + 1, rec.pac_t.size)  # the intervals that reach into the span
+    dt = np.diff(rec.pac_t[lo:hi])
+    limit = MAX_GAP_INTERVALS / rec.pac_rate_hz
+    wide = np.flatnonzero(dt > limit)
+    if not wide.size:
+        return None
+    k = lo + int(wide[0]) + 1
+    return (f"PAC has a gap between contact_s and slide_end_s: PAC_t[{k}] = {rec.pac_t[k]:.6g} s is "
+            f"{dt[wide[0]]:.4g} s after PAC_t[{k - 1}] = {rec.pac_t[k - 1]:.6g} s, more than {MAX_GAP_INTERVALS:g} "
+            f"median spacings ({limit:.4g} s): samples were lost, and the filter and spectra would join across it")
 
 
 # ---------------------------------------------------------------------------------------------------- properties
@@ -287,7 +346,10 @@ def _centred_convolution(x: np.ndarray, h: np.ndarray, lo: int, hi: int) -> np.n
 
 
 def traction(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL) -> float:
-    """Traction (A): the mean stage motor current over the measurement window (D eq. 6.14)."""
+    """Traction (A): the mean stage motor current over the measurement window (D eq. 6.14); undefined for a
+    recording without the stage current."""
+    if rec.current_t is None:
+        raise UndefinedProperty("stage current: not recorded, so traction (the mean motor current) is undefined")
     w = measurement_window(rec, lead, tail)
     sel = _in(rec.current_t, w)
     if not sel.any():
@@ -303,6 +365,9 @@ def band_powers(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = M
     convolution of the whole record, i.e. the 33-sample delay compensated; evaluated only inside the windows),
     then each window's samples are averaged.
     """
+    gap = pac_gap(rec)
+    if gap:
+        raise UndefinedProperty(gap)
     h = roughness_filter(rec.pac_rate_hz)
     x = rec.pac - rec.pac.mean()
     out = []
@@ -352,6 +417,9 @@ def _hann(n: int) -> np.ndarray:
 def spectral_centroid(rec: TrialRecording, lead: float = MEASURE_LEAD, tail: float = MEASURE_TAIL,
                       window: int = CENTROID_WINDOW, overlap: float = CENTROID_OVERLAP) -> float:
     """Spectral centroid (Hz) Σ|FFT|²·f / Σ|FFT|² of unfiltered PAC over the measurement window (D eq. 6.18)."""
+    gap = pac_gap(rec)
+    if gap:
+        raise UndefinedProperty(gap)
     w = measurement_window(rec, lead, tail)
     f, p = averaged_spectrum(rec.pac[_in(rec.pac_t, w)], rec.pac_rate_hz, window, overlap)
     total = p.sum()
