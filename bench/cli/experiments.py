@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench.cli.args import add_cluster_arguments, any_seed, say_leftovers, sigterm_like_ctrl_c, strict_json, whole
+from bench.cli.args import add_cluster_arguments, any_seed, say_leftovers, sigterm_like_ctrl_c, whole
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from bench.tomlfile import spelled
 from emulator.fidelity import PROFILES
@@ -31,7 +31,8 @@ library, each relative to its own file.
 
 Writes into --out (default: a fresh out/texture-sweep[-n]): trials.csv and trials.json (one row per trial:
 texture, movement, repetition, seed, skin, the library file, the three properties, the true normal force,
-simulated and wall time; trials.json also states the library: path, SHA-256 of the file, shipped or not),
+simulated and wall time; trials.json, the same rows in the schema explore writes too — format, version, command,
+library (path, SHA-256 of the file, shipped or not), wall_s, workers, rows — see bench/reporting/trials_file.py),
 wear.csv (ridge height each movement wears off in {PILOT_WORTH_TRIALS} trials, a pilot's worth, on a fresh skin),
 properties.png (each property against force and velocity).  Movements keep their grid ids in every file.  An
 --out folder that holds anything is refused; --force replaces an earlier sweep's files there.
@@ -130,6 +131,7 @@ def _cmd_texture_sweep(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.trials import clipped_note, rows_to_arrays, sweep, sweep_tasks, wear_per_movement
     from bench.reporting.experiment_report import write_rows_csv, write_text
+    from bench.reporting import trials_file
     from bench.reporting.outdir import FolderKind
     from bench.reporting.sweep_plots import properties_vs_movement
     from bench.cli.args import library_option
@@ -158,8 +160,7 @@ def _cmd_texture_sweep(a) -> int:
             check_unchanged(library, "the sweep")
         except TextureError as e:
             raise ValueError(f"{library.path}: {'; '.join(e.problems)}") from None  # (one line)
-        trials_json = strict_json({"wall_s": wall, "workers": spec.describe(), "library": library.record(),
-                                   "rows": rows}, indent=1)
+        trials_json = trials_file.trials_json("texture-sweep", rows, library.record(), wall, spec.describe())
         with signals_held():  # a signal meanwhile: every file finished first, then the stop
             folder.clear_earlier()
             try:
@@ -226,7 +227,8 @@ sliding.  Ctrl-C stops the experiment (exit 130; SIGTERM: 143); the stages alrea
 file being written is finished first.
 
 Writes into --out (default: a fresh out/explore/<name>[-n]): report.md (beside D's numbers), summary.json,
-accuracy.csv, accuracy_per_texture.csv, confusion.csv, pilot_uncertainty.csv, trials.csv/json,
+accuracy.csv, accuracy_per_texture.csv, confusion.csv, pilot_uncertainty.csv, trials.csv/json (trials.json in
+texture-sweep's schema: bench/reporting/trials_file.py),
 properties_at_optimal_movements.png, probability_evolution.png.  --ablation NAME runs a variant into
 --out/<name>/ and adds a comparison table to --out/ablations.md:
 {ablations}
@@ -264,7 +266,7 @@ DEFAULT_CACHE = "out/cache"
 def _cmd_explore(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.experiments.experiment import ablated, identified_among, load_experiment, run_experiment, summary
-    from bench.reporting.experiment_report import OUTPUT_FILES, trial_rows, write_outputs, write_text
+    from bench.reporting.experiment_report import OUTPUT_FILES, experiment_trials_json, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, made_folders, writable_folder
 
     if a.no_cache and a.cache is not None:
@@ -300,7 +302,7 @@ def _cmd_explore(a) -> int:
                 try:
                     files = write_outputs(result, where)
                 except OSError as e:
-                    raise _results_not_written(e, where, OUTPUT_FILES, strict_json(trial_rows(result))) from None
+                    raise _results_not_written(e, where, OUTPUT_FILES, experiment_trials_json(result)) from None
             rows.append((label, what, summary(result), identified_among(result)))
             print(f"wrote {where}/ ({', '.join(files)}) in {time.perf_counter() - t0:.0f} s")
         if names:

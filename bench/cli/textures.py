@@ -18,9 +18,9 @@ value and what is allowed.  --json prints the textures in the file's own fields 
 file, that list is a library --library reads back.  Edit it (or a copy of the TOML) to try surfaces of your own,
 named the same way everywhere: a scene slides over them with [scene] library = "FILE", the texture experiment
 with [experiment] library = "FILE" (each relative to the file that names it), texture-sweep --library FILE
-(relative to the current folder).  A scene's record.json and report.md and texture-sweep's trials.json state
-the library used (path and the SHA-256 of the file, as sha256sum prints it); trials.csv names the file on
-every row.
+(relative to the current folder).  A scene's record.json and report.md, and the trials.json of texture-sweep and
+explore, state the library used (path and the SHA-256 of the file, as sha256sum prints it); trials.csv names the
+file on every row.
 
 examples:
   biotac-bench textures                      # all of them

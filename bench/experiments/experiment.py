@@ -540,6 +540,7 @@ class ExperimentResult:
     identification_results: dict  # strategy -> list of ExplorationResult
     wall_s: dict = field(default_factory=dict)
     library: dict = field(default_factory=dict)  # the texture library as read at the start: path, sha256, shipped
+    workers: str = ""  # where the trials ran (ClusterSpec.describe(): a LocalCluster's size or a scheduler)
 
 
 def _pick_pairs(model: ex.TextureModel, best: np.ndarray, n_pairs: int, choice: str, seed: int,
@@ -591,7 +592,8 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     library = read_library(spec.library)  # (complete when shipped, as load_library)
     lib = library.textures
     grid = movement_grid()
-    client = connect(cluster or ClusterSpec.from_env())
+    cluster = cluster or ClusterSpec.from_env()
+    client = connect(cluster)
     try:
         # 1. pilot
         t0 = time.perf_counter()
@@ -665,7 +667,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                             for true in val_textures]
     wall["exploration"] = time.perf_counter() - t0
     return ExperimentResult(spec, pilot_rows, u_full, best, wear_per_movement(), training_rows, history, pairs,
-                            validation_rows, pair_results, ident_results, wall, library.record())
+                            validation_rows, pair_results, ident_results, wall, library.record(), cluster.describe())
 
 
 def simulation_shares(total: int, n: int) -> list[int]:

@@ -20,6 +20,7 @@ from bench.atomic import atomic_write
 from bench.cli.args import strict_json
 from bench.reporting.figures import figure_file
 from bench.reporting.sweep_plots import PROPERTIES as PROPERTY_LABELS
+from bench.reporting.trials_file import trials_json
 
 #: every file :func:`write_outputs` may write (what ``explore --force`` may replace)
 OUTPUT_FILES = ("trials.csv", "trials.json", "pilot_uncertainty.csv", "accuracy.csv", "accuracy_per_texture.csv",
@@ -80,6 +81,17 @@ def trial_rows(result: ExperimentResult) -> list[dict]:
     return result.pilot_rows + result.training_rows + result.validation_rows
 
 
+#: the stages whose wall time trials.json's ``wall_s`` counts: those that run trials
+TRIAL_STAGES = ("pilot", "training", "validation")
+
+
+def experiment_trials_json(result: ExperimentResult) -> str:
+    """trials.json of an experiment (:mod:`bench.reporting.trials_file`): its trial rows, the library, the trial
+    stages' wall time and where they ran."""
+    return trials_json("explore", trial_rows(result), result.library,
+                       sum(result.wall_s.get(stage, 0.0) for stage in TRIAL_STAGES), result.workers)
+
+
 def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     """Write every output of an experiment into ``out``; returns the file names."""
     from bench.textures.library import load_library
@@ -89,7 +101,7 @@ def write_outputs(result: ExperimentResult, out: Path) -> list[str]:
     names = []
     rows = trial_rows(result)
     write_rows_csv(out / "trials.csv", rows)
-    write_text(out / "trials.json", strict_json(rows))
+    write_text(out / "trials.json", experiment_trials_json(result))
     names += ["trials.csv", "trials.json"]
     status = pilot_status(result)
     u = [{"movement_id": m, "movement": movement_label(m), "status": status[m],

@@ -10,6 +10,7 @@ from bench.campaigns.engine import ClusterSpec
 from bench.cli import main as cli
 from bench.experiments import experiment as E
 from bench.paths import FIXTURES
+from bench.reporting.trials_file import read_trials
 
 pytestmark = pytest.mark.unit
 QUICK = FIXTURES / "experiments" / "quick.toml"
@@ -418,7 +419,7 @@ def _check_tables_against_the_result(out, result, summary):
     wrong-but-unnoticed by a mutation: validation rows dropped, fractions under accuracy_%, a U column of another
     property, ridge loss in mm under µm, the replacement count one high, decisions outside the true set lost, and in
     report.md fractions printed as percent or the validation-spread columns swapped)."""
-    assert len(_csv(out / "trials.csv")) == len(json.loads((out / "trials.json").read_text())) == (
+    assert len(_csv(out / "trials.csv")) == len(read_trials(out / "trials.json")["rows"]) == (
         len(result.pilot_rows) + len(result.training_rows) + len(result.validation_rows))
     s = E.summary(result)
     for row in _csv(out / "accuracy.csv"):

@@ -4,7 +4,6 @@ trials kept — in the out folder's trials.json, else in one saved in the system
 "[Errno 28]" with exit status 2; a stage cache that cannot be written is a note, not the end of the experiment."""
 
 import errno
-import json
 import os
 import re
 import tempfile
@@ -14,6 +13,7 @@ import pytest
 from bench import atomic
 from bench.cli import main as cli
 from bench.experiments import trials as T
+from bench.reporting.trials_file import read_trials
 from bench.tests import test_sweep_review as first_review
 from bench.tests.test_sweep_review import TINY, _in_process_sweep
 
@@ -56,7 +56,7 @@ def _one_error_line(err: str) -> str:
 def _saved(line: str):
     match = re.search(r"saved to (\S+) instead", line)
     assert match, line
-    return json.loads(open(match.group(1), encoding="utf-8").read())
+    return read_trials(match.group(1))  # (the schema both commands write: checked as read)
 
 
 def test_atomic_write_names_the_file_a_full_disk_stopped(tmp_path, monkeypatch):
@@ -89,7 +89,7 @@ def test_a_sweep_whose_plot_meets_a_full_disk_says_the_trials_are_in_place(tmp_p
     line = _one_error_line(capsys.readouterr().err)
     assert f"{out}/properties.png could not be written ({NO_SPACE})" in line
     assert "written: trials.csv, trials.json, wear.csv" in line and f"the trials are in {out}/trials.json" in line
-    assert [r["movement_id"] for r in json.loads((out / "trials.json").read_text())["rows"]] == [21, 7]
+    assert [r["movement_id"] for r in read_trials(out / "trials.json")["rows"]] == [21, 7]
     assert list(system_tmp.iterdir()) == []
 
 
@@ -103,7 +103,7 @@ def test_an_experiment_whose_results_meet_a_full_disk_names_the_file_and_saves_i
     assert cli.main(["explore", str(exp), *cache, "--quiet", "--out", str(out)]) == 1
     line = _one_error_line(capsys.readouterr().err)
     assert f"{out}/trials.csv could not be written ({NO_SPACE})" in line and "written: nothing" in line
-    rows = _saved(line)
+    rows = _saved(line)["rows"]
     assert {r["stage"] for r in rows} == {"pilot", "training", "validation"}
 
 
