@@ -15,7 +15,8 @@ friction against the silicone skin, the texture's Young's modulus, thermal mater
 
 The file is validated completely before anything is listed; every problem names the texture, the field, the
 value and what is allowed.  --json prints the textures in the file's own fields and units; saved as a .json
-file, that list is a library --library reads back.  Edit it (or a copy of the TOML) to try surfaces of your own,
+file, that list is a library --library reads back (a library with groups of its own, [[group]] tables, prints
+as {"group": [...], "texture": [...]}, which reads back too).  Edit it (or a copy of the TOML) to try surfaces of your own,
 named the same way everywhere: a scene slides over them with [scene] library = "FILE", the texture experiment
 with [experiment] library = "FILE" (each relative to the file that names it), texture-sweep --library FILE
 (relative to the current folder).  A scene's record.json and report.md, and the trials.json of texture-sweep and
@@ -43,20 +44,20 @@ def _periods(t) -> str:
     return ", ".join(f"{p.track_period_m * 1e3:.3g}" for p in t.periodic) or "-"
 
 
-def _pick_group(text: str) -> str:
-    """The group ``--group text`` names: its name in any case, or the one group whose name holds ``text``; an empty or
-    unknown one is refused listing every group, an ambiguous one listing those it is part of, the value spelled as
-    the rest of the CLI spells values (``"glas"``, TOML's spelling; never Python's ``'glas'``)."""
-    from bench.textures.library import GROUP_NAMES
+def _pick_group(text: str, group_names: tuple[str, ...]) -> str:
+    """The group ``--group text`` names among ``group_names`` (the library's: D's, the test surfaces', its own): its
+    name in any case, or the one group whose name holds ``text``; an empty or unknown one is refused listing every
+    group, an ambiguous one listing those it is part of, the value spelled as the rest of the CLI spells values
+    (``"glas"``, TOML's spelling; never Python's ``'glas'``)."""
     from bench.tomlfile import spelled
 
     key = text.strip().casefold()
-    exact = [g for g in GROUP_NAMES if g.casefold() == key]
-    found = exact or [g for g in GROUP_NAMES if key and key in g.casefold()]
+    exact = [g for g in group_names if g.casefold() == key]
+    found = exact or [g for g in group_names if key and key in g.casefold()]
     if len(found) != 1:
         if found:
             raise ValueError(f"--group {spelled(text)}: ambiguous, part of {len(found)} groups: {', '.join(found)}")
-        raise ValueError(f"--group {spelled(text)}: {'unknown' if key else 'empty'}; groups: {', '.join(GROUP_NAMES)}")
+        raise ValueError(f"--group {spelled(text)}: {'unknown' if key else 'empty'}; groups: {', '.join(group_names)}")
     return found[0]
 
 
@@ -105,7 +106,7 @@ def _table(textures) -> str:
 def _cmd_textures(a) -> int:
     from bench.cli.args import library_option
     from bench.errors import shell_word
-    from bench.textures.library import UnknownTextureError, texture_record
+    from bench.textures.library import UnknownTextureError, library_record, texture_record
 
     if a.show is not None and a.group:
         raise ValueError(f"--show {a.show} prints one texture and --group {a.group} filters the list: give one or the "
@@ -121,10 +122,10 @@ def _cmd_textures(a) -> int:
         return 0
     items = list(lib.values())
     if a.group is not None:  # (an empty --group "" is refused, not taken as no filter)
-        group = _pick_group(a.group)
+        group = _pick_group(a.group, library.group_names)
         items = [t for t in items if t.group == group]
     if a.json:
-        print(strict_json([texture_record(t) for t in items], indent=2, ensure_ascii=False))
+        print(strict_json(library_record(items, library.groups), indent=2, ensure_ascii=False))
         return 0
     print(_table(items))
     if not items:

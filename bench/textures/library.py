@@ -21,7 +21,8 @@ Allowed values (physical ranges, wide enough for any real surface, narrow enough
 ==============================  ==================  ===========================================================
 field                           range               why
 ==============================  ==================  ===========================================================
-number                          1-117, 900-999      the 117 of D Table 6-1; test surfaces (group "test surfaces")
+number                          1-117, 900-999      the 117 of D Table 6-1; test surfaces (group "test surfaces");
+                                                    a library's own groups: 118-899, 1000-9999 (below)
 rms_height_um                   0.0001 - 3000 µm    0.1 nm (atomically flat) to 3 mm (coarse pile, open foam)
 correlation_length_um           0.1 - 50000 µm      sub-µm grains to 50 mm features (≪ the 1 m stored surface)
 hurst                           0.1 - 1.0           roughness exponent of a self-affine surface (0 < H ≤ 1)
@@ -44,6 +45,17 @@ fluctuation (0.82 μk) it allows 4·√(2e)·0.82·μk/30 s/m, 255 × μk mm/s (
 ``name`` (unique, case-insensitive), ``group`` (the dissertation's group for the number), ``source`` (where the
 numbers come from, non-empty) and ``description`` are text.  The shipped library must hold all of T1..T117, with
 the textures the dissertation names at their numbers (:data:`NAMED`).
+
+A library of one's own may declare groups of its own, one ``[[group]]`` table each (:func:`declared_groups`)::
+
+    [[group]]
+    name = "3D prints"        # text, unique (case-insensitive) among D's groups, "test surfaces" and the others
+    first = 200               # its numbers, first to last: whole numbers within 118-899 or 1000-9999
+    last = 249                #   (never D's 1-117 or the test surfaces' 900-999), overlapping no other group
+
+and its textures then take numbers in that range, with ``group = "3D prints"``, validated as every other texture
+(a number in no group names every group's range; a group that does not match the number names the right one).
+:attr:`LibraryFile.groups` holds the declared groups; the shipped library declares none.
 """
 
 from __future__ import annotations
@@ -93,6 +105,9 @@ GROUPS: tuple[tuple[str, int, int], ...] = (
 TEST_GROUP: tuple[str, int, int] = ("test surfaces", 900, 999)
 LIBRARY_SIZE = 117
 GROUP_NAMES = tuple(g for g, _, _ in GROUPS) + (TEST_GROUP[0],)
+#: Numbers a library's own groups (``[[group]]``) may span: past D's 117, below and above the test surfaces.
+OWN_GROUP_RANGES: tuple[tuple[int, int], ...] = ((LIBRARY_SIZE + 1, TEST_GROUP[1] - 1), (TEST_GROUP[2] + 1, 9999))
+GROUP_FIELDS = ("name", "first", "last")
 
 #: The textures D ch. 6 names, at their numbers.
 NAMED: dict[int, str] = {
@@ -149,18 +164,75 @@ KNOWN_FIELDS = frozenset({"number", "seed", "periodic", *TEXT_FIELDS, *NUMBER_FI
 MAX_NAME = 60
 
 
-def group_of(number: int) -> str | None:
-    """The group a texture number belongs to (None outside 1-117 and 900-999)."""
-    for g, lo, hi in GROUPS + (TEST_GROUP,):
+def group_of(number: int, own: tuple[tuple[str, int, int], ...] = ()) -> str | None:
+    """The group a texture number belongs to: D's (1-117), the test surfaces (900-999) or one of ``own`` (a
+    library's declared groups, (name, first, last)); None outside them all."""
+    for g, lo, hi in GROUPS + (TEST_GROUP,) + tuple(own):
         if lo <= number <= hi:
             return g
     return None
+
+
+def _own_ranges() -> str:
+    return " or ".join(f"{lo}-{hi}" for lo, hi in OWN_GROUP_RANGES)
+
+
+def declared_groups(c: "_Checker", items) -> tuple[tuple[str, int, int], ...]:
+    """A library's own groups (its ``[[group]]`` tables) as (name, first, last), every problem recorded in ``c``
+    (naming the table, the field, the value and what is allowed); the groups with problems are left out."""
+    if items is None:
+        return ()
+    if not isinstance(items, list) or not all(isinstance(g, dict) for g in items):
+        c.add("library", f"group = {spelled(items)}: must be an array of tables ([[group]] with name, first, last)")
+        return ()
+    out: list[tuple[str, int, int]] = []
+    taken = {g.casefold(): "one of D's groups" if g != TEST_GROUP[0] else "the test surfaces' group"
+             for g in GROUP_NAMES}
+    for i, g in enumerate(items):
+        who = _table_label("group", i, g.get("name"))
+        n_before = len(c.problems)
+        c.unknown_fields(who, g, GROUP_FIELDS)
+        name = c.text(who, g, "name")
+        if name is not None and (len(name) > MAX_NAME or name != name.strip()):
+            c.add(who, f"name = {spelled(name)}: at most {MAX_NAME} characters, no leading or trailing spaces")
+        elif name is not None and name.casefold() in taken:
+            c.add(who, f"name = {spelled(name)}: already the name of {taken[name.casefold()]}; group names are "
+                       "unique")
+        bounds = []
+        for key in ("first", "last"):
+            v = g.get(key)
+            if key not in g:
+                c.add(who, f"{key} is missing (a whole number, {_own_ranges()})")
+            elif isinstance(v, bool) or not isinstance(v, int) or not any(lo <= v <= hi for lo, hi in OWN_GROUP_RANGES):
+                c.add(who, f"{key} = {spelled(v)}: allowed {_own_ranges()}, a whole number (1-{LIBRARY_SIZE} are D's "
+                           f"groups, {TEST_GROUP[1]}-{TEST_GROUP[2]} the test surfaces)")
+            else:
+                bounds.append(v)
+        if len(c.problems) > n_before:
+            continue
+        first, last = bounds
+        if first > last:
+            c.add(who, f"first = {first}, last = {last}: first must not exceed last")
+        elif first <= TEST_GROUP[2] and TEST_GROUP[1] <= last:
+            c.add(who, f"first = {first}, last = {last}: spans the test surfaces' {TEST_GROUP[1]}-{TEST_GROUP[2]}")
+        elif (other := next((o for o in out if o[1] <= last and first <= o[2]), None)) is not None:
+            c.add(who, f"first = {first}, last = {last}: overlaps group {spelled(other[0])} ({other[1]}-{other[2]}); "
+                       "a number belongs to one group")
+        else:
+            taken[name.casefold()] = f"group {spelled(name)} ({first}-{last})"
+            out.append((name, first, last))
+    return tuple(out)
 
 
 def _label(number: int, name) -> str:
     """How problems name a texture: ``T10 "velcro hooks"`` (the name as the file spells it; a lone surrogate in it
     as U+FFFD without :func:`spelled`'s note, which the name's own problem gives: the note once per message)."""
     return f"T{number} {spelled(name, note=False)}" if isinstance(name, str) and name else f"T{number}"
+
+
+def _table_label(kind: str, i: int, name) -> str:
+    """How problems name the ``i``-th ``[[kind]]`` table when no number names it: ``group[1] "3D prints"``."""
+    return f"{kind}[{i}]" + (f" {spelled(name, note=False)}" if isinstance(name, str) and name else "")
 
 
 class _Checker:
@@ -187,6 +259,13 @@ class _Checker:
             self.add(who, f"{name} = {spelled(v)}: allowed range is {spec.lo:g} to {spec.hi:g}{unit}")
             return None
         return spec.to_si(v)
+
+    def unknown_fields(self, who: str, table: dict, known) -> None:
+        """A problem for each key of ``table`` not in ``known`` (with a close match suggested, and the known ones)."""
+        for k in table:
+            if k not in known:
+                self.add(who, f"unknown field {spelled(k)}{_did_you_mean(k, known)}; known fields: "
+                              f"{', '.join(sorted(known))}")
 
     def text(self, who: str, table: dict, key: str, required=True):
         if key not in table:
@@ -247,12 +326,19 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
     """Validate a parsed library (the TOML as a dict); ``complete`` also demands T1..T117 with the named ones.
 
     Returns ``{number: Texture}`` sorted by number; raises :class:`TextureError` listing every problem."""
+    return _parse(data, source, complete)[0]
+
+
+def _parse(data: dict, source: str, complete: bool) -> tuple[dict[int, Texture], tuple[tuple[str, int, int], ...]]:
+    """:func:`parse_library`'s textures, and the library's own groups (name, first, last) besides."""
     c = _Checker()
     if not isinstance(data, dict):
         raise TextureError(source, ["the library must be a table holding [[texture]] tables"])
     for k in data:
-        if k != "texture":
-            c.add("library", f"unknown top-level key {spelled(k)}: the file holds [[texture]] tables only")
+        if k not in ("texture", "group"):
+            c.add("library", f"unknown top-level key {spelled(k)}: the file holds [[texture]] tables only (and "
+                             "[[group]] tables for groups of its own)")
+    own = declared_groups(c, data.get("group"))
     items = data.get("texture")
     if items is None or items == []:
         c.add("library", "no [[texture]] tables")
@@ -264,7 +350,7 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
     seen = _Seen()
     out: dict[int, Texture] = {}
     for i, t in enumerate(items):
-        tex = _texture(c, i, t, seen)
+        tex = _texture(c, i, t, seen, own)
         if tex is not None:
             out[tex.number] = tex
     if complete:
@@ -277,7 +363,7 @@ def parse_library(data: dict, source: str = "<library>", complete: bool = False)
                       f"name = {spelled(out[n].name)}: D ch. 6 names texture {n} {spelled(expected)}")
     if c.problems:
         raise TextureError(source, c.problems)
-    return dict(sorted(out.items()))
+    return dict(sorted(out.items())), own
 
 
 @dataclass
@@ -289,8 +375,8 @@ class _Seen:
     seeds: dict = field(default_factory=dict)
 
 
-def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
-    """One ``[[texture]]`` table, or None after recording its problems."""
+def _texture(c: _Checker, i: int, t, seen: _Seen, own: tuple[tuple[str, int, int], ...] = ()) -> Texture | None:
+    """One ``[[texture]]`` table (``own``: the library's own groups), or None after recording its problems."""
     if not isinstance(t, dict):
         c.add(f"texture[{i}]", f"{spelled(t)}: must be a table ([[texture]])")
         return None
@@ -298,20 +384,16 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
     if isinstance(number, int) and not isinstance(number, bool):
         who = _label(number, name)
     else:  # no usable number: say where the table is
-        who = f"texture[{i}]" + (f" {spelled(name, note=False)}" if isinstance(name, str) and name else "")
+        who = _table_label("texture", i, name)
     n_before = len(c.problems)
-    for k in t:
-        if k not in KNOWN_FIELDS:
-            c.add(who, f"unknown field {spelled(k)}{_did_you_mean(k, KNOWN_FIELDS)}; known fields: "
-                       f"{', '.join(sorted(KNOWN_FIELDS))}")
+    c.unknown_fields(who, t, KNOWN_FIELDS)
 
     # identity: number, name, group, seed
     if "number" not in t:
-        c.add(who, f"number is missing (1 to {LIBRARY_SIZE}, or {TEST_GROUP[1]} to {TEST_GROUP[2]} for test surfaces)")
+        c.add(who, f"number is missing ({_allowed_numbers(own)})")
         number = None
-    elif isinstance(number, bool) or not isinstance(number, int) or group_of(number) is None:
-        c.add(who, f"number = {spelled(number)}: allowed 1 to {LIBRARY_SIZE} (the library) or {TEST_GROUP[1]} to "
-                   f"{TEST_GROUP[2]} (test surfaces), a whole number")
+    elif isinstance(number, bool) or not isinstance(number, int) or group_of(number, own) is None:
+        c.add(who, f"number = {spelled(number)}: allowed {_allowed_numbers(own)}, a whole number")
         number = None
     elif number in seen.numbers:
         c.add(who, f"number = {number}: already used by {seen.numbers[number]}; numbers are unique")
@@ -329,13 +411,14 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
         else:
             seen.names[name.casefold()] = who
     group = c.text(who, t, "group")
-    if group is not None and number is not None and group != group_of(number):
-        expected = group_of(number)
-        lo, hi = next((lo, hi) for g, lo, hi in GROUPS + (TEST_GROUP,) if g == expected)
+    names = GROUP_NAMES + tuple(g for g, _, _ in own)
+    if group is not None and number is not None and group != group_of(number, own):
+        expected = group_of(number, own)
+        lo, hi = next((lo, hi) for g, lo, hi in GROUPS + (TEST_GROUP,) + own if g == expected)
         c.add(who, f"group = {spelled(group)}: texture {number} is in group {spelled(expected)} (numbers {lo}-{hi}); "
-                   f"groups: {', '.join(GROUP_NAMES)}")
-    elif group is not None and group not in GROUP_NAMES:
-        c.add(who, f"group = {spelled(group)}: must be one of: {', '.join(GROUP_NAMES)}")
+                   f"groups: {', '.join(names)}")
+    elif group is not None and group not in names:
+        c.add(who, f"group = {spelled(group)}: must be one of: {', '.join(names)}")
     seed = t.get("seed")
     if "seed" not in t:
         c.add(who, "seed is missing (a whole number, 0 to 2**63-1, unique)")
@@ -371,6 +454,13 @@ def _texture(c: _Checker, i: int, t, seen: _Seen) -> Texture | None:
 #: the largest bristle damping at rest σ1 (s/m) a sensor may have (SensorParams' range): a library texture must
 #: keep the friction element passive under it, whatever sensor slides on it
 SIGMA1_MAX_S_PER_M = PARAMETER_FIELDS["bristle_damping_per_N"].metadata["range"][1]
+
+
+def _allowed_numbers(own: tuple[tuple[str, int, int], ...]) -> str:
+    """The texture numbers a library with the own groups ``own`` allows, in words."""
+    groups = "".join(f", {lo} to {hi} (group {spelled(g)})" for g, lo, hi in own)
+    return (f"1 to {LIBRARY_SIZE} (D's library), {TEST_GROUP[1]} to {TEST_GROUP[2]} (test surfaces){groups}; "
+            f"numbers {_own_ranges()} need a [[group]] of the library's own")
 
 
 def _check_passive_friction(c: _Checker, who: str, t: dict, mu_kinetic: float, stribeck_m_per_s: float) -> None:
@@ -450,21 +540,29 @@ def _library_file(path: str | Path) -> tuple[str, str]:
 
 
 @functools.lru_cache(maxsize=8)
-def _load_cached(path: str, text: str, complete: bool) -> dict[int, Texture]:
-    """The textures of ``text`` (the file ``path``'s): keyed on the content itself, so an edit is always seen."""
-    return parse_library(_parse_text(text, path), source=path, complete=complete)
+def _load_cached(path: str, text: str, complete: bool) -> tuple[dict[int, Texture], tuple[tuple[str, int, int], ...]]:
+    """The textures and own groups of ``text`` (the file ``path``'s): keyed on the content itself, so an edit is
+    always seen."""
+    return _parse(_parse_text(text, path), path, complete)
 
 
 @dataclass(frozen=True, eq=False)
 class LibraryFile:
     """A texture library file as read: ``path`` (as given; absolute when a scene, an experiment or a command names
     it), ``sha256`` (hex digest of the file's bytes as stored, as ``sha256sum`` prints it), ``textures`` by
-    number in SI units, and whether it is the shipped ``fixtures/textures/library.toml``."""
+    number in SI units, whether it is the shipped ``fixtures/textures/library.toml``, and the groups it declares
+    of its own (``[[group]]``: (name, first, last) each; none for the shipped one)."""
 
     path: str
     sha256: str
     textures: dict
     shipped: bool
+    groups: tuple = ()
+
+    @property
+    def group_names(self) -> tuple[str, ...]:
+        """Every group a texture of this library may be in: D's, the test surfaces', then its own."""
+        return GROUP_NAMES + tuple(g for g, _, _ in self.groups)
 
     def texture(self, number_or_name: int | str) -> Texture:
         """One texture by number or name, as :func:`texture` looks it up (:class:`UnknownTextureError` if absent)."""
@@ -483,9 +581,9 @@ def read_library(path: str | Path | None = None, complete: bool | None = None) -
     if complete is None:
         complete = path is None
     text, sha256 = _library_file(p)
-    textures = _load_cached(str(p), text, bool(complete))
+    textures, groups = _load_cached(str(p), text, bool(complete))
     shipped = path is None or os.path.realpath(p) == os.path.realpath(LIBRARY_PATH)
-    return LibraryFile(str(p), sha256, MappingProxyType(textures), shipped)
+    return LibraryFile(str(p), sha256, MappingProxyType(textures), shipped, groups)
 
 
 def check_unchanged(library: LibraryFile, what: str) -> None:
@@ -608,6 +706,16 @@ def _lookup(lib, source: str, q) -> Texture:
     hint = ("close matches: " + ", ".join(_label(by_name[nm].number, by_name[nm].name) for nm in near)
             if near else f"no close matches (`{listing_command(source)}` lists them all)")
     raise UnknownTextureError(source, q, f"no texture named {spelled(q)}; {hint}")
+
+
+def library_record(textures, groups: tuple[tuple[str, int, int], ...] = ()) -> list[dict] | dict:
+    """``textures`` as ``biotac-bench textures --json`` prints them, a list of :func:`texture_record`; with groups
+    of the library's own (``groups``: (name, first, last) each), ``{"group": [...], "texture": [...]}``, so that
+    the file reads back (:func:`read_library_file`)."""
+    records = [texture_record(t) for t in textures]
+    if not groups:
+        return records
+    return {"group": [dict(zip(GROUP_FIELDS, g)) for g in groups], "texture": records}
 
 
 def texture_record(t: Texture) -> dict:

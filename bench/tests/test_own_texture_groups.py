@@ -1,0 +1,188 @@
+"""A lab's texture groups of its own: a library's ``[[group]]`` tables (name, first, last) let its textures take
+numbers past D's 117, validated as every other field (the file, the table, the field, the value, the allowed range),
+and usable wherever a library is: ``textures``, scenes, ``texture-sweep``, ``explore``.  The shipped library
+declares none and reads as before."""
+
+import csv
+import json
+import tomllib
+
+import pytest
+
+from bench.cli import main as cli
+from bench.errors import TextureError
+from bench.experiments import experiment as E
+from bench.paths import FIXTURES
+from bench.reporting.trials_file import read_trials
+from bench.scenes.scene import parse_scene_text
+from bench.textures import library as L
+
+pytestmark = pytest.mark.unit
+
+EXAMPLE = FIXTURES / "textures" / "own_groups_example.toml"
+
+
+def test_the_example_library_declares_two_groups_and_its_textures_are_in_them():
+    lib = L.read_library(EXAMPLE)
+    assert lib.groups == (("3D prints", 200, 249), ("gripper pads", 1000, 1009))
+    assert {n: t.group for n, t in lib.textures.items()} == {200: "3D prints", 201: "3D prints",
+                                                             1000: "gripper pads"}
+    assert lib.group_names[-2:] == ("3D prints", "gripper pads") and lib.group_names[:-2] == L.GROUP_NAMES
+    assert lib.texture("urethane gripper pad").number == 1000 and lib.texture("T201").group == "3D prints"
+
+
+def test_the_shipped_library_declares_no_group():
+    lib = L.read_library()
+    assert lib.groups == () and lib.group_names == L.GROUP_NAMES and max(lib.textures) == 902
+
+
+def test_textures_lists_a_group_of_its_own_and_its_json_reads_back(tmp_path, capsys):
+    """``textures --group`` finds the library's own groups; ``--json`` of a library with groups of its own is the
+    object {"group": [...], "texture": [...]}, which ``--library`` reads back to the same textures."""
+    assert cli.main(["textures", "--library", str(EXAMPLE), "--group", "gripper"]) == 0
+    listed = capsys.readouterr().out
+    assert "T1000" in listed and "T200" not in listed
+    assert cli.main(["textures", "--library", str(EXAMPLE), "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["group"] == [{"name": "3D prints", "first": 200, "last": 249},
+                                {"name": "gripper pads", "first": 1000, "last": 1009}]
+    back = tmp_path / "mine.json"
+    back.write_text(json.dumps(printed))
+    assert L.load_library(back) == L.load_library(EXAMPLE)
+
+
+GROUPS_AND_ONE = """\
+[[group]]
+name = "3D prints"
+first = 200
+last = 249
+{more}
+[[texture]]
+number = {number}
+name = "a print"
+group = {group}
+rms_height_um = 1.0
+correlation_length_um = 20.0
+hurst = 0.8
+mu_static = 0.8
+mu_kinetic = 0.6
+modulus_MPa = 3500.0
+material = "acrylic"
+seed = 7
+source = "made up for a test"
+"""
+
+
+def _problems(tmp_path, more="", number=200, group='"3D prints"') -> list[str]:
+    path = tmp_path / "mine.toml"
+    path.write_text(GROUPS_AND_ONE.format(more=more, number=number, group=group))
+    with pytest.raises(TextureError) as e:
+        L.read_library(path)
+    assert e.value.source == str(path) and str(e.value).startswith(f"{path}: ")
+    return e.value.problems
+
+
+@pytest.mark.parametrize("more, expected", [
+    ('[[group]]\nname = "Glass"\nfirst = 300\nlast = 310\n',
+     'group[1] "Glass": name = "Glass": already the name of one of D\'s groups; group names are unique'),
+    ('[[group]]\nname = "3d PRINTS"\nfirst = 300\nlast = 310\n',
+     'group[1] "3d PRINTS": name = "3d PRINTS": already the name of group "3D prints" (200-249)'),
+    ('[[group]]\nname = "early"\nfirst = 100\nlast = 130\n',
+     'group[1] "early": first = 100: allowed 118-899 or 1000-9999, a whole number (1-117 are D\'s groups, 900-999 '
+     'the test surfaces)'),
+    ('[[group]]\nname = "wide"\nfirst = 850\nlast = 1050\n',
+     'group[1] "wide": first = 850, last = 1050: spans the test surfaces\' 900-999'),
+    ('[[group]]\nname = "overlap"\nfirst = 240\nlast = 260\n',
+     'group[1] "overlap": first = 240, last = 260: overlaps group "3D prints" (200-249)'),
+    ('[[group]]\nname = "backwards"\nfirst = 320\nlast = 310\n',
+     'group[1] "backwards": first = 320, last = 310: first must not exceed last'),
+    ('[[group]]\nname = "huge"\nfirst = 5000\nlast = 10000\n',
+     'group[1] "huge": last = 10000: allowed 118-899 or 1000-9999'),
+    ('[[group]]\nname = "no end"\nfirst = 300\n', 'group[1] "no end": last is missing (a whole number, 118-899'),
+    ('[[group]]\nname = "typo"\nfirst = 300\nlasts = 310\n',
+     'group[1] "typo": unknown field "lasts" (did you mean "last"?); known fields: first, last, name'),
+])
+def test_a_bad_group_is_named_with_its_field_value_and_allowed_range(tmp_path, more, expected):
+    problems = _problems(tmp_path, more)
+    assert any(p.startswith(expected) for p in problems), problems
+
+
+def test_a_texture_outside_every_group_or_in_the_wrong_one_is_named(tmp_path):
+    """A number past 117 in no declared group names every group's range and what a [[group]] allows; a texture in
+    a declared group's range naming another group names the right one, as D's groups are checked."""
+    (problem,) = _problems(tmp_path, number=300)
+    assert problem == ('T300 "a print": number = 300: allowed 1 to 117 (D\'s library), 900 to 999 (test surfaces), '
+                       '200 to 249 (group "3D prints"); numbers 118-899 or 1000-9999 need a [[group]] of the '
+                       "library's own, a whole number")
+    (problem,) = _problems(tmp_path, group='"glass"')
+    assert problem.startswith('T200 "a print": group = "glass": texture 200 is in group "3D prints" (numbers '
+                              '200-249); groups: paper-like, ')
+    (problem,) = _problems(tmp_path, number=30)  # D's numbers keep D's groups
+    assert problem.startswith('T30 "a print": group = "3D prints": texture 30 is in group "foam" (numbers 29-31)')
+
+
+def test_a_library_without_groups_refuses_numbers_past_117_as_before(tmp_path):
+    text = GROUPS_AND_ONE.format(more="", number=200, group='"3D prints"').split("[[texture]]")[1]
+    with pytest.raises(TextureError, match=r"number = 200: allowed 1 to 117 \(D's library\), 900 to 999 \(test "
+                                           r"surfaces\); numbers 118-899 or 1000-9999 need a \[\[group\]\]"):
+        L.parse_library(tomllib.loads("[[texture]]" + text))
+
+
+def test_texture_sweep_slides_the_example_librarys_own_textures(tmp_path):
+    """README: the example file through texture-sweep, on Dask: a texture of each of its groups slides, and the
+    outputs name the library."""
+    out = tmp_path / "sweep"
+    assert cli.main(["texture-sweep", "--library", str(EXAMPLE), "--textures", "200,urethane gripper pad",
+                     "--movements", "7", "--trials", "1", "--workers", "1", "--fidelity", "fast", "--quiet",
+                     "--out", str(out)]) == 0
+    doc = read_trials(out / "trials.json")
+    assert [r["texture"] for r in doc["rows"]] == [200, 1000]
+    assert all(r["traction"] > 0 and r["roughness"] is not None for r in doc["rows"])
+    assert doc["library"]["path"] == str(EXAMPLE) and doc["library"]["shipped"] is False
+    assert [r["library"] for r in csv.DictReader(open(out / "trials.csv"))] == [str(EXAMPLE)] * 2
+
+
+def test_a_scene_and_an_experiment_take_the_example_librarys_own_textures(tmp_path):
+    scene = parse_scene_text(f"""\
+[scene]
+name = "own-group-slide"
+duration_s = 2.0
+library = "{EXAMPLE}"
+
+[[stimulus]]
+kind = "slide"
+start_s = 0.05
+texture = 1000
+force_N = 0.5
+velocity_mm_per_s = 50
+distance_mm = 20
+""", "slide.toml")
+    assert scene.library["path"] == str(EXAMPLE)
+    experiment = tmp_path / "own.toml"
+    experiment.write_text(f"""\
+[experiment]
+name = "own"
+seed = 1
+fidelity = "fast"
+library = "{EXAMPLE}"
+[pilot]
+textures = [200, 201, 1000]
+trials = 2
+movements = [0, 7, 14]
+[training]
+textures = [200, 201, 1000]
+trials = 2
+[validation]
+pairs = [[200, 201]]
+trials = 1
+[exploration]
+max_moves = 5
+pair_simulations = 20
+identification_simulations = 20
+""")
+    assert E.load_experiment(experiment).training_textures == [200, 201, 1000]
+    out = tmp_path / "explore"
+    assert cli.main(["explore", str(experiment), "--no-cache", "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    rows = read_trials(out / "trials.json")["rows"]
+    assert {r["texture"] for r in rows} == {200, 201, 1000} and {r["library"] for r in rows} == {str(EXAMPLE)}
+    assert "T200 PLA print, 0.2 mm layers / T201 PLA print, 0.1 mm layers" in (out / "report.md").read_text()
