@@ -17,9 +17,11 @@ descriptions in the library, never with a classifier's outcome. Two textures are
 Among admissible pairs the *description distance* is the Euclidean distance of
 :func:`description_features` — log₁₀ RMS height, log₁₀ correlation length, Hurst exponent, static friction μ,
 and for ridged textures log₁₀ track period and log₁₀ amplitude of the strongest periodic component — each
-divided by its spread (standard deviation) over the 117 textures, so no feature weighs by its units. Logs for lengths (a
+divided by its spread (standard deviation) over the library's textures outside the test surfaces — D's 117, and a
+library's own groups (:mod:`bench.textures.library`) — so no feature weighs by its units. Logs for lengths (a
 ratio of heights or periods is what changes the feel, Weber's law); linear for μ and the Hurst exponent
-(dimensionless, narrow ranges).
+(dimensionless, narrow ranges). A feature fewer than two of those textures have (a library with one ridged texture),
+or that all of them share, has no spread and weighs nothing.
 
 Pairs are taken greedily, nearest first (ties by texture number), disjoint, at most one pair per library group
 while groups remain (D's sixteen textures came from different kinds of material), then from any group.
@@ -28,6 +30,7 @@ while groups remain (D's sixteen textures came from different kinds of material)
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -49,10 +52,18 @@ def description_features(t) -> np.ndarray:
 
 
 def feature_scales(lib: dict) -> np.ndarray:
-    """Spread (standard deviation) of each feature over the library's 117 textures (periodic ones: over the
-    ridged textures)."""
-    f = np.array([description_features(t) for n, t in sorted(lib.items()) if n <= 117])
-    return np.nanstd(f, axis=0)
+    """Spread (standard deviation) of each feature over the library's textures outside the test surfaces (D's 117
+    and the library's own groups; periodic features: over the ridged ones); NaN for a feature fewer than two of
+    them have, or that all of them share, which then weighs nothing in :func:`description_distance`."""
+    from bench.textures.library import TEST_GROUP
+
+    f = np.array([description_features(t) for n, t in sorted(lib.items()) if t.group != TEST_GROUP[0]])
+    f = f.reshape(-1, len(FEATURES))
+    with warnings.catch_warnings():  # (a feature no texture has: nanstd's warning; the NaN below says it)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        spread = np.nanstd(f, axis=0)
+    spread[~(spread > 0)] = np.nan  # none, one or every texture alike: no spread (a lone value's is 0)
+    return spread
 
 
 def admissible(ta, tb) -> str | None:

@@ -186,3 +186,29 @@ identification_simulations = 20
     rows = read_trials(out / "trials.json")["rows"]
     assert {r["texture"] for r in rows} == {200, 201, 1000} and {r["library"] for r in rows} == {str(EXAMPLE)}
     assert "T200 PLA print, 0.2 mm layers / T201 PLA print, 0.1 mm layers" in (out / "report.md").read_text()
+
+
+def test_similar_pairs_weigh_features_by_the_spread_of_the_librarys_own_textures(tmp_path):
+    """The description distance divides each feature by its spread over the library's textures outside the test
+    surfaces: for the shipped library D's 117, bit for bit as before; for a library of its own groups alone, its own
+    textures (over D's 117 there were none: every spread NaN with a warning, every distance 0, the pair choice
+    blind).  A feature they all share (the example's correlation length) or fewer than two have weighs nothing,
+    without a warning."""
+    import warnings
+
+    import numpy as np
+
+    from bench.experiments import pairs
+
+    shipped = L.load_library()
+    d = np.array([pairs.description_features(t) for n, t in sorted(shipped.items()) if n <= 117])
+    assert pairs.feature_scales(shipped).tobytes() == np.nanstd(d, axis=0).tobytes()
+    own = L.load_library(EXAMPLE)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scales = pairs.feature_scales(own)
+        far = pairs.description_distance(own[200], own[1000], scales)
+    assert np.isnan(scales[1]) and np.isfinite(np.delete(scales, 1)).all()
+    assert far > pairs.description_distance(own[200], own[201], scales) > 0
+    one_ridged = {n: t for n, t in own.items() if n != 201}
+    assert np.isnan(pairs.feature_scales(one_ridged)[4:]).all()
