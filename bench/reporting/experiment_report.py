@@ -38,15 +38,16 @@ def write_text(path: Path, text: str) -> None:
 
 
 def write_rows_csv(path: Path, rows: list[dict]) -> None:
-    """A table of row dicts as CSV (columns: every key, in first-seen order; a row without one leaves it empty),
-    written under a temporary name and renamed into place."""
+    """A table of row dicts as CSV (columns: every key, in first-seen order; a row without one leaves it empty; a
+    value that is a table or a list — a trial's ``undefined``, {property: why} — as its JSON text, which any reader
+    parses back), written under a temporary name and renamed into place."""
     if not rows:
         return
     columns = list(dict.fromkeys(k for r in rows for k in r))
     with atomic_write(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=columns, restval="")
         w.writeheader()
-        w.writerows(rows)
+        w.writerows({k: strict_json(v) if isinstance(v, (dict, list)) else v for k, v in r.items()} for r in rows)
 
 
 def pilot_status(result: ExperimentResult) -> dict[int, str]:

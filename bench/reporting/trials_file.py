@@ -14,8 +14,8 @@ The file is one JSON object (standard JSON: a non-finite number is null)::
 
 A row's fields are those of :func:`bench.experiments.trials.run_trial_task`'s rows (SI units: ``force_N``,
 ``velocity_m_per_s``, ``traction`` in A, ``roughness`` ln bits², ``fineness`` ln Hz, ...); trials.csv holds the same
-rows as text, a None as an empty cell.  :func:`read_trials` reads a file back and checks the envelope, naming the
-file and the field in one line.
+rows as text, a None as an empty cell and an object (a row's ``undefined``, {property: why}) as its JSON text.
+:func:`read_trials` reads a file back and checks the envelope, naming the file and the field in one line.
 """
 
 from __future__ import annotations

@@ -14,7 +14,9 @@ pytestmark = pytest.mark.unit
 
 
 def _as_csv_text(value) -> str:
-    """A JSON row value as csv.DictWriter writes it into trials.csv (None: an empty cell)."""
+    """A JSON row value as trials.csv holds it (None: an empty cell; an object or a list: its JSON text)."""
+    if isinstance(value, (dict, list)):
+        return json.dumps(value)
     return "" if value is None else str(value)
 
 
@@ -80,3 +82,16 @@ def test_a_file_that_is_not_a_trials_json_is_refused_naming_the_file_and_the_fie
     with pytest.raises(TrialsFileError) as e:
         read_trials(path)
     assert str(e.value).startswith(f"{path}: ") and message in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_trial_whose_property_is_undefined_keeps_the_reason_as_json_in_trials_csv(tmp_path):
+    """A row's ``undefined`` ({property: why}, beside the property's empty cell) is JSON text in trials.csv, so a
+    reader of the CSV gets the same object trials.json holds (it had been Python's repr, with single quotes)."""
+    from bench.reporting.experiment_report import write_rows_csv
+
+    why = {"fineness": "PAC is constant over the measurement window 1.9…3.3 s: spectral centroid undefined"}
+    rows = [{"texture": 902, "fineness": None, "undefined": why}, {"texture": 901, "fineness": 5.5}]
+    write_rows_csv(tmp_path / "trials.csv", rows)
+    table = list(csv.DictReader(open(tmp_path / "trials.csv", newline="")))
+    assert json.loads(table[0]["undefined"]) == why and table[0]["fineness"] == "" and table[1]["undefined"] == ""
+    assert table[0]["undefined"] == _as_csv_text(why)  # (what the comparison of whole files above expects)
