@@ -160,6 +160,26 @@ def item_problems(where: str, items: list, ok, what: str) -> list[str]:
     return out
 
 
+def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[int], listing: str) -> list[str]:
+    """What a library lacking D's textures makes of ``textures = "all"`` (D's 1-117; training's default too) and of
+    the pilot's default (D's pilot textures): a problem each, rather than an empty stage or a pilot that fails on its
+    workers over textures the library does not hold (a library of its own groups alone, say)."""
+    out = []
+    for table in ("pilot", "training"):
+        given = t[table].get("textures")
+        if given == "all" or (given is None and table == "training"):
+            if not every:
+                shown = '"all"' if given else '"all" (the default)'
+                out.append(f"{table}.textures = {shown}: D's textures, numbered 1 to 117, and the library holds none; "
+                           f"list the textures to use (`{listing}` lists them)")
+        elif given is None:  # the pilot's default
+            missing = [n for n in spec.pilot_textures if n not in lib]
+            if missing:
+                out.append(f"pilot.textures (the default, D's pilot textures {list(design.D_PILOT_TEXTURES)}): no "
+                           f"texture {missing} in the library; list the textures to use (`{listing}` lists them)")
+    return out
+
+
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
     from bench.textures.library import library_path, listing_command, load_library, named_problems
@@ -246,7 +266,8 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         spec.fidelity = fid
     every = [n for n in lib if n <= 117]  # "all": the 117 textures of D's library
     spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or every
-    if len(spec.pilot_textures) < 2:
+    problems += _default_texture_problems(t, spec, lib, every, listing_command(spec.library))
+    if len(spec.pilot_textures) < 2 and (spec.pilot_textures or every):
         problems.append(f"pilot.textures = {spelled(spec.pilot_textures)}: at least 2 textures (the pilot measures how "
                         f"well each movement tells textures apart)")
     spec.pilot_trials = get("pilot", "trials", int, 2, 100, spec.pilot_trials)

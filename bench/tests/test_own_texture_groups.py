@@ -212,3 +212,27 @@ def test_similar_pairs_weigh_features_by_the_spread_of_the_librarys_own_textures
     assert far > pairs.description_distance(own[200], own[201], scales) > 0
     one_ridged = {n: t for n, t in own.items() if n != 201}
     assert np.isnan(pairs.feature_scales(one_ridged)[4:]).all()
+
+
+@pytest.mark.parametrize("pilot, training, expected", [
+    ({}, {"textures": [200, 201, 1000]},
+     ["pilot.textures (the default, D's pilot textures [10, 30, 43, 46, 47, 84, 87, 100, 38, 58]): no texture "
+      "[10, 30, 43, 46, 47, 84, 87, 100, 38, 58] in the library; list the textures to use (`biotac-bench textures "
+      f"--library {EXAMPLE}` lists them)"]),
+    ({"textures": "all"}, {"textures": [200, 201, 1000]},
+     ['pilot.textures = "all": D\'s textures, numbered 1 to 117, and the library holds none; list the textures to use '
+      f"(`biotac-bench textures --library {EXAMPLE}` lists them)"]),
+    ({"textures": [200, 201, 1000]}, {},
+     ['training.textures = "all" (the default): D\'s textures, numbered 1 to 117, and the library holds none; list '
+      f"the textures to use (`biotac-bench textures --library {EXAMPLE}` lists them)"]),
+])
+def test_an_experiment_on_a_library_without_ds_textures_names_what_all_and_the_pilots_default_miss(
+        tmp_path, pilot, training, expected):
+    """"all" means D's T1..T117 and the pilot's default D's pilot textures: on a library of its own groups alone, a
+    problem naming it (the default pilot had been accepted, and failed on the workers over textures not there)."""
+    with pytest.raises(E.ExperimentError) as e:
+        E.parse_experiment({"experiment": {"name": "own", "seed": 1, "library": str(EXAMPLE)},
+                            "pilot": {"trials": 2, "movements": [0, 7, 14], **pilot}, "training": {"trials": 2,
+                                                                                                 **training},
+                            "validation": {"n_pairs": 1, "pair_choice": "random-within-group"}}, "own.toml")
+    assert [p for p in e.value.problems if "textures" in p.split(":")[0]] == expected
