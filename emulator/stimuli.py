@@ -539,7 +539,8 @@ def fade_window(tau: np.ndarray, duration_s: float, fade_s: float) -> np.ndarray
     inside = (tau >= 0) & (tau <= duration_s)
     if fade_s <= 0:
         return inside.astype(float)
-    ramp = np.clip(np.minimum(tau, duration_s - tau) / fade_s, 0, 1)
+    # clipped to [0, fade_s] before dividing (the same values): a fade of a few ulps (5e-324 s) overflowed to inf
+    ramp = np.clip(np.minimum(tau, duration_s - tau), 0, fade_s) / fade_s
     return np.where(inside, 0.5 - 0.5 * np.cos(np.pi * ramp), 0.0)
 
 

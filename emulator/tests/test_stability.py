@@ -368,3 +368,16 @@ def test_the_reference_profiles_duct_keeps_its_own_in_band_response(f0, q):
     _, analog = signal.freqs_zpk([], np.roots([1.0, w0 / q, w0**2]), w0**2, worN=2 * np.pi * f)
     error = np.abs(digital / analog - 1.0).max()
     assert error < (1e-4 if (f0, q) == (18.7e3, 5.0) else 2.5e-3), error
+
+
+@pytest.mark.parametrize("fade_s", [5e-324, 1e-300, 0.5e-3])
+def test_a_fade_of_any_length_computes_without_overflow(fade_s):
+    """A vibration's or a pressure's fade_s may be any float from 0 (the scene allows 5e-324 s): dividing the time
+    into the stimulus by it once overflowed to inf (clipped to 1 afterwards, with numpy's overflow warning)."""
+    from emulator.stimuli import fade_window
+
+    tau = np.array([-1.0, 0.0, 0.25e-3, 0.5e-3, 1e-3, 2e-3])
+    with np.errstate(all="raise"):
+        window = fade_window(tau, 1e-3, fade_s)
+    expected = [0.0, 0.0, 1.0, 1.0, 0.0, 0.0] if fade_s < 1e-9 else [0.0, 0.0, 0.5, 1.0, 0.0, 0.0]
+    assert np.allclose(window, expected, atol=1e-12)
