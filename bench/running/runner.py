@@ -152,14 +152,17 @@ def make_chunk(parts: dict) -> Chunk:
 
 
 def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
-              sinks=(), should_stop=None) -> Recording:
+              sinks=(), should_stop=None, block_s: float = 2.0) -> Recording:
     """Run every sensor of ``scene``: sensor 1 as :func:`run_one_sensor` (with ``sinks``), then sensors 2..N, each
-    into ``Recording.sensors[k]`` (samples kept in memory for scenes up to :data:`KEEP_SAMPLES_MAX_S`)."""
-    rec = run_one_sensor(scene, progress, chunk_s, keep_samples=keep_samples, sinks=sinks, should_stop=should_stop)
+    into ``Recording.sensors[k]`` (samples kept in memory for scenes up to :data:`KEEP_SAMPLES_MAX_S`); every
+    sensor computes its physics in blocks of ``block_s`` (s), which changes no sample."""
+    rec = run_one_sensor(scene, progress, chunk_s, keep_samples=keep_samples, sinks=sinks, should_stop=should_stop,
+                         block_s=block_s)
     for k in range(2, scene.n_sensors + 1):
         if rec.status != "ok":
             break
-        rec.sensors[k] = run_one_sensor(scene.for_sensor(k), progress, chunk_s, should_stop=should_stop)
+        rec.sensors[k] = run_one_sensor(scene.for_sensor(k), progress, chunk_s, should_stop=should_stop,
+                                        block_s=block_s)
         if rec.sensors[k].status != "ok" and rec.error is None:
             rec.status = rec.sensors[k].status
             rec.error = None if rec.sensors[k].error is None else f"sensor {k}: {rec.sensors[k].error}"
@@ -167,7 +170,7 @@ def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep
 
 
 def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
-                   sinks=(), should_stop=None) -> Recording:
+                   sinks=(), should_stop=None, block_s: float = 2.0) -> Recording:
     """Run ``scene`` to its end, an error, or ``should_stop()`` (checked at every chunk boundary).
 
     ``keep_samples``: hold every sample in ``Recording.channels`` (default: only for scenes up to
@@ -175,6 +178,7 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
     receiving each chunk as channel name → (instants, codes, status).  An exception in the sampler or a sink
     ends the run: the recording so far is returned with ``error`` set and status ``"failed"`` (``"interrupted"``
     for a :class:`~bench.errors.BuildError` after a stop signal: the compilers got the same Ctrl-C).
+    ``block_s``: the sensor's physics block (s, :class:`~emulator.sensor.Sensor`); no sample depends on it.
     """
     from tqdm import tqdm
 
@@ -191,7 +195,7 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
     bar = tqdm(total=round(scene.duration_s, 3), unit="sim s", disable=not progress, desc=scene.name,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]")
     try:
-        sensor = build_sensor(scene)
+        sensor = build_sensor(scene, block_s)
         peripheral = peripheral_for(scene, sensor)
         sampler = Sampler(peripheral, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz, variant=scene.variant)
         total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))

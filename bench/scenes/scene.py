@@ -184,6 +184,10 @@ class _Checker:
 
     def number(self, table: dict, key: str, where: str, lo: float, hi: float, unit: str,
                default=None, required=False, integer=False):
+        """``table[key]`` if it is a number within ``lo`` to ``hi``; ``default`` if the key is absent; None, with the
+        problem noted, if the value is refused — never the default in its place, which later checks would take for
+        the file's (a pressure's frequency_Hz = -5e-324 was read as the default 0 Hz, and its amplitude then refused
+        for needing a frequency the file had given)."""
         note = unit[1:-1] if unit.startswith("(") and unit.endswith(")") else None  # what it is, not its unit
         if key not in table:
             if required:
@@ -194,10 +198,10 @@ class _Checker:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
             what = f" ({note}, {lo} to {hi})" if note else f"{' in ' + unit if unit else ''} ({lo} to {hi})"
             self.problems.append(f"{where}.{key} = {_r(v)}: must be {kind}{what}")
-            return default
+            return None
         if not _real(v) or not lo <= v <= hi:
             self.problems.append(f"{where}.{key} = {_r(v)}: allowed range is {lo} to {hi}{' ' + unit if unit else ''}")
-            return default
+            return None
         return v
 
     def times(self, table: dict, key: str, where: str, duration: float | None, required=True):
