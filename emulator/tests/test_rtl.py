@@ -336,6 +336,19 @@ def _assert_all_routes_agree(words: dict) -> np.ndarray:
     return reference
 
 
+@pytest.mark.parametrize("first_us", [0.0, 0.05, 0.2])
+def test_a_transfer_at_power_on_reads_the_same_word_over_every_route(harness, first_us):
+    """A host that starts clocking at 0 s (or within the first 100 ns) reads the same words over the RTL as over
+    the software model: the C++ harness holds reset before time 0, so chip select falls when the host says and the
+    first bit is on the line half a clock later (reset was released at 100 ns, so a transfer at 0 had its chip
+    select fall late and its first bit read as 0: 0x255F for 0xA55F; found by a CI user's adversarial pass)."""
+    start = first_us * 1e-6 + np.array([0.0, 60e-6, 200e-6, 260e-6])
+    mosi = np.array([_cmd("PDC"), 0, _cmd("PAC"), 0], np.uint16)
+    words = _assert_all_routes_agree(
+        _words_over_every_route(harness, {1: ["PDC", "PAC"]}, start, np.full(start.size, SELECT_CODE[1]), mosi))
+    assert not proto.is_error_word(words[[1, 3]]).any() and words[0] == words[2]
+
+
 def test_a_channel_the_sensor_does_not_provide_answers_ex_over_the_rtl_as_over_the_software_model(harness):
     """A sensor built to provide PDC and E1 only: a channel its variant recognises but it lacks (PAC, TAC) answers
     "EX" and converts nothing, yet restarts the 5 µs conversion window (PDC 2 µs after TAC answers "E-", also when

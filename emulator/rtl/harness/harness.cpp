@@ -67,6 +67,7 @@ struct CodeRecord {
 
 static const int64_t HALF_TIMER_PS = 500000;  // 1 MHz timer: rising edges at whole microseconds
 static const int64_t VALID_DELAY_PS = 45000;
+static const int64_t RESET_PS = 100000;  // how long the harness holds reset before time 0
 // An event up to 1 ns before a timer edge counts the edge as past, as the software model's ticks() does (it adds
 // 1e-3 of a tick): it absorbs the float instants' rounding and the half periods rounded to whole picoseconds.
 static const int64_t TICK_SLACK_PS = 1000;
@@ -234,9 +235,13 @@ static void setup(Harness& H, const Header& h) {
         top.provided[2 * i] = (uint32_t)h.provided[i];
         top.provided[2 * i + 1] = (uint32_t)(h.provided[i] >> 32);
     }
+    // Reset is held for the 100 ns before time 0 and released at 0, so a transfer the host starts at 0 finds the
+    // sensors ready with chip select falling when it says, as the software model does (released at 100 ns, a
+    // transfer at 0 had its chip select fall late and its first bit read before the line held it).
+    H.now = -RESET_PS;
     top.rst_n = 0;
     H.eval();
-    H.advance_to(100000);
+    H.advance_to(0);
     top.rst_n = 0x1F;
     H.eval();
 }
