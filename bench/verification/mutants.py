@@ -6453,6 +6453,11 @@ CATALOGUE += [
            '    return np.random.default_rng()',
            ('bench/tests/test_scene_properties.py::test_vibrations_sweeps_and_pressures_keep_every_property',),
            'every effect draws from fresh entropy: one seed twice gives other codes'),
+    Mutant('rtl-reset-released-at-100ns', 'rtl', 'emulator/rtl/harness/harness.cpp',
+           '    H.advance_to(0);\n    top.rst_n = 0x1F;\n',
+           '    H.advance_to(100000);\n    top.rst_n = 0x1F;\n',
+           ('emulator/tests/test_rtl.py::test_a_transfer_at_power_on_reads_the_same_word_over_every_route',),
+           'the C++ harness releases reset 100 ns after time 0: a transfer the host starts at 0 s has its chip select fall late and reads its first bit as 0 (0x255F where the software model answers 0xA55F)'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
