@@ -215,40 +215,46 @@ HOLDER_PID_WAIT_S = 0.5
 def take_lock(lock_path: Path, wait=None) -> int:
     """Take the exclusive ``flock`` on ``lock_path`` (created, mode 0644, never followed if it is a symbolic link)
     and write this process's pid into it; returns its file descriptor (closing it releases the lock).  Held by
-    another process: :class:`LockHeld` — or, with ``wait``, ``wait(holder)`` is called once (the holder's pid, "" if
-    unknown) and the lock waited for (a signal's KeyboardInterrupt ends the wait).  A lock file its holder removed
-    meanwhile (:func:`release_lock`) is taken afresh.  Opening the file raises as ``os.open`` does (ELOOP: a symbolic
-    link; ENOENT: the folder is gone); :class:`LockFailed` when ``flock`` fails otherwise."""
-    fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
-    try:
+    another process: :class:`LockHeld` — or, with ``wait``, the lock is waited for (a signal's KeyboardInterrupt ends
+    the wait) and ``wait(holder)`` is called before waiting (the holder's pid, "" if unknown): once, and again only
+    for another holder — a holder that releases the lock and takes it again before this process gets it (or a lock
+    file its holder removed meanwhile, :func:`release_lock`, taken afresh by the same holder) is not told twice.
+    Opening the file raises as ``os.open`` does (ELOOP: a symbolic link; ENOENT: the folder is gone);
+    :class:`LockFailed` when ``flock`` fails otherwise."""
+    told = None  # the holder ``wait`` was last called for
+    while True:
+        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = lock_holder(fd)
-            named_by = time.monotonic() + HOLDER_PID_WAIT_S
-            while not holder and time.monotonic() < named_by:  # (its holder writes its pid just after locking)
-                time.sleep(0.002)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
                 holder = lock_holder(fd)
-            if wait is None:
-                raise LockHeld(lock_path, holder) from None
-            wait(holder)
-            fcntl.flock(fd, fcntl.LOCK_EX)
-    except LockHeld:
-        os.close(fd)
-        raise
-    except OSError as e:
-        os.close(fd)
-        raise LockFailed(e.errno, e.strerror, str(lock_path)) from None
-    except BaseException:
-        os.close(fd)
-        raise
-    try:
-        same = os.path.samestat(os.fstat(fd), os.lstat(lock_path))
-    except OSError:
-        same = False
-    if not same:  # its holder removed it (release_lock) between our open and our lock: take the new one
-        os.close(fd)
-        return take_lock(lock_path, wait)
+                named_by = time.monotonic() + HOLDER_PID_WAIT_S
+                while not holder and time.monotonic() < named_by:  # (its holder writes its pid just after locking)
+                    time.sleep(0.002)
+                    holder = lock_holder(fd)
+                if wait is None:
+                    raise LockHeld(lock_path, holder) from None
+                if holder != told:
+                    wait(holder)
+                    told = holder
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        except LockHeld:
+            os.close(fd)
+            raise
+        except OSError as e:
+            os.close(fd)
+            raise LockFailed(e.errno, e.strerror, str(lock_path)) from None
+        except BaseException:
+            os.close(fd)
+            raise
+        try:
+            same = os.path.samestat(os.fstat(fd), os.lstat(lock_path))
+        except OSError:
+            same = False
+        if same:
+            break
+        os.close(fd)  # its holder removed it (release_lock) between our open and our lock: take the new one
     with contextlib.suppress(OSError):  # the pid only names the holder to a process refused (a full disk: unnamed)
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
