@@ -38,6 +38,8 @@ FAULTS = np.dtype([("sensor", "u1"), ("miso_flip_en", "u1"), ("mosi_flip_en", "u
                    ("miso_flip_bit", "<u2"), ("mosi_flip_bit", "<u2")])
 #: The slowest SCK (Hz) the harness takes: its half period in ps is a signed 32-bit field.
 MIN_CLOCK_HZ = 0.5e12 / (2**31 - 1)
+#: What the streaming harness answers a header it takes, before any batch (harness.cpp's ``STREAM_READY``).
+STREAM_READY = b"BTSPIOK\0"
 #: How long (wall s) :meth:`RtlBus.close` waits for the streaming harness to exit after its input ends.
 CLOSE_TIMEOUT_S = 5.0
 
@@ -371,11 +373,26 @@ class RtlBus:
         self._deferred: dict[int, tuple] = {}  # sensor -> (port, channel, instant s) of the conversion a call ended on
         self._open_window: dict[int, list | None] = {}  # a chip-select window held open past a call, by sensor
         self._faults_in_rtl = {n: Faults() for n in sensors}  # what the harness's fault ports hold, by sensor
+        header = Harness._header({"sensors": list(sensors), "pull_up": False,
+                                  "provided": {n: p.provided for n, p in self.ports.items()}}, 0)
         self.proc = subprocess.Popen([str(self.harness.binary), "--stream"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE)
-        self.proc.stdin.write(Harness._header({"sensors": list(sensors), "pull_up": False,
-                                               "provided": {n: p.provided for n, p in self.ports.items()}}, 0))
-        self.proc.stdin.flush()
+        try:  # the harness takes the header (it answers STREAM_READY) or the bus is not made, its process reaped
+            try:
+                self.proc.stdin.write(header)
+                self.proc.stdin.flush()
+            except BrokenPipeError:  # (it exited first: its status says more, read below)
+                pass
+            answer = self.proc.stdout.read(len(STREAM_READY))
+            if answer != STREAM_READY:
+                self.close()
+                how = (f"exited with status {self.proc.returncode}" if not answer
+                       else f"answered {answer!r} and was stopped")
+                raise HarnessError(f"the RTL harness {self.harness.binary} did not take the bus's header: it {how} "
+                                   f"(its message, if any, is on stderr); rebuild it: Harness(sp={mask}).build()")
+        except BaseException:
+            self.close()
+            raise
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
         #: transfers clocked outside the SPI clock range (500 kHz–10 MHz), as the software bus counts them
         self.out_of_spec_transfers = 0

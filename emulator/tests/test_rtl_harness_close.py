@@ -79,3 +79,50 @@ def test_an_idle_gap_in_virtual_time_costs_the_harness_little_work():
     finally:
         rtl.close()
     assert rtl.proc.returncode == 0, "the harness did not exit when its input ended"
+
+
+def _children() -> set[int]:
+    """This process's child processes, running or not yet reaped (zombies)."""
+    import glob
+
+    return {int(pid) for f in glob.glob("/proc/self/task/*/children") for pid in open(f).read().split()}
+
+
+@pytest.mark.parametrize("stand_in, error", [
+    ("exit 3", (H.HarnessError, r"the RTL harness .*/harness did not take the bus's header: it exited with status 3")),
+    ("printf 'not ready'; exec sleep 30",
+     (H.HarnessError, r"the RTL harness .*/harness did not take the bus's header: it answered b'not read' and was "
+                      r"stopped")),
+    ("exec sleep 30", (KeyboardInterrupt, "")),
+], ids=["exits at start", "answers something else", "Ctrl-C while it starts"])
+def test_a_harness_that_does_not_take_the_header_leaves_nothing_behind(tmp_path, monkeypatch, stand_in, error):
+    """An RtlBus whose harness exits as it starts (a broken or foreign binary), or answers its header with anything
+    but STREAM_READY, is not made: a HarnessError names the binary and what it did; one that never answers, the user
+    giving up with Ctrl-C, neither.  Its process is reaped (no zombie, none left running), its pipes are closed, and
+    nothing warns of a resource left open."""
+    import gc
+    import os
+    import signal
+    import threading
+    import warnings
+
+    monkeypatch.setattr(H, "CLOSE_TIMEOUT_S", 0.2)
+    harness = H.Harness(build_dir=tmp_path)
+    harness.binary.write_text(f"#!/bin/sh\n{stand_in}\n")
+    harness.binary.chmod(0o755)
+    (tmp_path / "sources.sha256").write_text(harness._sources_digest())  # (taken as built: not rebuilt)
+    children, fds = _children(), len(os.listdir("/proc/self/fd"))
+    ctrl_c = threading.Timer(0.5, signal.pthread_kill, (threading.get_ident(), signal.SIGINT))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(error[0], match=error[1]):
+            if error[0] is KeyboardInterrupt:
+                ctrl_c.start()
+            H.RtlBus({1: _sensor()}, harness=harness)
+        ctrl_c.cancel()  # (when it was never started: nothing to send)
+        if ctrl_c.ident is not None:
+            ctrl_c.join()
+        gc.collect()
+    assert _children() == children, "the harness's process was left behind"
+    assert len(os.listdir("/proc/self/fd")) == fds, "the harness's pipes were left open"
+    assert not [w for w in caught if issubclass(w.category, ResourceWarning)], [str(w.message) for w in caught]

@@ -5,6 +5,7 @@ over the software bus, each change acting from the first transfer after it, on i
 import numpy as np
 import pytest
 
+from emulator.rtl.harness import STREAM_READY
 from emulator.spi import protocol as proto
 from emulator.spi.model import SELECT_CODE, Bus, Faults, SensorPort
 
@@ -405,7 +406,7 @@ def test_the_streaming_harness_refuses_a_reset_or_sensors_present_outside_its_fi
     tr[field] = value
     r = _stream(harness, [1, 2], tr)
     assert r.returncode == 2 and b"transfer 0 of a batch: a reset mask or sensors present outside" in r.stderr, r.stderr
-    assert r.stdout == b""
+    assert r.stdout == STREAM_READY  # the header taken, nothing played
 
 
 def _raw_transfers(words) -> np.ndarray:
@@ -422,7 +423,7 @@ def _raw_transfers(words) -> np.ndarray:
 
 def _stream(harness, sensors: list, tr: np.ndarray):
     """Run the streaming harness (no faults, pull-down, ``sensors`` present) on one batch ``tr`` with no codes: the
-    finished process (its stdout: a uint64 MISO per transfer, then three counts)."""
+    finished process (its stdout: STREAM_READY, then a uint64 MISO per transfer, then the counts)."""
     import struct
     import subprocess
 
@@ -445,7 +446,8 @@ def test_the_rtl_holds_an_absent_sensor_in_reset_so_it_comes_back_in_power_on_st
     for name, tr in (("plugged", plugged), ("away", away)):
         r = _stream(harness, [1], tr)
         assert r.returncode == 0, r.stderr
-        out[name] = [int(w) for w in np.frombuffer(r.stdout, "<u8")]
+        assert r.stdout.startswith(STREAM_READY)
+        out[name] = [int(w) for w in np.frombuffer(r.stdout[len(STREAM_READY):], "<u8")]
         assert out[name][len(tr):len(tr) + 2] == [0, 0]  # no mismatched request, no code left
     assert out["plugged"][1] == int.from_bytes(b"BT", "big")
     assert out["away"][1:3] == [0, ERR["nothing_to_resend"]]

@@ -15,7 +15,8 @@
 //           set to the record's when chip select falls for the batch's first transfer, before anything is
 //           clocked, as the software bus applies a fault set between two of its calls; a batch with no transfers
 //           keeps them for the next one); the RTL keeps its state and time runs on from batch to batch
-//   stdout: per batch, one uint64 MISO per transfer, then uint64 mismatched requests, unused codes, model
+//   stdout: "BTSPIOK\0" once the header is taken (a header refused: a message on stderr, exit 2, nothing on stdout);
+//           then per batch, one uint64 MISO per transfer, then uint64 mismatched requests, unused codes, model
 //           evaluations so far and requests waiting for their code; the harness exits when stdin ends.  A request
 //           made when its sensor has no code queued waits for one (the RTL answers "E." meanwhile): the conversion
 //           a batch ends on has its code in the next batch, first for that sensor, answered before anything is
@@ -289,6 +290,9 @@ static uint64_t play(Harness& H, const Transfer& t) {
 
 static bool read_exact(void* buf, size_t n) { return std::fread(buf, 1, n, stdin) == n; }
 
+// what the streaming harness answers a header it takes, before any batch
+static const char STREAM_READY[8] = {'B', 'T', 'S', 'P', 'I', 'O', 'K', '\0'};
+
 static int stream_mode() {
     Header h;
     if (!read_exact(&h, sizeof h) || std::string(h.magic, 7) != "BTSPIV3") {
@@ -298,6 +302,8 @@ static int stream_mode() {
     if (!valid_header(h)) return 2;
     Harness H;
     setup(H, h);
+    std::fwrite(STREAM_READY, 1, sizeof STREAM_READY, stdout);  // the header is taken: the host may go on
+    std::fflush(stdout);
     uint32_t counts[3];
     std::vector<Transfer> trs;
     std::vector<char> codes;
