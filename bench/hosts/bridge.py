@@ -258,12 +258,14 @@ class FirmwareBench:
                     f"(virtual time {self.board.t:.6f} s): it hangs in a loop (one waiting for a byte or a time that "
                     f"only comes between steps, or one that calls no HAL function; its last HAL call: "
                     f"{self.board.last_hal_call or 'none'}; firmware {self.sim.library})")
-            self.sim.stop_step(self._thread.ident)  # the step guard's signal: the firmware's loop is left
-            self._thread.join(timeout=STOP_TIMEOUT_S)
-            if self._thread.is_alive():  # (stuck inside a HAL call of the bench's: parked at its next one)
+            why_not = self.sim.stop_step(within_s=STOP_TIMEOUT_S)  # the step guard: the firmware's loop is left
+            if why_not is None:
+                self._thread.join(timeout=STOP_TIMEOUT_S)
+            if self._thread.is_alive():  # (inside a HAL call of the bench's, or outside the firmware's own code)
                 self.board.abandoned.set()
-                raise FirmwareError(f"{hung}; the watchdog could not stop it: its port is closed, its SPI bus left "
-                                    f"open and its thread parked at its next HAL call")
+                raise FirmwareError(f"{hung}; the watchdog could not stop it ({why_not or 'its thread did not end'}): "
+                                    f"its port is closed, its SPI bus left open and its thread parked at its next HAL "
+                                    f"call")
             self.board.bus.close()
             raise FirmwareError(f"{hung}; the watchdog stopped it (its thread ended; its port and SPI bus are closed)")
         self.board.bus.close()

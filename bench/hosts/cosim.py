@@ -30,25 +30,66 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
 GUARD_SOURCE = Path(__file__).resolve().parent / "c" / "step_guard.c"
-#: The signal that stops a hung bt_step (:meth:`CoSim.stop_step`): a real-time signal nothing else here uses.
+#: The signal that stops a hung bt_step (:meth:`CoSim.stop_step`): a real-time signal nothing else here uses.  The
+#: bench installs its handler at the first co-simulation, only over the default action (a handler something else in
+#: the process installed first is refused by name, never replaced), and keeps it for the process's life.
 GUARD_SIGNAL = signal.SIGRTMIN + 3
+#: How long (wall s) :meth:`CoSim.stop_step` waits between two of its signals.
+GUARD_RETRY_S = 0.001
 _guard_lock = threading.Lock()
-_guard: list = []  # the loaded step guard, once its handler is installed
+_guard: list = []  # the loaded step guard
+
+
+def _signal_name(sig: int) -> str:
+    return f"SIGRTMIN+{sig - signal.SIGRTMIN} ({sig})"
 
 
 def step_guard() -> C.CDLL:
-    """The step guard (``bench/hosts/c/step_guard.c``), built and loaded once, its signal handler installed."""
+    """The step guard (``bench/hosts/c/step_guard.c``), built and loaded once, its handler of :data:`GUARD_SIGNAL`
+    installed (:class:`FirmwareError` when the signal has another handler in this process)."""
     with _guard_lock:
         if not _guard:
             folder = build_folder(REPO / "out" / "firmware", [GUARD_SOURCE, FIRMWARE_DIR / "bt_hal.h"])
             lib = C.CDLL(str(compile_c([GUARD_SOURCE], folder / "libbtguard.so",
                                        flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}"), what="the step guard")))
-            lib.bt_guard_step.argtypes = [C.c_void_p, C.c_void_p]
+            lib.bt_guard_size.restype = C.c_size_t
+            lib.bt_guard_init.argtypes = [C.c_void_p, C.c_void_p]
+            lib.bt_guard_step.argtypes = [C.c_void_p, C.c_void_p, C.c_void_p]
             lib.bt_guard_wrap.argtypes = [C.c_void_p, C.c_void_p]
-            if lib.bt_guard_install(int(GUARD_SIGNAL)) != 0:
-                raise BuildError(f"the step guard cannot handle signal {int(GUARD_SIGNAL)}")
+            for name in ("bt_guard_stop", "bt_guard_stopped", "bt_guard_poke", "bt_guard_outside"):
+                getattr(lib, name).argtypes = [C.c_void_p]
+            lib.bt_guard_outside.restype = C.c_size_t
             _guard.append(lib)
-        return _guard[0]
+        lib = _guard[0]
+        sig = int(GUARD_SIGNAL)
+        installed = lib.bt_guard_install(sig)
+        if installed == 1:
+            raise FirmwareError(f"signal {_signal_name(sig)} already has a handler in this process (installed by "
+                                f"signal.signal or by a library): the firmware watchdog needs a signal of its own; "
+                                f"set bench.hosts.cosim.GUARD_SIGNAL to a free real-time signal before making a "
+                                f"co-simulation")
+        if installed != 0:
+            raise BuildError(f"the step guard cannot handle signal {_signal_name(sig)}")
+        return lib
+
+
+def code_at(address: int) -> str:
+    """The library (and function, where it exports one) holding machine code at ``address``: where a hung
+    firmware's thread is."""
+    info = _DlInfo()
+    if not address or not _LIBC.dladdr(C.c_void_p(address), C.byref(info)) or not info.dli_fname:
+        return f"code at {address:#x} in no loaded library"
+    where = Path(info.dli_fname.decode(errors="replace")).name
+    return f"{where} ({info.dli_sname.decode(errors='replace')})" if info.dli_sname else where
+
+
+class _DlInfo(C.Structure):
+    _fields_ = [("dli_fname", C.c_char_p), ("dli_fbase", C.c_void_p), ("dli_sname", C.c_char_p),
+                ("dli_saddr", C.c_void_p)]
+
+
+_LIBC = C.CDLL(None)
+_LIBC.dladdr.argtypes = [C.c_void_p, C.POINTER(_DlInfo)]
 
 
 def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
@@ -312,21 +353,45 @@ class CoSim:
         self._guarded_hal = BtHal()
         self._guard.bt_guard_wrap(C.byref(self.hal), C.byref(self._guarded_hal))
         self._step = C.cast(self.lib.bt_step, C.c_void_p)
-        self._stop_requested = False  # (set by stop_step: run raises before its next step)
+        self._watch = C.create_string_buffer(self._guard.bt_guard_size())  # this firmware's guard: its code, its stop
+        if self._guard.bt_guard_init(self._watch, self._step):
+            raise FirmwareError(f"the step guard found no loaded library holding bt_step of {self.library}")
         self.lib.bt_init(self.state, C.byref(self._guarded_hal))
         self._raise()
 
-    def stop_step(self, thread_id: int) -> None:
-        """Stop the bt_step that thread ``thread_id`` (its ``threading`` ident) runs — a watchdog giving up on a
-        hung firmware: the step ends (as it returns from a HAL call, if inside one) and :meth:`run` raises
-        :class:`FirmwareError`.  The firmware's state is not to be used after: its loop was left midway.  The request
-        is also kept, so that a signal arriving between two steps (which has no step to leave) still ends :meth:`run`
-        before its next step; a thread that has already ended is no error."""
-        self._stop_requested = True
-        try:
-            signal.pthread_kill(thread_id, GUARD_SIGNAL)
-        except ProcessLookupError:  # (the thread ended between the caller's look and the signal)
-            pass
+    @property
+    def stopped(self) -> bool:
+        """Whether :meth:`stop_step` stopped this co-simulation: it does not run again (its firmware's state was left
+        midway); make a new one."""
+        return bool(self._guard.bt_guard_stopped(self._watch))
+
+    def stop_step(self, within_s: float = 1.0) -> str | None:
+        """Stop this co-simulation's firmware for good — a watchdog giving up on a hung ``bt_step``, from another
+        thread: the step running now is left (by a signal to its thread, :data:`GUARD_SIGNAL`, taken only where the
+        thread is in the firmware's own code; tried again every :data:`GUARD_RETRY_S` until ``within_s`` wall s have
+        passed) and :meth:`run` raises :class:`FirmwareError`, now or at its next step; so does every later
+        :meth:`run` and :meth:`set_pattern`.  Returns None when no step runs any more, or else why the step could not
+        be left yet: inside one of the bench's HAL calls (it is left as that returns), or outside the firmware's code
+        (a C library call, say, which may hold a lock: jumping out of it would deadlock the process's next call of
+        it) or with the guard's signal handler replaced by something else in the process (a signal then might end
+        the process: none is sent)."""
+        self._guard.bt_guard_stop(self._watch)
+        sig = int(GUARD_SIGNAL)
+        deadline = time.monotonic() + within_s
+        while True:
+            if not self._guard.bt_guard_installed(sig):
+                return (f"the handler of signal {_signal_name(sig)} was replaced after the bench installed it (by "
+                        f"signal.signal or a library): the watchdog sends no signal")
+            status = self._guard.bt_guard_poke(self._watch)
+            if status == 0:
+                return None
+            if time.monotonic() >= deadline:
+                if status == 2:
+                    return (f"it is inside the bench's HAL function {self.board.last_hal_call}: its step is left as "
+                            f"that returns")
+                return (f"it is outside the firmware's code, in {code_at(self._guard.bt_guard_outside(self._watch))}, "
+                        f"which the watchdog does not jump out of (a lock held there would deadlock the process)")
+            time.sleep(GUARD_RETRY_S)
 
     def set_pattern(self, channels) -> None:
         """Set the firmware's sampling pattern directly (as its PATTERN command would, without a reply on the
@@ -336,6 +401,9 @@ class CoSim:
         refused before the firmware sees it); the firmware judges the channels."""
         channels = list(channels)
         payload = BridgeDriver.pattern_bytes(channels)  # (ValueError before the firmware sees anything)
+        if self.stopped:
+            raise FirmwareError(f"set_pattern: the co-simulation of {self.library} was stopped by the bench's "
+                                f"watchdog (its firmware hung; its state was left midway): make a new one")
         result = self.lib.bt_set_pattern(self.state, payload, C.c_size_t(len(payload))) & 0xFF
         if result:
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
@@ -359,9 +427,10 @@ class CoSim:
         wall0, virt0 = time.perf_counter(), self.board.t
         steps = 0
         while self.board.t < end:
-            if self._stop_requested or self._guard.bt_guard_step(self._step, self.state):
+            if self._guard.bt_guard_step(self._watch, self._step, self.state):
                 raise FirmwareError(f"the firmware's bt_step was stopped by the bench's watchdog at virtual time "
-                                    f"{self.board.t:.6f} s (it hung)")
+                                    f"{self.board.t:.6f} s (it hung); this co-simulation does not run again: make a "
+                                    f"new one")
             self._raise()
             steps += 1
             if max_steps is not None and steps >= max_steps:

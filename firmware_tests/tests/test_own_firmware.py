@@ -129,8 +129,9 @@ def test_a_firmware_held_inside_a_hal_call_is_reported_parked_and_ends_when_the_
     bench.now(lambda board: board.at(board.t, wait))  # applied at the firmware's next HAL call
     assert entered.wait(30)
     with pytest.raises(FirmwareError, match=r"did not return from bt_step within 0\.3 s .*the watchdog could not "
-                                            r"stop it: its port is closed, its SPI bus left open and its thread "
-                                            r"parked at its next HAL call"):
+                                            r"stop it \(it is inside the bench's HAL function \w+: its step "
+                                            r"is left as that returns\): its port is closed, its SPI bus left open "
+                                            r"and its thread parked at its next HAL call"):
         bench.stop()
     assert bench._thread.is_alive() and bench.board.abandoned.is_set()
     release.set()
@@ -193,16 +194,16 @@ def test_a_stop_requested_between_two_steps_still_ends_run():
     """The watchdog's signal can arrive while no bt_step runs (between two of run's passes, or before the first):
     the step guard then has no loop to leave and ignores it. The request is kept, so run still raises before its
     next step instead of carrying on."""
-    import threading
-
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors
 
     board = VirtualBoard(default_sensors(1))
     try:
         sim = CoSim(board)
         sim.run(0.002)  # runs as usual
-        sim.stop_step(threading.get_ident())  # delivered here and now: no step is running to be left
-        with pytest.raises(FirmwareError, match="stopped by the bench's watchdog"):
+        assert sim.stop_step() is None  # no step is running to be left
+        with pytest.raises(FirmwareError, match="stopped by the bench's watchdog .* make a new one"):
             sim.run(0.002)
+        with pytest.raises(FirmwareError, match="stopped by the bench's watchdog .* make a new one"):
+            sim.run(0.002)  # for good: its firmware's state was left midway
     finally:
         board.bus.close()

@@ -1,83 +1,217 @@
-/* Stopping a firmware's bt_step that hangs (bench/hosts/cosim.py): a bench thread runs bt_step through
- * bt_guard_step, and a watchdog that gives up on it sends that thread BT_GUARD_SIGNAL; the handler jumps back out
- * of the firmware's loop and bt_guard_step returns 1, so the thread ends instead of spinning a core until the
- * process exits.  The firmware is given a HAL of wrappers (bt_guard_wrap) that block the signal while the bench's
- * HAL function (Python) runs: the jump only ever leaves firmware code, never the interpreter; a signal that comes
- * during a HAL call acts as it returns.  The firmware's state after a jump is not to be used again. */
-#define _POSIX_C_SOURCE 200809L
+/* Stopping a firmware's bt_step that hangs (bench/hosts/cosim.py).  Each co-simulation has a guard (bt_guard_init);
+ * a bench thread runs bt_step through bt_guard_step, and a watchdog that gives up on it calls bt_guard_stop, then
+ * bt_guard_poke until the step is left: the guard's signal goes to the step's thread, one at a time, and its handler
+ * jumps back out of the firmware — only when the thread was interrupted in the firmware library's own code.
+ *
+ * Why only there: a thread interrupted inside the C library (malloc, printf) may hold one of its locks, and a jump
+ * out of it leaves the lock held for good — the next malloc or printf of any thread (the interpreter's own, or the
+ * process's exit flushing stdio) then waits forever.  Elsewhere the handler returns and the next signal tries again
+ * (as a runtime that preempts threads by signal does: only at a safe point, else later); a step that never comes
+ * back to the firmware's code (blocked in a system call, or waiting for a lock it never gets) is not left, and
+ * bt_guard_outside says where it is.  The firmware is given a HAL of wrappers (bt_guard_wrap) that block the signal
+ * while the bench's HAL function (Python) runs, and leave the step as that call returns once a stop was asked: the
+ * jump never leaves the interpreter.  A stop is for good: every later bt_guard_step of that guard returns 1 at once
+ * (the firmware's state was left midway).  The handler acts only for the guard whose stop was asked, so a thread
+ * that runs two co-simulations, or two threads that run one each, stop only what was asked. */
+#define _GNU_SOURCE
+#include <link.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+#include <ucontext.h>
 
 #include "bt_hal.h"
 
-static _Thread_local sigjmp_buf *inside; /* set while this thread runs bt_step through bt_guard_step */
+#define MAX_TEXT 8 /* executable segments of a firmware library kept */
+
+typedef struct {
+    atomic_int stop;            /* set by bt_guard_stop: leave the step, refuse every later one */
+    atomic_int inside;          /* 1 while bt_guard_step runs the step */
+    atomic_int in_hal;          /* 1 while the step is inside one of the bench's HAL functions */
+    atomic_uint sent, seen;     /* signals sent to the step's thread, and seen by its handler */
+    atomic_uintptr_t outside;   /* where the last signal found the thread outside the firmware's code (0: none) */
+    pthread_t thread;           /* the thread running the step (set before inside) */
+    uintptr_t lo[MAX_TEXT], hi[MAX_TEXT];
+    int n_text;                 /* the firmware library's executable segments: [lo, hi) */
+} bt_guard;
+
+static _Thread_local bt_guard *current;  /* the guard whose step this thread runs */
+static _Thread_local sigjmp_buf *leave;  /* where that step is left */
 static int guard_signal;
 
-static void on_signal(int sig) {
-    (void)sig;
-    if (inside) siglongjmp(*inside, 1);
+static uintptr_t pc_of(void *uc) {
+#if defined(__x86_64__)
+    return (uintptr_t)((ucontext_t *)uc)->uc_mcontext.gregs[REG_RIP];
+#elif defined(__aarch64__)
+    return (uintptr_t)((ucontext_t *)uc)->uc_mcontext.pc;
+#else
+    (void)uc;
+    return 0; /* another machine: never the firmware's code; the step is left at its next HAL call only */
+#endif
 }
 
-/* Install the handler for signal sig (a real-time signal nothing else uses); 0 on success. */
-int bt_guard_install(int sig) {
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    guard_signal = sig;
-    return sigaction(sig, &sa, NULL);
-}
-
-/* Run step(state); 0 when it returned, 1 when the guard signal stopped it. */
-int bt_guard_step(void (*step)(void *), void *state) {
-    sigjmp_buf env;
-    if (sigsetjmp(env, 1)) {
-        inside = NULL;
-        return 1;
-    }
-    inside = &env;
-    step(state);
-    inside = NULL;
+static int in_firmware(const bt_guard *g, uintptr_t pc) {
+    for (int i = 0; i < g->n_text; i++)
+        if (pc >= g->lo[i] && pc < g->hi[i]) return 1;
     return 0;
 }
 
-#define BLOCKED(call)                                        \
+static void on_signal(int sig, siginfo_t *info, void *uc) {
+    bt_guard *g = current;
+    (void)sig;
+    (void)info;
+    if (!g) return;
+    atomic_fetch_add(&g->seen, 1);
+    if (!atomic_load(&g->stop)) return;
+    uintptr_t pc = pc_of(uc);
+    if (in_firmware(g, pc)) siglongjmp(*leave, 1);
+    atomic_store(&g->outside, pc);
+}
+
+/* Install the handler for signal sig; 0 on success (or when it is installed already), 1 when the signal has another
+ * handler in this process (left as it is: the bench never takes a signal something else uses), -1 on failure. */
+int bt_guard_install(int sig) {
+    struct sigaction sa, old;
+    if (sigaction(sig, NULL, &old) != 0) return -1;
+    if ((old.sa_flags & SA_SIGINFO) && old.sa_sigaction == on_signal) {
+        guard_signal = sig;
+        return 0;
+    }
+    if ((old.sa_flags & SA_SIGINFO) || old.sa_handler != SIG_DFL) return 1;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_sigaction = on_signal;
+    sa.sa_flags = SA_SIGINFO | SA_RESTART; /* (a system call of the firmware's it interrupts goes on) */
+    sigemptyset(&sa.sa_mask);
+    guard_signal = sig;
+    return sigaction(sig, &sa, NULL) == 0 ? 0 : -1;
+}
+
+/* 1 while signal sig's handler is still the guard's (nothing replaced it since bt_guard_install). */
+int bt_guard_installed(int sig) {
+    struct sigaction now;
+    return sigaction(sig, NULL, &now) == 0 && (now.sa_flags & SA_SIGINFO) && now.sa_sigaction == on_signal;
+}
+
+struct wanted {
+    uintptr_t addr;
+    bt_guard *g;
+};
+
+static int take_text(struct dl_phdr_info *info, size_t size, void *data) {
+    struct wanted *w = data;
+    int found = 0;
+    (void)size;
+    for (int i = 0; i < info->dlpi_phnum; i++) {
+        const ElfW(Phdr) *ph = &info->dlpi_phdr[i];
+        uintptr_t lo = info->dlpi_addr + ph->p_vaddr;
+        if (ph->p_type == PT_LOAD && w->addr >= lo && w->addr < lo + ph->p_memsz) found = 1;
+    }
+    if (!found) return 0;
+    for (int i = 0; i < info->dlpi_phnum && w->g->n_text < MAX_TEXT; i++) {
+        const ElfW(Phdr) *ph = &info->dlpi_phdr[i];
+        if (ph->p_type == PT_LOAD && (ph->p_flags & PF_X)) {
+            w->g->lo[w->g->n_text] = info->dlpi_addr + ph->p_vaddr;
+            w->g->hi[w->g->n_text++] = info->dlpi_addr + ph->p_vaddr + ph->p_memsz;
+        }
+    }
+    return 1;
+}
+
+size_t bt_guard_size(void) { return sizeof(bt_guard); }
+
+/* Make *g (bt_guard_size() bytes, zeroed) the guard of the firmware library holding the function at
+ * firmware_symbol (its bt_step); 0 on success, 1 when no loaded library holds it. */
+int bt_guard_init(bt_guard *g, void *firmware_symbol) {
+    struct wanted w = {(uintptr_t)firmware_symbol, g};
+    return dl_iterate_phdr(take_text, &w) && g->n_text > 0 ? 0 : 1;
+}
+
+/* Run step(state) under guard g; 0 when it returned, 1 when it was left (bt_guard_stop) or a stop was asked before. */
+int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
+    sigjmp_buf env;
+    g->thread = pthread_self();
+    current = g;
+    leave = &env;
+    if (sigsetjmp(env, 1)) {
+        atomic_store(&g->inside, 0);
+        current = NULL;
+        return 1;
+    }
+    atomic_store(&g->inside, 1);
+    if (atomic_load(&g->stop)) { /* (after inside is set: a stop is either seen here or signalled in the step) */
+        atomic_store(&g->inside, 0);
+        current = NULL;
+        return 1;
+    }
+    step(state);
+    atomic_store(&g->inside, 0);
+    current = NULL;
+    return 0;
+}
+
+/* Ask g's step to be left, for good. */
+void bt_guard_stop(bt_guard *g) { atomic_store(&g->stop, 1); }
+
+int bt_guard_stopped(const bt_guard *g) { return atomic_load(&g->stop); }
+
+/* One go at leaving g's step once stopped: 0 when no step runs (left, or none was running); 2 while it is inside a
+ * HAL function of the bench's (it leaves as that returns); 1 when a signal was sent, or one is on its way still. */
+int bt_guard_poke(bt_guard *g) {
+    if (!atomic_load(&g->inside)) return 0;
+    if (atomic_load(&g->in_hal)) return 2;
+    if (atomic_load(&g->sent) != atomic_load(&g->seen)) return 1; /* (one at a time: real-time signals queue) */
+    atomic_fetch_add(&g->sent, 1);
+    if (pthread_kill(g->thread, guard_signal) != 0) atomic_fetch_sub(&g->sent, 1);
+    return 1;
+}
+
+/* Where the last signal found g's step outside the firmware's code (an address; 0: never). */
+uintptr_t bt_guard_outside(const bt_guard *g) { return atomic_load(&g->outside); }
+
+/* A HAL call of the firmware's: the guard's signal blocked while the bench's function runs; the step is left as it
+ * returns once a stop was asked. */
+#define HAL_CALL(call)                                       \
+    bt_guard *g = current;                                   \
     sigset_t set, old;                                       \
     sigemptyset(&set);                                       \
     sigaddset(&set, guard_signal);                           \
     pthread_sigmask(SIG_BLOCK, &set, &old);                  \
+    if (g) atomic_store(&g->in_hal, 1);                      \
     call;                                                    \
-    pthread_sigmask(SIG_SETMASK, &old, NULL)
+    if (g) atomic_store(&g->in_hal, 0);                      \
+    pthread_sigmask(SIG_SETMASK, &old, NULL);                \
+    if (g && atomic_load(&g->stop)) siglongjmp(*leave, 1)
 
 static void w_spi_sequence(void *ctx, const bt_word *words, uint16_t *miso, size_t n) {
     const bt_hal *h = ctx;
-    BLOCKED(h->spi_sequence(h->ctx, words, miso, n));
+    HAL_CALL(h->spi_sequence(h->ctx, words, miso, n));
 }
 static void w_spi_bytes(void *ctx, uint8_t cs, uint8_t keep_cs, const uint8_t *tx, uint8_t *rx, size_t n) {
     const bt_hal *h = ctx;
-    BLOCKED(h->spi_bytes(h->ctx, cs, keep_cs, tx, rx, n));
+    HAL_CALL(h->spi_bytes(h->ctx, cs, keep_cs, tx, rx, n));
 }
 static void w_delay_us(void *ctx, uint32_t us) {
     const bt_hal *h = ctx;
-    BLOCKED(h->delay_us(h->ctx, us));
+    HAL_CALL(h->delay_us(h->ctx, us));
 }
 static uint64_t w_micros(void *ctx) {
     const bt_hal *h = ctx;
     uint64_t r;
-    BLOCKED(r = h->micros(h->ctx));
+    HAL_CALL(r = h->micros(h->ctx));
     return r;
 }
 static void w_uart_write(void *ctx, const uint8_t *data, size_t n) {
     const bt_hal *h = ctx;
-    BLOCKED(h->uart_write(h->ctx, data, n));
+    HAL_CALL(h->uart_write(h->ctx, data, n));
 }
 static size_t w_uart_read(void *ctx, uint8_t *buf, size_t max) {
     const bt_hal *h = ctx;
     size_t r;
-    BLOCKED(r = h->uart_read(h->ctx, buf, max));
+    HAL_CALL(r = h->uart_read(h->ctx, buf, max));
     return r;
 }
 

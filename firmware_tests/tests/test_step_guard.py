@@ -1,0 +1,195 @@
+"""The firmware watchdog's step guard (bench/hosts/c/step_guard.c): a hung bt_step is left only from the firmware's
+own code — never from inside the C library, where a lock may be held (a jump out of fprintf or malloc used to leave
+the process unable to exit) —, a step blocked in the C library is reported with where it is, a stopped
+co-simulation refuses to run again, two co-simulations in two threads stop only what was asked, and the guard's
+signal is never taken from (or sent behind the back of) another handler in the process.  Each case runs in a
+process of its own: a deadlock there fails the test by its timeout instead of hanging the suite, and the handler
+installed or replaced stays in that process."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from bench.hosts.cosim import FIRMWARE_DIR
+
+pytestmark = pytest.mark.firmware
+
+STEP = "void bt_step(bt_bridge *b) {\n    serve_host(b);\n"
+assert STEP in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_step changed"
+
+#: a process that builds a firmware whose bt_step runs ``LOOP`` once 20 ms of virtual time have passed, runs it in a
+#: thread, lets it hang for 0.3 s, asks the watchdog to stop it (within 10 s) and says what came of it; then a new
+#: thread allocates and writes through C stdio, and the process ends (flushing every C stream)
+CHILD = textwrap.dedent("""
+    import ctypes, sys, threading, time
+    from pathlib import Path
+    from bench.errors import FirmwareError
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
+    loop, folder = sys.argv[1], Path(sys.argv[2])
+    src = folder / "fw.c"
+    src.write_text("#include <stdio.h>\\n#include <stdlib.h>\\n#include <unistd.h>\\n"
+                   "char *volatile sink;\\nFILE *out;\\n"
+                   + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
+                       STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + loop + "\\n    }\\n"))
+    sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
+    ended = []
+    def run():
+        try:
+            sim.run(1.0)
+        except FirmwareError as e:
+            ended.append(str(e))
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    time.sleep(0.3)
+    print("stop_step:", sim.stop_step(within_s=10), flush=True)
+    thread.join(10)
+    print("thread ended:", not thread.is_alive(), ended, flush=True)
+    if not thread.is_alive():
+        libc = ctypes.CDLL(None)
+        libc.malloc.restype = ctypes.c_void_p
+        def use_libc():
+            for _ in range(1000):
+                libc.free(ctypes.c_void_p(libc.malloc(4000)))
+            libc.fputs(b"C stdio still works\\n", ctypes.c_void_p.in_dll(libc, "stderr"))
+        after = threading.Thread(target=use_libc)
+        after.start()
+        after.join()
+        print("after: malloc and stdio in a new thread", flush=True)
+""").replace("STEP", repr(STEP))
+
+
+def _child(tmp_path, loop: str, timeout_s: float = 120):
+    return subprocess.run([sys.executable, "-c", CHILD, loop, str(tmp_path)], capture_output=True, text=True,
+                          timeout=timeout_s)
+
+
+@pytest.mark.parametrize("loop", [
+    'if (!out) { out = fopen("/dev/null", "w"); } for (;;) { fputs("x", out); }',
+    "for (;;) { sink = malloc(4000); sink[0] = 1; free(sink); }",
+], ids=["writing through stdio", "allocating"])
+def test_a_firmware_hung_in_a_c_library_loop_is_stopped_and_the_process_goes_on(tmp_path, loop):
+    """A bt_step looping on fputs (its FILE's lock taken and released each pass) or malloc/free (the arena's lock) is
+    stopped — the signal taken only when it lands in the firmware's own code — and the process goes on: a new
+    thread allocates and writes through C stdio, and the process exits (flushing every C stream, the firmware's
+    too).  Jumping wherever the signal landed left the FILE's lock held: the process never exited."""
+    r = _child(tmp_path, loop)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "stop_step: None\n" in r.stdout
+    assert "thread ended: True [\"the firmware's bt_step was stopped by the bench's watchdog at virtual time 0.02" \
+           in r.stdout and "make a new one" in r.stdout
+    assert "after: malloc and stdio in a new thread" in r.stdout and "C stdio still works" in r.stderr
+
+
+def test_a_firmware_blocked_in_a_c_library_call_is_reported_where_it_is_not_jumped_out_of(tmp_path):
+    """A bt_step blocked for good in read() on a pipe nobody writes: the watchdog never finds it in the firmware's
+    code, so does not leave it, and says where it is — the C library, read — within the time it was given."""
+    r = _child(tmp_path, "int fds[2]; char c; if (pipe(fds) == 0) { (void)read(fds[0], &c, 1); }")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "stop_step: it is outside the firmware's code, in libc.so.6 (read), which the watchdog does not jump out " \
+           "of (a lock held there would deadlock the process)\n" in r.stdout, r.stdout
+    assert "thread ended: False []" in r.stdout
+
+
+#: two co-simulations in two threads: one hangs (a loop calling no HAL function), one streams; stopping the first
+#: leaves the second's run untouched — its UART output is the same as a run on its own
+TWO = textwrap.dedent("""
+    import sys, threading, time
+    from pathlib import Path
+    from bench.errors import FirmwareError
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
+    from bench.hosts.driver import CMD_START, encode
+    folder = Path(sys.argv[1])
+    src = folder / "hang.c"
+    src.write_text((FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
+        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) { for (volatile unsigned long k = 0;; k++) { } }\\n"))
+    def streaming():
+        out = bytearray()
+        board = VirtualBoard(default_sensors(1), uart_out=out.extend)
+        sim = CoSim(board)
+        sim.set_pattern(["PDC"])
+        board.send_to_firmware(encode(CMD_START))
+        return sim, out
+    ended = {}
+    def run(name, sim, seconds):
+        try:
+            for _ in range(int(seconds / 0.01)):
+                sim.run(0.01)
+                time.sleep(0.001)
+            ended[name] = "ran"
+        except FirmwareError as e:
+            ended[name] = str(e)
+    alone, alone_out = streaming()
+    run("alone", alone, 0.5)
+    hung = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
+    other, other_out = streaming()
+    threads = [threading.Thread(target=run, args=("hung", hung, 1.0)),
+               threading.Thread(target=run, args=("other", other, 0.5))]
+    for t in threads:
+        t.start()
+    time.sleep(0.2)
+    print("stop_step:", hung.stop_step(within_s=10), flush=True)
+    for t in threads:
+        t.join(60)
+    print("hung:", ended.get("hung"))
+    print("other:", ended.get("other"), "same output:", bytes(other_out) == bytes(alone_out),
+          "streamed:", len(alone_out) > 1000)
+    print("stopped:", hung.stopped, other.stopped)
+""").replace("STEP", repr(STEP))
+
+
+def test_two_co_simulations_in_two_threads_stop_only_what_was_asked(tmp_path):
+    """Stopping one co-simulation's hung firmware leaves another, running in another thread at the same time, as it
+    was: its run ends as usual with the same bytes streamed as on its own, and only the first is stopped."""
+    r = subprocess.run([sys.executable, "-c", TWO, str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "stop_step: None\n" in r.stdout
+    assert "hung: the firmware's bt_step was stopped by the bench's watchdog" in r.stdout
+    assert "other: ran same output: True streamed: True" in r.stdout and "stopped: True False" in r.stdout, r.stdout
+
+
+#: the guard's signal and another handler in the same process: one installed first is refused by name (never
+#: replaced); one installed after the bench's (here the default action back, which would end the process if the
+#: signal came) makes the watchdog say so and send nothing
+OTHER_HANDLER = textwrap.dedent("""
+    import signal, sys, threading, time
+    from pathlib import Path
+    from bench.errors import FirmwareError
+    from bench.hosts import cosim
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
+    mine = lambda *a: None
+    signal.signal(cosim.GUARD_SIGNAL, mine)
+    try:
+        CoSim(VirtualBoard(default_sensors(1)))
+    except FirmwareError as e:
+        print("refused:", e)
+    print("kept:", signal.getsignal(cosim.GUARD_SIGNAL) is mine)
+    signal.signal(cosim.GUARD_SIGNAL, signal.SIG_DFL)
+    folder = Path(sys.argv[1])
+    src = folder / "hang.c"
+    src.write_text((FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
+        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) { for (volatile unsigned long k = 0;; k++) { } }\\n"))
+    sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
+    threading.Thread(target=sim.run, args=(1.0,), daemon=True).start()
+    time.sleep(0.3)
+    signal.signal(cosim.GUARD_SIGNAL, signal.SIG_DFL)
+    print("stop_step:", sim.stop_step(within_s=1), flush=True)
+    time.sleep(0.3)
+    print("alive", flush=True)
+""").replace("STEP", repr(STEP))
+
+
+def test_a_handler_of_the_guards_signal_elsewhere_in_the_process_is_never_taken_over(tmp_path):
+    r = subprocess.run([sys.executable, "-c", OTHER_HANDLER, str(tmp_path)], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "refused: signal SIGRTMIN+3 (" in r.stdout and ") already has a handler in this process (installed by " \
+           "signal.signal or by a library): the firmware watchdog needs a signal of its own; set " \
+           "bench.hosts.cosim.GUARD_SIGNAL to a free real-time signal" in r.stdout, r.stdout
+    assert "kept: True" in r.stdout
+    assert "stop_step: the handler of signal SIGRTMIN+3 (" in r.stdout and ") was replaced after the bench " \
+           "installed it (by signal.signal or a library): the watchdog sends no signal\n" in r.stdout, r.stdout
+    assert r.stdout.endswith("alive\n")  # (the default action of a real-time signal ends the process)
