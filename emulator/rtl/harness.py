@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import select
 import struct
 import subprocess
 import tempfile
@@ -40,6 +41,8 @@ FAULTS = np.dtype([("sensor", "u1"), ("miso_flip_en", "u1"), ("mosi_flip_en", "u
 MIN_CLOCK_HZ = 0.5e12 / (2**31 - 1)
 #: What the streaming harness answers a header it takes, before any batch (harness.cpp's ``STREAM_READY``).
 STREAM_READY = b"BTSPIOK\0"
+#: How long (wall s) :class:`RtlBus` waits for its harness to take the header (it answers in milliseconds).
+START_TIMEOUT_S = 60.0
 #: How long (wall s) :meth:`RtlBus.close` waits for the streaming harness to exit after its input ends.
 CLOSE_TIMEOUT_S = 5.0
 
@@ -383,10 +386,12 @@ class RtlBus:
                 self.proc.stdin.flush()
             except BrokenPipeError:  # (it exited first: its status says more, read below)
                 pass
-            answer = self.proc.stdout.read(len(STREAM_READY))
+            answered = select.select([self.proc.stdout], [], [], START_TIMEOUT_S)[0]
+            answer = self.proc.stdout.read(len(STREAM_READY)) if answered else None
             if answer != STREAM_READY:
                 self.close()
-                how = (f"exited with status {self.proc.returncode}" if not answer
+                how = (f"said nothing within {START_TIMEOUT_S:g} s and was stopped" if answer is None
+                       else f"exited with status {self.proc.returncode}" if not answer
                        else f"answered {answer!r} and was stopped")
                 raise HarnessError(f"the RTL harness {self.harness.binary} did not take the bus's header: it {how} "
                                    f"(its message, if any, is on stderr); rebuild it: Harness(sp={mask}).build()")

@@ -93,12 +93,14 @@ def _children() -> set[int]:
     ("printf 'not ready'; exec sleep 30",
      (H.HarnessError, r"the RTL harness .*/harness did not take the bus's header: it answered b'not read' and was "
                       r"stopped")),
+    ("exec sleep 30", (H.HarnessError, r"the RTL harness .*/harness did not take the bus's header: it said nothing "
+                                       r"within 1 s and was stopped")),
     ("exec sleep 30", (KeyboardInterrupt, "")),
-], ids=["exits at start", "answers something else", "Ctrl-C while it starts"])
+], ids=["exits at start", "answers something else", "says nothing", "Ctrl-C while it starts"])
 def test_a_harness_that_does_not_take_the_header_leaves_nothing_behind(tmp_path, monkeypatch, stand_in, error):
     """An RtlBus whose harness exits as it starts (a broken or foreign binary), or answers its header with anything
-    but STREAM_READY, is not made: a HarnessError names the binary and what it did; one that never answers, the user
-    giving up with Ctrl-C, neither.  Its process is reaped (no zombie, none left running), its pipes are closed, and
+    but STREAM_READY, or says nothing within START_TIMEOUT_S, is not made: a HarnessError names the binary and what it
+    did; one that the user gives up on with Ctrl-C as it starts, neither.  Its process is reaped (no zombie, none left running), its pipes are closed, and
     nothing warns of a resource left open."""
     import gc
     import os
@@ -107,6 +109,7 @@ def test_a_harness_that_does_not_take_the_header_leaves_nothing_behind(tmp_path,
     import warnings
 
     monkeypatch.setattr(H, "CLOSE_TIMEOUT_S", 0.2)
+    monkeypatch.setattr(H, "START_TIMEOUT_S", 1.0 if error[0] is H.HarnessError else 30.0)
     harness = H.Harness(build_dir=tmp_path)
     harness.binary.write_text(f"#!/bin/sh\n{stand_in}\n")
     harness.binary.chmod(0o755)

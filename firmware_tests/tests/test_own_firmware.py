@@ -205,5 +205,8 @@ def test_a_stop_requested_between_two_steps_still_ends_run():
             sim.run(0.002)
         with pytest.raises(FirmwareError, match="stopped by the bench's watchdog .* make a new one"):
             sim.run(0.002)  # for good: its firmware's state was left midway
+        with pytest.raises(FirmwareError, match=r"set_pattern: the co-simulation of .* was stopped by the bench's "
+                                                r"watchdog .* make a new one"):
+            sim.set_pattern(["PDC"])
     finally:
         board.bus.close()
