@@ -401,6 +401,7 @@ class RtlBus:
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
         #: transfers clocked outside the SPI clock range (500 kHz–10 MHz), as the software bus counts them
         self.out_of_spec_transfers = 0
+        self._cut_short: str | None = None  # a call ended with its reply unread: the bus is then unusable
 
     def _windows(self, n: int, start, end, cs, mosi, nbits, keep, flip: int | None = None):
         """Sensor ``n``'s chip-select windows that close among these transfers, as the software bus sees them: a
@@ -548,6 +549,10 @@ class RtlBus:
     def _play(self, start, cs, mosi, nbits, clock, keep):
         from emulator.spi.fastpath import _NO_TICK
 
+        if self._cut_short is not None:
+            raise HarnessError(f"RTL bus: {self._cut_short} between sending its transfers to the harness and reading "
+                               f"all of their MISO: the harness's replies and the bus's calls are out of step; close "
+                               f"this bus and make a new one")
         start = np.asarray(start, float)
         clock = np.broadcast_to(np.asarray(clock, float), start.shape)
         nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
@@ -578,11 +583,15 @@ class RtlBus:
         if len(c):
             codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
         records = fault_records(changed)
-        self.proc.stdin.write(struct.pack("<III", start.size, len(codes), len(records)) + tr.tobytes()
-                              + codes.tobytes() + records.tobytes())
-        self.proc.stdin.flush()
-        self._faults_in_rtl.update(changed)
-        raw = np.frombuffer(self._read(8 * (start.size + 4)), dtype="<u8")
+        try:  # (a call cut short before its reply is read whole leaves the harness's replies out of step)
+            self.proc.stdin.write(struct.pack("<III", start.size, len(codes), len(records)) + tr.tobytes()
+                                  + codes.tobytes() + records.tobytes())
+            self.proc.stdin.flush()
+            self._faults_in_rtl.update(changed)
+            raw = np.frombuffer(self._read(8 * (start.size + 4)), dtype="<u8")
+        except BaseException as e:
+            self._cut_short = f"a call of {start.size} transfers was ended by {e!r}"
+            raise
         self.evals = int(raw[start.size + 2])
         mismatched, unrequested = int(raw[start.size]), int(raw[start.size + 1])
         waiting = int(raw[start.size + 3])

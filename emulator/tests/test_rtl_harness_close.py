@@ -129,3 +129,48 @@ def test_a_harness_that_does_not_take_the_header_leaves_nothing_behind(tmp_path,
     assert _children() == children, "the harness's process was left behind"
     assert len(os.listdir("/proc/self/fd")) == fds, "the harness's pipes were left open"
     assert not [w for w in caught if issubclass(w.category, ResourceWarning)], [str(w.message) for w in caught]
+
+
+@pytest.mark.rtl
+def test_a_call_cut_short_before_its_reply_is_read_leaves_the_bus_refusing_calls():
+    """Ctrl-C while a call waits for the harness's MISO: the reply stays in the pipe, where the next call would read
+    it as its own (the words of another call, silently).  The bus refuses every later call instead, saying why and
+    what to do; close() still ends the harness."""
+    import signal
+    import threading
+    import time
+
+    rtl = H.RtlBus({1: _sensor()})
+    main = threading.get_ident()
+
+    def ctrl_c_once_reading() -> None:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            frame = sys._current_frames().get(main)
+            while frame is not None and not (frame.f_code.co_name == "_read"
+                                             and frame.f_code.co_filename == H.__file__):
+                frame = frame.f_back
+            if frame is not None:
+                signal.pthread_kill(main, signal.SIGINT)
+                return
+            time.sleep(0.0005)
+
+    n = 400_000  # (the harness plays them for about a second)
+    start = 1e-3 + np.arange(n) * 10e-6
+    interrupter = threading.Thread(target=ctrl_c_once_reading)
+    try:
+        interrupter.start()
+        with pytest.raises(KeyboardInterrupt):
+            rtl.exchange_words(start, np.full(n, SELECT_CODE[1]), np.zeros(n, np.uint16), proto.HOST_DEFAULT_CLOCK_HZ)
+        interrupter.join()
+        for _ in range(2):
+            with pytest.raises(H.HarnessError, match=r"RTL bus: a call of 400000 transfers was ended by "
+                                                     r"KeyboardInterrupt\(\) between sending its transfers to the "
+                                                     r"harness and reading all of their MISO: the harness's replies "
+                                                     r"and the bus's calls are out of step; close this bus and make a "
+                                                     r"new one"):
+                rtl.exchange_words(*_command_then_read(10.0, 10.0001), proto.HOST_DEFAULT_CLOCK_HZ)
+    finally:
+        interrupter.join()
+        rtl.close()
+    assert rtl.proc.returncode is not None
