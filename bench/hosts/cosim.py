@@ -58,6 +58,7 @@ def step_guard() -> C.CDLL:
             lib.bt_guard_wrap.argtypes = [C.c_void_p, C.c_void_p]
             for name in ("bt_guard_stop", "bt_guard_stopped", "bt_guard_poke", "bt_guard_outside"):
                 getattr(lib, name).argtypes = [C.c_void_p]
+            lib.bt_guard_crash.argtypes = [C.c_void_p, C.POINTER(C.c_size_t), C.POINTER(C.c_size_t)]
             lib.bt_guard_outside.restype = C.c_size_t
             _guard.append(lib)
         lib = _guard[0]
@@ -68,8 +69,8 @@ def step_guard() -> C.CDLL:
                                 f"signal.signal or by a library): the firmware watchdog needs a signal of its own; "
                                 f"set bench.hosts.cosim.GUARD_SIGNAL to a free real-time signal before making a "
                                 f"co-simulation")
-        if installed != 0:
-            raise BuildError(f"the step guard cannot handle signal {_signal_name(sig)}")
+        if installed != 0 or lib.bt_guard_catch_crashes() != 0:
+            raise BuildError(f"the step guard cannot handle signal {_signal_name(sig)} or the fault signals")
         return lib
 
 
@@ -337,7 +338,13 @@ class VirtualBoard:
 
 
 class CoSim:
-    """Firmware + board: ``run(seconds)`` executes the firmware's main loop in virtual time."""
+    """Firmware + board: ``run(seconds)`` executes the firmware's main loop in virtual time.
+
+    Each ``bt_step`` runs under the step guard (``bench/hosts/c/step_guard.c``): :meth:`stop_step` leaves a hung one,
+    and a fault in the firmware's own code (SIGSEGV, SIGBUS, SIGFPE, SIGILL) leaves its step instead of ending the
+    process — :meth:`run` raises :class:`FirmwareError` naming it.  Either way the co-simulation is :attr:`stopped`
+    for good.
+    """
 
     def __init__(self, board: VirtualBoard, library: Path | None = None):
         self.board = board
@@ -409,6 +416,18 @@ class CoSim:
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
                              + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E24"))
 
+    def _why_stopped(self) -> str:
+        """Why bt_step was left: the watchdog (a hang), or a fault in the firmware's code (its signal, where)."""
+        pc, addr = C.c_size_t(), C.c_size_t()
+        sig = self._guard.bt_guard_crash(self._watch, C.byref(pc), C.byref(addr))
+        again = "this co-simulation does not run again: make a new one"
+        if sig:
+            return (f"the firmware crashed in bt_step at virtual time {self.board.t:.6f} s: "
+                    f"{signal.Signals(sig).name} in {code_at(pc.value)} (touching address {addr.value:#x}); the "
+                    f"bench left its step and goes on; {again}")
+        return (f"the firmware's bt_step was stopped by the bench's watchdog at virtual time {self.board.t:.6f} s (it "
+                f"hung); {again}")
+
     def _raise(self):
         if self.board.error is not None:
             e, self.board.error = self.board.error, None
@@ -428,9 +447,7 @@ class CoSim:
         steps = 0
         while self.board.t < end:
             if self._guard.bt_guard_step(self._watch, self._step, self.state):
-                raise FirmwareError(f"the firmware's bt_step was stopped by the bench's watchdog at virtual time "
-                                    f"{self.board.t:.6f} s (it hung); this co-simulation does not run again: make a "
-                                    f"new one")
+                raise FirmwareError(self._why_stopped())
             self._raise()
             steps += 1
             if max_steps is not None and steps >= max_steps:

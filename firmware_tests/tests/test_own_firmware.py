@@ -201,8 +201,10 @@ def test_a_stop_requested_between_two_steps_still_ends_run():
         sim = CoSim(board)
         sim.run(0.002)  # runs as usual
         assert sim.stop_step() is None  # no step is running to be left
+        board.send_to_firmware(b"\x00")
         with pytest.raises(FirmwareError, match="stopped by the bench's watchdog .* make a new one"):
             sim.run(0.002)
+        assert list(board.uart_in) == [0]  # the firmware did not run at all: its byte is still waiting
         with pytest.raises(FirmwareError, match="stopped by the bench's watchdog .* make a new one"):
             sim.run(0.002)  # for good: its firmware's state was left midway
         with pytest.raises(FirmwareError, match=r"set_pattern: the co-simulation of .* was stopped by the bench's "

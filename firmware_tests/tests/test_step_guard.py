@@ -193,3 +193,91 @@ def test_a_handler_of_the_guards_signal_elsewhere_in_the_process_is_never_taken_
     assert "stop_step: the handler of signal SIGRTMIN+3 (" in r.stdout and ") was replaced after the bench " \
            "installed it (by signal.signal or a library): the watchdog sends no signal\n" in r.stdout, r.stdout
     assert r.stdout.endswith("alive\n")  # (the default action of a real-time signal ends the process)
+
+
+def test_a_step_stopped_inside_a_hal_call_is_left_as_the_call_returns(tmp_path):
+    """The watchdog gives up on a step inside one of the bench's HAL calls (uart_write, held by the bench): it says so
+    and sends nothing then.  As that call returns the step is left — before the firmware's next instruction, here a
+    loop that calls no HAL function and would spin for good."""
+    import threading
+
+    from bench.errors import FirmwareError
+    from bench.hosts.cosim import CoSim, VirtualBoard, build_firmware, default_sensors
+
+    src = tmp_path / "fw.c"
+    src.write_text((FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
+        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\n"
+                     "        b->hal->uart_write(b->hal->ctx, (const uint8_t *)\"!\", 1);\n"
+                     "        for (volatile unsigned long k = 0;; k++) { }\n    }\n"))
+    release, entered, ended = threading.Event(), threading.Event(), []
+
+    def uart_out(data: bytes) -> None:
+        if data == b"!":
+            entered.set()
+            release.wait(30)
+
+    sim = CoSim(VirtualBoard(default_sensors(1), uart_out=uart_out), build_firmware([src], out_dir=tmp_path / "out"))
+
+    def run():
+        try:
+            sim.run(1.0)
+        except FirmwareError as e:
+            ended.append(str(e))
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    try:
+        assert entered.wait(30)
+        assert sim.stop_step(within_s=0.2) == ("it is inside the bench's HAL function uart_write: its step is left as "
+                                               "that returns")
+    finally:
+        release.set()
+    thread.join(10)
+    assert not thread.is_alive() and ended and "stopped by the bench's watchdog" in ended[0]
+    assert sim.stop_step() is None
+    sim.board.bus.close()
+
+
+#: a firmware that faults (``FAULT``) once 20 ms of virtual time have passed, run twice, then a new co-simulation
+CRASH = textwrap.dedent("""
+    import sys
+    from pathlib import Path
+    from bench.errors import FirmwareError
+    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
+    fault, folder = sys.argv[1], Path(sys.argv[2])
+    src = folder / "crash.c"
+    src.write_text("#include <string.h>\\nint *volatile nowhere;\\nvolatile size_t length;\\n"
+                   + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
+                       STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + fault + "\\n    }\\n"))
+    sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
+    for _ in range(2):
+        try:
+            sim.run(0.1)
+        except FirmwareError as e:
+            print("error:", e, flush=True)
+    CoSim(VirtualBoard(default_sensors(1))).run(0.05)
+    print("a new co-simulation runs", flush=True)
+""").replace("STEP", repr(STEP))
+
+
+def test_a_firmware_that_crashes_in_its_own_code_is_an_error_naming_the_fault_and_the_process_goes_on(tmp_path):
+    """A bt_step writing through a null pointer: SIGSEGV in the firmware's own code ends its step, not the process —
+    run raises a FirmwareError naming the signal, the library and function, the address touched and the virtual
+    time (also on the next run: the co-simulation is stopped), and a new co-simulation runs."""
+    r = subprocess.run([sys.executable, "-c", CRASH, "*nowhere = 1;", str(tmp_path)], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    error = ("error: the firmware crashed in bt_step at virtual time 0.020425 s: SIGSEGV in libbtbridge.so (bt_step) "
+             "(touching address 0x0); the bench left its step and goes on; this co-simulation does not run again: "
+             "make a new one\n")
+    assert r.stdout == 2 * error + "a new co-simulation runs\n", r.stdout
+
+
+def test_a_crash_outside_the_firmwares_code_goes_to_the_handler_that_was_there_before(tmp_path):
+    """strlen(NULL) from the firmware faults inside the C library, not the firmware's code: the bench does not leave
+    the step from there; the handler that was there before takes the fault — here Python's faulthandler, which
+    names it and ends the process — rather than the process hanging or carrying on with a corrupt C library."""
+    r = subprocess.run([sys.executable, "-X", "faulthandler", "-c", CRASH, "length = strlen((const char *)nowhere);",
+                        str(tmp_path)], capture_output=True, text=True, timeout=120)
+    assert r.returncode < 0 and "Fatal Python error: Segmentation fault" in r.stderr, r.stdout + r.stderr
+    assert "a new co-simulation runs" not in r.stdout

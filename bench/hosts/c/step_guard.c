@@ -10,7 +10,8 @@
  * back to the firmware's code (blocked in a system call, or waiting for a lock it never gets) is not left, and
  * bt_guard_outside says where it is.  The firmware is given a HAL of wrappers (bt_guard_wrap) that block the signal
  * while the bench's HAL function (Python) runs, and leave the step as that call returns once a stop was asked: the
- * jump never leaves the interpreter.  A stop is for good: every later bt_guard_step of that guard returns 1 at once
+ * jump never leaves the interpreter.  A fault in the firmware's own code (on_crash) leaves the step the same way.
+ * A stop is for good: every later bt_guard_step of that guard returns 1 at once
  * (the firmware's state was left midway).  The handler acts only for the guard whose stop was asked, so a thread
  * that runs two co-simulations, or two threads that run one each, stop only what was asked. */
 #define _GNU_SOURCE
@@ -34,6 +35,8 @@ typedef struct {
     atomic_int in_hal;          /* 1 while the step is inside one of the bench's HAL functions */
     atomic_uint sent, seen;     /* signals sent to the step's thread, and seen by its handler */
     atomic_uintptr_t outside;   /* where the last signal found the thread outside the firmware's code (0: none) */
+    int crash_signal;           /* the firmware's code faulted: SIGSEGV, SIGBUS, SIGFPE or SIGILL (0: never) */
+    uintptr_t crash_pc, crash_addr; /* where it faulted, and the address it touched */
     pthread_t thread;           /* the thread running the step (set before inside) */
     uintptr_t lo[MAX_TEXT], hi[MAX_TEXT];
     int n_text;                 /* the firmware library's executable segments: [lo, hi) */
@@ -70,6 +73,53 @@ static void on_signal(int sig, siginfo_t *info, void *uc) {
     uintptr_t pc = pc_of(uc);
     if (in_firmware(g, pc)) siglongjmp(*leave, 1);
     atomic_store(&g->outside, pc);
+}
+
+/* A fault (SIGSEGV, SIGBUS, SIGFPE, SIGILL) in the firmware's own code, in a guarded step: the step is left and the
+ * guard stopped, the fault recorded (bt_guard_step returns 2).  Anywhere else — the interpreter, the C library (whose
+ * locks a jump could leave held) — the handler that was there before is put back and the fault happens again under
+ * it (Python's faulthandler, or the default: the process ends as it would have). */
+#define N_CRASH 4
+static const int crash_signals[N_CRASH] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL};
+static struct sigaction before_crash[N_CRASH];
+
+static void on_crash(int sig, siginfo_t *info, void *uc) {
+    bt_guard *g = current;
+    uintptr_t pc = pc_of(uc);
+    if (g && atomic_load(&g->inside) && !atomic_load(&g->in_hal) && in_firmware(g, pc)) {
+        g->crash_signal = sig;
+        g->crash_pc = pc;
+        g->crash_addr = (uintptr_t)info->si_addr;
+        atomic_store(&g->stop, 1);
+        siglongjmp(*leave, 2);
+    }
+    for (int i = 0; i < N_CRASH; i++)
+        if (crash_signals[i] == sig) sigaction(sig, &before_crash[i], NULL);
+    if (info->si_code <= 0) raise(sig); /* (sent by kill, not a fault: it would not come again by itself) */
+}
+
+/* Install on_crash for the fault signals where it is not installed already, keeping what was there to hand faults
+ * elsewhere back to; 0 on success. */
+int bt_guard_catch_crashes(void) {
+    for (int i = 0; i < N_CRASH; i++) {
+        struct sigaction sa, old;
+        if (sigaction(crash_signals[i], NULL, &old) != 0) return -1;
+        if ((old.sa_flags & SA_SIGINFO) && old.sa_sigaction == on_crash) continue;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_sigaction = on_crash;
+        sa.sa_flags = SA_SIGINFO | SA_ONSTACK;
+        sigemptyset(&sa.sa_mask);
+        before_crash[i] = old;
+        if (sigaction(crash_signals[i], &sa, NULL) != 0) return -1;
+    }
+    return 0;
+}
+
+/* The fault that left g's step: its signal (0: none), and where (the code's address, the address touched). */
+int bt_guard_crash(const bt_guard *g, uintptr_t *pc, uintptr_t *addr) {
+    *pc = g->crash_pc;
+    *addr = g->crash_addr;
+    return g->crash_signal;
 }
 
 /* Install the handler for signal sig; 0 on success (or when it is installed already), 1 when the signal has another
@@ -130,16 +180,18 @@ int bt_guard_init(bt_guard *g, void *firmware_symbol) {
     return dl_iterate_phdr(take_text, &w) && g->n_text > 0 ? 0 : 1;
 }
 
-/* Run step(state) under guard g; 0 when it returned, 1 when it was left (bt_guard_stop) or a stop was asked before. */
+/* Run step(state) under guard g; 0 when it returned, 1 when it was left (bt_guard_stop) or a stop was asked before,
+ * 2 when it faulted in the firmware's code (bt_guard_crash). */
 int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
     sigjmp_buf env;
     g->thread = pthread_self();
     current = g;
     leave = &env;
-    if (sigsetjmp(env, 1)) {
+    int left = sigsetjmp(env, 1);
+    if (left) {
         atomic_store(&g->inside, 0);
         current = NULL;
-        return 1;
+        return left;
     }
     atomic_store(&g->inside, 1);
     if (atomic_load(&g->stop)) { /* (after inside is set: a stop is either seen here or signalled in the step) */
