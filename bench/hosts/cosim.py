@@ -30,6 +30,9 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
 GUARD_SOURCE = Path(__file__).resolve().parent / "c" / "step_guard.c"
+#: Linked into every firmware built here: its exit, _exit, abort and failed asserts end its step, not the process.
+EXIT_GUARD_SOURCE = GUARD_SOURCE.with_name("exit_guard.c")
+EXIT_GUARD_FLAGS = ("-Wl,--wrap=exit,--wrap=_exit,--wrap=abort,--wrap=__assert_fail",)
 #: The signal that stops a hung bt_step (:meth:`CoSim.stop_step`): a real-time signal nothing else here uses.  The
 #: bench installs its handler at the first co-simulation, only over the default action (a handler something else in
 #: the process installed first is refused by name, never replaced), and keeps it for the process's life.
@@ -59,6 +62,8 @@ def step_guard() -> C.CDLL:
             for name in ("bt_guard_stop", "bt_guard_stopped", "bt_guard_poke", "bt_guard_outside"):
                 getattr(lib, name).argtypes = [C.c_void_p]
             lib.bt_guard_crash.argtypes = [C.c_void_p, C.POINTER(C.c_size_t), C.POINTER(C.c_size_t)]
+            lib.bt_guard_exit_call.argtypes = [C.c_void_p]
+            lib.bt_guard_exit_call.restype = C.c_char_p
             lib.bt_guard_outside.restype = C.c_size_t
             _guard.append(lib)
         lib = _guard[0]
@@ -104,9 +109,9 @@ def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
                              f"sorted(Path('my_firmware').glob('*.c')))")
     folders = sorted({s.resolve().parent for s in sources} | {FIRMWARE_DIR.resolve()})
     headers = [h for folder in folders for h in sorted(folder.glob("*.h"))]
-    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + headers)
-    return compile_c(sources, folder / "libbtbridge.so", flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}"),
-                     what="the firmware")
+    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + headers + [EXIT_GUARD_SOURCE])
+    return compile_c(sources + [EXIT_GUARD_SOURCE], folder / "libbtbridge.so",
+                     flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}", *EXIT_GUARD_FLAGS), what="the firmware")
 
 
 #: What a firmware library must export for the bench to run it (bt_bridge.h).
@@ -363,6 +368,10 @@ class CoSim:
         self._watch = C.create_string_buffer(self._guard.bt_guard_size())  # this firmware's guard: its code, its stop
         if self._guard.bt_guard_init(self._watch, self._step):
             raise FirmwareError(f"the step guard found no loaded library holding bt_step of {self.library}")
+        try:  # (a firmware the bench built: its exit, abort and failed asserts end its step, not the process)
+            C.c_void_p.in_dll(self.lib, "bt_exit_hook").value = C.cast(self._guard.bt_guard_exit, C.c_void_p).value
+        except ValueError:  # (a library built elsewhere: they end the process, as they would without the bench)
+            pass
         self.lib.bt_init(self.state, C.byref(self._guarded_hal))
         self._raise()
 
@@ -421,6 +430,10 @@ class CoSim:
         pc, addr = C.c_size_t(), C.c_size_t()
         sig = self._guard.bt_guard_crash(self._watch, C.byref(pc), C.byref(addr))
         again = "this co-simulation does not run again: make a new one"
+        called = self._guard.bt_guard_exit_call(self._watch).decode(errors="replace")
+        if called:
+            return (f"the firmware called {called} at virtual time {self.board.t:.6f} s, which would have ended the "
+                    f"process: the bench left its step and goes on; {again}")
         if sig:
             return (f"the firmware crashed in bt_step at virtual time {self.board.t:.6f} s: "
                     f"{signal.Signals(sig).name} in {code_at(pc.value)} (touching address {addr.value:#x}); the "

@@ -246,7 +246,8 @@ CRASH = textwrap.dedent("""
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
     fault, folder = sys.argv[1], Path(sys.argv[2])
     src = folder / "crash.c"
-    src.write_text("#include <string.h>\\nint *volatile nowhere;\\nvolatile size_t length;\\n"
+    src.write_text("#include <assert.h>\\n#include <stdlib.h>\\n#include <string.h>\\n#include <unistd.h>\\n"
+                   "int *volatile nowhere;\\nvolatile size_t length;\\n"
                    + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
                        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + fault + "\\n    }\\n"))
     sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
@@ -281,3 +282,20 @@ def test_a_crash_outside_the_firmwares_code_goes_to_the_handler_that_was_there_b
                         str(tmp_path)], capture_output=True, text=True, timeout=120)
     assert r.returncode < 0 and "Fatal Python error: Segmentation fault" in r.stderr, r.stdout + r.stderr
     assert "a new co-simulation runs" not in r.stdout
+
+
+@pytest.mark.parametrize("call, said", [
+    ("exit(3);", "exit(3)"), ("_exit(4);", "_exit(4)"), ("abort();", "abort()"),
+    ("assert(b->hal == 0);", r"assert(b->hal == 0), which failed at {src}:{line} in bt_step()"),
+], ids=["exit", "_exit", "abort", "assert"])
+def test_a_firmware_calling_exit_abort_or_failing_an_assert_ends_its_step_not_the_process(tmp_path, call, said):
+    """A firmware built by the bench that calls exit, _exit or abort, or fails an assert, in bt_step: the process
+    (a user's pytest run) goes on; run raises a FirmwareError saying what was called (the assert's condition and
+    place) and when, and a new co-simulation runs.  It ended the process, with nothing said."""
+    r = subprocess.run([sys.executable, "-c", CRASH, call, str(tmp_path)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stdout + r.stderr
+    source = (tmp_path / "crash.c").read_text().splitlines()
+    said = said.format(src=tmp_path / "crash.c", line=1 + next(k for k, text in enumerate(source) if call in text))
+    error = (f"error: the firmware called {said} at virtual time 0.020425 s, which would have ended the process: the "
+             f"bench left its step and goes on; this co-simulation does not run again: make a new one\n")
+    assert r.stdout == 2 * error + "a new co-simulation runs\n", r.stdout

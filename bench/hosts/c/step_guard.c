@@ -36,6 +36,7 @@ typedef struct {
     atomic_uint sent, seen;     /* signals sent to the step's thread, and seen by its handler */
     atomic_uintptr_t outside;   /* where the last signal found the thread outside the firmware's code (0: none) */
     int crash_signal;           /* the firmware's code faulted: SIGSEGV, SIGBUS, SIGFPE or SIGILL (0: never) */
+    char exit_call[256];        /* what the firmware called that would have ended the process ("": nothing) */
     uintptr_t crash_pc, crash_addr; /* where it faulted, and the address it touched */
     pthread_t thread;           /* the thread running the step (set before inside) */
     uintptr_t lo[MAX_TEXT], hi[MAX_TEXT];
@@ -122,6 +123,20 @@ int bt_guard_crash(const bt_guard *g, uintptr_t *pc, uintptr_t *addr) {
     return g->crash_signal;
 }
 
+/* The firmware's exit, _exit, abort or failed assert (bench/hosts/c/exit_guard.c): in a guarded step, the step is
+ * left and the guard stopped, the call recorded (bt_guard_step returns 3); elsewhere it returns (the call goes on). */
+void bt_guard_exit(int status, const char *what) {
+    bt_guard *g = current;
+    (void)status;
+    if (!g || !atomic_load(&g->inside)) return;
+    strncpy(g->exit_call, what, sizeof g->exit_call - 1);
+    atomic_store(&g->stop, 1);
+    siglongjmp(*leave, 3);
+}
+
+/* What g's firmware called that would have ended the process ("": nothing). */
+const char *bt_guard_exit_call(const bt_guard *g) { return g->exit_call; }
+
 /* Install the handler for signal sig; 0 on success (or when it is installed already), 1 when the signal has another
  * handler in this process (left as it is: the bench never takes a signal something else uses), -1 on failure. */
 int bt_guard_install(int sig) {
@@ -181,7 +196,7 @@ int bt_guard_init(bt_guard *g, void *firmware_symbol) {
 }
 
 /* Run step(state) under guard g; 0 when it returned, 1 when it was left (bt_guard_stop) or a stop was asked before,
- * 2 when it faulted in the firmware's code (bt_guard_crash). */
+ * 2 when it faulted in the firmware's code (bt_guard_crash), 3 when it called exit or the like (bt_guard_exit). */
 int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
     sigjmp_buf env;
     g->thread = pthread_self();
