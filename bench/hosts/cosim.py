@@ -29,6 +29,8 @@ from emulator.spi.model import Bus, SensorPort, Transfer
 
 FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
+#: The largest chip-select code the HAL takes (``bt_word.cs``, ``spi_bytes``' cs: three bits).
+MAX_SELECT_CODE = 7
 GUARD_SOURCE = Path(__file__).resolve().parent / "c" / "step_guard.c"
 #: Linked into every firmware built here: its exit, _exit, abort and failed asserts end its step, not the process.
 EXIT_GUARD_SOURCE = GUARD_SOURCE.with_name("exit_guard.c")
@@ -212,6 +214,7 @@ class VirtualBoard:
         self.events: list[tuple[float, object]] = []
         self.resets: list[tuple[float, int]] = []  # (virtual time s, sensor): brown-outs inside an SPI sequence
         self.error: BaseException | None = None
+        self.error_in = ""  # the HAL function where error came, and when
         #: Set when the bench gave up on a hung firmware: its next HAL call parks its thread for good, so a loop
         #: that keeps calling the HAL stops spending a core for the rest of the process.
         self.abandoned = threading.Event()
@@ -285,14 +288,21 @@ class VirtualBoard:
             try:
                 return fn(self, *a)
             except BaseException as e:  # an exception must not unwind through C: keep it, stop the run
-                self.error = self.error or e
+                if self.error is None:
+                    self.error, self.error_in = e, f"{name} at virtual time {self.t:.6f} s"
                 return 0
         return wrapped
 
     @_guard
     def spi_sequence(self, ctx, words, miso, n):
         self._events_due()
+        if n == 0:  # (an empty list: nothing clocked, no time passes)
+            return
         w = np.ctypeslib.as_array(words, shape=(n,))
+        bad = np.flatnonzero(w["cs"] > MAX_SELECT_CODE)
+        if bad.size:
+            raise ValueError(f"word #{bad[0]} of {n}: cs = {w['cs'][bad[0]]}: a select code is 0 to "
+                             f"{MAX_SELECT_CODE} (bt_hal.h: 1, 2, 4, 5, 6 = sensors 1..5, 7 = all, 0 = none)")
         start = self.t + w["offset_ns"] * 1e-9
         keep, out = w["keep_cs"].astype(bool), np.ctypeslib.as_array(miso, shape=(n,))
         i = 0
@@ -312,6 +322,9 @@ class VirtualBoard:
     @_guard
     def spi_bytes(self, ctx, cs, keep_cs, tx, rx, n):
         self._events_due()
+        if cs > MAX_SELECT_CODE:
+            raise ValueError(f"cs = {cs}: a select code is 0 to {MAX_SELECT_CODE} (bt_hal.h: 1, 2, 4, 5, 6 = sensors "
+                             f"1..5, 7 = all, 0 = none)")
         mosi = int.from_bytes(bytes(tx[:n]), "big") if n else 0
         tr = Transfer(self.t, int(cs), mosi, 8 * n, SPI_CLOCK_HZ, bool(keep_cs))
         bits = self.bus.transfer(tr)
@@ -446,7 +459,8 @@ class CoSim:
             e, self.board.error = self.board.error, None
             if isinstance(e, ActionError):  # a test's own action: its message says which and why
                 raise e
-            raise FirmwareError(f"the bench failed inside a HAL call: {e!r}") from e
+            what = str(e) if isinstance(e, ValueError) else repr(e)  # (a ValueError: the firmware's call refused)
+            raise FirmwareError(f"the firmware's HAL call {self.board.error_in}: {what}") from e
 
     def run(self, seconds: float, realtime: bool = False, max_steps: int | None = None) -> None:
         """Run the firmware until ``seconds`` more of virtual time have passed.

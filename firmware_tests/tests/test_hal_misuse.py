@@ -1,0 +1,56 @@
+"""A firmware misusing the bench's HAL (bt_hal.h), as a driver author's first attempts do: each misuse is a
+FirmwareError from run() naming the HAL function, the virtual time, the word and the value — never an internal
+error of the bench's — and an empty SPI sequence is no misuse (nothing is clocked)."""
+
+from __future__ import annotations
+
+import pytest
+
+from bench.errors import FirmwareError
+from bench.hosts.cosim import FIRMWARE_DIR, CoSim, VirtualBoard, build_firmware, default_sensors
+
+pytestmark = pytest.mark.firmware
+
+STEP = "void bt_step(bt_bridge *b) {\n    serve_host(b);\n"
+REFERENCE = (FIRMWARE_DIR / "bt_bridge.c").read_text()
+assert STEP in REFERENCE and "#include <string.h>\n" in REFERENCE, "the reference firmware changed"
+SELECT = r"a select code is 0 to 7 \(bt_hal\.h: 1, 2, 4, 5, 6 = sensors 1\.\.5, 7 = all, 0 = none\)"
+
+
+def _sim(tmp_path, misuse: str) -> CoSim:
+    """The reference firmware doing ``misuse`` (C, with globals tx, rx, w, mi at hand) in every bt_step from 20 ms
+    of virtual time on."""
+    src = tmp_path / "fw.c"
+    src.write_text(REFERENCE.replace("#include <string.h>\n", "#include <string.h>\nuint8_t tx[4], rx[4];\n"
+                                     "bt_word w[2];\nuint16_t mi[2];\n")
+                   .replace(STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\n" + misuse + "\n    }\n"))
+    return CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=tmp_path / "out"))
+
+
+@pytest.mark.parametrize("misuse, error", [
+    ("w[0].cs = 99; b->hal->spi_sequence(b->hal->ctx, w, mi, 1);",
+     r"the firmware's HAL call spi_sequence at virtual time 0\.020425 s: word #0 of 1: cs = 99: " + SELECT),
+    ("b->hal->spi_bytes(b->hal->ctx, 200, 0, tx, rx, 2);",
+     r"the firmware's HAL call spi_bytes at virtual time 0\.020425 s: cs = 200: " + SELECT),
+    ("w[0].offset_ns = 1000; w[1].offset_ns = 10; w[0].cs = w[1].cs = 1; b->hal->spi_sequence(b->hal->ctx, w, mi, 2);",
+     r"the firmware's HAL call spi_sequence at virtual time 0\.020425 s: transfer #1 of the call starts at "
+     r"0\.02042539\d* s, before transfer #0 \(from 0\.0204263\d* s\) ends"),
+], ids=["a select code out of range in a sequence", "a select code out of range in bytes", "words out of time order"])
+def test_a_hal_call_the_bench_cannot_take_is_an_error_naming_the_call_the_time_and_the_value(tmp_path, misuse, error):
+    sim = _sim(tmp_path, misuse)
+    try:
+        with pytest.raises(FirmwareError, match=error):
+            sim.run(0.1)
+    finally:
+        sim.board.bus.close()
+
+
+def test_an_empty_spi_sequence_clocks_nothing(tmp_path):
+    """spi_sequence with no words (an empty DMA list): nothing happens and no time passes — it was an IndexError
+    from inside the bench."""
+    sim = _sim(tmp_path, "b->hal->spi_sequence(b->hal->ctx, w, mi, 0);")
+    try:
+        sim.run(0.1)
+        assert 0.1 <= sim.board.t < 0.11
+    finally:
+        sim.board.bus.close()
