@@ -457,7 +457,9 @@ class CoSim:
     def _raise(self):
         if self.board.error is not None:
             e, self.board.error = self.board.error, None
-            if isinstance(e, ActionError):  # a test's own action: its message says which and why
+            # a test's own action (its message says which and why), or Ctrl-C (KeyboardInterrupt) or SystemExit in a
+            # HAL call: as it came
+            if isinstance(e, ActionError) or not isinstance(e, Exception):
                 raise e
             what = str(e) if isinstance(e, ValueError) else repr(e)  # (a ValueError: the firmware's call refused)
             raise FirmwareError(f"the firmware's HAL call {self.board.error_in}: {what}") from e

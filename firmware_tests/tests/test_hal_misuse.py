@@ -54,3 +54,20 @@ def test_an_empty_spi_sequence_clocks_nothing(tmp_path):
         assert 0.1 <= sim.board.t < 0.11
     finally:
         sim.board.bus.close()
+
+
+def test_ctrl_c_during_a_hal_call_is_a_keyboard_interrupt_from_run(tmp_path):
+    """Ctrl-C while the firmware is inside one of the bench's HAL calls (a SPI transfer, a delay: where a run spends
+    its time) reaches run's caller as the KeyboardInterrupt it is — it was a FirmwareError wrapping it, which a
+    program ending on Ctrl-C with its usual status took for a firmware fault."""
+    import signal
+
+    board = VirtualBoard(default_sensors(1))
+    sim = CoSim(board)
+    board.at(0.05, lambda board: signal.raise_signal(signal.SIGINT))  # (here: inside the HAL call at 0.05 s)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sim.run(0.1)
+        assert 0.05 <= board.t < 0.1
+    finally:
+        board.bus.close()
