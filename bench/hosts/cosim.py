@@ -390,8 +390,8 @@ class CoSim:
 
     @property
     def stopped(self) -> bool:
-        """Whether :meth:`stop_step` stopped this co-simulation: it does not run again (its firmware's state was left
-        midway); make a new one."""
+        """Whether this co-simulation was stopped — by :meth:`stop_step`, or its firmware faulting or calling exit in
+        a step: it does not run again (its firmware's state was left midway); make a new one."""
         return bool(self._guard.bt_guard_stopped(self._watch))
 
     def stop_step(self, within_s: float = 1.0) -> str | None:
@@ -431,8 +431,7 @@ class CoSim:
         channels = list(channels)
         payload = BridgeDriver.pattern_bytes(channels)  # (ValueError before the firmware sees anything)
         if self.stopped:
-            raise FirmwareError(f"set_pattern: the co-simulation of {self.library} was stopped by the bench's "
-                                f"watchdog (its firmware hung; its state was left midway): make a new one")
+            raise FirmwareError(f"set_pattern: {self._why_stopped()}")
         result = self.lib.bt_set_pattern(self.state, payload, C.c_size_t(len(payload))) & 0xFF
         if result:
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "

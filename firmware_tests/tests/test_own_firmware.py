@@ -207,7 +207,7 @@ def test_a_stop_requested_between_two_steps_still_ends_run():
         assert list(board.uart_in) == [0]  # the firmware did not run at all: its byte is still waiting
         with pytest.raises(FirmwareError, match="stopped by the bench's watchdog .* make a new one"):
             sim.run(0.002)  # for good: its firmware's state was left midway
-        with pytest.raises(FirmwareError, match=r"set_pattern: the co-simulation of .* was stopped by the bench's "
+        with pytest.raises(FirmwareError, match=r"set_pattern: the firmware's bt_step was stopped by the bench's "
                                                 r"watchdog .* make a new one"):
             sim.set_pattern(["PDC"])
     finally:
