@@ -21,29 +21,50 @@ pytestmark = pytest.mark.firmware
 STEP = "void bt_step(bt_bridge *b) {\n    serve_host(b);\n"
 assert STEP in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_step changed"
 
-#: a process that builds a firmware whose bt_step runs ``LOOP`` once 20 ms of virtual time have passed, runs it in a
-#: thread, lets it hang for 0.3 s, asks the watchdog to stop it (within 10 s) and says what came of it; then a new
-#: thread allocates and writes through C stdio, and the process ends (flushing every C stream)
-CHILD = textwrap.dedent("""
-    import ctypes, sys, threading, time
+#: C declarations put before the reference firmware's source in every firmware these cases build
+HEAD = ("#include <assert.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n#include <unistd.h>\n"
+        "char *volatile sink;\nFILE *out;\nint *volatile nowhere;\nvolatile size_t length;\n")
+#: what every case's process starts with: ``firmware(extra)`` builds the reference firmware running ``extra`` (C) in
+#: every bt_step from 20 ms of virtual time on, as fw.c in the folder its last argument names; ``HANG``: a loop calling
+#: no HAL function; ``start(sim)`` runs 1 s of it in a thread: (the thread, the FirmwareErrors it ended with)
+PRELUDE = textwrap.dedent("""
+    import ctypes, signal, sys, threading, time
     from pathlib import Path
     from bench.errors import FirmwareError
+    from bench.hosts import cosim
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
-    loop, folder = sys.argv[1], Path(sys.argv[2])
-    src = folder / "fw.c"
-    src.write_text("#include <stdio.h>\\n#include <stdlib.h>\\n#include <unistd.h>\\n"
-                   "char *volatile sink;\\nFILE *out;\\n"
-                   + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
-                       STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + loop + "\\n    }\\n"))
-    sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
-    ended = []
-    def run():
-        try:
-            sim.run(1.0)
-        except FirmwareError as e:
-            ended.append(str(e))
-    thread = threading.Thread(target=run, daemon=True)
-    thread.start()
+    folder = Path(sys.argv[-1])
+    HANG = "for (volatile unsigned long k = 0;; k++) { }"
+    def firmware(extra):
+        src = folder / "fw.c"
+        src.write_text(HEAD + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
+            STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + extra + "\\n    }\\n"))
+        return build_firmware([src], out_dir=folder / "out")
+    def start(sim):
+        ended = []
+        def run():
+            try:
+                sim.run(1.0)
+            except FirmwareError as e:
+                ended.append(str(e))
+        thread = threading.Thread(target=run, daemon=True)
+        thread.start()
+        return thread, ended
+""").replace("STEP", repr(STEP)).replace("HEAD", repr(HEAD))
+
+
+def _run(tmp_path, body: str, *args: str, python=(), timeout_s: float = 120) -> subprocess.CompletedProcess:
+    """Run :data:`PRELUDE` + ``body`` in a process of its own, with ``args`` then ``tmp_path`` as arguments."""
+    return subprocess.run([sys.executable, *python, "-c", PRELUDE + textwrap.dedent(body), *args, str(tmp_path)],
+                          capture_output=True, text=True, timeout=timeout_s)
+
+
+#: a firmware whose bt_step runs its first argument, run in a thread, left to hang for 0.3 s, then stopped by the
+#: watchdog (within 10 s), saying what came of it; then a new thread allocates and writes through C stdio, and the
+#: process ends (flushing every C stream)
+CHILD = """
+    sim = CoSim(VirtualBoard(default_sensors(1)), firmware(sys.argv[1]))
+    thread, ended = start(sim)
     time.sleep(0.3)
     print("stop_step:", sim.stop_step(within_s=10), flush=True)
     thread.join(10)
@@ -59,12 +80,7 @@ CHILD = textwrap.dedent("""
         after.start()
         after.join()
         print("after: malloc and stdio in a new thread", flush=True)
-""").replace("STEP", repr(STEP))
-
-
-def _child(tmp_path, loop: str, timeout_s: float = 120):
-    return subprocess.run([sys.executable, "-c", CHILD, loop, str(tmp_path)], capture_output=True, text=True,
-                          timeout=timeout_s)
+"""
 
 
 @pytest.mark.parametrize("loop", [
@@ -76,7 +92,7 @@ def test_a_firmware_hung_in_a_c_library_loop_is_stopped_and_the_process_goes_on(
     stopped — the signal taken only when it lands in the firmware's own code — and the process goes on: a new
     thread allocates and writes through C stdio, and the process exits (flushing every C stream, the firmware's
     too).  Jumping wherever the signal landed left the FILE's lock held: the process never exited."""
-    r = _child(tmp_path, loop)
+    r = _run(tmp_path, CHILD, loop)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "stop_step: None\n" in r.stdout
     assert "thread ended: True [\"the firmware's bt_step was stopped by the bench's watchdog at virtual time 0.02" \
@@ -87,7 +103,7 @@ def test_a_firmware_hung_in_a_c_library_loop_is_stopped_and_the_process_goes_on(
 def test_a_firmware_blocked_in_a_c_library_call_is_reported_where_it_is_not_jumped_out_of(tmp_path):
     """A bt_step blocked for good in read() on a pipe nobody writes: the watchdog never finds it in the firmware's
     code, so does not leave it, and says where it is — the C library, read — within the time it was given."""
-    r = _child(tmp_path, "int fds[2]; char c; if (pipe(fds) == 0) { (void)read(fds[0], &c, 1); }")
+    r = _run(tmp_path, CHILD, "int fds[2]; char c; if (pipe(fds) == 0) { (void)read(fds[0], &c, 1); }")
     assert r.returncode == 0, r.stdout + r.stderr
     assert "stop_step: it is outside the firmware's code, in libc.so.6 (read), which the watchdog does not jump out " \
            "of (a lock held there would deadlock the process)\n" in r.stdout, r.stdout
@@ -96,16 +112,8 @@ def test_a_firmware_blocked_in_a_c_library_call_is_reported_where_it_is_not_jump
 
 #: two co-simulations in two threads: one hangs (a loop calling no HAL function), one streams; stopping the first
 #: leaves the second's run untouched — its UART output is the same as a run on its own
-TWO = textwrap.dedent("""
-    import sys, threading, time
-    from pathlib import Path
-    from bench.errors import FirmwareError
-    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
+TWO = """
     from bench.hosts.driver import CMD_START, encode
-    folder = Path(sys.argv[1])
-    src = folder / "hang.c"
-    src.write_text((FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
-        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) { for (volatile unsigned long k = 0;; k++) { } }\\n"))
     def streaming():
         out = bytearray()
         board = VirtualBoard(default_sensors(1), uart_out=out.extend)
@@ -124,7 +132,7 @@ TWO = textwrap.dedent("""
             ended[name] = str(e)
     alone, alone_out = streaming()
     run("alone", alone, 0.5)
-    hung = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
+    hung = CoSim(VirtualBoard(default_sensors(1)), firmware(HANG))
     other, other_out = streaming()
     threads = [threading.Thread(target=run, args=("hung", hung, 1.0)),
                threading.Thread(target=run, args=("other", other, 0.5))]
@@ -138,13 +146,13 @@ TWO = textwrap.dedent("""
     print("other:", ended.get("other"), "same output:", bytes(other_out) == bytes(alone_out),
           "streamed:", len(alone_out) > 1000)
     print("stopped:", hung.stopped, other.stopped)
-""").replace("STEP", repr(STEP))
+"""
 
 
 def test_two_co_simulations_in_two_threads_stop_only_what_was_asked(tmp_path):
     """Stopping one co-simulation's hung firmware leaves another, running in another thread at the same time, as it
     was: its run ends as usual with the same bytes streamed as on its own, and only the first is stopped."""
-    r = subprocess.run([sys.executable, "-c", TWO, str(tmp_path)], capture_output=True, text=True, timeout=300)
+    r = _run(tmp_path, TWO, timeout_s=300)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "stop_step: None\n" in r.stdout
     assert "hung: the firmware's bt_step was stopped by the bench's watchdog" in r.stdout
@@ -154,12 +162,7 @@ def test_two_co_simulations_in_two_threads_stop_only_what_was_asked(tmp_path):
 #: the guard's signal and another handler in the same process: one installed first is refused by name (never
 #: replaced); one installed after the bench's (here the default action back, which would end the process if the
 #: signal came) makes the watchdog say so and send nothing
-OTHER_HANDLER = textwrap.dedent("""
-    import signal, sys, threading, time
-    from pathlib import Path
-    from bench.errors import FirmwareError
-    from bench.hosts import cosim
-    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
+OTHER_HANDLER = """
     mine = lambda *a: None
     signal.signal(cosim.GUARD_SIGNAL, mine)
     try:
@@ -168,23 +171,18 @@ OTHER_HANDLER = textwrap.dedent("""
         print("refused:", e)
     print("kept:", signal.getsignal(cosim.GUARD_SIGNAL) is mine)
     signal.signal(cosim.GUARD_SIGNAL, signal.SIG_DFL)
-    folder = Path(sys.argv[1])
-    src = folder / "hang.c"
-    src.write_text((FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
-        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) { for (volatile unsigned long k = 0;; k++) { } }\\n"))
-    sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
-    threading.Thread(target=sim.run, args=(1.0,), daemon=True).start()
+    sim = CoSim(VirtualBoard(default_sensors(1)), firmware(HANG))
+    start(sim)
     time.sleep(0.3)
     signal.signal(cosim.GUARD_SIGNAL, signal.SIG_DFL)
     print("stop_step:", sim.stop_step(within_s=1), flush=True)
     time.sleep(0.3)
     print("alive", flush=True)
-""").replace("STEP", repr(STEP))
+"""
 
 
 def test_a_handler_of_the_guards_signal_elsewhere_in_the_process_is_never_taken_over(tmp_path):
-    r = subprocess.run([sys.executable, "-c", OTHER_HANDLER, str(tmp_path)], capture_output=True, text=True,
-                       timeout=120)
+    r = _run(tmp_path, OTHER_HANDLER)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "refused: signal SIGRTMIN+3 (" in r.stdout and ") already has a handler in this process (installed by " \
            "signal.signal or by a library): the firmware watchdog needs a signal of its own; set " \
@@ -195,62 +193,41 @@ def test_a_handler_of_the_guards_signal_elsewhere_in_the_process_is_never_taken_
     assert r.stdout.endswith("alive\n")  # (the default action of a real-time signal ends the process)
 
 
+#: a firmware that writes "!" on its UART (a HAL call the bench holds until told) then loops calling no HAL function:
+#: the watchdog gives up while the call is held, then the call is let go
+IN_HAL = """
+    release, entered = threading.Event(), threading.Event()
+    def uart_out(data):
+        if data == b"!":
+            entered.set()
+            release.wait(30)
+    sim = CoSim(VirtualBoard(default_sensors(1), uart_out=uart_out),
+                firmware('b->hal->uart_write(b->hal->ctx, (const uint8_t *)"!", 1);' + HANG))
+    thread, ended = start(sim)
+    print("entered:", entered.wait(30), flush=True)
+    print("stop_step:", sim.stop_step(within_s=0.2), flush=True)
+    release.set()
+    thread.join(10)
+    print("thread ended:", not thread.is_alive(), ended, flush=True)
+    print("stop_step:", sim.stop_step(), flush=True)
+"""
+
+
 def test_a_step_stopped_inside_a_hal_call_is_left_as_the_call_returns(tmp_path):
     """The watchdog gives up on a step inside one of the bench's HAL calls (uart_write, held by the bench): it says so
     and sends nothing then.  As that call returns the step is left — before the firmware's next instruction, here a
     loop that calls no HAL function and would spin for good."""
-    import threading
-
-    from bench.errors import FirmwareError
-    from bench.hosts.cosim import CoSim, VirtualBoard, build_firmware, default_sensors
-
-    src = tmp_path / "fw.c"
-    src.write_text((FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
-        STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\n"
-                     "        b->hal->uart_write(b->hal->ctx, (const uint8_t *)\"!\", 1);\n"
-                     "        for (volatile unsigned long k = 0;; k++) { }\n    }\n"))
-    release, entered, ended = threading.Event(), threading.Event(), []
-
-    def uart_out(data: bytes) -> None:
-        if data == b"!":
-            entered.set()
-            release.wait(30)
-
-    sim = CoSim(VirtualBoard(default_sensors(1), uart_out=uart_out), build_firmware([src], out_dir=tmp_path / "out"))
-
-    def run():
-        try:
-            sim.run(1.0)
-        except FirmwareError as e:
-            ended.append(str(e))
-
-    thread = threading.Thread(target=run, daemon=True)
-    thread.start()
-    try:
-        assert entered.wait(30)
-        assert sim.stop_step(within_s=0.2) == ("it is inside the bench's HAL function uart_write: its step is left as "
-                                               "that returns")
-    finally:
-        release.set()
-    thread.join(10)
-    assert not thread.is_alive() and ended and "stopped by the bench's watchdog" in ended[0]
-    assert sim.stop_step() is None
-    sim.board.bus.close()
+    r = _run(tmp_path, IN_HAL)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.stdout.startswith("entered: True\nstop_step: it is inside the bench's HAL function uart_write: its step "
+                               "is left as that returns\nthread ended: True [\"the firmware's bt_step was stopped by "
+                               "the bench's watchdog"), r.stdout
+    assert r.stdout.endswith("stop_step: None\n")
 
 
-#: a firmware that faults (``FAULT``) once 20 ms of virtual time have passed, run twice, then a new co-simulation
-CRASH = textwrap.dedent("""
-    import sys
-    from pathlib import Path
-    from bench.errors import FirmwareError
-    from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
-    fault, folder = sys.argv[1], Path(sys.argv[2])
-    src = folder / "crash.c"
-    src.write_text("#include <assert.h>\\n#include <stdlib.h>\\n#include <string.h>\\n#include <unistd.h>\\n"
-                   "int *volatile nowhere;\\nvolatile size_t length;\\n"
-                   + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
-                       STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + fault + "\\n    }\\n"))
-    sim = CoSim(VirtualBoard(default_sensors(1)), build_firmware([src], out_dir=folder / "out"))
+#: a firmware whose bt_step runs its first argument (a fault, an exit), run twice; then a new co-simulation
+CRASH = """
+    sim = CoSim(VirtualBoard(default_sensors(1)), firmware(sys.argv[1]))
     for _ in range(2):
         try:
             sim.run(0.1)
@@ -258,15 +235,14 @@ CRASH = textwrap.dedent("""
             print("error:", e, flush=True)
     CoSim(VirtualBoard(default_sensors(1))).run(0.05)
     print("a new co-simulation runs", flush=True)
-""").replace("STEP", repr(STEP))
+"""
 
 
 def test_a_firmware_that_crashes_in_its_own_code_is_an_error_naming_the_fault_and_the_process_goes_on(tmp_path):
     """A bt_step writing through a null pointer: SIGSEGV in the firmware's own code ends its step, not the process —
     run raises a FirmwareError naming the signal, the library and function, the address touched and the virtual
     time (also on the next run: the co-simulation is stopped), and a new co-simulation runs."""
-    r = subprocess.run([sys.executable, "-c", CRASH, "*nowhere = 1;", str(tmp_path)], capture_output=True, text=True,
-                       timeout=120)
+    r = _run(tmp_path, CRASH, "*nowhere = 1;")
     assert r.returncode == 0, r.stdout + r.stderr
     error = ("error: the firmware crashed in bt_step at virtual time 0.020425 s: SIGSEGV in libbtbridge.so (bt_step) "
              "(touching address 0x0); the bench left its step and goes on; this co-simulation does not run again: "
@@ -278,8 +254,7 @@ def test_a_crash_outside_the_firmwares_code_goes_to_the_handler_that_was_there_b
     """strlen(NULL) from the firmware faults inside the C library, not the firmware's code: the bench does not leave
     the step from there; the handler that was there before takes the fault — here Python's faulthandler, which
     names it and ends the process — rather than the process hanging or carrying on with a corrupt C library."""
-    r = subprocess.run([sys.executable, "-X", "faulthandler", "-c", CRASH, "length = strlen((const char *)nowhere);",
-                        str(tmp_path)], capture_output=True, text=True, timeout=120)
+    r = _run(tmp_path, CRASH, "length = strlen((const char *)nowhere);", python=("-X", "faulthandler"))
     assert r.returncode < 0 and "Fatal Python error: Segmentation fault" in r.stderr, r.stdout + r.stderr
     assert "a new co-simulation runs" not in r.stdout
 
@@ -292,10 +267,10 @@ def test_a_firmware_calling_exit_abort_or_failing_an_assert_ends_its_step_not_th
     """A firmware built by the bench that calls exit, _exit or abort, or fails an assert, in bt_step: the process
     (a user's pytest run) goes on; run raises a FirmwareError saying what was called (the assert's condition and
     place) and when, and a new co-simulation runs.  It ended the process, with nothing said."""
-    r = subprocess.run([sys.executable, "-c", CRASH, call, str(tmp_path)], capture_output=True, text=True, timeout=120)
+    r = _run(tmp_path, CRASH, call)
     assert r.returncode == 0, r.stdout + r.stderr
-    source = (tmp_path / "crash.c").read_text().splitlines()
-    said = said.format(src=tmp_path / "crash.c", line=1 + next(k for k, text in enumerate(source) if call in text))
+    source = (tmp_path / "fw.c").read_text().splitlines()
+    said = said.format(src=tmp_path / "fw.c", line=1 + next(k for k, text in enumerate(source) if call in text))
     error = (f"error: the firmware called {said} at virtual time 0.020425 s, which would have ended the process: the "
              f"bench left its step and goes on; this co-simulation does not run again: make a new one\n")
     assert r.stdout == 2 * error + "a new co-simulation runs\n", r.stdout
