@@ -292,7 +292,8 @@ def biotac_sensor(request):
         __tracebackhide__ = True
         _check_keywords("biotac_sensor", kw, allowed)
         _check_values("biotac_sensor", stimuli=stimuli, seed=seed)
-        spi = kw.pop("spi", None) or session_spi
+        spi = kw.pop("spi", None)  # None: not given (the session's --biotac-spi, else the scene's or software)
+        spi = session_spi if spi is None else spi
         if spi is not None and spi not in SPI_SIDES:
             _fail(f"biotac_sensor(): spi = {spi!r}: \"software\" (the Python model) or \"rtl\" (the Verilog twin)")
         kw.update(_given(stimuli=stimuli, channels=channels, seed=None if seed is None else int(seed), unit=unit))

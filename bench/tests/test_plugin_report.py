@@ -274,3 +274,13 @@ def test_biotac_sensor_over_the_rtl_answers_as_the_software_model_and_takes_its_
     with pytest.raises(pytest.fail.Exception, match=re.escape('''biotac_sensor(): spi = 'verilog': "software" (the '''
                                                               '''Python model) or "rtl" (the Verilog twin)''')):
         biotac_sensor(spi="verilog")
+
+
+@pytest.mark.parametrize("spi", ["", 0, False])
+def test_biotac_sensor_refuses_an_spi_side_that_is_no_name_rather_than_running_the_software_model(biotac_sensor,
+                                                                                                    spi):
+    """``biotac_sensor(spi="")`` (or 0, False) names the two sides, as ``biotac_bridge(spi="")`` does; it had been
+    taken for "not given" and ran the software model without a word."""
+    with pytest.raises(pytest.fail.Exception, match=re.escape(f'biotac_sensor(): spi = {spi!r}: "software" (the '
+                                                              f'Python model) or "rtl" (the Verilog twin)')):
+        biotac_sensor(spi=spi)
