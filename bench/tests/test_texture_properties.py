@@ -363,8 +363,10 @@ def test_instants_going_back_name_the_array_and_the_index(tmp_path, key):
     t[7:] -= t[7] - t[2]  # sample 7 is stamped as sample 2 was: back by five intervals
     a[key] = t
     with pytest.raises(tp.RecordingError, match=rf"x\.npz: .*not strictly increasing: {key}\[7\] = .* after "
-                                                rf"{key}\[6\] = "):
+                                                rf"{key}\[6\] = ") as e:
         tp.load_npz(_write(tmp_path / "x.npz", **a))
+    # the instants as numbers are written (0.0123 s), not as numpy's repr of its scalar (np.float64(0.0123) s)
+    assert f"{key}[7] = {float(t[7])!r} s after {key}[6] = {float(t[6])!r} s" in str(e.value), str(e.value)
 
 
 def test_a_pac_gap_inside_the_trial_leaves_the_spectral_properties_undefined_and_traction_alone(tmp_path):

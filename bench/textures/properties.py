@@ -125,8 +125,8 @@ def _series(name: str, key: str, t: Any, x: Any) -> tuple[np.ndarray, np.ndarray
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:
         k = int(back[0]) + 1
-        raise RecordingError(f"{name}: instants are not strictly increasing: {key}[{k}] = {t[k]!r} s after "
-                             f"{key}[{k - 1}] = {t[k - 1]!r} s (a restarted logger, or frames out of order?)")
+        raise RecordingError(f"{name}: instants are not strictly increasing: {key}[{k}] = {float(t[k])!r} s after "
+                             f"{key}[{k - 1}] = {float(t[k - 1])!r} s (a restarted logger, or frames out of order?)")
     return t, x
 
 
