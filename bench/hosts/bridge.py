@@ -42,7 +42,7 @@ import time
 
 import numpy as np
 
-from bench.errors import FirmwareError
+from bench.errors import BenchError, FirmwareError
 from bench.hosts.cosim import CoSim, VirtualBoard, firmware_library, run_action
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
@@ -269,8 +269,9 @@ class FirmwareBench:
             self.board.bus.close()
             raise FirmwareError(f"{hung}; the watchdog stopped it (its thread ended; its port and SPI bus are closed)")
         self.board.bus.close()
-        if self.error is not None:
-            raise RuntimeError(f"the firmware bench stopped with an error: {self.error!r}") from self.error
+        if self.error is not None:  # a bench's own error (a test's action, the firmware) in its words, else the repr
+            shown = str(self.error) if isinstance(self.error, BenchError) else repr(self.error)
+            raise RuntimeError(f"the firmware bench stopped with an error: {shown}") from self.error
 
     def __enter__(self):
         return self.start()

@@ -196,6 +196,8 @@ def test_an_action_that_raises_stops_the_bench_naming_the_action_its_instant_and
         bench.stop()
     assert isinstance(stopped.value.__cause__, ActionError), repr(stopped.value.__cause__)
     assert "HAL call" not in str(stopped.value)  # the test's action, not the firmware's HAL, failed
+    # its message as written, not inside the repr of an ActionError('…') (which escaped its quotes)
+    assert str(stopped.value) == f"the firmware bench stopped with an error: {stopped.value.__cause__}"
 
 
 def test_a_slide_is_described_by_its_textures_name_not_by_the_whole_texture():
