@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 #: The sensors and benches a test's factories made, in order: (fixture, the call as written, the object).
@@ -40,10 +41,13 @@ def remember(node, fixture: str, args: tuple, kw: dict, made) -> None:
 
 
 def _value_text(value) -> str:
-    """A stimulus's field: numbers, strings and lists as their repr; an object inside it (a slide's texture, its
-    skin) by its kind and, if it has one, its name (``Texture('foam')``, ``Skin(…)``)."""
+    """A stimulus's field: numbers, strings and lists as their repr — a numpy number as the Python number it equals
+    (``0.3``, not ``np.float64(0.3)``, nor a float32's kind alone); an object inside it (a slide's texture, its skin)
+    by its kind and, if it has one, its name (``Texture('foam')``, ``Skin(…)``)."""
     if isinstance(value, (bool, int, float, str, list, tuple)):
-        return repr(value)
+        return repr(value.item() if isinstance(value, np.generic) else value)
+    if isinstance(value, np.generic) and isinstance(value.item(), (bool, int, float)):
+        return repr(value.item())
     name = getattr(value, "name", None)
     return f"{type(value).__name__}({name!r})" if isinstance(name, str) else f"{type(value).__name__}(…)"
 

@@ -215,6 +215,19 @@ def test_a_slide_is_described_by_its_textures_name_not_by_the_whole_texture():
     assert text.endswith(", skin=Skin(…))") and len(text) <= MAX_VALUE_CHARS, text
 
 
+def test_a_stimulus_built_from_numpy_numbers_is_described_by_their_values():
+    """A test that builds its stimuli from numpy arrays reads the numbers in the report as if it had typed them
+    (``peak_N=1.5``), not numpy's ``np.float64(1.5)`` nor ``float32(…)``, which hid the value."""
+    import numpy as np
+
+    from bench.pytest_plugin.hooks import stimulus_text
+    from emulator.stimuli import Press, Tap
+
+    assert stimulus_text(Tap(np.float64(0.3), np.float32(1.5), np.float16(0.25))) == stimulus_text(Tap(0.3, 1.5, 0.25))
+    assert stimulus_text(Press(*np.array([0.1, 1.0, 0.5, 2.0]))) == stimulus_text(Press(0.1, 1.0, 0.5, 2.0))
+    assert stimulus_text(Tap(np.int64(1), np.uint8(3))) == stimulus_text(Tap(1, 3))
+
+
 def test_the_serial_port_has_no_modem_lines_as_the_readme_says(biotac_serial_port):
     """README (Serial link): pyserial opens the pty and reads frames, but setting DTR or RTS, or reading CD, CTS or
     DSR, fails with ENOTTY — a driver that toggles DTR meets that here, not on a USB bridge."""
