@@ -140,7 +140,7 @@ def pytest_addoption(parser) -> None:
 def pytest_runtest_makereport(item, call):
     """A failing test's report gains the ``biotac`` section — inside its traceback's representation where it has one,
     so that JUnit XML's ``<failure>`` text holds it too, else beside it; after the call the text is also the test's
-    property ``biotac`` (JUnit XML)."""
+    property ``biotac`` (JUnit XML); after the teardown what the test made is no longer held (:data:`MADE`)."""
     report = yield
     text = description(item)
     if text is not None:
@@ -152,4 +152,6 @@ def pytest_runtest_makereport(item, call):
                 report.sections.append((title, text))
         if report.when == "call":
             item.user_properties.append(("biotac", text))
+    if report.when == "teardown" and MADE in item.stash:  # described for the last time: what the test made is let
+        del item.stash[MADE]  # go (pytest keeps every item to the session's end, and every sensor and bench it held)
     return report

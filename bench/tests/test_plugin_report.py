@@ -215,6 +215,37 @@ def test_a_slide_is_described_by_its_textures_name_not_by_the_whole_texture():
     assert text.endswith(", skin=Skin(…))") and len(text) <= MAX_VALUE_CHARS, text
 
 
+KEPT = '''
+import gc
+import weakref
+
+import pytest
+
+MADE = []
+
+
+@pytest.mark.parametrize("i", range(3))
+def test_makes(biotac_sensor, biotac_bridge, i):
+    MADE.extend(weakref.ref(x) for x in (biotac_sensor(), biotac_sensor().sensor, biotac_bridge()))
+    assert i != 1, "fails on purpose: described, then let go too"
+
+
+def test_after():
+    gc.collect()
+    assert len(MADE) == 9 and [r() for r in MADE] == [None] * 9
+'''
+
+
+def test_what_a_test_made_is_let_go_once_its_report_is_made(pytester):
+    """pytest keeps every test item to the session's end: the sensors and benches a test's factories made, kept on
+    its item for the report, were kept with it (every sensor of a suite in memory at once, ~0.3 MB each and more
+    with its signals); once the test's teardown is reported they are let go, failed or passed."""
+    pytester.makepyfile(test_user=KEPT)
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider")
+    result.assert_outcomes(passed=3, failed=1)
+    result.stdout.fnmatch_lines(["*Captured biotac call*"])
+
+
 def test_a_stimulus_built_from_numpy_numbers_is_described_by_their_values():
     """A test that builds its stimuli from numpy arrays reads the numbers in the report as if it had typed them
     (``peak_N=1.5``), not numpy's ``np.float64(1.5)`` nor ``float32(…)``, which hid the value."""
