@@ -16,7 +16,8 @@ friction against the silicone skin, the texture's Young's modulus, thermal mater
 The file is validated completely before anything is listed; every problem names the texture, the field, the
 value and what is allowed.  --json prints the textures in the file's own fields and units; saved as a .json
 file, that list is a library --library reads back (a library with groups of its own, [[group]] tables, prints
-as {"group": [...], "texture": [...]}, which reads back too).  Edit it (or a copy of the TOML) to try surfaces of your own,
+as {"group": [...], "texture": [...]}, which reads back too, as does --show N --json of a texture of
+such a group, printed with its group).  Edit it (or a copy of the TOML) to try surfaces of your own,
 named the same way everywhere: a scene slides over them with [scene] library = "FILE", the texture experiment
 with [experiment] library = "FILE" (each relative to the file that names it), texture-sweep --library FILE
 (relative to the current folder).  A scene's record.json and report.md, and the trials.json of texture-sweep and
@@ -118,7 +119,11 @@ def _cmd_textures(a) -> int:
             t = library.texture(a.show)
         except UnknownTextureError as e:
             raise ValueError(e.for_option("--show")) from None
-        print(strict_json(texture_record(t), indent=2, ensure_ascii=False) if a.json else _show(t))
+        if not a.json:
+            print(_show(t))
+            return 0
+        own = tuple(g for g in library.groups if g[0] == t.group)  # its group, if the library's own: declared too
+        print(strict_json(library_record([t], own) if own else texture_record(t), indent=2, ensure_ascii=False))
         return 0
     items = list(lib.values())
     if a.group is not None:  # (an empty --group "" is refused, not taken as no filter)

@@ -51,6 +51,20 @@ def test_textures_lists_a_group_of_its_own_and_its_json_reads_back(tmp_path, cap
     assert L.load_library(back) == L.load_library(EXAMPLE)
 
 
+def test_one_texture_of_a_group_of_its_own_printed_as_json_reads_back(tmp_path, capsys):
+    """``--show N --json`` of a texture in one of the library's own groups declares that group beside it
+    ({"group": [its group], "texture": [it]}), so the file reads back as a library (a bare texture numbered 200 was
+    refused: a number in no group, a group not D's); one of D's textures is still printed alone."""
+    assert cli.main(["textures", "--library", str(EXAMPLE), "--show", "T200", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["group"] == [{"name": "3D prints", "first": 200, "last": 249}]
+    back = tmp_path / "one.json"
+    back.write_text(json.dumps(printed))
+    assert L.load_library(back) == {200: L.load_library(EXAMPLE)[200]}
+    assert cli.main(["textures", "--show", "2", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["number"] == 2
+
+
 GROUPS_AND_ONE = """\
 [[group]]
 name = "3D prints"
