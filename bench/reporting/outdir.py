@@ -355,7 +355,7 @@ class OutFile:
         the leftovers; :class:`OutDirError` naming ``flag`` and the path if the lock is held (by another
         ``command``: ``what`` is the file, for the refusal: "this report") or the folder cannot be made."""
         path = Path(path)
-        out = cls(path, f"{flag} {escaped(os.fspath(path))}", command)
+        out = cls(path, folder_named(path, flag), command)  # (a file named as a folder is: --junit PATH)
         _make_folder(path.parent, out.where, out._made)
         try:
             out._lock_fd = lock_exclusively(out._lock_path, out.where,
