@@ -120,6 +120,10 @@ _ALL = np.zeros(0, dtype=np.int64)  # (_interpolate: every position)
 MAX_BLOCK_SAMPLES = 2**18
 
 
+#: the physics block a sensor computes at once unless told otherwise (s; results do not depend on it)
+DEFAULT_BLOCK_S = 2.0
+
+
 def _block_samples(block_s: float, fs: float) -> int:
     """Grid samples per physics block for a block of ``block_s`` s (finite, > 0: checked by :class:`Sensor`) on a
     grid of ``fs`` Hz: at least 1, at most :data:`MAX_BLOCK_SAMPLES`."""
@@ -178,7 +182,7 @@ class Sensor:
 
     def __init__(self, params: SensorParams | None = None, stimuli=(), channels_read=("PAC", "PDC"),
                  fidelity: str | Fidelity = "default", seed: int = 0, noise: NoiseSources = NoiseSources(),
-                 block_s: float = 2.0, start_s: float = 0.0, faults: dict | None = None, record_signals=(),
+                 block_s: float = DEFAULT_BLOCK_S, start_s: float = 0.0, faults: dict | None = None, record_signals=(),
                  variant: str = ch.DEFAULT_VARIANT):
         self.variant = ch.variant(variant)  # ValueError naming the allowed variants
         if params is not None and not isinstance(params, SensorParams):

@@ -28,7 +28,7 @@ from bench.running.sampler import Sampler
 from bench.running.slides import SlideRecorder
 from bench.scenes.scene import Scene
 from emulator.channels import ALL_CHANNEL_INDEX
-from emulator.sensor import Sensor
+from emulator.sensor import DEFAULT_BLOCK_S, Sensor
 from emulator.spi.peripheral import SoftwarePeripheral
 
 #: Every channel any variant has (E1..E24), by index: a BioTac SP's E20..E24 are named too.
@@ -77,7 +77,7 @@ class Recording:
         return self.simulated_s / self.wall_s if self.wall_s > 0 else float("inf")
 
 
-def build_sensor(scene: Scene, block_s: float = 2.0) -> Sensor:
+def build_sensor(scene: Scene, block_s: float = DEFAULT_BLOCK_S) -> Sensor:
     """Sensor 1 of ``scene`` (``scene.for_sensor(k)`` for another), carrying its unit's serial as ``.serial``
     (None for the nominal unit: the host then sees the port's own default serial, different per sensor)."""
     sensor = Sensor(params=scene.params, stimuli=scene.stimuli, channels_read=scene.channels,
@@ -152,7 +152,7 @@ def make_chunk(parts: dict) -> Chunk:
 
 
 def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
-              sinks=(), should_stop=None, block_s: float = 2.0) -> Recording:
+              sinks=(), should_stop=None, block_s: float = DEFAULT_BLOCK_S) -> Recording:
     """Run every sensor of ``scene``: sensor 1 as :func:`run_one_sensor` (with ``sinks``), then sensors 2..N, each
     into ``Recording.sensors[k]`` (samples kept in memory for scenes up to :data:`KEEP_SAMPLES_MAX_S`); every
     sensor computes its physics in blocks of ``block_s`` (s), which changes no sample."""
@@ -170,7 +170,7 @@ def run_scene(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep
 
 
 def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *, keep_samples: bool | None = None,
-                   sinks=(), should_stop=None, block_s: float = 2.0) -> Recording:
+                   sinks=(), should_stop=None, block_s: float = DEFAULT_BLOCK_S) -> Recording:
     """Run ``scene`` to its end, an error, or ``should_stop()`` (checked at every chunk boundary).
 
     ``keep_samples``: hold every sample in ``Recording.channels`` (default: only for scenes up to
