@@ -27,6 +27,12 @@ SCENE_DESCRIPTIONS = {
     "press": "1 × Touch: 1 N over E17 from 0.3 s (0.2 s ramps, 0.6 s hold)",
 }
 
+def is_scene_file(entry: str) -> bool:
+    """Whether a ``campaign --scenes`` entry names a scene file — a path with a folder, or a name ending in
+    ``.toml`` (a file here, else the shipped scene of that name) — rather than one of :data:`SCENE_DESCRIPTIONS`."""
+    return "/" in entry or entry.endswith(".toml")
+
+
 #: the SPI buses a campaign runs over (``campaign --spi``): the software model, or the Verilog RTL in the C++ harness
 SPI_BUSES = ("software", "rtl")
 

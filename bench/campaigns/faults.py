@@ -316,12 +316,14 @@ def _schedule_after_start(board, schedule) -> list:
     return started
 
 
-def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, spi: str = "software",
+def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = 150, spi: str = "software",
              firmware=None) -> dict:
-    """One fault in one scene over the SPI bus ``spi`` ("software" or "rtl") with ``firmware`` (None: the reference
-    one; else FirmwareBench's ``firmware=``: your C sources or library): the verdict (``passed``, ``problem``),
-    what was expected, the bus, and ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or
-    driver is this case's failure, never an exception."""
+    """One fault in one scene — a built-in scene's name, or a scene file
+    (:class:`~bench.campaigns.scene_files.CampaignScene`: its sensor 1 and stimuli, and its own number of frames)
+    — over the SPI bus ``spi`` ("software" or "rtl") with ``firmware`` (None: the reference one; else
+    FirmwareBench's ``firmware=``: your C sources or library): the verdict (``passed``, ``problem``), what was
+    expected, the bus, and ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or driver is
+    this case's failure, never an exception."""
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.cosim import default_sensors
     from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, BridgeDriver, Status
@@ -329,14 +331,19 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
 
     t0 = time.perf_counter()
     problem = None
+    own = not isinstance(scene, str)  # a scene file's
     try:
+        stimuli = scene.stimuli if own else SCENES[scene]
         kw = {"n_sensors": 1, **fault.bench_kw}
         if firmware is not None:
             kw["firmware"] = list(firmware) if isinstance(firmware, tuple) else firmware
         sensor_faults = kw.pop("sensor_faults", None)
-        if sensor_faults:  # the sensors the bench would build, with these faults of their own
-            kw["sensors"] = default_sensors(kw["n_sensors"], SCENES[scene], seed, faults=sensor_faults)
-        fb = FirmwareBench(stimuli=SCENES[scene], seed=seed, spi=spi, **kw)
+        if own:  # the scene's sensor 1 (and its twin), with the fault's own sensor faults
+            kw["sensors"] = scene.sensors(kw["n_sensors"], seed, sensor_faults)
+            frames_wanted = scene.frames
+        elif sensor_faults:  # the sensors the bench would build, with these faults of their own
+            kw["sensors"] = default_sensors(kw["n_sensors"], stimuli, seed, faults=sensor_faults)
+        fb = FirmwareBench(stimuli=stimuli, seed=seed, spi=spi, **kw)
         started = _schedule_after_start(fb.board, fault.schedule)
         with fb:
             drv = BridgeDriver(fb.port)
@@ -362,11 +369,12 @@ def run_case(fault: FaultCase, scene: str, seed: int, frames_wanted: int = 150, 
             if problem is None and not (0 <= pac.min() and pac.max() <= 4095):
                 problem = "out-of-range data reached the caller"
             if problem is None and fault.at_rest:
-                problem = not_at_rest(frames, fb.board.sensors, SCENES[scene], started[0])
+                problem = not_at_rest(frames, fb.board.sensors, stimuli, started[0])
     except Exception as e:  # a crash or hang of the firmware or driver is a failure of the case
         problem = f"{type(e).__name__}: {e}"
-    return {"fault": fault.name, "scene": scene, "seed": seed, "spi": spi, "firmware": firmware_name(firmware),
-            "expected": fault.expected,
+    return {"fault": fault.name, "scene": scene.label if own else scene, "seed": seed, "spi": spi,
+            "firmware": firmware_name(firmware), "expected": fault.expected,
+            **({"scene_file": scene.path} if own else {}),
             "passed": problem is None, "problem": problem, "seconds": time.perf_counter() - t0}
 
 
@@ -380,10 +388,11 @@ def firmware_name(firmware) -> str:
 @dataclass(frozen=True)
 class CaseTask:
     """One case of a campaign as a task: names, a seed and the SPI bus (a fault's schedule holds functions, which do
-    not travel to a worker; the worker looks the fault and scene up by name)."""
+    not travel to a worker; the worker looks the fault and a built-in scene up by name; a scene file travels as its
+    validated scene, :class:`~bench.campaigns.scene_files.CampaignScene`, so every worker runs the same one)."""
 
     fault: str
-    scene: str
+    scene: object  # a built-in scene's name (str) or a CampaignScene
     seed: int
     spi: str = "software"
     firmware: tuple | str | None = None  # None: the reference firmware; your sources (a tuple) or library (a path)
@@ -395,12 +404,13 @@ def run_case_task(task: CaseTask) -> dict:
 
 
 def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTask]:
-    """Every fault × scene × seed over the SPI bus ``spi``, in that order; ValueError for an empty campaign, an
-    unknown name, or a fault the bus cannot carry (:func:`~bench.campaigns.case_names.check_bus`)."""
+    """Every fault × scene × seed over the SPI bus ``spi``, in that order (a scene: a built-in one's name or a
+    :class:`~bench.campaigns.scene_files.CampaignScene`); ValueError for an empty campaign, an unknown name, or a
+    fault the bus cannot carry (:func:`~bench.campaigns.case_names.check_bus`)."""
     faults, scenes, seeds = list(faults), list(scenes), list(seeds)
     if not (faults and scenes and seeds):
         raise ValueError("a campaign needs at least one fault, one scene and one seed (it would pass vacuously)")
-    unknown = [f for f in faults if f not in FAULTS] + [s for s in scenes if s not in SCENES]
+    unknown = [f for f in faults if f not in FAULTS] + [s for s in scenes if isinstance(s, str) and s not in SCENES]
     if unknown:
         raise ValueError(f"unknown fault or scene: {', '.join(map(str, unknown))}")
     check_bus(faults, spi)
@@ -488,7 +498,8 @@ def case_output(r: dict) -> str:
     """What a report's test case shows as its output (``system-out``), passed or failed: the fault, scene, seed, SPI
     bus and firmware it ran, the verdict with what was expected (and the problem, for a failure) and its wall time."""
     verdict = "PASS" if r["passed"] else f"FAIL: {r['problem']}"
-    return (f"fault {r['fault']} in scene {r['scene']}, seed {r['seed']}, over the {r.get('spi', 'software')} SPI bus, "
+    scene = f"{r['scene']} ({r['scene_file']})" if "scene_file" in r else r["scene"]
+    return (f"fault {r['fault']} in scene {scene}, seed {r['seed']}, over the {r.get('spi', 'software')} SPI bus, "
             f"firmware {r.get('firmware', 'reference')}\nexpected: {r['expected']}\n{verdict}\n"
             f"wall time {r['seconds']:.3f} s\n")
 

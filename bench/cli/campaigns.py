@@ -7,14 +7,17 @@ import sys
 from datetime import datetime, timezone
 from pathlib import Path
 
-from bench.campaigns.case_names import FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus
+from bench.campaigns.case_names import (FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus,
+                                        is_scene_file)
 from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
                             say_leftovers, sigterm_like_ctrl_c, whole)
 from bench.tomlfile import spelled
 
 
 def _names(kind: str):
-    """argparse type: ``all`` or a comma-separated list of known fault / scene names."""
+    """argparse type: ``all`` or a comma-separated list of known fault / scene names (scenes: also scene files, a
+    path or a name ending in .toml, :func:`~bench.campaigns.case_names.is_scene_file`; read when the campaign
+    starts)."""
 
     def parse(text: str) -> list[str]:
         known = FAULT_EXPECTED if kind == "faults" else SCENE_DESCRIPTIONS
@@ -24,9 +27,11 @@ def _names(kind: str):
         if not all(names):
             raise argparse.ArgumentTypeError(f"{spelled(text)}: comma-separated names (or all); known: "
                                              f"{', '.join(known)}")
-        bad = [n for n in names if n not in known]
+        bad = [n for n in names if n not in known and not (kind == "scenes" and is_scene_file(n))]
         if bad:
-            raise argparse.ArgumentTypeError(f"unknown {', '.join(bad)}; known: {', '.join(known)}")
+            files = " (or a scene file: a path, or a shipped scene's name with .toml, e.g. press_hold.toml)"
+            raise argparse.ArgumentTypeError(f"unknown {', '.join(bad)}; known: {', '.join(known)}"
+                                             + (files if kind == "scenes" else ""))
         twice = sorted({n for n in names if names.count(n) > 1})
         if twice:
             raise argparse.ArgumentTypeError(f"{', '.join(twice)} listed twice (each case would run twice)")
@@ -62,7 +67,10 @@ def _run_campaign(a, report: Path) -> int:
           f"firmware: {campaign.firmware_name(firmware)}", file=sys.stderr)
     started = datetime.now(timezone.utc)  # the report's timestamp: when the campaign began
     try:
-        results = campaign.run_campaign(a.faults, a.scenes, seeds, spec=spec, progress=not a.quiet,
+        from bench.campaigns.scene_files import campaign_scenes
+
+        scenes = campaign_scenes(a.scenes, a.faults, a.spi)  # scene files read and checked before anything runs
+        results = campaign.run_campaign(a.faults, scenes, seeds, spec=spec, progress=not a.quiet,
                                         spi=a.spi, firmware=firmware)
     except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
         # report says so: an earlier campaign's passing report left at --junit would be published as this one's
