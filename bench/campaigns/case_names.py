@@ -27,6 +27,13 @@ SCENE_DESCRIPTIONS = {
     "press": "1 × Touch: 1 N over E17 from 0.3 s (0.2 s ramps, 0.6 s hold)",
 }
 
+#: frames a case reads (each the bridge firmware's default 44-slot frame, 10 ms); a scene file's case reads more
+#: if the scene lasts longer (:attr:`bench.campaigns.scene_files.CampaignScene.frames`)
+CASE_FRAMES = 150
+#: the longest scene file a case streams (s): a case is a step of a CI job, not a long recording
+CASE_MAX_S = 30.0
+
+
 def is_scene_file(entry: str) -> bool:
     """Whether a ``campaign --scenes`` entry names a scene file — a path with a folder, or a name ending in
     ``.toml`` (a file here, else the shipped scene of that name) — rather than one of :data:`SCENE_DESCRIPTIONS`."""

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bench.atomic import atomic_write
-from bench.campaigns.case_names import FAULT_EXPECTED, SCENE_DESCRIPTIONS, check_bus
+from bench.campaigns.case_names import CASE_FRAMES, FAULT_EXPECTED, SCENE_DESCRIPTIONS, check_bus
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
@@ -316,7 +316,7 @@ def _schedule_after_start(board, schedule) -> list:
     return started
 
 
-def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = 150, spi: str = "software",
+def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAMES, spi: str = "software",
              firmware=None) -> dict:
     """One fault in one scene — a built-in scene's name, or a scene file
     (:class:`~bench.campaigns.scene_files.CampaignScene`: its sensor 1 and stimuli, and its own number of frames)

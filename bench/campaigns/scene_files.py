@@ -11,8 +11,9 @@ scene.  A case streams the scene's whole duration and :data:`LEAK_TAIL_FRAMES` f
 What the campaign cannot honour is refused before anything runs, naming the file and the field
 (:func:`campaign_scene`): several sensors, sensor faults of the scene's own (the campaign injects its own), a scene
 longer than a case, a host the bridge firmware is not (another sequence, slot rate or SPI clock), an SPI side
-other than ``--spi``, and a stimulus too early (or, for ``fluid_leak``, one that never ends) for a fault that checks
-the resting sensor in the case's first or last frames (``none``, ``fluid_leak``)."""
+other than ``--spi``, a stimulus too early (or, for ``fluid_leak``, one that never ends) for a fault that checks
+the resting sensor in the case's first or last frames (``none``, ``fluid_leak``), and, for ``fluid_leak``, whose
+prediction is the nominal sensor's, a unit or parameters of the scene's own."""
 
 from __future__ import annotations
 
@@ -21,14 +22,10 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from bench.campaigns.case_names import is_scene_file
+from bench.campaigns.case_names import CASE_FRAMES, CASE_MAX_S, is_scene_file
 from bench.campaigns.faults import LEAK_CASE_FRAMES, REST_MARGIN_FRAMES, REST_MIN_FRAMES
 from bench.errors import BenchError, escaped
 
-#: frames a case reads in a built-in scene (each the firmware's default 44-slot frame: 10 ms)
-CASE_FRAMES = 150
-#: the longest scene a case streams (s): a case is a CI job's step, not a long recording
-CASE_MAX_S = 30.0
 
 
 class SceneRefused(BenchError, ValueError):
@@ -121,6 +118,12 @@ def _problems(scene, raw: dict, faults, spi: str) -> list[str]:
                             f"{earliest:g} s: fault {fault} checks the sensor at rest in the case's first frames "
                             f"(start it later, or leave {fault} out of --faults)")
     if "fluid_leak" in faults:
+        from emulator.params import SensorParams
+
+        if scene.params != SensorParams():
+            problems.append("[sensor] unit / parameters: fault fluid_leak predicts the fall of the resting PDC from "
+                            "the nominal sensor's pressure-volume curve (leave fluid_leak out of --faults, or the "
+                            "unit and parameters out of the scene)")
         endless = sorted({type(st).__name__ for st in scene.stimuli if getattr(st, "end_s", None) is None})
         if endless:
             problems.append(f"{', '.join(endless)} change the sensor for good: fault fluid_leak compares its resting "

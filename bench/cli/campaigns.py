@@ -7,8 +7,8 @@ import sys
 from datetime import datetime, timezone
 from pathlib import Path
 
-from bench.campaigns.case_names import (FAULT_EXPECTED, NEEDS_SOFTWARE_SPI, SCENE_DESCRIPTIONS, SPI_BUSES, check_bus,
-                                        is_scene_file)
+from bench.campaigns.case_names import (CASE_FRAMES, CASE_MAX_S, FAULT_EXPECTED, NEEDS_SOFTWARE_SPI,
+                                        SCENE_DESCRIPTIONS, SPI_BUSES, check_bus, is_scene_file)
 from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
                             say_leftovers, sigterm_like_ctrl_c, whole)
 from bench.tomlfile import spelled
@@ -126,8 +126,19 @@ scheduler at the address) leaves one error saying why.
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}
 
-scenes (--scenes): the campaign's own stimulus sets for sensor 1 (not the scene files of `biotac-bench scenes`):
+scenes (--scenes): the campaign's own stimulus sets for sensor 1, by name:
 {_listed(SCENE_DESCRIPTIONS)}
+or your own scene: an entry with a "/" or ending in .toml is a scene file as `biotac-bench run` takes it
+(my_scene.toml, ci/grip.toml), or a shipped scene of `biotac-bench scenes` (taps.toml when no file taps.toml is
+here; the bare names above are always the campaign's own sets).  Sensor 1 is the scene's (its stimuli, unit,
+variant, parameters, skin, noise and fidelity) in every fault case; the campaign's seed replaces the scene's, a
+fault's sensor 2 is sensor 1's twin at rest, and the case streams the whole scene and the frames the fluid-leak
+check reads after it (at least {CASE_FRAMES} frames).  Its cases are named by the file: grip.toml[seed=K].  Refused
+before anything runs, naming the file and field: several sensors, [faults] of its own, more than {CASE_MAX_S:g} s, a
+[host] the bridge firmware is not (a sequence, slot rate or SPI clock of its own), a host.spi other than --spi, a
+first stimulus too early for none or fluid_leak (each checks the resting sensor in the case's first frames; the
+refusal says how early), and for fluid_leak (its prediction is the nominal sensor's) a unit or parameters of the
+scene's own or a stimulus that never ends (power_on, ambient_step, heater_failure).
 
 --spi rtl runs the cases over the Verilog RTL in the C++ harness instead of the software model (the same verdicts
 are expected; the summary and the report's property "spi" say which bus ran).  {_over_the_rtl()}
@@ -137,6 +148,8 @@ are expected; the summary and the report's property "spi" say which bus ran).  {
   biotac-bench campaign --seeds 10 --scheduler tcp://10.0.0.5:8786        # on an existing Dask cluster
   biotac-bench campaign --faults serial_loss --scenes taps --seed 7         # the case taps[seed=7] again
   biotac-bench campaign --spi rtl --scenes rest --junit out/c-rtl.xml       # every fault over the RTL
+  biotac-bench campaign --scenes ci/grip.toml,taps.toml --seeds 3          # your scene file and a shipped one
+  biotac-bench campaign --faults cs_glitch --scenes ci/grip.toml --seed 2   # the case grip.toml[seed=2] again
 """
 
 
@@ -147,7 +160,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     cp.add_argument("--faults", type=_names("faults"), default="all",
                     help="comma-separated fault names (listed above), or all")
     cp.add_argument("--scenes", type=_names("scenes"), default="all",
-                    help="comma-separated campaign scene names (listed above), or all")
+                    help="comma-separated campaign scene names (listed above), or all; or scene files: an entry with "
+                         "a / or ending in .toml (my_scene.toml; taps.toml: the shipped scene)")
     seeds = cp.add_mutually_exclusive_group()
     seeds.add_argument("--seeds", type=whole(1, 10_000), default=1,
                        help="how many seeds, 1 to 10000: each case runs with seeds 0, 1, ..., N - 1")
