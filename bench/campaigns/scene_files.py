@@ -25,6 +25,7 @@ from pathlib import Path
 from bench.campaigns.case_names import CASE_FRAMES, CASE_MAX_S, is_scene_file
 from bench.campaigns.faults import LEAK_CASE_FRAMES, REST_MARGIN_FRAMES, REST_MIN_FRAMES
 from bench.errors import BenchError, escaped
+from emulator.stimuli import AmbientStep, HeaterFailure, PowerOn
 
 
 
@@ -39,6 +40,9 @@ def frame_s() -> float:
 
     return len(DEFAULT_FRAME_NAMES) / SLOT_RATE_HZ
 
+
+#: stimuli whose change lasts: a step, not a pulse (the sensor is not back at rest after them)
+LASTING_CHANGES = (PowerOn, HeaterFailure, AmbientStep)
 
 #: frames a scene-file case streams after the scene's end: the fluid-leak check's last frames, the margin next to a
 #: stimulus and one for when START arrives, so that they read the sensor at rest
@@ -124,7 +128,7 @@ def _problems(scene, raw: dict, faults, spi: str) -> list[str]:
             problems.append("[sensor] unit / parameters: fault fluid_leak predicts the fall of the resting PDC from "
                             "the nominal sensor's pressure-volume curve (leave fluid_leak out of --faults, or the "
                             "unit and parameters out of the scene)")
-        endless = sorted({type(st).__name__ for st in scene.stimuli if getattr(st, "end_s", None) is None})
+        endless = sorted({type(st).__name__ for st in scene.stimuli if isinstance(st, LASTING_CHANGES)})
         if endless:
             problems.append(f"{', '.join(endless)} change the sensor for good: fault fluid_leak compares its resting "
                             "PDC in the case's first and last frames (leave fluid_leak out of --faults)")
