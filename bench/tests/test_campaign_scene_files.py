@@ -67,6 +67,16 @@ def test_the_at_rest_check_ends_at_the_scene_files_first_stimulus(tmp_path):
     assert r["scene"] == "grip.toml" and r["scene_file"] == str(tmp_path / "grip.toml")
 
 
+def test_a_scene_files_case_streams_the_whole_scene_and_the_leak_checks_frames_after_it(tmp_path):
+    """fluid_leak reads the resting PDC in the case's last frames: in a 2 s scene pressed from 1.2 to 1.6 s they
+    fall in the press if the case stops after a built-in scene's 150 frames (1.5 s), after it if the case streams
+    the whole scene."""
+    late = NOMINAL_GRIP.replace("duration_s = 1.0", "duration_s = 2.0").replace("start_s = 0.3", "start_s = 1.2")
+    cs = campaign_scene(str(_scene(tmp_path, late)), ["fluid_leak"], "software")
+    r = campaign.run_case(campaign.FAULTS["fluid_leak"], cs, 0)
+    assert r["passed"], r["problem"]
+
+
 def test_a_campaign_over_a_scene_file_names_its_cases_by_file_and_seed_alike_for_1_and_2_workers(tmp_path, capsys):
     scene = _scene(tmp_path, NOMINAL_GRIP)
     argv = ["campaign", "--faults", "serial_loss,fluid_leak", "--scenes", f"{scene},rest", "--seeds", "2", "--quiet"]
