@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from bench.campaigns.case_names import CASE_FRAMES, CASE_MAX_S, is_scene_file
@@ -64,7 +64,7 @@ class CampaignScene:
 
     label: str
     path: str
-    scene: object  # bench.scenes.scene.Scene
+    scene: object = field(repr=False)  # bench.scenes.scene.Scene (left out of a failed task's message: its whole text)
 
     @property
     def stimuli(self) -> list:

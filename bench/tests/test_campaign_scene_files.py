@@ -52,6 +52,8 @@ def test_a_scene_file_gives_every_fault_case_its_sensor_1_and_the_campaigns_seed
     leaking = cs.sensors(1, seed=5, faults={"fluid_leak_mL_per_min": 6.0})[1]
     assert leaking.faults == {"fluid_leak_mL_per_min": 6.0}
     assert cs.label == "grip.toml" and cs.frames == CASE_FRAMES  # a short scene: a built-in scene's case
+    # a failed task's message names it by file, not by the scene's whole text
+    assert repr(cs) == f"CampaignScene(label='grip.toml', path={str(tmp_path / 'grip.toml')!r})"
     long = campaign_scene(str(_scene(tmp_path, GRIP.replace("duration_s = 1.0", "duration_s = 3.0"), "long.toml")),
                           ["none"], "software")
     assert long.frames == 300 + LEAK_TAIL_FRAMES  # the whole scene, and the leak check's frames at rest after it
