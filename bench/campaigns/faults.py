@@ -7,8 +7,9 @@ sensor at rest before the scene's first stimulus (:data:`AT_REST`), and nothing 
 Results go to JUnit XML and a summary table.
 
 The cases are independent tasks on the campaign engine (:mod:`bench.campaigns.engine`: a Dask LocalCluster or an
-existing scheduler).  A task is a case's description — fault name, scene name, seed (:class:`CaseTask`) — and a
-worker builds the case from the registries below, so the verdicts are the same for any number of workers; each
+existing scheduler).  A task is a case's description — fault name, scene name (or a scene file's validated
+scene: :mod:`bench.campaigns.scene_files`), seed (:class:`CaseTask`) — and a worker builds the case from the
+registries below, so the verdicts are the same for any number of workers; each
 case's wall time is measured where it runs.  The faults' and scenes' names, the faults' expected reactions and the
 scenes' descriptions live in :mod:`bench.campaigns.case_names` (light: what the command line's help lists); the
 registries here hold the heavy objects keyed by those names.  The bench and the driver are imported only where a

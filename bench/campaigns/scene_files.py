@@ -6,12 +6,12 @@ What a scene contributes to a case: sensor 1's stimuli, unit, variant, parameter
 fidelity profile (the sensor is built as a scene run builds it: :func:`bench.hosts.scene_sensors.sensors_from_scene`);
 the campaign's seed replaces the scene's ``[scene] seed``; a fault's second sensor is sensor 1's twin at rest, as in a
 scene.  A case streams the scene's whole duration and :data:`LEAK_TAIL_FRAMES` frames more, at least the
-:data:`CASE_FRAMES` frames of a built-in scene's case, at most :data:`CASE_MAX_S` of them.
+:data:`CASE_FRAMES` frames of a built-in scene's case; a scene lasts at most :data:`CASE_MAX_S`.
 
 What the campaign cannot honour is refused before anything runs, naming the file and the field
 (:func:`campaign_scene`): several sensors, sensor faults of the scene's own (the campaign injects its own), a scene
 longer than a case, a host the bridge firmware is not (another sequence, slot rate or SPI clock), an SPI side
-other than ``--spi``, a stimulus too early (or, for ``fluid_leak``, one that never ends) for a fault that checks
+other than ``--spi``, a stimulus too early (or, for ``fluid_leak``, one whose change lasts) for a fault that checks
 the resting sensor in the case's first or last frames (``none``, ``fluid_leak``), and, for ``fluid_leak``, whose
 prediction is the nominal sensor's, a unit or parameters of the scene's own."""
 
@@ -26,7 +26,6 @@ from bench.campaigns.case_names import CASE_FRAMES, CASE_MAX_S, is_scene_file
 from bench.campaigns.faults import LEAK_CASE_FRAMES, REST_MARGIN_FRAMES, REST_MIN_FRAMES
 from bench.errors import BenchError, escaped
 from emulator.stimuli import AmbientStep, HeaterFailure, PowerOn
-
 
 
 class SceneRefused(BenchError, ValueError):
