@@ -364,16 +364,17 @@ def test_a_csv_that_does_not_fit_leaves_the_npz_placed_and_says_so(tmp_path, mon
     written with the reason, and no temporary file is left."""
     import errno
 
+    from bench import atomic
     from bench.cli import hosts
 
-    original = hosts._written_temp
+    original = atomic.written_temp
 
     def full_for_csv(final, write):
         if final.suffix == ".csv":
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return original(final, write)
 
-    monkeypatch.setattr(hosts, "_written_temp", full_for_csv)
+    monkeypatch.setattr(atomic, "written_temp", full_for_csv)
     written, not_written = hosts._save_recording(tmp_path / "r.npz", _frames(), {"end": "complete"}, csv=True)
     assert written == [tmp_path / "r.npz"] and not_written == {tmp_path / "r.csv": os.strerror(errno.ENOSPC)}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.npz"]
@@ -388,20 +389,21 @@ def test_an_npz_that_cannot_be_written_is_saved_in_the_temporary_folder_and_name
 
     import numpy as np
 
+    from bench import atomic
     from bench.cli import hosts
     from bench.errors import OutputNotWritten
 
     out_disk, spare = tmp_path / "full", tmp_path / "spare"
     spare.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(spare))
-    original = hosts._written_temp
+    original = atomic.written_temp
 
     def full_disk(final, write):
         if final.parent == out_disk:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return original(final, write)
 
-    monkeypatch.setattr(hosts, "_written_temp", full_disk)
+    monkeypatch.setattr(atomic, "written_temp", full_disk)
     with pytest.raises(OutputNotWritten) as e:
         hosts._save_recording(out_disk / "r.npz", _frames(), {"end": "complete"}, csv=True)
     rescued = list(spare.iterdir())
