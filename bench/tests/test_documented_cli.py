@@ -69,7 +69,7 @@ def test_run_refuses_an_unknown_compression_in_one_line_before_running(tmp_path,
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1, err
-    assert "--compression" in err and "'zstd'" in err and "gzip" in err and "Traceback" not in err, err
+    assert "--compression" in err and '"zstd"' in err and "gzip" in err and "Traceback" not in err, err
     assert not out.exists()  # refused before anything ran
 
 
