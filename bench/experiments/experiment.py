@@ -182,7 +182,8 @@ def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[in
 
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
-    from bench.textures.library import library_path, listing_command, load_library, named_problems
+    from bench.textures.library import (dissertation_textures, library_path, listing_command, load_library,
+                                        named_problems)
     from emulator.fidelity import PROFILES
 
     problems: list[str] = []
@@ -264,7 +265,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         problems.append(f"experiment.fidelity = {spelled(fid)}: one of {', '.join(PROFILES)}")
     else:
         spec.fidelity = fid
-    every = [n for n in lib if n <= 117]  # "all": the 117 textures of D's library
+    every = dissertation_textures(lib)  # "all": the 117 textures of D's library
     spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or every
     problems += _default_texture_problems(t, spec, lib, every, listing_command(spec.library))
     if len(spec.pilot_textures) < 2 and (spec.pilot_textures or every):
@@ -321,7 +322,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
             if twice and not same:
                 problems.append(f"validation.pairs: texture(s) {twice} in more than one pair (pairs must be disjoint)")
             untrained = sorted({n for n in listed if n in lib} - set(spec.training_textures or
-                                                                    [n for n in lib if n <= 117]))
+                                                                    dissertation_textures(lib)))
             if untrained:
                 problems.append(f"validation.pairs: texture(s) {untrained} not among the training textures (the "
                                 f"classifier knows only those)")
@@ -607,7 +608,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
     import time
 
     from bench.campaigns.engine import ClusterSpec, close, connect
-    from bench.textures.library import check_unchanged, read_library
+    from bench.textures.library import check_unchanged, dissertation_textures, read_library
 
     wall = {}
     library = read_library(spec.library)  # (complete when shipped, as load_library)
@@ -633,7 +634,7 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         wall["pilot"] = time.perf_counter() - t0
         # 2. training: one session on one skin, in texture order, replaced at the first visible wear
         t0 = time.perf_counter()
-        textures = spec.training_textures or sorted(n for n in lib if n <= 117)
+        textures = spec.training_textures or dissertation_textures(lib)
         tasks = []
         for tex in textures:
             for p, m in enumerate(best):

@@ -278,10 +278,10 @@ def wear_per_movement(movements: list[Movement] | None = None, trials: int = PIL
 def d_training_tasks(textures=None) -> list[TrialTask]:
     """D's training session in the shipped experiment's order: texture after texture (default the library's 117),
     D's three movements × 5 trials each (seeds 0: only the skin schedule is of interest)."""
-    from bench.textures.library import load_library
+    from bench.textures.library import dissertation_textures, load_library
 
     grid = movement_grid()
-    textures = textures if textures is not None else sorted(n for n in load_library() if n <= 117)
+    textures = textures if textures is not None else dissertation_textures(load_library())
     return [TrialTask(int(tex), grid[m].force_N, grid[m].velocity_m_per_s, k, 0, m)
             for tex in textures for m in D_TRAINING_MOVEMENTS for k in range(D_TRAINING_TRIALS)]
 

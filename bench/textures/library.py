@@ -109,6 +109,12 @@ GROUP_NAMES = tuple(g for g, _, _ in GROUPS) + (TEST_GROUP[0],)
 OWN_GROUP_RANGES: tuple[tuple[int, int], ...] = ((LIBRARY_SIZE + 1, TEST_GROUP[1] - 1), (TEST_GROUP[2] + 1, 9999))
 GROUP_FIELDS = ("name", "first", "last")
 
+
+def dissertation_textures(numbers) -> list[int]:
+    """D Table 6-1's texture numbers (1..:data:`LIBRARY_SIZE`) among ``numbers`` (a library, or its numbers), sorted:
+    what an experiment's or a sweep's "all" means, whatever else the library holds."""
+    return sorted(n for n in numbers if 1 <= n <= LIBRARY_SIZE)
+
 #: The textures D ch. 6 names, at their numbers.
 NAMED: dict[int, str] = {
     2: "linen paper", 3: "smooth cardstock", 10: "velcro hooks", 30: "foam", 38: "balsa wood", 43: "graphite",

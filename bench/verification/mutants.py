@@ -6683,6 +6683,11 @@ CATALOGUE += [
            '    scene: object = field()',
            ('bench/tests/test_campaign_scene_files.py::test_a_scene_file_gives_every_fault_case_its_sensor_1_and_the_campaigns_seed',),
            "a failed task's message (the engine names its task) carries the scene file's whole text"),
+    Mutant('dissertation-textures-include-own-groups', 'texture', 'bench/textures/library.py',
+           '    return sorted(n for n in numbers if 1 <= n <= LIBRARY_SIZE)\n',
+           '    return sorted(n for n in numbers if 1 <= n)\n',
+           ('bench/tests/test_own_texture_groups.py::test_an_experiment_on_a_library_without_ds_textures_names_what_all_and_the_pilots_default_miss',),
+           'an experiment\'s "all" (and training\'s and the pilot\'s defaults) takes a library\'s own textures and the test surfaces as D\'s 117'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -502,9 +502,9 @@ def texture_property_claims(b: Bench) -> list[Claim]:
                         "(docs/experiment/force_damping.md)"),
     ]
     # across the whole library at one movement: roughness and traction correlate negatively (D ch. 6)
-    from bench.textures.library import load_library
+    from bench.textures.library import dissertation_textures, load_library
 
-    library = [n for n in load_library() if n <= 117]
+    library = dissertation_textures(load_library())
     lib_rows = _trials(b, library, [main], 1, "claims-library")
     r = float(np.corrcoef([x["traction"] for x in lib_rows], [x["roughness"] for x in lib_rows])[0, 1])
     out.append(Claim("roughness and traction across the 117 textures (0.5 N @ 2.5 cm/s)", "negative correlation", r,
