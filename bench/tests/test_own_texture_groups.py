@@ -121,6 +121,40 @@ def test_a_bad_group_is_named_with_its_field_value_and_allowed_range(tmp_path, m
     assert any(p.startswith(expected) for p in problems), problems
 
 
+SECOND_PRINT = GROUPS_AND_ONE.split("[[texture]]")[1].replace("number = {number}", "number = 201").replace(
+    '"a print"', '"another print"').replace("group = {group}", 'group = "3D prints"').replace("seed = 7", "seed = 8")
+
+
+@pytest.mark.parametrize("broken, expected", [
+    ("first = 249\nlast = 200", 'group[0] "3D prints": first = 249, last = 200: first must not exceed last'),
+    ("first = 200\nlast = 99999", 'group[0] "3D prints": last = 99999: allowed 118-899 or 1000-9999'),
+    ("first = 200\nlast = 249\ncolour = 1", 'group[0] "3D prints": unknown field "colour"'),
+])
+def test_a_broken_group_is_named_once_not_again_for_each_texture_in_it(tmp_path, broken, expected):
+    """A [[group]] table with a problem is named once: its textures (by their group's name, or by a number in its
+    first-last) get no problem of their own for a number no sound group holds or a group not declared — they
+    had had two each — while a problem of their own (a field out of range) is still named."""
+    text = GROUPS_AND_ONE.replace("first = 200\nlast = 249", broken).format(more="", number=200, group='"3D prints"')
+    path = tmp_path / "mine.toml"
+    path.write_text(text + "[[texture]]" + SECOND_PRINT.replace("hurst = 0.8", "hurst = 7"))
+    with pytest.raises(TextureError) as e:
+        L.read_library(path)
+    (group_problem, hurst) = e.value.problems
+    assert group_problem.startswith(expected), e.value.problems
+    assert hurst == 'T201 "another print": hurst = 7: allowed range is 0.1 to 1'
+
+
+def test_a_texture_in_a_nameless_broken_groups_range_is_not_named_again(tmp_path):
+    """A broken group without a name is found by its numbers: a texture numbered within them, naming a group no
+    table declares, gets no problem beside the group's."""
+    path = tmp_path / "mine.toml"
+    path.write_text(GROUPS_AND_ONE.replace('name = "3D prints"\n', "").format(more="", number=200,
+                                                                             group='"3D prints"'))
+    with pytest.raises(TextureError) as e:
+        L.read_library(path)
+    assert e.value.problems == ["group[0]: name is missing (text)"]
+
+
 def test_a_texture_outside_every_group_or_in_the_wrong_one_is_named(tmp_path):
     """A number past 117 in no declared group names every group's range and what a [[group]] allows; a texture in
     a declared group's range naming another group names the right one, as D's groups are checked."""

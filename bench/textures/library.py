@@ -54,7 +54,9 @@ A library of one's own may declare groups of its own, one ``[[group]]`` table ea
     last = 249                #   (never D's 1-117 or the test surfaces' 900-999), overlapping no other group
 
 and its textures then take numbers in that range, with ``group = "3D prints"``, validated as every other texture
-(a number in no group names every group's range; a group that does not match the number names the right one).
+(a number in no group names every group's range; a group that does not match the number names the right one; a
+``[[group]]`` table with a problem is named once, and its textures get no problem of their own for their number or
+group until it is fixed).
 :attr:`LibraryFile.groups` holds the declared groups; the shipped library declares none.
 """
 
@@ -197,6 +199,7 @@ def declared_groups(c: "_Checker", items) -> tuple[tuple[str, int, int], ...]:
     for i, g in enumerate(items):
         who = _table_label("group", i, g.get("name"))
         n_before = len(c.problems)
+        c.broken_groups.append(g)  # (until it proves sound, below)
         c.unknown_fields(who, g, GROUP_FIELDS)
         name = c.text(who, g, "name")
         if name is not None and (len(name) > MAX_NAME or name != name.strip()):
@@ -227,7 +230,27 @@ def declared_groups(c: "_Checker", items) -> tuple[tuple[str, int, int], ...]:
         else:
             taken[name.casefold()] = f"group {spelled(name)} ({first}-{last})"
             out.append((name, first, last))
+            c.broken_groups.pop()
     return tuple(out)
+
+
+def _names_a_broken_group(t: dict, broken: list[dict]) -> bool:
+    """Whether the ``[[texture]]`` table ``t`` belongs to one of the ``[[group]]`` tables ``broken`` (each with a
+    problem of its own already recorded): its ``group`` is that table's name (case-insensitive), or its number lies
+    within that table's first-last.  Its number and group are then not judged against the groups that are sound:
+    the broken table's problem is the one to fix, said once, not again for every texture in it."""
+    group, number = t.get("group"), t.get("number")
+    for g in broken:
+        name, first, last = g.get("name"), g.get("first"), g.get("last")
+        if isinstance(group, str) and isinstance(name, str) and group.casefold() == name.casefold():
+            return True
+        if all(_whole(v) for v in (number, first, last)) and first <= number <= last:
+            return True
+    return False
+
+
+def _whole(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
 
 
 def _label(number: int, name) -> str:
@@ -244,6 +267,8 @@ def _table_label(kind: str, i: int, name) -> str:
 class _Checker:
     def __init__(self):
         self.problems: list[str] = []
+        #: the library's ``[[group]]`` tables with a problem (:func:`declared_groups`), as the file gives them
+        self.broken_groups: list[dict] = []
 
     def add(self, who: str, msg: str):
         self.problems.append(f"{who}: {msg}")
@@ -393,11 +418,14 @@ def _texture(c: _Checker, i: int, t, seen: _Seen, own: tuple[tuple[str, int, int
         who = _table_label("texture", i, name)
     n_before = len(c.problems)
     c.unknown_fields(who, t, KNOWN_FIELDS)
+    in_broken_group = _names_a_broken_group(t, c.broken_groups)
 
     # identity: number, name, group, seed
     if "number" not in t:
         c.add(who, f"number is missing ({_allowed_numbers(own)})")
         number = None
+    elif in_broken_group and _whole(number) and group_of(number, own) is None:
+        number = None  # (not valid yet, and no problem of its own: the broken group's says what to fix)
     elif isinstance(number, bool) or not isinstance(number, int) or group_of(number, own) is None:
         c.add(who, f"number = {spelled(number)}: allowed {_allowed_numbers(own)}, a whole number")
         number = None
@@ -423,7 +451,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen, own: tuple[tuple[str, int, int
         lo, hi = next((lo, hi) for g, lo, hi in GROUPS + (TEST_GROUP,) + own if g == expected)
         c.add(who, f"group = {spelled(group)}: texture {number} is in group {spelled(expected)} (numbers {lo}-{hi}); "
                    f"groups: {', '.join(names)}")
-    elif group is not None and group not in names:
+    elif group is not None and group not in names and not in_broken_group:
         c.add(who, f"group = {spelled(group)}: must be one of: {', '.join(names)}")
     seed = t.get("seed")
     if "seed" not in t:
@@ -451,7 +479,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen, own: tuple[tuple[str, int, int
     source = c.text(who, t, "source")
     description = c.text(who, t, "description", required=False)
     periodic = _periodic(c, who, t.get("periodic", []))
-    if len(c.problems) > n_before:
+    if len(c.problems) > n_before or number is None:
         return None
     return Texture(number=number, name=name, group=group, material=material, seed=seed, source=source,
                    description=description or "", periodic=periodic, **vals)
