@@ -219,7 +219,9 @@ pairs = [[a, b], ...].
 
 The textures come from the shipped library, or from one of your own: [experiment] library = "my_textures.toml"
 (relative to the experiment file; the format of fixtures/textures/library.toml, or .json as `biotac-bench textures
---json` prints; "all" is then its textures numbered 1..117; the workers must be able to read the file).
+--json` prints; the workers must be able to read the file).  pilot.textures and training.textures take a list of
+numbers, "all" (D's T1..T117, the dissertation's experiment, whatever else the library holds) or "library" (every
+texture the library holds: D's, the test surfaces, groups of its own).
 
 Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
 stage's trials are cached in --cache (out/cache) by content hash, so changing the classifier settings re-runs no

@@ -84,7 +84,7 @@ class ExperimentSpec:
     pilot_trials: int = 6
     pilot_movements: list[int] | None = None  # grid ids; None = all 36
     exclude_high_power: bool = True
-    training_textures: list[int] | None = None  # None = the whole library's 117
+    training_textures: list[int] | None = None  # None = "all": D's 117 (T1..T117) of the library
     training_trials: int = 5
     wear: bool = True
     replace_skin: bool = True
@@ -160,6 +160,12 @@ def item_problems(where: str, items: list, ok, what: str) -> list[str]:
     return out
 
 
+#: How an experiment file's ``pilot.textures`` / ``training.textures`` names its textures without listing them:
+#: ``"all"`` is D's T1..T117 (the dissertation's experiment: D's 117, whatever else the library holds), ``"library"``
+#: every texture the library holds (D's, the test surfaces, groups of its own), by number
+ALL_TEXTURES, LIBRARY_TEXTURES = "all", "library"
+
+
 def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[int], listing: str) -> list[str]:
     """What a library lacking D's textures makes of ``textures = "all"`` (D's 1-117; training's default too) and of
     the pilot's default (D's pilot textures): a problem each, rather than an empty stage or a pilot that fails on its
@@ -167,11 +173,12 @@ def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[in
     out = []
     for table in ("pilot", "training"):
         given = t[table].get("textures")
-        if given == "all" or (given is None and table == "training"):
+        if given == ALL_TEXTURES or (given is None and table == "training"):
             if not every:
                 shown = '"all"' if given else '"all" (the default)'
                 out.append(f"{table}.textures = {shown}: D's textures, numbered 1 to 117, and the library holds none; "
-                           f"list the textures to use (`{listing}` lists them)")
+                           f"give {spelled(LIBRARY_TEXTURES)} for every texture it holds, or list the textures to use "
+                           f"(`{listing}` lists them)")
         elif given is None:  # the pilot's default
             missing = [n for n in spec.pilot_textures if n not in lib]
             if missing:
@@ -182,8 +189,8 @@ def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[in
 
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
-    from bench.textures.library import (dissertation_textures, library_path, listing_command, load_library,
-                                        named_problems)
+    from bench.textures.library import (LIBRARY_SIZE, dissertation_textures, library_path, listing_command,
+                                        load_library, named_problems)
     from emulator.fidelity import PROFILES
 
     problems: list[str] = []
@@ -240,10 +247,14 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         if key not in t[table]:
             return default
         v = t[table][key]
-        if v == "all":
+        if v == ALL_TEXTURES:
             return None
+        if v == LIBRARY_TEXTURES:
+            return sorted(lib)
         if not isinstance(v, list) or not v:
-            problems.append(f"{table}.{key} = {spelled(v)}: a list of texture numbers, or \"all\"")
+            problems.append(f"{table}.{key} = {spelled(v)}: a list of texture numbers, {spelled(ALL_TEXTURES)} (D's "
+                            f"T1..T{LIBRARY_SIZE}) or {spelled(LIBRARY_TEXTURES)} (every texture the library holds: "
+                            f"D's, the test surfaces, groups of its own)")
             return default
         if bad := item_problems(f"{table}.{key}", v, lambda n: _whole(n), "a texture number (a whole number)"):
             problems.extend(bad)
@@ -265,7 +276,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         problems.append(f"experiment.fidelity = {spelled(fid)}: one of {', '.join(PROFILES)}")
     else:
         spec.fidelity = fid
-    every = dissertation_textures(lib)  # "all": the 117 textures of D's library
+    every = dissertation_textures(lib)  # "all": the 117 textures of D's library ("library": every one it holds)
     spec.pilot_textures = textures("pilot", "textures", spec.pilot_textures) or every
     problems += _default_texture_problems(t, spec, lib, every, listing_command(spec.library))
     if len(spec.pilot_textures) < 2 and (spec.pilot_textures or every):

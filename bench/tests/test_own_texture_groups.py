@@ -268,11 +268,12 @@ def test_similar_pairs_weigh_features_by_the_spread_of_the_librarys_own_textures
       "[10, 30, 43, 46, 47, 84, 87, 100, 38, 58] in the library; list the textures to use (`biotac-bench textures "
       f"--library {EXAMPLE}` lists them)"]),
     ({"textures": "all"}, {"textures": [200, 201, 1000]},
-     ['pilot.textures = "all": D\'s textures, numbered 1 to 117, and the library holds none; list the textures to use '
-      f"(`biotac-bench textures --library {EXAMPLE}` lists them)"]),
+     ['pilot.textures = "all": D\'s textures, numbered 1 to 117, and the library holds none; give "library" for every '
+      f"texture it holds, or list the textures to use (`biotac-bench textures --library {EXAMPLE}` lists them)"]),
     ({"textures": [200, 201, 1000]}, {},
-     ['training.textures = "all" (the default): D\'s textures, numbered 1 to 117, and the library holds none; list '
-      f"the textures to use (`biotac-bench textures --library {EXAMPLE}` lists them)"]),
+     ['training.textures = "all" (the default): D\'s textures, numbered 1 to 117, and the library holds none; give '
+      f'"library" for every texture it holds, or list the textures to use (`biotac-bench textures --library {EXAMPLE}` '
+      "lists them)"]),
 ])
 def test_an_experiment_on_a_library_without_ds_textures_names_what_all_and_the_pilots_default_miss(
         tmp_path, pilot, training, expected):
@@ -284,3 +285,31 @@ def test_an_experiment_on_a_library_without_ds_textures_names_what_all_and_the_p
                                                                                                  **training},
                             "validation": {"n_pairs": 1, "pair_choice": "random-within-group"}}, "own.toml")
     assert [p for p in e.value.problems if "textures" in p.split(":")[0]] == expected
+
+
+def _experiment(pilot, training, library=None) -> E.ExperimentSpec:
+    lib = {"library": str(library)} if library else {}
+    return E.parse_experiment({"experiment": {"name": "own", "seed": 1, **lib},
+                               "pilot": {"trials": 2, "movements": [0, 7, 14], **pilot},
+                               "training": {"trials": 2, **training},
+                               "validation": {"n_pairs": 1, "pair_choice": "random-within-group"}}, "own.toml")
+
+
+def test_library_in_an_experiment_takes_every_texture_the_library_holds_and_all_stays_ds_117():
+    """"all" is the dissertation's experiment, D's T1..T117 whatever else the library holds; "library" is every
+    texture of the library: the example's own groups, and the shipped library's test surfaces beside D's 117."""
+    own = _experiment({"textures": "library"}, {"textures": "library"}, EXAMPLE)
+    assert own.pilot_textures == own.training_textures == sorted(L.load_library(EXAMPLE)) == [200, 201, 1000]
+    shipped = sorted(L.load_library())
+    every = _experiment({"textures": "library"}, {"textures": "library"})
+    assert every.pilot_textures == every.training_textures == shipped and 901 in shipped
+    d117 = _experiment({"textures": "all"}, {"textures": "all"})
+    assert d117.pilot_textures == L.dissertation_textures(shipped) == list(range(1, 118))
+    assert d117.training_textures is None  # (run as D's 117: experiment.run_experiment)
+
+
+def test_a_textures_value_neither_list_nor_all_nor_library_names_both_spellings():
+    with pytest.raises(E.ExperimentError) as e:
+        _experiment({"textures": "every"}, {"textures": [200, 201, 1000]}, EXAMPLE)
+    assert 'pilot.textures = "every": a list of texture numbers, "all" (D\'s T1..T117) or "library" (every texture ' \
+           "the library holds: D's, the test surfaces, groups of its own)" in e.value.problems
