@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bench.running.sampler import Sampler
+from bench.running.sampler import STATUS_NAMES, STATUS_OK, Sampler
 from bench.textures.properties import TrialRecording
 from bench.textures.stage import StageMotor
 from emulator import channels as ch
@@ -69,6 +69,7 @@ from emulator.sensor import NoiseSources, Sensor
 from emulator.skin import Skin, contact_patch_area_m2, contact_patch_radius_m
 from emulator.sliding import CommandedMotion, contact_force_from_depth
 from emulator.stimuli import MountVibration
+from emulator.spi.model import Faults
 from emulator.spi.peripheral import SoftwarePeripheral
 from emulator.texture import Texture
 
@@ -159,9 +160,29 @@ class RigSettings:
                              f"of e^3 ≈ 20 either way for one standard deviation)")
 
 
+@dataclass(frozen=True)
+class SpiFaultWindow:
+    """SPI faults (:class:`emulator.spi.model.Faults`) on the rig's bus from ``start_s`` to ``end_s`` (s from the
+    trial's start, the sampler's clock): every slot whose sampling command starts in [start_s, end_s) is exchanged
+    with them in force (fault injection over SPI, as a flaky cable or a disturbed bus would)."""
+
+    start_s: float
+    end_s: float
+    faults: Faults
+
+    def __post_init__(self):
+        if not (isinstance(self.faults, Faults) and all(isinstance(v, numbers.Real) and math.isfinite(v)
+                                                         for v in (self.start_s, self.end_s))
+                and 0 <= self.start_s < self.end_s):
+            raise ValueError(f"SpiFaultWindow({self.start_s!r}, {self.end_s!r}, {self.faults!r:.80}): start_s and "
+                             f"end_s in s, 0 ≤ start_s < end_s, and an emulator.spi.model.Faults")
+
+
 @dataclass
 class Trial:
-    """One trial's recording (for the properties), its true forces, and what the controller did."""
+    """One trial's recording (for the properties), its true forces, and what the controller did.  ``extra``:
+    ``"lowering"`` (what the emulator did while lowering) and ``"rejected_samples"`` (the samples the host
+    flagged bad, left out of the recording and of the controller's decisions: ``{channel: {status: count}}``)."""
 
     recording: TrialRecording
     movement: Movement
@@ -181,12 +202,16 @@ class TextureRig:
     """The rig with one skin: trials run one after another on the same skin (which wears)."""
 
     def __init__(self, skin: Skin | None = None, params: SensorParams | None = None, fidelity: str = "default",
-                 noise: NoiseSources = NoiseSources(), settings: RigSettings | None = None, wear: bool = True):
+                 noise: NoiseSources = NoiseSources(), settings: RigSettings | None = None, wear: bool = True,
+                 spi_faults: tuple[SpiFaultWindow, ...] = ()):
         self.skin = skin or Skin()
         self.params = params or SensorParams()
         self.fidelity, self.noise = fidelity, noise
         self.settings = settings or RigSettings()
         self.wear = wear
+        self.spi_faults = tuple(spi_faults)  # each trial's bus, from its start (:class:`SpiFaultWindow`)
+        if not all(isinstance(w, SpiFaultWindow) for w in self.spi_faults):
+            raise ValueError(f"spi_faults = {spi_faults!r:.120}: SpiFaultWindow(start_s, end_s, Faults(...)) each")
 
     def run_trial(self, texture: Texture, movement: Movement, seed: int, trial: int = 0) -> Trial:
         """Lower, hold, slide, lift: one trial on ``texture``; ``seed`` decides the start position and every
@@ -241,7 +266,8 @@ class TextureRig:
             self.skin.wear(movement.force_N, s.distance_m, area, float(texture.mu_kinetic), movement.velocity_m_per_s)
         rec = log.recording(contact_s, slide_start, slide_end, texture.number, movement, trial, seed)
         return Trial(rec, movement, true_normal, reached, skin_before, self.skin.state(), texture.number, trial,
-                     start_position, time.perf_counter() - wall0, log.n_frames(run.frame), {"lowering": lowering})
+                     start_position, time.perf_counter() - wall0, log.n_frames(run.frame),
+                     {"lowering": lowering, "rejected_samples": log.rejected()})
 
     def stepper_noise_Pa(self, seed: int) -> float:
         """The stepper's background (RMS Pa in the PAC band) during the trial of ``seed``: the settings' median
@@ -294,7 +320,7 @@ class TextureRig:
         return _Run(Sensor(params=self.params, stimuli=[motion, *hum], channels_read=ch.DEFAULT_FRAME_NAMES,
                            fidelity=self.fidelity, seed=seed, noise=self.noise, block_s=s.chunk_s,
                            record_signals=("stage_force_N", "normal_force_N")),
-                    motion, effect_rng(seed, "rig.motor_current"), s)
+                    motion, effect_rng(seed, "rig.motor_current"), s, self.spi_faults)
 
     def _lowered(self, texture: Texture, movement: Movement, seed: int, start_position: float,
                  read_ahead: bool) -> tuple["_Run", float, dict, int]:
@@ -338,7 +364,7 @@ class TextureRig:
         baseline = None
         while True:
             if baseline is None and first_stretch < _MIN_WINDOW_FRAMES:
-                baseline = float(np.mean(run.log.pdc_codes()[:baseline_frames]))
+                baseline = _baseline(run.log.pdc_codes()[:baseline_frames])
             lowered = max(0, run.log.n_frames(run.frame) - first)  # frames read since the lowering command
             if lowered >= budget:
                 raise RuntimeError(f"the finger never reached {movement.force_N} N (PDC +{target:.0f}) on "
@@ -358,7 +384,7 @@ class TextureRig:
             run.read_exactly(before + n - run.log.n_frames(run.frame))  # (with the baseline, the first time)
             pdc = run.log.pdc_codes()
             if baseline is None:
-                baseline = float(np.mean(pdc[:baseline_frames]))
+                baseline = _baseline(pdc[:baseline_frames])
             means = np.convolve(pdc, np.ones(s.pdc_average_frames) / s.pdc_average_frames, "full")[:pdc.size]
             over = np.flatnonzero(means[before:] - baseline >= target)
             if over.size:
@@ -374,6 +400,16 @@ class TextureRig:
                 stats["frames_recomputed"] += k
                 stats["frames_discarded"] += n - k
                 return snapshot, reached, stats, k
+
+
+def _baseline(pdc: np.ndarray) -> float:
+    """The PDC baseline (counts): the mean of the baseline frames' readings the host took as good (a rejected one is
+    NaN in ``pdc``); ValueError if the host rejected them all."""
+    good = pdc[np.isfinite(pdc)]
+    if not good.size:
+        raise ValueError(f"the host rejected every PDC reading of the {pdc.size} baseline frames (parity errors or "
+                         f"error words on the SPI bus): the rig has no resting PDC to lower against")
+    return float(np.mean(good))
 
 
 def _batch_frames(settings: RigSettings, frame_s: float) -> int:
@@ -461,7 +497,7 @@ def _predicted_change(run: "_Run", first: int, baseline: float, texture: Texture
     last = max(first, run.log.n_frames(run.frame) - _FIT_FRAMES)
     load = _commanded_load(run, np.concatenate(run.log.cur_t)[last:], texture)
     change = run.log.pdc_codes()[last:] - baseline
-    touching = load > 0
+    touching = (load > 0) & np.isfinite(change)  # (a reading the host rejected tells nothing)
     if np.count_nonzero(touching) < _FIT_FRAMES // 2 or np.ptp(load[touching]) == 0:  # too few, or no line to fit
         return None
     x, y = load[touching], change[touching]
@@ -478,8 +514,10 @@ class _Run:
     """Everything a trial's run holds — sensor, SPI side, host sampler, motion, current noise, log — as one
     object, so the controller can snapshot it (a deep copy) and go back."""
 
-    def __init__(self, sensor: Sensor, motion: CommandedMotion, current_rng, settings: RigSettings):
+    def __init__(self, sensor: Sensor, motion: CommandedMotion, current_rng, settings: RigSettings,
+                 spi_faults: tuple[SpiFaultWindow, ...] = ()):
         self.sensor, self.motion, self.current_rng, self.settings = sensor, motion, current_rng, settings
+        self.spi_faults = spi_faults
         self.sampler = Sampler(SoftwarePeripheral(sensor))
         self.frame = len(self.sampler.sequence)
         self.log = _Log()
@@ -539,7 +577,23 @@ class _Run:
         ft = self.sensor.signal("stage_force_N", t_cur)
         self.log.load(t_cur, self.sensor.signal("normal_force_N", t_cur))
         self.log.current(t_cur, s.motor.current_A(ft, self.current_rng))
-        self.log.samples(self.sampler.read(n_frames * self.frame))
+        for n_slots, faults in self._fault_parts(n_frames * self.frame):
+            if faults is not None:
+                self.sampler.peripheral.faults = faults
+            self.log.samples(self.sampler.read(n_slots))
+
+    def _fault_parts(self, n_slots: int) -> list[tuple[int, Faults | None]]:
+        """The next ``n_slots`` slots as runs of slots under the same SPI faults (:class:`SpiFaultWindow`; a slot
+        in none: no fault), each (slots, faults); one run, faults None (left as they are), without windows."""
+        if not self.spi_faults:
+            return [(n_slots, None)]
+        t_cmd = self.sampler.slots(self.sampler.next_slot + np.arange(n_slots))[0]
+        which = np.full(n_slots, -1)
+        for i, w in enumerate(self.spi_faults):
+            which[(t_cmd >= w.start_s) & (t_cmd < w.end_s)] = i
+        starts = np.concatenate([[0], np.flatnonzero(np.diff(which)) + 1, [n_slots]])
+        return [(int(b - a), self.spi_faults[which[a]].faults if which[a] >= 0 else Faults())
+                for a, b in zip(starts[:-1], starts[1:])]
 
 
 _ATOMIC = frozenset({int, float, bool, str, bytes, complex, type(None), range, type, np.float64, np.int64, np.bool_,
@@ -610,12 +664,19 @@ def _copy_generator(g: np.random.Generator) -> np.random.Generator:
 class _Log:
     """What the rig recorded: samples as read, motor current, and the true normal load for the report.  PAC's and
     PDC's samples are also kept apart as they are read (what the controller and the recording use: no pass over
-    every sample read so far at each check)."""
+    every sample read so far at each check).
+
+    A sample the host flags bad (its status: a parity error or an error word, :mod:`bench.running.sampler`) is
+    dropped, and counted (:meth:`rejected`): the recording holds the good samples only (so the properties never see
+    a bad one: a PAC sample missing where they look is a gap, which leaves roughness and fineness undefined rather
+    than filtering across it), and the controller reads a rejected PDC frame as NaN (no reading: it decides on the
+    good frames alone)."""
 
     def __init__(self):
         self.t, self.ch, self.code, self.cur_t, self.cur, self.load_N = [], [], [], [], [], []
         self.slots = 0  # samples read
-        self.of = {ch.PAC: ([], []), ch.PDC: ([], [])}  # channel -> (instants, codes) read, per read
+        self.of = {ch.PAC: ([], []), ch.PDC: ([], [])}  # channel -> (instants, codes; NaN where rejected) read, per read
+        self.bad: dict[tuple[int, int], int] = {}  # (channel, status) -> samples the host flagged so
 
     def load(self, t, newtons):
         self.load_N.append(newtons)
@@ -630,10 +691,20 @@ class _Log:
         self.ch.append(s.channels)
         self.code.append(s.codes)
         self.slots += s.times.size
+        bad = s.status != STATUS_OK
         for channel, (times, codes) in self.of.items():
             at = s.channels == channel
             times.append(s.times[at])
-            codes.append(s.codes[at])
+            codes.append(np.where(bad[at], np.nan, s.codes[at]) if bad.any() else s.codes[at])
+        for channel, status in zip(s.channels[bad].tolist(), s.status[bad].tolist()):
+            self.bad[(channel, status)] = self.bad.get((channel, status), 0) + 1
+
+    def rejected(self) -> dict[str, dict[str, int]]:
+        """The samples the host flagged bad, by channel name and status: ``{"PAC": {"parity error": 440}}``."""
+        out: dict[str, dict[str, int]] = {}
+        for (channel, status), n in sorted(self.bad.items()):
+            out.setdefault(ch.CHANNEL_NAME.get(channel, f"ch{channel}"), {})[STATUS_NAMES[status]] = n
+        return out
 
     def current(self, t, amps):
         self.cur_t.append(t)
@@ -661,7 +732,17 @@ class _Log:
         return self.slots // frame
 
     def recording(self, contact_s, slide_start, slide_end, texture, movement, trial, seed) -> TrialRecording:
-        (pac_t, pac), (pdc_t, pdc) = self._channel(ch.PAC), self._channel(ch.PDC)
+        """The trial's recording: the good PAC and PDC samples (a rejected one left out), the stage current, the
+        phases (s) and what the trial was."""
+        (pac_t, pac), (pdc_t, pdc) = (_good(*self._channel(c)) for c in (ch.PAC, ch.PDC))
         return TrialRecording(pac_t, pac, pdc_t, pdc, np.concatenate(self.cur_t),
                               np.concatenate(self.cur), contact_s, slide_start, slide_end, texture=texture,
                               force_N=movement.force_N, velocity_m_s=movement.velocity_m_per_s, trial=trial, seed=seed)
+
+
+def _good(times: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The samples of (instants, codes) the host took as good: a rejected one (NaN) left out."""
+    if codes.dtype.kind != "f":  # (no sample rejected: the codes as read)
+        return times, codes
+    keep = np.isfinite(codes)
+    return times[keep], codes[keep]
