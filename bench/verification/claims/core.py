@@ -121,21 +121,40 @@ ClaimGroup = Callable[[Bench], list[Claim]]
 
 #: group name -> function(bench) -> claims, in registration order (the table's order)
 CLAIM_GROUPS: dict[str, ClaimGroup] = {}
+#: group name -> function(sensor parameters) -> why the group cannot judge that sensor (a problem each; [] when it
+#: can): a group whose accepted ranges derive from the sensor's parameters refuses those that would invert them
+GROUP_REFUSALS: dict[str, Callable[[SensorParams], list[str]]] = {}
 
 
-def claim_group(name: str) -> Callable[[ClaimGroup], ClaimGroup]:
-    """Register a function ``f(bench) -> list[Claim]`` as the claim group ``name``."""
+def claim_group(name: str, refuses: Callable[[SensorParams], list[str]] | None = None
+                ) -> Callable[[ClaimGroup], ClaimGroup]:
+    """Register a function ``f(bench) -> list[Claim]`` as the claim group ``name``; ``refuses(params)``, if given,
+    says why the group cannot judge a sensor (:func:`check_sensor` asks it before anything runs)."""
 
     def register(fn: ClaimGroup) -> ClaimGroup:
         if name in CLAIM_GROUPS and CLAIM_GROUPS[name] is not fn:
             raise ValueError(f"claim group {name!r} is registered twice")
         CLAIM_GROUPS[name] = fn
+        if refuses is not None:
+            GROUP_REFUSALS[name] = refuses
         return fn
 
     return register
 
 
+def check_sensor(params: SensorParams, groups) -> None:
+    """ValueError, one line naming each parameter, its value and why, if a group of ``groups`` cannot judge the
+    sensor ``params`` (:data:`GROUP_REFUSALS`): refused before any claim runs, rather than rows whose accepted
+    range is inverted."""
+    problems = [f"the {g} claims cannot judge this sensor: {p}" for g in groups for p in
+                GROUP_REFUSALS.get(g, lambda _: [])(params)]
+    if problems:
+        raise ValueError("; ".join(problems) + " (leave the group out, --only, or change the sensor)")
+
+
 def run_claims(bench: Bench, groups=None, progress=None) -> list[Claim]:
+    """Every claim of ``groups`` (default: all) on ``bench``, after :func:`check_sensor`."""
+    check_sensor(bench.params, list(groups or CLAIM_GROUPS))
     out = []
     for name in groups or CLAIM_GROUPS:
         if progress:
@@ -252,6 +271,8 @@ def run_claims_over_seeds(make_bench: Callable[[int], Bench], seeds, groups=None
 
     groups = list(groups or CLAIM_GROUPS)
     tasks = [ClaimTask(make_bench(seed), group) for seed in seeds for group in groups]
+    for task in tasks:
+        check_sensor(task.bench.params, [task.group])
     on_workers = [i for i, t in enumerate(tasks) if runs_on_workers(t.group)]
     found = dict(zip(on_workers, run_tasks(run_claim_task, [tasks[i] for i in on_workers], spec=spec,
                                            client=client, progress=progress is not None, desc="claim groups")))

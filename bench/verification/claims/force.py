@@ -20,6 +20,10 @@ CREEP_EARLY_S, CREEP_LATE_S = (0.62, 0.72), (10.3, 10.6)
 CREEP_READ_BACK_POINTS = 1.0
 #: the knee row accepts force_slope_above_knee ± this fraction (seeds 2012–2021: +2–3 %)
 KNEE_READ_BACK = 0.1
+#: D's "clear departure" above the knee: the slope there below this fraction of the slope below (the knee row's top)
+CLEAR_DEPARTURE = 0.5
+#: creep present yet bounded (%): the creep row's accepted range holds nothing outside it
+CREEP_PRESENT_PERCENT = (2.0, 15.0)
 
 
 def sls_creep_growth(p) -> float:
@@ -63,7 +67,48 @@ def loop_width(force, rise, loading, levels=np.linspace(0.3, 1.7, 15)):
     return float(np.max(fd - fu) / top)
 
 
-@claim_group("force")
+def knee_band(p) -> tuple[float, float]:
+    """The knee row's accepted range (ratio): ``force_slope_above_knee`` of ``p`` ± :data:`KNEE_READ_BACK`, below
+    D's :data:`CLEAR_DEPARTURE` (inverted, low above high, for a value above CLEAR_DEPARTURE / (1 − KNEE_READ_BACK):
+    :func:`unclaimable` refuses those)."""
+    knee = p.force_slope_above_knee
+    return knee * (1 - KNEE_READ_BACK), min(knee * (1 + KNEE_READ_BACK), CLEAR_DEPARTURE)
+
+
+def creep_band_percent(p) -> tuple[float, float]:
+    """The creep row's accepted range (%): the creep law of ``p`` (:func:`sls_creep_growth`) ±
+    :data:`CREEP_READ_BACK_POINTS`, within :data:`CREEP_PRESENT_PERCENT` (inverted for a law outside that range
+    widened by the read-back: :func:`unclaimable` refuses those)."""
+    law = 100 * sls_creep_growth(p)
+    return (max(law - CREEP_READ_BACK_POINTS, CREEP_PRESENT_PERCENT[0]),
+            min(law + CREEP_READ_BACK_POINTS, CREEP_PRESENT_PERCENT[1]))
+
+
+def unclaimable(p, where: str = "sensor") -> list[str]:
+    """Why the force group cannot judge the sensor ``p`` (a problem per row, [] when it can): the knee and creep
+    rows accept their parameter's read-back (± :data:`KNEE_READ_BACK`, ± :data:`CREEP_READ_BACK_POINTS`) within D's
+    bounds (< :data:`CLEAR_DEPARTURE`; :data:`CREEP_PRESENT_PERCENT`), so a parameter whose read-back band lies
+    wholly outside those bounds would give an accepted range whose low end is above its high end: no reading
+    could pass, and the table would print the inverted range.  ``where`` names the sensor's table."""
+    out = []
+    knee, most = p.force_slope_above_knee, CLEAR_DEPARTURE / (1 - KNEE_READ_BACK)
+    knee_low, knee_high = knee_band(p)
+    if knee_low > knee_high:
+        out.append(f"{where}.force_slope_above_knee = {knee:g}: the knee row accepts its read-back ± "
+                   f"{100 * KNEE_READ_BACK:g} % and below D's clear departure (< {CLEAR_DEPARTURE:g}), so above "
+                   f"{most:.4g} no reading can pass")
+    law, (low, high) = 100 * sls_creep_growth(p), CREEP_PRESENT_PERCENT
+    creep_low, creep_high = creep_band_percent(p)
+    if creep_low > creep_high:
+        out.append(f"{where}.skin_relaxed_modulus_fraction = {p.skin_relaxed_modulus_fraction:g} with "
+                   f"{where}.skin_relaxation_time_s = {p.skin_relaxation_time_s:g} s: the skin's creep law gives "
+                   f"{law:.3g} % from 0.2 to 10 s; the creep row accepts its read-back ± {CREEP_READ_BACK_POINTS:g} "
+                   f"point and within {low:g}–{high:g} % (creep present and bounded), so outside a law of "
+                   f"{low - CREEP_READ_BACK_POINTS:g}–{high + CREEP_READ_BACK_POINTS:g} % no reading can pass")
+    return out
+
+
+@claim_group("force", refuses=unclaimable)
 def force_claims(b: Bench) -> list[Claim]:
     """11.5 mN/bit (± 5 %), R² in [0.99, 0.998] over 0–2 N; a clear departure above 2 N; creep and hysteresis."""
     force, rise, loading = press_cycle(b)
@@ -105,7 +150,7 @@ def force_claims(b: Bench) -> list[Claim]:
                    "elastic skin (R² > 0.998) or a grossly lossy one (< 0.99) fails"),
         Claim("slope above the knee / slope below",
               f"clear departure: < 0.5 (reads back {knee:.3g} ± {100 * KNEE_READ_BACK:.0f} %)", ratio,
-              knee * (1 - KNEE_READ_BACK), min(knee * (1 + KNEE_READ_BACK), 0.5), "ratio", "D ch. 6; §1",
+              *knee_band(b.params), "ratio", "D ch. 6; §1",
               kind="consistency",
               note=f"reads back force_slope_above_knee = {knee:.3g} (a model choice): the static force curve's slope "
                    f"above the knee is that fraction of the slope below, so the ratio is fixed by it; ± "
@@ -113,7 +158,7 @@ def force_claims(b: Bench) -> list[Claim]:
                    f"seeds), D's 'clear departure' (< 0.5) at most"),
         Claim("PDC creep under a held 1 N, 0.2 → 10 s",
               f"the skin's creep law: {creep_law:.2f} % ± {CREEP_READ_BACK_POINTS:g} (present: 2–15 %)", 100 * creep,
-              max(creep_law - CREEP_READ_BACK_POINTS, 2.0), min(creep_law + CREEP_READ_BACK_POINTS, 15.0), "%",
+              *creep_band_percent(b.params), "%",
               "silicone stress relaxation (no published BioTac figure)",
               {"early_codes": early, "late_codes": late, "creep_law_%": creep_law},
               kind="consistency",
