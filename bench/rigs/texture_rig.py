@@ -497,7 +497,7 @@ def _predicted_change(run: "_Run", first: int, baseline: float, texture: Texture
     last = max(first, run.log.n_frames(run.frame) - _FIT_FRAMES)
     load = _commanded_load(run, np.concatenate(run.log.cur_t)[last:], texture)
     change = run.log.pdc_codes()[last:] - baseline
-    touching = (load > 0) & np.isfinite(change)  # (a reading the host rejected tells nothing)
+    touching = load > 0  # (a reading the host rejected, NaN, leaves no line: None, windows read with snapshots)
     if np.count_nonzero(touching) < _FIT_FRAMES // 2 or np.ptp(load[touching]) == 0:  # too few, or no line to fit
         return None
     x, y = load[touching], change[touching]
