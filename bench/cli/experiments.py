@@ -267,7 +267,8 @@ DEFAULT_CACHE = "out/cache"
 
 def _cmd_explore(a) -> int:
     from bench.campaigns.engine import ClusterSpec, signals_held
-    from bench.experiments.experiment import ablated, identified_among, load_experiment, run_experiment, summary
+    from bench.experiments.experiment import (ablated, all_leaves_out_note, identified_among, load_experiment,
+                                              run_experiment, summary)
     from bench.reporting.experiment_report import OUTPUT_FILES, experiment_trials_json, write_outputs, write_text
     from bench.reporting.outdir import FolderKind, made_folders, writable_folder
 
@@ -276,6 +277,8 @@ def _cmd_explore(a) -> int:
                          f"give one or the other")
     a.cache = a.cache or DEFAULT_CACHE
     spec = load_experiment(a.experiment)
+    if note := all_leaves_out_note(spec):
+        print(f"note: {note}", file=sys.stderr)
     if not a.no_cache and a.out is not None and Path(a.cache).resolve() == Path(a.out).resolve():
         raise ValueError(f"--cache {a.cache} is --out: the results and the stage cache need folders of their own (the "
                          f"cache's entries would make a later --force refuse the folder); the cache may sit inside "

@@ -187,6 +187,25 @@ def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[in
     return out
 
 
+def all_leaves_out_note(spec: ExperimentSpec) -> str | None:
+    """What a stage on "all" (D's T1..T117: the file's ``"all"``, or training's default) leaves out of the library
+    beyond the test surfaces — its own groups' textures — and how to take them (``"library"``); None when nothing."""
+    from bench.textures.library import LIBRARY_SIZE, TEST_GROUP, dissertation_textures, load_library
+
+    lib = load_library(spec.library)
+    every = dissertation_textures(lib)
+    own = [n for n in lib if n not in every and not TEST_GROUP[1] <= n <= TEST_GROUP[2]]
+    stages = [name for name, textures in (("pilot", spec.pilot_textures), ("training", spec.training_textures))
+              if textures is None or (every and textures == every)]
+    if not own or not stages:
+        return None
+    shown = ", ".join(f"T{n}" for n in own[:MAX_ITEMS_NAMED]) + (f" and {len(own) - MAX_ITEMS_NAMED} more"
+                                                                    if len(own) > MAX_ITEMS_NAMED else "")
+    return (f"{' and '.join(f'{s}.textures' for s in stages)}: D's T1..T{LIBRARY_SIZE} ({spelled(ALL_TEXTURES)}), "
+            f"so the library's own {shown} {'is' if len(own) == 1 else 'are'} left out ({spelled(LIBRARY_TEXTURES)} "
+            f"takes every texture it holds)")
+
+
 def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec:
     from bench.errors import TextureError
     from bench.textures.library import (LIBRARY_SIZE, dissertation_textures, library_path, listing_command,

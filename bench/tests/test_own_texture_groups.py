@@ -313,3 +313,22 @@ def test_a_textures_value_neither_list_nor_all_nor_library_names_both_spellings(
         _experiment({"textures": "every"}, {"textures": [200, 201, 1000]}, EXAMPLE)
     assert 'pilot.textures = "every": a list of texture numbers, "all" (D\'s T1..T117) or "library" (every texture ' \
            "the library holds: D's, the test surfaces, groups of its own)" in e.value.problems
+
+
+def test_explore_notes_the_own_textures_all_leaves_out(tmp_path, capsys):
+    """On a library holding D's 117 and groups of its own, "all" (training's default here) is still D's 117, and
+    explore says at once which of the library's textures that leaves out and how to take them; the test surfaces
+    (T901, T902) are not counted, nor is a stage that lists its textures."""
+    library = tmp_path / "d_and_mine.toml"
+    library.write_text((FIXTURES / "textures" / "library.toml").read_text() + "\n" + EXAMPLE.read_text())
+    experiment = tmp_path / "mixed.toml"
+    experiment.write_text(f'[experiment]\nname = "mixed"\nlibrary = "{library}"\n[pilot]\ntextures = [10, 30, 200]\n')
+    assert E.all_leaves_out_note(E.load_experiment(experiment)) == (
+        'training.textures: D\'s T1..T117 ("all"), so the library\'s own T200, T201, T1000 are left out ("library" '
+        "takes every texture it holds)")
+    out = tmp_path / "same"  # (refused once the file is read: --cache is --out)
+    assert cli.main(["explore", str(experiment), "--cache", str(out), "--out", str(out)]) == 2
+    assert 'note: training.textures: D\'s T1..T117 ("all"), so the library\'s own T200' in capsys.readouterr().err
+    experiment.write_text(experiment.read_text() + '[training]\ntextures = "library"\n')
+    assert E.all_leaves_out_note(E.load_experiment(experiment)) is None
+    assert E.all_leaves_out_note(E.load_experiment(FIXTURES / "experiments" / "fishel2012.toml")) is None
