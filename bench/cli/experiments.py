@@ -65,15 +65,23 @@ def _int_list(flag: str, text: str, lo: int, hi: int) -> list[int]:
 
 def _texture_numbers(text: str, library=None) -> list[int]:
     """--textures: texture numbers or names, comma-separated, each in ``library`` (a
-    :class:`~bench.textures.library.LibraryFile`; None: the shipped one) and none twice (ValueError naming
-    --textures and the value otherwise)."""
+    :class:`~bench.textures.library.LibraryFile`; None: the shipped one) and none twice, or "all" (D's T1..T117)
+    or "library" (every texture it holds: :func:`~bench.textures.library.textures_named`); ValueError naming
+    --textures and the value otherwise."""
     from bench.errors import TextureError
     from bench.experiments.trials import listed_twice
-    from bench.textures.library import listing_command
+    from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES, LIBRARY_SIZE, listing_command, textures_named
 
     from bench.cli.args import library_option
 
     library = library or library_option(None)
+    named = textures_named(text, library.textures)
+    if named:
+        return named
+    if named is not None:  # "all" on a library without D's textures
+        raise ValueError(f"--textures {ALL_TEXTURES}: D's T1..T{LIBRARY_SIZE}, and the library holds none; --textures "
+                         f"{LIBRARY_TEXTURES} takes every texture it holds "
+                         f"(`{listing_command(None if library.shipped else library.path)}` lists them)")
     numbers = []
     for item in (x.strip() for x in text.split(",")):
         if not item:
@@ -184,7 +192,9 @@ def _cmd_texture_sweep(a) -> int:
 def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s = sub.add_parser("texture-sweep", help="the texture rig over textures × movements × repetitions (Dask)",
                        description=SWEEP_HELP, formatter_class=fmt)
-    s.add_argument("--textures", required=True, help="comma-separated texture numbers or names (biotac-bench textures)")
+    s.add_argument("--textures", required=True,
+                   help="comma-separated texture numbers or names (biotac-bench textures), \"all\" (D's T1..T117) or "
+                        "\"library\" (every texture of the library: D's, the test surfaces, groups of its own)")
     s.add_argument("--movements", default="all", help="'all' (the 36 of D eqs 6.20–6.21) or grid ids 0..35 "
                                                       "(id = 6 × force step + velocity step)")
     s.add_argument("--trials", type=whole(1, 1000), default=6, help="repetitions per texture and movement, 1 to "

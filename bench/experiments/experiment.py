@@ -46,6 +46,7 @@ from bench.experiments.trials import (
 from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
 from bench.atomic import atomic_write, release_lock, take_lock
 from bench.rigs.texture_rig import movement_grid
+from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"
 #: D's published figures, for the report (Tables 6-4, 6-5; ch. 6 text)
@@ -158,12 +159,6 @@ def item_problems(where: str, items: list, ok, what: str) -> list[str]:
     if len(bad) > MAX_ITEMS_NAMED:
         out.append(f"{where}: {len(bad) - MAX_ITEMS_NAMED} more item(s) refused for the same reason")
     return out
-
-
-#: How an experiment file's ``pilot.textures`` / ``training.textures`` names its textures without listing them:
-#: ``"all"`` is D's T1..T117 (the dissertation's experiment: D's 117, whatever else the library holds), ``"library"``
-#: every texture the library holds (D's, the test surfaces, groups of its own), by number
-ALL_TEXTURES, LIBRARY_TEXTURES = "all", "library"
 
 
 def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[int], listing: str) -> list[str]:

@@ -332,3 +332,35 @@ def test_explore_notes_the_own_textures_all_leaves_out(tmp_path, capsys):
     experiment.write_text(experiment.read_text() + '[training]\ntextures = "library"\n')
     assert E.all_leaves_out_note(E.load_experiment(experiment)) is None
     assert E.all_leaves_out_note(E.load_experiment(FIXTURES / "experiments" / "fishel2012.toml")) is None
+
+
+def test_texture_sweep_takes_all_and_library_as_the_experiment_file_does(capsys):
+    """--textures library: every texture of the library (the example's own, or the shipped 117 and the test
+    surfaces); --textures all: D's T1..T117, refused in one line on a library without them (before any trial)."""
+    from bench.cli.args import library_option
+    from bench.cli.experiments import _texture_numbers
+
+    assert _texture_numbers("library", library_option(str(EXAMPLE))) == [200, 201, 1000]
+    assert _texture_numbers("library", None) == sorted(L.load_library())
+    assert _texture_numbers(" All ", None) == list(range(1, 118))
+    assert cli.main(["texture-sweep", "--library", str(EXAMPLE), "--textures", "all", "--movements", "7"]) == 2
+    err = capsys.readouterr().err
+    assert ("--textures all: D's T1..T117, and the library holds none; --textures library takes every texture it "
+            f"holds (`biotac-bench textures --library {EXAMPLE}` lists them)") in err
+    assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("name", ["all", "Library"])
+def test_a_texture_may_not_take_a_name_that_names_textures(tmp_path, name):
+    (problem,) = _problems_named(tmp_path, name)
+    assert problem == (f'T200 "{name}": name = "{name}": names textures without listing them ("all": D\'s T1..T117, '
+                       f'"library": every texture of the library), so it would not look this one up; give it another '
+                       f"name")
+
+
+def _problems_named(tmp_path, name: str) -> list[str]:
+    path = tmp_path / "named.toml"
+    path.write_text(GROUPS_AND_ONE.format(more="", number=200, group='"3D prints"').replace('"a print"', f'"{name}"'))
+    with pytest.raises(TextureError) as e:
+        L.read_library(path)
+    return e.value.problems

@@ -117,6 +117,24 @@ def dissertation_textures(numbers) -> list[int]:
     what an experiment's or a sweep's "all" means, whatever else the library holds."""
     return sorted(n for n in numbers if 1 <= n <= LIBRARY_SIZE)
 
+
+#: How textures are named without listing them (an experiment file's ``pilot.textures`` and ``training.textures``,
+#: ``texture-sweep --textures``): ``"all"`` is D's T1..T117 (:func:`dissertation_textures`: the dissertation's
+#: experiment, whatever else the library holds), ``"library"`` every texture the library holds (D's, the test
+#: surfaces, groups of its own).  No texture may take either as its name.
+ALL_TEXTURES, LIBRARY_TEXTURES = "all", "library"
+
+
+def textures_named(word: str, numbers) -> list[int] | None:
+    """The texture numbers ``word`` (:data:`ALL_TEXTURES` or :data:`LIBRARY_TEXTURES`, any case, spaces around
+    ignored) names among ``numbers`` (a library, or its numbers), sorted; None for any other word."""
+    word = word.strip().casefold() if isinstance(word, str) else None
+    if word == ALL_TEXTURES:
+        return dissertation_textures(numbers)
+    if word == LIBRARY_TEXTURES:
+        return sorted(numbers)
+    return None
+
 #: The textures D ch. 6 names, at their numbers.
 NAMED: dict[int, str] = {
     2: "linen paper", 3: "smooth cardstock", 10: "velcro hooks", 30: "foam", 38: "balsa wood", 43: "graphite",
@@ -440,6 +458,10 @@ def _texture(c: _Checker, i: int, t, seen: _Seen, own: tuple[tuple[str, int, int
         elif re.fullmatch(r"[Tt]?\d+", name):
             c.add(who, f"name = {spelled(name)}: looks like a texture number (\"T5\" and \"5\" look textures up by "
                        f"number), so it would hide another texture; give it a name")
+        elif textures_named(name, ()) is not None:
+            c.add(who, f"name = {spelled(name)}: names textures without listing them ({spelled(ALL_TEXTURES)}: D's "
+                       f"T1..T{LIBRARY_SIZE}, {spelled(LIBRARY_TEXTURES)}: every texture of the library), so it would "
+                       f"not look this one up; give it another name")
         elif name.casefold() in seen.names:
             c.add(who, f"name = {spelled(name)}: already used by {seen.names[name.casefold()]}; names are unique")
         else:
