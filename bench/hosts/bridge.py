@@ -24,6 +24,11 @@ clock, so the firmware waits for a host that is reading (back-pressure: nothing 
 a host that has not read for :data:`HOST_GONE_S` (``host_gone_s=``: raise it for a host that may stall longer,
 e.g. on a loaded CI machine) is taken as gone, and bytes overrun as in real time.
 
+Sample times: the wire carries no time, but the bench knows when each slot was sampled.  :meth:`sample_times` gives,
+for a data frame a host read, the virtual time (s from power-on) of each slot's sample — the instant its sampling
+command ended on the bus and the sensor's conversion started; ``BridgeDriver(bench.port,
+sample_times=bench.sample_times)`` puts them in every frame's ``t_s``.
+
 Virtual time, and so every stimulus and scheduled fault, counts from power-on (t = 0, when the bench starts).
 Unpaced, it stands still at the end of the firmware's start-up until the host sends its first byte (usually
 START): however long the host takes to open the port and set up, it finds the sensors as at power-on, so a tap
@@ -44,6 +49,7 @@ import numpy as np
 
 from bench.errors import BenchError, FirmwareError
 from bench.hosts.cosim import CoSim, VirtualBoard, firmware_library, run_action
+from bench.hosts.driver import DataFrame, FrameParser
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
 
@@ -53,6 +59,9 @@ HOST_GONE_S = 0.2
 HOST_POLL_S = 0.002
 #: How long (wall s) stop() waits for the firmware to end its step before it reports a hung firmware.
 STOP_TIMEOUT_S = 10.0
+#: The sample times of this many of the latest data frames are kept (:meth:`FirmwareBench.sample_times`): 40 s of
+#: 44-slot frames, and fewer than the 65 536 sequence numbers, so a frame's number never finds another's times.
+SAMPLE_TIMES_FRAMES = 4096
 
 
 def _check_action(what: str, action) -> None:
@@ -97,11 +106,14 @@ class FirmwareBench:
         self.host_gone_s = host_gone_s
         self._host_gone = False  # unpaced: the buffer stayed full for host_gone_s (no more waiting until it drains)
         self.port = self.link.path
+        self._sent = FrameParser()  # the firmware's own bytes, before the line's faults: its data frames' times
+        self._frame_times: dict[int, np.ndarray] = {}  # sequence number -> each slot's sample time (s)
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
         self.board = None
         try:
             self.board = VirtualBoard(sensors, uart_out=self._line, pull_up=pull_up, spi=spi)
+            self.board.command_ends = []
             self.sim = CoSim(self.board, library)
             if pattern is not None:
                 self.sim.set_pattern(pattern)
@@ -118,6 +130,7 @@ class FirmwareBench:
         self.bytes_corrupted = self.bytes_dropped = 0
 
     def _line(self, data: bytes) -> None:
+        self._time_frames(data)
         if self.corrupt_rate or self.drop_rate:
             out = bytearray()
             for b in data:
@@ -145,6 +158,30 @@ class FirmwareBench:
         else:
             self._host_gone = False
         self.link.deliver(data, keep_all=not self._host_gone)
+
+    def _time_frames(self, data: bytes) -> None:
+        """Give each data frame among the firmware's bytes ``data`` the sample times of its slots: the ends of the
+        last command words clocked before it, one per slot (none if fewer were clocked: a firmware that samples
+        otherwise)."""
+        commands = self.board.command_ends
+        for item in self._sent.feed(data, now=self.board.t):
+            if not isinstance(item, DataFrame):
+                continue
+            slots = len(item.channels)
+            if len(commands) >= slots:
+                self._frame_times.pop(item.seq, None)  # (re-inserted newest)
+                self._frame_times[item.seq] = np.array(commands[len(commands) - slots:])
+                while len(self._frame_times) > SAMPLE_TIMES_FRAMES:
+                    del self._frame_times[next(iter(self._frame_times))]
+            commands.clear()
+
+    def sample_times(self, frame: DataFrame) -> np.ndarray | None:
+        """The virtual time (s from power-on) of each slot's sample of ``frame`` (a data frame a host read from this
+        bench: ``t_s[slot]``, 1/4400 s apart in the reference firmware): when its sampling command ended and the
+        sensors' conversion started.  None for a frame the bench did not send with that sequence number and slot
+        count, or one more than :data:`SAMPLE_TIMES_FRAMES` frames old."""
+        times = self._frame_times.get(frame.seq)
+        return times.copy() if times is not None and len(times) == len(frame.channels) else None
 
     def _sleep(self, seconds: float) -> None:
         """Sleep, moving buffered bytes on to the pty as the host reads them."""

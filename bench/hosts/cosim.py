@@ -219,6 +219,10 @@ class VirtualBoard:
         #: that keeps calling the HAL stops spending a core for the rest of the process.
         self.abandoned = threading.Event()
         self.last_hal_call: str | None = None  # the HAL function the firmware called last (where a hang is)
+        #: When a list: every command word (a word whose MOSI is not 0: a sampling command, or any other command)
+        #: the firmware's SPI sequences clock gets its end appended — the virtual time (s) chip select rises on it
+        #: and a sampling command's conversion starts (:meth:`bench.hosts.bridge.FirmwareBench.sample_times`).
+        self.command_ends: list[float] | None = None
 
     # --- faults and events ---------------------------------------------------------------
     def at(self, t_s: float, action) -> None:
@@ -304,6 +308,8 @@ class VirtualBoard:
             raise ValueError(f"word #{bad[0]} of {n}: cs = {w['cs'][bad[0]]}: a select code is 0 to "
                              f"{MAX_SELECT_CODE} (bt_hal.h: 1, 2, 4, 5, 6 = sensors 1..5, 7 = all, 0 = none)")
         start = self.t + w["offset_ns"] * 1e-9
+        if self.command_ends is not None:
+            self.command_ends.extend((start[w["mosi"] != 0] + 16.5 / SPI_CLOCK_HZ).tolist())  # (Transfer.end_s)
         keep, out = w["keep_cs"].astype(bool), np.ctypeslib.as_array(miso, shape=(n,))
         i = 0
         while i < n:  # the words before each reset due within the sequence, the reset, the rest

@@ -73,13 +73,17 @@ class FrameChannels(dict):
 
 @dataclass
 class DataFrame:
-    """One frame of samples: ``codes[slot, sensor]`` (12 bits) and ``status`` (0 ok, 1 parity, 2 error word)."""
+    """One frame of samples: ``codes[slot, sensor]`` (12 bits) and ``status`` (0 ok, 1 parity, 2 error word);
+    ``t_s[slot]``: the virtual time (s from the emulated bridge's power-on) of each slot's sample, from a
+    :class:`BridgeDriver` given ``sample_times=`` (:meth:`bench.hosts.bridge.FirmwareBench.sample_times`), else None
+    (the wire carries no time)."""
 
     seq: int
     sensor_mask: int
     channels: np.ndarray
     codes: np.ndarray
     status: np.ndarray
+    t_s: np.ndarray | None = None
 
     @property
     def sensors(self) -> list[int]:
@@ -361,8 +365,16 @@ class BridgeDriver:
     across calls that stop at ``max_frames`` and across waits for a reply (:data:`BACKLOG_FRAMES` at most).
     """
 
-    def __init__(self, port, baudrate: int = 3_000_000, timeout: float = 0.05):
+    def __init__(self, port, baudrate: int = 3_000_000, timeout: float = 0.05, sample_times=None):
+        """``sample_times``: None, or a callable giving a data frame's sample times (s, one per slot, or None), put in
+        each frame's ``t_s`` as it is read: an emulated bridge's :meth:`~bench.hosts.bridge.FirmwareBench.sample_times`
+        (``BridgeDriver(bench.port, sample_times=bench.sample_times)``)."""
         import serial
+
+        if sample_times is not None and not callable(sample_times):
+            raise ValueError(f"sample_times = {sample_times!r}: a callable taking a DataFrame (e.g. a FirmwareBench's "
+                             f"bench.sample_times), or None")
+        self.sample_times = sample_times
 
         if isinstance(port, str):
             # exclusive: a second host on the same port (two `record`s) is refused at open, rather than each
@@ -493,6 +505,8 @@ class BridgeDriver:
         items = self.parser.feed(data) if data else []
         for item in items:
             if isinstance(item, DataFrame):
+                if self.sample_times is not None:
+                    item.t_s = self.sample_times(item)
                 for cb in self.callbacks:
                     cb(item)
                 if len(self._backlog) >= BACKLOG_FRAMES:
