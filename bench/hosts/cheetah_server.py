@@ -60,6 +60,7 @@ import numpy as np
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
+from bench.scenes.limits import SPI_SIDES
 from emulator.spi.model import Bus, SensorPort, Transfer
 
 LIBRARY_SOURCE = REPO / "emulator" / "cheetah" / "cheetah_emu.c"
@@ -140,19 +141,33 @@ class CheetahBench:
 
     ``trace=True`` keeps every transfer clocked on the bus in :attr:`trace` as (start s, select code the sensors
     see, bits, MOSI the sensors received).
+
+    ``spi``: the sensors' SPI side — "software" (the Python model, the default) or "rtl" (the Verilog twin in the
+    C++ Verilator harness, :class:`emulator.rtl.harness.RtlBus`, stopped by :meth:`stop`), which the adapter clocks
+    the same transfers through.  Over the RTL a batch in SPI mode 3 is refused (a client error, its connection
+    ended): the bench gives the host the sensor's first MISO bit, driven before the first clock edge, from the
+    sensor's port state, which the RTL harness does not expose; modes 0–2 and LSB first are served.
     """
 
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False,
-                 variant: str = "biotac"):
+                 variant: str = "biotac", spi: str = "software"):
         if not isinstance(trace, (bool, np.bool_)):
             raise ValueError(f"trace = {trace!r}: must be True or False")
         trace = bool(trace)
+        if spi not in SPI_SIDES:
+            raise ValueError(f"spi = {spi!r}: \"software\" (the Python model) or \"rtl\" (the Verilog twin)")
         sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)  # variant: "biotac" or "biotac-sp"
         self.library = build_library()
         self.lib_dir = self.library.parent
+        self.spi = spi
+        if spi == "rtl":  # built (or refused) before the socket's folder exists
+            from emulator.rtl.harness import RtlBus
+
+            self.bus = RtlBus(sensors)
+        else:
+            self.bus = Bus({n: SensorPort(s, n) for n, s in sensors.items()})
         self._tmp = private_folder()
         self.socket_path = os.path.join(self._tmp, "cheetah.sock")
-        self.bus = Bus({n: SensorPort(s, n) for n, s in sensors.items()})
         self.t_host = 0.0  # the host program's time (s)
         self.t_bus = 0.0  # when the adapter's bus is free
         self.batches = 0
@@ -168,8 +183,14 @@ class CheetahBench:
         self._owner: _Client | None = None
         self._clients: list[_Client] = []
         self._server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self._server.bind(self.socket_path)
-        os.chmod(self.socket_path, 0o600)
+        try:
+            self._server.bind(self.socket_path)
+            os.chmod(self.socket_path, 0o600)
+        except BaseException:  # nothing left behind: the RTL's harness process, the socket's folder
+            self._server.close()
+            self.bus.close()
+            shutil.rmtree(self._tmp, ignore_errors=True)
+            raise
         self._server.listen(8)
         self._server.settimeout(0.2)
         self._stop = threading.Event()
@@ -405,6 +426,10 @@ class CheetahBench:
         if not plan.steps:
             return b""
         mode, clock = plan.mode, plan.clock
+        if self.spi == "rtl" and mode & (MODE_CPOL | MODE_CPHA) == MODE_CPOL | MODE_CPHA:
+            raise ProtocolError("SPI mode 3 over the RTL: not served (the sensor's first MISO bit, driven before the "
+                                "first clock edge, is read from its port's state, which the RTL harness does not "
+                                "expose); use mode 0, the sensors' own, or the software SPI side")
         if plan.words is not None:  # word traffic in mode 0: the vectorized path
             rel, cs, mosi, keep = plan.words
             starts = rel + start
@@ -477,6 +502,8 @@ class CheetahBench:
         for c in clients:
             if c.thread is not None and c.thread is not threading.current_thread():
                 c.thread.join(timeout=5)
+        if not any(c.thread is not None and c.thread.is_alive() for c in clients):  # (none still clocking it)
+            self.bus.close()  # the RTL's harness process, if any
         shutil.rmtree(self._tmp, ignore_errors=True)
 
     def __enter__(self):

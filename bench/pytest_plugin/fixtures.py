@@ -21,6 +21,12 @@ Installed with the package (entry point ``pytest11``), so in any test:
         bench.at(bench.virtual_time + 1.0, lambda board: board.unplug(2))   # a fault, in virtual time
         ...
 
+    def test_when_each_sample_was_taken(biotac_bridge):
+        bench = biotac_bridge()
+        driver = BridgeDriver(bench.port, sample_times=bench.sample_times); driver.start()
+        frame = next(driver.frames(max_frames=1))
+        frame.t_s           # each slot's sample time: virtual s from power-on, 1/4400 s apart
+
     def test_a_scene_on_the_bridge(biotac_bridge):
         bench = biotac_bridge(scene="taps")      # a shipped scene's name, a scene file, or a Scene
         ...
@@ -34,7 +40,10 @@ Fixtures
     biotac_bridge       factory -> bench.hosts.bridge.FirmwareBench: reference firmware on a pty (stopped at teardown),
                         at ``bench.port``.  The firmware speaks the real bridge's protocol: it answers each
                         command, and streams frames only after the host sends START
-                        (``BridgeDriver(bench.port).start()``).
+                        (``BridgeDriver(bench.port).start()``).  ``bench.sample_times(frame)``: the virtual
+                        time (s from power-on) of each slot's sample of a frame read from it —
+                        ``BridgeDriver(bench.port, sample_times=bench.sample_times)`` puts it in every
+                        DataFrame's ``t_s`` column (the wire carries no time: without it ``t_s`` is None).
                         Unpaced by default: the firmware waits for your program to read, nothing is lost.  With
                         ``realtime=True`` the pty is a UART without flow control: a program that stops reading
                         overruns the 4096-byte receive buffer and loses frames (``keep_arrivals=True`` and
@@ -55,7 +64,8 @@ Keywords (every one optional)
         stimuli       what the sensor feels (``emulator.stimuli``; default: nothing)
         channels      the channels it answers (default: its variant's whole frame — E1..E24 on a "biotac-sp";
                       others answer 0xA558, channel not recognised)
-        seed          its noise seed (default 0; with ``scene``: the scene's)
+        seed          its noise seed (default: the session's, else 0; with ``scene``: the session's, else the
+                      scene's) — it is sensor 1 of the seed convention below
         unit          its unit (``emulator.units``): a unit seed, "nominal" (default) or a serial "BT..."
         variant       "biotac" (default, 19 electrodes) or "biotac-sp" (24)
         params        ``SensorParams`` (with ``unit``: the unit's spreads are drawn around them)
@@ -69,8 +79,8 @@ Keywords (every one optional)
         units         one unit per sensor (sensor k is ``units[k - 1]``; default: all nominal)
         variant       "biotac" or "biotac-sp" for every sensor, or one per sensor; each sensor then reads its
                       variant's whole frame (an all-SP bridge streams the 54-slot frame)
-        seed          sensor k draws its noise from ``seed + k`` (default 1; with ``scene``: the scene's,
-                      sensor k ``seed + k - 1``)
+        seed          sensor k draws its noise from ``seed + k - 1`` (default: the session's, else 0; with
+                      ``scene``: the session's, else the scene's)
         params, fidelity, noise, faults   for every sensor, as for ``biotac_sensor``
         sensors       your own ``{k: Sensor}`` instead (refused with units, variant, stimuli, params, fidelity,
                       noise, faults or scene: they would be ignored; an n_sensors beside them must be their count)
@@ -102,6 +112,21 @@ Keywords (every one optional)
         failing test's report and at teardown
       biotac_cheetah only (``CheetahBench``):
         trace         keep every transfer (start s, select code, bits, MOSI) in ``bench.trace``
+        spi           "software" (default; with ``scene``: its host.spi; the session's ``--biotac-spi`` replaces
+                      that default) or "rtl": the adapter clocks the Verilog twin (SPI mode 3 refused there, as a
+                      client error: see ``CheetahBench``)
+
+Seeds, one convention: sensor k of a call (or session) whose seed is S draws its noise from ``S + k - 1``
+(:func:`bench.scenes.scene.sensor_seed`) whichever factory or route makes it — ``biotac_sensor(seed=S)`` is
+sensor 1, and a scene's sensor k draws ``S + k - 1`` too — so the same S gives sensor k the same noise on the bridge,
+behind the Cheetah adapter and in process.
+
+Session settings: ``pytest --biotac-fidelity NAME --biotac-seed N`` (or ``biotac_fidelity = NAME`` /
+``biotac_seed = N`` in the ini file; the command line wins) set the fidelity profile and the seed of every call of
+the three factories (a scene's own replaced); a test's ``@pytest.mark.biotac(fidelity=..., seed=...)`` replaces
+them for that test, and a call's ``fidelity=``/``seed=`` replaces all of them.  Your own ``sensors=`` keep their
+own.  A value that is not one stops the session at its start (or fails the marked test) in one line naming the
+option, the value and the allowed ones (:mod:`bench.pytest_plugin.hooks`).
 
 The factories are called (``spi = biotac_sensor()``); using one as the sensor or bench it makes is an
 AttributeError saying so.  A bench that fails when it is stopped (a hung firmware, an error in its thread) fails
@@ -110,8 +135,8 @@ the test at teardown with that error in one message, after every bench of the te
 ``scene``: a ``Scene``, a scene file's path, or a shipped scene's name as ``biotac-bench run`` takes it ("taps").
 Sensor k is the scene's sensor k (unit, parameters, variant, stimuli, faults, noise, fidelity; see
 ``bench.hosts.scene_sensors``); on the bridge its ``host.sequence`` becomes the firmware's pattern and
-``host.spi`` the SPI side.  Behind the Cheetah adapter your program is the host: the scene's [host] section is not
-used (a scene asking for the RTL is refused: the adapter serves the software model).  A scene that is not valid,
+``host.spi`` the SPI side.  Behind the Cheetah adapter your program is the host: of the scene's [host] section
+only ``spi`` is used (the SPI side the adapter clocks).  A scene that is not valid,
 or a keyword the fixture does not take, fails the test with the problem in one message (no traceback).
 
 A failing test's report says what every sensor and bench its factories made was and felt (the call, each
@@ -136,12 +161,23 @@ pytest_plugins = ("bench.pytest_plugin.hooks",)
 SENSOR_KEYWORDS = ("params", "fidelity", "noise", "faults", "block_s", "start_s", "record_signals")
 #: What a scene (or your own ``sensors=``) already says about the sensors: refused beside it.
 SENSOR_DESCRIPTION = ("stimuli", "units", "variant") + SENSOR_KEYWORDS
+#: The seed of a call that gives none, in a session without ``--biotac-seed``: sensor k draws ``DEFAULT_SEED + k - 1``
+#: (:func:`bench.scenes.scene.sensor_seed`), as a scene's sensors do from its default seed.
+DEFAULT_SEED = 0
 
 
 def _fail(message: str):
     """Fail the calling test with ``message`` alone (a misused fixture: no traceback into the plugin)."""
     __tracebackhide__ = True
     raise pytest.fail.Exception(message, pytrace=False) from None  # not "during handling of ... another exception"
+
+
+def with_settings(scene, settings: dict):
+    """``scene`` with the session's or the test's marker's sensor settings (``settings``: fidelity and seed, those
+    set) in place of its own (as ``biotac-bench run --seed`` replaces a scene's seed)."""
+    import dataclasses
+
+    return dataclasses.replace(scene, **settings) if settings else scene
 
 
 def load_scene_like(scene):
@@ -153,7 +189,8 @@ def load_scene_like(scene):
     return scene if isinstance(scene, Scene) else load_scene(scene_file(str(scene)))
 
 
-def one_sensor(unit=None, variant=None, stimuli=(), channels=None, seed: int = 0, params=None, **sensor_kw):
+def one_sensor(unit=None, variant=None, stimuli=(), channels=None, seed: int = DEFAULT_SEED, params=None,
+               **sensor_kw):
     """An emulated sensor of ``unit`` (None/"nominal", a unit seed or a serial; its spreads drawn around ``params``)
     and ``variant`` (None: "biotac"), answering ``channels`` (None: its variant's whole frame), carrying the unit's
     serial as ``.serial`` (None for the nominal unit: its port answers the default serial)."""
@@ -172,17 +209,21 @@ def one_sensor(unit=None, variant=None, stimuli=(), channels=None, seed: int = 0
     return sensor
 
 
-def unit_sensors(n_sensors: int, units=None, stimuli=(), seed: int = 1, variant=None, **sensor_kw) -> dict:
+def unit_sensors(n_sensors: int, units=None, stimuli=(), seed: int = DEFAULT_SEED, variant=None,
+                 **sensor_kw) -> dict:
     """Sensors 1..n (:func:`one_sensor`) of ``units`` (None: all nominal; else one per sensor) and ``variant`` (one
     for all, or one per sensor), each reading its variant's whole frame; sensor 1 feels ``stimuli``; sensor k draws
-    its noise from ``seed + k`` (as the benches' own sensors); ``sensor_kw`` go to every sensor."""
+    its noise from :func:`bench.scenes.scene.sensor_seed` (``seed + k - 1``, as a scene's sensor k); ``sensor_kw``
+    go to every sensor."""
+    from bench.scenes.scene import sensor_seed
+
     units = ["nominal"] * n_sensors if units is None else list(units)
     variants = [variant] * n_sensors if variant is None or isinstance(variant, str) else list(variant)
     if len(units) != n_sensors:
         raise ValueError(f"units = {units!r}: give one unit per sensor ({n_sensors})")
     if len(variants) != n_sensors:
         raise ValueError(f"variant = {variant!r}: give one variant for every sensor, or one per sensor ({n_sensors})")
-    return {k: one_sensor(which, variants[k - 1], stimuli if k == 1 else (), seed=seed + k, **sensor_kw)
+    return {k: one_sensor(which, variants[k - 1], stimuli if k == 1 else (), seed=sensor_seed(seed, k), **sensor_kw)
             for k, which in enumerate(units, start=1)}
 
 
@@ -277,6 +318,9 @@ def biotac_sensor(request):
 
     allowed = {"stimuli", "channels", "seed", "unit", "variant", "scene", "spi", *SENSOR_KEYWORDS}
     session_spi = request.config.getoption("biotac_spi", None)
+    from bench.pytest_plugin.hooks import sensor_settings  # (registered by pytest_plugins above)
+
+    settings = sensor_settings(request.node)  # the session's fidelity and seed, the test's marker's over them
     harnesses = []  # the RTL's harness processes this test started: stopped after it
 
     def side(sensor, spi: str):
@@ -300,11 +344,11 @@ def biotac_sensor(request):
         scene = kw.pop("scene", None)
         try:
             if scene is None:
-                return side(one_sensor(**{"seed": 0, **kw}), spi or "software")
+                return side(one_sensor(**{"seed": DEFAULT_SEED, **settings, **kw}), spi or "software")
             _refuse_beside("biotac_sensor", "scene", kw, ("stimuli", "channels", "unit", "variant", *SENSOR_KEYWORDS))
             from bench.hosts.scene_sensors import sensors_from_scene
 
-            scene = load_scene_like(scene)
+            scene = with_settings(load_scene_like(scene), settings)
             return side(sensors_from_scene(scene, scene.n_sensors, seed=kw.get("seed"))[1], spi or scene.spi)
         except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"biotac_sensor(): {e}")
@@ -323,6 +367,9 @@ def _benches(fixture: str, bench_class, scene_kw, gives: str, node, defaults=Non
 
     own = set(inspect.signature(bench_class).parameters) - {"n_sensors", "stimuli", "seed", "sensors", "variant"}
     allowed = {"n_sensors", "stimuli", "seed", "sensors", "scene", *SENSOR_DESCRIPTION, *own}
+    from bench.pytest_plugin.hooks import sensor_settings  # (registered by pytest_plugins above)
+
+    settings = sensor_settings(node)  # the session's fidelity and seed, the test's marker's over them
     started = []
     ended = []
 
@@ -336,7 +383,7 @@ def _benches(fixture: str, bench_class, scene_kw, gives: str, node, defaults=Non
         kw = {**(defaults or {}), **kw}
         kw.update(_given(stimuli=stimuli, units=units, seed=None if kw.get("seed") is None else int(kw["seed"])))
         try:
-            bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw))
+            bench = bench_class(**_bench_kw(fixture, n_sensors, kw, scene_kw, settings))
         except (BenchError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"; BuildError: firmware
             _fail(f"{fixture}(): {e}")
         started.append(bench.start())
@@ -354,16 +401,18 @@ def _benches(fixture: str, bench_class, scene_kw, gives: str, node, defaults=Non
         _fail("\n".join(problems))
 
 
-def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw) -> dict:
+def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw, settings: dict) -> dict:
     """A bench's keywords for a factory's call (``kw``: its keywords but ``n_sensors``): the sensors built from a
-    scene, taken as given, or built from units, variants and sensor keywords; the bench's own keywords passed on."""
+    scene, taken as given, or built from units, variants and sensor keywords; the bench's own keywords passed on.
+    ``settings``: the session's or the test's marker's fidelity and seed, for what the call leaves out (a scene's
+    own replaced; your own ``sensors`` keep theirs)."""
     __tracebackhide__ = True
     kw = dict(kw)
     if "scene" in kw:
         _refuse_beside(fixture, "scene", kw, ("sensors", "pattern") + SENSOR_DESCRIPTION)
-        scene = load_scene_like(kw.pop("scene"))
+        scene = with_settings(load_scene_like(kw.pop("scene")), settings)
         return scene_kw(scene, n_sensors, kw.pop("seed", None), kw)
-    seed = kw.pop("seed", 1)
+    seed = kw.pop("seed", settings.get("seed", DEFAULT_SEED))
     if "sensors" in kw:
         _refuse_beside(fixture, "sensors", kw, SENSOR_DESCRIPTION)
         sensors = kw.pop("sensors")
@@ -376,7 +425,8 @@ def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw) -> dict:
     if n_sensors is None:
         n_sensors = (len(units) if units is not None else
                      1 if variant is None or isinstance(variant, str) else len(variant))
-    sensor_kw = {k: kw.pop(k) for k in SENSOR_KEYWORDS if k in kw}
+    sensor_kw = {**({"fidelity": settings["fidelity"]} if "fidelity" in settings else {}),
+                 **{k: kw.pop(k) for k in SENSOR_KEYWORDS if k in kw}}
     return {**kw, "n_sensors": n_sensors, "seed": seed,
             "sensors": unit_sensors(n_sensors, units, stimuli, seed, variant, **sensor_kw)}
 
@@ -391,17 +441,12 @@ def _bridge_scene_kw(scene, n_sensors: int | None, seed: int | None, kw: dict) -
 
 def _cheetah_scene_kw(scene, n_sensors: int | None, seed: int | None, kw: dict) -> dict:
     """CheetahBench's keywords for ``scene``'s sensors and ``kw`` (the scene's [host] section is the user's
-    program's business; the adapter serves the software SPI model only)."""
-    from bench.errors import SceneError
+    program's business, but its ``spi``: the sensors' SPI side unless ``kw`` gives one)."""
     from bench.hosts.scene_sensors import sensors_from_scene
-    from bench.tomlfile import spelled
 
-    if scene.spi != "software":
-        raise SceneError(scene.source, [f"host.spi = {spelled(scene.spi)}: the Cheetah adapter serves the "
-                                        "software SPI model only"])
     n_sensors = scene.n_sensors if n_sensors is None else n_sensors
     return {**kw, "n_sensors": n_sensors, "sensors": sensors_from_scene(scene, n_sensors, seed=seed),
-            "seed": scene.seed if seed is None else seed}
+            "seed": scene.seed if seed is None else seed, "spi": kw.get("spi") or scene.spi}
 
 
 @pytest.fixture
@@ -430,4 +475,6 @@ def biotac_cheetah(request):
     in the module docstring."""
     from bench.hosts.cheetah_server import CheetahBench
 
-    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw, "a CheetahBench", request.node)
+    spi = request.config.getoption("biotac_spi", None)  # --biotac-spi: the session's SPI side
+    yield from _benches("biotac_cheetah", CheetahBench, _cheetah_scene_kw, "a CheetahBench", request.node,
+                        defaults={} if spi is None else {"spi": spi})

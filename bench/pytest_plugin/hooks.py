@@ -9,17 +9,22 @@ failure and to see what the sensor saw.  After the test's call the same text is 
 ``biotac`` (``item.user_properties``), which ``--junitxml`` writes into the test case's ``<properties>``, passed
 or failed (as pytest's ``record_property`` does: outside the strict xunit2 schema, which some CI servers check).
 
-``--biotac-spi software|rtl`` runs every ``biotac_bridge`` and ``biotac_sensor`` of the session over that SPI side
+``--biotac-spi software|rtl`` runs every ``biotac_bridge``, ``biotac_cheetah`` and ``biotac_sensor`` of the session over that SPI side
 unless its call gives ``spi=``: one test suite, run over the software model and again over the Verilog RTL in CI,
-unchanged.
+unchanged.  ``--biotac-fidelity NAME`` and ``--biotac-seed N`` (ini: ``biotac_fidelity``, ``biotac_seed``) set every
+factory's sensors' fidelity profile and seed, under a test's ``@pytest.mark.biotac(fidelity=..., seed=...)`` and
+its calls' keywords; values that are not ones stop the session at its start in one line.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import numbers
 
 import numpy as np
 import pytest
+
+from bench.scenes.limits import SPI_SIDES  # the SPI sides a bench can run on (``--biotac-spi``)
 
 #: The sensors and benches a test's factories made, in order: (fixture, the call as written, the object).
 MADE = pytest.StashKey[list]()
@@ -123,17 +128,97 @@ def description(item) -> str | None:
     return "\n".join(texts)
 
 
-#: The SPI sides a bridge can run on (``--biotac-spi``).
-SPI_SIDES = ("software", "rtl")
+#: The session's sensor settings (``--biotac-fidelity``/``biotac_fidelity``, ``--biotac-seed``/``biotac_seed``),
+#: checked at the session's start: {"fidelity": name, "seed": int}, with only those the session sets.
+SESSION = pytest.StashKey[dict]()
+#: The marker a test overrides the session's sensor settings with: ``@pytest.mark.biotac(fidelity=..., seed=...)``.
+MARKER = "biotac"
+#: What the marker and the session set: the command-line option and the ini name of each.
+SETTINGS = {"fidelity": ("--biotac-fidelity", "biotac_fidelity"), "seed": ("--biotac-seed", "biotac_seed")}
+
+
+def setting_problem(name: str, value) -> str | None:
+    """What is wrong with ``value`` for the sensor setting ``name`` ("fidelity": a profile name of
+    :data:`emulator.fidelity.PROFILES`; "seed": a whole number ≥ 0, an int or its decimal digits), else None."""
+    from emulator.fidelity import PROFILES
+
+    if name == "fidelity":
+        return None if isinstance(value, str) and value in PROFILES else \
+            f"{value!r}: a fidelity profile, one of {', '.join(PROFILES)}"
+    whole = (isinstance(value, numbers.Integral) and not isinstance(value, bool)  # numpy's too
+             or isinstance(value, str) and value.isdecimal())
+    return None if whole and int(value) >= 0 else f"{value!r}: a seed, a whole number ≥ 0 (e.g. 7)"
+
+
+def _setting(name: str, value):
+    """``value`` of the checked sensor setting ``name`` as the sensors take it (a seed as an int)."""
+    return int(value) if name == "seed" else value
 
 
 def pytest_addoption(parser) -> None:
-    """``--biotac-spi``: run every ``biotac_bridge`` and ``biotac_sensor`` of the session on that SPI side unless
-    the test's call says ``spi=`` (a scene's ``host.spi`` is replaced, as ``biotac-bench run --spi`` replaces it)."""
-    parser.getgroup("biotac", "emulated BioTac (bench.pytest_plugin)").addoption(
+    """``--biotac-spi``: run every ``biotac_bridge``, ``biotac_cheetah`` and ``biotac_sensor`` of the session on that SPI side unless
+    the test's call says ``spi=`` (a scene's ``host.spi`` is replaced, as ``biotac-bench run --spi`` replaces it).
+    ``--biotac-fidelity``/``--biotac-seed`` (or the ini values ``biotac_fidelity``/``biotac_seed``; the command line
+    wins): every factory's sensors' fidelity profile and seed unless the test's marker or call says otherwise."""
+    group = parser.getgroup("biotac", "emulated BioTac (bench.pytest_plugin)")
+    group.addoption(
         "--biotac-spi", choices=SPI_SIDES, default=None, dest="biotac_spi",
-        help="SPI side of every biotac_bridge and biotac_sensor whose call gives no spi=: the software model or "
+        help="SPI side of every biotac_bridge, biotac_cheetah and biotac_sensor whose call gives no spi=: the software model or "
              "the Verilog RTL (Verilator); default: the call's scene's host.spi, else software")
+    group.addoption(
+        "--biotac-fidelity", default=None, dest="biotac_fidelity", metavar="NAME",
+        help="fidelity profile of every emulated sensor the biotac fixtures make (fast, default, reference) unless "
+             "the test's @pytest.mark.biotac(fidelity=...) or call says otherwise; replaces a scene's; default: "
+             "the ini value biotac_fidelity, else the call's scene's, else default")
+    group.addoption(
+        "--biotac-seed", default=None, dest="biotac_seed", metavar="N",
+        help="seed of every biotac fixture call (sensor k draws seed + k - 1) unless the test's "
+             "@pytest.mark.biotac(seed=...) or call says otherwise; replaces a scene's; default: the ini value "
+             "biotac_seed, else the call's scene's, else 0")
+    parser.addini("biotac_fidelity", "fidelity profile of the biotac fixtures' sensors (as --biotac-fidelity)",
+                  type="string", default="")
+    parser.addini("biotac_seed", "seed of the biotac fixtures' calls (as --biotac-seed)", type="string",
+                  default="")
+
+
+def pytest_configure(config) -> None:
+    """Register the ``biotac`` marker; check the session's sensor settings (:data:`SESSION`) once, at its start:
+    a value that is not one stops the session with one line naming the option (or ini name), the value and what
+    it may be (a ``pytest.UsageError``, as pytest reports its own bad options)."""
+    config.addinivalue_line("markers", f"{MARKER}(fidelity=None, seed=None): this test's emulated sensors' "
+                                       "fidelity profile and seed, over --biotac-fidelity/--biotac-seed")
+    session = {}
+    for name, (option, ini) in SETTINGS.items():
+        given = config.getoption(option.lstrip("-").replace("-", "_"), None)
+        where = option
+        if given is None:
+            given, where = config.getini(ini).strip() or None, f"ini value {ini}"
+        if given is None:
+            continue
+        problem = setting_problem(name, given)
+        if problem:
+            raise pytest.UsageError(f"{where} = {problem}")
+        session[name] = _setting(name, given)
+    config.stash[SESSION] = session
+
+
+def sensor_settings(node) -> dict:
+    """The sensor settings of the test ``node``: the session's (:data:`SESSION`) with its ``biotac`` marker's over
+    them (the closest marker: a test's own over its class's or module's).  A marker with another keyword, a
+    positional argument or a value that is not one fails the test with one line naming it."""
+    __tracebackhide__ = True
+    settings = dict(node.config.stash.get(SESSION, {}))
+    marker = node.get_closest_marker(MARKER)
+    if marker is None:
+        return settings
+    problems = [f"{k} = {v!r}: not a setting (it takes {', '.join(SETTINGS)})" for k, v in marker.kwargs.items()
+                if k not in SETTINGS]
+    problems += [f"{a!r}: give settings by keyword ({', '.join(SETTINGS)})" for a in marker.args]
+    problems += [f"{k} = {setting_problem(k, v)}" for k, v in marker.kwargs.items()
+                 if k in SETTINGS and setting_problem(k, v)]
+    if problems:
+        raise pytest.fail.Exception(f"@pytest.mark.{MARKER}(): {'; '.join(problems)}", pytrace=False)
+    return {**settings, **{k: _setting(k, v) for k, v in marker.kwargs.items()}}
 
 
 @pytest.hookimpl(wrapper=True)

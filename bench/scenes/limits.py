@@ -3,3 +3,6 @@
 
 #: sensors a scene can describe: the bridge firmware and the Cheetah adapter serve at most 5
 MAX_SENSORS = 5
+#: the sensors' SPI sides a scene's host.spi, the bridge, the Cheetah adapter and the pytest plugin choose between:
+#: the software model, or the Verilog RTL under Verilator
+SPI_SIDES = ("software", "rtl")

@@ -17,7 +17,7 @@ from typing import NamedTuple
 from bench import tomlfile
 from bench.errors import SceneError, shortened
 from bench.paths import folder_name_problem
-from bench.scenes.limits import MAX_SENSORS
+from bench.scenes.limits import MAX_SENSORS, SPI_SIDES
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
 from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM, nail_touch_problem
 from emulator.fidelity import PROFILES
@@ -49,6 +49,14 @@ SENSOR_KEYS = ("unit", "variant")
 #: ``min_points`` PAC samples beyond 4σ within ``window_s`` of a drop); kept here because verification builds on
 #: scenes, not the other way round — bench/tests/test_hostile_input.py holds the two equal.
 IMPACT_RULE_MIN_POINTS, IMPACT_RULE_WINDOW_S = 3, 0.1
+
+
+def sensor_seed(seed: int, k: int) -> int:
+    """The noise seed of sensor ``k`` (1..5) of a scene, or of a pytest factory's call or session, whose seed is
+    ``seed``: ``seed + k - 1`` (independent noise per sensor; sensor 1 draws ``seed`` itself).  The one convention of
+    every route that numbers sensors: scenes (:meth:`Scene.for_sensor`, each sensor's slides) and the pytest plugin's
+    factories (``bench.pytest_plugin.fixtures``)."""
+    return seed + k - 1
 
 
 def _r(v, limit: int = 80) -> str:
@@ -131,14 +139,14 @@ class Scene:
 
     def for_sensor(self, k: int) -> "Scene":
         """A one-sensor scene of sensor ``k``: its unit, parameters, variant, stimuli, skin and faults; the scene's
-        host, noise, fidelity; seed ``seed + k - 1`` (independent noise per sensor)."""
+        host, noise, fidelity; seed :func:`sensor_seed` (``seed + k - 1``: independent noise per sensor)."""
         import dataclasses
 
         if k == 1 and not self.sensors:
             return self
         sp = self.sensor_spec(k)
         return dataclasses.replace(self, name=self.name if k == 1 else f"{self.name}-sensor{k}",
-                                   seed=self.seed + k - 1, params=sp.params, stimuli=list(sp.stimuli),
+                                   seed=sensor_seed(self.seed, k), params=sp.params, stimuli=list(sp.stimuli),
                                    unit=sp.unit, serial=sp.serial, variant=sp.variant, sensors={},
                                    skin_before=sp.skin_before, skin_after=sp.skin_after,
                                    trial_skins=list(sp.trial_skins), faults=dict(sp.faults),
@@ -1055,7 +1063,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
 
     host = c.table(data, "host", "sequence, slot_rate_Hz, spi_clock_Hz, spi")
     c.known_keys(host, "host", {"sequence", "slot_rate_Hz", "spi_clock_Hz", "spi"})
-    spi = c.choice(host, "spi", "host", ("software", "rtl"), default="software")
+    spi = c.choice(host, "spi", "host", SPI_SIDES, default="software")
     sequence = host.get("sequence", "default")
     host_problems = len(c.problems)
     if sequence != "default":
@@ -1215,7 +1223,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         u, var, p_k, ser = t.unit, t.variant, t.params, (t.serial if k in others else "")
         own = copy.deepcopy(fresh_skin)  # each finger its own skin, as the [skin] table describes it
         before = own.state()
-        slides_k, skins_k, own = build_slides(slide_specs_of.get(k, []), own, int(seed) + k - 1, wear,
+        slides_k, skins_k, own = build_slides(slide_specs_of.get(k, []), own, sensor_seed(int(seed), k), wear,
                                               p_k.contact_radius_at_1N_m)
         sensors[k] = SensorSpec(k, u, ser, p_k, var, per_sensor.get(k, []) + slides_k, before, own.state(), skins_k,
                                 dict(faults_of.get(k, common)))

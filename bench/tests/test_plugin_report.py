@@ -79,10 +79,10 @@ def test_a_failing_test_says_what_each_sensor_was_and_felt_and_junit_keeps_it(py
         "*Captured biotac call*",
         "biotac_bridge(n_sensors=2, stimuli=[[]Tap(*time_s=0.3, peak_N=1.0*)[]], seed=7)",
         "  port /dev/pts/*, SPI side software, virtual time *",
-        "  sensor 1: biotac, serial BT0101EMU0000001, seed 8, fidelity default, sensor faults none, SPI faults none",
+        "  sensor 1: biotac, serial BT0101EMU0000001, seed 7, fidelity default, sensor faults none, SPI faults none",
         "    stimuli: 1",
         "      Tap(indenter_radius_mm=3.0, time_s=0.3, peak_N=1.0, duration_s=0.03)",
-        "  sensor 2: biotac, serial BT0101EMU0000002, seed 9, fidelity default, sensor faults none, "
+        "  sensor 2: biotac, serial BT0101EMU0000002, seed 8, fidelity default, sensor faults none, "
         "SPI faults miso_stuck=1",
         "    stimuli: none",
         f"biotac_sensor(scene='{scene}', seed=5)",
@@ -92,7 +92,7 @@ def test_a_failing_test_says_what_each_sensor_was_and_felt_and_junit_keeps_it(py
         "      Tap(indenter_radius_mm=3.0, time_s=1.0, peak_N=0.5, duration_s=0.03)",
         "biotac_cheetah(variant='biotac-sp')",
         "  socket *cheetah.sock, host time 0.000000 s, 0 batch(es) clocked",
-        "  sensor 1: biotac-sp, serial BTSP01EMU0000001, seed 2, *",
+        "  sensor 1: biotac-sp, serial BTSP01EMU0000001, seed 0, *",
     ])
     result.stdout.fnmatch_lines([  # the call's failure says why the stream stopped, not only the teardown
         "*_ test_action_raises _*", "*assert * == 30*", "*Captured biotac call*",
@@ -141,8 +141,19 @@ def test_sensor_the_call_decides(biotac_sensor):
     assert type(rtl).__name__ == "HarnessPeripheral" and rtl.bus.proc.poll() is None
     started.append(rtl.bus)
 
+def test_cheetah_default(biotac_cheetah):
+    assert biotac_cheetah().spi == "{default}"
+
+def test_cheetah_scene_asks_for_rtl(biotac_cheetah):
+    rtl = biotac_cheetah(scene="{rtl_scene}")
+    assert rtl.spi == "{scene}"
+    started.append(getattr(rtl.bus, "proc", None) and rtl.bus)
+
+def test_cheetah_the_call_decides(biotac_cheetah):
+    assert biotac_cheetah(spi="software").spi == "software"
+
 def test_every_harness_was_stopped_after_its_test():
-    assert all(h is None or h.proc.poll() is not None for h in started) and len(started) == 2
+    assert all(h is None or h.proc.poll() is not None for h in started) and len(started) == 3
 '''
 
 
@@ -150,12 +161,14 @@ def test_every_harness_was_stopped_after_its_test():
                                                     ("software", "software", "software")])
 def test_biotac_spi_sets_every_bridges_and_sensors_spi_side_unless_the_call_gives_one(pytester, tmp_path, option,
                                                                                       default, scene):
+    """``--biotac-spi`` reaches biotac_bridge, biotac_sensor and biotac_cheetah (a scene's host.spi replaced, a
+    call's spi= over both), and every RTL harness a test started is stopped after it."""
     rtl_scene = tmp_path / "rtl.toml"
     rtl_scene.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
     pytester.makepyfile(test_user=SPI_SIDE.format(default=default, scene=scene, rtl_scene=rtl_scene))
     chosen = [] if option is None else [f"--biotac-spi={option}"]
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", *chosen)
-    result.assert_outcomes(passed=7)
+    result.assert_outcomes(passed=10)
 
 
 def test_biotac_spi_refuses_a_side_that_is_not_one(pytester):

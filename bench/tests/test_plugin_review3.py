@@ -170,8 +170,8 @@ def test_one_stimulus_not_in_a_list(biotac_sensor):
 def test_a_stimulus_by_name(biotac_bridge):
     biotac_bridge(stimuli=["tap"])
 
-def test_cheetah_on_an_rtl_scene(biotac_cheetah):
-    biotac_cheetah(scene="{rtl}")
+def test_cheetah_on_no_spi_side(biotac_cheetah):
+    biotac_cheetah(spi="verilog")
 
 def test_channels_beside_a_scene(biotac_sensor):
     biotac_sensor(scene="taps", channels=["PDC"])
@@ -201,9 +201,7 @@ def test_uses_it_later():
 def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_path, sp_scene):
     bad = tmp_path / "bad.toml"
     bad.write_text('[scene]\nname = "bad"\nduration_s = 1.0\n[host]\nsequence = ["PAC", "QQQ"]\n')
-    rtl = tmp_path / "rtl.toml"
-    rtl.write_text('[scene]\nname = "rtl"\nduration_s = 1.0\n[host]\nspi = "rtl"\n')
-    pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene, rtl=rtl))
+    pytester.makepyfile(test_user=MISUSE.format(bad=bad, sp=sp_scene))
     result = pytester.runpytest("-p", "no:cacheprovider")
     result.assert_outcomes(failed=19, passed=1)
     out = result.stdout.str()
@@ -220,8 +218,7 @@ def test_misusing_a_factory_fails_the_test_with_one_clear_message(pytester, tmp_
         "*biotac_cheetah(): n_sensors = 9: a whole number from 1 to 5*",
         "*biotac_sensor(): stimuli = Tap(*): give a list of stimuli*",
         "*biotac_bridge(): not a stimulus: 'tap'*",
-        "*biotac_cheetah(): */rtl.toml: 1 problem(s):*",
-        '*host.spi = "rtl": the Cheetah adapter serves the software SPI model only*',
+        '*biotac_cheetah(): spi = \'verilog\': "software" (the Python model) or "rtl" (the Verilog twin)*',
         "*biotac_sensor(): channels given with scene*",
         "*biotac_bridge(): pattern given with scene*",
         "*biotac_bridge(): units = [[]1, 2, 3[]]: give one unit per sensor (2)*",
@@ -250,14 +247,14 @@ def test_a_sensor_answers_only_the_channels_it_was_given(biotac_sensor):
 def test_the_benches_sensors_feel_the_stimuli_on_sensor_1_only_and_draw_seed_plus_k():
     """The factories' sensors (``unit_sensors``, what biotac_bridge and biotac_cheetah build): a 2 N, 0.2 s tap raises
     sensor 1's PDC by tens of codes while sensor 2's stays within a few of its rest; sensor k's noise seed is
-    ``seed + k``."""
+    ``seed + k - 1``, as a scene's sensor k."""
     from bench.pytest_plugin.fixtures import unit_sensors
     from emulator.channels import PDC
     from emulator.spi.model import SensorPort
     from emulator.stimuli import Tap
 
     sensors = unit_sensors(2, stimuli=[Tap(0.2, 2.0, duration_s=0.2)], seed=1)
-    assert [sensors[k].seed for k in (1, 2)] == [2, 3]
+    assert [sensors[k].seed for k in (1, 2)] == [1, 2]
     rise = {}
     for k, sensor in sensors.items():
         port = SensorPort(sensor)

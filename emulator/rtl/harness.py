@@ -39,6 +39,8 @@ FAULTS = np.dtype([("sensor", "u1"), ("miso_flip_en", "u1"), ("mosi_flip_en", "u
                    ("miso_flip_bit", "<u2"), ("mosi_flip_bit", "<u2")])
 #: The slowest SCK (Hz) the harness takes: its half period in ps is a signed 32-bit field.
 MIN_CLOCK_HZ = 0.5e12 / (2**31 - 1)
+#: The most bits one transfer carries through the harness (its MOSI and MISO fields are 64-bit words).
+MAX_TRANSFER_BITS = 64
 #: What the streaming harness answers a header it takes, before any batch (harness.cpp's ``STREAM_READY``).
 STREAM_READY = b"BTSPIOK\0"
 #: How long (wall s) :class:`RtlBus` waits for its harness to take the header (it answers in milliseconds).
@@ -647,8 +649,24 @@ class RtlBus:
         return self._play(start, np.asarray(cs), np.asarray(mosi), 16, clock_hz, keep).astype(np.uint16)
 
     def transfer(self, tr) -> int:
-        return int(self._play([tr.start_s], np.array([tr.cs]), np.array([tr.mosi]), tr.nbits, tr.clock_hz,
-                              [tr.keep_cs])[0])
+        """Clock one transfer; returns the MISO bits the host samples (``nbits``, MSB first).  The harness carries
+        :data:`MAX_TRANSFER_BITS` bits of MOSI and MISO a transfer: a longer one (a vendor host's 18-byte property
+        read) is clocked as pieces of that many bits under the one chip select, each starting when the one before
+        it ends (half an SCK period after its last bit)."""
+        if tr.nbits <= MAX_TRANSFER_BITS:
+            return int(self._play([tr.start_s], np.array([tr.cs]), np.array([tr.mosi]), tr.nbits, tr.clock_hz,
+                                  [tr.keep_cs])[0])
+        sizes = [MAX_TRANSFER_BITS] * (tr.nbits // MAX_TRANSFER_BITS) + ([tr.nbits % MAX_TRANSFER_BITS]
+                                                                          if tr.nbits % MAX_TRANSFER_BITS else [])
+        left = np.cumsum([0] + sizes[:-1])  # bits clocked before each piece
+        starts = tr.start_s + (left + 0.5 * np.arange(len(sizes))) / tr.clock_hz
+        mosi = [tr.mosi >> (tr.nbits - int(a) - n) & ((1 << n) - 1) for a, n in zip(left, sizes)]
+        miso = self._play(starts, np.full(len(sizes), tr.cs), np.array(mosi, np.uint64), np.array(sizes),
+                          tr.clock_hz, [True] * (len(sizes) - 1) + [tr.keep_cs])
+        out = 0
+        for bits, n in zip(miso, sizes):
+            out = out << n | int(bits)
+        return out
 
     def close(self) -> None:
         """Stop the harness: end its input (it exits), and kill it if it has not within :data:`CLOSE_TIMEOUT_S`;
