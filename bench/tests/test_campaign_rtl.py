@@ -129,3 +129,39 @@ def test_an_rtl_harness_that_does_not_build_is_one_line_and_an_unfinished_report
     assert suite.get("errors") == "1" and suite.find("testcase").get("name") == "unfinished"
     assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")] == [("spi", "rtl")]
     assert "the campaign could not run" in suite.find("testcase/error").get("message")
+
+
+@pytest.mark.rtl
+@pytest.mark.firmware
+def test_a_scene_files_cases_run_over_the_rtl_with_its_sensor_1(monkeypatch, tmp_path, capsys):
+    """``campaign --spi rtl --scenes grip.toml``: a scene file asking for the RTL (``host.spi = "rtl"``) is taken
+    over the RTL, and its case's bench is the RTL's with sensor 1 of the scene (its unit's parameter, its press) —
+    in process, where the bench can be looked at; then the command over a LocalCluster worker: the case passes and
+    the report names it by the file over the RTL."""
+    from bench.campaigns.scene_files import campaign_scene
+    from bench.hosts import bridge
+    from bench.tests.test_campaign_scene_files import GRIP
+
+    scene = tmp_path / "grip.toml"
+    scene.write_text(GRIP + "\n[host]\nspi = \"rtl\"\n")
+    built = []
+
+    class Spy(bridge.FirmwareBench):
+        def __init__(self, *a, **kw):
+            super().__init__(*a, **kw)
+            s1 = self.board.sensors[1]
+            built.append((type(self.board.bus).__name__, s1.params.inflation_volume_mL,
+                          [type(st).__name__ for st in s1.stimuli]))
+
+    monkeypatch.setattr(bridge, "FirmwareBench", Spy)
+    result = campaign.run_case_task(campaign.CaseTask("none", campaign_scene(str(scene), ["none"], "rtl"), 0, "rtl"))
+    assert result["passed"], result["problem"]
+    assert built == [("RtlBus", 0.6, ["Press"])]
+    monkeypatch.undo()
+    report = tmp_path / "c.xml"
+    status, out, err = invoke(["campaign", "--spi", "rtl", "--faults", "cs_glitch", "--scenes", scene, "--workers",
+                               "1", "--quiet", "--junit", report], capsys)
+    assert status == 0, out + err
+    suite = ET.parse(report).getroot()
+    assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")][0] == ("spi", "rtl")
+    assert [(c.get("name"), c.find("failure")) for c in suite.iter("testcase")] == [("grip.toml[seed=0]", None)]
