@@ -542,13 +542,24 @@ def write_unfinished_junit(path: Path, why: str, spi: str = "software", started=
     _write_suite(suite, path)
 
 
+def _one_line(text: str) -> str:
+    """``text`` on one line (a problem may hold several, e.g. a build's diagnostics): its lines joined by " / "."""
+    return " / ".join(line.strip() for line in text.splitlines() if line.strip())
+
+
 def summary(results: list[dict]) -> str:
     """The summary table: a header naming the SPI bus the cases ran over, one line per case, the count of passes and
-    failures."""
-    lines = [f"{'fault':18s} {'scene':13s} {'seed':>4s}  result  expected / problem  (SPI bus: {_bus(results)})"]
+    failures.  The fault, scene and seed columns are as wide as their longest entry (a scene file's name can be
+    long), so that every line's result starts in the same column; a problem of several lines is shown on one."""
+    fault_w = max([len("fault")] + [len(r["fault"]) for r in results])
+    scene_w = max([len("scene")] + [len(str(r["scene"])) for r in results])
+    seed_w = max([len("seed")] + [len(str(r["seed"])) for r in results])
+    lines = [f"{'fault':{fault_w}s} {'scene':{scene_w}s} {'seed':>{seed_w}s}  result  expected / problem  "
+             f"(SPI bus: {_bus(results)})"]
     for r in results:
-        lines.append(f"{r['fault']:18s} {r['scene']:13s} {r['seed']:4d}  {'PASS' if r['passed'] else 'FAIL':6s}  "
-                     f"{r['expected'] if r['passed'] else r['problem']}")
+        said = r["expected"] if r["passed"] else _one_line(r["problem"])
+        lines.append(f"{r['fault']:{fault_w}s} {str(r['scene']):{scene_w}s} {r['seed']:{seed_w}d}  "
+                     f"{'PASS' if r['passed'] else 'FAIL':6s}  {said}")
     n_fail = sum(not r["passed"] for r in results)
     lines.append(f"{len(results) - n_fail} passed, {n_fail} failed")
     return "\n".join(lines)

@@ -264,6 +264,26 @@ def test_the_summary_says_pass_or_fail_per_case_and_counts_them():
     assert lines[-1] == "2 passed, 1 failed"
 
 
+def test_the_summary_columns_are_as_wide_as_their_longest_entry():
+    """A scene file's long name, a long fault name and a five-digit seed keep every line's columns aligned (the
+    scene column was 13 wide: grip.toml[seed=K]'s file names pushed their lines' results right), and a problem of
+    several lines (a build's diagnostics) stays on its case's line."""
+    scenes = ("rest", "a_scene_file_with_a_long_name.toml", "taps")
+    results = [{"fault": f, "scene": s, "seed": seed, "expected": "as expected", "passed": s != "taps",
+                "problem": "no build:\n  error: x\n" if s == "taps" else None, "seconds": 0.1}
+               for f, seed in (("none", 7), ("serial_corruption", 12345)) for s in scenes]
+    lines = campaign.summary(results).splitlines()
+    assert len(lines) == len(results) + 2
+    header, rows = lines[0], lines[1:-1]
+    for r, row in zip(results, rows):
+        scene_at = row.index(f" {r['scene']} ") + 1
+        seed_ends = row.index(f" {r['seed']}  ", scene_at + len(r["scene"])) + 1 + len(str(r["seed"]))
+        assert row.startswith(f"{r['fault']} ") and scene_at == header.index(" scene ") + 1, lines
+        assert seed_ends == header.index(" seed ") + 5 and row.index("PASS" if r["passed"] else "FAIL") == \
+            header.index(" result ") + 1, lines
+    assert rows[2].endswith("FAIL    no build: / error: x")
+
+
 def test_the_junit_failure_carries_the_problem_and_what_was_expected(tmp_path):
     import xml.etree.ElementTree as ET
 
