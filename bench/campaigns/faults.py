@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import re
 import time
+from contextlib import contextmanager
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -30,6 +31,7 @@ import numpy as np
 
 from bench.atomic import atomic_write
 from bench.campaigns.case_names import CASE_FRAMES, FAULT_EXPECTED, SCENE_DESCRIPTIONS, check_bus
+from bench.campaigns.drivers import BENCH_DRIVER, DriverFailed, one_line, open_driver, uncounted_gaps
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
@@ -318,20 +320,22 @@ def _schedule_after_start(board, schedule) -> list:
 
 
 def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAMES, spi: str = "software",
-             firmware=None) -> dict:
+             firmware=None, driver: str = BENCH_DRIVER) -> dict:
     """One fault in one scene — a built-in scene's name, or a scene file
     (:class:`~bench.campaigns.scene_files.CampaignScene`: its sensor 1 and stimuli, and its own number of frames)
     — over the SPI bus ``spi`` ("software" or "rtl") with ``firmware`` (None: the reference one; else
-    FirmwareBench's ``firmware=``: your C sources or library): the verdict (``passed``, ``problem``), what was
-    expected, the bus, and ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or driver is
-    this case's failure, never an exception."""
+    FirmwareBench's ``firmware=``: your C sources or library) and the host ``driver`` (``MODULE:CALLABLE`` or
+    ``PATH.py:CALLABLE``: :mod:`bench.campaigns.drivers`): the verdict (``passed``, ``problem``; ``error`` when
+    the driver raised or lacks part of its interface, so no verdict was reached), what was expected, the bus, and
+    ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or driver is this case's failure (or
+    error), never an exception."""
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.cosim import default_sensors
-    from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, BridgeDriver, Status
+    from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, Status
     from emulator.channels import PAC
 
     t0 = time.perf_counter()
-    problem = None
+    problem, error = None, False
     own = not isinstance(scene, str)  # a scene file's
     try:
         stimuli = scene.stimuli if own else SCENES[scene]
@@ -347,13 +351,17 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
         fb = FirmwareBench(stimuli=stimuli, seed=seed, spi=spi, **kw)
         started = _schedule_after_start(fb.board, fault.schedule)
         with fb:
-            drv = BridgeDriver(fb.port)
+            drv = open_driver(driver, fb.port)
             tries = LOSSY_LINE_TRIES if fb.corrupt_rate or fb.drop_rate else 1
-            if _ask(drv, drv.start, CMD_START, tries) is None:
+            with _blamed_on(driver):
+                acknowledged = _ask(drv, drv.start, CMD_START, tries)
+            if acknowledged is None:
                 raise TimeoutError(f"no acknowledgement of START within {tries} × {REPLY_HORIZON_S:g} s")
-            frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
-            status = _ask(drv, drv.request_status, Status, tries)
-            drv.close()
+            with _blamed_on(driver):
+                frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
+                status = _ask(drv, drv.request_status, Status, tries)
+                stats = drv.parser.stats
+                drv.close()
         unapplied = len(fb.board.events) + len(fb.board.resets)  # the fault's actions the run never reached
         if fault.schedule and unapplied:
             problem = f"{unapplied} of the fault's scheduled actions never happened (the stream ended before them)"
@@ -363,20 +371,35 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
             problem = f"only {len(frames)} frames arrived"
         elif status is None:
             problem = "no status reply"
+        elif (lost := uncounted_gaps(frames, stats.dropped_frames)) is not None:
+            problem = lost
         else:
-            problem = fault.check(frames, status, drv.parser.stats)
+            problem = fault.check(frames, status, stats)
             pac = np.concatenate([f.codes[f.channels == PAC, 0] for f in frames if (f.status == 0).all()]
                                  or [np.array([2048])])
             if problem is None and not (0 <= pac.min() and pac.max() <= 4095):
                 problem = "out-of-range data reached the caller"
             if problem is None and fault.at_rest:
                 problem = not_at_rest(frames, fb.board.sensors, stimuli, started[0])
+    except DriverFailed as e:  # the driver raised or cannot be used: the case reached no verdict
+        problem, error = one_line(e), True
     except Exception as e:  # a crash or hang of the firmware or driver is a failure of the case
         problem = f"{type(e).__name__}: {e}"
     return {"fault": fault.name, "scene": scene.label if own else scene, "seed": seed, "spi": spi,
             "firmware": firmware_name(firmware), "expected": fault.expected,
-            **({"scene_file": scene.path} if own else {}),
-            "passed": problem is None, "problem": problem, "seconds": time.perf_counter() - t0}
+            "driver": driver, **({"scene_file": scene.path} if own else {}),
+            "passed": problem is None, "problem": problem, **({"error": True} if error else {}),
+            "seconds": time.perf_counter() - t0}
+
+
+@contextmanager
+def _blamed_on(driver: str):
+    """An exception the host ``driver``'s own methods raise inside this block becomes :class:`DriverFailed`
+    naming the driver (the case is then an error, not a verdict on the firmware)."""
+    try:
+        yield
+    except Exception as e:
+        raise DriverFailed(f"driver {driver} raised {type(e).__name__}: {e}") from None
 
 
 def firmware_name(firmware) -> str:
@@ -397,11 +420,13 @@ class CaseTask:
     seed: int
     spi: str = "software"
     firmware: tuple | str | None = None  # None: the reference firmware; your sources (a tuple) or library (a path)
+    driver: str = BENCH_DRIVER  # the host driver: MODULE:CALLABLE or PATH.py:CALLABLE (bench.campaigns.drivers)
 
 
 def run_case_task(task: CaseTask) -> dict:
     """The engine's task: :func:`run_case` for the named fault and scene (a plain dict; ``seconds`` is wall s)."""
-    return run_case(FAULTS[task.fault], task.scene, task.seed, spi=task.spi, firmware=task.firmware)
+    return run_case(FAULTS[task.fault], task.scene, task.seed, spi=task.spi, firmware=task.firmware,
+                    driver=task.driver)
 
 
 def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTask]:
@@ -419,14 +444,19 @@ def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTas
 
 
 def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool = False,
-                 spi: str = "software", firmware=None) -> list[dict]:
-    """Every fault × scene × seed over the SPI bus ``spi`` on the campaign engine (``spec``: a
-    :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment; or a connected ``client``); results
-    in task order, one dict per case.  A fault the bus cannot carry is refused (ValueError) before anything runs."""
+                 spi: str = "software", firmware=None, driver: str = BENCH_DRIVER) -> list[dict]:
+    """Every fault × scene × seed over the SPI bus ``spi`` with the host ``driver`` (:mod:`bench.campaigns.drivers`)
+    on the campaign engine (``spec``: a :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment;
+    or a connected ``client``); results in task order, one dict per case.  A fault the bus cannot carry is refused
+    (ValueError), and a driver that does not import or cannot take the port
+    (:class:`~bench.campaigns.drivers.DriverRefused`), before anything runs."""
+    from bench.campaigns.drivers import load_driver
     from bench.campaigns.engine import run_tasks
     from bench.hosts.cosim import build_firmware, firmware_library
 
     tasks = campaign_tasks(faults, scenes, seeds, spi)
+    load_driver(driver)  # here, once: a driver that cannot be used is one error, not one per case
+    tasks = [replace(t, driver=driver) for t in tasks]
     if spi == "rtl":  # once, here, as the firmware: not one Verilator build per worker at the same time
         from bench.errors import BuildError
         from emulator.rtl.harness import Harness, HarnessError
@@ -498,10 +528,11 @@ def _write_suite(suite: ET.Element, path: Path) -> None:
 def case_output(r: dict) -> str:
     """What a report's test case shows as its output (``system-out``), passed or failed: the fault, scene, seed, SPI
     bus and firmware it ran, the verdict with what was expected (and the problem, for a failure) and its wall time."""
-    verdict = "PASS" if r["passed"] else f"FAIL: {r['problem']}"
+    verdict = "PASS" if r["passed"] else f"{'ERROR' if r.get('error') else 'FAIL'}: {r['problem']}"
     scene = f"{r['scene']} ({r['scene_file']})" if "scene_file" in r else r["scene"]
     return (f"fault {r['fault']} in scene {scene}, seed {r['seed']}, over the {r.get('spi', 'software')} SPI bus, "
-            f"firmware {r.get('firmware', 'reference')}\nexpected: {r['expected']}\n{verdict}\n"
+            f"firmware {r.get('firmware', 'reference')}, driver {r.get('driver', BENCH_DRIVER)}\n"
+            f"expected: {r['expected']}\n{verdict}\n"
             f"wall time {r['seconds']:.3f} s\n")
 
 
@@ -512,16 +543,21 @@ def write_junit(results: list[dict], path: Path, started=None) -> None:
     and on which host (:func:`_when_and_where`), and the SPI bus and firmware as its properties ``spi`` and
     ``firmware``."""
     suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results)),
-                       failures=str(sum(not r["passed"] for r in results)),
-                       errors="0", skipped="0",  # required by the JUnit schema CI tools validate against
+                       failures=str(sum(not r["passed"] and not r.get("error") for r in results)),
+                       errors=str(sum(bool(r.get("error")) for r in results)),
+                       skipped="0",  # (required by the JUnit schema CI tools validate against)
                        time=f"{sum(r['seconds'] for r in results):.3f}", **_when_and_where(started))
     ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=_bus(results))
     firmwares = sorted({r.get("firmware", "reference") for r in results})
     ET.SubElement(suite.find("properties"), "property", name="firmware", value="; ".join(firmwares) or "reference")
+    drivers = sorted({r.get("driver", BENCH_DRIVER) for r in results})
+    ET.SubElement(suite.find("properties"), "property", name="driver", value="; ".join(drivers) or BENCH_DRIVER)
     for r in results:
         case = ET.SubElement(suite, "testcase", classname=f"campaign.{r['fault']}",
                              name=f"{r['scene']}[seed={r['seed']}]", time=f"{r['seconds']:.3f}")
-        if not r["passed"]:
+        if r.get("error"):  # the driver raised or could not be used: no verdict (the Ant schema's error)
+            ET.SubElement(case, "error", message=r["problem"], type="driver-error").text = f"expected: {r['expected']}"
+        elif not r["passed"]:
             ET.SubElement(case, "failure", message=r["problem"]).text = f"expected: {r['expected']}"
             case.find("failure").set("type", "unexpected-reaction")  # (the Ant schema requires a type)
         ET.SubElement(case, "system-out").text = case_output(r)
@@ -542,11 +578,6 @@ def write_unfinished_junit(path: Path, why: str, spi: str = "software", started=
     _write_suite(suite, path)
 
 
-def _one_line(text: str) -> str:
-    """``text`` on one line (a problem may hold several, e.g. a build's diagnostics): its lines joined by " / "."""
-    return " / ".join(line.strip() for line in text.splitlines() if line.strip())
-
-
 def summary(results: list[dict]) -> str:
     """The summary table: a header naming the SPI bus the cases ran over, one line per case, the count of passes and
     failures.  The fault, scene and seed columns are as wide as their longest entry (a scene file's name can be
@@ -557,9 +588,11 @@ def summary(results: list[dict]) -> str:
     lines = [f"{'fault':{fault_w}s} {'scene':{scene_w}s} {'seed':>{seed_w}s}  result  expected / problem  "
              f"(SPI bus: {_bus(results)})"]
     for r in results:
-        said = r["expected"] if r["passed"] else _one_line(r["problem"])
+        said = r["expected"] if r["passed"] else one_line(r["problem"])
         lines.append(f"{r['fault']:{fault_w}s} {str(r['scene']):{scene_w}s} {r['seed']:{seed_w}d}  "
-                     f"{'PASS' if r['passed'] else 'FAIL':6s}  {said}")
-    n_fail = sum(not r["passed"] for r in results)
-    lines.append(f"{len(results) - n_fail} passed, {n_fail} failed")
+                     f"{'PASS' if r['passed'] else 'ERROR' if r.get('error') else 'FAIL':6s}  {said}")
+    n_fail = sum(not r["passed"] and not r.get("error") for r in results)
+    n_error = sum(bool(r.get("error")) for r in results)
+    lines.append(f"{len(results) - n_fail - n_error} passed, {n_fail} failed"
+                 + (f", {n_error} error(s) (the driver raised or could not be used)" if n_error else ""))
     return "\n".join(lines)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from bench.campaigns.case_names import (CASE_FRAMES, CASE_MAX_S, FAULT_EXPECTED, NEEDS_SOFTWARE_SPI,
                                         SCENE_DESCRIPTIONS, SPI_BUSES, check_bus, is_scene_file)
+from bench.campaigns.drivers import BENCH_DRIVER
 from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
                             say_leftovers, sigterm_like_ctrl_c, whole)
 from bench.tomlfile import spelled
@@ -41,6 +42,21 @@ def _names(kind: str):
     return parse
 
 
+def _driver_spec(text: str) -> str:
+    """argparse type: ``--driver``'s MODULE:CALLABLE or PATH.py:CALLABLE, spelled right (imported when the campaign
+    starts: :func:`bench.campaigns.drivers.load_driver`)."""
+    from bench.campaigns.drivers import parse_driver
+
+    try:
+        parse_driver(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return text
+
+
+_driver_spec.__name__ = "driver"
+
+
 def _cmd_campaign(a) -> int:
     """The campaign, holding --junit's lock from start to end (:class:`~bench.reporting.outdir.OutFile`): two
     campaigns never write one report, and the temporary files of a campaign killed as it wrote its report are
@@ -64,14 +80,14 @@ def _run_campaign(a, report: Path) -> int:
     n_cases = len(a.faults) * len(a.scenes) * len(seeds)
     print(f"{n_cases} cases ({len(a.faults)} fault(s) × {len(a.scenes)} scene(s) × "
           f"{len(seeds) if a.seed is None else f'seed {a.seed}'}) over the {a.spi} SPI bus on {spec.describe()}, "
-          f"firmware: {campaign.firmware_name(firmware)}", file=sys.stderr)
+          f"firmware: {campaign.firmware_name(firmware)}, driver: {a.driver}", file=sys.stderr)
     started = datetime.now(timezone.utc)  # the report's timestamp: when the campaign began
     try:
         from bench.campaigns.scene_files import campaign_scenes
 
         scenes = campaign_scenes(a.scenes, a.faults, a.spi)  # scene files read and checked before anything runs
         results = campaign.run_campaign(a.faults, scenes, seeds, spec=spec, progress=not a.quiet,
-                                        spi=a.spi, firmware=firmware)
+                                        spi=a.spi, firmware=firmware, driver=a.driver)
     except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
         # report says so: an earlier campaign's passing report left at --junit would be published as this one's
         why = (f"the campaign was stopped before its {n_cases} case(s) finished" if isinstance(e, KeyboardInterrupt)
@@ -140,6 +156,15 @@ first stimulus too early for none or fluid_leak (each checks the resting sensor 
 refusal says how early), and for fluid_leak (its prediction is the nominal sensor's) a unit or parameters of the
 scene's own or a stimulus that never ends (power_on, ambient_step, heater_failure).
 
+--driver MODULE:CALLABLE (or PATH.py:CALLABLE) runs every case through your host driver instead of the bench's
+({BENCH_DRIVER}): the callable is called with the serial port's path and returns the driver object, which the
+case uses as the bench's: start(), request_status(), wait_for(reply_type, timeout_s), frames(max_frames=,
+timeout_s=) yielding the bench's DataFrame, parser.stats (crc_errors, dropped_frames), close() — a subclass or a
+wrapper of the bench's BridgeDriver is simplest.  A driver that does not import, is not callable or cannot take the
+port is refused before anything runs; one that raises, or returns an object lacking part of that, makes its case
+an error naming the driver; frames missing from the sequence numbers it hands over that it did not count as dropped
+fail the case.
+
 --spi rtl runs the cases over the Verilog RTL in the C++ harness instead of the software model (the same verdicts
 are expected; the summary and the report's property "spi" say which bus ran).  {_over_the_rtl()}
 
@@ -150,6 +175,7 @@ are expected; the summary and the report's property "spi" say which bus ran).  {
   biotac-bench campaign --spi rtl --scenes rest --junit out/c-rtl.xml       # every fault over the RTL
   biotac-bench campaign --scenes ci/grip.toml,taps.toml --seeds 3          # your scene file and a shipped one
   biotac-bench campaign --faults cs_glitch --scenes ci/grip.toml --seed 2   # the case grip.toml[seed=2] again
+  biotac-bench campaign --driver ci/our_driver.py:open_driver --junit out/c.xml   # your host driver in every case
 """
 
 
@@ -178,5 +204,9 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     cp.add_argument("--firmware", nargs="+", type=firmware_file, metavar="FILE",
                     help="your firmware instead of the reference one, checked against every case: its C sources or "
                          "one built .so (as bridge --firmware); the report's property \"firmware\" names it")
+    cp.add_argument("--driver", type=_driver_spec, default=BENCH_DRIVER, metavar="MODULE:CALLABLE",
+                    help="your host driver instead of the bench's (%(default)s): a module Python imports or a .py "
+                         "file, and the callable in it that takes the serial port's path and returns the driver "
+                         "(see above); the report's property \"driver\" names it")
     cp.add_argument("--quiet", action="store_true", help="no progress bar")
     cp.set_defaults(func=sigterm_like_ctrl_c(_cmd_campaign))

@@ -41,7 +41,7 @@ def test_a_campaign_runs_your_firmware_and_fails_it_where_it_misbehaves(tmp_path
     suite = ET.parse(tmp_path / "c.xml").getroot()
     assert (suite.get("failures"), suite.get("errors"), suite.get("skipped")) == ("1", "0", "0")
     props = {p.get("name"): p.get("value") for p in suite.iter("property")}
-    assert props == {"spi": "software", "firmware": str(bad)}
+    assert props == {"spi": "software", "firmware": str(bad), "driver": "bench.hosts.driver:BridgeDriver"}
 
 
 def test_the_reference_firmware_is_named_so_in_the_report(tmp_path):

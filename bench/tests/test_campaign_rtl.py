@@ -36,8 +36,8 @@ def test_a_small_campaign_gives_the_same_verdicts_over_the_rtl_as_over_the_softw
         assert campaign.summary(results).splitlines()[0].endswith(f"(SPI bus: {spi})")
         campaign.write_junit(results, tmp_path / f"{spi}.xml")
         suite = ET.parse(tmp_path / f"{spi}.xml").getroot()
-        assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")] == [("spi", spi),
-                                                                                          ("firmware", "reference")]
+        assert [(p.get("name"), p.get("value")) for p in suite.findall("properties/property")] == [
+            ("spi", spi), ("firmware", "reference"), ("driver", "bench.hosts.driver:BridgeDriver")]
         cases[spi] = [(c.get("classname"), c.get("name")) for c in suite.findall("testcase")]
     assert cases["rtl"] == cases["software"]
 

@@ -1,0 +1,133 @@
+"""A team's own host driver in the fault campaign (``campaign --driver MODULE:CALLABLE`` or ``PATH.py:CALLABLE``):
+a real campaign through a driver wrapping the bench's passes and names it; one that loses every other frame without
+counting it fails every case; a driver that cannot be imported, is not callable or cannot take the port is refused
+in one line naming it before anything runs (the --junit report says the campaign could not run); one that raises,
+or returns an object lacking what a case calls, makes its case a JUnit error naming the driver."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from bench.campaigns import faults as campaign
+from bench.campaigns.drivers import BENCH_DRIVER, DriverRefused, load_driver, uncounted_gaps
+from bench.tests.test_cli_review import invoke
+
+DRIVERS = Path(__file__).resolve().parents[2] / "fixtures" / "drivers"
+WRAPPED = f"{DRIVERS / 'wrapped_bridge_driver.py'}:open_driver"
+EVERY_OTHER = f"{DRIVERS / 'every_other_frame.py'}:EveryOtherFrame"
+
+
+def _suite(path) -> ET.Element:
+    return ET.parse(path).getroot()
+
+
+@pytest.mark.firmware
+def test_a_campaign_through_your_driver_passes_and_names_it(tmp_path, capsys):
+    report = tmp_path / "c.xml"
+    status, out, err = invoke(["campaign", "--driver", WRAPPED, "--faults", "none,serial_loss", "--scenes", "taps",
+                               "--workers", "1", "--quiet", "--junit", report], capsys)
+    assert status == 0, out + err
+    assert f"driver: {WRAPPED}" in err  # the header
+    suite = _suite(report)
+    props = {p.get("name"): p.get("value") for p in suite.iter("property")}
+    assert props["driver"] == WRAPPED and (suite.get("failures"), suite.get("errors")) == ("0", "0")
+    assert all(f"driver {WRAPPED}\n" in c.find("system-out").text for c in suite.iter("testcase"))
+
+
+@pytest.mark.firmware
+def test_a_driver_that_loses_every_other_frame_without_a_word_fails_every_case(tmp_path, capsys):
+    report = tmp_path / "c.xml"
+    status, out, err = invoke(["campaign", "--driver", EVERY_OTHER, "--faults", "none,serial_loss", "--scenes",
+                               "rest", "--workers", "1", "--quiet", "--junit", report], capsys)
+    assert status == 1, out + err
+    failures = [c.find("failure") for c in _suite(report).iter("testcase")]
+    assert len(failures) == 2 and all(f is not None and "frames lost without a word" in f.get("message")
+                                      for f in failures)
+    assert out.splitlines()[-2] == "0 passed, 2 failed"
+
+
+def test_frames_missing_from_the_sequence_must_be_counted_as_dropped():
+    from types import SimpleNamespace
+
+    frames = [SimpleNamespace(seq=s) for s in (65534, 65535, 1, 2)]  # 0 missing, across the counter's wrap
+    assert uncounted_gaps(frames, 1) is None and uncounted_gaps(frames[:2], 0) is None
+    assert "missing 1 by their sequence numbers, but counted 0 dropped" in uncounted_gaps(frames, 0)
+
+
+#: (the driver file's text, the callable's name, what its refusal says)
+REFUSED = [
+    (None, "open_driver", "no file "),
+    ("def open_driver(port:\n", "open_driver", "cannot import "),
+    ("raise RuntimeError('no licence')\n", "open_driver", "cannot import "),
+    ("def other(port):\n    pass\n", "open_driver", "has no open_driver"),
+    ("open_driver = 3\n", "open_driver", "open_driver is a int, not callable"),
+    ("def open_driver():\n    pass\n", "open_driver", "cannot be called with the serial port's path alone"),
+    ("def open_driver(port, baud):\n    pass\n", "open_driver", "cannot be called with the serial port's path"),
+]
+
+
+@pytest.mark.parametrize("text, name, said", REFUSED, ids=[f"{r[2][:20]}-{k}" for k, r in enumerate(REFUSED)])
+def test_a_driver_the_campaign_cannot_use_is_refused_in_one_line_before_anything_runs(tmp_path, capsys, text,
+                                                                                       name, said):
+    path = tmp_path / "team_driver.py"
+    if text is not None:
+        path.write_text(text)
+    spec = f"{path}:{name}"
+    with pytest.raises(DriverRefused) as e:
+        load_driver(spec)
+    assert str(e.value).startswith(f"--driver {spec}: ") and said in str(e.value) and "\n" not in str(e.value)
+    report = tmp_path / "c.xml"
+    status, out, err = invoke(["campaign", "--driver", spec, "--faults", "none", "--scenes", "rest", "--quiet",
+                               "--junit", report], capsys)
+    errors = [line for line in err.splitlines() if line.startswith("error:")]
+    assert status == 2 and out == "" and errors == [f"error: {e.value}"] and "Traceback" not in err, err
+    error = _suite(report).find("testcase/error")
+    assert error.get("type") == "unfinished" and f"the campaign could not run: --driver {spec}" in error.get("message")
+
+
+@pytest.mark.parametrize("spec", ["nocolon", "x.py:", ":open", "my driver:open", "mod:open()"])
+def test_a_driver_spelled_wrong_is_refused_by_the_command_line(capsys, tmp_path, spec):
+    status, out, err = invoke(["campaign", "--driver", spec, "--junit", tmp_path / "c.xml"], capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "MODULE:CALLABLE" in err, err
+    assert not (tmp_path / "c.xml").exists()
+
+
+#: (a driver file's text, what its case's error says): raising when opened, in a method, or lacking a method
+RAISING = [
+    ("def open_driver(port):\n    raise OSError('the port is busy')\n",
+     "raised OSError opening the port: the port is busy"),
+    ("from bench.hosts.driver import BridgeDriver\n\nclass D(BridgeDriver):\n    def frames(self, **kw):\n"
+     "        raise ValueError('bad frame')\n\ndef open_driver(port):\n    return D(port)\n",
+     "raised ValueError: bad frame"),
+    ("class D:\n    def __init__(self, port):\n        pass\n\n    def start(self):\n        pass\n\n"
+     "def open_driver(port):\n    return D(port)\n",
+     "returned a D without request_status, wait_for, frames, close, parser"),
+]
+
+
+@pytest.mark.firmware
+@pytest.mark.parametrize("text, said", RAISING, ids=["opening", "frames", "lacking"])
+def test_a_driver_that_raises_makes_its_case_an_error_naming_it(tmp_path, text, said):
+    path = tmp_path / "team_driver.py"
+    path.write_text(text)
+    spec = f"{path}:open_driver"
+    r = campaign.run_case(campaign.FAULTS["none"], "rest", 0, driver=spec)
+    assert not r["passed"] and r["error"] and r["problem"].startswith(f"driver {spec} {said}"), r["problem"]
+    campaign.write_junit([r], tmp_path / "c.xml")
+    suite = _suite(tmp_path / "c.xml")
+    assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("1", "0", "1")
+    error = suite.find("testcase/error")
+    assert error.get("type") == "driver-error" and error.get("message") == r["problem"]
+    assert suite.find("testcase/failure") is None
+    lines = campaign.summary([r]).splitlines()
+    assert lines[1].split()[3] == "ERROR" and lines[-1].startswith("0 passed, 0 failed, 1 error(s)")
+
+
+def test_the_bench_driver_is_the_default_and_named_so():
+    assert load_driver(BENCH_DRIVER).__name__ == "BridgeDriver"
+    results = [{"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None,
+                "seconds": 0.1}]  # results from before the driver was recorded: the bench's
+    assert "driver bench.hosts.driver:BridgeDriver\n" in campaign.case_output(results[0])
