@@ -270,9 +270,11 @@ def group_size(n_tasks: int, n_threads: int) -> int:
 
 
 def run_tasks(fn: Callable, tasks: Sequence, spec: ClusterSpec | None = None, client=None, progress: bool = True,
-              desc: str = "tasks", retries: int = 2) -> list:
+              desc: str = "tasks", retries: int = 2, on_result: Callable | None = None) -> list:
     """``[fn(t) for t in tasks]`` on the cluster, in task order. ``fn`` must be importable by the workers (a
-    module-level function) and pure: its result may depend only on its task."""
+    module-level function) and pure: its result may depend only on its task.  ``on_result(index, result)`` is
+    called for each task as its result arrives (in the order they finish): a caller stopped by Ctrl-C or a lost
+    cluster keeps what had finished."""
     from distributed import as_completed
     from tqdm import tqdm
 
@@ -303,6 +305,9 @@ def run_tasks(fn: Callable, tasks: Sequence, spec: ClusterSpec | None = None, cl
                     k, what = e.args if isinstance(e, TaskFailed) else (i, f"{type(e).__name__}: {e}")
                     raise CampaignError(f"task {k} ({tasks[k]!r}) failed: {what}") from None
                 results[i:i + len(done)] = done
+                if on_result is not None:
+                    for k, result in enumerate(done):
+                        on_result(i + k, result)
                 bar.update(len(done))
         return results
     finally:

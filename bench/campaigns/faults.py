@@ -444,12 +444,14 @@ def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTas
 
 
 def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool = False,
-                 spi: str = "software", firmware=None, driver: str = BENCH_DRIVER) -> list[dict]:
+                 spi: str = "software", firmware=None, driver: str = BENCH_DRIVER,
+                 finished: dict | None = None) -> list[dict]:
     """Every fault × scene × seed over the SPI bus ``spi`` with the host ``driver`` (:mod:`bench.campaigns.drivers`)
     on the campaign engine (``spec``: a :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment;
     or a connected ``client``); results in task order, one dict per case.  A fault the bus cannot carry is refused
     (ValueError), and a driver that does not import or cannot take the port
-    (:class:`~bench.campaigns.drivers.DriverRefused`), before anything runs."""
+    (:class:`~bench.campaigns.drivers.DriverRefused`), before anything runs.  ``finished`` (a dict of the
+    caller's): each case's result by its index as it finishes, so that a campaign stopped midway keeps them."""
     from bench.campaigns.drivers import load_driver
     from bench.campaigns.engine import run_tasks
     from bench.hosts.cosim import build_firmware, firmware_library
@@ -470,7 +472,8 @@ def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool =
         firmware_library(firmware)
         firmware = tuple(map(str, firmware)) if isinstance(firmware, (list, tuple)) else str(firmware)
         tasks = [replace(t, firmware=firmware) for t in tasks]
-    return run_tasks(run_case_task, tasks, spec=spec, client=client, progress=progress, desc="cases")
+    return run_tasks(run_case_task, tasks, spec=spec, client=client, progress=progress, desc="cases",
+                     on_result=None if finished is None else finished.__setitem__)
 
 
 def _bus(results: list[dict]) -> str:
@@ -536,22 +539,27 @@ def case_output(r: dict) -> str:
             f"wall time {r['seconds']:.3f} s\n")
 
 
-def write_junit(results: list[dict], path: Path, started=None) -> None:
+def write_junit(results: list[dict], path: Path, started=None, stopped: str | None = None,
+                spi: str | None = None) -> None:
     """The JUnit XML report: one test case per result (the same names over either bus, so that two reports compare
     case by case), each with its output (:func:`case_output`, a passing case's too: a CI page shows what it
-    checked), a failure carrying the problem; the suite says when the campaign ``started`` (a datetime; None: now)
-    and on which host (:func:`_when_and_where`), and the SPI bus and firmware as its properties ``spi`` and
-    ``firmware``."""
-    suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results)),
+    checked), a failure carrying the problem (an error, for a case whose driver raised); the suite says when the
+    campaign ``started`` (a datetime; None: now) and on which host (:func:`_when_and_where`), and the SPI bus
+    (``spi``, else the results') as its property ``spi``, and, with results, the firmware and driver as ``firmware``
+    and ``driver``.  ``stopped``: why the campaign ended before all its cases (Ctrl-C, SIGTERM, a cluster lost,
+    could not run) — one more test case, ``unfinished``, with an error saying so, after the finished ones."""
+    n_errors = sum(bool(r.get("error")) for r in results) + (stopped is not None)
+    suite = ET.Element("testsuite", name="biotac-fault-campaign", tests=str(len(results) + (stopped is not None)),
                        failures=str(sum(not r["passed"] and not r.get("error") for r in results)),
-                       errors=str(sum(bool(r.get("error")) for r in results)),
-                       skipped="0",  # (required by the JUnit schema CI tools validate against)
+                       errors=str(n_errors), skipped="0",  # (required by the JUnit schema CI tools validate against)
                        time=f"{sum(r['seconds'] for r in results):.3f}", **_when_and_where(started))
-    ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=_bus(results))
-    firmwares = sorted({r.get("firmware", "reference") for r in results})
-    ET.SubElement(suite.find("properties"), "property", name="firmware", value="; ".join(firmwares) or "reference")
-    drivers = sorted({r.get("driver", BENCH_DRIVER) for r in results})
-    ET.SubElement(suite.find("properties"), "property", name="driver", value="; ".join(drivers) or BENCH_DRIVER)
+    properties = ET.SubElement(suite, "properties")
+    ET.SubElement(properties, "property", name="spi", value=spi or _bus(results))
+    if results:  # (a campaign that ran no case: which firmware and driver it would have run is not known here)
+        firmwares = sorted({r.get("firmware", "reference") for r in results})
+        ET.SubElement(properties, "property", name="firmware", value="; ".join(firmwares))
+        drivers = sorted({r.get("driver", BENCH_DRIVER) for r in results})
+        ET.SubElement(properties, "property", name="driver", value="; ".join(drivers))
     for r in results:
         case = ET.SubElement(suite, "testcase", classname=f"campaign.{r['fault']}",
                              name=f"{r['scene']}[seed={r['seed']}]", time=f"{r['seconds']:.3f}")
@@ -561,21 +569,20 @@ def write_junit(results: list[dict], path: Path, started=None) -> None:
             ET.SubElement(case, "failure", message=r["problem"]).text = f"expected: {r['expected']}"
             case.find("failure").set("type", "unexpected-reaction")  # (the Ant schema requires a type)
         ET.SubElement(case, "system-out").text = case_output(r)
+    if stopped is not None:
+        case = ET.SubElement(suite, "testcase", classname="campaign", name="unfinished", time="0")
+        ET.SubElement(case, "error", message=stopped, type="unfinished")
+        ET.SubElement(case, "system-out").text = f"{stopped}\n"
     _write_suite(suite, path)
 
 
-def write_unfinished_junit(path: Path, why: str, spi: str = "software", started=None) -> None:
-    """A JUnit report for a campaign that gave no results (stopped by Ctrl-C or SIGTERM, or unable to run): one
-    error saying ``why``, so that a CI step that publishes the report whatever the exit status shows it, not an
-    earlier campaign's report left at the path; the SPI bus it was to run over as the suite's property ``spi``, and
-    when it ``started`` (None: now) and on which host, as :func:`write_junit` says."""
-    suite = ET.Element("testsuite", name="biotac-fault-campaign", tests="1", failures="0", errors="1", skipped="0",
-                       time="0", **_when_and_where(started))
-    ET.SubElement(ET.SubElement(suite, "properties"), "property", name="spi", value=spi)
-    case = ET.SubElement(suite, "testcase", classname="campaign", name="unfinished", time="0")
-    ET.SubElement(case, "error", message=why, type="unfinished")
-    ET.SubElement(case, "system-out").text = f"{why}\n"
-    _write_suite(suite, path)
+def write_unfinished_junit(path: Path, why: str, spi: str = "software", started=None, results=()) -> None:
+    """A JUnit report for a campaign that did not finish (stopped by Ctrl-C or SIGTERM, or unable to run): the
+    ``results`` of the cases that had finished and one error saying ``why``, so that a CI step that publishes the
+    report whatever the exit status shows it, not an earlier campaign's report left at the path; the SPI bus it ran
+    over as the suite's property ``spi``, and when it ``started`` (None: now) and on which host, as
+    :func:`write_junit` says."""
+    write_junit(list(results), path, started, stopped=why, spi=spi)
 
 
 def summary(results: list[dict]) -> str:

@@ -82,19 +82,25 @@ def _run_campaign(a, report: Path) -> int:
           f"{len(seeds) if a.seed is None else f'seed {a.seed}'}) over the {a.spi} SPI bus on {spec.describe()}, "
           f"firmware: {campaign.firmware_name(firmware)}, driver: {a.driver}", file=sys.stderr)
     started = datetime.now(timezone.utc)  # the report's timestamp: when the campaign began
+    finished: dict = {}  # each case's result by its index, as it finishes: kept when the campaign is stopped
     try:
         from bench.campaigns.scene_files import campaign_scenes
 
         scenes = campaign_scenes(a.scenes, a.faults, a.spi)  # scene files read and checked before anything runs
         results = campaign.run_campaign(a.faults, scenes, seeds, spec=spec, progress=not a.quiet,
-                                        spi=a.spi, firmware=firmware, driver=a.driver)
+                                        spi=a.spi, firmware=firmware, driver=a.driver, finished=finished)
     except (KeyboardInterrupt, BenchError) as e:  # (SIGTERM too; no cluster, a firmware that does not build) the
         # report says so: an earlier campaign's passing report left at --junit would be published as this one's
+        done = [finished[k] for k in sorted(finished)]
         why = (f"the campaign was stopped before its {n_cases} case(s) finished" if isinstance(e, KeyboardInterrupt)
-               else f"the campaign could not run: {e}")
+               else f"the campaign could not run: {e}" if not done
+               else f"the campaign could not finish its {n_cases} case(s): {e}")
+        why += (f"; the {len(done)} that had finished are reported" if done else "; no case's result is reported")
         with signals_held():
+            if done:  # what had finished is shown, as a finished campaign's are
+                print(campaign.summary(done), flush=True)
             try:
-                campaign.write_unfinished_junit(report, f"{why}; no case's result is reported", a.spi, started)
+                campaign.write_unfinished_junit(report, why, a.spi, started, done)
             except OSError as oe:
                 print(f"error: --junit {a.junit}: the report saying so could not be written ({oe.strerror or oe})",
                       file=sys.stderr)
@@ -136,8 +142,8 @@ of workers.  An --junit path where no file can be created is refused before anyt
 before the report is written; a second campaign naming a report a first one is still running for is refused (a lock
 file beside the report, removed at the end).  Exit status 1 if any case fails or the report could not be written
 after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the campaign (exit 130; SIGTERM: 143)
-and its --junit report holds one error saying it was stopped, no case's result; a campaign that could not run (no
-scheduler at the address) leaves one error saying why.
+and its --junit report holds one error saying it was stopped, after the results of the cases that had finished (the
+summary shows them too); a campaign that could not run (no scheduler at the address) leaves one error saying why.
 
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}

@@ -323,13 +323,52 @@ def test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no
     assert "Traceback" not in stderr and stderr.strip().splitlines()[-1] == said, stderr
     if "--junit" in argv:
         suite = ET.parse(tmp_path / "c.xml").getroot()
-        assert (suite.get("tests"), suite.get("errors"), suite.get("failures")) == ("1", "1", "0")
-        error = suite.find("testcase/error")
+        cases = suite.findall("testcase")  # the cases that had finished (if any), then the one saying it stopped
+        assert (suite.get("tests"), suite.get("errors"), suite.get("failures")) == (str(len(cases)), "1", "0")
+        error = cases[-1].find("error")
         # (36 default cases × 5 seeds)
         assert error is not None and "stopped before its 180 case(s) finished" in error.get("message")
+        assert [c.get("name") for c in cases[:-1]] == [line.split()[1] + f"[seed={line.split()[2]}]"
+                                                       for line in stdout.splitlines()[1:-1]]  # as the summary
         (tmp_path / "c.xml").unlink()
-    assert stdout == "" and not list(tmp_path.iterdir())  # no other file, no temporary one
+    else:
+        assert stdout == ""
+    assert not list(tmp_path.iterdir())  # no other file, no temporary one
     assert not psutil.wait_procs(workers, timeout=10)[1]  # no worker left
+
+
+def test_a_stopped_campaign_reports_the_cases_that_had_finished(tmp_path):
+    """Ctrl-C once a few cases have finished (the progress bar says so): the summary shows them, the --junit report
+    holds each with its verdict and output, then one error saying the campaign was stopped and how many finished —
+    a CI page shows what ran before the stop, not nothing."""
+    env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "bench.cli", "campaign", "--faults", "none,serial_loss", "--scenes",
+                             "rest", "--seeds", "40", "--workers", "1", "--junit", "c.xml"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    seen: list[str] = []
+    reader = threading.Thread(target=lambda: seen.extend(iter(lambda: proc.stderr.read(1), "")), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not any(int(n) >= 3 for n in re.findall(r"(\d+)/80", "".join(seen))):
+            time.sleep(0.2)
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout = proc.communicate(timeout=30)[0]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    reader.join(10)
+    assert proc.returncode == 130, "".join(seen)
+    rows = stdout.splitlines()[1:-1]
+    assert len(rows) >= 3 and stdout.splitlines()[-1] == f"{len(rows)} passed, 0 failed", stdout
+    suite = ET.parse(tmp_path / "c.xml").getroot()
+    cases = suite.findall("testcase")
+    assert [(c.get("classname"), c.get("name")) for c in cases[:-1]] == [
+        (f"campaign.{r.split()[0]}", f"{r.split()[1]}[seed={r.split()[2]}]") for r in rows]
+    assert all(c.find("system-out").text.endswith(" s\n") and c.find("failure") is None for c in cases[:-1])
+    assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == (str(len(rows) + 1), "0", "1")
+    assert cases[-1].find("error").get("message") == (f"the campaign was stopped before its 80 case(s) finished; "
+                                                      f"the {len(rows)} that had finished are reported")
 
 
 @pytest.mark.parametrize("fault, passes", [("serial_loss", True), ("none", False)])
