@@ -1,5 +1,6 @@
-"""Your own host driver in the fault campaign (``campaign --driver MODULE:CALLABLE`` or ``--driver PATH.py:CALLABLE``):
-every case then talks to the bridge firmware through it instead of the bench's :class:`~bench.hosts.driver.BridgeDriver`.
+"""Your own host driver in the fault campaign (``campaign --driver MODULE:CALLABLE`` or ``--driver
+PATH.py:CALLABLE``): every case then talks to the bridge firmware through it instead of the bench's
+:class:`~bench.hosts.driver.BridgeDriver`.
 
 The callable is called with the serial port's path (a str, the pty the firmware streams on) and returns the
 driver object the case uses — the bench's own is ``bench.hosts.driver:BridgeDriver`` (:data:`BENCH_DRIVER`), the

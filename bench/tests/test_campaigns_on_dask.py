@@ -293,8 +293,8 @@ CAMPAIGN_ON_2 = ["campaign", "--seeds", "5", "--workers", "2", "--junit", "c.xml
 def test_a_signal_ends_a_campaign_or_claim_sweep_with_one_line_its_status_and_no_report(tmp_path, argv, signum,
                                                                                        status, said):
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM (to the main process, as `timeout`
-    sends it) while the tasks run on 2 workers: one line, 130 / 143, the cluster closed, no results; a campaign's
-    --junit then holds one error saying it was stopped (an earlier campaign's passing report left there would be
+    sends it) while the tasks run on 2 workers: one line, 130 / 143, the cluster closed; a campaign's --junit then
+    holds the cases that had finished, as its summary shows them, and one error saying it was stopped (an earlier campaign's passing report left there would be
     published as this one's by a CI step that publishes reports whatever the exit status)."""
     import psutil
     import xml.etree.ElementTree as ET
