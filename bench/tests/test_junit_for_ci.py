@@ -64,6 +64,25 @@ def test_an_unfinished_campaigns_report_has_the_same_shape(tmp_path):
     assert suite.find("testcase/system-out").text == "stopped by Ctrl-C\n"
 
 
+def test_a_stopped_campaigns_report_with_finished_cases_and_a_driver_error_has_the_same_shape(tmp_path):
+    """The cases that had finished (a pass, a failure, a case whose driver raised \x1b: an error) before the one
+    saying it stopped: the counts add up (tests = cases + 1; the driver's error and the stop are errors, the
+    failure a failure) and the report parses, control characters and all."""
+    errored = dict(RESULTS[0], seed=3, passed=False, error=True, driver="team.py:open",
+                   problem="driver team.py:open raised OSError: \x1b[31mbusy")
+    campaign.write_unfinished_junit(tmp_path / "c.xml", "stopped; the 3 that had finished are reported", "software",
+                                    STARTED, RESULTS + [errored])
+    suite = _suite(tmp_path / "c.xml")
+    _ci_shape(suite)
+    assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("4", "1", "2")
+    kinds = [[(bad.tag, bad.get("type")) for bad in case if bad.tag != "system-out"] for case in suite.iter("testcase")]
+    assert kinds == [[], [("failure", "unexpected-reaction")], [("error", "driver-error")], [("error", "unfinished")]]
+    assert suite.findall("testcase")[2].find("error").get("message").endswith("\\x1b[31mbusy")
+    props = {p.get("name"): p.get("value") for p in suite.iter("property")}
+    assert props == {"spi": "software", "firmware": "reference",
+                     "driver": "bench.hosts.driver:BridgeDriver; team.py:open"}
+
+
 def test_a_machine_without_a_name_is_localhost(tmp_path, monkeypatch):
     monkeypatch.setattr(socket, "gethostname", lambda: "")
     campaign.write_junit(RESULTS, tmp_path / "c.xml")
