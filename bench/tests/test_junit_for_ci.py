@@ -65,7 +65,7 @@ def test_an_unfinished_campaigns_report_has_the_same_shape(tmp_path):
 
 
 def test_a_stopped_campaigns_report_with_finished_cases_and_a_driver_error_has_the_same_shape(tmp_path):
-    """The cases that had finished (a pass, a failure, a case whose driver raised \x1b: an error) before the one
+    """The cases that had finished (a pass, a failure, a case whose driver raised, with an escape character: an error) before the one
     saying it stopped: the counts add up (tests = cases + 1; the driver's error and the stop are errors, the
     failure a failure) and the report parses, control characters and all."""
     errored = dict(RESULTS[0], seed=3, passed=False, error=True, driver="team.py:open",
