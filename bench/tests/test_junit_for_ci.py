@@ -65,9 +65,10 @@ def test_an_unfinished_campaigns_report_has_the_same_shape(tmp_path):
 
 
 def test_a_stopped_campaigns_report_with_finished_cases_and_a_driver_error_has_the_same_shape(tmp_path):
-    """The cases that had finished (a pass, a failure, a case whose driver raised, with an escape character: an error) before the one
-    saying it stopped: the counts add up (tests = cases + 1; the driver's error and the stop are errors, the
-    failure a failure) and the report parses, control characters and all."""
+    """The cases that had finished (a pass, a failure, and an error: a case whose driver raised, its message
+    holding an escape character) before the one saying it stopped: the counts add up (tests = cases + 1; the
+    driver's error and the stop are errors, the failure a failure) and the report parses, control characters and
+    all."""
     errored = dict(RESULTS[0], seed=3, passed=False, error=True, driver="team.py:open",
                    problem="driver team.py:open raised OSError: \x1b[31mbusy")
     campaign.write_unfinished_junit(tmp_path / "c.xml", "stopped; the 3 that had finished are reported", "software",
