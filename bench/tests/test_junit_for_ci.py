@@ -50,7 +50,8 @@ def test_every_case_carries_its_output_and_the_suite_when_and_where_it_ran(tmp_p
     assert passed.find("failure") is None
     out = passed.find("system-out").text
     assert out.splitlines() == ["fault serial_loss in scene rest, seed 2, over the software SPI bus, firmware "
-                                "reference, driver bench.hosts.driver:BridgeDriver", "expected: the driver resynchronises", "PASS", "wall time 0.250 s"]
+                                "reference, driver bench.hosts.driver:BridgeDriver",
+                                "expected: the driver resynchronises", "PASS", "wall time 0.250 s"]
     assert "FAIL: 3 corrupted frames reached the caller" in failed.find("system-out").text
     assert failed.find("failure").get("type") == "unexpected-reaction"
 
