@@ -36,6 +36,12 @@ BENCH_DRIVER = "bench.hosts.driver:BridgeDriver"
 #: what a case calls on (or reads from) the object a driver's callable returns
 DRIVER_INTERFACE = ("start", "request_status", "wait_for", "frames", "close", "parser")
 
+#: How long (wall s) a case waits for the host driver's calls at most, plus :data:`HOST_LIMIT_PER_FRAME_S` per frame
+#: it reads: far beyond what the bench's own driver takes on a loaded machine (its waits are bounded: START and
+#: STATUS 3 × 5 s at most, frames 10 s without one), so only a driver that hangs reaches it.
+HOST_LIMIT_S = 120.0
+HOST_LIMIT_PER_FRAME_S = 0.1
+
 _NAME = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*")
 
 

@@ -20,9 +20,10 @@ worker on another machine builds its own (the build is atomic, also between thre
 from __future__ import annotations
 
 import re
+import threading
 import time
-from contextlib import contextmanager
 import xml.etree.ElementTree as ET
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -31,7 +32,8 @@ import numpy as np
 
 from bench.atomic import atomic_write
 from bench.campaigns.case_names import CASE_FRAMES, FAULT_EXPECTED, SCENE_DESCRIPTIONS, check_bus
-from bench.campaigns.drivers import BENCH_DRIVER, DriverFailed, one_line, open_driver, uncounted_gaps
+from bench.campaigns.drivers import (BENCH_DRIVER, HOST_LIMIT_PER_FRAME_S, HOST_LIMIT_S, DriverFailed, one_line,
+                                     open_driver, uncounted_gaps)
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
@@ -320,7 +322,7 @@ def _schedule_after_start(board, schedule) -> list:
 
 
 def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAMES, spi: str = "software",
-             firmware=None, driver: str = BENCH_DRIVER) -> dict:
+             firmware=None, driver: str = BENCH_DRIVER, host_limit_s: float | None = None) -> dict:
     """One fault in one scene — a built-in scene's name, or a scene file
     (:class:`~bench.campaigns.scene_files.CampaignScene`: its sensor 1 and stimuli, and its own number of frames)
     — over the SPI bus ``spi`` ("software" or "rtl") with ``firmware`` (None: the reference one; else
@@ -328,7 +330,9 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
     ``PATH.py:CALLABLE``: :mod:`bench.campaigns.drivers`): the verdict (``passed``, ``problem``; ``error`` when
     the driver raised or lacks part of its interface, so no verdict was reached), what was expected, the bus, and
     ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or driver is this case's failure (or
-    error), never an exception."""
+    error), never an exception: a driver whose calls have not returned within ``host_limit_s`` wall seconds (None:
+    :data:`HOST_LIMIT_S` + :data:`HOST_LIMIT_PER_FRAME_S` per frame the case reads) makes the case an error, and the
+    case's port is closed under it."""
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.cosim import default_sensors
     from bench.hosts.driver import CMD_START, REPLY_HORIZON_S, Status
@@ -353,15 +357,22 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
         with fb:
             drv = open_driver(driver, fb.port)
             tries = LOSSY_LINE_TRIES if fb.corrupt_rate or fb.drop_rate else 1
-            with _blamed_on(driver):
-                acknowledged = _ask(drv, drv.start, CMD_START, tries)
-            if acknowledged is None:
-                raise TimeoutError(f"no acknowledgement of START within {tries} × {REPLY_HORIZON_S:g} s")
-            with _blamed_on(driver):
-                frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
-                status = _ask(drv, drv.request_status, Status, tries)
-                stats = drv.parser.stats
-                drv.close()
+
+            def session():
+                with _blamed_on(driver):
+                    acknowledged = _ask(drv, drv.start, CMD_START, tries)
+                if acknowledged is None:
+                    raise TimeoutError(f"no acknowledgement of START within {tries} × {REPLY_HORIZON_S:g} s")
+                with _blamed_on(driver):
+                    frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
+                    status = _ask(drv, drv.request_status, Status, tries)
+                    stats = drv.parser.stats
+                    drv.close()
+                return frames, status, stats
+
+            if host_limit_s is None:
+                host_limit_s = HOST_LIMIT_S + HOST_LIMIT_PER_FRAME_S * frames_wanted
+            frames, status, stats = _within(session, host_limit_s, driver)
         unapplied = len(fb.board.events) + len(fb.board.resets)  # the fault's actions the run never reached
         if fault.schedule and unapplied:
             problem = f"{unapplied} of the fault's scheduled actions never happened (the stream ended before them)"
@@ -390,6 +401,30 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
             "driver": driver, **({"scene_file": scene.path} if own else {}),
             "passed": problem is None, "problem": problem, **({"error": True} if error else {}),
             "seconds": time.perf_counter() - t0}
+
+
+def _within(session, limit_s: float, driver: str):
+    """``session()``'s return value, run in a thread of its own: what it raises is raised here; if it has not
+    returned within ``limit_s`` wall seconds, :class:`DriverFailed` naming ``driver`` (the caller then closes the
+    port, which ends a driver blocked reading it; the thread is a daemon, so a driver spinning forever does not keep
+    the process alive)."""
+    outcome: dict = {}
+
+    def run():
+        try:
+            outcome["value"] = session()
+        except BaseException as e:
+            outcome["error"] = e
+
+    thread = threading.Thread(target=run, name="host driver", daemon=True)
+    thread.start()
+    thread.join(limit_s)
+    if thread.is_alive():
+        raise DriverFailed(f"driver {driver} had not returned within {limit_s:g} s (a case's calls to the driver are "
+                           f"bounded: start, frames, request_status and wait_for must return)")
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["value"]
 
 
 @contextmanager

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from bench.campaigns.case_names import (CASE_FRAMES, CASE_MAX_S, FAULT_EXPECTED, NEEDS_SOFTWARE_SPI,
                                         SCENE_DESCRIPTIONS, SPI_BUSES, check_bus, is_scene_file)
-from bench.campaigns.drivers import BENCH_DRIVER
+from bench.campaigns.drivers import BENCH_DRIVER, HOST_LIMIT_PER_FRAME_S, HOST_LIMIT_S
 from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
                             say_leftovers, sigterm_like_ctrl_c, whole)
 from bench.tomlfile import spelled
@@ -167,9 +167,9 @@ scene's own or a stimulus that never ends (power_on, ambient_step, heater_failur
 case uses as the bench's: start(), request_status(), wait_for(reply_type, timeout_s), frames(max_frames=,
 timeout_s=) yielding the bench's DataFrame, parser.stats (crc_errors, dropped_frames), close() — a subclass or a
 wrapper of the bench's BridgeDriver is simplest.  A driver that does not import, is not callable or cannot take the
-port is refused before anything runs; one that raises, or returns an object lacking part of that, makes its case
-an error naming the driver; frames missing from the sequence numbers it hands over that it did not count as dropped
-fail the case.
+port is refused before anything runs; one that raises, returns an object lacking part of that, or hangs (its calls
+not returned within {HOST_LIMIT_S:g} s + {HOST_LIMIT_PER_FRAME_S:g} s per frame) makes its case an error naming the
+driver; frames missing from the sequence numbers it hands over that it did not count as dropped fail the case.
 
 --spi rtl runs the cases over the Verilog RTL in the C++ harness instead of the software model (the same verdicts
 are expected; the summary and the report's property "spi" say which bus ran).  {_over_the_rtl()}

@@ -126,6 +126,29 @@ def test_a_driver_that_raises_makes_its_case_an_error_naming_it(tmp_path, text, 
     assert lines[1].split()[3] == "ERROR" and lines[-1].startswith("0 passed, 0 failed, 1 error(s)")
 
 
+#: a driver that never hands over a frame: its frames() reads the port until the port is closed under it
+HANGING = """\
+from bench.hosts.driver import BridgeDriver
+
+
+class Hanging(BridgeDriver):
+    def frames(self, max_frames=None, timeout_s=5.0):
+        while not self.disconnected:
+            self.poll()
+        return iter(())
+"""
+
+
+@pytest.mark.firmware
+def test_a_driver_that_hangs_makes_its_case_an_error_within_the_limit(tmp_path):
+    path = tmp_path / "hanging.py"
+    path.write_text(HANGING)
+    spec = f"{path}:Hanging"
+    r = campaign.run_case(campaign.FAULTS["none"], "rest", 0, driver=spec, host_limit_s=3.0)
+    assert r["error"] and r["problem"].startswith(f"driver {spec} had not returned within 3 s"), r["problem"]
+    assert r["seconds"] < 30
+
+
 def test_the_bench_driver_is_the_default_and_named_so():
     assert load_driver(BENCH_DRIVER).__name__ == "BridgeDriver"
     results = [{"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None,
