@@ -153,12 +153,17 @@ def test_a_bad_scene_file_stops_the_campaign_in_one_line_before_anything_runs_an
     ("taps,{d}/grip.toml,{d}/sub/grip.toml", "both name their cases grip.toml[seed=K]"),
     ("{d}/nothere.toml", "nothere.toml: cannot read the file: No such file or directory"),
     ("{d}/broken.toml", "broken.toml: "),
+    ("{d}/sub/", "sub/: cannot read the file: Is a directory"),  # (a CI step's variable left empty: "ci/$SCENE")
+    ("{d}/empty.toml", "empty.toml: the file is empty"),
+    ("{d}/binary.toml", "binary.toml: the file holds a NUL byte at line 1, column 1: not a text file"),
 ])
 def test_scene_files_that_cannot_be_read_or_share_a_case_name_are_refused(tmp_path, capsys, scenes, said):
     _scene(tmp_path, NOMINAL_GRIP)
     (tmp_path / "sub").mkdir()
     _scene(tmp_path / "sub", NOMINAL_GRIP)
     _scene(tmp_path, "[scene]\nname = 'broken'\nduration_s = -1\n", "broken.toml")
+    _scene(tmp_path, "", "empty.toml")
+    (tmp_path / "binary.toml").write_bytes(b"\x00\x01\xff")
     assert cli.main(["campaign", "--scenes", scenes.format(d=tmp_path), "--junit", str(tmp_path / "c.xml"),
                      "--quiet"]) == 2
     errors = [line for line in capsys.readouterr().err.splitlines() if line.startswith("error:")]
