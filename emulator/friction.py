@@ -43,7 +43,9 @@ ridges' catch-and-release dissipates, a share of friction the texture's measured
 stick-slip keeps that µ and the ridges add their fluctuation about their mean); rigid ridges (``k_j`` → ∞,
 ``µ_r`` = 0) give the comb's ``N·f·c·g·Σ w_j σ_j`` exactly.  A release event is a
 drop of ``F_j`` by ``k_j`` × :data:`RIDGE_RELEASE_LENGTH_M` (peak to trough, small reloads ignored); a slip slower
-than :data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge; a change of chord adds no energy (:func:`_rechord`).
+than :data:`RIDGE_SLIP_FLOOR_M_PER_S` moves no ridge by itself, but once a slip has moved them the slow slip is
+summed, and the held crests are carried with the texture once the sum passes the bristles' elastic reach µs/σ0
+(creep, not the recoverable pre-sliding deflection); a change of chord adds no energy (:func:`_rechord`).
 """
 
 from __future__ import annotations
@@ -76,9 +78,10 @@ RIDGE_SLIP_FLOOR_M_PER_S = CATCH_VELOCITY_M_PER_S
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
 #: (m) and slope (1) where the finger touched down (a position-held finger's load changes with the height from
 #: there; the slope is kept for the record but not subtracted: see the slope force below)
-#: ... whether the finger is touching (1.0) or not (0.0), the skin's last velocity (m/s), and the direction (±1) of
-#: the last slip that moved the resolved ridges (0.0 none since the finger touched down: see _slide_kernel)
-STATE_SIZE = 8
+#: ... whether the finger is touching (1.0) or not (0.0), the skin's last velocity (m/s), the direction (±1) of
+#: the last slip that moved the resolved ridges (0.0 none since the finger touched down: see _slide_kernel), and
+#: the slip (m) the texture has crept under the resolved ridges' held crests since they last moved
+STATE_SIZE = 9
 
 # (the helpers below are inlined into slide_block at numba's IR level, ``inline="always"``: the same arithmetic,
 # about an eighth less time per sample than calls)
@@ -609,6 +612,13 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
     # the direction (±1) of the last slip that moved the ridges, 0.0 before any since touchdown: their mean force
     # µ_r·N is taken off in it from then on, stuck or slipping, since a ridge a slip deflected keeps pushing
     ridge_direction = state[7]
+    # the slip (m) the texture has crept under the held crests since the ridges last moved: each slip below the floor
+    # moves none, but the crests are held by the surface, so once a slip has moved them (ridge_direction ≠ 0) the
+    # slow slips are summed and carried with the next moving slip, or on their own once the sum passes the bristles'
+    # elastic reach µs/σ0 (beyond it the skin creeps over the surface: the texture passes under the crests; within
+    # it the bristles' pre-sliding deflection recovers, as when the skin settles after a stop)
+    ridge_creep = state[8]
+    creep_reach = mu_s / sigma0
     kn_per_cbrt_n = hertz_stiffness_per_cbrt_N(K)
     n0_last, kn, series, row, row_w = 0.0, 0.0, 0.0, 0, 0.0
     mu_ridges = 0.0
@@ -660,6 +670,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
                     ridge_state[:, :] = 0.0
                     ridge_force, ridge_mean = 0.0, 0.0
                     ridge_direction = 0.0
+                    ridge_creep = 0.0
                 u = -k_t * x / (k_t * h + c_t)
                 u_prev = u
                 z = _bristle_after(z, v_stage - u, h, sigma0, ms, mk, vs)[0]
@@ -690,13 +701,20 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
             u_prev = u
             vr = v_stage - u
             if resolved:  # the ridges under the patch catch and release, read where the tables were
+                ridge_slip = vr * h
+                if ridge_direction != 0.0:  # (the crept slip joins this one; see ridge_creep above)
+                    ridge_slip += ridge_creep
+                    ridge_creep = 0.0
+                    slow = abs(vr * h) < slip_floor and abs(ridge_slip) < creep_reach
+                    if slow or abs(ridge_slip) < slip_floor:
+                        ridge_creep, ridge_slip = ridge_slip, 0.0
                 ridge_force, events, drop = _ridges_step(ridge_state, crest, ridge_shifts, ridge_shares,
                                                          ridge_stiffness, p, dx, normal * series * ridge_gain,
-                                                         catching, vr * h, slip_floor)
+                                                         catching, ridge_slip, slip_floor)
                 # (their mean in the last moving slip's direction: a slip below the floor moves no ridge and keeps
                 # the direction; before the first, no ridge is deflected and nothing is taken off)
-                if abs(vr * h) >= slip_floor:
-                    ridge_direction = 1.0 if vr > 0.0 else -1.0
+                if abs(ridge_slip) >= slip_floor:
+                    ridge_direction = 1.0 if ridge_slip > 0.0 else -1.0
                 ridge_mean = ridge_direction * mu_ridges * normal
                 releases += events
                 released += drop
@@ -715,6 +733,7 @@ def _slide_kernel(N0, V, dt, substeps, heights, slopes, radii, fluctuation, dx, 
         out_position[n] = p
     state[0], state[1], state[2], state[3], state[4], state[5], state[6] = x, z, p, h_ref, s_ref, float(touching), u_prev
     state[7] = ridge_direction
+    state[8] = ridge_creep
 
 
 def new_state(position_m: float = 0.0) -> np.ndarray:

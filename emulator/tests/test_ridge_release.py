@@ -193,6 +193,57 @@ def test_lift_off_mid_slide_unloads_the_ridges_and_stays_finite():
     assert out["normal_force_N"][-1] > 0.3 and contact.ridge_releases(0)["count"].sum() > 0
 
 
+def _creeping_slide() -> Slide:
+    """The creep hard case: 60-grit at 1.26 N and 0.1 mm/s for 10 s, where one stick-slip burst moves the ridges
+    ~7 s in and the skin creeps below the ridges' slip floor before and after it."""
+    return _slide(SAND, None, 1e-4, 1.26, 1e-3)
+
+
+@pytest.mark.unit
+def test_the_skins_creep_after_a_burst_carries_the_held_crests(monkeypatch):
+    """Hard case, creep at 0.1 mm/s (1.26 N over 60-grit, `default` grid with resolved ridges, whose one substep per
+    grid sample makes each sample's slip the slip a ridge step sees): between the bursts the skin creeps below the
+    ridges' 1 mm/s floor, tens of µm at a time.  The surface holds the crests, so once a slip has moved the ridges a
+    creep beyond the bristles' elastic reach µs/σ0 (7 µm) carries them: over every 10 ms-block stretch after the
+    first moving slip in which no sample slips faster than the floor and the texture creeps more than twice the
+    reach, the ridges' force Σ k_j·δ_j changes (with the floor alone it stayed to the bit, and the texture passed
+    under the crests unloaded: 41 µm with the force held at 0.080 N over the last second at `reference`).  Such a
+    stretch exists here (the test is not idle), and the creep is carried state: blocks of 88 samples give the
+    whole run's forces to the bit."""
+    floor_m_per_s, reach_m = friction.RIDGE_SLIP_FLOOR_M_PER_S, SAND.mu_static / SensorParams().bristle_stiffness_per_N
+    blocks = []  # per 88-sample block: the fastest slip (m/s), the texture position (m), the ridges' force (N)
+    original = SlidingContact._friction
+
+    def observed(self, c, n0, v, dt, out, i, j):
+        original(self, c, n0, v, dt, out, i, j)
+        state = c["ridge_parts"][-1]
+        blocks.append((float(np.max(np.abs(out[2][i:j]))), float(c["state"][2]), float(np.sum(state[4] * state[0]))))
+
+    monkeypatch.setattr(SlidingContact, "_friction", observed)
+    _, in_blocks = _run(_creeping_slide(), block_n=88)
+    monkeypatch.undo()
+    _, whole = _run(_creeping_slide())
+    for name in whole:
+        assert np.array_equal(in_blocks[name], whole[name]), name
+    fastest, position, force = (np.array(x) for x in zip(*blocks))
+    first = int(np.argmax(fastest >= floor_m_per_s))
+    assert fastest[first] >= floor_m_per_s and force[first] != 0.0  # a burst moved the ridges
+    creeps = []
+    k = first + 1
+    while k < fastest.size:
+        if fastest[k] >= floor_m_per_s:
+            k += 1
+            continue
+        end = k
+        while end + 1 < fastest.size and fastest[end + 1] < floor_m_per_s:
+            end += 1
+        if position[end] - position[k - 1] > 2 * reach_m:  # (from the end of the block before the stretch)
+            creeps.append((position[end] - position[k - 1], force[end] - force[k - 1]))
+        k = end + 1
+    assert creeps, "no creep beyond the reach after the first burst"
+    assert all(moved != 0.0 for _, moved in creeps), creeps
+
+
 REFERENCE = profile("reference")
 
 
