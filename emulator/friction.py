@@ -68,13 +68,13 @@ CATCH_VELOCITY_M_PER_S = 1e-3
 #: crest keeps to its base, never releases)
 RIDGE_RELEASE_LENGTH_M = 20e-6
 
-#: a ridge's slip slower than this is no motion: its crest stays, nothing releases and the slip's direction stays;
-#: once a faster slip has moved the ridges, the slower ones are summed and carried with the next moving slip, or on
-#: their own past the bristles' elastic reach µs/σ0 (see _slide_kernel: the surface holds the crests while the skin
-#: creeps) (model choice: the catch velocity, the comb's own scale for "the skin slips" — the pre-sliding
-#: micro-slip of the stuck skin and its settling after the stage stops move no crest; with a floor of 1 µm/s the stuck skin's micro-slip
-#: let crests over back slopes fall to their negative limits at the stage's start, pushing the skin forward while it
-#: stuck and taking the reference profile's slip-onset rise from 22.8 to 10.0 dB)
+#: a ridge's slip slower than this is no motion: its crest stays, nothing releases and the slip's direction stays; once
+#: a faster slip has moved the ridges, the slower ones are summed and carried with the next moving slip, or on their own
+#: past the bristles' elastic reach µs/σ0 (see _slide_kernel: the surface holds the crests while the skin creeps) (model
+#: choice: the catch velocity, the comb's own scale for "the skin slips" — the pre-sliding micro-slip of the stuck skin
+#: and its settling after the stage stops move no crest; with a floor of 1 µm/s the stuck skin's micro-slip let crests
+#: over back slopes fall to their negative limits at the stage's start, pushing the skin forward while it stuck and
+#: taking the reference profile's slip-onset rise from 22.8 to 10.0 dB)
 RIDGE_SLIP_FLOOR_M_PER_S = CATCH_VELOCITY_M_PER_S
 
 #: state vector: skin displacement x (m), bristle deflection z (m), texture position p (m), and the patch height
