@@ -383,21 +383,28 @@ def test_caught_crests_add_friction_as_prandtl_tomlinson_predicts(force):
 
 
 @pytest.mark.unit
-@pytest.mark.parametrize("force, tolerance", [(0.2, 0.03), (0.5, 0.03), (1.26, 0.08)])
+@pytest.mark.parametrize("force, tolerance", [(0.2, 0.01), (0.5, 0.02), (1.26, 0.02)])
 def test_the_textures_measured_friction_holds_the_ridges_share(force, tolerance):
     """Consistency: a texture's µ is a fingertip's, ridges included, so while they move the resolved ridges add
-    their force less its mean µ_r × load, and the steady friction over sandpaper at 1 cm/s stays the comb's: within
-    3 % at 0.2 and 0.5 N (measured −0.4 % and −0.7 %; without the share +5 % and +13 %) and 8 % at 1.26 N, where
-    the skin sticks now and then (measured −2.9 %; +4 % while the share was taken off only as the ridges moved,
-    not while the stuck skin's deflected ridges pushed; without the share +25 %), while the ridges' snaps remain
-    (the resolved force differs from the comb's)."""
-    slide = _slide(force=force, distance=0.006)
-    _, resolved = _run(slide)
-    _, comb = _run(slide, "effective")
-    mu_resolved, mu_comb = (_steady_friction_coefficient(o, slide) for o in (resolved, comb))
-    assert mu_resolved == pytest.approx(mu_comb, rel=tolerance)
-    scale = np.max(np.abs(comb["tangential_force_N"]))
-    assert np.max(np.abs(resolved["tangential_force_N"] - comb["tangential_force_N"])) > 1e-3 * scale
+    their force less its mean µ_r × load, and the steady friction over sandpaper at 1 cm/s stays the comb's on
+    average over the 16 stretches of STRETCHES_M (6 mm slides), while the ridges' snaps remain (the resolved force
+    differs from the comb's).  One stretch is one sample of the ridges' force about its mean: resolved over comb
+    scatters from stretch to stretch with SD 0.95 %, 1.6 % and 1.65 % at 0.2, 0.5 and 1.26 N (measured 2026-11-24
+    over these 16; 0.87 %, 1.4 %, 1.6 % over 24), so the mean of 16 has a standard error of SD/4 and the tolerance is
+    four of them, rounded up to the next 0.5 %: 1 %, 2 % and 2 % (measured means 1.000, 1.001, 1.002; without the
+    share +5 %, +13 % and +25 %; the stretch at 0, which this test used alone with 3 %, 3 % and 8 %: 0.996, 0.993,
+    0.977)."""
+    ratios = []
+    for start_m in STRETCHES_M:
+        slide = Slide(0.0, SAND, force, 0.01, 0.006, approach_s=0.02, hold_s=0.02, accel_s=0.01, lift_s=0.02,
+                      start_position_m=start_m)
+        _, resolved = _run(slide)
+        _, comb = _run(slide, "effective")
+        ratios.append(_steady_friction_coefficient(resolved, slide) / _steady_friction_coefficient(comb, slide))
+        if start_m == 0.0:
+            scale = np.max(np.abs(comb["tangential_force_N"]))
+            assert np.max(np.abs(resolved["tangential_force_N"] - comb["tangential_force_N"])) > 1e-3 * scale
+    assert abs(np.mean(ratios) - 1.0) < tolerance, (np.mean(ratios), np.std(ratios, ddof=1))
 
 
 @pytest.mark.unit

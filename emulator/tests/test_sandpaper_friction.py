@@ -49,24 +49,33 @@ def test_a_fast_steady_slide_on_sandpaper_keeps_the_kinetic_friction_on_the_effe
     assert abs(ratio - 1.0) < 0.02, f"{name}: mean friction {tangential:.3f} N at {normal:.3f} N: {ratio:.4f} µk·N"
 
 
+#: where the finger lands on the track (m) in the ridge-resolved slides: 0.1 m apart, so no two 10 cm slides share
+#: a stretch of the 1 m surface
+LANDINGS_M = tuple(0.1 * k for k in range(8))
+
+
 @pytest.mark.unit
-@pytest.mark.parametrize("force_N, velocity_m_per_s, distance_m, start_position_m",
-                         [(20.0, 0.5, 0.1, 0.0), (20.0, 0.5, 0.1, 0.04), (2.0, 0.01, 0.01, 0.0),
-                          (20.0, 0.05, 0.03, 0.0)],
-                         ids=["20N-0.5m_per_s", "20N-0.5m_per_s-from-40mm", "2N-1cm_per_s", "20N-5cm_per_s"])
+@pytest.mark.parametrize("force_N, velocity_m_per_s, distance_m, landings, tolerance",
+                         [(20.0, 0.5, 0.1, 6, 0.02), (2.0, 0.01, 0.01, 8, 0.06), (20.0, 0.05, 0.03, 6, 0.03)],
+                         ids=["20N-0.5m_per_s", "2N-1cm_per_s", "20N-5cm_per_s"])
 def test_the_ridge_resolved_fingerprint_keeps_the_slides_mean_friction(force_N, velocity_m_per_s, distance_m,
-                                                                      start_position_m):
+                                                                      landings, tolerance):
     """Consistency with the model's own contract (emulator/friction.py: the texture's µ holds the ridges' share, so
-    they add their fluctuation about their mean): on the reference grid the ridge-resolved fingerprint changes the
-    slide's mean friction by less than 6 % against the effective comb (whose skin stick-slips the same way: the
-    ridges' force does not act back on the skin; 6 %: a test choice, above the few % by which the ridges' mean over
-    one slide's track differs from a longer track's).  Fast steady slides over two stretches of the track (whose
-    first 20 mm are rougher and smoother than the slide's 10 cm) guard µ_r taken over the slide's own track; slow
-    stick-slipping ones guard its subtraction while the skin sticks.  Measured: 20 N, 0.5 m/s −0.3 % (0.561·N
-    against 0.563·N), from 40 mm +2.2 %; 2 N, 1 cm/s −2.3 %; 20 N, 5 cm/s −2.0 % (0.572·N against 0.584·N);
-    before the mends −7.2 % (0.52·N), +13 %, +20 % (0.73·N, above µs = 0.7) and +59 % (0.93·N)."""
+    they add their fluctuation about their mean): on the reference grid the ridge-resolved fingerprint keeps the
+    slide's mean friction against the effective comb (whose skin stick-slips the same way: the ridges' force does
+    not act back on the skin), on average over the first ``landings`` of LANDINGS_M.  Fast steady slides guard µ_r
+    taken over the slide's own track (the track's first 20 mm are rougher and smoother than a 10 cm slide's); slow
+    stick-slipping ones guard its subtraction while the skin sticks.  One landing is one sample of the ridges' force
+    about its mean: resolved over comb scatters from landing to landing with SD 1.0 % at 20 N, 0.5 m/s, 3.9 % at
+    2 N, 1 cm/s (a 10 mm slide: ~40 of the sandpaper's features) and 1.8 % at 20 N, 5 cm/s (measured 2026-11-24 over
+    the 8 landings), so the tolerance on the mean of n landings is four standard errors, 4·SD/√n, rounded up to the
+    next 0.5 %: 2 % (n = 6), 6 % (n = 8) and 3 % (n = 6).  Measured means 0.995, 1.012 and 0.990 (n = 8); one
+    landing ranges 0.978–1.009, 0.952–1.068 and 0.962–1.011, so the single landing this test used until 2026-11-24,
+    with 6 %, could fail at 2 N for a model no worse; before the share's mends (one landing) −7.2 %, +20 % and
+    +59 %."""
     reference = PROFILES["reference"]
     comb = dataclasses.replace(reference, name="reference, effective comb", ridges="effective")
-    resolved, _ = _mean_friction_N(reference, force_N, velocity_m_per_s, distance_m, start_position_m)
-    effective, _ = _mean_friction_N(comb, force_N, velocity_m_per_s, distance_m, start_position_m)
-    assert abs(resolved / effective - 1.0) < 0.06, (resolved, effective)
+    ratios = [_mean_friction_N(reference, force_N, velocity_m_per_s, distance_m, start_m)[0]
+              / _mean_friction_N(comb, force_N, velocity_m_per_s, distance_m, start_m)[0]
+              for start_m in LANDINGS_M[:landings]]
+    assert abs(np.mean(ratios) - 1.0) < tolerance, (np.mean(ratios), np.std(ratios, ddof=1))
