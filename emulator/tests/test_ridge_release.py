@@ -606,6 +606,23 @@ floor (the skin's settling after the stop) is forgotten with the direction."""
     assert np.all(with_share["tangential_force_N"][hold] < without["tangential_force_N"][hold])
 
 
+
+@pytest.mark.unit
+def test_a_sample_off_the_surface_forgets_the_held_creep():
+    """Consistency: after a slide and a stop the skin's settling is held as creep (1.9 µm, below the bristles'
+    reach); one grid sample with no load (the finger off the surface, the stage still), run through the contact's
+    own friction step, unloads the ridges and forgets both the slip's direction and that creep, so a finger pressed
+    again starts from rest.  (A slide's own lift-off unloads through a fast slip back, which carries the creep
+    first; a load that vanishes within a step does not.)"""
+    contact, _ = _run(_press_slide_stop(), end_s=0.49)
+    c = contact._contacts[0]
+    assert c["state"][7] == 1.0 and c["state"][8] > 1e-6
+    out = tuple(np.zeros(1) for _ in range(6))
+    contact._friction(c, np.zeros(1), np.zeros(1), 1.0 / GRID.grid_Hz, out, 0, 1)
+    assert out[0][0] == 0.0  # (no load)
+    assert c["state"][7] == 0.0 and c["state"][8] == 0.0
+    assert np.all(c["ridge_parts"][-1] == 0.0)
+
 @pytest.mark.unit
 def test_a_reverse_slide_mirrors_the_forward_one():
     """Consistency: a finger slid 3 mm forward and back over the same track at the same speed feels the same mean
