@@ -55,27 +55,28 @@ LANDINGS_M = tuple(0.1 * k for k in range(8))
 
 
 @pytest.mark.unit
-@pytest.mark.parametrize("force_N, velocity_m_per_s, distance_m, landings, tolerance",
-                         [(20.0, 0.5, 0.1, 6, 0.02), (2.0, 0.01, 0.01, 8, 0.06), (20.0, 0.05, 0.03, 6, 0.03)],
+@pytest.mark.parametrize("force_N, velocity_m_per_s, distance_m, landings, spread",
+                         [(20.0, 0.5, 0.1, 6, 0.010), (2.0, 0.01, 0.01, 8, 0.039), (20.0, 0.05, 0.03, 6, 0.018)],
                          ids=["20N-0.5m_per_s", "2N-1cm_per_s", "20N-5cm_per_s"])
 def test_the_ridge_resolved_fingerprint_keeps_the_slides_mean_friction(force_N, velocity_m_per_s, distance_m,
-                                                                      landings, tolerance):
+                                                                      landings, spread):
     """Consistency with the model's own contract (emulator/friction.py: the texture's µ holds the ridges' share, so
     they add their fluctuation about their mean): on the reference grid the ridge-resolved fingerprint keeps the
     slide's mean friction against the effective comb (whose skin stick-slips the same way: the ridges' force does
-    not act back on the skin), on average over the first ``landings`` of LANDINGS_M.  Fast steady slides guard µ_r
-    taken over the slide's own track (the track's first 20 mm are rougher and smoother than a 10 cm slide's); slow
-    stick-slipping ones guard its subtraction while the skin sticks.  One landing is one sample of the ridges' force
-    about its mean: resolved over comb scatters from landing to landing with SD 1.0 % at 20 N, 0.5 m/s, 3.9 % at
-    2 N, 1 cm/s (a 10 mm slide: ~40 of the sandpaper's features) and 1.8 % at 20 N, 5 cm/s (measured 2026-11-24 over
-    the 8 landings), so the tolerance on the mean of n landings is four standard errors, 4·SD/√n, rounded up to the
-    next 0.5 %: 2 % (n = 6), 6 % (n = 8) and 3 % (n = 6).  Measured means 0.995, 1.012 and 0.990 (n = 8); one
-    landing ranges 0.978–1.009, 0.952–1.068 and 0.962–1.011, so the single landing this test used until 2026-11-24,
-    with 6 %, could fail at 2 N for a model no worse; before the share's mends (one landing) −7.2 %, +20 % and
-    +59 %."""
+    not act back on the skin), over the first ``landings`` of LANDINGS_M.  Fast steady slides guard µ_r taken over
+    the slide's own track (the track's first 20 mm are rougher or smoother than a 10 cm slide's: each landing's
+    ratio moves, not their mean); slow stick-slipping ones guard its subtraction while the skin sticks.  One landing
+    is one sample of the ridges' force about its mean: resolved over comb scatters from landing to landing with SD
+    ``spread``, 1.0 % at 20 N, 0.5 m/s, 3.9 % at 2 N, 1 cm/s (a 10 mm slide: ~40 of the sandpaper's features) and
+    1.8 % at 20 N, 5 cm/s (measured 2026-11-24 over the 8 landings).  So the mean of n landings is held within four
+    standard errors, 4·SD/√n (1.6 %, 5.5 %, 2.9 %; measured means over 8: 0.995, 1.012, 0.990), and each landing
+    within four SD (4 %, 16 %, 7 %; measured 0.978–1.009, 0.952–1.068, 0.962–1.011).  The single landing this test
+    used until 2026-11-24, held within 6 %, could fail at 2 N for a model no worse; before the share's mends (one
+    landing) −7.2 %, +13 % from 40 mm, +20 % and +59 %."""
     reference = PROFILES["reference"]
     comb = dataclasses.replace(reference, name="reference, effective comb", ridges="effective")
-    ratios = [_mean_friction_N(reference, force_N, velocity_m_per_s, distance_m, start_m)[0]
-              / _mean_friction_N(comb, force_N, velocity_m_per_s, distance_m, start_m)[0]
-              for start_m in LANDINGS_M[:landings]]
-    assert abs(np.mean(ratios) - 1.0) < tolerance, (np.mean(ratios), np.std(ratios, ddof=1))
+    ratios = np.array([_mean_friction_N(reference, force_N, velocity_m_per_s, distance_m, start_m)[0]
+                       / _mean_friction_N(comb, force_N, velocity_m_per_s, distance_m, start_m)[0]
+                       for start_m in LANDINGS_M[:landings]])
+    assert abs(ratios.mean() - 1.0) < 4 * spread / np.sqrt(landings), (ratios.mean(), ratios.std(ddof=1))
+    assert np.max(np.abs(ratios - 1.0)) < 4 * spread, ratios
