@@ -3,7 +3,8 @@ ridges").  With ``ridges="resolved"`` (the reference profile) each ridge under t
 element whose crest the surface holds with the comb's own limit; it loads with the slip and releases — often as a
 snap — when a feature's crest passes.  Rigid ridges give the effective comb's tangential force; a smooth skin, ridges
 worn flat and a sticking skin release nothing; the samples do not depend on the block size or on the ring of table
-tiles; no hard case makes a NaN; the fast and default profiles keep the effective comb."""
+tiles; no hard case makes a NaN; after a slip has moved the ridges, the skin's creep below their slip floor carries
+the held crests; the fast and default profiles keep the effective comb."""
 
 import dataclasses
 import math
@@ -270,7 +271,8 @@ def test_hard_cases_stay_finite_and_bounded_at_the_reference_profile(case):
     steepest crest slope (a crest loads only up to the limit where it is held and releases to it; a chord change
     makes no force).  Lifted off the surface the ridges carry nothing and the slip's direction is forgotten; ridges
     worn flat give the comb's forces to the bit.  (Creep at 0.1 mm/s: 10 s at 1.26 N, where one stick-slip burst,
-    ~6.4 s in, slips faster than the ridges' 1 mm/s floor and moves them; docs/model.md on what that leaves.)"""
+    ~7 s in, slips faster than the ridges' 1 mm/s floor and moves them, and the creep after it carries their held
+    crests; docs/model.md on what that leaves.)"""
     if case == "lift-off-mid-slide":
         motion, end_s = _lifted_mid_slide(), 0.6
         lifted_contact, lifted = _run(_lifted_mid_slide(), grid=REFERENCE, end_s=0.38)
