@@ -385,17 +385,18 @@ def test_caught_crests_add_friction_as_prandtl_tomlinson_predicts(force):
 
 
 @pytest.mark.unit
-@pytest.mark.parametrize("force, tolerance", [(0.2, 0.01), (0.5, 0.02), (1.26, 0.02)])
-def test_the_textures_measured_friction_holds_the_ridges_share(force, tolerance):
+@pytest.mark.parametrize("force, spread", [(0.2, 0.0095), (0.5, 0.0163), (1.26, 0.0165)])
+def test_the_textures_measured_friction_holds_the_ridges_share(force, spread):
     """Consistency: a texture's µ is a fingertip's, ridges included, so while they move the resolved ridges add
-    their force less its mean µ_r × load, and the steady friction over sandpaper at 1 cm/s stays the comb's on
-    average over the 16 stretches of STRETCHES_M (6 mm slides), while the ridges' snaps remain (the resolved force
-    differs from the comb's).  One stretch is one sample of the ridges' force about its mean: resolved over comb
-    scatters from stretch to stretch with SD 0.95 %, 1.6 % and 1.65 % at 0.2, 0.5 and 1.26 N (measured 2026-11-24
-    over these 16; 0.87 %, 1.4 %, 1.6 % over 24), so the mean of 16 has a standard error of SD/4 and the tolerance is
-    four of them, rounded up to the next 0.5 %: 1 %, 2 % and 2 % (measured means 1.000, 1.001, 1.002; without the
-    share +5 %, +13 % and +25 %; the stretch at 0, which this test used alone with 3 %, 3 % and 8 %: 0.996, 0.993,
-    0.977)."""
+    their force less its mean µ_r × load, and the steady friction over sandpaper at 1 cm/s stays the comb's over
+    the 16 stretches of STRETCHES_M (6 mm slides), while the ridges' snaps remain (the resolved force differs from
+    the comb's).  One stretch is one sample of the ridges' force about its mean: resolved over comb scatters from
+    stretch to stretch with SD ``spread``, 0.95 %, 1.63 % and 1.65 % at 0.2, 0.5 and 1.26 N (measured 2026-11-24
+    over these 16; 0.9 %, 1.4 %, 1.6 % over 24).  So the mean of the 16 is held within four standard errors,
+    4·SD/√16 (measured 1.000, 1.001, 1.002; without the share +5 %, +13 % and +25 %), and each stretch within four
+    SD, 3.8 %, 6.5 % and 6.6 % (measured 0.985–1.022, 0.975–1.038, 0.962–1.020).  The second bound guards µ_r over
+    the slide's own track, which moves single stretches more than their mean.  (The stretch at 0, which this test
+    used alone with 3 %, 3 % and 8 % until 2026-11-24: 0.996, 0.993, 0.977.)"""
     ratios = []
     for start_m in STRETCHES_M:
         slide = Slide(0.0, SAND, force, 0.01, 0.006, approach_s=0.02, hold_s=0.02, accel_s=0.01, lift_s=0.02,
@@ -406,7 +407,9 @@ def test_the_textures_measured_friction_holds_the_ridges_share(force, tolerance)
         if start_m == 0.0:
             scale = np.max(np.abs(comb["tangential_force_N"]))
             assert np.max(np.abs(resolved["tangential_force_N"] - comb["tangential_force_N"])) > 1e-3 * scale
-    assert abs(np.mean(ratios) - 1.0) < tolerance, (np.mean(ratios), np.std(ratios, ddof=1))
+    ratios = np.array(ratios)
+    assert abs(ratios.mean() - 1.0) < 4 * spread / np.sqrt(ratios.size), (ratios.mean(), ratios.std(ddof=1))
+    assert np.max(np.abs(ratios - 1.0)) < 4 * spread, ratios
 
 
 @pytest.mark.unit
