@@ -7027,6 +7027,16 @@ CATALOGUE += [
            'tac_after_s[m] = float(rate_t[np.argmax(rate)] - TOUCH_START_S)',
            ('bench/tests/test_claim_measurements.py::test_the_tac_row_orders_a_rate_tac_reads_as_one_within_its_range_and_resolution',),
            "the TAC row's details place each material's peak cooling at the fastest warming instead"),
+    Mutant('ridge-share-over-the-track-ahead', 'physics', 'emulator/sliding.py',
+           'm.start_position_m - settle_n * dx, 0, n',
+           'm.start_position_m + (track_n - settle_n) * dx, 0, n',
+           ('emulator/tests/test_ridge_release.py::test_the_textures_measured_friction_holds_the_ridges_share',),
+           "the ridges' mean share µ_r is taken over the stretch of track after the one the slide crosses: each slide's share is wrong, their mean about right"),
+    Mutant('ridge-share-over-the-track-at-0', 'physics', 'emulator/sliding.py',
+           'm.start_position_m - settle_n * dx, 0, n',
+           '0.0 - settle_n * dx, 0, n',
+           ('emulator/tests/test_ridge_release.py::test_the_textures_measured_friction_holds_the_ridges_share',),
+           "the ridges' mean share µ_r is taken over the track's start whatever the slide's landing spot"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
