@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench.errors import escaped
 from bench.verification import analysis
 from bench.running.runner import build_sensor, run_scene
 from bench.running.sampler import Sampler
@@ -611,12 +612,21 @@ def fingerprint_environment() -> dict:
             "numba": numba.__version__, "machine": platform.machine()}
 
 
+def write_json(path: Path, doc) -> None:
+    """Write ``doc`` to ``path`` as indented JSON (UTF-8), its folder made if need be, whole or not at all
+    (:func:`bench.atomic.atomic_write`): a write that fails or is stopped (a full disk, Ctrl-C) leaves an earlier
+    file there as it was and no temporary file.  Raises :class:`OSError` naming ``path``."""
+    from bench.atomic import atomic_write
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_write(path) as tmp:
+        tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+
+
 def write_scene_fingerprint_fixture(path=None) -> dict:
     """Recompute the non-sliding scenes' fingerprints and write them to ``path`` (default
     :data:`SCENE_FINGERPRINT_FIXTURE`; do it only for an intended change of their codes, and say why in the
     commit)."""
-    from bench.atomic import atomic_write
-
     path = SCENE_FINGERPRINT_FIXTURE if path is None else path
     doc = {"about": "Codes of the shipped scenes that do not slide (fixtures/scenes/*.toml without a slide or skin "
                     "replacement on any sensor), default profile, each scene's own seed: per channel the number of "
@@ -628,9 +638,7 @@ def write_scene_fingerprint_fixture(path=None) -> dict:
            "profile": "default",
            "made_with": fingerprint_environment(),
            "scenes": non_sliding_scene_fingerprints()}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(path) as tmp:
-        tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    write_json(path, doc)
     return doc
 
 
@@ -643,8 +651,6 @@ FIDELITY_ERROR_COMMAND = ".venv/bin/python -m bench.verification.benchmark --wri
 def write_fidelity_error_fixture(path=None, say=print) -> dict:
     """Recompute :func:`profile_errors` for every shipped scene and write them to ``path`` (default
     :data:`FIDELITY_ERROR_FIXTURE`; only for an intended change of a profile's error, said in the commit)."""
-    from bench.atomic import atomic_write
-
     path = FIDELITY_ERROR_FIXTURE if path is None else path
     scenes = {}
     for scene_path in sorted(SCENES_DIR.glob("*.toml")):
@@ -661,9 +667,7 @@ def write_fidelity_error_fixture(path=None, say=print) -> dict:
            "kinds": list(ERROR_KINDS),
            "made_with": fingerprint_environment(),
            "scenes": scenes}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_write(path) as tmp:
-        tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    write_json(path, doc)
     return doc
 
 
@@ -701,10 +705,21 @@ def _fingerprints_main(argv) -> int:
     if a.out is None:
         ap.error("OUT.json is required (or --write-fixture)")
     prints = scene_code_fingerprints(a.scenes)
-    a.out.write_text(json.dumps(prints, indent=1))
+    try:
+        write_json(a.out, prints)
+    except OSError as e:
+        ap.exit(2, f"error: OUT.json {escaped(str(a.out))}: not written ({e.strerror or e}); an earlier file there is "
+                   f"left as it was\n")
     if a.against is None:
         return 0
-    old = json.loads(a.against.read_text())
+    try:
+        old = json.loads(a.against.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        ap.exit(2, f"error: OLD.json {escaped(str(a.against))}: cannot be read as JSON "
+                   f"({getattr(e, 'strerror', None) or e})\n")
+    if not isinstance(old, dict):
+        ap.exit(2, f"error: OLD.json {escaped(str(a.against))}: not fingerprints (a JSON object of run -> "
+                   f"fingerprint)\n")
     differ = sorted(k for k in set(old) | set(prints) if old.get(k) != prints.get(k))
     for k in differ:
         print(f"DIFFERENT {k}: {old.get(k)} -> {prints.get(k)}")

@@ -1,0 +1,62 @@
+"""``python -m bench.verification.benchmark OUT.json [OLD.json]`` writes OUT.json whole or not at all: a write that
+fails (a full disk, here the file-size limit RLIMIT_FSIZE in the child process, whose writes past it fail with
+EFBIG) leaves an earlier OUT.json as it was and no temporary file, and says so in one line naming OUT.json; an
+OLD.json that cannot be read is one line naming it, not a traceback."""
+
+import os
+import resource
+import subprocess
+import sys
+
+import pytest
+
+from bench.paths import REPO, SCENES_DIR
+
+pytestmark = pytest.mark.unit
+
+#: a tenth of a second of the shipped rest scene: 3 profiles × 4 seeds of it, about 800 bytes of fingerprints
+_SHORT_REST = (SCENES_DIR / "rest.toml").read_text(encoding="utf-8").replace("duration_s = 10.0", "duration_s = 0.1")
+
+
+def _fingerprints(tmp_path, *argv, file_size_limit=None) -> subprocess.CompletedProcess:
+    """The fingerprints module run in a child process over a folder holding the short rest scene; with
+    ``file_size_limit`` (bytes) no file the child writes grows past it."""
+    scenes = tmp_path / "scenes"
+    scenes.mkdir(exist_ok=True)
+    (scenes / "rest.toml").write_text(_SHORT_REST, encoding="utf-8")
+
+    def limit():
+        if file_size_limit is not None:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (file_size_limit, file_size_limit))
+
+    return subprocess.run([sys.executable, "-m", "bench.verification.benchmark", *map(str, argv), "--scenes",
+                           str(scenes)], cwd=REPO, capture_output=True, text=True, preexec_fn=limit, timeout=600,
+                          env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"})
+
+
+def test_a_write_that_fails_leaves_the_earlier_file_whole_and_says_so_in_one_line(tmp_path):
+    out = tmp_path / "prints.json"
+    out.write_text('{"rest/fast/seed+0": "earlier"}\n')
+    r = _fingerprints(tmp_path, out, file_size_limit=200)
+    assert r.returncode == 2, r.stderr
+    assert out.read_text() == '{"rest/fast/seed+0": "earlier"}\n'
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["prints.json", "scenes"]  # no temporary file left
+    assert r.stderr == (f"error: OUT.json {out}: not written (File too large); an earlier file there is left as it "
+                        f"was\n")
+
+
+def test_the_written_file_and_a_comparison_with_an_unreadable_old_file(tmp_path):
+    out, old = tmp_path / "new" / "prints.json", tmp_path / "old.json"
+    old.write_text("[1, 2]")
+    r = _fingerprints(tmp_path, out, old)
+    assert r.returncode == 2 and r.stderr == (f"error: OLD.json {old}: not fingerprints (a JSON object of run -> "
+                                              f"fingerprint)\n")
+    import json
+
+    prints = json.loads(out.read_text(encoding="utf-8"))
+    assert sorted(prints) == sorted(f"rest/{p}/seed+{k}" for p in ("fast", "default", "reference") for k in (0, 1, 5, 11))
+    r = _fingerprints(tmp_path, tmp_path / "again.json", tmp_path / "missing\n.json")
+    assert r.returncode == 2
+    assert r.stderr == f"error: OLD.json {tmp_path}/missing\\n.json: cannot be read as JSON (No such file or directory)\n"
+    r = _fingerprints(tmp_path, tmp_path / "again.json", out)
+    assert r.returncode == 0 and r.stdout.endswith("12 runs, 0 with different codes\n")
