@@ -15,7 +15,8 @@ The file is one JSON object (standard JSON: a non-finite number is null)::
 A row's fields are those of :func:`bench.experiments.trials.run_trial_task`'s rows (SI units: ``force_N``,
 ``velocity_m_per_s``, ``traction`` in A, ``roughness`` ln bits², ``fineness`` ln Hz, ...); trials.csv holds the same
 rows as text, a None as an empty cell and an object (a row's ``undefined``, {property: why}) as its JSON text.
-:func:`read_trials` reads a file back and checks the envelope, naming the file and the field in one line.
+:func:`read_trials` reads a file back and checks the envelope, naming the file and the field in one line (a value
+shown as every message shows one: :func:`bench.tomlfile.spelled`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pathlib import Path
 
 from bench.cli.args import strict_json
 from bench.errors import BenchError, escaped
+from bench.tomlfile import spelled
 
 TRIALS_FORMAT = "biotac-bench trials"
 TRIALS_VERSION = 1
@@ -44,7 +46,7 @@ def trials_json(command: str, rows: list[dict], library: dict, wall_s: float, wo
     """The text of trials.json for ``rows`` (one dict per trial) that ``command`` ran on the texture library
     ``library`` (:meth:`bench.textures.library.LibraryFile.record`) in ``wall_s`` s on ``workers``."""
     if command not in TRIALS_COMMANDS:
-        raise ValueError(f"command {command!r}: trials.json is written by {', '.join(TRIALS_COMMANDS)}")
+        raise ValueError(f"command {spelled(command)}: trials.json is written by {', '.join(TRIALS_COMMANDS)}")
     return strict_json({"format": TRIALS_FORMAT, "version": TRIALS_VERSION, "command": command, "library": library,
                         "wall_s": wall_s, "workers": workers, "rows": rows}, indent=1)
 
@@ -63,20 +65,20 @@ def read_trials(path: str | Path) -> dict:
         raise TrialsFileError(f"{where}: no \"format\" field: not a trials.json of this schema (one written before "
                               f"it had one is a bare list or lacks the field; its rows are in trials.csv beside it)")
     if doc["format"] != TRIALS_FORMAT:
-        raise TrialsFileError(f"{where}: format = {json.dumps(doc['format'])[:80]}: expected \"{TRIALS_FORMAT}\"")
+        raise TrialsFileError(f"{where}: format = {spelled(doc['format'])}: expected \"{TRIALS_FORMAT}\"")
     if doc.get("version") != TRIALS_VERSION:
-        raise TrialsFileError(f"{where}: version = {json.dumps(doc.get('version'))[:40]}: this biotac-bench reads "
+        raise TrialsFileError(f"{where}: version = {spelled(doc.get('version'))}: this biotac-bench reads "
                               f"version {TRIALS_VERSION}")
     for key, (types, kind) in TRIALS_FIELDS.items():
         value = doc.get(key)
         if key not in doc or isinstance(value, bool) or not isinstance(value, types):
-            shown = f"{key} = {json.dumps(value)[:80]}" if key in doc else f"{key} is missing"
+            shown = f"{key} = {spelled(value)}" if key in doc else f"{key} is missing"
             raise TrialsFileError(f"{where}: {shown}: must be {kind}")
     if doc["command"] not in TRIALS_COMMANDS:
-        raise TrialsFileError(f"{where}: command = {json.dumps(doc['command'])[:80]}: one of "
+        raise TrialsFileError(f"{where}: command = {spelled(doc['command'])}: one of "
                               f"{', '.join(TRIALS_COMMANDS)}")
     bad = next((i for i, r in enumerate(doc["rows"]) if not isinstance(r, dict)), None)
     if bad is not None:
-        raise TrialsFileError(f"{where}: rows[{bad}] = {json.dumps(doc['rows'][bad])[:80]}: must be an object (one "
+        raise TrialsFileError(f"{where}: rows[{bad}] = {spelled(doc['rows'][bad])}: must be an object (one "
                               f"trial)")
     return doc

@@ -75,6 +75,11 @@ def _envelope(**changes) -> str:
     (_envelope(library="mine.toml"), 'library = "mine.toml": must be an object'),
     (_envelope(rows=[{"texture": 1}, 7]), "rows[1] = 7: must be an object (one trial)"),
     ("{not json", "not JSON"),
+    # values shown as every message shows them (bench.tomlfile.spelled), not as json.dumps wrote them: text as
+    # written, an object as {key = value}, a long value cut saying its length
+    (_envelope(format="Bühl"), 'format = "Bühl": expected'),
+    (_envelope(library=[{"path": "x"}]), 'library = [{path = "x"}]: must be an object'),
+    (_envelope(command="x" * 100), f'command = "{"x" * 54}… (102 characters): one of'),
 ])
 def test_a_file_that_is_not_a_trials_json_is_refused_naming_the_file_and_the_field(tmp_path, text, message):
     path = tmp_path / "trials.json"
