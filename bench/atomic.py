@@ -11,6 +11,7 @@ import contextlib
 import errno
 import fcntl
 import os
+import shutil
 import stat
 import tempfile
 import time
@@ -110,6 +111,24 @@ def save_in_temp_folder(write, prefix: str, suffix: str) -> Path:
     return path
 
 
+def copy_to_new(src: Path, dst: Path) -> Path:
+    """Copy the file ``src`` to ``dst``, a name nothing holds (created with O_EXCL: nothing replaced, a symbolic
+    link never followed), flushed to disk; ``dst``.  Raises :class:`OSError` leaving no ``dst`` (nor on a signal).
+    For a file that can take no name by a link or a rename (:func:`commit_new`)."""
+    fd = os.open(dst, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
+    try:
+        with os.fdopen(fd, "wb") as out, open(src, "rb") as fh:
+            shutil.copyfileobj(fh, out)
+            out.flush()
+            os.fsync(out.fileno())
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(dst)
+        raise
+    _fsync_folder(dst.parent)
+    return dst
+
+
 def _fsync_file(path: Path) -> None:
     """Flush a finished temporary file's contents to disk (never through a symbolic link)."""
     fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
@@ -137,13 +156,19 @@ def commit(tmp: Path, final: Path) -> Path:
     return final
 
 
+#: what ``os.link`` fails with on a file system without hard links (vfat, many FUSE ones): :func:`commit_new` copies
+NO_HARD_LINKS = frozenset({errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.ENOSYS, errno.EMLINK})
+
+
 def commit_new(temps: dict[Path, Path]) -> list[Path]:
     """Move finished temporary files into place (``temps``: final name -> temporary file), replacing nothing: all
-    or none.  Each final name is taken with ``os.link``, which fails (FileExistsError, naming it) if anything is
+    or none.  Each final name is taken with ``os.link`` — on a file system without hard links (:data:`NO_HARD_LINKS`)
+    with a copy created O_EXCL (:func:`copy_to_new`) —, which fails (FileExistsError, naming it) if anything is
     there — a file, a folder, a dangling symbolic link — so no other program's file that appeared after a check is
-    ever replaced (no check-then-rename race).  If one name is taken, the names already linked are removed again and
-    every temporary file is left as it was; once all are linked, the temporary names are removed."""
-    placed: list[Path] = []
+    ever replaced (no check-then-rename race).  If one name is taken, the names already placed are removed again
+    (each only while it is still the file placed) and every temporary file is left as it was; once all are placed,
+    the temporary names are removed."""
+    placed: list[tuple[Path, tuple[int, int]]] = []  # final name, and the identity (st_dev, st_ino) placed there
     try:
         for final, tmp in temps.items():
             _fsync_file(tmp)
@@ -151,18 +176,24 @@ def commit_new(temps: dict[Path, Path]) -> list[Path]:
                 os.link(tmp, final, follow_symlinks=False)
             except FileExistsError:
                 raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), str(final)) from None
-            placed.append(final)
+            except OSError as e:
+                if e.errno not in NO_HARD_LINKS:
+                    raise
+                copy_to_new(tmp, final)
+            st = os.lstat(final)
+            placed.append((final, (st.st_dev, st.st_ino)))
     except BaseException:
-        for final in placed:
+        for final, identity in placed:
             with contextlib.suppress(OSError):
-                if os.path.samefile(final, temps[final]):  # still our link (its data stays under the temp name)
+                st = os.lstat(final)
+                if (st.st_dev, st.st_ino) == identity:  # still what we placed (its data stays under the temp name)
                     os.unlink(final)
         raise
     for tmp in temps.values():
         os.unlink(tmp)
     for folder in {final.parent for final in temps}:
         _fsync_folder(folder)
-    return placed
+    return [final for final, _ in placed]
 
 
 @contextlib.contextmanager

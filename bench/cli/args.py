@@ -39,6 +39,20 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefau
 # --- argument checks -------------------------------------------------
 
 
+class NotedWhenTyped(argparse.Action):
+    """argparse action: store the value as "store" does, and note that the flag was typed (:func:`typed`), so a
+    message can name a default the command chose as such rather than as a flag the user did not give."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace.typed_flags = (*getattr(namespace, "typed_flags", ()), self.dest)
+
+
+def typed(a, dest: str) -> bool:
+    """Whether the flag storing ``dest`` (a :class:`NotedWhenTyped` one) was typed, not left at its default."""
+    return dest in getattr(a, "typed_flags", ())
+
+
 def number(lo: float | None = None, hi: float | None = None, lo_open: bool = False, what: str = "a number"):
     """argparse type: a finite float within [lo, hi] (``lo_open``: strictly above lo)."""
 

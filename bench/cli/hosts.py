@@ -9,9 +9,9 @@ import os
 import sys
 from pathlib import Path
 
-from bench.cli.args import (Terminated, any_seed, firmware_choice, firmware_file, number, output_file, say_leftovers,
-                            sigterm_raises, stimuli_count, whole)
-from bench.errors import BenchError, OutputNotWritten
+from bench.cli.args import (NotedWhenTyped, Terminated, any_seed, firmware_choice, firmware_file, number,
+                            output_file, say_leftovers, sigterm_raises, stimuli_count, typed, whole)
+from bench.errors import BenchError, OutputNotWritten, escaped
 from bench.running.signals import signals_deferred
 from bench.tomlfile import spelled
 
@@ -134,33 +134,45 @@ def _is_recording_npz(path: Path) -> bool:
         return False
 
 
-def _refuse_overwriting(out: Path, csv: bool, force: bool) -> None:
-    """Before the port is opened: an earlier recording at ``out`` or a CSV beside it (which would no longer match
-    the NPZ) is refused unless ``force``; a --out that the CSV would overwrite is refused always."""
+def _out_named(out: Path, where: str | None) -> str:
+    """How record's messages name --out: ``where`` (:func:`~bench.reporting.outdir.folder_named`: the flag and the
+    path, or the default file), or, None, ``--out PATH``."""
+    from bench.reporting.outdir import folder_named
+
+    return where or folder_named(out, "--out", what="file")
+
+
+def _refuse_overwriting(out: Path, csv: bool, force: bool, where: str | None = None) -> None:
+    """Before the port is opened: an earlier recording at ``out`` (named ``where``: :func:`_out_named`) or a CSV
+    beside it (which would no longer match the NPZ) is refused unless ``force``; a --out that the CSV would
+    overwrite is refused always."""
+    where = _out_named(out, where)
     if csv and _csv_beside(out) == out:
-        raise BenchError(f"--out {out}: the CSV is written beside the NPZ with the suffix .csv, i.e. over it; "
-                         f"give the NPZ's name (e.g. {out.with_suffix('.npz')})")
+        raise BenchError(f"{where}: the CSV is written beside the NPZ with the suffix .csv, i.e. over it; "
+                         f"give the NPZ's name (e.g. {escaped(str(out.with_suffix('.npz')))})")
     present = [p for p in (out, _csv_beside(out)) if p.exists() or p.is_symlink()]
     folders = [p for p in present if p.is_dir()]
     if folders:
-        raise BenchError(f"--out {out}: {folders[0]} is a folder, where the recording's CSV would go; give "
+        raise BenchError(f"{where}: {escaped(str(folders[0]))} is a folder, where the recording's CSV would go; give "
                          f"another --out")
     if present and not force:
-        raise BenchError(f"--out {out}: {' and '.join(map(str, present))} already there (an earlier recording?); "
+        raise BenchError(f"{where}: {_paths_said(present)} already there (an earlier recording?); "
                          f"give another --out, or --force to replace {'it' if len(present) == 1 else 'them'}")
     if out in present and not out.is_symlink() and not _is_recording_npz(out):  # a link is replaced, not followed
-        raise BenchError(f"--out {out}: already there and not a recording (an NPZ with codes and layout); --force "
+        raise BenchError(f"{where}: already there and not a recording (an NPZ with codes and layout); --force "
                          f"replaces only an earlier recording: move it away, or give another --out")
     csv_path = _csv_beside(out)
     if csv_path in present and not _is_recording_csv(csv_path):
-        raise BenchError(f"--out {out}: {csv_path} is not a recording's CSV (its first line is not "
+        raise BenchError(f"{where}: {escaped(str(csv_path))} is not a recording's CSV (its first line is not "
                          f"{spelled(RECORDING_CSV_HEADER)}); --force replaces only an earlier recording: move it away, "
                          f"or give another --out")
 
 
-def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True) -> tuple[list[Path], dict]:
-    """Write the frames to ``out`` (NPZ) and, with ``csv``, beside it (CSV: channels by name); returns the files
-    written and {file: why} for a CSV that could not be (the NPZ holds every sample, so it is placed all the same).
+def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True,
+                    where: str | None = None) -> tuple[list[Path], dict]:
+    """Write the frames to ``out`` (NPZ; named ``where`` in messages, :func:`_out_named`) and, with ``csv``, beside
+    it (CSV: channels by name); returns the files written and {file: why} for a CSV that could not be (the NPZ
+    holds every sample, so it is placed all the same).
 
     Atomic: every file is written whole under a temporary name first (:func:`bench.atomic.temp_path`), then put in
     place by :func:`_place_recording` (replacing an earlier recording only with ``force``).  An NPZ that cannot be
@@ -210,8 +222,8 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
         out.parent.mkdir(parents=True, exist_ok=True)  # (a full disk may refuse even the folder)
         temps[out] = written_temp(out, write_npz)
     except OSError as e:  # a stream cannot be recorded again: the NPZ goes where there is room, and says so
-        raise OutputNotWritten(f"--out {out}: the recording could not be written ({e.strerror or e}); "
-                               + _rescue(write_npz)) from None
+        raise OutputNotWritten(f"{_out_named(out, where)}: the recording could not be written "
+                               f"({e.strerror or e}); " + _rescue(write_npz)) from None
     not_written = {}
     if csv:
         try:
@@ -221,7 +233,7 @@ def _save_recording(out: Path, frames, meta: dict, csv: bool, force: bool = True
         except BaseException:  # anything else: no temporary file left behind unnamed
             temps[out].unlink(missing_ok=True)
             raise
-    _place_recording(out, temps, _csv_beside(out) in temps, force)  # refused or failed: kept, and named
+    _place_recording(out, temps, _csv_beside(out) in temps, force, where)  # refused or failed: kept, and named
     return list(temps), not_written
 
 
@@ -239,11 +251,11 @@ def _rescue(write) -> str:
     try:
         path = save_in_temp_folder(write_file, "biotac-recording-", ".npz")
     except OSError as e:
-        return f"nor in {tempfile.gettempdir()} ({e.strerror or e}): the recording is lost"
-    return f"it was saved as {path} instead"
+        return f"nor in {escaped(tempfile.gettempdir())} ({e.strerror or e}): the recording is lost"
+    return f"it was saved as {escaped(str(path))} instead"
 
 
-def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool) -> None:
+def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool, where: str | None = None) -> None:
     """Move a finished recording's temporary files (``temps``: final name -> temporary file) into place.
 
     Without ``force`` nothing is replaced: the files take their names only where nothing is there, all or none
@@ -275,11 +287,12 @@ def _place_recording(out: Path, temps: dict[Path, Path], csv: bool, force: bool)
             commit_new(temps)
     except OSError as e:
         if isinstance(e, FileExistsError):
-            why = (f"{e.filename} appeared during the recording (written by another program?) and is not replaced"
-                   + ("" if force else " without --force"))
+            why = (f"{escaped(str(e.filename))} appeared during the recording (written by another program?) and is "
+                   f"not replaced" + ("" if force else " without --force"))
         else:
-            why = f"cannot put the recording in place: {e}"
-        raise BenchError(f"--out {out}: {why}; the recording is kept as {_keep_aside(temps)} (rename it to use "
+            why = f"cannot put the recording in place: {escaped(str(e))}"
+        raise BenchError(f"{_out_named(out, where)}: {why}; "
+                         f"the recording is kept as {_keep_aside(temps)} (rename it to use "
                          f"it)") from None
 
 
@@ -287,31 +300,67 @@ def _keep_aside(temps: dict[Path, Path]) -> str:
     """Give a finished recording that cannot take its place (``temps``: final name -> temporary file) names of its
     own beside it, ``NAME.kept-<8 random hex digits>.npz`` (and ``.csv``, the same digits), so that it is never
     taken for what an interrupted record left (:class:`~bench.reporting.outdir.OutFile` removes those); replacing
-    nothing (:func:`bench.atomic.commit_new`; a file system without hard links: a rename to the fresh random
-    name).  The files as a message names them; under their temporary names if even that fails."""
+    nothing (:func:`bench.atomic.commit_new`: a hard link, or a copy on a file system without them; either
+    failing otherwise — a full disk refusing the copy —, a rename to the fresh random name).  If nothing can name it
+    there, the last resort is a copy elsewhere (:func:`_copy_aside`).
+    Where the files are, as a message names them (:func:`~bench.errors.escaped`)."""
     import secrets
 
     from bench.atomic import commit_new
 
-    left = {final: tmp for final, tmp in temps.items() if tmp.exists()}
-    aside: dict[Path, Path] = {}
+    at = {final: tmp for final, tmp in temps.items() if tmp.exists()}  # final name -> where its data is now
     for _ in range(5):
         digits = secrets.token_hex(4)
-        aside = {final.with_name(f"{final.stem}.kept-{digits}{final.suffix}"): tmp for final, tmp in left.items()}
+        aside = {final.with_name(f"{final.stem}.kept-{digits}{final.suffix}"): final for final in at}
         try:
-            return " and ".join(map(str, commit_new(aside)))
+            return _paths_said(commit_new({kept: at[final] for kept, final in aside.items()}))
         except FileExistsError:
             continue  # (8 random digits taken: another draw)
-        except OSError:  # no hard links here: a rename, to a name nothing holds
+        except OSError:  # neither a link nor a copy: a rename, to a name nothing holds
             if any(os.path.lexists(p) for p in aside):
                 continue
             try:
-                for kept, tmp in aside.items():
-                    os.rename(tmp, kept)
+                for kept, final in aside.items():
+                    os.rename(at[final], kept)
+                    at[final] = kept
             except OSError:
                 break
-            return " and ".join(map(str, aside))
-    return " and ".join(str(p) for p in [*aside, *left.values()] if os.path.lexists(p))
+            return _paths_said(at.values())
+    return _copy_aside(at)
+
+
+def _copy_aside(at: dict[Path, Path]) -> str:
+    """The last resort of :func:`_keep_aside`, the folder refusing every name beside --out (a link, a copy and a
+    rename: a folder gone read-only): each file still under its temporary name (``at``: final name -> where its
+    data is) is copied into the system's temporary folder and its temporary file removed, so that the next record,
+    which removes temporary files as an interrupted one's leftovers, removes none of this one's data.  Where the
+    files are, as a message says it; a temporary file that stays is named as one (the folder refusing its removal:
+    a copy is elsewhere; no copy possible: the data is only there)."""
+    import shutil
+
+    from bench.atomic import TEMP_SUFFIX, save_in_temp_folder
+
+    notes = []
+    for final, where in list(at.items()):
+        if not where.name.endswith(TEMP_SUFFIX):
+            continue  # (renamed to its kept name before the rename of another failed)
+        try:
+            at[final] = save_in_temp_folder(lambda path: shutil.copyfile(where, path), f"{final.stem}.kept-",
+                                            final.suffix)
+        except OSError as e:
+            notes.append(f"{escaped(str(where))} is a temporary name, which the next record into that folder "
+                         f"removes as an interrupted one's, and no copy could be made ({e.strerror or e})")
+            continue
+        try:
+            os.unlink(where)
+        except OSError:
+            notes.append(f"the temporary file {escaped(str(where))}, a copy, stays (the next record there removes it)")
+    return _paths_said(at.values()) + "".join(f"; {n}" for n in notes)
+
+
+def _paths_said(paths) -> str:
+    """Files for a message: each path escaped (one line, :func:`~bench.errors.escaped`), joined by "and"."""
+    return " and ".join(escaped(str(p)) for p in paths)
 
 
 def _open_driver(port: str, baud: int):
@@ -330,15 +379,17 @@ def _open_driver(port: str, baud: int):
 def _cmd_record(a) -> int:
     """The recording, holding --out's lock from start to end (:class:`~bench.reporting.outdir.OutFile`): two
     records never write one file, and the temporary files of a record killed as it wrote are removed and named."""
-    from bench.reporting.outdir import OutFile
+    from bench.reporting.outdir import OutFile, folder_named
 
     out = Path(a.out)
-    _refuse_overwriting(out, a.csv, a.force)
-    with say_leftovers(OutFile.open(out, "--out", "record", "this recording", beside=(_csv_beside(out).name,))):
-        return _record(a, out)
+    where = folder_named(out, "--out", not typed(a, "out"), "file")
+    _refuse_overwriting(out, a.csv, a.force, where)
+    with say_leftovers(OutFile.open(out, "--out", "record", "this recording", beside=(_csv_beside(out).name,),
+                                    where=where)):
+        return _record(a, out, where)
 
 
-def _record(a, out: Path) -> int:
+def _record(a, out: Path, where: str) -> int:
     from tqdm import tqdm
 
     from bench.hosts.driver import CMD_START, SLOT_RATE_HZ
@@ -400,18 +451,20 @@ def _record(a, out: Path) -> int:
                 "crc_errors": st.crc_errors}
         written, not_written, lost = [], {}, None
         try:
-            written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force)
+            written, not_written = _save_recording(out, frames, meta, a.csv, force=a.force, where=where)
         except OutputNotWritten as e:  # its message says where the NPZ went instead (or that it is lost)
             lost = e
     if lost:
         print(f"error: {lost}", file=sys.stderr)
         status = max(status, 1)  # (a recording a signal ended keeps 130 / 143)
-    summary = (f"wrote {', '.join(map(str, written)) or 'nothing at --out'}: {len(frames)} frames ({recorded_s:.2f} "
+    summary = (f"wrote {', '.join(escaped(str(p)) for p in written) or 'nothing at --out'}: {len(frames)} frames "
+               f"({recorded_s:.2f} "
                f"s of {a.seconds:g} s asked); CRC errors {st.crc_errors}, dropped frames {st.dropped_frames}, bytes "
                f"skipped {st.bytes_skipped}")
     print(summary)
     for path, why in not_written.items():
-        print(f"error: {path} not written ({why}); {out} holds every sample", file=sys.stderr)
+        print(f"error: {escaped(str(path))} not written ({why}); {escaped(str(out))} holds every sample",
+              file=sys.stderr)
         status = max(status, 1)
     if end != "complete":
         print(f"warning: partial recording: {detail} after {recorded_s:.2f} s of the {a.seconds:g} s asked "
@@ -486,7 +539,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                  "a pyserial URL such as socket://host:port")
     rc.add_argument("--seconds", type=number(0, 86_400 * 7, lo_open=True), default=1.0,
                     help="seconds of stream to record (> 0; default 1)")
-    rc.add_argument("--out", type=recording_file, default="out/recording.npz", metavar="FILE",
+    rc.add_argument("--out", type=recording_file, default="out/recording.npz", metavar="FILE", action=NotedWhenTyped,
                     help="the NPZ file to write (default out/recording.npz); a folder is refused: give the file's "
                          "name in it")
     rc.add_argument("--csv", action="store_true",

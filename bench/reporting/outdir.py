@@ -89,12 +89,13 @@ class OutDirError(BenchError, ValueError):
     """The out folder cannot be used (the message names it: :func:`folder_named`)."""
 
 
-def folder_named(path, flag: str = "--out", default: bool = False) -> str:
-    """How a message names an out folder: ``--out PATH``, the flag and the path as the user gave them (unquoted, as
-    every message shows a path; :func:`~bench.errors.escaped`: one line), or, for the folder a command chose itself
-    because no ``flag`` was given (``default``), ``PATH (the default folder; --out chooses another)``."""
+def folder_named(path, flag: str = "--out", default: bool = False, what: str = "folder") -> str:
+    """How a message names an out folder (or, ``what="file"``, an out file): ``--out PATH``, the flag and the path
+    as the user gave them (unquoted, as every message shows a path; :func:`~bench.errors.escaped`: one line), or,
+    for the one a command chose itself because no ``flag`` was given (``default``),
+    ``PATH (the default folder; --out chooses another)``."""
     shown = escaped(os.fspath(path))
-    return f"{shown} (the default folder; {flag} chooses another)" if default else f"{flag} {shown}"
+    return f"{shown} (the default {what}; {flag} chooses another)" if default else f"{flag} {shown}"
 
 
 class FolderGone(OutDirError):
@@ -350,12 +351,15 @@ class OutFile:
         self.stale: tuple[str, ...] = ()
 
     @classmethod
-    def open(cls, path, flag: str, command: str, what: str, beside: tuple[str, ...] = ()) -> "OutFile":
+    def open(cls, path, flag: str, command: str, what: str, beside: tuple[str, ...] = (), default: bool = False,
+             where: str | None = None) -> "OutFile":
         """Make ``path``'s folder (removed again at close if the command leaves it empty), take the lock and remove
         the leftovers; :class:`OutDirError` naming ``flag`` and the path if the lock is held (by another
-        ``command``: ``what`` is the file, for the refusal: "this report") or the folder cannot be made."""
+        ``command``: ``what`` is the file, for the refusal: "this report") or the folder cannot be made.  Messages
+        name the file as :func:`folder_named` does (``default``: no ``flag`` was given, the command chose it), or
+        as ``where`` (what the user typed: the folder ``claims --plots`` writes its plot into)."""
         path = Path(path)
-        out = cls(path, folder_named(path, flag), command)  # (a file named as a folder is: --junit PATH)
+        out = cls(path, where or folder_named(path, flag, default, "file"), command)
         _make_folder(path.parent, out.where, out._made)
         try:
             out._lock_fd = lock_exclusively(out._lock_path, out.where,
@@ -548,14 +552,15 @@ def made_folders():
         raise
 
 
-def writable_folder(path, flag: str = "--out", made: list | None = None) -> Path:
+def writable_folder(path, flag: str = "--out", made: list | None = None, default: bool = False) -> Path:
     """Check a shared folder before a long job runs (an experiment's stage cache, which runs share on purpose):
     :func:`_make_folder`'s checks and a write probe — :class:`OutDirError` naming ``flag`` otherwise (the folders it
     made for the probe removed again). No lock, nothing refused or removed (each file goes in under a temporary
     name, renamed into place).  ``made`` (:func:`made_folders`): where the folders it creates are noted, to be
-    removed if the command ends leaving them empty."""
+    removed if the command ends leaving them empty.  ``default``: the command chose ``path`` itself, no ``flag`` was
+    given (messages say so, :func:`folder_named`)."""
     new: list[tuple[Path, tuple[int, int]]] = []
-    where = folder_named(path, flag)
+    where = folder_named(path, flag, default)
     p = _make_folder(path, where, new)
     try:
         fd, name = tempfile.mkstemp(dir=p, prefix=f".{PROBE}.", suffix=TEMP_SUFFIX)
