@@ -10,8 +10,9 @@ from pathlib import Path
 from bench.campaigns.case_names import (CASE_FRAMES, CASE_MAX_S, FAULT_EXPECTED, NEEDS_SOFTWARE_SPI,
                                         SCENE_DESCRIPTIONS, SPI_BUSES, check_bus, is_scene_file)
 from bench.campaigns.drivers import BENCH_DRIVER, HOST_LIMIT_PER_FRAME_S, HOST_LIMIT_S
-from bench.cli.args import (add_cluster_arguments, firmware_choice, firmware_file, replaceable_report,
-                            say_leftovers, sigterm_like_ctrl_c, whole)
+from bench.cli.args import (NotedWhenTyped, add_cluster_arguments, firmware_choice, firmware_file,
+                            replaceable_report, say_leftovers, sigterm_like_ctrl_c, typed, whole)
+from bench.errors import escaped
 from bench.tomlfile import spelled
 
 
@@ -65,11 +66,14 @@ def _cmd_campaign(a) -> int:
 
     check_bus(a.faults, a.spi)  # a fault the bus cannot carry: refused by name before anything (the report) is touched
     firmware_choice(a.firmware, "campaign")  # a library beside other files: refused before the report is touched
-    with say_leftovers(OutFile.open(a.junit, "--junit", "campaign", "this report")) as report:
-        return _run_campaign(a, report.path)
+    with say_leftovers(OutFile.open(a.junit, "--junit", "campaign", "this report",
+                                    default=not typed(a, "junit"))) as report:
+        return _run_campaign(a, report.path, report.where)
 
 
-def _run_campaign(a, report: Path) -> int:
+def _run_campaign(a, report: Path, where: str) -> int:
+    """The campaign, its JUnit report written to ``report`` (named ``where`` in messages: the flag and the path, or
+    the default file)."""
     from bench.campaigns import faults as campaign
     from bench.campaigns.engine import ClusterSpec, signals_held
     from bench.errors import BenchError
@@ -102,7 +106,7 @@ def _run_campaign(a, report: Path) -> int:
             try:
                 campaign.write_unfinished_junit(report, why, a.spi, started, done)
             except OSError as oe:
-                print(f"error: --junit {a.junit}: the report saying so could not be written ({oe.strerror or oe})",
+                print(f"error: {where}: the report saying so could not be written ({oe.strerror or oe})",
                       file=sys.stderr)
         raise
     print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
@@ -110,10 +114,10 @@ def _run_campaign(a, report: Path) -> int:
         with signals_held():  # a signal meanwhile: the report is finished first, then the stop
             campaign.write_junit(results, report, started)
     except OSError as e:
-        print(f"error: --junit {a.junit}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
+        print(f"error: {where}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
               f"holds the results", file=sys.stderr)
         return 1  # the work was done, its report not written (as a run whose record.json could not be)
-    print(f"JUnit XML: {a.junit}")
+    print(f"JUnit XML: {escaped(str(report))}")
     return 0 if all(r["passed"] for r in results) else 1
 
 
@@ -201,7 +205,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                        help="run the cases with this one seed only, 0 to 9999: a failing case again (its seed is in "
                             "the summary and in the report's case name, rest[seed=7])")
     cp.add_argument("--junit", type=replaceable_report(b"<testsuite", "a JUnit XML report"),
-                    default="out/campaign.xml",
+                    default="out/campaign.xml", action=NotedWhenTyped,
                     help="where to write the JUnit XML report (one test case per fault × scene × seed; an earlier "
                          "report there is replaced, as CI tools expect; any other file is refused)")
     cp.add_argument("--spi", choices=list(SPI_BUSES), default="software",

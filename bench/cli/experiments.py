@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from bench.cli.args import add_cluster_arguments, any_seed, say_leftovers, sigterm_like_ctrl_c, whole
+from bench.errors import escaped
 from bench.experiments.design import ABLATIONS, D_PILOT_TEXTURES, PILOT_WORTH_TRIALS
 from bench.tomlfile import spelled
 from emulator.fidelity import PROFILES
@@ -122,16 +123,16 @@ def _results_not_written(e: OSError, out: Path, files, trials_json: str):
 
     written = [f for f in files if (out / f).is_file()]
     if "trials.json" in written:
-        where = f"the trials are in {out}/trials.json"
+        where = f"the trials are in {escaped(str(out / 'trials.json'))}"
     else:
         try:
             saved = save_in_temp_folder(lambda path: path.write_text(trials_json, encoding="utf-8"),
                                         "biotac-trials-", ".json")
-            where = f"the trials were saved to {saved} instead"
+            where = f"the trials were saved to {escaped(str(saved))} instead"
         except OSError as lost:
             where = f"the trials could not be saved in the temporary folder either ({lost.strerror or lost}): lost"
     failed = Path(e.filename).name if e.filename else "a file"
-    return OutputNotWritten(f"{out}/{failed} could not be written ({e.strerror or e}); written: "
+    return OutputNotWritten(f"{escaped(str(out / failed))} could not be written ({e.strerror or e}); written: "
                             f"{', '.join(written) or 'nothing'}; {where}")
 
 
@@ -182,7 +183,7 @@ def _cmd_texture_sweep(a) -> int:
     finally:
         folder.close()
     sim = sum(r["simulated_s"] for r in rows)
-    print(f"wrote {out}/ ({', '.join(SWEEP_FILES)}): {len(rows)} trials, "
+    print(f"wrote {escaped(str(out))}/ ({', '.join(SWEEP_FILES)}): {len(rows)} trials, "
           f"{sim:.0f} simulated s in {wall:.1f} s wall ({sim / wall:.0f}× real time)")
     if clipped_note(rows):
         print(f"note: {clipped_note(rows)}")
@@ -280,22 +281,23 @@ def _cmd_explore(a) -> int:
     from bench.experiments.experiment import (ablated, all_leaves_out_note, identified_among, load_experiment,
                                               run_experiment, summary)
     from bench.reporting.experiment_report import OUTPUT_FILES, experiment_trials_json, write_outputs, write_text
-    from bench.reporting.outdir import FolderKind, made_folders, writable_folder
+    from bench.reporting.outdir import FolderKind, folder_named, made_folders, writable_folder
 
     if a.no_cache and a.cache is not None:
-        raise ValueError(f"--cache {a.cache} with --no-cache: --no-cache runs every trial again and caches nothing; "
-                         f"give one or the other")
+        raise ValueError(f"{folder_named(a.cache, '--cache')} with --no-cache: --no-cache runs every trial again and "
+                         f"caches nothing; give one or the other")
+    cache_defaulted = a.cache is None  # (messages name it as the default folder, not as a --cache not given)
     a.cache = a.cache or DEFAULT_CACHE
     spec = load_experiment(a.experiment)
     if note := all_leaves_out_note(spec):
         print(f"note: {note}", file=sys.stderr)
     if not a.no_cache and a.out is not None and Path(a.cache).resolve() == Path(a.out).resolve():
-        raise ValueError(f"--cache {a.cache} is --out: the results and the stage cache need folders of their own (the "
-                         f"cache's entries would make a later --force refuse the folder); the cache may sit inside "
-                         f"--out, e.g. --cache {Path(a.out) / 'cache'}")
+        raise ValueError(f"{folder_named(a.cache, '--cache')} is --out: the results and the stage cache need folders of "
+                         f"their own (the cache's entries would make a later --force refuse the folder); the cache may "
+                         f"sit inside --out, e.g. {folder_named(Path(a.out) / 'cache', '--cache')}")
     names = [] if not a.ablation else (list(ABLATIONS) if a.ablation == "all" else [a.ablation])
     variants = [("baseline", spec, "as specified")] + [(n, *ablated(spec, n)) for n in names]  # (checked first)
-    cache_kept = "" if a.no_cache else f" (the stage cache {a.cache} is kept: no trial runs again)"
+    cache_kept = "" if a.no_cache else f" (the stage cache {escaped(a.cache)} is kept: no trial runs again)"
     kind = FolderKind("the earlier results" + cache_kept, OUTPUT_FILES + ("ablations.md",), tuple(ABLATIONS))
     keep = () if a.no_cache or a.out is None else tuple(filter(None, [_entry_inside(a.cache, a.out)]))
     # both checked before anything runs; the out folder is locked while the experiment runs
@@ -303,7 +305,7 @@ def _cmd_explore(a) -> int:
     # a cache folder this command makes, then refused or failed, is removed if empty (before --out is closed)
     with contextlib.closing(folder), made_folders() as made:
         out = folder.path
-        cache = None if a.no_cache else writable_folder(a.cache, "--cache", made)
+        cache = None if a.no_cache else writable_folder(a.cache, "--cache", made, default=cache_defaulted)
         cluster = ClusterSpec.from_env(a.scheduler, a.workers)
         rows = []
         for label, sp, what in variants:

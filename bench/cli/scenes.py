@@ -176,10 +176,10 @@ def _print_run(a, scene, res) -> None:
     out, record = res.folder, res.record
     if not a.quiet:
         print((out / "report.md").read_text())
-    print(f"wrote {out}/ ({', '.join(record['outputs'])})" + (" for sensor 1" if scene.n_sensors > 1 else ""))
+    print(f"wrote {escaped(str(out))}/ ({', '.join(record['outputs'])})" + (" for sensor 1" if scene.n_sensors > 1 else ""))
     for k, sub_record in sorted(res.sensor_records.items()):
         spec = scene.sensor_spec(k)
-        print(f"wrote {out}/sensor{k}/ ({', '.join(sub_record['outputs'])}) for sensor {k} "
+        print(f"wrote {escaped(str(out / f'sensor{k}'))}/ ({', '.join(sub_record['outputs'])}) for sensor {k} "
               f"({identity_words(sensor_identity(spec, k))}, {stimuli_count(len(spec.stimuli))}"
               + "".join(f", {n} = {v}" for n, v in spec.faults.items()) + ")")
         for name, why in sub_record.get("skipped_outputs", {}).items():

@@ -63,15 +63,16 @@ def _claims(a, made: list, held: contextlib.ExitStack) -> int:
     from bench.verification.claims import (CLAIM_GROUPS, Bench, format_spread_table, format_table, run_claims,
                                            run_claims_over_seeds)
 
+    from bench.reporting.outdir import folder_named
     from emulator.units import unit
 
     groups = a.only or list(CLAIM_GROUPS)
-    plots = escaped(a.plots or "")  # the folder as messages show it (a control character in it escaped)
+    plots = folder_named(a.plots or "", "--plots")  # the folder as messages name it (--plots DIR, DIR escaped)
     if a.plots:  # checked before anything runs: the plot needs the vibration group, and a folder it can write
         from bench.reporting.outdir import writable_folder
 
         if "vibration" not in groups:
-            raise ValueError(f"--plots {plots}: the frequency-sensitivity plot needs the vibration claims; add "
+            raise ValueError(f"{plots}: the frequency-sensitivity plot needs the vibration claims; add "
                              f"--only vibration")
         writable_folder(a.plots, "--plots", made)
         from bench.reporting.plots import SENSITIVITY_PLOT
@@ -79,11 +80,11 @@ def _claims(a, made: list, held: contextlib.ExitStack) -> int:
         try:  # only a plot this command wrote is replaced
             replaceable_report(b"\x89PNG", "a PNG plot")(str(Path(a.plots) / SENSITIVITY_PLOT))
         except argparse.ArgumentTypeError as e:
-            raise ValueError(f"--plots {plots}: {escaped(str(e))}") from None
+            raise ValueError(f"{plots}: {escaped(str(e))}") from None
         from bench.reporting.outdir import OutFile
 
         held.enter_context(say_leftovers(OutFile.open(Path(a.plots) / SENSITIVITY_PLOT, "--plots", "claims run",
-                                                      "this plot")))
+                                                      "this plot", where=plots)))
     unit_kw = {} if a.unit is None else {"params": unit(a.unit).params}  # default: the Bench's (nominal) sensor
     progress = None if a.json else (lambda g: print(f"… {g}", file=sys.stderr))
     if a.seeds is not None:
@@ -122,7 +123,7 @@ def _claims(a, made: list, held: contextlib.ExitStack) -> int:
         try:
             out = sensitivity_plot(claims, Path(a.plots))
         except OSError as e:
-            raise OutputNotWritten(f"--plots {plots}: {SENSITIVITY_PLOT} could not be written "
+            raise OutputNotWritten(f"{plots}: {SENSITIVITY_PLOT} could not be written "
                                    f"({e.strerror or e}); the claims above ran and are reported") from None
         print(f"wrote {escaped(str(out))}", file=sys.stderr)
     return 0 if all(c.ok for c in claims) else 1

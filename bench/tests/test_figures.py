@@ -93,6 +93,6 @@ def test_claims_plots_replaces_its_own_earlier_plot(tmp_path, capsys):
     assert target.read_bytes()[:4] == b"\x89PNG" and len(target.read_bytes()) > 1000
     err = capsys.readouterr().err
     assert f"wrote {target}" in err
-    assert (f"note: --plots {target}: removed 1 temporary file that an interrupted claims run left, killed (or the "
+    assert (f"note: --plots {tmp_path}: removed 1 temporary file that an interrupted claims run left, killed (or the "
             f"machine down) before it could clean up, partial writes and never results: {left.name}") in err, err
     assert [p.name for p in tmp_path.iterdir()] == [target.name]
