@@ -54,9 +54,29 @@ def test_the_written_file_and_a_comparison_with_an_unreadable_old_file(tmp_path)
     import json
 
     prints = json.loads(out.read_text(encoding="utf-8"))
-    assert sorted(prints) == sorted(f"rest/{p}/seed+{k}" for p in ("fast", "default", "reference") for k in (0, 1, 5, 11))
+    assert sorted(prints) == sorted(f"rest/{p}/seed+{k}" for p in ("fast", "default", "reference")
+                                    for k in (0, 1, 5, 11))
     r = _fingerprints(tmp_path, tmp_path / "again.json", tmp_path / "missing\n.json")
     assert r.returncode == 2
-    assert r.stderr == f"error: OLD.json {tmp_path}/missing\\n.json: cannot be read as JSON (No such file or directory)\n"
+    assert r.stderr == (f"error: OLD.json {tmp_path}/missing\\n.json: cannot be read as JSON (No such file or "
+                        f"directory)\n")
     r = _fingerprints(tmp_path, tmp_path / "again.json", out)
     assert r.returncode == 0 and r.stdout.endswith("12 runs, 0 with different codes\n")
+
+
+def test_ctrl_c_while_fingerprinting_writes_nothing_and_says_so(tmp_path):
+    import signal
+
+    scenes = tmp_path / "scenes"
+    scenes.mkdir()
+    (scenes / "rest.toml").write_text(_SHORT_REST, encoding="utf-8")
+    out = tmp_path / "prints.json"
+    out.write_text("earlier\n")
+    p = subprocess.Popen([sys.executable, "-m", "bench.verification.benchmark", str(out), "--scenes", str(scenes)],
+                         cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout.readline().startswith("rest/fast/seed+0")  # working: the first run fingerprinted
+    p.send_signal(signal.SIGINT)
+    rest, err = p.communicate(timeout=120)
+    assert p.returncode == 130
+    assert err == "interrupted (Ctrl-C): no file written; an earlier one is left as it was\n"
+    assert out.read_text() == "earlier\n" and sorted(p.name for p in tmp_path.iterdir()) == ["prints.json", "scenes"]

@@ -844,4 +844,8 @@ def main(args) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(_fingerprints_main(sys.argv[1:]))
+    try:
+        sys.exit(_fingerprints_main(sys.argv[1:]))
+    except KeyboardInterrupt:  # (every file is written whole or not at all: none is half-written)
+        print("interrupted (Ctrl-C): no file written; an earlier one is left as it was", file=sys.stderr)
+        sys.exit(130)
