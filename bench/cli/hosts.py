@@ -373,7 +373,7 @@ def _open_driver(port: str, baud: int):
         msg = os.strerror(code) if isinstance(code, int) else str(e)
         if "exclusively lock" in str(e):
             msg = "another program has it open (another record or host?); one host at a time"
-        raise OSError(f"argument port: cannot open {port}: {msg}") from None
+        raise OSError(f"argument port: cannot open {escaped(port)}: {msg}") from None
 
 
 def _cmd_record(a) -> int:
@@ -406,11 +406,11 @@ def _record(a, out: Path, where: str) -> int:
             if drv.wait_for(CMD_START, timeout_s=5) is None:
                 drv.close()
                 if drv.disconnected:
-                    raise OSError(f"{a.port}: the port closed before the bridge answered START")
-                raise OSError(f"{a.port}: no answer to START within 5 s (is the bridge running?)")
+                    raise OSError(f"{escaped(a.port)}: the port closed before the bridge answered START")
+                raise OSError(f"{escaped(a.port)}: no answer to START within 5 s (is the bridge running?)")
             drv.count_afresh(after_reply_to=started)  # the recording's frames, CRC errors and drops: from its START on
             if not a.quiet:
-                print(f"recording {a.seconds:g} s from {a.port}", file=sys.stderr, flush=True)
+                print(f"recording {a.seconds:g} s from {escaped(a.port)}", file=sys.stderr, flush=True)
             with tqdm(total=round(a.seconds, 3), unit="s", disable=a.quiet,
                       bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s") as bar:
                 for f in drv.frames(timeout_s=a.idle_timeout):

@@ -85,3 +85,22 @@ def test_explore_and_run_show_the_paths_they_name_escaped(tmp_path, capsys):
     scene.write_text((SCENES_DIR / "rest.toml").read_text().replace("duration_s = 10.0", "duration_s = 0.05"))
     assert main(["run", str(scene), "--out", str(odd), "--quiet"]) == 0
     assert f"wrote {shown}/ (" in capsys.readouterr().out
+
+
+def test_record_shows_the_port_it_names_escaped(tmp_path, capsys):
+    """The port as typed (a device, a link to one), a line break in its name shown as \\n: one line each."""
+    missing = tmp_path / "no\nport"
+    assert main(["record", str(missing), "--out", str(tmp_path / "r.npz")]) == 2
+    shown = str(missing).replace("\n", "\\n")
+    assert capsys.readouterr().err == f"error: argument port: cannot open {shown}: No such file or directory\n"
+    controller, device = os.openpty()  # a serial line nothing answers on
+    try:
+        port = tmp_path / "silent\nline"
+        port.symlink_to(os.ttyname(device))
+        assert main(["record", str(port), "--out", str(tmp_path / "r.npz"), "--quiet"]) == 2
+    finally:
+        os.close(controller)
+        os.close(device)
+    shown = str(port).replace("\n", "\\n")
+    assert capsys.readouterr().err == (f"error: {shown}: no answer to START within 5 s (is the bridge running?)\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["silent\nline"]  # nothing written
