@@ -20,7 +20,8 @@ _SHORT_REST = (SCENES_DIR / "rest.toml").read_text(encoding="utf-8").replace("du
 
 def _fingerprints(tmp_path, *argv, file_size_limit=None) -> subprocess.CompletedProcess:
     """The fingerprints module run in a child process over a folder holding the short rest scene; with
-    ``file_size_limit`` (bytes) no file the child writes grows past it."""
+    ``file_size_limit`` (bytes) no file the child writes grows past it (no bytecode is written: CPython would
+    place a .pyc cut short by the limit, which later imports fail to read)."""
     scenes = tmp_path / "scenes"
     scenes.mkdir(exist_ok=True)
     (scenes / "rest.toml").write_text(_SHORT_REST, encoding="utf-8")
@@ -35,12 +36,14 @@ def _fingerprints(tmp_path, *argv, file_size_limit=None) -> subprocess.Completed
 
 
 def test_a_write_that_fails_leaves_the_earlier_file_whole_and_says_so_in_one_line(tmp_path):
+    warm = tmp_path / "warm" / "prints.json"  # numba's caches written first (the limit would refuse them)
+    assert _fingerprints(tmp_path, warm).returncode == 0
     out = tmp_path / "prints.json"
     out.write_text('{"rest/fast/seed+0": "earlier"}\n')
     r = _fingerprints(tmp_path, out, file_size_limit=200)
     assert r.returncode == 2, r.stderr
     assert out.read_text() == '{"rest/fast/seed+0": "earlier"}\n'
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["prints.json", "scenes"]  # no temporary file left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["prints.json", "scenes", "warm"]  # no temporary file left
     assert r.stderr == (f"error: OUT.json {out}: not written (File too large); an earlier file there is left as it "
                         f"was\n")
 
