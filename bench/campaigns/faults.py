@@ -14,7 +14,9 @@ case's wall time is measured where it runs.  The faults' and scenes' names, the 
 scenes' descriptions live in :mod:`bench.campaigns.case_names` (light: what the command line's help lists); the
 registries here hold the heavy objects keyed by those names.  The bench and the driver are imported only where a
 case runs.  The firmware is built once on the client before the tasks go out; a
-worker on another machine builds its own (the build is atomic, also between threads: bench.hosts.native).
+worker on another machine builds its own (the build is atomic, also between threads: bench.hosts.native).  So are
+the emulator's numba kernels compiled, for each scene (:func:`compile_kernels`): workers on this machine load them
+from numba's cache on disk; one on another machine compiles its own in its first case of a scene.
 """
 
 from __future__ import annotations
@@ -437,6 +439,39 @@ def _blamed_on(driver: str):
         raise DriverFailed(f"driver {driver} raised {type(e).__name__}: {e}") from None
 
 
+#: How long (wall s) :func:`compile_kernels`' bench waits for a host before dropping the bytes nobody reads.
+COMPILE_RUN_HOST_GONE_S = 1e-3
+
+
+def compile_kernels(scenes) -> None:
+    """Run the reference firmware over sensor 1 of each of ``scenes`` (built-in names or scene files, as in
+    :func:`campaign_tasks`) for a case's length, here, with no host and before any case's wall-clock waits start.
+    The emulator's numba kernels (the sensor's, the SPI model's) compile on their first call, inside a case's first
+    firmware step: measured in a fresh clone with a load of 11 on 2 cores, a sliding scene's first step took 24 s,
+    so its first ``none`` case read no frame within the 10 s it waits ("only 0 frames arrived") and passed when run
+    again.  Compiled here, they reach every worker on this machine from numba's cache on disk (that step then takes
+    0.3 s).  No case's frames change: these benches and sensors are thrown away."""
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cosim import default_sensors
+    from bench.hosts.driver import CMD_START, encode
+
+    from bench.campaigns.scene_files import frame_s
+
+    seen = set()
+    for scene in scenes:
+        own = not isinstance(scene, str)
+        if (scene.path if own else scene) in seen:
+            continue
+        seen.add(scene.path if own else scene)
+        sensors = scene.sensors(1, 0) if own else default_sensors(1, SCENES[scene], 0)
+        fb = FirmwareBench(sensors=sensors, host_gone_s=COMPILE_RUN_HOST_GONE_S)
+        try:
+            fb.board.send_to_firmware(encode(CMD_START))
+            fb.sim.run((scene.frames if own else CASE_FRAMES) * frame_s())
+        finally:
+            fb.stop()
+
+
 def firmware_name(firmware) -> str:
     """How a report names the firmware a case ran: "reference", or your sources' or library's paths."""
     if firmware is None:
@@ -503,6 +538,7 @@ def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool =
         except HarnessError as e:  # (the emulator's RuntimeError: as the bench's, the campaign could not run)
             raise BuildError(f"--spi rtl: the RTL harness could not be built: {e}") from None
     build_firmware()  # once, here: the workers find it built (and a build error is one error, not one per case)
+    compile_kernels([t.scene for t in tasks])  # once, here: no case waits for a compiler
     if firmware is not None:  # yours: built (or refused) here once too; each worker finds it by the same paths
         firmware_library(firmware)
         firmware = tuple(map(str, firmware)) if isinstance(firmware, (list, tuple)) else str(firmware)
