@@ -451,11 +451,10 @@ def compile_kernels(scenes) -> None:
     so its first ``none`` case read no frame within the 10 s it waits ("only 0 frames arrived") and passed when run
     again.  Compiled here, they reach every worker on this machine from numba's cache on disk (that step then takes
     0.3 s).  No case's frames change: these benches and sensors are thrown away."""
+    from bench.campaigns.scene_files import frame_s
     from bench.hosts.bridge import FirmwareBench
     from bench.hosts.cosim import default_sensors
     from bench.hosts.driver import CMD_START, encode
-
-    from bench.campaigns.scene_files import frame_s
 
     seen = set()
     for scene in scenes:
