@@ -7137,6 +7137,16 @@ CATALOGUE += [
            '                raise OSError(f"{a.port}: no answer to START',
            ('bench/tests/test_output_naming.py::test_record_shows_the_port_it_names_escaped',),
            "record's no-answer error prints the port's line break raw"),
+    Mutant('campaign-kernels-compiled-in-the-cases', 'host', 'bench/campaigns/faults.py',
+           '    compile_kernels([t.scene for t in tasks])  # once, here: no case waits for a compiler\n',
+           '',
+           ('bench/tests/test_campaign_kernels.py::test_a_campaign_compiles_every_kernel_its_cases_use_before_the_first_case_starts',),
+           "a campaign does not compile the emulator's kernels before its cases: each scene's first case compiles them inside its first firmware step (24 s on a loaded machine, past the 10 s a case waits for a frame)"),
+    Mutant('campaign-kernels-without-streaming', 'host', 'bench/campaigns/faults.py',
+           '            fb.board.send_to_firmware(encode(CMD_START))\n',
+           '',
+           ('bench/tests/test_campaign_kernels.py::test_a_campaign_compiles_every_kernel_its_cases_use_before_the_first_case_starts',),
+           'compile_kernels runs the firmware without START: nothing is sampled over the SPI model, whose kernels the cases then compile'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
