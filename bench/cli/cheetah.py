@@ -40,7 +40,8 @@ def _cmd_serve(a) -> int:
             print("note: the scene's [host] section is not used: your program is the host and chooses what to "
                   "sample and when", file=sys.stderr)
     else:
-        kw["seed"] = 1 if a.seed is None else a.seed
+        kw["seed"] = 0 if a.seed is None else a.seed
+        what += f" (seed {kw['seed']}: sensor k draws {kw['seed']} + k - 1)"
     with sigterm_raises():
         cb = CheetahBench(n_sensors, **kw).start()
         try:
@@ -96,8 +97,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help=f"emulated sensors, 1 to 5 (default: the scene's count with SCENE, else {DEFAULT_SENSORS}; "
                          f"with SCENE at least its count)")
     sv.add_argument("--seed", type=any_seed,
-                    help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
-                         "seed + k without")
+                    help="seed (default: the scene's, else 0); sensor k draws its noise from seed + k - 1, "
+                         "with a scene or without (as every route numbers sensors)")
     sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds (s; default: "
                                                                         "serve until Ctrl-C or SIGTERM)")
     sv.set_defaults(func=_cmd_serve)

@@ -49,8 +49,8 @@ def _cmd_bridge(a) -> int:
         what = (f"{kw['n_sensors']} emulated sensor(s) built from scene '{scene.name}' (units, parameters, noise, "
                 f"fidelity {scene.fidelity}, seed {kw['seed']}; {feels}; faults — {faults})")
     else:
-        kw = {"n_sensors": a.sensors or 1, "seed": 1 if a.seed is None else a.seed, "spi": a.spi or "software"}
-        what = f"{kw['n_sensors']} emulated sensor(s) at rest"
+        kw = {"n_sensors": a.sensors or 1, "seed": 0 if a.seed is None else a.seed, "spi": a.spi or "software"}
+        what = f"{kw['n_sensors']} emulated sensor(s) at rest (seed {kw['seed']}: sensor k draws {kw['seed']} + k - 1)"
     with sigterm_raises():
         try:
             fb = FirmwareBench(realtime=not a.fast, speed=a.speed, baudrate=a.baud, rx_buffer=a.rx_buffer,
@@ -492,8 +492,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     help="scene file or shipped scene name: sensors built from it (units, variants, each its own "
                          "stimuli; --sensors, if given, at least the scene's count)")
     br.add_argument("--seed", type=any_seed,
-                    help="seed (default: the scene's, else 1); sensor k draws from seed + k - 1 with a scene, "
-                         "seed + k without")
+                    help="seed (default: the scene's, else 0); sensor k draws its noise from seed + k - 1, "
+                         "with a scene or without (as every route numbers sensors)")
     br.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds")
     br.add_argument("--speed", type=number(0, lo_open=True), default=1.0,
                     help="virtual seconds per wall second when paced (> 0; default 1)")

@@ -71,7 +71,7 @@ def _check_action(what: str, action) -> None:
 
 
 class FirmwareBench:
-    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, realtime: bool = False,
+    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 0, sensors=None, realtime: bool = False,
                  speed: float = 1.0, pull_up: bool = False, corrupt_rate: float = 0.0, drop_rate: float = 0.0,
                  step_s: float = 0.01, baudrate: int = 3_000_000, spi: str = "software",
                  rx_buffer: int = RX_BUFFER_BYTES, keep_arrivals: bool = False, pattern=None,

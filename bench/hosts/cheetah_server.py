@@ -149,7 +149,7 @@ class CheetahBench:
     sensor's port state, which the RTL harness does not expose; modes 0–2 and LSB first are served.
     """
 
-    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 1, sensors=None, trace: bool = False,
+    def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 0, sensors=None, trace: bool = False,
                  variant: str = "biotac", spi: str = "software"):
         if not isinstance(trace, (bool, np.bool_)):
             raise ValueError(f"trace = {trace!r}: must be True or False")

@@ -493,9 +493,13 @@ class CoSim:
                     time.sleep(ahead)
 
 
-def default_sensors(n: int = 1, stimuli=(), seed: int = 1, variant: str = ch.DEFAULT_VARIANT,
+def default_sensors(n: int = 1, stimuli=(), seed: int = 0, variant: str = ch.DEFAULT_VARIANT,
                     **kw) -> dict[int, Sensor]:
-    """n emulated sensors of ``variant`` reading its default frame's channels (sensor k gets seed + k)."""
+    """n emulated sensors of ``variant`` reading its default frame's channels; sensor k draws its noise from
+    ``seed + k - 1`` (:func:`bench.scenes.scene.sensor_seed`, as a scene's and the pytest plugin's sensor k)."""
+    from bench.scenes.scene import sensor_seed
+
     frame = ch.variant(variant).frame_names
-    return {k: Sensor(stimuli=stimuli if k == 1 else (), channels_read=frame, seed=seed + k, variant=variant, **kw)
+    return {k: Sensor(stimuli=stimuli if k == 1 else (), channels_read=frame, seed=sensor_seed(seed, k),
+                      variant=variant, **kw)
             for k in range(1, n + 1)}

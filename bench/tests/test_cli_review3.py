@@ -102,8 +102,10 @@ def test_bridge_serves_the_scenes_sensor_count_unless_told_otherwise(tmp_path, c
     assert cli.main(["bridge", "--scene", str(scene), "--sensors", "1", "--fast", "--seconds", "0.2"]) == 2
     err = capsys.readouterr().err
     assert "the scene describes 2 sensors" in err and "not 1" in err and "Traceback" not in err, err
-    assert cli.main(["bridge", "--fast", "--seconds", "0.2"]) == 0
-    assert "running with 1 emulated sensor(s) at rest" in capsys.readouterr().out
+    assert cli.main(["bridge", "--fast", "--seconds", "0.2"]) == 0  # the one seed convention, from 0 (README)
+    assert "running with 1 emulated sensor(s) at rest (seed 0: sensor k draws 0 + k - 1)" in capsys.readouterr().out
+    assert cli.main(["bridge", "--fast", "--seconds", "0.2", "--sensors", "2", "--seed", "7"]) == 0
+    assert "running with 2 emulated sensor(s) at rest (seed 7: sensor k draws 7 + k - 1)" in capsys.readouterr().out
 
 
 # --- 7. run: the serial each sensor answers, printed and recorded ----------------------------------------------

@@ -48,6 +48,27 @@ def test_sensor_k_draws_the_same_noise_whichever_factory_or_route_makes_it(biota
     assert not np.array_equal(noise["bridge"][2], noise["bridge"][3])
 
 
+
+def test_the_benches_and_default_sensors_number_sensors_as_every_route_does(biotac_sensor):
+    """Outside the plugin too — ``FirmwareBench``, ``CheetahBench`` (and so ``biotac-bench bridge`` / ``cheetah
+    serve`` without a scene) and ``default_sensors`` — sensor k of seed S draws ``S + k - 1``, from a default seed
+    of 0: a bench's sensor 1 without a seed gives biotac_sensor()'s codes (they drew seed + k from 1 before)."""
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cheetah_server import CheetahBench
+    from bench.hosts.cosim import default_sensors
+
+    firmware = FirmwareBench(n_sensors=3, seed=11)
+    firmware.stop()
+    cheetah = CheetahBench(n_sensors=3, seed=11)
+    for name, sensors in (("FirmwareBench", firmware.board.sensors), ("default_sensors", default_sensors(3, seed=11)),
+                          ("CheetahBench", {k: p.sensor for k, p in cheetah.bus.ports.items()})):
+        assert [sensors[k].seed for k in (1, 2, 3)] == [11, 12, 13], name
+    unseeded = FirmwareBench(n_sensors=2)
+    unseeded.stop()
+    assert [unseeded.board.sensors[k].seed for k in (1, 2)] == [0, 1]
+    assert [p.sensor.seed for p in CheetahBench(n_sensors=2).bus.ports.values()] == [0, 1]
+    assert np.array_equal(pac_noise(unseeded.board.sensors[1]), pac_noise(biotac_sensor().sensor))
+
 SETTINGS_SEEN = '''
 import pytest
 

@@ -267,8 +267,8 @@ def test_a_second_host_on_one_port_is_refused_at_open_naming_why():
 
 
 def test_the_default_bench_sensors_each_have_their_own_noise_and_only_sensor_1_feels_the_stimuli():
-    """default_sensors(n, stimuli): sensor k draws from seed + k, and the stimuli are sensor 1's (the others rest) —
-    as FirmwareBench and CheetahBench document."""
+    """default_sensors(n, stimuli): sensor k draws from seed + k - 1, and the stimuli are sensor 1's (the others
+    rest) — as FirmwareBench and CheetahBench document."""
     import numpy as np
 
     from bench.hosts.cosim import default_sensors
