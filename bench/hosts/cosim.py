@@ -32,9 +32,6 @@ SPI_CLOCK_HZ = 4.4e6
 #: The largest chip-select code the HAL takes (``bt_word.cs``, ``spi_bytes``' cs: three bits).
 MAX_SELECT_CODE = 7
 GUARD_SOURCE = Path(__file__).resolve().parent / "c" / "step_guard.c"
-#: Linked into every firmware built here: its exit, _exit, abort and failed asserts end its step, not the process.
-EXIT_GUARD_SOURCE = GUARD_SOURCE.with_name("exit_guard.c")
-EXIT_GUARD_FLAGS = ("-Wl,--wrap=exit,--wrap=_exit,--wrap=abort,--wrap=__assert_fail",)
 #: The signal that stops a hung bt_step (:meth:`CoSim.stop_step`): a real-time signal nothing else here uses.  The
 #: bench installs its handler at the first co-simulation, only over the default action (a handler something else in
 #: the process installed first is refused by name, never replaced), and keeps it for the process's life.
@@ -60,10 +57,13 @@ def step_guard() -> C.CDLL:
             lib.bt_guard_size.restype = C.c_size_t
             lib.bt_guard_init.argtypes = [C.c_void_p, C.c_void_p]
             lib.bt_guard_step.argtypes = [C.c_void_p, C.c_void_p, C.c_void_p]
+            lib.bt_guard_start.argtypes = [C.c_void_p, C.c_void_p, C.c_void_p, C.c_void_p]
+            lib.bt_guard_take_exits.argtypes = [C.c_void_p]
             lib.bt_guard_wrap.argtypes = [C.c_void_p, C.c_void_p]
             for name in ("bt_guard_stop", "bt_guard_stopped", "bt_guard_poke", "bt_guard_outside"):
                 getattr(lib, name).argtypes = [C.c_void_p]
-            lib.bt_guard_crash.argtypes = [C.c_void_p, C.POINTER(C.c_size_t), C.POINTER(C.c_size_t)]
+            lib.bt_guard_crash.argtypes = [C.c_void_p, C.POINTER(C.c_size_t), C.POINTER(C.c_size_t),
+                                           C.POINTER(C.c_int)]
             lib.bt_guard_exit_call.argtypes = [C.c_void_p]
             lib.bt_guard_exit_call.restype = C.c_char_p
             lib.bt_guard_outside.restype = C.c_size_t
@@ -111,9 +111,9 @@ def build_firmware(sources=None, out_dir: Path | None = None) -> Path:
                              f"sorted(Path('my_firmware').glob('*.c')))")
     folders = sorted({s.resolve().parent for s in sources} | {FIRMWARE_DIR.resolve()})
     headers = [h for folder in folders for h in sorted(folder.glob("*.h"))]
-    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + headers + [EXIT_GUARD_SOURCE])
-    return compile_c(sources + [EXIT_GUARD_SOURCE], folder / "libbtbridge.so",
-                     flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}", *EXIT_GUARD_FLAGS), what="the firmware")
+    folder = build_folder(out_dir or REPO / "out" / "firmware", sources + headers)
+    return compile_c(sources, folder / "libbtbridge.so", flags=("-shared", "-fPIC", f"-I{FIRMWARE_DIR}"),
+                     what="the firmware")
 
 
 #: What a firmware library must export for the bench to run it (bt_bridge.h).
@@ -364,10 +364,11 @@ class VirtualBoard:
 class CoSim:
     """Firmware + board: ``run(seconds)`` executes the firmware's main loop in virtual time.
 
-    Each ``bt_step`` runs under the step guard (``bench/hosts/c/step_guard.c``): :meth:`stop_step` leaves a hung one,
-    and a fault in the firmware's own code (SIGSEGV, SIGBUS, SIGFPE, SIGILL) leaves its step instead of ending the
-    process — :meth:`run` raises :class:`FirmwareError` naming it.  Either way the co-simulation is :attr:`stopped`
-    for good.
+    ``bt_init`` and each ``bt_step`` run under the step guard (``bench/hosts/c/step_guard.c``): :meth:`stop_step`
+    leaves a hung step, and a fault in the firmware's own code (SIGSEGV, SIGBUS, SIGFPE, SIGILL; a stack overflow
+    too) or its call of exit, _exit, abort or a failed assert (any firmware library: the guard takes over its calls
+    of them) leaves the call instead of ending the process — :meth:`run`, or the constructor for ``bt_init``, raises
+    :class:`FirmwareError` naming it.  Either way the co-simulation is :attr:`stopped` for good.
     """
 
     def __init__(self, board: VirtualBoard, library: Path | None = None):
@@ -387,12 +388,14 @@ class CoSim:
         self._watch = C.create_string_buffer(self._guard.bt_guard_size())  # this firmware's guard: its code, its stop
         if self._guard.bt_guard_init(self._watch, self._step):
             raise FirmwareError(f"the step guard found no loaded library holding bt_step of {self.library}")
-        try:  # (a firmware the bench built: its exit, abort and failed asserts end its step, not the process)
-            C.c_void_p.in_dll(self.lib, "bt_exit_hook").value = C.cast(self._guard.bt_guard_exit, C.c_void_p).value
-        except ValueError:  # (a library built elsewhere: they end the process, as they would without the bench)
-            pass
-        self.lib.bt_init(self.state, C.byref(self._guarded_hal))
+        # the firmware's exit, _exit, abort and failed asserts end the guarded call, not the process
+        self._guard.bt_guard_take_exits(self._step)
+        self._left_in = "bt_init"  # the firmware's function running when the guard left it (for _why_stopped)
+        if self._guard.bt_guard_start(self._watch, C.cast(self.lib.bt_init, C.c_void_p), self.state,
+                                      C.byref(self._guarded_hal)):
+            raise FirmwareError(self._why_stopped())
         self._raise()
+        self._left_in = "bt_step"
 
     @property
     def stopped(self) -> bool:
@@ -445,17 +448,18 @@ class CoSim:
 
     def _why_stopped(self) -> str:
         """Why bt_step was left: the watchdog (a hang), or a fault in the firmware's code (its signal, where)."""
-        pc, addr = C.c_size_t(), C.c_size_t()
-        sig = self._guard.bt_guard_crash(self._watch, C.byref(pc), C.byref(addr))
+        pc, addr, overflow = C.c_size_t(), C.c_size_t(), C.c_int()
+        sig = self._guard.bt_guard_crash(self._watch, C.byref(pc), C.byref(addr), C.byref(overflow))
         again = "this co-simulation does not run again: make a new one"
         called = self._guard.bt_guard_exit_call(self._watch).decode(errors="replace")
         if called:
-            return (f"the firmware called {called} at virtual time {self.board.t:.6f} s, which would have ended the "
-                    f"process: the bench left its step and goes on; {again}")
+            return (f"the firmware called {called} in {self._left_in} at virtual time {self.board.t:.6f} s, which "
+                    f"would have ended the process: the bench left its {self._left_in} and goes on; {again}")
         if sig:
-            return (f"the firmware crashed in bt_step at virtual time {self.board.t:.6f} s: "
-                    f"{signal.Signals(sig).name} in {code_at(pc.value)} (touching address {addr.value:#x}); the "
-                    f"bench left its step and goes on; {again}")
+            fault = "a stack overflow" if overflow.value else signal.Signals(sig).name
+            return (f"the firmware crashed in {self._left_in} at virtual time {self.board.t:.6f} s: "
+                    f"{fault} in {code_at(pc.value)} (touching address {addr.value:#x}); the "
+                    f"bench left its {self._left_in} and goes on; {again}")
         return (f"the firmware's bt_step was stopped by the bench's watchdog at virtual time {self.board.t:.6f} s (it "
                 f"hung); {again}")
 

@@ -20,13 +20,20 @@ pytestmark = pytest.mark.firmware
 
 STEP = "void bt_step(bt_bridge *b) {\n    serve_host(b);\n"
 assert STEP in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_step changed"
+INIT = "void bt_init(bt_bridge *b, const bt_hal *hal) {\n    memset(b, 0, sizeof *b);\n    b->hal = hal;\n"
+assert INIT in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_init changed"
 
 #: C declarations put before the reference firmware's source in every firmware these cases build
 HEAD = ("#include <assert.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n#include <unistd.h>\n"
-        "char *volatile sink;\nFILE *out;\nint *volatile nowhere;\nvolatile size_t length;\n")
+        "char *volatile sink;\nFILE *out;\nint *volatile nowhere;\nvolatile size_t length;\n"
+        "int bt_deep(unsigned depth);\n"  # (a recursion without end, as far as the stack goes)
+        "int bt_deep(unsigned depth) { volatile char pad[512]; pad[depth % 512] = 1;\n"
+        "    return depth ? bt_deep(depth + 1) + pad[0] : 0; }\n")
 #: what every case's process starts with: ``firmware(extra)`` builds the reference firmware running ``extra`` (C) in
-#: every bt_step from 20 ms of virtual time on, as fw.c in the folder its last argument names; ``HANG``: a loop calling
-#: no HAL function; ``start(sim)`` runs 1 s of it in a thread: (the thread, the FirmwareErrors it ended with)
+#: every bt_step from 20 ms of virtual time on, as fw.c in the folder its last argument names (``in_init=True``: at the
+#: start of bt_init instead; ``own=True``: compiled here with cc, as a library built without the bench);
+#: ``HANG``: a loop calling no HAL function; ``start(sim)`` runs 1 s of it in a thread: (the thread, the
+#: FirmwareErrors it ended with)
 PRELUDE = textwrap.dedent("""
     import ctypes, signal, sys, threading, time
     from pathlib import Path
@@ -35,11 +42,21 @@ PRELUDE = textwrap.dedent("""
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
     folder = Path(sys.argv[-1])
     HANG = "for (volatile unsigned long k = 0;; k++) { }"
-    def firmware(extra):
+    def firmware(extra, in_init=False, own=False):
         src = folder / "fw.c"
-        src.write_text(HEAD + (FIRMWARE_DIR / "bt_bridge.c").read_text().replace(
-            STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + extra + "\\n    }\\n"))
-        return build_firmware([src], out_dir=folder / "out")
+        code = (FIRMWARE_DIR / "bt_bridge.c").read_text()
+        if in_init:
+            code = code.replace(INIT, INIT + "    " + extra + "\\n")
+        else:
+            code = code.replace(STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + extra
+                                + "\\n    }\\n")
+        src.write_text(HEAD + code)
+        if not own:
+            return build_firmware([src], out_dir=folder / "out")
+        import subprocess
+        subprocess.run(["cc", "-O2", "-shared", "-fPIC", f"-I{FIRMWARE_DIR}", str(src), "-o",
+                        str(folder / "libown.so")], check=True)
+        return folder / "libown.so"
     def start(sim):
         ended = []
         def run():
@@ -50,7 +67,7 @@ PRELUDE = textwrap.dedent("""
         thread = threading.Thread(target=run, daemon=True)
         thread.start()
         return thread, ended
-""").replace("STEP", repr(STEP)).replace("HEAD", repr(HEAD))
+""").replace("STEP", repr(STEP)).replace("INIT", repr(INIT)).replace("HEAD", repr(HEAD))
 
 
 def _run(tmp_path, body: str, *args: str, python=(), timeout_s: float = 120) -> subprocess.CompletedProcess:
@@ -245,7 +262,7 @@ def test_a_firmware_that_crashes_in_its_own_code_is_an_error_naming_the_fault_an
     r = _run(tmp_path, CRASH, "*nowhere = 1;")
     assert r.returncode == 0, r.stdout + r.stderr
     error = ("error: the firmware crashed in bt_step at virtual time 0.020425 s: SIGSEGV in libbtbridge.so (bt_step) "
-             "(touching address 0x0); the bench left its step and goes on; this co-simulation does not run again: "
+             "(touching address 0x0); the bench left its bt_step and goes on; this co-simulation does not run again: "
              "make a new one\n")
     assert r.stdout == 2 * error + "a new co-simulation runs\n", r.stdout
 
@@ -271,6 +288,88 @@ def test_a_firmware_calling_exit_abort_or_failing_an_assert_ends_its_step_not_th
     assert r.returncode == 0, r.stdout + r.stderr
     source = (tmp_path / "fw.c").read_text().splitlines()
     said = said.format(src=tmp_path / "fw.c", line=1 + next(k for k, text in enumerate(source) if call in text))
-    error = (f"error: the firmware called {said} at virtual time 0.020425 s, which would have ended the process: the "
-             f"bench left its step and goes on; this co-simulation does not run again: make a new one\n")
+    error = (f"error: the firmware called {said} in bt_step at virtual time 0.020425 s, which would have ended the "
+             f"process: the bench left its bt_step and goes on; this co-simulation does not run again: make a new "
+             f"one\n")
     assert r.stdout == 2 * error + "a new co-simulation runs\n", r.stdout
+
+
+#: a firmware running its first argument at the start of bt_init (its second: "own" when built with cc here, not by
+#: the bench), made into a co-simulation; the virtual time then; then a new co-simulation of the reference firmware
+INIT_CRASH = """
+    board = VirtualBoard(default_sensors(1))
+    try:
+        CoSim(board, firmware(sys.argv[1], in_init=True, own=sys.argv[2] == "own"))
+    except FirmwareError as e:
+        print("error:", e, flush=True)
+    print(f"t: {board.t:.6f}", flush=True)
+    CoSim(VirtualBoard(default_sensors(1))).run(0.05)
+    print("a new co-simulation runs", flush=True)
+"""
+
+
+@pytest.mark.parametrize("built", ["bench", "own"], ids=["built by the bench", "a library built elsewhere"])
+@pytest.mark.parametrize("call, said", [
+    ("*nowhere = 1;", "crashed in bt_init at virtual time {t} s: SIGSEGV in {lib} (bt_init) (touching address 0x0);"),
+    ("exit(3);", "called exit(3) in bt_init at virtual time {t} s, which would have ended the process:"),
+    ("_exit(4);", "called _exit(4) in bt_init at virtual time {t} s, which would have ended the process:"),
+    ("abort();", "called abort() in bt_init at virtual time {t} s, which would have ended the process:"),
+    ("assert(hal == 0);", "called assert(hal == 0), which failed at {src}:{line} in bt_init() in bt_init at virtual "
+                          "time {t} s, which would have ended the process:"),
+], ids=["SIGSEGV", "exit", "_exit", "abort", "assert"])
+def test_a_firmware_that_crashes_or_exits_in_bt_init_is_an_error_naming_it_and_the_process_goes_on(
+        tmp_path, call, said, built):
+    """A fault, exit, _exit, abort or failed assert in bt_init — in a firmware the bench built, or in a library built
+    without it (with cc here, as a user's --firmware .so) — ends bt_init, not the process: making the co-simulation
+    raises a FirmwareError naming bt_init, the signal or the call, where, and the virtual time; a new co-simulation
+    runs.  They ended the whole process, with nothing said (a library built elsewhere ended it in bt_step too)."""
+    r = _run(tmp_path, INIT_CRASH, call, built)
+    assert r.returncode == 0, r.stdout + r.stderr
+    t = r.stdout.split("t: ")[1].split("\n")[0]
+    source = (tmp_path / "fw.c").read_text().splitlines()
+    said = said.format(t=t, lib="libown.so" if built == "own" else "libbtbridge.so", src=tmp_path / "fw.c",
+                       line=1 + next(k for k, text in enumerate(source) if call in text))
+    assert r.stdout == (f"error: the firmware {said} the bench left its bt_init and goes on; this co-simulation does "
+                        f"not run again: make a new one\nt: {t}\na new co-simulation runs\n"), r.stdout
+
+
+@pytest.mark.parametrize("call", ["exit(3);", "abort();"])
+def test_a_library_built_elsewhere_that_exits_in_bt_step_is_an_error_not_the_end_of_the_process(tmp_path, call):
+    """A library built without the bench (cc here: no wrapping at link time) calling exit or abort in bt_step: its
+    step is left and run raises naming the call, as for a firmware the bench builds.  It ended the process."""
+    body = CRASH.replace("firmware(sys.argv[1])", "firmware(sys.argv[1], own=True)")
+    r = _run(tmp_path, body, call)
+    assert r.returncode == 0, r.stdout + r.stderr
+    error = (f"error: the firmware called {call[:-1]} in bt_step at virtual time 0.020425 s, which would have ended "
+             f"the process: the bench left its bt_step and goes on; this co-simulation does not run again: make a new "
+             f"one\n")
+    assert r.stdout == 2 * error + "a new co-simulation runs\n", r.stdout
+
+
+#: a firmware whose bt_step recurses without end, run in the main thread and in a thread of its own
+OVERFLOW = """
+    sim = CoSim(VirtualBoard(default_sensors(1)), firmware("length = (size_t)bt_deep(1);"))
+    try:
+        sim.run(0.1)
+    except FirmwareError as e:
+        print("main thread:", e, flush=True)
+    thread, ended = start(CoSim(VirtualBoard(default_sensors(1)), firmware("length = (size_t)bt_deep(1);")))
+    thread.join(60)
+    print("thread:", *ended, flush=True)
+    CoSim(VirtualBoard(default_sensors(1))).run(0.05)
+    print("a new co-simulation runs", flush=True)
+"""
+
+
+def test_a_stack_overflow_in_the_firmware_is_an_error_saying_so_and_the_process_goes_on(tmp_path):
+    """A bt_step recursing until its stack runs out, in the main thread and in another: a FirmwareError saying it was
+    a stack overflow, in which function, at what virtual time; the process goes on.  With no alternate signal
+    stack the fault's handler had no stack to run on: the process ended."""
+    r = _run(tmp_path, OVERFLOW)
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    assert [line.split(":")[0] for line in lines] == ["main thread", "thread", "a new co-simulation runs"], r.stdout
+    for line in lines[:2]:
+        assert ": the firmware crashed in bt_step at virtual time 0.020425 s: a stack overflow in libbtbridge.so " \
+               "(bt_deep) (touching address 0x" in line and line.endswith(
+                   "); the bench left its bt_step and goes on; this co-simulation does not run again: make a new one")

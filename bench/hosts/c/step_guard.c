@@ -12,9 +12,15 @@
  * while the bench's HAL function (Python) runs, and leave the step as that call returns once a stop was asked: the
  * jump never leaves the interpreter.  A fault in the firmware's own code (on_crash) leaves the step the same way.
  * A stop is for good: every later bt_guard_step of that guard returns 1 at once
- * (the firmware's state was left midway).  The handler acts only for the guard whose stop was asked, so a thread
- * that runs two co-simulations, or two threads that run one each, stop only what was asked. */
+ * (the firmware's state was left midway).  bt_init runs under the guard too (bt_guard_start), as bt_step does.
+ * The firmware's own calls of exit, _exit, abort and __assert_fail (a failed assert) are redirected to the guard
+ * (bt_guard_take_exits rewrites the library's entries for them in its global offset table — any library, built by
+ * the bench or not), and each guarded call runs with an alternate signal stack, so a stack overflow in the firmware
+ * (unbounded recursion) reaches on_crash rather than ending the process.  The handler acts only for the guard whose
+ * stop was asked, so a thread that runs two co-simulations, or two threads that run one each, stop only what was
+ * asked. */
 #define _GNU_SOURCE
+#include <elf.h>
 #include <link.h>
 #include <pthread.h>
 #include <setjmp.h>
@@ -22,8 +28,12 @@
 #include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <ucontext.h>
+#include <unistd.h>
 
 #include "bt_hal.h"
 
@@ -36,6 +46,7 @@ typedef struct {
     atomic_uint sent, seen;     /* signals sent to the step's thread, and seen by its handler */
     atomic_uintptr_t outside;   /* where the last signal found the thread outside the firmware's code (0: none) */
     int crash_signal;           /* the firmware's code faulted: SIGSEGV, SIGBUS, SIGFPE or SIGILL (0: never) */
+    int overflow;               /* that fault touched just below the thread's stack: a stack overflow */
     char exit_call[256];        /* what the firmware called that would have ended the process ("": nothing) */
     uintptr_t crash_pc, crash_addr; /* where it faulted, and the address it touched */
     pthread_t thread;           /* the thread running the step (set before inside) */
@@ -45,7 +56,50 @@ typedef struct {
 
 static _Thread_local bt_guard *current;  /* the guard whose step this thread runs */
 static _Thread_local sigjmp_buf *leave;  /* where that step is left */
+static _Thread_local uintptr_t stack_lo; /* the lowest address of this thread's stack (0: not known yet) */
 static int guard_signal;
+
+/* How far below its stack (bytes) a fault counts as the stack overflowing: a frame that jumps the guard page. */
+#define OVERFLOW_REACH (1u << 20)
+/* The alternate signal stack given to each thread that runs a firmware (bytes). */
+#define ALT_STACK_BYTES (64u * 1024u)
+
+static pthread_key_t alt_stack_key;
+static pthread_once_t alt_stack_once = PTHREAD_ONCE_INIT;
+
+/* A thread that ends: its alternate signal stack given back. */
+static void drop_alt_stack(void *stack) {
+    stack_t off = {.ss_flags = SS_DISABLE};
+    sigaltstack(&off, NULL);
+    munmap(stack, ALT_STACK_BYTES);
+}
+
+static void make_alt_stack_key(void) { pthread_key_create(&alt_stack_key, drop_alt_stack); }
+
+/* Give this thread an alternate signal stack where it has none (a fault of a stack overflow has no stack left to run
+ * its handler on: without one the process ends), and note where its stack ends. */
+static void prepare_thread(void) {
+    if (!stack_lo) {
+        pthread_attr_t attr;
+        void *addr;
+        size_t size;
+        if (pthread_getattr_np(pthread_self(), &attr) == 0) {
+            if (pthread_attr_getstack(&attr, &addr, &size) == 0) stack_lo = (uintptr_t)addr;
+            pthread_attr_destroy(&attr);
+        }
+    }
+    stack_t now;
+    if (sigaltstack(NULL, &now) != 0 || !(now.ss_flags & SS_DISABLE)) return; /* (one there already: kept) */
+    pthread_once(&alt_stack_once, make_alt_stack_key);
+    void *stack = mmap(NULL, ALT_STACK_BYTES, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (stack == MAP_FAILED) return;
+    stack_t alt = {.ss_sp = stack, .ss_size = ALT_STACK_BYTES, .ss_flags = 0};
+    if (sigaltstack(&alt, NULL) != 0) {
+        munmap(stack, ALT_STACK_BYTES);
+        return;
+    }
+    pthread_setspecific(alt_stack_key, stack);
+}
 
 static uintptr_t pc_of(void *uc) {
 #if defined(__x86_64__)
@@ -91,6 +145,8 @@ static void on_crash(int sig, siginfo_t *info, void *uc) {
         g->crash_signal = sig;
         g->crash_pc = pc;
         g->crash_addr = (uintptr_t)info->si_addr;
+        g->overflow = sig == SIGSEGV && stack_lo && g->crash_addr < stack_lo
+                      && g->crash_addr + OVERFLOW_REACH >= stack_lo;
         atomic_store(&g->stop, 1);
         siglongjmp(*leave, 2);
     }
@@ -116,23 +172,66 @@ int bt_guard_catch_crashes(void) {
     return 0;
 }
 
-/* The fault that left g's step: its signal (0: none), and where (the code's address, the address touched). */
-int bt_guard_crash(const bt_guard *g, uintptr_t *pc, uintptr_t *addr) {
+/* The fault that left g's step: its signal (0: none), and where (the code's address, the address touched);
+ * *overflow: 1 when it was the stack overflowing. */
+int bt_guard_crash(const bt_guard *g, uintptr_t *pc, uintptr_t *addr, int *overflow) {
     *pc = g->crash_pc;
     *addr = g->crash_addr;
+    *overflow = g->overflow;
     return g->crash_signal;
 }
 
-/* The firmware's exit, _exit, abort or failed assert (bench/hosts/c/exit_guard.c): in a guarded step, the step is
- * left and the guard stopped, the call recorded (bt_guard_step returns 3); elsewhere it returns (the call goes on). */
-void bt_guard_exit(int status, const char *what) {
+/* The firmware called exit, _exit, abort or __assert_fail (what: how, said): in a guarded call (and not inside a HAL
+ * function of the bench's), the call is left and the guard stopped, what recorded (bt_guard_step returns 3);
+ * elsewhere it returns, and the caller goes on to the C library's function. */
+static void leave_on_exit(const char *what) {
     bt_guard *g = current;
-    (void)status;
-    if (!g || !atomic_load(&g->inside)) return;
+    if (!g || !atomic_load(&g->inside) || atomic_load(&g->in_hal)) return;
     strncpy(g->exit_call, what, sizeof g->exit_call - 1);
     atomic_store(&g->stop, 1);
     siglongjmp(*leave, 3);
 }
+
+static _Noreturn void guard_exit(int status) {
+    char what[32];
+    snprintf(what, sizeof what, "exit(%d)", status);
+    leave_on_exit(what);
+    exit(status);
+}
+
+static _Noreturn void guard__exit(int status) {
+    char what[32];
+    snprintf(what, sizeof what, "_exit(%d)", status);
+    leave_on_exit(what);
+    _exit(status);
+}
+
+static _Noreturn void guard_abort(void) {
+    leave_on_exit("abort()");
+    abort();
+}
+
+extern _Noreturn void __assert_fail(const char *assertion, const char *file, unsigned int line, const char *function);
+
+static _Noreturn void guard_assert_fail(const char *assertion, const char *file, unsigned int line,
+                                        const char *function) {
+    char what[256];
+    snprintf(what, sizeof what, "assert(%s), which failed at %s:%u in %s()", assertion, file, line, function);
+    leave_on_exit(what);
+    __assert_fail(assertion, file, line, function);
+}
+
+/* The C library's functions that end the process, and the guard's function each of the firmware's calls goes to. */
+static const struct {
+    const char *name;
+    void *guarded;
+} exit_calls[] = {
+    {"exit", (void *)guard_exit},
+    {"_exit", (void *)guard__exit},
+    {"abort", (void *)guard_abort},
+    {"__assert_fail", (void *)guard_assert_fail},
+};
+#define N_EXIT_CALLS (sizeof exit_calls / sizeof exit_calls[0])
 
 /* What g's firmware called that would have ended the process ("": nothing). */
 const char *bt_guard_exit_call(const bt_guard *g) { return g->exit_call; }
@@ -195,10 +294,114 @@ int bt_guard_init(bt_guard *g, void *firmware_symbol) {
     return dl_iterate_phdr(take_text, &w) && g->n_text > 0 ? 0 : 1;
 }
 
-/* Run step(state) under guard g; 0 when it returned, 1 when it was left (bt_guard_stop) or a stop was asked before,
- * 2 when it faulted in the firmware's code (bt_guard_crash), 3 when it called exit or the like (bt_guard_exit). */
-int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
+/* One of the firmware's entry points and its arguments: step(state), or init(state, hal). */
+struct entry {
+    void (*step)(void *);
+    void (*init)(void *, const void *);
+    void *state;
+    const void *hal;
+};
+
+#if defined(__x86_64__)
+#define R_JUMP_SLOT R_X86_64_JUMP_SLOT
+#define R_GLOB_DAT R_X86_64_GLOB_DAT
+#elif defined(__aarch64__)
+#define R_JUMP_SLOT R_AARCH64_JUMP_SLOT
+#define R_GLOB_DAT R_AARCH64_GLOB_DAT
+#endif
+
+struct exits_wanted {
+    uintptr_t addr; /* an address inside the firmware library */
+    int rewritten;  /* entries of its global offset table pointed at the guard's functions (-1: none could be) */
+};
+
+/* Point the library's entries for exit_calls (relocations list) at the guard's functions; entries in its read-only
+ * part (RELRO) are made writable for the write.  How many were rewritten. */
+static int rewrite_entries(uintptr_t base, const ElfW(Rela) *rel, size_t bytes, const ElfW(Sym) *symbols,
+                           const char *names, uintptr_t relro_lo, uintptr_t relro_hi) {
+    int rewritten = 0;
+#ifdef R_JUMP_SLOT
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE);
+    for (size_t i = 0; i < bytes / sizeof *rel; i++) {
+        unsigned type = ELF64_R_TYPE(rel[i].r_info);
+        if (type != R_JUMP_SLOT && type != R_GLOB_DAT) continue;
+        const char *name = names + symbols[ELF64_R_SYM(rel[i].r_info)].st_name;
+        for (size_t k = 0; k < N_EXIT_CALLS; k++) {
+            if (strcmp(name, exit_calls[k].name) != 0) continue;
+            uintptr_t slot = base + rel[i].r_offset;
+            int locked = slot >= relro_lo && slot < relro_hi;
+            void *first = (void *)(slot & ~(page - 1));
+            if (locked && mprotect(first, page, PROT_READ | PROT_WRITE) != 0) break;
+            *(void *volatile *)slot = exit_calls[k].guarded;
+            if (locked) mprotect(first, page, PROT_READ);
+            rewritten++;
+        }
+    }
+#else
+    (void)base, (void)rel, (void)bytes, (void)symbols, (void)names, (void)relro_lo, (void)relro_hi, (void)exit_calls;
+#endif
+    return rewritten;
+}
+
+static int take_exits(struct dl_phdr_info *info, size_t size, void *data) {
+    struct exits_wanted *w = data;
+    const ElfW(Dyn) *dyn = NULL;
+    uintptr_t base = info->dlpi_addr, relro_lo = 0, relro_hi = 0;
+    int found = 0;
+    (void)size;
+    for (int i = 0; i < info->dlpi_phnum; i++) {
+        const ElfW(Phdr) *ph = &info->dlpi_phdr[i];
+        uintptr_t lo = base + ph->p_vaddr;
+        if (ph->p_type == PT_LOAD && w->addr >= lo && w->addr < lo + ph->p_memsz) found = 1;
+        if (ph->p_type == PT_DYNAMIC) dyn = (const ElfW(Dyn) *)lo;
+        if (ph->p_type == PT_GNU_RELRO) relro_lo = lo, relro_hi = lo + ph->p_memsz;
+    }
+    if (!found) return 0;
+    if (!dyn) return 1;
+    const ElfW(Sym) *symbols = NULL;
+    const char *names = NULL;
+    const ElfW(Rela) *plt = NULL, *rela = NULL;
+    size_t plt_bytes = 0, rela_bytes = 0;
+    long plt_kind = DT_RELA;
+    for (; dyn->d_tag != DT_NULL; dyn++) {
+        /* (the loader has made most of these addresses absolute already; an offset is below the library's base) */
+        uintptr_t at = dyn->d_un.d_ptr < base ? base + dyn->d_un.d_ptr : dyn->d_un.d_ptr;
+        switch (dyn->d_tag) {
+        case DT_SYMTAB: symbols = (const ElfW(Sym) *)at; break;
+        case DT_STRTAB: names = (const char *)at; break;
+        case DT_JMPREL: plt = (const ElfW(Rela) *)at; break;
+        case DT_PLTRELSZ: plt_bytes = dyn->d_un.d_val; break;
+        case DT_PLTREL: plt_kind = (long)dyn->d_un.d_val; break;
+        case DT_RELA: rela = (const ElfW(Rela) *)at; break;
+        case DT_RELASZ: rela_bytes = dyn->d_un.d_val; break;
+        default: break;
+        }
+    }
+    if (!symbols || !names || plt_kind != DT_RELA) return 1;
+    w->rewritten = (plt ? rewrite_entries(base, plt, plt_bytes, symbols, names, relro_lo, relro_hi) : 0)
+                   + (rela ? rewrite_entries(base, rela, rela_bytes, symbols, names, relro_lo, relro_hi) : 0);
+    return 1;
+}
+
+/* Send the firmware library's own calls of exit, _exit, abort and __assert_fail (the library holding the function at
+ * firmware_symbol) to the guard: in a guarded call they leave it (bt_guard_exit_call says what was called), elsewhere
+ * they go on to the C library.  How many of its entries were rewritten (0: it calls none of them), -1 when no loaded
+ * library holds firmware_symbol or this machine's relocations are not known here. */
+int bt_guard_take_exits(void *firmware_symbol) {
+    struct exits_wanted w = {(uintptr_t)firmware_symbol, -1};
+#ifdef R_JUMP_SLOT
+    dl_iterate_phdr(take_exits, &w);
+#else
+    (void)take_exits;
+#endif
+    return w.rewritten;
+}
+
+/* Run call under guard g; 0 when it returned, 1 when it was left (bt_guard_stop) or a stop was asked before, 2 when
+ * it faulted in the firmware's code (bt_guard_crash), 3 when it called exit or the like (bt_guard_exit_call). */
+static int run_guarded(bt_guard *g, const struct entry *call) {
     sigjmp_buf env;
+    prepare_thread();
     g->thread = pthread_self();
     current = g;
     leave = &env;
@@ -214,10 +417,25 @@ int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
         current = NULL;
         return 1;
     }
-    step(state);
+    if (call->init)
+        call->init(call->state, call->hal);
+    else
+        call->step(call->state);
     atomic_store(&g->inside, 0);
     current = NULL;
     return 0;
+}
+
+/* Run the firmware's step(state) under guard g (run_guarded says what comes back). */
+int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
+    struct entry call = {.step = step, .state = state};
+    return run_guarded(g, &call);
+}
+
+/* Run the firmware's init(state, hal) under guard g (run_guarded says what comes back). */
+int bt_guard_start(bt_guard *g, void (*init)(void *, const void *), void *state, const void *hal) {
+    struct entry call = {.init = init, .state = state, .hal = hal};
+    return run_guarded(g, &call);
 }
 
 /* Ask g's step to be left, for good. */
