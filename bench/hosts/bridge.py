@@ -13,7 +13,10 @@ line itself can corrupt or drop bytes (``corrupt_rate``, ``drop_rate``).
 with :func:`bench.hosts.cosim.build_firmware`, headers beside them part of the build's key) or a library you built;
 it must export ``bt_bridge_size``, ``bt_init``, ``bt_step`` and ``bt_set_pattern`` (``bt_bridge.h``).  A firmware
 whose ``bt_step`` never returns is reported by :meth:`stop` (a :class:`~bench.errors.FirmwareError`) after
-:data:`STOP_TIMEOUT_S` of wall time.
+:data:`STOP_TIMEOUT_S` of wall time.  A bench whose firmware thread ended with an error (the firmware crashed or
+called exit, a HAL call it made was refused, a scheduled action raised) says so at the first call after —
+:meth:`at`, :meth:`now`, :attr:`virtual_time`, :meth:`overrun_frames`, or else :meth:`stop` — naming the virtual
+time it ended at; every later call but :meth:`stop` says it again.
 
 The host's side of the link is a finite receive buffer (:class:`bench.hosts.serial_link.PtyLink`, 4096 bytes by
 default, ``rx_buffer=``).  Paced to the wall clock (``realtime=True``, what ``biotac-bench bridge`` does), it
@@ -127,6 +130,8 @@ class FirmwareBench:
         self._requests: queue.Queue = queue.Queue()  # (virtual time or None, action): applied by the bench thread
         self._thread = threading.Thread(target=self._loop, name="firmware", daemon=True)
         self.error: BaseException | None = None
+        self._error_at = 0.0  # the virtual time (s) when the firmware's thread ended with error
+        self._error_told = False  # a call raised error already (stop() then does not again)
         self.bytes_corrupted = self.bytes_dropped = 0
 
     def _line(self, data: bytes) -> None:
@@ -215,7 +220,8 @@ class FirmwareBench:
                     ahead = (self.board.t - virt0) / self.speed - (time.perf_counter() - wall0)
                     if ahead > 0:
                         self._sleep(ahead)
-        except BaseException as e:  # reported by stop()
+        except BaseException as e:  # reported by the next call (_check_alive), or by stop()
+            self._error_at = self.board.t
             self.error = e
 
     def _take_requests(self) -> None:
@@ -236,14 +242,30 @@ class FirmwareBench:
         if not (isinstance(t_s, numbers.Real) and not isinstance(t_s, bool) and math.isfinite(t_s) and t_s >= 0):
             raise ValueError(f"at: t_s = {t_s!r}: must be a finite virtual time ≥ 0 s (e.g. bench.virtual_time + 0.5)")
         _check_action("at", action)
+        self._check_alive("at")
         self._check_running("at")
         self._requests.put((float(t_s), action))
 
     def now(self, action) -> None:
         """Apply ``action(board)`` before the firmware's next step (never blocks the caller)."""
         _check_action("now", action)
+        self._check_alive("now")
         self._check_running("now")
         self._requests.put((None, action))
+
+    def _ended_with(self) -> str:
+        """How the firmware's thread ended: the bench's own error (a test's action, the firmware) in its words, else
+        its repr."""
+        return str(self.error) if isinstance(self.error, BenchError) else repr(self.error)
+
+    def _check_alive(self, what: str) -> None:
+        """Raise, for the call ``what``, the error the firmware's thread ended with, if it did: the call would act on
+        a bench that no longer runs."""
+        if self.error is None:
+            return
+        self._error_told = True
+        raise RuntimeError(f"{what}: the firmware bench on {self.port} stopped at virtual time {self._error_at:.6f} "
+                           f"s with an error: {self._ended_with()}") from self.error
 
     def _check_running(self, what: str) -> None:
         """Refuse scheduling on a stopped bench: the action would silently never run."""
@@ -253,11 +275,14 @@ class FirmwareBench:
 
     @property
     def virtual_time(self) -> float:
+        """The firmware's virtual time (s) since power-on."""
+        self._check_alive("virtual_time")
         return self.board.t
 
     def overrun_frames(self) -> list[int]:
         """Sequence numbers of the data frames that lost bytes to receive-buffer overruns (needs
         ``keep_arrivals=True``): exactly the frames a host reading this port can never get."""
+        self._check_alive("overrun_frames")
         if self.link.arrivals is None:
             raise ValueError("overrun_frames() needs FirmwareBench(..., keep_arrivals=True)")
         data, lost, pos, k = bytes(self.link.arrivals), [], 0, 0
@@ -306,9 +331,8 @@ class FirmwareBench:
             self.board.bus.close()
             raise FirmwareError(f"{hung}; the watchdog stopped it (its thread ended; its port and SPI bus are closed)")
         self.board.bus.close()
-        if self.error is not None:  # a bench's own error (a test's action, the firmware) in its words, else the repr
-            shown = str(self.error) if isinstance(self.error, BenchError) else repr(self.error)
-            raise RuntimeError(f"the firmware bench stopped with an error: {shown}") from self.error
+        if self.error is not None and not self._error_told:
+            raise RuntimeError(f"the firmware bench stopped with an error: {self._ended_with()}") from self.error
 
     def __enter__(self):
         return self.start()
