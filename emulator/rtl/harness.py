@@ -403,7 +403,7 @@ class RtlBus:
         self.evals = 0  # evaluations of the RTL model so far (the harness's work; idle stretches cost little)
         #: transfers clocked outside the SPI clock range (500 kHz–10 MHz), as the software bus counts them
         self.out_of_spec_transfers = 0
-        self._cut_short: str | None = None  # a call ended with its reply unread: the bus is then unusable
+        self._cut_short: str | None = None  # how a call was cut short midway: the bus is then unusable
 
     def _windows(self, n: int, start, end, cs, mosi, nbits, keep, flip: int | None = None):
         """Sensor ``n``'s chip-select windows that close among these transfers, as the software bus sees them: a
@@ -517,19 +517,22 @@ class RtlBus:
                                  f"{len(port.provided)} channels; the RTL was started with {self._started_with[n][0]} "
                                  f"providing {len(self._started_with[n][1])}: plug the same kind of sensor back in")
 
-    def _hot_plugged(self) -> int:
-        """The sensors plugged in now (``ports``' keys) as the RTL's mask, after a sensor was unplugged (its port
-        removed) or plugged in (a port added or replaced: reset with the mask, power-on state, its ADC-busy window
-        and any window held open forgotten); the ports checked by :meth:`_check_ports`.  Refused (ValueError) for a
-        sensor unplugged and plugged back in between two calls inside a chip-select window held open on it: its RTL
-        would stay selected through the reset, which does not restart the window's bit counter (see
-        :meth:`_reset_requested`), where the software bus's new port sees chip select fall."""
+    def _check_replugged(self) -> None:
+        """Refuse (ValueError) a sensor unplugged and plugged back in between two calls inside a chip-select window
+        held open on it: its RTL would stay selected through the reset, which does not restart the window's bit
+        counter (see :meth:`_reset_requested`), where the software bus's new port sees chip select fall."""
         for n, port in self.ports.items():
             old = self._ports_in_rtl.get(n)
             if old is not None and old is not port and self._open_window.get(n) is not None:
                 raise ValueError(f"sensor {n}: unplugged and plugged back in inside a chip-select window held open "
                                  f"on it: over the RTL a sensor is plugged in between windows only (release chip "
                                  f"select first, make a call while it is unplugged, or use the software bus)")
+
+    def _hot_plugged(self) -> int:
+        """The sensors plugged in now (``ports``' keys) as the RTL's mask, after a sensor was unplugged (its port
+        removed) or plugged in (a port added or replaced: reset with the mask, power-on state, its ADC-busy window
+        and any window held open forgotten); the ports checked by :meth:`_check_ports` and
+        :meth:`_check_replugged`."""
         for n in set(self._ports_in_rtl) | set(self.ports):
             if self._ports_in_rtl.get(n) is not self.ports.get(n):
                 self._open_window.pop(n, None)
@@ -552,9 +555,7 @@ class RtlBus:
         from emulator.spi.fastpath import _NO_TICK
 
         if self._cut_short is not None:
-            raise HarnessError(f"RTL bus: {self._cut_short} between sending its transfers to the harness and reading "
-                               f"all of their MISO: the harness's replies and the bus's calls are out of step; close "
-                               f"this bus and make a new one")
+            raise HarnessError(f"RTL bus: {self._cut_short}; close this bus and make a new one")
         start = np.asarray(start, float)
         clock = np.broadcast_to(np.asarray(clock, float), start.shape)
         nbits = np.broadcast_to(np.asarray(nbits, int), start.shape)
@@ -571,28 +572,41 @@ class RtlBus:
         tr["nbits"], tr["cs"], tr["keep_cs"] = nbits, cs, np.asarray(keep, bool)
         tr["mosi"] = np.asarray(mosi, dtype=np.uint64)
         self._check_ports()
+        self._check_replugged()
         faults = self._faults_in_force()
         changed = {n: f for n, f in faults.items() if f != self._faults_in_rtl[n]} if start.size else {}
-        if start.size and self._ports_in_rtl != self.ports:  # a sensor unplugged or plugged in since the last call
-            tr["present"][0], tr["set_present"][0] = self._hot_plugged(), 1
-        if start.size and self._resets:  # reset just before the first transfer; the RTL forgets its ADC-busy window
-            tr["reset_mask"][0] = sum(1 << (n - 1) for n in self._resets)
-            self._last_sampling_tick.update(dict.fromkeys(self._resets, _NO_TICK))
-            self._resets.clear()
-        c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits, np.broadcast_to(keep, start.shape),
-                            faults) if start.size else np.zeros((0, 3), np.int64)
-        codes = np.zeros(len(c), CODE)
-        if len(c):
-            codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
-        records = fault_records(changed)
-        try:  # (a call cut short before its reply is read whole leaves the harness's replies out of step)
+        # (everything refused is refused above.)  From here until the reply is read whole, the bus's record of the
+        # sensors (resets, ADC-busy windows, windows held open, conversions left pending, the ports' counts, the
+        # sensors' codes) and the harness move on together: a call cut short anywhere in between — Ctrl-C while the
+        # sensors compute their codes, a sensor raising, Ctrl-C while the harness plays the transfers — leaves the
+        # two out of step, and the bus refuses every later call
+        cut = (f"before its transfers were sent to the harness, while the bus updated its record of the sensors "
+               f"(resets, ADC-busy windows, conversions pending, codes): that record and the RTL's state are out of "
+               f"step")
+        try:
+            if start.size and self._ports_in_rtl != self.ports:  # a sensor unplugged or plugged in since the last call
+                tr["present"][0], tr["set_present"][0] = self._hot_plugged(), 1
+            if start.size and self._resets:  # reset just before the first transfer; the RTL forgets its ADC-busy
+                tr["reset_mask"][0] = sum(1 << (n - 1) for n in self._resets)  # window
+                self._last_sampling_tick.update(dict.fromkeys(self._resets, _NO_TICK))
+                self._resets.clear()
+            c = np.zeros((0, 3), np.int64)
+            if start.size:
+                c = self._codes_for(start, end, np.asarray(cs), np.asarray(mosi), nbits,
+                                    np.broadcast_to(keep, start.shape), faults)
+            codes = np.zeros(len(c), CODE)
+            if len(c):
+                codes["sensor"], codes["channel"], codes["code"] = c[:, 0], c[:, 1], c[:, 2]
+            records = fault_records(changed)
+            cut = ("between sending its transfers to the harness and reading all of their MISO: the harness's replies "
+                   "and the bus's calls are out of step")
             self.proc.stdin.write(struct.pack("<III", start.size, len(codes), len(records)) + tr.tobytes()
                                   + codes.tobytes() + records.tobytes())
             self.proc.stdin.flush()
             self._faults_in_rtl.update(changed)
             raw = np.frombuffer(self._read(8 * (start.size + 4)), dtype="<u8")
         except BaseException as e:
-            self._cut_short = f"a call of {start.size} transfers was ended by {e!r}"
+            self._cut_short = f"a call of {start.size} transfers was ended by {e!r} {cut}"
             raise
         self.evals = int(raw[start.size + 2])
         mismatched, unrequested = int(raw[start.size]), int(raw[start.size + 1])

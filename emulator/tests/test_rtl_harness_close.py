@@ -132,6 +132,41 @@ def test_a_harness_that_does_not_take_the_header_leaves_nothing_behind(tmp_path,
 
 
 @pytest.mark.rtl
+@pytest.mark.parametrize("cut", ["ctrl-c", "raise"], ids=["Ctrl-C while a sensor computes", "a sensor raising"])
+def test_a_call_cut_short_before_its_transfers_are_sent_leaves_the_bus_refusing_calls(cut):
+    """A real Ctrl-C (SIGINT) while the sensor computes the codes of a call's conversions, or the sensor raising
+    there: the bus had already moved its record of the sensors on (the conversion taken, the ADC-busy window, resets
+    cleared) for transfers the harness never got.  Every later call is refused, saying why and what to do, rather
+    than played against an RTL out of step with that record; close() still ends the harness."""
+    import signal
+
+    sensor = _sensor()
+    rtl = H.RtlBus({1: sensor})
+    try:
+        assert rtl.exchange_words(*_command_then_read(1e-3, 1.2e-3), proto.HOST_DEFAULT_CLOCK_HZ)[1] != 0
+
+        def cut_short(*args, **kw):
+            if cut == "raise":
+                raise RuntimeError("the stimulus went away")
+            signal.raise_signal(signal.SIGINT)  # (Python raises KeyboardInterrupt here, as the handler returns)
+            return Sensor.sample(sensor, *args, **kw)
+
+        sensor.sample = cut_short
+        with pytest.raises(KeyboardInterrupt if cut == "ctrl-c" else RuntimeError):
+            rtl.exchange_words(*_command_then_read(2e-3, 2.2e-3), proto.HOST_DEFAULT_CLOCK_HZ)
+        del sensor.sample
+        ended = "KeyboardInterrupt\\(\\)" if cut == "ctrl-c" else r"RuntimeError\('the stimulus went away'\)"
+        for _ in range(2):
+            with pytest.raises(H.HarnessError, match=rf"RTL bus: a call of 2 transfers was ended by {ended} before its "
+                                                     r"transfers were sent to the harness, while the bus updated its "
+                                                     r"record of the sensors .*: that record and the RTL's state are "
+                                                     r"out of step; close this bus and make a new one"):
+                rtl.exchange_words(*_command_then_read(3e-3, 3.2e-3), proto.HOST_DEFAULT_CLOCK_HZ)
+    finally:
+        rtl.close()
+    assert rtl.proc.returncode is not None
+
+
 def test_a_call_cut_short_before_its_reply_is_read_leaves_the_bus_refusing_calls():
     """Ctrl-C while a call waits for the harness's MISO: the reply stays in the pipe, where the next call would read
     it as its own (the words of another call, silently).  The bus refuses every later call instead, saying why and

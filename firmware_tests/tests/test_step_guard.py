@@ -31,7 +31,7 @@ HEAD = ("#include <assert.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include 
         "    return depth ? bt_deep(depth + 1) + pad[0] : 0; }\n")
 #: what every case's process starts with: ``firmware(extra)`` builds the reference firmware running ``extra`` (C) in
 #: every bt_step from 20 ms of virtual time on, as fw.c in the folder its last argument names (``in_init=True``: at the
-#: start of bt_init instead; ``own=True``: compiled here with cc, as a library built without the bench);
+#: start of bt_init instead; ``own``: compiled here with cc and these flags, as a library built without the bench);
 #: ``HANG``: a loop calling no HAL function; ``start(sim)`` runs 1 s of it in a thread: (the thread, the
 #: FirmwareErrors it ended with)
 PRELUDE = textwrap.dedent("""
@@ -42,7 +42,7 @@ PRELUDE = textwrap.dedent("""
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
     folder = Path(sys.argv[-1])
     HANG = "for (volatile unsigned long k = 0;; k++) { }"
-    def firmware(extra, in_init=False, own=False):
+    def firmware(extra, in_init=False, own=None):
         src = folder / "fw.c"
         code = (FIRMWARE_DIR / "bt_bridge.c").read_text()
         if in_init:
@@ -51,10 +51,10 @@ PRELUDE = textwrap.dedent("""
             code = code.replace(STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + extra
                                 + "\\n    }\\n")
         src.write_text(HEAD + code)
-        if not own:
+        if own is None:
             return build_firmware([src], out_dir=folder / "out")
         import subprocess
-        subprocess.run(["cc", "-O2", "-shared", "-fPIC", f"-I{FIRMWARE_DIR}", str(src), "-o",
+        subprocess.run(["cc", "-O2", "-shared", "-fPIC", *own.split(), f"-I{FIRMWARE_DIR}", str(src), "-o",
                         str(folder / "libown.so")], check=True)
         return folder / "libown.so"
     def start(sim):
@@ -299,7 +299,7 @@ def test_a_firmware_calling_exit_abort_or_failing_an_assert_ends_its_step_not_th
 INIT_CRASH = """
     board = VirtualBoard(default_sensors(1))
     try:
-        CoSim(board, firmware(sys.argv[1], in_init=True, own=sys.argv[2] == "own"))
+        CoSim(board, firmware(sys.argv[1], in_init=True, own="" if sys.argv[2] == "own" else None))
     except FirmwareError as e:
         print("error:", e, flush=True)
     print(f"t: {board.t:.6f}", flush=True)
@@ -333,12 +333,16 @@ def test_a_firmware_that_crashes_or_exits_in_bt_init_is_an_error_naming_it_and_t
                         f"not run again: make a new one\nt: {t}\na new co-simulation runs\n"), r.stdout
 
 
+@pytest.mark.parametrize("flags", ["", "-Wl,-z,relro,-z,now", "-fno-plt"],
+                         ids=["linked as cc does", "full RELRO", "no PLT"])
 @pytest.mark.parametrize("call", ["exit(3);", "abort();"])
-def test_a_library_built_elsewhere_that_exits_in_bt_step_is_an_error_not_the_end_of_the_process(tmp_path, call):
-    """A library built without the bench (cc here: no wrapping at link time) calling exit or abort in bt_step: its
+def test_a_library_built_elsewhere_that_exits_in_bt_step_is_an_error_not_the_end_of_the_process(tmp_path, call,
+                                                                                                  flags):
+    """A library built without the bench (cc here) calling exit or abort in bt_step — linked as cc links it, with
+    its offset table read-only (full RELRO, a common hardening), or calling through the table without a PLT: its
     step is left and run raises naming the call, as for a firmware the bench builds.  It ended the process."""
-    body = CRASH.replace("firmware(sys.argv[1])", "firmware(sys.argv[1], own=True)")
-    r = _run(tmp_path, body, call)
+    body = CRASH.replace("firmware(sys.argv[1])", "firmware(sys.argv[1], own=sys.argv[2])")
+    r = _run(tmp_path, body, call, flags)
     assert r.returncode == 0, r.stdout + r.stderr
     error = (f"error: the firmware called {call[:-1]} in bt_step at virtual time 0.020425 s, which would have ended "
              f"the process: the bench left its bt_step and goes on; this co-simulation does not run again: make a new "
