@@ -215,6 +215,14 @@ class VirtualBoard:
         self.resets: list[tuple[float, int]] = []  # (virtual time s, sensor): brown-outs inside an SPI sequence
         self.error: BaseException | None = None
         self.error_in = ""  # the HAL function where error came, and when
+        #: A HAL call ended midway — by Ctrl-C, or by an exception that is neither the bench refusing the call (a
+        #: ValueError, raised before anything changed) nor a test's action raising (ActionError) — says which, when
+        #: and by what: the board's record (virtual time, events and resets applied, the sensors' SPI state) may be
+        #: half-updated, so the firmware is left as that call returns (``stop_firmware``) and never runs again.
+        self.cut_short: str | None = None
+        #: Set by the co-simulation running the firmware: ends its bt_init or bt_step as the HAL call returns, for good
+        #: (the step guard's stop), so the firmware never goes on with what a call cut short gave it.
+        self.stop_firmware = lambda: None
         #: Set when the bench gave up on a hung firmware: its next HAL call parks its thread for good, so a loop
         #: that keeps calling the HAL stops spending a core for the rest of the process.
         self.abandoned = threading.Event()
@@ -294,6 +302,9 @@ class VirtualBoard:
             except BaseException as e:  # an exception must not unwind through C: keep it, stop the run
                 if self.error is None:
                     self.error, self.error_in = e, f"{name} at virtual time {self.t:.6f} s"
+                if not isinstance(e, (ValueError, ActionError)) and self.cut_short is None:
+                    self.cut_short = f"the HAL call {name} at virtual time {self.t:.6f} s was cut short by {e!r}"
+                    self.stop_firmware()
                 return 0
         return wrapped
 
@@ -391,8 +402,10 @@ class CoSim:
         # the firmware's exit, _exit, abort and failed asserts end the guarded call, not the process
         self._guard.bt_guard_take_exits(self._step)
         self._left_in = "bt_init"  # the firmware's function running when the guard left it (for _why_stopped)
+        board.stop_firmware = lambda: self._guard.bt_guard_stop(self._watch)
         if self._guard.bt_guard_start(self._watch, C.cast(self.lib.bt_init, C.c_void_p), self.state,
                                       C.byref(self._guarded_hal)):
+            self._raise()  # (a HAL call cut short: Ctrl-C reaches the caller as the KeyboardInterrupt it is)
             raise FirmwareError(self._why_stopped())
         self._raise()
         self._left_in = "bt_step"
@@ -451,6 +464,9 @@ class CoSim:
         pc, addr, overflow = C.c_size_t(), C.c_size_t(), C.c_int()
         sig = self._guard.bt_guard_crash(self._watch, C.byref(pc), C.byref(addr), C.byref(overflow))
         again = "this co-simulation does not run again: make a new one"
+        if self.board.cut_short:
+            return (f"{self.board.cut_short}: the board's record of time and of its sensors may be half-updated; the "
+                    f"bench left the firmware's {self._left_in} as that call returned; {again}")
         called = self._guard.bt_guard_exit_call(self._watch).decode(errors="replace")
         if called:
             return (f"the firmware called {called} in {self._left_in} at virtual time {self.board.t:.6f} s, which "
@@ -485,6 +501,7 @@ class CoSim:
         steps = 0
         while self.board.t < end:
             if self._guard.bt_guard_step(self._watch, self._step, self.state):
+                self._raise()  # (a HAL call cut short: Ctrl-C reaches the caller as the KeyboardInterrupt it is)
                 raise FirmwareError(self._why_stopped())
             self._raise()
             steps += 1

@@ -71,3 +71,52 @@ def test_ctrl_c_during_a_hal_call_is_a_keyboard_interrupt_from_run(tmp_path):
         assert 0.05 <= board.t < 0.1
     finally:
         board.bus.close()
+
+
+@pytest.mark.parametrize("cut", ["ctrl-c", "raise"], ids=["Ctrl-C in an action", "a sensor raising"])
+def test_a_hal_call_cut_short_ends_the_step_there_and_the_co_simulation_for_good(tmp_path, cut):
+    """A real Ctrl-C (SIGINT, arriving as a scheduled action runs: before the HAL call's SPI transfers are sent), or
+    a sensor raising as the bus has it convert (midway through the transfers), inside a HAL call of a streaming
+    firmware: the firmware's step is left as the call returns (it wrote nothing more on its UART: no frame built on
+    MISO words the call never produced), run raises the interrupt as it came (the exception in a FirmwareError
+    naming the call), and every later run and set_pattern refuse, saying which call was cut short, when and by
+    what.  The step went on with the zeros, and the next run on a board whose record was half-updated."""
+    import signal
+
+    from bench.hosts.driver import CMD_START, encode
+
+    out = bytearray()
+    board = VirtualBoard(default_sensors(1), uart_out=out.extend)
+    sim = CoSim(board)
+    sim.set_pattern(["PDC"])
+    board.send_to_firmware(encode(CMD_START))
+    sent_then = []
+
+    def ctrl_c(board):
+        sent_then.append(len(out))
+        signal.raise_signal(signal.SIGINT)  # (Python raises KeyboardInterrupt here, as the handler returns)
+
+    def sensor_fails(*args, **kw):
+        sent_then.append(len(out))
+        raise RuntimeError("the stimulus went away")
+
+    def cut_short(board):
+        board.sensors[1].sample = sensor_fails
+
+    board.at(0.05, ctrl_c if cut == "ctrl-c" else cut_short)
+    try:
+        with pytest.raises(KeyboardInterrupt if cut == "ctrl-c" else FirmwareError):
+            sim.run(0.1)
+        assert len(out) == sent_then[0] > 1000  # streamed until the cut, nothing after
+        said = (rf"the HAL call \w+ at virtual time 0\.050\d+ s was cut short by "
+                rf"{'KeyboardInterrupt' if cut == 'ctrl-c' else 'RuntimeError'}\(.*\): the board's record of time and "
+                rf"of its sensors may be half-updated; the bench left the firmware's bt_step as that call returned; "
+                rf"this co-simulation does not run again: make a new one")
+        assert sim.stopped
+        with pytest.raises(FirmwareError, match=said):
+            sim.run(0.1)
+        with pytest.raises(FirmwareError, match="set_pattern: " + said):
+            sim.set_pattern(["PDC"])
+        assert len(out) == sent_then[0]
+    finally:
+        board.bus.close()
