@@ -580,9 +580,9 @@ class RtlBus:
         # sensors' codes) and the harness move on together: a call cut short anywhere in between — Ctrl-C while the
         # sensors compute their codes, a sensor raising, Ctrl-C while the harness plays the transfers — leaves the
         # two out of step, and the bus refuses every later call
-        cut = (f"before its transfers were sent to the harness, while the bus updated its record of the sensors "
-               f"(resets, ADC-busy windows, conversions pending, codes): that record and the RTL's state are out of "
-               f"step")
+        cut = ("before its transfers were sent to the harness, while the bus updated its record of the sensors "
+               "(resets, ADC-busy windows, conversions pending, codes): that record and the RTL's state are out of "
+               "step")
         try:
             if start.size and self._ports_in_rtl != self.ports:  # a sensor unplugged or plugged in since the last call
                 tr["present"][0], tr["set_present"][0] = self._hot_plugged(), 1
