@@ -37,10 +37,12 @@ def _sim(tmp_path, misuse: str) -> CoSim:
      r"0\.02042539\d* s, before transfer #0 \(from 0\.0204263\d* s\) ends"),
 ], ids=["a select code out of range in a sequence", "a select code out of range in bytes", "words out of time order"])
 def test_a_hal_call_the_bench_cannot_take_is_an_error_naming_the_call_the_time_and_the_value(tmp_path, misuse, error):
+    """... and, refused before anything changed, it leaves the co-simulation as it was: not stopped."""
     sim = _sim(tmp_path, misuse)
     try:
         with pytest.raises(FirmwareError, match=error):
             sim.run(0.1)
+        assert not sim.stopped
     finally:
         sim.board.bus.close()
 
