@@ -15,8 +15,8 @@ it must export ``bt_bridge_size``, ``bt_init``, ``bt_step`` and ``bt_set_pattern
 whose ``bt_step`` never returns is reported by :meth:`stop` (a :class:`~bench.errors.FirmwareError`) after
 :data:`STOP_TIMEOUT_S` of wall time.  A bench whose firmware thread ended with an error (the firmware crashed or
 called exit, a HAL call it made was refused, a scheduled action raised) says so at the first call after —
-:meth:`at`, :meth:`now`, :attr:`virtual_time`, :meth:`overrun_frames`, or else :meth:`stop` — naming the virtual
-time it ended at; every later call but :meth:`stop` says it again.
+:meth:`at`, :meth:`now`, :attr:`virtual_time`, or else :meth:`stop` — naming the virtual time it ended at; every
+later call but :meth:`stop` says it again (:meth:`overrun_frames` still reads what the host was sent).
 
 The host's side of the link is a finite receive buffer (:class:`bench.hosts.serial_link.PtyLink`, 4096 bytes by
 default, ``rx_buffer=``).  Paced to the wall clock (``realtime=True``, what ``biotac-bench bridge`` does), it
@@ -282,7 +282,6 @@ class FirmwareBench:
     def overrun_frames(self) -> list[int]:
         """Sequence numbers of the data frames that lost bytes to receive-buffer overruns (needs
         ``keep_arrivals=True``): exactly the frames a host reading this port can never get."""
-        self._check_alive("overrun_frames")
         if self.link.arrivals is None:
             raise ValueError("overrun_frames() needs FirmwareBench(..., keep_arrivals=True)")
         data, lost, pos, k = bytes(self.link.arrivals), [], 0, 0
