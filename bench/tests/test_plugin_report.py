@@ -200,6 +200,7 @@ def test_an_action_that_raises_stops_the_bench_naming_the_action_its_instant_and
             bench.now(unplug_seven)
         driver.start()
         list(driver.frames(max_frames=30, timeout_s=3))
+        bench._thread.join(60)  # (the action stops it: from a cold start the first frames can take the 3 s)
     finally:
         driver.close()
     where = f"unplug_seven at {__file__}:{unplug_seven.__code__.co_firstlineno}"
