@@ -383,6 +383,9 @@ class CoSim:
     """
 
     def __init__(self, board: VirtualBoard, library: Path | None = None):
+        if board.cut_short:
+            raise FirmwareError(f"the board: {board.cut_short}: its record of time and of its sensors may be "
+                                f"half-updated; make a new VirtualBoard for a new co-simulation")
         self.board = board
         self.library = Path(library or build_firmware())
         self.lib = load_firmware(self.library)

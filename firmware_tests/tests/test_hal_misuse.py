@@ -82,7 +82,8 @@ def test_a_hal_call_cut_short_ends_the_step_there_and_the_co_simulation_for_good
     firmware: the firmware's step is left as the call returns (it wrote nothing more on its UART: no frame built on
     MISO words the call never produced), run raises the interrupt as it came (the exception in a FirmwareError
     naming the call), and every later run and set_pattern refuse, saying which call was cut short, when and by
-    what.  The step went on with the zeros, and the next run on a board whose record was half-updated."""
+    what; so does a new co-simulation on that board.  The step went on with the zeros, and the next run on a board
+    whose record was half-updated."""
     import signal
 
     from bench.hosts.driver import CMD_START, encode
@@ -120,5 +121,9 @@ def test_a_hal_call_cut_short_ends_the_step_there_and_the_co_simulation_for_good
         with pytest.raises(FirmwareError, match="set_pattern: " + said):
             sim.set_pattern(["PDC"])
         assert len(out) == sent_then[0]
+        with pytest.raises(FirmwareError, match=r"the board: the HAL call \w+ at virtual time 0\.050\d+ s was cut "
+                                                r"short by .*: its record of time and of its sensors may be "
+                                                r"half-updated; make a new VirtualBoard for a new co-simulation"):
+            CoSim(board)  # (a firmware started on it would build on that record)
     finally:
         board.bus.close()

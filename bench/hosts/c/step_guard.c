@@ -329,7 +329,8 @@ static int rewrite_entries(uintptr_t base, const ElfW(Rela) *rel, size_t bytes, 
         for (size_t k = 0; k < N_EXIT_CALLS; k++) {
             if (strcmp(name, exit_calls[k].name) != 0) continue;
             uintptr_t slot = base + rel[i].r_offset;
-            int locked = slot >= relro_lo && slot < relro_hi;
+            /* (the loader makes read-only the whole pages inside RELRO: a last part page stays writable) */
+            int locked = slot >= (relro_lo & ~(page - 1)) && slot < (relro_hi & ~(page - 1));
             void *first = (void *)(slot & ~(page - 1));
             if (locked && mprotect(first, page, PROT_READ | PROT_WRITE) != 0) break;
             *(void *volatile *)slot = exit_calls[k].guarded;
