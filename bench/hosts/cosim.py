@@ -463,7 +463,8 @@ class CoSim:
                              + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E24"))
 
     def _why_stopped(self) -> str:
-        """Why bt_step was left: the watchdog (a hang), or a fault in the firmware's code (its signal, where)."""
+        """Why the firmware's bt_init or bt_step was left: a HAL call cut short, the firmware calling exit or the like,
+        a fault in its code (its signal, or a stack overflow; where), or the watchdog (a hung bt_step)."""
         pc, addr, overflow = C.c_size_t(), C.c_size_t(), C.c_int()
         sig = self._guard.bt_guard_crash(self._watch, C.byref(pc), C.byref(addr), C.byref(overflow))
         again = "this co-simulation does not run again: make a new one"
