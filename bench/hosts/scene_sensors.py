@@ -31,6 +31,7 @@ import numbers
 from bench.errors import SceneError
 from bench.hosts.cosim import default_sensors
 from bench.scenes.limits import MAX_SENSORS
+from bench.scenes.scene import with_overrides
 from emulator.channels import ALL_CHANNEL_INDEX, HAL, variant
 from emulator.sensor import Sensor
 from emulator.spi import protocol as proto
@@ -48,7 +49,7 @@ def sensors_from_scene(scene, n_sensors: int, seed: int | None = None) -> dict[i
         raise SceneError(scene.source, [f"the scene describes {scene.n_sensors} sensors ([[sensors]] or a stimulus's "
                                         f"sensor = {scene.n_sensors}); serve at least {scene.n_sensors} "
                                         f"(--sensors {scene.n_sensors}), not {n_sensors}"])
-    base = scene if seed is None else dataclasses.replace(scene, seed=int(seed))
+    base = scene if seed is None else with_overrides(scene, {"scene.seed": int(seed)})  # (its slides redrawn too)
     out = {}
     for k in range(1, n_sensors + 1):
         one = dataclasses.replace(base.for_sensor(k), sequence="default")

@@ -174,10 +174,11 @@ def _fail(message: str):
 
 def with_settings(scene, settings: dict):
     """``scene`` with the session's or the test's marker's sensor settings (``settings``: fidelity and seed, those
-    set) in place of its own (as ``biotac-bench run --seed`` replaces a scene's seed)."""
-    import dataclasses
+    set) in place of its own, as ``biotac-bench run --fidelity/--seed`` replace them
+    (:func:`bench.scenes.scene.with_overrides`: validated again, its slides drawn from the new seed)."""
+    from bench.scenes.scene import with_overrides
 
-    return dataclasses.replace(scene, **settings) if settings else scene
+    return with_overrides(scene, {f"scene.{name}": value for name, value in settings.items()})
 
 
 def load_scene_like(scene):

@@ -1275,3 +1275,18 @@ def load_scene(path: str | Path, overrides: dict | None = None) -> Scene:
     """Read and validate a scene file (see :func:`read_scene_text` for what makes a file unreadable;
     ``overrides`` as for :func:`parse_scene_text`)."""
     return parse_scene_text(read_scene_text(path), source=str(path), overrides=overrides)
+
+
+def with_overrides(scene: Scene, overrides: dict) -> Scene:
+    """``scene`` with ``overrides`` (as :func:`parse_scene_text` takes them, e.g. ``{"scene.seed": 5}``) over its own
+    values and over those it was read with: read again from its text and validated again, as ``biotac-bench run``
+    applies its options — so a seed also redraws what the scene draws from it (its slides' placements), and a
+    fidelity profile whose grid cannot compute a stimulus is refused (:class:`SceneError`).  A scene made or
+    changed in code (no text, or not what its text reads as) gets the fields replaced as they are, its changes kept."""
+    import dataclasses
+
+    if not overrides:
+        return scene
+    if scene.text and parse_scene_text(scene.text, source=scene.source, overrides=scene.overrides) == scene:
+        return parse_scene_text(scene.text, source=scene.source, overrides={**scene.overrides, **overrides})
+    return dataclasses.replace(scene, **{key.partition(".")[2]: value for key, value in overrides.items()})

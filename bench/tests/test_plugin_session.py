@@ -163,3 +163,42 @@ def test_a_marker_that_is_not_one_fails_its_test_in_one_line(pytester):
         "@pytest.mark.biotac(): seed = -1: a seed, a whole number ≥ 0 (e.g. 7)",
     ], consecutive=True)
     assert "Traceback" not in result.stdout.str()
+
+
+SCENE_READ_AGAIN = '''
+from bench.scenes.scene import load_scene
+
+
+def test_slides(biotac_sensor, biotac_bridge):
+    drawn = load_scene("{slides}", {{"scene.seed": 5}}).stimuli  # what `biotac-bench run --seed 5` slides over
+    assert drawn != load_scene("{slides}").stimuli
+    assert list(biotac_sensor(scene="{slides}").sensor.stimuli) == drawn
+    bench = biotac_bridge(scene="{slides}")
+    bench.stop()
+    assert list(bench.board.sensors[1].stimuli) == drawn
+
+
+def test_vibration(biotac_sensor):
+    biotac_sensor(scene="vibration.toml")
+'''
+
+
+def test_a_sessions_seed_and_fidelity_reach_a_scene_as_runs_options_do(pytester):
+    """``--biotac-seed``/``--biotac-fidelity`` replace a scene's own as ``biotac-bench run --seed/--fidelity`` do:
+    the scene is read again with them — its slides placed from the session's seed (not the file's), and a stimulus
+    the session's profile cannot compute (a 3 kHz vibration, valid at "default", past "fast"'s grid) fails its test
+    in one line naming it, rather than running on a grid that cannot carry it."""
+    from bench.paths import REPO
+
+    slides = REPO / "fixtures" / "scenes" / "skin_wear.toml"
+    text = (REPO / "fixtures" / "scenes" / "vibration_sweep.toml").read_text()
+    assert "f_stop_Hz = 900.0" in text
+    pytester.path.joinpath("vibration.toml").write_text(text.replace("f_stop_Hz = 900.0", "f_stop_Hz = 3000.0"))
+    pytester.makepyfile(test_user=SCENE_READ_AGAIN.format(slides=slides))
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--biotac-seed", "5", "--biotac-fidelity",
+                                           "fast")
+    result.assert_outcomes(passed=1, failed=1)
+    result.stdout.fnmatch_lines(["biotac_sensor(): vibration.toml: 1 problem(s):",
+                                 "  - the stimulus starting at 1 s: vibration at 3000 Hz needs a finer grid than "
+                                 "fidelity 'fast' (4400 Hz); use \"default\" or \"reference\""], consecutive=True)
+    assert "Traceback" not in result.stdout.str()
