@@ -113,6 +113,9 @@ class FirmwareBench:
         self._frame_times: dict[int, np.ndarray] = {}  # sequence number -> each slot's sample time (s)
         self._rng = random.Random(seed)
         self.corrupt_rate, self.drop_rate = corrupt_rate, drop_rate
+        # (set before the firmware's bt_init runs: what it sends the host at start-up goes through _line)
+        self.realtime, self.speed, self.step_s = realtime, speed, step_s
+        self._stop = threading.Event()
         self.board = None
         try:
             self.board = VirtualBoard(sensors, uart_out=self._line, pull_up=pull_up, spi=spi)
@@ -125,8 +128,6 @@ class FirmwareBench:
             if self.board is not None:
                 self.board.bus.close()
             raise
-        self.realtime, self.speed, self.step_s = realtime, speed, step_s
-        self._stop = threading.Event()
         self._requests: queue.Queue = queue.Queue()  # (virtual time or None, action): applied by the bench thread
         self._thread = threading.Thread(target=self._loop, name="firmware", daemon=True)
         self.error: BaseException | None = None

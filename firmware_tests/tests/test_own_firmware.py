@@ -163,6 +163,27 @@ def test_a_firmware_crash_is_reported_by_the_first_call_after_it_naming_the_virt
     driver.close()
 
 
+def test_a_firmware_that_talks_to_the_host_in_bt_init_starts_and_is_heard(tmp_path):
+    """A firmware whose bt_init sends the host something (here its status, as a boot message) starts on the bench,
+    its message on the line, and streams as usual.  Its bt_init runs inside FirmwareBench's constructor, and its
+    UART bytes go through the bench's line: that line's settings were set only after it, so the firmware's first
+    byte was an AttributeError blamed on its HAL call (a FirmwareError: the bench could not start it).  (A host
+    opening the port later does not read it: pyserial empties the input at open, as after a real bridge's boot.)"""
+    from bench.hosts.driver import FrameParser, Status
+
+    end = '    b->finds = 0; /* sensors present at start-up are not "found again" */\n}\n'
+    assert REFERENCE.count(end) == 1, "the reference firmware's bt_init changed: update this test's edit"
+    src = tmp_path / "boot_status.c"
+    src.write_text(REFERENCE.replace(end, end[:-2] + "    send_status(b);\n}\n"))
+    with FirmwareBench(n_sensors=1, firmware=[src], keep_arrivals=True) as bench:
+        sent = FrameParser().feed(bytes(bench.link.arrivals), now=0.0)
+        assert [type(item) for item in sent] == [Status]  # the boot status, on the line before any host spoke
+        driver = BridgeDriver(bench.port)
+        driver.start()
+        assert len(list(driver.frames(max_frames=5, timeout_s=5))) == 5
+        driver.close()
+
+
 def test_scheduling_on_a_stopped_bench_is_refused():
     bench = FirmwareBench().start()
     bench.at(0.5, lambda board: None)
