@@ -8,6 +8,7 @@ import sys
 
 from bench.cli.args import any_seed, number, sigterm_raises, stimuli_count, whole
 from bench.running.signals import signals_deferred
+from bench.tomlfile import spelled
 
 #: Sensors served without a scene (``--sensors`` not given); with one, the scene's count.
 DEFAULT_SENSORS = 3
@@ -22,23 +23,19 @@ def _cmd_serve(a) -> int:
     n_sensors = DEFAULT_SENSORS if a.sensors is None else a.sensors
     what = f"{n_sensors} emulated sensor(s) at rest"
     if a.scene:
-        from bench.errors import SceneError
         from bench.hosts.scene_sensors import sensors_from_scene
         from bench.scenes.scene import load_scene
-        from bench.tomlfile import spelled
 
         scene = load_scene(a.scene)
-        if scene.spi != "software":
-            raise SceneError(scene.source, [f"host.spi = {spelled(scene.spi)}: the Cheetah adapter serves the "
-                                            "software SPI model only"])
         n_sensors = scene.n_sensors if a.sensors is None else a.sensors
         kw["sensors"] = sensors_from_scene(scene, n_sensors, seed=a.seed)
+        kw["spi"] = scene.spi  # the sensors' SPI side the adapter clocks (as biotac_cheetah(scene=...) takes it)
         what = (f"{n_sensors} emulated sensor(s) built from scene '{scene.name}' ("
                 + "; ".join(f"sensor {k} feels {stimuli_count(len(scene.sensor_spec(k).stimuli))}"
                             for k in range(1, scene.n_sensors + 1)) + ")")
         if scene.sequence != "default" or scene.slot_rate_Hz != 4400.0:
-            print("note: the scene's [host] section is not used: your program is the host and chooses what to "
-                  "sample and when", file=sys.stderr)
+            print("note: the scene's [host] sequence and slot rate are not used: your program is the host and "
+                  "chooses what to sample and when", file=sys.stderr)
     else:
         kw["seed"] = 0 if a.seed is None else a.seed
         what += f" (seed {kw['seed']}: sensor k draws {kw['seed']} + k - 1)"
@@ -46,7 +43,9 @@ def _cmd_serve(a) -> int:
         cb = CheetahBench(n_sensors, **kw).start()
         try:
             print(f"export BIOTAC_CHEETAH_SOCKET={shlex.quote(cb.socket_path)}", flush=True)
-            print(f"emulated Cheetah adapter (port 0) with {what}\n"
+            side = (f", their SPI side the Verilog RTL (the scene says host.spi = {spelled(cb.spi)})"
+                    if cb.spi == "rtl" else "")
+            print(f"emulated Cheetah adapter (port 0) with {what}{side}\n"
                   f"run your Cheetah program with that variable set and this cheetah.so beside it (or in its working "
                   f"folder): {cb.library}\nCtrl-C or SIGTERM to stop", file=sys.stderr, flush=True)
             deadline = None if a.seconds is None else time.monotonic() + a.seconds

@@ -342,11 +342,15 @@ def test_explore_help_describes_every_ablation_from_its_registry(capsys):
         assert re.search(rf"^  {name}: {re.escape(what)}$", out, re.M), name
 
 
-@unit
+@pytest.mark.rtl
 def test_cheetah_serve_names_a_scenes_rtl_spi_as_the_file_spells_it(tmp_path, capsys):
-    """A scene whose [host] spi the adapter cannot serve is refused before serving, the value in TOML spelling (as
-    the pytest plugin's factory says it), not Python's ``'rtl'``."""
+    """A scene whose [host] spi is "rtl" is served over the Verilog RTL (CheetahBench(spi="rtl"), as
+    ``biotac_cheetah(scene=...)`` serves it), and the adapter says so, the value in TOML spelling (not Python's
+    ``'rtl'``); it had been refused, "the Cheetah adapter serves the software SPI model only", after the adapter had
+    learnt to clock the RTL."""
     scene = tmp_path / "rtl.toml"
     scene.write_text('[scene]\nname = "r"\nduration_s = 0.1\n[host]\nspi = "rtl"\n')
-    status, out, err = invoke(["cheetah", "serve", str(scene)], capsys)
-    assert status == 2 and 'host.spi = "rtl": the Cheetah adapter serves the software SPI model only' in err, err
+    status, out, err = invoke(["cheetah", "serve", str(scene), "--seconds", "0.1"], capsys)
+    assert status == 0, err
+    assert "their SPI side the Verilog RTL (the scene says host.spi = \"rtl\")" in err, err
+    assert "software SPI model only" not in err
