@@ -31,6 +31,9 @@ FIRMWARE_DIR = REPO / "firmware_tests" / "firmware"
 SPI_CLOCK_HZ = 4.4e6
 #: The largest chip-select code the HAL takes (``bt_word.cs``, ``spi_bytes``' cs: three bits).
 MAX_SELECT_CODE = 7
+#: The command words' ends :attr:`VirtualBoard.command_ends` keeps, the latest: the most slots a data frame holds (its
+#: slot count is one byte), of which a frame's sample times are the last ones before it.
+COMMAND_ENDS_KEPT = 255
 GUARD_SOURCE = Path(__file__).resolve().parent / "c" / "step_guard.c"
 #: The signal that stops a hung bt_step (:meth:`CoSim.stop_step`): a real-time signal nothing else here uses.  The
 #: bench installs its handler at the first co-simulation, only over the default action (a handler something else in
@@ -229,7 +232,8 @@ class VirtualBoard:
         self.last_hal_call: str | None = None  # the HAL function the firmware called last (where a hang is)
         #: When a list: every command word (a word whose MOSI is not 0: a sampling command, or any other command)
         #: the firmware's SPI sequences clock gets its end appended — the virtual time (s) chip select rises on it
-        #: and a sampling command's conversion starts (:meth:`bench.hosts.bridge.FirmwareBench.sample_times`).
+        #: and a sampling command's conversion starts (:meth:`bench.hosts.bridge.FirmwareBench.sample_times`); the
+        #: latest :data:`COMMAND_ENDS_KEPT` are kept.
         self.command_ends: list[float] | None = None
 
     # --- faults and events ---------------------------------------------------------------
@@ -321,6 +325,7 @@ class VirtualBoard:
         start = self.t + w["offset_ns"] * 1e-9
         if self.command_ends is not None:
             self.command_ends.extend((start[w["mosi"] != 0] + 16.5 / SPI_CLOCK_HZ).tolist())  # (Transfer.end_s)
+            del self.command_ends[:-COMMAND_ENDS_KEPT]  # (a firmware whose frames the bench never parses)
         keep, out = w["keep_cs"].astype(bool), np.ctypeslib.as_array(miso, shape=(n,))
         i = 0
         while i < n:  # the words before each reset due within the sequence, the reset, the rest

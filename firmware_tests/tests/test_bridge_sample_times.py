@@ -68,3 +68,25 @@ def test_without_sample_times_a_frame_has_none_and_a_bad_one_is_refused(biotac_b
     frame = next(driver.frames(max_frames=1, timeout_s=20))
     driver.close()
     assert frame.t_s is None and bench.sample_times(frame) is not None
+
+
+def test_a_firmware_whose_frames_never_parse_keeps_no_growing_record_of_its_commands(tmp_path):
+    """The bench notes when each sampling command ended until the data frame it belongs to leaves the firmware; a
+    firmware whose frames the bench cannot parse (here: a wrong CRC on every data frame) never sends one, so the
+    notes were never emptied — 4400 a virtual second, without end on a bench left running.  Only the latest
+    :data:`~bench.hosts.cosim.COMMAND_ENDS_KEPT` (the most slots a frame holds) are kept."""
+    from bench.hosts.bridge import FirmwareBench
+    from bench.hosts.cosim import COMMAND_ENDS_KEPT, FIRMWARE_DIR
+
+    reference = (FIRMWARE_DIR / "bt_bridge.c").read_text()
+    tail = "    uint8_t tail[2] = {(uint8_t)(crc & 0xFF), (uint8_t)(crc >> 8)};\n"
+    assert reference.count(tail) == 1, "the reference firmware's send() changed: update this test's edit"
+    src = tmp_path / "bad_crc.c"
+    src.write_text(reference.replace(tail, tail + "    if (type == 0x10) tail[0] ^= 1;\n"))
+    with FirmwareBench(firmware=[src]) as bench:
+        driver = BridgeDriver(bench.port)
+        driver.start()  # (acknowledged: only data frames carry the wrong CRC)
+        assert list(driver.frames(max_frames=1, timeout_s=1.0)) == []
+        assert driver.parser.stats.crc_errors > 20  # the firmware streamed on, frames the host could not take
+        assert 0 < len(bench.board.command_ends) <= COMMAND_ENDS_KEPT
+        driver.close()
