@@ -25,7 +25,7 @@ import re
 import threading
 import time
 import xml.etree.ElementTree as ET
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -361,14 +361,20 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
             tries = LOSSY_LINE_TRIES if fb.corrupt_rate or fb.drop_rate else 1
 
             def session():
+                try:
+                    with _blamed_on(driver):
+                        acknowledged = _ask(drv, drv.start, CMD_START, tries)
+                    if acknowledged is None:
+                        raise TimeoutError(f"no acknowledgement of START within {tries} × {REPLY_HORIZON_S:g} s")
+                    with _blamed_on(driver):
+                        frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
+                        status = _ask(drv, drv.request_status, Status, tries)
+                        stats = drv.parser.stats
+                except BaseException:  # the driver's port closed on every way out, not left to the garbage collector
+                    with suppress(Exception):
+                        drv.close()
+                    raise
                 with _blamed_on(driver):
-                    acknowledged = _ask(drv, drv.start, CMD_START, tries)
-                if acknowledged is None:
-                    raise TimeoutError(f"no acknowledgement of START within {tries} × {REPLY_HORIZON_S:g} s")
-                with _blamed_on(driver):
-                    frames = list(drv.frames(max_frames=frames_wanted, timeout_s=10))
-                    status = _ask(drv, drv.request_status, Status, tries)
-                    stats = drv.parser.stats
                     drv.close()
                 return frames, status, stats
 

@@ -154,3 +154,19 @@ def test_the_bench_driver_is_the_default_and_named_so():
     results = [{"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None,
                 "seconds": 0.1}]  # results from before the driver was recorded: the bench's
     assert "driver bench.hosts.driver:BridgeDriver\n" in campaign.case_output(results[0])
+
+
+@pytest.mark.firmware
+def test_a_driver_that_raises_is_closed_by_the_case(tmp_path):
+    """A driver whose ``frames`` raises (its case an error) still has ``close()`` called by the case, so its port's
+    file descriptor is given back then, not whenever the garbage collector comes by (a CI campaign of hundreds of
+    cases would otherwise hold hundreds of ptys)."""
+    closed = tmp_path / "closed"
+    path = tmp_path / "team_driver.py"
+    path.write_text("from pathlib import Path\n\nfrom bench.hosts.driver import BridgeDriver\n\n"
+                    "class D(BridgeDriver):\n    def frames(self, **kw):\n        raise ValueError('bad frame')\n\n"
+                    f"    def close(self):\n        Path({str(closed)!r}).write_text('closed')\n"
+                    "        super().close()\n\ndef open_driver(port):\n    return D(port)\n")
+    r = campaign.run_case(campaign.FAULTS["none"], "rest", 0, driver=f"{path}:open_driver")
+    assert r["error"] and "raised ValueError: bad frame" in r["problem"], r["problem"]
+    assert closed.read_text() == "closed"

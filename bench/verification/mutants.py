@@ -7283,6 +7283,11 @@ CATALOGUE += [
            '            pass  # (a firmware whose frames the bench never parses)',
            ('firmware_tests/tests/test_bridge_sample_times.py::test_a_firmware_whose_frames_never_parse_keeps_no_growing_record_of_its_commands',),
            "the board keeps every command word's end until a data frame parses: a firmware whose frames never do grows the list without end"),
+    Mutant('campaign-driver-left-open-on-error', 'campaigns', 'bench/campaigns/faults.py',
+           '                    with suppress(Exception):\n                        drv.close()\n                    raise',
+           '                    raise',
+           ('bench/tests/test_campaign_own_driver.py::test_a_driver_that_raises_is_closed_by_the_case',),
+           'a case whose driver raised leaves the driver (its port) open until the garbage collector comes by'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
