@@ -166,7 +166,11 @@ class CheetahBench:
             self.bus = RtlBus(sensors)
         else:
             self.bus = Bus({n: SensorPort(s, n) for n, s in sensors.items()})
-        self._tmp = private_folder()
+        try:
+            self._tmp = private_folder()
+        except BaseException:  # (no folder to make: the RTL's harness process is not left running)
+            self.bus.close()
+            raise
         self.socket_path = os.path.join(self._tmp, "cheetah.sock")
         self.t_host = 0.0  # the host program's time (s)
         self.t_bus = 0.0  # when the adapter's bus is free

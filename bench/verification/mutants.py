@@ -7288,6 +7288,11 @@ CATALOGUE += [
            '                    raise',
            ('bench/tests/test_campaign_own_driver.py::test_a_driver_that_raises_is_closed_by_the_case',),
            'a case whose driver raised leaves the driver (its port) open until the garbage collector comes by'),
+    Mutant('cheetah-rtl-harness-left-without-folder', 'hosts', 'bench/hosts/cheetah_server.py',
+           "        except BaseException:  # (no folder to make: the RTL's harness process is not left running)\n            self.bus.close()\n            raise",
+           "        except BaseException:  # (no folder to make: the RTL's harness process is not left running)\n            raise",
+           ('firmware_tests/tests/test_cheetah_rtl.py::test_a_bench_that_cannot_make_its_socket_folder_leaves_no_rtl_harness_running',),
+           'a CheetahBench over the RTL that cannot make its socket folder leaves the harness process running'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

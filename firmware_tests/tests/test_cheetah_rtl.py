@@ -57,3 +57,27 @@ def test_spi_mode_3_over_the_rtl_is_refused_naming_why(monkeypatch):
         assert cb.bus.proc.poll() is None  # the harness serves on until the bench stops
     assert any("SPI mode 3 over the RTL: not served" in e for e in cb.client_errors), cb.client_errors
     assert cb.bus.proc.poll() is not None  # stop() stopped the RTL's harness process
+
+
+def test_a_bench_that_cannot_make_its_socket_folder_leaves_no_rtl_harness_running(monkeypatch):
+    """The RTL's harness process starts before the socket's private folder is made: when that fails (a full or
+    read-only temporary folder: injected here) the construction's error reaches the caller and the harness process
+    has been stopped, not left running until the garbage collector finds the bus."""
+    from bench.hosts import cheetah_server
+    from emulator.rtl import harness
+
+    started = []
+    real = harness.RtlBus.__init__
+
+    def keep(self, *a, **kw):
+        real(self, *a, **kw)
+        started.append(self)
+
+    def no_room():
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(harness.RtlBus, "__init__", keep)
+    monkeypatch.setattr(cheetah_server, "private_folder", no_room)
+    with pytest.raises(OSError, match="No space left"):
+        cheetah_server.CheetahBench(1, spi="rtl")
+    assert len(started) == 1 and started[0].proc.poll() is not None
