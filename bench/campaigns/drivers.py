@@ -141,7 +141,13 @@ def one_line(text: str) -> str:
 def uncounted_gaps(frames, dropped_frames: int) -> str | None:
     """Why the frames a driver handed over (in order) miss more frames, by their 16-bit sequence numbers, than its
     parser counted as dropped (``dropped_frames``), or None: a driver that loses frames must say so."""
-    missing = sum((b.seq - a.seq - 1) % 65536 for a, b in zip(frames, frames[1:]))
+    steps = [(k + 1, (b.seq - a.seq) % 65536) for k, (a, b) in enumerate(zip(frames, frames[1:]))]
+    back = next(((k, frames[k].seq, frames[k - 1].seq) for k, step in steps if step == 0 or step >= 32768), None)
+    if back is not None:  # (read as a gap, a repeat would be "missing 65535")
+        k, seq, before = back
+        return (f"the driver handed over frame {seq} right after frame {before} (its frames {k} and {k + 1}): a "
+                f"frame repeated or out of order")
+    missing = sum(step - 1 for _, step in steps)
     if missing > dropped_frames:
         return (f"the driver handed over {len(frames)} frames missing {missing} by their sequence numbers, but counted "
                 f"{dropped_frames} dropped (frames lost without a word)")

@@ -55,6 +55,11 @@ def test_frames_missing_from_the_sequence_must_be_counted_as_dropped():
     frames = [SimpleNamespace(seq=s) for s in (65534, 65535, 1, 2)]  # 0 missing, across the counter's wrap
     assert uncounted_gaps(frames, 1) is None and uncounted_gaps(frames[:2], 0) is None
     assert "missing 1 by their sequence numbers, but counted 0 dropped" in uncounted_gaps(frames, 0)
+    # a frame handed over twice, or one from before, is said as such (not "missing 65535"), whatever was counted
+    for seqs, said in (((7, 8, 8, 9), "frame 8 right after frame 8 (its frames 2 and 3)"),
+                       ((7, 9, 8), "frame 8 right after frame 9 (its frames 2 and 3)")):
+        again = [SimpleNamespace(seq=s) for s in seqs]
+        assert uncounted_gaps(again, 100) == f"the driver handed over {said}: a frame repeated or out of order"
 
 
 #: (the driver file's text, the callable's name, what its refusal says)

@@ -6944,8 +6944,8 @@ CATALOGUE += [
            ('bench/tests/test_campaign_own_driver.py::test_a_driver_that_loses_every_other_frame_without_a_word_fails_every_case',),
            'frames a driver loses without counting them pass every case'),
     Mutant('uncounted-gaps-across-the-wrap', 'campaigns', 'bench/campaigns/drivers.py',
-           'missing = sum((b.seq - a.seq - 1) % 65536 for a, b in zip(frames, frames[1:]))',
-           'missing = sum(b.seq - a.seq - 1 for a, b in zip(frames, frames[1:]))',
+           '(k + 1, (b.seq - a.seq) % 65536)',
+           '(k + 1, b.seq - a.seq)',
            ('bench/tests/test_campaign_own_driver.py::test_frames_missing_from_the_sequence_must_be_counted_as_dropped',),
            "the frame count's 16-bit wrap makes a run that lost a frame look like one that lost none"),
     Mutant('driver-signature-unchecked', 'campaigns', 'bench/campaigns/drivers.py',
@@ -7293,6 +7293,11 @@ CATALOGUE += [
            "        except BaseException:  # (no folder to make: the RTL's harness process is not left running)\n            raise",
            ('firmware_tests/tests/test_cheetah_rtl.py::test_a_bench_that_cannot_make_its_socket_folder_leaves_no_rtl_harness_running',),
            'a CheetahBench over the RTL that cannot make its socket folder leaves the harness process running'),
+    Mutant('driver-repeat-read-as-a-gap', 'campaigns', 'bench/campaigns/drivers.py',
+           'for k, step in steps if step == 0 or step >= 32768), None)',
+           'for k, step in steps if False), None)',
+           ('bench/tests/test_campaign_own_driver.py::test_frames_missing_from_the_sequence_must_be_counted_as_dropped',),
+           'a frame a driver hands over twice or out of order is told as 65535 frames missing'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
