@@ -304,7 +304,7 @@ class VirtualBoard:
             try:
                 return fn(self, *a)
             except BaseException as e:  # an exception must not unwind through C: keep it, stop the run
-                if self.error is None:
+                if self.error is None or not isinstance(e, Exception):  # (Ctrl-C is never hidden by a refusal)
                     self.error, self.error_in = e, f"{name} at virtual time {self.t:.6f} s"
                 if not isinstance(e, (ValueError, ActionError)) and self.cut_short is None:
                     self.cut_short = f"the HAL call {name} at virtual time {self.t:.6f} s was cut short by {e!r}"

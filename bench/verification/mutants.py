@@ -7298,6 +7298,11 @@ CATALOGUE += [
            'for k, step in steps if False), None)',
            ('bench/tests/test_campaign_own_driver.py::test_frames_missing_from_the_sequence_must_be_counted_as_dropped',),
            'a frame a driver hands over twice or out of order is told as 65535 frames missing'),
+    Mutant('hal-ctrl-c-hidden-by-a-refusal', 'hosts', 'bench/hosts/cosim.py',
+           'if self.error is None or not isinstance(e, Exception):  # (Ctrl-C is never hidden by a refusal)',
+           'if self.error is None:  # (Ctrl-C is never hidden by a refusal)',
+           ('firmware_tests/tests/test_hal_misuse.py::test_ctrl_c_after_a_refused_hal_call_in_the_same_step_is_still_a_keyboard_interrupt',),
+           'Ctrl-C after a refused HAL call in the same step is reported as the refusal (a FirmwareError), the KeyboardInterrupt lost'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

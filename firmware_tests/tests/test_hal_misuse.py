@@ -127,3 +127,19 @@ def test_a_hal_call_cut_short_ends_the_step_there_and_the_co_simulation_for_good
             CoSim(board)  # (a firmware started on it would build on that record)
     finally:
         board.bus.close()
+
+
+def test_ctrl_c_after_a_refused_hal_call_in_the_same_step_is_still_a_keyboard_interrupt(tmp_path):
+    """A refused HAL call (a select code out of range: its ValueError kept, the step going on) and then, in the same
+    step, Ctrl-C: run's caller gets the KeyboardInterrupt — the earlier refusal must not hide it (a program stopped
+    with Ctrl-C would have reported a firmware fault and gone on)."""
+    import signal
+
+    sim = _sim(tmp_path, "b->hal->spi_bytes(b->hal->ctx, 200, 0, tx, rx, 2);")
+    sim.board.at(0.0205, lambda board: signal.raise_signal(signal.SIGINT))  # after the refusal at 0.020425 s
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sim.run(0.1)
+        assert sim.board.t < 0.03  # (the step of the refusal)
+    finally:
+        sim.board.bus.close()
