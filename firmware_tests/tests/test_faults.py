@@ -148,7 +148,8 @@ def test_the_lines_corruption_and_drop_rates_are_each_their_own():
     arrived = []
     line = SimpleNamespace(corrupt_rate=0.01, drop_rate=0.01, _rng=random.Random(7), bytes_dropped=0,
                            bytes_corrupted=0, realtime=True, baudrate=1e12, speed=1.0, _line_free_at=0.0,
-                           _sleep=lambda s: None, link=SimpleNamespace(deliver=arrived.append))
+                           _sleep=lambda s: None, link=SimpleNamespace(deliver=arrived.append),
+                           _time_frames=lambda data: None)  # (the sample-time bookkeeping: not this test's)
     FirmwareBench._line(line, sent)
     n = len(sent)
     assert line.bytes_dropped / n == pytest.approx(0.01, abs=0.002)
