@@ -190,6 +190,26 @@ def test_npz_round_trip(tmp_path):
     assert tp.properties(back) == tp.properties(rec)
 
 
+def test_a_trial_file_is_written_whole_or_not_at_all(tmp_path, monkeypatch):
+    """A write that fails midway (injected: the NPZ writer puts out part of a file, then the disk fills) leaves the
+    earlier trial.npz as it was and no temporary file beside it; the error names trial.npz."""
+    import errno
+
+    rec = make_trial(lambda t, rng: 5 * rng.standard_normal(t.size), bg_sigma=1.0, texture=43, force_N=0.2,
+                     velocity_m_s=0.0631, trial=4, seed=99)
+    earlier = tp.save_npz(rec, tmp_path / "trial.npz").read_bytes()
+
+    def fills_the_disk(out, **arrays):
+        out.write(b"PK\x03\x04 half a zip")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(tp.np, "savez_compressed", fills_the_disk)
+    with pytest.raises(OSError, match="trial.npz"):
+        tp.save_npz(rec, tmp_path / "trial")
+    assert (tmp_path / "trial.npz").read_bytes() == earlier
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["trial.npz"]
+
+
 def _write(path, **arrays):
     np.savez(path, **arrays)
     return path

@@ -202,7 +202,8 @@ class TrialRecording:
 
 
 def save_npz(rec: TrialRecording, path: str | Path) -> Path:
-    """Write ``rec`` to ``path`` (compressed NPZ) and return the path.
+    """Write ``rec`` to ``path`` (compressed NPZ; ".npz" added when the name lacks it) and return the path; the file
+    is written whole or not at all (:func:`bench.atomic.atomic_write`: an earlier file there stays as it was).
 
     Layout: ``PAC_t``, ``PDC_t``, ``stage_current_t`` — instants (s, float64); ``PAC_code``, ``PDC_code`` — codes
     (float64; integers for real 12-bit data); ``stage_current_A`` — motor current (A); ``contact_s``,
@@ -211,15 +212,19 @@ def save_npz(rec: TrialRecording, path: str | Path) -> Path:
     current pair are left out when the recording has none (:data:`NPZ_OPTIONAL`).  The PAC/PDC names match the
     ``codes.npz`` a scene run writes.
     """
+    from bench.atomic import atomic_write
+
     path = Path(path)
+    final = path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
     optional = {k: v for k, v in (("PDC_t", rec.pdc_t), ("PDC_code", rec.pdc), ("stage_current_t", rec.current_t),
                                   ("stage_current_A", rec.current_A)) if v is not None}
-    np.savez_compressed(
-        path, PAC_t=rec.pac_t, PAC_code=rec.pac, **optional,
-        contact_s=np.float64(rec.contact_s), slide_start_s=np.float64(rec.slide_start_s),
-        slide_end_s=np.float64(rec.slide_end_s), meta_json=np.array(json.dumps(rec.metadata())),
-        format=np.array(NPZ_FORMAT))
-    return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
+    with atomic_write(final) as tmp, open(tmp, "wb") as out:  # whole or not at all: an earlier file stays if it fails
+        np.savez_compressed(
+            out, PAC_t=rec.pac_t, PAC_code=rec.pac, **optional,
+            contact_s=np.float64(rec.contact_s), slide_start_s=np.float64(rec.slide_start_s),
+            slide_end_s=np.float64(rec.slide_end_s), meta_json=np.array(json.dumps(rec.metadata())),
+            format=np.array(NPZ_FORMAT))
+    return final
 
 
 def load_npz(path: str | Path) -> TrialRecording:

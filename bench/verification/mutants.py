@@ -7303,6 +7303,11 @@ CATALOGUE += [
            'if self.error is None:  # (Ctrl-C is never hidden by a refusal)',
            ('firmware_tests/tests/test_hal_misuse.py::test_ctrl_c_after_a_refused_hal_call_in_the_same_step_is_still_a_keyboard_interrupt',),
            'Ctrl-C after a refused HAL call in the same step is reported as the refusal (a FirmwareError), the KeyboardInterrupt lost'),
+    Mutant('trial-npz-written-in-place', 'outputs', 'bench/textures/properties.py',
+           '    with atomic_write(final) as tmp, open(tmp, "wb") as out:',
+           '    with open(final, "wb") as out:',
+           ('bench/tests/test_texture_properties.py::test_a_trial_file_is_written_whole_or_not_at_all',),
+           'save_npz writes the trial file in place: a failed write leaves half a file where the earlier trial was'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
