@@ -60,7 +60,7 @@ import numpy as np
 from bench.hosts.scene_sensors import bench_sensors
 from bench.hosts.native import build_folder, compile_c
 from bench.paths import REPO
-from bench.scenes.limits import SPI_SIDES
+from bench.scenes.limits import SPI_SIDES, SPI_SIDES_SAID
 from emulator.spi.model import Bus, SensorPort, Transfer
 
 LIBRARY_SOURCE = REPO / "emulator" / "cheetah" / "cheetah_emu.c"
@@ -155,7 +155,7 @@ class CheetahBench:
             raise ValueError(f"trace = {trace!r}: must be True or False")
         trace = bool(trace)
         if spi not in SPI_SIDES:
-            raise ValueError(f"spi = {spi!r}: \"software\" (the Python model) or \"rtl\" (the Verilog twin)")
+            raise ValueError(f"spi = {spi!r}: {SPI_SIDES_SAID}")
         sensors = bench_sensors(n_sensors, sensors, stimuli, seed, variant)  # variant: "biotac" or "biotac-sp"
         self.library = build_library()
         self.lib_dir = self.library.parent

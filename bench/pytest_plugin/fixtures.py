@@ -315,6 +315,7 @@ def biotac_sensor(request):
     test); keywords in the module docstring."""
     from bench.errors import SceneError
     from bench.pytest_plugin.hooks import SPI_SIDES
+    from bench.scenes.limits import SPI_SIDES_SAID
     from emulator.spi.model import SensorPort
 
     allowed = {"stimuli", "channels", "seed", "unit", "variant", "scene", "spi", *SENSOR_KEYWORDS}
@@ -340,7 +341,7 @@ def biotac_sensor(request):
         spi = kw.pop("spi", None)  # None: not given (the session's --biotac-spi, else the scene's or software)
         spi = session_spi if spi is None else spi
         if spi is not None and spi not in SPI_SIDES:
-            _fail(f"biotac_sensor(): spi = {spi!r}: \"software\" (the Python model) or \"rtl\" (the Verilog twin)")
+            _fail(f"biotac_sensor(): spi = {spi!r}: {SPI_SIDES_SAID}")
         kw.update(_given(stimuli=stimuli, channels=channels, seed=None if seed is None else int(seed), unit=unit))
         scene = kw.pop("scene", None)
         try:

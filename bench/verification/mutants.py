@@ -1676,7 +1676,7 @@ CATALOGUE += [
            ('firmware_tests/tests/test_firmware_end_to_end.py::test_host_commands_stop_and_change_the_pattern',),
            'STATUS counts the sensors present at power-on as found again'),
     Mutant('plugin-cheetah-takes-an-rtl-scene', 'plugin', 'bench/hosts/cheetah_server.py',
-           '            raise ValueError(f"spi = {spi!r}: \\"software\\" (the Python model) or \\"rtl\\" (the Verilog twin)")',
+           '            raise ValueError(f"spi = {spi!r}: {SPI_SIDES_SAID}")',
            '            pass',
            ('bench/tests/test_plugin_review3.py::test_misusing_a_factory_fails_the_test_with_one_clear_message',),
            'biotac_cheetah(scene=...) takes an RTL scene and serves it the software model silently'),
