@@ -113,19 +113,21 @@ def save_in_temp_folder(write, prefix: str, suffix: str) -> Path:
 
 def copy_to_new(src: Path, dst: Path) -> Path:
     """Copy the file ``src`` to ``dst``, a name nothing holds (created with O_EXCL: nothing replaced, a symbolic
-    link never followed), flushed to disk; ``dst``.  Raises :class:`OSError` leaving no ``dst`` (nor on a signal).
-    For a file that can take no name by a link or a rename (:func:`commit_new`)."""
+    link never followed), its data and its new name in the folder flushed to disk (:func:`_fsync_folder`); ``dst``.
+    All or nothing: an error anywhere — the copy, either flush — or a signal removes ``dst`` again (it is this
+    call's own, made O_EXCL) before the error is raised, so a caller told it failed never finds a copy there.
+    Raises :class:`OSError`.  For a file that can take no name by a link or a rename (:func:`commit_new`)."""
     fd = os.open(dst, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
     try:
         with os.fdopen(fd, "wb") as out, open(src, "rb") as fh:
             shutil.copyfileobj(fh, out)
             out.flush()
             os.fsync(out.fileno())
+        _fsync_folder(dst.parent)  # (inside: a name that may not survive a crash is not reported as written)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(dst)
         raise
-    _fsync_folder(dst.parent)
     return dst
 
 
@@ -138,21 +140,35 @@ def _fsync_file(path: Path) -> None:
         os.close(fd)
 
 
+#: what fsync (or open) of a folder fails with where the file system cannot flush or open folders at all (as
+#: PostgreSQL's fsync_fname treats them): nothing to flush, not an error
+FOLDER_FSYNC_UNSUPPORTED = frozenset({errno.EBADF, errno.EINVAL, errno.EACCES})
+
+
 def _fsync_folder(folder: Path) -> None:
-    """Flush a folder's entries (a new name in it) to disk, where the file system allows it."""
-    with contextlib.suppress(OSError):
+    """Flush a folder's entries (a new name in it) to disk.  Raises :class:`OSError` (naming ``folder``) when that
+    fails — an I/O error: the new name may not survive a crash —, but not where the file system cannot flush or
+    open folders (:data:`FOLDER_FSYNC_UNSUPPORTED`)."""
+    try:
         dfd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
         try:
             os.fsync(dfd)
         finally:
             os.close(dfd)
+    except OSError as e:
+        if e.errno in FOLDER_FSYNC_UNSUPPORTED:
+            return
+        if e.filename is None:
+            e.filename = str(folder)
+        raise
 
 
 def commit(tmp: Path, final: Path) -> Path:
     """Move a finished temporary file into place as ``final`` (atomic; replaces a symlink, never follows it)."""
     _fsync_file(tmp)
     os.replace(tmp, final)
-    _fsync_folder(final.parent)
+    with contextlib.suppress(OSError):  # the rename is done and cannot be undone (an earlier file is gone, the new
+        _fsync_folder(final.parent)     # one is whole): a failed flush of its name is not reported as "not written"
     return final
 
 
@@ -165,9 +181,10 @@ def commit_new(temps: dict[Path, Path]) -> list[Path]:
     or none.  Each final name is taken with ``os.link`` — on a file system without hard links (:data:`NO_HARD_LINKS`)
     with a copy created O_EXCL (:func:`copy_to_new`) —, which fails (FileExistsError, naming it) if anything is
     there — a file, a folder, a dangling symbolic link — so no other program's file that appeared after a check is
-    ever replaced (no check-then-rename race).  If one name is taken, the names already placed are removed again
-    (each only while it is still the file placed) and every temporary file is left as it was; once all are placed,
-    the temporary names are removed."""
+    ever replaced (no check-then-rename race).  If one name is taken, or the folders' new names cannot be flushed to
+    disk (:func:`_fsync_folder`), the names already placed are removed again (each only while it is still the file
+    placed) and every temporary file is left as it was; once all are placed and flushed, the temporary names are
+    removed."""
     placed: list[tuple[Path, tuple[int, int]]] = []  # final name, and the identity (st_dev, st_ino) placed there
     try:
         for final, tmp in temps.items():
@@ -182,6 +199,8 @@ def commit_new(temps: dict[Path, Path]) -> list[Path]:
                 copy_to_new(tmp, final)
             st = os.lstat(final)
             placed.append((final, (st.st_dev, st.st_ino)))
+        for folder in {final.parent for final in temps}:  # the new names on disk, or taken back out (all or none)
+            _fsync_folder(folder)
     except BaseException:
         for final, identity in placed:
             with contextlib.suppress(OSError):
@@ -191,8 +210,6 @@ def commit_new(temps: dict[Path, Path]) -> list[Path]:
         raise
     for tmp in temps.values():
         os.unlink(tmp)
-    for folder in {final.parent for final in temps}:
-        _fsync_folder(folder)
     return [final for final, _ in placed]
 
 
