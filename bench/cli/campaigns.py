@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from datetime import datetime, timezone
 from pathlib import Path
@@ -106,19 +107,26 @@ def _run_campaign(a, report: Path, where: str) -> int:
             try:
                 campaign.write_unfinished_junit(report, why, a.spi, started, done)
             except OSError as oe:
-                print(f"error: {where}: the report saying so could not be written ({oe.strerror or oe})",
-                      file=sys.stderr)
+                print(f"error: {where}: the report saying so could not be written ({oe.strerror or oe})"
+                      f"{_left_at(report)}", file=sys.stderr)
         raise
     print(campaign.summary(results), flush=True)  # first: the results are shown even if the report cannot be written
     try:
         with signals_held():  # a signal meanwhile: the report is finished first, then the stop
             campaign.write_junit(results, report, started)
     except OSError as e:
-        print(f"error: {where}: the JUnit XML could not be written ({e.strerror or e}); the summary above "
-              f"holds the results", file=sys.stderr)
+        print(f"error: {where}: the JUnit XML could not be written ({e.strerror or e}){_left_at(report)}; the "
+              f"summary above holds the results", file=sys.stderr)
         return 1  # the work was done, its report not written (as a run whose record.json could not be)
     print(f"JUnit XML: {escaped(str(report))}")
     return 0 if all(r["passed"] for r in results) else 1
+
+
+def _left_at(report: Path) -> str:
+    """What a campaign whose report could not be written says is at ``report``: an earlier campaign's report, left as
+    it was (a report is written whole or not at all, and --junit takes no other file) — not this campaign's, which a
+    CI step publishing it must not take it for — or nothing."""
+    return "; the file there is an earlier campaign's report, left as it was" if os.path.lexists(report) else ""
 
 
 def _listed(table: dict) -> str:
