@@ -3,6 +3,7 @@ fails (a full disk, here the file-size limit RLIMIT_FSIZE in the child process, 
 EFBIG) leaves an earlier OUT.json as it was and no temporary file, and says so in one line naming OUT.json; an
 OLD.json that cannot be read is one line naming it, not a traceback."""
 
+import json
 import os
 import resource
 import subprocess
@@ -54,7 +55,6 @@ def test_the_written_file_and_a_comparison_with_an_unreadable_old_file(tmp_path)
     r = _fingerprints(tmp_path, out, old)
     assert r.returncode == 2 and r.stderr == (f"error: OLD.json {old}: not fingerprints (a JSON object of run -> "
                                               f"fingerprint)\n")
-    import json
 
     prints = json.loads(out.read_text(encoding="utf-8"))
     assert sorted(prints) == sorted(f"rest/{p}/seed+{k}" for p in ("fast", "default", "reference")
@@ -83,3 +83,39 @@ def test_ctrl_c_while_fingerprinting_writes_nothing_and_says_so(tmp_path):
     assert p.returncode == 130
     assert err == "interrupted (Ctrl-C): no file written; an earlier one is left as it was\n"
     assert out.read_text() == "earlier\n" and sorted(p.name for p in tmp_path.iterdir()) == ["prints.json", "scenes"]
+
+
+def test_a_second_command_writing_the_same_file_is_refused_while_the_first_writes_it(tmp_path):
+    """Two real processes on one OUT.json: the first holds the lock beside it (.prints.json.lock) from start to end,
+    so the second is refused at once — exit status 2, one line naming the first's pid, the file untouched — rather
+    than both writing it and the last silently replacing the other's.  The first is held still (SIGSTOP) while the
+    second runs, so the two overlap however fast the machine.  A temporary file a killed writer left beside it is
+    removed by the next command, and named."""
+    import signal
+
+    scenes = tmp_path / "scenes"
+    scenes.mkdir()
+    (scenes / "rest.toml").write_text(_SHORT_REST, encoding="utf-8")
+    out = tmp_path / "prints.json"
+    out.write_text("earlier\n")
+    left = tmp_path / ".prints.json.k1ll3d00.part"  # (as bench.atomic.temp_path names them)
+    left.write_text('{"rest/fast/seed+0": "half')
+    first = subprocess.Popen([sys.executable, "-m", "bench.verification.benchmark", str(out), "--scenes",
+                              str(scenes)], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert first.stdout.readline().startswith("rest/fast/seed+0")  # working, the lock held
+        first.send_signal(signal.SIGSTOP)
+        second = _fingerprints(tmp_path, out)
+    finally:
+        first.send_signal(signal.SIGCONT)
+    assert second.returncode == 2, second.stderr
+    assert second.stderr == (f"error: OUT.json {out}: another fingerprint run (pid {first.pid}) is writing this file; "
+                             f"wait for it to end or choose another OUT.json\n")
+    assert out.read_text() == "earlier\n"
+    rest, err = first.communicate(timeout=600)
+    assert first.returncode == 0, err
+    assert err == (f"note: OUT.json {out}: removed 1 temporary file that an interrupted fingerprint run left, killed "
+                   f"(or the machine down) before it could clean up, partial writes and never results: {left.name}\n")
+    assert len(json.loads(out.read_text(encoding="utf-8"))) == 12
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["prints.json", "scenes"]  # the lock file removed
+

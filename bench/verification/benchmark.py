@@ -674,13 +674,24 @@ def write_fidelity_error_fixture(path=None, say=print) -> dict:
 def _fingerprints_main(argv) -> int:
     """``python -m bench.verification.benchmark OUT.json [OLD.json]``: write the fingerprints; with OLD.json (another
     tree's), list the runs whose codes differ and exit 1 if any does.  ``--write-fixture``: rewrite
-    :data:`SCENE_FINGERPRINT_FIXTURE` instead.  (The per-effect cost table is ``biotac-bench benchmark --effects``.)"""
+    :data:`SCENE_FINGERPRINT_FIXTURE` instead (``--write-fidelity-errors``: :data:`FIDELITY_ERROR_FIXTURE`).  OUT.json
+    is locked from start to end (:class:`~bench.reporting.outdir.OutFile`: ``.<name>.lock`` beside it): a second
+    command writing the same file is refused at once, exit status 2, naming the first's pid — rather than both
+    computing it and the last to finish silently replacing the other's, perhaps from another tree — and the
+    temporary files of one killed as it wrote are removed and named.  (The committed fixtures are not locked: two
+    rewrites of one tree's fixture write the same codes.  The per-effect cost table is ``biotac-bench benchmark
+    --effects``.)"""
     import argparse
     from pathlib import Path
 
+    from bench.cli.args import say_leftovers
+    from bench.reporting.outdir import OutDirError, OutFile
+
     ap = argparse.ArgumentParser(description=scene_code_fingerprints.__doc__)
-    ap.add_argument("out", type=Path, nargs="?")
-    ap.add_argument("against", type=Path, nargs="?")
+    ap.add_argument("out", type=Path, nargs="?", metavar="OUT.json",
+                    help="where to write the fingerprints (an earlier file there is replaced; a second command "
+                         "writing the same file meanwhile is refused)")
+    ap.add_argument("against", type=Path, nargs="?", metavar="OLD.json")
     ap.add_argument("--scenes", type=Path, default=SCENES_DIR)
     ap.add_argument("--write-fixture", action="store_true",
                     help="rewrite the committed fingerprints of the scenes that do not slide (fixtures/fingerprints/"
@@ -704,6 +715,17 @@ def _fingerprints_main(argv) -> int:
         return 0
     if a.out is None:
         ap.error("OUT.json is required (or --write-fixture)")
+    try:
+        out = say_leftovers(OutFile.open(a.out, "OUT.json", "fingerprint run", "this file"))
+    except OutDirError as e:
+        ap.exit(2, f"error: {e}\n")
+    with out:
+        return _write_fingerprints(ap, a)
+
+
+def _write_fingerprints(ap, a) -> int:
+    """The fingerprints written to OUT.json (and compared with OLD.json) once :func:`_fingerprints_main` holds the
+    lock beside it (``a``: its arguments)."""
     prints = scene_code_fingerprints(a.scenes)
     try:
         write_json(a.out, prints)
