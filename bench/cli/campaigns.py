@@ -153,9 +153,10 @@ cores, or an existing scheduler with --scheduler / DASK_SCHEDULER_ADDRESS); the 
 of workers.  An --junit path where no file can be created is refused before anything runs; the summary is printed
 before the report is written; a second campaign naming a report a first one is still running for is refused (a lock
 file beside the report, removed at the end).  Exit status 1 if any case fails or the report could not be written
-after all, 2 for bad arguments or no scheduler at the address; Ctrl-C stops the campaign (exit 130; SIGTERM: 143)
-and its --junit report holds one error saying it was stopped, after the results of the cases that had finished (the
-summary shows them too); a campaign that could not run (no scheduler at the address) leaves one error saying why.
+after all (an earlier campaign's report there is then left as it was, and the error says so), 2 for bad arguments
+or no scheduler at the address; Ctrl-C stops the campaign (exit 130; SIGTERM: 143) and its --junit report holds one
+error saying it was stopped, after the results of the cases that had finished (the summary shows them too); a
+campaign that could not run (no scheduler at the address) leaves one error saying why.
 
 faults (--faults), each with what a correct firmware and driver do:
 {_listed(FAULT_EXPECTED)}
