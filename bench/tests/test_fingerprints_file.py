@@ -105,14 +105,19 @@ def test_a_second_command_writing_the_same_file_is_refused_while_the_first_write
     try:
         assert first.stdout.readline().startswith("rest/fast/seed+0")  # working, the lock held
         first.send_signal(signal.SIGSTOP)
-        second = _fingerprints(tmp_path, out)
+        try:
+            second = _fingerprints(tmp_path, out)
+        finally:
+            first.send_signal(signal.SIGCONT)
+        assert second.returncode == 2, second.stderr
+        assert second.stderr == (f"error: OUT.json {out}: another fingerprint run (pid {first.pid}) is writing this "
+                                 f"file; wait for it to end or choose another OUT.json\n")
+        assert out.read_text() == "earlier\n"
+        rest, err = first.communicate(timeout=600)
     finally:
-        first.send_signal(signal.SIGCONT)
-    assert second.returncode == 2, second.stderr
-    assert second.stderr == (f"error: OUT.json {out}: another fingerprint run (pid {first.pid}) is writing this file; "
-                             f"wait for it to end or choose another OUT.json\n")
-    assert out.read_text() == "earlier\n"
-    rest, err = first.communicate(timeout=600)
+        if first.poll() is None:  # (a failed check above: the first is not left running)
+            first.kill()
+            first.communicate()
     assert first.returncode == 0, err
     assert err == (f"note: OUT.json {out}: removed 1 temporary file that an interrupted fingerprint run left, killed "
                    f"(or the machine down) before it could clean up, partial writes and never results: {left.name}\n")
