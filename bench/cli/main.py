@@ -13,6 +13,8 @@ import select
 import signal
 import sys
 
+from bench.errors import OutputNotWritten
+
 
 MAIN_HELP = """\
 An emulated BioTac fingertip — pressure (PDC, PAC), temperature (TDC, TAC) and 19 impedance electrodes at
@@ -81,10 +83,49 @@ def _bad_input_errors() -> tuple[type[Exception], ...]:
 
 def main(argv=None) -> int:
     """The command line (``argv``: its arguments; None: this process's own, as the ``biotac-bench`` script)."""
+    if argv is None:
+        sys.stdout = _StdoutThatSaysItFailed(sys.stdout)
     code = _main(argv)
     if argv is None:  # a process of its own: what remains is the interpreter's shutdown (~0.5 s after a run)
         _finish_on_a_late_signal()
     return code
+
+
+class StdoutNotWritten(OutputNotWritten):
+    """The command's output to stdout could not be written (exit status 1, as any output not written)."""
+
+
+class _StdoutThatSaysItFailed:
+    """The process's stdout, whose failed write (a full disk behind ``> results.json``, an I/O error) is raised as
+    :class:`StdoutNotWritten`, so the command ends with exit status 1 and one line, not
+    "error: [Errno 28]" under the bad-input status.  A reader that has gone (BrokenPipeError) passes through as it
+    is: that has its own quiet ending."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def _failed(self, e: OSError) -> StdoutNotWritten:
+        return StdoutNotWritten(f"stdout: the output could not be written ({e.strerror or e}): what reached it is "
+                                "cut short")
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as e:
+            raise self._failed(e) from e
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as e:
+            raise self._failed(e) from e
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 def _finish_on_a_late_signal() -> None:
@@ -133,6 +174,8 @@ def _main(argv) -> int:
         return 2
     except _bad_input_errors() as e:  # evaluated when an exception arrives here, after the command ran
         print(f"error: {e}", file=sys.stderr)
+        if isinstance(e, StdoutNotWritten):
+            _discard_stdout()  # what is still buffered would fail again, noisily, at exit
         return getattr(e, "exit_status", 2)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -132,6 +132,19 @@ def test_a_reader_that_has_gone_ends_the_command_quietly(argv, status):
 
 
 @unit
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux): a device every write to fails")
+@pytest.mark.parametrize("argv", [["units", "--json"], ["params"], ["textures"]], ids=" ".join)
+def test_output_that_cannot_be_written_to_stdout_is_a_failure_naming_stdout(argv):
+    """As `biotac-bench units --json > results.json` on a full disk: exit status 1 (results not written), one line
+    that names stdout and the reason — not the bad-input status with a bare errno, not a second report at exit."""
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([*CLI, *argv], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120, cwd=REPO)
+    assert r.returncode == 1, r.stderr
+    assert r.stderr.splitlines() == [r.stderr.strip()] and r.stderr.startswith("error: stdout: ")
+    assert "No space left on device" in r.stderr and "cut short" in r.stderr
+
+
+@unit
 def test_a_broken_pipe_elsewhere_is_still_an_error(monkeypatch, capsys):
     from bench.cli import scenes
 

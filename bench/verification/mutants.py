@@ -7373,6 +7373,21 @@ CATALOGUE += [
            '    except KeyError as e:',
            ('bench/tests/test_fingerprints_file.py::test_a_second_command_writing_the_same_file_is_refused_while_the_first_writes_it',),
            'a second command writing the same OUT.json ends in a traceback instead of one line naming the first'),
+    Mutant('stdout-failure-not-said', 'outputs', 'bench/cli/main.py',
+           '        sys.stdout = _StdoutThatSaysItFailed(sys.stdout)\n',
+           '        pass\n',
+           ('bench/tests/test_cli_review.py::test_output_that_cannot_be_written_to_stdout_is_a_failure_naming_stdout',),
+           'a write to a full stdout is reported as bad input (exit 2) with a bare errno'),
+    Mutant('stdout-failure-reported-twice', 'outputs', 'bench/cli/main.py',
+           '            _discard_stdout()  # what is still buffered',
+           '            pass  # what is still buffered',
+           ('bench/tests/test_cli_review.py::test_output_that_cannot_be_written_to_stdout_is_a_failure_naming_stdout',),
+           "after a failed write to stdout the interpreter's exit flushes the rest and fails again (a second report, status 120)"),
+    Mutant('stdout-reader-gone-taken-for-a-failed-write', 'outputs', 'bench/cli/main.py',
+           '            return self._stream.write(text)\n        except BrokenPipeError:\n            raise\n',
+           '            return self._stream.write(text)\n        except BrokenPipeError as e:\n            raise self._failed(e) from e\n',
+           ('bench/tests/test_cli_review.py::test_a_reader_that_has_gone_ends_the_command_quietly',),
+           'a reader that has gone (params | head) is reported as output not written, exit 1'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
