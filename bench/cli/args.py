@@ -20,6 +20,7 @@ from pathlib import Path
 
 from bench.atomic import open_regular
 from bench.errors import escaped
+from bench.scenes.limits import MAX_SEED
 from bench.tomlfile import spelled
 
 
@@ -126,8 +127,8 @@ def scheduler_address(text: str) -> str:
         raise argparse.ArgumentTypeError(str(e).removeprefix("--scheduler ")) from None
 
 
-#: argparse type of every ``--seed``: 0 to 2**63 − 1 (what numpy's seeding and the trial seeds take)
-any_seed = whole(0, 2**63 - 1)
+#: argparse type of every ``--seed``: 0 to 2**63 − 1 (:data:`bench.scenes.limits.MAX_SEED`, a scene's bound)
+any_seed = whole(0, MAX_SEED)
 any_seed.__name__ = "a seed"
 
 

@@ -243,13 +243,11 @@ def _check_keywords(fixture: str, given: dict, allowed) -> None:
 
 def _check_values(fixture: str, n_sensors=None, stimuli=None, seed=None) -> None:
     """Fail the test if ``n_sensors`` is not a whole number 1..MAX_SENSORS, ``stimuli`` not a list of stimuli or
-    ``seed`` not a whole number ≥ 0."""
+    ``seed`` not a seed (:func:`bench.scenes.limits.seed_problem`: 0 to MAX_SEED, as a scene's)."""
     __tracebackhide__ = True
-    import math
-    import numbers
     import operator
 
-    from bench.scenes.limits import MAX_SENSORS
+    from bench.scenes.limits import MAX_SENSORS, seed_problem
 
     if n_sensors is not None:
         try:
@@ -258,9 +256,8 @@ def _check_values(fixture: str, n_sensors=None, stimuli=None, seed=None) -> None
             whole = None
         if whole is None or not 1 <= whole <= MAX_SENSORS:
             _fail(f"{fixture}(): n_sensors = {n_sensors!r}: a whole number from 1 to {MAX_SENSORS}")
-    if seed is not None and not (isinstance(seed, numbers.Real) and not isinstance(seed, bool)  # numpy's too
-                                 and math.isfinite(seed) and float(seed).is_integer() and seed >= 0):
-        _fail(f"{fixture}(): seed = {seed!r}: a whole number ≥ 0")
+    if seed is not None and (problem := seed_problem(seed)):
+        _fail(f"{fixture}(): seed = {problem}")
     if stimuli is not None and not isinstance(stimuli, (list, tuple)):
         _fail(f"{fixture}(): stimuli = {stimuli!r}: give a list of stimuli (emulator.stimuli), e.g. "
               f"stimuli=[Tap(0.5, 1.0)]")

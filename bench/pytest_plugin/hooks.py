@@ -19,12 +19,11 @@ its calls' keywords; values that are not ones stop the session at its start in o
 from __future__ import annotations
 
 import dataclasses
-import numbers
 
 import numpy as np
 import pytest
 
-from bench.scenes.limits import SPI_SIDES  # the SPI sides a bench can run on (``--biotac-spi``)
+from bench.scenes.limits import SPI_SIDES, seed_problem  # SPI_SIDES: what ``--biotac-spi`` takes
 
 #: The sensors and benches a test's factories made, in order: (fixture, the call as written, the object).
 MADE = pytest.StashKey[list]()
@@ -139,15 +138,14 @@ SETTINGS = {"fidelity": ("--biotac-fidelity", "biotac_fidelity"), "seed": ("--bi
 
 def setting_problem(name: str, value) -> str | None:
     """What is wrong with ``value`` for the sensor setting ``name`` ("fidelity": a profile name of
-    :data:`emulator.fidelity.PROFILES`; "seed": a whole number ≥ 0, an int or its decimal digits), else None."""
+    :data:`emulator.fidelity.PROFILES`; "seed": :func:`bench.scenes.limits.seed_problem`, 0 to
+    :data:`~bench.scenes.limits.MAX_SEED` as a scene's seed), else None."""
     from emulator.fidelity import PROFILES
 
     if name == "fidelity":
         return None if isinstance(value, str) and value in PROFILES else \
             f"{value!r}: a fidelity profile, one of {', '.join(PROFILES)}"
-    whole = (isinstance(value, numbers.Integral) and not isinstance(value, bool)  # numpy's too
-             or isinstance(value, str) and value.isdecimal())
-    return None if whole and int(value) >= 0 else f"{value!r}: a seed, a whole number ≥ 0 (e.g. 7)"
+    return seed_problem(value)  # (one bound and one message for every route: a scene's, the option, ini, marker, call)
 
 
 def _setting(name: str, value):

@@ -17,7 +17,7 @@ from typing import NamedTuple
 from bench import tomlfile
 from bench.errors import SceneError, shortened
 from bench.paths import folder_name_problem
-from bench.scenes.limits import MAX_SENSORS, SPI_SIDES
+from bench.scenes.limits import MAX_SEED, MAX_SENSORS, SPI_SIDES
 from emulator.channels import ALL_CHANNEL_INDEX, CHANNEL_INDEX
 from emulator.electrodes import CORE_RADIUS_MM, SKIN_BASE_X_MM, nail_touch_problem
 from emulator.fidelity import PROFILES
@@ -1043,7 +1043,7 @@ def parse_scene(data: dict, source: str = "<scene>", text: str = "") -> Scene:
         c.problems.append(problem)
     duration = c.number(meta, "duration_s", "scene", 1e-3, MAX_DURATION_S, "s",
                         required=isinstance(data.get("scene", {}), dict))
-    seed = c.number(meta, "seed", "scene", 0, 2**63 - 1, "", default=0, integer=True)
+    seed = c.number(meta, "seed", "scene", 0, MAX_SEED, "", default=0, integer=True)
     fidelity = c.choice(meta, "fidelity", "scene", tuple(PROFILES), default="default")
     description = meta.get("description", "")
     if not isinstance(description, str):

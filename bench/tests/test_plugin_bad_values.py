@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import pytest
 
+from bench.scenes.limits import SEED_SAID
 from emulator.sensor import Sensor
 
 pytestmark = pytest.mark.firmware
@@ -96,8 +97,8 @@ def test_bad_values_fail_the_users_test_naming_the_keyword(pytester):
         "*biotac_bridge(): realtime = 'yes': must be True or False*",
         "*biotac_bridge(): keep_arrivals = 3: must be True or False*",
         "*biotac_cheetah(): trace = 'x': must be True or False*",
-        "*biotac_bridge(): seed = 'a': a whole number ≥ 0*",
-        "*biotac_sensor(): seed = 'x': a whole number ≥ 0*",
+        f"*biotac_bridge(): seed = 'a': {SEED_SAID}*",
+        f"*biotac_sensor(): seed = 'x': {SEED_SAID}*",
         "*biotac_bridge(): sensors = {1: 3}: each must be an emulator.sensor.Sensor*",
     ])
     out = result.stdout.str()

@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bench.scenes.limits import MAX_SEED, SEED_SAID
+
 pytestmark = pytest.mark.firmware
 pytest_plugins = ["pytester"]
 
@@ -116,10 +118,13 @@ def test_the_sessions_fidelity_and_seed_reach_every_factory_under_the_tests_mark
 @pytest.mark.parametrize("options, ini, line", [
     (["--biotac-fidelity=slow"], "", "ERROR: --biotac-fidelity = 'slow': a fidelity profile, one of fast, default, "
                                      "reference"),
-    (["--biotac-seed", "-3"], "", "ERROR: --biotac-seed = '-3': a seed, a whole number ≥ 0 (e.g. 7)"),
-    ([], "biotac_seed = 1.5\n", "ERROR: ini value biotac_seed = '1.5': a seed, a whole number ≥ 0 (e.g. 7)"),
+    (["--biotac-seed", "-3"], "", f"ERROR: --biotac-seed = '-3': {SEED_SAID}"),
+    ([], "biotac_seed = 1.5\n", f"ERROR: ini value biotac_seed = '1.5': {SEED_SAID}"),
     ([], "biotac_fidelity = Fast\n", "ERROR: ini value biotac_fidelity = 'Fast': a fidelity profile, one of fast, "
                                      "default, reference"),
+    # past a scene's bound (2**63 - 1): refused as a scene's seed is, though no scene is given
+    (["--biotac-seed", str(MAX_SEED + 1)], "", f"ERROR: --biotac-seed = '{MAX_SEED + 1}': {SEED_SAID}"),
+    ([], f"biotac_seed = {MAX_SEED + 1}\n", f"ERROR: ini value biotac_seed = '{MAX_SEED + 1}': {SEED_SAID}"),
 ])
 def test_a_sessions_setting_that_is_not_one_stops_the_session_at_its_start_in_one_line(pytester, options, ini, line):
     """A bad ``--biotac-fidelity``/``--biotac-seed`` or ini value: no test runs, exit code 4 (a usage error), and
@@ -160,8 +165,48 @@ def test_a_marker_that_is_not_one_fails_its_test_in_one_line(pytester):
         "*ERROR at setup of test_unknown_keyword*",
         "@pytest.mark.biotac(): sed = 3: not a setting (it takes fidelity, seed)",
         "*ERROR at setup of test_bad_seed*",
-        "@pytest.mark.biotac(): seed = -1: a seed, a whole number ≥ 0 (e.g. 7)",
+        f"@pytest.mark.biotac(): seed = -1: {SEED_SAID}",
     ], consecutive=True)
+    assert "Traceback" not in result.stdout.str()
+
+
+SEEDS_AT_THE_BOUND = f'''
+import pytest
+
+@pytest.mark.biotac(seed={MAX_SEED + 1})
+def test_marker(biotac_bridge):
+    pass
+
+def test_sensor_call(biotac_sensor):
+    biotac_sensor(seed={MAX_SEED + 1})
+
+def test_bridge_call(biotac_bridge):
+    biotac_bridge(seed={MAX_SEED + 1})
+
+def test_cheetah_call(biotac_cheetah):
+    biotac_cheetah(seed={MAX_SEED + 1})
+
+def test_scene_call(biotac_sensor):
+    biotac_sensor(scene="rest", seed={MAX_SEED + 1})
+
+@pytest.mark.biotac(seed={MAX_SEED})
+def test_the_bound_itself(biotac_bridge, biotac_sensor, biotac_cheetah):
+    assert [s.seed for s in biotac_bridge(n_sensors=5).board.sensors.values()] == [{MAX_SEED} + k for k in range(5)]
+    assert biotac_sensor().sensor.seed == biotac_sensor(scene="rest").sensor.seed == {MAX_SEED}
+    assert biotac_cheetah(n_sensors=2, seed={MAX_SEED}).bus.ports[2].sensor.seed == {MAX_SEED + 1}
+'''
+
+
+def test_a_seed_past_a_scenes_bound_is_refused_alike_by_the_marker_and_every_call(pytester):
+    """A scene's seed is at most 2**63 - 1 (MAX_SEED); the marker's and a call's seed= are bounded the same with or
+    without a scene, in the same words (a seed past it had reached the sensors: a bare numpy TypeError without a
+    scene, the scene's own message with one); the bound itself runs on every factory, sensor k drawing seed + k - 1."""
+    pytester.makepyfile(test_user=SEEDS_AT_THE_BOUND)
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider")
+    result.assert_outcomes(passed=1, failed=4, errors=1)
+    said = f"seed = {MAX_SEED + 1}: {SEED_SAID}"  # (the marker's error is listed first, then the failures)
+    result.stdout.fnmatch_lines([f"@pytest.mark.biotac(): {said}", f"biotac_sensor(): {said}",
+                                 f"biotac_bridge(): {said}", f"biotac_cheetah(): {said}", f"biotac_sensor(): {said}"])
     assert "Traceback" not in result.stdout.str()
 
 
