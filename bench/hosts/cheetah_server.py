@@ -81,6 +81,9 @@ SELECT_CYCLES = 8
 TRANSFER_OVERHEAD_S = 750e-9
 #: A batch's slave-select polarity bits: 1 = that line is active high (the sensors' selects are active low).
 MODE_CPOL, MODE_CPHA, MODE_LSB = 1, 2, 4
+#: How long (wall s) :meth:`CheetahBench.stop` waits for each client's thread to end (a request still being clocked)
+#: before it ends the RTL harness under it (:meth:`emulator.rtl.harness.RtlBus.stop_process`).
+CLIENT_STOP_S = 5.0
 
 
 class ProtocolError(Exception):
@@ -200,6 +203,9 @@ class CheetahBench:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._serve, name="cheetah-server", daemon=True)
         self._stopped = False
+        #: what :meth:`stop` had to do beyond a clean stop, in one line (None: nothing): a client's request still
+        #: being clocked over the RTL after :data:`CLIENT_STOP_S`, its harness process ended under it
+        self.stop_problem: str | None = None
 
     @property
     def t(self) -> float:
@@ -484,9 +490,11 @@ class CheetahBench:
         return self
 
     def stop(self) -> None:
-        """Close every connection, join every thread (a few seconds at most: a client still busy clocking a long
-        request is left to end with the process, its thread being a daemon), remove the socket's folder; never
-        raises and never waits on the lock a busy request holds."""
+        """Close every connection, join every thread (:data:`CLIENT_STOP_S` each at most), remove the socket's folder;
+        never raises and never waits on the lock a busy request holds.  A client still busy clocking a request after
+        that: over the RTL its harness process is ended under it (SIGTERM, then SIGKILL: no Verilator process
+        outlives the bench), the request fails, and :attr:`stop_problem` says so; over the software model its
+        thread, a daemon, is left to end with the process."""
         if self._stopped:
             return
         self._stopped = True
@@ -503,9 +511,17 @@ class CheetahBench:
                 c.conn.shutdown(socket.SHUT_RDWR)
             except OSError:
                 pass
-        for c in clients:
-            if c.thread is not None and c.thread is not threading.current_thread():
-                c.thread.join(timeout=5)
+        others = [c.thread for c in clients if c.thread is not None and c.thread is not threading.current_thread()]
+        for thread in others:
+            thread.join(timeout=CLIENT_STOP_S)
+        busy = [thread for thread in others if thread.is_alive()]
+        if busy and self.spi == "rtl":  # the harness process is ended under the request: it fails, its thread ends
+            pid, how = self.bus.proc.pid, self.bus.stop_process()
+            for thread in busy:
+                thread.join(timeout=CLIENT_STOP_S)
+            ended = f"was {how} under it" if how else "had exited already"
+            self.stop_problem = (f"{len(busy)} client request(s) still being clocked {CLIENT_STOP_S:g} s after "
+                                 f"stop(): the RTL harness process (pid {pid}) {ended}")
         if not any(c.thread is not None and c.thread.is_alive() for c in clients):  # (none still clocking it)
             self.bus.close()  # the RTL's harness process, if any
         shutil.rmtree(self._tmp, ignore_errors=True)

@@ -129,8 +129,9 @@ own.  A value that is not one stops the session at its start (or fails the marke
 option, the value and the allowed ones (:mod:`bench.pytest_plugin.hooks`).
 
 The factories are called (``spi = biotac_sensor()``); using one as the sensor or bench it makes is an
-AttributeError saying so.  A bench that fails when it is stopped (a hung firmware, an error in its thread) fails
-the test at teardown with that error in one message, after every bench of the test has been stopped.
+AttributeError saying so.  A bench that fails when it is stopped (a hung firmware, an error in its thread; a Cheetah
+program's request still being clocked over the RTL, whose harness process is then ended under it) fails the test at
+teardown with that error in one message, after every bench of the test has been stopped.
 
 ``scene``: a ``Scene``, a scene file's path, or a shipped scene's name as ``biotac-bench run`` takes it ("taps").
 Sensor k is the scene's sensor k (unit, parameters, variant, stimuli, faults, noise, fidelity; see
@@ -392,10 +393,13 @@ def _benches(fixture: str, bench_class, scene_kw, gives: str, node, defaults=Non
     ended.append(True)
     problems = []
     for bench in started:  # every bench is stopped, whatever an earlier one reported
+        where = getattr(bench, "port", None) or getattr(bench, "socket_path", "?")
         try:
             bench.stop()
         except (BenchError, RuntimeError) as e:  # a hung firmware, an error inside the bench's thread
-            problems.append(f"{fixture}: bench on {getattr(bench, 'port', '?')}: {e}")
+            problems.append(f"{fixture}: bench on {where}: {e}")
+        if getattr(bench, "stop_problem", None):  # (a CheetahBench: a request still clocked, its RTL harness ended)
+            problems.append(f"{fixture}: bench on {where}: {bench.stop_problem}")
     if problems:
         _fail("\n".join(problems))
 

@@ -682,6 +682,23 @@ class RtlBus:
             out = out << n | int(bits)
         return out
 
+    def stop_process(self, within_s: float = CLOSE_TIMEOUT_S) -> str | None:
+        """End the harness process now, whatever a call in another thread is doing with it: SIGTERM, then SIGKILL if
+        it has not exited within ``within_s`` wall s.  A call under way then fails (:class:`HarnessError`, "the RTL
+        harness stopped", or a broken pipe), as does every later one; :meth:`close` still closes the pipes.  Returns
+        how the process ended — "terminated" or "killed" — or None if it had exited already."""
+        if self.proc.poll() is not None:
+            return None
+        self._cut_short = self._cut_short or "its harness process was stopped (RtlBus.stop_process)"
+        self.proc.terminate()
+        try:
+            self.proc.wait(timeout=within_s)
+            return "terminated"
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            return "killed"
+
     def close(self) -> None:
         """Stop the harness: end its input (it exits), and kill it if it has not within :data:`CLOSE_TIMEOUT_S`;
         never leaves the process behind.  Idempotent."""
