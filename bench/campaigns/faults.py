@@ -411,11 +411,38 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
             "seconds": time.perf_counter() - t0}
 
 
+#: How long (wall s) a case waits for a timed-out driver's thread to end once :class:`DriverStopped` has been raised
+#: in it (a driver spinning in Python ends at its next bytecode; one blocked in C only when the call returns)
+DRIVER_STOP_S = 5.0
+
+
+class DriverStopped(BaseException):
+    """Raised asynchronously into a host driver's thread whose case timed out (:func:`_within`), so that a driver
+    spinning in Python stops rather than keep a worker's core busy for the rest of the campaign.  A BaseException,
+    as KeyboardInterrupt is: a driver's ``except Exception`` does not swallow it."""
+
+
+def _raise_in(thread: threading.Thread, exc_type: type) -> bool:
+    """Raise ``exc_type`` in ``thread`` at its next Python bytecode (CPython's ``PyThreadState_SetAsyncExc``);
+    False if the thread had already ended.  A thread blocked in C (a read, a sleep) sees it only when the call
+    returns."""
+    import ctypes
+
+    set_async = ctypes.pythonapi.PyThreadState_SetAsyncExc
+    set_async.argtypes = (ctypes.c_ulong, ctypes.py_object)
+    n = set_async(thread.ident, exc_type)
+    if n > 1:  # (never, with a live thread's own id: undone, as CPython's documentation asks)
+        set_async(thread.ident, None)
+    return n == 1
+
+
 def _within(session, limit_s: float, driver: str):
     """``session()``'s return value, run in a thread of its own: what it raises is raised here; if it has not
-    returned within ``limit_s`` wall seconds, :class:`DriverFailed` naming ``driver`` (the caller then closes the
-    port, which ends a driver blocked reading it; the thread is a daemon, so a driver spinning forever does not keep
-    the process alive)."""
+    returned within ``limit_s`` wall seconds, :class:`DriverFailed` naming ``driver``.  The thread is then stopped:
+    :class:`DriverStopped` is raised in it and it is given :data:`DRIVER_STOP_S` to end, so a driver spinning in
+    Python (``while True: pass``) no longer holds a core and the interpreter's lock through the next cases; one
+    blocked in C ends when the caller closes the port under it (the thread is a daemon: if it never does, it does
+    not keep the process alive), and the error says it had not ended."""
     outcome: dict = {}
 
     def run():
@@ -428,8 +455,13 @@ def _within(session, limit_s: float, driver: str):
     thread.start()
     thread.join(limit_s)
     if thread.is_alive():
+        if _raise_in(thread, DriverStopped):
+            thread.join(DRIVER_STOP_S)
+        ended = ("its thread was stopped" if not thread.is_alive() else
+                 f"its thread had not ended {DRIVER_STOP_S:g} s after being stopped (blocked in C: it ends when its "
+                 f"port is closed)")
         raise DriverFailed(f"driver {driver} had not returned within {limit_s:g} s (a case's calls to the driver are "
-                           f"bounded: start, frames, request_status and wait_for must return)")
+                           f"bounded: start, frames, request_status and wait_for must return); {ended}")
     if "error" in outcome:
         raise outcome["error"]
     return outcome["value"]

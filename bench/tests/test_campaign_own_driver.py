@@ -154,6 +154,40 @@ def test_a_driver_that_hangs_makes_its_case_an_error_within_the_limit(tmp_path):
     assert r["seconds"] < 30
 
 
+#: a driver that spins in pure Python once asked for frames: it never blocks, so closing its port cannot end it
+SPINNING = """\
+from bench.hosts.driver import BridgeDriver
+
+
+class Spinning(BridgeDriver):
+    def frames(self, max_frames=None, timeout_s=5.0):
+        while True:
+            pass
+"""
+
+
+@pytest.mark.firmware
+def test_a_spinning_driver_is_stopped_when_its_case_times_out_and_the_next_case_runs_at_full_speed(tmp_path):
+    """The case's limit stops the driver's thread itself (an exception raised into it), not only the case: no
+    "host driver" thread is left, the process burns no CPU while it sleeps (a spinning thread would take a whole
+    core), and the next case, through the bench's driver, passes."""
+    import threading
+    import time
+
+    path = tmp_path / "spinning.py"
+    path.write_text(SPINNING)
+    spec = f"{path}:Spinning"
+    r = campaign.run_case(campaign.FAULTS["none"], "rest", 0, driver=spec, host_limit_s=2.0)
+    assert r["error"] and r["problem"] == (f"driver {spec} had not returned within 2 s (a case's calls to the driver "
+                                           f"are bounded: start, frames, request_status and wait_for must return); "
+                                           f"its thread was stopped"), r["problem"]
+    assert not [t for t in threading.enumerate() if t.name == "host driver"]
+    cpu, wall = time.process_time(), time.perf_counter()
+    time.sleep(1.0)
+    assert time.process_time() - cpu < 0.5 * (time.perf_counter() - wall)  # nothing spins on in this process
+    assert campaign.run_case(campaign.FAULTS["none"], "rest", 0)["passed"]
+
+
 def test_the_bench_driver_is_the_default_and_named_so():
     assert load_driver(BENCH_DRIVER).__name__ == "BridgeDriver"
     results = [{"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None,
