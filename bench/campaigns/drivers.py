@@ -13,7 +13,10 @@ timeout_s=)`` yields decoded :class:`~bench.hosts.driver.DataFrame` s; ``parser.
 
 Checked before anything runs (:func:`load_driver`, :class:`DriverRefused` in one line naming the driver): the module
 imports (a path: the file exists and runs), the name is in it, it is callable and takes the port as its one
-argument.  In a case, a driver that raises, or whose object lacks part of the interface, makes that case an error
+argument.  A ``PATH.py`` driver is read where the campaign starts (a relative path: from its working directory) and
+its text travels with every case (:class:`DriverFile`), run on the worker under the file's absolute path: a worker
+in another directory or on another machine (``--scheduler``) runs the same driver, and its tracebacks name the
+file; a ``MODULE:CALLABLE`` driver is imported by each worker, so it must be installed where they run.  In a case, a driver that raises, or whose object lacks part of the interface, makes that case an error
 naming the driver (:class:`DriverFailed`); what it hands over is checked as the bench's driver's is, and more: a
 frame missing from the sequence numbers it hands over that its ``parser.stats`` does not count as dropped fails the
 case (a driver that silently loses frames).
@@ -24,8 +27,11 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import inspect
+import linecache
 import re
 import sys
+import types
+from dataclasses import dataclass
 from pathlib import Path
 
 from bench.errors import BenchError, escaped
@@ -64,23 +70,61 @@ def parse_driver(text: str) -> tuple[str, str]:
     return where, name
 
 
-def _import(where: str, spec: str):
-    """The module ``where`` names: a Python file's path (run as a module of its own) or an importable module."""
+@dataclass(frozen=True)
+class DriverFile:
+    """A ``PATH.py`` driver as the campaign ships it to its workers: the file's absolute path where the campaign
+    was started (resolved there: a relative path means the client's working directory, never a worker's) and its
+    text, read there once.  A worker runs that text under that path, so a traceback names the team's file and shows
+    its lines whether or not the worker's machine has the file — and a worker that has another file at that path
+    still runs the client's."""
+
+    path: str
+    text: str
+
+
+def driver_file(spec: str) -> DriverFile | None:
+    """The file ``spec`` (``PATH.py:CALLABLE``) names, read here; None for ``MODULE:CALLABLE`` (a module each worker
+    imports itself); :class:`DriverRefused` naming ``spec`` if it is no file or cannot be read as Python source."""
+    try:
+        where, _ = parse_driver(spec)
+    except ValueError as e:
+        raise DriverRefused(f"--driver {e}") from None
+    if not where.endswith(".py"):
+        return None
+    path = Path(where)
+    if not path.is_file():
+        raise DriverRefused(f"--driver {escaped(spec)}: no file {escaped(where)}")
+    try:  # (decoded as an import decodes it: UTF-8 unless the file declares its coding)
+        text = importlib.util.decode_source(path.read_bytes())
+    except (OSError, SyntaxError, UnicodeDecodeError) as e:
+        raise DriverRefused(f"--driver {escaped(spec)}: cannot read {escaped(where)}: "
+                            f"{one_line(f'{type(e).__name__}: {e}')}") from None
+    return DriverFile(str(path.resolve()), text)
+
+
+def _run_file(file: DriverFile):
+    """``file``'s text run as a module of its own, under its path (its traceback lines from the text itself)."""
+    name = f"_campaign_driver_{abs(hash(file.path))}"  # its own name: (re)run afresh each time
+    module = types.ModuleType(name)
+    module.__file__ = file.path
+    # the lines a traceback shows are the text that runs, even where the file is missing or differs (an entry with
+    # no modification time is never checked against the disk)
+    linecache.cache[file.path] = (len(file.text), None, file.text.splitlines(keepends=True), file.path)
+    sys.modules[name] = module  # (as an import does: a dataclass in the file looks its module up there)
+    try:
+        exec(compile(file.text, file.path, "exec"), module.__dict__)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module
+
+
+def _import(where: str, spec: str, file: DriverFile | None):
+    """The module ``where`` names: a Python file (``file``: its text as the client read it; None: read here) or an
+    importable module."""
     try:
         if where.endswith(".py"):
-            path = Path(where)
-            if not path.is_file():
-                raise DriverRefused(f"--driver {escaped(spec)}: no file {escaped(where)}")
-            name = f"_campaign_driver_{abs(hash(str(path.resolve())))}"  # its own name: (re)run afresh each time
-            module_spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(module_spec)
-            sys.modules[name] = module  # (as an import does: a dataclass in the file looks its module up there)
-            try:
-                module_spec.loader.exec_module(module)
-            except BaseException:
-                del sys.modules[name]
-                raise
-            return module
+            return _run_file(file or driver_file(spec))
         return importlib.import_module(where)
     except DriverRefused:
         raise
@@ -91,14 +135,15 @@ def _import(where: str, spec: str):
                             f"{one_line(f'{type(e).__name__}: {e}')}") from None
 
 
-def load_driver(spec: str):
+def load_driver(spec: str, file: DriverFile | None = None):
     """The callable ``spec`` names (:func:`parse_driver`), imported and checked: callable, taking the port as its one
-    argument; :class:`DriverRefused` naming ``spec`` otherwise."""
+    argument; :class:`DriverRefused` naming ``spec`` otherwise.  ``file``: a ``PATH.py`` driver's text as the
+    client read it (:func:`driver_file`; None: the file is read here)."""
     try:
         where, name = parse_driver(spec)
     except ValueError as e:
         raise DriverRefused(f"--driver {e}") from None
-    obj = _import(where, spec)
+    obj = _import(where, spec, file)
     for part in name.split("."):
         if not hasattr(obj, part):
             raise DriverRefused(f"--driver {escaped(spec)}: {escaped(where)} has no {name}")
@@ -118,10 +163,11 @@ def load_driver(spec: str):
     return obj
 
 
-def open_driver(spec: str, port: str):
+def open_driver(spec: str, port: str, file: DriverFile | None = None):
     """The driver object ``spec``'s callable returns for ``port``, with every part of :data:`DRIVER_INTERFACE`;
-    :class:`DriverFailed` naming ``spec`` if the callable raises or the object lacks a part."""
-    make = load_driver(spec)
+    :class:`DriverFailed` naming ``spec`` if the callable raises or the object lacks a part.  ``file``: as
+    :func:`load_driver` takes it."""
+    make = load_driver(spec, file)
     try:
         drv = make(port)
     except Exception as e:

@@ -34,8 +34,8 @@ import numpy as np
 
 from bench.atomic import atomic_write
 from bench.campaigns.case_names import CASE_FRAMES, FAULT_EXPECTED, SCENE_DESCRIPTIONS, check_bus
-from bench.campaigns.drivers import (BENCH_DRIVER, HOST_LIMIT_PER_FRAME_S, HOST_LIMIT_S, DriverFailed, one_line,
-                                     open_driver, uncounted_gaps)
+from bench.campaigns.drivers import (BENCH_DRIVER, HOST_LIMIT_PER_FRAME_S, HOST_LIMIT_S, DriverFailed, DriverFile,
+                                     one_line, open_driver, uncounted_gaps)
 from emulator.spi.model import Faults
 from emulator.stimuli import SPHERES, SphereDrop, Tap, Touch
 
@@ -324,12 +324,14 @@ def _schedule_after_start(board, schedule) -> list:
 
 
 def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAMES, spi: str = "software",
-             firmware=None, driver: str = BENCH_DRIVER, host_limit_s: float | None = None) -> dict:
+             firmware=None, driver: str = BENCH_DRIVER, host_limit_s: float | None = None,
+             driver_file: DriverFile | None = None) -> dict:
     """One fault in one scene — a built-in scene's name, or a scene file
     (:class:`~bench.campaigns.scene_files.CampaignScene`: its sensor 1 and stimuli, and its own number of frames)
     — over the SPI bus ``spi`` ("software" or "rtl") with ``firmware`` (None: the reference one; else
     FirmwareBench's ``firmware=``: your C sources or library) and the host ``driver`` (``MODULE:CALLABLE`` or
-    ``PATH.py:CALLABLE``: :mod:`bench.campaigns.drivers`): the verdict (``passed``, ``problem``; ``error`` when
+    ``PATH.py:CALLABLE``: :mod:`bench.campaigns.drivers`; ``driver_file``: a ``PATH.py`` driver's text as the
+    campaign's client read it, :func:`~bench.campaigns.drivers.driver_file`; None: read here): the verdict (``passed``, ``problem``; ``error`` when
     the driver raised or lacks part of its interface, so no verdict was reached), what was expected, the bus, and
     ``seconds`` (the case's wall time, s).  A crash or hang of the firmware or driver is this case's failure (or
     error), never an exception: a driver whose calls have not returned within ``host_limit_s`` wall seconds (None:
@@ -357,7 +359,7 @@ def run_case(fault: FaultCase, scene, seed: int, frames_wanted: int = CASE_FRAME
         fb = FirmwareBench(stimuli=stimuli, seed=seed, spi=spi, **kw)
         started = _schedule_after_start(fb.board, fault.schedule)
         with fb:
-            drv = open_driver(driver, fb.port)
+            drv = open_driver(driver, fb.port, driver_file)
             tries = LOSSY_LINE_TRIES if fb.corrupt_rate or fb.drop_rate else 1
 
             def session():
@@ -528,12 +530,13 @@ class CaseTask:
     spi: str = "software"
     firmware: tuple | str | None = None  # None: the reference firmware; your sources (a tuple) or library (a path)
     driver: str = BENCH_DRIVER  # the host driver: MODULE:CALLABLE or PATH.py:CALLABLE (bench.campaigns.drivers)
+    driver_file: DriverFile | None = None  # a PATH.py driver's text, read on the client: the same on every worker
 
 
 def run_case_task(task: CaseTask) -> dict:
     """The engine's task: :func:`run_case` for the named fault and scene (a plain dict; ``seconds`` is wall s)."""
     return run_case(FAULTS[task.fault], task.scene, task.seed, spi=task.spi, firmware=task.firmware,
-                    driver=task.driver)
+                    driver=task.driver, driver_file=task.driver_file)
 
 
 def campaign_tasks(faults, scenes, seeds, spi: str = "software") -> list[CaseTask]:
@@ -557,15 +560,21 @@ def run_campaign(faults, scenes, seeds, spec=None, client=None, progress: bool =
     on the campaign engine (``spec``: a :class:`~bench.campaigns.engine.ClusterSpec`, default from the environment;
     or a connected ``client``); results in task order, one dict per case.  A fault the bus cannot carry is refused
     (ValueError), and a driver that does not import or cannot take the port
-    (:class:`~bench.campaigns.drivers.DriverRefused`), before anything runs.  ``finished`` (a dict of the
+    (:class:`~bench.campaigns.drivers.DriverRefused`), before anything runs.  A ``PATH.py`` driver is read here (a
+    relative path from this process's working directory) and its text goes out with every case
+    (:class:`~bench.campaigns.drivers.DriverFile`): every worker, local or remote, runs the client's file.
+    ``finished`` (a dict of the
     caller's): each case's result by its index as it finishes, so that a campaign stopped midway keeps them."""
-    from bench.campaigns.drivers import load_driver
+    from bench.campaigns.drivers import driver_file, load_driver
     from bench.campaigns.engine import run_tasks
     from bench.hosts.cosim import build_firmware, firmware_library
 
     tasks = campaign_tasks(faults, scenes, seeds, spi)
-    load_driver(driver)  # here, once: a driver that cannot be used is one error, not one per case
-    tasks = [replace(t, driver=driver) for t in tasks]
+    # a PATH.py driver is read here, on the client (a relative path: this working directory), and its text travels
+    # with every case: a worker in another directory, or on a machine without the file, runs the same driver
+    file = driver_file(driver)
+    load_driver(driver, file)  # here, once: a driver that cannot be used is one error, not one per case
+    tasks = [replace(t, driver=driver, driver_file=file) for t in tasks]
     if spi == "rtl":  # once, here, as the firmware: not one Verilator build per worker at the same time
         from bench.errors import BuildError
         from emulator.rtl.harness import Harness, HarnessError

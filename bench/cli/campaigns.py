@@ -179,7 +179,9 @@ scene's own or a stimulus that never ends (power_on, ambient_step, heater_failur
 ({BENCH_DRIVER}): the callable is called with the serial port's path and returns the driver object, which the
 case uses as the bench's: start(), request_status(), wait_for(reply_type, timeout_s), frames(max_frames=,
 timeout_s=) yielding the bench's DataFrame, parser.stats (crc_errors, dropped_frames), close() — a subclass or a
-wrapper of the bench's BridgeDriver is simplest.  A driver that does not import, is not callable or cannot take the
+wrapper of the bench's BridgeDriver is simplest.  A PATH.py is read here (a relative path: from this directory) and
+its text sent with every case, so workers elsewhere (--scheduler) run the same file; a MODULE must be importable
+where the workers run.  A driver that does not import, is not callable or cannot take the
 port is refused before anything runs; one that raises, returns an object lacking part of that, or hangs (its calls
 not returned within {HOST_LIMIT_S:g} s + {HOST_LIMIT_PER_FRAME_S:g} s per frame) makes its case an error naming the
 driver; frames missing from the sequence numbers it hands over that it did not count as dropped fail the case.

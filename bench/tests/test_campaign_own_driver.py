@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from bench.campaigns import faults as campaign
-from bench.campaigns.drivers import BENCH_DRIVER, DriverRefused, load_driver, uncounted_gaps
+from bench.campaigns.drivers import BENCH_DRIVER, DriverRefused, driver_file, load_driver, uncounted_gaps
 from bench.tests.test_cli_review import invoke
 
 DRIVERS = Path(__file__).resolve().parents[2] / "fixtures" / "drivers"
@@ -131,6 +131,58 @@ def test_a_driver_that_raises_makes_its_case_an_error_naming_it(tmp_path, text, 
     assert lines[1].split()[3] == "ERROR" and lines[-1].startswith("0 passed, 0 failed, 1 error(s)")
 
 
+#: a driver file at the same relative path in the workers' directory: it must not be the one that runs
+WORKERS_OWN = "def open_driver(port):\n    raise OSError(\"the worker's own ci/driver.py\")\n"
+
+
+@pytest.mark.firmware
+def test_a_relative_driver_path_is_the_clients_file_on_workers_in_another_directory(tmp_path, monkeypatch):
+    """``--driver ci/driver.py:...`` is resolved where the campaign starts and its text goes out with the cases: a
+    LocalCluster worker whose working directory holds another ci/driver.py, then none, runs the client's file (as
+    a worker of a remote scheduler, on a machine without the file, does)."""
+    import os
+
+    from bench.campaigns.engine import ClusterSpec, close, connect
+
+    client_dir, worker_dir = tmp_path / "client", tmp_path / "worker"
+    for folder in (client_dir, worker_dir):
+        (folder / "ci").mkdir(parents=True)
+    (client_dir / "ci" / "driver.py").write_text((DRIVERS / "wrapped_bridge_driver.py").read_text())
+    (worker_dir / "ci" / "driver.py").write_text(WORKERS_OWN)
+    monkeypatch.chdir(client_dir)
+    spec = "ci/driver.py:open_driver"
+    client = connect(ClusterSpec(workers=1))  # (its worker process starts here, in the client's directory)
+    try:
+        client.run(os.chdir, str(worker_dir))
+        assert set(client.run(os.getcwd).values()) == {str(worker_dir)}
+        for worker_has in ("another file", "no file"):
+            r, = campaign.run_campaign(["none"], ["rest"], [0], client=client, driver=spec)
+            assert r["passed"] and r["driver"] == spec, (worker_has, r["problem"])
+            (worker_dir / "ci" / "driver.py").unlink(missing_ok=True)
+    finally:
+        close(client)
+
+
+def test_a_driver_file_runs_from_the_text_the_client_read_under_its_own_name(tmp_path, monkeypatch):
+    """What runs is the text read where the campaign started (the file since removed, here), under the file's
+    absolute path: a traceback names the team's file and shows its line."""
+    import traceback
+
+    (tmp_path / "ci").mkdir()
+    path = tmp_path / "ci" / "team_driver.py"
+    path.write_text("def open_driver(port):\n    raise OSError('from the text the client read')\n")
+    monkeypatch.chdir(tmp_path)
+    file = driver_file("ci/team_driver.py:open_driver")
+    assert file.path == str(path.resolve())
+    path.unlink()
+    monkeypatch.chdir("/")
+    make = load_driver("ci/team_driver.py:open_driver", file)
+    with pytest.raises(OSError, match="from the text the client read") as e:
+        make("/dev/pts/N")
+    last = traceback.extract_tb(e.value.__traceback__)[-1]
+    assert (last.filename, last.lineno, last.line) == (str(path), 2, "raise OSError('from the text the client read')")
+
+
 #: a driver that never hands over a frame: its frames() reads the port until the port is closed under it
 HANGING = """\
 from bench.hosts.driver import BridgeDriver
@@ -154,7 +206,8 @@ def test_a_driver_that_hangs_makes_its_case_an_error_within_the_limit(tmp_path):
     assert r["seconds"] < 30
 
 
-#: a driver that spins in pure Python once asked for frames: it never blocks, so closing its port cannot end it
+#: a driver that spins in pure Python once asked for frames, carrying on whatever Exception its loop meets: it
+#: never blocks, so closing its port cannot end it
 SPINNING = """\
 from bench.hosts.driver import BridgeDriver
 
@@ -162,7 +215,11 @@ from bench.hosts.driver import BridgeDriver
 class Spinning(BridgeDriver):
     def frames(self, max_frames=None, timeout_s=5.0):
         while True:
-            pass
+            try:
+                for _ in range(10**6):
+                    pass
+            except Exception:
+                pass
 """
 
 
