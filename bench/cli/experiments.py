@@ -31,17 +31,21 @@ workers must be able to read the file).  Scenes name one with [scene] library, e
 library, each relative to its own file.
 
 Writes into --out (default: a fresh out/texture-sweep[-n]): trials.csv and trials.json (one row per trial:
-texture, movement, repetition, seed, skin, the library file, the three properties, the true normal force,
-simulated and wall time; trials.json, the same rows in the schema explore writes too — format, version, command,
-library (path, SHA-256 of the file, shipped or not), wall_s, workers, rows — see bench/reporting/trials_file.py),
+texture, movement, repetition, seed, skin, the library file, the SPI faults, the three properties, the samples at
+the ADC's rails (pac_at_rails) and those the host rejected (rejected_samples: 0 without SPI faults), the true
+normal force, simulated and wall time; trials.json, the same rows in the schema explore writes too — format,
+version, command, library (path, SHA-256 of the file, shipped or not), wall_s, workers, rows — see
+bench/reporting/trials_file.py),
 wear.csv (ridge height each movement wears off in {PILOT_WORTH_TRIALS} trials, a pilot's worth, on a fresh skin),
 properties.png (each property against force and velocity).  Movements keep their grid ids in every file.  An
 --out folder that holds anything is refused; --force replaces an earlier sweep's files there.
 
 Every trial runs on a fresh skin with a seed derived from its identity (sweep seed, texture, grid movement id,
 repetition), so a trial's result is the same in any selection of textures and movements and for any number of
-workers.  Ctrl-C stops the sweep (exit 130; SIGTERM: 143) and writes nothing — or, once the writing has begun,
-finishes every file first.  Examples:
+workers.  --spi-fault puts SPI faults on the rig's bus for part of every trial (as an experiment file's [rig]
+spi_faults): the rig leaves out each sample the host flags bad and counts it (rejected_samples).  Ctrl-C stops
+the sweep (exit 130; SIGTERM: 143) and writes nothing — or, once the writing has begun, finishes every file
+first.  Examples:
   biotac-bench texture-sweep --textures {PILOT_TEXTURES} --trials 6      # D ch. 6's pilot (2160 trials)
   biotac-bench texture-sweep --textures 902 --movements 7,14,21 --trials 2 --workers 1
   biotac-bench texture-sweep --library my_textures.toml --textures 950 --movements 7 --trials 2
@@ -99,6 +103,18 @@ def _texture_numbers(text: str, library=None) -> list[int]:
     return numbers
 
 
+def _spi_faults(given: list[str] | None) -> str:
+    """--spi-fault (given once per window): the windows as :attr:`~bench.experiments.trials.TrialTask.spi_faults`
+    holds them, checked as an experiment file's ``[rig] spi_faults`` (ValueError naming --spi-fault[i], the field,
+    its value and what is allowed)."""
+    from bench.rigs.texture_rig import spi_fault_text, spi_faults_from_text
+
+    windows, problems = spi_faults_from_text("; ".join(given or ()), "--spi-fault")
+    if problems:
+        raise ValueError("; ".join(problems))
+    return spi_fault_text(windows)
+
+
 def _open_out(path, default, force: bool, kind, keep=()):
     """The out folder, checked and locked: ``path`` (refused if it holds anything but ``keep``, unless ``force``;
     temporary files an interrupted run left are removed, :func:`say_leftovers` says which)
@@ -149,6 +165,7 @@ def _cmd_texture_sweep(a) -> int:
     from bench.textures.library import check_unchanged
 
     grid = movement_grid()
+    spi_faults = _spi_faults(a.spi_fault)
     library = library_option(a.library)
     textures = _texture_numbers(a.textures, library)
     ids = list(range(len(grid))) if a.movements == "all" else _int_list("--movements", a.movements, 0, len(grid) - 1)
@@ -158,7 +175,7 @@ def _cmd_texture_sweep(a) -> int:
     try:
         out = folder.path
         tasks = sweep_tasks(textures, movements, a.trials, a.seed, a.fidelity, not a.smooth_skin, movement_ids=ids,
-                            library="" if library.shipped else library.path)
+                            library="" if library.shipped else library.path, spi_faults=spi_faults)
         spec = ClusterSpec.from_env(a.scheduler, a.workers)
         print(f"{len(tasks)} trials ({len(textures)} textures × {len(movements)} movements × {a.trials}) on "
               f"{spec.describe()}", file=sys.stderr)
@@ -207,6 +224,11 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
     s.add_argument("--library", metavar="FILE",
                    help="the textures come from this library file (TOML as fixtures/textures/library.toml, or .json "
                         "as `biotac-bench textures --json` prints; default: the shipped library)")
+    s.add_argument("--spi-fault", action="append", metavar="start_s=S,end_s=S,SETTING=VALUE",
+                   help="SPI faults on the rig's bus in every trial from start_s to end_s (s from the trial's start), "
+                        "e.g. start_s=0.3,end_s=0.4,miso_flip_bit=1; settings: miso_flip_bit and mosi_flip_bit "
+                        "(0 to 15), miso_stuck (0 or 1), bad_parity and slow_response (true or false); once per "
+                        "window, windows not overlapping (an experiment file: [rig] spi_faults)")
     s.add_argument("--out", help="output folder (default: a fresh out/texture-sweep[-n]); refused if it holds "
                                  "anything, unless --force")
     s.add_argument("--force", action="store_true", help="replace an earlier sweep's files in --out as the new ones "
@@ -232,7 +254,9 @@ The textures come from the shipped library, or from one of your own: [experiment
 (relative to the experiment file; the format of fixtures/textures/library.toml, or .json as `biotac-bench textures
 --json` prints; the workers must be able to read the file).  pilot.textures and training.textures take a list of
 numbers, "all" (D's T1..T117, the dissertation's experiment, whatever else the library holds) or "library" (every
-texture the library holds: D's, the test surfaces, groups of its own).
+texture the library holds: D's, the test surfaces, groups of its own).  [rig] spi_faults
+= [{start_s = 0.25, end_s = 0.35, miso_flip_bit = 1}, ...] puts SPI faults on the rig's bus in every trial
+(trials.csv: rejected_samples, the samples the host rejected).
 
 Trials run on Dask (a LocalCluster on this machine's cores, or --scheduler / DASK_SCHEDULER_ADDRESS) and each
 stage's trials are cached in --cache (out/cache) by content hash, so changing the classifier settings re-runs no

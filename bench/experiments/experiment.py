@@ -45,7 +45,7 @@ from bench.experiments.trials import (
 )
 from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
 from bench.atomic import atomic_write, release_lock, take_lock
-from bench.rigs.texture_rig import movement_grid
+from bench.rigs.texture_rig import movement_grid, spi_fault_text, spi_fault_windows
 from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"
@@ -104,6 +104,8 @@ class ExperimentSpec:
     fingerprints: bool = True
     noise_scale: float = 1.0
     stepper_noise_Pa: float = 0.0  # the rig's stepper background ([rig] stepper_noise_Pa; RigSettings)
+    #: SPI faults on the rig's bus in every trial ([rig] spi_faults), as TrialTask.spi_faults holds them ("": none)
+    spi_faults: str = ""
     library: str | None = None  # a texture library file of one's own ([experiment] library; None: the shipped one)
     source: str = "<experiment>"
 
@@ -214,7 +216,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
              "validation": {"pairs", "n_pairs", "trials", "pair_choice"},
              "exploration": {"strategies", "pair_threshold", "identification_threshold", "max_moves",
                              "pair_simulations", "identification_simulations", "identify_all_textures"},
-             "skin": {"fingerprints"}, "sensor": {"noise_scale"}, "rig": {"stepper_noise_Pa"}}
+             "skin": {"fingerprints"}, "sensor": {"noise_scale"}, "rig": {"stepper_noise_Pa", "spi_faults"}}
     if not isinstance(data, dict):
         raise ExperimentError(source, ["the file must hold tables"])
     for k, v in data.items():
@@ -404,6 +406,10 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
     if noise_problem:
         problems.append(f"sensor.noise_scale = {spelled(spec.noise_scale)}: {noise_problem}")
     spec.stepper_noise_Pa = get("rig", "stepper_noise_Pa", float, 0.0, 100.0, 0.0)
+    if "spi_faults" in t["rig"]:
+        windows, bad = spi_fault_windows(t["rig"]["spi_faults"], "rig.spi_faults")
+        problems += bad
+        spec.spi_faults = spi_fault_text(windows)
     if "name" not in t["experiment"]:
         problems.append("[experiment] table with a name is missing (e.g. name = \"my-variant\")")
     if problems:
@@ -434,9 +440,15 @@ def _code_digest() -> str:
     return h.hexdigest()[:16]
 
 
+#: the counts beyond its task and properties every cached trial row must hold (a whole number each): a row cached
+#: before the rows had one is run again, never read with the count missing
+CACHED_ROW_COUNTS = ("rejected_samples",)
+
+
 def _cached_rows(path: Path, tasks: list[TrialTask]) -> tuple[list[dict] | None, str]:
     """A stage's rows from its cache file, or (None, why not): the file must hold one row per task, each naming its
-    task and carrying the three properties (a truncated or foreign file is run again, never trusted)."""
+    task and carrying the three properties and :data:`CACHED_ROW_COUNTS` (a truncated, foreign or older file is run
+    again, never trusted)."""
     from dataclasses import asdict
 
     try:
@@ -451,6 +463,9 @@ def _cached_rows(path: Path, tasks: list[TrialTask]) -> tuple[list[dict] | None,
                 isinstance(row.get(p), (int, float)) or (row.get(p) is None and isinstance(undefined, dict)
                                                          and p in undefined) for p in ex.PROPERTIES):
             return None, "a row that is not its task's trial"
+        missing = [k for k in CACHED_ROW_COUNTS if not _whole(row.get(k))]
+        if missing:
+            return None, f"a row without {', '.join(missing)} (cached before the rows had it)"
     return rows, ""
 
 
@@ -647,7 +662,8 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         ids = spec.pilot_movements if spec.pilot_movements is not None else list(range(len(grid)))
         tasks = sweep_tasks(spec.pilot_textures, [grid[i] for i in ids], spec.pilot_trials, spec.seed,
                             spec.fidelity, spec.fingerprints, stage="pilot", noise_scale=spec.noise_scale,
-                            movement_ids=ids, stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "")
+                            movement_ids=ids, stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "",
+                            spi_faults=spec.spi_faults)
         log(f"pilot: {len(tasks)} trials")
         pilot_rows = run_stage("pilot", tasks, cache_dir, client=client, progress=progress, log=log)
         model = ex.fit_model(table_from_rows(pilot_rows))
@@ -667,7 +683,8 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
                     tasks.append(TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                            trial_seed(spec.seed, "training", tex, int(m), k), int(m), spec.fidelity,
                                            spec.fingerprints, stage="training", noise_scale=spec.noise_scale,
-                                           stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or ""))
+                                           stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "",
+                                           spi_faults=spec.spi_faults))
         # the same movement may be best for two properties: run it once
         tasks = list({(t.texture, t.movement_id, t.trial): t for t in tasks}.values())
         replace_at = spec.replace_at if spec.replace_skin else None
@@ -684,7 +701,8 @@ def run_experiment(spec: ExperimentSpec, cache_dir: Path | None = OUT / "cache",
         val_tasks = [TrialTask(tex, grid[m].force_N, grid[m].velocity_m_per_s, k,
                                trial_seed(spec.seed, "validation", tex, int(m), k), int(m), spec.fidelity,
                                spec.fingerprints, stage="validation", noise_scale=spec.noise_scale,
-                               stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "")
+                               stepper_noise_Pa=spec.stepper_noise_Pa, library=spec.library or "",
+                               spi_faults=spec.spi_faults)
                      for tex in val_textures for m in sorted(set(best.tolist())) for k in range(spec.validation_trials)]
         session, history = schedule_skin(tasks + val_tasks, wear=spec.wear, replace_at=replace_at)
         tasks = session[len(tasks):]

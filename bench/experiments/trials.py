@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from bench.experiments.design import PILOT_WORTH_TRIALS
-from bench.rigs.texture_rig import Movement, RigSettings, TextureRig, movement_grid
+from bench.rigs.texture_rig import Movement, RigSettings, TextureRig, movement_grid, spi_faults_from_text
 from bench.textures.properties import pac_at_rails, properties
 from emulator.params import SensorParams
 from emulator.sensor import NoiseSources
@@ -56,6 +56,9 @@ class TrialTask:
     stepper_noise_Pa: float = 0.0  # the rig's stepper background, median RMS in the PAC band (RigSettings)
     stage: str = ""  # which stage of an experiment the trial belongs to (pilot, training, validation)
     library: str = ""  # the texture library file the texture comes from ("": the shipped one)
+    #: SPI faults on the rig's bus for part of the trial (:func:`bench.rigs.texture_rig.spi_fault_text`'s form:
+    #: ``start_s=0.25,end_s=0.35,miso_flip_bit=1``, windows joined by ``; ``; "": none)
+    spi_faults: str = ""
 
     def movement(self) -> Movement:
         return Movement(self.force_N, self.velocity_m_per_s)
@@ -159,20 +162,26 @@ def _params(noise_scale: float, base: SensorParams | None = None) -> SensorParam
 
 def run_trial_task(task: TrialTask) -> dict:
     """Run one trial on the rig; returns a flat row: the task, the three properties, the PAC samples at the ADC's
-    rails in their window (``pac_at_rails``), the true force, timing."""
+    rails in their window (``pac_at_rails``), the samples the host rejected and the rig left out
+    (``rejected_samples``, every channel's: 0 without SPI faults), the true force, timing."""
     from bench.textures.library import texture
 
+    windows, problems = spi_faults_from_text(task.spi_faults, "spi_faults")
+    if problems:
+        raise ValueError("; ".join(problems))
     skin = Skin(fingerprints=task.fingerprints, ridge_height_m=task.ridge_height_m, serial=task.skin_serial)
     rig = TextureRig(skin=skin, params=_params(task.noise_scale), fidelity=task.fidelity,
                      noise=noise_sources(task.noise_scale),
-                     settings=RigSettings(stepper_noise_Pa=task.stepper_noise_Pa), wear=False)
+                     settings=RigSettings(stepper_noise_Pa=task.stepper_noise_Pa), wear=False, spi_faults=windows)
     trial = rig.run_trial(texture(task.texture, task.library or None), task.movement(), seed=task.seed,
                           trial=task.trial)
     row = asdict(task)
     row.update(properties(trial.recording))
-    row.update(pac_at_rails=pac_at_rails(trial.recording), true_normal_N=trial.true_normal_N,
-               start_position_m=trial.start_position_m, simulated_s=float(trial.recording.pac_t[-1]),
-               wall_s=trial.wall_s)
+    row.update(pac_at_rails=pac_at_rails(trial.recording),
+               rejected_samples=sum(n for by_status in trial.extra["rejected_samples"].values()
+                                    for n in by_status.values()),
+               true_normal_N=trial.true_normal_N, start_position_m=trial.start_position_m,
+               simulated_s=float(trial.recording.pac_t[-1]), wall_s=trial.wall_s)
     return row
 
 
@@ -228,11 +237,12 @@ def _movement_ids(movements: list[Movement], movement_ids) -> list[int]:
 def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int = 6, seed: int = 0,
                 fidelity: str = "default", fingerprints: bool = True, stage: str = "sweep",
                 noise_scale: float = 1.0, movement_ids: list[int] | None = None,
-                stepper_noise_Pa: float = 0.0, library: str = "") -> list[TrialTask]:
+                stepper_noise_Pa: float = 0.0, library: str = "", spi_faults: str = "") -> list[TrialTask]:
     """Tasks for every texture × movement × repetition, each on a fresh skin (wear is shown apart, by
     :func:`wear_per_movement`).  ``movement_ids`` name the movements (grid ids; default their positions, which are
     the grid ids for the whole grid); a trial's seed comes from its identity (``seed``, ``stage``, texture,
-    movement id, repetition), whatever the order of the lists.  A texture or movement id listed twice is refused
+    movement id, repetition), whatever the order of the lists.  ``spi_faults``: every trial's
+    (:attr:`TrialTask.spi_faults`).  A texture or movement id listed twice is refused
     (ValueError)."""
     movements = list(movements) if movements is not None else movement_grid()
     ids = _movement_ids(movements, movement_ids)
@@ -245,7 +255,7 @@ def sweep_tasks(textures, movements: list[Movement] | None = None, trials: int =
             for k in range(trials):
                 out.append(TrialTask(tex, m.force_N, m.velocity_m_per_s, k, trial_seed(seed, stage, tex, m_id, k),
                                      m_id, fidelity, fingerprints, stage=stage, noise_scale=noise_scale,
-                                     stepper_noise_Pa=stepper_noise_Pa, library=library))
+                                     stepper_noise_Pa=stepper_noise_Pa, library=library, spi_faults=spi_faults))
     return out
 
 

@@ -53,13 +53,16 @@ from __future__ import annotations
 
 import copy
 import copyreg
+import dataclasses
 import math
 import numbers
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from bench.running.sampler import STATUS_NAMES, STATUS_OK, Sampler
+from bench.tomlfile import spelled
 from bench.textures.properties import TrialRecording
 from bench.textures.stage import StageMotor
 from emulator import channels as ch
@@ -176,6 +179,122 @@ class SpiFaultWindow:
                 and 0 <= self.start_s < self.end_s):
             raise ValueError(f"SpiFaultWindow({self.start_s!r}, {self.end_s!r}, {self.faults!r:.80}): start_s and "
                              f"end_s in s, 0 ≤ start_s < end_s, and an emulator.spi.model.Faults")
+
+
+#: a declared SPI fault window's span (s from the trial's start) and the settings it may put on the bus (the fields of
+#: :class:`emulator.spi.model.Faults`): an experiment file's ``[rig] spi_faults`` entries and ``texture-sweep
+#: --spi-fault`` take these fields, and :func:`spi_fault_text` writes them so
+SPI_FAULT_SPAN = ("start_s", "end_s")
+SPI_FAULT_SETTINGS = tuple(f.name for f in dataclasses.fields(Faults))
+#: the most fault windows one declaration takes (each a stretch of the trial: a few are all a trial has room for)
+MAX_SPI_FAULT_WINDOWS = 100
+
+
+def _fault_allowed(setting: str, value) -> str | None:
+    """What :class:`Faults` allows for ``setting`` (a field of it) in a file's words, or None when it takes
+    ``value``: Faults's own check, its "None or" left out (a declaration leaves a setting out instead)."""
+    try:
+        Faults(**{setting: value})
+    except ValueError as e:
+        allowed = re.sub(r"^None(,| or) ", "", str(e).split(": must be ", 1)[-1])
+        return allowed.replace("True or False", "true or false")
+    return None
+
+
+def spi_fault_windows(declared, where: str) -> tuple[tuple[SpiFaultWindow, ...], list[str]]:
+    """The SPI fault windows ``declared`` (a list of tables, each ``start_s`` and ``end_s`` in s from the trial's
+    start and at least one setting of :data:`SPI_FAULT_SETTINGS`) and the problems found, each naming
+    ``where[i].field``, the value and what is allowed (no window when there is any problem).  Windows may not
+    overlap: which faults would be in force there?"""
+    fields = SPI_FAULT_SPAN + SPI_FAULT_SETTINGS
+    if not isinstance(declared, list) or len(declared) > MAX_SPI_FAULT_WINDOWS:
+        return (), [f"{where} = {spelled(declared)}: a list of at most {MAX_SPI_FAULT_WINDOWS} windows, each a table "
+                    f"of start_s and end_s (s from the trial's start, 0 ≤ start_s < end_s) and the faults in force "
+                    f"then ({', '.join(SPI_FAULT_SETTINGS)})"]
+    problems: list[str] = []
+    windows = []
+    for i, table in enumerate(declared):
+        at = f"{where}[{i}]"
+        if not isinstance(table, dict):
+            problems.append(f"{at} = {spelled(table)}: a table of {', '.join(fields)}")
+            continue
+        unknown = [f"{at}: unknown field {spelled(k)}; known: {', '.join(fields)}" for k in table if k not in fields]
+        problems += unknown
+        span = {}
+        for key in SPI_FAULT_SPAN:
+            v = table.get(key)
+            if key not in table:
+                problems.append(f"{at}.{key} is missing: a number of seconds ≥ 0 from the trial's start")
+            elif isinstance(v, bool) or not isinstance(v, numbers.Real) or not (math.isfinite(v) and v >= 0):
+                problems.append(f"{at}.{key} = {spelled(v)}: must be a number of seconds ≥ 0 from the trial's start")
+            else:
+                span[key] = float(v)
+        if len(span) == 2 and not span["start_s"] < span["end_s"]:
+            problems.append(f"{at}.end_s = {spelled(table['end_s'])}: must be after start_s = "
+                            f"{spelled(table['start_s'])}")
+        settings = {k: table[k] for k in SPI_FAULT_SETTINGS if k in table}
+        bad = {k: why for k, v in settings.items() if (why := _fault_allowed(k, v)) is not None}
+        problems += [f"{at}.{k} = {spelled(settings[k])}: must be {why}" for k, why in bad.items()]
+        if unknown or bad or len(span) < 2 or not span["start_s"] < span["end_s"]:
+            continue
+        faults = Faults(**settings)
+        if not faults.any:
+            problems.append(f"{at} = {spelled(table)}: sets no fault; give at least one of "
+                            f"{', '.join(SPI_FAULT_SETTINGS)}")
+            continue
+        windows.append((i, SpiFaultWindow(span["start_s"], span["end_s"], faults)))
+    ordered = sorted(windows, key=lambda iw: iw[1].start_s)
+    for (i, a), (j, b) in zip(ordered, ordered[1:]):
+        if b.start_s < a.end_s:
+            problems.append(f"{where}[{j}] ({b.start_s:g} to {b.end_s:g} s) overlaps {where}[{i}] ({a.start_s:g} to "
+                            f"{a.end_s:g} s): windows may not overlap (whose faults would be in force?)")
+    return (() if problems else tuple(w for _, w in windows)), problems
+
+
+def _text_value(text: str):
+    """A value of :func:`spi_fault_text`'s form as the file would hold it: true/false, a whole number, a number, or
+    the text itself (refused by :func:`spi_fault_windows`, which names it)."""
+    if text in ("true", "false"):
+        return text == "true"
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def spi_faults_from_text(text: str, where: str) -> tuple[tuple[SpiFaultWindow, ...], list[str]]:
+    """The windows ``text`` declares (:func:`spi_fault_text`'s form: ``start_s=S,end_s=S,SETTING=VALUE,...``, windows
+    joined by ``;``; "" none) and the problems found (:func:`spi_fault_windows`'s, the i-th window ``where[i]``)."""
+    declared, problems = [], []
+    for i, part in enumerate(p.strip() for p in text.split(";") if p.strip()):
+        items = [item.strip() for item in part.split(",") if item.strip()]
+        unpaired = [item for item in items if "=" not in item]
+        if unpaired:
+            problems.append(f"{where}[{i}] = {spelled(part)}: {spelled(unpaired[0])} is no FIELD=VALUE; write "
+                            f"start_s=S,end_s=S,SETTING=VALUE,... (e.g. start_s=0.3,end_s=0.4,miso_flip_bit=1)")
+            continue
+        declared.append({k.strip(): _text_value(v.strip()) for k, v in (item.split("=", 1) for item in items)})
+    if problems:
+        return (), problems
+    return spi_fault_windows(declared, where)
+
+
+def spi_fault_text(windows) -> str:
+    """``windows`` (:class:`SpiFaultWindow` each) as text, the form :func:`spi_faults_from_text` reads back to the
+    same windows: ``start_s=0.25,end_s=0.35,miso_flip_bit=1`` (the settings a window sets, in
+    :data:`SPI_FAULT_SETTINGS`' order), windows joined by ``; ``; "" for none."""
+    def value(v) -> str:
+        return ("true" if v else "false") if isinstance(v, bool) else repr(v)
+
+    def set_(v) -> bool:  # (a bit 0 or stuck-at-0 is a fault set: only None and False are none)
+        return v is not None and v is not False
+
+    return "; ".join(",".join([f"start_s={w.start_s!r}", f"end_s={w.end_s!r}"]
+                              + [f"{k}={value(getattr(w.faults, k))}" for k in SPI_FAULT_SETTINGS
+                                 if set_(getattr(w.faults, k))])
+                     for w in windows)
 
 
 @dataclass

@@ -195,6 +195,8 @@ def test_texture_sweep_writes_its_table_and_plot(tmp_path, capsys):
     # foam at 2 N, 10 cm/s drives PAC to the ADC's rails: the row counts the samples, the summary says so
     rails = {(r["texture"], r["movement_id"]): int(r["pac_at_rails"]) for r in rows}
     assert rails[("30", "35")] > 0 and rails[("902", "0")] == 0
+    # no SPI fault declared: none, and no sample rejected, in every row
+    assert {(r["spi_faults"], r["rejected_samples"]) for r in rows} == {("", "0")}
     clipped = sum(1 for v in rails.values() if v)
     assert f"note: {clipped} of 4 trials had PAC at the ADC's rails" in capsys.readouterr().out
 
