@@ -75,7 +75,8 @@ def _texture_numbers(text: str, library=None) -> list[int]:
     --textures and the value otherwise."""
     from bench.errors import TextureError
     from bench.experiments.trials import listed_twice
-    from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES, LIBRARY_SIZE, listing_command, textures_named
+    from bench.textures.library import (ALL_TEXTURES, LIBRARY_TEXTURES, LIBRARY_SIZE, listing_command, texture_word,
+                                        textures_named)
 
     from bench.cli.args import library_option
 
@@ -83,6 +84,9 @@ def _texture_numbers(text: str, library=None) -> list[int]:
     named = textures_named(text, library.textures)
     if named:
         return named
+    if named is not None and texture_word(text) == LIBRARY_TEXTURES:  # (a file of none is refused as read: a
+        raise ValueError(f"--textures {LIBRARY_TEXTURES}: every texture the library {escaped(library.path)} holds, "
+                         f"and it holds none: name a library with textures (--library)")  # LibraryFile built so)
     if named is not None:  # "all" on a library without D's textures
         raise ValueError(f"--textures {ALL_TEXTURES}: D's T1..T{LIBRARY_SIZE}, and the library holds none; --textures "
                          f"{LIBRARY_TEXTURES} takes every texture it holds "
@@ -254,7 +258,7 @@ The textures come from the shipped library, or from one of your own: [experiment
 (relative to the experiment file; the format of fixtures/textures/library.toml, or .json as `biotac-bench textures
 --json` prints; the workers must be able to read the file).  pilot.textures and training.textures take a list of
 numbers, "all" (D's T1..T117, the dissertation's experiment, whatever else the library holds) or "library" (every
-texture the library holds: D's, the test surfaces, groups of its own).  [rig] spi_faults
+texture the library holds: D's, the test surfaces, groups of its own), either word in any case.  [rig] spi_faults
 = [{start_s = 0.25, end_s = 0.35, miso_flip_bit = 1}, ...] puts SPI faults on the rig's bus in every trial
 (trials.csv: rejected_samples, the samples the host rejected).
 

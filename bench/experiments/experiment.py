@@ -46,7 +46,7 @@ from bench.experiments.trials import (
 from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
 from bench.atomic import atomic_write, release_lock, take_lock
 from bench.rigs.texture_rig import movement_grid, spi_fault_text, spi_fault_windows
-from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES
+from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES, texture_word
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"
 #: D's published figures, for the report (Tables 6-4, 6-5; ch. 6 text)
@@ -170,9 +170,9 @@ def _default_texture_problems(t: dict, spec: ExperimentSpec, lib, every: list[in
     out = []
     for table in ("pilot", "training"):
         given = t[table].get("textures")
-        if given == ALL_TEXTURES or (given is None and table == "training"):
+        if texture_word(given) == ALL_TEXTURES or (given is None and table == "training"):
             if not every:
-                shown = '"all"' if given else '"all" (the default)'
+                shown = spelled(given) if given else '"all" (the default)'
                 out.append(f"{table}.textures = {shown}: D's textures, numbered 1 to 117, and the library holds none; "
                            f"give {spelled(LIBRARY_TEXTURES)} for every texture it holds, or list the textures to use "
                            f"(`{listing}` lists them)")
@@ -263,9 +263,9 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         if key not in t[table]:
             return default
         v = t[table][key]
-        if v == ALL_TEXTURES:
+        if texture_word(v) == ALL_TEXTURES:  # (any case, as --textures reads it)
             return None
-        if v == LIBRARY_TEXTURES:
+        if texture_word(v) == LIBRARY_TEXTURES:
             return sorted(lib)
         if not isinstance(v, list) or not v:
             problems.append(f"{table}.{key} = {spelled(v)}: a list of texture numbers, {spelled(ALL_TEXTURES)} (D's "

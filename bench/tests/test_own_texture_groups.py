@@ -308,6 +308,44 @@ def test_library_in_an_experiment_takes_every_texture_the_library_holds_and_all_
     assert d117.training_textures is None  # (run as D's 117: experiment.run_experiment)
 
 
+@pytest.mark.parametrize("word", ["All", " LIBRARY ", "all", "Library"])
+def test_all_and_library_are_read_by_one_rule_in_an_experiment_file_and_on_the_command_line(word):
+    """"all" and "library" in any case, spaces around ignored, on both routes (the command line took " All ", the
+    experiment file refused it as neither a list nor a word): the same textures either way."""
+    from bench.cli.args import library_option
+    from bench.cli.experiments import _texture_numbers
+
+    for library in (None, EXAMPLE):
+        if word.strip().casefold() == "all" and library:  # (no D texture in the example: refused on both routes)
+            continue
+        spec = _experiment({"textures": word}, {"textures": word}, library)
+        cli_textures = _texture_numbers(word, library_option(None if library is None else str(library)))
+        assert spec.pilot_textures == cli_textures
+        assert spec.training_textures == (None if word.strip().casefold() == "all" else cli_textures)
+
+
+def test_all_in_any_case_on_a_library_without_ds_textures_is_the_same_problem_as_all():
+    """"ALL" is "all": on a library without D's textures, the problem "all" has (it had been read as D's textures and
+    left the pilot empty, with no problem said)."""
+    with pytest.raises(E.ExperimentError) as e:
+        _experiment({"textures": "ALL"}, {"textures": [200, 201, 1000]}, EXAMPLE)
+    assert [p for p in e.value.problems if p.startswith("pilot.textures")] == [
+        'pilot.textures = "ALL": D\'s textures, numbered 1 to 117, and the library holds none; give "library" for every '
+        f"texture it holds, or list the textures to use (`biotac-bench textures --library {EXAMPLE}` lists them)"]
+
+
+def test_textures_library_on_a_library_of_no_texture_says_so_not_what_all_would():
+    """--textures library on a library holding no texture (a file of none is refused as it is read; a LibraryFile
+    built in code can hold none): its own message, not "all"'s about D's T1..T117."""
+    from bench.cli.experiments import _texture_numbers
+
+    empty = L.LibraryFile(path="lab/empty.toml", sha256="0" * 64, textures={}, shipped=False)
+    with pytest.raises(ValueError) as e:
+        _texture_numbers(" Library", empty)
+    assert str(e.value) == ("--textures library: every texture the library lab/empty.toml holds, and it holds none: "
+                            "name a library with textures (--library)")
+
+
 def test_a_textures_value_neither_list_nor_all_nor_library_names_both_spellings():
     with pytest.raises(E.ExperimentError) as e:
         _experiment({"textures": "every"}, {"textures": [200, 201, 1000]}, EXAMPLE)

@@ -125,10 +125,17 @@ def dissertation_textures(numbers) -> list[int]:
 ALL_TEXTURES, LIBRARY_TEXTURES = "all", "library"
 
 
+def texture_word(value) -> str | None:
+    """:data:`ALL_TEXTURES` or :data:`LIBRARY_TEXTURES` if ``value`` spells one (any case, spaces around ignored),
+    else None: the one rule by which ``--textures`` and an experiment file's ``textures`` read them."""
+    word = value.strip().casefold() if isinstance(value, str) else None
+    return word if word in (ALL_TEXTURES, LIBRARY_TEXTURES) else None
+
+
 def textures_named(word: str, numbers) -> list[int] | None:
-    """The texture numbers ``word`` (:data:`ALL_TEXTURES` or :data:`LIBRARY_TEXTURES`, any case, spaces around
-    ignored) names among ``numbers`` (a library, or its numbers), sorted; None for any other word."""
-    word = word.strip().casefold() if isinstance(word, str) else None
+    """The texture numbers ``word`` (:data:`ALL_TEXTURES` or :data:`LIBRARY_TEXTURES`, read by
+    :func:`texture_word`) names among ``numbers`` (a library, or its numbers), sorted; None for any other word."""
+    word = texture_word(word)
     if word == ALL_TEXTURES:
         return dissertation_textures(numbers)
     if word == LIBRARY_TEXTURES:
