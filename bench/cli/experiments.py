@@ -84,9 +84,10 @@ def _texture_numbers(text: str, library=None) -> list[int]:
     named = textures_named(text, library.textures)
     if named:
         return named
-    if named is not None and texture_word(text) == LIBRARY_TEXTURES:  # (a file of none is refused as read: a
+    # "library" on a library of no texture (a file of none is refused as it is read; a LibraryFile built so is not)
+    if named is not None and texture_word(text) == LIBRARY_TEXTURES:
         raise ValueError(f"--textures {LIBRARY_TEXTURES}: every texture the library {escaped(library.path)} holds, "
-                         f"and it holds none: name a library with textures (--library)")  # LibraryFile built so)
+                         f"and it holds none: name a library with textures (--library)")
     if named is not None:  # "all" on a library without D's textures
         raise ValueError(f"--textures {ALL_TEXTURES}: D's T1..T{LIBRARY_SIZE}, and the library holds none; --textures "
                          f"{LIBRARY_TEXTURES} takes every texture it holds "

@@ -547,7 +547,7 @@ def test_a_trial_with_an_undefined_property_is_kept_in_the_cache_and_refused_by_
     task = E.TrialTask(texture=46, force_N=0.2, velocity_m_per_s=0.01, trial=1, seed=5, movement_id=0,
                        stage="pilot")
     from dataclasses import asdict
-    row = dict(asdict(task), traction=0.1, roughness=-6.9, fineness=None,
+    row = dict(asdict(task), traction=0.1, roughness=-6.9, fineness=None, rejected_samples=0,
                undefined={"fineness": "PAC is constant over the measurement window"})
     path = tmp_path / "pilot.json"
     path.write_text(json.dumps([row]))
