@@ -24,6 +24,7 @@ def _synthetic_sweep(tasks, **_):
                    roughness=5.0 + 0.3 * (t.texture % 5) + 0.05 * rng.standard_normal(),
                    fineness=5.0 + 0.2 * (t.texture % 3) + 0.05 * rng.standard_normal(),
                    pac_at_rails=3 if t.texture == 100 else 0,  # burlap's PAC clipped, as a coarse weave's may be
+                   rejected_samples=0,
                    true_normal_N=t.force_N, start_position_m=0.0, simulated_s=1.0, wall_s=0.0)
         rows.append(row)
     return rows

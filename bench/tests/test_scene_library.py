@@ -304,8 +304,8 @@ def test_a_library_edited_while_the_trials_run_is_refused_not_stated_or_cached(t
     monkeypatch.chdir(tmp_path)
 
     def rows_of(tasks):
-        return [dict(asdict(t), traction=0.1, roughness=1.0, fineness=2.0, true_normal_N=0.5, start_position_m=0.01,
-                     simulated_s=7.0, wall_s=1.0) for t in tasks]
+        return [dict(asdict(t), traction=0.1, roughness=1.0, fineness=2.0, rejected_samples=0, true_normal_N=0.5,
+                     start_position_m=0.01, simulated_s=7.0, wall_s=1.0) for t in tasks]
 
     monkeypatch.setattr(trials, "sweep", _edit_meanwhile(lib, rows_of))
     out = tmp_path / "sweep"

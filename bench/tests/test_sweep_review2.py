@@ -328,7 +328,7 @@ def test_the_stage_cache_runs_again_when_the_code_changes_or_its_rows_are_not_it
 
     def fake_sweep(tasks, spec=None, client=None, progress=True):
         ran.append(len(tasks))
-        return [asdict(t) | {"traction": 0.3, "roughness": 5.0, "fineness": 3.0} for t in tasks]
+        return [asdict(t) | {"traction": 0.3, "roughness": 5.0, "fineness": 3.0, "rejected_samples": 0} for t in tasks]
 
     monkeypatch.setattr(E, "sweep", fake_sweep)
     tasks = sweep_tasks([902], [movement_grid()[7]], 2, 0, movement_ids=[7])
