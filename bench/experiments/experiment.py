@@ -46,6 +46,7 @@ from bench.experiments.trials import (
 from bench.paths import FIXTURES, OUT, REPO, folder_name_problem
 from bench.atomic import atomic_write, release_lock, take_lock
 from bench.rigs.texture_rig import movement_grid, spi_fault_text, spi_fault_windows
+from bench.scenes.limits import MAX_SEED
 from bench.textures.library import ALL_TEXTURES, LIBRARY_TEXTURES, texture_word
 
 EXPERIMENTS_DIR = FIXTURES / "experiments"
@@ -286,7 +287,7 @@ def parse_experiment(data: dict, source: str = "<experiment>") -> ExperimentSpec
         problems.append(problem)
     else:
         spec.name = t["experiment"].get("name", spec.name)
-    spec.seed = get("experiment", "seed", int, 0, 2**63 - 1, spec.seed)
+    spec.seed = get("experiment", "seed", int, 0, MAX_SEED, spec.seed)
     fid = t["experiment"].get("fidelity", spec.fidelity)
     if not isinstance(fid, str) or fid not in PROFILES:
         problems.append(f"experiment.fidelity = {spelled(fid)}: one of {', '.join(PROFILES)}")
