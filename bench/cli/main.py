@@ -174,8 +174,6 @@ def _main(argv) -> int:
         return 2
     except _bad_input_errors() as e:  # evaluated when an exception arrives here, after the command ran
         print(f"error: {e}", file=sys.stderr)
-        if isinstance(e, StdoutNotWritten):
-            _discard_stdout()  # what is still buffered would fail again, noisily, at exit
         return getattr(e, "exit_status", 2)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
