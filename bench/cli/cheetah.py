@@ -61,6 +61,8 @@ def _cmd_serve(a) -> int:
              else ""), file=sys.stderr)
     for why in cb.client_errors[:5]:
         print(f"  {why}", file=sys.stderr)
+    if cb.stop_problem:  # a program's request was cut short by the stop (over the RTL, its harness ended under it)
+        print(f"  {cb.stop_problem}", file=sys.stderr)
     return 0
 
 

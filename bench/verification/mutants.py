@@ -7538,6 +7538,11 @@ CATALOGUE += [
            'if False:',
            ('bench/tests/test_own_texture_groups.py::test_textures_library_on_a_library_of_no_texture_says_so_not_what_all_would',),
            '--textures library on a library of no texture gets the message about D\'s T1..T117 meant for "all"'),
+    Mutant('cheetah-serve-stop-problem-untold', 'cheetah', 'bench/cli/cheetah.py',
+           "    if cb.stop_problem:  # a program's request",
+           "    if False:  # a program's request",
+           ('firmware_tests/tests/test_cheetah_rtl_stop.py::test_cheetah_serve_says_a_request_was_cut_short_when_it_stops',),
+           "cheetah serve stopped under a program's request says nothing of the request cut short or the harness ended"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -117,3 +117,33 @@ def test_biotac_cheetah_ends_the_harness_and_fails_the_test_at_teardown(pytester
     result.stdout.fnmatch_lines([f"biotac_cheetah: bench on *cheetah.sock: 1 client request(s) still being clocked "
                                  f"{SHORT_STOP_S:g} s after stop(): the RTL harness process (pid {pid}) was "
                                  f"terminated under it"])
+
+
+def test_cheetah_serve_says_a_request_was_cut_short_when_it_stops(tmp_path, monkeypatch):
+    """``biotac-bench cheetah serve`` over the RTL, stopped by Ctrl-C while a program's request is still being
+    clocked: it stops as usual (status 0: Ctrl-C is its normal end), and its last lines say the request was cut
+    short and the harness ended under it (the program's call fails)."""
+    import signal
+
+    from bench.hosts.cheetah_server import build_library
+    from firmware_tests.tests.test_cheetah_device import serve
+
+    scene = tmp_path / "rtl.toml"
+    scene.write_text('[scene]\nname = "rtl"\nduration_s = 10\n[host]\nspi = "rtl"\n')
+    lib = C.CDLL(str(build_library()))
+    p, path = serve(scene)
+    try:
+        monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", path)
+        h = lib.c_ch_open(0)
+        assert h == 1
+        thread, returned = long_request(lib, h)
+        time.sleep(2.0)  # being clocked by now: 40 000 transfers take far longer
+        assert thread.is_alive()
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+        thread.join(30)
+    finally:
+        p.kill()
+    assert p.returncode == 0 and "Traceback" not in err, err
+    assert "1 client request(s) still being clocked" in err and "was terminated under it" in err, err
+    assert returned and returned[0] < 0
