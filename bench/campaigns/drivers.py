@@ -165,9 +165,13 @@ def load_driver(spec: str, file: DriverFile | None = None):
 
 def open_driver(spec: str, port: str, file: DriverFile | None = None):
     """The driver object ``spec``'s callable returns for ``port``, with every part of :data:`DRIVER_INTERFACE`;
-    :class:`DriverFailed` naming ``spec`` if the callable raises or the object lacks a part.  ``file``: as
+    :class:`DriverFailed` naming ``spec`` if the driver cannot be loaded here (a worker without its module, though
+    the campaign's client could import it), the callable raises or the object lacks a part.  ``file``: as
     :func:`load_driver` takes it."""
-    make = load_driver(spec, file)
+    try:
+        make = load_driver(spec, file)
+    except DriverRefused as e:
+        raise DriverFailed(f"{e} (where this case ran)") from None
     try:
         drv = make(port)
     except Exception as e:

@@ -131,6 +131,16 @@ def test_a_driver_that_raises_makes_its_case_an_error_naming_it(tmp_path, text, 
     assert lines[1].split()[3] == "ERROR" and lines[-1].startswith("0 passed, 0 failed, 1 error(s)")
 
 
+@pytest.mark.firmware
+def test_a_driver_a_worker_cannot_import_makes_its_case_an_error_naming_it():
+    """A ``MODULE:CALLABLE`` driver the campaign's client imported but a worker (of a remote scheduler) cannot: no
+    verdict on the firmware — the case is an error naming the driver and why, as one that raises."""
+    spec = "team_driver_not_installed_here:open_driver"
+    r = campaign.run_case(campaign.FAULTS["none"], "rest", 0, driver=spec)
+    assert not r["passed"] and r["error"], r
+    assert r["problem"].startswith(f"--driver {spec}: cannot import") and "where this case ran" in r["problem"], r
+
+
 #: a driver file at the same relative path in the workers' directory: it must not be the one that runs
 WORKERS_OWN = "def open_driver(port):\n    raise OSError(\"the worker's own ci/driver.py\")\n"
 

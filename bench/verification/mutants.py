@@ -7543,6 +7543,11 @@ CATALOGUE += [
            "    if False:  # a program's request",
            ('firmware_tests/tests/test_cheetah_rtl_stop.py::test_cheetah_serve_says_a_request_was_cut_short_when_it_stops',),
            "cheetah serve stopped under a program's request says nothing of the request cut short or the harness ended"),
+    Mutant('driver-not-importable-on-worker-is-a-failure', 'campaigns', 'bench/campaigns/drivers.py',
+           '        raise DriverFailed(f"{e} (where this case ran)") from None\n',
+           '        raise\n',
+           ('bench/tests/test_campaign_own_driver.py::test_a_driver_a_worker_cannot_import_makes_its_case_an_error_naming_it',),
+           'a driver a worker cannot import makes its case a failure of the firmware instead of an error naming the driver'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
