@@ -61,6 +61,8 @@ def step_guard() -> C.CDLL:
             lib.bt_guard_init.argtypes = [C.c_void_p, C.c_void_p]
             lib.bt_guard_step.argtypes = [C.c_void_p, C.c_void_p, C.c_void_p]
             lib.bt_guard_start.argtypes = [C.c_void_p, C.c_void_p, C.c_void_p, C.c_void_p]
+            lib.bt_guard_set_pattern.argtypes = [C.c_void_p, C.c_void_p, C.c_void_p, C.c_char_p, C.c_size_t,
+                                                 C.POINTER(C.c_uint8)]
             lib.bt_guard_take_exits.argtypes = [C.c_void_p]
             lib.bt_guard_wrap.argtypes = [C.c_void_p, C.c_void_p]
             for name in ("bt_guard_stop", "bt_guard_stopped", "bt_guard_poke", "bt_guard_outside"):
@@ -380,10 +382,11 @@ class VirtualBoard:
 class CoSim:
     """Firmware + board: ``run(seconds)`` executes the firmware's main loop in virtual time.
 
-    ``bt_init`` and each ``bt_step`` run under the step guard (``bench/hosts/c/step_guard.c``): :meth:`stop_step`
-    leaves a hung step, and a fault in the firmware's own code (SIGSEGV, SIGBUS, SIGFPE, SIGILL; a stack overflow
-    too) or its call of exit, _exit, abort or a failed assert (any firmware library: the guard takes over its calls
-    of them) leaves the call instead of ending the process — :meth:`run`, or the constructor for ``bt_init``, raises
+    ``bt_init``, each ``bt_step`` and ``bt_set_pattern`` run under the step guard (``bench/hosts/c/step_guard.c``): :meth:`stop_step`
+    leaves a hung step (or a hung ``bt_set_pattern``), and a fault in the firmware's own code (SIGSEGV, SIGBUS,
+    SIGFPE, SIGILL; a stack overflow too) or its call of exit, _exit, abort or a failed assert (any firmware library:
+    the guard takes over its calls of them) leaves the call instead of ending the process — :meth:`run` (the
+    constructor for ``bt_init``, :meth:`set_pattern` for ``bt_set_pattern``) raises
     :class:`FirmwareError` naming it.  Either way the co-simulation is :attr:`stopped` for good.
     """
 
@@ -411,12 +414,8 @@ class CoSim:
         self._guard.bt_guard_take_exits(self._step)
         self._left_in = "bt_init"  # the firmware's function running when the guard left it (for _why_stopped)
         board.stop_firmware = lambda: self._guard.bt_guard_stop(self._watch)
-        if self._guard.bt_guard_start(self._watch, C.cast(self.lib.bt_init, C.c_void_p), self.state,
-                                      C.byref(self._guarded_hal)):
-            self._raise()  # (a HAL call cut short: Ctrl-C reaches the caller as the KeyboardInterrupt it is)
-            raise FirmwareError(self._why_stopped())
-        self._raise()
-        self._left_in = "bt_step"
+        self._guarded("bt_init", lambda: self._guard.bt_guard_start(
+            self._watch, C.cast(self.lib.bt_init, C.c_void_p), self.state, C.byref(self._guarded_hal)))
 
     @property
     def stopped(self) -> bool:
@@ -457,12 +456,18 @@ class CoSim:
         UART): 1–64 channel indices (or names), each PAC, PDC, TAC, TDC or E1..E24 (E20..E24 exist on a BioTac
         SP only; a 19-electrode sensor answers them with error words).  Entries are checked as the driver's
         (:meth:`bench.hosts.driver.BridgeDriver.pattern_bytes`: True is no channel, an index not a byte is
-        refused before the firmware sees it); the firmware judges the channels."""
+        refused before the firmware sees it); the firmware judges the channels.  ``bt_set_pattern`` runs under the step
+        guard, as ``bt_step`` does: a crash, an exit or a hang the watchdog stops there is a :class:`FirmwareError`
+        naming it, and the co-simulation is :attr:`stopped`."""
         channels = list(channels)
         payload = BridgeDriver.pattern_bytes(channels)  # (ValueError before the firmware sees anything)
         if self.stopped:
             raise FirmwareError(f"set_pattern: {self._why_stopped()}")
-        result = self.lib.bt_set_pattern(self.state, payload, C.c_size_t(len(payload))) & 0xFF
+        result = C.c_uint8()
+        self._guarded("bt_set_pattern", lambda: self._guard.bt_guard_set_pattern(
+            self._watch, C.cast(self.lib.bt_set_pattern, C.c_void_p), self.state, payload, len(payload),
+            C.byref(result)))
+        result = result.value
         if result:
             raise ValueError(f"sampling pattern {list(channels)!r} refused by the firmware: "
                              + ("1 to 64 channels" if result == 1 else "channels are PAC, PDC, TAC, TDC, E1..E24"))
@@ -485,8 +490,19 @@ class CoSim:
             return (f"the firmware crashed in {self._left_in} at virtual time {self.board.t:.6f} s: "
                     f"{fault} in {code_at(pc.value)} (touching address {addr.value:#x}); the "
                     f"bench left its {self._left_in} and goes on; {again}")
-        return (f"the firmware's bt_step was stopped by the bench's watchdog at virtual time {self.board.t:.6f} s (it "
-                f"hung); {again}")
+        return (f"the firmware's {self._left_in} was stopped by the bench's watchdog at virtual time "
+                f"{self.board.t:.6f} s (it hung); {again}")
+
+    def _guarded(self, entry: str, call) -> None:
+        """Run the firmware's ``entry`` (its name: bt_init, bt_step, bt_set_pattern) by ``call()``, one of the step
+        guard's functions (0: it returned); :class:`FirmwareError` saying why when the guard left it (or a stop was
+        asked before), or the error a HAL call it made was cut short by."""
+        if not self.stopped:  # (a stopped co-simulation says where it was left, not where it was asked to go on)
+            self._left_in = entry
+        if call():
+            self._raise()  # (a HAL call cut short: Ctrl-C reaches the caller as the KeyboardInterrupt it is)
+            raise FirmwareError(self._why_stopped())
+        self._raise()
 
     def _raise(self):
         if self.board.error is not None:
@@ -509,10 +525,7 @@ class CoSim:
         wall0, virt0 = time.perf_counter(), self.board.t
         steps = 0
         while self.board.t < end:
-            if self._guard.bt_guard_step(self._watch, self._step, self.state):
-                self._raise()  # (a HAL call cut short: Ctrl-C reaches the caller as the KeyboardInterrupt it is)
-                raise FirmwareError(self._why_stopped())
-            self._raise()
+            self._guarded("bt_step", lambda: self._guard.bt_guard_step(self._watch, self._step, self.state))
             steps += 1
             if max_steps is not None and steps >= max_steps:
                 raise FirmwareError(f"the firmware made {steps} passes without reaching t = {end:.3f} s "

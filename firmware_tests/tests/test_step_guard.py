@@ -22,6 +22,8 @@ STEP = "void bt_step(bt_bridge *b) {\n    serve_host(b);\n"
 assert STEP in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_step changed"
 INIT = "void bt_init(bt_bridge *b, const bt_hal *hal) {\n    memset(b, 0, sizeof *b);\n    b->hal = hal;\n"
 assert INIT in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_init changed"
+PATTERN = "uint8_t bt_set_pattern(bt_bridge *b, const uint8_t *p, size_t len) {\n"
+assert PATTERN in (FIRMWARE_DIR / "bt_bridge.c").read_text(), "the reference firmware's bt_set_pattern changed"
 
 #: C declarations put before the reference firmware's source in every firmware these cases build
 HEAD = ("#include <assert.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n#include <unistd.h>\n"
@@ -31,7 +33,7 @@ HEAD = ("#include <assert.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include 
         "    return depth ? bt_deep(depth + 1) + pad[0] : 0; }\n")
 #: what every case's process starts with: ``firmware(extra)`` builds the reference firmware running ``extra`` (C) in
 #: every bt_step from 20 ms of virtual time on, as fw.c in the folder its last argument names (``in_init=True``: at the
-#: start of bt_init instead; ``own``: compiled here with cc and these flags, as a library built without the bench);
+#: start of bt_init instead; ``in_pattern=True``: at the start of bt_set_pattern; ``own``: compiled here with cc and these flags, as a library built without the bench);
 #: ``HANG``: a loop calling no HAL function; ``start(sim)`` runs 1 s of it in a thread: (the thread, the
 #: FirmwareErrors it ended with)
 PRELUDE = textwrap.dedent("""
@@ -42,11 +44,12 @@ PRELUDE = textwrap.dedent("""
     from bench.hosts.cosim import CoSim, VirtualBoard, default_sensors, FIRMWARE_DIR, build_firmware
     folder = Path(sys.argv[-1])
     HANG = "for (volatile unsigned long k = 0;; k++) { }"
-    def firmware(extra, in_init=False, own=None):
+    def firmware(extra, in_init=False, own=None, in_pattern=False):
         src = folder / "fw.c"
         code = (FIRMWARE_DIR / "bt_bridge.c").read_text()
-        if in_init:
-            code = code.replace(INIT, INIT + "    " + extra + "\\n")
+        if in_init or in_pattern:
+            anchor = INIT if in_init else PATTERN
+            code = code.replace(anchor, anchor + "    " + extra + "\\n")
         else:
             code = code.replace(STEP, STEP + "    if (b->hal->micros(b->hal->ctx) > 20000) {\\n" + extra
                                 + "\\n    }\\n")
@@ -67,7 +70,8 @@ PRELUDE = textwrap.dedent("""
         thread = threading.Thread(target=run, daemon=True)
         thread.start()
         return thread, ended
-""").replace("STEP", repr(STEP)).replace("INIT", repr(INIT)).replace("HEAD", repr(HEAD))
+""").replace("STEP", repr(STEP)).replace("INIT", repr(INIT)).replace("PATTERN", repr(PATTERN)).replace("HEAD",
+                                                                                                       repr(HEAD))
 
 
 def _run(tmp_path, body: str, *args: str, python=(), timeout_s: float = 120) -> subprocess.CompletedProcess:
@@ -377,3 +381,79 @@ def test_a_stack_overflow_in_the_firmware_is_an_error_saying_so_and_the_process_
         assert ": the firmware crashed in bt_step at virtual time 0.020425 s: a stack overflow in libbtbridge.so " \
                "(bt_deep) (touching address 0x" in line and line.endswith(
                    "); the bench left its bt_step and goes on; this co-simulation does not run again: make a new one")
+
+
+#: a firmware running its first argument at the start of bt_set_pattern: a co-simulation's set_pattern, twice (the
+#: co-simulation stopped), then a bridge bench given the pattern (its constructor); then a new co-simulation
+PATTERN_CRASH = """
+    from bench.hosts.bridge import FirmwareBench
+    library = firmware(sys.argv[1], in_pattern=True)
+    sim = CoSim(VirtualBoard(default_sensors(1)), library)
+    sim.run(0.01)
+    for _ in range(2):
+        try:
+            sim.set_pattern(["PDC"])
+        except FirmwareError as e:
+            print("error:", e, flush=True)
+    print("stopped:", sim.stopped, flush=True)
+    try:
+        FirmwareBench(firmware=library, pattern=["PDC"])
+    except FirmwareError as e:
+        print("bench:", e, flush=True)
+    CoSim(VirtualBoard(default_sensors(1))).run(0.05)
+    print("a new co-simulation runs", flush=True)
+"""
+
+
+@pytest.mark.parametrize("call, said", [
+    ("*nowhere = 1;", "crashed in bt_set_pattern at virtual time {t} s: SIGSEGV in libbtbridge.so (bt_set_pattern) "
+                      "(touching address 0x0);"),
+    ("exit(3);", "called exit(3) in bt_set_pattern at virtual time {t} s, which would have ended the process:"),
+    ("abort();", "called abort() in bt_set_pattern at virtual time {t} s, which would have ended the process:"),
+    ("assert(len == 0);", "called assert(len == 0), which failed at {src}:{line} in bt_set_pattern() in "
+                          "bt_set_pattern at virtual time {t} s, which would have ended the process:"),
+], ids=["SIGSEGV", "exit", "abort", "assert"])
+def test_a_firmware_that_crashes_or_exits_in_bt_set_pattern_is_an_error_naming_it_and_the_process_goes_on(
+        tmp_path, call, said):
+    """A fault, exit, abort or failed assert in bt_set_pattern ends that call, not the process: CoSim.set_pattern
+    raises a FirmwareError naming bt_set_pattern, the signal or the call, where and the virtual time (again at the
+    next call: the co-simulation is stopped), FirmwareBench(pattern=...) raises the same from its constructor, and a
+    new co-simulation runs.  bt_set_pattern ran outside the guard: the process ended, with nothing said."""
+    r = _run(tmp_path, PATTERN_CRASH, call)
+    assert r.returncode == 0, r.stdout + r.stderr
+    source = (tmp_path / "fw.c").read_text().splitlines()
+    line = 1 + next(k for k, text in enumerate(source) if call in text)
+    tail = "the bench left its bt_set_pattern and goes on; this co-simulation does not run again: make a new one\n"
+    error = "the firmware " + said.format(t="0.011425", src=tmp_path / "fw.c", line=line) + " " + tail
+    bench = "the firmware " + said.format(t="0.001425", src=tmp_path / "fw.c", line=line) + " " + tail
+    assert r.stdout == ("error: " + error + "error: set_pattern: " + error + "stopped: True\nbench: " + bench
+                        + "a new co-simulation runs\n"), r.stdout
+
+
+#: a firmware whose bt_set_pattern hangs (a loop calling no HAL function), called in a thread; the watchdog stops it
+PATTERN_HANG = """
+    sim = CoSim(VirtualBoard(default_sensors(1)), firmware(HANG, in_pattern=True))
+    ended = []
+    def set_pattern():
+        try:
+            sim.set_pattern(["PDC"])
+        except FirmwareError as e:
+            ended.append(str(e))
+    thread = threading.Thread(target=set_pattern, daemon=True)
+    thread.start()
+    time.sleep(0.3)
+    print("stop_step:", sim.stop_step(within_s=10), flush=True)
+    thread.join(10)
+    print("thread ended:", not thread.is_alive(), *ended, flush=True)
+"""
+
+
+def test_a_firmware_hung_in_bt_set_pattern_is_stopped_by_the_watchdog(tmp_path):
+    """A bt_set_pattern that never returns is left by the watchdog (stop_step, from another thread) as a hung bt_step
+    is: set_pattern raises a FirmwareError naming bt_set_pattern.  Outside the guard nothing could leave it: its
+    thread spun for good."""
+    r = _run(tmp_path, PATTERN_HANG)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.stdout == ("stop_step: None\nthread ended: True the firmware's bt_set_pattern was stopped by the bench's "
+                        "watchdog at virtual time 0.001425 s (it hung); this co-simulation does not run again: make a "
+                        "new one\n"), r.stdout

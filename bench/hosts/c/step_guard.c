@@ -12,7 +12,8 @@
  * while the bench's HAL function (Python) runs, and leave the step as that call returns once a stop was asked: the
  * jump never leaves the interpreter.  A fault in the firmware's own code (on_crash) leaves the step the same way.
  * A stop is for good: every later bt_guard_step of that guard returns 1 at once
- * (the firmware's state was left midway).  bt_init runs under the guard too (bt_guard_start), as bt_step does.
+ * (the firmware's state was left midway).  bt_init (bt_guard_start) and bt_set_pattern (bt_guard_set_pattern) run
+ * under the guard too, as bt_step does.
  * The firmware's own calls of exit, _exit, abort and __assert_fail (a failed assert) are redirected to the guard
  * (bt_guard_take_exits rewrites the library's entries for them in its global offset table — any library, built by
  * the bench or not), and each guarded call runs with an alternate signal stack, so a stack overflow in the firmware
@@ -294,12 +295,17 @@ int bt_guard_init(bt_guard *g, void *firmware_symbol) {
     return dl_iterate_phdr(take_text, &w) && g->n_text > 0 ? 0 : 1;
 }
 
-/* One of the firmware's entry points and its arguments: step(state), or init(state, hal). */
+/* One of the firmware's entry points and its arguments: step(state), init(state, hal), or
+ * set_pattern(state, payload, n) and where its result goes. */
 struct entry {
     void (*step)(void *);
     void (*init)(void *, const void *);
+    uint8_t (*set_pattern)(void *, const uint8_t *, size_t);
     void *state;
     const void *hal;
+    const uint8_t *payload;
+    size_t n;
+    uint8_t *result;
 };
 
 #if defined(__x86_64__)
@@ -420,6 +426,8 @@ static int run_guarded(bt_guard *g, const struct entry *call) {
     }
     if (call->init)
         call->init(call->state, call->hal);
+    else if (call->set_pattern)
+        *call->result = call->set_pattern(call->state, call->payload, call->n);
     else
         call->step(call->state);
     atomic_store(&g->inside, 0);
@@ -436,6 +444,14 @@ int bt_guard_step(bt_guard *g, void (*step)(void *), void *state) {
 /* Run the firmware's init(state, hal) under guard g (run_guarded says what comes back). */
 int bt_guard_start(bt_guard *g, void (*init)(void *, const void *), void *state, const void *hal) {
     struct entry call = {.init = init, .state = state, .hal = hal};
+    return run_guarded(g, &call);
+}
+
+/* Run the firmware's set_pattern(state, payload, n) under guard g, its result in *result when it returned
+ * (run_guarded says what comes back). */
+int bt_guard_set_pattern(bt_guard *g, uint8_t (*set_pattern)(void *, const uint8_t *, size_t), void *state,
+                         const uint8_t *payload, size_t n, uint8_t *result) {
+    struct entry call = {.set_pattern = set_pattern, .state = state, .payload = payload, .n = n, .result = result};
     return run_guarded(g, &call);
 }
 
