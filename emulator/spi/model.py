@@ -37,18 +37,78 @@ What MOSI does (decided when chip select rises)
 The conversion of a sampling command happens just after its chip select rises; it is disturbed by
 SPI coupling if the bus clocks again within ``adc_conversion_s``.  It is therefore resolved when the
 next transfer on the bus starts (or at :meth:`Bus.flush`), so results never depend on batching.
+
+A call is whole
+    :meth:`Bus.transfer`, :meth:`Bus.exchange_words` and :meth:`SensorPort.exchange` change the bus, its ports and
+    their sensors step by step; an exception a Python signal handler raises midway (KeyboardInterrupt from Ctrl-C)
+    would leave them part-way through a batch.  Such handlers run after the call instead (:func:`whole_call`), so
+    an interrupted caller finds the bus wholly before or wholly after its call.
 """
 
 from __future__ import annotations
 
 import functools
+import _signal  # (signal's own C functions: signal.getsignal's enum conversion costs 85 µs a call over every signal)
 import math
+import signal
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from emulator import channels as ch
 from emulator.spi import protocol as proto
+
+_SIGNALS = tuple(int(sig) for sig in signal.valid_signals())
+_holding = threading.local()  # .active: the main thread is inside a call that holds signal handlers back
+
+
+@contextmanager
+def signals_held():
+    """Hold back every Python signal handler over the block: a signal that comes inside it runs its handler as the
+    block ends (in the order the signals came), so an exception a handler raises — KeyboardInterrupt from SIGINT,
+    say — never lands midway.  Python runs signal handlers in the main thread only: elsewhere, and inside a block
+    already holding them, the block runs as it is.  Signals whose handler is not a Python function (the default
+    action, ignored, or a C library's) are left alone."""
+    if getattr(_holding, "active", False) or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came, handlers = [], {}
+
+    def later(sig, frame):
+        if getattr(_holding, "active", False):
+            came.append((sig, frame))
+        else:  # (the block is over: a handler not put back yet runs as it would have)
+            handlers[sig](sig, frame)
+
+    _holding.active = True
+    try:
+        for sig in _SIGNALS:
+            handler = _signal.getsignal(sig)
+            if callable(handler):
+                handlers[sig] = handler
+                _signal.signal(sig, later)
+        yield
+    finally:
+        _holding.active = False
+        try:
+            for sig, frame in came:
+                handlers[sig](sig, frame)
+        finally:
+            for sig, handler in handlers.items():
+                _signal.signal(sig, handler)
+
+
+def whole_call(method):
+    """``method`` run with Python signal handlers held back to its end (:func:`signals_held`): an interrupt never
+    leaves its changes to the bus half made."""
+    @functools.wraps(method)
+    def held(*args, **kwargs):
+        with signals_held():
+            return method(*args, **kwargs)
+    return held
+
 
 TIMER_HZ = 1e6
 SAMPLE_DELAY_TICKS = 50
@@ -442,6 +502,7 @@ class SensorPort:
             self._prepare_word(err["unknown_command"], t)
 
     # --- a sensor alone on its bus (the host sampler's path) ------------------------------
+    @whole_call
     def exchange(self, batch) -> np.ndarray:
         """MISO words for a batch of 16-bit transfers to this sensor alone (``TransferBatch``).
 
@@ -577,6 +638,7 @@ class Bus:
             return set(self.ports)
         return {n for n, c in SELECT_CODE.items() if c == code and n in self.ports}
 
+    @whole_call
     def transfer(self, tr: Transfer) -> int:
         """Clock one transfer; returns the MISO bits the host samples (``nbits`` bits, MSB first)."""
         if not (tr.nbits >= 0 and 0 < tr.clock_hz < math.inf and math.isfinite(tr.start_s)
@@ -627,6 +689,7 @@ class Bus:
     def run(self, transfers) -> list[int]:
         return [self.transfer(t) for t in transfers]
 
+    @whole_call
     def exchange_words(self, start, cs, mosi, clock_hz, keep_cs=None) -> np.ndarray:
         """MISO for a batch of 16-bit transfers with select codes ``cs`` (the firmware's usual traffic).
 

@@ -1,5 +1,8 @@
 """The reference SPI state machine: every command, multi-sensor buses, faults, and the vectorized path."""
 
+import signal
+import time
+
 import numpy as np
 import pytest
 
@@ -722,3 +725,54 @@ def test_a_sensor_unplugged_with_chip_select_held_on_it_leaves_the_idle_line(pul
     assert words[2] == words[3] == idle
     assert proto.decode_response(words[5])[1] and words[6] == words[7] == E["nothing_to_resend"]
     assert proto.decode_response(words[8])[1]
+
+
+def _probe(b: Bus) -> tuple:
+    """What a bus's state shows: when its last transfer ended, its ports' counters and what the sensors answer next
+    (every frame channel of sensors 1 and 2 sampled, then read, 1 s on)."""
+    from emulator.spi.model import PORT_COUNTERS
+
+    counters = tuple(getattr(p, c) for p in b.ports.values() for c in PORT_COUNTERS)
+    t = max(b._last_end, 0.0) + 1.0
+    commands = [int(proto.sample_command(channel_index(name))) << 8 for name in ALL[:6]]
+    start = t + 100e-6 * np.arange(2 * 2 * len(commands))
+    mosi = np.array([w for c in commands for w in (c, c, 0, 0)], np.uint16)
+    cs = np.tile([SELECT_CODE[1], SELECT_CODE[2]], mosi.size // 2)
+    return b._last_end, counters, b.exchange_words(start, cs, mosi, 4.4e6).tolist()
+
+
+def test_an_interrupt_inside_exchange_words_leaves_the_bus_wholly_before_or_after_the_call():
+    """Module docstring ("A call is whole"): SIGALRM, whose handler raises KeyboardInterrupt as Ctrl-C's does, comes
+    a quarter of the way into a long exchange_words call in the main thread (2000 words to two sensors, one of them a
+    property request, so the call goes word by word; on the all-plain word path the work between two Python steps
+    is a sensor's whole share, so a signal seldom lands inside it).  The call still raises KeyboardInterrupt, and
+    the bus is then as one that made no call or the whole call: the same end, counters and next answers.  The
+    handler used to run between two words, leaving the bus part-way: its last end mid-batch."""
+    n = 2000
+    start = 1e-3 + 60e-6 * np.arange(n)
+    cs = np.tile([SELECT_CODE[1], SELECT_CODE[2]], n // 2)
+    commands = [int(proto.sample_command(channel_index(name))) << 8 for name in ALL]
+    mosi = np.array([commands[(k // 4) % len(commands)] if k % 4 < 2 else 0 for k in range(n)], np.uint16)
+    mosi[n // 2] = 0x6100 | 0x02  # (a property request: not plain word traffic)
+    bus(2).exchange_words(start, cs, mosi, 4.4e6)  # (its kernels loaded: the timed call takes what the next takes)
+    before, after = bus(2), bus(2)
+    began = time.perf_counter()
+    whole = after.exchange_words(start, cs, mosi, 4.4e6)
+    took_s = time.perf_counter() - began
+    interrupted = bus(2)
+
+    def interrupt(sig, frame):
+        raise KeyboardInterrupt("SIGALRM")
+
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, took_s / 4)
+        with pytest.raises(KeyboardInterrupt, match="SIGALRM"):
+            interrupted.exchange_words(start, cs, mosi, 4.4e6)
+            time.sleep(10 * took_s + 1)  # (the signal must come: never returning quietly)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    state = _probe(interrupted)
+    assert state in (_probe(before), _probe(after)), "the bus was left part-way through the call"
+    assert whole.size == n
