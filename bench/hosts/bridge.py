@@ -13,7 +13,8 @@ line itself can corrupt or drop bytes (``corrupt_rate``, ``drop_rate``).
 with :func:`bench.hosts.cosim.build_firmware`, headers beside them part of the build's key) or a library you built;
 it must export ``bt_bridge_size``, ``bt_init``, ``bt_step`` and ``bt_set_pattern`` (``bt_bridge.h``).  A firmware
 whose ``bt_step`` never returns is reported by :meth:`stop` (a :class:`~bench.errors.FirmwareError`) after
-:data:`STOP_TIMEOUT_S` of wall time.  A bench whose firmware thread ended with an error (the firmware crashed or
+:data:`STOP_TIMEOUT_S` of wall time (time the process spends compiling the emulator's numba kernels, as a fresh
+clone's first steps do, not counted).  A bench whose firmware thread ended with an error (the firmware crashed or
 called exit, a HAL call it made was refused, a scheduled action raised) says so at the first call after —
 :meth:`at`, :meth:`now`, :attr:`virtual_time`, or else :meth:`stop` — naming the virtual time it ended at; every
 later call but :meth:`stop` says it again (:meth:`overrun_frames` still reads what the host was sent).
@@ -51,6 +52,7 @@ import time
 import numpy as np
 
 from bench.errors import BenchError, FirmwareError
+from bench.hosts.compile_clock import join_outside_compiles
 from bench.hosts.cosim import CoSim, VirtualBoard, firmware_library, run_action
 from bench.hosts.driver import DataFrame, FrameParser
 from bench.hosts.scene_sensors import bench_sensors
@@ -60,7 +62,9 @@ from bench.hosts.serial_link import RX_BUFFER_BYTES, PtyLink
 HOST_GONE_S = 0.2
 #: Unpaced, before the host's first byte: how often (wall s) the bench looks for it (virtual time stands still).
 HOST_POLL_S = 0.002
-#: How long (wall s) stop() waits for the firmware to end its step before it reports a hung firmware.
+#: How long (wall s) stop() waits for the firmware to end its step before it reports a hung firmware; time spent
+#: compiling the emulator's numba kernels (a fresh clone's first steps) does not count
+#: (:func:`bench.hosts.compile_clock.join_outside_compiles`).
 STOP_TIMEOUT_S = 10.0
 #: The sample times of this many of the latest data frames are kept (:meth:`FirmwareBench.sample_times`): 40 s of
 #: 44-slot frames, and fewer than the 65 536 sequence numbers, so a frame's number never finds another's times.
@@ -312,8 +316,7 @@ class FirmwareBench:
         if self.link.closed:
             return
         self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=STOP_TIMEOUT_S)
+        join_outside_compiles(self._thread, STOP_TIMEOUT_S)
         self.link.close()
         if self._thread.is_alive():  # inside the firmware's bt_step: a loop that never returns to the bench
             hung = (f"the firmware did not return from bt_step within {STOP_TIMEOUT_S:g} s of wall time after stop() "
@@ -322,7 +325,7 @@ class FirmwareBench:
                     f"{self.board.last_hal_call or 'none'}; firmware {self.sim.library})")
             why_not = self.sim.stop_step(within_s=STOP_TIMEOUT_S)  # the step guard: the firmware's loop is left
             if why_not is None:
-                self._thread.join(timeout=STOP_TIMEOUT_S)
+                join_outside_compiles(self._thread, STOP_TIMEOUT_S)
             if self._thread.is_alive():  # (inside a HAL call of the bench's, or outside the firmware's own code)
                 self.board.abandoned.set()
                 raise FirmwareError(f"{hung}; the watchdog could not stop it ({why_not or 'its thread did not end'}): "
