@@ -384,7 +384,8 @@ def test_a_stack_overflow_in_the_firmware_is_an_error_saying_so_and_the_process_
 
 
 #: a firmware running its first argument at the start of bt_set_pattern: a co-simulation's set_pattern, twice (the
-#: co-simulation stopped), then a bridge bench given the pattern (its constructor); then a new co-simulation
+#: co-simulation stopped), then its run; then a bridge bench given the pattern (its constructor); then a new
+#: co-simulation
 PATTERN_CRASH = """
     from bench.hosts.bridge import FirmwareBench
     library = firmware(sys.argv[1], in_pattern=True)
@@ -395,6 +396,10 @@ PATTERN_CRASH = """
             sim.set_pattern(["PDC"])
         except FirmwareError as e:
             print("error:", e, flush=True)
+    try:
+        sim.run(0.01)
+    except FirmwareError as e:
+        print("run:", e, flush=True)
     print("stopped:", sim.stopped, flush=True)
     try:
         FirmwareBench(firmware=library, pattern=["PDC"])
@@ -417,7 +422,7 @@ def test_a_firmware_that_crashes_or_exits_in_bt_set_pattern_is_an_error_naming_i
         tmp_path, call, said):
     """A fault, exit, abort or failed assert in bt_set_pattern ends that call, not the process: CoSim.set_pattern
     raises a FirmwareError naming bt_set_pattern, the signal or the call, where and the virtual time (again at the
-    next call: the co-simulation is stopped), FirmwareBench(pattern=...) raises the same from its constructor, and a
+    next call, and run says the same: the co-simulation is stopped, where it was left), FirmwareBench(pattern=...) raises the same from its constructor, and a
     new co-simulation runs.  bt_set_pattern ran outside the guard: the process ended, with nothing said."""
     r = _run(tmp_path, PATTERN_CRASH, call)
     assert r.returncode == 0, r.stdout + r.stderr
@@ -426,7 +431,8 @@ def test_a_firmware_that_crashes_or_exits_in_bt_set_pattern_is_an_error_naming_i
     tail = "the bench left its bt_set_pattern and goes on; this co-simulation does not run again: make a new one\n"
     error = "the firmware " + said.format(t="0.011425", src=tmp_path / "fw.c", line=line) + " " + tail
     bench = "the firmware " + said.format(t="0.001425", src=tmp_path / "fw.c", line=line) + " " + tail
-    assert r.stdout == ("error: " + error + "error: set_pattern: " + error + "stopped: True\nbench: " + bench
+    assert r.stdout == ("error: " + error + "error: set_pattern: " + error + "run: " + error + "stopped: True\nbench: "
+                        + bench
                         + "a new co-simulation runs\n"), r.stdout
 
 
