@@ -382,11 +382,11 @@ class VirtualBoard:
 class CoSim:
     """Firmware + board: ``run(seconds)`` executes the firmware's main loop in virtual time.
 
-    ``bt_init``, each ``bt_step`` and ``bt_set_pattern`` run under the step guard (``bench/hosts/c/step_guard.c``): :meth:`stop_step`
-    leaves a hung step (or a hung ``bt_set_pattern``), and a fault in the firmware's own code (SIGSEGV, SIGBUS,
-    SIGFPE, SIGILL; a stack overflow too) or its call of exit, _exit, abort or a failed assert (any firmware library:
-    the guard takes over its calls of them) leaves the call instead of ending the process — :meth:`run` (the
-    constructor for ``bt_init``, :meth:`set_pattern` for ``bt_set_pattern``) raises
+    ``bt_init``, each ``bt_step`` and ``bt_set_pattern`` run under the step guard (``bench/hosts/c/step_guard.c``):
+    :meth:`stop_step` leaves a hung step (or a hung ``bt_set_pattern``), and a fault in the firmware's own code
+    (SIGSEGV, SIGBUS, SIGFPE, SIGILL; a stack overflow too) or its call of exit, _exit, abort or a failed assert (any
+    firmware library: the guard takes over its calls of them) leaves the call instead of ending the process —
+    :meth:`run` (the constructor for ``bt_init``, :meth:`set_pattern` for ``bt_set_pattern``) raises
     :class:`FirmwareError` naming it.  Either way the co-simulation is :attr:`stopped` for good.
     """
 
@@ -427,12 +427,12 @@ class CoSim:
         """Stop this co-simulation's firmware for good — a watchdog giving up on a hung ``bt_step``, from another
         thread: the step running now is left (by a signal to its thread, :data:`GUARD_SIGNAL`, taken only where the
         thread is in the firmware's own code; tried again every :data:`GUARD_RETRY_S` until ``within_s`` wall s have
-        passed) and :meth:`run` raises :class:`FirmwareError`, now or at its next step; so does every later
-        :meth:`run` and :meth:`set_pattern`.  Returns None when no step runs any more, or else why the step could not
-        be left yet: inside one of the bench's HAL calls (it is left as that returns), or outside the firmware's code
-        (a C library call, say, which may hold a lock: jumping out of it would deadlock the process's next call of
-        it) or with the guard's signal handler replaced by something else in the process (a signal then might end
-        the process: none is sent)."""
+        passed) and :meth:`run` (:meth:`set_pattern`, for a hung ``bt_set_pattern``) raises :class:`FirmwareError`, now
+        or at its next step; so does every later :meth:`run` and :meth:`set_pattern`.  Returns None when no step runs
+        any more, or else why the step could not be left yet: inside one of the bench's HAL calls (it is left as that
+        returns), or outside the firmware's code (a C library call, say, which may hold a lock: jumping out of it would
+        deadlock the process's next call of it) or with the guard's signal handler replaced by something else in the
+        process (a signal then might end the process: none is sent)."""
         self._guard.bt_guard_stop(self._watch)
         sig = int(GUARD_SIGNAL)
         deadline = time.monotonic() + within_s

@@ -33,9 +33,9 @@ HEAD = ("#include <assert.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include 
         "    return depth ? bt_deep(depth + 1) + pad[0] : 0; }\n")
 #: what every case's process starts with: ``firmware(extra)`` builds the reference firmware running ``extra`` (C) in
 #: every bt_step from 20 ms of virtual time on, as fw.c in the folder its last argument names (``in_init=True``: at the
-#: start of bt_init instead; ``in_pattern=True``: at the start of bt_set_pattern; ``own``: compiled here with cc and these flags, as a library built without the bench);
-#: ``HANG``: a loop calling no HAL function; ``start(sim)`` runs 1 s of it in a thread: (the thread, the
-#: FirmwareErrors it ended with)
+#: start of bt_init instead; ``in_pattern=True``: at the start of bt_set_pattern; ``own``: compiled here with cc and
+#: these flags, as a library built without the bench); ``HANG``: a loop calling no HAL function; ``start(sim)`` runs 1
+#: s of it in a thread: (the thread, the FirmwareErrors it ended with)
 PRELUDE = textwrap.dedent("""
     import ctypes, signal, sys, threading, time
     from pathlib import Path
@@ -422,8 +422,9 @@ def test_a_firmware_that_crashes_or_exits_in_bt_set_pattern_is_an_error_naming_i
         tmp_path, call, said):
     """A fault, exit, abort or failed assert in bt_set_pattern ends that call, not the process: CoSim.set_pattern
     raises a FirmwareError naming bt_set_pattern, the signal or the call, where and the virtual time (again at the
-    next call, and run says the same: the co-simulation is stopped, where it was left), FirmwareBench(pattern=...) raises the same from its constructor, and a
-    new co-simulation runs.  bt_set_pattern ran outside the guard: the process ended, with nothing said."""
+    next call, and run says the same: the co-simulation is stopped, where it was left), FirmwareBench(pattern=...)
+    raises the same from its constructor, and a new co-simulation runs.  bt_set_pattern ran outside the guard: the
+    process ended, with nothing said."""
     r = _run(tmp_path, PATTERN_CRASH, call)
     assert r.returncode == 0, r.stdout + r.stderr
     source = (tmp_path / "fw.c").read_text().splitlines()
