@@ -29,6 +29,11 @@ def _mark_stimuli(ax, stimuli, t_max):
             ax.axvline(s.start_s, color=color, alpha=0.35, lw=0.8)
 
 
+def electrodes_read(names) -> list[str]:
+    """The electrodes among the channel names ``names`` (E1..E24, in order): those a run's frame sampled, E1 or not."""
+    return [f"E{n}" for n in range(1, 25) if f"E{n}" in names]
+
+
 #: a channel whose codes stay within this many codes, top to bottom, over the whole run is at rest: its noise is
 #: the ADC's (±1–2 LSB), drawn as a band around its mean instead of a zig-zag that fills the panel like a barcode
 QUIET_SPAN_CODES = 5
@@ -141,7 +146,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
                                             ("TDC_C", "TDC temperature (°C)", ("TDC",)),
                                             ("TAC_C_per_s", "TAC (°C/s)", ("TAC", "TDC")))
               if all(n in names for n in need)]
-    if any(f"E{n}" in names for n in range(1, 25)):  # whichever electrodes the frame samples (E1 or not)
+    if electrodes_read(names):
         panels.append(("E_kohm", "electrode impedance (kΩ)"))
 
     def traces(path: Path):
@@ -149,7 +154,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
         with figure_file(path, len(panels), 1, figsize=size, sharex=True, squeeze=False) as (_, axes):
             for ax, (key, label) in zip(axes[:, 0], panels):
                 if key == "E_kohm":
-                    electrodes = [f"E{n}" for n in range(1, 25) if f"E{n}" in names]  # E20..E24: a BioTac SP's
+                    electrodes = electrodes_read(names)
                     resting = [e for e in electrodes if at_rest(summary, e)]
                     for e in electrodes:
                         c, lo, hi, mean = _envelope_panel(summary, f"{e}_ohm", base)
@@ -188,7 +193,7 @@ def scene_plots(rec, base: dict) -> list[tuple[str, object]]:
                 ax.set_title(f"{rec.scene.name}: PAC spectrogram (80 ms windows{avg})")
 
         plots.append(("spectrogram.png", spectrogram))
-    if "E1" in names and any(contact_place(s) is not None for s in rec.scene.stimuli):  # touches, placed taps/presses
+    if electrodes_read(names) and any(contact_place(s) is not None for s in rec.scene.stimuli):  # placed contacts
         plots.append(("electrode_map.png", lambda path: electrode_map(rec, path)))
     if getattr(rec, "forces", None) and len(rec.forces.get("t", ())):
         plots.append(("forces.png", lambda path: sliding_forces(rec, path)))
@@ -232,18 +237,18 @@ def sliding_properties(rec, path: Path) -> None:
 
 def electrode_map(rec, path: Path) -> None:
     """The finger's core unwrapped (along the finger × around it) with each electrode coloured by its largest
-    impedance change over the scene, and the touches marked."""
+    impedance change over the scene (hollow: an electrode the host did not read), and the touches marked."""
     from bench.running.aggregate import hist_median_pair
     from emulator.conversions import impedance_ohm
     from emulator.electrodes import CORE_RADIUS_MM, electrode_positions_mm
 
     pos = electrode_positions_mm(rec.scene.variant)  # the sensor's own variant's table (24 on an SP)
     arc = CORE_RADIUS_MM * np.arctan2(pos[:, 1], -pos[:, 2])  # mm around the finger from the ventral midline
-    change = []
+    change = []  # %, NaN for an electrode the host did not read (or read no good sample of): no change known
     for n in range(1, len(pos) + 1):
         cs = rec.summary.channels.get(f"E{n}")
         if cs is None or cs.good == 0:
-            change.append(0.0)
+            change.append(np.nan)
             continue
         a, b = hist_median_pair(cs.early_hist if cs.early_hist.any() else cs.hist)
         rest = float((impedance_ohm(a) + impedance_ohm(b)) / 2)  # the median of the resting impedances
@@ -263,10 +268,16 @@ def electrode_map(rec, path: Path) -> None:
                 else:
                     x, a = x_mm, CORE_RADIUS_MM * np.radians(angle_deg)
                 ax.plot(x, a, "x", color="red", ms=9, mew=2, zorder=1)
-        sc = ax.scatter(pos[:, 0], arc, c=change, s=300, cmap="viridis", edgecolors="black", zorder=2)
-        shade = sc.to_rgba(np.asarray(change, float))
-        for n, (x, a, rgba) in enumerate(zip(pos[:, 0], arc, shade), start=1):
-            light = 0.299 * rgba[0] + 0.587 * rgba[1] + 0.114 * rgba[2] > 0.5  # dark text on light colours
+        change = np.asarray(change, float)
+        read = np.isfinite(change)
+        sc = ax.scatter(pos[read, 0], arc[read], c=change[read], s=300, cmap="viridis", edgecolors="black", zorder=2)
+        if not read.all():  # hollow, not a colour of the scale: no change is known where nothing was read
+            ax.scatter(pos[~read, 0], arc[~read], s=300, facecolors="none", edgecolors="0.6", zorder=2,
+                       label="not read")
+            ax.legend(loc="lower left", fontsize=7)
+        shade = sc.to_rgba(np.where(read, change, 0.0))
+        for n, (x, a, rgba, was_read) in enumerate(zip(pos[:, 0], arc, shade, read), start=1):
+            light = not was_read or 0.299 * rgba[0] + 0.587 * rgba[1] + 0.114 * rgba[2] > 0.5  # dark text on light
             ax.annotate(f"E{n}", (x, a), ha="center", va="center", fontsize=7, zorder=3,
                         color="black" if light else "white")
         fig.colorbar(sc, ax=ax, label="largest impedance change (%)", shrink=0.8)

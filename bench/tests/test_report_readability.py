@@ -210,6 +210,30 @@ def test_the_electrode_maps_cross_sits_on_the_touched_electrode(tmp_path, drawn)
     assert (float(crosses[0].get_xdata()[0]), float(crosses[0].get_ydata()[0])) == pytest.approx(label.xy, abs=1e-9)
 
 
+def test_the_electrode_map_is_drawn_for_a_frame_without_e1_and_leaves_unread_electrodes_hollow(tmp_path, drawn):
+    """A scene that reads E7 but not E1 and presses on E7 gets its electrode_map.png (it had been skipped without a
+    word: the map asked for E1); E7's disc takes the scale's colour of its change, and the 18 electrodes the host
+    never read are hollow discs labelled "not read", not 0 % on the colour scale."""
+    from bench.reporting.plots import scene_plots
+    from bench.reporting.report import baselines
+
+    sc = parse_scene_text('[scene]\nname = "map"\nduration_s = 2.0\nseed = 1\nfidelity = "fast"\n'
+                          '[host]\nsequence = ["PAC", "PDC", "E7"]\n[[stimulus]]\nkind = "press"\n'
+                          'electrode = "E7"\nstart_s = 0.4\nforce_N = 1.0\nramp_s = 0.2\nhold_s = 0.3\n')
+    rec = run_scene(sc, progress=False)
+    plots = dict(scene_plots(rec, baselines(rec)))
+    assert "electrode_map.png" in plots
+    plots["electrode_map.png"](tmp_path / "electrode_map.png")
+    assert (tmp_path / "electrode_map.png").stat().st_size > 0
+    _, ax = drawn["electrode_map.png"]
+    coloured, hollow = ax.collections
+    label_at = {a.get_text(): a.xy for a in ax.texts}
+    assert np.allclose(coloured.get_offsets(), [label_at["E7"]], rtol=0, atol=1e-9)
+    assert float(coloured.get_array()[0]) > 1.0  # % change of E7's impedance under the 1 N press on it
+    assert hollow.get_label() == "not read" and len(hollow.get_offsets()) == 18
+    assert np.allclose(hollow.get_offsets(), [label_at[f"E{n}"] for n in range(1, 20) if n != 7], rtol=0, atol=1e-9)
+
+
 def test_the_electrode_map_marks_a_placed_tap_and_leaves_a_bare_press_out(tmp_path, drawn):
     """A tap given x_mm/angle_deg dents the electrodes: electrode_map.png is drawn with one red × at its place
     (x_mm, and R·angle around the finger, to 1e-9 mm); a press given no place is not marked (only the fluid felt it)."""
