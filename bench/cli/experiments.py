@@ -204,9 +204,11 @@ def _cmd_texture_sweep(a) -> int:
                 raise _results_not_written(e, out, SWEEP_FILES, trials_json) from None
     finally:
         folder.close()
+    from bench.reporting.report import realtime_said
+
     sim = sum(r["simulated_s"] for r in rows)
     print(f"wrote {escaped(str(out))}/ ({', '.join(SWEEP_FILES)}): {len(rows)} trials, "
-          f"{sim:.0f} simulated s in {wall:.1f} s wall ({sim / wall:.0f}× real time)")
+          f"{sim:.0f} simulated s in {wall:.1f} s wall ({realtime_said(sim / wall)} real time)")
     if clipped_note(rows):
         print(f"note: {clipped_note(rows)}")
     return 0

@@ -357,6 +357,12 @@ def _or_dash(x, fmt: str) -> str:
     return "—" if x is None else format(x, fmt)
 
 
+def realtime_said(factor: float) -> str:
+    """A real-time factor (simulated s per wall s) as a report says it: whole numbers from 10×, two significant
+    digits below (0.44×, 3.2×: a slow run is not rounded to "0×")."""
+    return f"{factor:.0f}×" if factor >= 10 else f"{factor:.2g}×"
+
+
 def markdown_report(record: dict) -> str:
     sc = record["scene"]
     lines = [f"# Scene report: {sc['name']}", ""]
@@ -368,7 +374,7 @@ def markdown_report(record: dict) -> str:
         record.get("host", {}).get("spi"), "not recorded")  # (a record that could not be built holds no host)
     lines += [f"- status: **{status}**" + (f" — {record['error']}" if record["error"] else ""),
               f"- simulated {record['simulated_s']:.2f} s of {sc['duration_s']:g} s in {record['wall_s']:.2f} s wall "
-              + (f"({speed:.0f}× real time)" if speed >= 10 else f"({speed:.2g}× real time)"),
+              + f"({realtime_said(speed)} real time)",
               f"- fidelity `{sc['fidelity']}`, seed {sc['seed']}, SPI side: {spi}"]
     if "sensor" in record:
         who = record["sensor"]

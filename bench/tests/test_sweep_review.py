@@ -121,6 +121,31 @@ def test_sweep_files_share_grid_ids_and_an_earlier_sweep_needs_force(tmp_path, m
     assert "notes.txt" in capsys.readouterr().err and (first / "notes.txt").read_text() == "mine"
 
 
+def test_a_sweep_slower_than_real_time_says_its_factor_with_digits_not_0x(tmp_path, monkeypatch, capsys):
+    """A sweep whose trials take longer in wall time than they simulate (a first run compiling its kernels, a
+    loaded cluster) prints its real-time factor as run's report does, 0.77× — it had printed "(0× real time)". The
+    factor is checked against trials.json's own wall_s and the rows' simulated seconds."""
+    import json
+
+    from bench.reporting.report import realtime_said
+
+    def slow_sweep(tasks, spec=None, client=None, progress=True):  # the rows, in more wall time than simulated
+        t0 = time.perf_counter()
+        rows = _in_process_sweep(tasks)
+        time.sleep(max(0.0, 1.3 * sum(r["simulated_s"] for r in rows) - (time.perf_counter() - t0)))
+        return rows
+
+    monkeypatch.setattr(T, "sweep", slow_sweep)
+    out = tmp_path / "sweep"
+    assert cli.main(["texture-sweep", "--textures", "902", "--movements", "5", "--trials", "1", "--quiet",
+                     "--out", str(out)]) == 0
+    said = json.loads((out / "trials.json").read_text())
+    factor = sum(r["simulated_s"] for r in said["rows"]) / said["wall_s"]
+    assert 0.1 < factor < 1
+    assert f"({realtime_said(factor)} real time)" in capsys.readouterr().out
+    assert realtime_said(0.7712) == "0.77×" and realtime_said(1234.4) == "1234×"
+
+
 TINY = """
 [experiment]
 name = "tiny"
