@@ -141,7 +141,7 @@ def test_a_sweep_slower_than_real_time_says_its_factor_with_digits_not_0x(tmp_pa
                      "--out", str(out)]) == 0
     said = json.loads((out / "trials.json").read_text())
     factor = sum(r["simulated_s"] for r in said["rows"]) / said["wall_s"]
-    assert 0.1 < factor < 1
+    assert 0 < factor < 1
     assert f"({realtime_said(factor)} real time)" in capsys.readouterr().out
     assert realtime_said(0.7712) == "0.77×" and realtime_said(1234.4) == "1234×"
 
