@@ -111,6 +111,23 @@ def peripheral_for(scene: Scene, sensor: Sensor):
     return SoftwarePeripheral(sensor)
 
 
+def build_rtl_first(scene: Scene, sensor: Sensor, bar) -> bool:
+    """Build the RTL harness the scene's sensor runs on, if it is not built from today's sources (a first
+    ``--spi rtl``, or the RTL changed), saying so on the progress ``bar`` (tqdm) while Verilator runs; whether it
+    built (the run's wall time and its bar then start after the build, which is no part of the run's speed)."""
+    if scene.spi != "rtl":
+        return False
+    from emulator.rtl.harness import harness_for
+
+    harness = harness_for({1: sensor})
+    if harness.up_to_date():
+        return False
+    bar.set_description_str(f"{scene.name}: building the RTL harness with Verilator (first use, a minute or more)")
+    harness.ensure_built()
+    bar.set_description_str(scene.name)
+    return True
+
+
 def read_channel_names(scene: Scene) -> list[str]:
     """The channels the scene's host reads, in channel-index order (the keys of ``Recording.channels``)."""
     seq = Sampler(None, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz, variant=scene.variant).sequence
@@ -196,6 +213,9 @@ def run_one_sensor(scene: Scene, progress: bool = True, chunk_s: float = 1.0, *,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} sim s [{elapsed}<{remaining}]")
     try:
         sensor = build_sensor(scene, block_s)
+        if build_rtl_first(scene, sensor, bar):
+            t0 = time.perf_counter()
+            bar.reset()
         peripheral = peripheral_for(scene, sensor)
         sampler = Sampler(peripheral, scene.sequence, scene.slot_rate_Hz, scene.spi_clock_Hz, variant=scene.variant)
         total_slots = int(round(scene.duration_s * scene.slot_rate_Hz))

@@ -131,6 +131,14 @@ def _variant_of(sensor) -> str:
     return ch.variant(getattr(sensor, "variant", ch.DEFAULT_VARIANT)).name
 
 
+def harness_for(sensors: dict) -> "Harness":
+    """The harness a bus of ``sensors`` ({n: sensor}) runs on: the one built for their mix of variants (built or
+    not: :meth:`Harness.up_to_date`)."""
+    from emulator.rtl.build import sp_mask
+
+    return Harness(sp=sp_mask({n: _variant_of(s) for n, s in sensors.items()}))
+
+
 class Harness:
     """The compiled harness; ``sp``: bit n-1 set where sensor n is a BioTac SP (the bus's ``SP`` parameter)."""
 
@@ -155,13 +163,17 @@ class Harness:
         built under an exclusive lock on ``build.lock`` in the build folder: two processes that need it at once (two
         CI jobs on one checkout, pytest-xdist) build it once, where both had run Verilator into one folder and one
         of them failed."""
-        stamp = self.build_dir / "sources.sha256"
-        digest = self._sources_digest()
         with self._build_lock():
-            if not (self.binary.exists() and stamp.exists() and stamp.read_text() == digest):
+            if not self.up_to_date():
                 self._build()
-                stamp.write_text(digest)
+                (self.build_dir / "sources.sha256").write_text(self._sources_digest())
         return self.binary
+
+    def up_to_date(self) -> bool:
+        """Whether the binary is built from its sources as they are now (else :meth:`ensure_built` builds it:
+        Verilator and the C++ compiler, a minute or more)."""
+        stamp = self.build_dir / "sources.sha256"
+        return self.binary.exists() and stamp.exists() and stamp.read_text() == self._sources_digest()
 
     def _build_lock(self):
         """The build folder's lock (one build at a time, across processes)."""
@@ -360,7 +372,7 @@ class RtlBus:
         from emulator.spi.fastpath import _NO_TICK
 
         mask = sp_mask({n: _variant_of(s) for n, s in sensors.items()})
-        self.harness = harness or Harness(sp=mask)
+        self.harness = harness or harness_for(sensors)
         if self.harness.sp != mask:
             raise ValueError(f"the harness was built for SP mask {self.harness.sp}, the sensors need {mask}")
         self.harness.ensure_built()
