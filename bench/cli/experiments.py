@@ -226,7 +226,8 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                                                                    "1000 (D's pilot: 6)")
     s.add_argument("--seed", type=any_seed, default=0,
                    help="the sweep's seed; each trial's seed derives from it")
-    s.add_argument("--fidelity", default="default", choices=list(PROFILES))
+    s.add_argument("--fidelity", default="default", choices=list(PROFILES),
+                   help="fidelity profile of every trial (biotac-bench profiles)")
     s.add_argument("--smooth-skin", action="store_true", help="a skin without fingerprint ridges")
     s.add_argument("--library", metavar="FILE",
                    help="the textures come from this library file (TOML as fixtures/textures/library.toml, or .json "

@@ -485,7 +485,11 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "The host's receive buffer holds --rx-buffer bytes: paced, a host that stops reading loses "
                     "what does not fit (an overrun, as on a real UART without flow control) and the firmware "
                     "streams on; with --fast the firmware waits for a reading host instead. Stops on Ctrl-C or "
-                    "SIGTERM.", formatter_class=fmt)
+                    "SIGTERM.\n\n"
+                    "  biotac-bench bridge --sensors 3                 # prints the pty's path; Ctrl-C to stop\n"
+                    "  biotac-bench bridge --scene taps --fast         # the scene's sensors; waits for the host\n"
+                    "  biotac-bench record /dev/pts/5 --seconds 5      # from another shell: the path it printed",
+        formatter_class=fmt)
     br.add_argument("--sensors", type=whole(1, 5), default=None,
                     help="emulated sensors, 1 to 5 (default: the scene's count with --scene, else 1)")
     br.add_argument("--scene", type=scene_argument,
@@ -534,7 +538,11 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                     "during the recording.\n\n"
                     "codes[frame, slot, k] is the k-th present sensor ('layout' = 'compact'); if the pattern or "
                     "the set of sensors changes during the recording, codes[frame, slot, sensor - 1] with status "
-                    "255 where nothing was sampled ('layout' = 'by_sensor').", formatter_class=fmt)
+                    "255 where nothing was sampled ('layout' = 'by_sensor').\n\n"
+                    "  biotac-bench record /dev/pts/5 --seconds 5 --out rec.npz --csv   # the pty `biotac-bench "
+                    "bridge` printed\n"
+                    "  biotac-bench record socket://bench-pc:7000 --seconds 60 --out long.npz --force",
+        formatter_class=fmt)
     rc.add_argument("port", help="the bridge's serial port: a device, a pty (`biotac-bench bridge` prints it) or "
                                  "a pyserial URL such as socket://host:port")
     rc.add_argument("--seconds", type=number(0, 86_400 * 7, lo_open=True), default=1.0,
