@@ -28,6 +28,8 @@ the current folder.  It writes, into --out:
                 status ("ok", "failed" with the error, "interrupted" with the signal); written last
   report.md     a short human-readable report
   traces.png, spectrogram.png   (from min/max envelopes and an averaged spectrogram: any run length)
+  electrode_map.png   with a placed touch, tap or press and any electrode read
+  forces.png, properties.png    a sliding run's forces and slip, and each trial's texture properties
 
 The out folder is checked and locked before anything runs; a folder that is not empty is refused unless
 --force (which first removes an earlier run's files, and nothing else). Without --out, a fresh folder

@@ -60,6 +60,18 @@ def test_every_help_page_has_a_description_with_an_example_and_every_argument_a_
 
 
 @unit
+def test_run_help_names_every_file_a_run_can_write(capsys):
+    """`run --help` lists what a run writes into --out: every file of outdir.RUN_FILES (the files --force may
+    replace), the plots of a placed contact and of a sliding run included (electrode_map.png, forces.png and
+    properties.png had been left out of it)."""
+    from bench.reporting.outdir import RUN_FILES
+
+    _, out, _ = invoke(["run", "--help"], capsys)
+    listed = out.split("It writes, into --out:")[1].split("\n\n")[0]
+    assert [name for name in RUN_FILES if name not in listed] == []
+
+
+@unit
 @pytest.mark.parametrize("names, shown", [
     (("benchmark",), ["(default: 60.0)"]),
     (("claims",), ["(default: 2012)", "(default: default)"]),
