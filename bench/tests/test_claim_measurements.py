@@ -151,7 +151,7 @@ def test_the_tac_rate_s_smoothing_keeps_the_resting_noise_under_the_weakest_tran
     1.5e-3 °C/s); read over 50 ms instead of 200 ms the noise alone would read a third of it."""
     from bench.verification.claims.thermal import material_touch, tac_rate_C_per_s
 
-    foam = _row("thermal", "TAC transient: Al > glass > wood > foam").details["peak_cooling_C_per_s"]["polystyrene foam"]
+    foam = _row("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam").details["peak_cooling_C_per_s"]["polystyrene foam"]
     t, tdc, tac = material_touch(Bench(), None, seed_offset=4)
     _, rate = tac_rate_C_per_s(t, tac, tdc)
     assert 0.0 < -np.min(rate) < foam / 5, (-np.min(rate), foam)
@@ -168,7 +168,7 @@ def test_the_tac_row_orders_a_rate_tac_reads_as_one_within_its_range_and_resolut
     stated range and above the stated resolution, so the ordering is one the real TAC could read."""
     from bench.verification.claims.thermal import THERMAL_MATERIALS
 
-    row = _row("thermal", "TAC transient: Al > glass > wood > foam")
+    row = _row("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam")
     tau_s = 1.0 / (2 * np.pi * 0.45)
     after = row.details["peak_after_contact_s"]
     peaks = row.details["peak_cooling_C_per_s"]
@@ -294,7 +294,7 @@ def test_a_resting_code_at_or_below_the_series_impedance_is_refused_as_a_pressed
 
 @pytest.mark.parametrize("group, name", [
     ("thermal", "TDC drop after 10 s: Al > glass > wood > foam"),
-    ("thermal", "TAC transient: Al > glass > wood > foam"),
+    ("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam"),
     ("electrodes", "pressed electrode's impedance rises with force"),
 ])
 def test_a_yes_or_no_row_accepts_only_yes(group, name):

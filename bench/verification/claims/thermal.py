@@ -137,7 +137,7 @@ def thermal_claims(b: Bench) -> list[Claim]:
                    "the divider is built from the published conversion's constants"),
         Claim("TDC drop after 10 s: Al > glass > wood > foam", "strictly ordered", float(order_drop), 1.0, 1.0,
               "ordered", "D ch. 4; §4", {"drop_K": drops}, kind="prediction", note=_ORDER),
-        Claim("TAC transient: Al > glass > wood > foam", "strictly ordered", float(order_tac), 1.0, 1.0, "ordered",
+        Claim("TAC peak cooling rate over 10 s: Al > glass > wood > foam", "strictly ordered", float(order_tac), 1.0, 1.0, "ordered",
               "D ch. 4; §4", {"peak_cooling_C_per_s": tacs, "peak_after_contact_s": tac_after_s},
               kind="prediction", note=_TAC_RATE),
         Claim("TDC drop on aluminum after 10 s", "a clear drop (> 0.5 K)", drops["aluminum"], 0.5, 10.0, "K",
