@@ -245,6 +245,87 @@ def test_the_skins_creep_after_a_burst_carries_the_held_crests(monkeypatch):
     assert all(moved != 0.0 for _, moved in creeps), creeps
 
 
+def _stretch_at_0(force_N: float, velocity_m_per_s: float) -> Slide:
+    """The 24-stretch table's slide on the stretch at 0 of the track (docs/model.md): 60-grit at ``force_N`` N and
+    ``velocity_m_per_s`` m/s over max(6 mm, 0.3 s of travel)."""
+    return Slide(0.0, SAND, force_N, velocity_m_per_s, max(0.006, 0.3 * velocity_m_per_s), approach_s=0.02,
+                 hold_s=0.02, accel_s=0.01, lift_s=0.02)
+
+
+def _skins_slip(slide: Slide, monkeypatch, ridges: str = "resolved") -> tuple[np.ndarray, np.ndarray]:
+    """The skin's slip velocity (m/s) and the texture position under it (m) at every grid sample of ``slide`` (which
+    starts at 0 s) on the `default` grid, as the friction step writes them."""
+    slips, positions = [], []
+    original = SlidingContact._friction
+
+    def observed(self, c, n0, v, dt, out, i, j):
+        original(self, c, n0, v, dt, out, i, j)
+        slips.append(out[2][i:j].copy())
+        positions.append(out[3][i:j].copy())
+
+    monkeypatch.setattr(SlidingContact, "_friction", observed)
+    _run(slide, ridges)
+    monkeypatch.undo()
+    return np.concatenate(slips), np.concatenate(positions)
+
+
+def _ridges_force_N(contact: SlidingContact) -> float:
+    """The resolved ridges' force on the skin, Σ k_j·δ_j (N), of a contact's first motion."""
+    state = contact._contacts[0]["ridge_parts"][-1]
+    return float(np.sum(state[4] * state[0]))
+
+
+@pytest.mark.unit
+def test_the_documented_slow_speed_stick_creep_and_first_slip_figures(monkeypatch):
+    """Pins the figures docs/model.md quotes for the slow, hard cells on the stretch at 0 (`default` grid with
+    resolved ridges, the 24-stretch table's slides), as defined there.  In the steady part (from 0.1 s after the
+    stage starts to 20 ms before its end) the skin sticks (grid samples slipping slower than the ridges' 1 mm/s
+    floor) 90 % of the time at 1.26 N, 2 mm/s and 55 % at 0.5 N (measured 0.897, 0.547).  After the first slip above
+    the floor, each run of stuck samples wholly inside the steady part creeps the texture by the travel over it: the
+    medians of 1.26 N at 2, 5 and 10 mm/s and 0.5 N at 2 mm/s span 3–18 µm (measured 3.3, 8.7, 18.0, 11.1), the
+    longest is 35 µm, and the stuck samples carry 15 % of the steady part's slip at 1.26 N, 2 mm/s (0.149).  At that
+    first slip, at 1.26 N, 2 mm/s, the ridges' force goes from 0 to −0.63 N within one grid step (−0.633: every
+    crest over a feature's back falls to its negative limit at once).  None of these moved when the creep came to
+    carry the held crests (2026-11-24, the same to the digits above before and after): the ridges do not act back
+    on the skin, so its slip is the effective comb's to the bit, and the first moving slip comes before any
+    creep is carried."""
+    floor = friction.RIDGE_SLIP_FLOOR_M_PER_S
+    medians_m, longest_m = [], 0.0
+    for force_N, velocity in ((1.26, 0.002), (0.5, 0.002), (1.26, 0.005), (1.26, 0.01)):
+        slide = _stretch_at_0(force_N, velocity)
+        slip, position = _skins_slip(slide, monkeypatch)
+        t = np.arange(slip.size) / GRID.grid_Hz
+        steady = np.flatnonzero((t >= slide.slide_start_s + 0.1) & (t < slide.slide_end_s - 0.02))
+        lo, hi = steady[0], steady[-1]
+        stuck = np.abs(slip) < floor
+        first = int(np.argmax(~stuck))
+        creeps_m = []
+        k = first + 1
+        while k < slip.size:
+            end = k
+            while stuck[k] and end + 1 < slip.size and stuck[end + 1]:
+                end += 1
+            if stuck[k] and lo < k and end < hi:
+                creeps_m.append(abs(position[end] - position[k - 1]))
+            k = end + 1
+        medians_m.append(float(np.median(creeps_m)))
+        longest_m = max(longest_m, max(creeps_m))
+        if velocity == 0.002:
+            assert round(100 * stuck[lo:hi + 1].mean()) == {1.26: 90, 0.5: 55}[force_N], stuck[lo:hi + 1].mean()
+        if (force_N, velocity) == (1.26, 0.002):
+            crept_m = np.sum(np.abs(np.diff(position[lo:hi + 1]))[stuck[lo + 1:hi + 1]])
+            assert round(100 * crept_m / abs(position[hi] - position[lo])) == 15
+            assert np.array_equal(slip, _skins_slip(slide, monkeypatch, "effective")[0])
+            contact = SlidingContact([slide], SensorParams(), GRID.grid_Hz, GRID.sliding_dx_m,
+                                     GRID.friction_substeps, GRID.patch_radii, 3, ridges="resolved")
+            contact.process(Block(0, first, GRID.grid_Hz), {})
+            assert _ridges_force_N(contact) == 0.0
+            contact.process(Block(first, 1, GRID.grid_Hz), {})
+            assert _ridges_force_N(contact) == pytest.approx(-0.63, abs=0.005)
+    assert (round(min(medians_m) * 1e6), round(max(medians_m) * 1e6)) == (3, 18), medians_m
+    assert round(longest_m * 1e6) == 35, longest_m
+
+
 REFERENCE = profile("reference")
 
 
