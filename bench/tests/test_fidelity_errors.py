@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import json
 import math
+import time
+from pathlib import Path
 
 import pytest
 
@@ -164,3 +166,61 @@ def test_profile_errors_take_a_scene_built_in_code_as_they_take_its_file_and_lea
     before = (scene.fidelity, scene.noise, scene.seed)
     assert profile_errors(scene) == profile_errors(path)
     assert (scene.fidelity, scene.noise, scene.seed) == before
+
+
+def _copy_of_the_fixture(tmp_path, made) -> Path:
+    """A copy of the committed fixture in ``tmp_path`` whose every scene's ``made`` entry is ``made``."""
+    doc = dict(FIXTURE, made={name: made for name in FIXTURE["scenes"]})
+    doc.pop("made_with", None)
+    path = tmp_path / "errors.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return path
+
+
+@pytest.mark.unit
+def test_remaking_one_scene_measures_it_and_keeps_the_others_and_what_they_were_made_with(tmp_path):
+    """``--write-fidelity-errors --remake power_on``: power_on's errors are measured again (the committed ones,
+    within the recomputing test's tolerance) and its ``made`` entry says today's date, this checkout's commit and
+    changed files and this environment; every other scene keeps its errors and its ``made`` entry to the letter."""
+    from bench.verification.benchmark import fingerprint_environment, source_revision, write_fidelity_error_fixture
+
+    earlier = {"date": "2000-01-01", "commit": "0" * 40, "uncommitted": [], "environment": {"python": "0"}}
+    path = _copy_of_the_fixture(tmp_path, earlier)
+    said, today = [], time.strftime("%Y-%m-%d", time.gmtime())
+    doc = write_fidelity_error_fixture(path, say=said.append, remake=["power_on"])
+    assert json.loads(path.read_text(encoding="utf-8")) == doc and len(said) == 1
+    assert set(doc["scenes"]) == set(doc["made"]) == set(FIXTURE["scenes"]) and "made_with" not in doc
+    for name in FIXTURE["scenes"]:
+        if name != "power_on":
+            assert doc["scenes"][name] == FIXTURE["scenes"][name] and doc["made"][name] == earlier, name
+    for profile, errors in FIXTURE["scenes"]["power_on"].items():
+        assert doc["scenes"]["power_on"][profile] == pytest.approx(errors, rel=1e-3, abs=1e-6), profile
+    made = doc["made"]["power_on"]
+    assert made["date"] in (today, time.strftime("%Y-%m-%d", time.gmtime()))
+    assert {k: made[k] for k in ("commit", "uncommitted")} == source_revision()
+    assert made["environment"] == fingerprint_environment()
+
+
+@pytest.mark.unit
+def test_a_remake_naming_no_shipped_scene_or_of_a_file_without_provenance_is_refused_in_one_line(tmp_path, capsys,
+                                                                                                monkeypatch):
+    """A name that is not a shipped scene is refused naming it (through the command line: one line, exit 2), and a
+    partial remake of a file that does not say how its other scenes were measured (the old single ``made_with``)
+    is refused too; neither writes anything."""
+    import bench.verification.benchmark as benchmark
+
+    path = _copy_of_the_fixture(tmp_path, {"date": "2000-01-01"})
+    before = path.read_bytes()
+    monkeypatch.setattr(benchmark, "FIDELITY_ERROR_FIXTURE", path)
+    with pytest.raises(SystemExit) as exit_:
+        benchmark._fingerprints_main(["--write-fidelity-errors", "--remake", "power_on", "--remake", "powr_on"])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert exit_.value.code == 2 and "'powr_on'" in err and "power_on" in err, err
+    assert path.read_bytes() == before
+    old = dict(FIXTURE, made_with={"python": "3.11.7"})
+    old.pop("made", None)
+    path.write_text(json.dumps(old), encoding="utf-8")
+    before = path.read_bytes()
+    with pytest.raises(ValueError, match="no per-scene 'made' entry"):
+        benchmark.write_fidelity_error_fixture(path, say=lambda m: None, remake=["power_on"])
+    assert path.read_bytes() == before

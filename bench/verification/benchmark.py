@@ -648,25 +648,70 @@ FIDELITY_ERROR_FIXTURE = FIXTURES / "fidelity" / "errors.json"
 FIDELITY_ERROR_COMMAND = ".venv/bin/python -m bench.verification.benchmark --write-fidelity-errors"
 
 
-def write_fidelity_error_fixture(path=None, say=print) -> dict:
-    """Recompute :func:`profile_errors` for every shipped scene and write them to ``path`` (default
-    :data:`FIDELITY_ERROR_FIXTURE`; only for an intended change of a profile's error, said in the commit)."""
-    path = FIDELITY_ERROR_FIXTURE if path is None else path
-    scenes = {}
-    for scene_path in sorted(SCENES_DIR.glob("*.toml")):
+def source_revision(repo: Path = REPO) -> dict:
+    """Where in the project's history a measurement was made: the commit the working tree of ``repo`` is at
+    (``commit``: 40 hex digits, None outside a git checkout) and the tracked files it had changed on top of that
+    commit (``uncommitted``: relative paths, sorted; the measured fixture itself is left out)."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=repo, capture_output=True, text=True, check=True)
+        diff = subprocess.run(["git", "diff", "--name-only", "--no-renames", "-z", "HEAD"], cwd=repo,
+                              capture_output=True, text=True, check=True)
+    except (OSError, subprocess.CalledProcessError):
+        return {"commit": None, "uncommitted": []}
+    fixture = str(FIDELITY_ERROR_FIXTURE.relative_to(REPO))
+    changed = sorted({name for name in diff.stdout.split("\0") if name} - {fixture})
+    return {"commit": head.stdout.strip(), "uncommitted": changed}
+
+
+def write_fidelity_error_fixture(path=None, say=print, remake=None) -> dict:
+    """Recompute :func:`profile_errors` for every shipped scene, or only for the scenes named in ``remake`` (their
+    file names without ``.toml``), and write them to ``path`` (default :data:`FIDELITY_ERROR_FIXTURE`; only for an
+    intended change of a profile's error, said in the commit).  Each scene's entry in ``made`` says what it was
+    measured with: the date (UTC), :func:`source_revision` and :func:`fingerprint_environment`; a partial remake
+    keeps the other scenes' errors and their ``made`` entries as they were.  Raises :class:`ValueError` (one line,
+    nothing written) for a name that is not a shipped scene, or a partial remake of a file without per-scene
+    ``made`` entries."""
+    path = FIDELITY_ERROR_FIXTURE if path is None else Path(path)
+    shipped = sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+    if remake is None:
+        scenes, made, names = {}, {}, shipped
+    else:
+        unknown = sorted(set(remake) - set(shipped))
+        if unknown:
+            raise ValueError(f"fidelity errors: no shipped scene named {', '.join(map(repr, unknown))} "
+                             f"(fixtures/scenes/*.toml: {', '.join(shipped)})")
+        try:
+            old = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as e:
+            raise ValueError(f"fidelity errors: cannot read {escaped(str(path))} to remake part of it: "
+                             f"{escaped(str(e))}") from None
+        if not isinstance(old, dict) or not isinstance(old.get("scenes"), dict):
+            raise ValueError(f"fidelity errors: {escaped(str(path))} has no 'scenes' table to remake part of")
+        scenes, made, names = old["scenes"], old.get("made", {}), sorted(set(remake))
+        missing = sorted(set(scenes) - set(made))
+        if missing:
+            raise ValueError(f"fidelity errors: {escaped(str(path))} says nothing of how {', '.join(missing)} "
+                             f"were measured (no per-scene 'made' entry): remake it whole, without naming scenes")
+    stamp = {"date": time.strftime("%Y-%m-%d", time.gmtime()), **source_revision(),
+             "environment": fingerprint_environment()}
+    for name in names:
         t0 = time.perf_counter()
-        scenes[scene_path.stem] = profile_errors(scene_path)
-        say(f"{scene_path.stem}: {time.perf_counter() - t0:.1f} s")
+        scenes[name] = profile_errors(SCENES_DIR / f"{name}.toml")
+        made[name] = stamp
+        say(f"{name}: {time.perf_counter() - t0:.1f} s")
     doc = {"about": "Each fidelity profile's error against the reference profile on every shipped scene "
                     "(fixtures/scenes/*.toml, every sensor): per kind of channel the scene's host reads, the RMS over "
                     "all its conversions of the noise-free analog value's difference, in ADC LSB (bits). "
                     "bench/tests/test_fidelity_errors.py recomputes them: a change of any profile's error fails "
-                    "there until this file (and the README's table) says the new error.",
+                    "there until this file (and the README's table) says the new error. 'made' says, per scene, "
+                    "when, at which commit (and with which tracked files changed on top of it) and with what "
+                    "software its errors were last measured.",
            "regenerate": f"only for an intended change of these errors, said in the commit message: "
-                         f"{FIDELITY_ERROR_COMMAND}",
+                         f"{FIDELITY_ERROR_COMMAND} (every scene), or with --remake SCENE (repeatable) for the "
+                         f"scenes whose errors the change moved",
            "kinds": list(ERROR_KINDS),
-           "made_with": fingerprint_environment(),
-           "scenes": scenes}
+           "made": {name: made[name] for name in sorted(made)},
+           "scenes": {name: scenes[name] for name in sorted(scenes)}}
     write_json(path, doc)
     return doc
 
@@ -699,12 +744,21 @@ def _fingerprints_main(argv) -> int:
     ap.add_argument("--write-fidelity-errors", action="store_true",
                     help="rewrite the committed errors of the fidelity profiles (fixtures/fidelity/errors.json) and "
                          "nothing else; only for an intended change of a profile's error")
+    ap.add_argument("--remake", action="append", metavar="SCENE",
+                    help="with --write-fidelity-errors: measure only this shipped scene (its file name without "
+                         ".toml; repeatable) and keep the others' errors and provenance")
     a = ap.parse_args(argv)
+    if a.remake and not a.write_fidelity_errors:
+        ap.error("--remake goes with --write-fidelity-errors")
     if a.write_fidelity_errors:
         if a.write_fixture or a.out is not None or a.scenes != SCENES_DIR:
             ap.error("--write-fidelity-errors takes no other option or file (it measures the shipped scenes)")
-        doc = write_fidelity_error_fixture()
-        print(f"wrote {FIDELITY_ERROR_FIXTURE}: {len(doc['scenes'])} scenes")
+        try:
+            doc = write_fidelity_error_fixture(remake=a.remake)
+        except ValueError as e:
+            ap.error(str(e))
+        remade = len(doc["scenes"]) if a.remake is None else len(set(a.remake))
+        print(f"wrote {FIDELITY_ERROR_FIXTURE}: {remade} of {len(doc['scenes'])} scenes measured")
         return 0
     if a.write_fixture:
         if a.out is not None or a.scenes != SCENES_DIR:
