@@ -224,3 +224,32 @@ def test_a_remake_naming_no_shipped_scene_or_of_a_file_without_provenance_is_ref
     with pytest.raises(ValueError, match="no per-scene 'made' entry"):
         benchmark.write_fidelity_error_fixture(path, say=lambda m: None, remake=["power_on"])
     assert path.read_bytes() == before
+
+
+@pytest.mark.unit
+def test_the_source_revision_is_the_checkouts_commit_and_the_tracked_files_changed_on_it(tmp_path):
+    """In a git checkout (a real one, made here): the commit HEAD is at, and the tracked files changed since, staged
+    or not, sorted, without the fidelity fixture itself (a remake rewrites it) or untracked files; outside a
+    checkout, commit None."""
+    import subprocess
+
+    from bench.verification.benchmark import source_revision
+
+    def git(*args):
+        return subprocess.run(["git", "-c", "user.name=t", "-c", "user.email=t@t", *args], cwd=tmp_path,
+                              capture_output=True, text=True, check=True).stdout.strip()
+
+    assert source_revision(tmp_path) == {"commit": None, "uncommitted": []}
+    fixture = tmp_path / FIXTURE_NAME
+    fixture.parent.mkdir(parents=True)
+    for path in (fixture, tmp_path / "a.py", tmp_path / "b.py", tmp_path / "c.py"):
+        path.write_text("0\n", encoding="utf-8")
+    git("init", "-q")
+    git("add", ".")
+    git("commit", "-q", "-m", "start")
+    head = git("rev-parse", "HEAD")
+    assert source_revision(tmp_path) == {"commit": head, "uncommitted": []}
+    for path in (fixture, tmp_path / "c.py", tmp_path / "a.py", tmp_path / "new.py"):
+        path.write_text("1\n", encoding="utf-8")
+    git("add", "c.py")
+    assert source_revision(tmp_path) == {"commit": head, "uncommitted": ["a.py", "c.py"]}
