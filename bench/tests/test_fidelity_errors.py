@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import time
 from pathlib import Path
 
@@ -253,3 +254,18 @@ def test_the_source_revision_is_the_checkouts_commit_and_the_tracked_files_chang
         path.write_text("1\n", encoding="utf-8")
     git("add", "c.py")
     assert source_revision(tmp_path) == {"commit": head, "uncommitted": ["a.py", "c.py"]}
+
+
+@pytest.mark.unit
+def test_the_stated_errors_say_per_scene_when_at_which_commit_and_with_what_they_were_measured():
+    """The file once named one environment (``made_with``) for errors that later sessions remade scene by scene;
+    now every scene's ``made`` entry gives its own date, commit (40 hex digits), the tracked files changed on top of
+    it (a list) and the software (the keys of :func:`fingerprint_environment`), and no file-wide claim is left."""
+    from bench.verification.benchmark import fingerprint_environment
+
+    assert "made_with" not in FIXTURE
+    assert set(FIXTURE["made"]) == set(FIXTURE["scenes"])
+    for name, made in FIXTURE["made"].items():
+        assert set(made) == {"date", "commit", "uncommitted", "environment"}, name
+        assert re.fullmatch(r"\d{4}-\d{2}-\d{2}", made["date"]) and re.fullmatch(r"[0-9a-f]{40}", made["commit"])
+        assert isinstance(made["uncommitted"], list) and set(made["environment"]) == set(fingerprint_environment())
