@@ -151,7 +151,8 @@ def test_the_tac_rate_s_smoothing_keeps_the_resting_noise_under_the_weakest_tran
     1.5e-3 °C/s); read over 50 ms instead of 200 ms the noise alone would read a third of it."""
     from bench.verification.claims.thermal import material_touch, tac_rate_C_per_s
 
-    foam = _row("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam").details["peak_cooling_C_per_s"]["polystyrene foam"]
+    row = _row("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam")
+    foam = row.details["peak_cooling_C_per_s"]["polystyrene foam"]
     t, tdc, tac = material_touch(Bench(), None, seed_offset=4)
     _, rate = tac_rate_C_per_s(t, tac, tdc)
     assert 0.0 < -np.min(rate) < foam / 5, (-np.min(rate), foam)

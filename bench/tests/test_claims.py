@@ -131,7 +131,8 @@ def test_rows_over_several_parts_report_the_worst_part():
     d_min = _row("vibration", "d_min near the 330 Hz resonance")
     assert d_min.measured == pytest.approx(1e9 * min(d_min.details["peak_search_d_min_m"].values()), rel=1e-12)
     for group, name, key in (("thermal", "TDC drop after 10 s: Al > glass > wood > foam", "drop_K"),
-                             ("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam", "peak_cooling_C_per_s")):
+                             ("thermal", "TAC peak cooling rate over 10 s: Al > glass > wood > foam",
+                              "peak_cooling_C_per_s")):
         c = _row(group, name)
         v = [c.details[key][m] for m in ("aluminum", "glass", "wood", "polystyrene foam")]
         assert len(v) == 4 and c.measured == float(all(a > b for a, b in zip(v, v[1:]))), name
