@@ -205,9 +205,9 @@ def test_remaking_one_scene_measures_it_and_keeps_the_others_and_what_they_were_
 @pytest.mark.unit
 def test_a_remake_naming_no_shipped_scene_or_of_a_file_without_provenance_is_refused_in_one_line(tmp_path, capsys,
                                                                                                 monkeypatch):
-    """A name that is not a shipped scene is refused naming it (through the command line: one line, exit 2), and a
-    partial remake of a file that does not say how its other scenes were measured (the old single ``made_with``)
-    is refused too; neither writes anything."""
+    """A name that is not a shipped scene is refused naming it (through the command line: one line, exit 2), as is
+    ``--remake`` without ``--write-fidelity-errors``, a file that cannot be read, and a partial remake of a file
+    that does not say how its other scenes were measured (the old single ``made_with``); none writes anything."""
     import bench.verification.benchmark as benchmark
 
     path = _copy_of_the_fixture(tmp_path, {"date": "2000-01-01"})
@@ -218,6 +218,12 @@ def test_a_remake_naming_no_shipped_scene_or_of_a_file_without_provenance_is_ref
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert exit_.value.code == 2 and "'powr_on'" in err and "power_on" in err, err
     assert path.read_bytes() == before
+    with pytest.raises(SystemExit) as exit_:  # (a remake writes the fixture: alone it would only measure)
+        benchmark._fingerprints_main(["--remake", "power_on"])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert exit_.value.code == 2 and "--remake goes with --write-fidelity-errors" in err, err
+    with pytest.raises(ValueError, match="cannot read .*absent.json"):
+        benchmark.write_fidelity_error_fixture(tmp_path / "absent.json", say=lambda m: None, remake=["power_on"])
     old = dict(FIXTURE, made_with={"python": "3.11.7"})
     old.pop("made", None)
     path.write_text(json.dumps(old), encoding="utf-8")
