@@ -85,8 +85,8 @@ Keywords (every one optional)
         sensors       your own ``{k: Sensor}`` instead (refused with units, variant, stimuli, params, fidelity,
                       noise, faults or scene: they would be ignored; an n_sensors beside them must be their count)
         scene         the sensors of a scene (below); refused with sensors, stimuli, units, variant, params,
-                      fidelity, noise, faults (the scene says them) and, on the bridge, pattern (its
-                      host.sequence is the pattern)
+                      noise, faults (the scene says them) and, on the bridge, pattern (its host.sequence is the
+                      pattern); a ``fidelity`` (and ``seed``) beside it replaces the scene's own
       biotac_bridge only (``FirmwareBench``):
         realtime      pace the firmware to the wall clock (default False: it waits for your program to read)
         speed         virtual seconds per wall second when paced (default 1)
@@ -180,6 +180,12 @@ def with_settings(scene, settings: dict):
     from bench.scenes.scene import with_overrides
 
     return with_overrides(scene, {f"scene.{name}": value for name, value in settings.items()})
+
+
+def over_scene(settings: dict, kw: dict) -> dict:
+    """The settings a call's scene is read with: the session's or the test's marker's (``settings``), the call's own
+    ``fidelity=`` over them (taken out of the call's keywords ``kw``), as ``run SCENE --fidelity`` replaces a scene's."""
+    return {**settings, **({"fidelity": kw.pop("fidelity")} if "fidelity" in kw else {})}
 
 
 def load_scene_like(scene):
@@ -345,10 +351,11 @@ def biotac_sensor(request):
         try:
             if scene is None:
                 return side(one_sensor(**{"seed": DEFAULT_SEED, **settings, **kw}), spi or "software")
+            scene_settings = over_scene(settings, kw)
             _refuse_beside("biotac_sensor", "scene", kw, ("stimuli", "channels", "unit", "variant", *SENSOR_KEYWORDS))
             from bench.hosts.scene_sensors import sensors_from_scene
 
-            scene = with_settings(load_scene_like(scene), settings)
+            scene = with_settings(load_scene_like(scene), scene_settings)
             return side(sensors_from_scene(scene, scene.n_sensors, seed=kw.get("seed"))[1], spi or scene.spi)
         except (SceneError, ValueError, TypeError) as e:  # TypeError: "not a stimulus: 'tap'"
             _fail(f"biotac_sensor(): {e}")
@@ -412,8 +419,9 @@ def _bench_kw(fixture: str, n_sensors: int | None, kw: dict, scene_kw, settings:
     __tracebackhide__ = True
     kw = dict(kw)
     if "scene" in kw:
+        scene_settings = over_scene(settings, kw)
         _refuse_beside(fixture, "scene", kw, ("sensors", "pattern") + SENSOR_DESCRIPTION)
-        scene = with_settings(load_scene_like(kw.pop("scene")), settings)
+        scene = with_settings(load_scene_like(kw.pop("scene")), scene_settings)
         return scene_kw(scene, n_sensors, kw.pop("seed", None), kw)
     seed = kw.pop("seed", settings.get("seed", DEFAULT_SEED))
     if "sensors" in kw:

@@ -91,6 +91,16 @@ def test_marker(biotac_sensor, biotac_bridge):
 
 def test_the_call_decides(biotac_cheetah):
     assert seen(p.sensor for p in biotac_cheetah(seed=5, fidelity="default").bus.ports.values()) == [("default", 5)]
+
+@pytest.mark.biotac(fidelity="reference")
+def test_the_call_decides_beside_a_scene(biotac_sensor, biotac_bridge, biotac_cheetah):
+    def profiles(sensors):
+        return [name for name, _ in seen(sensors)]
+
+    assert profiles([biotac_sensor(scene="rest", fidelity="fast").sensor]) == ["fast"]
+    assert profiles(biotac_bridge(scene="rest", fidelity="fast").board.sensors.values())[0] == "fast"
+    assert profiles(p.sensor for p in biotac_cheetah(scene="rest", fidelity="fast").bus.ports.values())[0] == "fast"
+    assert profiles([biotac_sensor(scene="rest").sensor]) == ["reference"]  # the marker's, without the call's
 '''
 
 
@@ -111,7 +121,7 @@ def test_the_sessions_fidelity_and_seed_reach_every_factory_under_the_tests_mark
     if ini:
         pytester.makeini("[pytest]\n" + ini)
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", *options)
-    result.assert_outcomes(passed=3)
+    result.assert_outcomes(passed=4)
     assert "warning" not in result.stdout.str().lower(), result.stdout.str()
 
 

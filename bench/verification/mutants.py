@@ -7714,6 +7714,16 @@ CATALOGUE += [
            '        except ValueError as e:\n            raise ValueError(f"fidelity errors: cannot read',
            ('bench/tests/test_fidelity_errors.py::test_a_remake_naming_no_shipped_scene_or_of_a_file_without_provenance_is_refused_in_one_line',),
            'a remake of a missing fidelity file ends in a bare FileNotFoundError instead of one line naming the file'),
+    Mutant('plugin-sensor-call-fidelity-refused-beside-a-scene', 'plugin', 'bench/pytest_plugin/fixtures.py',
+           '            scene_settings = over_scene(settings, kw)\n',
+           '            scene_settings = settings\n',
+           ('bench/tests/test_plugin_session.py::test_the_sessions_fidelity_and_seed_reach_every_factory_under_the_tests_marker_and_call',),
+           "biotac_sensor(scene=..., fidelity=...) is refused, though the README says a call's fidelity= replaces the scene's"),
+    Mutant('plugin-bench-call-fidelity-refused-beside-a-scene', 'plugin', 'bench/pytest_plugin/fixtures.py',
+           '        scene_settings = over_scene(settings, kw)\n        _refuse_beside(fixture,',
+           '        scene_settings = settings\n        _refuse_beside(fixture,',
+           ('bench/tests/test_plugin_session.py::test_the_sessions_fidelity_and_seed_reach_every_factory_under_the_tests_marker_and_call',),
+           "biotac_bridge/biotac_cheetah(scene=..., fidelity=...) are refused, though the README says a call's fidelity= replaces the scene's"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
