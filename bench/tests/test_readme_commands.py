@@ -68,3 +68,36 @@ def test_scripts_claims_writes_a_relative_plots_folder_where_the_user_is(tmp_pat
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "mine" / "frequency_sensitivity.png").stat().st_size > 1000
     assert not (REPO / "mine").exists()
+
+
+#: a README example's placeholder for the user's own file (not a file of the repository)
+OWN_FILE_PLACEHOLDERS = {"my_scene.toml"}
+
+
+def readme_cli_examples() -> list[list[str]]:
+    """The arguments of every ``.venv/bin/biotac-bench …`` line in the README's code blocks (its comment cut)."""
+    import shlex
+
+    readme = (REPO / "README.md").read_text()
+    blocks = re.findall(r"^```[a-z]*\n(.*?)^```", readme, flags=re.S | re.M)
+    return [shlex.split(line.split(" # ")[0], comments=False)[1:]
+            for block in blocks for line in block.splitlines() if line.startswith(".venv/bin/biotac-bench ")]
+
+
+def test_every_command_line_the_readme_shows_is_one_the_cli_takes():
+    """Each example in the README's code blocks names a real subcommand and only options it has, with values it
+    takes (parsed by the CLI's own parser, nothing run), and every repository file it names exists: a renamed flag
+    or file cannot leave the README behind."""
+    from bench.cli.main import build_parser
+
+    examples = readme_cli_examples()
+    assert len(examples) >= 15, examples
+    parser = build_parser()
+    for argv in examples:
+        try:
+            _, extra = parser.parse_known_args(argv)
+        except SystemExit as e:
+            pytest.fail(f"the README's `biotac-bench {' '.join(argv)}` is refused by the CLI (exit {e.code})")
+        assert not extra, (argv, extra)
+        files = [a for a in argv if a.endswith((".toml", ".json")) and a not in OWN_FILE_PLACEHOLDERS]
+        assert all((REPO / f).is_file() for f in files), (argv, files)

@@ -7724,6 +7724,16 @@ CATALOGUE += [
            '        scene_settings = settings\n        _refuse_beside(fixture,',
            ('bench/tests/test_plugin_session.py::test_the_sessions_fidelity_and_seed_reach_every_factory_under_the_tests_marker_and_call',),
            "biotac_bridge/biotac_cheetah(scene=..., fidelity=...) are refused, though the README says a call's fidelity= replaces the scene's"),
+    Mutant('readme-example-flag-misspelled', 'cli', 'README.md',
+           '.venv/bin/biotac-bench run taps --csv ',
+           '.venv/bin/biotac-bench run taps --cvs ',
+           ('bench/tests/test_readme_commands.py::test_every_command_line_the_readme_shows_is_one_the_cli_takes',),
+           'a README example names an option the CLI does not have'),
+    Mutant('readme-example-file-moved', 'cli', 'README.md',
+           '.venv/bin/biotac-bench explore fixtures/experiments/fishel2012.toml   # D ch. 6',
+           '.venv/bin/biotac-bench explore fixtures/experiment/fishel2012.toml   # D ch. 6',
+           ('bench/tests/test_readme_commands.py::test_every_command_line_the_readme_shows_is_one_the_cli_takes',),
+           'a README example names a repository file that is not there'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
