@@ -7734,6 +7734,21 @@ CATALOGUE += [
            '.venv/bin/biotac-bench explore fixtures/experiment/fishel2012.toml   # D ch. 6',
            ('bench/tests/test_readme_commands.py::test_every_command_line_the_readme_shows_is_one_the_cli_takes',),
            'a README example names a repository file that is not there'),
+    Mutant('harness-stamp-not-compared', 'rtl', 'emulator/rtl/harness.py',
+           'stamp.exists() and stamp.read_text() == self._sources_digest()',
+           'stamp.exists()',
+           ('emulator/tests/test_rtl_harness_stale.py::test_a_harness_is_up_to_date_only_while_its_sources_and_mask_are_those_it_was_built_from',),
+           'a harness built from other sources is reused: a stale RTL runs under --spi rtl'),
+    Mutant('harness-digest-skips-the-rtl', 'rtl', 'emulator/rtl/harness.py',
+           'for path in (HARNESS_CPP, *build.SOURCES, Path(build.__file__)):',
+           'for path in (HARNESS_CPP, Path(build.__file__)):',
+           ('emulator/tests/test_rtl_harness_stale.py::test_a_harness_is_up_to_date_only_while_its_sources_and_mask_are_those_it_was_built_from',),
+           'a change to the Verilog does not rebuild the harness'),
+    Mutant('harness-digest-skips-the-mask', 'rtl', 'emulator/rtl/harness.py',
+           'h = hashlib.sha256(f"sp={self.sp}".encode())',
+           'h = hashlib.sha256(b"sp")',
+           ('emulator/tests/test_rtl_harness_stale.py::test_a_harness_is_up_to_date_only_while_its_sources_and_mask_are_those_it_was_built_from',),
+           'a harness built for one SP mask is taken for another'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
