@@ -515,6 +515,17 @@ def test_a_first_rtl_run_says_it_is_building_and_keeps_the_build_out_of_its_wall
     from bench.scenes.scene import parse_scene_text
 
     monkeypatch.setattr(harness, "DEFAULT_DIR", tmp_path / "rtl_harness")  # a fresh build, not the shared one
+    build = harness.Harness._build
+    built_s = []
+
+    def timed_build(self):  # the real build, its duration noted (a few s with a warm compiler cache, a minute cold)
+        t = time.perf_counter()
+        try:
+            return build(self)
+        finally:
+            built_s.append(time.perf_counter() - t)
+
+    monkeypatch.setattr(harness.Harness, "_build", timed_build)
     scene = parse_scene_text('[scene]\nname = "first-rtl"\nduration_s = 0.3\nseed = 1\nfidelity = "fast"\n'
                         '[host]\nspi = "rtl"\nsequence = ["PAC", "PDC"]\n')
     t0 = time.perf_counter()
@@ -523,4 +534,4 @@ def test_a_first_rtl_run_says_it_is_building_and_keeps_the_build_out_of_its_wall
     assert rec.error is None and rec.status == "ok", rec.error
     assert (tmp_path / "rtl_harness" / "harness").is_file()  # built here, by this run
     assert "first-rtl: building the RTL harness with Verilator" in capsys.readouterr().err
-    assert whole_s > 5.0 and rec.wall_s < whole_s / 2, (rec.wall_s, whole_s)
+    assert len(built_s) == 1 and rec.wall_s <= whole_s - built_s[0], (rec.wall_s, whole_s, built_s)
