@@ -16,13 +16,17 @@ from emulator.sensor import NoiseSources, Sensor
 from emulator.sliding import CommandedMotion, Slide
 from emulator.texture import Texture
 
-pytestmark = pytest.mark.unit
+#: every texture here sits inside the model's documented range: a slip of it into extrapolation fails the test
+pytestmark = [pytest.mark.unit, pytest.mark.filterwarnings("error::emulator.stimuli.OutsideModelWarning")]
 
 #: polished aluminium's friction (µs 1.05, µk 0.95: the library's T46), on a fine random surface
 GRIPPY = Texture(906, "grippy", "test", rms_height_m=0.3e-6, correlation_length_m=50e-6, hurst=0.8, mu_static=1.05,
                  mu_kinetic=0.95, seed=11)
-#: the same surface nearly frictionless (µ = 0 itself is outside the friction model: its Stribeck curve divides by µ)
-SLICK = dataclasses.replace(GRIPPY, mu_static=1e-6, mu_kinetic=1e-6)
+#: the same surface nearly frictionless: µ 0.02, a lubricated contact, the least a texture library takes (µ = 0 is
+#: outside the friction model, its Stribeck curve divides by µ; and below µk ≈ 0.0065 the default 5 mm/s Stribeck
+#: velocity leaves the friction element's passive range at this sensor's bristle damping, an extrapolation the
+#: Sensor warns about)
+SLICK = dataclasses.replace(GRIPPY, number=907, name="slick", mu_static=0.02, mu_kinetic=0.02)
 #: a smooth texture whose static friction far exceeds its kinetic one: the skin sticks and snaps (stick-slip)
 STICKY = Texture(905, "sticky", "test", rms_height_m=0.0, correlation_length_m=100e-6, hurst=0.8, mu_static=1.2,
                  mu_kinetic=0.5, seed=9)
@@ -49,7 +53,7 @@ def _slide(texture, velocity=0.02, force=1.0, distance=0.03):
 
 def test_during_the_hold_the_pressed_electrodes_read_as_on_a_frictionless_texture():
     """The stage holds still: the friction model's tangential force is zero, so the electrodes under the pad read as
-    with µ ≈ 0 (before the fix they read µk × the load from touchdown on: 133 codes apart on polished aluminium)."""
+    with µ 0.02 (before the fix they read µk × the load from touchdown on: 133 codes apart on polished aluminium)."""
     readings = []
     for texture in (GRIPPY, SLICK):
         slide = _slide(texture)
@@ -65,8 +69,8 @@ def test_during_the_hold_the_pressed_electrodes_read_as_on_a_frictionless_textur
 def test_the_pattern_shifts_at_slip_along_the_shear_and_follows_the_friction_force():
     """At slip onset the friction force rises from zero and the dent moves along it (+x, with the stage): the
     pressed electrode ahead of the centre thins (its code falls), the one behind recovers (its code rises), by
-    amounts that follow the friction force the sliding contact computes, while a frictionless texture moves
-    nothing."""
+    amounts that follow the friction force the sliding contact computes, while a nearly frictionless texture (µ 0.02
+    against 0.95) moves it by a small fraction of that."""
     slide = _slide(GRIPPY)
     sensor = Sensor(stimuli=[slide], channels_read=[f"E{PRESSED}", f"E{BEHIND}", "PDC"], noise=NoiseSources.none(),
                     record_signals=("tangential_force_N",))
@@ -87,8 +91,9 @@ def test_the_pattern_shifts_at_slip_along_the_shear_and_follows_the_friction_for
     spread = behind - ahead  # grows with the shear along +x
     assert np.corrcoef(spread, shear)[0, 1] > 0.9
     slick = Sensor(stimuli=[_slide(SLICK)], channels_read=[f"E{PRESSED}"], noise=NoiseSources.none())
-    frictionless = _codes(slick, PRESSED, times)
-    assert np.ptp(frictionless[times > start - 0.1]) <= 5  # the slide alone (no shear) hardly moves it
+    lubricated = _codes(slick, PRESSED, times)
+    shift = np.mean(ahead[sliding]) - np.mean(ahead[hold])
+    assert abs(np.mean(lubricated[sliding]) - np.mean(lubricated[hold])) < 0.1 * abs(shift)  # the slide alone: little
 
 
 def test_stick_slip_shows_in_the_electrode_codes():
