@@ -19,7 +19,7 @@ from cocotb.utils import get_sim_time
 
 from emulator.rtl.harness import fault_port_values
 from emulator.spi.model import Transfer
-from emulator.spi.vectors import rtl_provided_masks
+from emulator.spi.vectors import load, rtl_provided_masks
 
 PS = 1e-12
 
@@ -125,7 +125,7 @@ async def vectors(dut):
     CodeServer(dut, source)
     master = SpiMaster(dut)
     for path in paths:
-        vec = json.loads(open(path).read())
+        vec = load(path)
         offset[0] = (get_sim_time("ps") // 1_000_000 + 2) * 1_000_000
         await Timer(offset[0] - get_sim_time("ps") - 500_000, unit="ps")
         await reset(dut, sum(1 << (s - 1) for s in vec["sensors"]), vec["pull_up"])
