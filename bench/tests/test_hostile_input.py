@@ -134,10 +134,9 @@ def sliding_kernels_compiled():
         assert run_scene(load_scene(path), progress=False, chunk_s=0.25).status == "ok"
 
 
-# emulator.stimuli.Vibration evaluates a sweep's phase on the whole block, past the scene's end too, where the
-# steepest sweep the validator accepts overflows; those instants are never sampled (the run is checked to be ok)
-@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
-@pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")
+# no numpy overflow or invalid value on the way (a NaN or Inf on its way to a code): the steepest sweep the validator
+# accepts once overflowed past its end (emulator.stimuli.Vibration now evaluates its phase within its duration only)
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 @pytest.mark.parametrize("entry", [e for e in SCENES if e.get("valid")], ids=_scene_id)
 def test_a_scene_valid_on_purpose_loads_runs_and_is_recorded_whole(entry, tmp_path, sliding_kernels_compiled):
     from bench.reporting.report import write_outputs
