@@ -469,7 +469,8 @@ def _holds_more_than_leftovers(folder: Path, kind: FolderKind) -> bool:
     """Whether ``folder`` holds anything but its lock and the temporary files an interrupted run left
     (:func:`stale_temps`; :meth:`OutFolder.open` removes those, so a folder holding only them is free)."""
     stale = stale_temps(folder, kind)
-    return any(e.name != LOCK_NAME and e.name not in stale for e in os.scandir(folder))
+    with os.scandir(folder) as entries:  # closed here: any() stops at the first result, the listing unfinished
+        return any(e.name != LOCK_NAME and e.name not in stale for e in entries)
 
 
 def _make_folder(path, where: str, made: list | None = None) -> Path:

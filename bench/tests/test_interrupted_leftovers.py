@@ -4,11 +4,13 @@ interrupted run left it, removes those files when nothing else is there (no --fo
 results), names them apart from the rest when it refuses the folder, and never removes or follows anything the
 user made (a link, a folder, another name)."""
 
+import gc
 import os
 import signal
 import subprocess
 import sys
 import time
+import warnings
 
 import pytest
 
@@ -130,6 +132,21 @@ def test_the_default_folder_is_reused_when_it_holds_only_leftovers_and_never_tak
         with fresh_folder(live) as other:
             assert other.path == tmp_path / "live-2" and other.stale == ()
         assert tmp.exists()
+
+
+def test_passing_over_a_folder_of_results_leaves_no_listing_open(tmp_path):
+    """The default folder holding results (more than one entry: the check stops at the first) is passed over for
+    ``base-2``, and the listing of ``base`` it read is closed, not left to the collector (no ResourceWarning)."""
+    base = tmp_path / "press-hold"
+    base.mkdir()
+    for name in ("codes.npz", "record.json", "samples.h5"):
+        (base / name).write_bytes(b"an earlier result")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ResourceWarning)
+        with fresh_folder(base) as folder:
+            assert folder.path == tmp_path / "press-hold-2"
+        gc.collect()
+    assert [str(w.message) for w in caught if issubclass(w.category, ResourceWarning)] == []
 
 
 def test_the_write_probe_of_any_kind_of_folder_is_a_leftover(tmp_path):
