@@ -182,15 +182,13 @@ def test_explore_command_reports_bad_input_without_traceback(tmp_path, capsys):
 
 
 def test_texture_sweep_writes_its_table_and_plot(tmp_path, capsys):
-    import csv
-
     out = tmp_path / "sweep"
     assert cli.main(["texture-sweep", "--textures", "902,T30", "--movements", "0,35", "--trials", "1",
                      "--workers", "1", "--out", str(out), "--quiet"]) == 0
-    rows = list(csv.DictReader(open(out / "trials.csv")))
+    rows = _csv(out / "trials.csv")
     assert {(r["texture"], r["movement_id"]) for r in rows} == {("902", "0"), ("902", "35"), ("30", "0"), ("30", "35")}
     assert (out / "properties.png").stat().st_size > 0 and (out / "wear.csv").exists()
-    wear = list(csv.DictReader(open(out / "wear.csv")))
+    wear = _csv(out / "wear.csv")
     assert float(wear[1]["ridge_lost_m"]) > float(wear[0]["ridge_lost_m"])  # 2 N @ 10 cm/s wears more
     # foam at 2 N, 10 cm/s drives PAC to the ADC's rails: the row counts the samples, the summary says so
     rails = {(r["texture"], r["movement_id"]): int(r["pac_at_rails"]) for r in rows}
@@ -219,12 +217,10 @@ def test_sweep_and_explore_name_the_bad_flag(argv, flag, capsys):
 
 
 def test_row_tables_with_different_columns_are_written_whole(tmp_path):
-    import csv
-
     from bench.reporting.experiment_report import write_rows_csv
 
     write_rows_csv(tmp_path / "t.csv", [{"texture": 1, "pairs": 0.5}, {"texture": 2, "identification": 0.9}])
-    rows = list(csv.DictReader(open(tmp_path / "t.csv")))
+    rows = _csv(tmp_path / "t.csv")
     assert rows == [{"texture": "1", "pairs": "0.5", "identification": ""},
                     {"texture": "2", "pairs": "", "identification": "0.9"}]
 

@@ -158,15 +158,16 @@ def test_accuracy_per_texture_is_in_percent_as_accuracy_csv(no_rig, tmp_path):
     result = E.run_experiment(_spec(), cache_dir=None, progress=False, log=lambda m: None)
     write_outputs(result, tmp_path)
     s = E.summary(result)
-    rows = list(csv.DictReader(open(tmp_path / "accuracy_per_texture.csv", newline="")))
+    with open(tmp_path / "accuracy_per_texture.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
     assert [k for k in rows[0] if k not in ("texture", "name")] == [f"{k}_accuracy_%" for k in s]
     for row in rows:
         for k, v in s.items():
             if int(row["texture"]) in v["per_texture_accuracy"]:
                 assert float(row[f"{k}_accuracy_%"]) == pytest.approx(
                     100 * v["per_texture_accuracy"][int(row["texture"])], abs=1e-4)
-    overall = {f"{r['task']}/{r['strategy']}": float(r["accuracy_%"])
-               for r in csv.DictReader(open(tmp_path / "accuracy.csv", newline=""))}
+    with open(tmp_path / "accuracy.csv", newline="") as f:
+        overall = {f"{r['task']}/{r['strategy']}": float(r["accuracy_%"]) for r in csv.DictReader(f)}
     assert overall == {k: pytest.approx(100 * v["accuracy"], abs=1e-4) for k, v in s.items()}
 
 

@@ -75,8 +75,8 @@ for line in sys.stdin:
 def _blocked_on(path) -> bool:
     """Whether a process waits for the flock of the file now at ``path`` (/proc/locks: "->" marks a waiter)."""
     inode = str(os.stat(path).st_ino)
-    return any("->" in line and line.split()[-3].split(":")[-1] == inode
-               for line in open("/proc/locks").read().splitlines())
+    with open("/proc/locks") as f:
+        return any("->" in line and line.split()[-3].split(":")[-1] == inode for line in f.read().splitlines())
 
 
 def test_a_waiter_says_whom_it_waits_for_once_and_again_only_when_the_holder_changes(tmp_path):

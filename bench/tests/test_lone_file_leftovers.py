@@ -39,13 +39,12 @@ def _killed_while_writing(report) -> list[str]:
     """Run :data:`_HALF_WRITTEN` for ``report`` in a process of its own and SIGKILL it mid-write; the temporary
     files it left."""
     env = dict(os.environ, PYTHONPATH=str(REPO))
-    proc = subprocess.Popen([sys.executable, "-c", _HALF_WRITTEN, str(report)], stdout=subprocess.PIPE, text=True,
-                            env=env)
-    try:
-        assert proc.stdout.readline() == "writing\n"
-    finally:
-        proc.send_signal(signal.SIGKILL)
-        proc.wait()
+    with subprocess.Popen([sys.executable, "-c", _HALF_WRITTEN, str(report)], stdout=subprocess.PIPE, text=True,
+                          env=env) as proc:  # (leaving it closes the pipe and waits for the process)
+        try:
+            assert proc.stdout.readline() == "writing\n"
+        finally:
+            proc.send_signal(signal.SIGKILL)
     return _temps(report.parent)
 
 

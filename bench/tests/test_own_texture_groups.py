@@ -187,7 +187,8 @@ def test_texture_sweep_slides_the_example_librarys_own_textures(tmp_path):
     assert [r["texture"] for r in doc["rows"]] == [200, 1000]
     assert all(r["traction"] > 0 and r["roughness"] is not None for r in doc["rows"])
     assert doc["library"]["path"] == str(EXAMPLE) and doc["library"]["shipped"] is False
-    assert [r["library"] for r in csv.DictReader(open(out / "trials.csv"))] == [str(EXAMPLE)] * 2
+    with open(out / "trials.csv", newline="") as f:
+        assert [r["library"] for r in csv.DictReader(f)] == [str(EXAMPLE)] * 2
 
 
 def test_a_scene_and_an_experiment_take_the_example_librarys_own_textures(tmp_path):

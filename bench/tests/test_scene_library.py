@@ -203,7 +203,8 @@ def test_texture_sweep_slides_the_textures_of_the_library_given(tmp_path, monkey
                                  "sha256": hashlib.sha256(lib.read_bytes()).hexdigest()}
     (row,) = record["rows"]
     assert row["texture"] == 950 and row["library"] == str(lib.resolve()) and row["traction"] > 0
-    assert [r["library"] for r in csv.DictReader(open(out / "trials.csv"))] == [str(lib.resolve())]
+    with open(out / "trials.csv", newline="") as f:
+        assert [r["library"] for r in csv.DictReader(f)] == [str(lib.resolve())]
 
 
 def test_texture_sweep_names_a_bad_library_or_a_texture_it_lacks_in_one_line(tmp_path, monkeypatch, capsys):

@@ -97,6 +97,7 @@ def test_a_trial_whose_property_is_undefined_keeps_the_reason_as_json_in_trials_
     why = {"fineness": "PAC is constant over the measurement window 1.9…3.3 s: spectral centroid undefined"}
     rows = [{"texture": 902, "fineness": None, "undefined": why}, {"texture": 901, "fineness": 5.5}]
     write_rows_csv(tmp_path / "trials.csv", rows)
-    table = list(csv.DictReader(open(tmp_path / "trials.csv", newline="")))
+    with open(tmp_path / "trials.csv", newline="") as f:
+        table = list(csv.DictReader(f))
     assert json.loads(table[0]["undefined"]) == why and table[0]["fineness"] == "" and table[1]["undefined"] == ""
     assert table[0]["undefined"] == _as_csv_text(why)  # (what the comparison of whole files above expects)

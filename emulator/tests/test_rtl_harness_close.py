@@ -83,9 +83,9 @@ def test_an_idle_gap_in_virtual_time_costs_the_harness_little_work():
 
 def _children() -> set[int]:
     """This process's child processes, running or not yet reaped (zombies)."""
-    import glob
+    from pathlib import Path
 
-    return {int(pid) for f in glob.glob("/proc/self/task/*/children") for pid in open(f).read().split()}
+    return {int(pid) for f in Path("/proc/self/task").glob("*/children") for pid in f.read_text().split()}
 
 
 @pytest.mark.parametrize("stand_in, error", [
