@@ -189,7 +189,7 @@ CHILD = textwrap.dedent('''
     first, last = slide.slide_start_s + 0.5, slide.slide_end_s - 0.2
     edges = np.linspace(first, last, parts + 1)
     power = [float(np.var(sensor.analog_trace("PAC", np.arange(a, b, 1 / 2200)))) for a, b in zip(edges, edges[1:])]
-    status = Path("/proc/self/status").read_text().splitlines()
+    status = open("/proc/self/status").read().splitlines()
     peak_MB = int(next(line for line in status if line.startswith("VmHWM")).split()[1]) / 1024
     print(json.dumps({"power_V2": power, "peak_MB": peak_MB}))
 ''')
