@@ -7749,6 +7749,21 @@ CATALOGUE += [
            'h = hashlib.sha256(b"sp")',
            ('emulator/tests/test_rtl_harness_stale.py::test_a_harness_is_up_to_date_only_while_its_sources_and_mask_are_those_it_was_built_from',),
            'a harness built for one SP mask is taken for another'),
+    Mutant('friction-stribeck-limit-four-times-tight', 'physics', 'emulator/friction.py',
+           '    return 4.0 * math.sqrt(2.0 * math.e) * mu_kinetic * fluctuation_floor(fluctuation_rms) / sigma1_s_per_m',
+           '    return 1.0 * math.sqrt(2.0 * math.e) * mu_kinetic * fluctuation_floor(fluctuation_rms) / sigma1_s_per_m',
+           ('emulator/tests/test_electrode_shear.py::test_during_the_hold_the_pressed_electrodes_read_as_on_a_frictionless_texture',),
+           'the passivity cap four times too tight: a lubricated texture (µ 0.02) at the default 5 mm/s is warned of as past it'),
+    Mutant('sweep-phase-past-its-end', 'mechanics', 'emulator/stimuli.py',
+           'phase = 2 * np.pi * f0 * np.expm1(k * np.clip(tau, 0.0, T)) / k',
+           'phase = 2 * np.pi * f0 * np.expm1(k * tau) / k',
+           ('bench/tests/test_hostile_input.py::test_a_scene_valid_on_purpose_loads_runs_and_is_recorded_whole[conflict-vibration-sweep-too-steep.toml]',),
+           "a sweep's phase evaluated on the whole block: the steepest accepted sweep overflows past its end (inf, NaN)"),
+    Mutant('outdir-leftover-check-listing-left-open', 'outputs', 'bench/reporting/outdir.py',
+           'return any(e.name != LOCK_NAME and e.name not in stale for e in entries)',
+           'return any(e.name != LOCK_NAME and e.name not in stale for e in os.scandir(folder))',
+           ('bench/tests/test_interrupted_leftovers.py::test_passing_over_a_folder_of_results_leaves_no_listing_open',),
+           'a default folder passed over leaves its listing open (a scandir iterator left to the collector)'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
