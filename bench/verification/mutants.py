@@ -7764,6 +7764,11 @@ CATALOGUE += [
            'return any(e.name != LOCK_NAME and e.name not in stale for e in os.scandir(folder))',
            ('bench/tests/test_interrupted_leftovers.py::test_passing_over_a_folder_of_results_leaves_no_listing_open',),
            'a default folder passed over leaves its listing open (a scandir iterator left to the collector)'),
+    Mutant('suite-takes-outside-model-inputs-silently', 'numerics', 'pyproject.toml',
+           'filterwarnings = ["error::emulator.stimuli.OutsideModelWarning"]\n',
+           'filterwarnings = []\n',
+           ('emulator/tests/test_touch_shear_and_place.py::test_a_sensor_driven_outside_the_model_fails_a_test_that_does_not_ask_for_the_warning',),
+           "a test that drives the sensor outside the model's range by mistake passes on its extrapolation"),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.

@@ -190,3 +190,11 @@ def test_a_placed_press_too_short_for_the_electrodes_model_is_warned_of_as_a_pla
             Sensor(stimuli=[press], channels_read=["E17"], fidelity="fast")
         Sensor(stimuli=[Press(0.1, 2.0, 0.001, 0.0, electrode="E17")], channels_read=["PDC"], fidelity="fast")
         Sensor(stimuli=[Press(0.1, 2.0, 0.001, 0.0)], channels_read=["E17"], fidelity="fast")
+
+
+def test_a_sensor_driven_outside_the_model_fails_a_test_that_does_not_ask_for_the_warning():
+    """The suite's own setting (pyproject: ``filterwarnings``): an OutsideModelWarning a test does not ask for with
+    ``pytest.warns`` is an error, so a test whose input left the model's range by mistake fails instead of passing
+    on the model's extrapolation (four had, in test_electrode_shear)."""
+    with pytest.raises(OutsideModelWarning, match="tangential_N = 20.0 N exceeds"):
+        Sensor(stimuli=[Touch(0.1, 0.5, tangential_N=20.0)], channels_read=["E1"])
