@@ -68,9 +68,11 @@ _holding = threading.local()  # .active: the main thread is inside a call that h
 def signals_held():
     """Hold back every Python signal handler over the block: a signal that comes inside it runs its handler as the
     block ends (in the order the signals came), so an exception a handler raises — KeyboardInterrupt from SIGINT,
-    say — never lands midway.  Python runs signal handlers in the main thread only: elsewhere, and inside a block
-    already holding them, the block runs as it is.  Signals whose handler is not a Python function (the default
-    action, ignored, or a C library's) are left alone."""
+    say — never lands midway.  Every signal that came runs its handler, even after one of them raised (as Python
+    runs the others at its next check); the last exception raised propagates, with the earlier ones as its context.
+    Python runs signal handlers in the main thread only: elsewhere, and inside a block already holding them, the
+    block runs as it is.  Signals whose handler is not a Python function (the default action, ignored, or a C
+    library's) are left alone, and a handler the block itself installs stays."""
     if getattr(_holding, "active", False) or threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -93,11 +95,23 @@ def signals_held():
     finally:
         _holding.active = False
         try:
-            for sig, frame in came:
-                handlers[sig](sig, frame)
+            _run_handlers(came, handlers)
         finally:
             for sig, handler in handlers.items():
-                _signal.signal(sig, handler)
+                if _signal.getsignal(sig) is later:  # (one the block installed itself stays)
+                    _signal.signal(sig, handler)
+
+
+def _run_handlers(came: list, handlers: dict) -> None:
+    """Each signal in ``came`` ((signal, frame) pairs) given to its handler in ``handlers``, in order; one that
+    raises does not keep the others from running (they run inside its handling, so a later exception has it as
+    its context)."""
+    for k, (sig, frame) in enumerate(came):
+        try:
+            handlers[sig](sig, frame)
+        except BaseException:
+            _run_handlers(came[k + 1:], handlers)
+            raise
 
 
 def whole_call(method):

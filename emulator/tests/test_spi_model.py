@@ -776,3 +776,56 @@ def test_an_interrupt_inside_exchange_words_leaves_the_bus_wholly_before_or_afte
     state = _probe(interrupted)
     assert state in (_probe(before), _probe(after)), "the bus was left part-way through the call"
     assert whole.size == n
+
+
+def test_every_signal_held_inside_a_bus_call_runs_its_handler_even_after_one_raises():
+    """signals_held: SIGUSR1 and SIGUSR2 come inside the block, SIGUSR1's handler raising as Ctrl-C's does.  Both
+    handlers run as the block ends, in the order the signals came, and the exception propagates (as Python would
+    run SIGUSR2's handler at its next check).  SIGUSR2's used to be dropped once SIGUSR1's had raised."""
+    from emulator.spi.model import signals_held
+
+    ran = []
+
+    def first(sig, frame):
+        ran.append(sig)
+        raise KeyboardInterrupt("SIGUSR1")
+
+    def second(sig, frame):
+        ran.append(sig)
+
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGUSR1, signal.SIGUSR2)}
+    try:
+        signal.signal(signal.SIGUSR1, first)
+        signal.signal(signal.SIGUSR2, second)
+        with pytest.raises(KeyboardInterrupt, match="SIGUSR1"):
+            with signals_held():
+                signal.raise_signal(signal.SIGUSR1)
+                signal.raise_signal(signal.SIGUSR2)
+                assert ran == [], "a handler ran inside the block"
+        assert ran == [signal.SIGUSR1, signal.SIGUSR2]
+        assert signal.getsignal(signal.SIGUSR1) is first and signal.getsignal(signal.SIGUSR2) is second
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def test_a_handler_installed_inside_a_block_holding_signals_stays_installed():
+    """signals_held puts back only the handlers it swapped: one the block installs itself (here for SIGUSR1) is
+    the handler after the block, not the one before it (which the block used to put back over it)."""
+    from emulator.spi.model import signals_held
+
+    def before(sig, frame):
+        pass
+
+    def installed(sig, frame):
+        pass
+
+    previous = signal.getsignal(signal.SIGUSR1)
+    try:
+        signal.signal(signal.SIGUSR1, before)
+        with signals_held():
+            signal.signal(signal.SIGUSR1, installed)
+        assert signal.getsignal(signal.SIGUSR1) is installed
+    finally:
+        signal.signal(signal.SIGUSR1, previous)
+
