@@ -438,28 +438,43 @@ def _raise_in(thread: threading.Thread, exc_type: type) -> bool:
     return n == 1
 
 
+def _landing() -> None:
+    """Nothing: a Python call, at whose start an exception raised asynchronously into the calling thread lands."""
+
+
 def _within(session, limit_s: float, driver: str):
     """``session()``'s return value, run in a thread of its own: what it raises is raised here; if it has not
     returned within ``limit_s`` wall seconds, :class:`DriverFailed` naming ``driver``.  The thread is then stopped:
     :class:`DriverStopped` is raised in it and it is given :data:`DRIVER_STOP_S` to end, so a driver spinning in
     Python (``while True: pass``) no longer holds a core and the interpreter's lock through the next cases; one
     blocked in C ends when the caller closes the port under it (the thread is a daemon: if it never does, it does
-    not keep the process alive), and the error says it had not ended."""
+    not keep the process alive), and the error says it had not ended.  It is stopped only while still inside
+    ``session()``: one whose calls returned as the limit ran out is left to end (its id, once it has, may be another
+    thread's), and a stop raised as it leaves lands in its own code, never in threading's."""
     outcome: dict = {}
+    gate = threading.Lock()  # held to leave session() and to stop the thread: never both at once
 
     def run():
         try:
-            outcome["value"] = session()
-        except BaseException as e:
-            outcome["error"] = e
+            try:
+                outcome["value"] = session()
+            except BaseException as e:
+                outcome["error"] = e
+            with gate:
+                outcome["over"] = True
+            _landing()  # (a DriverStopped raised as the session ended lands by this call, not in threading's)
+        except DriverStopped:
+            pass
 
     thread = threading.Thread(target=run, name="host driver", daemon=True)
     thread.start()
     thread.join(limit_s)
     if thread.is_alive():
-        if _raise_in(thread, DriverStopped):
-            thread.join(DRIVER_STOP_S)
-        ended = ("its thread was stopped" if not thread.is_alive() else
+        with gate:  # only into a thread still inside the session (an ended thread's id may be another's by now)
+            stopping = "over" not in outcome and _raise_in(thread, DriverStopped)
+        thread.join(DRIVER_STOP_S)
+        ended = ("its calls returned just after that" if not stopping else
+                 "its thread was stopped" if not thread.is_alive() else
                  f"its thread had not ended {DRIVER_STOP_S:g} s after being stopped (blocked in C: it ends when its "
                  f"port is closed)")
         raise DriverFailed(f"driver {driver} had not returned within {limit_s:g} s (a case's calls to the driver are "

@@ -255,6 +255,50 @@ def test_a_spinning_driver_is_stopped_when_its_case_times_out_and_the_next_case_
     assert campaign.run_case(campaign.FAULTS["none"], "rest", 0)["passed"]
 
 
+
+def test_a_driver_returning_as_its_limit_passes_is_not_stopped_after_and_no_other_thread_gets_the_stop(monkeypatch):
+    """_within's limit passes with the driver's calls still under way; they return before the case stops the
+    thread (the case's own _raise_in, run as usual, is only made to wait: for the thread to end, at most 2 s, and
+    then for a thread started in its place).  DriverStopped is raised into no thread but the driver's, whose
+    thread ends without an uncaught exception; the error says the calls returned late or the thread was stopped.  It
+    used to be raised by the ended thread's id, which the thread started next had taken over: that thread got it."""
+    import threading
+    import time
+
+    returning, unhandled, hit = threading.Event(), [], []
+    monkeypatch.setattr(threading, "excepthook", lambda args: unhandled.append(args.exc_type))
+
+    def bystander():
+        try:
+            for _ in range(500):
+                time.sleep(0.001)
+        except campaign.DriverStopped:
+            hit.append("the next thread")
+
+    raise_in = campaign._raise_in
+    started = []
+
+    def raise_in_later(thread, exc_type):
+        returning.set()  # (the session returns now)
+        deadline = time.monotonic() + 2.0
+        while thread.is_alive() and time.monotonic() < deadline:
+            time.sleep(0.001)
+        started.append(threading.Thread(target=bystander, name="the next thread"))
+        started[0].start()
+        return raise_in(thread, exc_type)
+
+    def session():
+        returning.wait(30)
+        return "frames"
+
+    monkeypatch.setattr(campaign, "_raise_in", raise_in_later)
+    with pytest.raises(campaign.DriverFailed, match="had not returned within 0.2 s") as failed:
+        campaign._within(session, 0.2, "late:driver")
+    started[0].join()
+    assert hit == [], "DriverStopped was raised into a thread started after the driver's had ended"
+    assert unhandled == []
+    assert str(failed.value).endswith(("its calls returned just after that", "its thread was stopped"))
+
 def test_the_bench_driver_is_the_default_and_named_so():
     assert load_driver(BENCH_DRIVER).__name__ == "BridgeDriver"
     results = [{"fault": "none", "scene": "rest", "seed": 0, "expected": "-", "passed": True, "problem": None,
