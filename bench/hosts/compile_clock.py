@@ -21,7 +21,8 @@ from numba.core import event
 
 class _CompileClock(event.Listener):
     """Adds up the wall time (s) numba holds its compiler lock in this process (one thread at a time; a hold nested
-    in another counts once)."""
+    in another counts once; one under way when the clock began to listen — this module imported as another thread
+    compiles — is not counted, and its end leaves the count as it was)."""
 
     def __init__(self):
         self._lock = threading.Lock()
@@ -37,6 +38,8 @@ class _CompileClock(event.Listener):
 
     def on_end(self, ev) -> None:
         with self._lock:
+            if not self._depth:  # the end of a hold that began before this clock listened: not counted
+                return
             self._depth -= 1
             if not self._depth:
                 self._total_s += time.monotonic() - self._since

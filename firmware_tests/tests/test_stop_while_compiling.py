@@ -55,3 +55,32 @@ def test_stop_while_the_first_step_compiles_kernels_is_not_a_hung_firmware(tmp_p
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert result["compiled_while_stopping_s"] > 0.5, result  # (the compilation outlasted the timeout)
     assert result["said"] == "stopped", result
+
+
+def test_a_compile_under_way_as_the_clock_starts_listening_leaves_it_counting_right():
+    """A compile clock that starts listening while numba's compiler lock is held (bench.hosts.bridge imported as
+    another thread compiles) sees that hold end without its start: the clock ignores it, stands still while no
+    kernel compiles and counts the next hold.  It used to go below zero holds and from then on count every wall
+    second as compiling: a hung firmware's stop() then waited forever.  (numba's real lock, its real events.)"""
+    import time
+
+    from numba.core import event
+    from numba.core.compiler_lock import global_compiler_lock
+
+    from bench.hosts.compile_clock import _CompileClock
+
+    clock = _CompileClock()
+    global_compiler_lock.acquire()  # (a hold under way before the clock listens)
+    event.register("numba:compiler_lock", clock)
+    try:
+        global_compiler_lock.release()
+        idle = clock.seconds()
+        time.sleep(0.2)
+        assert clock.seconds() == idle == 0.0, "the clock counts while nothing compiles"
+        with global_compiler_lock:
+            time.sleep(0.1)
+        held = clock.seconds()
+        time.sleep(0.2)
+        assert held == clock.seconds() and held >= 0.1
+    finally:
+        event.unregister("numba:compiler_lock", clock)
