@@ -111,9 +111,12 @@ def _texture_numbers(text: str, library=None) -> list[int]:
 def _spi_faults(given: list[str] | None) -> str:
     """--spi-fault (given once per window): the windows as :attr:`~bench.experiments.trials.TrialTask.spi_faults`
     holds them, checked as an experiment file's ``[rig] spi_faults`` (ValueError naming --spi-fault[i], the field,
-    its value and what is allowed)."""
-    from bench.rigs.texture_rig import spi_fault_text, spi_faults_from_text
+    its value and what is allowed; a value declaring no window at all too, as "" or ";": not taken as no fault)."""
+    from bench.rigs.texture_rig import SPI_FAULT_FORM, spi_fault_text, spi_faults_from_text
 
+    for i, text in enumerate(given or ()):
+        if not text.replace(";", "").strip():
+            raise ValueError(f"--spi-fault[{i}] = {spelled(text)}: declares no window; write {SPI_FAULT_FORM}")
     windows, problems = spi_faults_from_text("; ".join(given or ()), "--spi-fault")
     if problems:
         raise ValueError("; ".join(problems))

@@ -264,6 +264,10 @@ def _text_value(text: str):
     return text
 
 
+#: how a window is written as text (:func:`spi_faults_from_text`), as an error shows it
+SPI_FAULT_FORM = "start_s=S,end_s=S,SETTING=VALUE,... (e.g. start_s=0.3,end_s=0.4,miso_flip_bit=1)"
+
+
 def spi_faults_from_text(text: str, where: str) -> tuple[tuple[SpiFaultWindow, ...], list[str]]:
     """The windows ``text`` declares (:func:`spi_fault_text`'s form: ``start_s=S,end_s=S,SETTING=VALUE,...``, windows
     joined by ``;``; "" none) and the problems found (:func:`spi_fault_windows`'s, the i-th window ``where[i]``)."""
@@ -273,7 +277,7 @@ def spi_faults_from_text(text: str, where: str) -> tuple[tuple[SpiFaultWindow, .
         unpaired = [item for item in items if "=" not in item]
         if unpaired:
             problems.append(f"{where}[{i}] = {spelled(part)}: {spelled(unpaired[0])} is no FIELD=VALUE; write "
-                            f"start_s=S,end_s=S,SETTING=VALUE,... (e.g. start_s=0.3,end_s=0.4,miso_flip_bit=1)")
+                            f"{SPI_FAULT_FORM}")
             continue
         declared.append({k.strip(): _text_value(v.strip()) for k, v in (item.split("=", 1) for item in items)})
     if problems:

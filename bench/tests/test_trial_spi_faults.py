@@ -49,6 +49,10 @@ def test_a_sweep_with_an_spi_fault_counts_the_rejected_samples_in_its_rows(tmp_p
                                             "miso_flip_bit, mosi_flip_bit, miso_stuck, bad_parity, slow_response"),
     (["0.1-0.2"], '--spi-fault[0] = "0.1-0.2": "0.1-0.2" is no FIELD=VALUE; write start_s=S,end_s=S,SETTING=VALUE,'
                   "... (e.g. start_s=0.3,end_s=0.4,miso_flip_bit=1)"),
+    ([WINDOW, ""], '--spi-fault[1] = "": declares no window; write start_s=S,end_s=S,SETTING=VALUE,... (e.g. '
+                   "start_s=0.3,end_s=0.4,miso_flip_bit=1)"),
+    ([" ; "], '--spi-fault[0] = " ; ": declares no window; write start_s=S,end_s=S,SETTING=VALUE,... (e.g. '
+              "start_s=0.3,end_s=0.4,miso_flip_bit=1)"),
     ([WINDOW, "start_s=0.3,end_s=0.5,bad_parity=true"],
      "--spi-fault[1] (0.3 to 0.5 s) overlaps --spi-fault[0] (0.25 to 0.35 s): windows may not overlap (whose "
      "faults would be in force?)"),
