@@ -104,7 +104,7 @@ def driver_file(spec: str) -> DriverFile | None:
 
 def _run_file(file: DriverFile):
     """``file``'s text run as a module of its own, under its path (its traceback lines from the text itself)."""
-    name = f"_campaign_driver_{abs(hash(file.path))}"  # its own name: (re)run afresh each time
+    name = f"_campaign_driver_{abs(hash(file))}"  # its path's and text's own name: (re)run afresh each time
     module = types.ModuleType(name)
     module.__file__ = file.path
     # the lines a traceback shows are the text that runs, even where the file is missing or differs (an entry with
@@ -114,7 +114,8 @@ def _run_file(file: DriverFile):
     try:
         exec(compile(file.text, file.path, "exec"), module.__dict__)
     except BaseException:
-        del sys.modules[name]
+        if sys.modules.get(name) is module:  # (not another case's, run from the same file in another thread)
+            del sys.modules[name]
         raise
     return module
 

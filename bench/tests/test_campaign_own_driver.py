@@ -320,3 +320,64 @@ def test_a_driver_that_raises_is_closed_by_the_case(tmp_path):
     r = campaign.run_case(campaign.FAULTS["none"], "rest", 0, driver=f"{path}:open_driver")
     assert r["error"] and "raised ValueError: bad frame" in r["problem"], r["problem"]
     assert closed.read_text() == "closed"
+
+
+def test_a_driver_file_that_fails_leaves_another_cases_module_of_the_same_file_in_place(tmp_path):
+    """Two cases of one worker (threads) run the same driver file: one whose run of the file fails takes out only its
+    own module, not the one the other case is using (a dataclass there looks its module up by name)."""
+    import sys
+
+    from bench.campaigns import drivers
+
+    file = drivers.DriverFile(str(tmp_path / "team_driver.py"), "X = 1\n")
+    first = drivers._run_file(file)  # the other case's, in use
+    name = first.__name__
+    assert sys.modules[name] is first
+    failing = drivers.DriverFile(file.path, "raise OSError('no port')\n")  # the same file, read as it changed
+    with pytest.raises(OSError):
+        drivers._run_file(failing)
+    assert sys.modules.get(name) is first
+    del sys.modules[name]
+
+
+def test_two_cases_running_one_driver_file_at_once_keep_the_survivors_module(tmp_path, monkeypatch):
+    """Two threads of a worker run the same driver file at once and the first one's run fails (its port, say) after
+    the second one's has begun: the second case's module stays registered under the name they share."""
+    import builtins
+    import sys
+    import threading
+
+    from bench.campaigns import drivers
+
+    first_began, second_began, first_failed = threading.Event(), threading.Event(), threading.Event()
+
+    def step():  # what the file's text calls: the first case fails once the second has begun
+        if threading.current_thread().name == "first":
+            first_began.set()
+            assert second_began.wait(30)
+            raise OSError("the port is busy")
+        second_began.set()
+        assert first_failed.wait(30)
+
+    monkeypatch.setattr(builtins, "_driver_test_step", step, raising=False)
+    file = drivers.DriverFile(str(tmp_path / "team_driver.py"), "import builtins\nbuiltins._driver_test_step()\n")
+    got = {}
+
+    def run(who):
+        try:
+            got[who] = drivers._run_file(file)
+        except OSError as e:
+            got[who] = e
+        finally:
+            if who == "first":
+                first_failed.set()
+
+    threads = [threading.Thread(target=run, args=(who,), name=who) for who in ("first", "second")]
+    threads[0].start()
+    assert first_began.wait(30)  # (its module registered: the second's registers over it)
+    threads[1].start()
+    for t in threads:
+        t.join(60)
+    assert isinstance(got["first"], OSError) and not isinstance(got["second"], Exception)
+    assert sys.modules.get(got["second"].__name__) is got["second"]
+    del sys.modules[got["second"].__name__]

@@ -7804,6 +7804,16 @@ CATALOGUE += [
            '        if False:\n',
            ('bench/tests/test_trial_spi_faults.py::test_a_bad_spi_fault_option_is_one_line_naming_it_before_anything_runs',),
            'texture-sweep --spi-fault "" runs the sweep with no fault on the bus, as if none had been asked for'),
+    Mutant('driver-file-name-by-path-alone', 'campaigns', 'bench/campaigns/drivers.py',
+           '    name = f"_campaign_driver_{abs(hash(file))}"',
+           '    name = f"_campaign_driver_{abs(hash(file.path))}"',
+           ('bench/tests/test_campaign_own_driver.py::test_a_driver_file_that_fails_leaves_another_cases_module_of_the_same_file_in_place',),
+           "a driver file's run that fails takes out the module another case made of an earlier text of that file"),
+    Mutant('driver-file-failure-deletes-anothers-module', 'campaigns', 'bench/campaigns/drivers.py',
+           "        if sys.modules.get(name) is module:  # (not another case's",
+           "        if True:  # (not another case's",
+           ('bench/tests/test_campaign_own_driver.py::test_two_cases_running_one_driver_file_at_once_keep_the_survivors_module',),
+           'a case whose run of the driver file fails deletes the module another case of the worker is running from it'),
 ]
 
 #: A quick sample of the catalogue that runs in the test suite (bench/tests/test_mutants.py): a few seconds each.
