@@ -742,37 +742,43 @@ def _probe(b: Bus) -> tuple:
 
 
 def test_an_interrupt_inside_exchange_words_leaves_the_bus_wholly_before_or_after_the_call():
-    """Module docstring ("A call is whole"): SIGALRM, whose handler raises KeyboardInterrupt as Ctrl-C's does, comes
-    a quarter of the way into a long exchange_words call in the main thread (2000 words to two sensors, one of them a
-    property request, so the call goes word by word; on the all-plain word path the work between two Python steps
-    is a sensor's whole share, so a signal seldom lands inside it).  The call still raises KeyboardInterrupt, and
-    the bus is then as one that made no call or the whole call: the same end, counters and next answers.  The
-    handler used to run between two words, leaving the bus part-way: its last end mid-batch."""
+    """Module docstring ("A call is whole"): a real SIGALRM, whose handler raises KeyboardInterrupt as Ctrl-C's does,
+    is raised in the main thread as the 500th of 2000 words to two sensors goes through (one of them a property
+    request, so the call goes word by word: the bus's own ``transfer`` is wrapped to raise it, then goes on as it
+    was).  The call still raises KeyboardInterrupt, and the bus is then as one that made no call or the whole call:
+    the same end, counters and next answers.  The handler used to run between two words, leaving the bus part-way:
+    its last end mid-batch.  (The signal comes at that word whatever the machine's load: a timer could land after
+    the call and test nothing.)"""
     n = 2000
     start = 1e-3 + 60e-6 * np.arange(n)
     cs = np.tile([SELECT_CODE[1], SELECT_CODE[2]], n // 2)
     commands = [int(proto.sample_command(channel_index(name))) << 8 for name in ALL]
     mosi = np.array([commands[(k // 4) % len(commands)] if k % 4 < 2 else 0 for k in range(n)], np.uint16)
     mosi[n // 2] = 0x6100 | 0x02  # (a property request: not plain word traffic)
-    bus(2).exchange_words(start, cs, mosi, 4.4e6)  # (its kernels loaded: the timed call takes what the next takes)
     before, after = bus(2), bus(2)
-    began = time.perf_counter()
     whole = after.exchange_words(start, cs, mosi, 4.4e6)
-    took_s = time.perf_counter() - began
     interrupted = bus(2)
+    words = []
+
+    def transfer_then_signal(tr):  # the bus's own transfer; SIGALRM raised as its 500th word is through
+        bits = Bus.transfer(interrupted, tr)
+        words.append(tr)
+        if len(words) == n // 4:
+            signal.raise_signal(signal.SIGALRM)
+        return bits
 
     def interrupt(sig, frame):
         raise KeyboardInterrupt("SIGALRM")
 
+    interrupted.transfer = transfer_then_signal
     previous = signal.signal(signal.SIGALRM, interrupt)
     try:
-        signal.setitimer(signal.ITIMER_REAL, took_s / 4)
         with pytest.raises(KeyboardInterrupt, match="SIGALRM"):
             interrupted.exchange_words(start, cs, mosi, 4.4e6)
-            time.sleep(10 * took_s + 1)  # (the signal must come: never returning quietly)
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+        del interrupted.transfer
+    assert len(words) in (n // 4, n)  # the word path ran, and the signal came inside the call
     state = _probe(interrupted)
     assert state in (_probe(before), _probe(after)), "the bus was left part-way through the call"
     assert whole.size == n
