@@ -1,7 +1,6 @@
 """The reference SPI state machine: every command, multi-sensor buses, faults, and the vectorized path."""
 
 import signal
-import time
 
 import numpy as np
 import pytest
