@@ -423,3 +423,12 @@ def test_the_stribeck_velocity_is_held_to_passivity_and_the_default_and_shipped_
     f.write_text(GOOD + f"stribeck_velocity_mm_per_s = {at * (1 + 1e-9)!r}\n", encoding="utf-8")
     with pytest.raises(TextureError, match="stribeck_velocity_mm_per_s"):
         load_library(f)
+
+
+def test_a_textures_seed_is_bounded_as_a_scenes():
+    """The library keeps its own copy of the seed bound (textures sit below scenes in the package layering): it is
+    the scene's, so a seed a scene takes a texture takes too."""
+    from bench.scenes.limits import MAX_SEED
+    from bench.textures import library
+
+    assert library.SEED_MAX == MAX_SEED

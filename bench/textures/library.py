@@ -77,7 +77,6 @@ from bench import tomlfile
 from bench.tomlfile import spelled
 from bench.errors import TextureError, escaped, shell_word, shortened
 from bench.paths import FIXTURES
-from bench.scenes.limits import MAX_SEED
 from emulator.friction import fluctuation_floor, stribeck_velocity_limit_m_per_s
 from emulator.params import PARAMETER_FIELDS
 from emulator.texture import FRICTION_FLUCTUATION_RMS, PeriodicComponent, Texture
@@ -192,6 +191,8 @@ PERIODIC_FIELDS: dict[str, _Number] = {
     "orientation_deg": _Number("°", -85.0, 85.0, 0, "orientation_deg", 0.0),
 }
 MAX_HARMONICS = 16
+#: a texture's largest seed: a scene's (bench.scenes.limits.MAX_SEED; not imported: textures sit below scenes)
+SEED_MAX = 2**63 - 1
 TEXT_FIELDS = ("name", "group", "material", "source", "description")
 KNOWN_FIELDS = frozenset({"number", "seed", "periodic", *TEXT_FIELDS, *NUMBER_FIELDS})
 MAX_NAME = 60
@@ -485,7 +486,7 @@ def _texture(c: _Checker, i: int, t, seen: _Seen, own: tuple[tuple[str, int, int
     seed = t.get("seed")
     if "seed" not in t:
         c.add(who, "seed is missing (a whole number, 0 to 2**63-1, unique)")
-    elif isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+    elif isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
         c.add(who, f"seed = {spelled(seed)}: must be a whole number, 0 to 2**63-1")
     elif seed in seen.seeds:
         c.add(who, f"seed = {seed}: already the seed of {seen.seeds[seed]}; each texture is its own surface")
