@@ -40,7 +40,7 @@ def _cmd_serve(a) -> int:
         kw["seed"] = 0 if a.seed is None else a.seed
         what += f" (seed {kw['seed']}: sensor k draws {kw['seed']} + k - 1)"
     with sigterm_raises():
-        cb = CheetahBench(n_sensors, **kw).start()
+        cb = CheetahBench(n_sensors, request_wait_s=a.request_wait, **kw).start()
         try:
             print(f"export BIOTAC_CHEETAH_SOCKET={shlex.quote(cb.socket_path)}", flush=True)
             side = (f", their SPI side the Verilog RTL (the scene says host.spi = {spelled(cb.spi)})"
@@ -102,4 +102,7 @@ def add_commands(sub, fmt=argparse.RawDescriptionHelpFormatter) -> None:
                          "with a scene or without (as every route numbers sensors)")
     sv.add_argument("--seconds", type=number(0, lo_open=True), help="stop after this many wall-clock seconds (s; default: "
                                                                         "serve until Ctrl-C or SIGTERM)")
+    sv.add_argument("--request-wait", type=number(0, 3600, lo_open=True), default=None, metavar="SECONDS",
+                    help="at Ctrl-C or SIGTERM, how long to wait for a program's request still being clocked before "
+                         "ending it (wall s; over the RTL its harness is ended under it; default: 5)")
     sv.set_defaults(func=_cmd_serve)

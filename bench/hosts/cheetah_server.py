@@ -153,9 +153,14 @@ class CheetahBench:
     """
 
     def __init__(self, n_sensors: int = 1, stimuli=(), seed: int = 0, sensors=None, trace: bool = False,
-                 variant: str = "biotac", spi: str = "software"):
+                 variant: str = "biotac", spi: str = "software", request_wait_s: float | None = None):
         if not isinstance(trace, (bool, np.bool_)):
             raise ValueError(f"trace = {trace!r}: must be True or False")
+        if request_wait_s is not None and not (isinstance(request_wait_s, (int, float)) and not isinstance(
+                request_wait_s, bool) and 0 < request_wait_s <= 3600):
+            raise ValueError(f"request_wait_s = {request_wait_s!r}: wall seconds, more than 0 and at most 3600")
+        #: how long (wall s) :meth:`stop` waits for a request still being clocked (None: :data:`CLIENT_STOP_S`)
+        self.request_wait_s = request_wait_s
         trace = bool(trace)
         if spi not in SPI_SIDES:
             raise ValueError(f"spi = {spi!r}: {SPI_SIDES_SAID}")
@@ -512,15 +517,16 @@ class CheetahBench:
             except OSError:
                 pass
         others = [c.thread for c in clients if c.thread is not None and c.thread is not threading.current_thread()]
+        wait_s = CLIENT_STOP_S if self.request_wait_s is None else self.request_wait_s
         for thread in others:
-            thread.join(timeout=CLIENT_STOP_S)
+            thread.join(timeout=wait_s)
         busy = [thread for thread in others if thread.is_alive()]
         if busy and self.spi == "rtl":  # the harness process is ended under the request: it fails, its thread ends
             pid, how = self.bus.proc.pid, self.bus.stop_process()
             for thread in busy:
                 thread.join(timeout=CLIENT_STOP_S)
             ended = f"was {how} under it" if how else "had exited already"
-            self.stop_problem = (f"{len(busy)} client request(s) still being clocked {CLIENT_STOP_S:g} s after "
+            self.stop_problem = (f"{len(busy)} client request(s) still being clocked {wait_s:g} s after "
                                  f"stop(): the RTL harness process (pid {pid}) {ended}")
         if not any(c.thread is not None and c.thread.is_alive() for c in clients):  # (none still clocking it)
             self.bus.close()  # the RTL's harness process, if any

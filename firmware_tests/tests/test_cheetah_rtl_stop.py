@@ -122,8 +122,8 @@ def test_biotac_cheetah_ends_the_harness_and_fails_the_test_at_teardown(pytester
 
 def test_cheetah_serve_says_a_request_was_cut_short_when_it_stops(tmp_path, monkeypatch):
     """``biotac-bench cheetah serve`` over the RTL, stopped by Ctrl-C while a program's request is still being
-    clocked: it stops as usual (status 0: Ctrl-C is its normal end), and its last lines say the request was cut
-    short and the harness ended under it (the program's call fails)."""
+    clocked past ``--request-wait``: it stops as usual (status 0: Ctrl-C is its normal end), and its last lines say the
+    request was cut short and the harness ended under it (the program's call fails)."""
     import signal
 
     from bench.hosts.cheetah_server import build_library
@@ -132,13 +132,13 @@ def test_cheetah_serve_says_a_request_was_cut_short_when_it_stops(tmp_path, monk
     scene = tmp_path / "rtl.toml"
     scene.write_text('[scene]\nname = "rtl"\nduration_s = 10\n[host]\nspi = "rtl"\n')
     lib = C.CDLL(str(build_library()))
-    p, path = serve(scene)
+    p, path = serve(scene, "--request-wait", SHORT_STOP_S)
     try:
         monkeypatch.setenv("BIOTAC_CHEETAH_SOCKET", path)
         h = lib.c_ch_open(0)
         assert h == 1
         thread, returned = long_request(lib, h)
-        time.sleep(2.0)  # being clocked by now: 40 000 transfers take far longer
+        time.sleep(1.0)  # being clocked by now: 40 000 transfers take seconds, far longer than the wait
         assert thread.is_alive()
         p.send_signal(signal.SIGINT)
         _, err = p.communicate(timeout=120)
