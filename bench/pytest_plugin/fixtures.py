@@ -115,6 +115,8 @@ Keywords (every one optional)
         spi           "software" (default; with ``scene``: its host.spi; the session's ``--biotac-spi`` replaces
                       that default) or "rtl": the adapter clocks the Verilog twin (SPI mode 3 refused there, as a
                       client error: see ``CheetahBench``)
+        request_wait_s  how long (wall s) the test's end waits for a request still being clocked before
+                      ending it (default 5; over the RTL its harness is ended under it and the test fails)
 
 Seeds, one convention: sensor k of a call (or session) whose seed is S draws its noise from ``S + k - 1``
 (:func:`bench.scenes.scene.sensor_seed`) whichever factory or route makes it — ``biotac_sensor(seed=S)`` is
