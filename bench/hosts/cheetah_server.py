@@ -209,7 +209,7 @@ class CheetahBench:
         self._thread = threading.Thread(target=self._serve, name="cheetah-server", daemon=True)
         self._stopped = False
         #: what :meth:`stop` had to do beyond a clean stop, in one line (None: nothing): a client's request still
-        #: being clocked over the RTL after :data:`CLIENT_STOP_S`, its harness process ended under it
+        #: being clocked over the RTL after that wait (:meth:`stop`), its harness process ended under it
         self.stop_problem: str | None = None
 
     @property
@@ -495,7 +495,7 @@ class CheetahBench:
         return self
 
     def stop(self) -> None:
-        """Close every connection, join every thread (:data:`CLIENT_STOP_S` each at most), remove the socket's folder;
+        """Close every connection, join every thread (:attr:`request_wait_s`, else :data:`CLIENT_STOP_S`, each at most), remove the socket's folder;
         never raises and never waits on the lock a busy request holds.  A client still busy clocking a request after
         that: over the RTL its harness process is ended under it (SIGTERM, then SIGKILL: no Verilator process
         outlives the bench), the request fails, and :attr:`stop_problem` says so; over the software model its
